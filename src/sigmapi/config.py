@@ -1,0 +1,272 @@
+"""The one typed source of defaults: :class:`SOMConfig`, its presets and overrides.
+
+Presets are TOML files shipped in ``sigmapi/presets/``; a TOML file or ``key=value`` overrides
+fill the same dataclass. Schedule milestones are fractions of the run, so ``iterations=50000``
+scales the paper's schedule rather than cutting it.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import tomllib
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+from sigmapi.codes import as_shape
+from sigmapi.errors import ConfigError
+from sigmapi.schedules import PAPER_SIGMA, PiecewiseLinear
+from sigmapi.tasks import RELATIONS
+
+__all__ = ["SOMConfig", "apply_overrides", "list_presets", "load_config_file", "load_preset"]
+
+WINNER_RULES = ("soft", "argmax", "min_distance")
+BACKEND_NAMES = ("auto", "reference", "fast", "gpu")
+
+
+@dataclass(frozen=True)
+class SOMConfig:
+    """Hyperparameters of a Sigma-Pi SOM run. Defaults are the authors' 1-D script."""
+
+    map_shape: tuple[int, ...] = (15,)
+    """Grid of map units, e.g. (15,) or (15, 15); the paper's Fig. 8 uses 15x15."""
+    x_shape: tuple[int, ...] = (15,)
+    """Grid of the x input (retinal position) code."""
+    y_shape: tuple[int, ...] = (15,)
+    """Grid of the y input (gaze direction) code; same number of dimensions as x."""
+    code_width: float = 0.5
+    """Standard deviation of the input hills in grid units (1-D script: 0.5)."""
+    code_height: float = 1.0
+    """Peak of the input hills before normalisation."""
+    code_normalize: bool = True
+    """L2-normalise input codes to length 1 (the script does)."""
+    periodic: bool = False
+    """Periodic input axes (rings); the paper's are bounded."""
+    relation: str = "mean"
+    """z = f(x, y): "mean" (the paper, z = (x + y) / 2), "sum" or "difference"."""
+    iterations: int = 300_000
+    """Length of the run; schedule milestones are fractions of it."""
+    eps: float | tuple[tuple[float, float], ...] = 0.01
+    """Learning rate: a constant, or [fraction, value] knots of a piecewise-linear schedule."""
+    sigma: tuple[tuple[float, float], ...] = PAPER_SIGMA.knots
+    """Neighbourhood width on the map (grid units): [fraction, value] knots (8 -> 3.5 -> 1e-5)."""
+    winner_rule: str = "soft"
+    """"soft" (Gaussian-smoothed argmax, the paper), "argmax", or "min_distance"."""
+    soft_cut: int = 15
+    """Half-width of the smoothing window of the soft winner, in map units (script: 15)."""
+    init_scale: float = 0.1
+    """Initial weights are uniform in [-init_scale, init_scale] (paper: 0.1)."""
+    same_view: bool = False
+    """Ablation: learn from the view that chose the winner (the paper learns from the other)."""
+    backend: str = "auto"
+    """Kernel: "auto" (fast if numba imports), "reference", "fast" or "gpu"."""
+    kernel_tol: float = 1e-6
+    """Fast kernel: code and neighbourhood values below kernel_tol x their maximum are skipped
+    (0 = exact). The reference kernel is always exact."""
+    seed: int | None = None
+    """Seed of every random stream of the run (weights and data); None draws fresh entropy."""
+
+    extra: dict[str, Any] = field(default_factory=dict, compare=False, repr=False)
+    """Unused by the SOM: free-form notes carried from the preset (e.g. its source)."""
+
+    def __post_init__(self) -> None:
+        set_ = object.__setattr__
+        set_(self, "map_shape", as_shape(self.map_shape, "map_shape"))
+        set_(self, "x_shape", as_shape(self.x_shape, "x_shape"))
+        set_(self, "y_shape", as_shape(self.y_shape, "y_shape"))
+        if len(self.x_shape) != len(self.y_shape):
+            raise ConfigError(
+                f"x_shape and y_shape must have the same number of dimensions, got "
+                f"{self.x_shape} and {self.y_shape}"
+            )
+        _positive(self, "code_width")
+        _positive(self, "code_height")
+        _positive(self, "init_scale")
+        _bool(self, "code_normalize")
+        _bool(self, "periodic")
+        _bool(self, "same_view")
+        if not isinstance(self.iterations, int) or isinstance(self.iterations, bool) or self.iterations < 1:
+            raise ConfigError(
+                f"iterations must be an int >= 1, got {self.iterations!r}; the paper runs 300000"
+            )
+        if not isinstance(self.soft_cut, int) or isinstance(self.soft_cut, bool) or self.soft_cut < 0:
+            raise ConfigError(f"soft_cut must be an int >= 0 (map units), got {self.soft_cut!r}")
+        _choice(self, "relation", tuple(RELATIONS))
+        _choice(self, "winner_rule", WINNER_RULES)
+        _choice(self, "backend", BACKEND_NAMES)
+        eps = PiecewiseLinear.coerce(self.eps, "eps")
+        vals = [v for _, v in eps.knots]
+        if min(vals) <= 0 or max(vals) > 1:
+            raise ConfigError(f"eps values must lie in (0, 1], got {vals}; the paper uses 0.01")
+        set_(self, "eps", eps.knots[0][1] if len(eps.knots) == 1 and eps.knots[0][0] == 0 else eps.knots)
+        sig = PiecewiseLinear.coerce(self.sigma, "sigma")
+        if min(v for _, v in sig.knots) <= 0:
+            raise ConfigError(
+                f"sigma values must be > 0 (map units), got {[v for _, v in sig.knots]}; "
+                "use a small value such as 1e-5 for a winner-only update"
+            )
+        set_(self, "sigma", sig.knots)
+        if not (isinstance(self.kernel_tol, (int, float)) and 0 <= self.kernel_tol < 1):
+            raise ConfigError(f"kernel_tol must be a number in [0, 1), got {self.kernel_tol!r}")
+        if self.seed is not None and (
+            not isinstance(self.seed, int) or isinstance(self.seed, bool) or self.seed < 0
+        ):
+            raise ConfigError(f"seed must be a non-negative int or None, got {self.seed!r}")
+
+    @property
+    def sigma_schedule(self) -> PiecewiseLinear:
+        return PiecewiseLinear.coerce(self.sigma, "sigma")
+
+    @property
+    def eps_schedule(self) -> PiecewiseLinear:
+        return PiecewiseLinear.coerce(self.eps, "eps")
+
+    def replace(self, **changes: Any) -> SOMConfig:
+        """A copy with ``changes``; unknown names raise a ConfigError listing the valid ones."""
+        _check_keys(changes)
+        return dataclasses.replace(self, **changes)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON/TOML-able dict of every field (tuples become lists)."""
+        out: dict[str, Any] = {}
+        for f in dataclasses.fields(self):
+            out[f.name] = _plain(getattr(self, f.name))
+        return out
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> SOMConfig:
+        """Build from a dict such as a parsed TOML file; unknown keys are an error."""
+        if not isinstance(data, dict):
+            raise ConfigError(f"a config must be a table of key = value pairs, got {type(data).__name__}")
+        _check_keys(data)
+        kwargs = dict(data)
+        for key in ("map_shape", "x_shape", "y_shape"):
+            if key in kwargs and isinstance(kwargs[key], list):
+                kwargs[key] = tuple(kwargs[key])
+        return cls(**kwargs)
+
+
+def _plain(value: Any) -> Any:
+    if isinstance(value, tuple):
+        return [_plain(v) for v in value]
+    if isinstance(value, dict):
+        return {k: _plain(v) for k, v in value.items()}
+    return value
+
+
+def _check_keys(data: dict[str, Any]) -> None:
+    names = {f.name for f in dataclasses.fields(SOMConfig)}
+    unknown = sorted(set(data) - names)
+    if unknown:
+        raise ConfigError(
+            f"unknown config key {unknown[0]!r}; valid keys are: {', '.join(sorted(names))}"
+        )
+
+
+def _positive(cfg: SOMConfig, name: str) -> None:
+    v = getattr(cfg, name)
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
+        raise ConfigError(f"{name} must be a finite number > 0, got {v!r}")
+
+
+def _bool(cfg: SOMConfig, name: str) -> None:
+    v = getattr(cfg, name)
+    if not isinstance(v, bool):
+        raise ConfigError(f"{name} must be true or false, got {v!r}")
+
+
+def _choice(cfg: SOMConfig, name: str, options: tuple[str, ...]) -> None:
+    v = getattr(cfg, name)
+    if v not in options:
+        raise ConfigError(f"{name} must be one of {', '.join(options)}; got {v!r}")
+
+
+# ---------------------------------------------------------------------------- presets and files
+
+
+def list_presets() -> list[str]:
+    """Names of the presets shipped with the package."""
+    files = resources.files("sigmapi").joinpath("presets")
+    return sorted(p.name[:-5] for p in files.iterdir() if p.name.endswith(".toml"))
+
+
+def _parse_toml(text: str, source: str) -> dict[str, Any]:
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{source} is not valid TOML: {exc}") from None
+    return data
+
+
+def load_preset(name: str) -> SOMConfig:
+    """The :class:`SOMConfig` of a shipped preset, e.g. ``"paper-1d"``."""
+    names = list_presets()
+    if name not in names:
+        raise ConfigError(f"unknown preset {name!r}; available presets: {', '.join(names)}")
+    text = resources.files("sigmapi").joinpath("presets", f"{name}.toml").read_text("utf-8")
+    return _from_toml(_parse_toml(text, f"preset {name!r}"), f"preset {name!r}")
+
+
+def load_config_file(path: str | Path, base: SOMConfig | None = None) -> SOMConfig:
+    """Read a TOML config file; its keys override ``base`` (default: the dataclass defaults)."""
+    p = Path(path)
+    if not p.is_file():
+        raise ConfigError(f"config file {str(p)!r} does not exist; check the --config path")
+    try:
+        text = p.read_text("utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ConfigError(f"config file {str(p)!r} cannot be read as UTF-8 text: {exc}") from None
+    data = _parse_toml(text, f"config file {str(p)!r}")
+    return _from_toml(data, f"config file {str(p)!r}", base)
+
+
+def _from_toml(data: dict[str, Any], source: str, base: SOMConfig | None = None) -> SOMConfig:
+    data = dict(data)
+    extra = data.pop("extra", {})
+    if not isinstance(extra, dict):
+        raise ConfigError(f"{source}: [extra] must be a table, got {extra!r}")
+    try:
+        merged = (base or SOMConfig()).to_dict()
+        _check_keys(data)
+        merged.update(data)
+        merged["extra"] = {**merged.get("extra", {}), **extra}
+        return SOMConfig.from_dict(merged)
+    except ConfigError as exc:
+        raise ConfigError(f"{source}: {exc}") from None
+    except TypeError as exc:
+        raise ConfigError(f"{source}: {exc}") from None
+
+
+def parse_override(item: str) -> tuple[str, Any]:
+    """Parse ``key=value``; the value is read as TOML (numbers, true/false, lists) or a string."""
+    if "=" not in item:
+        raise ConfigError(f"--set expects key=value, got {item!r}; e.g. --set iterations=50000")
+    key, _, raw = item.partition("=")
+    key = key.strip()
+    raw = raw.strip()
+    if not key:
+        raise ConfigError(f"--set expects key=value with a non-empty key, got {item!r}")
+    try:
+        value = tomllib.loads(f"v = {raw}")["v"]
+    except tomllib.TOMLDecodeError:
+        value = raw
+    return key, value
+
+
+def apply_overrides(cfg: SOMConfig, items: list[str]) -> SOMConfig:
+    """Apply ``key=value`` overrides (the CLI's ``--set``) to ``cfg``."""
+    changes: dict[str, Any] = {}
+    for item in items:
+        key, value = parse_override(item)
+        changes[key] = value
+    if not changes:
+        return cfg
+    merged = cfg.to_dict()
+    _check_keys(changes)
+    merged.update(changes)
+    try:
+        return SOMConfig.from_dict(merged)
+    except TypeError as exc:
+        raise ConfigError(f"--set: {exc}") from None

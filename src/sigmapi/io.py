@@ -1,0 +1,210 @@
+"""Model files: NumPy ``.npz`` archives read with ``allow_pickle=False``, written atomically.
+
+Layout (format ``sigmapi-model``, version 1): two members,
+
+- ``header``: a uint8 array holding UTF-8 JSON: format, version, the resolved config, the
+  iteration count ``t``, the seed entropy of the random streams, the weight dtype and shape,
+  and the SHA-256 of the weight bytes;
+- ``weights``: the float weights ``(n_units, n_x, n_y)``;
+- ``state_<name>``: extra arrays of the backend that wrote the file (the fast kernel's raw
+  float32 weights and per-unit scale factors), so that a model continues bit for bit on the
+  same backend. A different backend starts from ``weights``.
+
+The file is written to a temporary file in the same folder, flushed, fsync'ed and renamed over
+the target, so a reader sees the old file or the new one, never half of one. Loading checks
+everything it reads (format, version, keys, dtype, shape, finiteness, checksum) and raises
+:class:`~sigmapi.errors.ModelFileError` naming the problem; no object is ever unpickled.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import tempfile
+import zipfile
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from sigmapi.config import SOMConfig
+from sigmapi.errors import ConfigError, ModelFileError
+
+if TYPE_CHECKING:
+    from sigmapi.som import SigmaPiSOM
+
+__all__ = ["FORMAT", "VERSION", "atomic_write_bytes", "load_model", "read_archive", "save_model"]
+
+FORMAT = "sigmapi-model"
+VERSION = 1
+_MAX_HEADER = 1 << 20
+
+
+def atomic_write_bytes(path: str | Path, data: bytes) -> Path:
+    """Write ``data`` to ``path`` atomically: temp file in the same folder, fsync, rename."""
+    target = Path(path)
+    folder = target.parent if str(target.parent) else Path(".")
+    if not folder.is_dir():
+        raise ModelFileError(f"cannot write {str(target)!r}: folder {str(folder)!r} does not exist")
+    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=folder)
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(data)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, target)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    try:  # make the rename itself durable
+        dfd = os.open(folder, os.O_RDONLY)
+        try:
+            os.fsync(dfd)
+        finally:
+            os.close(dfd)
+    except OSError:
+        pass
+    return target
+
+
+def digest(weights: NDArray[Any]) -> str:
+    """SHA-256 of the weight bytes in C order."""
+    return hashlib.sha256(np.ascontiguousarray(weights).tobytes()).hexdigest()
+
+
+def encode_archive(header: dict[str, Any], arrays: dict[str, NDArray[Any]]) -> bytes:
+    """The bytes of an ``.npz`` archive holding ``header`` as JSON plus ``arrays``."""
+    import io as _io
+
+    buf = _io.BytesIO()
+    head = np.frombuffer(json.dumps(header, sort_keys=True).encode("utf-8"), dtype=np.uint8)
+    np.savez(buf, header=head, **arrays)
+    return buf.getvalue()
+
+
+def read_archive(path: str | Path, kind: str = FORMAT) -> tuple[dict[str, Any], dict[str, NDArray[Any]]]:
+    """Read and sanity-check an archive; returns (header, arrays). Never unpickles."""
+    p = Path(path)
+    if not p.exists():
+        raise ModelFileError(f"model file {str(p)!r} does not exist; check the path")
+    if not p.is_file():
+        raise ModelFileError(f"model file {str(p)!r} is not a regular file")
+    try:
+        with np.load(p, allow_pickle=False) as npz:
+            if not hasattr(npz, "files"):
+                raise ModelFileError(f"{str(p)!r} is not a sigmapi model file (not an .npz archive)")
+            names = set(npz.files)
+            if "header" not in names:
+                raise ModelFileError(f"{str(p)!r} has no header: not a sigmapi model file")
+            raw = npz["header"]
+            if raw.dtype != np.uint8 or raw.ndim != 1 or raw.size > _MAX_HEADER:
+                raise ModelFileError(f"{str(p)!r}: header must be a 1-D uint8 array of JSON")
+            try:
+                header = json.loads(raw.tobytes().decode("utf-8"))
+            except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+                raise ModelFileError(f"{str(p)!r}: header is not valid JSON ({exc})") from None
+            if not isinstance(header, dict):
+                raise ModelFileError(f"{str(p)!r}: header must be a JSON object")
+            arrays = {n: npz[n] for n in sorted(names - {"header"})}
+    except ModelFileError:
+        raise
+    except ValueError as exc:
+        if "pickle" in str(exc).lower():
+            raise ModelFileError(
+                f"{str(p)!r} holds a pickled object; refused (sigmapi files never contain code)"
+            ) from None
+        raise ModelFileError(f"{str(p)!r} is damaged or not a sigmapi model file ({exc})") from None
+    except (OSError, EOFError, zipfile.BadZipFile, KeyError, RuntimeError) as exc:
+        raise ModelFileError(f"{str(p)!r} is damaged or not a sigmapi model file ({exc})") from None
+    if header.get("format") != kind:
+        raise ModelFileError(
+            f"{str(p)!r}: format is {header.get('format')!r}, expected {kind!r}"
+        )
+    if header.get("version") != VERSION:
+        raise ModelFileError(
+            f"{str(p)!r}: file version {header.get('version')!r} is not supported by this "
+            f"sigmapi (reads version {VERSION}); use the sigmapi release that wrote it"
+        )
+    return header, arrays
+
+
+def save_model(model: SigmaPiSOM, path: str | Path) -> Path:
+    """Write ``model`` atomically to ``path``; see the module docstring for the layout."""
+    w = np.ascontiguousarray(model.weights_)
+    extra = {f"state_{k}": np.ascontiguousarray(v) for k, v in model._kernel.state_arrays(model._state).items()}
+    header = {
+        "format": FORMAT,
+        "version": VERSION,
+        "config": model.config.to_dict(),
+        "t": int(model.t_),
+        "seed_entropy": str(model.seed_entropy_),
+        "dtype": str(w.dtype),
+        "shape": list(w.shape),
+        "sha256": digest(w),
+        "backend": model.backend,
+        "state_sha256": {k: digest(v) for k, v in extra.items()},
+    }
+    return atomic_write_bytes(path, encode_archive(header, {"weights": w, **extra}))
+
+
+def load_model(path: str | Path, backend: str | None = None) -> SigmaPiSOM:
+    """Read a model file written by :func:`save_model` (optionally onto another backend)."""
+    from sigmapi.som import SigmaPiSOM
+
+    header, arrays = read_archive(path)
+    name = str(path)
+    for key in ("config", "t", "seed_entropy", "dtype", "shape", "sha256"):
+        if key not in header:
+            raise ModelFileError(f"{name!r}: header lacks {key!r}; the file is damaged")
+    state = {k[len("state_"):]: v for k, v in arrays.items() if k.startswith("state_")}
+    if "weights" not in arrays or set(arrays) - {"weights"} - {f"state_{k}" for k in state}:
+        raise ModelFileError(
+            f"{name!r}: expected an array 'weights' and optional 'state_*' arrays, "
+            f"found {sorted(arrays)}"
+        )
+    w = arrays["weights"]
+    try:
+        cfg = SOMConfig.from_dict(header["config"])
+        if backend is not None:
+            cfg = cfg.replace(backend=backend)
+    except (ConfigError, TypeError) as exc:
+        raise ModelFileError(f"{name!r}: stored config is invalid ({exc})") from None
+    expected = (int(np.prod(cfg.map_shape)), int(np.prod(cfg.x_shape)), int(np.prod(cfg.y_shape)))
+    if w.dtype.kind != "f" or str(w.dtype) != header["dtype"]:
+        raise ModelFileError(f"{name!r}: weights have dtype {w.dtype}, header says {header['dtype']!r}")
+    if tuple(w.shape) != expected or list(w.shape) != header["shape"]:
+        raise ModelFileError(
+            f"{name!r}: weights have shape {tuple(w.shape)}, the config needs {expected}"
+        )
+    if not np.all(np.isfinite(w)):
+        raise ModelFileError(f"{name!r}: weights hold NaN or inf values; the file is damaged")
+    if digest(w) != header["sha256"]:
+        raise ModelFileError(f"{name!r}: weight checksum mismatch; the file is damaged")
+    t = header["t"]
+    if not isinstance(t, int) or isinstance(t, bool) or t < 0:
+        raise ModelFileError(f"{name!r}: iteration count must be an int >= 0, got {t!r}")
+    try:
+        entropy = int(header["seed_entropy"])
+    except (TypeError, ValueError):
+        raise ModelFileError(f"{name!r}: seed_entropy must be an integer string") from None
+    if entropy < 0:
+        raise ModelFileError(f"{name!r}: seed_entropy must be >= 0, got {entropy}")
+    model = SigmaPiSOM(cfg)
+    model.seed_entropy_ = entropy
+    sums = header.get("state_sha256", {})
+    if not isinstance(sums, dict) or set(sums) != set(state):
+        raise ModelFileError(f"{name!r}: backend state arrays do not match the header")
+    for k, v in state.items():
+        if v.dtype.kind != "f" or not np.all(np.isfinite(v)) or digest(v) != sums[k]:
+            raise ModelFileError(f"{name!r}: backend state array {k!r} is damaged")
+    if state and header.get("backend") == model.backend:
+        try:
+            model._state = model._kernel.from_state_arrays(w, state, tol=cfg.kernel_tol)
+        except (ValueError, KeyError) as exc:
+            raise ModelFileError(f"{name!r}: backend state is invalid ({exc})") from None
+    else:
+        model._set_weights(np.asarray(w, dtype=np.float64))
+    model.t_ = t
+    return model

@@ -1,0 +1,133 @@
+"""How well a Sigma-Pi SOM learned the transformation (definitions: ALGORITHM.md).
+
+- **view consistency**: over test z's, the fraction whose two independent views give the same
+  winner, and the fraction whose winners are within one map unit (Chebyshev distance <= 1).
+- **z error**: decode z from the winner as the mean z of that unit's wins on a calibration set
+  (units that never win there: the affine prediction below); RMSE on a separate test set, in
+  input grid spacings (Euclidean over the z dimensions).
+- **order**: R^2 of an affine fit from winner grid coordinates to z (fit on the calibration
+  set, scored on the test set); a rotated or mirrored map is not penalised, a twisted one is.
+- **usage**: fraction of units that win for some test z.
+
+All metrics draw their data from a fixed evaluation seed, independent of the training seed,
+so that two models are measured on the same test set.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+from numpy.typing import NDArray
+
+if TYPE_CHECKING:
+    from sigmapi.som import SigmaPiSOM
+    from sigmapi.tasks import Batch
+
+__all__ = ["EVAL_SEED", "Metrics", "affine_fit", "evaluate", "z_decoder"]
+
+EVAL_SEED = 20070601
+"""Seed of the evaluation data (calibration and test sets)."""
+
+
+@dataclass(frozen=True)
+class Metrics:
+    """Metrics of one model on one test set (see the module docstring)."""
+
+    view_consistency: float
+    view_within_one: float
+    z_error: float
+    order_r2: float
+    usage: float
+    n_test: int
+
+    def to_dict(self) -> dict[str, float | int]:
+        return asdict(self)
+
+
+def affine_fit(coords: NDArray[np.float64], z: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Least-squares affine map from coordinates ``(N, c)`` to z ``(N, d)``: ``(c + 1, d)``."""
+    a = np.hstack([coords, np.ones((coords.shape[0], 1))])
+    beta, *_ = np.linalg.lstsq(a, z, rcond=None)
+    return np.asarray(beta)
+
+
+def _affine_predict(beta: NDArray[np.float64], coords: NDArray[np.float64]) -> NDArray[np.float64]:
+    return np.hstack([coords, np.ones((coords.shape[0], 1))]) @ beta
+
+
+def z_decoder(
+    winners: NDArray[np.int64], z: NDArray[np.float64], map_coords: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """Per-unit decoded z ``(n_units, d)``: mean z of each unit's wins; the affine fit elsewhere."""
+    n_units, d = map_coords.shape[0], z.shape[1]
+    counts = np.bincount(winners, minlength=n_units).astype(np.float64)
+    sums = np.zeros((n_units, d))
+    np.add.at(sums, winners, z)
+    beta = affine_fit(map_coords[winners], z)
+    table = _affine_predict(beta, map_coords)
+    seen = counts > 0
+    table[seen] = sums[seen] / counts[seen, None]
+    return table
+
+
+def chebyshev(map_coords: NDArray[np.float64], a: NDArray[np.int64], b: NDArray[np.int64]) -> NDArray[np.float64]:
+    """Chebyshev distance on the map grid between units ``a`` and ``b``."""
+    return np.max(np.abs(map_coords[a] - map_coords[b]), axis=1)
+
+
+def evaluate(
+    model: SigmaPiSOM,
+    n_test: int = 10_000,
+    seed: int = EVAL_SEED,
+    test: Batch | None = None,
+    calibration: Batch | None = None,
+) -> Metrics:
+    """All metrics of ``model`` on ``n_test`` test z's (and as many calibration z's).
+
+    Parameters
+    ----------
+    model : SigmaPiSOM
+        A fitted model.
+    n_test : int
+        Test (and calibration) set size.
+    seed : int
+        Seed of the evaluation data; the default is fixed so that models are comparable.
+    test, calibration : Batch, optional
+        Precomputed evaluation data (e.g. reused across learning-curve checkpoints).
+    """
+    if isinstance(n_test, bool) or not isinstance(n_test, (int, np.integer)) or n_test < 2:
+        raise ValueError(f"n_test must be an int >= 2, got {n_test!r}")
+    if test is None or calibration is None:
+        calibration, test = evaluation_sets(model, n_test, seed)
+    coords = model.map_coords
+    w0 = model.winner(test.x0, test.y0)
+    w1 = model.winner(test.x1, test.y1)
+    wc = model.winner(calibration.x0, calibration.y0)
+
+    same = float(np.mean(w0 == w1))
+    within = float(np.mean(chebyshev(coords, w0, w1) <= 1.0))
+
+    spacing = np.asarray(model.x_shape, dtype=np.float64) - 1.0
+    if model.config.periodic:
+        spacing = np.asarray(model.x_shape, dtype=np.float64)
+    table = z_decoder(wc, calibration.z, coords)
+    err = (table[w0] - test.z) * spacing
+    z_error = float(np.sqrt(np.mean(np.sum(err**2, axis=1))))
+
+    beta = affine_fit(coords[wc], calibration.z)
+    pred = _affine_predict(beta, coords[w0])
+    sse = float(np.sum((pred - test.z) ** 2))
+    sst = float(np.sum((test.z - test.z.mean(axis=0)) ** 2))
+    order = 1.0 - sse / sst if sst > 0 else float("nan")
+
+    usage = float(np.unique(w0).size / model.n_units)
+    return Metrics(same, within, z_error, order, usage, int(test.z.shape[0]))
+
+
+def evaluation_sets(model: SigmaPiSOM, n: int, seed: int = EVAL_SEED) -> tuple[Batch, Batch]:
+    """(calibration, test) batches of ``n`` two-view samples each, from ``seed``."""
+    cal_rng, test_rng = (np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(2))
+    sampler = model.sampler
+    return sampler.sample(n, cal_rng), sampler.sample(n, test_rng)

@@ -1,0 +1,367 @@
+"""SigmaPiSOM: a self-organizing map of Sigma-Pi units (Weber & Wermter 2007).
+
+The estimator holds the state (weights, iteration count, random streams) and delegates the
+arithmetic to a kernel module (:mod:`sigmapi.kernels`), so backends are swappable.
+
+Random streams: one :class:`numpy.random.SeedSequence` per run. The initial weights come from
+its child ``spawn_key=(0,)``; the training data of iterations ``[b * BLOCK, (b + 1) * BLOCK)``
+from child ``(1, b)``. The data of any iteration is therefore a pure function of the seed and
+the iteration number: stopping, saving, loading and continuing gives the same run, bit for
+bit, wherever the run was cut.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from sigmapi.codes import PopulationCode, grid_coordinates
+from sigmapi.config import SOMConfig
+from sigmapi.errors import ConfigError, NotFittedError
+from sigmapi.kernels import get_backend
+from sigmapi.tasks import Batch, TwoViewSampler
+
+__all__ = ["BLOCK", "SigmaPiSOM"]
+
+BLOCK = 1000
+"""Iterations per block of training data (one random child stream per block)."""
+
+Callback = Callable[["SigmaPiSOM"], None]
+
+
+class SigmaPiSOM:
+    """Self-organizing map of Sigma-Pi units, ``h_k = sum_ij w_kij x_i y_j``.
+
+    Trained without a teacher on two views of the same body-centred position z: the winner is
+    found from view 0 and the weights learn view 1, so units come to respond to z alone, in a
+    topographic map.
+
+    Parameters
+    ----------
+    config : SOMConfig, optional
+        All hyperparameters (default: the authors' 1-D run).
+    **overrides
+        Fields of :class:`SOMConfig` to change, e.g. ``iterations=20000, seed=0``.
+
+    Attributes
+    ----------
+    weights_ : ndarray, shape (n_units, n_x, n_y)
+        Sigma-Pi weights (float64 copy of the backend's state).
+    t_ : int
+        Learning iterations done so far.
+
+    References
+    ----------
+    C. Weber and S. Wermter, "A self-organizing map of Sigma-Pi units", Neurocomputing 70
+    (2007) 2552-2560; section 6 of "Neural control of actions involving different coordinate
+    systems", in Humanoid Robots, Human-like Machines (2007).
+
+    Examples
+    --------
+    >>> som = SigmaPiSOM(map_shape=(6,), x_shape=(6,), y_shape=(6,), iterations=2000, seed=0)
+    >>> som = som.fit()
+    >>> som.weights_.shape, som.t_
+    ((6, 6, 6), 2000)
+    >>> x = som.x_code.encode([[0.2], [0.2]]); y = som.y_code.encode([[0.6], [0.6]])
+    >>> som.winner(x, y).shape
+    (2,)
+    """
+
+    def __init__(self, config: SOMConfig | None = None, **overrides: Any) -> None:
+        if config is not None and not isinstance(config, SOMConfig):
+            raise ConfigError(
+                f"config must be a sigmapi.SOMConfig or None, got {type(config).__name__}; "
+                "pass hyperparameters as keywords instead"
+            )
+        cfg = config or SOMConfig()
+        self.config = cfg.replace(**overrides) if overrides else cfg
+        self.t_ = 0
+        self._state: Any = None
+        self._kernel = get_backend(self.config.backend)
+        seed = self.config.seed
+        self.seed_entropy_: int = int(np.random.SeedSequence(seed).entropy)  # type: ignore[arg-type]
+        self._block_cache: tuple[int, Batch] | None = None
+        self._weights_cache: NDArray[np.float64] | None = None
+
+    # ------------------------------------------------------------------ shapes and codes
+    @property
+    def map_shape(self) -> tuple[int, ...]:
+        return self.config.map_shape
+
+    @property
+    def x_shape(self) -> tuple[int, ...]:
+        return self.config.x_shape
+
+    @property
+    def y_shape(self) -> tuple[int, ...]:
+        return self.config.y_shape
+
+    @property
+    def n_units(self) -> int:
+        return int(np.prod(self.map_shape))
+
+    @property
+    def backend(self) -> str:
+        """Name of the kernel in use (``reference``, ``fast`` or ``gpu``)."""
+        return str(self._kernel.NAME)
+
+    def _code(self, shape: tuple[int, ...]) -> PopulationCode:
+        c = self.config
+        return PopulationCode(shape, c.code_width, c.code_height, c.code_normalize, c.periodic)
+
+    @property
+    def x_code(self) -> PopulationCode:
+        """The code of x the model was trained with: ``x_code.encode(p)`` for positions p."""
+        return self._code(self.x_shape)
+
+    @property
+    def y_code(self) -> PopulationCode:
+        """The code of y the model was trained with."""
+        return self._code(self.y_shape)
+
+    @property
+    def sampler(self) -> TwoViewSampler:
+        """The two-view sampler of the model's relation and codes."""
+        return TwoViewSampler(self.config.relation, self.x_code, self.y_code)
+
+    @property
+    def map_coords(self) -> NDArray[np.float64]:
+        """Grid coordinates of the map units, ``(n_units, map_ndim)``, C order."""
+        return grid_coordinates(self.map_shape)
+
+    # ------------------------------------------------------------------ state
+    def _seq(self, *key: int) -> np.random.Generator:
+        ss = np.random.SeedSequence(self.seed_entropy_, spawn_key=key)
+        return np.random.Generator(np.random.PCG64(ss))
+
+    def initial_weights(self) -> NDArray[np.float64]:
+        """The run's initial weights, uniform in ``[-init_scale, init_scale]``."""
+        s = self.config.init_scale
+        shape = (self.n_units, int(np.prod(self.x_shape)), int(np.prod(self.y_shape)))
+        return self._seq(0).uniform(-s, s, size=shape)
+
+    def _set_weights(self, weights: NDArray[np.float64]) -> None:
+        self._state = self._kernel.prepare(weights, tol=self.config.kernel_tol)
+        self._weights_cache = None
+
+    @property
+    def is_fitted(self) -> bool:
+        return self._state is not None
+
+    def _check_fitted(self) -> None:
+        if self._state is None:
+            raise NotFittedError(
+                "this SigmaPiSOM is not fitted yet; call fit() or partial_fit() first, "
+                "or load a trained model with sigmapi.load(path)"
+            )
+
+    @property
+    def weights_(self) -> NDArray[np.float64]:
+        self._check_fitted()
+        if self._weights_cache is None:
+            w = np.array(self._kernel.export(self._state), dtype=np.float64)
+            w.flags.writeable = False
+            self._weights_cache = w
+        return self._weights_cache
+
+    def sigma_at(self, t: int | NDArray[np.int64]) -> NDArray[np.float64]:
+        """Neighbourhood width at iteration(s) t of this run's schedule."""
+        return self.config.sigma_schedule.at(t, self.config.iterations)
+
+    def eps_at(self, t: int | NDArray[np.int64]) -> NDArray[np.float64]:
+        """Learning rate at iteration(s) t."""
+        return self.config.eps_schedule.at(t, self.config.iterations)
+
+    @property
+    def sigma_(self) -> float:
+        """Neighbourhood width at the current iteration (used by the soft winner)."""
+        return float(self.sigma_at(self.t_))
+
+    # ------------------------------------------------------------------ training
+    def training_block(self, b: int) -> Batch:
+        """The training data of block ``b`` (iterations ``b*BLOCK`` to ``(b+1)*BLOCK - 1``)."""
+        if self._block_cache is not None and self._block_cache[0] == b:
+            return self._block_cache[1]
+        batch = self.sampler.sample(BLOCK, self._seq(1, b))
+        self._block_cache = (b, batch)
+        return batch
+
+    def fit(self, n_iter: int | None = None, callback: Callback | None = None) -> SigmaPiSOM:
+        """Train from fresh initial weights for ``n_iter`` iterations (default: the whole run).
+
+        ``callback(model)`` is called at least once per block of ``BLOCK`` iterations.
+        Returns ``self``.
+        """
+        self._set_weights(self.initial_weights())
+        self.t_ = 0
+        return self.partial_fit(n_iter if n_iter is not None else self.config.iterations, callback=callback)
+
+    def partial_fit(
+        self,
+        n_iter: int | None = None,
+        *,
+        views: tuple[ArrayLike, ArrayLike, ArrayLike, ArrayLike] | None = None,
+        callback: Callback | None = None,
+    ) -> SigmaPiSOM:
+        """Continue training where the schedule stopped; returns ``self``.
+
+        Parameters
+        ----------
+        n_iter : int, optional
+            Iterations to run on the model's own two-view data (default: the rest of the
+            configured run). Ignored when ``views`` is given.
+        views : (x0, y0, x1, y1), optional
+            Your own data: codes of shape ``(T, n_x)``, ``(T, n_y)``, ``(T, n_x)``,
+            ``(T, n_y)``; iteration t finds the winner from ``(x0[t], y0[t])`` and learns
+            ``(x1[t], y1[t])``. The schedule continues at ``t_``.
+        callback : callable, optional
+            ``callback(model)``, called after every chunk of at most ``BLOCK`` iterations.
+        """
+        if self._state is None:
+            self._set_weights(self.initial_weights())
+        if views is not None:
+            x0, y0, x1, y1 = self._check_views(views)
+            for s in range(0, x0.shape[0], BLOCK):
+                sl = slice(s, s + BLOCK)
+                self._run(x0[sl], y0[sl], x1[sl], y1[sl])
+                if callback is not None:
+                    callback(self)
+            return self
+        if n_iter is None:
+            n_iter = self.config.iterations - self.t_
+            if n_iter <= 0:
+                raise ValueError(
+                    f"the configured run of {self.config.iterations} iterations is complete "
+                    f"(t_ = {self.t_}); pass n_iter to train further"
+                )
+        if isinstance(n_iter, bool) or not isinstance(n_iter, (int, np.integer)) or n_iter < 0:
+            raise ConfigError(f"n_iter must be an int >= 0, got {n_iter!r}")
+        end = self.t_ + int(n_iter)
+        while self.t_ < end:
+            b, off = divmod(self.t_, BLOCK)
+            stop = min(BLOCK, off + end - self.t_)
+            batch = self.training_block(b)
+            sl = slice(off, stop)
+            if self.config.same_view:
+                self._run(batch.x0[sl], batch.y0[sl], batch.x0[sl], batch.y0[sl])
+            else:
+                self._run(batch.x0[sl], batch.y0[sl], batch.x1[sl], batch.y1[sl])
+            if callback is not None:
+                callback(self)
+        return self
+
+    def _run(self, x0: NDArray[Any], y0: NDArray[Any], x1: NDArray[Any], y1: NDArray[Any]) -> None:
+        t = np.arange(self.t_, self.t_ + x0.shape[0])
+        c = self.config
+        self._kernel.train_block(
+            self._state, x0, y0, x1, y1, self.sigma_at(t), self.eps_at(t),
+            self.map_shape, c.winner_rule, c.soft_cut,
+        )  # fmt: skip
+        self.t_ += x0.shape[0]
+        self._weights_cache = None
+
+    def _check_views(self, views: Any) -> tuple[NDArray[np.float64], ...]:
+        try:
+            x0, y0, x1, y1 = views
+        except (TypeError, ValueError):
+            raise ValueError("views must be a tuple (x0, y0, x1, y1) of code arrays") from None
+        x0 = self._check_codes(x0, "x0", self.x_shape)
+        y0 = self._check_codes(y0, "y0", self.y_shape)
+        x1 = self._check_codes(x1, "x1", self.x_shape)
+        y1 = self._check_codes(y1, "y1", self.y_shape)
+        if not (x0.shape[0] == y0.shape[0] == x1.shape[0] == y1.shape[0]):
+            raise ValueError(
+                f"views must have the same number of rows, got {x0.shape[0]}, {y0.shape[0]}, "
+                f"{x1.shape[0]}, {y1.shape[0]}"
+            )
+        return x0, y0, x1, y1
+
+    @staticmethod
+    def _check_codes(a: ArrayLike, name: str, shape: tuple[int, ...]) -> NDArray[np.float64]:
+        arr = np.asarray(a)
+        if arr.dtype.kind not in "fiub":
+            raise ValueError(f"{name} must be a numeric array, got dtype {arr.dtype}")
+        arr = arr.astype(np.float64, copy=False)
+        n = int(np.prod(shape))
+        if arr.ndim == 1:
+            arr = arr[None, :]
+        if arr.ndim != 2 or arr.shape[1] != n:
+            raise ValueError(
+                f"{name} must have shape (B, {n}) (codes on grid {shape}, flattened in C order), "
+                f"got {np.shape(a)}; encode positions with model.x_code.encode / y_code.encode"
+            )
+        if not np.all(np.isfinite(arr)):
+            raise ValueError(f"{name} must be finite, got NaN or inf values")
+        return arr
+
+    # ------------------------------------------------------------------ using the map
+    def respond(self, x: ArrayLike, y: ArrayLike) -> NDArray[np.float64]:
+        """Activations ``h[b, k] = x_b^T W_k y_b`` of every unit; ``(B, n_units)``."""
+        self._check_fitted()
+        xa = self._check_codes(x, "x", self.x_shape)
+        ya = self._check_codes(y, "y", self.y_shape)
+        if xa.shape[0] != ya.shape[0]:
+            raise ValueError(f"x and y must have the same number of rows, got {xa.shape[0]} and {ya.shape[0]}")
+        return np.asarray(self._kernel.activation(self._state, xa, ya), dtype=np.float64)
+
+    def winner(self, x: ArrayLike, y: ArrayLike, rule: str | None = None) -> NDArray[np.int64]:
+        """Flat index of the winning unit per pair; ``(B,)``.
+
+        Uses the model's winner rule (default) or ``rule``, at the current sigma.
+        """
+        h = self.respond(x, y)
+        rule = rule or self.config.winner_rule
+        return np.asarray(
+            self._kernel.winners(self._state, h, self.map_shape, rule, self.sigma_, self.config.soft_cut),
+            dtype=np.int64,
+        )
+
+    def transform(self, x: ArrayLike, y: ArrayLike) -> NDArray[np.float64]:
+        """Map coordinates of the winner, as fractions of each map axis in [0, 1]; ``(B, d_map)``."""
+        k = self.winner(x, y)
+        scale = np.maximum(np.asarray(self.map_shape, dtype=np.float64) - 1.0, 1.0)
+        return self.map_coords[k] / scale
+
+    def cost(self, batch: Batch, sigma: float | None = None) -> float:
+        """Approximate cost of section 6.3 (after Kaski 1997), mean per sample.
+
+        ``E = mean_mu sum_k a_k^mu |x1^mu y1^mu^T - w_k|^2``, with the neighbourhood a^mu of
+        the winner of view 0 at width ``sigma`` (default: the current sigma) and the data
+        outer product of view 1.
+        """
+        k = self.winner(batch.x0, batch.y0)
+        s = self.sigma_ if sigma is None else float(sigma)
+        from sigmapi.kernels import reference
+
+        a = reference.neighbourhood(k, self.map_shape, s)
+        h1 = self.respond(batch.x1, batch.y1)
+        w = self.weights_
+        wn = np.einsum("kij,kij->k", w, w)
+        dn = (batch.x1**2).sum(1) * (batch.y1**2).sum(1)
+        dist = dn[:, None] - 2.0 * h1 + wn[None, :]
+        return float(np.mean(np.sum(a * dist, axis=1)))
+
+    # ------------------------------------------------------------------ files
+    def save(self, path: str | Path) -> Path:
+        """Write the model atomically to ``path`` (``.npz``, no pickle); returns the path."""
+        from sigmapi.io import save_model
+
+        return save_model(self, path)
+
+    @classmethod
+    def load(cls, path: str | Path, backend: str | None = None) -> SigmaPiSOM:
+        """Read a model written by :meth:`save`."""
+        from sigmapi.io import load_model
+
+        return load_model(path, backend=backend)
+
+    def __repr__(self) -> str:
+        fitted = f"t_={self.t_}" if self.is_fitted else "not fitted"
+        return (
+            f"SigmaPiSOM(map_shape={self.map_shape}, x_shape={self.x_shape}, "
+            f"y_shape={self.y_shape}, backend={self.backend!r}, {fitted})"
+        )

@@ -1,0 +1,227 @@
+"""Relations z = f(x, y) and the two-view sampler that feeds the Sigma-Pi SOM.
+
+Per iteration and per dimension (ALGORITHM.md): draw z uniformly over the relation's z range;
+draw one view by choosing x or y uniformly with probability 1/2 each and solving the relation
+for the other; reject and redraw the view until both lie in [0, 1]. Draw a second view of the
+same z the same way. The authors' relation is the mean ``z = (x + y) / 2``, which keeps z on
+the same [0, 1] axis as x and y.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+from numpy.typing import NDArray
+
+from sigmapi.codes import PopulationCode
+from sigmapi.errors import ConfigError
+
+__all__ = ["RELATIONS", "Batch", "Relation", "TwoViewSampler", "get_relation"]
+
+Array = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class Relation:
+    """A relation ``z = forward(x, y)`` with its two inverses, elementwise on positions.
+
+    Parameters
+    ----------
+    name : str
+        Identifier stored in model files (custom relations cannot be restored by name).
+    forward : callable
+        ``z = forward(x, y)``.
+    solve_y : callable
+        ``y = solve_y(z, x)``: the y that gives z with this x.
+    solve_x : callable
+        ``x = solve_x(z, y)``: the x that gives z with this y.
+    z_range : (float, float)
+        Interval z is drawn from uniformly.
+    x_bounds, y_bounds : callable, optional
+        ``(lo, hi) = x_bounds(z)``: the x in [0, 1] that have a y in [0, 1] for this z (and
+        likewise for y). Given for the built-in relations, so that the rare z whose views are
+        hard to hit by rejection (z within a hair of the border) are drawn from the same
+        distribution directly instead of after millions of rejections.
+
+    Examples
+    --------
+    >>> rel = Relation("shift", lambda x, y: x - y + 0.5, lambda z, x: x + 0.5 - z,
+    ...                lambda z, y: z + y - 0.5, (0.0, 1.0))
+    >>> float(rel.forward(0.7, 0.4))
+    0.8
+    """
+
+    name: str
+    forward: Callable[[Array, Array], Array]
+    solve_y: Callable[[Array, Array], Array]
+    solve_x: Callable[[Array, Array], Array]
+    z_range: tuple[float, float] = (0.0, 1.0)
+    x_bounds: Callable[[Array], tuple[Array, Array]] | None = None
+    y_bounds: Callable[[Array], tuple[Array, Array]] | None = None
+
+
+def _clip01(lo: Array, hi: Array) -> tuple[Array, Array]:
+    return np.maximum(lo, 0.0), np.minimum(hi, 1.0)
+
+
+RELATIONS: dict[str, Relation] = {
+    "mean": Relation(
+        "mean", lambda x, y: (x + y) / 2, lambda z, x: 2 * z - x, lambda z, y: 2 * z - y,
+        (0.0, 1.0), lambda z: _clip01(2 * z - 1, 2 * z), lambda z: _clip01(2 * z - 1, 2 * z),
+    ),
+    "sum": Relation(
+        "sum", lambda x, y: x + y, lambda z, x: z - x, lambda z, y: z - y,
+        (0.0, 2.0), lambda z: _clip01(z - 1, z), lambda z: _clip01(z - 1, z),
+    ),
+    "difference": Relation(
+        "difference", lambda x, y: x - y, lambda z, x: x - z, lambda z, y: z + y,
+        (-1.0, 1.0), lambda z: _clip01(z, 1 + z), lambda z: _clip01(-z, 1 - z),
+    ),
+}  # fmt: skip
+"""Built-in relations: the paper's ``mean``, the plain ``sum`` and the ``difference`` x - y."""
+
+
+def get_relation(relation: str | Relation) -> Relation:
+    """Look up a built-in relation by name, or pass a :class:`Relation` through."""
+    if isinstance(relation, Relation):
+        return relation
+    try:
+        return RELATIONS[relation]
+    except (KeyError, TypeError):
+        raise ConfigError(
+            f"relation must be one of {sorted(RELATIONS)} or a sigmapi.Relation, got {relation!r}"
+        ) from None
+
+
+class Batch(NamedTuple):
+    """Two views of the same body-centred positions, as codes and as positions.
+
+    Codes have shape ``(B, n_x)`` / ``(B, n_y)``; positions ``(B, d)``.
+    """
+
+    x0: Array
+    y0: Array
+    x1: Array
+    y1: Array
+    z: Array
+    px0: Array
+    py0: Array
+    px1: Array
+    py1: Array
+
+
+_REJECTION_ROUNDS = 64
+_MAX_ROUNDS = 1_000_000
+
+
+class TwoViewSampler:
+    """Draws batches of two views (x0, y0), (x1, y1) of the same z.
+
+    Parameters
+    ----------
+    relation : str or Relation
+        ``"mean"`` (the paper), ``"sum"``, ``"difference"`` or a custom :class:`Relation`.
+    x_code, y_code : PopulationCode
+        Codes of the retinal position x and the gaze direction y; same number of dimensions.
+
+    Examples
+    --------
+    >>> from sigmapi.codes import PopulationCode
+    >>> s = TwoViewSampler("mean", PopulationCode((15,)), PopulationCode((15,)))
+    >>> b = s.sample(4, np.random.default_rng(0))
+    >>> b.x0.shape, b.z.shape
+    ((4, 15), (4, 1))
+    >>> bool(np.allclose((b.px0 + b.py0) / 2, b.z) and np.allclose((b.px1 + b.py1) / 2, b.z))
+    True
+    """
+
+    def __init__(self, relation: str | Relation, x_code: PopulationCode, y_code: PopulationCode):
+        if x_code.ndim != y_code.ndim:
+            raise ConfigError(
+                f"x_code and y_code must have the same number of dimensions, got "
+                f"{x_code.ndim} and {y_code.ndim}"
+            )
+        self.relation = get_relation(relation)
+        self.x_code = x_code
+        self.y_code = y_code
+        self.ndim = x_code.ndim
+
+    def sample_z(self, n: int, rng: np.random.Generator) -> Array:
+        lo, hi = self.relation.z_range
+        return rng.uniform(lo, hi, size=(n, self.ndim))
+
+    def sample_view(self, z: Array, rng: np.random.Generator) -> tuple[Array, Array]:
+        """One view (x, y) in [0, 1] per entry of ``z`` (shape ``(B, d)``), by rejection.
+
+        As the authors did: pick x or y with probability 1/2, draw it uniformly in [0, 1],
+        solve the relation for the other, and redraw unless both lie in [0, 1]. Entries still
+        rejected after 64 rounds (z very near a border, acceptance ~ 2 z) are drawn from the
+        distribution rejection converges to: the coin weighted by the lengths of the feasible
+        intervals, then uniform within the interval (for relations that give bounds).
+        """
+        x = np.empty_like(z)
+        y = np.empty_like(z)
+        todo = np.ones(z.shape, dtype=bool)
+        rel = self.relation
+        for rounds in range(_MAX_ROUNDS):
+            idx = np.nonzero(todo)
+            m = idx[0].size
+            if m == 0:
+                return x, y
+            if rounds == _REJECTION_ROUNDS and rel.x_bounds is not None and rel.y_bounds is not None:
+                self._direct(z, idx, x, y, rng)
+                return x, y
+            zz = z[idx]
+            pick_x = rng.random(m) < 0.5
+            u = rng.random(m)
+            xx = np.where(pick_x, u, rel.solve_x(zz, u))
+            yy = np.where(pick_x, rel.solve_y(zz, u), u)
+            ok = (xx >= 0) & (xx <= 1) & (yy >= 0) & (yy <= 1)
+            x[idx[0][ok], idx[1][ok]] = xx[ok]
+            y[idx[0][ok], idx[1][ok]] = yy[ok]
+            todo[idx[0][ok], idx[1][ok]] = False
+        raise ConfigError(
+            f"relation {rel.name!r}: no view with x, y in [0, 1] found for some z after "
+            f"{_MAX_ROUNDS} draws; check its z_range and inverses"
+        )
+
+    def _direct(
+        self, z: Array, idx: tuple[NDArray[np.intp], ...], x: Array, y: Array, rng: np.random.Generator
+    ) -> None:
+        rel = self.relation
+        assert rel.x_bounds is not None and rel.y_bounds is not None
+        zz = z[idx]
+        xlo, xhi = rel.x_bounds(zz)
+        ylo, yhi = rel.y_bounds(zz)
+        lx = np.maximum(xhi - xlo, 0.0)
+        ly = np.maximum(yhi - ylo, 0.0)
+        total = lx + ly
+        pick_x = rng.random(zz.size) * np.where(total > 0, total, 1.0) < lx
+        u = rng.random(zz.size)
+        xx = np.where(pick_x, xlo + u * lx, 0.0)
+        yy = np.where(pick_x, 0.0, ylo + u * ly)
+        xx = np.where(pick_x, xx, rel.solve_x(zz, yy))
+        yy = np.where(pick_x, rel.solve_y(zz, xx), yy)
+        x[idx] = np.clip(xx, 0.0, 1.0)
+        y[idx] = np.clip(yy, 0.0, 1.0)
+
+    def sample(self, n: int, rng: np.random.Generator, z: Array | None = None) -> Batch:
+        """``n`` pairs of views of ``n`` body-centred positions (drawn unless ``z`` is given)."""
+        if z is None:
+            z = self.sample_z(n, rng)
+        px0, py0 = self.sample_view(z, rng)
+        px1, py1 = self.sample_view(z, rng)
+        return Batch(
+            self.x_code.encode(px0),
+            self.y_code.encode(py0),
+            self.x_code.encode(px1),
+            self.y_code.encode(py1),
+            z,
+            px0,
+            py0,
+            px1,
+            py1,
+        )
