@@ -177,13 +177,14 @@ class PopulationCode:
         """An "L" pattern on a 2-D code: a vertical and a horizontal bar meeting at ``corner``.
 
         The bars run one grid unit apart along axis 0 (down) from the corner and along axis 1
-        (right) from the corner, each ``arm`` of the axis long (as a fraction of it).
+        (right) from the corner, each ``arm`` of the axis long (as a fraction of it). The
+        corner snaps to the nearest unit so that every point of the L sits on a unit.
         """
         if self.ndim != 2:
             raise ValueError(f"l_shape needs a 2-D code, this code is {self.ndim}-D")
         if corner is None:
             corner = (0.25, 0.25)
-        c0, c1 = float(corner[0]), float(corner[1])
+        c0, c1 = (round(float(corner[a]) * (self.shape[a] - 1)) / (self.shape[a] - 1) for a in range(2))
         steps = [int(round(arm * (self.shape[a] - 1))) for a in range(2)]
         down = [(c0 + k / (self.shape[0] - 1), c1) for k in range(steps[0] + 1)]
         right = [(c0 + steps[0] / (self.shape[0] - 1), c1 + k / (self.shape[1] - 1))
