@@ -10,7 +10,7 @@ import pytest
 matplotlib.use("Agg")
 os.environ.setdefault("MPLBACKEND", "Agg")
 
-from sigmapi import SOMConfig  # noqa: E402
+from sigmapi import SOMConfig
 
 
 @pytest.fixture

@@ -100,14 +100,29 @@ def test_train_block_equals_plain_loop():
     rng = np.random.default_rng(2)
     K, nx, ny, T = 5, 4, 3, 30
     W = rng.uniform(-0.1, 0.1, (K, nx, ny))
-    x0, y0, x1, y1 = rng.random((T, nx)), rng.random((T, ny)), rng.random((T, nx)), rng.random((T, ny))
+    x0, y0, x1, y1 = (
+        rng.random((T, nx)),
+        rng.random((T, ny)),
+        rng.random((T, nx)),
+        rng.random((T, ny)),
+    )
     sig = np.linspace(2.0, 0.5, T)
     eps = np.full(T, 0.05)
     W_loop = W.copy()
     win_loop = []
     for t in range(T):
-        h = np.array([sum(W_loop[k, i, j] * x0[t, i] * y0[t, j] for i in range(nx) for j in range(ny)) for k in range(K)])
-        sm = np.array([sum(np.exp(-((k - m) ** 2) / (2 * sig[t] ** 2)) * h[m] for m in range(K)) for k in range(K)])
+        h = np.array(
+            [
+                sum(W_loop[k, i, j] * x0[t, i] * y0[t, j] for i in range(nx) for j in range(ny))
+                for k in range(K)
+            ]
+        )
+        sm = np.array(
+            [
+                sum(np.exp(-((k - m) ** 2) / (2 * sig[t] ** 2)) * h[m] for m in range(K))
+                for k in range(K)
+            ]
+        )
         kw = int(np.argmax(sm))
         a = np.exp(-((np.arange(K) - kw) ** 2) / (2 * sig[t] ** 2))
         a /= np.sqrt((a**2).sum())

@@ -143,7 +143,9 @@ def _metrics(same_view: bool) -> dict[str, float]:
         sigmapi.evaluate(SigmaPiSOM(LEARN_CFG, seed=s, same_view=same_view).fit(), n_test=3000)
         for s in SEEDS
     ]
-    return {k: float(np.mean([getattr(r, k) for r in runs])) for k in ("view_consistency", "z_error")}
+    return {
+        k: float(np.mean([getattr(r, k) for r in runs])) for k in ("view_consistency", "z_error")
+    }
 
 
 @pytest.fixture(scope="module")

@@ -61,7 +61,9 @@ def check_output(path: str | Path, force: bool, what: str = "output file") -> Pa
         raise UsageError(f"{what} {str(p)!r} is a folder; give a file name")
     parent = p.parent if str(p.parent) else Path(".")
     if not parent.is_dir():
-        raise UsageError(f"folder {str(parent)!r} of {what} {str(p)!r} does not exist; create it first")
+        raise UsageError(
+            f"folder {str(parent)!r} of {what} {str(p)!r} does not exist; create it first"
+        )
     return p
 
 
@@ -82,8 +84,12 @@ def progress_callback(total: int, desc: str, start: int = 0, disable: bool | Non
 def _add_config_flags(p: argparse.ArgumentParser) -> None:
     p.add_argument("--preset", default="paper-1d", help="preset name (see `sigmapi presets`)")
     p.add_argument("--config", help="TOML file whose keys override the preset")
-    p.add_argument("--set", action="append", metavar="KEY=VALUE",
-                   help="override one config key, e.g. --set iterations=50000 (repeatable)")  # fmt: skip
+    p.add_argument(
+        "--set",
+        action="append",
+        metavar="KEY=VALUE",
+        help="override one config key, e.g. --set iterations=50000 (repeatable)",
+    )
     p.add_argument("--seed", type=int, help="seed of all random streams (default: the config's)")
     p.add_argument("--backend", choices=["auto", "reference", "fast", "gpu"],
                    help="kernel backend (default: the config's, 'auto')")  # fmt: skip
@@ -98,7 +104,9 @@ def cmd_train(args: argparse.Namespace) -> int:
     cfg = resolve_config(args)
     out = check_output(args.out, args.force)
     model = SigmaPiSOM(cfg)
-    callback, bar = progress_callback(cfg.iterations, f"train {args.preset}", disable=args.quiet or None)
+    callback, bar = progress_callback(
+        cfg.iterations, f"train {args.preset}", disable=args.quiet or None
+    )
     with bar:
         model.fit(callback=callback)
     model.save(out)
@@ -134,7 +142,9 @@ def cmd_presets(args: argparse.Namespace) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = _Parser(prog="sigmapi", description="Sigma-Pi self-organizing maps (Weber & Wermter 2007)")
+    parser = _Parser(
+        prog="sigmapi", description="Sigma-Pi self-organizing maps (Weber & Wermter 2007)"
+    )
     from sigmapi import __version__
 
     parser.add_argument("--version", action="version", version=f"sigmapi {__version__}")

@@ -89,7 +89,9 @@ class PopulationCode:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "shape", as_shape(self.shape, "shape"))
-        if not (isinstance(self.width, (int, float)) and np.isfinite(self.width) and self.width > 0):
+        if not (
+            isinstance(self.width, (int, float)) and np.isfinite(self.width) and self.width > 0
+        ):
             raise ConfigError(
                 f"width must be a finite number > 0 (grid units), got {self.width!r}; "
                 "the paper uses 0.5"
@@ -173,7 +175,9 @@ class PopulationCode:
         hills = np.exp(-d2 / (2.0 * self.width**2)).max(axis=0)
         return self._finish(hills[None, :])[0]
 
-    def l_shape(self, corner: tuple[float, ...] | None = None, arm: float = 0.5) -> NDArray[np.float64]:
+    def l_shape(
+        self, corner: tuple[float, ...] | None = None, arm: float = 0.5
+    ) -> NDArray[np.float64]:
         """An "L" pattern on a 2-D code: a vertical and a horizontal bar meeting at ``corner``.
 
         The bars run one grid unit apart along axis 0 (down) from the corner and along axis 1
@@ -184,11 +188,15 @@ class PopulationCode:
             raise ValueError(f"l_shape needs a 2-D code, this code is {self.ndim}-D")
         if corner is None:
             corner = (0.25, 0.25)
-        c0, c1 = (round(float(corner[a]) * (self.shape[a] - 1)) / (self.shape[a] - 1) for a in range(2))
-        steps = [int(round(arm * (self.shape[a] - 1))) for a in range(2)]
+        c0, c1 = (
+            round(float(corner[a]) * (self.shape[a] - 1)) / (self.shape[a] - 1) for a in range(2)
+        )
+        steps = [round(arm * (self.shape[a] - 1)) for a in range(2)]
         down = [(c0 + k / (self.shape[0] - 1), c1) for k in range(steps[0] + 1)]
-        right = [(c0 + steps[0] / (self.shape[0] - 1), c1 + k / (self.shape[1] - 1))
-                 for k in range(1, steps[1] + 1)]
+        right = [
+            (c0 + steps[0] / (self.shape[0] - 1), c1 + k / (self.shape[1] - 1))
+            for k in range(1, steps[1] + 1)
+        ]
         pts = np.clip(np.array(down + right), 0.0, 1.0)
         return self.pattern(pts)
 
@@ -218,9 +226,13 @@ class PopulationCode:
             k = peak[:, axis]
             here = grid[(rows, *peak.T)]
 
-            def along(offset: NDArray[np.int64], axis: int = axis, n: int = n) -> NDArray[np.float64]:
+            def along(
+                offset: NDArray[np.int64], axis: int = axis, n: int = n
+            ) -> NDArray[np.float64]:
                 idx = peak.copy()
-                idx[:, axis] = (idx[:, axis] + offset) % n if self.periodic else idx[:, axis] + offset
+                idx[:, axis] = (
+                    (idx[:, axis] + offset) % n if self.periodic else idx[:, axis] + offset
+                )
                 valid = (idx[:, axis] >= 0) & (idx[:, axis] < n)
                 idx[:, axis] = np.clip(idx[:, axis], 0, n - 1)
                 vals = grid[(rows, *idx.T)]

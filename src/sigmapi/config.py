@@ -87,11 +87,19 @@ class SOMConfig:
         _bool(self, "code_normalize")
         _bool(self, "periodic")
         _bool(self, "same_view")
-        if not isinstance(self.iterations, int) or isinstance(self.iterations, bool) or self.iterations < 1:
+        if (
+            not isinstance(self.iterations, int)
+            or isinstance(self.iterations, bool)
+            or self.iterations < 1
+        ):
             raise ConfigError(
                 f"iterations must be an int >= 1, got {self.iterations!r}; the paper runs 300000"
             )
-        if not isinstance(self.soft_cut, int) or isinstance(self.soft_cut, bool) or self.soft_cut < 0:
+        if (
+            not isinstance(self.soft_cut, int)
+            or isinstance(self.soft_cut, bool)
+            or self.soft_cut < 0
+        ):
             raise ConfigError(f"soft_cut must be an int >= 0 (map units), got {self.soft_cut!r}")
         _choice(self, "relation", tuple(RELATIONS))
         _choice(self, "winner_rule", WINNER_RULES)
@@ -100,7 +108,11 @@ class SOMConfig:
         vals = [v for _, v in eps.knots]
         if min(vals) <= 0 or max(vals) > 1:
             raise ConfigError(f"eps values must lie in (0, 1], got {vals}; the paper uses 0.01")
-        set_(self, "eps", eps.knots[0][1] if len(eps.knots) == 1 and eps.knots[0][0] == 0 else eps.knots)
+        set_(
+            self,
+            "eps",
+            eps.knots[0][1] if len(eps.knots) == 1 and eps.knots[0][0] == 0 else eps.knots,
+        )
         sig = PiecewiseLinear.coerce(self.sigma, "sigma")
         if min(v for _, v in sig.knots) <= 0:
             raise ConfigError(
@@ -139,7 +151,9 @@ class SOMConfig:
     def from_dict(cls, data: dict[str, Any]) -> SOMConfig:
         """Build from a dict such as a parsed TOML file; unknown keys are an error."""
         if not isinstance(data, dict):
-            raise ConfigError(f"a config must be a table of key = value pairs, got {type(data).__name__}")
+            raise ConfigError(
+                f"a config must be a table of key = value pairs, got {type(data).__name__}"
+            )
         _check_keys(data)
         kwargs = dict(data)
         for key in ("map_shape", "x_shape", "y_shape"):

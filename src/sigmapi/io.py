@@ -80,11 +80,13 @@ def encode_archive(header: dict[str, Any], arrays: dict[str, NDArray[Any]]) -> b
 
     buf = _io.BytesIO()
     head = np.frombuffer(json.dumps(header, sort_keys=True).encode("utf-8"), dtype=np.uint8)
-    np.savez(buf, header=head, **arrays)
+    np.savez(buf, header=head, **arrays)  # type: ignore[arg-type]
     return buf.getvalue()
 
 
-def read_archive(path: str | Path, kind: str = FORMAT) -> tuple[dict[str, Any], dict[str, NDArray[Any]]]:
+def read_archive(
+    path: str | Path, kind: str = FORMAT
+) -> tuple[dict[str, Any], dict[str, NDArray[Any]]]:
     """Read and sanity-check an archive; returns (header, arrays). Never unpickles."""
     p = Path(path)
     if not p.exists():
@@ -92,9 +94,7 @@ def read_archive(path: str | Path, kind: str = FORMAT) -> tuple[dict[str, Any], 
     if not p.is_file():
         raise ModelFileError(f"model file {str(p)!r} is not a regular file")
     try:
-        with np.load(p, allow_pickle=False) as npz:
-            if not hasattr(npz, "files"):
-                raise ModelFileError(f"{str(p)!r} is not a sigmapi model file (not an .npz archive)")
+        with open(p, "rb") as fh, np.load(fh, allow_pickle=False) as npz:
             names = set(npz.files)
             if "header" not in names:
                 raise ModelFileError(f"{str(p)!r} has no header: not a sigmapi model file")
@@ -119,9 +119,7 @@ def read_archive(path: str | Path, kind: str = FORMAT) -> tuple[dict[str, Any], 
     except (OSError, EOFError, zipfile.BadZipFile, KeyError, RuntimeError) as exc:
         raise ModelFileError(f"{str(p)!r} is damaged or not a sigmapi model file ({exc})") from None
     if header.get("format") != kind:
-        raise ModelFileError(
-            f"{str(p)!r}: format is {header.get('format')!r}, expected {kind!r}"
-        )
+        raise ModelFileError(f"{str(p)!r}: format is {header.get('format')!r}, expected {kind!r}")
     if header.get("version") != VERSION:
         raise ModelFileError(
             f"{str(p)!r}: file version {header.get('version')!r} is not supported by this "
@@ -133,7 +131,10 @@ def read_archive(path: str | Path, kind: str = FORMAT) -> tuple[dict[str, Any], 
 def save_model(model: SigmaPiSOM, path: str | Path) -> Path:
     """Write ``model`` atomically to ``path``; see the module docstring for the layout."""
     w = np.ascontiguousarray(model.weights_)
-    extra = {f"state_{k}": np.ascontiguousarray(v) for k, v in model._kernel.state_arrays(model._state).items()}
+    extra = {
+        f"state_{k}": np.ascontiguousarray(v)
+        for k, v in model._kernel.state_arrays(model._state).items()
+    }
     header = {
         "format": FORMAT,
         "version": VERSION,
@@ -158,7 +159,7 @@ def load_model(path: str | Path, backend: str | None = None) -> SigmaPiSOM:
     for key in ("config", "t", "seed_entropy", "dtype", "shape", "sha256"):
         if key not in header:
             raise ModelFileError(f"{name!r}: header lacks {key!r}; the file is damaged")
-    state = {k[len("state_"):]: v for k, v in arrays.items() if k.startswith("state_")}
+    state = {k[len("state_") :]: v for k, v in arrays.items() if k.startswith("state_")}
     if "weights" not in arrays or set(arrays) - {"weights"} - {f"state_{k}" for k in state}:
         raise ModelFileError(
             f"{name!r}: expected an array 'weights' and optional 'state_*' arrays, "
@@ -173,7 +174,9 @@ def load_model(path: str | Path, backend: str | None = None) -> SigmaPiSOM:
         raise ModelFileError(f"{name!r}: stored config is invalid ({exc})") from None
     expected = (int(np.prod(cfg.map_shape)), int(np.prod(cfg.x_shape)), int(np.prod(cfg.y_shape)))
     if w.dtype.kind != "f" or str(w.dtype) != header["dtype"]:
-        raise ModelFileError(f"{name!r}: weights have dtype {w.dtype}, header says {header['dtype']!r}")
+        raise ModelFileError(
+            f"{name!r}: weights have dtype {w.dtype}, header says {header['dtype']!r}"
+        )
     if tuple(w.shape) != expected or list(w.shape) != header["shape"]:
         raise ModelFileError(
             f"{name!r}: weights have shape {tuple(w.shape)}, the config needs {expected}"

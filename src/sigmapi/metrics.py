@@ -72,7 +72,9 @@ def z_decoder(
     return table
 
 
-def chebyshev(map_coords: NDArray[np.float64], a: NDArray[np.int64], b: NDArray[np.int64]) -> NDArray[np.float64]:
+def chebyshev(
+    map_coords: NDArray[np.float64], a: NDArray[np.int64], b: NDArray[np.int64]
+) -> NDArray[np.float64]:
     """Chebyshev distance on the map grid between units ``a`` and ``b``."""
     return np.max(np.abs(map_coords[a] - map_coords[b]), axis=1)
 

@@ -43,7 +43,9 @@ class PiecewiseLinear:
                 "e.g. [[0.0, 8.0], [0.11, 3.5], [0.6667, 1e-5]]"
             ) from None
         if not knots:
-            raise ConfigError("schedule knots must hold at least one [fraction, value] pair, got []")
+            raise ConfigError(
+                "schedule knots must hold at least one [fraction, value] pair, got []"
+            )
         fr = np.array([f for f, _ in knots])
         vals = np.array([v for _, v in knots])
         if not (np.all(np.isfinite(fr)) and np.all(np.isfinite(vals))):
@@ -65,14 +67,16 @@ class PiecewiseLinear:
         return [[f, v] for f, v in self.knots]
 
     @classmethod
-    def coerce(cls, value: PiecewiseLinear | float | Sequence[Sequence[float]], name: str) -> PiecewiseLinear:
+    def coerce(
+        cls, value: PiecewiseLinear | float | Sequence[Sequence[float]], name: str
+    ) -> PiecewiseLinear:
         """Accept a schedule, a constant, or a list of [fraction, value] pairs."""
         if isinstance(value, PiecewiseLinear):
             return value
         if isinstance(value, (int, float)) and not isinstance(value, bool):
             return cls(((0.0, float(value)),))
         try:
-            return cls(tuple(tuple(k) for k in value))  # type: ignore[arg-type]
+            return cls(tuple(tuple(k) for k in value))  # type: ignore[union-attr]
         except ConfigError as exc:
             raise ConfigError(f"{name}: {exc}") from None
         except TypeError:

@@ -198,7 +198,9 @@ class SigmaPiSOM:
         """
         self._set_weights(self.initial_weights())
         self.t_ = 0
-        return self.partial_fit(n_iter if n_iter is not None else self.config.iterations, callback=callback)
+        return self.partial_fit(
+            n_iter if n_iter is not None else self.config.iterations, callback=callback
+        )
 
     def partial_fit(
         self,
@@ -305,7 +307,9 @@ class SigmaPiSOM:
         xa = self._check_codes(x, "x", self.x_shape)
         ya = self._check_codes(y, "y", self.y_shape)
         if xa.shape[0] != ya.shape[0]:
-            raise ValueError(f"x and y must have the same number of rows, got {xa.shape[0]} and {ya.shape[0]}")
+            raise ValueError(
+                f"x and y must have the same number of rows, got {xa.shape[0]} and {ya.shape[0]}"
+            )
         return np.asarray(self._kernel.activation(self._state, xa, ya), dtype=np.float64)
 
     def winner(self, x: ArrayLike, y: ArrayLike, rule: str | None = None) -> NDArray[np.int64]:
@@ -316,12 +320,14 @@ class SigmaPiSOM:
         h = self.respond(x, y)
         rule = rule or self.config.winner_rule
         return np.asarray(
-            self._kernel.winners(self._state, h, self.map_shape, rule, self.sigma_, self.config.soft_cut),
+            self._kernel.winners(
+                self._state, h, self.map_shape, rule, self.sigma_, self.config.soft_cut
+            ),
             dtype=np.int64,
         )
 
     def transform(self, x: ArrayLike, y: ArrayLike) -> NDArray[np.float64]:
-        """Map coordinates of the winner, as fractions of each map axis in [0, 1]; ``(B, d_map)``."""
+        """Map coordinates of the winner as fractions of each map axis, ``(B, d_map)`` in [0, 1]."""
         k = self.winner(x, y)
         scale = np.maximum(np.asarray(self.map_shape, dtype=np.float64) - 1.0, 1.0)
         return self.map_coords[k] / scale

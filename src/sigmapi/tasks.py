@@ -171,7 +171,11 @@ class TwoViewSampler:
             m = idx[0].size
             if m == 0:
                 return x, y
-            if rounds == _REJECTION_ROUNDS and rel.x_bounds is not None and rel.y_bounds is not None:
+            if (
+                rounds == _REJECTION_ROUNDS
+                and rel.x_bounds is not None
+                and rel.y_bounds is not None
+            ):
                 self._direct(z, idx, x, y, rng)
                 return x, y
             zz = z[idx]
@@ -189,7 +193,12 @@ class TwoViewSampler:
         )
 
     def _direct(
-        self, z: Array, idx: tuple[NDArray[np.intp], ...], x: Array, y: Array, rng: np.random.Generator
+        self,
+        z: Array,
+        idx: tuple[NDArray[np.intp], ...],
+        x: Array,
+        y: Array,
+        rng: np.random.Generator,
     ) -> None:
         rel = self.relation
         assert rel.x_bounds is not None and rel.y_bounds is not None

@@ -14,7 +14,8 @@ One learning iteration (Fig. 7 of the chapter; ALGORITHM.md):
 
 Every backend module (``reference``, ``fast``, ``gpu``) offers the same functions:
 ``activation``, ``winners``, ``neighbourhood``, ``kohonen_update``, ``train_block``,
-``prepare``, ``export``, ``state_arrays`` and ``from_state_arrays``; the SOM only ever calls them through that interface.
+``prepare``, ``export``, ``state_arrays`` and ``from_state_arrays``; the SOM only ever
+calls them through that interface.
 """
 
 from __future__ import annotations

@@ -1,0 +1,81 @@
+"""The command line, run as a user would run it (subprocess)."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+TINY = ["--preset", "tiny-1d", "--set", "iterations=2000", "--backend", "reference"]
+
+
+def run(*args: str, cwd=None) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "sigmapi.cli", *args], capture_output=True, text=True, cwd=cwd,
+        timeout=300,
+    )  # fmt: skip
+
+
+def test_train_then_evaluate_json(tmp_path):
+    out = tmp_path / "m.npz"
+    r = run("train", *TINY, "--seed", "3", "--out", str(out))
+    assert r.returncode == 0, r.stderr
+    assert out.is_file()
+    r = run("evaluate", str(out), "--json", "--n-test", "500")
+    assert r.returncode == 0, r.stderr
+    metrics = json.loads(r.stdout)
+    for key in ("view_consistency", "view_within_one", "z_error", "order_r2", "usage"):
+        assert isinstance(metrics[key], float)
+    assert 0 <= metrics["view_consistency"] <= metrics["view_within_one"] <= 1
+
+
+def test_presets_lists_paper_1d():
+    r = run("presets")
+    assert r.returncode == 0 and "paper-1d" in r.stdout
+
+
+@pytest.mark.parametrize(
+    ("args", "needle"),
+    [
+        (["train", "--preset", "nope", "--out", "x.npz"], "unknown preset 'nope'"),
+        (["train", *TINY, "--set", "iterations=-5", "--out", "x.npz"], "iterations must be"),
+        (["train", *TINY, "--set", "color=red", "--out", "x.npz"], "unknown config key 'color'"),
+        (["train", *TINY, "--set", "novalue", "--out", "x.npz"], "key=value"),
+        (["train", *TINY, "--config", "missing.toml", "--out", "x.npz"], "does not exist"),
+        (["train", *TINY, "--out", "no/such/dir/x.npz"], "does not exist"),
+        (["evaluate", "missing.npz"], "does not exist"),
+        (["evaluate", "bad.npz"], "not a sigmapi model file"),
+        (["train"], "required"),
+        (["frobnicate"], "invalid choice"),
+    ],
+)
+def test_user_mistakes_exit_2_with_one_line(tmp_path, args, needle):
+    (tmp_path / "bad.npz").write_text("not a model")
+    r = run(*args, cwd=tmp_path)
+    assert r.returncode == 2
+    lines = [ln for ln in r.stderr.splitlines() if ln.strip()]
+    assert len(lines) == 1, r.stderr
+    assert needle in lines[0]
+    assert "Traceback" not in r.stderr
+
+
+def test_existing_output_needs_force(tmp_path):
+    out = tmp_path / "m.npz"
+    out.write_text("keep me")
+    r = run("train", *TINY, "--out", str(out))
+    assert r.returncode == 2 and "--force" in r.stderr
+    assert out.read_text() == "keep me"
+
+
+def test_config_file_overrides_preset(tmp_path):
+    cfg = tmp_path / "c.toml"
+    cfg.write_text("iterations = 1500\nmap_shape = [5]\n")
+    out = tmp_path / "m.npz"
+    r = run("train", *TINY[:2], "--config", str(cfg), "--backend", "reference", "--out", str(out))
+    assert r.returncode == 0, r.stderr
+    import sigmapi
+
+    m = sigmapi.load(out)
+    assert m.t_ == 1500 and m.map_shape == (5,)
