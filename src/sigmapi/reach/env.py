@@ -1,0 +1,287 @@
+"""GazeReach: a body with a movable eye that must bring an object into its grasp region.
+
+The world (ALGORITHM.md): an object lies at body-centred position ``z`` in ``[0, 1]^d``; the
+eye looks in direction ``y`` in ``[0, 1]^d``; the retina sees the object at ``x = 2 z - y``
+(the relation ``z = (x + y) / 2`` of the paper's simulator). The agent sees only population
+codes of ``x`` (retina) and ``y`` (gaze); ``z`` is in ``info`` for analysis, never in the
+observation.
+
+Dynamics of one step
+--------------------
+1. The body moves: action ``a`` shifts ``z`` by ``step_size`` along one axis (or stays, action
+   0, which keeps ``z``: the body is still, so the next view shows the same ``z``).
+2. Outcome, in this order: ``z`` inside the goal box (``|z - goal|_inf <= goal_radius``:
+   "straight ahead within grasp range") -> reward ``reward_reach`` (+1), terminated;
+   ``z`` outside ``[0, 1]^d`` -> reward ``reward_fail`` (-0.3), terminated: the object left
+   the workspace, which is also the eye's whole field of view (no gaze direction ``y`` in
+   ``[0, 1]^d`` puts it on the retina). Otherwise reward 0. These are the authors' docking
+   values (+1 at the target, -0.3 at the borders, random restart after either).
+3. The eye: with probability ``saccade_rate`` it makes a saccade to a new fixation ``y`` drawn
+   uniformly among the directions that keep the object on the retina (``x`` in ``[0, 1]^d``).
+   A move that pushes the object off the retina at the current fixation forces such a
+   saccade (a corrective saccade), so a live object is always seen.
+4. ``truncated`` when ``max_steps`` steps passed without termination (time limit).
+
+Actions: ``0`` stay, then ``+`` and ``-`` along each axis (``1 + 2 * axis + (0 for +, 1 for
+-)``): 3 actions in 1-D, 5 in 2-D; ``diagonal=True`` adds the four diagonal moves in 2-D (9
+actions, each diagonal moving ``step_size`` along both axes).
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from typing import Any, SupportsFloat
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+from numpy.typing import NDArray
+
+from sigmapi.codes import PopulationCode
+from sigmapi.errors import ConfigError
+
+__all__ = ["GazeReachEnv", "move_table"]
+
+Obs = dict[str, NDArray[np.float32]]
+
+
+def move_table(dim: int, diagonal: bool = False) -> NDArray[np.float64]:
+    """Displacement per action in steps, ``(n_actions, dim)``; row 0 is "stay"."""
+    rows = [np.zeros(dim)]
+    for axis in range(dim):
+        for sign in (1.0, -1.0):
+            m = np.zeros(dim)
+            m[axis] = sign
+            rows.append(m)
+    if diagonal:
+        rows += [np.array(s, dtype=np.float64) for s in itertools.product((1.0, -1.0), repeat=dim)]
+    return np.array(rows, dtype=np.float64)
+
+
+def _check_number(name: str, value: Any, lo: float, hi: float, hint: str, lo_open: bool = True) -> float:
+    ok = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
+    ok = ok and math.isfinite(float(value))
+    if ok:
+        v = float(value)
+        ok = (v > lo if lo_open else v >= lo) and v <= hi
+    if not ok:
+        left = "(" if lo_open else "["
+        raise ConfigError(f"{name} must be a number in {left}{lo}, {hi}], got {value!r}; {hint}")
+    return float(value)
+
+
+def _check_int(name: str, value: Any, lo: int, hint: str) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < lo:
+        raise ConfigError(f"{name} must be an int >= {lo}, got {value!r}; {hint}")
+    return int(value)
+
+
+def _unit_vector(value: Any, dim: int) -> NDArray[np.float64] | None:
+    """``value`` as a float vector of length ``dim`` in [0, 1] (a scalar is repeated), or None."""
+    try:
+        arr = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        return None
+    if arr.ndim > 1 or arr.size not in (1, dim):
+        return None
+    v = np.broadcast_to(arr.ravel(), (dim,)).copy()
+    if not np.all(np.isfinite(v)) or np.any(v < 0.0) or np.any(v > 1.0):
+        return None
+    return v
+
+
+class GazeReachEnv(gym.Env[Obs, np.int64]):
+    """Gaze-and-reach task: move the body until the seen object lies in the grasp region.
+
+    Parameters
+    ----------
+    dim : int
+        1 or 2: dimensions of ``x``, ``y`` and ``z``.
+    grid : int
+        Units per axis of the retina and gaze codes (the code of a 2-D position has
+        ``grid**2`` units); must match the map's ``x_shape`` / ``y_shape`` when a trained
+        map reads the observations.
+    code_width : float
+        Width of the Gaussian hills in grid units (the paper: 0.5).
+    step_size : float
+        How far one move shifts ``z`` along an axis, as a fraction of the workspace.
+    goal : float or sequence of float
+        Centre of the goal box in ``z`` (default 0.5 on every axis: straight ahead).
+    goal_radius : float
+        Half-width of the goal box (Chebyshev radius): the grasp range.
+    saccade_rate : float
+        Probability of a saccade (a new gaze direction) per step, in [0, 1]; 1 = every step.
+    max_steps : int
+        Time limit: the episode is truncated after this many steps.
+    reward_reach, reward_fail : float
+        Reward on reaching the goal (+1) and on losing the object (-0.3).
+    diagonal : bool
+        2-D only: add the four diagonal moves.
+
+    Observations are ``{"retina": code of x, "gaze": code of y}``, float32 vectors of
+    ``grid**dim`` values in [0, 1] (L2-normalised Gaussian hills, C order over the grid).
+    ``info`` holds ``z``, ``x``, ``y`` (float64 positions), ``saccade`` (the eye moved this
+    step), ``event`` (``"reached"``, ``"left_view"`` or ``""``) and ``is_success``.
+
+    ``reset(options={"z": ..., "y": ...})`` places the object and the gaze by hand (tests,
+    demonstrations); ``y`` must keep the object on the retina.
+
+    Examples
+    --------
+    >>> env = GazeReachEnv(dim=1, grid=9)
+    >>> obs, info = env.reset(seed=0)
+    >>> obs["retina"].shape, env.action_space.n
+    ((9,), 3)
+    >>> obs, r, terminated, truncated, info = env.step(0)
+    """
+
+    metadata: dict[str, Any] = {"render_modes": []}  # noqa: RUF012 (Gymnasium's convention)
+
+    def __init__(
+        self,
+        dim: int = 2,
+        grid: int = 9,
+        code_width: float = 0.5,
+        step_size: float = 0.05,
+        goal: float | tuple[float, ...] = 0.5,
+        goal_radius: float = 0.1,
+        saccade_rate: float = 1.0,
+        max_steps: int = 100,
+        reward_reach: float = 1.0,
+        reward_fail: float = -0.3,
+        diagonal: bool = False,
+    ) -> None:
+        if dim not in (1, 2) or isinstance(dim, bool):
+            raise ConfigError(f"dim must be 1 or 2, got {dim!r}; the task has 1-D and 2-D variants")
+        self.dim = int(dim)
+        self.grid = _check_int("grid", grid, 2, "use e.g. grid=9 (the paper: 15)")
+        self.code_width = _check_number("code_width", code_width, 0.0, 1e6, "the paper uses 0.5")
+        self.step_size = _check_number("step_size", step_size, 0.0, 0.5, "use e.g. 0.05")
+        g = _unit_vector(goal, self.dim)
+        if g is None:
+            raise ConfigError(
+                f"goal must be a number or {self.dim} numbers in [0, 1], got {goal!r}; "
+                "the default 0.5 is straight ahead"
+            )
+        self.goal = g
+        self.goal_radius = _check_number("goal_radius", goal_radius, 0.0, 0.5, "use e.g. 0.1")
+        self.saccade_rate = _check_number(
+            "saccade_rate", saccade_rate, 0.0, 1.0, "a probability per step", lo_open=False
+        )
+        self.max_steps = _check_int("max_steps", max_steps, 1, "use e.g. 100")
+        self.reward_reach = _check_number("reward_reach", reward_reach, -1e9, 1e9, "e.g. 1.0")
+        self.reward_fail = _check_number("reward_fail", reward_fail, -1e9, 1e9, "e.g. -0.3")
+        if not isinstance(diagonal, bool) or (diagonal and self.dim != 2):
+            raise ConfigError(f"diagonal must be True or False, and True only for dim=2; got {diagonal!r}")
+        self.diagonal = diagonal
+        self.moves = move_table(self.dim, diagonal) * self.step_size
+
+        self.code = PopulationCode((self.grid,) * self.dim, width=self.code_width)
+        n = self.code.size
+        self.observation_space = spaces.Dict(
+            {
+                "retina": spaces.Box(0.0, 1.0, (n,), dtype=np.float32),
+                "gaze": spaces.Box(0.0, 1.0, (n,), dtype=np.float32),
+            }
+        )
+        self.action_space = spaces.Discrete(len(self.moves))
+        self._z = np.full(self.dim, 0.5)
+        self._y = np.full(self.dim, 0.5)
+        self._t = 0
+
+    # ------------------------------------------------------------------ helpers
+    def in_goal(self, z: NDArray[np.float64]) -> bool:
+        """Whether ``z`` lies in the goal box (closed, Chebyshev radius ``goal_radius``)."""
+        return bool(np.max(np.abs(z - self.goal)) <= self.goal_radius + 1e-12)
+
+    @staticmethod
+    def in_view(z: NDArray[np.float64]) -> bool:
+        """Whether ``z`` is inside the workspace ``[0, 1]^d`` (some gaze sees it)."""
+        return bool(np.all(z >= 0.0) and np.all(z <= 1.0))
+
+    @staticmethod
+    def gaze_range(z: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """The gaze directions that keep ``z`` on the retina: ``y`` in ``[lo, hi]`` per axis."""
+        return np.maximum(2.0 * z - 1.0, 0.0), np.minimum(2.0 * z, 1.0)
+
+    def _saccade(self) -> None:
+        lo, hi = self.gaze_range(np.clip(self._z, 0.0, 1.0))
+        self._y = lo + (hi - lo) * self.np_random.random(self.dim)
+
+    def _obs(self) -> Obs:
+        x = np.clip(2.0 * self._z - self._y, 0.0, 1.0)
+        codes = self.code.encode(np.stack([x, self._y]))
+        return {
+            "retina": codes[0].astype(np.float32),
+            "gaze": codes[1].astype(np.float32),
+        }
+
+    def _info(self, saccade: bool, event: str) -> dict[str, Any]:
+        return {
+            "z": self._z.copy(),
+            "x": 2.0 * self._z - self._y,
+            "y": self._y.copy(),
+            "saccade": saccade,
+            "event": event,
+            "is_success": event == "reached",
+        }
+
+    # ------------------------------------------------------------------ Gymnasium API
+    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[Obs, dict[str, Any]]:
+        super().reset(seed=seed)
+        options = dict(options or {})
+        unknown = sorted(set(options) - {"z", "y"})
+        if unknown:
+            raise ConfigError(f"unknown reset option {unknown[0]!r}; valid options are 'z' and 'y'")
+        if "z" in options:
+            z = self._position(options["z"], "options['z']")
+        else:
+            z = self.np_random.random(self.dim)
+            while self.in_goal(z):
+                z = self.np_random.random(self.dim)
+        self._z = z
+        if "y" in options:
+            y = self._position(options["y"], "options['y']")
+            lo, hi = self.gaze_range(z)
+            if np.any(y < lo - 1e-12) or np.any(y > hi + 1e-12):
+                raise ConfigError(
+                    f"options['y'] = {y.tolist()} puts the object off the retina (x = 2 z - y "
+                    f"outside [0, 1]); choose y in [{lo.tolist()}, {hi.tolist()}] for z = {z.tolist()}"
+                )
+            self._y = y
+        else:
+            self._saccade()
+        self._t = 0
+        return self._obs(), self._info(True, "")
+
+    def _position(self, value: Any, name: str) -> NDArray[np.float64]:
+        p = _unit_vector(value, self.dim)
+        if p is None:
+            raise ConfigError(f"{name} must be {self.dim} number(s) in [0, 1], got {value!r}")
+        return p
+
+    def step(self, action: Any) -> tuple[Obs, SupportsFloat, bool, bool, dict[str, Any]]:
+        if not self.action_space.contains(action):
+            raise ValueError(
+                f"action must be an int in [0, {self.action_space.n}), got {action!r}; see env.moves"
+            )
+        self._z = self._z + self.moves[int(action)]
+        self._t += 1
+        reward = 0.0
+        event = ""
+        if self.in_goal(self._z):
+            reward, event = self.reward_reach, "reached"
+        elif not self.in_view(self._z):
+            reward, event = self.reward_fail, "left_view"
+        terminated = event != ""
+        truncated = not terminated and self._t >= self.max_steps
+        # the eye: one uniform draw per step whatever happens, so rollouts stay in lockstep
+        u = self.np_random.random()
+        saccade = False
+        if not terminated:
+            x = 2.0 * self._z - self._y
+            if u < self.saccade_rate or np.any(x < 0.0) or np.any(x > 1.0):
+                self._saccade()
+                saccade = True
+        return self._obs(), reward, terminated, truncated, self._info(saccade, event)
