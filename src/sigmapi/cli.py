@@ -99,16 +99,43 @@ def _add_config_flags(p: argparse.ArgumentParser) -> None:
 
 
 def cmd_train(args: argparse.Namespace) -> int:
+    from sigmapi.checkpoints import checkpoint_dir, find_resumable, write_checkpoint
     from sigmapi.som import SigmaPiSOM
 
     cfg = resolve_config(args)
-    out = check_output(args.out, args.force)
-    model = SigmaPiSOM(cfg)
+    every = args.checkpoint_every
+    if every is not None and every < 1:
+        raise UsageError(f"--checkpoint-every must be an int >= 1 (iterations), got {every}")
+    # --resume continues the same run, so it may replace that run's --out
+    out = check_output(args.out, args.force or args.resume)
+    folder = checkpoint_dir(out)
+    model = None
+    if args.resume:
+        found = find_resumable(folder, cfg)
+        for note in found.skipped:
+            if "another config" in note:
+                raise UsageError(
+                    f"checkpoint {note}; resume with the command line that started the run, "
+                    f"or remove {str(folder)!r}"
+                )
+            print(f"sigmapi train: skipped damaged checkpoint {note}", file=sys.stderr)
+        model = found.model
+        if model is not None:
+            print(f"resuming from {found.path} (iteration {model.t_})", file=sys.stderr)
+    if model is None:
+        model = SigmaPiSOM(cfg)
+        model.partial_fit(0)  # initial weights, iteration 0
     callback, bar = progress_callback(
-        cfg.iterations, f"train {args.preset}", disable=args.quiet or None
+        cfg.iterations, f"train {args.preset}", start=model.t_, disable=args.quiet or None
     )
     with bar:
-        model.fit(callback=callback)
+        while model.t_ < cfg.iterations:
+            step = cfg.iterations - model.t_
+            if every is not None:
+                step = min(step, every - model.t_ % every)
+            model.partial_fit(step, callback=callback)
+            if every is not None and model.t_ % every == 0 and model.t_ < cfg.iterations:
+                write_checkpoint(model, folder)
     model.save(out)
     print(f"wrote {out} ({model.t_} iterations, backend {model.backend})", file=sys.stderr)
     return 0
@@ -155,6 +182,17 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", required=True, help="model file to write (.npz)")
     p.add_argument("--force", action="store_true", help="overwrite --out if it exists")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument(
+        "--checkpoint-every",
+        type=int,
+        metavar="N",
+        help="write a checkpoint to OUT.ckpt/ every N iterations (atomic; the 3 newest are kept)",
+    )
+    p.add_argument(
+        "--resume",
+        action="store_true",
+        help="continue from the newest good checkpoint of this --out (same command line)",
+    )
     p.set_defaults(func=cmd_train)
 
     p = sub.add_parser("evaluate", help="metrics of a model file")

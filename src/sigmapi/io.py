@@ -74,6 +74,12 @@ def digest(weights: NDArray[Any]) -> str:
     return hashlib.sha256(np.ascontiguousarray(weights).tobytes()).hexdigest()
 
 
+def header_digest(header: dict[str, Any]) -> str:
+    """SHA-256 of the canonical JSON of ``header`` without its own ``header_sha256`` entry."""
+    body = {k: v for k, v in header.items() if k != "header_sha256"}
+    return hashlib.sha256(json.dumps(body, sort_keys=True).encode("utf-8")).hexdigest()
+
+
 def encode_archive(header: dict[str, Any], arrays: dict[str, NDArray[Any]]) -> bytes:
     """The bytes of an ``.npz`` archive holding ``header`` as JSON plus ``arrays``."""
     import io as _io
@@ -147,6 +153,7 @@ def save_model(model: SigmaPiSOM, path: str | Path) -> Path:
         "backend": model.backend,
         "state_sha256": {k: digest(v) for k, v in extra.items()},
     }
+    header["header_sha256"] = header_digest(header)
     return atomic_write_bytes(path, encode_archive(header, {"weights": w, **extra}))
 
 
@@ -156,9 +163,11 @@ def load_model(path: str | Path, backend: str | None = None) -> SigmaPiSOM:
 
     header, arrays = read_archive(path)
     name = str(path)
-    for key in ("config", "t", "seed_entropy", "dtype", "shape", "sha256"):
+    for key in ("config", "t", "seed_entropy", "dtype", "shape", "sha256", "header_sha256"):
         if key not in header:
             raise ModelFileError(f"{name!r}: header lacks {key!r}; the file is damaged")
+    if header_digest(header) != header["header_sha256"]:
+        raise ModelFileError(f"{name!r}: header checksum mismatch; the file is damaged")
     state = {k[len("state_") :]: v for k, v in arrays.items() if k.startswith("state_")}
     if "weights" not in arrays or set(arrays) - {"weights"} - {f"state_{k}" for k in state}:
         raise ModelFileError(
