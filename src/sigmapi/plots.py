@@ -1,0 +1,336 @@
+"""Figures of the reproduction: thin drawing functions over the arrays of :mod:`sigmapi.analysis`.
+
+Every function takes ``ax=None`` and returns the Axes it drew into; with ``ax=None`` it opens a
+new pyplot figure. Figures made of several panels (Fig. 8, the learning curves) draw their
+panels as inset Axes inside ``ax`` (then hidden; the panels are ``ax.child_axes``), so they
+too fit any layout. Nothing here calls ``plt.show()``; the report draws on Agg figures.
+
+- :func:`plot_fig8`: Fig. 8 of the chapter (invariance and topography of the map response).
+- :func:`plot_weight_tiles`: Fig. 6a-style Sigma-Pi weight matrices, one tile per unit.
+- :func:`plot_net`: the map in input space (each unit at the z it responds to).
+- :func:`plot_learning_curves`: metrics and cost against iterations, with the sigma schedule.
+- :func:`plot_invariance`: the winner as a function of x and y.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+
+    from sigmapi.analysis import Fig8Data, InvarianceMatrix
+
+__all__ = [
+    "plot_fig8",
+    "plot_invariance",
+    "plot_learning_curves",
+    "plot_net",
+    "plot_weight_tiles",
+]
+
+CODE_CMAP = "viridis"
+WEIGHT_CMAP = "RdBu_r"
+
+
+def _axes(ax: Axes | None, figsize: tuple[float, float], container: bool = False) -> Axes:
+    """``ax``, or the Axes of a new pyplot figure (filling it when it holds inset panels)."""
+    if ax is not None:
+        return ax
+    import matplotlib.pyplot as plt
+
+    fig = plt.figure(figsize=figsize)
+    return fig.add_axes((0.0, 0.0, 1.0, 1.0)) if container else fig.add_subplot()
+
+
+def _container(ax: Axes, title: str) -> None:
+    ax.set_axis_off()
+    ax.set_title(title, fontsize=12, pad=14)
+
+
+def _inset(ax: Axes, left: float, bottom: float, width: float, height: float) -> Axes:
+    return ax.inset_axes((left, bottom, width, height))
+
+
+# ----------------------------------------------------------------------------- Fig. 8
+
+
+def _draw_code(ax: Axes, code: NDArray[np.float64], shape: tuple[int, ...]) -> Any:
+    """One input code or map response, scaled to its peak; returns the image (2-D) or None."""
+    peak = float(np.max(np.abs(code)))
+    v = code / peak if peak > 0 else code
+    if len(shape) == 1:
+        ax.bar(np.arange(shape[0]), v, width=0.8, color="C0")
+        ax.set_ylim(min(0.0, float(v.min()) * 1.1), 1.1)
+        ax.set_xlim(-0.7, shape[0] - 0.3)
+        ax.tick_params(labelsize=7)
+        return None
+    img = ax.imshow(v.reshape(shape), cmap=CODE_CMAP, vmin=0.0, vmax=1.0, interpolation="nearest")
+    ax.set_xticks([])
+    ax.set_yticks([])
+    return img
+
+
+def plot_fig8(data: Fig8Data, ax: Axes | None = None) -> Axes:
+    """Fig. 8 of the chapter: rows x, y and the map response h; one column per input pair.
+
+    Left columns: random (x, y) pairs with the same body-centred z; the response must look the
+    same in all of them (invariance). Right columns: a pattern (an "L" in 2-D, two hills in
+    1-D) on one input with a single hill on the other; the pattern reappears on the map
+    (topography), oriented as the map's polarity dictates (named in the title). Every panel is
+    scaled to its own peak.
+    """
+    d = len(data.x_shape)
+    ax = _axes(ax, (11.0, 5.6) if d == 2 else (12.0, 5.0), container=True)
+    zs = ", ".join(f"{v:.2f}" for v in data.z)
+    _container(
+        ax,
+        f"Fig. 8: map response h to {data.n_pairs} (x, y) pairs with the same z = ({zs}) (left) "
+        f"and to patterns (right)\nmap polarity: {data.polarity.name}",
+    )
+    n_cols = data.x.shape[0]
+    gap = 0.6  # extra space between the pair columns and the pattern columns, in columns
+    left, right, bottom, top = 0.08, 0.90, 0.02, 0.90
+    col_w = (right - left) / (n_cols + gap)
+    row_h = (top - bottom) / 3.0
+    rows = [
+        ("x (retinal)", data.x, data.x_shape, "x unit"),
+        ("y (gaze)", data.y, data.y_shape, "y unit"),
+        ("map response h", data.h, data.map_shape, "map unit"),
+    ]
+    img = None
+    for r, (name, codes, shape, unit) in enumerate(rows):
+        for c in range(n_cols):
+            x0 = left + col_w * (c + (gap if c >= data.n_pairs else 0.0))
+            y0 = top - row_h * (r + 1)
+            panel = _inset(ax, x0 + 0.1 * col_w, y0 + 0.24 * row_h, 0.8 * col_w, 0.66 * row_h)
+            out = _draw_code(panel, codes[c], shape)
+            img = out if out is not None else img
+            if r == 0:
+                panel.set_title(data.labels[c], fontsize=9)
+            if c == 0:
+                if d == 1:
+                    panel.set_ylabel(f"{name}\n(of peak)", fontsize=9)
+                    panel.set_xlabel(unit, fontsize=8)
+                else:
+                    panel.set_ylabel(f"{name}\naxis 0", fontsize=9)
+                    panel.set_xlabel(f"{unit}, axis 1", fontsize=8)
+    if img is not None:
+        cax = _inset(ax, 0.93, bottom + 0.24 * row_h, 0.015, top - bottom - 0.34 * row_h)
+        ax.figure.colorbar(img, cax=cax, label="activity (fraction of the panel's peak)")
+    return ax
+
+
+# ----------------------------------------------------------------------------- weights
+
+
+def plot_weight_tiles(
+    tiles: NDArray[np.float64],
+    map_shape: tuple[int, ...],
+    ax: Axes | None = None,
+    title: str | None = None,
+    x_label: str = "x unit i",
+    y_label: str = "y unit j",
+) -> Axes:
+    """Fig. 6a-style weights: each unit's matrix ``tiles[k]`` (x on rows, y on columns).
+
+    Tiles sit where their unit sits on the map (a 1-D map: one row, map unit k left to right),
+    separated by a blank line; one diverging colour scale centred on 0 for all tiles.
+    """
+    k, a, b = tiles.shape
+    if int(np.prod(map_shape)) != k:
+        raise ValueError(f"map_shape {map_shape} does not hold {k} tiles")
+    one_d = len(map_shape) == 1
+    if one_d:  # wrap a 1-D map into a few rows, read left to right, top to bottom
+        m0 = int(np.ceil(np.sqrt(k / 2.0)))
+        m1 = int(np.ceil(k / m0))
+    else:
+        m0, m1 = map_shape[0], map_shape[1]
+    ax = _axes(ax, (max(5.0, 0.9 * m1 + 1.5), max(3.0, 0.9 * m0 + 1.2)))
+    mosaic = np.full((m0 * (a + 1) - 1, m1 * (b + 1) - 1), np.nan)
+    for u in range(k):
+        r, c = divmod(u, m1)
+        mosaic[r * (a + 1) : r * (a + 1) + a, c * (b + 1) : c * (b + 1) + b] = tiles[u]
+    vmax = float(np.nanmax(np.abs(mosaic))) or 1.0
+    import matplotlib as mpl
+
+    cmap = mpl.colormaps[WEIGHT_CMAP].with_extremes(bad="white")
+    img = ax.imshow(mosaic, cmap=cmap, vmin=-vmax, vmax=vmax, interpolation="nearest")
+    if one_d:
+        for u in range(k):
+            r, c = divmod(u, m1)
+            ax.text(c * (b + 1) + (b - 1) / 2, r * (a + 1) - 0.6, f"k={u}", ha="center",
+                    va="bottom", fontsize=7)  # fmt: skip
+        ax.set_xticks([])
+        ax.set_yticks([])
+        ax.set_xlabel(f"one tile per map unit k; within a tile: {y_label} left to right")
+        ax.set_ylabel(f"within a tile: {x_label}\ntop to bottom")
+    else:
+        ax.set_xticks([c * (b + 1) + (b - 1) / 2 for c in range(m1)], [str(c) for c in range(m1)])
+        ax.set_yticks([r * (a + 1) + (a - 1) / 2 for r in range(m0)], [str(r) for r in range(m0)])
+        ax.tick_params(labelsize=7, length=0)
+        ax.set_xlabel(f"map axis 1 (one tile per unit); within a tile: {y_label} left to right")
+        ax.set_ylabel(f"map axis 0; within a tile:\n{x_label} top to bottom")
+    ax.set_title(
+        title or "Sigma-Pi weights w_kij of each map unit k (Fig. 6a)", pad=12 if one_d else 6
+    )
+    ax.figure.colorbar(img, ax=ax, label="weight", fraction=0.046, pad=0.02)
+    return ax
+
+
+# ----------------------------------------------------------------------------- net
+
+
+def plot_net(
+    centres: NDArray[np.float64],
+    map_shape: tuple[int, ...],
+    ax: Axes | None = None,
+    z_range: tuple[float, float] = (0.0, 1.0),
+    title: str | None = None,
+) -> Axes:
+    """The map in input space: each unit at the z it responds to, grid neighbours joined.
+
+    1-D maps: the centre against the unit index (an ordered map is monotonic). 2-D maps: the
+    classic SOM net in the (z0, z1) plane; unit (0, 0) and the end of map axis 1 are marked so
+    that the map's orientation can be read.
+    """
+    d = centres.shape[1]
+    ax = _axes(ax, (6.0, 4.0) if d == 1 else (5.6, 5.4))
+    if len(map_shape) == 1 and d == 1:
+        k = np.arange(map_shape[0])
+        ax.plot(k, centres[:, 0], "-o", color="C0", ms=5)
+        ax.set_xlabel("map unit k")
+        ax.set_ylabel("z the unit responds to")
+        ax.set_ylim(*z_range)
+        ax.set_title(title or "The map in input space: receptive-field centre of each unit")
+        ax.grid(alpha=0.3)
+        return ax
+    if len(map_shape) != 2 or d != 2:
+        raise ValueError(f"plot_net draws 1-D maps of 1-D z or 2-D maps of 2-D z, got map "
+                         f"{map_shape} and z of {d} dimensions")  # fmt: skip
+    g = centres.reshape(map_shape[0], map_shape[1], 2)
+    for r in range(map_shape[0]):
+        ax.plot(g[r, :, 0], g[r, :, 1], "-", color="C0", lw=1)
+    for c in range(map_shape[1]):
+        ax.plot(g[:, c, 0], g[:, c, 1], "-", color="C0", lw=1)
+    ax.plot(g[..., 0].ravel(), g[..., 1].ravel(), "o", color="C0", ms=3)
+    ax.plot(*g[0, 0], "s", color="C3", ms=8, label="unit (0, 0)")
+    ax.plot(*g[0, -1], "^", color="C2", ms=8, label=f"unit (0, {map_shape[1] - 1})")
+    ax.plot(*g[-1, 0], "v", color="C1", ms=8, label=f"unit ({map_shape[0] - 1}, 0)")
+    ax.legend(loc="upper left", fontsize=8, bbox_to_anchor=(1.01, 1.0))
+    ax.set_xlim(*z_range)
+    ax.set_ylim(*z_range)
+    ax.set_aspect("equal")
+    ax.set_xlabel("z0 (axis 0 of z)")
+    ax.set_ylabel("z1 (axis 1 of z)")
+    ax.set_title(title or "The map in input space: each unit at its receptive-field centre")
+    ax.grid(alpha=0.3)
+    return ax
+
+
+# ----------------------------------------------------------------------------- learning curves
+
+
+def plot_learning_curves(
+    curves: Sequence[Mapping[str, Sequence[float]]],
+    ax: Axes | None = None,
+    reference: Mapping[str, float] | None = None,
+    schedule: tuple[Sequence[float], Sequence[float]] | None = None,
+    title: str | None = None,
+) -> Axes:
+    """Learning curves: view consistency, z error and cost against iterations, and sigma.
+
+    ``curves``: one mapping per seed with columns ``t``, ``view_consistency``,
+    ``view_within_one``, ``z_error``, ``cost``, ``cost_winner``, ``sigma`` (as written by
+    :meth:`sigmapi.analysis.LearningCurve.to_dict`); thin lines per seed, a thick line for
+    the mean. ``reference``: horizontal lines for ``view_consistency``,
+    ``view_within_one``, ``z_error`` and ``z_error_floor``. ``schedule``: ``(t, sigma)`` of
+    the full sigma schedule, drawn under the checkpoints.
+    """
+    ax = _axes(ax, (8.0, 9.0), container=True)
+    _container(ax, title or "Learning curves (measured at checkpoints during training)")
+    curves = [c for c in curves if len(c.get("t", [])) > 0]
+    if not curves:
+        raise ValueError("curves must hold at least one curve with checkpoints")
+    ref = dict(reference or {})
+    panels = [
+        ("view consistency", [("view_consistency", "same winner"),
+                              ("view_within_one", "within one unit")]),
+        ("z error (grid spacings)", [("z_error", "z error")]),
+        ("cost E (sec. 6.3)", [("cost", "at the current sigma"), ("cost_winner", "winner only")]),
+        ("sigma (map units)", [("sigma", "sigma")]),
+    ]  # fmt: skip
+    n = len(panels)
+    left, right, bottom, top, gap = 0.12, 0.76, 0.06, 0.93, 0.035
+    h = (top - bottom - gap * (n - 1)) / n
+    axes = []
+    for p, (label, series) in enumerate(panels):
+        pa = _inset(ax, left, top - (p + 1) * h - p * gap, right - left, h)
+        axes.append(pa)
+        for s, (key, name) in enumerate(series):
+            colour = f"C{s}"
+            runs = [np.asarray(c[key], dtype=float) for c in curves if key in c]
+            ts = [np.asarray(c["t"], dtype=float) for c in curves if key in c]
+            for t, v in zip(ts, runs, strict=True):
+                pa.plot(t, v, "-", color=colour, lw=0.8, alpha=0.4)
+            same_t = all(len(t) == len(ts[0]) and np.allclose(t, ts[0]) for t in ts)
+            if runs and same_t:
+                mean_label = f"{name} (mean of {len(runs)})" if len(runs) > 1 else name
+                pa.plot(
+                    ts[0], np.mean(runs, axis=0), "-o", color=colour, lw=1.8, ms=3, label=mean_label
+                )
+            if key in ref:
+                pa.axhline(ref[key], color=colour, ls="--", lw=1, label=f"reference {ref[key]:g}")
+        if label.startswith("z error") and "z_error_floor" in ref:
+            pa.axhline(ref["z_error_floor"], color="0.4", ls=":", lw=1,
+                       label=f"quantisation floor {ref['z_error_floor']:g}")  # fmt: skip
+        if label.startswith("sigma") and schedule is not None:
+            st, sv = (np.asarray(v, dtype=float) for v in schedule)
+            keep = st > 0
+            pa.plot(st[keep], sv[keep], "-", color="0.5", lw=1, label="schedule")
+        if label.startswith("cost") or label.startswith("sigma"):
+            pa.set_yscale("log")
+        pa.set_xscale("log")
+        pa.set_ylabel(label)
+        pa.grid(alpha=0.3, which="both")
+        pa.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+        if p < n - 1:
+            pa.tick_params(labelbottom=False)
+    axes[-1].set_xlabel("training iteration")
+    lo = min(float(np.min(c["t"])) for c in curves)
+    hi = max(float(np.max(c["t"])) for c in curves)
+    for pa in axes:
+        pa.set_xlim(lo * 0.9, hi * 1.1)
+    return ax
+
+
+# ----------------------------------------------------------------------------- invariance
+
+
+def plot_invariance(
+    inv: InvarianceMatrix, ax: Axes | None = None, title: str | None = None
+) -> Axes:
+    """The winner as a function of x (rows) and y (columns): constant anti-diagonals = invariance.
+
+    Matrix layout (row 0 at the top), so constant z = (x + y) / 2 runs along the
+    anti-diagonals, bottom-left to top-right.
+    """
+    ax = _axes(ax, (5.6, 4.6))
+    n = inv.positions.size
+    step = 1.0 / (n - 1) if n > 1 else 1.0
+    ext = (-step / 2, 1 + step / 2, 1 + step / 2, -step / 2)
+    img = ax.imshow(inv.value, cmap="viridis", extent=ext, interpolation="nearest")
+    ax.set_xlabel(f"y position (axis {inv.axis})")
+    ax.set_ylabel(f"x position (axis {inv.axis})")
+    ax.set_title(
+        title
+        or f"Winner as a function of x and y: anti-diagonals (constant z) "
+        f"should be constant\n{100 * inv.constancy:.1f} % of cells agree with their anti-diagonal",
+        fontsize=10,
+    )
+    ax.figure.colorbar(img, ax=ax, label=inv.value_label)
+    return ax
