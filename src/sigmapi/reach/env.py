@@ -178,6 +178,7 @@ class GazeReachEnv(gym.Env[Obs, np.int64]):
         self.moves = move_table(self.dim, diagonal) * self.step_size
 
         self.code = PopulationCode((self.grid,) * self.dim, width=self.code_width)
+        self._axis = np.arange(self.grid, dtype=np.float64)[None, :]
         n = self.code.size
         self.observation_space = spaces.Dict(
             {
@@ -209,13 +210,16 @@ class GazeReachEnv(gym.Env[Obs, np.int64]):
         lo, hi = self.gaze_range(np.clip(self._z, 0.0, 1.0))
         self._y = lo + (hi - lo) * self.np_random.random(self.dim)
 
+    def encode(self, p: NDArray[np.float64]) -> NDArray[np.float32]:
+        """Code of one position ``p`` ``(dim,)`` in [0, 1]: ``self.code.encode`` computed as
+        a product of per-axis hills (the same Gaussian, separable), for speed per step."""
+        g = np.exp(-((self._axis - p[:, None] * (self.grid - 1)) ** 2) / (2.0 * self.code_width**2))
+        c = g[0] if self.dim == 1 else np.outer(g[0], g[1]).ravel()
+        return (c / np.linalg.norm(c)).astype(np.float32)
+
     def _obs(self) -> Obs:
         x = np.clip(2.0 * self._z - self._y, 0.0, 1.0)
-        codes = self.code.encode(np.stack([x, self._y]))
-        return {
-            "retina": codes[0].astype(np.float32),
-            "gaze": codes[1].astype(np.float32),
-        }
+        return {"retina": self.encode(x), "gaze": self.encode(self._y)}
 
     def _info(self, saccade: bool, event: str) -> dict[str, Any]:
         return {

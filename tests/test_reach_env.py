@@ -1,0 +1,170 @@
+"""The gaze-and-reach environment: Gymnasium API, rules on hand-built states, determinism."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+
+import sigmapi.reach
+from sigmapi.errors import ConfigError
+from sigmapi.reach import ENV_ID, GazeReachEnv, collect_saccade_views
+
+# action indices: 0 stay, 1 +axis0, 2 -axis0, 3 +axis1, 4 -axis1
+STAY, RIGHT, LEFT, UP, DOWN = range(5)
+
+
+@pytest.mark.parametrize("kwargs", [{"dim": 1}, {"dim": 2}, {"dim": 2, "diagonal": True, "saccade_rate": 0.3}])
+def test_check_env_passes(kwargs: dict) -> None:
+    check_env(GazeReachEnv(grid=7, **kwargs), skip_render_check=True)
+
+
+def test_registered_id_makes_the_env_and_reimport_is_harmless() -> None:
+    import importlib
+
+    importlib.reload(sigmapi.reach)  # registration is guarded against a second run
+    env = gym.make(ENV_ID, dim=1, grid=7)
+    obs, info = env.reset(seed=3)
+    assert env.observation_space.contains(obs)
+    assert set(info) >= {"z", "x", "y", "saccade", "event", "is_success"}
+    env.close()
+
+
+def rollout(env: gym.Env, seed: int, n: int = 200) -> list:
+    out = []
+    obs, info = env.reset(seed=seed)
+    actions = np.random.default_rng(99).integers(0, env.action_space.n, size=n)
+    for a in actions:
+        obs, r, term, trunc, info = env.step(int(a))
+        out.append((obs["retina"].copy(), obs["gaze"].copy(), r, term, trunc, info["z"].copy()))
+        if term or trunc:
+            obs, info = env.reset()
+    return out
+
+
+def test_same_seed_same_rollout_other_seed_differs() -> None:
+    a = rollout(GazeReachEnv(grid=7, saccade_rate=0.5), seed=5)
+    b = rollout(GazeReachEnv(grid=7, saccade_rate=0.5), seed=5)
+    c = rollout(GazeReachEnv(grid=7, saccade_rate=0.5), seed=6)
+    for u, v in zip(a, b, strict=True):
+        assert all(np.array_equal(p, q) for p, q in zip(u, v, strict=True))
+    assert not all(np.array_equal(u[5], v[5]) for u, v in zip(a, c, strict=True))
+
+
+def make(**kw) -> GazeReachEnv:
+    kw.setdefault("grid", 7)
+    kw.setdefault("step_size", 0.05)
+    kw.setdefault("goal_radius", 0.1)
+    return GazeReachEnv(**kw)
+
+
+def test_reaching_the_goal_gives_plus_one_and_terminates() -> None:
+    env = make(saccade_rate=0.0)
+    env.reset(seed=0, options={"z": [0.65, 0.5], "y": [0.5, 0.5]})
+    obs, r, term, trunc, info = env.step(LEFT)  # z0 0.65 -> 0.60: on the goal box's edge
+    assert (r, term, trunc, info["event"], info["is_success"]) == (1.0, True, False, "reached", True)
+    np.testing.assert_allclose(info["z"], [0.6, 0.5])
+
+
+def test_a_step_that_misses_the_goal_gives_zero() -> None:
+    env = make(saccade_rate=0.0)
+    env.reset(seed=0, options={"z": [0.75, 0.5], "y": [0.5, 0.5]})
+    _, r, term, trunc, info = env.step(LEFT)  # 0.70: still outside
+    assert (r, term, trunc, info["event"]) == (0.0, False, False, "")
+
+
+def test_leaving_the_workspace_gives_minus_0_3_and_terminates() -> None:
+    env = make(saccade_rate=0.0)
+    env.reset(seed=0, options={"z": [0.02, 0.5], "y": [0.0, 0.5]})
+    obs, r, term, trunc, info = env.step(LEFT)  # z0 = -0.03: no gaze sees it any more
+    assert (r, term, trunc, info["event"]) == (-0.3, True, False, "left_view")
+    assert env.observation_space.contains(obs)
+
+
+def test_time_limit_truncates_and_termination_wins_on_the_last_step() -> None:
+    env = make(max_steps=3, saccade_rate=0.0)
+    env.reset(seed=0, options={"z": [0.8, 0.8], "y": [0.7, 0.7]})
+    flags = [env.step(STAY)[2:4] for _ in range(3)]
+    assert flags == [(False, False), (False, False), (False, True)]
+    env.reset(seed=0, options={"z": [0.7, 0.5], "y": [0.5, 0.5]})
+    env.step(LEFT)
+    env.step(STAY)
+    _, r, term, trunc, _ = env.step(LEFT)  # reached on the last allowed step
+    assert (r, term, trunc) == (1.0, True, False)
+
+
+def test_no_saccade_keeps_gaze_and_a_move_off_the_retina_forces_one() -> None:
+    env = make(saccade_rate=0.0)
+    env.reset(seed=0, options={"z": [0.8, 0.3], "y": [0.6, 0.3]})  # x = (1.0, 0.3)
+    _, _, _, _, info = env.step(STAY)
+    assert not info["saccade"]
+    np.testing.assert_allclose(info["y"], [0.6, 0.3])
+    _, _, _, _, info = env.step(RIGHT)  # x0 would be 1.1: corrective saccade
+    assert info["saccade"]
+    assert np.all((info["x"] >= 0) & (info["x"] <= 1))
+    np.testing.assert_allclose((info["x"] + info["y"]) / 2, info["z"])
+
+
+def test_saccade_every_step_keeps_z_and_moves_the_eye() -> None:
+    env = make(saccade_rate=1.0)
+    _, info0 = env.reset(seed=1, options={"z": [0.3, 0.8]})
+    _, _, _, _, info = env.step(STAY)
+    assert info["saccade"]
+    np.testing.assert_array_equal(info["z"], info0["z"])
+    assert not np.array_equal(info["y"], info0["y"])
+
+
+def test_observation_is_the_code_of_x_and_y() -> None:
+    env = make(dim=2)
+    obs, info = env.reset(seed=4)
+    for _ in range(5):
+        obs, *_, info = env.step(STAY)
+        np.testing.assert_allclose(obs["retina"], env.code.encode(info["x"][None])[0], atol=1e-6)
+        np.testing.assert_allclose(obs["gaze"], env.code.encode(info["y"][None])[0], atol=1e-6)
+        assert obs["retina"].dtype == np.float32
+
+
+def test_random_restart_never_starts_in_the_goal() -> None:
+    env = make(dim=1, goal_radius=0.3)
+    for s in range(50):
+        _, info = env.reset(seed=s)
+        assert abs(info["z"][0] - 0.5) > 0.3
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"dim": 3}, "dim must be 1 or 2"),
+        ({"grid": 1}, "grid must be an int >= 2"),
+        ({"saccade_rate": 1.5}, r"saccade_rate must be a number in \[0.0, 1.0\]"),
+        ({"step_size": 0.0}, "step_size"),
+        ({"goal": [0.5, 2.0]}, "goal must be"),
+        ({"dim": 1, "diagonal": True}, "diagonal"),
+        ({"max_steps": 0}, "max_steps must be an int >= 1"),
+    ],
+)
+def test_constructor_errors_name_the_parameter(kwargs: dict, match: str) -> None:
+    with pytest.raises(ConfigError, match=match):
+        GazeReachEnv(**kwargs)
+
+
+def test_bad_reset_options_and_actions_are_refused() -> None:
+    env = make()
+    with pytest.raises(ConfigError, match="off the retina"):
+        env.reset(options={"z": [0.1, 0.1], "y": [0.9, 0.1]})
+    with pytest.raises(ConfigError, match="unknown reset option"):
+        env.reset(options={"goal": 1})
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match="action must be"):
+        env.step(7)
+
+
+def test_saccade_views_show_the_same_z() -> None:
+    env = make(dim=2, saccade_rate=0.5)
+    x0, y0, x1, y1 = collect_saccade_views(env, 40, seed=0)
+    dec = env.code.decode
+    z0 = (dec(x0) + dec(y0)) / 2
+    z1 = (dec(x1) + dec(y1)) / 2
+    np.testing.assert_allclose(z0, z1, atol=1e-3)
+    assert np.abs(dec(y0) - dec(y1)).max() > 0.05  # the eye really moved
