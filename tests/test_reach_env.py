@@ -15,7 +15,9 @@ from sigmapi.reach import ENV_ID, GazeReachEnv, collect_saccade_views
 STAY, RIGHT, LEFT, UP, DOWN = range(5)
 
 
-@pytest.mark.parametrize("kwargs", [{"dim": 1}, {"dim": 2}, {"dim": 2, "diagonal": True, "saccade_rate": 0.3}])
+@pytest.mark.parametrize(
+    "kwargs", [{"dim": 1}, {"dim": 2}, {"dim": 2, "diagonal": True, "saccade_rate": 0.3}]
+)
 def test_check_env_passes(kwargs: dict) -> None:
     check_env(GazeReachEnv(grid=7, **kwargs), skip_render_check=True)
 
@@ -62,8 +64,14 @@ def make(**kw) -> GazeReachEnv:
 def test_reaching_the_goal_gives_plus_one_and_terminates() -> None:
     env = make(saccade_rate=0.0)
     env.reset(seed=0, options={"z": [0.65, 0.5], "y": [0.5, 0.5]})
-    obs, r, term, trunc, info = env.step(LEFT)  # z0 0.65 -> 0.60: on the goal box's edge
-    assert (r, term, trunc, info["event"], info["is_success"]) == (1.0, True, False, "reached", True)
+    _, r, term, trunc, info = env.step(LEFT)  # z0 0.65 -> 0.60: on the goal box's edge
+    assert (r, term, trunc, info["event"], info["is_success"]) == (
+        1.0,
+        True,
+        False,
+        "reached",
+        True,
+    )
     np.testing.assert_allclose(info["z"], [0.6, 0.5])
 
 

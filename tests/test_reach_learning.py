@@ -25,8 +25,11 @@ from sigmapi.reach.plots import plot_reach_curves, plot_value_function, reach_fi
 
 @pytest.fixture(scope="module")
 def tiny_map() -> SigmaPiSOM:
-    return SigmaPiSOM(map_shape=(4, 4), x_shape=(5, 5), y_shape=(5, 5), iterations=300,
-                      sigma=((0.0, 2.0), (0.8, 0.7)), backend="reference", seed=0).fit()  # fmt: skip
+    som = SigmaPiSOM(
+        map_shape=(4, 4), x_shape=(5, 5), y_shape=(5, 5), iterations=300,
+        sigma=((0.0, 2.0), (0.8, 0.7)), backend="reference", seed=0,
+    )  # fmt: skip
+    return som.fit()
 
 
 def test_actor_critic_td_step_by_hand() -> None:
@@ -75,7 +78,9 @@ def test_map_bump_is_centred_on_the_models_winner(tiny_map: SigmaPiSOM) -> None:
     k = tiny_map.winner(raw["retina"][None].astype(float), raw["gaze"][None].astype(float))[0]
     assert int(np.argmax(obs)) == k
     resp = MapObservation(GazeReachEnv(grid=5), tiny_map, features="response").observation(raw)
-    h = np.maximum(tiny_map.respond(raw["retina"][None].astype(float), raw["gaze"][None].astype(float))[0], 0)
+    h = np.maximum(
+        tiny_map.respond(raw["retina"][None].astype(float), raw["gaze"][None].astype(float))[0], 0
+    )
     np.testing.assert_allclose(resp, h / np.linalg.norm(h), rtol=1e-5)
 
 
@@ -143,8 +148,13 @@ def test_cli_reach_json_and_figure(tmp_path, capsys) -> None:
 
 
 def test_cli_reach_user_mistakes_exit_2(tmp_path, capsys) -> None:
-    assert main(["reach", "--dim", "1", "--map-shape", "4x4", "--out", str(tmp_path / "a.png")]) == 2
+    assert (
+        main(["reach", "--dim", "1", "--map-shape", "4x4", "--out", str(tmp_path / "a.png")]) == 2
+    )
     assert "--map-shape must have 1 axes" in capsys.readouterr().err
     assert main(["reach", "--episodes", "0", "--out", str(tmp_path / "a.png")]) == 2
     assert "episodes must be an int >= 1" in capsys.readouterr().err
-    assert main(["reach", "--model", str(tmp_path / "none.npz"), "--out", str(tmp_path / "a.png")]) == 2
+    assert (
+        main(["reach", "--model", str(tmp_path / "none.npz"), "--out", str(tmp_path / "a.png")])
+        == 2
+    )

@@ -110,9 +110,13 @@ class ActorCritic:
     def act(self, phi: ArrayLike) -> int:
         """Draw an action from the softmax policy."""
         p = self.policy(phi)
-        return int(min(np.searchsorted(np.cumsum(p), self.rng.random() * p.sum()), self.n_actions - 1))
+        return int(
+            min(np.searchsorted(np.cumsum(p), self.rng.random() * p.sum()), self.n_actions - 1)
+        )
 
-    def update(self, phi: ArrayLike, action: int, reward: float, phi_next: ArrayLike, terminated: bool) -> float:
+    def update(
+        self, phi: ArrayLike, action: int, reward: float, phi_next: ArrayLike, terminated: bool
+    ) -> float:
         """One TD step from ``(s, a, r, s')``; returns the TD error ``delta``.
 
         ``terminated``: ``s'`` is terminal (its value is 0). On truncation pass False: the

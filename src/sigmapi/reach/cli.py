@@ -21,7 +21,9 @@ def _shape(text: str) -> tuple[int, ...]:
     try:
         shape = tuple(int(v) for v in text.lower().split("x"))
     except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a grid such as 8x8 or 10, got {text!r}") from None
+        raise argparse.ArgumentTypeError(
+            f"expected a grid such as 8x8 or 10, got {text!r}"
+        ) from None
     if not shape or any(n < 1 for n in shape):
         raise argparse.ArgumentTypeError(f"grid sizes must be positive, got {text!r}")
     return shape
@@ -39,29 +41,92 @@ def register(sub: Any) -> None:
         description="Gaze-and-reach task: the same actor-critic on the learned Sigma-Pi map, "
         "the retina code, retina+gaze codes, and the true z (upper bound).",
     )
-    p.add_argument("--dim", type=int, choices=[1, 2], default=d.dim, help=f"task dimension (default {d.dim})")
-    p.add_argument("--grid", type=int, default=d.grid, help=f"units per axis of the retina/gaze codes (default {d.grid})")
-    p.add_argument("--map-shape", type=_shape, help="map grid, e.g. 8x8 (default 8x8 in 2-D, 12 in 1-D)")
-    p.add_argument("--map-pairs", type=int, default=d.map_pairs, help=f"saccade view pairs the map learns from (default {d.map_pairs})")
-    p.add_argument("--model", help="use this trained model file (sigmapi train) instead of learning a map per seed")
-    p.add_argument("--backend", choices=["auto", "reference", "fast", "gpu"], default=d.backend,
-                   help=f"kernel for learning the map (default {d.backend})")
-    p.add_argument("--episodes", type=int, default=d.episodes, help=f"episodes per seed and state (default {d.episodes})")
-    p.add_argument("--seeds", type=int, default=d.seeds, help=f"number of seeds (default {d.seeds})")
+    p.add_argument(
+        "--dim", type=int, choices=[1, 2], default=d.dim, help=f"task dimension (default {d.dim})"
+    )
+    p.add_argument(
+        "--grid",
+        type=int,
+        default=d.grid,
+        help=f"units per axis of the retina/gaze codes (default {d.grid})",
+    )
+    p.add_argument(
+        "--map-shape", type=_shape, help="map grid, e.g. 7x7 (default 7x7 in 2-D, 12 in 1-D)"
+    )
+    p.add_argument(
+        "--map-pairs",
+        type=int,
+        default=d.map_pairs,
+        help=f"saccade view pairs the map learns from (default {d.map_pairs})",
+    )
+    p.add_argument(
+        "--model",
+        help="use this trained model file (sigmapi train) instead of learning a map per seed",
+    )
+    p.add_argument(
+        "--backend",
+        choices=["auto", "reference", "fast", "gpu"],
+        default=d.backend,
+        help=f"kernel for learning the map (default {d.backend})",
+    )
+    p.add_argument(
+        "--episodes",
+        type=int,
+        default=d.episodes,
+        help=f"episodes per seed and state (default {d.episodes})",
+    )
+    p.add_argument(
+        "--seeds", type=int, default=d.seeds, help=f"number of seeds (default {d.seeds})"
+    )
     p.add_argument("--seed", type=int, default=d.seed, help=f"root seed (default {d.seed})")
-    p.add_argument("--saccade-rate", type=float, default=d.saccade_rate, help=f"saccade probability per step (default {d.saccade_rate:g})")
-    p.add_argument("--max-steps", type=int, default=d.max_steps, help=f"time limit per episode (default {d.max_steps})")
-    p.add_argument("--features", choices=["bump", "response"], default=d.features, help=f"map features (default {d.features})")
-    p.add_argument("--feature-width", type=float, default=d.feature_width, help=f"bump width in grid units (default {d.feature_width:g})")
-    p.add_argument("--block", type=int, default=d.block, help=f"episodes per point of the curves (default {d.block})")
-    p.add_argument("--final-episodes", type=int, default=d.final_episodes, help=f"last episodes the final success rate averages (default {d.final_episodes})")
-    p.add_argument("--states", default=",".join(STATES), help=f"comma-separated subset of {','.join(STATES)}")
+    p.add_argument(
+        "--saccade-rate",
+        type=float,
+        default=d.saccade_rate,
+        help=f"saccade probability per step (default {d.saccade_rate:g})",
+    )
+    p.add_argument(
+        "--max-steps",
+        type=int,
+        default=d.max_steps,
+        help=f"time limit per episode (default {d.max_steps})",
+    )
+    p.add_argument(
+        "--features",
+        choices=["bump", "response"],
+        default=d.features,
+        help=f"map features (default {d.features})",
+    )
+    p.add_argument(
+        "--feature-width",
+        type=float,
+        default=d.feature_width,
+        help=f"bump width in grid units (default {d.feature_width:g})",
+    )
+    p.add_argument(
+        "--block",
+        type=int,
+        default=d.block,
+        help=f"episodes per point of the curves (default {d.block})",
+    )
+    p.add_argument(
+        "--final-episodes",
+        type=int,
+        default=d.final_episodes,
+        help=f"last episodes the final success rate averages (default {d.final_episodes})",
+    )
+    p.add_argument(
+        "--states", default=",".join(STATES), help=f"comma-separated subset of {','.join(STATES)}"
+    )
     p.add_argument("--out", default="reach.png", help="figure file to write (default reach.png)")
-    p.add_argument("--save-json", help="also write the full result (curves, per-seed rates, config) to this JSON file")
+    p.add_argument(
+        "--save-json",
+        help="also write the full result (curves, per-seed rates, config) to this JSON file",
+    )
     p.add_argument("--force", action="store_true", help="overwrite existing output files")
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
-    p.set_defaults(func=cmd_reach)  # fmt: skip
+    p.set_defaults(func=cmd_reach)
 
 
 def cmd_reach(args: argparse.Namespace) -> int:
@@ -75,15 +140,20 @@ def cmd_reach(args: argparse.Namespace) -> int:
     if out.suffix.lower() not in (".png", ".pdf", ".svg"):
         raise UsageError(f"--out must end in .png, .pdf or .svg, got {str(out)!r}")
     save_json = check_output(args.save_json, args.force, "JSON file") if args.save_json else None
-    map_shape = args.map_shape or ((8, 8) if args.dim == 2 else (12,))
+    map_shape = args.map_shape or ((7, 7) if args.dim == 2 else (12,))
     if len(map_shape) != args.dim:
-        raise UsageError(f"--map-shape must have {args.dim} axes for --dim {args.dim}, got {'x'.join(map(str, map_shape))}")
+        raise UsageError(
+            f"--map-shape must have {args.dim} axes for --dim {args.dim}, "
+            f"got {'x'.join(map(str, map_shape))}"
+        )
     states = tuple(s.strip() for s in args.states.split(",") if s.strip())
     if args.model is not None:
         from pathlib import Path
 
         if not Path(args.model).is_file():
-            raise UsageError(f"model file {args.model!r} does not exist; train one with `sigmapi train`")
+            raise UsageError(
+                f"model file {args.model!r} does not exist; train one with `sigmapi train`"
+            )
     try:
         cfg = ReachConfig(
             dim=args.dim, grid=args.grid, map_shape=map_shape, map_pairs=args.map_pairs,
@@ -113,7 +183,10 @@ def cmd_reach(args: argparse.Namespace) -> int:
         print(json.dumps(summary))
     else:
         per_seed = result.final_success_per_seed()
-        print(f"final success rate over the last {cfg.final_episodes} of {cfg.episodes} episodes, {cfg.seeds} seeds:")
+        print(
+            f"final success rate over the last {cfg.final_episodes} of {cfg.episodes} "
+            f"episodes, {cfg.seeds} seeds:"
+        )
         for s, v in result.final_success().items():
             seeds = " ".join(f"{x:.3f}" for x in per_seed[s])
             print(f"  {s:12s} {v:.3f}   per seed: {seeds}")

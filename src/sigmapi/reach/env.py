@@ -43,7 +43,8 @@ from sigmapi.errors import ConfigError
 
 __all__ = ["GazeReachEnv", "move_table"]
 
-Obs = dict[str, NDArray[np.float32]]
+Obs = dict[str, Any]
+"""Observation: ``{"retina": float32 code of x, "gaze": float32 code of y}``."""
 
 
 def move_table(dim: int, diagonal: bool = False) -> NDArray[np.float64]:
@@ -59,7 +60,9 @@ def move_table(dim: int, diagonal: bool = False) -> NDArray[np.float64]:
     return np.array(rows, dtype=np.float64)
 
 
-def _check_number(name: str, value: Any, lo: float, hi: float, hint: str, lo_open: bool = True) -> float:
+def _check_number(
+    name: str, value: Any, lo: float, hi: float, hint: str, lo_open: bool = True
+) -> float:
     ok = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
     ok = ok and math.isfinite(float(value))
     if ok:
@@ -173,7 +176,9 @@ class GazeReachEnv(gym.Env[Obs, np.int64]):
         self.reward_reach = _check_number("reward_reach", reward_reach, -1e9, 1e9, "e.g. 1.0")
         self.reward_fail = _check_number("reward_fail", reward_fail, -1e9, 1e9, "e.g. -0.3")
         if not isinstance(diagonal, bool) or (diagonal and self.dim != 2):
-            raise ConfigError(f"diagonal must be True or False, and True only for dim=2; got {diagonal!r}")
+            raise ConfigError(
+                f"diagonal must be True or False, and True only for dim=2; got {diagonal!r}"
+            )
         self.diagonal = diagonal
         self.moves = move_table(self.dim, diagonal) * self.step_size
 
@@ -232,7 +237,9 @@ class GazeReachEnv(gym.Env[Obs, np.int64]):
         }
 
     # ------------------------------------------------------------------ Gymnasium API
-    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[Obs, dict[str, Any]]:
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[Obs, dict[str, Any]]:
         super().reset(seed=seed)
         options = dict(options or {})
         unknown = sorted(set(options) - {"z", "y"})
@@ -251,7 +258,8 @@ class GazeReachEnv(gym.Env[Obs, np.int64]):
             if np.any(y < lo - 1e-12) or np.any(y > hi + 1e-12):
                 raise ConfigError(
                     f"options['y'] = {y.tolist()} puts the object off the retina (x = 2 z - y "
-                    f"outside [0, 1]); choose y in [{lo.tolist()}, {hi.tolist()}] for z = {z.tolist()}"
+                    f"outside [0, 1]); choose y in [{lo.tolist()}, {hi.tolist()}] "
+                    f"for z = {z.tolist()}"
                 )
             self._y = y
         else:
@@ -268,7 +276,7 @@ class GazeReachEnv(gym.Env[Obs, np.int64]):
     def step(self, action: Any) -> tuple[Obs, SupportsFloat, bool, bool, dict[str, Any]]:
         if not self.action_space.contains(action):
             raise ValueError(
-                f"action must be an int in [0, {self.action_space.n}), got {action!r}; see env.moves"
+                f"action must be an int in [0, {len(self.moves)}), got {action!r}; see env.moves"
             )
         self._z = self._z + self.moves[int(action)]
         self._t += 1

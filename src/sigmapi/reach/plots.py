@@ -45,7 +45,9 @@ def plot_reach_curves(result: ReachResult, metric: str = "success", ax: Axes | N
             ax.fill_between(ep, c["success"] - c["success_sd"], c["success"] + c["success_sd"],
                             color=COLORS.get(state), alpha=0.15, linewidth=0)  # fmt: skip
         else:
-            ax.plot(ep, c["steps_to_reach"], color=COLORS.get(state), label=LABELS.get(state, state))
+            ax.plot(
+                ep, c["steps_to_reach"], color=COLORS.get(state), label=LABELS.get(state, state)
+            )
     cfg = result.config
     ax.set_xlabel(f"episode (blocks of {cfg.block})")
     if metric == "success":
@@ -59,7 +61,9 @@ def plot_reach_curves(result: ReachResult, metric: str = "success", ax: Axes | N
     return ax
 
 
-def plot_value_function(result: ReachResult, state: str, ax: Axes | None = None, **kwargs: Any) -> Axes:
+def plot_value_function(
+    result: ReachResult, state: str, ax: Axes | None = None, **kwargs: Any
+) -> Axes:
     """The critic's value over body-centred z (seed 0) for ``state``, with the goal region.
 
     2-D: an image over (z0, z1); 1-D: a curve. Extra ``kwargs`` go to ``imshow`` / ``plot``.
@@ -71,7 +75,9 @@ def plot_value_function(result: ReachResult, state: str, ax: Axes | None = None,
     cfg = result.config
     lo, hi = 0.5 - cfg.goal_radius, 0.5 + cfg.goal_radius
     if v.ndim == 2:
-        im = ax.imshow(v.T, origin="lower", extent=(0, 1, 0, 1), cmap=kwargs.pop("cmap", "viridis"), **kwargs)
+        im = ax.imshow(
+            v.T, origin="lower", extent=(0, 1, 0, 1), cmap=kwargs.pop("cmap", "viridis"), **kwargs
+        )
         ax.plot([lo, hi, hi, lo, lo], [lo, lo, hi, hi, lo], color="w", lw=1.2)
         ax.set_xlabel("z0")
         ax.set_ylabel("z1")

@@ -36,8 +36,8 @@ class ReachConfig:
 
     dim: int = 2
     """1 or 2: dimensions of the task."""
-    grid: int = 9
-    """Units per axis of the retina and gaze codes (9x9 in 2-D; the paper's maps read 15x15)."""
+    grid: int = 7
+    """Units per axis of the retina and gaze codes (7x7 in 2-D; the paper's maps read 15x15)."""
     code_width: float = 0.5
     """Width of the input hills in grid units (the paper: 0.5)."""
     step_size: float = 0.05
@@ -46,21 +46,21 @@ class ReachConfig:
     """Half-width of the goal box around z = 0.5 (straight ahead, within grasp range)."""
     saccade_rate: float = 1.0
     """Probability of a saccade per step (1: on every step, the hardest case)."""
-    max_steps: int = 100
-    """Time limit per episode (truncation)."""
-    map_shape: tuple[int, ...] = (8, 8)
+    max_steps: int = 50
+    """Time limit per episode (truncation): 3x the longest shortest path (16 moves in 2-D)."""
+    map_shape: tuple[int, ...] = (7, 7)
     """Grid of the Sigma-Pi map learned in the environment."""
-    map_pairs: int = 20_000
+    map_pairs: int = 10_000
     """Saccade view pairs the map learns from (one SOM iteration each)."""
-    backend: str = "auto"
-    """Kernel of the map ("auto": the fast one when it is installed)."""
+    backend: str = "reference"
+    """Kernel that learns the map ("auto": the fast one when it is installed)."""
     model_path: str | None = None
     """A trained model file to use for every seed instead of learning a map per seed."""
     features: str = "bump"
     """Map features: "bump" (Gaussian around the winner on the map grid) or "response"."""
     feature_width: float = 1.0
     """Width of the bump features (map and true-z codes), in grid units."""
-    episodes: int = 1500
+    episodes: int = 600
     """Episodes of reinforcement learning per seed and state."""
     seeds: int = 5
     """Number of independent seeds (maps, start states, action choices)."""
@@ -68,7 +68,7 @@ class ReachConfig:
     """Root seed; seed i of the run uses SeedSequence(seed).spawn child i."""
     block: int = 50
     """Episodes per point of the learning curves."""
-    final_episodes: int = 300
+    final_episodes: int = 200
     """The final success rate is measured over this many last episodes."""
     gamma: float = 0.9
     critic_lr: float = 0.1
@@ -120,9 +120,10 @@ class ReachConfig:
         R^2 0.1 vs 0.5 on a 7x7 map, 10,000 views).
         """
         m = float(max(self.map_shape))
+        inputs = (self.grid,) * self.dim
         return SOMConfig(
-            map_shape=self.map_shape, x_shape=(self.grid,) * self.dim, y_shape=(self.grid,) * self.dim,
-            code_width=self.code_width, iterations=self.map_pairs, backend=self.backend, seed=seed,
+            map_shape=self.map_shape, x_shape=inputs, y_shape=inputs, code_width=self.code_width,
+            iterations=self.map_pairs, backend=self.backend, seed=seed,
             sigma=((0.0, m), (0.3, max(m / 3.5, 1.0)), (0.8, 0.7)),
         )  # fmt: skip
 
@@ -130,14 +131,20 @@ class ReachConfig:
         names = {f.name for f in dataclasses.fields(self)}
         bad = sorted(set(changes) - names)
         if bad:
-            raise ConfigError(f"unknown ReachConfig field {bad[0]!r}; valid: {', '.join(sorted(names))}")
+            raise ConfigError(
+                f"unknown ReachConfig field {bad[0]!r}; valid: {', '.join(sorted(names))}"
+            )
         return dataclasses.replace(self, **changes)
 
     def to_dict(self) -> dict[str, Any]:
-        return {k: (list(v) if isinstance(v, tuple) else v) for k, v in dataclasses.asdict(self).items()}
+        return {
+            k: (list(v) if isinstance(v, tuple) else v) for k, v in dataclasses.asdict(self).items()
+        }
 
 
-def learn_map_in_env(env: GazeReachEnv, config: SOMConfig, seed: int | None = None, callback: Any = None) -> Any:
+def learn_map_in_env(
+    env: GazeReachEnv, config: SOMConfig, seed: int | None = None, callback: Any = None
+) -> Any:
     """Train a :class:`~sigmapi.SigmaPiSOM` on saccade views gathered in ``env``.
 
     ``config.iterations`` view pairs are collected with
@@ -171,7 +178,12 @@ def value_over_z(
         ys = lo + (hi - lo) * rng.random((n_views, base.dim))
         xs = np.clip(2.0 * z - ys, 0.0, 1.0)
         cx, cy = base.code.encode(xs).astype(np.float32), base.code.encode(ys).astype(np.float32)
-        out[i] = np.mean([agent.value(state_env.observation({"retina": a, "gaze": b})) for a, b in zip(cx, cy, strict=True)])
+        out[i] = np.mean(
+            [
+                agent.value(state_env.observation({"retina": a, "gaze": b}))
+                for a, b in zip(cx, cy, strict=True)
+            ]
+        )
     return axis, out.reshape((n,) * base.dim)
 
 
@@ -218,7 +230,9 @@ class ReachResult:
                 reach_steps = np.where(sb, tb, 0.0).sum(axis=2) / sb.sum(axis=2)
             ok = np.isfinite(reach_steps)
             cnt = ok.sum(axis=0)
-            mean_steps = np.where(cnt > 0, np.where(ok, reach_steps, 0.0).sum(axis=0) / np.maximum(cnt, 1), np.nan)
+            mean_steps = np.where(
+                cnt > 0, np.where(ok, reach_steps, 0.0).sum(axis=0) / np.maximum(cnt, 1), np.nan
+            )
             out[s] = {
                 "episode": (np.arange(nb) + 1.0) * b,
                 "success": rate.mean(axis=0),
@@ -235,7 +249,9 @@ class ReachResult:
             "success_per_seed": {s: v.tolist() for s, v in self.final_success_per_seed().items()},
             "ratio_map_to_true_z": (
                 self.final_success()["map"] / self.final_success()["true_z"]
-                if "map" in self.success and "true_z" in self.success and self.final_success()["true_z"] > 0
+                if "map" in self.success
+                and "true_z" in self.success
+                and self.final_success()["true_z"] > 0
                 else None
             ),
             "curves": {
@@ -248,7 +264,9 @@ class ReachResult:
         }
 
 
-def _map_for_seed(config: ReachConfig, ss: np.random.SeedSequence, progress: Progress | None = None) -> Any:
+def _map_for_seed(
+    config: ReachConfig, ss: np.random.SeedSequence, progress: Progress | None = None
+) -> Any:
     if config.model_path is not None:
         from sigmapi.io import load_model
 
@@ -256,23 +274,37 @@ def _map_for_seed(config: ReachConfig, ss: np.random.SeedSequence, progress: Pro
     seq = np.random.SeedSequence(ss.entropy, spawn_key=(*ss.spawn_key, 0))
     r = np.random.default_rng(seq)
     env_seed, som_seed = (int(v) for v in r.integers(0, 2**31 - 1, size=2))
+
     def callback(model: Any) -> None:
         if progress is not None:
             progress(0, f"map {model.t_}/{config.map_pairs}")
 
-    return learn_map_in_env(config.make_env(), config.som_config(som_seed), seed=env_seed, callback=callback)
+    return learn_map_in_env(
+        config.make_env(), config.som_config(som_seed), seed=env_seed, callback=callback
+    )
 
 
 def run_episodes(
-    config: ReachConfig, state: str, model: Any, starts: NDArray[np.int64], agent_seed: np.random.SeedSequence,
+    config: ReachConfig,
+    state: str,
+    model: Any,
+    starts: NDArray[np.int64],
+    agent_seed: np.random.SeedSequence,
     progress: Progress | None = None,
 ) -> tuple[NDArray[np.bool_], NDArray[np.int64], ActorCritic, Any]:
     """Train one learner on ``state`` over the episodes that start from seeds ``starts``."""
     env = make_state_env(config.make_env(), state, model, config.features, config.feature_width)
+    n_features = int(np.prod(env.observation_space.shape or (1,)))
+    n_actions = int(env.unwrapped.action_space.n)  # type: ignore[attr-defined]
     agent = ActorCritic(
-        int(env.observation_space.shape[0]), int(env.action_space.n), config.gamma, config.critic_lr,  # type: ignore[index, attr-defined]
-        config.actor_lr, config.beta, seed=np.random.default_rng(agent_seed),
-    )  # fmt: skip
+        n_features,
+        n_actions,
+        config.gamma,
+        config.critic_lr,
+        config.actor_lr,
+        config.beta,
+        seed=np.random.default_rng(agent_seed),
+    )
     n = len(starts)
     success = np.zeros(n, dtype=bool)
     steps = np.zeros(n, dtype=np.int64)
@@ -294,7 +326,9 @@ def run_episodes(
     return success, steps, agent, env
 
 
-def run_reach(config: ReachConfig | None = None, progress: Progress | None = None, **overrides: Any) -> ReachResult:
+def run_reach(
+    config: ReachConfig | None = None, progress: Progress | None = None, **overrides: Any
+) -> ReachResult:
     """Train the actor-critic on every state of ``config.states`` for every seed.
 
     ``progress(n, phase)`` is called with the number of episodes just finished and a short
@@ -319,7 +353,9 @@ def run_reach(config: ReachConfig | None = None, progress: Progress | None = Non
         model = _map_for_seed(cfg, ss, progress) if "map" in cfg.states else None
         if model is not None:
             res.map_metrics.append(_map_quality(model))
-        start_rng = np.random.default_rng(np.random.SeedSequence(ss.entropy, spawn_key=(*ss.spawn_key, 1)))
+        start_rng = np.random.default_rng(
+            np.random.SeedSequence(ss.entropy, spawn_key=(*ss.spawn_key, 1))
+        )
         starts = start_rng.integers(0, 2**31 - 1, size=cfg.episodes)
         agent_seq = np.random.SeedSequence(ss.entropy, spawn_key=(*ss.spawn_key, 2))
         for s in cfg.states:
@@ -340,4 +376,3 @@ def _map_quality(model: Any) -> dict[str, Any]:
         return dict(evaluate(model, n_test=2000).to_dict())
     except Exception as exc:  # metrics are a record, not the experiment: never fail the run
         return {"error": f"{type(exc).__name__}: {exc}"}
-

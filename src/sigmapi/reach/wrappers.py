@@ -57,7 +57,9 @@ def _unit(v: NDArray[np.float64]) -> Features:
     return (v / norm if norm > 0 else v).astype(np.float32)
 
 
-def bump_features(centres: NDArray[np.float64], coords: NDArray[np.float64], width: float) -> NDArray[np.float64]:
+def bump_features(
+    centres: NDArray[np.float64], coords: NDArray[np.float64], width: float
+) -> NDArray[np.float64]:
     """Gaussian bumps ``exp(-|g_u - c|^2 / (2 width^2))`` on a grid, L2-normalised.
 
     ``centres`` ``(B, d)`` and ``coords`` ``(n, d)`` in grid units; returns ``(B, n)``.
@@ -68,8 +70,15 @@ def bump_features(centres: NDArray[np.float64], coords: NDArray[np.float64], wid
 
 
 def _check_width(width: Any) -> float:
-    if isinstance(width, bool) or not isinstance(width, (int, float)) or not np.isfinite(width) or width <= 0:
-        raise ConfigError(f"width must be a finite number > 0 (map grid units), got {width!r}; e.g. 1.0")
+    if (
+        isinstance(width, bool)
+        or not isinstance(width, (int, float))
+        or not np.isfinite(width)
+        or width <= 0
+    ):
+        raise ConfigError(
+            f"width must be a finite number > 0 (map grid units), got {width!r}; e.g. 1.0"
+        )
     return float(width)
 
 
@@ -94,7 +103,9 @@ class MapObservation(gym.ObservationWrapper[Features, Any, Obs]):
     model's weights once, when it is made: train the model first.
     """
 
-    def __init__(self, env: gym.Env[Obs, Any], model: Any, features: str = "bump", width: float = 1.0):
+    def __init__(
+        self, env: gym.Env[Obs, Any], model: Any, features: str = "bump", width: float = 1.0
+    ):
         super().__init__(env)
         base = _base(env)
         if features not in FEATURES:
@@ -148,17 +159,23 @@ class CodeObservation(gym.ObservationWrapper[Features, Any, Obs]):
         super().__init__(env)
         base = _base(env)
         keys = tuple(keys)
-        if not keys or any(k not in ("retina", "gaze") for k in keys) or len(set(keys)) != len(keys):
+        if (
+            not keys
+            or any(k not in ("retina", "gaze") for k in keys)
+            or len(set(keys)) != len(keys)
+        ):
             raise ConfigError(f"keys must be distinct names from ('retina', 'gaze'), got {keys!r}")
         self.keys = keys
-        self.observation_space = spaces.Box(0.0, 1.0, (len(keys) * base.code.size,), dtype=np.float32)
+        self.observation_space = spaces.Box(
+            0.0, 1.0, (len(keys) * base.code.size,), dtype=np.float32
+        )
 
     def observation(self, observation: Obs) -> Features:
         v = np.concatenate([np.asarray(observation[k], dtype=np.float64) for k in self.keys])
         return _unit(v)
 
 
-class TrueZObservation(gym.Wrapper[Features, Any, Obs, Any]):
+class TrueZObservation(gym.Wrapper[Features, Any, Any, Any]):
     """Oracle state: a Gaussian bump code of the true ``z`` (from ``info``) on a grid.
 
     Parameters
@@ -174,12 +191,18 @@ class TrueZObservation(gym.Wrapper[Features, Any, Obs, Any]):
     ``z`` outside the workspace (a terminal step) is clipped to it.
     """
 
-    def __init__(self, env: gym.Env[Obs, Any], shape: tuple[int, ...] | None = None, width: float = 1.0):
-        super().__init__(env)
+    def __init__(
+        self, env: gym.Env[Obs, Any], shape: tuple[int, ...] | None = None, width: float = 1.0
+    ):
+        super().__init__(env)  # type: ignore[arg-type]  # (gymnasium's stubs bind the wrong type var)
         base = _base(env)
-        self.code = PopulationCode(shape if shape is not None else (base.grid,) * base.dim, width=1.0)
+        self.code = PopulationCode(
+            shape if shape is not None else (base.grid,) * base.dim, width=1.0
+        )
         if self.code.ndim != base.dim:
-            raise ConfigError(f"shape must have {base.dim} axes for a {base.dim}-D task, got {shape!r}")
+            raise ConfigError(
+                f"shape must have {base.dim} axes for a {base.dim}-D task, got {shape!r}"
+            )
         self.width = _check_width(width)
         self.observation_space = spaces.Box(0.0, 1.0, (self.code.size,), dtype=np.float32)
 
@@ -188,7 +211,9 @@ class TrueZObservation(gym.Wrapper[Features, Any, Obs, Any]):
         g = np.clip(np.atleast_2d(z), 0.0, 1.0) * self.code.scale
         return bump_features(g, self.code.coords, self.width).astype(np.float32)
 
-    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[Features, dict[str, Any]]:
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[Features, dict[str, Any]]:
         _, info = self.env.reset(seed=seed, options=options)
         return self.encode(info["z"])[0], info
 
