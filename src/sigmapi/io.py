@@ -151,7 +151,7 @@ def save_model(model: SigmaPiSOM, path: str | Path) -> Path:
         "shape": list(w.shape),
         "sha256": digest(w),
         "backend": model.backend,
-        "state_sha256": {k: digest(v) for k, v in extra.items()},
+        "state_sha256": {k[len("state_") :]: digest(v) for k, v in extra.items()},
     }
     header["header_sha256"] = header_digest(header)
     return atomic_write_bytes(path, encode_archive(header, {"weights": w, **extra}))

@@ -1,0 +1,195 @@
+"""The fast (numba) kernel against the reference kernel, on small sizes.
+
+Stated tolerances:
+
+- exact mode (``tol = 0``, float64 storage): same winners at every step, weights within
+  ``1e-10`` of the reference after 2,000 iterations (float64 rounding only);
+- default mode (``tol = 1e-6``, float32 storage): same winner at >= 99.9 % of 2,000 steps,
+  weights within ``WEIGHT_ATOL = 1e-5`` (float32 rounding, about 6e-8 relative per update).
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+import pytest
+
+from sigmapi import SigmaPiSOM
+from sigmapi.kernels import fast, get_backend, reference
+
+WEIGHT_ATOL = 1e-5
+MAP = (4, 5)
+CODE = (5, 5)
+
+
+def _problem(n_iter: int = 2000, seed: int = 3, width: float = 1.0, eps: float = 0.01):
+    som = SigmaPiSOM(
+        map_shape=MAP, x_shape=CODE, y_shape=CODE, code_width=width, iterations=n_iter,
+        sigma=[[0.0, 3.0], [0.3, 1.0], [0.8, 1e-5]], seed=seed, backend="reference",
+    )  # fmt: skip
+    batches = [som.training_block(b) for b in range((n_iter + 999) // 1000)]
+    x0, y0, x1, y1 = (np.concatenate([getattr(b, f) for b in batches])[:n_iter]
+                      for f in ("x0", "y0", "x1", "y1"))  # fmt: skip
+    t = np.arange(n_iter)
+    return som.initial_weights(), (x0, y0, x1, y1, som.sigma_at(t), np.full(n_iter, eps))
+
+
+def _train(kernel, w, data, rule="soft", tol=None, chunks=(1000,)):
+    state = kernel.prepare(w) if tol is None else kernel.prepare(w, tol)
+    out, s = [], 0
+    n = data[0].shape[0]
+    while s < n:
+        for c in chunks:
+            sl = slice(s, min(n, s + c))
+            out.append(kernel.train_block(state, *(a[sl] for a in data), MAP, rule, 15))
+            s = sl.stop
+    return state, np.concatenate(out)
+
+
+@pytest.fixture(scope="module")
+def ref_run():
+    w, data = _problem()
+    state, win = _train(reference, w, data)
+    return w, data, reference.export(state), win
+
+
+def test_auto_backend_is_fast():
+    assert get_backend("auto") is fast
+    assert SigmaPiSOM(map_shape=(3,), x_shape=(3,), y_shape=(3,)).backend == "fast"
+
+
+def test_exact_mode_matches_reference(ref_run):
+    w, data, w_ref, win_ref = ref_run
+    state, win = _train(fast, w, data, tol=0.0)
+    assert state.raw.dtype == np.float64
+    np.testing.assert_array_equal(win, win_ref)
+    np.testing.assert_allclose(fast.export(state), w_ref, rtol=0, atol=1e-10)
+
+
+def test_default_mode_matches_reference(ref_run):
+    w, data, w_ref, win_ref = ref_run
+    state, win = _train(fast, w, data, tol=1e-6)
+    assert state.raw.dtype == np.float32
+    assert np.mean(win == win_ref) >= 0.999
+    np.testing.assert_allclose(fast.export(state), w_ref, rtol=0, atol=WEIGHT_ATOL)
+
+
+@pytest.mark.parametrize("rule", ["argmax", "min_distance"])
+def test_other_rules_match_reference(rule):
+    w, data = _problem(n_iter=600, seed=5)
+    ref_state, win_ref = _train(reference, w, data, rule)
+    state, win = _train(fast, w, data, rule, tol=0.0)
+    np.testing.assert_array_equal(win, win_ref)
+    np.testing.assert_allclose(fast.export(state), reference.export(ref_state), atol=1e-10)
+
+
+def test_renormalisation_of_scale_is_exact():
+    # eps = 0.5 halves a winner's scale per win: many folds of the scale in 400 steps;
+    # eps = 1 makes the decay factor exactly 0.
+    for eps in (0.5, 1.0):
+        w, data = _problem(n_iter=400, seed=7, eps=eps)
+        ref_state, win_ref = _train(reference, w, data, "min_distance")
+        state, win = _train(fast, w, data, "min_distance", tol=0.0)
+        np.testing.assert_array_equal(win, win_ref)
+        np.testing.assert_allclose(fast.export(state), reference.export(ref_state), atol=1e-10)
+        wr = reference.export(ref_state)
+        np.testing.assert_allclose(
+            state.scale**2 * state.sqnorm, np.einsum("kij,kij->k", wr, wr), rtol=1e-9
+        )
+
+
+def test_block_splitting_does_not_change_the_run():
+    w, data = _problem(n_iter=700, seed=2)
+    for rule in ("soft", "min_distance"):
+        a, wa = _train(fast, w, data, rule, chunks=(1000,))
+        b, wb = _train(fast, w, data, rule, chunks=(1, 99, 250))
+        np.testing.assert_array_equal(wa, wb)
+        np.testing.assert_array_equal(a.raw, b.raw)
+        np.testing.assert_array_equal(a.scale, b.scale)
+
+
+def test_same_result_for_any_thread_count(monkeypatch):
+    w, data = _problem(n_iter=300, seed=4)
+    serial, win_serial = _train(fast, w, data)
+    monkeypatch.setattr(fast, "PARALLEL_MIN_WORK", 0)
+    monkeypatch.setattr(fast, "CHUNK", fast.CHUNK)
+    before = numba.get_num_threads()
+    try:
+        for n in sorted({1, numba.config.NUMBA_NUM_THREADS}):
+            numba.set_num_threads(n)
+            par, win_par = _train(fast, w, data)
+            np.testing.assert_array_equal(win_par, win_serial)
+            np.testing.assert_array_equal(par.raw, serial.raw)
+            np.testing.assert_array_equal(par.scale, serial.scale)
+    finally:
+        numba.set_num_threads(before)
+
+
+@pytest.mark.parametrize("tol", [0.0, 1e-6])
+def test_batched_activation_and_winners(tol):
+    w, data = _problem(n_iter=10)
+    state = fast.prepare(w, tol)
+    x, y = data[0], data[1]
+    h_ref = reference.activation(w, x, y)
+    h = fast.activation(state, x, y)
+    assert h.shape == (x.shape[0], np.prod(MAP))
+    np.testing.assert_allclose(h, h_ref, rtol=0, atol=1e-12 if tol == 0 else 1e-6)
+    for rule in ("soft", "argmax", "min_distance"):
+        np.testing.assert_array_equal(
+            fast.winners(state, h_ref, MAP, rule, 1.5, 15),
+            reference.winners(w, h_ref, MAP, rule, 1.5, 15),
+        )
+
+
+def test_sparse_pairs_keep_exactly_the_large_products():
+    rng = np.random.default_rng(0)
+    x, y = rng.random(7), rng.random(6)
+    x[2] = 0.0
+    jb, pi, pv = np.empty(6, np.int64), np.empty(42, np.int64), np.empty(42)
+    outer = np.outer(x, y).ravel()
+    for tol in (0.0, 0.1, 0.5):
+        n = fast._pairs(x, y, tol, jb, pi, pv)
+        keep = np.flatnonzero(np.abs(outer) > tol * x.max() * y.max())
+        np.testing.assert_array_equal(pi[:n], keep)
+        np.testing.assert_array_equal(pv[:n], outer[keep])
+
+
+def test_state_round_trip_and_validation():
+    w, _ = _problem(n_iter=1)
+    for tol in (0.0, 1e-6):
+        s = fast.prepare(w, tol)
+        s2 = fast.from_state_arrays(w, fast.state_arrays(s), tol)
+        np.testing.assert_array_equal(fast.export(s2), fast.export(s))
+        np.testing.assert_allclose(fast.export(s), w, rtol=1e-7 if tol else 0)
+    arrays = fast.state_arrays(fast.prepare(w, 1e-6))
+    with pytest.raises(ValueError, match="raw must be float64"):
+        fast.from_state_arrays(w, arrays, 0.0)
+    with pytest.raises(ValueError, match="missing"):
+        fast.from_state_arrays(w, {"raw": arrays["raw"]}, 1e-6)
+    with pytest.raises(ValueError, match="tol must be"):
+        fast.prepare(w, 1.5)
+    with pytest.raises(ValueError, match="rule must be"):
+        fast.winners(fast.prepare(w), np.zeros((1, 20)), MAP, "max", 1.0, 15)
+
+
+@pytest.mark.parametrize("rule", ["soft", "min_distance"])
+def test_save_load_continue_is_bit_exact(tmp_path, rule):
+    kw = dict(map_shape=(3, 3), x_shape=(4, 4), y_shape=(4, 4), code_width=1.0,
+              iterations=1600, seed=11, backend="fast", winner_rule=rule)  # fmt: skip
+    a = SigmaPiSOM(**kw).fit(n_iter=1300)
+    path = a.save(tmp_path / "m.npz")
+    a.partial_fit()
+    b = SigmaPiSOM.load(path)
+    assert b.backend == "fast"
+    b.partial_fit()
+    np.testing.assert_array_equal(a.weights_, b.weights_)
+    np.testing.assert_array_equal(a._state.raw, b._state.raw)
+
+
+def test_estimator_with_fast_backend_matches_reference():
+    kw = dict(map_shape=(4,), x_shape=(6,), y_shape=(6,), iterations=3000, seed=0)
+    a = SigmaPiSOM(backend="fast", kernel_tol=0.0, **kw).fit()
+    b = SigmaPiSOM(backend="reference", **kw).fit()
+    np.testing.assert_allclose(a.weights_, b.weights_, atol=1e-10)
+    batch = a.training_block(0)
+    np.testing.assert_array_equal(a.winner(batch.x0, batch.y0), b.winner(batch.x0, batch.y0))
