@@ -157,10 +157,20 @@ class PopulationCode:
         return codes
 
     def encode(self, p: ArrayLike) -> NDArray[np.float64]:
-        """Codes of positions ``p`` (shape ``(B, d)``, in [0, 1]); returns ``(B, n)``."""
-        arr = self.check_positions(p)
-        d2 = self._sq_dist(arr * self.scale)
-        return self._finish(np.exp(-d2 / (2.0 * self.width**2)))
+        """Codes of positions ``p`` (shape ``(B, d)``, in [0, 1]); returns ``(B, n)``.
+
+        The Gaussian is separable, so the code is the C-order outer product of one 1-D hill
+        per axis.
+        """
+        arr = self.check_positions(p) * self.scale
+        out = np.ones((arr.shape[0], 1))
+        for axis, n in enumerate(self.shape):
+            diff = arr[:, axis, None] - np.arange(n, dtype=np.float64)[None, :]
+            if self.periodic:
+                diff = diff - n * np.round(diff / n)
+            hill = np.exp(-(diff**2) / (2.0 * self.width**2))
+            out = (out[:, :, None] * hill[:, None, :]).reshape(arr.shape[0], -1)
+        return self._finish(out)
 
     def pattern(self, points: ArrayLike) -> NDArray[np.float64]:
         """One code holding a hill at each of ``points`` (shape ``(m, d)``); returns ``(n,)``.

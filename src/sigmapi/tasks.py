@@ -113,7 +113,7 @@ class Batch(NamedTuple):
     py1: Array
 
 
-_REJECTION_ROUNDS = 64
+_REJECTION_ROUNDS = 8
 _MAX_ROUNDS = 1_000_000
 
 
@@ -157,36 +157,43 @@ class TwoViewSampler:
         """One view (x, y) in [0, 1] per entry of ``z`` (shape ``(B, d)``), by rejection.
 
         As the authors did: pick x or y with probability 1/2, draw it uniformly in [0, 1],
-        solve the relation for the other, and redraw unless both lie in [0, 1]. Entries still
-        rejected after 64 rounds (z very near a border, acceptance ~ 2 z) are drawn from the
+        solve the relation for the other, and redraw unless both lie in [0, 1] (the first 8
+        rounds are drawn for all entries at once and the first accepted one kept). Entries still
+        rejected after 8 rounds (z very near a border, acceptance ~ 2 z) are drawn from the
         distribution rejection converges to: the coin weighted by the lengths of the feasible
         intervals, then uniform within the interval (for relations that give bounds).
         """
-        x = np.empty_like(z)
-        y = np.empty_like(z)
-        todo = np.ones(z.shape, dtype=bool)
         rel = self.relation
-        for rounds in range(_MAX_ROUNDS):
+        # the first 8 rounds of rejection for every entry at once: (B, d, rounds)
+        zz = np.broadcast_to(z[..., None], (*z.shape, _REJECTION_ROUNDS))
+        pick_x = rng.random(zz.shape) < 0.5
+        u = rng.random(zz.shape)
+        xx = np.where(pick_x, u, rel.solve_x(zz, u))
+        yy = np.where(pick_x, rel.solve_y(zz, u), u)
+        ok = (xx >= 0) & (xx <= 1) & (yy >= 0) & (yy <= 1)
+        first = np.argmax(ok, axis=-1)[..., None]  # the first accepted round
+        x = np.take_along_axis(xx, first, axis=-1)[..., 0]
+        y = np.take_along_axis(yy, first, axis=-1)[..., 0]
+        todo = ~ok.any(axis=-1)
+        if not todo.any():
+            return x, y
+        if rel.x_bounds is not None and rel.y_bounds is not None:
+            self._direct(z, np.nonzero(todo), x, y, rng)
+            return x, y
+        for _ in range(_MAX_ROUNDS):  # custom relation without bounds: keep rejecting
             idx = np.nonzero(todo)
             m = idx[0].size
             if m == 0:
                 return x, y
-            if (
-                rounds == _REJECTION_ROUNDS
-                and rel.x_bounds is not None
-                and rel.y_bounds is not None
-            ):
-                self._direct(z, idx, x, y, rng)
-                return x, y
-            zz = z[idx]
-            pick_x = rng.random(m) < 0.5
-            u = rng.random(m)
-            xx = np.where(pick_x, u, rel.solve_x(zz, u))
-            yy = np.where(pick_x, rel.solve_y(zz, u), u)
-            ok = (xx >= 0) & (xx <= 1) & (yy >= 0) & (yy <= 1)
-            x[idx[0][ok], idx[1][ok]] = xx[ok]
-            y[idx[0][ok], idx[1][ok]] = yy[ok]
-            todo[idx[0][ok], idx[1][ok]] = False
+            zr = z[idx]
+            px = rng.random(m) < 0.5
+            ur = rng.random(m)
+            xr = np.where(px, ur, rel.solve_x(zr, ur))
+            yr = np.where(px, rel.solve_y(zr, ur), ur)
+            good = (xr >= 0) & (xr <= 1) & (yr >= 0) & (yr <= 1)
+            x[idx[0][good], idx[1][good]] = xr[good]
+            y[idx[0][good], idx[1][good]] = yr[good]
+            todo[idx[0][good], idx[1][good]] = False
         raise ConfigError(
             f"relation {rel.name!r}: no view with x, y in [0, 1] found for some z after "
             f"{_MAX_ROUNDS} draws; check its z_range and inverses"
