@@ -48,8 +48,9 @@ def _axes(ax: Axes | None, figsize: tuple[float, float], container: bool = False
 
 
 def _container(ax: Axes, title: str) -> None:
+    """Hide ``ax`` (its panels are insets) and put the title inside its top edge."""
     ax.set_axis_off()
-    ax.set_title(title, fontsize=12, pad=14)
+    ax.set_title(title, fontsize=12, y=0.99, va="top", pad=0)
 
 
 def _inset(ax: Axes, left: float, bottom: float, width: float, height: float) -> Axes:
@@ -75,7 +76,7 @@ def _draw_code(ax: Axes, code: NDArray[np.float64], shape: tuple[int, ...]) -> A
     return img
 
 
-def plot_fig8(data: Fig8Data, ax: Axes | None = None) -> Axes:
+def plot_fig8(data: Fig8Data, ax: Axes | None = None, title: str | None = None) -> Axes:
     """Fig. 8 of the chapter: rows x, y and the map response h; one column per input pair.
 
     Left columns: random (x, y) pairs with the same body-centred z; the response must look the
@@ -89,12 +90,13 @@ def plot_fig8(data: Fig8Data, ax: Axes | None = None) -> Axes:
     zs = ", ".join(f"{v:.2f}" for v in data.z)
     _container(
         ax,
-        f"Fig. 8: map response h to {data.n_pairs} (x, y) pairs with the same z = ({zs}) (left) "
-        f"and to patterns (right)\nmap polarity: {data.polarity.name}",
+        title
+        or f"Fig. 8: map response h to {data.n_pairs} (x, y) pairs with the same z = ({zs}) "
+        f"(left) and to patterns (right)\nmap polarity: {data.polarity.name}",
     )
     n_cols = data.x.shape[0]
     gap = 0.6  # extra space between the pair columns and the pattern columns, in columns
-    left, right, bottom, top = 0.08, 0.90, 0.02, 0.90
+    left, right, bottom, top = 0.08, 0.90, 0.03, 0.86
     col_w = (right - left) / (n_cols + gap)
     row_h = (top - bottom) / 3.0
     rows = [
@@ -258,8 +260,9 @@ def plot_learning_curves(
         raise ValueError("curves must hold at least one curve with checkpoints")
     ref = dict(reference or {})
     panels = [
-        ("view consistency", [("view_consistency", "same winner"),
-                              ("view_within_one", "within one unit")]),
+        ("view consistency,\nunit usage", [("view_consistency", "same winner"),
+                              ("view_within_one", "within one unit"),
+                              ("usage", "units that win")]),
         ("z error (grid spacings)", [("z_error", "z error")]),
         ("cost E (sec. 6.3)", [("cost", "at the current sigma"), ("cost_winner", "winner only")]),
         ("sigma (map units)", [("sigma", "sigma")]),
@@ -292,7 +295,7 @@ def plot_learning_curves(
             st, sv = (np.asarray(v, dtype=float) for v in schedule)
             keep = st > 0
             pa.plot(st[keep], sv[keep], "-", color="0.5", lw=1, label="schedule")
-        if label.startswith("cost") or label.startswith("sigma"):
+        if label.startswith("sigma"):
             pa.set_yscale("log")
         pa.set_xscale("log")
         pa.set_ylabel(label)

@@ -135,9 +135,9 @@ def _figure(size: tuple[float, float]) -> Figure:
     return Figure(figsize=size)
 
 
-def _save(fig: Figure, path: Path) -> None:
-    path = Path(path)
-    fig.savefig(path, dpi=DPI, bbox_inches="tight", facecolor="white")
+def _save(fig: Figure, path: Path, tight: bool = True) -> None:
+    """Write ``fig``; ``tight=False`` for figures whose panels already fill the canvas."""
+    fig.savefig(Path(path), dpi=DPI, bbox_inches="tight" if tight else None, facecolor="white")
 
 
 def sigma_schedule(model: SigmaPiSOM, n: int = 400) -> tuple[list[float], list[float]]:
@@ -178,9 +178,12 @@ def draw_figure(
         data = analysis.fig8_data(model, seed, centres=centres)
         fig = _figure((11.0, 5.6) if d == 2 else (12.0, 5.2))
         ax = fig.add_axes((0.0, 0.0, 1.0, 1.0))
-        plots.plot_fig8(data, ax=ax)
-        if label:
-            ax.set_title(ax.get_title() + tag, fontsize=12, pad=14)
+        zs = ", ".join(f"{v:.2f}" for v in data.z)
+        plots.plot_fig8(
+            data, ax=ax,
+            title=f"Fig. 8{tag}: map response h to {data.n_pairs} (x, y) pairs with the same "
+            f"z = ({zs}) (left) and to patterns (right)\nmap polarity: {data.polarity.name}",
+        )  # fmt: skip
         facts = {
             "z": data.z.tolist(),
             "polarity": data.polarity.name,
@@ -194,8 +197,8 @@ def draw_figure(
             fig = _figure((max(6.0, 1.1 * np.ceil(k / np.ceil(np.sqrt(k / 2.0))) + 2.0), 4.8))
             plots.plot_weight_tiles(
                 tiles, model.map_shape, ax=fig.add_subplot(),
-                title=f"Sigma-Pi weights w_kij of each map unit k{tag}: an invariant unit has "
-                "its weight on an anti-diagonal (Fig. 6a)",
+                title=f"Sigma-Pi weights w_kij of each map unit k{tag} (Fig. 6a):\nan invariant "
+                "unit has its weight on an anti-diagonal i + j = const",
             )  # fmt: skip
         else:
             fig = _figure((16.0, 7.6))
@@ -245,8 +248,11 @@ def draw_figure(
             schedule=sigma_schedule(model),
             title=f"Learning curves{tag}, measured at {len(curves[0]['t'])} checkpoints",
         )  # fmt: skip
-        facts = {"final": {k: v[-1] for k, v in curves[0].items()}}
-    _save(fig, Path(path))
+        facts = {
+            "checkpoints": len(curves[0]["t"]),
+            "final": {k: v[-1] for k, v in curves[0].items()},
+        }
+    _save(fig, Path(path), tight=name not in ("fig8", "curves"))
     return facts
 
 
@@ -439,10 +445,9 @@ def _caption(fig: str, preset: str, cfg: SOMConfig, seeds: list[int], facts: dic
             f"anti-diagonals; {score} of the cells agree with the most common winner of their "
             "anti-diagonal (100 % = perfectly invariant)."
         )
-    final = facts["final"]
     return (
         f"Learning curves of {preset} over seeds {seeds} (thin: each seed, thick: mean), "
-        f"measured on {CURVE_TEST} test z's at {len(final) and N_CHECKPOINTS} log-spaced "
+        f"measured on {CURVE_TEST} test z's at {facts['checkpoints']} log-spaced "
         "checkpoints: view consistency, z error, the approximate cost of section 6.3 (at the "
         "sigma of the moment, and with the winner alone) and the neighbourhood width sigma with "
         "its schedule. Dashed lines: reference figures of ALGORITHM.md."
