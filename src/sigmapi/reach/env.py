@@ -134,7 +134,7 @@ class GazeReachEnv(gym.Env[Obs, np.int64]):
     --------
     >>> env = GazeReachEnv(dim=1, grid=9)
     >>> obs, info = env.reset(seed=0)
-    >>> obs["retina"].shape, env.action_space.n
+    >>> obs["retina"].shape, int(env.action_space.n)
     ((9,), 3)
     >>> obs, r, terminated, truncated, info = env.step(0)
     """

@@ -87,7 +87,7 @@ def plot_value_function(
         ax.axvspan(lo, hi, color="0.85", zorder=0)
         ax.set_xlabel("z")
         ax.set_ylabel("V(z)")
-    ax.set_title(f"value: {LABELS.get(state, state)}", fontsize=9)
+    ax.set_title(f"V over z: {LABELS.get(state, state)}", fontsize=9)
     return ax
 
 
