@@ -65,9 +65,11 @@ def _draw_code(ax: Axes, code: NDArray[np.float64], shape: tuple[int, ...]) -> A
     peak = float(np.max(np.abs(code)))
     v = code / peak if peak > 0 else code
     if len(shape) == 1:
-        ax.bar(np.arange(shape[0]), v, width=0.8, color="C0")
+        ax.stairs(v, np.arange(shape[0] + 1) - 0.5, fill=True, color="C0")  # one patch: fast
         ax.set_ylim(min(0.0, float(v.min()) * 1.1), 1.1)
         ax.set_xlim(-0.7, shape[0] - 0.3)
+        ax.set_xticks([0, shape[0] // 2, shape[0] - 1])
+        ax.set_yticks([0.0, 0.5, 1.0])
         ax.tick_params(labelsize=7)
         return None
     img = ax.imshow(v.reshape(shape), cmap=CODE_CMAP, vmin=0.0, vmax=1.0, interpolation="nearest")
