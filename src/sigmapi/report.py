@@ -77,10 +77,13 @@ SECTION_MODULES = ("sigmapi.reach.report",)
 """Modules that may add a report section (``report_section(ctx)``); skipped if absent."""
 
 N_CHECKPOINTS = 20
-"""Checkpoints of the learning curves per run (log-spaced)."""
+"""Checkpoints of the learning curves per run (log-spaced); ``--quick``: :data:`QUICK_SIZES`."""
 
 CURVE_TEST = 1000
 """Test (and calibration) set size at each learning-curve checkpoint."""
+
+QUICK_SIZES = {"n_checkpoints": 12, "curve_test": 300, "n_test": 2000}
+"""Smaller measurements of ``--quick`` runs (checkpoints, their test sets, the final test set)."""
 
 DPI = 100
 
@@ -287,7 +290,7 @@ def reproduce(
     progress: bool = True,
     presets: list[tuple[str, SOMConfig]] | None = None,
     save_models: bool = True,
-    n_test: int = 10_000,
+    n_test: int | None = None,
 ) -> dict[str, Any]:
     """Train and evaluate each paper preset for ``seeds``; write the report into ``out``.
 
@@ -305,8 +308,8 @@ def reproduce(
         What to run instead of the paper presets (tests use tiny configs).
     save_models : bool
         Write each trained model beside the report.
-    n_test : int
-        Test set size of the final metrics.
+    n_test : int, optional
+        Test set size of the final metrics (default 10,000; ``quick``: 2,000).
 
     Returns
     -------
@@ -320,10 +323,17 @@ def reproduce(
     from sigmapi.som import SigmaPiSOM
 
     started = time.perf_counter()
+    n_points = QUICK_SIZES["n_checkpoints"] if quick else N_CHECKPOINTS
+    curve_test = QUICK_SIZES["curve_test"] if quick else CURVE_TEST
+    if n_test is None:
+        n_test = QUICK_SIZES["n_test"] if quick else 10_000
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     runs_of = _presets(quick) if presets is None else list(presets)
-    results: dict[str, Any] = {"quick": quick, "seeds": list(seeds), "presets": {}, "sections": {}}
+    results: dict[str, Any] = {
+        "quick": quick, "seeds": list(seeds), "n_test": n_test, "curve_test": curve_test,
+        "presets": {}, "sections": {},
+    }  # fmt: skip
     models: dict[str, list[SigmaPiSOM]] = {}
     figures: dict[str, list[tuple[str, str]]] = {}
     for name, cfg in runs_of:
@@ -334,7 +344,7 @@ def reproduce(
             callback, bar = progress_callback(
                 cfg.iterations, f"{name} seed {seed}", disable=not progress or None
             )
-            curve = LearningCurve(at=checkpoints(cfg.iterations, N_CHECKPOINTS), n_test=CURVE_TEST,
+            curve = LearningCurve(at=checkpoints(cfg.iterations, n_points), n_test=curve_test,
                                   then=callback)  # fmt: skip
             t0 = time.perf_counter()
             with bar:
@@ -361,11 +371,15 @@ def reproduce(
                    leave=False)  # fmt: skip
         for fig_name in bar:
             file = f"{fig_name}-{name}.png"
+            label = f"{name}, seed {seeds[0]}"
+            if fig_name == "curves":
+                label = f"{name}, seed{'s' if len(seeds) > 1 else ''} {', '.join(map(str, seeds))}"
             facts = draw_figure(
                 fig_name, first, out / file, curves=[r["curve"] for r in runs],
-                reference=_reference(name), label=f"{name}, seed {seeds[0]}", centres=centres,
+                reference=_reference(name), label=label, centres=centres,
             )  # fmt: skip
             entry["figures"][fig_name] = {"file": file, **facts}
+            facts["curve_test"] = curve_test
             figures[name].append((file, _caption(fig_name, name, cfg, seeds, facts)))
     ctx = ReportContext(out, quick, list(seeds), progress, models, results)
     sections = [s for s in _extra_sections(ctx) if s is not None]
@@ -403,7 +417,7 @@ def _extra_sections(ctx: ReportContext) -> list[Section | None]:
 
 
 def _caption(fig: str, preset: str, cfg: SOMConfig, seeds: list[int], facts: dict[str, Any]) -> str:
-    shape = "x".join(map(str, cfg.map_shape))
+    shape = "x".join(map(str, cfg.map_shape)) + ("-unit" if len(cfg.map_shape) == 1 else "")
     d = len(cfg.x_shape)
     what = f"{preset} ({shape} map, {cfg.iterations:,} iterations, seed {seeds[0]})"
     if fig == "fig8":
@@ -416,7 +430,7 @@ def _caption(fig: str, preset: str, cfg: SOMConfig, seeds: list[int], facts: dic
             f"responses: {facts['invariance_spread']:.2f}, 0 = identical). Right: {pattern}; "
             f"the pattern reappears on the map, {facts['polarity']} relative to the input "
             f"(affine order R² of the receptive-field centres {facts['polarity_r2']:.2f}). "
-            "The paper's run came out rotated by 180 degrees; the orientation is arbitrary "
+            "The paper's 2-D run came out rotated by 180 degrees: the orientation is arbitrary "
             "before learning and consistent after it."
         )
     if fig == "weights":
@@ -447,7 +461,7 @@ def _caption(fig: str, preset: str, cfg: SOMConfig, seeds: list[int], facts: dic
         )
     return (
         f"Learning curves of {preset} over seeds {seeds} (thin: each seed, thick: mean), "
-        f"measured on {CURVE_TEST} test z's at {facts['checkpoints']} log-spaced "
+        f"measured on {facts['curve_test']} test z's at {facts['checkpoints']} log-spaced "
         "checkpoints: view consistency, z error, the approximate cost of section 6.3 (at the "
         "sigma of the moment, and with the winner alone) and the neighbourhood width sigma with "
         "its schedule. Dashed lines: reference figures of ALGORITHM.md."
