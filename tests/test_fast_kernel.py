@@ -112,7 +112,7 @@ def test_same_result_for_any_thread_count(monkeypatch):
     w, data = _problem(n_iter=300, seed=4)
     serial, win_serial = _train(fast, w, data)
     monkeypatch.setattr(fast, "PARALLEL_MIN_WORK", 0)
-    monkeypatch.setattr(fast, "CHUNK", fast.CHUNK)
+    monkeypatch.setattr(fast, "PARALLEL_TRAIN", True)
     before = numba.get_num_threads()
     try:
         for n in sorted({1, numba.config.NUMBA_NUM_THREADS}):

@@ -36,6 +36,7 @@ C. Weber and S. Wermter, "A self-organizing map of Sigma-Pi units", Neurocomputi
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass
 from typing import Any
 
@@ -67,7 +68,16 @@ CHUNK = 32
 """Map units per parallel work item (a multiple of 16: whole cache lines of float32)."""
 
 PARALLEL_MIN_WORK = 1 << 18
-"""Use the threaded driver when ``K * n_x * n_y`` is at least this (results are identical)."""
+"""Use the threaded training driver when ``K * n_x * n_y`` is at least this."""
+
+PARALLEL_TRAIN = os.environ.get("SIGMAPI_PARALLEL_TRAIN", "0") == "1"
+"""Train with threads (environment ``SIGMAPI_PARALLEL_TRAIN=1``); results are identical.
+
+Off by default: one learning step is ~0.1-1 ms of work with two synchronisations, and on a
+shared 2-core machine a descheduled worker thread stalls every step (measured: 62 it/s with
+2 threads vs 390 it/s with 1 on paper-2d under a load average of 5). The batched
+:func:`activation` (one synchronisation per call) always uses all threads.
+"""
 
 _RULES = {"soft": 0, "argmax": 1, "min_distance": 2}
 
@@ -573,7 +583,9 @@ def train_block(
         state.refresh_norms()
     elif n_iter > 0:
         state.norms_valid = False
-    parallel = k_units * nx * ny >= PARALLEL_MIN_WORK and numba.get_num_threads() > 1
+    parallel = (
+        PARALLEL_TRAIN and k_units * nx * ny >= PARALLEL_MIN_WORK and numba.get_num_threads() > 1
+    )
     fn: Any = _train_parallel if parallel else _train_serial
     fn(state.raw, state.scale, state.sqnorm, *xs, sg, ep, dims, strides, code, int(cut),
        state.tol, out, track)  # fmt: skip
