@@ -93,7 +93,7 @@ def register(sub: Any) -> None:
     )
     p.add_argument(
         "--features",
-        choices=["bump", "response"],
+        choices=["response", "bump"],
         default=d.features,
         help=f"map features (default {d.features})",
     )
@@ -101,7 +101,7 @@ def register(sub: Any) -> None:
         "--feature-width",
         type=float,
         default=d.feature_width,
-        help=f"bump width in grid units (default {d.feature_width:g})",
+        help=f"width of bump features and true-z code, grid units (default {d.feature_width:g})",
     )
     p.add_argument(
         "--block",

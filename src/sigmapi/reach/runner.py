@@ -56,8 +56,10 @@ class ReachConfig:
     """Kernel that learns the map ("auto": the fast one when it is installed)."""
     model_path: str | None = None
     """A trained model file to use for every seed instead of learning a map per seed."""
-    features: str = "bump"
-    """Map features: "bump" (Gaussian around the winner on the map grid) or "response"."""
+    features: str = "response"
+    """Map features: "response" (activations clipped at 0, L2-normalised; measured best) or
+    "bump" (Gaussian around the winner on the map grid). 2-D, 5 seeds, 600 episodes: final
+    success 0.971 with "response", 0.949 with "bump" (true z: 0.977)."""
     feature_width: float = 1.0
     """Width of the bump features (map and true-z codes), in grid units."""
     episodes: int = 600
