@@ -8,12 +8,12 @@ import matplotlib
 
 matplotlib.use("Agg")
 
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import pytest  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
+import pytest
 
-from sigmapi import SigmaPiSOM, analysis, plots  # noqa: E402
-from sigmapi.report import FIGURES, draw_figure  # noqa: E402
+from sigmapi import SigmaPiSOM, analysis, plots
+from sigmapi.report import FIGURES, draw_figure
 
 PNG = b"\x89PNG\r\n\x1a\n"
 

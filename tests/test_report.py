@@ -11,10 +11,10 @@ import matplotlib
 
 matplotlib.use("Agg")
 
-import pytest  # noqa: E402
+import pytest
 
-from sigmapi import SOMConfig, SigmaPiSOM, report  # noqa: E402
-from sigmapi.cli import main  # noqa: E402
+from sigmapi import SigmaPiSOM, SOMConfig, report
+from sigmapi.cli import main
 
 TINY_1D = SOMConfig(map_shape=(5,), x_shape=(5,), y_shape=(5,), iterations=2000)
 TINY_2D = SOMConfig(map_shape=(3, 3), x_shape=(3, 3), y_shape=(3, 3), code_width=1.0,
@@ -90,7 +90,7 @@ def test_extra_sections_are_added_and_checked(tmp_path, monkeypatch):
         return report.Section("Broken", figures=[("missing.png", "never written")])
 
     module.report_section = broken  # type: ignore[attr-defined]
-    with pytest.raises(RuntimeError, match="missing.png"):
+    with pytest.raises(RuntimeError, match=r"missing\.png"):
         report.reproduce(tmp_path / "r2", seeds=[0], progress=False, n_test=100,
                          save_models=False, presets=[("tiny-1d", TINY_1D)])  # fmt: skip
 

@@ -155,10 +155,13 @@ def plot_weight_tiles(
     else:
         m0, m1 = map_shape[0], map_shape[1]
     ax = _axes(ax, (max(5.0, 0.9 * m1 + 1.5), max(3.0, 0.9 * m0 + 1.2)))
-    mosaic = np.full((m0 * (a + 1) - 1, m1 * (b + 1) - 1), np.nan)
+    gap = max(2, a // 4) if one_d else 1  # blank rows between tile rows (room for "k=...")
+    top = gap if one_d else 0
+    mosaic = np.full((top + m0 * (a + gap) - gap, m1 * (b + 1) - 1), np.nan)
     for u in range(k):
         r, c = divmod(u, m1)
-        mosaic[r * (a + 1) : r * (a + 1) + a, c * (b + 1) : c * (b + 1) + b] = tiles[u]
+        r0 = top + r * (a + gap)
+        mosaic[r0 : r0 + a, c * (b + 1) : c * (b + 1) + b] = tiles[u]
     vmax = float(np.nanmax(np.abs(mosaic))) or 1.0
     import matplotlib as mpl
 
@@ -167,8 +170,8 @@ def plot_weight_tiles(
     if one_d:
         for u in range(k):
             r, c = divmod(u, m1)
-            ax.text(c * (b + 1) + (b - 1) / 2, r * (a + 1) - 0.6, f"k={u}", ha="center",
-                    va="bottom", fontsize=7)  # fmt: skip
+            ax.text(c * (b + 1) + (b - 1) / 2, top + r * (a + gap) - 0.7, f"k={u}",
+                    ha="center", va="bottom", fontsize=8)  # fmt: skip
         ax.set_xticks([])
         ax.set_yticks([])
         ax.set_xlabel(f"one tile per map unit k; within a tile: {y_label} left to right")
