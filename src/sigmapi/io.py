@@ -100,6 +100,13 @@ def read_archive(
     if not p.is_file():
         raise ModelFileError(f"model file {str(p)!r} is not a regular file")
     try:
+        with open(p, "rb") as fh:
+            magic = fh.read(4)
+    except OSError as exc:
+        raise ModelFileError(f"model file {str(p)!r} cannot be read: {exc}") from None
+    if magic != b"PK\x03\x04":
+        raise ModelFileError(f"{str(p)!r} is not a sigmapi model file (not an .npz archive)")
+    try:
         with open(p, "rb") as fh, np.load(fh, allow_pickle=False) as npz:
             names = set(npz.files)
             if "header" not in names:
