@@ -454,19 +454,25 @@ def _train_parallel(
 
 
 @njit(cache=True, parallel=True)
-def _activation_batch(raw, scale, x, y, tol, h):
-    """``h[b, k] = scale_k sum_p raw[p, k] (x_b y_b^T)_p`` over the kept pairs; rows in parallel."""
+def _activation_batch(raw, scale, x, y, tol, order, h):
+    """``h[b, k] = scale_k sum_p raw[p, k] (x_b y_b^T)_p`` over the kept pairs.
+
+    Rows are visited in ``order`` (rows with nearby code peaks together, so that the weight
+    rows they share stay in cache); blocks of rows run in parallel. Each row's arithmetic
+    does not depend on the order or the thread.
+    """
     n_rows = x.shape[0]
     n_pairs = raw.shape[0]
     k_units = raw.shape[1]
-    rows = 32
+    rows = 16
     n_blocks = (n_rows + rows - 1) // rows
     for c in prange(n_blocks):
         jb = np.empty(y.shape[1], dtype=np.int64)
         pi = np.empty(n_pairs, dtype=np.int64)
         pv = np.empty(n_pairs)
         acc = np.empty(k_units)
-        for b in range(c * rows, min(n_rows, (c + 1) * rows)):
+        for r in range(c * rows, min(n_rows, (c + 1) * rows)):
+            b = order[r]
             n = _pairs(x[b], y[b], tol, jb, pi, pv)
             for k in range(k_units):
                 acc[k] = 0.0
@@ -522,7 +528,8 @@ def activation(
             f"x and y must have the same number of rows, got {xa.shape[0]}, {ya.shape[0]}"
         )
     h = np.empty((xa.shape[0], k_units))
-    _activation_batch(state.raw, state.scale, xa, ya, state.tol, h)
+    order = np.lexsort((np.argmax(np.abs(ya), axis=1), np.argmax(np.abs(xa), axis=1)))
+    _activation_batch(state.raw, state.scale, xa, ya, state.tol, order, h)
     return h
 
 
