@@ -187,9 +187,10 @@ def cmd_reach(args: argparse.Namespace) -> int:
             f"final success rate over the last {cfg.final_episodes} of {cfg.episodes} "
             f"episodes, {cfg.seeds} seeds:"
         )
+        lost = result.final_lost()
         for s, v in result.final_success().items():
             seeds = " ".join(f"{x:.3f}" for x in per_seed[s])
-            print(f"  {s:12s} {v:.3f}   per seed: {seeds}")
+            print(f"  {s:12s} {v:.3f}   per seed: {seeds}   (lost {lost[s]:.3f})")
         if summary["ratio_map_to_true_z"] is not None:
             print(f"  map / true_z = {summary['ratio_map_to_true_z']:.3f}")
     print(f"wrote {out} ({result.seconds:.0f} s)", file=sys.stderr)

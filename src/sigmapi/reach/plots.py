@@ -108,7 +108,8 @@ def reach_figure(result: ReachResult) -> Figure:
     cfg = result.config
     fig.suptitle(
         f"Gaze-and-reach, {cfg.dim}-D, saccade rate {cfg.saccade_rate:g}: actor-critic "
-        f"(gamma {cfg.gamma:g}, rates {cfg.critic_lr:g}/{cfg.actor_lr:g}, beta {cfg.beta:g})",
+        f"(gamma {cfg.gamma:g}, rates {cfg.critic_lr:g}/{cfg.actor_lr:g}, beta {cfg.beta:g}); "
+        "bottom: critic's value over z after training (seed 0; white: goal region)",
         fontsize=10,
     )
     return fig

@@ -193,14 +193,16 @@ def value_over_z(
 class ReachResult:
     """Outcome of :func:`run_reach`.
 
-    ``success[state]`` and ``steps[state]`` have shape ``(seeds, episodes)``: whether each
-    episode reached the goal and how many steps it took; ``values[state]`` is the critic's
+    ``success[state]``, ``lost[state]`` and ``steps[state]`` have shape ``(seeds,
+    episodes)``: whether each episode reached the goal, whether it lost the object (left the
+    workspace; the rest timed out) and how many steps it took; ``values[state]`` is the critic's
     value over z (seed 0), on ``z_axis``.
     """
 
     config: ReachConfig
     success: dict[str, NDArray[np.bool_]] = field(default_factory=dict)
     steps: dict[str, NDArray[np.int64]] = field(default_factory=dict)
+    lost: dict[str, NDArray[np.bool_]] = field(default_factory=dict)
     values: dict[str, NDArray[np.float64]] = field(default_factory=dict)
     z_axis: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
     map_metrics: list[dict[str, Any]] = field(default_factory=list)
@@ -209,6 +211,11 @@ class ReachResult:
     def final_success(self) -> dict[str, float]:
         """Success rate over the last ``final_episodes`` episodes, mean over seeds."""
         return {s: float(v.mean()) for s, v in self.final_success_per_seed().items()}
+
+    def final_lost(self) -> dict[str, float]:
+        """Fraction of the last ``final_episodes`` episodes that lost the object (seed mean)."""
+        f = self.config.final_episodes
+        return {s: float(v[:, -f:].mean()) for s, v in self.lost.items()}
 
     def final_success_per_seed(self) -> dict[str, NDArray[np.float64]]:
         f = self.config.final_episodes
@@ -249,6 +256,10 @@ class ReachResult:
         return {
             "success": self.final_success(),
             "success_per_seed": {s: v.tolist() for s, v in self.final_success_per_seed().items()},
+            "lost": self.final_lost(),
+            "timed_out": {
+                s: 1.0 - self.final_success()[s] - self.final_lost()[s] for s in self.success
+            },
             "ratio_map_to_true_z": (
                 self.final_success()["map"] / self.final_success()["true_z"]
                 if "map" in self.success
@@ -293,7 +304,7 @@ def run_episodes(
     starts: NDArray[np.int64],
     agent_seed: np.random.SeedSequence,
     progress: Progress | None = None,
-) -> tuple[NDArray[np.bool_], NDArray[np.int64], ActorCritic, Any]:
+) -> tuple[NDArray[np.bool_], NDArray[np.bool_], NDArray[np.int64], ActorCritic, Any]:
     """Train one learner on ``state`` over the episodes that start from seeds ``starts``."""
     env = make_state_env(config.make_env(), state, model, config.features, config.feature_width)
     n_features = int(np.prod(env.observation_space.shape or (1,)))
@@ -309,6 +320,7 @@ def run_episodes(
     )
     n = len(starts)
     success = np.zeros(n, dtype=bool)
+    lost = np.zeros(n, dtype=bool)
     steps = np.zeros(n, dtype=np.int64)
     for ep in range(n):
         phi, info = env.reset(seed=int(starts[ep]))
@@ -322,10 +334,11 @@ def run_episodes(
             if terminated or truncated:
                 break
         success[ep] = info["event"] == "reached"
+        lost[ep] = info["event"] == "left_view"
         steps[ep] = t
         if progress is not None:
             progress(1, state)
-    return success, steps, agent, env
+    return success, lost, steps, agent, env
 
 
 def run_reach(
@@ -350,6 +363,7 @@ def run_reach(
     for s in cfg.states:
         res.success[s] = np.zeros((cfg.seeds, cfg.episodes), dtype=bool)
         res.steps[s] = np.zeros((cfg.seeds, cfg.episodes), dtype=np.int64)
+        res.lost[s] = np.zeros((cfg.seeds, cfg.episodes), dtype=bool)
     root = np.random.SeedSequence(cfg.seed)
     for i, ss in enumerate(root.spawn(cfg.seeds)):
         model = _map_for_seed(cfg, ss, progress) if "map" in cfg.states else None
@@ -361,8 +375,8 @@ def run_reach(
         starts = start_rng.integers(0, 2**31 - 1, size=cfg.episodes)
         agent_seq = np.random.SeedSequence(ss.entropy, spawn_key=(*ss.spawn_key, 2))
         for s in cfg.states:
-            succ, steps, agent, env = run_episodes(cfg, s, model, starts, agent_seq, progress)
-            res.success[s][i], res.steps[s][i] = succ, steps
+            succ, lost, steps, agent, env = run_episodes(cfg, s, model, starts, agent_seq, progress)
+            res.success[s][i], res.lost[s][i], res.steps[s][i] = succ, lost, steps
             if i == 0:
                 axis, res.values[s] = value_over_z(agent, env, n=21 if cfg.dim == 2 else 51)
                 res.z_axis = axis
