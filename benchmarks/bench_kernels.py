@@ -157,7 +157,7 @@ def main() -> None:
 
     import numba
 
-    threads = args.threads or numba.config.NUMBA_NUM_THREADS
+    threads = args.threads or numba.get_num_threads()
     repeats = 1 if args.quick else args.repeats
     cases = {
         "paper-1d": {"reference": args.ref_iters_1d, "fast": args.fast_iters_1d},

@@ -115,7 +115,7 @@ def test_same_result_for_any_thread_count(monkeypatch):
     monkeypatch.setattr(fast, "PARALLEL_TRAIN", True)
     before = numba.get_num_threads()
     try:
-        for n in sorted({1, numba.config.NUMBA_NUM_THREADS}):
+        for n in sorted({1, getattr(numba.config, "NUMBA_NUM_THREADS", 1)}):
             numba.set_num_threads(n)
             par, win_par = _train(fast, w, data)
             np.testing.assert_array_equal(win_par, win_serial)
@@ -193,3 +193,21 @@ def test_estimator_with_fast_backend_matches_reference():
     np.testing.assert_allclose(a.weights_, b.weights_, atol=1e-10)
     batch = a.training_block(0)
     np.testing.assert_array_equal(a.winner(batch.x0, batch.y0), b.winner(batch.x0, batch.y0))
+
+
+@pytest.mark.slow
+def test_paper_1d_full_run_reaches_the_papers_figures():
+    from sigmapi import evaluate, load_preset
+
+    m = SigmaPiSOM(load_preset("paper-1d").replace(seed=0, backend="fast")).fit()
+    r = evaluate(m)
+    assert r.view_within_one >= 0.97 and r.z_error <= 0.40
+
+
+@pytest.mark.slow
+def test_paper_2d_preset_learns_an_ordered_map():
+    from sigmapi import evaluate, load_preset
+
+    m = SigmaPiSOM(load_preset("paper-2d").replace(seed=0)).fit()
+    r = evaluate(m)
+    assert r.order_r2 >= 0.95 and r.view_within_one >= 0.90 and r.z_error <= 0.6
