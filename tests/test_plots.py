@@ -167,3 +167,10 @@ def test_learning_curve_records_each_checkpoint_once(curves):
     for key in ("sigma", "view_consistency", "z_error", "cost", "cost_winner", "usage"):
         assert len(c[key]) == len(c["t"])
     assert all(np.isfinite(c["cost"]))
+
+
+def test_costs_match_the_models_cost(model_2d):
+    batch = model_2d.sampler.sample(50, np.random.default_rng(0))
+    c, cw = analysis.costs(model_2d, batch)
+    assert c == pytest.approx(model_2d.cost(batch))
+    assert cw == pytest.approx(model_2d.cost(batch, sigma=1e-5))

@@ -40,6 +40,7 @@ __all__ = [
     "LearningCurve",
     "Polarity",
     "checkpoints",
+    "costs",
     "fig8_data",
     "invariance_matrix",
     "map_polarity",
@@ -394,6 +395,25 @@ def checkpoints(iterations: int, n: int = 20, spacing: str = "log", block: int =
     return sorted(pts)
 
 
+def costs(model: SigmaPiSOM, batch: Batch) -> tuple[float, float]:
+    """The approximate cost of section 6.3 at the current sigma and with the winner alone.
+
+    The same numbers as ``model.cost(batch)`` and ``model.cost(batch, sigma=1e-5)``, computed
+    in one pass (one winner search, one activation of view 1, one weight export).
+    """
+    from sigmapi.kernels import reference
+
+    k = model.winner(batch.x0, batch.y0)
+    a = reference.neighbourhood(k, model.map_shape, model.sigma_)
+    h1 = model.respond(batch.x1, batch.y1)
+    w = model.weights_.reshape(model.n_units, -1)
+    wn = np.einsum("kn,kn->k", w, w)
+    dn = (batch.x1**2).sum(1) * (batch.y1**2).sum(1)
+    dist = dn[:, None] - 2.0 * h1 + wn[None, :]
+    rows = np.arange(k.size)
+    return float(np.mean(np.sum(a * dist, axis=1))), float(np.mean(dist[rows, k]))
+
+
 @dataclass
 class LearningCurve:
     """A ``fit`` callback that measures the model at checkpoints during training.
@@ -446,12 +466,13 @@ class LearningCurve:
             self._sets = evaluation_sets(model, self.n_test, self.seed)
         cal, test = self._sets
         m = evaluate(model, test=test, calibration=cal).to_dict()
+        cost, cost_winner = costs(model, test)
         return {
             "t": float(model.t_),
             "sigma": model.sigma_,
             **{k: float(v) for k, v in m.items() if k != "n_test"},
-            "cost": model.cost(test),
-            "cost_winner": model.cost(test, sigma=1e-5),
+            "cost": cost,
+            "cost_winner": cost_winner,
         }
 
     def to_dict(self) -> dict[str, list[float]]:

@@ -67,7 +67,7 @@ Z_ERROR_FLOOR: dict[str, float] = {"paper-1d": 0.27}
 
 PAPER_PRESETS = ("paper-1d", "paper-2d")
 
-QUICK_ITERATIONS: dict[str, int] = {"paper-1d": 60_000, "paper-2d": 30_000}
+QUICK_ITERATIONS: dict[str, int] = {"paper-1d": 60_000, "paper-2d": 6_000}
 """Iterations of each preset in ``--quick`` runs (the schedule is compressed to fit)."""
 
 FIGURES = ("fig8", "weights", "net", "invariance", "curves")
@@ -205,7 +205,7 @@ def draw_figure(
             )  # fmt: skip
         else:
             fig = _figure((16.0, 7.6))
-            axes = fig.subplots(1, 2)
+            axes = fig.subplots(1, 2, gridspec_kw={"wspace": 0.3})
             for a, ax in enumerate(axes):
                 other = 1 - a
                 plots.plot_weight_tiles(
@@ -232,7 +232,7 @@ def draw_figure(
             facts = {"constancy": inv.constancy}
         else:
             fig = _figure((12.0, 5.0))
-            axes = fig.subplots(1, 2)
+            axes = fig.subplots(1, 2, gridspec_kw={"wspace": 0.3})
             facts = {}
             for a, ax in enumerate(axes):
                 inv = analysis.invariance_matrix(model, axis=a, centres=centres)
@@ -530,7 +530,7 @@ def _html(
             f"<li><b>{html.escape(name)}</b>: map {'x'.join(map(str, cfg['map_shape']))}, inputs "
             f"{'x'.join(map(str, cfg['x_shape']))} + {'x'.join(map(str, cfg['y_shape']))}, "
             f"{cfg['iterations']:,} iterations per seed, backend {res['runs'][0]['backend']}, "
-            f"{secs:.0f} s of training in all</li>"
+            f"{secs:.0f} s of training in all{_source(cfg)}</li>"
         )
     body = [
         f"<h1>{title}</h1>",
@@ -562,6 +562,13 @@ def _html(
         f"<!doctype html><html lang='en'><head><meta charset='utf-8'><title>{title}</title>"
         f"<style>{_STYLE}</style></head><body>{''.join(body)}</body></html>\n"
     )
+
+
+def _source(cfg: dict[str, Any]) -> str:
+    """The preset's own note on where its values come from, if it has one."""
+    extra = cfg.get("extra") or {}
+    parts = [str(extra[k]) for k in ("source", "evidence") if extra.get(k)]
+    return f"; preset: {html.escape('; '.join(parts))}" if parts else ""
 
 
 def linked_files(text: str) -> list[str]:
