@@ -271,7 +271,7 @@ def map_polarity(model: SigmaPiSOM, centres: Any = None, seed: Seed = 0) -> Pola
             for j, i in enumerate(rows):
                 perm[i, j] = 1 if inv[i, j] > 0 else -1
     if not perm.any():
-        name = "undetermined (the map is not ordered along z)"
+        name = f"undetermined: the map is not ordered along z (affine R² {r2:.2f})"
     elif d_map == 1:
         name = "same direction as z" if perm[0, 0] > 0 else "reversed (mirrored)"
     elif d_map == 2:

@@ -47,10 +47,10 @@ def _axes(ax: Axes | None, figsize: tuple[float, float], container: bool = False
     return fig.add_axes((0.0, 0.0, 1.0, 1.0)) if container else fig.add_subplot()
 
 
-def _container(ax: Axes, title: str) -> None:
+def _container(ax: Axes, title: str, fontsize: float = 12) -> None:
     """Hide ``ax`` (its panels are insets) and put the title inside its top edge."""
     ax.set_axis_off()
-    ax.set_title(title, fontsize=12, y=0.99, va="top", pad=0)
+    ax.set_title(title, fontsize=fontsize, y=0.99, va="top", pad=0)
 
 
 def _inset(ax: Axes, left: float, bottom: float, width: float, height: float) -> Axes:
@@ -95,10 +95,11 @@ def plot_fig8(data: Fig8Data, ax: Axes | None = None, title: str | None = None) 
         title
         or f"Fig. 8: map response h to {data.n_pairs} (x, y) pairs with the same z = ({zs}) "
         f"(left) and to patterns (right)\nmap polarity: {data.polarity.name}",
+        fontsize=11,
     )
     n_cols = data.x.shape[0]
     gap = 0.6  # extra space between the pair columns and the pattern columns, in columns
-    left, right, bottom, top = 0.08, 0.90, 0.03, 0.86
+    left, right, bottom, top = 0.08, 0.90, 0.03, 0.84
     col_w = (right - left) / (n_cols + gap)
     row_h = (top - bottom) / 3.0
     rows = [

@@ -184,8 +184,8 @@ def draw_figure(
         zs = ", ".join(f"{v:.2f}" for v in data.z)
         plots.plot_fig8(
             data, ax=ax,
-            title=f"Fig. 8{tag}: map response h to {data.n_pairs} (x, y) pairs with the same "
-            f"z = ({zs}) (left) and to patterns (right)\nmap polarity: {data.polarity.name}",
+            title=f"Fig. 8{tag}\nleft: map response h to {data.n_pairs} (x, y) pairs with the "
+            f"same z = ({zs}); right: to patterns\nmap polarity: {data.polarity.name}",
         )  # fmt: skip
         facts = {
             "z": data.z.tolist(),
@@ -635,7 +635,8 @@ def cmd_figure(args: argparse.Namespace) -> int:
             print("note: the replayed run ended with weights that differ from the file's "
                   "(another backend?); curves show the replay", file=sys.stderr)  # fmt: skip
         curves = [curve.to_dict()]
-    draw_figure(args.name, model, out, curves=curves, label=Path(args.model).name, seed=args.seed)
+    label = args.label if args.label is not None else Path(args.model).name
+    draw_figure(args.name, model, out, curves=curves, label=label, seed=args.seed)
     print(f"wrote {out}", file=sys.stderr)
     return 0
 
@@ -659,6 +660,7 @@ def register(sub: Any) -> None:
     p.add_argument("model", help="model file written by `sigmapi train` or `sigmapi reproduce`")
     p.add_argument("--out", required=True, help="image file to write (.png, .pdf or .svg)")
     p.add_argument("--seed", type=int, default=0, help="seed of the figure's sampled inputs")
+    p.add_argument("--label", help="how titles name the model (default: the file name)")
     p.add_argument("--force", action="store_true", help="overwrite --out if it exists")
     p.add_argument("--quiet", action="store_true", help="no progress bar (curves replay the run)")
     p.set_defaults(func=cmd_figure)
