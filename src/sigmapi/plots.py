@@ -259,6 +259,8 @@ def plot_learning_curves(
     ``view_within_one``, ``z_error`` and ``z_error_floor``. ``schedule``: ``(t, sigma)`` of
     the full sigma schedule, drawn under the checkpoints.
     """
+    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
+
     ax = _axes(ax, (8.0, 9.0), container=True)
     _container(ax, title or "Learning curves (measured at checkpoints during training)")
     curves = [c for c in curves if len(c.get("t", [])) > 0]
@@ -304,6 +306,9 @@ def plot_learning_curves(
         if label.startswith("sigma"):
             pa.set_yscale("log")
         pa.set_xscale("log")
+        pa.xaxis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
+        pa.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:,.0f}"))
+        pa.xaxis.set_minor_formatter(NullFormatter())
         pa.set_ylabel(label)
         pa.grid(alpha=0.3, which="both")
         pa.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
