@@ -316,12 +316,6 @@ def reproduce(
     dict
         What ``metrics.json`` holds.
     """
-    from tqdm import tqdm
-
-    from sigmapi.analysis import LearningCurve, checkpoints, receptive_field_centres
-    from sigmapi.cli import progress_callback
-    from sigmapi.som import SigmaPiSOM
-
     started = time.perf_counter()
     n_points = QUICK_SIZES["n_checkpoints"] if quick else N_CHECKPOINTS
     curve_test = QUICK_SIZES["curve_test"] if quick else CURVE_TEST
@@ -337,50 +331,18 @@ def reproduce(
     models: dict[str, list[SigmaPiSOM]] = {}
     figures: dict[str, list[tuple[str, str]]] = {}
     for name, cfg in runs_of:
-        runs: list[dict[str, Any]] = []
-        models[name] = []
-        for seed in seeds:
-            model = SigmaPiSOM(cfg, seed=seed)
-            callback, bar = progress_callback(
-                cfg.iterations, f"{name} seed {seed}", disable=not progress or None
-            )
-            curve = LearningCurve(at=checkpoints(cfg.iterations, n_points), n_test=curve_test,
-                                  then=callback)  # fmt: skip
-            t0 = time.perf_counter()
-            with bar:
-                model.fit(callback=curve)
-            seconds = time.perf_counter() - t0
-            if save_models:
-                model.save(out / f"{name}-seed{seed}.npz")
-            metrics = evaluate(model, n_test=n_test).to_dict()
-            runs.append({"seed": seed, "train_seconds": seconds, "backend": model.backend,
-                         **metrics, "curve": curve.to_dict()})  # fmt: skip
-            models[name].append(model)
-        mean = {k: statistics.fmean(float(r[k]) for r in runs) for k in METRIC_KEYS}
-        sd = {k: statistics.pstdev(float(r[k]) for r in runs) for k in METRIC_KEYS}
+        runs, models[name] = _train(
+            name, cfg, seeds, out if save_models else None, progress, n_points, curve_test, n_test
+        )
         entry: dict[str, Any] = {
-            "config": cfg.to_dict(), "runs": runs, "mean": mean, "sd": sd,
+            "config": cfg.to_dict(), "runs": runs,
+            "mean": {k: statistics.fmean(float(r[k]) for r in runs) for k in METRIC_KEYS},
+            "sd": {k: statistics.pstdev(float(r[k]) for r in runs) for k in METRIC_KEYS},
             "reference": REFERENCE.get(name, {}), "z_error_floor": Z_ERROR_FLOOR.get(name),
             "figures": {},
         }  # fmt: skip
         results["presets"][name] = entry
-        first = models[name][0]
-        centres = receptive_field_centres(first, seed=0)
-        figures[name] = []
-        bar = tqdm(FIGURES, desc=f"{name} figures", disable=not progress or None, file=sys.stderr,
-                   leave=False)  # fmt: skip
-        for fig_name in bar:
-            file = f"{fig_name}-{name}.png"
-            label = f"{name}, seed {seeds[0]}"
-            if fig_name == "curves":
-                label = f"{name}, seed{'s' if len(seeds) > 1 else ''} {', '.join(map(str, seeds))}"
-            facts = draw_figure(
-                fig_name, first, out / file, curves=[r["curve"] for r in runs],
-                reference=_reference(name), label=label, centres=centres,
-            )  # fmt: skip
-            entry["figures"][fig_name] = {"file": file, **facts}
-            facts["curve_test"] = curve_test
-            figures[name].append((file, _caption(fig_name, name, cfg, seeds, facts)))
+        figures[name] = _draw(name, cfg, seeds, models[name][0], entry, out, progress, curve_test)
     ctx = ReportContext(out, quick, list(seeds), progress, models, results)
     sections = [s for s in _extra_sections(ctx) if s is not None]
     for s in sections:
@@ -395,6 +357,80 @@ def reproduce(
     return results
 
 
+def _train(
+    name: str,
+    cfg: SOMConfig,
+    seeds: list[int],
+    save_to: Path | None,
+    progress: bool,
+    n_points: int,
+    curve_test: int,
+    n_test: int,
+) -> tuple[list[dict[str, Any]], list[SigmaPiSOM]]:
+    """Train ``cfg`` once per seed with learning-curve checkpoints; (run records, models)."""
+    from sigmapi.analysis import LearningCurve, checkpoints
+    from sigmapi.cli import progress_callback
+    from sigmapi.som import SigmaPiSOM
+
+    runs: list[dict[str, Any]] = []
+    models: list[SigmaPiSOM] = []
+    for seed in seeds:
+        model = SigmaPiSOM(cfg, seed=seed)
+        callback, bar = progress_callback(
+            cfg.iterations, f"{name} seed {seed}", disable=not progress or None
+        )
+        curve = LearningCurve(at=checkpoints(cfg.iterations, n_points), n_test=curve_test,
+                              then=callback)  # fmt: skip
+        t0 = time.perf_counter()
+        with bar:
+            model.fit(callback=curve)
+        seconds = time.perf_counter() - t0
+        if save_to is not None:
+            model.save(save_to / f"{name}-seed{seed}.npz")
+        metrics = evaluate(model, n_test=n_test).to_dict()
+        runs.append({"seed": seed, "train_seconds": seconds, "backend": model.backend,
+                     **metrics, "curve": curve.to_dict()})  # fmt: skip
+        models.append(model)
+    return runs, models
+
+
+def _draw(
+    name: str,
+    cfg: SOMConfig,
+    seeds: list[int],
+    model: SigmaPiSOM,
+    entry: dict[str, Any],
+    out: Path,
+    progress: bool,
+    curve_test: int,
+) -> list[tuple[str, str]]:
+    """Draw every figure of one preset into ``out``; ``(file, caption)`` per figure.
+
+    The facts each caption states are stored in ``entry["figures"]``.
+    """
+    from tqdm import tqdm
+
+    from sigmapi.analysis import receptive_field_centres
+
+    centres = receptive_field_centres(model, seed=0)
+    curves = [r["curve"] for r in entry["runs"]]
+    drawn = []
+    bar = tqdm(FIGURES, desc=f"{name} figures", disable=not progress or None, file=sys.stderr,
+               leave=False)  # fmt: skip
+    for fig_name in bar:
+        file = f"{fig_name}-{name}.png"
+        label = f"{name}, seed {seeds[0]}"
+        if fig_name == "curves":
+            label = f"{name}, seed{'s' if len(seeds) > 1 else ''} {', '.join(map(str, seeds))}"
+        facts = draw_figure(fig_name, model, out / file, curves=curves,
+                            reference=_reference(name), label=label, centres=centres)  # fmt: skip
+        entry["figures"][fig_name] = {"file": file, **facts}
+        drawn.append(
+            (file, _caption(fig_name, name, cfg, seeds, {**facts, "curve_test": curve_test}))
+        )
+    return drawn
+
+
 def _extra_sections(ctx: ReportContext) -> list[Section | None]:
     """Sections from :data:`SECTION_MODULES` that are installed (none of them is required)."""
     out: list[Section | None] = []
@@ -403,8 +439,9 @@ def _extra_sections(ctx: ReportContext) -> list[Section | None]:
             module = importlib.import_module(mod_name)
         except ModuleNotFoundError as exc:
             if exc.name is not None and mod_name.startswith(exc.name):
-                continue
-            raise
+                continue  # that part of the package is not in this build
+            out.append(Section(mod_name, f"<p>Section skipped: {html.escape(str(exc))}.</p>"))
+            continue
         hook: Callable[[ReportContext], Section | None] | None = getattr(
             module, "report_section", None
         )
