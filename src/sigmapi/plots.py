@@ -273,10 +273,10 @@ def plot_learning_curves(
                               ("usage", "units that win")]),
         ("z error (grid spacings)", [("z_error", "z error")]),
         ("cost E (sec. 6.3)", [("cost", "at the current sigma"), ("cost_winner", "winner only")]),
-        ("sigma (map units)", [("sigma", "sigma")]),
+        ("sigma (map units)", [("sigma", "at checkpoints")]),
     ]  # fmt: skip
     n = len(panels)
-    left, right, bottom, top, gap = 0.12, 0.76, 0.06, 0.93, 0.035
+    left, right, bottom, top, gap = 0.12, 0.70, 0.06, 0.93, 0.035
     h = (top - bottom - gap * (n - 1)) / n
     axes = []
     for p, (label, series) in enumerate(panels):

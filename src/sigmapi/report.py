@@ -657,6 +657,11 @@ def cmd_figure(args: argparse.Namespace) -> int:
         raise UsageError(f"model {args.model!r} has not been trained (0 iterations)")
     if len(model.x_shape) > 2 or len(model.map_shape) > 2:
         raise UsageError("figures exist for 1-D and 2-D maps and inputs only")
+    if args.name == "net" and len(model.map_shape) != len(model.x_shape):
+        raise UsageError(
+            f"the net figure needs a map with as many dimensions as z; this map is "
+            f"{len(model.map_shape)}-D and z is {len(model.x_shape)}-D"
+        )
     curves = None
     if args.name == "curves":
         # the training data are a pure function of the seed: re-running the model's schedule
