@@ -19,7 +19,8 @@ Measured:
   The fast kernel's 2-D speed is also given over a whole run (``train``).
 - ``train``: whole runs of a preset on the fast kernel, per seed: wall-clock of the process
   (import, loading or compiling the numba cache, training), the training time alone, the time
-  to reach the quality targets (evaluation every tenth of the run, not counted), final metrics.
+  to reach the quality targets (evaluation every tenth, for paper-2d every fifth, of the run;
+  not counted), final metrics.
 """
 
 from __future__ import annotations
@@ -197,7 +198,7 @@ def main() -> None:
         print(f"paper-1d: {one['train_s']:.2f} s, final {one['final']}", flush=True)
         runs2 = []
         for seed in args.seeds:
-            res = run_child(["train", "paper-2d", str(seed), str(threads), "10"])
+            res = run_child(["train", "paper-2d", str(seed), str(threads), "5"])
             runs2.append(res)
             print(
                 f"paper-2d seed {seed}: {res['wall_s_incl_startup']:.0f} s, {res['final']}",
