@@ -25,7 +25,7 @@ TINY_2D = SOMConfig(map_shape=(3, 3), x_shape=(3, 3), y_shape=(3, 3), code_width
 def run(tmp_path_factory) -> tuple[Path, dict]:
     out = tmp_path_factory.mktemp("report")
     results = report.reproduce(
-        out, seeds=[0, 1], progress=False, n_test=300,
+        out, seeds=[0, 1], progress=False, n_test=300, save_models="all",
         presets=[("tiny-1d", TINY_1D), ("tiny-2d", TINY_2D)],
     )  # fmt: skip
     return out, results
@@ -59,7 +59,7 @@ def test_metrics_json_holds_runs_curves_and_figure_facts(run):
 
 def test_metrics_table_sits_beside_reference_figures(tmp_path):
     out = tmp_path / "r"
-    report.reproduce(out, seeds=[0], progress=False, n_test=200, save_models=False,
+    report.reproduce(out, seeds=[0], progress=False, n_test=200, save_models="none",
                      presets=[("paper-1d", TINY_1D)])  # fmt: skip
     text = (out / "report.html").read_text()
     assert "0.870" in text and "0.988" in text and "0.320" in text  # ALGORITHM.md
@@ -80,7 +80,7 @@ def test_extra_sections_are_added_and_checked(tmp_path, monkeypatch):
     monkeypatch.setattr(report, "SECTION_MODULES", ("fake_section", "no_such_module_here"))
     monkeypatch.setattr(report, "FIGURES", ("weights",))
     out = tmp_path / "r"
-    results = report.reproduce(out, seeds=[0], progress=False, n_test=100, save_models=False,
+    results = report.reproduce(out, seeds=[0], progress=False, n_test=100, save_models="none",
                                presets=[("tiny-1d", TINY_1D)])  # fmt: skip
     assert results["sections"] == {"Reaching": {"n": 1}}
     text = (out / "report.html").read_text()
@@ -92,7 +92,7 @@ def test_extra_sections_are_added_and_checked(tmp_path, monkeypatch):
     module.report_section = broken  # type: ignore[attr-defined]
     with pytest.raises(RuntimeError, match=r"missing\.png"):
         report.reproduce(tmp_path / "r2", seeds=[0], progress=False, n_test=100,
-                         save_models=False, presets=[("tiny-1d", TINY_1D)])  # fmt: skip
+                         save_models="none", presets=[("tiny-1d", TINY_1D)])  # fmt: skip
 
 
 def test_linked_files_ignores_urls_and_anchors():
@@ -107,12 +107,12 @@ def test_quick_run_uses_one_seed_and_short_presets(monkeypatch, tmp_path):
     seen = {}
 
     def fake(out, seeds, quick, progress, save_models):
-        seen.update(seeds=seeds, quick=quick)
+        seen.update(seeds=seeds, quick=quick, models=save_models)
         return {"presets": {}, "total_seconds": 0.0}
 
     monkeypatch.setattr(report, "reproduce", fake)
     assert main(["reproduce", "--quick", "--quiet", "--out", str(tmp_path / "q")]) == 0
-    assert seen == {"seeds": [0], "quick": True}
+    assert seen == {"seeds": [0], "quick": True, "models": "first"}
     for name, cfg in report._presets(quick=True):
         assert cfg.iterations <= report.QUICK_ITERATIONS.get(name, cfg.iterations)
 

@@ -9,7 +9,9 @@ paper and writes into ``DIR``:
 - ``metrics.json``: every number of the report (metrics per seed, learning curves, facts shown
   in the captions);
 - the figures, ``<figure>-<preset>.png`` for the figures of :data:`FIGURES`;
-- the trained models, ``<preset>-seed<S>.npz`` (unless ``save_models=False``).
+- the trained models, ``<preset>-seed<S>.npz``: by default the first seed's (the one the
+  figures show; ``sigmapi figure`` redraws from it), or every seed's, or none
+  (``--models all|first|none``; a paper-2d model file is about 140 MB).
 
 ``sigmapi figure NAME MODEL --out FILE`` draws one of the figures for a model file.
 
@@ -289,7 +291,7 @@ def reproduce(
     quick: bool = False,
     progress: bool = True,
     presets: list[tuple[str, SOMConfig]] | None = None,
-    save_models: bool = True,
+    save_models: str = "first",
     n_test: int | None = None,
 ) -> dict[str, Any]:
     """Train and evaluate each paper preset for ``seeds``; write the report into ``out``.
@@ -306,8 +308,8 @@ def reproduce(
         Show progress bars on stderr.
     presets : list of (name, SOMConfig), optional
         What to run instead of the paper presets (tests use tiny configs).
-    save_models : bool
-        Write each trained model beside the report.
+    save_models : {"first", "all", "none"}
+        Which trained models to write beside the report: the first seed's, all, or none.
     n_test : int, optional
         Test set size of the final metrics (default 10,000; ``quick``: 2,000).
 
@@ -316,6 +318,8 @@ def reproduce(
     dict
         What ``metrics.json`` holds.
     """
+    if save_models not in ("first", "all", "none"):
+        raise ValueError(f"save_models must be 'first', 'all' or 'none', got {save_models!r}")
     started = time.perf_counter()
     n_points = QUICK_SIZES["n_checkpoints"] if quick else N_CHECKPOINTS
     curve_test = QUICK_SIZES["curve_test"] if quick else CURVE_TEST
@@ -332,7 +336,7 @@ def reproduce(
     figures: dict[str, list[tuple[str, str]]] = {}
     for name, cfg in runs_of:
         runs, models[name] = _train(
-            name, cfg, seeds, out if save_models else None, progress, n_points, curve_test, n_test
+            name, cfg, seeds, out, save_models, progress, n_points, curve_test, n_test
         )
         entry: dict[str, Any] = {
             "config": cfg.to_dict(), "runs": runs,
@@ -361,7 +365,8 @@ def _train(
     name: str,
     cfg: SOMConfig,
     seeds: list[int],
-    save_to: Path | None,
+    out: Path,
+    save_models: str,
     progress: bool,
     n_points: int,
     curve_test: int,
@@ -385,8 +390,8 @@ def _train(
         with bar:
             model.fit(callback=curve)
         seconds = time.perf_counter() - t0
-        if save_to is not None:
-            model.save(save_to / f"{name}-seed{seed}.npz")
+        if save_models == "all" or (save_models == "first" and seed == seeds[0]):
+            model.save(out / f"{name}-seed{seed}.npz")
         metrics = evaluate(model, n_test=n_test).to_dict()
         runs.append({"seed": seed, "train_seconds": seconds, "backend": model.backend,
                      **metrics, "curve": curve.to_dict()})  # fmt: skip
@@ -632,7 +637,7 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
     if len(set(seeds)) != len(seeds):
         raise UsageError(f"--seeds must be distinct, got {seeds}")
     results = reproduce(out, seeds=seeds, quick=args.quick, progress=not args.quiet,
-                        save_models=not args.no_models)  # fmt: skip
+                        save_models=args.models)  # fmt: skip
     for name, res in results["presets"].items():
         print(
             f"{name}: " + ", ".join(f"{k} {v:.3f}" for k, v in res["mean"].items()), file=sys.stderr
@@ -693,7 +698,9 @@ def register(sub: Any) -> None:
                    help="a short run for a first look (under a minute): fewer iterations, "
                    "one seed")  # fmt: skip
     p.add_argument("--force", action="store_true", help="write into a non-empty --out folder")
-    p.add_argument("--no-models", action="store_true", help="do not save the trained models")
+    p.add_argument("--models", choices=["first", "all", "none"], default="first",
+                   help="which trained models to save: the first seed's (default; the one the "
+                   "figures show), all, or none")  # fmt: skip
     p.add_argument("--quiet", action="store_true", help="no progress bars")
     p.set_defaults(func=cmd_reproduce)
 
