@@ -163,7 +163,10 @@ def plot_weight_tiles(
         r, c = divmod(u, m1)
         r0 = top + r * (a + gap)
         mosaic[r0 : r0 + a, c * (b + 1) : c * (b + 1) + b] = tiles[u]
-    vmax = float(np.nanmax(np.abs(mosaic))) or 1.0
+    # a few saturated weights (border units) would wash out every anti-diagonal: scale to the
+    # 99.5th percentile and mark the clipped range on the colour bar
+    top_abs = float(np.nanmax(np.abs(mosaic)))
+    vmax = float(np.nanpercentile(np.abs(mosaic), 99.5)) or top_abs or 1.0
     import matplotlib as mpl
 
     cmap = mpl.colormaps[WEIGHT_CMAP].with_extremes(bad="white")
@@ -186,7 +189,10 @@ def plot_weight_tiles(
     ax.set_title(
         title or "Sigma-Pi weights w_kij of each map unit k (Fig. 6a)", pad=12 if one_d else 6
     )
-    ax.figure.colorbar(img, ax=ax, label="weight", fraction=0.046, pad=0.02)
+    clipped = top_abs > vmax * (1 + 1e-9)
+    label = "weight (colour clipped at the 99.5th percentile)" if clipped else "weight"
+    extend = "both" if clipped else "neither"
+    ax.figure.colorbar(img, ax=ax, label=label, fraction=0.046, pad=0.02, extend=extend)
     return ax
 
 
