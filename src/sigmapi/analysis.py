@@ -440,7 +440,7 @@ class LearningCurve:
     >>> som = SigmaPiSOM(map_shape=(5,), x_shape=(5,), y_shape=(5,), iterations=2000, seed=0)
     >>> curve = LearningCurve(at=[1000, 2000], n_test=200)
     >>> _ = som.fit(callback=curve)
-    >>> [r["t"] for r in curve.records]
+    >>> [int(r["t"]) for r in curve.records]
     [1000, 2000]
     """
 
