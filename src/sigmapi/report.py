@@ -240,7 +240,7 @@ def draw_figure(
                 inv = analysis.invariance_matrix(model, axis=a, centres=centres)
                 plots.plot_invariance(
                     inv, ax=ax,
-                    title=f"Winner as a function of x{a} and y{a} (axis {1 - a} of x and y at 0.5)"
+                    title=f"Winner as a function of x{a} and y{a} (x{1 - a}, y{1 - a} at 0.5)"
                     f"\n{100 * inv.constancy:.1f} % of cells agree with their anti-diagonal",
                 )  # fmt: skip
                 facts[f"constancy_axis{a}"] = inv.constancy
