@@ -174,7 +174,7 @@ class TwoViewSampler:
         first = np.argmax(ok, axis=-1)[..., None]  # the first accepted round
         x = np.take_along_axis(xx, first, axis=-1)[..., 0]
         y = np.take_along_axis(yy, first, axis=-1)[..., 0]
-        todo = ~ok.any(axis=-1)
+        todo = np.asarray(~ok.any(axis=-1), dtype=bool)
         if not todo.any():
             return x, y
         if rel.x_bounds is not None and rel.y_bounds is not None:

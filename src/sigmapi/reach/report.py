@@ -1,0 +1,92 @@
+"""The reach experiment as a section of the reproduction report (``sigmapi reproduce``).
+
+The report (:mod:`sigmapi.report`) imports this module and calls :func:`report_section`: it
+runs the comparison of :func:`sigmapi.reach.run_reach` (the 2-D task, a saccade on every step,
+the same actor-critic on four state representations), draws the figure and returns the
+section. ``--quick`` runs 1 seed of 150 episodes; the full run is the defaults of
+:class:`~sigmapi.reach.ReachConfig` (5 seeds of 600 episodes, the acceptance run).
+"""
+
+from __future__ import annotations
+
+import html
+import sys
+from typing import TYPE_CHECKING
+
+from sigmapi.reach.plots import reach_figure
+from sigmapi.reach.runner import ReachConfig, run_reach
+
+if TYPE_CHECKING:
+    from sigmapi.report import ReportContext, Section
+
+__all__ = ["report_section"]
+
+FIGURE = "reach-2d.png"
+CAPTION = (
+    "Success rate and steps to reach per block of episodes for each state, and the learned "
+    "value over z."
+)
+
+EXPLANATION = {
+    "map": "the learned Sigma-Pi map's response (learned from the robot's own saccades)",
+    "retina": "the retinal code x alone: under saccades it says little about z",
+    "retina_gaze": (
+        "x and y side by side: a linear learner can add a function of x to a function of y "
+        "but cannot form their conjunction, which the value of the goal needs"
+    ),
+    "true_z": "a population code of the true body-centred z (the upper bound)",
+}
+
+
+def report_section(ctx: ReportContext) -> Section:
+    """Run the reach comparison (smaller with ``ctx.quick``) and return its report section."""
+    from tqdm import tqdm
+
+    from sigmapi.report import Section
+
+    cfg = ReachConfig(episodes=150, seeds=1, final_episodes=50) if ctx.quick else ReachConfig()
+    total = cfg.seeds * len(cfg.states) * cfg.episodes
+    bar = tqdm(total=total, desc="reach", unit="ep", dynamic_ncols=True, file=sys.stderr,
+               disable=not ctx.progress or None, mininterval=0.5)  # fmt: skip
+
+    def progress(n: int, phase: str) -> None:
+        bar.set_postfix_str(phase, refresh=False)
+        bar.update(n)
+
+    with bar:
+        result = run_reach(cfg, progress=progress)
+    fig = reach_figure(result)
+    fig.savefig(ctx.out / FIGURE, dpi=120, facecolor="white")
+
+    final = result.final_success()
+    per_seed = result.final_success_per_seed()
+    rows = "".join(
+        f"<tr><td>{html.escape(state)}</td><td>{final[state]:.3f}</td>"
+        f"<td>{html.escape(' '.join(f'{v:.3f}' for v in per_seed[state]))}</td>"
+        f"<td>{html.escape(EXPLANATION.get(state, ''))}</td></tr>"
+        for state in final
+    )
+    ratio = final["map"] / final["true_z"] if final.get("true_z") else float("nan")
+    body = (
+        f"<p>The 2-D gaze-and-reach task (<code>sigmapi/GazeReach-v0</code>), a saccade with "
+        f"probability {cfg.saccade_rate:g} per step, {cfg.grid}x{cfg.grid} retina and gaze "
+        f"codes, a {'x'.join(map(str, cfg.map_shape))} Sigma-Pi map learned from "
+        f"{cfg.map_pairs:,} saccade view pairs per seed; the same actor-critic (discount "
+        f"{cfg.gamma}, rates {cfg.critic_lr}/{cfg.actor_lr}, inverse temperature {cfg.beta}) on "
+        f"each state, {cfg.episodes} episodes x {cfg.seeds} seeds. Final success = rate over the "
+        f"last {cfg.final_episodes} episodes. Map / true z = {ratio:.3f} "
+        f"(target: at least 0.9).</p>"
+        "<table><tr><th>state</th><th>final success (mean)</th><th>per seed</th>"
+        f"<th>what the learner sees</th></tr>{rows}</table>"
+    )
+    return Section(
+        title="From map to action: learning to reach",
+        html=body,
+        figures=[(FIGURE, CAPTION)],
+        data={
+            "config": {"episodes": cfg.episodes, "seeds": cfg.seeds, "quick": ctx.quick},
+            "success": final,
+            "success_per_seed": {k: [float(x) for x in v] for k, v in per_seed.items()},
+            "map_over_true_z": ratio,
+        },
+    )
