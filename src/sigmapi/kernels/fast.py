@@ -115,8 +115,7 @@ class FastState:
     def refresh_norms(self) -> None:
         """Recompute ``sqnorm`` exactly from ``raw`` if it is stale."""
         if not self.norms_valid:
-            r = self.raw.astype(np.float64)
-            self.sqnorm[:] = np.einsum("pk,pk->k", r, r)
+            self.sqnorm[:] = _sqnorms(self.raw)
             self.norms_valid = True
 
 
@@ -149,8 +148,16 @@ def prepare(weights: NDArray[np.float64], tol: float = 1e-6) -> FastState:
         raise ValueError(f"weights must have shape (K, n_x, n_y), got {w.shape}")
     k, nx, ny = w.shape
     raw = np.ascontiguousarray(w.reshape(k, nx * ny).T, dtype=_storage_dtype(tol))
-    sq = np.einsum("pk,pk->k", raw.astype(np.float64), raw.astype(np.float64))
-    return FastState(raw, np.ones(k), np.ascontiguousarray(sq), tol, (k, nx, ny))
+    return FastState(raw, np.ones(k), _sqnorms(raw), tol, (k, nx, ny))
+
+
+def _sqnorms(raw: NDArray[np.floating]) -> NDArray[np.float64]:
+    """``sum_p raw[p, k]**2`` in float64, in blocks of rows (no full float64 copy)."""
+    sq = np.zeros(raw.shape[1])
+    for s in range(0, raw.shape[0], 4096):
+        r = raw[s : s + 4096].astype(np.float64)
+        sq += np.einsum("pk,pk->k", r, r)
+    return sq
 
 
 def export(state: FastState) -> NDArray[np.float64]:
