@@ -26,7 +26,7 @@ def run(tmp_path_factory) -> tuple[Path, dict]:
     out = tmp_path_factory.mktemp("report")
     results = report.reproduce(
         out, seeds=[0, 1], progress=False, n_test=300, save_models="all",
-        presets=[("tiny-1d", TINY_1D), ("tiny-2d", TINY_2D)],
+        presets=[("tiny-1d", TINY_1D), ("tiny-2d", TINY_2D)], sections=(),
     )  # fmt: skip
     return out, results
 
@@ -60,7 +60,7 @@ def test_metrics_json_holds_runs_curves_and_figure_facts(run):
 def test_metrics_table_sits_beside_reference_figures(tmp_path):
     out = tmp_path / "r"
     report.reproduce(out, seeds=[0], progress=False, n_test=200, save_models="none",
-                     presets=[("paper-1d", TINY_1D)])  # fmt: skip
+                     presets=[("paper-1d", TINY_1D)], sections=())  # fmt: skip
     text = (out / "report.html").read_text()
     assert "0.870" in text and "0.988" in text and "0.320" in text  # ALGORITHM.md
     assert "floor 0.27" in text

@@ -293,6 +293,7 @@ def reproduce(
     presets: list[tuple[str, SOMConfig]] | None = None,
     save_models: str = "first",
     n_test: int | None = None,
+    sections: tuple[str, ...] | None = None,
 ) -> dict[str, Any]:
     """Train and evaluate each paper preset for ``seeds``; write the report into ``out``.
 
@@ -312,6 +313,9 @@ def reproduce(
         Which trained models to write beside the report: the first seed's, all, or none.
     n_test : int, optional
         Test set size of the final metrics (default 10,000; ``quick``: 2,000).
+    sections : tuple of str, optional
+        Modules that add report sections (default :data:`SECTION_MODULES`, the reach
+        experiment); ``()`` for none.
 
     Returns
     -------
@@ -348,12 +352,13 @@ def reproduce(
         results["presets"][name] = entry
         figures[name] = _draw(name, cfg, seeds, models[name][0], entry, out, progress, curve_test)
     ctx = ReportContext(out, quick, list(seeds), progress, models, results)
-    sections = [s for s in _extra_sections(ctx) if s is not None]
-    for s in sections:
+    extra = SECTION_MODULES if sections is None else sections
+    sections_done = [s for s in _extra_sections(ctx, extra) if s is not None]
+    for s in sections_done:
         results["sections"][s.title] = s.data
     results["total_seconds"] = time.perf_counter() - started
     atomic_write_bytes(out / "metrics.json", json.dumps(results, indent=2).encode())
-    text = _html(results, figures, sections)
+    text = _html(results, figures, sections_done)
     missing = [f for f in linked_files(text) if not (out / f).is_file()]
     if missing:
         raise RuntimeError(f"report links files that were not written: {missing}")
@@ -436,10 +441,10 @@ def _draw(
     return drawn
 
 
-def _extra_sections(ctx: ReportContext) -> list[Section | None]:
-    """Sections from :data:`SECTION_MODULES` that are installed (none of them is required)."""
+def _extra_sections(ctx: ReportContext, modules: tuple[str, ...]) -> list[Section | None]:
+    """Sections from ``modules`` that are installed (none of them is required)."""
     out: list[Section | None] = []
-    for mod_name in SECTION_MODULES:
+    for mod_name in modules:
         try:
             module = importlib.import_module(mod_name)
         except ModuleNotFoundError as exc:
