@@ -10,9 +10,12 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from sigmapi.errors import ConfigError
+
+if TYPE_CHECKING:
+    from sigmapi.reach.runner import ReachConfig, ReachResult
 
 __all__ = ["cmd_reach", "register"]
 
@@ -129,12 +132,28 @@ def register(sub: Any) -> None:
     p.set_defaults(func=cmd_reach)
 
 
-def cmd_reach(args: argparse.Namespace) -> int:
+def run_with_progress(cfg: ReachConfig, disable: bool | None = None) -> ReachResult:
+    """:func:`run_reach` with a tqdm bar on stderr (episodes, and the current phase)."""
     from tqdm import tqdm
 
+    from sigmapi.reach.runner import run_reach
+
+    total = cfg.seeds * len(cfg.states) * cfg.episodes
+    bar = tqdm(total=total, desc="reach", unit="ep", dynamic_ncols=True, file=sys.stderr,
+               disable=disable, mininterval=0.5)  # fmt: skip
+
+    def progress(n: int, phase: str) -> None:
+        bar.set_postfix_str(phase, refresh=False)
+        bar.update(n)
+
+    with bar:
+        return run_reach(cfg, progress=progress)
+
+
+def cmd_reach(args: argparse.Namespace) -> int:
     from sigmapi.cli import UsageError, check_output
     from sigmapi.reach.plots import reach_figure
-    from sigmapi.reach.runner import ReachConfig, run_reach
+    from sigmapi.reach.runner import ReachConfig
 
     out = check_output(args.out, args.force, "figure file")
     if out.suffix.lower() not in (".png", ".pdf", ".svg"):
@@ -164,16 +183,7 @@ def cmd_reach(args: argparse.Namespace) -> int:
         )  # fmt: skip
     except ConfigError as exc:
         raise UsageError(str(exc)) from None
-    total = cfg.seeds * len(cfg.states) * cfg.episodes
-    bar = tqdm(total=total, desc="reach", unit="ep", dynamic_ncols=True, file=sys.stderr,
-               disable=args.quiet or None, mininterval=0.5)  # fmt: skip
-
-    def progress(n: int, phase: str) -> None:
-        bar.set_postfix_str(phase, refresh=False)
-        bar.update(n)
-
-    with bar:
-        result = run_reach(cfg, progress=progress)
+    result = run_with_progress(cfg, disable=args.quiet or None)
     fig = reach_figure(result)
     fig.savefig(out, dpi=120)
     summary = result.to_dict()

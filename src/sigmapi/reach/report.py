@@ -10,11 +10,11 @@ section. ``--quick`` runs 1 seed of 150 episodes; the full run is the defaults o
 from __future__ import annotations
 
 import html
-import sys
 from typing import TYPE_CHECKING
 
+from sigmapi.reach.cli import run_with_progress
 from sigmapi.reach.plots import reach_figure
-from sigmapi.reach.runner import ReachConfig, run_reach
+from sigmapi.reach.runner import ReachConfig
 
 if TYPE_CHECKING:
     from sigmapi.report import ReportContext, Section
@@ -40,21 +40,10 @@ EXPLANATION = {
 
 def report_section(ctx: ReportContext) -> Section:
     """Run the reach comparison (smaller with ``ctx.quick``) and return its report section."""
-    from tqdm import tqdm
-
     from sigmapi.report import Section
 
     cfg = ReachConfig(episodes=150, seeds=1, final_episodes=50) if ctx.quick else ReachConfig()
-    total = cfg.seeds * len(cfg.states) * cfg.episodes
-    bar = tqdm(total=total, desc="reach", unit="ep", dynamic_ncols=True, file=sys.stderr,
-               disable=not ctx.progress or None, mininterval=0.5)  # fmt: skip
-
-    def progress(n: int, phase: str) -> None:
-        bar.set_postfix_str(phase, refresh=False)
-        bar.update(n)
-
-    with bar:
-        result = run_reach(cfg, progress=progress)
+    result = run_with_progress(cfg, disable=not ctx.progress or None)
     fig = reach_figure(result)
     fig.savefig(ctx.out / FIGURE, dpi=120, facecolor="white")
 
