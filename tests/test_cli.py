@@ -48,6 +48,7 @@ def test_presets_lists_paper_1d():
         (["evaluate", "missing.npz"], "does not exist"),
         (["evaluate", "bad.npz"], "not a sigmapi model file"),
         (["train"], "required"),
+        (["train", *TINY, "--out", "/proc/sigmapi-test.npz"], "cannot access"),
         (["frobnicate"], "invalid choice"),
     ],
 )

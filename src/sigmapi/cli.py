@@ -224,6 +224,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (UsageError, ConfigError, ModelFileError, NotFittedError) as exc:
         print(f"sigmapi {args.command}: error: {exc}", file=sys.stderr)
         return 2
+    except OSError as exc:  # unwritable folder, disk full, ...: the user's environment
+        where = f" {exc.filename!r}" if exc.filename else ""
+        print(f"sigmapi {args.command}: error: cannot access{where}: {exc.strerror or exc}",
+              file=sys.stderr)  # fmt: skip
+        return 2
     except KeyboardInterrupt:
         print(f"sigmapi {args.command}: interrupted", file=sys.stderr)
         return 130
