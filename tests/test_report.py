@@ -112,7 +112,7 @@ def test_quick_run_uses_one_seed_and_short_presets(monkeypatch, tmp_path):
 
     monkeypatch.setattr(report, "reproduce", fake)
     assert main(["reproduce", "--quick", "--quiet", "--out", str(tmp_path / "q")]) == 0
-    assert seen == {"seeds": [0], "quick": True, "models": "first"}
+    assert seen == {"seeds": [0], "quick": True, "models": "shown"}
     for name, cfg in report._presets(quick=True):
         assert cfg.iterations <= report.QUICK_ITERATIONS.get(name, cfg.iterations)
 

@@ -9,9 +9,9 @@ paper and writes into ``DIR``:
 - ``metrics.json``: every number of the report (metrics per seed, learning curves, facts shown
   in the captions);
 - the figures, ``<figure>-<preset>.png`` for the figures of :data:`FIGURES`;
-- the trained models, ``<preset>-seed<S>.npz``: by default the first seed's (the one the
-  figures show; ``sigmapi figure`` redraws from it), or every seed's, or none
-  (``--models all|first|none``; a paper-2d model file is about 140 MB).
+- the trained models, ``<preset>-seed<S>.npz``: by default the one the figures show (the
+  best-ordered seed; ``sigmapi figure`` redraws from it), or every seed's, or none
+  (``--models shown|all|none``; a paper-2d model file is about 140 MB).
 
 ``sigmapi figure NAME MODEL --out FILE`` draws one of the figures for a model file.
 
@@ -291,7 +291,7 @@ def reproduce(
     quick: bool = False,
     progress: bool = True,
     presets: list[tuple[str, SOMConfig]] | None = None,
-    save_models: str = "first",
+    save_models: str = "shown",
     n_test: int | None = None,
     sections: tuple[str, ...] | None = None,
 ) -> dict[str, Any]:
@@ -302,15 +302,17 @@ def reproduce(
     out : Path
         Report folder (created).
     seeds : list of int
-        Training seeds; figures other than the learning curves show the first seed's model.
+        Training seeds; figures other than the learning curves show the model of the seed
+        with the highest order R^2 (the first on ties), and say which.
     quick : bool
         Fewer iterations per preset (:data:`QUICK_ITERATIONS`), for a first look.
     progress : bool
         Show progress bars on stderr.
     presets : list of (name, SOMConfig), optional
         What to run instead of the paper presets (tests use tiny configs).
-    save_models : {"first", "all", "none"}
-        Which trained models to write beside the report: the first seed's, all, or none.
+    save_models : {"shown", "all", "none"}
+        Which trained models to write beside the report: the one the figures show
+        (``"shown"``), all, or none.
     n_test : int, optional
         Test set size of the final metrics (default 10,000; ``quick``: 2,000).
     sections : tuple of str, optional
@@ -322,8 +324,8 @@ def reproduce(
     dict
         What ``metrics.json`` holds.
     """
-    if save_models not in ("first", "all", "none"):
-        raise ValueError(f"save_models must be 'first', 'all' or 'none', got {save_models!r}")
+    if save_models not in ("shown", "all", "none"):
+        raise ValueError(f"save_models must be 'shown', 'all' or 'none', got {save_models!r}")
     started = time.perf_counter()
     n_points = QUICK_SIZES["n_checkpoints"] if quick else N_CHECKPOINTS
     curve_test = QUICK_SIZES["curve_test"] if quick else CURVE_TEST
@@ -350,7 +352,14 @@ def reproduce(
             "figures": {},
         }  # fmt: skip
         results["presets"][name] = entry
-        figures[name] = _draw(name, cfg, seeds, models[name][0], entry, out, progress, curve_test)
+        # figures show the best-ordered seed (the first on ties), and say which
+        shown = max(range(len(seeds)), key=lambda i: (runs[i]["order_r2"], -i))
+        entry["shown_seed"] = seeds[shown]
+        for i, seed in enumerate(seeds):
+            if save_models == "all" or (save_models == "shown" and i == shown):
+                models[name][i].save(out / f"{name}-seed{seed}.npz")
+        figures[name] = _draw(name, cfg, seeds, shown, models[name][shown], entry, out, progress,
+                              curve_test)  # fmt: skip
     ctx = ReportContext(out, quick, list(seeds), progress, models, results)
     extra = SECTION_MODULES if sections is None else sections
     sections_done = [s for s in _extra_sections(ctx, extra) if s is not None]
@@ -395,8 +404,6 @@ def _train(
         with bar:
             model.fit(callback=curve)
         seconds = time.perf_counter() - t0
-        if save_models == "all" or (save_models == "first" and seed == seeds[0]):
-            model.save(out / f"{name}-seed{seed}.npz")
         metrics = evaluate(model, n_test=n_test).to_dict()
         runs.append({"seed": seed, "train_seconds": seconds, "backend": model.backend,
                      **metrics, "curve": curve.to_dict()})  # fmt: skip
@@ -408,6 +415,7 @@ def _draw(
     name: str,
     cfg: SOMConfig,
     seeds: list[int],
+    shown: int,
     model: SigmaPiSOM,
     entry: dict[str, Any],
     out: Path,
@@ -429,14 +437,14 @@ def _draw(
                leave=False)  # fmt: skip
     for fig_name in bar:
         file = f"{fig_name}-{name}.png"
-        label = f"{name}, seed {seeds[0]}"
+        label = f"{name}, seed {seeds[shown]}"
         if fig_name == "curves":
             label = f"{name}, seed{'s' if len(seeds) > 1 else ''} {', '.join(map(str, seeds))}"
         facts = draw_figure(fig_name, model, out / file, curves=curves,
                             reference=_reference(name), label=label, centres=centres)  # fmt: skip
         entry["figures"][fig_name] = {"file": file, **facts}
         drawn.append(
-            (file, _caption(fig_name, name, cfg, seeds, {**facts, "curve_test": curve_test}))
+            (file, _caption(fig_name, name, cfg, seeds, shown, {**facts, "curve_test": curve_test}))
         )
     return drawn
 
@@ -463,10 +471,13 @@ def _extra_sections(ctx: ReportContext, modules: tuple[str, ...]) -> list[Sectio
 # ----------------------------------------------------------------------------- HTML
 
 
-def _caption(fig: str, preset: str, cfg: SOMConfig, seeds: list[int], facts: dict[str, Any]) -> str:
+def _caption(
+    fig: str, preset: str, cfg: SOMConfig, seeds: list[int], shown: int, facts: dict[str, Any]
+) -> str:
     shape = "x".join(map(str, cfg.map_shape)) + ("-unit" if len(cfg.map_shape) == 1 else "")
     d = len(cfg.x_shape)
-    what = f"{preset} ({shape} map, {cfg.iterations:,} iterations, seed {seeds[0]})"
+    which = "" if len(seeds) == 1 else f", the best-ordered of seeds {', '.join(map(str, seeds))}"
+    what = f"{preset} ({shape} map, {cfg.iterations:,} iterations, seed {seeds[shown]}{which})"
     if fig == "fig8":
         pattern = 'an "L" on x with a single hill on y (and the reverse)' if d == 2 else (
             "two hills on x with a single hill on y (and the reverse)")  # fmt: skip
@@ -703,9 +714,9 @@ def register(sub: Any) -> None:
                    help="a short run for a first look (under a minute): fewer iterations, "
                    "one seed")  # fmt: skip
     p.add_argument("--force", action="store_true", help="write into a non-empty --out folder")
-    p.add_argument("--models", choices=["first", "all", "none"], default="first",
-                   help="which trained models to save: the first seed's (default; the one the "
-                   "figures show), all, or none")  # fmt: skip
+    p.add_argument("--models", choices=["shown", "all", "none"], default="shown",
+                   help="which trained models to save: the one the figures show (default; the "
+                   "best-ordered seed), all, or none")  # fmt: skip
     p.add_argument("--quiet", action="store_true", help="no progress bars")
     p.set_defaults(func=cmd_reproduce)
 
