@@ -403,13 +403,8 @@ def costs(model: SigmaPiSOM, batch: Batch) -> tuple[float, float]:
     """
     from sigmapi.kernels import reference
 
-    k = model.winner(batch.x0, batch.y0)
+    k, dist = model.cost_terms(batch)
     a = reference.neighbourhood(k, model.map_shape, model.sigma_)
-    h1 = model.respond(batch.x1, batch.y1)
-    w = model.weights_.reshape(model.n_units, -1)
-    wn = np.einsum("kn,kn->k", w, w)
-    dn = (batch.x1**2).sum(1) * (batch.y1**2).sum(1)
-    dist = dn[:, None] - 2.0 * h1 + wn[None, :]
     rows = np.arange(k.size)
     return float(np.mean(np.sum(a * dist, axis=1))), float(np.mean(dist[rows, k]))
 

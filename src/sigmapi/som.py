@@ -22,7 +22,7 @@ from numpy.typing import ArrayLike, NDArray
 from sigmapi.codes import PopulationCode, grid_coordinates
 from sigmapi.config import SOMConfig
 from sigmapi.errors import ConfigError, NotFittedError
-from sigmapi.kernels import get_backend
+from sigmapi.kernels import get_backend, reference
 from sigmapi.tasks import Batch, TwoViewSampler
 
 __all__ = ["BLOCK", "SigmaPiSOM"]
@@ -332,6 +332,19 @@ class SigmaPiSOM:
         scale = np.maximum(np.asarray(self.map_shape, dtype=np.float64) - 1.0, 1.0)
         return self.map_coords[k] / scale
 
+    def cost_terms(self, batch: Batch) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
+        """Winners of view 0 ``(B,)`` and ``|x1 y1^T - w_k|^2`` for every unit ``(B, n_units)``.
+
+        The distances use ``|x y^T|^2 = |x|^2 |y|^2`` and ``<x y^T, w_k> = h_k``, so no outer
+        product is formed.
+        """
+        k = self.winner(batch.x0, batch.y0)
+        h1 = self.respond(batch.x1, batch.y1)
+        w = self.weights_
+        wn = np.einsum("kij,kij->k", w, w)
+        dn = (batch.x1**2).sum(1) * (batch.y1**2).sum(1)
+        return k, dn[:, None] - 2.0 * h1 + wn[None, :]
+
     def cost(self, batch: Batch, sigma: float | None = None) -> float:
         """Approximate cost of section 6.3 (after Kaski 1997), mean per sample.
 
@@ -339,16 +352,9 @@ class SigmaPiSOM:
         the winner of view 0 at width ``sigma`` (default: the current sigma) and the data
         outer product of view 1.
         """
-        k = self.winner(batch.x0, batch.y0)
+        k, dist = self.cost_terms(batch)
         s = self.sigma_ if sigma is None else float(sigma)
-        from sigmapi.kernels import reference
-
         a = reference.neighbourhood(k, self.map_shape, s)
-        h1 = self.respond(batch.x1, batch.y1)
-        w = self.weights_
-        wn = np.einsum("kij,kij->k", w, w)
-        dn = (batch.x1**2).sum(1) * (batch.y1**2).sum(1)
-        dist = dn[:, None] - 2.0 * h1 + wn[None, :]
         return float(np.mean(np.sum(a * dist, axis=1)))
 
     # ------------------------------------------------------------------ files
