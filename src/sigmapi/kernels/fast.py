@@ -386,23 +386,29 @@ def _unit_chunk(
 
 
 @njit(cache=True)
+def _buffers(k_units, n_pairs, ny):
+    """Work arrays of one training call: pair lists of both views, per-unit scratch."""
+    return (
+        np.empty(ny, dtype=np.int64),  # jb: kept y indices
+        np.empty(n_pairs, dtype=np.int64),  # pi0, pv0: pairs of view 0
+        np.empty(n_pairs),
+        np.empty(n_pairs, dtype=np.int64),  # pi1, pv1: pairs of view 1
+        np.empty(n_pairs),
+        np.empty(k_units),  # h: activations
+        np.zeros(k_units),  # ea: eps * neighbourhood
+        np.empty(k_units),  # gain
+        np.empty(k_units),  # acc
+        np.empty(k_units),  # t1, t2: winner scratch
+        np.empty(k_units),
+    )
+
+
+@njit(cache=True)
 def _train_serial(
     raw, scale, sqnorm, x0, y0, x1, y1, sigmas, eps, dims, strides, rule, cut, tol, out, track
 ):
     k_units = raw.shape[1]
-    n_pairs = raw.shape[0]
-    ny = y0.shape[1]
-    jb = np.empty(ny, dtype=np.int64)
-    pi0 = np.empty(n_pairs, dtype=np.int64)
-    pv0 = np.empty(n_pairs)
-    pi1 = np.empty(n_pairs, dtype=np.int64)
-    pv1 = np.empty(n_pairs)
-    h = np.empty(k_units)
-    ea = np.zeros(k_units)
-    gain = np.empty(k_units)
-    acc = np.empty(k_units)
-    t1 = np.empty(k_units)
-    t2 = np.empty(k_units)
+    jb, pi0, pv0, pi1, pv1, h, ea, gain, acc, t1, t2 = _buffers(k_units, raw.shape[0], y0.shape[1])
     n_iter = x0.shape[0]
     if n_iter == 0:
         return
@@ -427,19 +433,7 @@ def _train_parallel(
     raw, scale, sqnorm, x0, y0, x1, y1, sigmas, eps, dims, strides, rule, cut, tol, out, track
 ):
     k_units = raw.shape[1]
-    n_pairs = raw.shape[0]
-    ny = y0.shape[1]
-    jb = np.empty(ny, dtype=np.int64)
-    pi0 = np.empty(n_pairs, dtype=np.int64)
-    pv0 = np.empty(n_pairs)
-    pi1 = np.empty(n_pairs, dtype=np.int64)
-    pv1 = np.empty(n_pairs)
-    h = np.empty(k_units)
-    ea = np.zeros(k_units)
-    gain = np.empty(k_units)
-    acc = np.empty(k_units)
-    t1 = np.empty(k_units)
-    t2 = np.empty(k_units)
+    jb, pi0, pv0, pi1, pv1, h, ea, gain, acc, t1, t2 = _buffers(k_units, raw.shape[0], y0.shape[1])
     n_chunks = (k_units + CHUNK - 1) // CHUNK
     n_iter = x0.shape[0]
     if n_iter == 0:
