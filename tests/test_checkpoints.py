@@ -15,7 +15,7 @@ import sigmapi
 from sigmapi import SigmaPiSOM
 from sigmapi.checkpoints import checkpoint_dir, find_resumable, list_checkpoints, write_checkpoint
 
-ITER = 40_000
+ITER = 100_000  # long enough (about 8 s here) that five kills land before the run ends
 ARGS = [
     "--preset",
     "tiny-1d",

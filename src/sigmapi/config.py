@@ -17,6 +17,7 @@ from typing import Any
 
 from sigmapi.codes import as_shape
 from sigmapi.errors import ConfigError
+from sigmapi.ordering import ORDERINGS
 from sigmapi.schedules import PAPER_SIGMA, PiecewiseLinear
 from sigmapi.tasks import RELATIONS
 
@@ -58,6 +59,13 @@ class SOMConfig:
     """Half-width of the smoothing window of the soft winner, in map units (script: 15)."""
     init_scale: float = 0.1
     """Initial weights are uniform in [-init_scale, init_scale] (paper: 0.1)."""
+    ordering: str = "crossview"
+    """How the map comes to be ordered: "crossview" (sigmapi's: an ordered start computed from
+    the views alone, and the neighbourhood capped at ``ordering_sigma``; see
+    :mod:`sigmapi.ordering`) or "none" (the paper's random start and schedule, bit for bit)."""
+    ordering_sigma: float = 3.0
+    """With an ordering procedure: the largest neighbourhood width used (map units); the
+    configured sigma schedule is cut off at this value. Ignored with ordering = "none"."""
     same_view: bool = False
     """Ablation: learn from the view that chose the winner (the paper learns from the other)."""
     backend: str = "auto"
@@ -84,6 +92,7 @@ class SOMConfig:
         _positive(self, "code_width")
         _positive(self, "code_height")
         _positive(self, "init_scale")
+        _positive(self, "ordering_sigma")
         _bool(self, "code_normalize")
         _bool(self, "periodic")
         _bool(self, "same_view")
@@ -102,6 +111,7 @@ class SOMConfig:
         ):
             raise ConfigError(f"soft_cut must be an int >= 0 (map units), got {self.soft_cut!r}")
         _choice(self, "relation", tuple(RELATIONS))
+        _choice(self, "ordering", ORDERINGS)
         _choice(self, "winner_rule", WINNER_RULES)
         _choice(self, "backend", BACKEND_NAMES)
         eps = PiecewiseLinear.coerce(self.eps, "eps")

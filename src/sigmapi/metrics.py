@@ -104,9 +104,9 @@ def evaluate(
     if test is None or calibration is None:
         calibration, test = evaluation_sets(model, n_test, seed)
     coords = model.map_coords
-    w0 = model.winner(test.x0, test.y0)
-    w1 = model.winner(test.x1, test.y1)
-    wc = model.winner(calibration.x0, calibration.y0)
+    w0 = model.winner(test.x0, test.y0, hard=True)
+    w1 = model.winner(test.x1, test.y1, hard=True)
+    wc = model.winner(calibration.x0, calibration.y0, hard=True)
 
     same = float(np.mean(w0 == w1))
     within = float(np.mean(chebyshev(coords, w0, w1) <= 1.0))

@@ -23,6 +23,7 @@ from sigmapi.codes import PopulationCode, grid_coordinates
 from sigmapi.config import SOMConfig
 from sigmapi.errors import ConfigError, NotFittedError
 from sigmapi.kernels import get_backend, reference
+from sigmapi.ordering import INIT_PAIRS, crossview_init
 from sigmapi.tasks import Batch, TwoViewSampler
 
 __all__ = ["BLOCK", "SigmaPiSOM"]
@@ -138,11 +139,30 @@ class SigmaPiSOM:
         ss = np.random.SeedSequence(self.seed_entropy_, spawn_key=key)
         return np.random.Generator(np.random.PCG64(ss))
 
-    def initial_weights(self) -> NDArray[np.float64]:
-        """The run's initial weights, uniform in ``[-init_scale, init_scale]``."""
-        s = self.config.init_scale
-        shape = (self.n_units, int(np.prod(self.x_shape)), int(np.prod(self.y_shape)))
-        return self._seq(0).uniform(-s, s, size=shape)
+    def initial_weights(
+        self, views: tuple[NDArray[np.float64], ...] | None = None
+    ) -> NDArray[np.float64]:
+        """The run's initial weights ``(n_units, n_x, n_y)``.
+
+        ``ordering="none"``: uniform in ``[-init_scale, init_scale]`` (the paper).
+        ``ordering="crossview"``: an ordered start computed from view pairs alone
+        (:func:`sigmapi.ordering.crossview_init`): the first ``INIT_PAIRS`` of ``views`` when
+        given (your own data), else as many pairs of the built-in task from the run's own
+        random stream (child ``spawn_key=(2,)``).
+        """
+        c = self.config
+        if c.ordering == "none":
+            s = c.init_scale
+            shape = (self.n_units, int(np.prod(self.x_shape)), int(np.prod(self.y_shape)))
+            return self._seq(0).uniform(-s, s, size=shape)
+        if views is None:
+            b = self.sampler.sample(INIT_PAIRS, self._seq(2))
+            views = (b.x0, b.y0, b.x1, b.y1)
+        else:
+            views = tuple(v[:INIT_PAIRS] for v in views)
+        return crossview_init(
+            views, self.x_shape, self.y_shape, self.map_shape, c.ordering_sigma / 2.0
+        )
 
     def _set_weights(self, weights: NDArray[np.float64]) -> None:
         self._state = self._kernel.prepare(weights, tol=self.config.kernel_tol)
@@ -169,8 +189,13 @@ class SigmaPiSOM:
         return self._weights_cache
 
     def sigma_at(self, t: int | NDArray[np.int64]) -> NDArray[np.float64]:
-        """Neighbourhood width at iteration(s) t of this run's schedule."""
-        return self.config.sigma_schedule.at(t, self.config.iterations)
+        """Neighbourhood width at iteration(s) t of this run's schedule.
+
+        With an ordering procedure the schedule is cut off at ``ordering_sigma``.
+        """
+        c = self.config
+        sigma = c.sigma_schedule.at(t, c.iterations)
+        return sigma if c.ordering == "none" else np.minimum(sigma, c.ordering_sigma)
 
     def eps_at(self, t: int | NDArray[np.int64]) -> NDArray[np.float64]:
         """Learning rate at iteration(s) t."""
@@ -223,16 +248,18 @@ class SigmaPiSOM:
         callback : callable, optional
             ``callback(model)``, called after every chunk of at most ``BLOCK`` iterations.
         """
-        if self._state is None:
-            self._set_weights(self.initial_weights())
         if views is not None:
             x0, y0, x1, y1 = self._check_views(views)
+            if self._state is None:
+                self._set_weights(self.initial_weights((x0, y0, x1, y1)))
             for s in range(0, x0.shape[0], BLOCK):
                 sl = slice(s, s + BLOCK)
                 self._run(x0[sl], y0[sl], x1[sl], y1[sl])
                 if callback is not None:
                     callback(self)
             return self
+        if self._state is None:
+            self._set_weights(self.initial_weights())
         if n_iter is None:
             n_iter = self.config.iterations - self.t_
             if n_iter <= 0:
@@ -312,13 +339,19 @@ class SigmaPiSOM:
             )
         return np.asarray(self._kernel.activation(self._state, xa, ya), dtype=np.float64)
 
-    def winner(self, x: ArrayLike, y: ArrayLike, rule: str | None = None) -> NDArray[np.int64]:
+    def winner(
+        self, x: ArrayLike, y: ArrayLike, rule: str | None = None, *, hard: bool = False
+    ) -> NDArray[np.int64]:
         """Flat index of the winning unit per pair; ``(B,)``.
 
-        Uses the model's winner rule (default) or ``rule``, at the current sigma.
+        Uses the model's winner rule (default) or ``rule``, at the current sigma. ``hard=True``
+        takes the rule's limit at sigma -> 0: the soft winner becomes the argmax of the
+        response (the metrics use this, so that mid-run maps are not smoothed).
         """
         h = self.respond(x, y)
         rule = rule or self.config.winner_rule
+        if hard and rule == "soft":
+            rule = "argmax"
         return np.asarray(
             self._kernel.winners(
                 self._state, h, self.map_shape, rule, self.sigma_, self.config.soft_cut
