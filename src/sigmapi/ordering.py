@@ -50,13 +50,19 @@ BLUR_FRACTION = 0.2
 KEEP = 0.03
 """Smooth-basis modes kept per axis: kernel eigenvalues >= KEEP x the largest."""
 
+MAX_FEATURES = 1024
+"""Upper bound on the outer-product features (modes of x times modes of y); it caps the
+modes per axis so that the eigenproblem stays small (5 per axis for 2-D inputs)."""
 
-def smooth_basis(shape: tuple[int, ...], width: float) -> NDArray[np.float64]:
+
+def smooth_basis(
+    shape: tuple[int, ...], width: float, max_modes: int | None = None
+) -> NDArray[np.float64]:
     """Smooth features of codes on grid ``shape``: ``(n, r)``, C order over the axes.
 
     Per axis, the eigenvectors of the Gaussian kernel matrix ``exp(-(i - j)^2 / (2 width^2))``
-    with eigenvalue at least ``KEEP`` times the largest, scaled by their eigenvalues; axes are
-    combined by Kronecker products. ``codes @ basis`` is the code blurred by the kernel,
+    with eigenvalue at least ``KEEP`` times the largest (at most ``max_modes``), scaled by their
+    eigenvalues; axes are combined by Kronecker products. ``codes @ basis`` is the code blurred by the kernel,
     expressed in its ``r`` leading modes.
     """
     basis = np.ones((1, 1))
@@ -65,6 +71,8 @@ def smooth_basis(shape: tuple[int, ...], width: float) -> NDArray[np.float64]:
         gram = np.exp(-((c[:, None] - c[None, :]) ** 2) / (2.0 * width**2))
         vals, vecs = np.linalg.eigh(gram)
         keep = vals >= KEEP * vals[-1]
+        if max_modes is not None:
+            keep[: max(0, n - max_modes)] = False
         axis = vecs[:, keep][:, ::-1] * vals[keep][::-1]
         # a deterministic sign per mode, whatever LAPACK returned
         axis *= np.where(axis[np.argmax(np.abs(axis), axis=0), range(axis.shape[1])] < 0, -1, 1)
@@ -94,8 +102,9 @@ def crossview_scores(
     """
     x0, y0, x1, y1 = views
     width = blur if blur is not None else BLUR_FRACTION * max(max(x_shape), max(y_shape))
-    bx = smooth_basis(x_shape, width)
-    by = smooth_basis(y_shape, width)
+    per_axis = int(MAX_FEATURES ** (1.0 / (len(x_shape) + len(y_shape))))
+    bx = smooth_basis(x_shape, width, per_axis)
+    by = smooth_basis(y_shape, width, per_axis)
 
     def features(x: NDArray[np.float64], y: NDArray[np.float64]) -> NDArray[np.float64]:
         a, b = x @ bx, y @ by
@@ -107,7 +116,7 @@ def crossview_scores(
     f1 -= mean
     cross = f0.T @ f1
     cross = (cross + cross.T) / (2.0 * x0.shape[0])
-    vals, vecs = np.linalg.eigh(cross)
+    _, vecs = np.linalg.eigh(cross)
     lead = vecs[:, ::-1][:, :n_components]
     scores = 0.5 * (f0 @ lead + f1 @ lead)
 
