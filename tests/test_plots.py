@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 
 from sigmapi import SigmaPiSOM, analysis, plots
-from sigmapi.report import FIGURES, draw_figure
+from sigmapi.curves import LearningCurve, checkpoints, costs
+from sigmapi.figures import FIGURES, draw_figure
 
 PNG = b"\x89PNG\r\n\x1a\n"
 
@@ -33,7 +34,7 @@ def model_2d() -> SigmaPiSOM:
 @pytest.fixture(scope="module")
 def curves(model_1d: SigmaPiSOM) -> list[dict[str, list[float]]]:
     som = SigmaPiSOM(model_1d.config)
-    curve = analysis.LearningCurve(at=analysis.checkpoints(2000, 5), n_test=100)
+    curve = LearningCurve(at=checkpoints(2000, 5), n_test=100)
     som.fit(callback=curve)
     return [curve.to_dict()]
 
@@ -153,11 +154,11 @@ def test_weight_tiles_marginals_sum_the_other_axis(model_2d):
 
 
 def test_checkpoints_are_block_multiples_and_end_at_the_run():
-    pts = analysis.checkpoints(300_000, 20)
+    pts = checkpoints(300_000, 20)
     assert pts[0] == 1000 and pts[-1] == 300_000
     assert all(p % 1000 == 0 for p in pts) and pts == sorted(set(pts))
-    assert analysis.checkpoints(500, 5) == [500]
-    lin = analysis.checkpoints(10_000, 10, spacing="linear")
+    assert checkpoints(500, 5) == [500]
+    lin = checkpoints(10_000, 10, spacing="linear")
     assert lin == list(range(1000, 10_001, 1000))
 
 
@@ -171,6 +172,6 @@ def test_learning_curve_records_each_checkpoint_once(curves):
 
 def test_costs_match_the_models_cost(model_2d):
     batch = model_2d.sampler.sample(50, np.random.default_rng(0))
-    c, cw = analysis.costs(model_2d, batch)
+    c, cw = costs(model_2d, batch)
     assert c == pytest.approx(model_2d.cost(batch))
     assert cw == pytest.approx(model_2d.cost(batch, sigma=1e-5))

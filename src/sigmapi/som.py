@@ -357,6 +357,16 @@ class SigmaPiSOM:
         a = reference.neighbourhood(k, self.map_shape, s)
         return float(np.mean(np.sum(a * dist, axis=1)))
 
+    def clone(self) -> SigmaPiSOM:
+        """An unfitted model with this one's config and random streams.
+
+        ``clone().fit(model.t_)`` replays the run that made ``model`` (the training data of
+        every iteration is a pure function of the seed entropy and the iteration number).
+        """
+        twin = SigmaPiSOM(self.config)
+        twin.seed_entropy_ = self.seed_entropy_
+        return twin
+
     # ------------------------------------------------------------------ files
     def save(self, path: str | Path) -> Path:
         """Write the model atomically to ``path`` (``.npz``, no pickle); returns the path."""

@@ -17,7 +17,13 @@ import gymnasium as gym
 
 from sigmapi.reach.agent import ActorCritic
 from sigmapi.reach.env import GazeReachEnv, move_table
-from sigmapi.reach.runner import ReachConfig, ReachResult, learn_map_in_env, run_reach
+from sigmapi.reach.runner import (
+    ReachConfig,
+    ReachResult,
+    learn_map_in_env,
+    run_reach,
+    run_with_progress,
+)
 from sigmapi.reach.views import collect_saccade_views
 from sigmapi.reach.wrappers import (
     CodeObservation,
@@ -40,6 +46,7 @@ __all__ = [
     "make_state_env",
     "move_table",
     "run_reach",
+    "run_with_progress",
 ]
 
 ENV_ID = "sigmapi/GazeReach-v0"

@@ -20,12 +20,20 @@ from numpy.typing import NDArray
 
 from sigmapi.config import SOMConfig
 from sigmapi.errors import ConfigError
+from sigmapi.progress import counter
 from sigmapi.reach.agent import ActorCritic
 from sigmapi.reach.env import GazeReachEnv
 from sigmapi.reach.views import collect_saccade_views
 from sigmapi.reach.wrappers import FEATURES, STATES, TrueZObservation, make_state_env
 
-__all__ = ["ReachConfig", "ReachResult", "learn_map_in_env", "run_reach", "value_over_z"]
+__all__ = [
+    "ReachConfig",
+    "ReachResult",
+    "learn_map_in_env",
+    "run_reach",
+    "run_with_progress",
+    "value_over_z",
+]
 
 Progress = Callable[[int, str], None]
 
@@ -382,6 +390,13 @@ def run_reach(
                 res.z_axis = axis
     res.seconds = time.perf_counter() - t0
     return res
+
+
+def run_with_progress(cfg: ReachConfig, disable: bool | None = None) -> ReachResult:
+    """:func:`run_reach` with a progress bar on stderr (episodes, and the current phase)."""
+    progress, bar = counter(cfg.seeds * len(cfg.states) * cfg.episodes, "reach", "ep", disable)
+    with bar:
+        return run_reach(cfg, progress=progress)
 
 
 def _map_quality(model: Any) -> dict[str, Any]:

@@ -10,14 +10,17 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from typing import TYPE_CHECKING, Any
+from pathlib import Path
+from typing import Any
 
-from sigmapi.errors import ConfigError
+from sigmapi.cli._common import check_output
+from sigmapi.errors import ConfigError, UsageError
+from sigmapi.kernels import BACKENDS
+from sigmapi.reach.plots import reach_figure
+from sigmapi.reach.runner import ReachConfig, run_with_progress
+from sigmapi.reach.wrappers import STATES
 
-if TYPE_CHECKING:
-    from sigmapi.reach.runner import ReachConfig, ReachResult
-
-__all__ = ["cmd_reach", "register"]
+__all = ["cmd_reach", "register"]
 
 
 def _shape(text: str) -> tuple[int, ...]:
@@ -34,9 +37,6 @@ def _shape(text: str) -> tuple[int, ...]:
 
 def register(sub: Any) -> None:
     """Add the ``reach`` sub-command to the ``sigmapi`` parser's sub-parsers."""
-    from sigmapi.reach.runner import ReachConfig
-    from sigmapi.reach.wrappers import STATES
-
     d = ReachConfig()
     p = sub.add_parser(
         "reach",
@@ -68,7 +68,7 @@ def register(sub: Any) -> None:
     )
     p.add_argument(
         "--backend",
-        choices=["auto", "reference", "fast", "gpu"],
+        choices=["auto", *BACKENDS],
         default=d.backend,
         help=f"kernel for learning the map (default {d.backend})",
     )
@@ -132,29 +132,7 @@ def register(sub: Any) -> None:
     p.set_defaults(func=cmd_reach)
 
 
-def run_with_progress(cfg: ReachConfig, disable: bool | None = None) -> ReachResult:
-    """:func:`run_reach` with a tqdm bar on stderr (episodes, and the current phase)."""
-    from tqdm import tqdm
-
-    from sigmapi.reach.runner import run_reach
-
-    total = cfg.seeds * len(cfg.states) * cfg.episodes
-    bar = tqdm(total=total, desc="reach", unit="ep", dynamic_ncols=True, file=sys.stderr,
-               disable=disable, mininterval=0.5)  # fmt: skip
-
-    def progress(n: int, phase: str) -> None:
-        bar.set_postfix_str(phase, refresh=False)
-        bar.update(n)
-
-    with bar:
-        return run_reach(cfg, progress=progress)
-
-
 def cmd_reach(args: argparse.Namespace) -> int:
-    from sigmapi.cli import UsageError, check_output
-    from sigmapi.reach.plots import reach_figure
-    from sigmapi.reach.runner import ReachConfig
-
     out = check_output(args.out, args.force, "figure file")
     if out.suffix.lower() not in (".png", ".pdf", ".svg"):
         raise UsageError(f"--out must end in .png, .pdf or .svg, got {str(out)!r}")
@@ -167,8 +145,6 @@ def cmd_reach(args: argparse.Namespace) -> int:
         )
     states = tuple(s.strip() for s in args.states.split(",") if s.strip())
     if args.model is not None:
-        from pathlib import Path
-
         if not Path(args.model).is_file():
             raise UsageError(
                 f"model file {args.model!r} does not exist; train one with `sigmapi train`"
