@@ -3,16 +3,15 @@
 Weber & Wermter, "A self-organizing map of Sigma-Pi units", Neurocomputing 70 (2007) 2552-2560.
 """
 
+from sigmapi._version import __version__
 from sigmapi.codes import PopulationCode
 from sigmapi.config import SOMConfig, list_presets, load_preset
-from sigmapi.errors import ConfigError, ModelFileError, NotFittedError
-from sigmapi.io import load_model as load
+from sigmapi.errors import ConfigError, ModelFileError, NotFittedError, SigmapiError
 from sigmapi.metrics import Metrics, evaluate
 from sigmapi.schedules import PiecewiseLinear
 from sigmapi.som import SigmaPiSOM
+from sigmapi.som import load_model as load
 from sigmapi.tasks import Batch, Relation, TwoViewSampler
-
-__version__ = "0.1.0"
 
 __all__ = [
     "Batch",
@@ -25,6 +24,7 @@ __all__ = [
     "Relation",
     "SOMConfig",
     "SigmaPiSOM",
+    "SigmapiError",
     "TwoViewSampler",
     "__version__",
     "evaluate",

@@ -21,11 +21,11 @@ from numpy.typing import ArrayLike, NDArray
 
 from sigmapi.codes import PopulationCode, grid_coordinates
 from sigmapi.config import SOMConfig
-from sigmapi.errors import ConfigError, NotFittedError
+from sigmapi.errors import ConfigError, ModelFileError, NotFittedError
 from sigmapi.kernels import get_backend, reference
 from sigmapi.tasks import Batch, TwoViewSampler
 
-__all__ = ["BLOCK", "SigmaPiSOM"]
+__all__ = ["BLOCK", "SigmaPiSOM", "load_model"]
 
 BLOCK = 1000
 """Iterations per block of training data (one random child stream per block)."""
@@ -367,19 +367,89 @@ class SigmaPiSOM:
         twin.seed_entropy_ = self.seed_entropy_
         return twin
 
-    # ------------------------------------------------------------------ files
+    # ------------------------------------------------------------------ state as arrays, files
+    def to_arrays(self) -> tuple[dict[str, Any], dict[str, NDArray[Any]]]:
+        """The model as a JSON-able header and arrays (what a model file holds).
+
+        The header holds the resolved ``config``, the iteration count ``t``, the
+        ``seed_entropy`` of the random streams (a decimal string) and the ``backend``; the
+        arrays are the float64 ``weights`` ``(n_units, n_x, n_y)`` and ``state_<name>``,
+        the kernel's own state (e.g. the fast kernel's float32 weights and scale factors),
+        so that the model continues bit for bit on the same backend.
+        """
+        self._check_fitted()
+        state = self._kernel.state_arrays(self._state)
+        header = {
+            "config": self.config.to_dict(),
+            "t": int(self.t_),
+            "seed_entropy": str(self.seed_entropy_),
+            "backend": self.backend,
+        }
+        return header, {"weights": self.weights_, **{f"state_{k}": v for k, v in state.items()}}
+
+    @classmethod
+    def from_arrays(
+        cls,
+        header: dict[str, Any],
+        arrays: dict[str, NDArray[Any]],
+        backend: str | None = None,
+        source: str = "arrays",
+    ) -> SigmaPiSOM:
+        """Rebuild a model from :meth:`to_arrays`'s header and arrays.
+
+        ``backend`` runs the model on another kernel (which starts from ``weights``; the
+        kernel state is used only by the backend that wrote it). Raises
+        :class:`~sigmapi.errors.ModelFileError`, its message starting with ``source``, if
+        the header and arrays do not make a model.
+        """
+        name = source
+        try:
+            cfg = SOMConfig.from_dict(header["config"])
+            if backend is not None:
+                cfg = cfg.replace(backend=backend)
+        except (ConfigError, TypeError, KeyError) as exc:
+            raise ModelFileError(f"{name!r}: stored config is invalid ({exc})") from None
+        w = np.asarray(arrays["weights"])
+        n = (int(np.prod(cfg.map_shape)), int(np.prod(cfg.x_shape)), int(np.prod(cfg.y_shape)))
+        if tuple(w.shape) != n:
+            raise ModelFileError(
+                f"{name!r}: weights have shape {tuple(w.shape)}, the config needs {n}"
+            )
+        t = header.get("t")
+        if not isinstance(t, int) or isinstance(t, bool) or t < 0:
+            raise ModelFileError(f"{name!r}: iteration count must be an int >= 0, got {t!r}")
+        try:
+            entropy = int(header["seed_entropy"])
+        except (KeyError, TypeError, ValueError):
+            raise ModelFileError(f"{name!r}: seed_entropy must be an integer string") from None
+        if entropy < 0:
+            raise ModelFileError(f"{name!r}: seed_entropy must be >= 0, got {entropy}")
+        model = cls(cfg)
+        model.seed_entropy_ = entropy
+        state = {k[len("state_") :]: v for k, v in arrays.items() if k.startswith("state_")}
+        if state and header.get("backend") == model.backend:
+            try:
+                model._state = model._kernel.from_state_arrays(w, state, tol=cfg.kernel_tol)
+            except (ValueError, KeyError) as exc:
+                raise ModelFileError(f"{name!r}: backend state is invalid ({exc})") from None
+        else:
+            model._set_weights(np.asarray(w, dtype=np.float64))
+        model.t_ = t
+        return model
+
     def save(self, path: str | Path) -> Path:
         """Write the model atomically to ``path`` (``.npz``, no pickle); returns the path."""
-        from sigmapi.io import save_model
+        from sigmapi.io import write_model
 
-        return save_model(self, path)
+        return write_model(path, *self.to_arrays())
 
     @classmethod
     def load(cls, path: str | Path, backend: str | None = None) -> SigmaPiSOM:
-        """Read a model written by :meth:`save`."""
-        from sigmapi.io import load_model
+        """Read a model written by :meth:`save` (optionally onto another ``backend``)."""
+        from sigmapi.io import read_model
 
-        return load_model(path, backend=backend)
+        header, arrays = read_model(path)
+        return cls.from_arrays(header, arrays, backend=backend, source=str(path))
 
     def __repr__(self) -> str:
         fitted = f"t_={self.t_}" if self.is_fitted else "not fitted"
@@ -387,3 +457,8 @@ class SigmaPiSOM:
             f"SigmaPiSOM(map_shape={self.map_shape}, x_shape={self.x_shape}, "
             f"y_shape={self.y_shape}, backend={self.backend!r}, {fitted})"
         )
+
+
+def load_model(path: str | Path, backend: str | None = None) -> SigmaPiSOM:
+    """Read a model file (``sigmapi.load``); see :meth:`SigmaPiSOM.load`."""
+    return SigmaPiSOM.load(path, backend=backend)

@@ -24,7 +24,7 @@ __all__ = ["build_parser", "check_output", "main", "resolve_config"]
 
 def build_parser() -> argparse.ArgumentParser:
     """The ``sigmapi`` parser with every sub-command."""
-    from sigmapi import __version__
+    from sigmapi._version import __version__
 
     parser = Parser(
         prog="sigmapi", description="Sigma-Pi self-organizing maps (Weber & Wermter 2007)"

@@ -19,8 +19,8 @@ from sigmapi.errors import UsageError
 from sigmapi.experiments import ReproduceOptions, reproduce
 from sigmapi.experiments.results import CURVE_TEST, N_CHECKPOINTS, SAVE_MODELS
 from sigmapi.figures import FIGURES, draw_figure
-from sigmapi.io import load_model
 from sigmapi.progress import progress_callback
+from sigmapi.som import load_model
 
 __all__ = ["cmd_figure", "cmd_reproduce", "register"]
 

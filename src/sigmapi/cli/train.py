@@ -11,10 +11,9 @@ from sigmapi.checkpoints import checkpoint_dir, find_resumable, write_checkpoint
 from sigmapi.cli._common import add_config_flags, check_output, resolve_config
 from sigmapi.config import list_presets, load_preset
 from sigmapi.errors import UsageError
-from sigmapi.io import load_model
 from sigmapi.metrics import evaluate
 from sigmapi.progress import progress_callback
-from sigmapi.som import SigmaPiSOM
+from sigmapi.som import SigmaPiSOM, load_model
 
 __all__ = ["cmd_evaluate", "cmd_presets", "cmd_train", "register"]
 

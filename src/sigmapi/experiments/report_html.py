@@ -79,7 +79,7 @@ def render(
     result: ReproduceResult, figures: dict[str, list[tuple[str, str]]], sections: list[Section]
 ) -> str:
     """The report page: metrics table, figures per preset (``(file, caption)``), sections."""
-    from sigmapi import __version__
+    from sigmapi._version import __version__
 
     title = "sigmapi reproduction of Weber &amp; Wermter (2007)"
     runs = []

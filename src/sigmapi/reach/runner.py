@@ -289,7 +289,7 @@ def _map_for_seed(
     config: ReachConfig, ss: np.random.SeedSequence, progress: Progress | None = None
 ) -> Any:
     if config.model_path is not None:
-        from sigmapi.io import load_model
+        from sigmapi.som import load_model
 
         return load_model(Path(config.model_path))
     seq = np.random.SeedSequence(ss.entropy, spawn_key=(*ss.spawn_key, 0))
