@@ -41,7 +41,11 @@ def _train(kernel, w, data, rule="soft", tol=None, chunks=(1000,)):
     while s < n:
         for c in chunks:
             sl = slice(s, min(n, s + c))
-            out.append(kernel.train_block(state, *(a[sl] for a in data), MAP, rule, 15))
+            out.append(
+                kernel.train_block(
+                    state, *(a[sl] for a in data), map_shape=MAP, winner_rule=rule, soft_cut=15
+                )
+            )
             s = sl.stop
     return state, np.concatenate(out)
 

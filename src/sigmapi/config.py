@@ -17,13 +17,13 @@ from typing import Any
 
 from sigmapi.codes import as_shape
 from sigmapi.errors import ConfigError
+from sigmapi.kernels import BACKENDS, WINNER_RULES
 from sigmapi.schedules import PAPER_SIGMA, PiecewiseLinear
 from sigmapi.tasks import RELATIONS
 
 __all__ = ["SOMConfig", "apply_overrides", "list_presets", "load_config_file", "load_preset"]
 
-WINNER_RULES = ("soft", "argmax", "min_distance")
-BACKEND_NAMES = ("auto", "reference", "fast", "gpu")
+BACKEND_NAMES = ("auto", *BACKENDS)
 
 
 @dataclass(frozen=True)
@@ -61,7 +61,7 @@ class SOMConfig:
     same_view: bool = False
     """Ablation: learn from the view that chose the winner (the paper learns from the other)."""
     backend: str = "auto"
-    """Kernel: "auto" (fast if numba imports), "reference", "fast" or "gpu"."""
+    """Kernel: "auto" (fast if numba imports), "reference" or "fast"."""
     kernel_tol: float = 1e-6
     """Fast kernel: code and neighbourhood values below kernel_tol x their maximum are skipped
     (0 = exact). The reference kernel is always exact."""

@@ -22,7 +22,7 @@ from numpy.typing import ArrayLike, NDArray
 from sigmapi.codes import PopulationCode, grid_coordinates
 from sigmapi.config import SOMConfig
 from sigmapi.errors import ConfigError, ModelFileError, NotFittedError
-from sigmapi.kernels import get_backend, reference
+from sigmapi.kernels import KernelState, get_backend, reference
 from sigmapi.tasks import Batch, TwoViewSampler
 
 __all__ = ["BLOCK", "SigmaPiSOM", "load_model"]
@@ -80,7 +80,7 @@ class SigmaPiSOM:
         cfg = config or SOMConfig()
         self.config = cfg.replace(**overrides) if overrides else cfg
         self.t_ = 0
-        self._state: Any = None
+        self._state: KernelState | None = None
         self._kernel = get_backend(self.config.backend)
         seed = self.config.seed
         self.seed_entropy_: int = int(np.random.SeedSequence(seed).entropy)  # type: ignore[arg-type]
@@ -106,7 +106,7 @@ class SigmaPiSOM:
 
     @property
     def backend(self) -> str:
-        """Name of the kernel in use (``reference``, ``fast`` or ``gpu``)."""
+        """Name of the kernel in use (one of :data:`sigmapi.kernels.BACKENDS`)."""
         return str(self._kernel.NAME)
 
     def _code(self, shape: tuple[int, ...]) -> PopulationCode:
@@ -261,7 +261,7 @@ class SigmaPiSOM:
         c = self.config
         self._kernel.train_block(
             self._state, x0, y0, x1, y1, self.sigma_at(t), self.eps_at(t),
-            self.map_shape, c.winner_rule, c.soft_cut,
+            map_shape=self.map_shape, winner_rule=c.winner_rule, soft_cut=c.soft_cut,
         )  # fmt: skip
         self.t_ += x0.shape[0]
         self._weights_cache = None

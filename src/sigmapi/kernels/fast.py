@@ -48,6 +48,7 @@ from numba import njit, prange
 from numpy.typing import NDArray
 
 from sigmapi.kernels import reference
+from sigmapi.kernels.base import WINNER_RULES
 
 __all__ = [
     "NAME",
@@ -81,7 +82,8 @@ shared 2-core machine a descheduled worker thread stalls every step (measured: 6
 :func:`activation` (one synchronisation per call) always uses all threads.
 """
 
-_RULES = {"soft": 0, "argmax": 1, "min_distance": 2}
+_RULES = {rule: code for code, rule in enumerate(WINNER_RULES)}
+"""Rule codes of the compiled :func:`_winner`: 0 soft, 1 argmax, 2 min_distance."""
 
 
 @dataclass
@@ -505,7 +507,7 @@ def _rule_code(rule: str) -> int:
     try:
         return _RULES[rule]
     except KeyError:
-        raise ValueError(f"rule must be one of {tuple(_RULES)}, got {rule!r}") from None
+        raise ValueError(f"rule must be one of {WINNER_RULES}, got {rule!r}") from None
 
 
 def _codes(a: NDArray[np.floating], n: int, name: str) -> NDArray[np.float64]:
@@ -565,9 +567,10 @@ def train_block(
     y1: NDArray[np.floating],
     sigmas: NDArray[np.floating],
     eps: NDArray[np.floating],
+    *,
     map_shape: tuple[int, ...],
-    rule: str,
-    cut: int,
+    winner_rule: str,
+    soft_cut: int,
 ) -> NDArray[np.int64]:
     """Run ``len(x0)`` learning iterations in order, updating ``state`` in place.
 
@@ -577,7 +580,7 @@ def train_block(
     """
     k_units, nx, ny = state.shape
     dims, strides = _grid(tuple(map_shape), k_units)
-    code = _rule_code(rule)
+    code = _rule_code(winner_rule)
     xs = [
         _codes(a, n, nm)
         for a, n, nm in ((x0, nx, "x0"), (y0, ny, "y0"), (x1, nx, "x1"), (y1, ny, "y1"))
@@ -597,6 +600,6 @@ def train_block(
         PARALLEL_TRAIN and k_units * nx * ny >= PARALLEL_MIN_WORK and numba.get_num_threads() > 1
     )
     fn: Any = _train_parallel if parallel else _train_serial
-    fn(state.raw, state.scale, state.sqnorm, *xs, sg, ep, dims, strides, code, int(cut),
+    fn(state.raw, state.scale, state.sqnorm, *xs, sg, ep, dims, strides, code, int(soft_cut),
        state.tol, out, track)  # fmt: skip
     return out
