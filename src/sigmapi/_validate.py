@@ -17,7 +17,7 @@ import numpy as np
 
 from sigmapi.errors import ConfigError
 
-__all__ = ["boolean", "choice", "fail", "integer", "number", "positive", "shape"]
+__all__ = ["boolean", "choice", "fail", "integer", "is_int", "number", "positive", "shape"]
 
 T = TypeVar("T")
 
@@ -30,7 +30,8 @@ def fail(
     return error(f"{name} must be {constraint}, got {value!r}{tail}")
 
 
-def _is_int(value: Any) -> bool:
+def is_int(value: Any) -> bool:
+    """Whether ``value`` is an int (Python or NumPy), not a bool."""
     return isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
 
 
@@ -48,13 +49,13 @@ def _range(
     """``"an int >= 1"``, ``"a number in (0, 1]"``, ``"a finite number > 0"``, ..."""
     if lo is not None and hi is not None:
         left, right = "(" if lo_open else "[", ")" if hi_open else "]"
-        return f"{kind} in {left}{lo:g}, {hi:g}{right}"
+        return f"{kind} in {left}{lo}, {hi}{right}"
     if kind == "a number":
         kind = "a finite number"
     if lo is not None:
-        return f"{kind} {'>' if lo_open else '>='} {lo:g}"
+        return f"{kind} {'>' if lo_open else '>='} {lo}"
     if hi is not None:
-        return f"{kind} {'<' if hi_open else '<='} {hi:g}"
+        return f"{kind} {'<' if hi_open else '<='} {hi}"
     return kind
 
 
@@ -63,11 +64,12 @@ def integer(
     value: Any,
     lo: int | None = None,
     hi: int | None = None,
+    *,
     fix: str = "",
     error: type[Exception] = ConfigError,
 ) -> int:
     """``value`` as an int in ``[lo, hi]`` (either bound may be None); bools are refused."""
-    ok = _is_int(value) and (lo is None or value >= lo) and (hi is None or value <= hi)
+    ok = is_int(value) and (lo is None or value >= lo) and (hi is None or value <= hi)
     if not ok:
         raise fail(name, _range("an int", lo, hi), value, fix, error)
     return int(value)
@@ -96,22 +98,25 @@ def number(
     return float(value)
 
 
-def positive(name: str, value: Any, fix: str = "", error: type[Exception] = ConfigError) -> float:
+def positive(
+    name: str, value: Any, *, fix: str = "", error: type[Exception] = ConfigError
+) -> float:
     """``value`` as a finite float > 0."""
     return number(name, value, 0.0, lo_open=True, fix=fix, error=error)
 
 
-def boolean(name: str, value: Any, fix: str = "", error: type[Exception] = ConfigError) -> bool:
+def boolean(name: str, value: Any, *, fix: str = "", error: type[Exception] = ConfigError) -> bool:
     """``value`` if it is a bool (no truthiness: ``"yes"`` and ``1`` are refused)."""
-    if not isinstance(value, (bool, np.bool_)):
+    if not isinstance(value, bool):
         raise fail(name, "true or false", value, fix, error)
-    return bool(value)
+    return value
 
 
 def choice(
     name: str,
     value: T,
     options: Iterable[T],
+    *,
     fix: str = "",
     error: type[Exception] = ConfigError,
 ) -> T:
@@ -128,11 +133,11 @@ def shape(
     """``value`` (an int or a sequence of ints) as a non-empty tuple of positive ints."""
     fix = fix or f"use e.g. {name}=(15,) for 1-D or {name}=(15, 15) for 2-D"
     constraint = "a positive int or a non-empty tuple of positive ints"
-    items = (value,) if _is_int(value) else value
+    items = (value,) if is_int(value) else value
     try:
         out = tuple(items)
     except TypeError:
         raise fail(name, constraint, value, fix, error) from None
-    if not out or not all(_is_int(s) and s >= 1 for s in out):
+    if not out or not all(is_int(s) and s >= 1 for s in out):
         raise fail(name, constraint, value, fix, error)
     return tuple(int(s) for s in out)

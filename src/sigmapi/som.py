@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from sigmapi import _validate
 from sigmapi.codes import PopulationCode, grid_coordinates
 from sigmapi.config import SOMConfig
 from sigmapi.errors import ConfigError, ModelFileError, NotFittedError
@@ -240,9 +241,7 @@ class SigmaPiSOM:
                     f"the configured run of {self.config.iterations} iterations is complete "
                     f"(t_ = {self.t_}); pass n_iter to train further"
                 )
-        if isinstance(n_iter, bool) or not isinstance(n_iter, (int, np.integer)) or n_iter < 0:
-            raise ConfigError(f"n_iter must be an int >= 0, got {n_iter!r}")
-        end = self.t_ + int(n_iter)
+        end = self.t_ + _validate.integer("n_iter", n_iter, 0)
         while self.t_ < end:
             b, off = divmod(self.t_, BLOCK)
             stop = min(BLOCK, off + end - self.t_)
@@ -415,9 +414,9 @@ class SigmaPiSOM:
             raise ModelFileError(
                 f"{name!r}: weights have shape {tuple(w.shape)}, the config needs {n}"
             )
-        t = header.get("t")
-        if not isinstance(t, int) or isinstance(t, bool) or t < 0:
-            raise ModelFileError(f"{name!r}: iteration count must be an int >= 0, got {t!r}")
+        t = _validate.integer(
+            f"{name!r}: iteration count", header.get("t"), 0, error=ModelFileError
+        )
         try:
             entropy = int(header["seed_entropy"])
         except (KeyError, TypeError, ValueError):

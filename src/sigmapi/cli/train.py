@@ -7,6 +7,7 @@ import json
 import sys
 from typing import Any
 
+from sigmapi import _validate
 from sigmapi.checkpoints import checkpoint_dir, find_resumable, write_checkpoint
 from sigmapi.cli._common import add_config_flags, check_output, resolve_config
 from sigmapi.config import list_presets, load_preset
@@ -21,8 +22,8 @@ __all__ = ["cmd_evaluate", "cmd_presets", "cmd_train", "register"]
 def cmd_train(args: argparse.Namespace) -> int:
     cfg = resolve_config(args)
     every = args.checkpoint_every
-    if every is not None and every < 1:
-        raise UsageError(f"--checkpoint-every must be an int >= 1 (iterations), got {every}")
+    if every is not None:
+        _validate.integer("--checkpoint-every", every, 1, fix="in iterations", error=UsageError)
     # --resume continues the same run, so it may replace that run's --out
     out = check_output(args.out, args.force or args.resume)
     folder = checkpoint_dir(out)
@@ -60,8 +61,7 @@ def cmd_train(args: argparse.Namespace) -> int:
 
 def cmd_evaluate(args: argparse.Namespace) -> int:
     model = load_model(args.model)
-    if args.n_test < 2:
-        raise UsageError(f"--n-test must be >= 2, got {args.n_test}")
+    _validate.integer("--n-test", args.n_test, 2, error=UsageError)
     metrics = evaluate(model, n_test=args.n_test).to_dict()
     if args.json:
         print(json.dumps(metrics))

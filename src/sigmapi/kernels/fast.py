@@ -47,6 +47,7 @@ import numpy as np
 from numba import njit, prange
 from numpy.typing import NDArray
 
+from sigmapi import _validate
 from sigmapi.kernels import reference
 from sigmapi.kernels.base import WINNER_RULES
 
@@ -129,9 +130,7 @@ def _storage_dtype(tol: float) -> type[np.floating]:
 
 
 def _check_tol(tol: float) -> float:
-    if isinstance(tol, bool) or not isinstance(tol, (int, float)) or not 0 <= tol < 1:
-        raise ValueError(f"tol must be a number in [0, 1) (0 = exact), got {tol!r}")
-    return float(tol)
+    return _validate.number("tol", tol, 0.0, 1.0, hi_open=True, fix="0 is the exact mode")
 
 
 def prepare(weights: NDArray[np.float64], tol: float = 1e-6) -> FastState:

@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from sigmapi import _validate
 from sigmapi.config import SOMConfig
 from sigmapi.errors import ConfigError
 from sigmapi.progress import counter
@@ -89,22 +90,18 @@ class ReachConfig:
 
     def __post_init__(self) -> None:
         for name in ("episodes", "seeds", "block", "final_episodes", "map_pairs"):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, int) or v < 1:
-                raise ConfigError(f"{name} must be an int >= 1, got {v!r}")
+            object.__setattr__(self, name, _validate.integer(name, getattr(self, name), 1))
         if self.final_episodes > self.episodes:
             raise ConfigError(
                 f"final_episodes must be <= episodes ({self.episodes}), got {self.final_episodes}"
             )
-        if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
-            raise ConfigError(f"seed must be an int >= 0, got {self.seed!r}")
+        object.__setattr__(self, "seed", _validate.integer("seed", self.seed, 0))
         states = tuple(self.states)
         bad = [s for s in states if s not in STATES]
         if not states or bad or len(set(states)) != len(states):
             raise ConfigError(f"states must be distinct names from {STATES}, got {states!r}")
         object.__setattr__(self, "states", states)
-        if self.features not in FEATURES:
-            raise ConfigError(f"features must be one of {FEATURES}, got {self.features!r}")
+        _validate.choice("features", self.features, FEATURES)
         object.__setattr__(self, "map_shape", tuple(int(n) for n in self.map_shape))
         self.make_env()  # validates the task's parameters
         ActorCritic(1, 1, self.gamma, self.critic_lr, self.actor_lr, self.beta)

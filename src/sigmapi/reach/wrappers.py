@@ -22,6 +22,7 @@ import numpy as np
 from gymnasium import spaces
 from numpy.typing import NDArray
 
+from sigmapi import _validate
 from sigmapi.codes import PopulationCode, grid_coordinates
 from sigmapi.errors import ConfigError
 from sigmapi.kernels import reference
@@ -69,19 +70,6 @@ def bump_features(
     return b / np.linalg.norm(b, axis=1, keepdims=True)
 
 
-def _check_width(width: Any) -> float:
-    if (
-        isinstance(width, bool)
-        or not isinstance(width, (int, float))
-        or not np.isfinite(width)
-        or width <= 0
-    ):
-        raise ConfigError(
-            f"width must be a finite number > 0 (map grid units), got {width!r}; e.g. 1.0"
-        )
-    return float(width)
-
-
 class MapObservation(gym.ObservationWrapper[Features, Any, Obs]):
     """The observation becomes the Sigma-Pi map's reading of the retina and gaze codes.
 
@@ -127,7 +115,7 @@ class MapObservation(gym.ObservationWrapper[Features, Any, Obs]):
             )
         self.model = model
         self.features = features
-        self.width = _check_width(width)
+        self.width = _validate.positive("width", width, fix="in map grid units, e.g. 1.0")
         self._coords = grid_coordinates(tuple(model.map_shape))
         self._weights = np.asarray(model.weights_, dtype=np.float64)
         self._map_shape = tuple(model.map_shape)
@@ -206,7 +194,7 @@ class TrueZObservation(gym.Wrapper[Features, Any, Any, Any]):
             raise ConfigError(
                 f"shape must have {base.dim} axes for a {base.dim}-D task, got {shape!r}"
             )
-        self.width = _check_width(width)
+        self.width = _validate.positive("width", width, fix="in grid units, e.g. 1.0")
         self.observation_space = spaces.Box(0.0, 1.0, (self.code.size,), dtype=np.float32)
 
     def encode(self, z: NDArray[np.float64]) -> Features:
