@@ -1,4 +1,4 @@
-"""Wrappers, the actor-critic, the runner and the ``sigmapi reach`` command."""
+"""Wrappers, the actor-critic, the experiment and the ``sigmapi reach`` command."""
 
 from __future__ import annotations
 
@@ -101,7 +101,7 @@ TINY = {"dim": 1, "grid": 7, "map_shape": (6,), "map_pairs": 500, "episodes": 20
         "block": 10, "final_episodes": 10, "max_steps": 30, "backend": "reference"}  # fmt: skip
 
 
-def test_runner_is_deterministic_and_shapes_are_right() -> None:
+def test_experiment_is_deterministic_and_shapes_are_right() -> None:
     a = run_reach(**TINY)
     b = run_reach(**TINY)
     for s in a.success:

@@ -1,7 +1,13 @@
 """sigmapi: self-organizing maps of Sigma-Pi units that learn frame-of-reference transformations.
 
 Weber & Wermter, "A self-organizing map of Sigma-Pi units", Neurocomputing 70 (2007) 2552-2560.
+
+Importing the package registers the Gymnasium environment ``sigmapi/GazeReach-v0``
+(:class:`sigmapi.reach.GazeReachEnv`) by its entry-point string: ``gymnasium.make`` loads the
+environment's module when it is first made.
 """
+
+import gymnasium as _gymnasium
 
 from sigmapi._version import __version__
 from sigmapi.codes import PopulationCode
@@ -32,3 +38,6 @@ __all__ = [
     "load",
     "load_preset",
 ]
+
+if "sigmapi/GazeReach-v0" not in _gymnasium.registry:
+    _gymnasium.register(id="sigmapi/GazeReach-v0", entry_point="sigmapi.reach.env:GazeReachEnv")

@@ -13,8 +13,9 @@ import html
 from typing import TYPE_CHECKING
 
 from sigmapi.experiments.results import Section
+from sigmapi.reach.config import ReachConfig
+from sigmapi.reach.experiment import run_with_progress
 from sigmapi.reach.plots import reach_figure
-from sigmapi.reach.runner import ReachConfig, run_with_progress
 
 if TYPE_CHECKING:
     from sigmapi.experiments.results import ReportContext

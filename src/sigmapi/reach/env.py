@@ -1,6 +1,6 @@
 """GazeReach: a body with a movable eye that must bring an object into its grasp region.
 
-The world (ALGORITHM.md): an object lies at body-centred position ``z`` in ``[0, 1]^d``; the
+The world (docs/algorithm.md): an object lies at body-centred position ``z`` in ``[0, 1]^d``; the
 eye looks in direction ``y`` in ``[0, 1]^d``; the retina sees the object at ``x = 2 z - y``
 (the relation ``z = (x + y) / 2`` of the paper's simulator). The agent sees only population
 codes of ``x`` (retina) and ``y`` (gaze); ``z`` is in ``info`` for analysis, never in the
@@ -165,7 +165,6 @@ class GazeReachEnv(gym.Env[Obs, np.int64]):
         self.moves = move_table(self.dim, diagonal) * self.step_size
 
         self.code = PopulationCode((self.grid,) * self.dim, width=self.code_width)
-        self._axis = np.arange(self.grid, dtype=np.float64)[None, :]
         n = self.code.size
         self.observation_space = spaces.Dict(
             {
@@ -198,11 +197,8 @@ class GazeReachEnv(gym.Env[Obs, np.int64]):
         self._y = lo + (hi - lo) * self.np_random.random(self.dim)
 
     def encode(self, p: NDArray[np.float64]) -> NDArray[np.float32]:
-        """Code of one position ``p`` ``(dim,)`` in [0, 1]: ``self.code.encode`` computed as
-        a product of per-axis hills (the same Gaussian, separable), for speed per step."""
-        g = np.exp(-((self._axis - p[:, None] * (self.grid - 1)) ** 2) / (2.0 * self.code_width**2))
-        c = g[0] if self.dim == 1 else np.outer(g[0], g[1]).ravel()
-        return (c / np.linalg.norm(c)).astype(np.float32)
+        """Code of one position ``p`` ``(dim,)`` in [0, 1]: ``self.code.encode``, as float32."""
+        return self.code.encode(p[None, :])[0].astype(np.float32)
 
     def _obs(self) -> Obs:
         x = np.clip(2.0 * self._z - self._y, 0.0, 1.0)
