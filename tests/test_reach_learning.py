@@ -162,7 +162,8 @@ def test_cli_reach_user_mistakes_exit_2(tmp_path, capsys) -> None:
 
 @pytest.mark.slow
 def test_acceptance_map_reaches_90_percent_of_true_z_2d() -> None:
-    """Issue 5: 2-D task, saccade on every step, 5 seeds: map >= 0.9 x true-z success."""
+    """The acceptance run (docs/algorithm.md): 2-D task, saccade on every step, 5 seeds:
+    map >= 0.9 x true-z success."""
     res = run_reach(ReachConfig(states=("map", "true_z")))
     final = res.final_success()
     assert final["map"] >= 0.9 * final["true_z"], final

@@ -1,4 +1,4 @@
-"""How well a Sigma-Pi SOM learned the transformation (definitions: ALGORITHM.md).
+"""How well a Sigma-Pi SOM learned the transformation (definitions: docs/algorithm.md).
 
 - **view consistency**: over test z's, the fraction whose two independent views give the same
   winner, and the fraction whose winners are within one map unit (Chebyshev distance <= 1).

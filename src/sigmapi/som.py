@@ -1,3 +1,4 @@
+# Over 400 lines: one estimator class (state, training, use, arrays and files) reads as one.
 """SigmaPiSOM: a self-organizing map of Sigma-Pi units (Weber & Wermter 2007).
 
 The estimator holds the state (weights, iteration count, random streams) and delegates the

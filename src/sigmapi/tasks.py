@@ -1,6 +1,6 @@
 """Relations z = f(x, y) and the two-view sampler that feeds the Sigma-Pi SOM.
 
-Per iteration and per dimension (ALGORITHM.md): draw z uniformly over the relation's z range;
+Per iteration and per dimension (docs/algorithm.md): draw z uniformly over the relation's z range;
 draw one view by choosing x or y uniformly with probability 1/2 each and solving the relation
 for the other; reject and redraw the view until both lie in [0, 1]. Draw a second view of the
 same z the same way. The authors' relation is the mean ``z = (x + y) / 2``, which keeps z on

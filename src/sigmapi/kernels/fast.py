@@ -1,3 +1,4 @@
+# Over 400 lines: one kernel (its compiled helpers, two training drivers, public functions).
 """Fast CPU kernel: numba, sparse codes, lazy decay, parallel over map units.
 
 Computes the same learning iteration as :mod:`sigmapi.kernels.reference` (the definition),
@@ -19,11 +20,8 @@ using the structure of the problem:
   number of threads, so results do not depend on it (no reductions across units).
 
 ``tol = 0`` is the exact mode: no truncation and float64 storage, matching the reference to
-float64 rounding (used by the tests). Measured on the 2-D equivalence problem of
-``tests/test_fast_kernel.py`` (5x5 codes of width 1, 4x5 map, 2,000 iterations), share of the
-reference's winners kept and largest weight error: ``tol = 1e-6`` (the ``SOMConfig``
-default) 100 %, 1.8e-7; ``1e-5`` 100 %, 4.6e-7; ``1e-4`` (the ``paper-2d`` preset) 100 %,
-5.1e-6; ``1e-3`` 99.9 %, 1.2e-4; ``1e-2`` 97.3 %, 6.3e-3.
+float64 rounding (used by the tests). What larger ``tol`` costs in winners and weights is
+measured in ``benchmarks/README.md`` (kernel tolerance table).
 
 State (:class:`FastState`): ``raw`` ``(n_x * n_y, K)`` (float32, or float64 when exact),
 ``scale`` ``(K,)`` and ``sqnorm`` ``(K,)`` = ``sum_p raw[p, k]**2`` (tracked incrementally for

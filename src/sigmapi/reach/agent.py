@@ -8,7 +8,7 @@ The critic estimates ``V(s) = v . phi(s)``; the actor holds one preference vecto
 
 both learn: ``v += critic_lr delta phi(s)`` and ``W_a += actor_lr delta phi(s)`` for the action
 taken (the actor-critic of Barto, Sutton & Anderson 1983 as used in the authors' docking
-model: discount 0.9, rates 0.1, inverse temperature 2; ALGORITHM.md).
+model: discount 0.9, rates 0.1, inverse temperature 2; docs/algorithm.md).
 
 References
 ----------

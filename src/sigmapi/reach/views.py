@@ -2,7 +2,7 @@
 
 While the body keeps still, ``z`` does not change, and every saccade shows the same object at
 a new retinal position under a new gaze: two views ``(x0, y0)`` and ``(x1, y1)`` of one ``z``,
-exactly what the Sigma-Pi SOM learns from (ALGORITHM.md), gathered without a teacher and
+exactly what the Sigma-Pi SOM learns from (docs/algorithm.md), gathered without a teacher and
 without reading ``z``.
 """
 
