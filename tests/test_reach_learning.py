@@ -73,8 +73,7 @@ def test_wrappers_give_unit_float32_features_in_their_space(tiny_map: SigmaPiSOM
 def test_map_bump_is_centred_on_the_models_winner(tiny_map: SigmaPiSOM) -> None:
     env = MapObservation(GazeReachEnv(grid=5), tiny_map, features="bump", width=0.5)
     obs, _ = env.reset(seed=2)
-    base = env.unwrapped
-    raw = base._obs()
+    raw, _ = GazeReachEnv(grid=5).reset(seed=2)  # what the wrapper read
     k = tiny_map.winner(raw["retina"][None].astype(float), raw["gaze"][None].astype(float))[0]
     assert int(np.argmax(obs)) == k
     resp = MapObservation(GazeReachEnv(grid=5), tiny_map, features="response").observation(raw)

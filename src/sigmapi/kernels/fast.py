@@ -568,12 +568,16 @@ def train_block(
     map_shape: tuple[int, ...],
     winner_rule: str,
     soft_cut: int,
+    parallel: bool | None = None,
 ) -> NDArray[np.int64]:
     """Run ``len(x0)`` learning iterations in order, updating ``state`` in place.
 
     Iteration ``t`` finds the winner of view ``(x0[t], y0[t])`` at width ``sigmas[t]`` and
     learns view ``(x1[t], y1[t])`` with rate ``eps[t]`` (as
     :func:`sigmapi.kernels.reference.train_block`). Returns the winners ``(T,)``.
+
+    ``parallel``: use the threaded driver (same results); default: when
+    :data:`PARALLEL_TRAIN` is set, the map is large enough and numba has several threads.
     """
     k_units, nx, ny = state.shape
     dims, strides = _grid(tuple(map_shape), k_units)
@@ -593,9 +597,12 @@ def train_block(
         state.refresh_norms()
     elif n_iter > 0:
         state.norms_valid = False
-    parallel = (
-        PARALLEL_TRAIN and k_units * nx * ny >= PARALLEL_MIN_WORK and numba.get_num_threads() > 1
-    )
+    if parallel is None:
+        parallel = (
+            PARALLEL_TRAIN
+            and k_units * nx * ny >= PARALLEL_MIN_WORK
+            and numba.get_num_threads() > 1
+        )
     fn: Any = _train_parallel if parallel else _train_serial
     fn(state.raw, state.scale, state.sqnorm, *xs, sg, ep, dims, strides, code, int(soft_cut),
        state.tol, out, track)  # fmt: skip
