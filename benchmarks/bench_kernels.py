@@ -39,9 +39,9 @@ from typing import Any
 
 ROOT = Path(__file__).resolve().parent
 TARGETS = {
-    # paper-1d: the authors' figures restated (ALGORITHM.md): within one 0.988, z error 0.32.
+    # paper-1d: the authors' figures restated (docs/algorithm.md): within one 0.988, z error 0.32.
     "paper-1d": {"view_within_one": 0.97, "z_error": 0.40},
-    # paper-2d: the acceptance targets of issue 3.
+    # paper-2d: the acceptance targets (docs/algorithm.md).
     "paper-2d": {"order_r2": 0.95, "view_within_one": 0.90, "z_error": 0.6},
 }
 

@@ -10,7 +10,8 @@ import pytest
 matplotlib.use("Agg")
 os.environ.setdefault("MPLBACKEND", "Agg")
 
-from sigmapi import SOMConfig
+from sigmapi import SigmaPiSOM, SOMConfig
+from sigmapi.curves import LearningCurve, checkpoints
 
 
 @pytest.fixture
@@ -34,3 +35,26 @@ def small_2d() -> SOMConfig:
         sigma=((0.0, 2.0), (0.5, 1e-5)), backend="reference", seed=0,
         ordering="none",
     )  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def model_1d() -> SigmaPiSOM:
+    """A 5-unit 1-D map trained for 2,000 iterations (default backend)."""
+    return SigmaPiSOM(map_shape=(5,), x_shape=(5,), y_shape=(5,), iterations=2000, seed=0).fit()
+
+
+@pytest.fixture(scope="module")
+def model_2d() -> SigmaPiSOM:
+    """A 3x4 map on 4x4 inputs trained for 1,000 iterations."""
+    return SigmaPiSOM(
+        map_shape=(3, 4), x_shape=(4, 4), y_shape=(4, 4), code_width=1.0, iterations=1000, seed=0
+    ).fit()
+
+
+@pytest.fixture(scope="module")
+def curves(model_1d: SigmaPiSOM) -> list[dict[str, list[float]]]:
+    """Learning curves of model_1d's run at 5 checkpoints."""
+    som = SigmaPiSOM(model_1d.config)
+    curve = LearningCurve(at=checkpoints(2000, 5), n_test=100)
+    som.fit(callback=curve)
+    return [curve.to_dict()]

@@ -34,14 +34,23 @@ def _problem(n_iter: int = 2000, seed: int = 3, width: float = 1.0, eps: float =
     return som.initial_weights(), (x0, y0, x1, y1, som.sigma_at(t), np.full(n_iter, eps))
 
 
-def _train(kernel, w, data, rule="soft", tol=None, chunks=(1000,)):
+def _train(kernel, w, data, rule="soft", tol=None, chunks=(1000,), **options):
     state = kernel.prepare(w) if tol is None else kernel.prepare(w, tol)
     out, s = [], 0
     n = data[0].shape[0]
     while s < n:
         for c in chunks:
             sl = slice(s, min(n, s + c))
-            out.append(kernel.train_block(state, *(a[sl] for a in data), MAP, rule, 15))
+            out.append(
+                kernel.train_block(
+                    state,
+                    *(a[sl] for a in data),
+                    map_shape=MAP,
+                    winner_rule=rule,
+                    soft_cut=15,
+                    **options,
+                )
+            )
             s = sl.stop
     return state, np.concatenate(out)
 
@@ -108,16 +117,14 @@ def test_block_splitting_does_not_change_the_run():
         np.testing.assert_array_equal(a.scale, b.scale)
 
 
-def test_same_result_for_any_thread_count(monkeypatch):
+def test_same_result_for_any_thread_count():
     w, data = _problem(n_iter=300, seed=4)
-    serial, win_serial = _train(fast, w, data)
-    monkeypatch.setattr(fast, "PARALLEL_MIN_WORK", 0)
-    monkeypatch.setattr(fast, "PARALLEL_TRAIN", True)
+    serial, win_serial = _train(fast, w, data, parallel=False)
     before = numba.get_num_threads()
     try:
         for n in sorted({1, getattr(numba.config, "NUMBA_NUM_THREADS", 1)}):
             numba.set_num_threads(n)
-            par, win_par = _train(fast, w, data)
+            par, win_par = _train(fast, w, data, parallel=True)
             np.testing.assert_array_equal(win_par, win_serial)
             np.testing.assert_array_equal(par.raw, serial.raw)
             np.testing.assert_array_equal(par.scale, serial.scale)
@@ -183,7 +190,7 @@ def test_save_load_continue_is_bit_exact(tmp_path, rule):
     assert b.backend == "fast"
     b.partial_fit()
     np.testing.assert_array_equal(a.weights_, b.weights_)
-    np.testing.assert_array_equal(a._state.raw, b._state.raw)
+    np.testing.assert_array_equal(a.to_arrays()[1]["state_raw"], b.to_arrays()[1]["state_raw"])
 
 
 def test_estimator_with_fast_backend_matches_reference():

@@ -32,7 +32,6 @@ shapes = st.lists(st.integers(1, 4), min_size=1, max_size=2).map(tuple)
 def test_round_trip_is_exact(tmp_path, map_shape, n_in, ndim, t, seed, data):
     cfg = SOMConfig(map_shape=map_shape, x_shape=(n_in,) * ndim, y_shape=(n_in + 1,) * ndim,
                     seed=seed, backend="reference", iterations=7)  # fmt: skip
-    som = SigmaPiSOM(cfg)
     k = int(np.prod(map_shape))
     w = np.asarray(
         data.draw(
@@ -43,8 +42,10 @@ def test_round_trip_is_exact(tmp_path, map_shape, n_in, ndim, t, seed, data):
             )
         )
     ).reshape(k, n_in**ndim, (n_in + 1) ** ndim)
-    som._set_weights(w)
-    som.t_ = t
+    entropy = str(SigmaPiSOM(cfg).seed_entropy_)
+    som = SigmaPiSOM.from_arrays(
+        {"config": cfg.to_dict(), "t": t, "seed_entropy": entropy}, {"weights": w}
+    )
     path = som.save(tmp_path / "m.npz")
     back = sigmapi.load(path)
     np.testing.assert_array_equal(back.weights_, w)
@@ -124,6 +125,20 @@ def test_not_a_zip_and_missing_file(tmp_path):
         z.writestr("header.npy", b"\x93NUMPY garbage")
     with pytest.raises(ModelFileError):
         sigmapi.load(tmp_path / "z.npz")
+
+
+def test_to_arrays_from_arrays_and_clone(small_1d):
+    som = SigmaPiSOM(small_1d).fit(n_iter=1500)
+    header, arrays = som.to_arrays()
+    assert json.loads(json.dumps(header)) == header
+    back = SigmaPiSOM.from_arrays(header, arrays)
+    np.testing.assert_array_equal(back.weights_, som.weights_)
+    assert back.t_ == som.t_ and back.seed_entropy_ == som.seed_entropy_
+    twin = som.clone()
+    assert not twin.is_fitted and twin.config == som.config
+    np.testing.assert_array_equal(twin.fit(som.t_).weights_, som.weights_)
+    with pytest.raises(ModelFileError, match="the config needs"):
+        SigmaPiSOM.from_arrays(header, {"weights": arrays["weights"][:, :3]})
 
 
 def test_header_is_readable_json(tmp_path, small_1d):

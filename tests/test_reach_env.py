@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import subprocess
+import sys
+
 import gymnasium as gym
 import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
 
-import sigmapi.reach
+import sigmapi
 from sigmapi.errors import ConfigError
 from sigmapi.reach import ENV_ID, GazeReachEnv, collect_saccade_views
 
@@ -25,12 +28,21 @@ def test_check_env_passes(kwargs: dict) -> None:
 def test_registered_id_makes_the_env_and_reimport_is_harmless() -> None:
     import importlib
 
-    importlib.reload(sigmapi.reach)  # registration is guarded against a second run
+    importlib.reload(sigmapi)  # registration is guarded against a second run
     env = gym.make(ENV_ID, dim=1, grid=7)
     obs, info = env.reset(seed=3)
     assert env.observation_space.contains(obs)
     assert set(info) >= {"z", "x", "y", "saccade", "event", "is_success"}
     env.close()
+
+
+def test_import_sigmapi_alone_registers_the_id() -> None:
+    code = (
+        "import gymnasium, sigmapi, sys; assert 'sigmapi.reach' not in sys.modules; "
+        "env = gymnasium.make('sigmapi/GazeReach-v0', dim=1, grid=7); env.reset(seed=0)"
+    )
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
 
 
 def rollout(env: gym.Env, seed: int, n: int = 200) -> list:

@@ -1,4 +1,4 @@
-"""Wrappers, the actor-critic, the runner and the ``sigmapi reach`` command."""
+"""Wrappers, the actor-critic, the experiment and the ``sigmapi reach`` command."""
 
 from __future__ import annotations
 
@@ -73,8 +73,7 @@ def test_wrappers_give_unit_float32_features_in_their_space(tiny_map: SigmaPiSOM
 def test_map_bump_is_centred_on_the_models_winner(tiny_map: SigmaPiSOM) -> None:
     env = MapObservation(GazeReachEnv(grid=5), tiny_map, features="bump", width=0.5)
     obs, _ = env.reset(seed=2)
-    base = env.unwrapped
-    raw = base._obs()
+    raw, _ = GazeReachEnv(grid=5).reset(seed=2)  # what the wrapper read
     k = tiny_map.winner(raw["retina"][None].astype(float), raw["gaze"][None].astype(float))[0]
     assert int(np.argmax(obs)) == k
     resp = MapObservation(GazeReachEnv(grid=5), tiny_map, features="response").observation(raw)
@@ -101,7 +100,7 @@ TINY = {"dim": 1, "grid": 7, "map_shape": (6,), "map_pairs": 500, "episodes": 20
         "block": 10, "final_episodes": 10, "max_steps": 30, "backend": "reference"}  # fmt: skip
 
 
-def test_runner_is_deterministic_and_shapes_are_right() -> None:
+def test_experiment_is_deterministic_and_shapes_are_right() -> None:
     a = run_reach(**TINY)
     b = run_reach(**TINY)
     for s in a.success:
@@ -162,7 +161,8 @@ def test_cli_reach_user_mistakes_exit_2(tmp_path, capsys) -> None:
 
 @pytest.mark.slow
 def test_acceptance_map_reaches_90_percent_of_true_z_2d() -> None:
-    """Issue 5: 2-D task, saccade on every step, 5 seeds: map >= 0.9 x true-z success."""
+    """The acceptance run (docs/algorithm.md): 2-D task, saccade on every step, 5 seeds:
+    map >= 0.9 x true-z success."""
     res = run_reach(ReachConfig(states=("map", "true_z")))
     final = res.final_success()
     assert final["map"] >= 0.9 * final["true_z"], final

@@ -131,6 +131,8 @@ def test_train_block_equals_plain_loop():
                 for j in range(ny):
                     W_loop[k, i, j] += eps[t] * a[k] * (x1[t, i] * y1[t, j] - W_loop[k, i, j])
         win_loop.append(kw)
-    win = ref.train_block(W, x0, y0, x1, y1, sig, eps, (K,), "soft", 15)
+    win = ref.train_block(
+        W, x0, y0, x1, y1, sig, eps, map_shape=(K,), winner_rule="soft", soft_cut=15
+    )
     np.testing.assert_array_equal(win, win_loop)
     np.testing.assert_allclose(W, W_loop, rtol=1e-12, atol=1e-15)

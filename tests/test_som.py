@@ -164,7 +164,7 @@ def test_small_map_learns_invariance(learned):
 
 
 def test_learning_from_the_same_view_is_clearly_worse(learned):
-    """The ablation of ALGORITHM.md: learning the view that chose the winner breaks invariance."""
+    """Ablation (docs/algorithm.md): learning the view that chose the winner breaks invariance."""
     same = _metrics(same_view=True)
     assert same["view_consistency"] <= learned["view_consistency"] - 0.2
     assert same["z_error"] >= learned["z_error"] + 0.1

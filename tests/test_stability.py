@@ -25,7 +25,10 @@ def _long_run(cfg: SOMConfig, n_iter: int, sigma: float, eps: float) -> fast.Fas
     sig = np.full(b.x0.shape[0], sigma)
     ep = np.full(b.x0.shape[0], eps)
     for _ in range(n_iter // b.x0.shape[0]):
-        fast.train_block(state, b.x0, b.y0, b.x1, b.y1, sig, ep, cfg.map_shape, "soft", 15)
+        fast.train_block(
+            state, b.x0, b.y0, b.x1, b.y1, sig, ep,
+            map_shape=cfg.map_shape, winner_rule="soft", soft_cut=15,
+        )  # fmt: skip
     return state
 
 

@@ -1,18 +1,23 @@
 """sigmapi: self-organizing maps of Sigma-Pi units that learn frame-of-reference transformations.
 
 Weber & Wermter, "A self-organizing map of Sigma-Pi units", Neurocomputing 70 (2007) 2552-2560.
+
+Importing the package registers the Gymnasium environment ``sigmapi/GazeReach-v0``
+(:class:`sigmapi.reach.GazeReachEnv`) by its entry-point string: ``gymnasium.make`` loads the
+environment's module when it is first made.
 """
 
+import gymnasium as _gymnasium
+
+from sigmapi._version import __version__
 from sigmapi.codes import PopulationCode
 from sigmapi.config import SOMConfig, list_presets, load_preset
-from sigmapi.errors import ConfigError, ModelFileError, NotFittedError
-from sigmapi.io import load_model as load
+from sigmapi.errors import ConfigError, ModelFileError, NotFittedError, SigmapiError
 from sigmapi.metrics import Metrics, evaluate
 from sigmapi.schedules import PiecewiseLinear
 from sigmapi.som import SigmaPiSOM
+from sigmapi.som import load_model as load
 from sigmapi.tasks import Batch, Relation, TwoViewSampler
-
-__version__ = "0.1.0"
 
 __all__ = [
     "Batch",
@@ -25,6 +30,7 @@ __all__ = [
     "Relation",
     "SOMConfig",
     "SigmaPiSOM",
+    "SigmapiError",
     "TwoViewSampler",
     "__version__",
     "evaluate",
@@ -32,3 +38,6 @@ __all__ = [
     "load",
     "load_preset",
 ]
+
+if "sigmapi/GazeReach-v0" not in _gymnasium.registry:
+    _gymnasium.register(id="sigmapi/GazeReach-v0", entry_point="sigmapi.reach.env:GazeReachEnv")

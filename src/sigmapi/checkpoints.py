@@ -65,7 +65,7 @@ class Resumed:
 
 def find_resumable(folder: Path, config: SOMConfig) -> Resumed:
     """The newest checkpoint in ``folder`` that loads cleanly and matches ``config``."""
-    from sigmapi.io import load_model
+    from sigmapi.som import load_model
 
     skipped: list[str] = []
     for _, path in list_checkpoints(folder):

@@ -23,28 +23,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from sigmapi.errors import ConfigError
+from sigmapi import _validate
 
-__all__ = ["PopulationCode", "as_shape", "grid_coordinates"]
-
-
-def as_shape(value: Any, name: str) -> tuple[int, ...]:
-    """Return ``value`` as a tuple of positive ints, or raise a ConfigError naming ``name``."""
-    if isinstance(value, (int, np.integer)) and not isinstance(value, bool):
-        value = (int(value),)
-    try:
-        shape = tuple(value)
-    except TypeError:
-        shape = ()
-    ok = len(shape) >= 1 and all(
-        isinstance(s, (int, np.integer)) and not isinstance(s, bool) and s >= 1 for s in shape
-    )
-    if not ok:
-        raise ConfigError(
-            f"{name} must be a positive int or a non-empty tuple of positive ints, got {value!r}; "
-            f"use e.g. {name}=(15,) for 1-D or {name}=(15, 15) for 2-D"
-        )
-    return tuple(int(s) for s in shape)
+__all__ = ["PopulationCode", "grid_coordinates"]
 
 
 def grid_coordinates(shape: tuple[int, ...]) -> NDArray[np.float64]:
@@ -88,18 +69,9 @@ class PopulationCode:
     _coords: NDArray[np.float64] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "shape", as_shape(self.shape, "shape"))
-        if not (
-            isinstance(self.width, (int, float)) and np.isfinite(self.width) and self.width > 0
-        ):
-            raise ConfigError(
-                f"width must be a finite number > 0 (grid units), got {self.width!r}; "
-                "the paper uses 0.5"
-            )
-        if not (isinstance(self.height, (int, float)) and np.isfinite(self.height)):
-            raise ConfigError(f"height must be a finite number, got {self.height!r}")
-        if self.height <= 0:
-            raise ConfigError(f"height must be > 0, got {self.height!r}; the paper uses 1.0")
+        object.__setattr__(self, "shape", _validate.shape("shape", self.shape))
+        _validate.positive("width", self.width, fix="in grid units; the paper uses 0.5")
+        _validate.positive("height", self.height, fix="the paper uses 1.0")
         object.__setattr__(self, "_coords", grid_coordinates(self.shape))
 
     @property

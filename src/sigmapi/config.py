@@ -8,23 +8,22 @@ scales the paper's schedule rather than cutting it.
 from __future__ import annotations
 
 import dataclasses
-import math
 import tomllib
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from sigmapi.codes import as_shape
+from sigmapi import _validate
 from sigmapi.errors import ConfigError
+from sigmapi.kernels import BACKENDS, WINNER_RULES
 from sigmapi.ordering import ORDERINGS
 from sigmapi.schedules import PAPER_SIGMA, PiecewiseLinear
 from sigmapi.tasks import RELATIONS
 
 __all__ = ["SOMConfig", "apply_overrides", "list_presets", "load_config_file", "load_preset"]
 
-WINNER_RULES = ("soft", "argmax", "min_distance")
-BACKEND_NAMES = ("auto", "reference", "fast", "gpu")
+BACKEND_NAMES = ("auto", *BACKENDS)
 
 
 @dataclass(frozen=True)
@@ -69,7 +68,7 @@ class SOMConfig:
     same_view: bool = False
     """Ablation: learn from the view that chose the winner (the paper learns from the other)."""
     backend: str = "auto"
-    """Kernel: "auto" (fast if numba imports), "reference", "fast" or "gpu"."""
+    """Kernel: "auto" (fast if numba imports), "reference" or "fast"."""
     kernel_tol: float = 1e-6
     """Fast kernel: code and neighbourhood values below kernel_tol x their maximum are skipped
     (0 = exact). The reference kernel is always exact."""
@@ -81,39 +80,27 @@ class SOMConfig:
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
-        set_(self, "map_shape", as_shape(self.map_shape, "map_shape"))
-        set_(self, "x_shape", as_shape(self.x_shape, "x_shape"))
-        set_(self, "y_shape", as_shape(self.y_shape, "y_shape"))
+        for name in ("map_shape", "x_shape", "y_shape"):
+            set_(self, name, _validate.shape(name, getattr(self, name)))
         if len(self.x_shape) != len(self.y_shape):
             raise ConfigError(
                 f"x_shape and y_shape must have the same number of dimensions, got "
                 f"{self.x_shape} and {self.y_shape}"
             )
-        _positive(self, "code_width")
-        _positive(self, "code_height")
-        _positive(self, "init_scale")
-        _positive(self, "ordering_sigma")
-        _bool(self, "code_normalize")
-        _bool(self, "periodic")
-        _bool(self, "same_view")
-        if (
-            not isinstance(self.iterations, int)
-            or isinstance(self.iterations, bool)
-            or self.iterations < 1
-        ):
-            raise ConfigError(
-                f"iterations must be an int >= 1, got {self.iterations!r}; the paper runs 300000"
-            )
-        if (
-            not isinstance(self.soft_cut, int)
-            or isinstance(self.soft_cut, bool)
-            or self.soft_cut < 0
-        ):
-            raise ConfigError(f"soft_cut must be an int >= 0 (map units), got {self.soft_cut!r}")
-        _choice(self, "relation", tuple(RELATIONS))
-        _choice(self, "ordering", ORDERINGS)
-        _choice(self, "winner_rule", WINNER_RULES)
-        _choice(self, "backend", BACKEND_NAMES)
+        for name in ("code_width", "code_height", "init_scale", "ordering_sigma"):
+            set_(self, name, _validate.positive(name, getattr(self, name)))
+        for name in ("code_normalize", "periodic", "same_view"):
+            _validate.boolean(name, getattr(self, name))
+        its = _validate.integer("iterations", self.iterations, 1, fix="the paper runs 300000")
+        set_(self, "iterations", its)
+        cut = _validate.integer(
+            "soft_cut", self.soft_cut, 0, fix="in map units; the script uses 15"
+        )
+        set_(self, "soft_cut", cut)
+        _validate.choice("relation", self.relation, tuple(RELATIONS))
+        _validate.choice("ordering", self.ordering, ORDERINGS)
+        _validate.choice("winner_rule", self.winner_rule, WINNER_RULES)
+        _validate.choice("backend", self.backend, BACKEND_NAMES)
         eps = PiecewiseLinear.coerce(self.eps, "eps")
         vals = [v for _, v in eps.knots]
         if min(vals) <= 0 or max(vals) > 1:
@@ -130,12 +117,15 @@ class SOMConfig:
                 "use a small value such as 1e-5 for a winner-only update"
             )
         set_(self, "sigma", sig.knots)
-        if not (isinstance(self.kernel_tol, (int, float)) and 0 <= self.kernel_tol < 1):
-            raise ConfigError(f"kernel_tol must be a number in [0, 1), got {self.kernel_tol!r}")
-        if self.seed is not None and (
-            not isinstance(self.seed, int) or isinstance(self.seed, bool) or self.seed < 0
-        ):
-            raise ConfigError(f"seed must be a non-negative int or None, got {self.seed!r}")
+        tol = _validate.number("kernel_tol", self.kernel_tol, 0.0, 1.0, hi_open=True,
+                               fix="0 is exact; the default is 1e-6")  # fmt: skip
+        set_(self, "kernel_tol", tol)
+        if self.seed is not None:
+            set_(
+                self,
+                "seed",
+                _validate.integer("seed", self.seed, 0, fix="or None for fresh entropy"),
+            )
 
     @property
     def sigma_schedule(self) -> PiecewiseLinear:
@@ -187,24 +177,6 @@ def _check_keys(data: dict[str, Any]) -> None:
         raise ConfigError(
             f"unknown config key {unknown[0]!r}; valid keys are: {', '.join(sorted(names))}"
         )
-
-
-def _positive(cfg: SOMConfig, name: str) -> None:
-    v = getattr(cfg, name)
-    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
-        raise ConfigError(f"{name} must be a finite number > 0, got {v!r}")
-
-
-def _bool(cfg: SOMConfig, name: str) -> None:
-    v = getattr(cfg, name)
-    if not isinstance(v, bool):
-        raise ConfigError(f"{name} must be true or false, got {v!r}")
-
-
-def _choice(cfg: SOMConfig, name: str, options: tuple[str, ...]) -> None:
-    v = getattr(cfg, name)
-    if v not in options:
-        raise ConfigError(f"{name} must be one of {', '.join(options)}; got {v!r}")
 
 
 # ---------------------------------------------------------------------------- presets and files

@@ -1,20 +1,31 @@
-"""Error classes. Each subclasses the built-in a caller would catch (as Nengo and Gymnasium do).
+"""Error classes: one root, :class:`SigmapiError`, and its subclasses.
 
-Every message names the parameter, the constraint, the value received and the fix.
+Each subclass also subclasses the built-in a caller would catch (as Nengo and Gymnasium do):
+``except ValueError`` keeps working, and ``except SigmapiError`` catches everything this
+package raises on purpose. Every message names the parameter, the constraint, the value
+received and the fix.
 """
 
 from __future__ import annotations
 
-__all__ = ["ConfigError", "ModelFileError", "NotFittedError"]
+__all__ = ["ConfigError", "ModelFileError", "NotFittedError", "SigmapiError", "UsageError"]
 
 
-class ConfigError(ValueError):
+class SigmapiError(Exception):
+    """Root of the errors sigmapi raises on purpose (a user mistake, a bad file)."""
+
+
+class ConfigError(SigmapiError, ValueError):
     """A configuration value (API argument, TOML preset, ``--set`` override) is invalid."""
 
 
-class ModelFileError(ValueError):
+class ModelFileError(SigmapiError, ValueError):
     """A model file or checkpoint is missing, damaged, of another version, or hostile."""
 
 
-class NotFittedError(RuntimeError):
+class NotFittedError(SigmapiError, RuntimeError):
     """The model has no weights yet: call ``fit`` (or ``partial_fit``) first."""
+
+
+class UsageError(SigmapiError):
+    """A mistake on the command line, reported as one line with exit status 2."""

@@ -1,5 +1,9 @@
 """Model files: NumPy ``.npz`` archives read with ``allow_pickle=False``, written atomically.
 
+This module reads and writes verified archives; it knows the file layout, not the model:
+:meth:`sigmapi.SigmaPiSOM.to_arrays` and :meth:`~sigmapi.SigmaPiSOM.from_arrays` turn a
+model into the header and arrays below and back.
+
 Layout (format ``sigmapi-model``, version 1): two members,
 
 - ``header``: a uint8 array holding UTF-8 JSON: format, version, the resolved config, the
@@ -24,18 +28,14 @@ import os
 import tempfile
 import zipfile
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from sigmapi.config import SOMConfig
-from sigmapi.errors import ConfigError, ModelFileError
+from sigmapi.errors import ModelFileError
 
-if TYPE_CHECKING:
-    from sigmapi.som import SigmaPiSOM
-
-__all__ = ["FORMAT", "VERSION", "atomic_write_bytes", "load_model", "read_archive", "save_model"]
+__all__ = ["FORMAT", "VERSION", "atomic_write_bytes", "read_archive", "read_model", "write_model"]
 
 FORMAT = "sigmapi-model"
 VERSION = 1
@@ -141,33 +141,36 @@ def read_archive(
     return header, arrays
 
 
-def save_model(model: SigmaPiSOM, path: str | Path) -> Path:
-    """Write ``model`` atomically to ``path``; see the module docstring for the layout."""
-    w = np.ascontiguousarray(model.weights_)
-    extra = {
-        f"state_{k}": np.ascontiguousarray(v)
-        for k, v in model._kernel.state_arrays(model._state).items()
-    }
-    header = {
+def write_model(path: str | Path, header: dict[str, Any], arrays: dict[str, NDArray[Any]]) -> Path:
+    """Write a model's ``header`` and ``arrays`` atomically to ``path``, with checksums.
+
+    ``arrays`` holds ``"weights"`` and optional ``"state_<name>"`` arrays (see
+    :meth:`sigmapi.SigmaPiSOM.to_arrays`); the file gets the format, version, the weight
+    dtype, shape and SHA-256, the SHA-256 of each state array and of the header itself.
+    """
+    w = np.ascontiguousarray(arrays["weights"])
+    extra = {k: np.ascontiguousarray(v) for k, v in arrays.items() if k != "weights"}
+    full = {
         "format": FORMAT,
         "version": VERSION,
-        "config": model.config.to_dict(),
-        "t": int(model.t_),
-        "seed_entropy": str(model.seed_entropy_),
+        **header,
         "dtype": str(w.dtype),
         "shape": list(w.shape),
         "sha256": digest(w),
-        "backend": model.backend,
         "state_sha256": {k[len("state_") :]: digest(v) for k, v in extra.items()},
     }
-    header["header_sha256"] = header_digest(header)
-    return atomic_write_bytes(path, encode_archive(header, {"weights": w, **extra}))
+    full["header_sha256"] = header_digest(full)
+    return atomic_write_bytes(path, encode_archive(full, {"weights": w, **extra}))
 
 
-def load_model(path: str | Path, backend: str | None = None) -> SigmaPiSOM:
-    """Read a model file written by :func:`save_model` (optionally onto another backend)."""
-    from sigmapi.som import SigmaPiSOM
+def read_model(path: str | Path) -> tuple[dict[str, Any], dict[str, NDArray[Any]]]:
+    """Read and verify a model file written by :func:`write_model`; returns (header, arrays).
 
+    Checks the format, version, header keys and checksum, the weights (float, the dtype and
+    shape the header states, finite, checksum) and each state array (float, finite,
+    checksum); raises :class:`~sigmapi.errors.ModelFileError` naming the problem. Whether
+    the arrays make a model is :meth:`sigmapi.SigmaPiSOM.from_arrays`'s to check.
+    """
     header, arrays = read_archive(path)
     name = str(path)
     for key in ("config", "t", "seed_entropy", "dtype", "shape", "sha256", "header_sha256"):
@@ -182,48 +185,22 @@ def load_model(path: str | Path, backend: str | None = None) -> SigmaPiSOM:
             f"found {sorted(arrays)}"
         )
     w = arrays["weights"]
-    try:
-        cfg = SOMConfig.from_dict(header["config"])
-        if backend is not None:
-            cfg = cfg.replace(backend=backend)
-    except (ConfigError, TypeError) as exc:
-        raise ModelFileError(f"{name!r}: stored config is invalid ({exc})") from None
-    expected = (int(np.prod(cfg.map_shape)), int(np.prod(cfg.x_shape)), int(np.prod(cfg.y_shape)))
     if w.dtype.kind != "f" or str(w.dtype) != header["dtype"]:
         raise ModelFileError(
             f"{name!r}: weights have dtype {w.dtype}, header says {header['dtype']!r}"
         )
-    if tuple(w.shape) != expected or list(w.shape) != header["shape"]:
+    if list(w.shape) != header["shape"]:
         raise ModelFileError(
-            f"{name!r}: weights have shape {tuple(w.shape)}, the config needs {expected}"
+            f"{name!r}: weights have shape {tuple(w.shape)}, header says {header['shape']}"
         )
     if not np.all(np.isfinite(w)):
         raise ModelFileError(f"{name!r}: weights hold NaN or inf values; the file is damaged")
     if digest(w) != header["sha256"]:
         raise ModelFileError(f"{name!r}: weight checksum mismatch; the file is damaged")
-    t = header["t"]
-    if not isinstance(t, int) or isinstance(t, bool) or t < 0:
-        raise ModelFileError(f"{name!r}: iteration count must be an int >= 0, got {t!r}")
-    try:
-        entropy = int(header["seed_entropy"])
-    except (TypeError, ValueError):
-        raise ModelFileError(f"{name!r}: seed_entropy must be an integer string") from None
-    if entropy < 0:
-        raise ModelFileError(f"{name!r}: seed_entropy must be >= 0, got {entropy}")
-    model = SigmaPiSOM(cfg)
-    model.seed_entropy_ = entropy
     sums = header.get("state_sha256", {})
     if not isinstance(sums, dict) or set(sums) != set(state):
         raise ModelFileError(f"{name!r}: backend state arrays do not match the header")
     for k, v in state.items():
         if v.dtype.kind != "f" or not np.all(np.isfinite(v)) or digest(v) != sums[k]:
             raise ModelFileError(f"{name!r}: backend state array {k!r} is damaged")
-    if state and header.get("backend") == model.backend:
-        try:
-            model._state = model._kernel.from_state_arrays(w, state, tol=cfg.kernel_tol)
-        except (ValueError, KeyError) as exc:
-            raise ModelFileError(f"{name!r}: backend state is invalid ({exc})") from None
-    else:
-        model._set_weights(np.asarray(w, dtype=np.float64))
-    model.t_ = t
-    return model
+    return header, arrays

@@ -1,4 +1,4 @@
-"""How well a Sigma-Pi SOM learned the transformation (definitions: ALGORITHM.md).
+"""How well a Sigma-Pi SOM learned the transformation (definitions: docs/algorithm.md).
 
 - **view consistency**: over test z's, the fraction whose two independent views give the same
   winner, and the fraction whose winners are within one map unit (Chebyshev distance <= 1).
@@ -20,6 +20,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
+
+from sigmapi import _validate
 
 if TYPE_CHECKING:
     from sigmapi.som import SigmaPiSOM
@@ -99,8 +101,7 @@ def evaluate(
     test, calibration : Batch, optional
         Precomputed evaluation data (e.g. reused across learning-curve checkpoints).
     """
-    if isinstance(n_test, bool) or not isinstance(n_test, (int, np.integer)) or n_test < 2:
-        raise ValueError(f"n_test must be an int >= 2, got {n_test!r}")
+    _validate.integer("n_test", n_test, 2)
     if test is None or calibration is None:
         calibration, test = evaluation_sets(model, n_test, seed)
     coords = model.map_coords

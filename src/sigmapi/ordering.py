@@ -62,8 +62,8 @@ def smooth_basis(
 
     Per axis, the eigenvectors of the Gaussian kernel matrix ``exp(-(i - j)^2 / (2 width^2))``
     with eigenvalue at least ``KEEP`` times the largest (at most ``max_modes``), scaled by their
-    eigenvalues; axes are combined by Kronecker products. ``codes @ basis`` is the code blurred by the kernel,
-    expressed in its ``r`` leading modes.
+    eigenvalues; axes are combined by Kronecker products. ``codes @ basis`` is the code
+    blurred by the kernel, expressed in its ``r`` leading modes.
     """
     basis = np.ones((1, 1))
     for n in shape:

@@ -1,3 +1,4 @@
+# Over 400 lines: one estimator class (state, training, use, arrays and files) reads as one.
 """SigmaPiSOM: a self-organizing map of Sigma-Pi units (Weber & Wermter 2007).
 
 The estimator holds the state (weights, iteration count, random streams) and delegates the
@@ -19,14 +20,15 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from sigmapi import _validate
 from sigmapi.codes import PopulationCode, grid_coordinates
 from sigmapi.config import SOMConfig
-from sigmapi.errors import ConfigError, NotFittedError
-from sigmapi.kernels import get_backend, reference
+from sigmapi.errors import ConfigError, ModelFileError, NotFittedError
+from sigmapi.kernels import KernelState, get_backend, reference
 from sigmapi.ordering import INIT_PAIRS, crossview_init
 from sigmapi.tasks import Batch, TwoViewSampler
 
-__all__ = ["BLOCK", "SigmaPiSOM"]
+__all__ = ["BLOCK", "SigmaPiSOM", "load_model"]
 
 BLOCK = 1000
 """Iterations per block of training data (one random child stream per block)."""
@@ -81,7 +83,7 @@ class SigmaPiSOM:
         cfg = config or SOMConfig()
         self.config = cfg.replace(**overrides) if overrides else cfg
         self.t_ = 0
-        self._state: Any = None
+        self._state: KernelState | None = None
         self._kernel = get_backend(self.config.backend)
         seed = self.config.seed
         self.seed_entropy_: int = int(np.random.SeedSequence(seed).entropy)  # type: ignore[arg-type]
@@ -107,7 +109,7 @@ class SigmaPiSOM:
 
     @property
     def backend(self) -> str:
-        """Name of the kernel in use (``reference``, ``fast`` or ``gpu``)."""
+        """Name of the kernel in use (one of :data:`sigmapi.kernels.BACKENDS`)."""
         return str(self._kernel.NAME)
 
     def _code(self, shape: tuple[int, ...]) -> PopulationCode:
@@ -267,9 +269,7 @@ class SigmaPiSOM:
                     f"the configured run of {self.config.iterations} iterations is complete "
                     f"(t_ = {self.t_}); pass n_iter to train further"
                 )
-        if isinstance(n_iter, bool) or not isinstance(n_iter, (int, np.integer)) or n_iter < 0:
-            raise ConfigError(f"n_iter must be an int >= 0, got {n_iter!r}")
-        end = self.t_ + int(n_iter)
+        end = self.t_ + _validate.integer("n_iter", n_iter, 0)
         while self.t_ < end:
             b, off = divmod(self.t_, BLOCK)
             stop = min(BLOCK, off + end - self.t_)
@@ -288,7 +288,7 @@ class SigmaPiSOM:
         c = self.config
         self._kernel.train_block(
             self._state, x0, y0, x1, y1, self.sigma_at(t), self.eps_at(t),
-            self.map_shape, c.winner_rule, c.soft_cut,
+            map_shape=self.map_shape, winner_rule=c.winner_rule, soft_cut=c.soft_cut,
         )  # fmt: skip
         self.t_ += x0.shape[0]
         self._weights_cache = None
@@ -329,7 +329,12 @@ class SigmaPiSOM:
 
     # ------------------------------------------------------------------ using the map
     def respond(self, x: ArrayLike, y: ArrayLike) -> NDArray[np.float64]:
-        """Activations ``h[b, k] = x_b^T W_k y_b`` of every unit; ``(B, n_units)``."""
+        """Activations ``h[b, k] = x_b^T W_k y_b`` of every unit; ``(B, n_units)``.
+
+        ``x`` ``(B, n_x)`` and ``y`` ``(B, n_y)`` are codes (``x_code.encode``), flattened in
+        C order. A single pair is computed densely from ``weights_`` (cheap and exact); a batch
+        by the model's kernel.
+        """
         self._check_fitted()
         xa = self._check_codes(x, "x", self.x_shape)
         ya = self._check_codes(y, "y", self.y_shape)
@@ -337,6 +342,11 @@ class SigmaPiSOM:
             raise ValueError(
                 f"x and y must have the same number of rows, got {xa.shape[0]} and {ya.shape[0]}"
             )
+        if xa.shape[0] == 1:
+            # one sample (a step of an agent): a compiled kernel pays its dispatch and thread
+            # start-up on every call (~1-8 ms); the dense arithmetic on the cached float64
+            # weights takes ~30 us and is exact for any backend
+            return reference.activation(self.weights_, xa, ya)
         return np.asarray(self._kernel.activation(self._state, xa, ya), dtype=np.float64)
 
     def winner(
@@ -390,19 +400,99 @@ class SigmaPiSOM:
         a = reference.neighbourhood(k, self.map_shape, s)
         return float(np.mean(np.sum(a * dist, axis=1)))
 
-    # ------------------------------------------------------------------ files
+    def clone(self) -> SigmaPiSOM:
+        """An unfitted model with this one's config and random streams.
+
+        ``clone().fit(model.t_)`` replays the run that made ``model`` (the training data of
+        every iteration is a pure function of the seed entropy and the iteration number).
+        """
+        twin = SigmaPiSOM(self.config)
+        twin.seed_entropy_ = self.seed_entropy_
+        return twin
+
+    # ------------------------------------------------------------------ state as arrays, files
+    def to_arrays(self) -> tuple[dict[str, Any], dict[str, NDArray[Any]]]:
+        """The model as a JSON-able header and arrays (what a model file holds).
+
+        The header holds the resolved ``config``, the iteration count ``t``, the
+        ``seed_entropy`` of the random streams (a decimal string) and the ``backend``; the
+        arrays are the float64 ``weights`` ``(n_units, n_x, n_y)`` and ``state_<name>``,
+        the kernel's own state (e.g. the fast kernel's float32 weights and scale factors),
+        so that the model continues bit for bit on the same backend.
+        """
+        self._check_fitted()
+        state = self._kernel.state_arrays(self._state)
+        header = {
+            "config": self.config.to_dict(),
+            "t": int(self.t_),
+            "seed_entropy": str(self.seed_entropy_),
+            "backend": self.backend,
+        }
+        return header, {"weights": self.weights_, **{f"state_{k}": v for k, v in state.items()}}
+
+    @classmethod
+    def from_arrays(
+        cls,
+        header: dict[str, Any],
+        arrays: dict[str, NDArray[Any]],
+        backend: str | None = None,
+        source: str = "arrays",
+    ) -> SigmaPiSOM:
+        """Rebuild a model from :meth:`to_arrays`'s header and arrays.
+
+        ``backend`` runs the model on another kernel (which starts from ``weights``; the
+        kernel state is used only by the backend that wrote it). Raises
+        :class:`~sigmapi.errors.ModelFileError`, its message starting with ``source``, if
+        the header and arrays do not make a model.
+        """
+        name = source
+        try:
+            cfg = SOMConfig.from_dict(header["config"])
+            if backend is not None:
+                cfg = cfg.replace(backend=backend)
+        except (ConfigError, TypeError, KeyError) as exc:
+            raise ModelFileError(f"{name!r}: stored config is invalid ({exc})") from None
+        w = np.asarray(arrays["weights"])
+        n = (int(np.prod(cfg.map_shape)), int(np.prod(cfg.x_shape)), int(np.prod(cfg.y_shape)))
+        if tuple(w.shape) != n:
+            raise ModelFileError(
+                f"{name!r}: weights have shape {tuple(w.shape)}, the config needs {n}"
+            )
+        t = _validate.integer(
+            f"{name!r}: iteration count", header.get("t"), 0, error=ModelFileError
+        )
+        try:
+            entropy = int(header["seed_entropy"])
+        except (KeyError, TypeError, ValueError):
+            raise ModelFileError(f"{name!r}: seed_entropy must be an integer string") from None
+        if entropy < 0:
+            raise ModelFileError(f"{name!r}: seed_entropy must be >= 0, got {entropy}")
+        model = cls(cfg)
+        model.seed_entropy_ = entropy
+        state = {k[len("state_") :]: v for k, v in arrays.items() if k.startswith("state_")}
+        if state and header.get("backend") == model.backend:
+            try:
+                model._state = model._kernel.from_state_arrays(w, state, tol=cfg.kernel_tol)
+            except (ValueError, KeyError) as exc:
+                raise ModelFileError(f"{name!r}: backend state is invalid ({exc})") from None
+        else:
+            model._set_weights(np.asarray(w, dtype=np.float64))
+        model.t_ = t
+        return model
+
     def save(self, path: str | Path) -> Path:
         """Write the model atomically to ``path`` (``.npz``, no pickle); returns the path."""
-        from sigmapi.io import save_model
+        from sigmapi.io import write_model
 
-        return save_model(self, path)
+        return write_model(path, *self.to_arrays())
 
     @classmethod
     def load(cls, path: str | Path, backend: str | None = None) -> SigmaPiSOM:
-        """Read a model written by :meth:`save`."""
-        from sigmapi.io import load_model
+        """Read a model written by :meth:`save` (optionally onto another ``backend``)."""
+        from sigmapi.io import read_model
 
-        return load_model(path, backend=backend)
+        header, arrays = read_model(path)
+        return cls.from_arrays(header, arrays, backend=backend, source=str(path))
 
     def __repr__(self) -> str:
         fitted = f"t_={self.t_}" if self.is_fitted else "not fitted"
@@ -410,3 +500,8 @@ class SigmaPiSOM:
             f"SigmaPiSOM(map_shape={self.map_shape}, x_shape={self.x_shape}, "
             f"y_shape={self.y_shape}, backend={self.backend!r}, {fitted})"
         )
+
+
+def load_model(path: str | Path, backend: str | None = None) -> SigmaPiSOM:
+    """Read a model file (``sigmapi.load``); see :meth:`SigmaPiSOM.load`."""
+    return SigmaPiSOM.load(path, backend=backend)

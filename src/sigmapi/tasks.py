@@ -1,6 +1,6 @@
 """Relations z = f(x, y) and the two-view sampler that feeds the Sigma-Pi SOM.
 
-Per iteration and per dimension (ALGORITHM.md): draw z uniformly over the relation's z range;
+Per iteration and per dimension (docs/algorithm.md): draw z uniformly over the relation's z range;
 draw one view by choosing x or y uniformly with probability 1/2 each and solving the relation
 for the other; reject and redraw the view until both lie in [0, 1]. Draw a second view of the
 same z the same way. The authors' relation is the mean ``z = (x + y) / 2``, which keeps z on
@@ -16,6 +16,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
+from sigmapi import _validate
 from sigmapi.codes import PopulationCode
 from sigmapi.errors import ConfigError
 
@@ -91,8 +92,8 @@ def get_relation(relation: str | Relation) -> Relation:
     try:
         return RELATIONS[relation]
     except (KeyError, TypeError):
-        raise ConfigError(
-            f"relation must be one of {sorted(RELATIONS)} or a sigmapi.Relation, got {relation!r}"
+        raise _validate.fail(
+            "relation", f"one of {sorted(RELATIONS)} or a sigmapi.Relation", relation
         ) from None
 
 
@@ -120,22 +121,23 @@ _MAX_ROUNDS = 1_000_000
 class TwoViewSampler:
     """Draws batches of two views (x0, y0), (x1, y1) of the same z.
 
-    Parameters
-    ----------
-    relation : str or Relation
-        ``"mean"`` (the paper), ``"sum"``, ``"difference"`` or a custom :class:`Relation`.
-    x_code, y_code : PopulationCode
-        Codes of the retinal position x and the gaze direction y; same number of dimensions.
+        Parameters
+        ----------
+        relation : str or Relation
+            ``"mean"`` (the paper), ``"sum"``, ``"difference"`` or a custom :class:`Relation`.
+        x_code, y_code : PopulationCode
+            Codes of the retinal position x and the gaze direction y; same number of dimensions.
 
-    Examples
-    --------
-    >>> from sigmapi.codes import PopulationCode
-    >>> s = TwoViewSampler("mean", PopulationCode((15,)), PopulationCode((15,)))
-    >>> b = s.sample(4, np.random.default_rng(0))
-    >>> b.x0.shape, b.z.shape
-    ((4, 15), (4, 1))
-    >>> bool(np.allclose((b.px0 + b.py0) / 2, b.z) and np.allclose((b.px1 + b.py1) / 2, b.z))
-    True
+        Examples
+        --------
+        >>> from sigmapi import _validate
+    from sigmapi.codes import PopulationCode
+        >>> s = TwoViewSampler("mean", PopulationCode((15,)), PopulationCode((15,)))
+        >>> b = s.sample(4, np.random.default_rng(0))
+        >>> b.x0.shape, b.z.shape
+        ((4, 15), (4, 1))
+        >>> bool(np.allclose((b.px0 + b.py0) / 2, b.z) and np.allclose((b.px1 + b.py1) / 2, b.z))
+        True
     """
 
     def __init__(self, relation: str | Relation, x_code: PopulationCode, y_code: PopulationCode):

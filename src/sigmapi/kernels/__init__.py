@@ -1,35 +1,41 @@
-"""Arithmetic backends of the Sigma-Pi SOM, one module per backend with the same functions.
+"""The arithmetic of the Sigma-Pi SOM behind one contract, and the registry of backends.
 
-``reference`` (dense NumPy, the definition), ``fast`` (numba, sparse codes and lazy decay) and
-``gpu`` (torch, optional). :func:`get_backend` resolves a name; ``"auto"`` picks the fastest
-one that imports.
+- :mod:`~sigmapi.kernels.base`: the contract, :class:`Kernel` (the functions every backend
+  module offers, with shapes), :class:`KernelState` and :data:`WINNER_RULES`;
+- :mod:`~sigmapi.kernels.reference`: dense NumPy, written to be read (the definition);
+- :mod:`~sigmapi.kernels.fast`: numba, sparse codes and lazy decay.
+
+:data:`BACKENDS` names them; :func:`get_backend` returns one (``"auto"``: the fast one).
 """
 
 from __future__ import annotations
 
-import importlib
-from types import ModuleType
+from typing import Any
 
+from sigmapi import _validate
 from sigmapi.errors import ConfigError
+from sigmapi.kernels import reference
+from sigmapi.kernels.base import WINNER_RULES, Kernel, KernelState
 
-__all__ = ["BACKENDS", "get_backend"]
+__all__ = ["BACKENDS", "WINNER_RULES", "Kernel", "KernelState", "get_backend"]
 
-BACKENDS = ("reference", "fast", "gpu")
+BACKENDS = ("reference", "fast")
+"""The kernels that exist (``"auto"`` picks ``"fast"``)."""
 
 
-def get_backend(name: str) -> ModuleType:
-    """Return the kernel module called ``name`` (``"auto"``: fast if available, else reference)."""
-    if name == "auto":
+def get_backend(name: str) -> Kernel[Any]:
+    """The kernel module called ``name``, one of ``"auto"`` (the fast one) and :data:`BACKENDS`."""
+    _validate.choice("backend", name, ("auto", *BACKENDS))
+    kernel: Kernel[Any] = reference
+    if name != "reference":
         try:
-            return importlib.import_module("sigmapi.kernels.fast")
-        except ImportError:
-            return importlib.import_module("sigmapi.kernels.reference")
-    if name not in BACKENDS:
-        raise ConfigError(f"backend must be one of {('auto', *BACKENDS)}, got {name!r}")
-    try:
-        return importlib.import_module(f"sigmapi.kernels.{name}")
-    except ImportError as exc:
-        raise ConfigError(
-            f"backend {name!r} is not available here ({exc}); install its extra "
-            f"(pip install 'sigmapi[{name}]') or use backend='reference'"
-        ) from None
+            from sigmapi.kernels import fast
+        except ImportError:  # numba missing or broken on this machine: "auto" falls back
+            if name == "fast":
+                raise ConfigError(
+                    "backend 'fast' needs numba, which does not import here; "
+                    "install numba or use backend='reference'"
+                ) from None
+        else:
+            kernel = fast
+    return kernel

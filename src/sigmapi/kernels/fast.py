@@ -1,3 +1,4 @@
+# Over 400 lines: one kernel (its compiled helpers, two training drivers, public functions).
 """Fast CPU kernel: numba, sparse codes, lazy decay, parallel over map units.
 
 Computes the same learning iteration as :mod:`sigmapi.kernels.reference` (the definition),
@@ -19,11 +20,8 @@ using the structure of the problem:
   number of threads, so results do not depend on it (no reductions across units).
 
 ``tol = 0`` is the exact mode: no truncation and float64 storage, matching the reference to
-float64 rounding (used by the tests). Measured on the 2-D equivalence problem of
-``tests/test_fast_kernel.py`` (5x5 codes of width 1, 4x5 map, 2,000 iterations), share of the
-reference's winners kept and largest weight error: ``tol = 1e-6`` (the ``SOMConfig``
-default) 100 %, 1.8e-7; ``1e-5`` 100 %, 4.6e-7; ``1e-4`` (the ``paper-2d`` preset) 100 %,
-5.1e-6; ``1e-3`` 99.9 %, 1.2e-4; ``1e-2`` 97.3 %, 6.3e-3.
+float64 rounding (used by the tests). What larger ``tol`` costs in winners and weights is
+measured in ``benchmarks/README.md`` (kernel tolerance table).
 
 State (:class:`FastState`): ``raw`` ``(n_x * n_y, K)`` (float32, or float64 when exact),
 ``scale`` ``(K,)`` and ``sqnorm`` ``(K,)`` = ``sum_p raw[p, k]**2`` (tracked incrementally for
@@ -47,7 +45,9 @@ import numpy as np
 from numba import njit, prange
 from numpy.typing import NDArray
 
+from sigmapi import _validate
 from sigmapi.kernels import reference
+from sigmapi.kernels.base import WINNER_RULES
 
 __all__ = [
     "NAME",
@@ -81,7 +81,8 @@ shared 2-core machine a descheduled worker thread stalls every step (measured: 6
 :func:`activation` (one synchronisation per call) always uses all threads.
 """
 
-_RULES = {"soft": 0, "argmax": 1, "min_distance": 2}
+_RULES = {rule: code for code, rule in enumerate(WINNER_RULES)}
+"""Rule codes of the compiled :func:`_winner`: 0 soft, 1 argmax, 2 min_distance."""
 
 
 @dataclass
@@ -127,9 +128,7 @@ def _storage_dtype(tol: float) -> type[np.floating]:
 
 
 def _check_tol(tol: float) -> float:
-    if isinstance(tol, bool) or not isinstance(tol, (int, float)) or not 0 <= tol < 1:
-        raise ValueError(f"tol must be a number in [0, 1) (0 = exact), got {tol!r}")
-    return float(tol)
+    return _validate.number("tol", tol, 0.0, 1.0, hi_open=True, fix="0 is the exact mode")
 
 
 def prepare(weights: NDArray[np.float64], tol: float = 1e-6) -> FastState:
@@ -505,7 +504,7 @@ def _rule_code(rule: str) -> int:
     try:
         return _RULES[rule]
     except KeyError:
-        raise ValueError(f"rule must be one of {tuple(_RULES)}, got {rule!r}") from None
+        raise ValueError(f"rule must be one of {WINNER_RULES}, got {rule!r}") from None
 
 
 def _codes(a: NDArray[np.floating], n: int, name: str) -> NDArray[np.float64]:
@@ -565,19 +564,24 @@ def train_block(
     y1: NDArray[np.floating],
     sigmas: NDArray[np.floating],
     eps: NDArray[np.floating],
+    *,
     map_shape: tuple[int, ...],
-    rule: str,
-    cut: int,
+    winner_rule: str,
+    soft_cut: int,
+    parallel: bool | None = None,
 ) -> NDArray[np.int64]:
     """Run ``len(x0)`` learning iterations in order, updating ``state`` in place.
 
     Iteration ``t`` finds the winner of view ``(x0[t], y0[t])`` at width ``sigmas[t]`` and
     learns view ``(x1[t], y1[t])`` with rate ``eps[t]`` (as
     :func:`sigmapi.kernels.reference.train_block`). Returns the winners ``(T,)``.
+
+    ``parallel``: use the threaded driver (same results); default: when
+    :data:`PARALLEL_TRAIN` is set, the map is large enough and numba has several threads.
     """
     k_units, nx, ny = state.shape
     dims, strides = _grid(tuple(map_shape), k_units)
-    code = _rule_code(rule)
+    code = _rule_code(winner_rule)
     xs = [
         _codes(a, n, nm)
         for a, n, nm in ((x0, nx, "x0"), (y0, ny, "y0"), (x1, nx, "x1"), (y1, ny, "y1"))
@@ -593,10 +597,13 @@ def train_block(
         state.refresh_norms()
     elif n_iter > 0:
         state.norms_valid = False
-    parallel = (
-        PARALLEL_TRAIN and k_units * nx * ny >= PARALLEL_MIN_WORK and numba.get_num_threads() > 1
-    )
+    if parallel is None:
+        parallel = (
+            PARALLEL_TRAIN
+            and k_units * nx * ny >= PARALLEL_MIN_WORK
+            and numba.get_num_threads() > 1
+        )
     fn: Any = _train_parallel if parallel else _train_serial
-    fn(state.raw, state.scale, state.sqnorm, *xs, sg, ep, dims, strides, code, int(cut),
+    fn(state.raw, state.scale, state.sqnorm, *xs, sg, ep, dims, strides, code, int(soft_cut),
        state.tol, out, track)  # fmt: skip
     return out

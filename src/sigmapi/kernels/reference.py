@@ -4,7 +4,7 @@ Shapes: ``W`` is ``(K, n_x, n_y)`` (one Sigma-Pi weight per map unit and input p
 ``x`` ``(B, n_x)`` and ``y`` ``(B, n_y)``, activations ``h`` ``(B, K)``; ``K`` map units on a
 grid ``map_shape`` flattened in C order.
 
-One learning iteration (Fig. 7 of the chapter; ALGORITHM.md):
+One learning iteration (Fig. 7 of the chapter; docs/algorithm.md):
 
 1. ``h_k = x0^T W_k y0``                                    (:func:`activation`)
 2. winner ``k*``: argmax of h smoothed over the map with a Gaussian of width sigma
@@ -12,10 +12,9 @@ One learning iteration (Fig. 7 of the chapter; ALGORITHM.md):
 3. ``a_k = exp(-|k - k*|^2 / (2 sigma^2))``, L2-normalised      (:func:`neighbourhood`)
 4. ``w_kij += eps a_k (x1_i y1_j - w_kij)`` with the OTHER view   (:func:`kohonen_update`)
 
-Every backend module (``reference``, ``fast``, ``gpu``) offers the same functions:
-``activation``, ``winners``, ``neighbourhood``, ``kohonen_update``, ``train_block``,
-``prepare``, ``export``, ``state_arrays`` and ``from_state_arrays``; the SOM only ever
-calls them through that interface.
+This module satisfies the kernel contract (:class:`sigmapi.kernels.base.Kernel`): its state
+is the dense weight array ``W`` itself. It also offers the steps of the iteration one by one
+(``smooth``, ``neighbourhood``, ``kohonen_update``), which the tests check by hand.
 """
 
 from __future__ import annotations
@@ -26,21 +25,23 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sigmapi.codes import grid_coordinates
+from sigmapi.kernels.base import WINNER_RULES
 
 __all__ = [
-    "WINNER_RULES",
+    "NAME",
     "activation",
     "export",
+    "from_state_arrays",
     "kohonen_update",
     "neighbourhood",
     "prepare",
     "smooth",
+    "state_arrays",
     "train_block",
     "winners",
 ]
 
 Array = NDArray[np.floating]
-WINNER_RULES = ("soft", "argmax", "min_distance")
 NAME = "reference"
 
 # Activations of at most this many (sample x weight) products are formed at once.
@@ -60,13 +61,13 @@ def export(state: NDArray[np.float64]) -> NDArray[np.float64]:
     return np.asarray(state, dtype=np.float64)
 
 
-def state_arrays(state: NDArray[np.float64]) -> dict[str, NDArray[np.float64]]:
+def state_arrays(state: NDArray[np.float64]) -> dict[str, NDArray[np.floating]]:
     """Arrays beyond the dense weights that restore the state exactly: none here."""
     return {}
 
 
 def from_state_arrays(
-    weights: NDArray[np.float64], arrays: dict[str, NDArray[np.float64]], tol: float = 0.0
+    weights: NDArray[np.float64], arrays: dict[str, NDArray[np.floating]], tol: float = 0.0
 ) -> NDArray[np.float64]:
     """Inverse of :func:`state_arrays`: the state from saved weights (and extra arrays)."""
     return prepare(weights, tol)
@@ -166,20 +167,22 @@ def train_block(
     y1: Array,
     sigmas: Array,
     eps: Array,
+    *,
     map_shape: tuple[int, ...],
-    rule: str,
-    cut: int,
+    winner_rule: str,
+    soft_cut: int,
 ) -> NDArray[np.int64]:
     """Run ``len(x0)`` learning iterations in order, updating ``W`` in place.
 
-    Iteration ``t`` finds the winner of view ``(x0[t], y0[t])`` at width ``sigmas[t]`` and
-    learns view ``(x1[t], y1[t])`` with rate ``eps[t]``. Returns the winners ``(T,)``.
+    Iteration ``t`` finds the winner of view ``(x0[t], y0[t])`` at width ``sigmas[t]`` (rule
+    ``winner_rule``, smoothing window ``soft_cut``) and learns view ``(x1[t], y1[t])`` with
+    rate ``eps[t]``. Returns the winners ``(T,)``.
     """
     t_total = x0.shape[0]
     out = np.empty(t_total, dtype=np.int64)
     for t in range(t_total):
         h = activation(W, x0[t : t + 1], y0[t : t + 1])
-        k = winners(W, h, map_shape, rule, float(sigmas[t]), cut)
+        k = winners(W, h, map_shape, winner_rule, float(sigmas[t]), soft_cut)
         a = neighbourhood(k, map_shape, float(sigmas[t]))[0]
         kohonen_update(W, a, x1[t], y1[t], float(eps[t]))
         out[t] = k[0]

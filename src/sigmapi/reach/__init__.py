@@ -1,10 +1,10 @@
 """From map to action: the gaze-and-reach task, map observations and an actor-critic learner.
 
-Importing this package registers the Gymnasium environment ``sigmapi/GazeReach-v0``
+``import sigmapi`` registers the Gymnasium environment ``sigmapi/GazeReach-v0``
 (:class:`GazeReachEnv`; keyword arguments of ``gymnasium.make`` go to its constructor).
 
     >>> import gymnasium as gym
-    >>> import sigmapi.reach
+    >>> import sigmapi
     >>> env = gym.make("sigmapi/GazeReach-v0", dim=1, grid=9)
     >>> obs, info = env.reset(seed=0)
     >>> sorted(obs)
@@ -13,11 +13,10 @@ Importing this package registers the Gymnasium environment ``sigmapi/GazeReach-v
 
 from __future__ import annotations
 
-import gymnasium as gym
-
 from sigmapi.reach.agent import ActorCritic
+from sigmapi.reach.config import ReachConfig
 from sigmapi.reach.env import GazeReachEnv, move_table
-from sigmapi.reach.runner import ReachConfig, ReachResult, learn_map_in_env, run_reach
+from sigmapi.reach.experiment import ReachResult, learn_map_in_env, run_reach, run_with_progress
 from sigmapi.reach.views import collect_saccade_views
 from sigmapi.reach.wrappers import (
     CodeObservation,
@@ -40,9 +39,8 @@ __all__ = [
     "make_state_env",
     "move_table",
     "run_reach",
+    "run_with_progress",
 ]
 
 ENV_ID = "sigmapi/GazeReach-v0"
-
-if ENV_ID not in gym.registry:
-    gym.register(id=ENV_ID, entry_point="sigmapi.reach.env:GazeReachEnv")
+"""The environment's Gymnasium id (registered by ``import sigmapi``)."""

@@ -8,7 +8,7 @@ The critic estimates ``V(s) = v . phi(s)``; the actor holds one preference vecto
 
 both learn: ``v += critic_lr delta phi(s)`` and ``W_a += actor_lr delta phi(s)`` for the action
 taken (the actor-critic of Barto, Sutton & Anderson 1983 as used in the authors' docking
-model: discount 0.9, rates 0.1, inverse temperature 2; ALGORITHM.md).
+model: discount 0.9, rates 0.1, inverse temperature 2; docs/algorithm.md).
 
 References
 ----------
@@ -19,21 +19,12 @@ Learning: An Introduction (1998), section 6.6.
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from sigmapi.errors import ConfigError
+from sigmapi import _validate
 
 __all__ = ["ActorCritic"]
-
-
-def _rate(name: str, value: Any, hi: float, hint: str) -> float:
-    ok = isinstance(value, (int, float)) and not isinstance(value, bool) and np.isfinite(value)
-    if not ok or not 0.0 <= float(value) <= hi:
-        raise ConfigError(f"{name} must be a number in [0, {hi}], got {value!r}; {hint}")
-    return float(value)
 
 
 class ActorCritic:
@@ -74,15 +65,14 @@ class ActorCritic:
         beta: float = 2.0,
         seed: int | np.random.Generator | None = None,
     ) -> None:
-        for name, v in (("n_features", n_features), ("n_actions", n_actions)):
-            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
-                raise ConfigError(f"{name} must be an int >= 1, got {v!r}")
-        self.n_features = int(n_features)
-        self.n_actions = int(n_actions)
-        self.gamma = _rate("gamma", gamma, 1.0, "the authors use 0.9")
-        self.critic_lr = _rate("critic_lr", critic_lr, 10.0, "the authors use 0.1")
-        self.actor_lr = _rate("actor_lr", actor_lr, 10.0, "the authors use 0.1")
-        self.beta = _rate("beta", beta, 1e6, "the authors use 2")
+        self.n_features = _validate.integer("n_features", n_features, 1)
+        self.n_actions = _validate.integer("n_actions", n_actions, 1)
+        self.gamma = _validate.number("gamma", gamma, 0.0, 1.0, fix="the authors use 0.9")
+        self.critic_lr = _validate.number(
+            "critic_lr", critic_lr, 0.0, 10.0, fix="the authors use 0.1"
+        )
+        self.actor_lr = _validate.number("actor_lr", actor_lr, 0.0, 10.0, fix="the authors use 0.1")
+        self.beta = _validate.number("beta", beta, 0.0, 1e6, fix="the authors use 2")
         self.rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
         self.v_ = np.zeros(self.n_features)
         self.w_ = np.zeros((self.n_actions, self.n_features))

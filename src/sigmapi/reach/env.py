@@ -1,6 +1,6 @@
 """GazeReach: a body with a movable eye that must bring an object into its grasp region.
 
-The world (ALGORITHM.md): an object lies at body-centred position ``z`` in ``[0, 1]^d``; the
+The world (docs/algorithm.md): an object lies at body-centred position ``z`` in ``[0, 1]^d``; the
 eye looks in direction ``y`` in ``[0, 1]^d``; the retina sees the object at ``x = 2 z - y``
 (the relation ``z = (x + y) / 2`` of the paper's simulator). The agent sees only population
 codes of ``x`` (retina) and ``y`` (gaze); ``z`` is in ``info`` for analysis, never in the
@@ -30,7 +30,6 @@ actions, each diagonal moving ``step_size`` along both axes).
 from __future__ import annotations
 
 import itertools
-import math
 from typing import Any, SupportsFloat
 
 import gymnasium as gym
@@ -38,6 +37,7 @@ import numpy as np
 from gymnasium import spaces
 from numpy.typing import NDArray
 
+from sigmapi import _validate
 from sigmapi.codes import PopulationCode
 from sigmapi.errors import ConfigError
 
@@ -58,26 +58,6 @@ def move_table(dim: int, diagonal: bool = False) -> NDArray[np.float64]:
     if diagonal:
         rows += [np.array(s, dtype=np.float64) for s in itertools.product((1.0, -1.0), repeat=dim)]
     return np.array(rows, dtype=np.float64)
-
-
-def _check_number(
-    name: str, value: Any, lo: float, hi: float, hint: str, lo_open: bool = True
-) -> float:
-    ok = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
-    ok = ok and math.isfinite(float(value))
-    if ok:
-        v = float(value)
-        ok = (v > lo if lo_open else v >= lo) and v <= hi
-    if not ok:
-        left = "(" if lo_open else "["
-        raise ConfigError(f"{name} must be a number in {left}{lo}, {hi}], got {value!r}; {hint}")
-    return float(value)
-
-
-def _check_int(name: str, value: Any, lo: int, hint: str) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < lo:
-        raise ConfigError(f"{name} must be an int >= {lo}, got {value!r}; {hint}")
-    return int(value)
 
 
 def _unit_vector(value: Any, dim: int) -> NDArray[np.float64] | None:
@@ -155,12 +135,14 @@ class GazeReachEnv(gym.Env[Obs, np.int64]):
         reward_fail: float = -0.3,
         diagonal: bool = False,
     ) -> None:
-        if dim not in (1, 2) or isinstance(dim, bool):
-            raise ConfigError(f"dim must be 1 or 2, got {dim!r}; the task has 1-D and 2-D variants")
+        if not _validate.is_int(dim) or dim not in (1, 2):
+            raise _validate.fail("dim", "1 or 2", dim, "the task has 1-D and 2-D variants")
         self.dim = int(dim)
-        self.grid = _check_int("grid", grid, 2, "use e.g. grid=9 (the paper: 15)")
-        self.code_width = _check_number("code_width", code_width, 0.0, 1e6, "the paper uses 0.5")
-        self.step_size = _check_number("step_size", step_size, 0.0, 0.5, "use e.g. 0.05")
+        self.grid = _validate.integer("grid", grid, 2, fix="use e.g. grid=9 (the paper: 15)")
+        self.code_width = _validate.positive("code_width", code_width, fix="the paper uses 0.5")
+        self.step_size = _validate.number(
+            "step_size", step_size, 0.0, 0.5, lo_open=True, fix="use e.g. 0.05"
+        )
         g = _unit_vector(goal, self.dim)
         if g is None:
             raise ConfigError(
@@ -168,22 +150,21 @@ class GazeReachEnv(gym.Env[Obs, np.int64]):
                 "the default 0.5 is straight ahead"
             )
         self.goal = g
-        self.goal_radius = _check_number("goal_radius", goal_radius, 0.0, 0.5, "use e.g. 0.1")
-        self.saccade_rate = _check_number(
-            "saccade_rate", saccade_rate, 0.0, 1.0, "a probability per step", lo_open=False
+        self.goal_radius = _validate.number(
+            "goal_radius", goal_radius, 0.0, 0.5, lo_open=True, fix="use e.g. 0.1"
         )
-        self.max_steps = _check_int("max_steps", max_steps, 1, "use e.g. 100")
-        self.reward_reach = _check_number("reward_reach", reward_reach, -1e9, 1e9, "e.g. 1.0")
-        self.reward_fail = _check_number("reward_fail", reward_fail, -1e9, 1e9, "e.g. -0.3")
-        if not isinstance(diagonal, bool) or (diagonal and self.dim != 2):
-            raise ConfigError(
-                f"diagonal must be True or False, and True only for dim=2; got {diagonal!r}"
-            )
-        self.diagonal = diagonal
+        self.saccade_rate = _validate.number(
+            "saccade_rate", saccade_rate, 0.0, 1.0, fix="a probability per step"
+        )
+        self.max_steps = _validate.integer("max_steps", max_steps, 1, fix="use e.g. 100")
+        self.reward_reach = _validate.number("reward_reach", reward_reach, fix="e.g. 1.0")
+        self.reward_fail = _validate.number("reward_fail", reward_fail, fix="e.g. -0.3")
+        self.diagonal = _validate.boolean("diagonal", diagonal)
+        if diagonal and self.dim != 2:
+            raise _validate.fail("diagonal", "False for dim=1", diagonal, "diagonal moves are 2-D")
         self.moves = move_table(self.dim, diagonal) * self.step_size
 
         self.code = PopulationCode((self.grid,) * self.dim, width=self.code_width)
-        self._axis = np.arange(self.grid, dtype=np.float64)[None, :]
         n = self.code.size
         self.observation_space = spaces.Dict(
             {
@@ -216,11 +197,8 @@ class GazeReachEnv(gym.Env[Obs, np.int64]):
         self._y = lo + (hi - lo) * self.np_random.random(self.dim)
 
     def encode(self, p: NDArray[np.float64]) -> NDArray[np.float32]:
-        """Code of one position ``p`` ``(dim,)`` in [0, 1]: ``self.code.encode`` computed as
-        a product of per-axis hills (the same Gaussian, separable), for speed per step."""
-        g = np.exp(-((self._axis - p[:, None] * (self.grid - 1)) ** 2) / (2.0 * self.code_width**2))
-        c = g[0] if self.dim == 1 else np.outer(g[0], g[1]).ravel()
-        return (c / np.linalg.norm(c)).astype(np.float32)
+        """Code of one position ``p`` ``(dim,)`` in [0, 1]: ``self.code.encode``, as float32."""
+        return self.code.encode(p[None, :])[0].astype(np.float32)
 
     def _obs(self) -> Obs:
         x = np.clip(2.0 * self._z - self._y, 0.0, 1.0)

@@ -13,7 +13,7 @@ from typing import Any
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from sigmapi.reach.runner import ReachResult
+from sigmapi.reach.experiment import ReachResult
 
 __all__ = ["LABELS", "plot_reach_curves", "plot_value_function", "reach_figure"]
 

@@ -2,7 +2,7 @@
 
 While the body keeps still, ``z`` does not change, and every saccade shows the same object at
 a new retinal position under a new gaze: two views ``(x0, y0)`` and ``(x1, y1)`` of one ``z``,
-exactly what the Sigma-Pi SOM learns from (ALGORITHM.md), gathered without a teacher and
+exactly what the Sigma-Pi SOM learns from (docs/algorithm.md), gathered without a teacher and
 without reading ``z``.
 """
 
@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from sigmapi import _validate
 from sigmapi.errors import ConfigError
 from sigmapi.reach.env import GazeReachEnv
 
@@ -44,8 +45,7 @@ def collect_saccade_views(
     x0, y0, x1, y1 : ndarray, shape (n_pairs, grid**dim)
         Codes of the two views, ready for ``SigmaPiSOM.partial_fit(views=...)``.
     """
-    if isinstance(n_pairs, bool) or not isinstance(n_pairs, (int, np.integer)) or n_pairs < 1:
-        raise ConfigError(f"n_pairs must be an int >= 1, got {n_pairs!r}; e.g. n_pairs=20000")
+    n_pairs = _validate.integer("n_pairs", n_pairs, 1, fix="e.g. n_pairs=20000")
     if not isinstance(env, GazeReachEnv):
         raise ConfigError(
             f"env must be a GazeReachEnv (use env.unwrapped), got {type(env).__name__}"

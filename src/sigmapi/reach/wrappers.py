@@ -22,10 +22,11 @@ import numpy as np
 from gymnasium import spaces
 from numpy.typing import NDArray
 
+from sigmapi import _validate
 from sigmapi.codes import PopulationCode, grid_coordinates
 from sigmapi.errors import ConfigError
-from sigmapi.kernels import reference
 from sigmapi.reach.env import GazeReachEnv, Obs
+from sigmapi.som import SigmaPiSOM
 
 __all__ = [
     "FEATURES",
@@ -38,7 +39,7 @@ __all__ = [
 ]
 
 STATES = ("map", "retina", "retina_gaze", "true_z")
-"""State representations compared by the runner."""
+"""State representations compared by the experiment."""
 FEATURES = ("response", "bump")
 """How the map's reading becomes features (see :class:`MapObservation`)."""
 
@@ -69,19 +70,6 @@ def bump_features(
     return b / np.linalg.norm(b, axis=1, keepdims=True)
 
 
-def _check_width(width: Any) -> float:
-    if (
-        isinstance(width, bool)
-        or not isinstance(width, (int, float))
-        or not np.isfinite(width)
-        or width <= 0
-    ):
-        raise ConfigError(
-            f"width must be a finite number > 0 (map grid units), got {width!r}; e.g. 1.0"
-        )
-    return float(width)
-
-
 class MapObservation(gym.ObservationWrapper[Features, Any, Obs]):
     """The observation becomes the Sigma-Pi map's reading of the retina and gaze codes.
 
@@ -102,12 +90,16 @@ class MapObservation(gym.ObservationWrapper[Features, Any, Obs]):
     width : float
         Width of the bump in map grid units.
 
-    The result is L2-normalised: ``Box(0, 1, (n_units,), float32)``. The wrapper reads the
-    model's weights once, when it is made: train the model first.
+    The result is L2-normalised: ``Box(0, 1, (n_units,), float32)``. Each step asks the model
+    (``model.respond``, or ``model.winner`` for bumps), so it reads the model as it is then.
     """
 
     def __init__(
-        self, env: gym.Env[Obs, Any], model: Any, features: str = "response", width: float = 1.0
+        self,
+        env: gym.Env[Obs, Any],
+        model: SigmaPiSOM,
+        features: str = "response",
+        width: float = 1.0,
     ):
         super().__init__(env)
         base = _base(env)
@@ -127,27 +119,17 @@ class MapObservation(gym.ObservationWrapper[Features, Any, Obs]):
             )
         self.model = model
         self.features = features
-        self.width = _check_width(width)
+        self.width = _validate.positive("width", width, fix="in map grid units, e.g. 1.0")
         self._coords = grid_coordinates(tuple(model.map_shape))
-        self._weights = np.asarray(model.weights_, dtype=np.float64)
-        self._map_shape = tuple(model.map_shape)
-        self._rule = str(model.config.winner_rule)
-        self._cut = int(model.config.soft_cut)
         self.observation_space = spaces.Box(0.0, 1.0, (model.n_units,), dtype=np.float32)
 
     def observation(self, observation: Obs) -> Features:
         x = np.asarray(observation["retina"], dtype=np.float64)[None, :]
         y = np.asarray(observation["gaze"], dtype=np.float64)[None, :]
-        # One sample per step: the reference arithmetic on the dense weights is exact for a
-        # model of any backend and the cheapest at batch size 1 (a compiled kernel pays its
-        # dispatch for every call).
-        h = reference.activation(self._weights, x, y)
         if self.features == "bump":
-            k = reference.winners(
-                self._weights, h, self._map_shape, self._rule, self.model.sigma_, self._cut
-            )
+            k = self.model.winner(x, y)
             return bump_features(self._coords[k], self._coords, self.width)[0].astype(np.float32)
-        return _unit(np.maximum(h[0], 0.0))
+        return _unit(np.maximum(self.model.respond(x, y)[0], 0.0))
 
 
 class CodeObservation(gym.ObservationWrapper[Features, Any, Obs]):
@@ -206,7 +188,7 @@ class TrueZObservation(gym.Wrapper[Features, Any, Any, Any]):
             raise ConfigError(
                 f"shape must have {base.dim} axes for a {base.dim}-D task, got {shape!r}"
             )
-        self.width = _check_width(width)
+        self.width = _validate.positive("width", width, fix="in grid units, e.g. 1.0")
         self.observation_space = spaces.Box(0.0, 1.0, (self.code.size,), dtype=np.float32)
 
     def encode(self, z: NDArray[np.float64]) -> Features:
@@ -228,7 +210,7 @@ class TrueZObservation(gym.Wrapper[Features, Any, Any, Any]):
 def make_state_env(
     env: gym.Env[Obs, Any],
     state: str,
-    model: Any = None,
+    model: SigmaPiSOM | None = None,
     features: str = "response",
     width: float = 1.0,
 ) -> gym.Env[Features, Any]:

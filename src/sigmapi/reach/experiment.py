@@ -1,4 +1,4 @@
-"""Experiment runner: one actor-critic, several state representations, many seeds.
+"""The reach experiment: one actor-critic, several state representations, many seeds.
 
 Per seed, everything random comes from one :class:`numpy.random.SeedSequence`: child 0 seeds
 the map's data (saccade views) and weights, child 1 the episodes' start states (identical for
@@ -8,166 +8,69 @@ choices (the same stream for every representation).
 
 from __future__ import annotations
 
-import dataclasses
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import gymnasium as gym
 import numpy as np
 from numpy.typing import NDArray
 
 from sigmapi.config import SOMConfig
-from sigmapi.errors import ConfigError
+from sigmapi.metrics import evaluate
+from sigmapi.progress import counter
 from sigmapi.reach.agent import ActorCritic
+from sigmapi.reach.config import ReachConfig
 from sigmapi.reach.env import GazeReachEnv
 from sigmapi.reach.views import collect_saccade_views
-from sigmapi.reach.wrappers import FEATURES, STATES, TrueZObservation, make_state_env
+from sigmapi.reach.wrappers import Features, TrueZObservation, make_state_env
+from sigmapi.som import SigmaPiSOM, load_model
 
-__all__ = ["ReachConfig", "ReachResult", "learn_map_in_env", "run_reach", "value_over_z"]
+__all__ = [
+    "ReachResult",
+    "learn_map_in_env",
+    "run_episodes",
+    "run_reach",
+    "run_with_progress",
+    "value_over_z",
+]
 
 Progress = Callable[[int, str], None]
 
 
-@dataclass(frozen=True)
-class ReachConfig:
-    """Everything one reach comparison depends on. Defaults: the 2-D task, saccade every step."""
-
-    dim: int = 2
-    """1 or 2: dimensions of the task."""
-    grid: int = 7
-    """Units per axis of the retina and gaze codes (7x7 in 2-D; the paper's maps read 15x15)."""
-    code_width: float = 0.5
-    """Width of the input hills in grid units (the paper: 0.5)."""
-    step_size: float = 0.05
-    """How far one move shifts z along an axis."""
-    goal_radius: float = 0.1
-    """Half-width of the goal box around z = 0.5 (straight ahead, within grasp range)."""
-    saccade_rate: float = 1.0
-    """Probability of a saccade per step (1: on every step, the hardest case)."""
-    max_steps: int = 50
-    """Time limit per episode (truncation): 3x the longest shortest path (16 moves in 2-D)."""
-    map_shape: tuple[int, ...] = (7, 7)
-    """Grid of the Sigma-Pi map learned in the environment."""
-    map_pairs: int = 10_000
-    """Saccade view pairs the map learns from (one SOM iteration each)."""
-    backend: str = "reference"
-    """Kernel that learns the map ("auto": the fast one when it is installed)."""
-    model_path: str | None = None
-    """A trained model file to use for every seed instead of learning a map per seed."""
-    features: str = "response"
-    """Map features: "response" (activations clipped at 0, L2-normalised; measured best) or
-    "bump" (Gaussian around the winner on the map grid). 2-D, 5 seeds, 600 episodes: final
-    success 0.971 with "response", 0.949 with "bump" (true z: 0.977)."""
-    feature_width: float = 1.0
-    """Width of the bump features (map and true-z codes), in grid units."""
-    episodes: int = 600
-    """Episodes of reinforcement learning per seed and state."""
-    seeds: int = 5
-    """Number of independent seeds (maps, start states, action choices)."""
-    seed: int = 0
-    """Root seed; seed i of the run uses SeedSequence(seed).spawn child i."""
-    block: int = 50
-    """Episodes per point of the learning curves."""
-    final_episodes: int = 200
-    """The final success rate is measured over this many last episodes."""
-    gamma: float = 0.9
-    critic_lr: float = 0.1
-    actor_lr: float = 0.1
-    beta: float = 2.0
-    states: tuple[str, ...] = STATES
-    """State representations to compare."""
-
-    def __post_init__(self) -> None:
-        for name in ("episodes", "seeds", "block", "final_episodes", "map_pairs"):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, int) or v < 1:
-                raise ConfigError(f"{name} must be an int >= 1, got {v!r}")
-        if self.final_episodes > self.episodes:
-            raise ConfigError(
-                f"final_episodes must be <= episodes ({self.episodes}), got {self.final_episodes}"
-            )
-        if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
-            raise ConfigError(f"seed must be an int >= 0, got {self.seed!r}")
-        states = tuple(self.states)
-        bad = [s for s in states if s not in STATES]
-        if not states or bad or len(set(states)) != len(states):
-            raise ConfigError(f"states must be distinct names from {STATES}, got {states!r}")
-        object.__setattr__(self, "states", states)
-        if self.features not in FEATURES:
-            raise ConfigError(f"features must be one of {FEATURES}, got {self.features!r}")
-        object.__setattr__(self, "map_shape", tuple(int(n) for n in self.map_shape))
-        self.make_env()  # validates the task's parameters
-        ActorCritic(1, 1, self.gamma, self.critic_lr, self.actor_lr, self.beta)
-
-    def env_kwargs(self) -> dict[str, Any]:
-        """Keyword arguments of :class:`GazeReachEnv` (also of ``gymnasium.make``)."""
-        return {
-            "dim": self.dim, "grid": self.grid, "code_width": self.code_width,
-            "step_size": self.step_size, "goal_radius": self.goal_radius,
-            "saccade_rate": self.saccade_rate, "max_steps": self.max_steps,
-        }  # fmt: skip
-
-    def make_env(self) -> GazeReachEnv:
-        return GazeReachEnv(**self.env_kwargs())
-
-    def som_config(self, seed: int) -> SOMConfig:
-        """The map's config for ``map_pairs`` saccade views.
-
-        The neighbourhood shrinks from the map's size to 30 % of it over the first 30 % of the
-        run, then to 0.7 units at 80 %: a longer ordering phase and a wider final
-        neighbourhood than the paper's 300,000-iteration 1-D schedule, because a 2-D map
-        trained on only ~10^4 views twists under the paper's schedule shape (measured: order
-        R^2 0.1 vs 0.5 on a 7x7 map, 10,000 views).
-        """
-        m = float(max(self.map_shape))
-        inputs = (self.grid,) * self.dim
-        return SOMConfig(
-            map_shape=self.map_shape, x_shape=inputs, y_shape=inputs, code_width=self.code_width,
-            iterations=self.map_pairs, backend=self.backend, seed=seed,
-            sigma=((0.0, m), (0.3, max(m / 3.5, 1.0)), (0.8, 0.7)),
-        )  # fmt: skip
-
-    def replace(self, **changes: Any) -> ReachConfig:
-        names = {f.name for f in dataclasses.fields(self)}
-        bad = sorted(set(changes) - names)
-        if bad:
-            raise ConfigError(
-                f"unknown ReachConfig field {bad[0]!r}; valid: {', '.join(sorted(names))}"
-            )
-        return dataclasses.replace(self, **changes)
-
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            k: (list(v) if isinstance(v, tuple) else v) for k, v in dataclasses.asdict(self).items()
-        }
-
-
 def learn_map_in_env(
-    env: GazeReachEnv, config: SOMConfig, seed: int | None = None, callback: Any = None
-) -> Any:
+    env: GazeReachEnv,
+    config: SOMConfig,
+    seed: int | None = None,
+    callback: Callable[[SigmaPiSOM], None] | None = None,
+) -> SigmaPiSOM:
     """Train a :class:`~sigmapi.SigmaPiSOM` on saccade views gathered in ``env``.
 
     ``config.iterations`` view pairs are collected with
     :func:`~sigmapi.reach.collect_saccade_views` (no teacher, no access to z) and learned
     with ``partial_fit(views=...)``: the winner from one view, the update from the other.
     """
-    from sigmapi.som import SigmaPiSOM
-
     views = collect_saccade_views(env, config.iterations, seed=seed)
     return SigmaPiSOM(config).partial_fit(views=views, callback=callback)
 
 
 def value_over_z(
-    agent: ActorCritic, state_env: Any, n: int = 21, n_views: int = 8, seed: int = 0
+    agent: ActorCritic,
+    state_env: gym.Env[Features, Any],
+    n: int = 21,
+    n_views: int = 8,
+    seed: int = 0,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """The critic's value on a grid of z, averaged over ``n_views`` random gazes per z.
 
     Returns ``(z_axis, V)``: ``z_axis`` ``(n,)`` and ``V`` of shape ``(n,)`` (1-D) or
     ``(n, n)`` (2-D, indexed ``[z0, z1]``).
     """
-    base: GazeReachEnv = state_env.unwrapped
+    base: GazeReachEnv = state_env.unwrapped  # type: ignore[assignment]
+    if not isinstance(state_env, (TrueZObservation, gym.ObservationWrapper)):
+        raise TypeError(f"state_env must be made by make_state_env, got {type(state_env).__name__}")
     rng = np.random.default_rng(seed)
     axis = np.linspace(0.0, 1.0, n)
     zs = np.stack(np.meshgrid(*([axis] * base.dim), indexing="ij"), axis=-1).reshape(-1, base.dim)
@@ -205,7 +108,7 @@ class ReachResult:
     lost: dict[str, NDArray[np.bool_]] = field(default_factory=dict)
     values: dict[str, NDArray[np.float64]] = field(default_factory=dict)
     z_axis: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
-    map_metrics: list[dict[str, Any]] = field(default_factory=list)
+    map_metrics: list[dict[str, float | int]] = field(default_factory=list)
     seconds: float = 0.0
 
     def final_success(self) -> dict[str, float]:
@@ -279,16 +182,14 @@ class ReachResult:
 
 def _map_for_seed(
     config: ReachConfig, ss: np.random.SeedSequence, progress: Progress | None = None
-) -> Any:
+) -> SigmaPiSOM:
     if config.model_path is not None:
-        from sigmapi.io import load_model
-
         return load_model(Path(config.model_path))
     seq = np.random.SeedSequence(ss.entropy, spawn_key=(*ss.spawn_key, 0))
     r = np.random.default_rng(seq)
     env_seed, som_seed = (int(v) for v in r.integers(0, 2**31 - 1, size=2))
 
-    def callback(model: Any) -> None:
+    def callback(model: SigmaPiSOM) -> None:
         if progress is not None:
             progress(0, f"map {model.t_}/{config.map_pairs}")
 
@@ -300,11 +201,13 @@ def _map_for_seed(
 def run_episodes(
     config: ReachConfig,
     state: str,
-    model: Any,
+    model: SigmaPiSOM | None,
     starts: NDArray[np.int64],
     agent_seed: np.random.SeedSequence,
     progress: Progress | None = None,
-) -> tuple[NDArray[np.bool_], NDArray[np.bool_], NDArray[np.int64], ActorCritic, Any]:
+) -> tuple[
+    NDArray[np.bool_], NDArray[np.bool_], NDArray[np.int64], ActorCritic, gym.Env[Features, Any]
+]:
     """Train one learner on ``state`` over the episodes that start from seeds ``starts``."""
     env = make_state_env(config.make_env(), state, model, config.features, config.feature_width)
     n_features = int(np.prod(env.observation_space.shape or (1,)))
@@ -384,11 +287,13 @@ def run_reach(
     return res
 
 
-def _map_quality(model: Any) -> dict[str, Any]:
-    """The project's map metrics (ALGORITHM.md) on a small test set, for the record."""
-    from sigmapi.metrics import evaluate
+def run_with_progress(cfg: ReachConfig, disable: bool | None = None) -> ReachResult:
+    """:func:`run_reach` with a progress bar on stderr (episodes, and the current phase)."""
+    progress, bar = counter(cfg.seeds * len(cfg.states) * cfg.episodes, "reach", "ep", disable)
+    with bar:
+        return run_reach(cfg, progress=progress)
 
-    try:
-        return dict(evaluate(model, n_test=2000).to_dict())
-    except Exception as exc:  # metrics are a record, not the experiment: never fail the run
-        return {"error": f"{type(exc).__name__}: {exc}"}
+
+def _map_quality(model: SigmaPiSOM) -> dict[str, float | int]:
+    """The project's map metrics (docs/algorithm.md) on a small test set, for the record."""
+    return evaluate(model, n_test=2000).to_dict()

@@ -1,6 +1,6 @@
 """The reach experiment as a section of the reproduction report (``sigmapi reproduce``).
 
-The report (:mod:`sigmapi.report`) imports this module and calls :func:`report_section`: it
+The report (:mod:`sigmapi.experiments.reproduce`) calls :func:`reach_section`: it
 runs the comparison of :func:`sigmapi.reach.run_reach` (the 2-D task, a saccade on every step,
 the same actor-critic on four state representations), draws the figure and returns the
 section. ``--quick`` runs 1 seed of 150 episodes; the full run is the defaults of
@@ -12,14 +12,15 @@ from __future__ import annotations
 import html
 from typing import TYPE_CHECKING
 
-from sigmapi.reach.cli import run_with_progress
+from sigmapi.experiments.results import Section
+from sigmapi.reach.config import ReachConfig
+from sigmapi.reach.experiment import run_with_progress
 from sigmapi.reach.plots import reach_figure
-from sigmapi.reach.runner import ReachConfig
 
 if TYPE_CHECKING:
-    from sigmapi.report import ReportContext, Section
+    from sigmapi.experiments.results import ReportContext
 
-__all__ = ["report_section"]
+__all__ = ["reach_section"]
 
 FIGURE = "reach-2d.png"
 CAPTION = (
@@ -38,10 +39,8 @@ EXPLANATION = {
 }
 
 
-def report_section(ctx: ReportContext) -> Section:
+def reach_section(ctx: ReportContext) -> Section:
     """Run the reach comparison (smaller with ``ctx.quick``) and return its report section."""
-    from sigmapi.report import Section
-
     cfg = ReachConfig(episodes=150, seeds=1, final_episodes=50) if ctx.quick else ReachConfig()
     result = run_with_progress(cfg, disable=not ctx.progress or None)
     fig = reach_figure(result)

@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import json
-import sys
-import types
 from pathlib import Path
 
 import matplotlib
@@ -13,34 +11,49 @@ matplotlib.use("Agg")
 
 import pytest
 
-from sigmapi import SigmaPiSOM, SOMConfig, report
+from sigmapi import SigmaPiSOM, SOMConfig
 from sigmapi.cli import main
+from sigmapi.experiments import (
+    ReportContext,
+    ReproduceOptions,
+    Section,
+    paper_presets,
+    reproduce,
+)
+from sigmapi.experiments.report_html import linked_files
+from sigmapi.experiments.reproduce import QUICK_ITERATIONS
+from sigmapi.experiments.results import METRIC_KEYS
+from sigmapi.figures import FIGURES
 
 TINY_1D = SOMConfig(map_shape=(5,), x_shape=(5,), y_shape=(5,), iterations=2000)
 TINY_2D = SOMConfig(map_shape=(3, 3), x_shape=(3, 3), y_shape=(3, 3), code_width=1.0,
                     iterations=1000)  # fmt: skip
 
 
+def _options(seeds=(0,), n_test=100, save_models="none") -> ReproduceOptions:
+    return ReproduceOptions(seeds=seeds, progress=False, n_test=n_test, save_models=save_models)
+
+
 @pytest.fixture(scope="module")
 def run(tmp_path_factory) -> tuple[Path, dict]:
     out = tmp_path_factory.mktemp("report")
-    results = report.reproduce(
-        out, seeds=[0, 1], progress=False, n_test=300, save_models="all",
+    result = reproduce(
+        out, _options(seeds=(0, 1), n_test=300, save_models="all"),
         presets=[("tiny-1d", TINY_1D), ("tiny-2d", TINY_2D)], sections=(),
     )  # fmt: skip
-    return out, results
+    return out, result.to_dict()
 
 
 def test_report_has_every_figure_and_links_only_existing_files(run):
     out, _ = run
     text = (out / "report.html").read_text()
-    links = report.linked_files(text)
+    links = linked_files(text)
     assert links, "the report links no files"
     for f in links:
         assert (out / f).is_file(), f"report links missing file {f}"
         assert not Path(f).is_absolute() and ".." not in Path(f).parts
     for preset in ("tiny-1d", "tiny-2d"):
-        for name in report.FIGURES:
+        for name in FIGURES:
             assert f"{name}-{preset}.png" in links
     assert "metrics.json" in links
 
@@ -51,7 +64,7 @@ def test_metrics_json_holds_runs_curves_and_figure_facts(run):
     assert data == json.loads(json.dumps(results))
     res = data["presets"]["tiny-1d"]
     assert [r["seed"] for r in res["runs"]] == [0, 1]
-    assert set(report.METRIC_KEYS) <= set(res["mean"]) and set(report.METRIC_KEYS) <= set(res["sd"])
+    assert set(METRIC_KEYS) <= set(res["mean"]) and set(METRIC_KEYS) <= set(res["sd"])
     assert res["runs"][0]["curve"]["t"][-1] == TINY_1D.iterations
     assert "polarity" in res["figures"]["fig8"]
     assert (out / "tiny-2d-seed1.npz").is_file()
@@ -59,40 +72,30 @@ def test_metrics_json_holds_runs_curves_and_figure_facts(run):
 
 def test_metrics_table_sits_beside_reference_figures(tmp_path):
     out = tmp_path / "r"
-    report.reproduce(out, seeds=[0], progress=False, n_test=200, save_models="none",
-                     presets=[("paper-1d", TINY_1D)], sections=())  # fmt: skip
+    reproduce(out, _options(n_test=200), presets=[("paper-1d", TINY_1D)], sections=())
     text = (out / "report.html").read_text()
-    assert "0.870" in text and "0.988" in text and "0.320" in text  # ALGORITHM.md
+    assert "0.870" in text and "0.988" in text and "0.320" in text  # docs/algorithm.md
     assert "floor 0.27" in text
     assert not list(out.glob("*.npz"))
 
 
-def test_extra_sections_are_added_and_checked(tmp_path, monkeypatch):
-    module = types.ModuleType("fake_section")
-
-    def report_section(ctx: report.ReportContext) -> report.Section:
+def test_sections_are_added_and_checked(tmp_path):
+    def reaching(ctx: ReportContext) -> Section:
         assert ctx.models["tiny-1d"][0].t_ == TINY_1D.iterations
         (ctx.out / "extra.png").write_bytes(b"\x89PNG\r\n\x1a\n")
-        return report.Section("Reaching", "<p>extra</p>", [("extra.png", "a caption")], {"n": 1})
+        return Section("Reaching", "<p>extra</p>", [("extra.png", "a caption")], {"n": 1})
 
-    module.report_section = report_section  # type: ignore[attr-defined]
-    monkeypatch.setitem(sys.modules, "fake_section", module)
-    monkeypatch.setattr(report, "SECTION_MODULES", ("fake_section", "no_such_module_here"))
-    monkeypatch.setattr(report, "FIGURES", ("weights",))
     out = tmp_path / "r"
-    results = report.reproduce(out, seeds=[0], progress=False, n_test=100, save_models="none",
-                               presets=[("tiny-1d", TINY_1D)])  # fmt: skip
-    assert results["sections"] == {"Reaching": {"n": 1}}
+    result = reproduce(out, _options(), presets=[("tiny-1d", TINY_1D)], sections=[reaching])
+    assert result.sections == {"Reaching": {"n": 1}}
     text = (out / "report.html").read_text()
-    assert "<h2>Reaching</h2>" in text and "extra.png" in report.linked_files(text)
+    assert "<h2>Reaching</h2>" in text and "extra.png" in linked_files(text)
 
-    def broken(ctx: report.ReportContext) -> report.Section:
-        return report.Section("Broken", figures=[("missing.png", "never written")])
+    def broken(ctx: ReportContext) -> Section:
+        return Section("Broken", figures=[("missing.png", "never written")])
 
-    module.report_section = broken  # type: ignore[attr-defined]
     with pytest.raises(RuntimeError, match=r"missing\.png"):
-        report.reproduce(tmp_path / "r2", seeds=[0], progress=False, n_test=100,
-                         save_models="none", presets=[("tiny-1d", TINY_1D)])  # fmt: skip
+        reproduce(tmp_path / "r2", _options(), presets=[("tiny-1d", TINY_1D)], sections=[broken])
 
 
 def test_linked_files_ignores_urls_and_anchors():
@@ -100,21 +103,16 @@ def test_linked_files_ignores_urls_and_anchors():
         "<img src='a.png'><a href=\"b c.json\">x</a><a href='https://x.org/y.png'>"
         "<a href='#top'><img src='a.png'><a href='mailto:me@x.org'>"
     )
-    assert report.linked_files(text) == ["a.png", "b c.json"]
+    assert linked_files(text) == ["a.png", "b c.json"]
 
 
-def test_quick_run_uses_one_seed_and_short_presets(monkeypatch, tmp_path):
-    seen = {}
-
-    def fake(out, seeds, quick, progress, save_models):
-        seen.update(seeds=seeds, quick=quick, models=save_models)
-        return {"presets": {}, "total_seconds": 0.0}
-
-    monkeypatch.setattr(report, "reproduce", fake)
-    assert main(["reproduce", "--quick", "--quiet", "--out", str(tmp_path / "q")]) == 0
-    assert seen == {"seeds": [0], "quick": True, "models": "shown"}
-    for name, cfg in report._presets(quick=True):
-        assert cfg.iterations <= report.QUICK_ITERATIONS.get(name, cfg.iterations)
+def test_quick_presets_are_short_and_quick_options_small():
+    for name, cfg in paper_presets(quick=True):
+        assert cfg.iterations <= QUICK_ITERATIONS.get(name, cfg.iterations)
+    quick, full = ReproduceOptions(quick=True), ReproduceOptions()
+    assert quick.test_size < full.test_size and quick.curve_test < full.curve_test
+    with pytest.raises(ValueError, match="save_models must be one of"):
+        ReproduceOptions(save_models="some")
 
 
 def test_figure_command_writes_one_figure(tmp_path, capsys):

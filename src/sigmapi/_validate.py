@@ -1,0 +1,143 @@
+"""Argument checks shared by every module, so that every message has one form.
+
+``"<name> must be <constraint>, got <value>; <fix>"``: the parameter, the constraint, the
+value received and (where one helps) the fix, e.g. ``"iterations must be an int >= 1, got 0;
+the paper runs 300000"``. Each check returns the value in its canonical type (``int``,
+``float``, ``bool``, ``tuple``) and raises :class:`~sigmapi.errors.ConfigError` (a
+``ValueError``), or the error class given as ``error``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+from typing import Any, TypeVar
+
+import numpy as np
+
+from sigmapi.errors import ConfigError
+
+__all__ = ["boolean", "choice", "fail", "integer", "is_int", "number", "positive", "shape"]
+
+T = TypeVar("T")
+
+
+def fail(
+    name: str, constraint: str, value: Any, fix: str = "", error: type[Exception] = ConfigError
+) -> Exception:
+    """The error ``"<name> must be <constraint>, got <value>; <fix>"`` (to ``raise``)."""
+    tail = f"; {fix}" if fix else ""
+    return error(f"{name} must be {constraint}, got {value!r}{tail}")
+
+
+def is_int(value: Any) -> bool:
+    """Whether ``value`` is an int (Python or NumPy), not a bool."""
+    return isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
+
+
+def _is_real(value: Any) -> bool:
+    return (
+        isinstance(value, (int, float, np.integer, np.floating))
+        and not isinstance(value, (bool, np.bool_))
+        and math.isfinite(float(value))
+    )
+
+
+def _range(
+    kind: str, lo: float | None, hi: float | None, lo_open: bool = False, hi_open: bool = False
+) -> str:
+    """``"an int >= 1"``, ``"a number in (0, 1]"``, ``"a finite number > 0"``, ..."""
+    if lo is not None and hi is not None:
+        left, right = "(" if lo_open else "[", ")" if hi_open else "]"
+        return f"{kind} in {left}{lo}, {hi}{right}"
+    if kind == "a number":
+        kind = "a finite number"
+    if lo is not None:
+        return f"{kind} {'>' if lo_open else '>='} {lo}"
+    if hi is not None:
+        return f"{kind} {'<' if hi_open else '<='} {hi}"
+    return kind
+
+
+def integer(
+    name: str,
+    value: Any,
+    lo: int | None = None,
+    hi: int | None = None,
+    *,
+    fix: str = "",
+    error: type[Exception] = ConfigError,
+) -> int:
+    """``value`` as an int in ``[lo, hi]`` (either bound may be None); bools are refused."""
+    ok = is_int(value) and (lo is None or value >= lo) and (hi is None or value <= hi)
+    if not ok:
+        raise fail(name, _range("an int", lo, hi), value, fix, error)
+    return int(value)
+
+
+def number(
+    name: str,
+    value: Any,
+    lo: float | None = None,
+    hi: float | None = None,
+    *,
+    lo_open: bool = False,
+    hi_open: bool = False,
+    fix: str = "",
+    error: type[Exception] = ConfigError,
+) -> float:
+    """``value`` as a finite float in the interval from ``lo`` to ``hi`` (open ends optional)."""
+    ok = _is_real(value)
+    if ok:
+        v = float(value)
+        ok = (lo is None or (v > lo if lo_open else v >= lo)) and (
+            hi is None or (v < hi if hi_open else v <= hi)
+        )
+    if not ok:
+        raise fail(name, _range("a number", lo, hi, lo_open, hi_open), value, fix, error)
+    return float(value)
+
+
+def positive(
+    name: str, value: Any, *, fix: str = "", error: type[Exception] = ConfigError
+) -> float:
+    """``value`` as a finite float > 0."""
+    return number(name, value, 0.0, lo_open=True, fix=fix, error=error)
+
+
+def boolean(name: str, value: Any, *, fix: str = "", error: type[Exception] = ConfigError) -> bool:
+    """``value`` if it is a bool (no truthiness: ``"yes"`` and ``1`` are refused)."""
+    if not isinstance(value, bool):
+        raise fail(name, "true or false", value, fix, error)
+    return value
+
+
+def choice(
+    name: str,
+    value: T,
+    options: Iterable[T],
+    *,
+    fix: str = "",
+    error: type[Exception] = ConfigError,
+) -> T:
+    """``value`` if it is one of ``options``."""
+    opts = tuple(options)
+    if value not in opts:
+        raise fail(name, f"one of {opts}", value, fix, error)
+    return value
+
+
+def shape(
+    name: str, value: Any, fix: str = "", error: type[Exception] = ConfigError
+) -> tuple[int, ...]:
+    """``value`` (an int or a sequence of ints) as a non-empty tuple of positive ints."""
+    fix = fix or f"use e.g. {name}=(15,) for 1-D or {name}=(15, 15) for 2-D"
+    constraint = "a positive int or a non-empty tuple of positive ints"
+    items = (value,) if is_int(value) else value
+    try:
+        out = tuple(items)
+    except TypeError:
+        raise fail(name, constraint, value, fix, error) from None
+    if not out or not all(is_int(s) and s >= 1 for s in out):
+        raise fail(name, constraint, value, fix, error)
+    return tuple(int(s) for s in out)

@@ -1,0 +1,55 @@
+"""The ``sigmapi`` command line: a thin front that maps flags onto the API's config objects.
+
+Sub-commands: ``train``, ``evaluate``, ``presets`` (:mod:`sigmapi.cli.train`), ``reproduce``,
+``figure`` (:mod:`sigmapi.cli.reproduce`) and ``reach`` (:mod:`sigmapi.cli.reach`); each
+module's ``register(subparsers)`` adds its parsers and sets ``func`` to a handler
+``handler(args) -> int``.
+
+A user mistake (unknown preset, bad value, missing file) prints one line to stderr and exits
+with status 2; no traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+
+from sigmapi.cli import reach, reproduce, train
+from sigmapi.cli._common import Parser, check_output, resolve_config
+from sigmapi.errors import SigmapiError
+
+__all__ = ["build_parser", "check_output", "main", "resolve_config"]
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The ``sigmapi`` parser with every sub-command."""
+    from sigmapi._version import __version__
+
+    parser = Parser(
+        prog="sigmapi", description="Sigma-Pi self-organizing maps (Weber & Wermter 2007)"
+    )
+    parser.add_argument("--version", action="version", version=f"sigmapi {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser)
+    for module in (train, reproduce, reach):
+        module.register(sub)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``sigmapi`` command."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.func(args))
+    except SigmapiError as exc:
+        print(f"sigmapi {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:  # unwritable folder, disk full, ...: the user's environment
+        where = f" {exc.filename!r}" if exc.filename else ""
+        print(f"sigmapi {args.command}: error: cannot access{where}: {exc.strerror or exc}",
+              file=sys.stderr)  # fmt: skip
+        return 2
+    except KeyboardInterrupt:
+        print(f"sigmapi {args.command}: interrupted", file=sys.stderr)
+        return 130

@@ -1,0 +1,7 @@
+"""``python -m sigmapi.cli``: the ``sigmapi`` command."""
+
+import sys
+
+from sigmapi.cli import main
+
+sys.exit(main())

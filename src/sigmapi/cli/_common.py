@@ -1,0 +1,159 @@
+"""What the sub-commands share: the one-line-error parser, config flags, output checks."""
+
+from __future__ import annotations
+
+import argparse
+import ast
+import dataclasses
+import inspect
+import itertools
+import textwrap
+import typing
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any, NoReturn
+
+from sigmapi.config import SOMConfig, apply_overrides, load_config_file, load_preset
+from sigmapi.errors import UsageError
+from sigmapi.kernels import BACKENDS
+
+__all__ = [
+    "Parser",
+    "add_config_flags",
+    "add_dataclass_flags",
+    "check_output",
+    "dataclass_values",
+    "field_docs",
+    "resolve_config",
+]
+
+
+class Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> NoReturn:  # one line, exit 2, as argparse does, no usage dump
+        self.exit(2, f"{self.prog}: error: {message}\n")
+
+
+def add_config_flags(p: argparse.ArgumentParser) -> None:
+    """``--preset``, ``--config``, ``--set``, ``--seed`` and ``--backend``."""
+    p.add_argument("--preset", default="paper-1d", help="preset name (see `sigmapi presets`)")
+    p.add_argument("--config", help="TOML file whose keys override the preset")
+    p.add_argument(
+        "--set",
+        action="append",
+        metavar="KEY=VALUE",
+        help="override one config key, e.g. --set iterations=50000 (repeatable)",
+    )
+    p.add_argument("--seed", type=int, help="seed of all random streams (default: the config's)")
+    p.add_argument("--backend", choices=["auto", *BACKENDS],
+                   help="kernel backend (default: the config's, 'auto')")  # fmt: skip
+
+
+def resolve_config(args: argparse.Namespace) -> SOMConfig:
+    """The config of ``--preset`` / ``--config`` / ``--set`` / ``--seed`` / ``--backend``."""
+    cfg = load_preset(args.preset) if args.preset else SOMConfig()
+    if getattr(args, "config", None):
+        cfg = load_config_file(args.config, base=cfg)
+    cfg = apply_overrides(cfg, list(getattr(args, "set", None) or []))
+    if getattr(args, "seed", None) is not None:
+        cfg = cfg.replace(seed=args.seed)
+    if getattr(args, "backend", None):
+        cfg = cfg.replace(backend=args.backend)
+    return cfg
+
+
+def check_output(path: str | Path, force: bool, what: str = "output file") -> Path:
+    """Refuse to overwrite an existing ``path`` without ``--force``; the folder must exist."""
+    p = Path(path)
+    if p.exists() and not force:
+        raise UsageError(f"{what} {str(p)!r} exists; pass --force to overwrite it")
+    if p.exists() and p.is_dir():
+        raise UsageError(f"{what} {str(p)!r} is a folder; give a file name")
+    parent = p.parent if str(p.parent) else Path(".")
+    if not parent.is_dir():
+        raise UsageError(
+            f"folder {str(parent)!r} of {what} {str(p)!r} does not exist; create it first"
+        )
+    return p
+
+
+# ------------------------------------------------------------------ flags from a dataclass
+
+
+def field_docs(cls: type) -> dict[str, str]:
+    """The docstring under each field of dataclass ``cls`` (as written in its source)."""
+    try:
+        tree = ast.parse(textwrap.dedent(inspect.getsource(cls)))
+    except (OSError, TypeError):  # no source shipped: flags without help
+        return {}
+    body = tree.body[0].body if tree.body and isinstance(tree.body[0], ast.ClassDef) else []
+    docs = {}
+    for node, after in itertools.pairwise(body):
+        if (
+            isinstance(node, ast.AnnAssign)
+            and isinstance(node.target, ast.Name)
+            and isinstance(after, ast.Expr)
+            and isinstance(after.value, ast.Constant)
+            and isinstance(after.value.value, str)
+        ):
+            docs[node.target.id] = " ".join(after.value.value.split())
+    return docs
+
+
+def grid(text: str) -> tuple[int, ...]:
+    """A grid such as ``8x8`` or ``10`` as a tuple of positive ints."""
+    try:
+        shape = tuple(int(v) for v in text.lower().split("x"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected a grid such as 8x8 or 10, got {text!r}"
+        ) from None
+    if not shape or any(n < 1 for n in shape):
+        raise argparse.ArgumentTypeError(f"grid sizes must be positive, got {text!r}")
+    return shape
+
+
+def _names(text: str) -> tuple[str, ...]:
+    return tuple(s.strip() for s in text.split(",") if s.strip())
+
+
+def _flag_type(hint: Any) -> tuple[Callable[[str], Any], str]:
+    """The argparse ``type`` of a field's type hint, and how its default is written."""
+    origin, args = typing.get_origin(hint), typing.get_args(hint)
+    if origin is tuple and args == (int, Ellipsis):
+        return grid, "x"
+    if origin is tuple and args == (str, Ellipsis):
+        return _names, ","
+    simple = [a for a in (args or (hint,)) if a is not type(None)]
+    if len(simple) == 1 and simple[0] in (int, float, str):
+        return simple[0], ""
+    raise TypeError(f"no command-line type for a field of type {hint!r}")
+
+
+def add_dataclass_flags(
+    p: argparse.ArgumentParser, cls: type, aliases: dict[str, str] | None = None
+) -> None:
+    """One option ``--field-name`` per field of dataclass ``cls``, its help the field's docstring.
+
+    Options default to None (the field's own default applies); ``aliases`` adds a second
+    spelling for a field (e.g. ``{"model_path": "--model"}``). Values are not checked here:
+    ``cls`` checks them when it is built (:func:`dataclass_values`).
+    """
+    hints = typing.get_type_hints(cls)
+    docs = field_docs(cls)
+    for f in dataclasses.fields(cls):
+        kind, joiner = _flag_type(hints[f.name])
+        default = f.default
+        if joiner and isinstance(default, tuple):
+            default = joiner.join(map(str, default))
+        flags = [f"--{f.name.replace('_', '-')}"]
+        if aliases and f.name in aliases:
+            flags.append(aliases[f.name])
+        help_text = docs.get(f.name, f.name.replace("_", " "))
+        p.add_argument(*flags, dest=f.name, type=kind, default=None,
+                       metavar=f.name.upper(), help=f"{help_text} (default {default})")  # fmt: skip
+
+
+def dataclass_values(args: argparse.Namespace, cls: type) -> dict[str, Any]:
+    """The fields of ``cls`` given on the command line (the options left out are not listed)."""
+    given = ((f.name, getattr(args, f.name, None)) for f in dataclasses.fields(cls))
+    return {name: value for name, value in given if value is not None}

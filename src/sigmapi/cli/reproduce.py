@@ -1,0 +1,110 @@
+"""``sigmapi reproduce`` (the report, :mod:`sigmapi.experiments`) and ``sigmapi figure``.
+
+``sigmapi figure NAME MODEL --out FILE`` draws one of the figures of the report for a model
+file.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from sigmapi.cli._common import check_output
+from sigmapi.curves import LearningCurve, checkpoints
+from sigmapi.errors import UsageError
+from sigmapi.experiments import ReproduceOptions, reproduce
+from sigmapi.experiments.results import CURVE_TEST, N_CHECKPOINTS, SAVE_MODELS
+from sigmapi.figures import FIGURES, draw_figure
+from sigmapi.progress import progress_callback
+from sigmapi.som import load_model
+
+__all__ = ["cmd_figure", "cmd_reproduce", "register"]
+
+
+def cmd_reproduce(args: argparse.Namespace) -> int:
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise UsageError(f"--out {str(out)!r} is a file; give a folder for the report")
+    if out.exists() and any(out.iterdir()) and not args.force:
+        raise UsageError(f"--out folder {str(out)!r} is not empty; pass --force to write into it")
+    seeds = args.seeds if args.seeds is not None else ([0] if args.quick else [0, 1, 2])
+    if any(s < 0 for s in seeds):
+        raise UsageError(f"--seeds must be non-negative ints, got {seeds}")
+    if len(set(seeds)) != len(seeds):
+        raise UsageError(f"--seeds must be distinct, got {seeds}")
+    options = ReproduceOptions(seeds=tuple(seeds), quick=args.quick, progress=not args.quiet,
+                               save_models=args.models)  # fmt: skip
+    result = reproduce(out, options)
+    for name, res in result.presets.items():
+        print(
+            f"{name}: " + ", ".join(f"{k} {v:.3f}" for k, v in res.mean().items()), file=sys.stderr
+        )
+    print(f"wrote {out / 'report.html'} in {result.total_seconds:.0f} s", file=sys.stderr)
+    return 0
+
+
+def cmd_figure(args: argparse.Namespace) -> int:
+    out = check_output(args.out, args.force, "--out")
+    fmt = out.suffix.lower().lstrip(".")
+    allowed = ("png", "pdf", "svg")
+    if fmt not in allowed:
+        raise UsageError(f"--out must end in one of {['.' + a for a in allowed]}, got {str(out)!r}")
+    model = load_model(args.model)
+    if not model.is_fitted or model.t_ == 0:
+        raise UsageError(f"model {args.model!r} has not been trained (0 iterations)")
+    if len(model.x_shape) > 2 or len(model.map_shape) > 2:
+        raise UsageError("figures exist for 1-D and 2-D maps and inputs only")
+    if args.name == "net" and len(model.map_shape) != len(model.x_shape):
+        raise UsageError(
+            f"the net figure needs a map with as many dimensions as z; this map is "
+            f"{len(model.map_shape)}-D and z is {len(model.x_shape)}-D"
+        )
+    curves = None
+    if args.name == "curves":
+        # the training data are a pure function of the seed: re-running the model's schedule
+        # from its seed replays the same run, now with checkpoints
+        twin = model.clone()
+        callback, bar = progress_callback(model.t_, "replaying the run", disable=args.quiet or None)
+        at = checkpoints(model.t_, N_CHECKPOINTS)
+        curve = LearningCurve(at=at, n_test=CURVE_TEST, then=callback)
+        with bar:
+            twin.fit(model.t_, callback=curve)
+        if not np.allclose(twin.weights_, model.weights_, rtol=1e-6, atol=1e-9):
+            print("note: the replayed run ended with weights that differ from the file's "
+                  "(another backend?); curves show the replay", file=sys.stderr)  # fmt: skip
+        curves = [curve.to_dict()]
+    label = args.label if args.label is not None else Path(args.model).name
+    draw_figure(args.name, model, out, curves=curves, label=label, seed=args.seed)
+    print(f"wrote {out}", file=sys.stderr)
+    return 0
+
+
+def register(sub: Any) -> None:
+    """Add ``sigmapi reproduce`` and ``sigmapi figure`` to the sub-parsers ``sub``."""
+    p = sub.add_parser("reproduce", help="train the paper presets and write the report")
+    p.add_argument("--out", default="report", help="folder for the report (default: ./report)")
+    p.add_argument("--seeds", type=int, nargs="+", default=None,
+                   help="training seeds (default: 0 1 2; with --quick: 0)")  # fmt: skip
+    p.add_argument("--quick", action="store_true",
+                   help="a short run for a first look (under a minute): fewer iterations, "
+                   "one seed")  # fmt: skip
+    p.add_argument("--force", action="store_true", help="write into a non-empty --out folder")
+    p.add_argument("--models", choices=SAVE_MODELS, default="shown",
+                   help="which trained models to save: the one the figures show (default; the "
+                   "best-ordered seed), all, or none")  # fmt: skip
+    p.add_argument("--quiet", action="store_true", help="no progress bars")
+    p.set_defaults(func=cmd_reproduce)
+
+    p = sub.add_parser("figure", help="draw one figure of a trained model")
+    p.add_argument("name", choices=FIGURES, help="which figure")
+    p.add_argument("model", help="model file written by `sigmapi train` or `sigmapi reproduce`")
+    p.add_argument("--out", required=True, help="image file to write (.png, .pdf or .svg)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the figure's sampled inputs")
+    p.add_argument("--label", help="how titles name the model (default: the file name)")
+    p.add_argument("--force", action="store_true", help="overwrite --out if it exists")
+    p.add_argument("--quiet", action="store_true", help="no progress bar (curves replay the run)")
+    p.set_defaults(func=cmd_figure)

@@ -1,0 +1,112 @@
+"""``sigmapi train``, ``sigmapi evaluate`` and ``sigmapi presets``."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from typing import Any
+
+from sigmapi import _validate
+from sigmapi.checkpoints import checkpoint_dir, find_resumable, write_checkpoint
+from sigmapi.cli._common import add_config_flags, check_output, resolve_config
+from sigmapi.config import list_presets, load_preset
+from sigmapi.errors import UsageError
+from sigmapi.metrics import evaluate
+from sigmapi.progress import progress_callback
+from sigmapi.som import SigmaPiSOM, load_model
+
+__all__ = ["cmd_evaluate", "cmd_presets", "cmd_train", "register"]
+
+
+def cmd_train(args: argparse.Namespace) -> int:
+    cfg = resolve_config(args)
+    every = args.checkpoint_every
+    if every is not None:
+        _validate.integer("--checkpoint-every", every, 1, fix="in iterations", error=UsageError)
+    # --resume continues the same run, so it may replace that run's --out
+    out = check_output(args.out, args.force or args.resume)
+    folder = checkpoint_dir(out)
+    model = None
+    if args.resume:
+        found = find_resumable(folder, cfg)
+        for note in found.skipped:
+            if "another config" in note:
+                raise UsageError(
+                    f"checkpoint {note}; resume with the command line that started the run, "
+                    f"or remove {str(folder)!r}"
+                )
+            print(f"sigmapi train: skipped damaged checkpoint {note}", file=sys.stderr)
+        model = found.model
+        if model is not None:
+            print(f"resuming from {found.path} (iteration {model.t_})", file=sys.stderr)
+    if model is None:
+        model = SigmaPiSOM(cfg)
+        model.partial_fit(0)  # initial weights, iteration 0
+    callback, bar = progress_callback(
+        cfg.iterations, f"train {args.preset}", start=model.t_, disable=args.quiet or None
+    )
+    with bar:
+        while model.t_ < cfg.iterations:
+            step = cfg.iterations - model.t_
+            if every is not None:
+                step = min(step, every - model.t_ % every)
+            model.partial_fit(step, callback=callback)
+            if every is not None and model.t_ % every == 0 and model.t_ < cfg.iterations:
+                write_checkpoint(model, folder)
+    model.save(out)
+    print(f"wrote {out} ({model.t_} iterations, backend {model.backend})", file=sys.stderr)
+    return 0
+
+
+def cmd_evaluate(args: argparse.Namespace) -> int:
+    model = load_model(args.model)
+    _validate.integer("--n-test", args.n_test, 2, error=UsageError)
+    metrics = evaluate(model, n_test=args.n_test).to_dict()
+    if args.json:
+        print(json.dumps(metrics))
+    else:
+        for key, value in metrics.items():
+            print(f"{key:18s} {value:.4f}" if isinstance(value, float) else f"{key:18s} {value}")
+    return 0
+
+
+def cmd_presets(args: argparse.Namespace) -> int:
+    for name in list_presets():
+        cfg = load_preset(name)
+        print(
+            f"{name:12s} map {'x'.join(map(str, cfg.map_shape)):6s} "
+            f"x {'x'.join(map(str, cfg.x_shape)):6s} y {'x'.join(map(str, cfg.y_shape)):6s} "
+            f"{cfg.iterations:>8d} iterations  {cfg.extra.get('source', '')}"
+        )
+    return 0
+
+
+def register(sub: Any) -> None:
+    """Add ``train``, ``evaluate`` and ``presets`` to the sub-parsers ``sub``."""
+    p = sub.add_parser("train", help="train a map and write a model file")
+    add_config_flags(p)
+    p.add_argument("--out", required=True, help="model file to write (.npz)")
+    p.add_argument("--force", action="store_true", help="overwrite --out if it exists")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument(
+        "--checkpoint-every",
+        type=int,
+        metavar="N",
+        help="write a checkpoint to OUT.ckpt/ every N iterations (atomic; the 3 newest are kept)",
+    )
+    p.add_argument(
+        "--resume",
+        action="store_true",
+        help="continue from the newest good checkpoint of this --out (same command line)",
+    )
+    p.set_defaults(func=cmd_train)
+
+    p = sub.add_parser("evaluate", help="metrics of a model file")
+    p.add_argument("model", help="model file written by `sigmapi train`")
+    p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+    p.add_argument("--n-test", type=int, default=10_000, help="test set size (default 10000)")
+    p.set_defaults(func=cmd_evaluate)
+
+    p = sub.add_parser("presets", help="list the shipped presets")
+    p.set_defaults(func=cmd_presets)

@@ -1,0 +1,202 @@
+"""What the reproduction run takes and gives: its options, its typed results, report sections.
+
+:class:`ReproduceOptions` holds the run settings; :class:`ReproduceResult` (one
+:class:`PresetResult` per preset, one :class:`SeedRun` per seed) is what ``metrics.json``
+holds, through ``to_dict()``. A :class:`Section` is a part of the report that an experiment
+adds (e.g. the reach experiment); it receives a :class:`ReportContext`.
+"""
+
+from __future__ import annotations
+
+import statistics
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from sigmapi.config import SOMConfig
+    from sigmapi.metrics import Metrics
+    from sigmapi.som import SigmaPiSOM
+
+__all__ = [
+    "METRIC_KEYS",
+    "SAVE_MODELS",
+    "PresetResult",
+    "ReportContext",
+    "ReproduceOptions",
+    "ReproduceResult",
+    "Section",
+    "SeedRun",
+]
+
+METRIC_KEYS = ("view_consistency", "view_within_one", "z_error", "order_r2", "usage")
+"""The metrics the report tabulates (mean and sd over seeds)."""
+
+SAVE_MODELS = ("shown", "all", "none")
+"""Which trained models the report writes: the one the figures show, all, or none."""
+
+N_CHECKPOINTS = 20
+"""Checkpoints of the learning curves per run (log-spaced); ``quick``: :data:`QUICK_SIZES`."""
+
+CURVE_TEST = 1000
+"""Test (and calibration) set size at each learning-curve checkpoint."""
+
+N_TEST = 10_000
+"""Test set size of the final metrics."""
+
+QUICK_SIZES = {"n_checkpoints": 12, "curve_test": 300, "n_test": 2000}
+"""Smaller measurements of ``quick`` runs (checkpoints, their test sets, the final test set)."""
+
+
+@dataclass(frozen=True)
+class ReproduceOptions:
+    """Settings of one reproduction run.
+
+    Attributes
+    ----------
+    seeds : tuple of int
+        Training seeds; figures other than the learning curves show the model of the seed
+        with the highest order R^2 (the first on ties), and say which.
+    quick : bool
+        Fewer iterations per preset, smaller measurements: a first look.
+    progress : bool
+        Show progress bars on stderr.
+    save_models : {"shown", "all", "none"}
+        Which trained models to write beside the report.
+    n_test : int, optional
+        Test set size of the final metrics (default 10,000; ``quick``: 2,000).
+    """
+
+    seeds: tuple[int, ...] = (0, 1, 2)
+    quick: bool = False
+    progress: bool = True
+    save_models: str = "shown"
+    n_test: int | None = None
+
+    def __post_init__(self) -> None:
+        from sigmapi import _validate
+
+        object.__setattr__(self, "seeds", tuple(self.seeds))
+        _validate.choice("save_models", self.save_models, SAVE_MODELS)
+
+    @property
+    def n_checkpoints(self) -> int:
+        return QUICK_SIZES["n_checkpoints"] if self.quick else N_CHECKPOINTS
+
+    @property
+    def curve_test(self) -> int:
+        return QUICK_SIZES["curve_test"] if self.quick else CURVE_TEST
+
+    @property
+    def test_size(self) -> int:
+        if self.n_test is not None:
+            return self.n_test
+        return QUICK_SIZES["n_test"] if self.quick else N_TEST
+
+
+@dataclass
+class SeedRun:
+    """One trained seed: its metrics, learning curve and training time."""
+
+    seed: int
+    train_seconds: float
+    backend: str
+    metrics: Metrics
+    curve: dict[str, list[float]]
+
+    def metric(self, key: str) -> float:
+        return float(getattr(self.metrics, key))
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"seed": self.seed, "train_seconds": self.train_seconds, "backend": self.backend,
+                **self.metrics.to_dict(), "curve": self.curve}  # fmt: skip
+
+
+@dataclass
+class PresetResult:
+    """The runs of one preset over the seeds, the reference figures, and the figures drawn."""
+
+    config: SOMConfig
+    runs: list[SeedRun]
+    reference: dict[str, float]
+    z_error_floor: float | None
+    shown_seed: int
+    figures: dict[str, dict[str, Any]] = field(default_factory=dict)
+    """Per figure: its file and the facts its caption states."""
+
+    def mean(self) -> dict[str, float]:
+        return {k: statistics.fmean(r.metric(k) for r in self.runs) for k in METRIC_KEYS}
+
+    def sd(self) -> dict[str, float]:
+        return {k: statistics.pstdev(r.metric(k) for r in self.runs) for k in METRIC_KEYS}
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "config": self.config.to_dict(), "runs": [r.to_dict() for r in self.runs],
+            "mean": self.mean(), "sd": self.sd(), "reference": self.reference,
+            "z_error_floor": self.z_error_floor, "figures": self.figures,
+            "shown_seed": self.shown_seed,
+        }  # fmt: skip
+
+
+@dataclass
+class ReproduceResult:
+    """Everything the report states; :meth:`to_dict` is ``metrics.json``."""
+
+    options: ReproduceOptions
+    presets: dict[str, PresetResult] = field(default_factory=dict)
+    sections: dict[str, dict[str, Any]] = field(default_factory=dict)
+    """Per added section (by title): the numbers it stores."""
+    total_seconds: float = 0.0
+
+    def to_dict(self) -> dict[str, Any]:
+        o = self.options
+        return {
+            "quick": o.quick, "seeds": list(o.seeds), "n_test": o.test_size,
+            "curve_test": o.curve_test,
+            "presets": {name: p.to_dict() for name, p in self.presets.items()},
+            "sections": self.sections, "total_seconds": self.total_seconds,
+        }  # fmt: skip
+
+
+@dataclass(frozen=True)
+class Section:
+    """A section of the report.
+
+    Attributes
+    ----------
+    title : str
+        Heading (plain text; escaped).
+    html : str
+        Body, an HTML fragment (trusted: write it with :func:`html.escape` on your values).
+    figures : list of (str, str)
+        ``(file name relative to the report folder, caption)`` per image; the files must
+        exist when the report is written.
+    data : dict
+        Numbers to store in ``metrics.json`` under ``sections[title]``.
+    """
+
+    title: str
+    html: str = ""
+    figures: list[tuple[str, str]] = field(default_factory=list)
+    data: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass
+class ReportContext:
+    """What a section gets: the report folder, the run settings and the trained models.
+
+    ``models`` maps each preset name to its trained models, one per seed (in ``seeds`` order).
+    """
+
+    out: Path
+    options: ReproduceOptions
+    models: dict[str, list[SigmaPiSOM]]
+
+    @property
+    def quick(self) -> bool:
+        return self.options.quick
+
+    @property
+    def progress(self) -> bool:
+        return self.options.progress

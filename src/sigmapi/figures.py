@@ -1,0 +1,335 @@
+"""The figures of the report: a registry from figure name to a draw function and a caption.
+
+:data:`REGISTRY` maps each name of :data:`FIGURES` to a :class:`FigureSpec`: ``draw(model,
+inputs)`` returns the matplotlib figure and the facts its caption states (JSON-able), and
+``caption(run, facts)`` the caption text. :func:`draw_figure` draws one figure into a file;
+:func:`caption` words its caption. A new figure is one more entry, not one more branch.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+    from sigmapi.config import SOMConfig
+    from sigmapi.som import SigmaPiSOM
+
+__all__ = [
+    "DPI",
+    "FIGURES",
+    "REGISTRY",
+    "DrawInputs",
+    "FigureSpec",
+    "RunInfo",
+    "caption",
+    "draw_figure",
+    "sigma_schedule",
+]
+
+DPI = 100
+
+Facts = dict[str, Any]
+
+
+@dataclass(frozen=True)
+class DrawInputs:
+    """What a draw function may use besides the model.
+
+    ``curves``: learning-curve columns, one mapping per seed (the curves figure);
+    ``reference``: reference lines for it; ``label``: how titles name the model; ``seed``:
+    seed of sampled inputs; ``centres``: receptive-field centres (computed when needed).
+    """
+
+    curves: Sequence[dict[str, list[float]]] | None = None
+    reference: dict[str, float] | None = None
+    label: str = ""
+    seed: int = 0
+    centres: Any = None
+
+    @property
+    def tag(self) -> str:
+        return f" ({self.label})" if self.label else ""
+
+
+@dataclass(frozen=True)
+class RunInfo:
+    """What a caption says about the run: preset, config, seeds, the seed shown, test size."""
+
+    preset: str
+    config: SOMConfig
+    seeds: tuple[int, ...]
+    shown: int
+    curve_test: int = 0
+
+    @property
+    def what(self) -> str:
+        cfg, seeds = self.config, self.seeds
+        shape = "x".join(map(str, cfg.map_shape)) + ("-unit" if len(cfg.map_shape) == 1 else "")
+        which = (
+            "" if len(seeds) == 1 else f", the best-ordered of seeds {', '.join(map(str, seeds))}"
+        )
+        return (
+            f"{self.preset} ({shape} map, {cfg.iterations:,} iterations, "
+            f"seed {seeds[self.shown]}{which})"
+        )
+
+
+@dataclass(frozen=True)
+class FigureSpec:
+    """One figure: how to draw it, how to caption it, and what it needs."""
+
+    draw: Callable[[SigmaPiSOM, DrawInputs], tuple[Figure, Facts]]
+    caption: Callable[[RunInfo, Facts], str]
+    needs_centres: Callable[[int], bool] = lambda d: False
+    tight: bool = True
+    """Crop to the drawn area (False for figures whose panels already fill the canvas)."""
+
+
+def _figure(size: tuple[float, float]) -> Figure:
+    from matplotlib.figure import Figure
+
+    return Figure(figsize=size)
+
+
+def sigma_schedule(model: SigmaPiSOM, n: int = 400) -> tuple[list[float], list[float]]:
+    """``(t, sigma)`` of the model's whole neighbourhood schedule, for the curves figure."""
+    t = np.unique(np.geomspace(1, model.config.iterations, n).round().astype(np.int64))
+    return t.astype(float).tolist(), np.asarray(model.sigma_at(t), dtype=float).tolist()
+
+
+# ----------------------------------------------------------------------------- Fig. 8
+
+
+def _draw_fig8(model: SigmaPiSOM, inp: DrawInputs) -> tuple[Figure, Facts]:
+    from sigmapi import analysis, plots
+
+    d = len(model.x_shape)
+    data = analysis.fig8_data(model, inp.seed, centres=inp.centres)
+    fig = _figure((11.0, 5.6) if d == 2 else (12.0, 5.2))
+    ax = fig.add_axes((0.0, 0.0, 1.0, 1.0))
+    zs = ", ".join(f"{v:.2f}" for v in data.z)
+    plots.plot_fig8(
+        data, ax=ax,
+        title=f"Fig. 8{inp.tag}\nleft: map response h to {data.n_pairs} (x, y) pairs with the "
+        f"same z = ({zs}); right: to patterns\nmap polarity: {data.polarity.name}",
+    )  # fmt: skip
+    return fig, {
+        "z": data.z.tolist(),
+        "polarity": data.polarity.name,
+        "polarity_r2": data.polarity.r2,
+        "invariance_spread": data.invariance_spread,
+    }
+
+
+def _caption_fig8(run: RunInfo, facts: Facts) -> str:
+    if len(run.config.x_shape) == 2:
+        pattern = 'an "L" on x with a single hill on y (and the reverse)'
+    else:
+        pattern = "two hills on x with a single hill on y (and the reverse)"
+    return (
+        f"Fig. 8 of the chapter, {run.what}. Left: four random (x, y) pairs that share one "
+        f"body-centred z = ({', '.join(f'{v:.2f}' for v in facts['z'])}); rows x, y and the "
+        f"map activation h. The responses agree (largest distance between the normalised "
+        f"responses: {facts['invariance_spread']:.2f}, 0 = identical). Right: {pattern}; "
+        f"the pattern reappears on the map, {facts['polarity']} relative to the input "
+        f"(affine order R² of the receptive-field centres {facts['polarity_r2']:.2f}). "
+        "The paper's 2-D run came out rotated by 180 degrees: the orientation is arbitrary "
+        "before learning and consistent after it."
+    )
+
+
+# ----------------------------------------------------------------------------- weights
+
+
+def _draw_weights(model: SigmaPiSOM, inp: DrawInputs) -> tuple[Figure, Facts]:
+    from sigmapi import analysis, plots
+
+    if len(model.x_shape) == 1:
+        tiles = analysis.weight_tiles(model)
+        k = tiles.shape[0]
+        fig = _figure((max(6.0, 1.1 * np.ceil(k / np.ceil(np.sqrt(k / 2.0))) + 2.0), 4.8))
+        plots.plot_weight_tiles(
+            tiles, model.map_shape, ax=fig.add_subplot(),
+            title=f"Sigma-Pi weights w_kij of each map unit k{inp.tag} (Fig. 6a):\nan invariant "
+            "unit has its weight on an anti-diagonal i + j = const",
+        )  # fmt: skip
+    else:
+        fig = _figure((16.0, 7.6))
+        axes = fig.subplots(1, 2, gridspec_kw={"wspace": 0.3})
+        for a, ax in enumerate(axes):
+            other = 1 - a
+            plots.plot_weight_tiles(
+                analysis.weight_tiles(model, axis=a), model.map_shape, ax=ax,
+                title=f"weights of every unit{inp.tag}, summed over axis {other} of x and y:\n"
+                f"x{a} against y{a}; anti-diagonals = invariance along axis {a}",
+                x_label=f"x{a} unit", y_label=f"y{a} unit",
+            )  # fmt: skip
+    return fig, {"weight_abs_max": float(np.abs(model.weights_).max())}
+
+
+def _caption_weights(run: RunInfo, facts: Facts) -> str:
+    tiles = "each unit's full 15x15 matrix" if len(run.config.x_shape) == 1 else (
+        "for each unit, its weights summed over the other axis of x and of y")  # fmt: skip
+    return (
+        f"Sigma-Pi weights in the style of Fig. 6a, {run.what}: {tiles}, x on rows and y on "
+        "columns. A unit that responds to one z = (x + y) / 2 holds its weight on an "
+        "anti-diagonal i + j = const; neighbouring units hold neighbouring anti-diagonals."
+    )
+
+
+# ----------------------------------------------------------------------------- net
+
+
+def _draw_net(model: SigmaPiSOM, inp: DrawInputs) -> tuple[Figure, Facts]:
+    from sigmapi import analysis, plots
+
+    fig = _figure((6.4, 4.4) if len(model.x_shape) == 1 else (7.4, 6.0))
+    plots.plot_net(
+        np.asarray(inp.centres), model.map_shape, ax=fig.add_subplot(),
+        z_range=model.sampler.relation.z_range,
+        title=f"The map in input space{inp.tag}:\neach unit at the z it responds to",
+    )  # fmt: skip
+    pol = analysis.map_polarity(model, centres=inp.centres)
+    return fig, {"polarity": pol.name, "order_r2_centres": pol.r2}
+
+
+def _caption_net(run: RunInfo, facts: Facts) -> str:
+    return (
+        f"The map in input space, {run.what}: every unit placed at the z it responds to (centre "
+        "of mass of the upper half of its receptive field in z), grid neighbours joined, as "
+        f"in the classic SOM net plot. Map polarity: {facts['polarity']} (R² of the affine "
+        f"fit of the centres to the grid: {facts['order_r2_centres']:.2f})."
+    )
+
+
+# ----------------------------------------------------------------------------- invariance
+
+
+def _draw_invariance(model: SigmaPiSOM, inp: DrawInputs) -> tuple[Figure, Facts]:
+    from sigmapi import analysis, plots
+
+    if len(model.x_shape) == 1:
+        inv = analysis.invariance_matrix(model)
+        fig = _figure((6.0, 5.0))
+        plots.plot_invariance(inv, ax=fig.add_subplot())
+        return fig, {"constancy": inv.constancy}
+    fig = _figure((12.0, 5.0))
+    axes = fig.subplots(1, 2, gridspec_kw={"wspace": 0.3})
+    facts: Facts = {}
+    for a, ax in enumerate(axes):
+        inv = analysis.invariance_matrix(model, axis=a, centres=inp.centres)
+        plots.plot_invariance(
+            inv, ax=ax,
+            title=f"Winner as a function of x{a} and y{a} (x{1 - a}, y{1 - a} at 0.5)"
+            f"\n{100 * inv.constancy:.1f} % of cells agree with their anti-diagonal",
+        )  # fmt: skip
+        facts[f"constancy_axis{a}"] = inv.constancy
+    return fig, facts
+
+
+def _caption_invariance(run: RunInfo, facts: Facts) -> str:
+    d = len(run.config.x_shape)
+    if d == 1:
+        score = f"{100 * facts['constancy']:.1f} %"
+    else:
+        score = " and ".join(f"{100 * facts[f'constancy_axis{a}']:.1f} %" for a in range(d))
+    return (
+        f"Invariance matrix, {run.what}: the winning unit for every x and y on the input grid "
+        f"(2-D: along one axis, the other at the centre). Constant z lies on the "
+        f"anti-diagonals; {score} of the cells agree with the most common winner of their "
+        "anti-diagonal (100 % = perfectly invariant)."
+    )
+
+
+# ----------------------------------------------------------------------------- curves
+
+
+def _draw_curves(model: SigmaPiSOM, inp: DrawInputs) -> tuple[Figure, Facts]:
+    from sigmapi import plots
+
+    curves = inp.curves
+    if not curves:
+        raise ValueError("the curves figure needs learning curves (curves=...)")
+    fig = _figure((8.5, 9.0))
+    plots.plot_learning_curves(
+        curves, ax=fig.add_axes((0.0, 0.0, 1.0, 1.0)), reference=inp.reference,
+        schedule=sigma_schedule(model),
+        title=f"Learning curves{inp.tag}, measured at {len(curves[0]['t'])} checkpoints",
+    )  # fmt: skip
+    return fig, {
+        "checkpoints": len(curves[0]["t"]),
+        "final": {k: v[-1] for k, v in curves[0].items()},
+    }
+
+
+def _caption_curves(run: RunInfo, facts: Facts) -> str:
+    return (
+        f"Learning curves of {run.preset} over seeds {list(run.seeds)} (thin: each seed, thick: "
+        f"mean), measured on {run.curve_test} test z's at {facts['checkpoints']} log-spaced "
+        "checkpoints: view consistency, z error, the approximate cost of section 6.3 (at the "
+        "sigma of the moment, and with the winner alone) and the neighbourhood width sigma with "
+        "its schedule. Dashed lines: reference figures of docs/algorithm.md."
+    )
+
+
+# ----------------------------------------------------------------------------- registry
+
+REGISTRY: dict[str, FigureSpec] = {
+    "fig8": FigureSpec(_draw_fig8, _caption_fig8, needs_centres=lambda d: True, tight=False),
+    "weights": FigureSpec(_draw_weights, _caption_weights),
+    "net": FigureSpec(_draw_net, _caption_net, needs_centres=lambda d: True),
+    "invariance": FigureSpec(_draw_invariance, _caption_invariance, needs_centres=lambda d: d == 2),
+    "curves": FigureSpec(_draw_curves, _caption_curves, tight=False),
+}
+"""Figure name -> :class:`FigureSpec`, in report order."""
+
+FIGURES = tuple(REGISTRY)
+"""Names of the figures (``sigmapi figure NAME``), in report order."""
+
+
+def _spec(name: str) -> FigureSpec:
+    if name not in REGISTRY:
+        raise ValueError(f"figure name must be one of {FIGURES}, got {name!r}")
+    return REGISTRY[name]
+
+
+def draw_figure(
+    name: str,
+    model: SigmaPiSOM,
+    path: str | Path,
+    *,
+    curves: Sequence[dict[str, list[float]]] | None = None,
+    reference: dict[str, float] | None = None,
+    label: str = "",
+    seed: int = 0,
+    centres: Any = None,
+) -> Facts:
+    """Draw figure ``name`` (one of :data:`FIGURES`) of ``model`` into ``path``.
+
+    ``curves`` (learning-curve columns, one mapping per seed) is needed for ``"curves"``;
+    ``reference`` adds reference lines to it; ``label`` names the model in titles; ``seed``
+    draws the Fig. 8 inputs and the receptive-field sampling; ``centres`` reuses computed
+    receptive-field centres. Returns the facts the caption states (JSON-able).
+    """
+    spec = _spec(name)
+    if centres is None and spec.needs_centres(len(model.x_shape)):
+        from sigmapi.analysis import receptive_field_centres
+
+        centres = receptive_field_centres(model, seed)
+    inputs = DrawInputs(curves, reference, label, seed, centres)
+    fig, facts = spec.draw(model, inputs)
+    tight = "tight" if spec.tight else None
+    fig.savefig(Path(path), dpi=DPI, bbox_inches=tight, facecolor="white")
+    return facts
+
+
+def caption(name: str, run: RunInfo, facts: Facts) -> str:
+    """The caption of figure ``name`` for ``run``, stating ``facts`` (from :func:`draw_figure`)."""
+    return _spec(name).caption(run, facts)

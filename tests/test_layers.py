@@ -1,0 +1,131 @@
+"""The import graph of ``src/sigmapi``: no module imports the CLI, no loops, only downward.
+
+Every ``import`` and ``from ... import`` counts, wherever it stands (module level, inside a
+function, under ``TYPE_CHECKING``), so the rule holds for readers and tools, not only at run
+time. The package's ``__init__`` (the public names) is no layer: nothing imports it.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+SRC = Path(__file__).resolve().parents[1] / "src"
+PACKAGE = SRC / "sigmapi"
+
+LAYERS: tuple[tuple[str, ...], ...] = (
+    ("cli",),
+    ("experiments",),
+    ("figures", "reach"),
+    ("plots", "analysis", "curves"),
+    ("metrics", "checkpoints"),
+    ("som",),
+    ("io", "config", "kernels", "tasks", "ordering"),
+    ("codes", "schedules"),
+    ("errors", "_validate", "progress", "_version"),
+)
+"""Top to bottom: a module may import modules of its own layer (without a loop) or below."""
+
+
+def _name(path: Path) -> str:
+    parts = list(path.relative_to(SRC).with_suffix("").parts)
+    if parts[-1] == "__init__":
+        parts.pop()
+    return ".".join(parts)
+
+
+MODULES = {_name(p): p for p in sorted(PACKAGE.rglob("*.py"))}
+
+
+def _resolve(name: str) -> str | None:
+    """The sigmapi module that ``name`` refers to (a module, or the module defining it)."""
+    while name and name not in MODULES:
+        name = name.rpartition(".")[0]
+    return name or None
+
+
+def _imports(module: str) -> set[str]:
+    path = MODULES[module]
+    tree = ast.parse(path.read_text("utf-8"), str(path))
+    package = module if path.name == "__init__.py" else module.rpartition(".")[0]
+    found: set[str] = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            names = [a.name for a in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                base = ".".join(package.split(".")[: len(package.split(".")) - node.level + 1])
+                base = f"{base}.{node.module}" if node.module else base
+            names = [f"{base}.{a.name}" for a in node.names]
+        else:
+            continue
+        for n in names:
+            if n == "sigmapi" or n.startswith("sigmapi."):
+                target = _resolve(n)
+                if target is not None and target != module:
+                    found.add(target)
+    return found
+
+
+GRAPH = {m: _imports(m) for m in MODULES}
+
+
+def _layer(module: str) -> int:
+    top = module.split(".")[1]
+    for i, names in enumerate(LAYERS):
+        if top in names:
+            return i
+    raise AssertionError(f"module {module} is in no layer; add it to LAYERS")
+
+
+def test_every_module_has_a_layer():
+    for m in MODULES:
+        if m != "sigmapi":
+            _layer(m)
+
+
+def test_nothing_outside_the_cli_imports_the_cli():
+    for m, targets in GRAPH.items():
+        if not m.startswith("sigmapi.cli"):
+            bad = sorted(t for t in targets if t.startswith("sigmapi.cli"))
+            assert not bad, f"{m} imports {bad}"
+
+
+def test_nothing_imports_the_package_facade():
+    for m, targets in GRAPH.items():
+        assert "sigmapi" not in targets, f"{m} imports the package namespace; import the module"
+
+
+def test_imports_only_go_down_the_layers():
+    bad = [
+        f"{m} ({LAYERS[_layer(m)]}) imports {t} ({LAYERS[_layer(t)]})"
+        for m, targets in GRAPH.items()
+        if m != "sigmapi"
+        for t in sorted(targets - {"sigmapi"})
+        if _layer(t) < _layer(m)
+    ]
+    assert not bad, "upward imports:\n" + "\n".join(bad)
+
+
+def test_the_import_graph_has_no_loop():
+    state: dict[str, int] = {}  # 1: on the current path, 2: done
+    path: list[str] = []
+
+    def visit(m: str) -> None:
+        state[m] = 1
+        path.append(m)
+        for t in sorted(GRAPH[m]):
+            if state.get(t) == 1:
+                loop = [*path[path.index(t) :], t]
+                pytest.fail("import loop: " + " -> ".join(loop))
+            if t not in state:
+                visit(t)
+        path.pop()
+        state[m] = 2
+
+    for m in sorted(GRAPH):
+        if m not in state:
+            visit(m)
