@@ -8,6 +8,25 @@
 - **order**: R^2 of an affine fit from winner grid coordinates to z (fit on the calibration
   set, scored on the test set); a rotated or mirrored map is not penalised, a twisted one is.
 - **usage**: fraction of units that win for some test z.
+- **fold score** (never reads z, only the two views of each test pair): the larger of
+
+  * the number of *starved* units: units that win fewer than ``STARVED_SHARE`` (10 %) of a
+    uniform share of the test views (both views of every pair). A 1-D map folded onto itself
+    leaves the unit at the fold almost without wins;
+  * for maps of two or more dimensions, ``S / TWIST_S`` with
+    ``S = (1 - view_within_one) + topographic_error`` (the topographic error is the fraction
+    of view-0 test pairs whose best and second-best units are not grid neighbours). A twist
+    sends the two views of one z, and the best and second-best units of one view, to far-apart
+    units along its seam. In 1-D this term is left out: the paper's soft winner swaps the two
+    end units of many ordered maps (order R^2 0.966-0.98), which raises the topographic error
+    to 0.16 without a fold.
+
+  ``folded`` is ``fold_score >= FOLD_THRESHOLD`` (1.0). The thresholds were chosen on every map
+  trained while building the ordering procedure (docs/algorithm.md, "Ordering procedures").
+
+Winners are the **hard winners** (``model.winner(..., hard=True)``): the rule's limit at
+sigma -> 0, the argmax of the response for the soft rule. The soft winner at a mid-run sigma
+would smooth the map's differences away and inflate mid-run scores.
 
 All metrics draw their data from a fixed evaluation seed, independent of the training seed,
 so that two models are measured on the same test set.
@@ -27,10 +46,27 @@ if TYPE_CHECKING:
     from sigmapi.som import SigmaPiSOM
     from sigmapi.tasks import Batch
 
-__all__ = ["EVAL_SEED", "Metrics", "affine_fit", "evaluate", "z_decoder"]
+__all__ = [
+    "EVAL_SEED",
+    "FOLD_THRESHOLD",
+    "Metrics",
+    "affine_fit",
+    "evaluate",
+    "fold_indicators",
+    "z_decoder",
+]
 
 EVAL_SEED = 20070601
 """Seed of the evaluation data (calibration and test sets)."""
+
+STARVED_SHARE = 0.1
+"""A unit is starved when it wins fewer than this fraction of a uniform share of the views."""
+
+TWIST_S = 0.065
+"""Maps of 2+ dimensions: ``(1 - within one) + topographic error`` that counts as one fold sign."""
+
+FOLD_THRESHOLD = 1.0
+"""``folded`` is ``fold_score >= FOLD_THRESHOLD``."""
 
 
 @dataclass(frozen=True)
@@ -43,8 +79,13 @@ class Metrics:
     order_r2: float
     usage: float
     n_test: int
+    fold_score: float = 0.0
+    fold_threshold: float = FOLD_THRESHOLD
+    folded: bool = False
+    starved_units: int = 0
+    topographic_error: float = 0.0
 
-    def to_dict(self) -> dict[str, float | int]:
+    def to_dict(self) -> dict[str, float | int | bool]:
         return asdict(self)
 
 
@@ -126,7 +167,43 @@ def evaluate(
     order = 1.0 - sse / sst if sst > 0 else float("nan")
 
     usage = float(np.unique(w0).size / model.n_units)
-    return Metrics(same, within, z_error, order, usage, int(test.z.shape[0]))
+    starved, te, score = fold_indicators(model, test, w0, w1)
+    return Metrics(
+        same, within, z_error, order, usage, int(test.z.shape[0]),
+        fold_score=score, folded=score >= FOLD_THRESHOLD, starved_units=starved,
+        topographic_error=te,
+    )  # fmt: skip
+
+
+def fold_indicators(
+    model: SigmaPiSOM,
+    test: Batch,
+    w0: NDArray[np.int64] | None = None,
+    w1: NDArray[np.int64] | None = None,
+) -> tuple[int, float, float]:
+    """``(starved units, topographic error, fold score)`` from view pairs alone (never z).
+
+    ``w0``, ``w1``: the hard winners of the two views, when already known. Definitions in the
+    module docstring.
+    """
+    if w0 is None:
+        w0 = model.winner(test.x0, test.y0, hard=True)
+    if w1 is None:
+        w1 = model.winner(test.x1, test.y1, hard=True)
+    wins = np.bincount(np.concatenate([w0, w1]), minlength=model.n_units)
+    starved = int(np.sum(wins < STARVED_SHARE * wins.sum() / model.n_units))
+    scores = model.respond(test.x0, test.y0)
+    if model.config.winner_rule == "min_distance":
+        w = model.weights_.reshape(model.n_units, -1)
+        scores = 2.0 * scores - np.einsum("ki,ki->k", w, w)[None, :]
+    top2 = np.argpartition(-scores, 1, axis=1)[:, :2]
+    coords = model.map_coords
+    te = float(np.mean(chebyshev(coords, top2[:, 0], top2[:, 1]) > 1.0))
+    score = float(starved)
+    if len(model.map_shape) >= 2:
+        within = float(np.mean(chebyshev(coords, w0, w1) <= 1.0))
+        score = max(score, ((1.0 - within) + te) / TWIST_S)
+    return starved, te, score
 
 
 def evaluation_sets(model: SigmaPiSOM, n: int, seed: int = EVAL_SEED) -> tuple[Batch, Batch]:

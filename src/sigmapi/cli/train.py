@@ -12,7 +12,7 @@ from sigmapi.checkpoints import checkpoint_dir, find_resumable, write_checkpoint
 from sigmapi.cli._common import add_config_flags, check_output, resolve_config
 from sigmapi.config import list_presets, load_preset
 from sigmapi.errors import UsageError
-from sigmapi.metrics import evaluate
+from sigmapi.metrics import FOLD_THRESHOLD, evaluate, evaluation_sets, fold_indicators
 from sigmapi.progress import progress_callback
 from sigmapi.som import SigmaPiSOM, load_model
 
@@ -56,7 +56,26 @@ def cmd_train(args: argparse.Namespace) -> int:
                 write_checkpoint(model, folder)
     model.save(out)
     print(f"wrote {out} ({model.t_} iterations, backend {model.backend})", file=sys.stderr)
+    _warn_if_folded(model)
     return 0
+
+
+def _warn_if_folded(model: SigmaPiSOM, n: int = 4000) -> None:
+    """One warning line when the trained map looks folded (the z-free fold score)."""
+    _, test = evaluation_sets(model, n)
+    starved, te, score = fold_indicators(model, test)
+    if score >= FOLD_THRESHOLD:
+        hint = (
+            'train with --set ordering="crossview"'
+            if model.config.ordering == "none"
+            else "try another --seed"
+        )
+        print(
+            f"sigmapi train: warning: the map looks folded (fold score {score:.2f} >= "
+            f"{FOLD_THRESHOLD:g}: {starved} starved unit{'' if starved == 1 else 's'}, "
+            f"topographic error {te:.3f}); {hint}",
+            file=sys.stderr,
+        )
 
 
 def cmd_evaluate(args: argparse.Namespace) -> int:

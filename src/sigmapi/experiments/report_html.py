@@ -11,7 +11,7 @@ import html
 import re
 from typing import TYPE_CHECKING
 
-from sigmapi.experiments.results import METRIC_KEYS
+from sigmapi.experiments.results import METRIC_KEYS, ORDERED_R2
 
 if TYPE_CHECKING:
     from sigmapi.config import SOMConfig
@@ -37,10 +37,10 @@ def _table(result: ReproduceResult) -> str:
     rows = []
     for name, res in result.presets.items():
         ref = res.reference
-        mean, sd = res.mean(), res.sd()
+        mean, sd, med, worst = res.mean(), res.sd(), res.median(), res.worst()
         for key in METRIC_KEYS:
-            value = mean[key]
-            per_seed = ", ".join(f"{r.metric(key):.3f}" for r in res.runs)
+            value = med[key]
+            per_seed = ", ".join(_seed_value(r.metric(key), r.metrics.folded) for r in res.runs)
             r = ref.get(key)
             note = ""
             if r is not None:
@@ -49,15 +49,33 @@ def _table(result: ReproduceResult) -> str:
                 note = f"<span class='{cls}'>{word}</span>"
             if key == "z_error" and res.z_error_floor is not None:
                 note += f" (floor {res.z_error_floor:.2f})"
+            if key == "order_r2":
+                n, folded = len(res.runs), res.folded_seeds()
+                cls = "good" if res.ordered_count() == n else "bad"
+                note += (
+                    f"<span class='{cls}'>{res.ordered_count()} of {n} ordered "
+                    f"(R<sup>2</sup> &ge; {ORDERED_R2})</span>"
+                )
+                if folded:
+                    note += f"; flagged folded: seed{'s' if len(folded) != 1 else ''} "
+                    note += ", ".join(map(str, folded))
+                else:
+                    note += "; none flagged folded"
             rows.append(
-                f"<tr><td>{html.escape(name)}</td><td>{key}</td><td>{value:.3f} ± {sd[key]:.3f}"
-                f"</td><td>{per_seed}</td><td>{'' if r is None else f'{r:.3f}'}</td>"
+                f"<tr><td>{html.escape(name)}</td><td>{key}</td><td>{value:.3f}</td>"
+                f"<td>{worst[key]:.3f}</td><td>{mean[key]:.3f} ± {sd[key]:.3f}</td>"
+                f"<td>{per_seed}</td><td>{'' if r is None else f'{r:.3f}'}</td>"
                 f"<td>{note}</td></tr>"
             )
     return (
-        "<table><tr><th>preset</th><th>metric</th><th>measured (mean ± sd over seeds)</th>"
-        "<th>per seed</th><th>reference</th><th></th></tr>" + "".join(rows) + "</table>"
+        "<table><tr><th>run</th><th>metric</th><th>median</th><th>worst seed</th>"
+        "<th>mean ± sd</th><th>per seed (<b>bold</b>: flagged folded)</th><th>reference</th>"
+        "<th></th></tr>" + "".join(rows) + "</table>"
     )
+
+
+def _seed_value(value: float, folded: bool) -> str:
+    return f"<b>{value:.3f}</b>" if folded else f"{value:.3f}"
 
 
 def _figure_html(file: str, caption: str) -> str:

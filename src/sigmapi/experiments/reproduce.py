@@ -52,7 +52,13 @@ REFERENCE: dict[str, dict[str, float]] = {
 Z_ERROR_FLOOR: dict[str, float] = {"paper-1d": 0.27}
 """Smallest z error a map of that many units can reach (quantisation into 15 units)."""
 
+REFERENCE["paper-1d-crossview"] = REFERENCE["paper-1d"]
+Z_ERROR_FLOOR["paper-1d-crossview"] = Z_ERROR_FLOOR["paper-1d"]
+
 PAPER_PRESETS = ("paper-1d", "paper-2d")
+
+CROSSVIEW_1D = "paper-1d-crossview"
+"""The authors' 1-D run with sigmapi's ordering procedure (``ordering = "crossview"``)."""
 
 QUICK_ITERATIONS: dict[str, int] = {"paper-1d": 60_000, "paper-2d": 6_000}
 """Iterations of each preset in ``--quick`` runs (the schedule is compressed to fit)."""
@@ -72,6 +78,9 @@ def paper_presets(quick: bool) -> list[tuple[str, SOMConfig]]:
             it = QUICK_ITERATIONS.get(name, max(1000, cfg.iterations // 10))
             cfg = cfg.replace(iterations=min(cfg.iterations, it))
         out.append((name, cfg))
+        if name == "paper-1d":
+            # sigmapi's ordering procedure on the authors' run, beside it, on the same seeds
+            out.append((CROSSVIEW_1D, cfg.replace(ordering="crossview")))
     return out
 
 

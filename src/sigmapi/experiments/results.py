@@ -29,7 +29,12 @@ __all__ = [
     "SeedRun",
 ]
 
-METRIC_KEYS = ("view_consistency", "view_within_one", "z_error", "order_r2", "usage")
+METRIC_KEYS = (
+    "view_consistency", "view_within_one", "z_error", "order_r2", "usage", "fold_score",
+)  # fmt: skip
+
+ORDERED_R2 = 0.95
+"""A map counts as ordered when its order R^2 is at least this."""
 """The metrics the report tabulates (mean and sd over seeds)."""
 
 SAVE_MODELS = ("shown", "all", "none")
@@ -130,10 +135,28 @@ class PresetResult:
     def sd(self) -> dict[str, float]:
         return {k: statistics.pstdev(r.metric(k) for r in self.runs) for k in METRIC_KEYS}
 
+    def median(self) -> dict[str, float]:
+        return {k: statistics.median(r.metric(k) for r in self.runs) for k in METRIC_KEYS}
+
+    def worst(self) -> dict[str, float]:
+        """Per metric, the worst seed's value (largest z error, smallest of the others)."""
+        pick = {k: (max if k == "z_error" else min) for k in METRIC_KEYS}
+        return {k: pick[k](r.metric(k) for r in self.runs) for k in METRIC_KEYS}
+
+    def ordered_count(self) -> int:
+        """Seeds whose map is ordered: order R^2 >= ORDERED_R2."""
+        return sum(r.metrics.order_r2 >= ORDERED_R2 for r in self.runs)
+
+    def folded_seeds(self) -> list[int]:
+        """Seeds the z-free fold detector flags."""
+        return [r.seed for r in self.runs if r.metrics.folded]
+
     def to_dict(self) -> dict[str, Any]:
         return {
             "config": self.config.to_dict(), "runs": [r.to_dict() for r in self.runs],
-            "mean": self.mean(), "sd": self.sd(), "reference": self.reference,
+            "mean": self.mean(), "sd": self.sd(), "median": self.median(),
+            "worst": self.worst(), "ordered": self.ordered_count(),
+            "folded_seeds": self.folded_seeds(), "reference": self.reference,
             "z_error_floor": self.z_error_floor, "figures": self.figures,
             "shown_seed": self.shown_seed,
         }  # fmt: skip
