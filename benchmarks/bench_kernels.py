@@ -12,7 +12,7 @@ same machine load, and each speed is the median over ``--repeats`` runs.
 Measured:
 
 - ``speed``: iterations/s of the dense reference and the fast kernel (``fast``: one training
-  thread, the default; ``fast-threads``: ``SIGMAPI_PARALLEL_TRAIN=1``) on ``paper-1d`` and
+  thread, the default; ``fast-threads``: ``threads = true``) on ``paper-1d`` and
   ``paper-2d``, on the same iterations (the first ``--ref-iters-2d`` of the run for the 2-D
   reference, which costs ~20 ms per step whatever sigma is; the fast kernel is slowest there,
   as early on every map unit is in the neighbourhood), their ratio, and peak memory.
@@ -65,7 +65,9 @@ def child_speed(kernel: str, preset: str, n_iter: int, threads: int) -> dict[str
     from sigmapi import SigmaPiSOM, load_preset
 
     numba.set_num_threads(threads)
-    cfg = load_preset(preset).replace(backend=kernel.split("-")[0], seed=0)
+    cfg = load_preset(preset).replace(
+        backend=kernel.split("-")[0], seed=0, threads=kernel.endswith("threads")
+    )
     warm = SigmaPiSOM(cfg.replace(iterations=cfg.iterations))
     warm.fit(n_iter=min(50, n_iter))  # numba: load (or compile) the cached machine code
     model = SigmaPiSOM(cfg)
@@ -171,8 +173,7 @@ def main() -> None:
         for r in range(repeats):
             for kernel in kernels:
                 n = str(iters[kernel.split("-")[0]])
-                env = {**os.environ, "SIGMAPI_PARALLEL_TRAIN": "1" if "threads" in kernel else "0"}
-                res = run_child(["speed", kernel, preset, n, str(threads)], env=env)
+                res = run_child(["speed", kernel, preset, n, str(threads)])
                 runs[kernel].append(res)
                 print(f"{preset} {kernel} run {r}: {res['it_per_s']:.1f} it/s", flush=True)
         ref_ips, fast_ips = (

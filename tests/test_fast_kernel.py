@@ -34,7 +34,7 @@ def _problem(n_iter: int = 2000, seed: int = 3, width: float = 1.0, eps: float =
     return som.initial_weights(), (x0, y0, x1, y1, som.sigma_at(t), np.full(n_iter, eps))
 
 
-def _train(kernel, w, data, rule="soft", tol=None, chunks=(1000,), **options):
+def _train(kernel, w, data, rule="soft", tol=None, chunks=(1000,)):
     state = kernel.prepare(w) if tol is None else kernel.prepare(w, tol)
     out, s = [], 0
     n = data[0].shape[0]
@@ -43,12 +43,7 @@ def _train(kernel, w, data, rule="soft", tol=None, chunks=(1000,), **options):
             sl = slice(s, min(n, s + c))
             out.append(
                 kernel.train_block(
-                    state,
-                    *(a[sl] for a in data),
-                    map_shape=MAP,
-                    winner_rule=rule,
-                    soft_cut=15,
-                    **options,
+                    state, *(a[sl] for a in data), map_shape=MAP, winner_rule=rule, soft_cut=15
                 )
             )
             s = sl.stop
@@ -118,13 +113,21 @@ def test_block_splitting_does_not_change_the_run():
 
 
 def test_same_result_for_any_thread_count():
-    w, data = _problem(n_iter=300, seed=4)
-    serial, win_serial = _train(fast, w, data, parallel=False)
+    # a map large enough for the threaded driver (K n_x n_y >= fast.PARALLEL_MIN_WORK)
+    som = SigmaPiSOM(map_shape=(8, 8), x_shape=(8, 8), y_shape=(8, 8), code_width=1.0,
+                     iterations=300, seed=4, backend="reference")  # fmt: skip
+    assert som.n_units * 64 * 64 >= fast.PARALLEL_MIN_WORK
+    b, t = som.training_block(0), np.arange(300)
+    data = (b.x0[:300], b.y0[:300], b.x1[:300], b.y1[:300], som.sigma_at(t), som.eps_at(t))
+    kw = {"map_shape": (8, 8), "winner_rule": "soft", "soft_cut": 15}
+    serial = fast.prepare(som.initial_weights())
+    win_serial = fast.train_block(serial, *data, **kw, threads=False)
     before = numba.get_num_threads()
     try:
         for n in sorted({1, getattr(numba.config, "NUMBA_NUM_THREADS", 1)}):
             numba.set_num_threads(n)
-            par, win_par = _train(fast, w, data, parallel=True)
+            par = fast.prepare(som.initial_weights())
+            win_par = fast.train_block(par, *data, **kw, threads=True)
             np.testing.assert_array_equal(win_par, win_serial)
             np.testing.assert_array_equal(par.raw, serial.raw)
             np.testing.assert_array_equal(par.scale, serial.scale)

@@ -72,6 +72,9 @@ class SOMConfig:
     kernel_tol: float = 1e-6
     """Fast kernel: code and neighbourhood values below kernel_tol x their maximum are skipped
     (0 = exact). The reference kernel is always exact."""
+    threads: bool = False
+    """Fast kernel: train on numba's threads (the same result) when the map is large enough
+    (``K * n_x * n_y >= 2**18``, e.g. paper-2d); pays off on an otherwise idle machine."""
     seed: int | None = None
     """Seed of every random stream of the run (weights and data); None draws fresh entropy."""
 
@@ -89,7 +92,7 @@ class SOMConfig:
             )
         for name in ("code_width", "code_height", "init_scale", "ordering_sigma"):
             set_(self, name, _validate.positive(name, getattr(self, name)))
-        for name in ("code_normalize", "periodic", "same_view"):
+        for name in ("code_normalize", "periodic", "same_view", "threads"):
             _validate.boolean(name, getattr(self, name))
         its = _validate.integer("iterations", self.iterations, 1, fix="the paper runs 300000")
         set_(self, "iterations", its)

@@ -7,13 +7,15 @@ Both return ``(callback, bar)``; use the bar as a context manager so that it clo
 from __future__ import annotations
 
 import sys
-from collections.abc import Callable
-from typing import TYPE_CHECKING, Any, Protocol
+from collections.abc import Callable, Iterable
+from typing import TYPE_CHECKING, Any, Protocol, TypeVar
 
 if TYPE_CHECKING:
     from tqdm import tqdm
 
-__all__ = ["counter", "progress_callback"]
+__all__ = ["counter", "each", "progress_callback"]
+
+T = TypeVar("T")
 
 
 class _Trained(Protocol):
@@ -55,3 +57,10 @@ def counter(
         bar.update(n)
 
     return callback, bar
+
+
+def each(items: Iterable[T], desc: str, disable: bool | None = None) -> Iterable[T]:
+    """``items`` with a transient bar (it disappears when the loop ends)."""
+    from tqdm import tqdm
+
+    return tqdm(items, desc=desc, disable=disable, file=sys.stderr, leave=False)

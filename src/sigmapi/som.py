@@ -289,6 +289,7 @@ class SigmaPiSOM:
         self._kernel.train_block(
             self._state, x0, y0, x1, y1, self.sigma_at(t), self.eps_at(t),
             map_shape=self.map_shape, winner_rule=c.winner_rule, soft_cut=c.soft_cut,
+            threads=c.threads,
         )  # fmt: skip
         self.t_ += x0.shape[0]
         self._weights_cache = None

@@ -17,7 +17,6 @@ from sigmapi.cli._common import add_dataclass_flags, check_output, dataclass_val
 from sigmapi.errors import UsageError
 from sigmapi.reach.config import ReachConfig
 from sigmapi.reach.experiment import run_with_progress
-from sigmapi.reach.plots import reach_figure
 
 __all = ["cmd_reach", "register"]
 
@@ -47,6 +46,8 @@ def register(sub: Any) -> None:
 
 
 def cmd_reach(args: argparse.Namespace) -> int:
+    from sigmapi.reach.plots import reach_figure  # matplotlib: only when drawing
+
     out = check_output(args.out, args.force, "figure file")
     if out.suffix.lower() not in (".png", ".pdf", ".svg"):
         raise UsageError(f"--out must end in .png, .pdf or .svg, got {str(out)!r}")

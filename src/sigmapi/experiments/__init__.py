@@ -7,24 +7,15 @@
 """
 
 from sigmapi.experiments.reproduce import REFERENCE, SECTIONS, paper_presets, reproduce
-from sigmapi.experiments.results import (
-    PresetResult,
-    ReportContext,
-    ReproduceOptions,
-    ReproduceResult,
-    Section,
-    SeedRun,
-)
+from sigmapi.experiments.results import ReportContext, ReproduceOptions, ReproduceResult, Section
 
 __all__ = [
     "REFERENCE",
     "SECTIONS",
-    "PresetResult",
     "ReportContext",
     "ReproduceOptions",
     "ReproduceResult",
     "Section",
-    "SeedRun",
     "paper_presets",
     "reproduce",
 ]

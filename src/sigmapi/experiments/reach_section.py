@@ -15,7 +15,6 @@ from typing import TYPE_CHECKING
 from sigmapi.experiments.results import Section
 from sigmapi.reach.config import ReachConfig
 from sigmapi.reach.experiment import run_with_progress
-from sigmapi.reach.plots import reach_figure
 
 if TYPE_CHECKING:
     from sigmapi.experiments.results import ReportContext
@@ -41,6 +40,8 @@ EXPLANATION = {
 
 def reach_section(ctx: ReportContext) -> Section:
     """Run the reach comparison (smaller with ``ctx.quick``) and return its report section."""
+    from sigmapi.reach.plots import reach_figure  # matplotlib: only when drawing
+
     cfg = ReachConfig(episodes=150, seeds=1, final_episodes=50) if ctx.quick else ReachConfig()
     result = run_with_progress(cfg, disable=not ctx.progress or None)
     fig = reach_figure(result)

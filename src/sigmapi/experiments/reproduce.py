@@ -20,7 +20,6 @@ ReportContext) -> Section | None``; the default, :data:`SECTIONS`, is the reach 
 from __future__ import annotations
 
 import json
-import sys
 import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -39,7 +38,7 @@ from sigmapi.experiments.results import (
 )
 from sigmapi.io import atomic_write_bytes
 from sigmapi.metrics import evaluate
-from sigmapi.progress import progress_callback
+from sigmapi.progress import each, progress_callback
 from sigmapi.som import SigmaPiSOM
 
 __all__ = ["QUICK_ITERATIONS", "REFERENCE", "SECTIONS", "paper_presets", "reproduce"]
@@ -183,16 +182,13 @@ def _draw(
 
     The facts each caption states are stored in ``entry.figures``.
     """
-    from tqdm import tqdm
-
     from sigmapi.analysis import receptive_field_centres
 
     centres = receptive_field_centres(model, seed=0)
     curves = [r.curve for r in entry.runs]
     seeds = run.seeds
     drawn = []
-    bar = tqdm(figs.FIGURES, desc=f"{run.preset} figures", disable=not progress or None,
-               file=sys.stderr, leave=False)  # fmt: skip
+    bar = each(figs.FIGURES, f"{run.preset} figures", disable=not progress or None)
     for fig_name in bar:
         file = f"{fig_name}-{run.preset}.png"
         label = f"{run.preset}, seed {seeds[run.shown]}"

@@ -92,7 +92,9 @@ class Kernel(Protocol[S]):
         map_shape: tuple[int, ...],
         winner_rule: str,
         soft_cut: int,
+        threads: bool = False,
     ) -> NDArray[np.int64]:
         """``len(x0)`` learning iterations in place: winner of view 0 at ``sigmas[t]``,
-        Kohonen update towards view 1 at rate ``eps[t]``. Returns the winners ``(T,)``."""
+        Kohonen update towards view 1 at rate ``eps[t]``. Returns the winners ``(T,)``.
+        ``threads``: the kernel may use several threads (the result must not change)."""
         ...

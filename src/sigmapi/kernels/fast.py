@@ -36,7 +36,6 @@ C. Weber and S. Wermter, "A self-organizing map of Sigma-Pi units", Neurocomputi
 
 from __future__ import annotations
 
-import os
 from dataclasses import dataclass
 from typing import Any
 
@@ -70,10 +69,8 @@ CHUNK = 32
 """Map units per parallel work item (a multiple of 16: whole cache lines of float32)."""
 
 PARALLEL_MIN_WORK = 1 << 18
-"""Use the threaded training driver when ``K * n_x * n_y`` is at least this."""
-
-PARALLEL_TRAIN = os.environ.get("SIGMAPI_PARALLEL_TRAIN", "0") == "1"
-"""Train with threads (environment ``SIGMAPI_PARALLEL_TRAIN=1``); results are identical.
+"""With ``threads=True`` (``SOMConfig.threads``), training uses threads when ``K * n_x * n_y``
+is at least this; below it, synchronising the threads costs more than it saves.
 
 Off by default: one learning step is ~0.1-1 ms of work with two synchronisations, and on a
 shared 2-core machine a descheduled worker thread stalls every step (measured: 62 it/s with
@@ -402,35 +399,14 @@ def _buffers(k_units, n_pairs, ny):
     )
 
 
-@njit(cache=True)
-def _train_serial(
-    raw, scale, sqnorm, x0, y0, x1, y1, sigmas, eps, dims, strides, rule, cut, tol, out, track
-):
-    k_units = raw.shape[1]
-    jb, pi0, pv0, pi1, pv1, h, ea, gain, acc, t1, t2 = _buffers(k_units, raw.shape[0], y0.shape[1])
-    n_iter = x0.shape[0]
-    if n_iter == 0:
-        return
-    n0 = _pairs(x0[0], y0[0], tol, jb, pi0, pv0)
-    _unit_chunk(raw, scale, sqnorm, 0, k_units, ea, 1.0, 0, 0,
-                pi1, pv1, 0, pi0, pv0, n0, True, track, h, gain, acc)  # fmt: skip
-    for t in range(n_iter):
-        w = _winner(h, scale, sqnorm, rule, sigmas[t], cut, dims, strides, t1, t2)
-        out[t] = w
-        lo, hi = _neighbourhood(w, sigmas[t], eps[t], tol, dims, strides, ea)
-        thr = tol * ea[w]
-        n1 = _pairs(x1[t], y1[t], tol, jb, pi1, pv1)
-        more = t + 1 < n_iter
-        if more:
-            n0 = _pairs(x0[t + 1], y0[t + 1], tol, jb, pi0, pv0)
-        _unit_chunk(raw, scale, sqnorm, 0, k_units, ea, thr, lo, hi,
-                    pi1, pv1, n1, pi0, pv0, n0, more, track, h, gain, acc)  # fmt: skip
-
-
 @njit(cache=True, parallel=True)
-def _train_parallel(
-    raw, scale, sqnorm, x0, y0, x1, y1, sigmas, eps, dims, strides, rule, cut, tol, out, track
-):
+def _train(
+    raw, scale, sqnorm, x0, y0, x1, y1, sigmas, eps, dims, strides, rule, cut, tol, out, track,
+    threads,
+):  # fmt: skip
+    """The training driver: iterations in order; ``threads``: update the units in parallel
+    chunks of :data:`CHUNK` (same arithmetic per unit, so the same result), else in one call
+    (no parallel region is entered, so no thread is woken)."""
     k_units = raw.shape[1]
     jb, pi0, pv0, pi1, pv1, h, ea, gain, acc, t1, t2 = _buffers(k_units, raw.shape[0], y0.shape[1])
     n_chunks = (k_units + CHUNK - 1) // CHUNK
@@ -438,8 +414,12 @@ def _train_parallel(
     if n_iter == 0:
         return
     n0 = _pairs(x0[0], y0[0], tol, jb, pi0, pv0)
-    for c in prange(n_chunks):
-        _unit_chunk(raw, scale, sqnorm, c * CHUNK, min(k_units, (c + 1) * CHUNK), ea, 1.0, 0, 0,
+    if threads:
+        for c in prange(n_chunks):
+            _unit_chunk(raw, scale, sqnorm, c * CHUNK, min(k_units, (c + 1) * CHUNK), ea, 1.0,
+                        0, 0, pi1, pv1, 0, pi0, pv0, n0, True, track, h, gain, acc)  # fmt: skip
+    else:
+        _unit_chunk(raw, scale, sqnorm, 0, k_units, ea, 1.0, 0, 0,
                     pi1, pv1, 0, pi0, pv0, n0, True, track, h, gain, acc)  # fmt: skip
     for t in range(n_iter):
         w = _winner(h, scale, sqnorm, rule, sigmas[t], cut, dims, strides, t1, t2)
@@ -450,9 +430,14 @@ def _train_parallel(
         more = t + 1 < n_iter
         if more:
             n0 = _pairs(x0[t + 1], y0[t + 1], tol, jb, pi0, pv0)
-        for c in prange(n_chunks):
-            _unit_chunk(raw, scale, sqnorm, c * CHUNK, min(k_units, (c + 1) * CHUNK), ea, thr,
-                        lo, hi, pi1, pv1, n1, pi0, pv0, n0, more, track, h, gain, acc)  # fmt: skip
+        if threads:
+            for c in prange(n_chunks):
+                _unit_chunk(raw, scale, sqnorm, c * CHUNK, min(k_units, (c + 1) * CHUNK), ea,
+                            thr, lo, hi, pi1, pv1, n1, pi0, pv0, n0, more, track, h, gain,
+                            acc)  # fmt: skip
+        else:
+            _unit_chunk(raw, scale, sqnorm, 0, k_units, ea, thr, lo, hi,
+                        pi1, pv1, n1, pi0, pv0, n0, more, track, h, gain, acc)  # fmt: skip
 
 
 @njit(cache=True, parallel=True)
@@ -568,7 +553,7 @@ def train_block(
     map_shape: tuple[int, ...],
     winner_rule: str,
     soft_cut: int,
-    parallel: bool | None = None,
+    threads: bool = False,
 ) -> NDArray[np.int64]:
     """Run ``len(x0)`` learning iterations in order, updating ``state`` in place.
 
@@ -576,8 +561,8 @@ def train_block(
     learns view ``(x1[t], y1[t])`` with rate ``eps[t]`` (as
     :func:`sigmapi.kernels.reference.train_block`). Returns the winners ``(T,)``.
 
-    ``parallel``: use the threaded driver (same results); default: when
-    :data:`PARALLEL_TRAIN` is set, the map is large enough and numba has several threads.
+    ``threads``: update the units on numba's threads (the same result) when the map is large
+    enough (:data:`PARALLEL_MIN_WORK`) and numba has more than one thread.
     """
     k_units, nx, ny = state.shape
     dims, strides = _grid(tuple(map_shape), k_units)
@@ -597,13 +582,8 @@ def train_block(
         state.refresh_norms()
     elif n_iter > 0:
         state.norms_valid = False
-    if parallel is None:
-        parallel = (
-            PARALLEL_TRAIN
-            and k_units * nx * ny >= PARALLEL_MIN_WORK
-            and numba.get_num_threads() > 1
-        )
-    fn: Any = _train_parallel if parallel else _train_serial
-    fn(state.raw, state.scale, state.sqnorm, *xs, sg, ep, dims, strides, code, int(soft_cut),
-       state.tol, out, track)  # fmt: skip
+    parallel = threads and k_units * nx * ny >= PARALLEL_MIN_WORK and numba.get_num_threads() > 1
+    driver: Any = _train  # a numba dispatcher (its stubs do not know the signature)
+    driver(state.raw, state.scale, state.sqnorm, *xs, sg, ep, dims, strides, code,
+           int(soft_cut), state.tol, out, track, bool(parallel))  # fmt: skip
     return out

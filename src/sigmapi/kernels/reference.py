@@ -171,12 +171,14 @@ def train_block(
     map_shape: tuple[int, ...],
     winner_rule: str,
     soft_cut: int,
+    threads: bool = False,
 ) -> NDArray[np.int64]:
     """Run ``len(x0)`` learning iterations in order, updating ``W`` in place.
 
     Iteration ``t`` finds the winner of view ``(x0[t], y0[t])`` at width ``sigmas[t]`` (rule
     ``winner_rule``, smoothing window ``soft_cut``) and learns view ``(x1[t], y1[t])`` with
-    rate ``eps[t]``. Returns the winners ``(T,)``.
+    rate ``eps[t]``. Returns the winners ``(T,)``. ``threads`` is ignored: this kernel is
+    written to be read, on one thread.
     """
     t_total = x0.shape[0]
     out = np.empty(t_total, dtype=np.int64)
