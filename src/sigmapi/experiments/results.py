@@ -139,8 +139,8 @@ class PresetResult:
         return {k: statistics.median(r.metric(k) for r in self.runs) for k in METRIC_KEYS}
 
     def worst(self) -> dict[str, float]:
-        """Per metric, the worst seed's value (largest z error, smallest of the others)."""
-        pick = {k: (max if k == "z_error" else min) for k in METRIC_KEYS}
+        """Per metric, the worst seed's value (largest z error and fold score, else smallest)."""
+        pick = {k: (max if k in ("z_error", "fold_score") else min) for k in METRIC_KEYS}
         return {k: pick[k](r.metric(k) for r in self.runs) for k in METRIC_KEYS}
 
     def ordered_count(self) -> int:
