@@ -122,24 +122,27 @@ def crossview_scores(
 
     # orient: per map axis, the combination of the leading components that best predicts the
     # retinal position along that axis (falls back to the gaze position where x says nothing)
-    target = _centroid(x0, x_shape)[:, :n_components]
-    if target.shape[1] < n_components or not _informative(scores, target):
-        target = _centroid(y0, y_shape)[:, :n_components]
-    if target.shape[1] == n_components and _informative(scores, target):
-        centred = scores - scores.mean(axis=0)
-        rot, *_ = np.linalg.lstsq(centred, target - target.mean(axis=0), rcond=None)
-        return np.asarray(centred @ rot)
+    centred = scores - scores.mean(axis=0)
+    for codes, shape in ((x0, x_shape), (y0, y_shape)):
+        target = _centroid(codes, shape)[:, :n_components]
+        if target.shape[1] == n_components:
+            rot = _orientation(centred, target - target.mean(axis=0))
+            if rot is not None:
+                return np.asarray(centred @ rot)
     return np.asarray(scores)
 
 
-def _informative(scores: NDArray[np.float64], target: NDArray[np.float64]) -> bool:
-    """Whether the components predict every target axis (R^2 >= 0.05) with a regular fit."""
-    s = scores - scores.mean(axis=0)
-    t = target - target.mean(axis=0)
-    rot, *_ = np.linalg.lstsq(s, t, rcond=None)
-    resid = t - s @ rot
-    r2 = 1.0 - (resid**2).sum(axis=0) / np.maximum((t**2).sum(axis=0), 1e-300)
-    return bool(np.all(r2 >= 0.05) and np.linalg.cond(rot) < 1e3)
+def _orientation(
+    scores: NDArray[np.float64], target: NDArray[np.float64]
+) -> NDArray[np.float64] | None:
+    """Least-squares map from centred scores to a centred target, or None where it says too
+    little: some target axis predicted with R^2 < 0.05, or an ill-conditioned fit."""
+    rot, *_ = np.linalg.lstsq(scores, target, rcond=None)
+    resid = target - scores @ rot
+    r2 = 1.0 - (resid**2).sum(axis=0) / np.maximum((target**2).sum(axis=0), 1e-300)
+    if np.all(r2 >= 0.05) and np.linalg.cond(rot) < 1e3:
+        return np.asarray(rot, dtype=np.float64)
+    return None
 
 
 def crossview_init(
