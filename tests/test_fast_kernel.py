@@ -216,12 +216,12 @@ def test_paper_1d_full_run_reaches_the_papers_figures():
 
 @pytest.mark.slow
 def test_paper_2d_preset_learns_an_ordered_map():
-    # Known limit (see the preset): about one seed in three twists the map (seed 0 here),
-    # so order is required of two seeds of three; invariance and z error of all three.
+    # With the default ordering procedure every seed measured orders (README: 20 of 20 fresh
+    # seeds, within one >= 0.975, z error <= 0.575); thresholds are the targets.
     from sigmapi import evaluate, load_preset
 
     results = [
         evaluate(SigmaPiSOM(load_preset("paper-2d").replace(seed=s)).fit()) for s in range(3)
     ]
-    assert all(r.view_within_one >= 0.90 and r.z_error <= 0.6 for r in results)
-    assert sum(r.order_r2 >= 0.95 for r in results) >= 2
+    assert all(r.view_within_one >= 0.95 and r.z_error <= 0.6 for r in results)
+    assert all(r.order_r2 >= 0.95 and not r.folded for r in results)

@@ -35,7 +35,11 @@ _PROCEDURE = {
     "crossview": "ordering <code>crossview</code> (sigmapi's ordered start from the views)",
 }
 
-_QUICK_NOTE = "<b>quick run</b> (fewer iterations: a first look, not the paper setting)"
+_QUICK_NOTE = (
+    "<b>quick run</b> (fewer iterations: a first look, not the paper setting; 2-D maps this "
+    "short are ordered but not converged, and the fold detector, which reads within-one and "
+    "the topographic error, flags them too)"
+)
 
 
 def _table(result: ReproduceResult) -> str:
