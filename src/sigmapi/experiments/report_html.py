@@ -36,9 +36,9 @@ _PROCEDURE = {
 }
 
 _QUICK_NOTE = (
-    "<b>quick run</b> (fewer iterations: a first look, not the paper setting; 2-D maps this "
-    "short are ordered but not converged, and the fold detector, which reads within-one and "
-    "the topographic error, flags them too)"
+    "<b>quick run</b> (fewer iterations: a first look, not the paper setting; maps this short "
+    "are ordered but not converged, and the fold detector flags some of them: its signs, "
+    "views of one z won by distant units, also mark a coarse map)"
 )
 
 
