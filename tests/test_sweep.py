@@ -98,3 +98,21 @@ def test_bad_spec_is_one_line_and_exit_2(tmp_path):
                         str(tmp_path / "o")], capture_output=True, text=True)  # fmt: skip
     assert r.returncode == 2
     assert r.stderr.count("\n") == 1 and "unknown preset 'tiny-9d'" in r.stderr
+
+
+def test_sweep_runs_on_an_existing_dask_cluster_by_address(tmp_path):
+    distributed = pytest.importorskip("distributed")
+    spec_file = tmp_path / "spec.toml"
+    spec_file.write_text(SPEC.replace("seeds = [0, 1]", "seeds = [0]"))
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster:  # fmt: skip
+        r = subprocess.run(
+            [sys.executable, "-m", "sigmapi.cli", "sweep", str(spec_file), "--out",
+             str(tmp_path / "o"), "--engine", "dask", "--address", cluster.scheduler_address],
+            capture_output=True, text=True, timeout=300,
+        )  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    rows = read_results(tmp_path / "o" / RESULTS)
+    assert len(rows) == 4 and all(row["status"] == "ok" for row in rows)
+    local = run_sweep(SweepSpec.read(spec_file), tmp_path / "local", workers=1)
+    assert _table(rows) == _table(local)
