@@ -35,7 +35,11 @@ class Parser(argparse.ArgumentParser):
 
 def add_config_flags(p: argparse.ArgumentParser) -> None:
     """``--preset``, ``--config``, ``--set``, ``--seed`` and ``--backend``."""
-    p.add_argument("--preset", default="paper-1d", help="preset name (see `sigmapi presets`)")
+    p.add_argument(
+        "--preset",
+        default="paper-1d",
+        help="preset name (default paper-1d: 300,000 iterations; see `sigmapi presets`)",
+    )
     p.add_argument("--config", help="TOML file whose keys override the preset")
     p.add_argument(
         "--set",
