@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from sigmapi import _validate
 from sigmapi.cli._common import check_output
 from sigmapi.curves import LearningCurve, checkpoints
 from sigmapi.errors import UsageError
@@ -53,6 +54,8 @@ def cmd_figure(args: argparse.Namespace) -> int:
     allowed = ("png", "pdf", "svg")
     if fmt not in allowed:
         raise UsageError(f"--out must end in one of {['.' + a for a in allowed]}, got {str(out)!r}")
+    if args.seed is not None:
+        _validate.integer("--seed", args.seed, 0, fix="seeds are ints >= 0", error=UsageError)
     model = load_model(args.model)
     if not model.is_fitted or model.t_ == 0:
         raise UsageError(f"model {args.model!r} has not been trained (0 iterations)")
