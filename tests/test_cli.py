@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 
@@ -52,6 +53,7 @@ def test_presets_lists_paper_1d():
         (["train"], "required"),
         (["train", *TINY, "--out", "/proc/sigmapi-test.npz"], "cannot access"),
         (["frobnicate"], "invalid choice"),
+        (["train", *TINY, "--out", "fifo", "--force"], "not a regular file"),
         # absurd sizes and values (issue 15): refused before anything is allocated or trained
         (["train", *TINY, "--set", "map_shape=[1000,1000]", "--set", "x_shape=[200,200]",
           "--set", "y_shape=[200,200]", "--out", "x.npz"], "PB of memory"),
@@ -65,6 +67,7 @@ def test_presets_lists_paper_1d():
 )  # fmt: skip
 def test_user_mistakes_exit_2_with_one_line(tmp_path, args, needle):
     (tmp_path / "bad.npz").write_text("not a model")
+    os.mkfifo(tmp_path / "fifo")
     if "good.npz" in args:
         small = SigmaPiSOM(map_shape=(3,), x_shape=(4,), y_shape=(4,), backend="reference")
         small.fit(n_iter=20).save(tmp_path / "good.npz")

@@ -341,6 +341,15 @@ def test_files_follow_the_umask_and_overwrites_keep_the_mode(tmp_path, umask, mo
         os.umask(old)
 
 
+def test_devices_and_fifos_are_never_replaced(tmp_path):
+    fifo = tmp_path / "pipe"
+    os.mkfifo(fifo)
+    with pytest.raises(ModelFileError, match="not a regular file"):
+        _small("reference").save(fifo)
+    assert stat.S_ISFIFO(fifo.stat().st_mode)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["pipe"]
+
+
 def test_stale_temp_files_are_removed_and_only_ours(tmp_path):
     som = _small("reference")
     stale = tmp_path / ".m.npz.abcd1234.tmp"

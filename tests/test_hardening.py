@@ -183,3 +183,11 @@ def test_cli_files_follow_the_umask_and_force_keeps_the_mode(tmp_path, umask, mo
 def test_train_help_names_the_default_run():
     r = _cli("train", "--help")
     assert "300,000 iterations" in r.stdout and "paper-1d" in r.stdout
+
+
+def test_every_subcommand_help_opens_with_a_description():
+    from sigmapi.cli import build_parser
+
+    sub = next(a for a in build_parser()._actions if a.dest == "command")
+    for name, parser in sub.choices.items():
+        assert parser.description and len(parser.description) > 10, name

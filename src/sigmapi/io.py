@@ -139,6 +139,10 @@ def atomic_write(path: str | Path, write: Callable[[IO[bytes]], None]) -> Path:
     folder = target.parent if str(target.parent) else Path(".")
     if not folder.is_dir():
         raise ModelFileError(f"cannot write {str(target)!r}: folder {str(folder)!r} does not exist")
+    if target.exists() and not target.is_file():  # a device, FIFO or folder: never replace
+        raise ModelFileError(
+            f"cannot write {str(target)!r}: it exists and is not a regular file; give a file name"
+        )
     for old in stale_temps(folder, re.escape(target.name)):
         old.unlink(missing_ok=True)
     try:

@@ -35,6 +35,10 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser)
     for module in (train, reproduce, reach):
         module.register(sub)
+    for action in sub._choices_actions:  # `sigmapi CMD --help` opens with its one-line summary
+        cmd = sub.choices[action.dest]
+        if cmd.description is None and action.help:
+            cmd.description = action.help[0].upper() + action.help[1:] + "."
     return parser
 
 

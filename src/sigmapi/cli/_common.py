@@ -72,6 +72,8 @@ def check_output(path: str | Path, force: bool, what: str = "output file") -> Pa
         raise UsageError(f"{what} {str(p)!r} exists; pass --force to overwrite it")
     if p.exists() and p.is_dir():
         raise UsageError(f"{what} {str(p)!r} is a folder; give a file name")
+    if p.exists() and not p.is_file():
+        raise UsageError(f"{what} {str(p)!r} is not a regular file (a device?); give a file name")
     parent = p.parent if str(p.parent) else Path(".")
     if not parent.is_dir():
         raise UsageError(
