@@ -89,13 +89,14 @@ def write_checkpoint(model: SigmaPiSOM, folder: Path, keep: int = 3) -> Path:
 
 
 def remove_checkpoints(folder: Path) -> int:
-    """Delete the checkpoints (and stale temp files) in ``folder``, and the folder if it is
-    then empty; returns how many checkpoints were deleted. Other files are left alone."""
+    """Delete the checkpoints and checkpoint temp files in ``folder`` (the run has finished:
+    temp files are debris of killed writes, however recent), and the folder if it is then
+    empty; returns how many checkpoints were deleted. Other files are left alone."""
     found = list_checkpoints(folder)
     for _, p in found:
         p.unlink(missing_ok=True)
     if folder.is_dir():
-        for old in stale_temps(folder, _TEMP):
+        for old in stale_temps(folder, _TEMP, idle_s=-1.0):
             old.unlink(missing_ok=True)
         try:
             folder.rmdir()

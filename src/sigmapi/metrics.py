@@ -49,6 +49,7 @@ if TYPE_CHECKING:
 __all__ = [
     "EVAL_SEED",
     "FOLD_THRESHOLD",
+    "ORDERED_R2",
     "Metrics",
     "affine_fit",
     "evaluate",
@@ -67,6 +68,10 @@ TWIST_S = 0.065
 
 FOLD_THRESHOLD = 1.0
 """``folded`` is ``fold_score >= FOLD_THRESHOLD``."""
+
+ORDERED_R2 = 0.95
+"""A map counts as ordered when its order R^2 (or the affine R^2 of its receptive-field
+centres, in figure captions) is at least this; below it, captions call the map twisted."""
 
 
 @dataclass(frozen=True)
