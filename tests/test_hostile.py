@@ -171,3 +171,18 @@ def test_api_inputs_are_validated(small_1d):
         sigmapi.evaluate(som, n_test=1)
     with pytest.raises(ConfigError, match=r"config must be a sigmapi\.SOMConfig"):
         SigmaPiSOM({"iterations": 5})  # type: ignore[arg-type]
+
+
+def test_extra_holds_only_plain_values_of_bounded_size(tmp_path):
+    p = tmp_path / "c.toml"
+    p.write_text("iterations = 10\n[extra]\nwhen = 1979-05-27\n", encoding="utf-8")
+    with pytest.raises(ConfigError, match=r"extra\.when must be a string, number, bool"):
+        load_config_file(p)  # a TOML date would crash the run at its first save
+    with pytest.raises(ConfigError, match="extra must be at most 65536 bytes of JSON"):
+        SOMConfig(extra={"notes": "x" * 70_000})
+    with pytest.raises(ConfigError, match="finite"):
+        SOMConfig(extra={"v": [1.0, float("nan")]})
+    ok = SOMConfig(extra={"source": "paper", "n": [1, 2.5, True], "t": {"a": "b"}})
+    som = SigmaPiSOM(ok.replace(map_shape=(2,), x_shape=(2,), y_shape=(2,), iterations=5))
+    back = sigmapi.load(som.fit().save(tmp_path / "m.npz"))
+    assert back.config.extra == ok.extra

@@ -7,6 +7,8 @@ import ast
 import dataclasses
 import inspect
 import itertools
+import os
+import tempfile
 import textwrap
 import typing
 from collections.abc import Callable
@@ -79,6 +81,15 @@ def check_output(path: str | Path, force: bool, what: str = "output file") -> Pa
         raise UsageError(
             f"folder {str(parent)!r} of {what} {str(p)!r} does not exist; create it first"
         )
+    try:  # find out now, not after a long run, that the folder takes no files
+        fd, probe = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=parent)
+        os.close(fd)
+        os.unlink(probe)
+    except OSError as exc:
+        raise UsageError(
+            f"cannot access {str(parent)!r} to write {what} {str(p)!r}: {exc.strerror or exc}; "
+            "choose another folder"
+        ) from None
     return p
 
 
