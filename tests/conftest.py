@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+from pathlib import Path
 
 import matplotlib
 import pytest
@@ -10,8 +11,16 @@ import pytest
 matplotlib.use("Agg")
 os.environ.setdefault("MPLBACKEND", "Agg")
 
+import sigmapi
 from sigmapi import SigmaPiSOM, SOMConfig
 from sigmapi.curves import LearningCurve, checkpoints
+
+# command lines run by the tests (subprocesses, other working folders) import the sigmapi
+# under test, not whichever one is installed
+_SRC = str(Path(sigmapi.__file__).resolve().parents[1])
+os.environ["PYTHONPATH"] = os.pathsep.join(
+    [_SRC, *[p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p]]
+)
 
 
 @pytest.fixture

@@ -3,10 +3,13 @@
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 
 import pytest
+
+from sigmapi import SigmaPiSOM
 
 TINY = ["--preset", "tiny-1d", "--set", "iterations=2000", "--backend", "reference"]
 
@@ -50,10 +53,24 @@ def test_presets_lists_paper_1d():
         (["train"], "required"),
         (["train", *TINY, "--out", "/proc/sigmapi-test.npz"], "cannot access"),
         (["frobnicate"], "invalid choice"),
+        (["train", *TINY, "--out", "fifo", "--force"], "not a regular file"),
+        # absurd sizes and values (issue 15): refused before anything is allocated or trained
+        (["train", *TINY, "--set", "map_shape=[1000,1000]", "--set", "x_shape=[200,200]",
+          "--set", "y_shape=[200,200]", "--out", "x.npz"], "PB of memory"),
+        (["train", *TINY, "--set", "init_scale=1e308", "--out", "x.npz"], "init_scale must be"),
+        (["train", *TINY, "--set", "code_width=0.01", "--out", "x.npz"], "code_width must be"),
+        (["train", *TINY, "--set", "extra={d=1979-05-27}", "--out", "x.npz"], "as strings"),
+        (["evaluate", "good.npz", "--n-test", "10000000000"], "needs about"),
+        (["figure", "fig8", "good.npz", "--out", "f.png", "--seed", "-1"], "--seed must be"),
+        (["reach", "--grid", "300"], "needs about"),
     ],
-)
+)  # fmt: skip
 def test_user_mistakes_exit_2_with_one_line(tmp_path, args, needle):
     (tmp_path / "bad.npz").write_text("not a model")
+    os.mkfifo(tmp_path / "fifo")
+    if "good.npz" in args:
+        small = SigmaPiSOM(map_shape=(3,), x_shape=(4,), y_shape=(4,), backend="reference")
+        small.fit(n_iter=20).save(tmp_path / "good.npz")
     r = run(*args, cwd=tmp_path)
     assert r.returncode == 2
     lines = [ln for ln in r.stderr.splitlines() if ln.strip()]

@@ -5,6 +5,7 @@ from __future__ import annotations
 import pytest
 
 from sigmapi.config import SOMConfig
+from sigmapi.som import SigmaPiSOM
 from sigmapi.errors import UsageError
 from sigmapi.experiments.executor import job_memory, plan_workers, run_jobs
 
@@ -57,4 +58,5 @@ def test_job_memory_grows_with_the_weights():
     small = SOMConfig(map_shape=(4,), x_shape=(5,), y_shape=(5,))
     paper_2d = SOMConfig(map_shape=(15, 15), x_shape=(15, 15), y_shape=(15, 15))
     weights = 225 * 225 * 225
-    assert job_memory(paper_2d) - job_memory(small) >= weights * (4 + 3 * 8)
+    assert job_memory(paper_2d) - job_memory(small) >= weights * (4 + 8)
+    assert job_memory(paper_2d) >= SigmaPiSOM(paper_2d).memory_estimate()

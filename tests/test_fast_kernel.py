@@ -168,14 +168,18 @@ def test_state_round_trip_and_validation():
     w, _ = _problem(n_iter=1)
     for tol in (0.0, 1e-6):
         s = fast.prepare(w, tol)
-        s2 = fast.from_state_arrays(w, fast.state_arrays(s), tol)
+        s2 = fast.from_state_arrays(w.shape, fast.state_arrays(s), tol)
         np.testing.assert_array_equal(fast.export(s2), fast.export(s))
         np.testing.assert_allclose(fast.export(s), w, rtol=1e-7 if tol else 0)
     arrays = fast.state_arrays(fast.prepare(w, 1e-6))
     with pytest.raises(ValueError, match="raw must be float64"):
-        fast.from_state_arrays(w, arrays, 0.0)
-    with pytest.raises(ValueError, match="missing"):
-        fast.from_state_arrays(w, {"raw": arrays["raw"]}, 1e-6)
+        fast.from_state_arrays(w.shape, arrays, 0.0)
+    with pytest.raises(ValueError, match="raw, scale"):
+        fast.from_state_arrays(w.shape, {"raw": arrays["raw"]}, 1e-6)
+    with pytest.raises(ValueError, match="sqnorm disagrees"):
+        fast.from_state_arrays(w.shape, {**arrays, "sqnorm": arrays["sqnorm"] * 1.01}, 1e-6)
+    with pytest.raises(ValueError, match="scale must be finite"):
+        fast.from_state_arrays(w.shape, {**arrays, "scale": arrays["scale"] * np.inf}, 1e-6)
     with pytest.raises(ValueError, match="tol must be"):
         fast.prepare(w, 1.5)
     with pytest.raises(ValueError, match="rule must be"):

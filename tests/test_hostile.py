@@ -138,7 +138,11 @@ def test_config_file_that_is_binary_is_named(tmp_path):
         ({"sigma": [[0.5, 1.0], [0.2, 2.0]]}, "rise strictly"),
         ({"sigma": "wide"}, "sigma"),
         ({"code_width": float("nan")}, "code_width must be a finite number"),
-        ({"init_scale": float("inf")}, "init_scale must be a finite number"),
+        ({"init_scale": float("inf")}, r"init_scale must be a number in \(0, 1e\+15\]"),
+        ({"init_scale": 1e308}, r"init_scale must be a number in \(0, 1e\+15\], got 1e\+308"),
+        ({"init_scale": 1e39}, "float32's range"),
+        ({"code_height": 1e20}, r"code_height must be a number in \(0, 1e\+07\]"),
+        ({"code_width": 0.01}, r"code_width must be a finite number >= 0.1, got 0.01"),
         ({"kernel_tol": 1.0}, "kernel_tol must be"),
         ({"seed": -1}, "seed must be"),
         ({"backend": "cuda"}, "backend must be one of"),
@@ -167,3 +171,18 @@ def test_api_inputs_are_validated(small_1d):
         sigmapi.evaluate(som, n_test=1)
     with pytest.raises(ConfigError, match=r"config must be a sigmapi\.SOMConfig"):
         SigmaPiSOM({"iterations": 5})  # type: ignore[arg-type]
+
+
+def test_extra_holds_only_plain_values_of_bounded_size(tmp_path):
+    p = tmp_path / "c.toml"
+    p.write_text("iterations = 10\n[extra]\nwhen = 1979-05-27\n", encoding="utf-8")
+    with pytest.raises(ConfigError, match=r"extra\.when must be a string, number, bool"):
+        load_config_file(p)  # a TOML date would crash the run at its first save
+    with pytest.raises(ConfigError, match="extra must be at most 65536 bytes of JSON"):
+        SOMConfig(extra={"notes": "x" * 70_000})
+    with pytest.raises(ConfigError, match="finite"):
+        SOMConfig(extra={"v": [1.0, float("nan")]})
+    ok = SOMConfig(extra={"source": "paper", "n": [1, 2.5, True], "t": {"a": "b"}})
+    som = SigmaPiSOM(ok.replace(map_shape=(2,), x_shape=(2,), y_shape=(2,), iterations=5))
+    back = sigmapi.load(som.fit().save(tmp_path / "m.npz"))
+    assert back.config.extra == ok.extra

@@ -143,5 +143,5 @@ def test_to_arrays_from_arrays_and_clone(small_1d):
 
 def test_header_is_readable_json(tmp_path, small_1d):
     header, _ = read_archive(_saved(tmp_path, small_1d))
-    assert header["format"] == "sigmapi-model" and header["version"] == 1
+    assert header["format"] == "sigmapi-model" and header["version"] == 2
     assert json.loads(json.dumps(header)) == header

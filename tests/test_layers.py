@@ -24,7 +24,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("som",),
     ("io", "config", "kernels", "tasks", "ordering"),
     ("codes", "schedules"),
-    ("errors", "_validate", "progress", "_version"),
+    ("errors", "_validate", "_memory", "_startup", "progress", "_version"),
 )
 """Top to bottom: a module may import modules of its own layer (without a loop) or below."""
 

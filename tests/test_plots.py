@@ -9,6 +9,7 @@ import matplotlib
 matplotlib.use("Agg")
 
 import matplotlib.pyplot as plt
+import numpy as np
 import pytest
 
 from sigmapi import analysis, plots
@@ -75,3 +76,74 @@ def test_colour_bars_where_colour_carries_a_value(model_2d):
 
 def _is_colorbar(ax) -> bool:
     return getattr(ax, "_colorbar", None) is not None
+
+
+# ---------------------------------------------------------------------------- issue 15
+
+
+def test_weight_tiles_use_a_sequential_map_for_non_negative_weights(model_1d):
+    tiles = analysis.weight_tiles(model_1d)
+    ax = plots.plot_weight_tiles(np.abs(tiles), model_1d.map_shape)
+    img = ax.images[0]
+    assert img.get_cmap().name.startswith(plots.WEIGHT_CMAP_POSITIVE) and img.get_clim()[0] == 0
+    signed = tiles - tiles.mean()
+    img = plots.plot_weight_tiles(signed, model_1d.map_shape).images[0]
+    lo, hi = img.get_clim()
+    assert img.get_cmap().name.startswith(plots.WEIGHT_CMAP) and lo == -hi
+
+
+def test_iteration_ticks_are_short_and_never_run_together(curves):
+    assert [plots._count_label(v) for v in (500, 2000, 100_000, 200_000, 1e6)] == [
+        "500", "2k", "100k", "200k", "1M",
+    ]  # fmt: skip
+    ax = plots.plot_learning_curves(curves)
+    ax.figure.canvas.draw()
+    for pa in ax.figure.axes:
+        if pa.get_xscale() == "log":
+            labels = [t.get_text() for t in pa.get_xticklabels() if t.get_text()]
+            assert labels and all("," not in t and len(t) <= 5 for t in labels), labels
+
+
+def test_captions_say_twisted_when_the_data_do():
+    from sigmapi import SOMConfig
+    from sigmapi.figures import RunInfo, caption
+
+    run = RunInfo("quick-2d", SOMConfig(map_shape=(5, 5), x_shape=(5, 5), y_shape=(5, 5)), (0,), 0)
+    fig8 = {"z": [0.5, 0.5], "polarity": "mirrored left-right", "polarity_r2": 0.41,
+            "invariance_spread": 1.3}  # fmt: skip
+    text = caption("fig8", run, fig8)
+    assert "twisted" in text and "reappears" not in text and "responses differ" in text
+    text = caption("fig8", run, {**fig8, "polarity_r2": 0.99, "invariance_spread": 0.1})
+    assert "reappears on the map, mirrored left-right" in text and "responses agree" in text
+    net = caption("net", run, {"polarity": "same orientation", "order_r2_centres": 0.5})
+    assert "twisted" in net and "same orientation" not in net
+    curves = {"checkpoints": 5, "final": {}, "reference_lines": []}
+    assert "Dashed" not in caption("curves", run, curves)
+    assert "Dashed lines" in caption("curves", run, {**curves, "reference_lines": ["z_error"]})
+
+
+def test_one_seed_shows_no_spread():
+    from sigmapi.experiments.report_html import _mean_sd
+
+    assert _mean_sd(0.5, 0.0, 1) == "0.500 (one seed)"
+    assert _mean_sd(0.5, 0.01, 3) == "0.500 ± 0.010"
+
+
+def test_reach_value_maps_share_one_colour_scale():
+    from sigmapi.reach import run_reach
+    from sigmapi.reach.plots import reach_figure
+
+    res = run_reach(dim=2, grid=5, map_shape=(3, 3), map_pairs=300, episodes=4, seeds=1,
+                    block=2, final_episodes=2, max_steps=10, backend="reference")  # fmt: skip
+    clims = {ax.images[0].get_clim() for ax in reach_figure(res).axes if ax.images}
+    assert len(clims) == 1
+
+
+def test_figure_dpi_on_request(model_1d, tmp_path: Path):
+    import matplotlib.image as mpimg
+
+    draw_figure("net", model_1d, tmp_path / "a.png")
+    draw_figure("net", model_1d, tmp_path / "b.png", dpi=300)
+    small = mpimg.imread(tmp_path / "a.png")
+    big = mpimg.imread(tmp_path / "b.png")
+    assert big.shape[1] > 2.5 * small.shape[1]

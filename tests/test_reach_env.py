@@ -157,7 +157,7 @@ def test_random_restart_never_starts_in_the_goal() -> None:
     [
         ({"dim": 3}, "dim must be 1 or 2"),
         ({"grid": 1}, "grid must be an int >= 2"),
-        ({"saccade_rate": 1.5}, r"saccade_rate must be a number in \[0.0, 1.0\]"),
+        ({"saccade_rate": 1.5}, r"saccade_rate must be a number in \[0, 1\], got 1.5"),
         ({"step_size": 0.0}, "step_size"),
         ({"goal": [0.5, 2.0]}, "goal must be"),
         ({"dim": 1, "diagonal": True}, "diagonal"),
@@ -188,3 +188,60 @@ def test_saccade_views_show_the_same_z() -> None:
     z1 = (dec(x1) + dec(y1)) / 2
     np.testing.assert_allclose(z0, z1, atol=1e-3)
     assert np.abs(dec(y0) - dec(y1)).max() > 0.05  # the eye really moved
+
+
+# ---------------------------------------------------------------------------- issue 15
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"goal_radius": 0.5}, "leave 5 % of the workspace outside the goal box"),
+        ({"goal_radius": 0.48, "dim": 1}, "the box covers 96 %"),
+        ({"code_width": 0.02}, "code_width must be a finite number >= 0.1, got 0.02"),
+        ({"render_mode": "human"}, r"render_mode must be one of \(None, 'rgb_array'\)"),
+    ],
+)
+def test_construction_refuses_what_would_hang_or_give_nan(kwargs, match) -> None:
+    with pytest.raises(ConfigError, match=match):
+        GazeReachEnv(**kwargs)
+
+
+def test_observations_stay_in_the_box_at_the_narrowest_width() -> None:
+    env = GazeReachEnv(grid=7, code_width=0.1, saccade_rate=0.5)
+    env.reset(seed=0)
+    rng = np.random.default_rng(0)
+    for _ in range(2000):
+        obs, _, terminated, truncated, _ = env.step(int(rng.integers(env.action_space.n)))
+        assert env.observation_space.contains(obs), obs
+        if terminated or truncated:
+            env.reset()
+
+
+def test_stepping_after_the_episode_ended_needs_reset() -> None:
+    env = GazeReachEnv(dim=1, grid=7)
+    with pytest.raises(gym.error.ResetNeeded):
+        env.step(STAY)
+    env.reset(seed=0, options={"z": [0.2], "y": [0.2]})
+    terminated = False
+    while not terminated:
+        *_, terminated, _, _ = env.step(LEFT)  # walks out of view
+    with pytest.raises(gym.error.ResetNeeded, match="call reset"):
+        env.step(STAY)
+    env.reset()
+    env.step(STAY)
+
+
+@pytest.mark.parametrize("dim", [1, 2])
+def test_rgb_array_render_shows_workspace_goal_gaze_and_object(dim) -> None:
+    env = gym.make(ENV_ID, dim=dim, grid=7, render_mode="rgb_array").unwrapped
+    check_env(env)  # with the render check
+    env.reset(seed=0, options={"z": [0.2] * dim, "y": [0.3] * dim})
+    img = env.render()
+    assert img.dtype == np.uint8 and img.ndim == 3 and img.shape[2] == 3
+    colours = {tuple(c) for c in img.reshape(-1, 3)}
+    assert {(225, 225, 225), (150, 220, 150), (40, 90, 220), (220, 40, 40)} <= colours
+    red = np.argwhere(np.all(img == (220, 40, 40), axis=2))[:, 1].mean()
+    green = np.argwhere(np.all(img == (150, 220, 150), axis=2))[:, 1].mean()
+    assert red < green  # the object (z = 0.2) is drawn left of the goal (z = 0.5)
+    assert GazeReachEnv(dim=dim, grid=7).render() is None

@@ -111,7 +111,12 @@ def test_experiment_is_deterministic_and_shapes_are_right() -> None:
     assert a.values["map"].shape == (51,)
     c = a.curves()["true_z"]
     assert c["success"].shape == (2,)
-    json.dumps(a.to_dict())
+    d = a.to_dict()
+    json.dumps(d)
+    for s in a.success:  # counted: never a rounding residue such as -8.7e-17
+        last = ~a.success[s][:, -10:] & ~a.lost[s][:, -10:]
+        assert d["timed_out"][s] == last.sum() / last.size  # exactly, not 1 - success - lost
+        assert d["success"][s] + d["lost"][s] + d["timed_out"][s] == pytest.approx(1.0)
     fig = reach_figure(a)
     assert len(fig.axes) >= 6
     assert plot_reach_curves(a, "steps") is not None

@@ -7,6 +7,9 @@ Importing the package registers the Gymnasium environment ``sigmapi/GazeReach-v0
 environment's module when it is first made.
 """
 
+# first: a quiet Ctrl-C while the command line starts (see _startup.py)
+from sigmapi import _startup  # noqa: F401  # isort: skip
+
 import gymnasium as _gymnasium
 
 from sigmapi._version import __version__

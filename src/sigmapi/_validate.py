@@ -43,10 +43,18 @@ def _is_real(value: Any) -> bool:
     )
 
 
+def _short(v: float | None) -> Any:
+    """A bound as written by a person: 0 for 0.0, 1e+15 for 1000000000000000.0."""
+    if isinstance(v, float) and v.is_integer() and abs(v) < 1e6:
+        return int(v)
+    return f"{v:g}" if isinstance(v, float) else v
+
+
 def _range(
     kind: str, lo: float | None, hi: float | None, lo_open: bool = False, hi_open: bool = False
 ) -> str:
     """``"an int >= 1"``, ``"a number in (0, 1]"``, ``"a finite number > 0"``, ..."""
+    lo, hi = _short(lo), _short(hi)
     if lo is not None and hi is not None:
         left, right = "(" if lo_open else "[", ")" if hi_open else "]"
         return f"{kind} in {left}{lo}, {hi}{right}"

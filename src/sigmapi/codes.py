@@ -25,13 +25,24 @@ from numpy.typing import ArrayLike, NDArray
 
 from sigmapi import _validate
 
-__all__ = ["PopulationCode", "grid_coordinates"]
+__all__ = ["MIN_WIDTH", "PopulationCode", "grid_coordinates"]
+
+MIN_WIDTH = 0.1
+"""Narrowest hill (grid units). Half-way between two units a hill of width w is
+``exp(-d / (8 w^2))`` of its peak in d dimensions: at w = 0.1 that is 4e-6 in 1-D, at w = 0.02
+it underflows in 2-D and the normalised code becomes NaN."""
 
 
 def grid_coordinates(shape: tuple[int, ...]) -> NDArray[np.float64]:
     """Grid coordinates of every unit, shape ``(prod(shape), len(shape))``, in C order."""
     axes = np.meshgrid(*[np.arange(n, dtype=np.float64) for n in shape], indexing="ij")
     return np.stack([a.ravel() for a in axes], axis=1)
+
+
+_WIDTH_FIX = (
+    "in grid units; narrower hills leave positions between units without a code "
+    "(the paper uses 0.5)"
+)
 
 
 @dataclass(frozen=True)
@@ -70,7 +81,7 @@ class PopulationCode:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "shape", _validate.shape("shape", self.shape))
-        _validate.positive("width", self.width, fix="in grid units; the paper uses 0.5")
+        _validate.number("width", self.width, MIN_WIDTH, fix=_WIDTH_FIX)
         _validate.positive("height", self.height, fix="the paper uses 1.0")
         object.__setattr__(self, "_coords", grid_coordinates(self.shape))
 

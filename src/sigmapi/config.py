@@ -8,6 +8,8 @@ scales the paper's schedule rather than cutting it.
 from __future__ import annotations
 
 import dataclasses
+import json
+import math
 import tomllib
 from dataclasses import dataclass, field
 from importlib import resources
@@ -15,15 +17,65 @@ from pathlib import Path
 from typing import Any
 
 from sigmapi import _validate
+from sigmapi.codes import _WIDTH_FIX, MIN_WIDTH
 from sigmapi.errors import ConfigError
 from sigmapi.kernels import BACKENDS, WINNER_RULES
 from sigmapi.ordering import ORDERINGS
 from sigmapi.schedules import PAPER_SIGMA, PiecewiseLinear
 from sigmapi.tasks import RELATIONS
 
-__all__ = ["SOMConfig", "apply_overrides", "list_presets", "load_config_file", "load_preset"]
+__all__ = [
+    "MAX_EXTRA",
+    "SOMConfig",
+    "apply_overrides",
+    "check_extra",
+    "list_presets",
+    "load_config_file",
+    "load_preset",
+]
 
 BACKEND_NAMES = ("auto", *BACKENDS)
+MAX_INIT_SCALE = 1e15
+MAX_CODE_HEIGHT = 1e7
+"""Weights stay within init_scale and code_height**2 (a Kohonen update moves them towards the
+data), so these bounds keep them far inside float32's range (3.4e38) even after the fast
+kernel's lazy scaling (raw = W / scale, scale >= 2**-50, about 1e-15)."""
+_RANGE_FIX = "weights must stay far inside float32's range; the paper uses 0.1 and 1.0"
+MAX_EXTRA = 64 * 1024
+"""Largest ``[extra]`` table, in bytes of JSON (a model file's header holds it)."""
+
+
+def check_extra(extra: Any) -> dict[str, Any]:
+    """``extra`` if it is a table of plain values (strings, finite numbers, bools, lists and
+    tables of them) of at most :data:`MAX_EXTRA` bytes of JSON; else a ConfigError naming it."""
+    if not isinstance(extra, dict):
+        raise ConfigError(f"extra must be a table, got {extra!r}")
+
+    def plain(v: Any, where: str) -> None:
+        if isinstance(v, dict):
+            for k, item in v.items():
+                if not isinstance(k, str):
+                    raise ConfigError(f"{where} has a key {k!r} that is not a string")
+                plain(item, f"{where}.{k}")
+        elif isinstance(v, (list, tuple)):
+            for i, item in enumerate(v):
+                plain(item, f"{where}[{i}]")
+        elif isinstance(v, float) and not math.isfinite(v):
+            raise ConfigError(f"{where} must be a finite number, got {v!r}")
+        elif not isinstance(v, (str, int, float, bool)):
+            raise ConfigError(
+                f"{where} must be a string, number, bool, or a list or table of them, got "
+                f"{type(v).__name__} {v!r}; write dates and times as strings"
+            )
+
+    plain(extra, "extra")
+    size = len(json.dumps(extra))
+    if size > MAX_EXTRA:
+        raise ConfigError(
+            f"extra must be at most {MAX_EXTRA} bytes of JSON, got {size}; keep notes short "
+            "and put data in files of their own"
+        )
+    return extra
 
 
 @dataclass(frozen=True)
@@ -93,8 +145,12 @@ class SOMConfig:
                 f"x_shape and y_shape must have the same number of dimensions, got "
                 f"{self.x_shape} and {self.y_shape}"
             )
-        for name in ("code_width", "code_height", "init_scale", "ordering_sigma"):
-            set_(self, name, _validate.positive(name, getattr(self, name)))
+        cw = _validate.number("code_width", self.code_width, MIN_WIDTH, fix=_WIDTH_FIX)
+        set_(self, "code_width", cw)
+        for name, hi in (("code_height", MAX_CODE_HEIGHT), ("init_scale", MAX_INIT_SCALE)):
+            v = _validate.number(name, getattr(self, name), 0.0, hi, lo_open=True, fix=_RANGE_FIX)
+            set_(self, name, v)
+        set_(self, "ordering_sigma", _validate.positive("ordering_sigma", self.ordering_sigma))
         for name in ("code_normalize", "periodic", "same_view", "threads"):
             _validate.boolean(name, getattr(self, name))
         its = _validate.integer("iterations", self.iterations, 1, fix="the paper runs 300000")
@@ -126,6 +182,7 @@ class SOMConfig:
         tol = _validate.number("kernel_tol", self.kernel_tol, 0.0, 1.0, hi_open=True,
                                fix="0 is exact; the default is 1e-6")  # fmt: skip
         set_(self, "kernel_tol", tol)
+        set_(self, "extra", check_extra(self.extra))
         if self.seed is not None:
             set_(
                 self,

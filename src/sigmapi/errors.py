@@ -8,7 +8,15 @@ received and the fix.
 
 from __future__ import annotations
 
-__all__ = ["ConfigError", "ModelFileError", "NotFittedError", "SigmapiError", "UsageError"]
+__all__ = [
+    "ConfigError",
+    "ModelFileError",
+    "NotFittedError",
+    "NumericalError",
+    "ResourceError",
+    "SigmapiError",
+    "UsageError",
+]
 
 
 class SigmapiError(Exception):
@@ -25,6 +33,14 @@ class ModelFileError(SigmapiError, ValueError):
 
 class NotFittedError(SigmapiError, RuntimeError):
     """The model has no weights yet: call ``fit`` (or ``partial_fit``) first."""
+
+
+class ResourceError(SigmapiError, MemoryError):
+    """What was asked needs more memory than the machine has available (checked beforehand)."""
+
+
+class NumericalError(SigmapiError, FloatingPointError):
+    """A model's weights overflowed (NaN or inf): the model cannot be used or saved."""
 
 
 class UsageError(SigmapiError):

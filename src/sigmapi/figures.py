@@ -15,6 +15,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from sigmapi.metrics import ORDERED_R2
+
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
@@ -34,6 +36,13 @@ __all__ = [
 ]
 
 DPI = 100
+"""Resolution of raster figures by default (``draw_figure(..., dpi=300)`` for print; a
+``.pdf`` or ``.svg`` path gives vector graphics)."""
+SAME_RESPONSE = 0.5
+"""Fig. 8 caption: responses "agree" when the largest distance between the normalised
+responses (0 = identical, 2 = opposite) is at most this."""
+CURVE_REFERENCES = ("view_consistency", "z_error", "z_error_floor")
+"""Reference keys the curves figure draws as lines (plots.plot_learning_curves)."""
 
 Facts = dict[str, Any]
 
@@ -133,13 +142,23 @@ def _caption_fig8(run: RunInfo, facts: Facts) -> str:
         pattern = 'an "L" on x with a single hill on y (and the reverse)'
     else:
         pattern = "two hills on x with a single hill on y (and the reverse)"
+    spread, r2 = facts["invariance_spread"], facts["polarity_r2"]
+    agree = "agree" if spread <= SAME_RESPONSE else "differ"
+    if r2 >= ORDERED_R2:
+        shown = (
+            f"the pattern reappears on the map, {facts['polarity']} relative to the input "
+            f"(affine order R² of the receptive-field centres {r2:.2f})"
+        )
+    else:
+        shown = (
+            f"this map is twisted (affine order R² of the receptive-field centres {r2:.2f} < "
+            f"{ORDERED_R2}), so the pattern does not reappear as one piece"
+        )
     return (
         f"Fig. 8 of the chapter, {run.what}. Left: four random (x, y) pairs that share one "
         f"body-centred z = ({', '.join(f'{v:.2f}' for v in facts['z'])}); rows x, y and the "
-        f"map activation h. The responses agree (largest distance between the normalised "
-        f"responses: {facts['invariance_spread']:.2f}, 0 = identical). Right: {pattern}; "
-        f"the pattern reappears on the map, {facts['polarity']} relative to the input "
-        f"(affine order R² of the receptive-field centres {facts['polarity_r2']:.2f}). "
+        f"map activation h. The responses {agree} (largest distance between the normalised "
+        f"responses: {spread:.2f}, 0 = identical). Right: {pattern}; {shown}. "
         "The paper's 2-D run came out rotated by 180 degrees: the orientation is arbitrary "
         "before learning and consistent after it."
     )
@@ -180,7 +199,8 @@ def _caption_weights(run: RunInfo, facts: Facts) -> str:
     return (
         f"Sigma-Pi weights in the style of Fig. 6a, {run.what}: {tiles}, x on rows and y on "
         "columns. A unit that responds to one z = (x + y) / 2 holds its weight on an "
-        "anti-diagonal i + j = const; neighbouring units hold neighbouring anti-diagonals."
+        "anti-diagonal i + j = const; in an ordered map, neighbouring units hold neighbouring "
+        "anti-diagonals."
     )
 
 
@@ -204,8 +224,14 @@ def _caption_net(run: RunInfo, facts: Facts) -> str:
     return (
         f"The map in input space, {run.what}: every unit placed at the z it responds to (centre "
         "of mass of the upper half of its receptive field in z), grid neighbours joined, as "
-        f"in the classic SOM net plot. Map polarity: {facts['polarity']} (R² of the affine "
-        f"fit of the centres to the grid: {facts['order_r2_centres']:.2f})."
+        f"in the classic SOM net plot. "
+        + (
+            f"Map polarity: {facts['polarity']} (R² of the affine fit of the centres to the "
+            f"grid: {facts['order_r2_centres']:.2f})."
+            if facts["order_r2_centres"] >= ORDERED_R2
+            else f"The net is twisted (R² of the affine fit of the centres to the grid: "
+            f"{facts['order_r2_centres']:.2f} < {ORDERED_R2}): no single polarity."
+        )
     )
 
 
@@ -266,6 +292,7 @@ def _draw_curves(model: SigmaPiSOM, inp: DrawInputs) -> tuple[Figure, Facts]:
     return fig, {
         "checkpoints": len(curves[0]["t"]),
         "final": {k: v[-1] for k, v in curves[0].items()},
+        "reference_lines": sorted(k for k in (inp.reference or {}) if k in CURVE_REFERENCES),
     }
 
 
@@ -275,7 +302,14 @@ def _caption_curves(run: RunInfo, facts: Facts) -> str:
         f"mean), measured on {run.curve_test} test z's at {facts['checkpoints']} log-spaced "
         "checkpoints: view consistency, z error, the approximate cost of section 6.3 (at the "
         "sigma of the moment, and with the winner alone) and the neighbourhood width sigma with "
-        "its schedule. Dashed lines: reference figures of docs/algorithm.md."
+        "its schedule. The table's metrics use a larger test set: the last points differ from "
+        "it by sampling."
+        + (
+            " Dashed lines: reference figures of docs/algorithm.md "
+            f"({', '.join(facts['reference_lines'])})."
+            if facts.get("reference_lines")
+            else ""
+        )
     )
 
 
@@ -310,6 +344,7 @@ def draw_figure(
     label: str = "",
     seed: int = 0,
     centres: Any = None,
+    dpi: int = DPI,
 ) -> Facts:
     """Draw figure ``name`` (one of :data:`FIGURES`) of ``model`` into ``path``.
 
@@ -326,7 +361,7 @@ def draw_figure(
     inputs = DrawInputs(curves, reference, label, seed, centres)
     fig, facts = spec.draw(model, inputs)
     tight = "tight" if spec.tight else None
-    fig.savefig(Path(path), dpi=DPI, bbox_inches=tight, facecolor="white")
+    fig.savefig(Path(path), dpi=dpi, bbox_inches=tight, facecolor="white")
     return facts
 
 

@@ -44,7 +44,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
-from sigmapi import _validate
+from sigmapi import _memory, _validate
 
 if TYPE_CHECKING:
     from sigmapi.som import SigmaPiSOM
@@ -53,6 +53,7 @@ if TYPE_CHECKING:
 __all__ = [
     "EVAL_SEED",
     "FOLD_THRESHOLD",
+    "ORDERED_R2",
     "Metrics",
     "affine_fit",
     "evaluate",
@@ -77,6 +78,10 @@ FAR_SHARE = 0.002
 
 FOLD_THRESHOLD = 1.0
 """``folded`` is ``fold_score >= FOLD_THRESHOLD``."""
+
+ORDERED_R2 = 0.95
+"""A map counts as ordered when its order R^2 (or the affine R^2 of its receptive-field
+centres, in figure captions) is at least this; below it, captions call the map twisted."""
 
 
 @dataclass(frozen=True)
@@ -153,6 +158,12 @@ def evaluate(
         Precomputed evaluation data (e.g. reused across learning-curve checkpoints).
     """
     _validate.integer("n_test", n_test, 2)
+    n_x, n_y = int(np.prod(model.x_shape)), int(np.prod(model.y_shape))
+    _memory.check(  # two batches of codes, the responses (B, K) and their scores
+        n_test * 8 * (4 * (n_x + n_y) + 3 * model.n_units + 16),
+        f"evaluating on n_test={n_test} test pairs",
+        "use a smaller n_test (the default is 10000)",
+    )
     if test is None or calibration is None:
         calibration, test = evaluation_sets(model, n_test, seed)
     coords = model.map_coords

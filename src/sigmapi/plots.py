@@ -37,6 +37,16 @@ __all__ = [
 
 CODE_CMAP = "viridis"
 WEIGHT_CMAP = "RdBu_r"
+"""Weights of both signs (an untrained map): a diverging map centred on zero."""
+WEIGHT_CMAP_POSITIVE = "magma_r"
+"""Weights >= 0 (a trained map: they learn non-negative outer products): a sequential map."""
+
+
+def _count_label(v: float, _: object = None) -> str:
+    """An iteration count as a short tick label: 500, 2k, 100k, 1M (no colliding digits)."""
+    if v >= 1e6:
+        return f"{v / 1e6:g}M"
+    return f"{v / 1e3:g}k" if v >= 1e3 else f"{v:g}"
 
 
 def _axes(ax: Axes | None, figsize: tuple[float, float], container: bool = False) -> Axes:
@@ -171,8 +181,11 @@ def plot_weight_tiles(
     vmax = float(np.nanpercentile(np.abs(mosaic), 99.5)) or top_abs or 1.0
     import matplotlib as mpl
 
-    cmap = mpl.colormaps[WEIGHT_CMAP].with_extremes(bad="white")
-    img = ax.imshow(mosaic, cmap=cmap, vmin=-vmax, vmax=vmax, interpolation="nearest")
+    signed = float(np.nanmin(mosaic)) < -1e-3 * vmax  # negligible negatives: a trained map
+    name = WEIGHT_CMAP if signed else WEIGHT_CMAP_POSITIVE
+    cmap = mpl.colormaps[name].with_extremes(bad="white")
+    img = ax.imshow(mosaic, cmap=cmap, vmin=-vmax if signed else 0.0, vmax=vmax,
+                    interpolation="nearest")  # fmt: skip
     if one_d:
         for u in range(k):
             r, c = divmod(u, m1)
@@ -193,7 +206,7 @@ def plot_weight_tiles(
     )
     clipped = top_abs > vmax * (1 + 1e-9)
     label = "weight (colour clipped at the 99.5th percentile)" if clipped else "weight"
-    extend = "both" if clipped else "neither"
+    extend = ("both" if signed else "max") if clipped else "neither"
     ax.figure.colorbar(img, ax=ax, label=label, fraction=0.046, pad=0.02, extend=extend)
     return ax
 
@@ -276,9 +289,9 @@ def plot_learning_curves(
         raise ValueError("curves must hold at least one curve with checkpoints")
     ref = dict(reference or {})
     panels = [
-        ("view consistency,\nunit usage", [("view_consistency", "same winner"),
-                              ("view_within_one", "within one unit"),
-                              ("usage", "units that win")]),
+        ("view consistency,\nunit usage", [("view_consistency", "view consistency"),
+                              ("view_within_one", "view within one"),
+                              ("usage", "usage")]),
         ("z error (grid spacings)", [("z_error", "z error")]),
         ("cost E (sec. 6.3)", [("cost", "at the current sigma"), ("cost_winner", "winner only")]),
         ("sigma (map units)", [("sigma", "at checkpoints")]),
@@ -315,7 +328,7 @@ def plot_learning_curves(
             pa.set_yscale("log")
         pa.set_xscale("log")
         pa.xaxis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
-        pa.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:,.0f}"))
+        pa.xaxis.set_major_formatter(FuncFormatter(_count_label))
         pa.xaxis.set_minor_formatter(NullFormatter())
         pa.set_ylabel(label)
         pa.grid(alpha=0.3, which="both")

@@ -1,20 +1,24 @@
-"""Progress bars on stderr (tqdm): one for training runs, one for counted work such as episodes,
-one for parallel jobs (a line per finished job when stderr is not a terminal).
+"""Progress on stderr: bars (tqdm) on a terminal, plain lines in a log.
 
-Both return ``(callback, bar)``; use the bar as a context manager so that it closes.
-``disable=None`` lets tqdm hide the bar when stderr is not a terminal.
+:func:`progress_callback` (training runs), :func:`counter` (counted work such as
+episodes) and :func:`jobs_done` (parallel runs) return ``(callback, bar)``; use the bar as a
+context manager so that it closes.
+``disable=None`` draws a bar when stderr is a terminal and otherwise writes one line per phase
+and one per finished run (``sigmapi reproduce > log 2>&1`` shows where it is);
+``disable=True`` writes nothing.
 """
 
 from __future__ import annotations
 
 import sys
-from collections.abc import Callable, Iterable
+import time
+from collections.abc import Callable, Iterable, Iterator
 from typing import TYPE_CHECKING, Any, Protocol, TypeVar
 
 if TYPE_CHECKING:
     from tqdm import tqdm
 
-__all__ = ["counter", "each", "jobs_done", "progress_callback"]
+__all__ = ["Lines", "counter", "each", "jobs_done", "progress_callback"]
 
 T = TypeVar("T")
 
@@ -24,8 +28,52 @@ class _Trained(Protocol):
     sigma_: float
 
 
-def _bar(total: int, desc: str, unit: str, start: int, disable: bool | None) -> tqdm[Any]:
+class Lines:
+    """What a bar does, as plain lines: one per new phase, one when closed (count, time)."""
+
+    def __init__(self, total: int, desc: str, unit: str, start: int = 0) -> None:
+        self.total, self.desc, self.unit, self.start, self.n = total, desc, unit, start, start
+        self._phase = ""
+        self._t0 = time.perf_counter()
+        self._closed = False
+
+    def update(self, n: int) -> None:
+        self.n += n
+
+    def set_postfix(self, *args: Any, **kwargs: Any) -> None:
+        pass
+
+    def set_postfix_str(self, phase: str, refresh: bool = True) -> None:
+        if phase and phase != self._phase:
+            self._phase = phase
+            print(f"{self.desc}: {phase}", file=sys.stderr, flush=True)
+
+    def close(self) -> None:
+        if self._closed:
+            return
+        self._closed = True
+        done, dt = self.n - self.start, time.perf_counter() - self._t0
+        rate = f" ({done / dt:,.0f} {self.unit}/s)" if dt > 0 and done > 0 and self.unit else ""
+        unit = f" {self.unit}" if self.unit else ""
+        print(f"{self.desc}: {done:,} of {self.total:,}{unit} in {dt:.1f} s{rate}",
+              file=sys.stderr, flush=True)  # fmt: skip
+
+    def __enter__(self) -> Lines:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def _lines(disable: bool | None) -> bool:
+    return disable is None and not (hasattr(sys.stderr, "isatty") and sys.stderr.isatty())
+
+
+def _bar(total: int, desc: str, unit: str, start: int, disable: bool | None) -> Any:
     from tqdm import tqdm
+
+    if _lines(disable):
+        return Lines(total, desc, unit, start)
 
     return tqdm(total=total, initial=start, desc=desc, unit=unit, unit_scale=unit == "it",
                 dynamic_ncols=True, file=sys.stderr, disable=disable, mininterval=0.5)  # fmt: skip
@@ -33,7 +81,7 @@ def _bar(total: int, desc: str, unit: str, start: int, disable: bool | None) -> 
 
 def progress_callback(
     total: int, desc: str, start: int = 0, disable: bool | None = None
-) -> tuple[Callable[[Any], None], tqdm[Any]]:
+) -> tuple[Callable[[Any], None], tqdm[Any] | Lines]:
     """A bar of training iterations showing iterations/s and the current sigma.
 
     The callback takes the model (``callback(model)``, as ``fit`` calls it).
@@ -49,7 +97,7 @@ def progress_callback(
 
 def counter(
     total: int, desc: str, unit: str, disable: bool | None = None
-) -> tuple[Callable[[int, str], None], tqdm[Any]]:
+) -> tuple[Callable[[int, str], None], tqdm[Any] | Lines]:
     """A bar of ``total`` units of work; ``callback(n, phase)`` adds ``n`` and shows ``phase``."""
     bar = _bar(total, desc, unit, 0, disable)
 
@@ -61,31 +109,41 @@ def counter(
 
 
 def each(items: Iterable[T], desc: str, disable: bool | None = None) -> Iterable[T]:
-    """``items`` with a transient bar (it disappears when the loop ends)."""
+    """``items`` with a transient bar (it disappears when the loop ends), or in a log one
+    line when the loop ends."""
     from tqdm import tqdm
 
+    if _lines(disable):
+        return _each_line(list(items), desc)
     return tqdm(items, desc=desc, disable=disable, file=sys.stderr, leave=False)
+
+
+def _each_line(items: list[T], desc: str) -> Iterator[T]:
+    with Lines(len(items), desc, "") as lines:
+        for item in items:
+            yield item
+            lines.update(1)
 
 
 def jobs_done(
     total: int, desc: str, disable: bool = False
-) -> tuple[Callable[[bool, str], None], tqdm[Any]]:
-    """A bar of ``total`` jobs; ``callback(ok, line)`` counts one finished job.
+) -> tuple[Callable[[bool, str], None], tqdm[Any] | Lines]:
+    """A bar of ``total`` parallel jobs; ``callback(ok, line)`` counts one finished job.
 
-    On a terminal the bar shows jobs done, failed and left; when stderr is a file (a log),
-    each finished job prints ``line`` instead, one line per job.
+    On a terminal the bar shows jobs done, failed and left; in a log each finished job
+    writes ``line`` (numbered), and the end one line with the count and the time.
     """
-    tty = sys.stderr.isatty()
-    bar = _bar(total, desc, "run", 0, disable or not tty)
+    bar = _bar(total, desc, "run", 0, True if disable else None)
     done = failed = 0
 
     def callback(ok: bool, line: str) -> None:
         nonlocal done, failed
         done += 1
         failed += not ok
-        bar.set_postfix_str(f"failed {failed}, left {total - done}", refresh=False)
+        if isinstance(bar, Lines):
+            bar.set_postfix_str(f"[{done}/{total}] {line}")
+        else:
+            bar.set_postfix_str(f"failed {failed}, left {total - done}", refresh=False)
         bar.update(1)
-        if not tty and not disable:
-            print(f"{desc}: [{done}/{total}] {line}", file=sys.stderr, flush=True)
 
     return callback, bar

@@ -13,6 +13,8 @@ bit, wherever the run was cut.
 
 from __future__ import annotations
 
+import copy
+import threading
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -20,11 +22,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from sigmapi import _validate
+from sigmapi import _memory, _validate
 from sigmapi.codes import PopulationCode, grid_coordinates
 from sigmapi.config import SOMConfig
-from sigmapi.errors import ConfigError, ModelFileError, NotFittedError
+from sigmapi.errors import ConfigError, ModelFileError, NotFittedError, NumericalError
 from sigmapi.kernels import KernelState, get_backend, reference
+from sigmapi.kernels.base import columns_to_dense, columns_top
 from sigmapi.ordering import INIT_PAIRS, crossview_init, training_rule
 from sigmapi.tasks import Batch, TwoViewSampler
 
@@ -34,6 +37,14 @@ BLOCK = 1000
 """Iterations per block of training data (one random child stream per block)."""
 
 Callback = Callable[["SigmaPiSOM"], None]
+
+MAX_WEIGHT = 1e30
+"""Largest weight magnitude a model starts from; with :data:`MAX_PRODUCT`, the fast kernel's
+float32 ``raw = W / scale`` (scale >= 2**-50) stays below about 2e30, far from 3.4e38."""
+
+MAX_PRODUCT = 1e15
+"""Largest ``|x_i y_j|`` of the views a model learns (weights move towards ``x y^T``): keeps
+every backend's weights far inside float32's range (see :data:`sigmapi.config.MAX_INIT_SCALE`)."""
 
 
 class SigmaPiSOM:
@@ -89,6 +100,7 @@ class SigmaPiSOM:
         self.seed_entropy_: int = int(np.random.SeedSequence(seed).entropy)  # type: ignore[arg-type]
         self._block_cache: tuple[int, Batch] | None = None
         self._weights_cache: NDArray[np.float64] | None = None
+        self._lock = threading.RLock()
 
     # ------------------------------------------------------------------ shapes and codes
     @property
@@ -153,6 +165,7 @@ class SigmaPiSOM:
         random stream (child ``spawn_key=(2,)``).
         """
         c = self.config
+        self.check_memory()
         if c.ordering == "none":
             s = c.init_scale
             shape = (self.n_units, int(np.prod(self.x_shape)), int(np.prod(self.y_shape)))
@@ -166,7 +179,31 @@ class SigmaPiSOM:
             views, self.x_shape, self.y_shape, self.map_shape, c.ordering_sigma / 2.0
         )
 
+    def memory_estimate(self) -> int:
+        """Bytes this model needs at its peak: the float64 start, the backend's copy (float64,
+        or float32 for the fast kernel with ``kernel_tol > 0``) and the float64 ``weights_``."""
+        n = self.n_units * int(np.prod(self.x_shape)) * int(np.prod(self.y_shape))
+        storage = 4 if self.backend == "fast" and self.config.kernel_tol > 0 else 8
+        return n * (8 + storage + 8)
+
+    def check_memory(self) -> None:
+        """Raise :class:`~sigmapi.errors.ResourceError` (a MemoryError) before allocating if
+        the machine's available memory cannot hold :meth:`memory_estimate`."""
+        n = self.n_units * int(np.prod(self.x_shape)) * int(np.prod(self.y_shape))
+        _memory.check(
+            self.memory_estimate(),
+            f"a model of {self.n_units} units x {int(np.prod(self.x_shape))} x "
+            f"{int(np.prod(self.y_shape))} inputs ({n:,} weights)",
+            "use a smaller map_shape, x_shape or y_shape",
+        )
+
     def _set_weights(self, weights: NDArray[np.float64]) -> None:
+        top = float(np.abs(weights).max(initial=0.0))
+        if not top <= MAX_WEIGHT:  # also NaN
+            raise NumericalError(
+                f"weights must be finite and at most {MAX_WEIGHT:g} in magnitude (the fast "
+                f"kernel stores float32 and scales lazily), got {top:.3g}; rescale them"
+            )
         self._state = self._kernel.prepare(weights, tol=self.config.kernel_tol)
         self._weights_cache = None
 
@@ -223,11 +260,12 @@ class SigmaPiSOM:
         ``callback(model)`` is called at least once per block of ``BLOCK`` iterations.
         Returns ``self``.
         """
-        self._set_weights(self.initial_weights())
-        self.t_ = 0
-        return self.partial_fit(
-            n_iter if n_iter is not None else self.config.iterations, callback=callback
-        )
+        with self._lock:
+            self._set_weights(self.initial_weights())
+            self.t_ = 0
+            return self.partial_fit(
+                n_iter if n_iter is not None else self.config.iterations, callback=callback
+            )
 
     def partial_fit(
         self,
@@ -249,7 +287,19 @@ class SigmaPiSOM:
             ``(x1[t], y1[t])``. The schedule continues at ``t_``.
         callback : callable, optional
             ``callback(model)``, called after every chunk of at most ``BLOCK`` iterations.
+
+        Calls from several threads on one model run one after the other (a lock), so no
+        iteration is lost; the order in which they run is the threads'.
         """
+        with self._lock:
+            return self._partial_fit(n_iter, views, callback)
+
+    def _partial_fit(
+        self,
+        n_iter: int | None,
+        views: tuple[ArrayLike, ArrayLike, ArrayLike, ArrayLike] | None,
+        callback: Callback | None,
+    ) -> SigmaPiSOM:
         if views is not None:
             x0, y0, x1, y1 = self._check_views(views)
             if self._state is None:
@@ -307,6 +357,13 @@ class SigmaPiSOM:
             raise ValueError(
                 f"views must have the same number of rows, got {x0.shape[0]}, {y0.shape[0]}, "
                 f"{x1.shape[0]}, {y1.shape[0]}"
+            )
+        top = float(np.abs(x1).max(initial=0.0)) * float(np.abs(y1).max(initial=0.0))
+        if top > MAX_PRODUCT:
+            raise ValueError(
+                f"views x1 and y1 must have |x1_i y1_j| <= {MAX_PRODUCT:g} (the weights learn "
+                f"x1 y1^T and would overflow), got up to {top:.3g}; scale your codes to "
+                "about 1 (model.x_code.encode gives unit-length codes)"
             )
         return x0, y0, x1, y1
 
@@ -423,20 +480,36 @@ class SigmaPiSOM:
         """The model as a JSON-able header and arrays (what a model file holds).
 
         The header holds the resolved ``config``, the iteration count ``t``, the
-        ``seed_entropy`` of the random streams (a decimal string) and the ``backend``; the
-        arrays are the float64 ``weights`` ``(n_units, n_x, n_y)`` and ``state_<name>``,
-        the kernel's own state (e.g. the fast kernel's float32 weights and scale factors),
-        so that the model continues bit for bit on the same backend.
+        ``seed_entropy`` of the random streams (a decimal string) and the ``backend``. The
+        weights are stored once, in the backend's precision: the reference kernel's float64
+        ``weights`` ``(n_units, n_x, n_y)``, or the kernel's own state as ``state_<name>``
+        arrays (the fast kernel's float32 ``raw`` weights and per-unit ``scale``), from which
+        the weights follow and with which the model continues bit for bit on that backend.
+
+        Raises :class:`~sigmapi.errors.NumericalError` if the weights hold NaN or inf, so
+        that no file is written that :func:`sigmapi.load` would refuse.
         """
         self._check_fitted()
         state = self._kernel.state_arrays(self._state)
+        arrays = (
+            {f"state_{k}": v for k, v in state.items()}
+            if state
+            else {"weights": np.array(self.weights_)}
+        )
+        for k, v in arrays.items():
+            if not np.all(np.isfinite(v)):
+                raise NumericalError(
+                    f"the model's {k} hold NaN or inf values (an overflow in training, at "
+                    f"iteration <= {self.t_}); it cannot be saved: retrain with codes and "
+                    "init_scale of about 1"
+                )
         header = {
             "config": self.config.to_dict(),
             "t": int(self.t_),
             "seed_entropy": str(self.seed_entropy_),
             "backend": self.backend,
         }
-        return header, {"weights": self.weights_, **{f"state_{k}": v for k, v in state.items()}}
+        return header, arrays
 
     @classmethod
     def from_arrays(
@@ -448,7 +521,9 @@ class SigmaPiSOM:
     ) -> SigmaPiSOM:
         """Rebuild a model from :meth:`to_arrays`'s header and arrays.
 
-        ``backend`` runs the model on another kernel (which starts from ``weights``; the
+        ``arrays`` holds ``weights``, or the fast kernel's ``state_raw`` and ``state_scale``
+        (and ``state_sqnorm``), or both (format version 1), which must then agree exactly.
+        ``backend`` runs the model on another kernel (which starts from the weights; the
         kernel state is used only by the backend that wrote it). Raises
         :class:`~sigmapi.errors.ModelFileError`, its message starting with ``source``, if
         the header and arrays do not make a model.
@@ -460,12 +535,40 @@ class SigmaPiSOM:
                 cfg = cfg.replace(backend=backend)
         except (ConfigError, TypeError, KeyError) as exc:
             raise ModelFileError(f"{name!r}: stored config is invalid ({exc})") from None
-        w = np.asarray(arrays["weights"])
         n = (int(np.prod(cfg.map_shape)), int(np.prod(cfg.x_shape)), int(np.prod(cfg.y_shape)))
-        if tuple(w.shape) != n:
-            raise ModelFileError(
-                f"{name!r}: weights have shape {tuple(w.shape)}, the config needs {n}"
-            )
+        state = {k[len("state_") :]: v for k, v in arrays.items() if k.startswith("state_")}
+        w = arrays.get("weights")
+        bad = (
+            f"{name!r}: weights must be floats of magnitude <= {MAX_WEIGHT:g} (found NaN, "
+            "inf or an overflow such as raw x scale); the file is damaged or was edited"
+        )
+        if state:
+            try:
+                if not columns_top(state["raw"], state["scale"], n) <= MAX_WEIGHT:
+                    raise ModelFileError(bad)
+                dense = None
+                if w is not None or header.get("backend") != get_backend(cfg.backend).NAME:
+                    dense = columns_to_dense(state["raw"], state["scale"], n)
+            except (KeyError, ValueError) as exc:
+                if isinstance(exc, ModelFileError):
+                    raise
+                raise ModelFileError(f"{name!r}: backend state is invalid ({exc})") from None
+            if w is not None and not np.array_equal(np.asarray(dense), w):
+                raise ModelFileError(
+                    f"{name!r}: the backend state (raw x scale) disagrees with the stored "
+                    "weights; the file is damaged or was edited"
+                )
+            w = dense
+        elif w is None:
+            raise ModelFileError(f"{name!r}: holds neither weights nor a backend state")
+        if w is not None:
+            w = np.asarray(w)
+            if tuple(w.shape) != n:
+                raise ModelFileError(
+                    f"{name!r}: weights have shape {tuple(w.shape)}, the config needs {n}"
+                )
+            if w.dtype.kind != "f" or not float(np.abs(w).max(initial=0.0)) <= MAX_WEIGHT:
+                raise ModelFileError(bad)
         t = _validate.integer(
             f"{name!r}: iteration count", header.get("t"), 0, error=ModelFileError
         )
@@ -477,22 +580,29 @@ class SigmaPiSOM:
             raise ModelFileError(f"{name!r}: seed_entropy must be >= 0, got {entropy}")
         model = cls(cfg)
         model.seed_entropy_ = entropy
-        state = {k[len("state_") :]: v for k, v in arrays.items() if k.startswith("state_")}
         if state and header.get("backend") == model.backend:
             try:
-                model._state = model._kernel.from_state_arrays(w, state, tol=cfg.kernel_tol)
+                model._state = model._kernel.from_state_arrays(n, state, tol=cfg.kernel_tol)
             except (ValueError, KeyError) as exc:
                 raise ModelFileError(f"{name!r}: backend state is invalid ({exc})") from None
         else:
-            model._set_weights(np.asarray(w, dtype=np.float64))
+            try:
+                model._set_weights(np.asarray(w, dtype=np.float64))
+            except NumericalError as exc:
+                raise ModelFileError(f"{name!r}: {exc}") from None
         model.t_ = t
         return model
 
-    def save(self, path: str | Path) -> Path:
-        """Write the model atomically to ``path`` (``.npz``, no pickle); returns the path."""
+    def save(self, path: str | Path, *, compress: bool = False) -> Path:
+        """Write the model atomically to ``path`` (``.npz``, no pickle); returns the path.
+
+        ``compress=True`` deflates the arrays (for archives: smaller, slower). The ``.npz``
+        file is the format to keep models in; ``pickle`` works (it stores the same arrays)
+        but ties a file to Python and is never safe to load from others.
+        """
         from sigmapi.io import write_model
 
-        return write_model(path, *self.to_arrays())
+        return write_model(path, *self.to_arrays(), compress=compress)
 
     @classmethod
     def load(cls, path: str | Path, backend: str | None = None) -> SigmaPiSOM:
@@ -501,6 +611,28 @@ class SigmaPiSOM:
 
         header, arrays = read_model(path)
         return cls.from_arrays(header, arrays, backend=backend, source=str(path))
+
+    # ------------------------------------------------------------------ copies and pickles
+    def __getstate__(self) -> dict[str, Any]:
+        """State arrays and the config, never modules or compiled kernels (see :meth:`save`)."""
+        if self.is_fitted:
+            header, arrays = self.to_arrays()
+            return {"header": header, "arrays": arrays}
+        header = {"config": self.config.to_dict(), "seed_entropy": str(self.seed_entropy_)}
+        return {"header": header, "arrays": None}
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        header, arrays = state["header"], state["arrays"]
+        if arrays is None:
+            twin = SigmaPiSOM(SOMConfig.from_dict(header["config"]))
+            twin.seed_entropy_ = int(header["seed_entropy"])
+        else:
+            twin = SigmaPiSOM.from_arrays(header, arrays, source="pickle")
+        self.__dict__.update(twin.__dict__)
+
+    def __copy__(self) -> SigmaPiSOM:
+        """A full copy: a shallow one would share the weights while ``t_`` diverges."""
+        return copy.deepcopy(self)
 
     def __repr__(self) -> str:
         fitted = f"t_={self.t_}" if self.is_fitted else "not fitted"

@@ -13,7 +13,9 @@ with status 2; no traceback.
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
+import threading
 from collections.abc import Sequence
 
 from sigmapi.cli import reach, reproduce, sweep, train
@@ -34,15 +36,36 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser)
     for module in (train, reproduce, reach, sweep):
         module.register(sub)
+    for action in sub._choices_actions:  # `sigmapi CMD --help` opens with its one-line summary
+        cmd = sub.choices[action.dest]
+        if cmd.description is None and action.help:
+            cmd.description = action.help[0].upper() + action.help[1:] + "."
     return parser
+
+
+class Terminated(BaseException):
+    """SIGTERM, turned into an exception so that ``finally`` blocks (temp files) run."""
+
+
+def _terminate(signum: int, frame: object) -> None:
+    raise Terminated
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``sigmapi`` command."""
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGINT, signal.default_int_handler)  # see sigmapi/__init__.py
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
+        previous = signal.signal(signal.SIGTERM, _terminate)
+    except ValueError:  # not the main thread: leave signals alone
+        previous = None
+    try:
         return int(args.func(args))
+    except Terminated:
+        print(f"sigmapi {args.command}: terminated", file=sys.stderr)
+        return 143
     except SigmapiError as exc:
         print(f"sigmapi {args.command}: error: {exc}", file=sys.stderr)
         return 2
@@ -54,3 +77,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print(f"sigmapi {args.command}: interrupted", file=sys.stderr)
         return 130
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)

@@ -7,6 +7,8 @@ import ast
 import dataclasses
 import inspect
 import itertools
+import os
+import tempfile
 import textwrap
 import typing
 from collections.abc import Callable
@@ -35,7 +37,11 @@ class Parser(argparse.ArgumentParser):
 
 def add_config_flags(p: argparse.ArgumentParser) -> None:
     """``--preset``, ``--config``, ``--set``, ``--seed`` and ``--backend``."""
-    p.add_argument("--preset", default="paper-1d", help="preset name (see `sigmapi presets`)")
+    p.add_argument(
+        "--preset",
+        default="paper-1d",
+        help="preset name (default paper-1d: 300,000 iterations; see `sigmapi presets`)",
+    )
     p.add_argument("--config", help="TOML file whose keys override the preset")
     p.add_argument(
         "--set",
@@ -68,11 +74,22 @@ def check_output(path: str | Path, force: bool, what: str = "output file") -> Pa
         raise UsageError(f"{what} {str(p)!r} exists; pass --force to overwrite it")
     if p.exists() and p.is_dir():
         raise UsageError(f"{what} {str(p)!r} is a folder; give a file name")
+    if p.exists() and not p.is_file():
+        raise UsageError(f"{what} {str(p)!r} is not a regular file (a device?); give a file name")
     parent = p.parent if str(p.parent) else Path(".")
     if not parent.is_dir():
         raise UsageError(
             f"folder {str(parent)!r} of {what} {str(p)!r} does not exist; create it first"
         )
+    try:  # find out now, not after a long run, that the folder takes no files
+        fd, probe = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=parent)
+        os.close(fd)
+        os.unlink(probe)
+    except OSError as exc:
+        raise UsageError(
+            f"cannot access {str(parent)!r} to write {what} {str(p)!r}: {exc.strerror or exc}; "
+            "choose another folder"
+        ) from None
     return p
 
 

@@ -13,12 +13,13 @@ from typing import Any
 
 import numpy as np
 
+from sigmapi import _validate
 from sigmapi.cli._common import check_output
 from sigmapi.curves import LearningCurve, checkpoints
 from sigmapi.errors import UsageError
 from sigmapi.experiments import ReproduceOptions, reproduce
 from sigmapi.experiments.results import CURVE_TEST, N_CHECKPOINTS, SAVE_MODELS
-from sigmapi.figures import FIGURES, draw_figure
+from sigmapi.figures import DPI, FIGURES, draw_figure
 from sigmapi.progress import progress_callback
 from sigmapi.som import load_model
 
@@ -53,6 +54,9 @@ def cmd_figure(args: argparse.Namespace) -> int:
     allowed = ("png", "pdf", "svg")
     if fmt not in allowed:
         raise UsageError(f"--out must end in one of {['.' + a for a in allowed]}, got {str(out)!r}")
+    if args.seed is not None:
+        _validate.integer("--seed", args.seed, 0, fix="seeds are ints >= 0", error=UsageError)
+    dpi = _validate.integer("--dpi", args.dpi, 20, 1200, fix="300 for print", error=UsageError)
     model = load_model(args.model)
     if not model.is_fitted or model.t_ == 0:
         raise UsageError(f"model {args.model!r} has not been trained (0 iterations)")
@@ -78,7 +82,7 @@ def cmd_figure(args: argparse.Namespace) -> int:
                   "(another backend?); curves show the replay", file=sys.stderr)  # fmt: skip
         curves = [curve.to_dict()]
     label = args.label if args.label is not None else Path(args.model).name
-    draw_figure(args.name, model, out, curves=curves, label=label, seed=args.seed)
+    draw_figure(args.name, model, out, curves=curves, label=label, seed=args.seed, dpi=dpi)
     print(f"wrote {out}", file=sys.stderr)
     return 0
 
@@ -108,6 +112,9 @@ def register(sub: Any) -> None:
     p.add_argument("--out", required=True, help="image file to write (.png, .pdf or .svg)")
     p.add_argument("--seed", type=int, default=0, help="seed of the figure's sampled inputs")
     p.add_argument("--label", help="how titles name the model (default: the file name)")
+    p.add_argument("--dpi", type=int, default=DPI,
+                   help=f"resolution of .png figures (default {DPI}; 300 for print; .pdf and "
+                   ".svg are vector graphics)")  # fmt: skip
     p.add_argument("--force", action="store_true", help="overwrite --out if it exists")
     p.add_argument("--quiet", action="store_true", help="no progress bar (curves replay the run)")
     p.set_defaults(func=cmd_figure)

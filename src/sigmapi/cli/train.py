@@ -8,10 +8,15 @@ import sys
 from typing import Any
 
 from sigmapi import _validate
-from sigmapi.checkpoints import checkpoint_dir, find_resumable, write_checkpoint
+from sigmapi.checkpoints import (
+    checkpoint_dir,
+    find_resumable,
+    remove_checkpoints,
+    write_checkpoint,
+)
 from sigmapi.cli._common import add_config_flags, check_output, resolve_config
 from sigmapi.config import list_presets, load_preset
-from sigmapi.errors import UsageError
+from sigmapi.errors import ModelFileError, UsageError
 from sigmapi.metrics import FOLD_THRESHOLD, evaluate, evaluation_sets, fold_indicators
 from sigmapi.progress import progress_callback
 from sigmapi.som import SigmaPiSOM, load_model
@@ -24,7 +29,7 @@ def cmd_train(args: argparse.Namespace) -> int:
     every = args.checkpoint_every
     if every is not None:
         _validate.integer("--checkpoint-every", every, 1, fix="in iterations", error=UsageError)
-    # --resume continues the same run, so it may replace that run's --out
+    # --resume continues the same run, so it may replace that run's --out (checked below)
     out = check_output(args.out, args.force or args.resume)
     folder = checkpoint_dir(out)
     model = None
@@ -40,6 +45,13 @@ def cmd_train(args: argparse.Namespace) -> int:
         model = found.model
         if model is not None:
             print(f"resuming from {found.path} (iteration {model.t_})", file=sys.stderr)
+        elif out.exists() and not args.force:
+            model = _finished_run(out, cfg)
+            if model.t_ >= cfg.iterations:
+                print(f"{out} is this run, complete ({model.t_} iterations); nothing to do",
+                      file=sys.stderr)  # fmt: skip
+                return 0
+            print(f"resuming from {out} (iteration {model.t_})", file=sys.stderr)
     if model is None:
         model = SigmaPiSOM(cfg)
         model.partial_fit(0)  # initial weights, iteration 0
@@ -54,10 +66,31 @@ def cmd_train(args: argparse.Namespace) -> int:
             model.partial_fit(step, callback=callback)
             if every is not None and model.t_ % every == 0 and model.t_ < cfg.iterations:
                 write_checkpoint(model, folder)
-    model.save(out)
+    model.save(out, compress=args.compress)
     print(f"wrote {out} ({model.t_} iterations, backend {model.backend})", file=sys.stderr)
+    if not args.keep_checkpoints:
+        remove_checkpoints(folder)
     _warn_if_folded(model)
     return 0
+
+
+def _finished_run(out: Any, cfg: Any) -> SigmaPiSOM:
+    """The model in ``out`` if it is a run of ``cfg`` (``--resume`` may continue it), else a
+    UsageError: resuming must never replace the file of another run."""
+    try:
+        model = load_model(out)
+    except ModelFileError as exc:
+        raise UsageError(
+            f"--resume found no checkpoint in {str(checkpoint_dir(out))!r}, and --out "
+            f"{str(out)!r} is not a model of this run ({exc}); pass --force to replace it"
+        ) from None
+    if model.config != cfg or model.t_ > cfg.iterations:
+        raise UsageError(
+            f"--resume found no checkpoint in {str(checkpoint_dir(out))!r}, and --out "
+            f"{str(out)!r} holds a model made with another config; pass --force to replace "
+            "it, or choose another --out"
+        )
+    return model
 
 
 def _warn_if_folded(model: SigmaPiSOM, n: int = 4000) -> None:
@@ -103,16 +136,35 @@ def cmd_presets(args: argparse.Namespace) -> int:
 
 def register(sub: Any) -> None:
     """Add ``train``, ``evaluate`` and ``presets`` to the sub-parsers ``sub``."""
-    p = sub.add_parser("train", help="train a map and write a model file")
+    p = sub.add_parser(
+        "train",
+        help="train a map and write a model file",
+        description="Train a Sigma-Pi map and write it to a model file (.npz). Without "
+        "--preset this is preset paper-1d: the authors' 1-D run of 300,000 iterations "
+        "(a few minutes); try --preset tiny-1d for a run of seconds.",
+    )
     add_config_flags(p)
     p.add_argument("--out", required=True, help="model file to write (.npz)")
-    p.add_argument("--force", action="store_true", help="overwrite --out if it exists")
+    p.add_argument(
+        "--force", action="store_true", help="overwrite --out if it exists (its mode is kept)"
+    )
+    p.add_argument(
+        "--compress",
+        action="store_true",
+        help="deflate the model file (smaller, for archives; slower to write and read)",
+    )
+    p.add_argument(
+        "--keep-checkpoints",
+        action="store_true",
+        help="keep OUT.ckpt/ after the run has finished (default: remove its checkpoints)",
+    )
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.add_argument(
         "--checkpoint-every",
         type=int,
         metavar="N",
-        help="write a checkpoint to OUT.ckpt/ every N iterations (atomic; the 3 newest are kept)",
+        help="write a checkpoint to OUT.ckpt/ every N iterations (atomic; the 3 newest are "
+        "kept while the run lasts)",
     )
     p.add_argument(
         "--resume",

@@ -35,8 +35,10 @@ from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wai
 from dataclasses import dataclass
 from typing import Any
 
+from sigmapi import _memory
 from sigmapi.config import SOMConfig
 from sigmapi.errors import UsageError
+from sigmapi.som import SigmaPiSOM
 
 __all__ = [
     "ENGINES",
@@ -76,37 +78,20 @@ class WorkerPlan:
 
 
 def available_memory() -> int:
-    """Bytes of memory available to new processes now (``MemAvailable``; 4 GiB if unknown)."""
-    try:
-        with open("/proc/meminfo", encoding="ascii") as f:
-            for line in f:
-                if line.startswith("MemAvailable:"):
-                    return int(line.split()[1]) * 1024
-    except OSError:
-        pass
-    try:
-        return int(os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE"))
-    except (ValueError, OSError, AttributeError):
-        return 4 << 30
+    """Bytes of memory available to new processes now (4 GiB where the system does not say)."""
+    have = _memory.available()
+    return 4 << 30 if have is None else have
 
 
 def job_memory(cfg: SOMConfig, n_test: int = 10_000) -> int:
     """Peak bytes one training-and-evaluation job of ``cfg`` needs (an upper estimate).
 
-    Weights ``K n_x n_y``: the kernel's state (float32 for the fast kernel, float64 for the
-    reference) plus the float64 copy the estimator keeps for responses and saving, twice more
-    while a model is exported; evaluation adds ``(n_test, K)`` float64 responses for a few
-    test sets; 200 MiB for the interpreter, numpy and numba.
+    The model's own estimate (:meth:`SigmaPiSOM.memory_estimate`: the weights in the
+    kernel's precision and the float64 copies), the ``(n_test, K)`` float64 responses of
+    evaluation for a few test sets, and 200 MiB for the interpreter, numpy and numba.
     """
-    n = 1
-    for s in (*cfg.map_shape, *cfg.x_shape, *cfg.y_shape):
-        n *= int(s)
-    k = 1
-    for s in cfg.map_shape:
-        k *= int(s)
-    weights = n * (4 if cfg.backend != "reference" else 8) + 3 * n * 8
-    evaluation = 4 * n_test * k * 8
-    return weights + evaluation + 200 * _MIB
+    model = SigmaPiSOM(cfg)
+    return model.memory_estimate() + 4 * n_test * model.n_units * 8 + 200 * _MIB
 
 
 def plan_workers(

@@ -72,7 +72,7 @@ def _table(result: ReproduceResult) -> str:
                     note += "; none flagged folded"
             rows.append(
                 f"<tr><td>{html.escape(name)}</td><td>{key}</td><td>{value:.3f}</td>"
-                f"<td>{worst[key]:.3f}</td><td>{mean[key]:.3f} ± {sd[key]:.3f}</td>"
+                f"<td>{worst[key]:.3f}</td><td>{_mean_sd(mean[key], sd[key], len(res.runs))}</td>"
                 f"<td>{per_seed}</td><td>{'' if r is None else f'{r:.3f}'}</td>"
                 f"<td>{note}</td></tr>"
             )
@@ -81,6 +81,11 @@ def _table(result: ReproduceResult) -> str:
         "<th>mean ± sd</th><th>per seed (<b>bold</b>: flagged folded)</th><th>reference</th>"
         "<th></th></tr>" + "".join(rows) + "</table>"
     )
+
+
+def _mean_sd(mean: float, sd: float, n: int) -> str:
+    """``mean ± sd`` over seeds; one seed has no spread to show (never "± 0.000")."""
+    return f"{mean:.3f} ± {sd:.3f}" if n > 1 else f"{mean:.3f} (one seed)"
 
 
 def _seed_value(value: float, folded: bool) -> str:

@@ -13,6 +13,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from sigmapi.metrics import ORDERED_R2
+
 if TYPE_CHECKING:
     from sigmapi.config import SOMConfig
     from sigmapi.metrics import Metrics
@@ -33,8 +35,6 @@ METRIC_KEYS = (
     "view_consistency", "view_within_one", "z_error", "order_r2", "usage", "fold_score",
 )  # fmt: skip
 
-ORDERED_R2 = 0.95
-"""A map counts as ordered when its order R^2 is at least this."""
 """The metrics the report tabulates (mean and sd over seeds)."""
 
 SAVE_MODELS = ("shown", "all", "none")

@@ -13,13 +13,50 @@ from typing import Protocol, TypeVar
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["WINNER_RULES", "Kernel", "KernelState"]
+__all__ = ["WINNER_RULES", "Kernel", "KernelState", "columns_to_dense", "columns_top"]
 
 WINNER_RULES = ("soft", "argmax", "min_distance", "soft_mean")
 """How the winner is chosen: ``"soft"`` (argmax of the Gaussian-smoothed activation, the
 paper), ``"argmax"``, ``"min_distance"`` (``argmin |vec(x y^T) - w_k|``), ``"soft_mean"``
 (the soft rule with the smoothed activation divided by the window's weight inside the map, so
 that border units are not handicapped)."""
+
+
+def columns_top(
+    raw: NDArray[np.floating], scale: NDArray[np.floating], shape: tuple[int, int, int]
+) -> float:
+    """Largest ``|W[k, i, j]|`` of the column layout with per-unit scales (see
+    :func:`columns_to_dense`), without forming ``W``; NaN or inf if ``raw`` holds them.
+
+    Raises ``ValueError`` if the shapes do not fit ``shape`` or a scale is not finite and > 0.
+    """
+    k, nx, ny = shape
+    raw, scale = np.asarray(raw), np.asarray(scale)
+    if raw.shape != (nx * ny, k) or raw.dtype.kind != "f":
+        raise ValueError(f"raw must be float of shape {(nx * ny, k)}, got {raw.dtype} {raw.shape}")
+    if scale.shape != (k,) or scale.dtype != np.float64:
+        raise ValueError(f"scale must be float64 of shape ({k},), got {scale.dtype} {scale.shape}")
+    if not np.all(np.isfinite(scale) & (scale > 0)):
+        raise ValueError("scale must be finite and > 0")
+    if raw.size == 0:
+        return 0.0
+    with np.errstate(over="ignore", invalid="ignore"):  # an overflow is the answer here
+        return float((np.abs(raw).max(axis=0).astype(np.float64) * scale).max())
+
+
+def columns_to_dense(
+    raw: NDArray[np.floating], scale: NDArray[np.floating], shape: tuple[int, int, int]
+) -> NDArray[np.float64]:
+    """Dense float64 weights ``(K, n_x, n_y)`` of the column layout with per-unit scales:
+    ``W[k] = scale[k] * raw[:, k]``, ``raw`` ``(n_x * n_y, K)`` (the fast kernel's state, as
+    a model file stores it; plain NumPy, so any backend can read such a file).
+    """
+    columns_top(raw[:0], scale, (shape[0], 0, 0))  # checks the scales
+    k, nx, ny = shape
+    if np.shape(raw) != (nx * ny, k):
+        raise ValueError(f"raw must have shape {(nx * ny, k)}, got {np.shape(raw)}")
+    w = np.asarray(raw).T.astype(np.float64) * scale[:, None]
+    return np.ascontiguousarray(w.reshape(k, nx, ny))
 
 
 class KernelState(Protocol):
@@ -56,11 +93,11 @@ class Kernel(Protocol[S]):
 
     def from_state_arrays(
         self,
-        weights: NDArray[np.float64],
+        shape: tuple[int, int, int],
         arrays: dict[str, NDArray[np.floating]],
         tol: float = ...,
     ) -> S:
-        """Inverse of :meth:`state_arrays`."""
+        """Inverse of :meth:`state_arrays` for weights of ``shape`` ``(K, n_x, n_y)``."""
         ...
 
     def activation(

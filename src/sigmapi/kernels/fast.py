@@ -46,7 +46,7 @@ from numpy.typing import NDArray
 
 from sigmapi import _validate
 from sigmapi.kernels import reference
-from sigmapi.kernels.base import WINNER_RULES
+from sigmapi.kernels.base import WINNER_RULES, columns_to_dense
 
 __all__ = [
     "NAME",
@@ -158,9 +158,7 @@ def _sqnorms(raw: NDArray[np.floating]) -> NDArray[np.float64]:
 
 def export(state: FastState) -> NDArray[np.float64]:
     """Dense float64 weights ``(K, n_x, n_y)``: ``scale[k] * raw[:, k]``."""
-    k, nx, ny = state.shape
-    w = state.raw.T.astype(np.float64) * state.scale[:, None]
-    return np.ascontiguousarray(w.reshape(k, nx, ny))
+    return columns_to_dense(state.raw, state.scale, state.shape)
 
 
 def state_arrays(state: FastState) -> dict[str, NDArray[np.floating]]:
@@ -172,37 +170,43 @@ def state_arrays(state: FastState) -> dict[str, NDArray[np.floating]]:
 
 
 def from_state_arrays(
-    weights: NDArray[np.float64], arrays: dict[str, NDArray[np.floating]], tol: float = 1e-6
+    shape: tuple[int, int, int], arrays: dict[str, NDArray[np.floating]], tol: float = 1e-6
 ) -> FastState:
-    """Inverse of :func:`state_arrays`; ``weights`` ``(K, n_x, n_y)`` give the shapes.
+    """Inverse of :func:`state_arrays` for weights of ``shape`` ``(K, n_x, n_y)``.
 
-    Raises ``ValueError`` if the arrays are missing or do not fit the weights and ``tol``.
+    Raises ``ValueError`` if the arrays are missing, do not fit ``shape`` and ``tol``, or are
+    not finite (scales must be > 0; ``sqnorm`` must agree with ``raw`` to 1e-6 relative).
     """
     tol = _check_tol(tol)
-    k, nx, ny = np.shape(weights)
+    k, nx, ny = shape
     missing = {"raw", "scale"} - set(arrays)
-    if missing:
-        raise ValueError(f"fast state needs arrays raw and scale; missing {sorted(missing)}")
+    if missing or set(arrays) - {"raw", "scale", "sqnorm"}:
+        raise ValueError(f"fast state is the arrays raw, scale [, sqnorm], got {sorted(arrays)}")
     raw, scale = arrays["raw"], arrays["scale"]
-    valid = "sqnorm" in arrays
-    sq = arrays["sqnorm"] if valid else np.zeros(k)
     dtype = _storage_dtype(tol)
     if raw.shape != (nx * ny, k) or raw.dtype != dtype:
         raise ValueError(
             f"raw must be {np.dtype(dtype).name} of shape {(nx * ny, k)} for tol={tol}, "
             f"got {raw.dtype} {raw.shape}"
         )
+    if not np.all(np.isfinite(raw)):
+        raise ValueError("raw must be finite")
+    valid = "sqnorm" in arrays
+    exact = _sqnorms(raw)
+    sq = arrays["sqnorm"] if valid else exact
     if scale.shape != (k,) or sq.shape != (k,):
         raise ValueError(f"scale and sqnorm must have shape ({k},), got {scale.shape}, {sq.shape}")
-    if np.any(scale <= 0):
-        raise ValueError("scale must be > 0")
+    if not np.all(np.isfinite(scale) & (scale > 0)):
+        raise ValueError("scale must be finite and > 0")
+    if not np.allclose(sq, exact, rtol=1e-6, atol=1e-12 * float(exact.max(initial=0.0))):
+        raise ValueError("sqnorm disagrees with raw")
     return FastState(
         np.ascontiguousarray(raw, dtype=dtype),
         np.ascontiguousarray(scale, dtype=np.float64),
         np.ascontiguousarray(sq, dtype=np.float64),
         tol,
         (int(k), int(nx), int(ny)),
-        valid,
+        True,
     )
 
 

@@ -67,10 +67,10 @@ def state_arrays(state: NDArray[np.float64]) -> dict[str, NDArray[np.floating]]:
 
 
 def from_state_arrays(
-    weights: NDArray[np.float64], arrays: dict[str, NDArray[np.floating]], tol: float = 0.0
+    shape: tuple[int, int, int], arrays: dict[str, NDArray[np.floating]], tol: float = 0.0
 ) -> NDArray[np.float64]:
-    """Inverse of :func:`state_arrays`: the state from saved weights (and extra arrays)."""
-    return prepare(weights, tol)
+    """Inverse of :func:`state_arrays`: this kernel has no state beyond the weights."""
+    raise ValueError("the reference kernel has no backend state; load its weights instead")
 
 
 def activation(W: Array, x: Array, y: Array) -> NDArray[np.float64]:

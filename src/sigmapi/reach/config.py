@@ -10,13 +10,14 @@ import dataclasses
 from dataclasses import dataclass
 from typing import Any
 
-from sigmapi import _validate
+from sigmapi import _memory, _validate
 from sigmapi.config import SOMConfig
 from sigmapi.errors import ConfigError
 from sigmapi.kernels import BACKENDS
 from sigmapi.reach.agent import ActorCritic
 from sigmapi.reach.env import GazeReachEnv
 from sigmapi.reach.wrappers import FEATURES, STATES
+from sigmapi.som import SigmaPiSOM
 
 __all__ = ["ReachConfig"]
 
@@ -92,6 +93,15 @@ class ReachConfig:
         object.__setattr__(self, "map_shape", tuple(int(n) for n in self.map_shape))
         self.make_env()  # validates the task's parameters
         ActorCritic(1, 1, self.gamma, self.critic_lr, self.actor_lr, self.beta)
+        if self.model_path is None:  # the map is learned here: its weights and its views
+            som = SigmaPiSOM(self.som_config(self.seed))
+            n_in = self.grid**self.dim
+            _memory.check(
+                som.memory_estimate() + self.map_pairs * 4 * n_in * 8,
+                f"the reach experiment's map ({'x'.join(map(str, self.map_shape))} units on "
+                f"{n_in} x {n_in} inputs, {self.map_pairs} views)",
+                "use a smaller --grid, --map-shape or --map-pairs",
+            )
 
     def env_kwargs(self) -> dict[str, Any]:
         """Keyword arguments of :class:`GazeReachEnv` (also of ``gymnasium.make``)."""

@@ -38,7 +38,7 @@ from gymnasium import spaces
 from numpy.typing import NDArray
 
 from sigmapi import _validate
-from sigmapi.codes import PopulationCode
+from sigmapi.codes import _WIDTH_FIX, MIN_WIDTH, PopulationCode
 from sigmapi.errors import ConfigError
 
 __all__ = ["GazeReachEnv", "move_table"]
@@ -101,6 +101,10 @@ class GazeReachEnv(gym.Env[Obs, np.int64]):
         Reward on reaching the goal (+1) and on losing the object (-0.3).
     diagonal : bool
         2-D only: add the four diagonal moves.
+    render_mode : {None, "rgb_array"}
+        ``"rgb_array"``: :meth:`render` returns a picture (uint8 ``(H, W, 3)``) of the
+        workspace (grey), the goal box (green), the gaze direction (blue lines) and the
+        object (red).
 
     Observations are ``{"retina": code of x, "gaze": code of y}``, float32 vectors of
     ``grid**dim`` values in [0, 1] (L2-normalised Gaussian hills, C order over the grid).
@@ -119,7 +123,7 @@ class GazeReachEnv(gym.Env[Obs, np.int64]):
     >>> obs, r, terminated, truncated, info = env.step(0)
     """
 
-    metadata: dict[str, Any] = {"render_modes": []}  # noqa: RUF012 (Gymnasium's convention)
+    metadata: dict[str, Any] = {"render_modes": ["rgb_array"], "render_fps": 10}  # noqa: RUF012
 
     def __init__(
         self,
@@ -134,12 +138,13 @@ class GazeReachEnv(gym.Env[Obs, np.int64]):
         reward_reach: float = 1.0,
         reward_fail: float = -0.3,
         diagonal: bool = False,
+        render_mode: str | None = None,
     ) -> None:
         if not _validate.is_int(dim) or dim not in (1, 2):
             raise _validate.fail("dim", "1 or 2", dim, "the task has 1-D and 2-D variants")
         self.dim = int(dim)
         self.grid = _validate.integer("grid", grid, 2, fix="use e.g. grid=9 (the paper: 15)")
-        self.code_width = _validate.positive("code_width", code_width, fix="the paper uses 0.5")
+        self.code_width = _validate.number("code_width", code_width, MIN_WIDTH, fix=_WIDTH_FIX)
         self.step_size = _validate.number(
             "step_size", step_size, 0.0, 0.5, lo_open=True, fix="use e.g. 0.05"
         )
@@ -152,6 +157,19 @@ class GazeReachEnv(gym.Env[Obs, np.int64]):
         self.goal = g
         self.goal_radius = _validate.number(
             "goal_radius", goal_radius, 0.0, 0.5, lo_open=True, fix="use e.g. 0.1"
+        )
+        lo, hi = (
+            np.maximum(self.goal - self.goal_radius, 0.0),
+            np.minimum(self.goal + self.goal_radius, 1.0),
+        )
+        free = 1.0 - float(np.prod(hi - lo))
+        if free < 0.05:
+            raise _validate.fail(
+                "goal_radius", "small enough to leave 5 % of the workspace outside the goal box",
+                goal_radius, f"the box covers {100 * (1 - free):.0f} %; use e.g. 0.1",
+            )  # fmt: skip
+        self.render_mode = _validate.choice(
+            "render_mode", render_mode, (None, *self.metadata["render_modes"])
         )
         self.saccade_rate = _validate.number(
             "saccade_rate", saccade_rate, 0.0, 1.0, fix="a probability per step"
@@ -176,6 +194,7 @@ class GazeReachEnv(gym.Env[Obs, np.int64]):
         self._z = np.full(self.dim, 0.5)
         self._y = np.full(self.dim, 0.5)
         self._t = 0
+        self._done = True  # no episode yet: step() needs reset()
 
     # ------------------------------------------------------------------ helpers
     def in_goal(self, z: NDArray[np.float64]) -> bool:
@@ -243,6 +262,7 @@ class GazeReachEnv(gym.Env[Obs, np.int64]):
         else:
             self._saccade()
         self._t = 0
+        self._done = False
         return self._obs(), self._info(True, "")
 
     def _position(self, value: Any, name: str) -> NDArray[np.float64]:
@@ -252,6 +272,11 @@ class GazeReachEnv(gym.Env[Obs, np.int64]):
         return p
 
     def step(self, action: Any) -> tuple[Obs, SupportsFloat, bool, bool, dict[str, Any]]:
+        if self._done:
+            raise gym.error.ResetNeeded(
+                "the episode has ended (terminated or truncated) or not begun; call reset() "
+                "before step()"
+            )
         if not self.action_space.contains(action):
             raise ValueError(
                 f"action must be an int in [0, {len(self.moves)}), got {action!r}; see env.moves"
@@ -266,6 +291,7 @@ class GazeReachEnv(gym.Env[Obs, np.int64]):
             reward, event = self.reward_fail, "left_view"
         terminated = event != ""
         truncated = not terminated and self._t >= self.max_steps
+        self._done = terminated or truncated
         # the eye: one uniform draw per step whatever happens, so rollouts stay in lockstep
         u = self.np_random.random()
         saccade = False
@@ -275,3 +301,37 @@ class GazeReachEnv(gym.Env[Obs, np.int64]):
                 self._saccade()
                 saccade = True
         return self._obs(), reward, terminated, truncated, self._info(saccade, event)
+
+    def render(self) -> NDArray[np.uint8] | None:
+        """A picture of the workspace ``[0, 1]^d`` (``render_mode="rgb_array"``), else None.
+
+        Grey: the workspace; green: the goal box; blue: the gaze direction ``y``; red: the
+        object ``z`` (outside the grey square once it has left the view). 1-D tasks are drawn
+        as a strip.
+        """
+        if self.render_mode != "rgb_array":
+            return None
+        size, pad = 96, 16
+        rows = size if self.dim == 2 else 24
+        img = np.full((rows + 2 * pad, size + 2 * pad, 3), 255, dtype=np.uint8)
+
+        def px(p: NDArray[np.float64]) -> tuple[int, int]:
+            c = int(np.clip(round(pad + p[0] * (size - 1)), 0, size + 2 * pad - 1))
+            if self.dim == 1:
+                return pad + rows // 2, c
+            r = int(np.clip(round(pad + (1.0 - p[1]) * (size - 1)), 0, rows + 2 * pad - 1))
+            return r, c
+
+        img[pad : pad + rows, pad : pad + size] = (225, 225, 225)
+        lo = np.maximum(self.goal - self.goal_radius, 0.0)
+        hi = np.minimum(self.goal + self.goal_radius, 1.0)
+        (r0, c0), (r1, c1) = px(lo), px(hi)
+        r0, r1 = (pad, pad + rows) if self.dim == 1 else (r1, r0 + 1)
+        img[r0:r1, c0 : c1 + 1] = (150, 220, 150)
+        gr, gc = px(self._y)
+        img[pad : pad + rows, gc] = (40, 90, 220)
+        if self.dim == 2:
+            img[gr, pad : pad + size] = (40, 90, 220)
+        zr, zc = px(self._z)
+        img[max(zr - 3, 0) : zr + 4, max(zc - 3, 0) : zc + 4] = (220, 40, 40)
+        return img

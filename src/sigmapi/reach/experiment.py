@@ -120,6 +120,14 @@ class ReachResult:
         f = self.config.final_episodes
         return {s: float(v[:, -f:].mean()) for s, v in self.lost.items()}
 
+    def final_timed_out(self) -> dict[str, float]:
+        """Fraction of the last ``final_episodes`` episodes that neither reached nor lost the
+        object (seed mean), counted (not ``1 - success - lost``, which rounds to -1e-17)."""
+        f = self.config.final_episodes
+        return {
+            s: float((~v[:, -f:] & ~self.lost[s][:, -f:]).mean()) for s, v in self.success.items()
+        }
+
     def final_success_per_seed(self) -> dict[str, NDArray[np.float64]]:
         f = self.config.final_episodes
         return {s: v[:, -f:].mean(axis=1) for s, v in self.success.items()}
@@ -160,9 +168,7 @@ class ReachResult:
             "success": self.final_success(),
             "success_per_seed": {s: v.tolist() for s, v in self.final_success_per_seed().items()},
             "lost": self.final_lost(),
-            "timed_out": {
-                s: 1.0 - self.final_success()[s] - self.final_lost()[s] for s in self.success
-            },
+            "timed_out": self.final_timed_out(),
             "ratio_map_to_true_z": (
                 self.final_success()["map"] / self.final_success()["true_z"]
                 if "map" in self.success

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from typing import Any
 
+import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
@@ -103,8 +104,15 @@ def reach_figure(result: ReachResult) -> Figure:
     plot_reach_curves(result, "success", ax0)
     plot_reach_curves(result, "steps", ax1)
     ax0.legend(fontsize=8, loc="lower right")
+    values = [np.asarray(result.values[s]) for s in states]
+    shared: dict[
+        str, float
+    ] = {}  # one colour scale for every state's value map, so that they compare
+    if values and values[0].ndim == 2:
+        shared = {"vmin": min(float(v.min()) for v in values),
+                  "vmax": max(float(v.max()) for v in values)}  # fmt: skip
     for i, s in enumerate(states):
-        plot_value_function(result, s, fig.add_subplot(grid[1, i]))
+        plot_value_function(result, s, fig.add_subplot(grid[1, i]), **shared)
     cfg = result.config
     fig.suptitle(
         f"Gaze-and-reach, {cfg.dim}-D, saccade rate {cfg.saccade_rate:g}: actor-critic "
