@@ -2,7 +2,8 @@
 
 - :func:`_pairs`: the sparse outer product ``x y^T`` of one view (the kept input pairs);
 - :func:`_winner`: the winning unit of one activation vector under a winner rule;
-- :func:`prefetch_row`: ask the CPU to start loading a weight row before it is needed;
+- :func:`prefetch`, :func:`prefetch_row`: ask the CPU to start loading weights before they are
+  needed;
 - the inference drivers: activations and winners of a batch of rows, serial (for one pair or
   a few: no thread start-up, scratch memory passed in) or parallel over blocks of rows.
 
@@ -24,6 +25,7 @@ from numba.extending import intrinsic
 
 __all__ = [
     "BLOCK_ROWS",
+    "prefetch",
     "prefetch_row",
     "respond_rows",
     "respond_rows_parallel",
@@ -36,29 +38,31 @@ BLOCK_ROWS = 16
 
 
 @intrinsic
-def _prefetch_row(typingctx: Any, arr: Any, row: Any) -> Any:
-    """``prefetch_row(a, i)``: prefetch every cache line of row ``i`` of the 2-D array ``a``.
+def _prefetch(typingctx: Any, arr: Any, row: Any, c0: Any, c1: Any) -> Any:
+    """``prefetch(a, i, c0, c1)``: prefetch the cache lines of ``a[i, c0:c1]`` (2-D ``a``).
 
     A hint (LLVM's ``llvm.prefetch``, read, high locality): it changes no value. The weight
     rows of the kept input pairs are scattered over the weight matrix, so the hardware
     prefetcher cannot guess them; asking for the rows a few pairs ahead keeps several memory
     reads in flight instead of one.
     """
-    sig = types.void(arr, row)
+    sig = types.void(arr, row, c0, c1)
 
     def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
         aryty = signature.args[0]
         ary = context.make_array(aryty)(context, builder, args[0])
-        zero = context.get_constant(types.intp, 0)
-        ptr = cgutils.get_item_pointer(context, builder, aryty, ary, [args[1], zero])
+        intp = context.get_value_type(types.intp)
+        first = context.cast(builder, args[2], signature.args[2], types.intp)
+        stop = context.cast(builder, args[3], signature.args[3], types.intp)
+        ptr = cgutils.get_item_pointer(context, builder, aryty, ary, [args[1], first])
         i8p = ir.IntType(8).as_pointer()
         i32 = ir.IntType(32)
         fnty = ir.FunctionType(ir.VoidType(), [i8p, i32, i32, i32])
         fn = cgutils.get_or_insert_function(builder.module, fnty, "llvm.prefetch")
         base = builder.bitcast(ptr, i8p)
-        n_cols = cgutils.unpack_tuple(builder, ary.shape)[1]
-        nbytes = builder.mul(n_cols, context.get_constant(types.intp, aryty.dtype.bitwidth // 8))
-        step = context.get_constant(types.intp, 64)
+        itemsize = ir.Constant(intp, aryty.dtype.bitwidth // 8)
+        nbytes = builder.mul(builder.sub(stop, first), itemsize)
+        zero, step = ir.Constant(intp, 0), ir.Constant(intp, 64)
         with cgutils.for_range_slice(builder, zero, nbytes, step) as (off, _):
             builder.call(fn, [builder.gep(base, [off]), i32(0), i32(3), i32(1)])
         return context.get_dummy_value()
@@ -66,7 +70,14 @@ def _prefetch_row(typingctx: Any, arr: Any, row: Any) -> Any:
     return sig, codegen
 
 
-prefetch_row: Any = _prefetch_row  # compiled code calls it as prefetch_row(a, i)
+prefetch: Any = _prefetch  # compiled code calls it as prefetch(a, i, c0, c1)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def prefetch_row(raw, i):
+    """Prefetch the whole row ``i`` of ``raw``."""
+    prefetch(raw, i, 0, raw.shape[1])
+
 
 @njit(cache=True, nogil=True)
 def _pairs(x, y, tol, jbuf, pidx, pval):

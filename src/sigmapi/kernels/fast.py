@@ -47,7 +47,7 @@ from numpy.typing import NDArray
 
 from sigmapi import _validate
 from sigmapi.kernels import _rows, reference
-from sigmapi.kernels._rows import _pairs, _winner
+from sigmapi.kernels._rows import _pairs, _winner, prefetch, prefetch_row
 from sigmapi.kernels.base import WINNER_RULES
 
 __all__ = [
@@ -89,6 +89,10 @@ but the result); larger batches run in parallel over blocks of rows."""
 
 PREFETCH_AHEAD = 8
 """Inference prefetches the weight row of the input pair this many pairs ahead (0: off)."""
+
+TRAIN_PREFETCH_AHEAD = 8
+"""Training prefetches the weight row of the input pair this many pairs ahead (0: off), in
+the update and in the activation pass (benchmarks/README.md: its effect)."""
 
 _RULES = {rule: code for code, rule in enumerate(WINNER_RULES)}
 """Rule codes of the compiled :func:`_winner`: 0 soft, 1 argmax, 2 min_distance."""
@@ -273,13 +277,14 @@ def _neighbourhood(winner, sigma, eps, tol, dims, strides, ea):
 @njit(cache=True, nogil=True)
 def _unit_chunk(
     raw, scale, sqnorm, k0, k1, ea, thr, lo, hi,
-    pi1, pv1, n1, pi0, pv0, n0, do_act, track, h, gain, acc,
+    pi1, pv1, n1, pi0, pv0, n0, do_act, track, h, gain, acc, ahead,
 ):  # fmt: skip
     """Units ``[k0, k1)``: Kohonen update with pairs 1, then activation of pairs 0 into ``h``.
 
     ``ea[k] = eps a_k``; units in ``[lo, hi)`` with ``ea[k] > thr`` get the additive update.
-    ``track``: keep ``sqnorm`` up to date. Touches only indices ``[k0, k1)`` of the per-unit
-    arrays, so chunks can run in parallel.
+    ``track``: keep ``sqnorm`` up to date. ``ahead``: prefetch the weight row of the pair this
+    many pairs ahead (0: none). Touches only indices ``[k0, k1)`` of the per-unit arrays, so
+    chunks can run in parallel.
     """
     n_pairs = raw.shape[0]
     for k in range(k0, k1):
@@ -297,10 +302,14 @@ def _unit_chunk(
     u0 = max(lo, k0)
     u1 = min(hi, k1)
     if u0 < u1 and n1 > 0:
+        for q in range(min(ahead, n1)):
+            prefetch(raw, pi1[q], u0, u1)
         if track:
             for k in range(u0, u1):
                 acc[k] = 0.0
             for q in range(n1):
+                if ahead > 0 and q + ahead < n1:
+                    prefetch(raw, pi1[q + ahead], u0, u1)
                 row = raw[pi1[q]]
                 val = pv1[q]
                 for k in range(u0, u1):
@@ -312,6 +321,8 @@ def _unit_chunk(
                 sqnorm[k] += acc[k]
         else:
             for q in range(n1):
+                if ahead > 0 and q + ahead < n1:
+                    prefetch(raw, pi1[q + ahead], u0, u1)
                 row = raw[pi1[q]]
                 val = pv1[q]
                 for k in range(u0, u1):
@@ -319,7 +330,11 @@ def _unit_chunk(
     if do_act:
         for k in range(k0, k1):
             acc[k] = 0.0
+        for q in range(min(ahead, n0)):
+            prefetch_row(raw, pi0[q])
         for q in range(n0):
+            if ahead > 0 and q + ahead < n0:
+                prefetch_row(raw, pi0[q + ahead])
             row = raw[pi0[q]]
             val = pv0[q]
             for k in range(k0, k1):
@@ -349,7 +364,7 @@ def _buffers(k_units, n_pairs, ny):
 @njit(cache=True, parallel=True)
 def _train(
     raw, scale, sqnorm, x0, y0, x1, y1, sigmas, eps, dims, strides, rule, cut, tol, out, track,
-    threads,
+    threads, ahead,
 ):  # fmt: skip
     """The training driver: iterations in order; ``threads``: update the units in parallel
     chunks of :data:`CHUNK` (same arithmetic per unit, so the same result), else in one call
@@ -364,10 +379,11 @@ def _train(
     if threads:
         for c in prange(n_chunks):
             _unit_chunk(raw, scale, sqnorm, c * CHUNK, min(k_units, (c + 1) * CHUNK), ea, 1.0,
-                        0, 0, pi1, pv1, 0, pi0, pv0, n0, True, track, h, gain, acc)  # fmt: skip
+                        0, 0, pi1, pv1, 0, pi0, pv0, n0, True, track, h, gain, acc,
+                        ahead)  # fmt: skip
     else:
         _unit_chunk(raw, scale, sqnorm, 0, k_units, ea, 1.0, 0, 0,
-                    pi1, pv1, 0, pi0, pv0, n0, True, track, h, gain, acc)  # fmt: skip
+                    pi1, pv1, 0, pi0, pv0, n0, True, track, h, gain, acc, ahead)  # fmt: skip
     for t in range(n_iter):
         w = _winner(h, scale, sqnorm, rule, sigmas[t], cut, dims, strides, t1, t2)
         out[t] = w
@@ -381,10 +397,10 @@ def _train(
             for c in prange(n_chunks):
                 _unit_chunk(raw, scale, sqnorm, c * CHUNK, min(k_units, (c + 1) * CHUNK), ea,
                             thr, lo, hi, pi1, pv1, n1, pi0, pv0, n0, more, track, h, gain,
-                            acc)  # fmt: skip
+                            acc, ahead)  # fmt: skip
         else:
             _unit_chunk(raw, scale, sqnorm, 0, k_units, ea, thr, lo, hi,
-                        pi1, pv1, n1, pi0, pv0, n0, more, track, h, gain, acc)  # fmt: skip
+                        pi1, pv1, n1, pi0, pv0, n0, more, track, h, gain, acc, ahead)  # fmt: skip
 
 
 # ---------------------------------------------------------------------------- public interface
@@ -558,5 +574,5 @@ def train_block(
     parallel = threads and k_units * nx * ny >= PARALLEL_MIN_WORK and numba.get_num_threads() > 1
     driver: Any = _train  # a numba dispatcher (its stubs do not know the signature)
     driver(state.raw, state.scale, state.sqnorm, *xs, sg, ep, dims, strides, code,
-           int(soft_cut), state.tol, out, track, bool(parallel))  # fmt: skip
+           int(soft_cut), state.tol, out, track, bool(parallel), TRAIN_PREFETCH_AHEAD)  # fmt: skip
     return out
