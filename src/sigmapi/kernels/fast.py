@@ -94,6 +94,18 @@ TRAIN_PREFETCH_AHEAD = 8
 """Training prefetches the weight row of the input pair this many pairs ahead (0: off), in
 the update and in the activation pass (benchmarks/README.md: its effect)."""
 
+PREFETCH_MIN_BYTES = 1 << 21
+"""Prefetching is used only for weights of at least this many bytes (2 MiB, a core's L2 cache
+here): weights that stay in cache gain nothing from it and pay its instructions (measured in
+one bench_bandwidth.py round under load: paper-1d, 13.5 KB of weights, 354,000 it/s without,
+280,000 with; paper-2d, 45.6 MB, 1,362 it/s without, 2,196 with)."""
+
+
+def _ahead(state: FastState, ahead: int) -> int:
+    """``ahead`` if ``state``'s weights are large enough to gain from prefetching, else 0."""
+    return ahead if state.raw.nbytes >= PREFETCH_MIN_BYTES else 0
+
+
 _RULES = {rule: code for code, rule in enumerate(WINNER_RULES)}
 """Rule codes of the compiled :func:`_winner`: 0 soft, 1 argmax, 2 min_distance."""
 
@@ -469,12 +481,13 @@ def activation(
     """
     xa, ya = _rows_of(state, x, y)
     h = np.empty((xa.shape[0], state.shape[0]))
+    ahead = _ahead(state, PREFETCH_AHEAD)
     if xa.shape[0] <= SERIAL_ROWS:
         jb, pi, pv, acc, *_ = state.scratch()
-        _rows.respond_rows(state.raw, state.scale, xa, ya, state.tol, PREFETCH_AHEAD,
+        _rows.respond_rows(state.raw, state.scale, xa, ya, state.tol, ahead,
                            jb, pi, pv, acc, h)  # fmt: skip
     else:
-        _rows.respond_rows_parallel(state.raw, state.scale, xa, ya, state.tol, PREFETCH_AHEAD,
+        _rows.respond_rows_parallel(state.raw, state.scale, xa, ya, state.tol, ahead,
                                     _peak_order(xa, ya), h)  # fmt: skip
     return h
 
@@ -520,7 +533,8 @@ def winners_of(
     if code == _RULES["min_distance"]:
         state.refresh_norms()
     out = np.empty(xa.shape[0], dtype=np.int64)
-    args = (state.raw, state.scale, state.sqnorm, xa, ya, state.tol, PREFETCH_AHEAD, code,
+    args = (state.raw, state.scale, state.sqnorm, xa, ya, state.tol,
+            _ahead(state, PREFETCH_AHEAD), code,
             float(sigma), int(cut), dims, strides)  # fmt: skip
     if xa.shape[0] <= SERIAL_ROWS:
         jb, pi, pv, acc, h, t1, t2 = state.scratch()
@@ -574,5 +588,6 @@ def train_block(
     parallel = threads and k_units * nx * ny >= PARALLEL_MIN_WORK and numba.get_num_threads() > 1
     driver: Any = _train  # a numba dispatcher (its stubs do not know the signature)
     driver(state.raw, state.scale, state.sqnorm, *xs, sg, ep, dims, strides, code,
-           int(soft_cut), state.tol, out, track, bool(parallel), TRAIN_PREFETCH_AHEAD)  # fmt: skip
+           int(soft_cut), state.tol, out, track, bool(parallel),
+           _ahead(state, TRAIN_PREFETCH_AHEAD))  # fmt: skip
     return out
