@@ -179,9 +179,9 @@ def test_cli_reach_user_mistakes_exit_2(tmp_path, capsys) -> None:
 
 
 @pytest.mark.slow
-def test_acceptance_map_reaches_90_percent_of_true_z_2d() -> None:
-    """The acceptance run (docs/algorithm.md): 2-D task, saccade on every step, 5 seeds:
-    map >= 0.9 x true-z success."""
+def test_acceptance_map_reaches_95_percent_of_true_z_2d() -> None:
+    """The acceptance run: 2-D task, saccade on every step, the 15x15 paper-2d map, 5 seeds:
+    map >= 0.95 x true-z success (measured 1.001; per seed 0.98-1.04, README)."""
     res = run_reach(ReachConfig(states=("map", "true_z")))
     final = res.final_success()
-    assert final["map"] >= 0.9 * final["true_z"], final
+    assert final["map"] >= 0.95 * final["true_z"], final

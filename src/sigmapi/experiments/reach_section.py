@@ -66,7 +66,7 @@ def reach_section(ctx: ReportContext) -> Section:
         f"{cfg.gamma}, rates {cfg.critic_lr}/{cfg.actor_lr}, inverse temperature {cfg.beta}) on "
         f"each state, {cfg.episodes} episodes x {cfg.seeds} seeds. Final success = rate over the "
         f"last {cfg.final_episodes} episodes. Map / true z = {ratio:.3f} "
-        f"(target: at least 0.9).</p>"
+        f"(target: at least 0.95).</p>"
         "<table><tr><th>state</th><th>final success (mean)</th><th>per seed</th>"
         f"<th>what the learner sees</th></tr>{rows}</table>"
     )
