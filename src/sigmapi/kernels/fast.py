@@ -107,7 +107,7 @@ def _ahead(state: FastState, ahead: int) -> int:
 
 
 _RULES = {rule: code for code, rule in enumerate(WINNER_RULES)}
-"""Rule codes of the compiled :func:`_winner`: 0 soft, 1 argmax, 2 min_distance."""
+"""Rule codes of the compiled :func:`_winner`: 0 soft, 1 argmax, 2 min_distance, 3 soft_mean."""
 
 
 @dataclass
