@@ -27,15 +27,14 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
-import platform
 import resource
 import statistics
-import subprocess
 import sys
 import time
 from pathlib import Path
 from typing import Any
+
+import _common
 
 ROOT = Path(__file__).resolve().parent
 TARGETS = {
@@ -120,13 +119,9 @@ def child_train(preset: str, seed: int, threads: int, checkpoints: int) -> dict[
     }
 
 
-def run_child(args: list[str], env: dict[str, str] | None = None) -> dict[str, Any]:
+def run_child(args: list[str]) -> dict[str, Any]:
     """Run this script as a child with ``args``; returns its JSON result plus peak memory."""
-    cmd = [sys.executable, str(Path(__file__).resolve()), "--child", *args]
-    proc = subprocess.run(cmd, capture_output=True, text=True, env=env, check=False)
-    if proc.returncode != 0:
-        raise RuntimeError(f"{' '.join(cmd)} failed:\n{proc.stderr[-3000:]}")
-    return json.loads(proc.stdout.strip().splitlines()[-1])
+    return _common.run_child(__file__, args)
 
 
 def child_main(argv: list[str]) -> None:
@@ -213,21 +208,11 @@ def main() -> None:
 
     result = {
         "command": "python benchmarks/bench_kernels.py" + (" --quick" if args.quick else ""),
-        "machine": {
-            "platform": platform.platform(),
-            "processor": platform.processor(),
-            "cpus": os.cpu_count(),
-            "load_average_at_end": os.getloadavg(),
-            "numba_threads": threads,
-            "python": platform.python_version(),
-            "numba": numba.__version__,
-        },
+        "machine": _common.machine(numba_threads=threads, numba=numba.__version__),
         "speed": speed,
         "train": train,
     }
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(result, indent=1, sort_keys=True) + "\n", encoding="utf-8")
-    print(f"wrote {args.out}")
+    _common.write_result(args.out, result)
 
 
 if __name__ == "__main__":

@@ -5,9 +5,9 @@ from __future__ import annotations
 import pytest
 
 from sigmapi.config import SOMConfig
-from sigmapi.som import SigmaPiSOM
 from sigmapi.errors import UsageError
 from sigmapi.experiments.executor import job_memory, plan_workers, run_jobs
+from sigmapi.som import SigmaPiSOM
 
 
 def _square_or_fail(v: int) -> int:

@@ -229,3 +229,74 @@ def test_paper_2d_preset_learns_an_ordered_map():
     ]
     assert all(r.view_within_one >= 0.95 and r.z_error <= 0.6 for r in results)
     assert all(r.order_r2 >= 0.95 and not r.folded for r in results)
+
+
+# ---------------------------------------------------------------------------- inference
+
+
+@pytest.mark.parametrize("tol", [0.0, 1e-4])
+def test_single_pairs_and_batches_give_the_same_numbers(tol):
+    # one pair at a time (serial, scratch kept in the state) and the whole batch (parallel
+    # over rows) run the same arithmetic per row: equal bit for bit
+    w, data = _problem(n_iter=3 * fast.SERIAL_ROWS)
+    state = fast.prepare(w, tol)
+    x, y = data[0], data[1]
+    assert x.shape[0] > fast.SERIAL_ROWS
+    h = fast.activation(state, x, y)
+    one = np.concatenate(
+        [fast.activation(state, x[b : b + 1], y[b : b + 1]) for b in range(len(x))]
+    )
+    np.testing.assert_array_equal(one, h)
+    for rule in WINNER_RULES:
+        batch = fast.winners_of(state, x, y, MAP, rule, 1.5, 15)
+        single = [fast.winners_of(state, x[b : b + 1], y[b : b + 1], MAP, rule, 1.5, 15)[0]
+                  for b in range(len(x))]  # fmt: skip
+        np.testing.assert_array_equal(batch, single)
+        np.testing.assert_array_equal(batch, fast.winners(state, h, MAP, rule, 1.5, 15))
+        np.testing.assert_array_equal(
+            batch, reference.winners_of(fast.export(state), x, y, MAP, rule, 1.5, 15)
+        )
+
+
+def test_prefetching_changes_no_value(monkeypatch):
+    # prefetching is a hint: inference and training give the same numbers with and without it
+    monkeypatch.setattr(fast, "PREFETCH_MIN_BYTES", 0)  # (the test's weights are small)
+    w, data = _problem(n_iter=300)
+    results = []
+    for ahead in (0, 3):
+        monkeypatch.setattr(fast, "PREFETCH_AHEAD", ahead)
+        monkeypatch.setattr(fast, "TRAIN_PREFETCH_AHEAD", ahead)
+        for rule in ("soft", "min_distance"):
+            state, win = _train(fast, w, data, rule, tol=1e-6)
+            h = fast.activation(state, data[0], data[1])
+            one = fast.activation(state, data[0][:1], data[1][:1])
+            results.append((win, state.raw, state.scale, h, one))
+    for a, b in zip(results[:2], results[2:], strict=True):
+        for x, y in zip(a, b, strict=True):
+            np.testing.assert_array_equal(x, y)
+
+
+@pytest.mark.parametrize("rule", ["soft", "min_distance"])
+def test_model_inference_after_training_equals_a_fresh_model(rule):
+    # what inference keeps in the model (scratch, norms, sigma, unit positions) follows
+    # training: after partial_fit the model answers like one rebuilt from its arrays
+    kw = dict(map_shape=(3, 4), x_shape=(5, 5), y_shape=(5, 5), code_width=1.0,
+              iterations=900, seed=3, winner_rule=rule)  # fmt: skip
+    som = SigmaPiSOM(**kw).fit(n_iter=300)
+    b = som.training_block(0)
+    x, y = b.x0[:40], b.y0[:40]
+    before = som.winner(x[:1], y[:1]), som.respond(x, y), som.transform(x, y)
+    som.partial_fit(300)
+    fresh = SigmaPiSOM.from_arrays(*som.to_arrays())
+    for model in (som, fresh):
+        assert model.t_ == 600
+    np.testing.assert_array_equal(som.respond(x, y), fresh.respond(x, y))
+    np.testing.assert_array_equal(som.respond(x[:1], y[:1]), fresh.respond(x[:1], y[:1]))
+    np.testing.assert_array_equal(som.winner(x, y), fresh.winner(x, y))
+    np.testing.assert_array_equal(som.winner(x[:1], y[:1]), fresh.winner(x[:1], y[:1]))
+    np.testing.assert_array_equal(som.transform(x, y), fresh.transform(x, y))
+    np.testing.assert_array_equal(som.unit_sqnorms(), fresh.unit_sqnorms())
+    assert not np.array_equal(before[1], som.respond(x, y))  # training did change the map
+    ref = SigmaPiSOM.from_arrays(*som.to_arrays(), backend="reference")
+    np.testing.assert_allclose(som.respond(x, y), ref.respond(x, y), rtol=0, atol=1e-6)
+    np.testing.assert_allclose(som.unit_sqnorms(), ref.unit_sqnorms(), rtol=1e-6)

@@ -190,7 +190,7 @@ def test_saccade_views_show_the_same_z() -> None:
     assert np.abs(dec(y0) - dec(y1)).max() > 0.05  # the eye really moved
 
 
-# ---------------------------------------------------------------------------- issue 15
+# ------------------------------------------------------- construction, stepping, rendering
 
 
 @pytest.mark.parametrize(
@@ -245,3 +245,13 @@ def test_rgb_array_render_shows_workspace_goal_gaze_and_object(dim) -> None:
     green = np.argwhere(np.all(img == (150, 220, 150), axis=2))[:, 1].mean()
     assert red < green  # the object (z = 0.2) is drawn left of the goal (z = 0.5)
     assert GazeReachEnv(dim=dim, grid=7).render() is None
+
+
+def test_saccade_views_cover_the_whole_workspace_goal_included() -> None:
+    env = make(dim=1)
+    x0, y0, _, _ = collect_saccade_views(env, 400, seed=1)
+    z = (env.code.decode(x0) + env.code.decode(y0))[:, 0] / 2
+    in_goal = np.abs(z - 0.5) <= env.goal_radius
+    # the goal box is 20 % of the 1-D workspace: 80 expected of 400; 50 is 3.8 sd below
+    assert in_goal.sum() >= 50
+    assert z.min() < 0.05 and z.max() > 0.95

@@ -140,6 +140,25 @@ def test_reach_config_validation() -> None:
         ReachConfig().replace(episode=3)
 
 
+def test_the_map_learns_with_the_paper_2d_preset_or_the_small_map_schedule() -> None:
+    from sigmapi import load_preset
+    from sigmapi.reach.config import SMALL_MAP
+
+    cfg = ReachConfig()
+    som = cfg.som_config(seed=3)
+    p2 = load_preset("paper-2d")
+    assert (som.map_shape, som.x_shape, som.y_shape) == ((15, 15),) * 3
+    assert som.code_width == cfg.code_width == p2.code_width
+    for name in ("winner_rule", "ordering", "ordering_sigma", "kernel_tol", "eps", "sigma"):
+        assert getattr(som, name) == getattr(p2, name), name
+    assert (som.iterations, som.seed, som.backend) == (cfg.map_pairs, 3, "auto")
+    small = ReachConfig(**SMALL_MAP).som_config(seed=3)
+    assert small.map_shape == (7, 7) and small.x_shape == (7, 7) and small.code_width == 0.5
+    assert small.winner_rule == "soft" and small.iterations == 10_000
+    with pytest.raises(ConfigError, match="map_preset must be one of"):
+        ReachConfig(map_preset="paper-3d")
+
+
 def test_cli_reach_json_and_figure(tmp_path, capsys) -> None:
     out = tmp_path / "reach.png"
     rc = main(["reach", "--dim", "1", "--grid", "7", "--map-shape", "6", "--map-pairs", "500",
@@ -165,9 +184,9 @@ def test_cli_reach_user_mistakes_exit_2(tmp_path, capsys) -> None:
 
 
 @pytest.mark.slow
-def test_acceptance_map_reaches_90_percent_of_true_z_2d() -> None:
-    """The acceptance run (docs/algorithm.md): 2-D task, saccade on every step, 5 seeds:
-    map >= 0.9 x true-z success."""
+def test_acceptance_map_reaches_95_percent_of_true_z_2d() -> None:
+    """The acceptance run: 2-D task, saccade on every step, the 15x15 paper-2d map, 5 seeds:
+    map >= 0.95 x true-z success (measured 1.001; per seed 0.98-1.04, README)."""
     res = run_reach(ReachConfig(states=("map", "true_z")))
     final = res.final_success()
-    assert final["map"] >= 0.9 * final["true_z"], final
+    assert final["map"] >= 0.95 * final["true_z"], final

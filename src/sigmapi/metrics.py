@@ -215,8 +215,7 @@ def fold_indicators(
     starved = int(np.sum(wins < STARVED_SHARE * wins.sum() / model.n_units))
     scores = model.respond(test.x0, test.y0)
     if model.config.winner_rule == "min_distance":
-        w = model.weights_.reshape(model.n_units, -1)
-        scores = 2.0 * scores - np.einsum("ki,ki->k", w, w)[None, :]
+        scores = 2.0 * scores - model.unit_sqnorms()[None, :]
     top2 = np.argpartition(-scores, 1, axis=1)[:, :2]
     coords = model.map_coords
     te = float(np.mean(chebyshev(coords, top2[:, 0], top2[:, 1]) > 1.0))

@@ -14,6 +14,7 @@ bit, wherever the run was cut.
 from __future__ import annotations
 
 import copy
+import math
 import threading
 from collections.abc import Callable
 from pathlib import Path
@@ -101,6 +102,8 @@ class SigmaPiSOM:
         self._block_cache: tuple[int, Batch] | None = None
         self._weights_cache: NDArray[np.float64] | None = None
         self._lock = threading.RLock()
+        self._unit_positions: NDArray[np.float64] | None = None  # transform()'s table
+        self._sigma_cache: tuple[int, float] | None = None  # (t_, sigma at t_)
 
     # ------------------------------------------------------------------ shapes and codes
     @property
@@ -243,7 +246,9 @@ class SigmaPiSOM:
     @property
     def sigma_(self) -> float:
         """Neighbourhood width at the current iteration (used by the soft winner)."""
-        return float(self.sigma_at(self.t_))
+        if self._sigma_cache is None or self._sigma_cache[0] != self.t_:
+            self._sigma_cache = (self.t_, float(self.sigma_at(self.t_)))
+        return self._sigma_cache[1]
 
     # ------------------------------------------------------------------ training
     def training_block(self, b: int) -> Batch:
@@ -373,7 +378,7 @@ class SigmaPiSOM:
         if arr.dtype.kind not in "fiub":
             raise ValueError(f"{name} must be a numeric array, got dtype {arr.dtype}")
         arr = arr.astype(np.float64, copy=False)
-        n = int(np.prod(shape))
+        n = math.prod(shape)
         if arr.ndim == 1:
             arr = arr[None, :]
         if arr.ndim != 2 or arr.shape[1] != n:
@@ -381,7 +386,7 @@ class SigmaPiSOM:
                 f"{name} must have shape (B, {n}) (codes on grid {shape}, flattened in C order), "
                 f"got {np.shape(a)}; encode positions with model.x_code.encode / y_code.encode"
             )
-        if not np.all(np.isfinite(arr)):
+        if not np.isfinite(arr.sum()) and not np.all(np.isfinite(arr)):  # one pass when finite
             raise ValueError(f"{name} must be finite, got NaN or inf values")
         return arr
 
@@ -390,9 +395,15 @@ class SigmaPiSOM:
         """Activations ``h[b, k] = x_b^T W_k y_b`` of every unit; ``(B, n_units)``.
 
         ``x`` ``(B, n_x)`` and ``y`` ``(B, n_y)`` are codes (``x_code.encode``), flattened in
-        C order. A single pair is computed densely from ``weights_`` (cheap and exact); a batch
-        by the model's kernel.
+        C order. Computed by the model's kernel on its own state (for the fast kernel: the
+        sparse input pairs of each row against its float32 weights; one pair or a few rows in
+        the caller's thread, larger batches in parallel over rows).
         """
+        xa, ya = self._pairs_of(x, y)
+        return np.asarray(self._kernel.activation(self._state, xa, ya), dtype=np.float64)
+
+    def _pairs_of(self, x: ArrayLike, y: ArrayLike) -> tuple[NDArray[np.float64], ...]:
+        """Checked codes ``(B, n_x)`` and ``(B, n_y)`` of a fitted model's input pairs."""
         self._check_fitted()
         xa = self._check_codes(x, "x", self.x_shape)
         ya = self._check_codes(y, "y", self.y_shape)
@@ -400,12 +411,7 @@ class SigmaPiSOM:
             raise ValueError(
                 f"x and y must have the same number of rows, got {xa.shape[0]} and {ya.shape[0]}"
             )
-        if xa.shape[0] == 1:
-            # one sample (a step of an agent): a compiled kernel pays its dispatch and thread
-            # start-up on every call (~1-8 ms); the dense arithmetic on the cached float64
-            # weights takes ~30 us and is exact for any backend
-            return reference.activation(self.weights_, xa, ya)
-        return np.asarray(self._kernel.activation(self._state, xa, ya), dtype=np.float64)
+        return xa, ya
 
     @property
     def winner_rule_(self) -> str:
@@ -423,13 +429,13 @@ class SigmaPiSOM:
         takes the rule's limit at sigma -> 0: the soft winner becomes the argmax of the
         response (the metrics use this, so that mid-run maps are not smoothed).
         """
-        h = self.respond(x, y)
+        xa, ya = self._pairs_of(x, y)
         rule = rule or self.winner_rule_
         if hard and rule in ("soft", "soft_mean"):
             rule = "argmax"
         return np.asarray(
-            self._kernel.winners(
-                self._state, h, self.map_shape, rule, self.sigma_, self.config.soft_cut
+            self._kernel.winners_of(
+                self._state, xa, ya, self.map_shape, rule, self.sigma_, self.config.soft_cut
             ),
             dtype=np.int64,
         )
@@ -437,8 +443,18 @@ class SigmaPiSOM:
     def transform(self, x: ArrayLike, y: ArrayLike) -> NDArray[np.float64]:
         """Map coordinates of the winner as fractions of each map axis, ``(B, d_map)`` in [0, 1]."""
         k = self.winner(x, y)
-        scale = np.maximum(np.asarray(self.map_shape, dtype=np.float64) - 1.0, 1.0)
-        return self.map_coords[k] / scale
+        if self._unit_positions is None:
+            scale = np.maximum(np.asarray(self.map_shape, dtype=np.float64) - 1.0, 1.0)
+            self._unit_positions = self.map_coords / scale
+        return self._unit_positions[k]
+
+    def unit_sqnorms(self) -> NDArray[np.float64]:
+        """``|w_k|^2``, the squared length of every unit's weights; ``(n_units,)``.
+
+        From the kernel's state (the fast kernel tracks them), without forming ``weights_``.
+        """
+        self._check_fitted()
+        return np.asarray(self._kernel.sqnorms(self._state), dtype=np.float64)
 
     def cost_terms(self, batch: Batch) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
         """Winners of view 0 ``(B,)`` and ``|x1 y1^T - w_k|^2`` for every unit ``(B, n_units)``.
@@ -448,8 +464,7 @@ class SigmaPiSOM:
         """
         k = self.winner(batch.x0, batch.y0)
         h1 = self.respond(batch.x1, batch.y1)
-        w = self.weights_
-        wn = np.einsum("kij,kij->k", w, w)
+        wn = self.unit_sqnorms()
         dn = (batch.x1**2).sum(1) * (batch.y1**2).sum(1)
         return k, dn[:, None] - 2.0 * h1 + wn[None, :]
 

@@ -55,7 +55,7 @@ def cmd_reach(args: argparse.Namespace) -> int:
     values = dataclass_values(args, ReachConfig)
     dim = values.get("dim", ReachConfig.dim)
     if "map_shape" not in values:  # the default map follows the task's dimension
-        values["map_shape"] = (7, 7) if dim == 2 else (12,)
+        values["map_shape"] = ReachConfig.map_shape if dim == 2 else (12,)
     if len(values["map_shape"]) != dim:
         raise UsageError(
             f"--map-shape must have {dim} axes for --dim {dim}, "

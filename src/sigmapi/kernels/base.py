@@ -100,6 +100,10 @@ class Kernel(Protocol[S]):
         """Inverse of :meth:`state_arrays` for weights of ``shape`` ``(K, n_x, n_y)``."""
         ...
 
+    def sqnorms(self, state: S) -> NDArray[np.float64]:
+        """``|w_k|^2`` of every unit, ``(K,)`` (the ``min_distance`` rule's norms)."""
+        ...
+
     def activation(
         self, state: S, x: NDArray[np.floating], y: NDArray[np.floating]
     ) -> NDArray[np.float64]:
@@ -116,6 +120,20 @@ class Kernel(Protocol[S]):
         cut: int,
     ) -> NDArray[np.int64]:
         """Winning unit per row of ``h`` under ``rule`` (one of :data:`WINNER_RULES`)."""
+        ...
+
+    def winners_of(
+        self,
+        state: S,
+        x: NDArray[np.floating],
+        y: NDArray[np.floating],
+        map_shape: tuple[int, ...],
+        rule: str,
+        sigma: float,
+        cut: int,
+    ) -> NDArray[np.int64]:
+        """Winning unit of each pair ``(x_b, y_b)``, ``(B,)``: the same as ``winners`` of
+        ``activation``, for one pair as fast as the kernel allows (no per-call preparation)."""
         ...
 
     def train_block(

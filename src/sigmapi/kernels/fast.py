@@ -36,7 +36,8 @@ C. Weber and S. Wermter, "A self-organizing map of Sigma-Pi units", Neurocomputi
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import functools
+from dataclasses import dataclass, field
 from typing import Any
 
 import numba
@@ -45,7 +46,8 @@ from numba import njit, prange
 from numpy.typing import NDArray
 
 from sigmapi import _validate
-from sigmapi.kernels import reference
+from sigmapi.kernels import _rows, reference
+from sigmapi.kernels._rows import _pairs, _winner, prefetch, prefetch_row
 from sigmapi.kernels.base import WINNER_RULES, columns_to_dense
 
 __all__ = [
@@ -55,9 +57,11 @@ __all__ = [
     "export",
     "from_state_arrays",
     "prepare",
+    "sqnorms",
     "state_arrays",
     "train_block",
     "winners",
+    "winners_of",
 ]
 
 NAME = "fast"
@@ -78,8 +82,32 @@ shared 2-core machine a descheduled worker thread stalls every step (measured: 6
 :func:`activation` (one synchronisation per call) always uses all threads.
 """
 
+SERIAL_ROWS = 16
+"""Inference calls (:func:`activation`, :func:`winners_of`) with at most this many rows run in
+the caller's thread on scratch memory kept in the state (no thread start-up, no allocation
+but the result); larger batches run in parallel over blocks of rows."""
+
+PREFETCH_AHEAD = 8
+"""Inference prefetches the weight row of the input pair this many pairs ahead (0: off)."""
+
+TRAIN_PREFETCH_AHEAD = 8
+"""Training prefetches the weight row of the input pair this many pairs ahead (0: off), in
+the update and in the activation pass (benchmarks/README.md: its effect)."""
+
+PREFETCH_MIN_BYTES = 1 << 21
+"""Prefetching is used only for weights of at least this many bytes (2 MiB, a core's L2 cache
+here): weights that stay in cache gain nothing from it and pay its instructions (measured in
+one bench_bandwidth.py round under load: paper-1d, 13.5 KB of weights, 354,000 it/s without,
+280,000 with; paper-2d, 45.6 MB, 1,362 it/s without, 2,196 with)."""
+
+
+def _ahead(state: FastState, ahead: int) -> int:
+    """``ahead`` if ``state``'s weights are large enough to gain from prefetching, else 0."""
+    return ahead if state.raw.nbytes >= PREFETCH_MIN_BYTES else 0
+
+
 _RULES = {rule: code for code, rule in enumerate(WINNER_RULES)}
-"""Rule codes of the compiled :func:`_winner`: 0 soft, 1 argmax, 2 min_distance."""
+"""Rule codes of the compiled :func:`_winner`: 0 soft, 1 argmax, 2 min_distance, 3 soft_mean."""
 
 
 @dataclass
@@ -101,6 +129,9 @@ class FastState:
         Relative truncation tolerance of codes and neighbourhoods (0 = exact).
     shape : tuple of int
         ``(K, n_x, n_y)``.
+
+    The state also keeps the scratch memory of serial inference (:meth:`scratch`); it holds no
+    information about the weights, so training never makes it stale.
     """
 
     raw: NDArray[np.floating]
@@ -109,6 +140,18 @@ class FastState:
     tol: float
     shape: tuple[int, int, int]
     norms_valid: bool = True
+    _scratch: tuple[NDArray[Any], ...] | None = field(default=None, repr=False, compare=False)
+
+    def scratch(self) -> tuple[NDArray[Any], ...]:
+        """Work arrays of one row at a time ``(jb, pi, pv, acc, h, t1, t2)``, made once."""
+        if self._scratch is None:
+            k, nx, ny = self.shape
+            n = nx * ny
+            self._scratch = (
+                np.empty(ny, dtype=np.int64), np.empty(n, dtype=np.int64), np.empty(n),
+                *(np.empty(k) for _ in range(4)),
+            )  # fmt: skip
+        return self._scratch
 
     def refresh_norms(self) -> None:
         """Recompute ``sqnorm`` exactly from ``raw`` if it is stale."""
@@ -214,88 +257,6 @@ def from_state_arrays(
 
 
 @njit(cache=True, nogil=True)
-def _pairs(x, y, tol, jbuf, pidx, pval):
-    """Sparse outer product: pairs ``p = i * n_y + j`` with ``|x_i y_j| > tol max|x| max|y|``.
-
-    Fills ``pidx``/``pval`` (length >= n_x n_y) and returns the count. ``jbuf``: scratch (n_y,).
-    """
-    nx = x.shape[0]
-    ny = y.shape[0]
-    mx = 0.0
-    for i in range(nx):
-        mx = max(mx, abs(x[i]))
-    my = 0.0
-    for j in range(ny):
-        my = max(my, abs(y[j]))
-    thr = tol * mx * my
-    nj = 0
-    for j in range(ny):
-        if abs(y[j]) * mx > thr:
-            jbuf[nj] = j
-            nj += 1
-    n = 0
-    for i in range(nx):
-        xi = x[i]
-        if abs(xi) * my <= thr:
-            continue
-        base = i * ny
-        for q in range(nj):
-            j = jbuf[q]
-            v = xi * y[j]
-            if abs(v) > thr:
-                pidx[n] = base + j
-                pval[n] = v
-                n += 1
-    return n
-
-
-@njit(cache=True, nogil=True)
-def _winner(h, scale, sqnorm, rule, sigma, cut, dims, strides, tmp, tmp2):
-    """Winning unit of one activation vector ``h`` (K,); ties to the lowest index."""
-    k_units = h.shape[0]
-    if rule == 0 or rule == 3:  # soft: separable Gaussian smoothing over the map, window +-cut
-        for k in range(k_units):
-            tmp[k] = h[k]
-        cur = tmp
-        nxt = tmp2
-        for ax in range(dims.shape[0]):
-            n = dims[ax]
-            st = strides[ax]
-            m = min(cut, n - 1)
-            wts = np.empty(m + 1)
-            for d in range(m + 1):
-                wts[d] = np.exp(-(d * d) / (2.0 * sigma * sigma))
-            for k in range(k_units):
-                c = (k // st) % n
-                acc = 0.0
-                norm = 0.0
-                for c2 in range(max(0, c - m), min(n - 1, c + m) + 1):
-                    acc += cur[k + (c2 - c) * st] * wts[abs(c2 - c)]
-                    norm += wts[abs(c2 - c)]
-                nxt[k] = acc / norm if rule == 3 else acc
-            cur, nxt = nxt, cur
-        best = 0
-        for k in range(1, k_units):
-            if cur[k] > cur[best]:
-                best = k
-        return best
-    if rule == 1:
-        best = 0
-        for k in range(1, k_units):
-            if h[k] > h[best]:
-                best = k
-        return best
-    best = 0
-    bval = 2.0 * h[0] - scale[0] * scale[0] * sqnorm[0]
-    for k in range(1, k_units):
-        v = 2.0 * h[k] - scale[k] * scale[k] * sqnorm[k]
-        if v > bval:
-            best = k
-            bval = v
-    return best
-
-
-@njit(cache=True, nogil=True)
 def _neighbourhood(winner, sigma, eps, tol, dims, strides, ea):
     """``ea[k] = eps * a_k`` (L2-normalised Gaussian around ``winner``).
 
@@ -332,13 +293,14 @@ def _neighbourhood(winner, sigma, eps, tol, dims, strides, ea):
 @njit(cache=True, nogil=True)
 def _unit_chunk(
     raw, scale, sqnorm, k0, k1, ea, thr, lo, hi,
-    pi1, pv1, n1, pi0, pv0, n0, do_act, track, h, gain, acc,
+    pi1, pv1, n1, pi0, pv0, n0, do_act, track, h, gain, acc, ahead,
 ):  # fmt: skip
     """Units ``[k0, k1)``: Kohonen update with pairs 1, then activation of pairs 0 into ``h``.
 
     ``ea[k] = eps a_k``; units in ``[lo, hi)`` with ``ea[k] > thr`` get the additive update.
-    ``track``: keep ``sqnorm`` up to date. Touches only indices ``[k0, k1)`` of the per-unit
-    arrays, so chunks can run in parallel.
+    ``track``: keep ``sqnorm`` up to date. ``ahead``: prefetch the weight row of the pair this
+    many pairs ahead (0: none). Touches only indices ``[k0, k1)`` of the per-unit arrays, so
+    chunks can run in parallel.
     """
     n_pairs = raw.shape[0]
     for k in range(k0, k1):
@@ -356,10 +318,14 @@ def _unit_chunk(
     u0 = max(lo, k0)
     u1 = min(hi, k1)
     if u0 < u1 and n1 > 0:
+        for q in range(min(ahead, n1)):
+            prefetch(raw, pi1[q], u0, u1)
         if track:
             for k in range(u0, u1):
                 acc[k] = 0.0
             for q in range(n1):
+                if ahead > 0 and q + ahead < n1:
+                    prefetch(raw, pi1[q + ahead], u0, u1)
                 row = raw[pi1[q]]
                 val = pv1[q]
                 for k in range(u0, u1):
@@ -371,6 +337,8 @@ def _unit_chunk(
                 sqnorm[k] += acc[k]
         else:
             for q in range(n1):
+                if ahead > 0 and q + ahead < n1:
+                    prefetch(raw, pi1[q + ahead], u0, u1)
                 row = raw[pi1[q]]
                 val = pv1[q]
                 for k in range(u0, u1):
@@ -378,7 +346,11 @@ def _unit_chunk(
     if do_act:
         for k in range(k0, k1):
             acc[k] = 0.0
+        for q in range(min(ahead, n0)):
+            prefetch_row(raw, pi0[q])
         for q in range(n0):
+            if ahead > 0 and q + ahead < n0:
+                prefetch_row(raw, pi0[q + ahead])
             row = raw[pi0[q]]
             val = pv0[q]
             for k in range(k0, k1):
@@ -408,7 +380,7 @@ def _buffers(k_units, n_pairs, ny):
 @njit(cache=True, parallel=True)
 def _train(
     raw, scale, sqnorm, x0, y0, x1, y1, sigmas, eps, dims, strides, rule, cut, tol, out, track,
-    threads,
+    threads, ahead,
 ):  # fmt: skip
     """The training driver: iterations in order; ``threads``: update the units in parallel
     chunks of :data:`CHUNK` (same arithmetic per unit, so the same result), else in one call
@@ -423,10 +395,11 @@ def _train(
     if threads:
         for c in prange(n_chunks):
             _unit_chunk(raw, scale, sqnorm, c * CHUNK, min(k_units, (c + 1) * CHUNK), ea, 1.0,
-                        0, 0, pi1, pv1, 0, pi0, pv0, n0, True, track, h, gain, acc)  # fmt: skip
+                        0, 0, pi1, pv1, 0, pi0, pv0, n0, True, track, h, gain, acc,
+                        ahead)  # fmt: skip
     else:
         _unit_chunk(raw, scale, sqnorm, 0, k_units, ea, 1.0, 0, 0,
-                    pi1, pv1, 0, pi0, pv0, n0, True, track, h, gain, acc)  # fmt: skip
+                    pi1, pv1, 0, pi0, pv0, n0, True, track, h, gain, acc, ahead)  # fmt: skip
     for t in range(n_iter):
         w = _winner(h, scale, sqnorm, rule, sigmas[t], cut, dims, strides, t1, t2)
         out[t] = w
@@ -440,54 +413,26 @@ def _train(
             for c in prange(n_chunks):
                 _unit_chunk(raw, scale, sqnorm, c * CHUNK, min(k_units, (c + 1) * CHUNK), ea,
                             thr, lo, hi, pi1, pv1, n1, pi0, pv0, n0, more, track, h, gain,
-                            acc)  # fmt: skip
+                            acc, ahead)  # fmt: skip
         else:
             _unit_chunk(raw, scale, sqnorm, 0, k_units, ea, thr, lo, hi,
-                        pi1, pv1, n1, pi0, pv0, n0, more, track, h, gain, acc)  # fmt: skip
-
-
-@njit(cache=True, parallel=True)
-def _activation_batch(raw, scale, x, y, tol, order, h):
-    """``h[b, k] = scale_k sum_p raw[p, k] (x_b y_b^T)_p`` over the kept pairs.
-
-    Rows are visited in ``order`` (rows with nearby code peaks together, so that the weight
-    rows they share stay in cache); blocks of rows run in parallel. Each row's arithmetic
-    does not depend on the order or the thread.
-    """
-    n_rows = x.shape[0]
-    n_pairs = raw.shape[0]
-    k_units = raw.shape[1]
-    rows = 16
-    n_blocks = (n_rows + rows - 1) // rows
-    for c in prange(n_blocks):
-        jb = np.empty(y.shape[1], dtype=np.int64)
-        pi = np.empty(n_pairs, dtype=np.int64)
-        pv = np.empty(n_pairs)
-        acc = np.empty(k_units)
-        for r in range(c * rows, min(n_rows, (c + 1) * rows)):
-            b = order[r]
-            n = _pairs(x[b], y[b], tol, jb, pi, pv)
-            for k in range(k_units):
-                acc[k] = 0.0
-            for q in range(n):
-                row = raw[pi[q]]
-                val = pv[q]
-                for k in range(k_units):
-                    acc[k] += row[k] * val
-            for k in range(k_units):
-                h[b, k] = scale[k] * acc[k]
+                        pi1, pv1, n1, pi0, pv0, n0, more, track, h, gain, acc, ahead)  # fmt: skip
 
 
 # ---------------------------------------------------------------------------- public interface
 
 
+@functools.lru_cache(maxsize=16)
 def _grid(map_shape: tuple[int, ...], k_units: int) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """Sizes and flat-index strides of the map's axes (read-only; cached: every call needs them)."""
     dims = np.asarray(map_shape, dtype=np.int64)
     if int(np.prod(dims)) != k_units:
         raise ValueError(f"map_shape {map_shape} does not hold the state's {k_units} units")
     strides = np.ones_like(dims)
     for ax in range(len(map_shape) - 2, -1, -1):
         strides[ax] = strides[ax + 1] * dims[ax + 1]
+    dims.flags.writeable = False
+    strides.flags.writeable = False
     return dims, strides
 
 
@@ -505,24 +450,49 @@ def _codes(a: NDArray[np.floating], n: int, name: str) -> NDArray[np.float64]:
     return arr
 
 
-def activation(
-    state: FastState, x: NDArray[np.floating], y: NDArray[np.floating]
-) -> NDArray[np.float64]:
-    """Sigma-Pi activations ``h[b, k] = x_b^T W_k y_b`` of a batch; ``(B, K)``.
+def sqnorms(state: FastState) -> NDArray[np.float64]:
+    """``|w_k|^2 = scale_k^2 sqnorm_k`` of every unit, ``(K,)``, from the tracked norms."""
+    state.refresh_norms()
+    return np.asarray(state.scale**2 * state.sqnorm)
 
-    Sparse equivalent of the matrix product ``vec(x_b y_b^T) @ W^T``: each row costs
-    ``K x (number of kept pairs)`` multiply-adds; rows run in parallel.
-    """
-    k_units, nx, ny = state.shape
+
+def _rows_of(
+    state: FastState, x: NDArray[np.floating], y: NDArray[np.floating]
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    _, nx, ny = state.shape
     xa = _codes(x, nx, "x")
     ya = _codes(y, ny, "y")
     if xa.shape[0] != ya.shape[0]:
         raise ValueError(
             f"x and y must have the same number of rows, got {xa.shape[0]}, {ya.shape[0]}"
         )
-    h = np.empty((xa.shape[0], k_units))
-    order = np.lexsort((np.argmax(np.abs(ya), axis=1), np.argmax(np.abs(xa), axis=1)))
-    _activation_batch(state.raw, state.scale, xa, ya, state.tol, order, h)
+    return xa, ya
+
+
+def _peak_order(x: NDArray[np.float64], y: NDArray[np.float64]) -> NDArray[np.int64]:
+    """Rows sorted by the peaks of their codes (rows that share weight rows come together)."""
+    return np.lexsort((np.argmax(np.abs(y), axis=1), np.argmax(np.abs(x), axis=1)))
+
+
+def activation(
+    state: FastState, x: NDArray[np.floating], y: NDArray[np.floating]
+) -> NDArray[np.float64]:
+    """Sigma-Pi activations ``h[b, k] = x_b^T W_k y_b`` of a batch; ``(B, K)``.
+
+    Sparse equivalent of the matrix product ``vec(x_b y_b^T) @ W^T``: each row costs
+    ``K x (number of kept pairs)`` multiply-adds. Up to :data:`SERIAL_ROWS` rows run in the
+    caller's thread; larger batches in parallel over rows (the same numbers either way).
+    """
+    xa, ya = _rows_of(state, x, y)
+    h = np.empty((xa.shape[0], state.shape[0]))
+    ahead = _ahead(state, PREFETCH_AHEAD)
+    if xa.shape[0] <= SERIAL_ROWS:
+        jb, pi, pv, acc, *_ = state.scratch()
+        _rows.respond_rows(state.raw, state.scale, xa, ya, state.tol, ahead,
+                           jb, pi, pv, acc, h)  # fmt: skip
+    else:
+        _rows.respond_rows_parallel(state.raw, state.scale, xa, ya, state.tol, ahead,
+                                    _peak_order(xa, ya), h)  # fmt: skip
     return h
 
 
@@ -541,10 +511,41 @@ def winners(
     """
     _rule_code(rule)
     if rule == "min_distance":
-        state.refresh_norms()
-        wn = state.scale**2 * state.sqnorm
+        wn = sqnorms(state)
         return np.argmax(2.0 * np.asarray(h, dtype=np.float64) - wn[None, :], axis=1)
     return reference.winners(np.empty((0, 0, 0)), h, map_shape, rule, sigma, cut)
+
+
+def winners_of(
+    state: FastState,
+    x: NDArray[np.floating],
+    y: NDArray[np.floating],
+    map_shape: tuple[int, ...],
+    rule: str,
+    sigma: float,
+    cut: int,
+) -> NDArray[np.int64]:
+    """Winning unit of each pair ``(x_b, y_b)``; ``(B,)``: activation and winner in one pass.
+
+    The same winners as ``winners(state, activation(state, x, y), ...)`` (the compiled
+    winner rule of training), without forming the ``(B, K)`` activations; serial up to
+    :data:`SERIAL_ROWS` rows, else parallel over rows.
+    """
+    xa, ya = _rows_of(state, x, y)
+    dims, strides = _grid(tuple(map_shape), state.shape[0])
+    code = _rule_code(rule)
+    if code == _RULES["min_distance"]:
+        state.refresh_norms()
+    out = np.empty(xa.shape[0], dtype=np.int64)
+    args = (state.raw, state.scale, state.sqnorm, xa, ya, state.tol,
+            _ahead(state, PREFETCH_AHEAD), code,
+            float(sigma), int(cut), dims, strides)  # fmt: skip
+    if xa.shape[0] <= SERIAL_ROWS:
+        jb, pi, pv, acc, h, t1, t2 = state.scratch()
+        _rows.winners_rows(*args, jb, pi, pv, acc, h, t1, t2, out)
+    else:
+        _rows.winners_rows_parallel(*args, _peak_order(xa, ya), out)
+    return out
 
 
 def train_block(
@@ -591,5 +592,6 @@ def train_block(
     parallel = threads and k_units * nx * ny >= PARALLEL_MIN_WORK and numba.get_num_threads() > 1
     driver: Any = _train  # a numba dispatcher (its stubs do not know the signature)
     driver(state.raw, state.scale, state.sqnorm, *xs, sg, ep, dims, strides, code,
-           int(soft_cut), state.tol, out, track, bool(parallel))  # fmt: skip
+           int(soft_cut), state.tol, out, track, bool(parallel),
+           _ahead(state, TRAIN_PREFETCH_AHEAD))  # fmt: skip
     return out

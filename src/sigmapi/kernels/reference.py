@@ -36,9 +36,11 @@ __all__ = [
     "neighbourhood",
     "prepare",
     "smooth",
+    "sqnorms",
     "state_arrays",
     "train_block",
     "winners",
+    "winners_of",
 ]
 
 Array = NDArray[np.floating]
@@ -71,6 +73,11 @@ def from_state_arrays(
 ) -> NDArray[np.float64]:
     """Inverse of :func:`state_arrays`: this kernel has no state beyond the weights."""
     raise ValueError("the reference kernel has no backend state; load its weights instead")
+
+
+def sqnorms(W: Array) -> NDArray[np.float64]:
+    """``|w_k|^2 = sum_ij W[k, i, j]^2`` of every unit; ``(K,)``."""
+    return np.einsum("kij,kij->k", W, W)
 
 
 def activation(W: Array, x: Array, y: Array) -> NDArray[np.float64]:
@@ -137,9 +144,22 @@ def winners(
     if rule == "argmax":
         return np.argmax(h, axis=1)
     if rule == "min_distance":
-        wn = np.einsum("kij,kij->k", W, W)
+        wn = sqnorms(W)
         return np.argmax(2.0 * h - wn[None, :], axis=1)
     raise ValueError(f"rule must be one of {WINNER_RULES}, got {rule!r}")
+
+
+def winners_of(
+    W: Array,
+    x: Array,
+    y: Array,
+    map_shape: tuple[int, ...],
+    rule: str,
+    sigma: float,
+    cut: int,
+) -> NDArray[np.int64]:
+    """Winning unit of each pair ``(x_b, y_b)``: :func:`winners` of :func:`activation`."""
+    return winners(W, activation(W, x, y), map_shape, rule, sigma, cut)
 
 
 def neighbourhood(

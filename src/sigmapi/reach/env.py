@@ -212,16 +212,34 @@ class GazeReachEnv(gym.Env[Obs, np.int64]):
         return np.maximum(2.0 * z - 1.0, 0.0), np.minimum(2.0 * z, 1.0)
 
     def _saccade(self) -> None:
-        lo, hi = self.gaze_range(np.clip(self._z, 0.0, 1.0))
-        self._y = lo + (hi - lo) * self.np_random.random(self.dim)
+        self._y = self.saccade_targets(np.clip(self._z, 0.0, 1.0)[None, :], self.np_random)[0]
+
+    def saccade_targets(
+        self, z: NDArray[np.float64], rng: np.random.Generator
+    ) -> NDArray[np.float64]:
+        """Fixations after a saccade, uniform among those that keep ``z`` on the retina.
+
+        ``z`` ``(B, dim)`` in the workspace; returns ``y`` ``(B, dim)`` (one draw of ``B * dim``
+        uniforms from ``rng``, as a step's saccade draws ``dim``).
+        """
+        lo, hi = self.gaze_range(z)
+        return lo + (hi - lo) * rng.random(z.shape)
+
+    def codes(
+        self, z: NDArray[np.float64], y: NDArray[np.float64]
+    ) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
+        """What the agent sees of objects at ``z`` with gaze ``y`` (both ``(B, dim)``): the
+        retina and gaze codes, float32 ``(B, grid**dim)`` each (the observation's values)."""
+        x = np.clip(2.0 * z - y, 0.0, 1.0)
+        return self.code.encode(x).astype(np.float32), self.code.encode(y).astype(np.float32)
 
     def encode(self, p: NDArray[np.float64]) -> NDArray[np.float32]:
         """Code of one position ``p`` ``(dim,)`` in [0, 1]: ``self.code.encode``, as float32."""
         return self.code.encode(p[None, :])[0].astype(np.float32)
 
     def _obs(self) -> Obs:
-        x = np.clip(2.0 * self._z - self._y, 0.0, 1.0)
-        return {"retina": self.encode(x), "gaze": self.encode(self._y)}
+        retina, gaze = self.codes(self._z[None, :], self._y[None, :])
+        return {"retina": retina[0], "gaze": gaze[0]}
 
     def _info(self, saccade: bool, event: str) -> dict[str, Any]:
         return {

@@ -17,19 +17,20 @@ from sigmapi.reach.env import GazeReachEnv
 
 __all__ = ["collect_saccade_views"]
 
-STAY = 0
-"""The action that keeps the body still (row 0 of :func:`~sigmapi.reach.env.move_table`)."""
-
 
 def collect_saccade_views(
     env: GazeReachEnv, n_pairs: int, seed: int | None = None
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """Gather ``n_pairs`` pairs of views of the same ``z`` by keeping still and looking around.
 
-    Per pair the environment makes a random restart (the body lands at a random place, the
-    object anywhere outside the goal region, as in every episode), then the agent takes the
-    "stay" action until the eye makes a saccade; the observations before and after that
-    saccade are the two views. Only observations are used, never ``info["z"]``.
+    Per pair the object lies anywhere in the workspace (uniform ``z``, the goal region
+    included: the map must know the goal's z too) and, while the body keeps still, the eye
+    makes two saccades (each to a uniform fixation that keeps the object on the retina, the
+    environment's :meth:`~sigmapi.reach.GazeReachEnv.saccade_targets`); the two fixations are
+    the two views, coded as the environment codes its observations
+    (:meth:`~sigmapi.reach.GazeReachEnv.codes`). Computed for all pairs at once rather than by
+    stepping: the environment ends an episode as soon as ``z`` is in the goal box, so stepping
+    could never show a goal ``z`` twice. Only the codes are used for learning, never ``z``.
 
     Parameters
     ----------
@@ -38,7 +39,7 @@ def collect_saccade_views(
     n_pairs : int
         Number of view pairs.
     seed : int, optional
-        Seed of the environment's first reset (later restarts continue its stream).
+        Seed of the object positions and fixations.
 
     Returns
     -------
@@ -54,19 +55,9 @@ def collect_saccade_views(
         raise ConfigError(
             "saccade_rate must be > 0 to collect views: a still eye never shows a second view"
         )
-    n = env.code.size
-    out = [np.empty((n_pairs, n)) for _ in range(4)]
-    obs, _ = env.reset(seed=seed)
-    for i in range(n_pairs):
-        if i > 0:
-            obs, _ = env.reset()
-        while True:
-            nxt, _, terminated, truncated, info = env.step(STAY)
-            if info["saccade"]:
-                break
-            if terminated or truncated:  # a long still spell hit the time limit: restart
-                nxt, _ = env.reset()
-            obs = nxt
-        out[0][i], out[1][i] = obs["retina"], obs["gaze"]
-        out[2][i], out[3][i] = nxt["retina"], nxt["gaze"]
-    return out[0], out[1], out[2], out[3]
+    rng = np.random.default_rng(seed)
+    z = rng.random((n_pairs, env.dim))
+    x0, y0 = env.codes(z, env.saccade_targets(z, rng))
+    x1, y1 = env.codes(z, env.saccade_targets(z, rng))
+    f64 = [np.asarray(v, dtype=np.float64) for v in (x0, y0, x1, y1)]
+    return f64[0], f64[1], f64[2], f64[3]

@@ -1,0 +1,245 @@
+"""Compiled helpers of the fast kernel that work on one input pair (one row) at a time.
+
+- :func:`_pairs`: the sparse outer product ``x y^T`` of one view (the kept input pairs);
+- :func:`_winner`: the winning unit of one activation vector under a winner rule;
+- :func:`prefetch`, :func:`prefetch_row`: ask the CPU to start loading weights before they are
+  needed;
+- the inference drivers: activations and winners of a batch of rows, serial (for one pair or
+  a few: no thread start-up, scratch memory passed in) or parallel over blocks of rows.
+
+The weights are the fast kernel's ``raw`` ``(n_x * n_y, K)`` with per-unit ``scale`` ``(K,)``
+(:class:`sigmapi.kernels.fast.FastState`); one input pair's weights for all units are one
+contiguous row. Every row's arithmetic is the same in the serial and the parallel drivers, so
+batched and single calls give the same numbers, bit for bit.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from llvmlite import ir
+from numba import njit, prange, types
+from numba.core import cgutils
+from numba.extending import intrinsic
+
+__all__ = [
+    "BLOCK_ROWS",
+    "prefetch",
+    "prefetch_row",
+    "respond_rows",
+    "respond_rows_parallel",
+    "winners_rows",
+    "winners_rows_parallel",
+]
+
+BLOCK_ROWS = 16
+"""Rows per parallel work item of the batched drivers."""
+
+
+@intrinsic
+def _prefetch(typingctx: Any, arr: Any, row: Any, c0: Any, c1: Any) -> Any:
+    """``prefetch(a, i, c0, c1)``: prefetch the cache lines of ``a[i, c0:c1]`` (2-D ``a``).
+
+    A hint (LLVM's ``llvm.prefetch``, read, high locality): it changes no value. The weight
+    rows of the kept input pairs are scattered over the weight matrix, so the hardware
+    prefetcher cannot guess them; asking for the rows a few pairs ahead keeps several memory
+    reads in flight instead of one.
+    """
+    sig = types.void(arr, row, c0, c1)
+
+    def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
+        aryty = signature.args[0]
+        ary = context.make_array(aryty)(context, builder, args[0])
+        intp = context.get_value_type(types.intp)
+        first = context.cast(builder, args[2], signature.args[2], types.intp)
+        stop = context.cast(builder, args[3], signature.args[3], types.intp)
+        ptr = cgutils.get_item_pointer(context, builder, aryty, ary, [args[1], first])
+        i8p = ir.IntType(8).as_pointer()
+        i32 = ir.IntType(32)
+        fnty = ir.FunctionType(ir.VoidType(), [i8p, i32, i32, i32])
+        fn = cgutils.get_or_insert_function(builder.module, fnty, "llvm.prefetch")
+        base = builder.bitcast(ptr, i8p)
+        itemsize = ir.Constant(intp, aryty.dtype.bitwidth // 8)
+        nbytes = builder.mul(builder.sub(stop, first), itemsize)
+        zero, step = ir.Constant(intp, 0), ir.Constant(intp, 64)
+        with cgutils.for_range_slice(builder, zero, nbytes, step) as (off, _):
+            builder.call(fn, [builder.gep(base, [off]), i32(0), i32(3), i32(1)])
+        return context.get_dummy_value()
+
+    return sig, codegen
+
+
+prefetch: Any = _prefetch  # compiled code calls it as prefetch(a, i, c0, c1)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def prefetch_row(raw, i):
+    """Prefetch the whole row ``i`` of ``raw``."""
+    prefetch(raw, i, 0, raw.shape[1])
+
+
+@njit(cache=True, nogil=True)
+def _pairs(x, y, tol, jbuf, pidx, pval):
+    """Sparse outer product: pairs ``p = i * n_y + j`` with ``|x_i y_j| > tol max|x| max|y|``.
+
+    Fills ``pidx``/``pval`` (length >= n_x n_y) and returns the count. ``jbuf``: scratch (n_y,).
+    """
+    nx = x.shape[0]
+    ny = y.shape[0]
+    mx = 0.0
+    for i in range(nx):
+        mx = max(mx, abs(x[i]))
+    my = 0.0
+    for j in range(ny):
+        my = max(my, abs(y[j]))
+    thr = tol * mx * my
+    nj = 0
+    for j in range(ny):
+        if abs(y[j]) * mx > thr:
+            jbuf[nj] = j
+            nj += 1
+    n = 0
+    for i in range(nx):
+        xi = x[i]
+        if abs(xi) * my <= thr:
+            continue
+        base = i * ny
+        for q in range(nj):
+            j = jbuf[q]
+            v = xi * y[j]
+            if abs(v) > thr:
+                pidx[n] = base + j
+                pval[n] = v
+                n += 1
+    return n
+
+
+@njit(cache=True, nogil=True)
+def _winner(h, scale, sqnorm, rule, sigma, cut, dims, strides, tmp, tmp2):
+    """Winning unit of one activation vector ``h`` (K,); ties to the lowest index."""
+    k_units = h.shape[0]
+    if rule == 0 or rule == 3:  # soft: separable Gaussian smoothing over the map, window +-cut
+        for k in range(k_units):
+            tmp[k] = h[k]
+        cur = tmp
+        nxt = tmp2
+        for ax in range(dims.shape[0]):
+            n = dims[ax]
+            st = strides[ax]
+            m = min(cut, n - 1)
+            wts = np.empty(m + 1)
+            for d in range(m + 1):
+                wts[d] = np.exp(-(d * d) / (2.0 * sigma * sigma))
+            for k in range(k_units):
+                c = (k // st) % n
+                acc = 0.0
+                norm = 0.0
+                for c2 in range(max(0, c - m), min(n - 1, c + m) + 1):
+                    acc += cur[k + (c2 - c) * st] * wts[abs(c2 - c)]
+                    norm += wts[abs(c2 - c)]
+                nxt[k] = acc / norm if rule == 3 else acc
+            cur, nxt = nxt, cur
+        best = 0
+        for k in range(1, k_units):
+            if cur[k] > cur[best]:
+                best = k
+        return best
+    if rule == 1:
+        best = 0
+        for k in range(1, k_units):
+            if h[k] > h[best]:
+                best = k
+        return best
+    best = 0
+    bval = 2.0 * h[0] - scale[0] * scale[0] * sqnorm[0]
+    for k in range(1, k_units):
+        v = 2.0 * h[k] - scale[k] * scale[k] * sqnorm[k]
+        if v > bval:
+            best = k
+            bval = v
+    return best
+
+
+@njit(cache=True, nogil=True)
+def _respond_row(raw, scale, x, y, tol, ahead, jb, pi, pv, acc, h):
+    """``h[k] = scale[k] sum_p raw[p, k] (x y^T)_p`` over the kept pairs ``p`` of one view.
+
+    ``ahead``: prefetch the weight row of the pair this many pairs ahead (0: none).
+    ``jb``, ``pi``, ``pv``, ``acc``: scratch for :func:`_pairs` and the float64 sums.
+    """
+    n = _pairs(x, y, tol, jb, pi, pv)
+    k_units = raw.shape[1]
+    for k in range(k_units):
+        acc[k] = 0.0
+    for q in range(min(ahead, n)):
+        prefetch_row(raw, pi[q])
+    for q in range(n):
+        if ahead > 0 and q + ahead < n:
+            prefetch_row(raw, pi[q + ahead])
+        row = raw[pi[q]]
+        val = pv[q]
+        for k in range(k_units):
+            acc[k] += row[k] * val
+    for k in range(k_units):
+        h[k] = scale[k] * acc[k]
+
+
+@njit(cache=True)
+def _scratch(n_pairs, ny, k_units):
+    """Scratch of one row at a time: ``jb, pi, pv`` for the pairs, ``acc, t1, t2`` per unit."""
+    return (
+        np.empty(ny, dtype=np.int64),
+        np.empty(n_pairs, dtype=np.int64),
+        np.empty(n_pairs),
+        np.empty(k_units),
+        np.empty(k_units),
+        np.empty(k_units),
+    )
+
+
+@njit(cache=True)
+def respond_rows(raw, scale, x, y, tol, ahead, jb, pi, pv, acc, h):
+    """Serial activations ``h`` ``(B, K)`` of the rows of ``x`` ``(B, n_x)``, ``y`` ``(B, n_y)``."""
+    for b in range(x.shape[0]):
+        _respond_row(raw, scale, x[b], y[b], tol, ahead, jb, pi, pv, acc, h[b])
+
+
+@njit(cache=True, parallel=True)
+def respond_rows_parallel(raw, scale, x, y, tol, ahead, order, h):
+    """:func:`respond_rows` in parallel blocks of :data:`BLOCK_ROWS` rows, visited in ``order``
+    (rows with nearby code peaks together, so that the weight rows they share stay in cache)."""
+    n_rows = x.shape[0]
+    n_blocks = (n_rows + BLOCK_ROWS - 1) // BLOCK_ROWS
+    for c in prange(n_blocks):
+        jb, pi, pv, acc, _, _ = _scratch(raw.shape[0], y.shape[1], raw.shape[1])
+        for r in range(c * BLOCK_ROWS, min(n_rows, (c + 1) * BLOCK_ROWS)):
+            b = order[r]
+            _respond_row(raw, scale, x[b], y[b], tol, ahead, jb, pi, pv, acc, h[b])
+
+
+@njit(cache=True)
+def winners_rows(
+    raw, scale, sqnorm, x, y, tol, ahead, rule, sigma, cut, dims, strides,
+    jb, pi, pv, acc, h, t1, t2, out,
+):  # fmt: skip
+    """Serial winners ``out`` ``(B,)`` of the rows of ``x``, ``y`` (``h``: one row of scratch)."""
+    for b in range(x.shape[0]):
+        _respond_row(raw, scale, x[b], y[b], tol, ahead, jb, pi, pv, acc, h)
+        out[b] = _winner(h, scale, sqnorm, rule, sigma, cut, dims, strides, t1, t2)
+
+
+@njit(cache=True, parallel=True)
+def winners_rows_parallel(
+    raw, scale, sqnorm, x, y, tol, ahead, rule, sigma, cut, dims, strides, order, out
+):  # fmt: skip
+    """:func:`winners_rows` in parallel blocks of rows, visited in ``order``."""
+    n_rows = x.shape[0]
+    n_blocks = (n_rows + BLOCK_ROWS - 1) // BLOCK_ROWS
+    for c in prange(n_blocks):
+        jb, pi, pv, acc, t1, t2 = _scratch(raw.shape[0], y.shape[1], raw.shape[1])
+        h = np.empty(raw.shape[1])
+        for r in range(c * BLOCK_ROWS, min(n_rows, (c + 1) * BLOCK_ROWS)):
+            b = order[r]
+            _respond_row(raw, scale, x[b], y[b], tol, ahead, jb, pi, pv, acc, h)
+            out[b] = _winner(h, scale, sqnorm, rule, sigma, cut, dims, strides, t1, t2)
