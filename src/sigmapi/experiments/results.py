@@ -70,6 +70,8 @@ class ReproduceOptions:
         Which trained models to write beside the report.
     n_test : int, optional
         Test set size of the final metrics (default 10,000; ``quick``: 2,000).
+    dpi : int
+        Resolution of the report's figures (default 100; 300 for print).
     """
 
     seeds: tuple[int, ...] = (0, 1, 2)
@@ -77,12 +79,14 @@ class ReproduceOptions:
     progress: bool = True
     save_models: str = "shown"
     n_test: int | None = None
+    dpi: int = 100
 
     def __post_init__(self) -> None:
         from sigmapi import _validate
 
         object.__setattr__(self, "seeds", tuple(self.seeds))
         _validate.choice("save_models", self.save_models, SAVE_MODELS)
+        _validate.integer("dpi", self.dpi, 20, 1200, fix="300 for print")
 
     @property
     def n_checkpoints(self) -> int:
