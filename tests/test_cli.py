@@ -63,6 +63,8 @@ def test_presets_lists_paper_1d():
         (["evaluate", "good.npz", "--n-test", "10000000000"], "needs about"),
         (["figure", "fig8", "good.npz", "--out", "f.png", "--seed", "-1"], "--seed must be"),
         (["reach", "--grid", "300"], "needs about"),
+        (["reproduce", "--quick", "--dpi", "5", "--out", "r"], "--dpi must be an int in [20,"),
+        (["figure", "net", "good.npz", "--out", "f.png", "--dpi", "5"], "--dpi must be"),
     ],
 )  # fmt: skip
 def test_user_mistakes_exit_2_with_one_line(tmp_path, args, needle):

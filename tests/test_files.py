@@ -308,6 +308,9 @@ def test_a_model_never_saves_a_file_load_would_refuse(tmp_path):
     som._state.raw[0, 0] = np.inf  # what an overflow in training would leave
     with pytest.raises(NumericalError, match="state_raw hold NaN or inf"):
         som.save(tmp_path / "m.npz")
+    som._state.raw[0, 0] = 3e38  # finite float32, but weights load refuses
+    with pytest.raises(NumericalError, match=r"beyond 1e\+30"):
+        som.save(tmp_path / "m.npz")
     assert not any(tmp_path.iterdir())
     # the points where an overflow could start are refused with their cause
     with pytest.raises(sigmapi.ConfigError, match="init_scale"):

@@ -226,8 +226,10 @@ def _caption_net(run: RunInfo, facts: Facts) -> str:
         "of mass of the upper half of its receptive field in z), grid neighbours joined, as "
         f"in the classic SOM net plot. "
         + (
-            f"Map polarity: {facts['polarity']} (R² of the affine fit of the centres to the "
-            f"grid: {facts['order_r2_centres']:.2f})."
+            f"Map polarity: {facts['polarity']}, i.e. how a picture in z appears on the map "
+            "image (rows down, columns right, as in Fig. 8's right panel), not how this net "
+            f"looks in z (R² of the affine fit of the centres to the grid: "
+            f"{facts['order_r2_centres']:.2f})."
             if facts["order_r2_centres"] >= ORDERED_R2
             else f"The net is twisted (R² of the affine fit of the centres to the grid: "
             f"{facts['order_r2_centres']:.2f} < {ORDERED_R2}): no single polarity."

@@ -518,6 +518,17 @@ class SigmaPiSOM:
                     f"iteration <= {self.t_}); it cannot be saved: retrain with codes and "
                     "init_scale of about 1"
                 )
+        n = (self.n_units, int(np.prod(self.x_shape)), int(np.prod(self.y_shape)))
+        top = (
+            columns_top(state["raw"], state["scale"], n)
+            if "raw" in state
+            else float(np.abs(arrays["weights"]).max(initial=0.0))
+        )
+        if not top <= MAX_WEIGHT:  # what load would refuse
+            raise NumericalError(
+                f"the model's weights reach {top:.3g}, beyond {MAX_WEIGHT:g} (an overflow in "
+                "training); it cannot be saved: retrain with codes and init_scale of about 1"
+            )
         header = {
             "config": self.config.to_dict(),
             "t": int(self.t_),

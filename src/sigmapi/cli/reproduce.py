@@ -37,8 +37,10 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
         raise UsageError(f"--seeds must be non-negative ints, got {seeds}")
     if len(set(seeds)) != len(seeds):
         raise UsageError(f"--seeds must be distinct, got {seeds}")
+    _validate.integer("--dpi", args.dpi, 20, 1200, fix="300 for print", error=UsageError)
     options = ReproduceOptions(seeds=tuple(seeds), quick=args.quick, progress=not args.quiet,
-                               save_models=args.models, workers=args.workers)  # fmt: skip
+                               save_models=args.models, workers=args.workers,
+                               dpi=args.dpi)  # fmt: skip
     result = reproduce(out, options)
     for name, res in result.presets.items():
         print(
@@ -104,6 +106,9 @@ def register(sub: Any) -> None:
                    help="training runs at once (default: one per core, as many as fit in half "
                    "the available memory; results do not depend on it)")  # fmt: skip
     p.add_argument("--quiet", action="store_true", help="no progress bars")
+    p.add_argument(
+        "--dpi", type=int, default=DPI, help=f"figure resolution (default {DPI}; 300 for print)"
+    )
     p.set_defaults(func=cmd_reproduce)
 
     p = sub.add_parser("figure", help="draw one figure of a trained model")

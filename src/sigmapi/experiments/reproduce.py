@@ -148,7 +148,7 @@ def reproduce(
             if opts.save_models == "all" or (opts.save_models == "shown" and i == shown):
                 models[name][i].save(out / f"{name}-seed{seed}.npz")
         run = figs.RunInfo(name, cfg, opts.seeds, shown, opts.curve_test)
-        figures[name] = _draw(run, models[name][shown], entry, out, opts.progress)
+        figures[name] = _draw(run, models[name][shown], entry, out, opts)
     ctx = ReportContext(out, opts, models)
     added = [s for s in (fn(ctx) for fn in (SECTIONS if sections is None else sections)) if s]
     for s in added:
@@ -229,7 +229,7 @@ def _train_all(
 
 
 def _draw(
-    run: figs.RunInfo, model: SigmaPiSOM, entry: PresetResult, out: Path, progress: bool
+    run: figs.RunInfo, model: SigmaPiSOM, entry: PresetResult, out: Path, opts: ReproduceOptions
 ) -> list[tuple[str, str]]:
     """Draw every figure of one preset into ``out``; ``(file, caption)`` per figure.
 
@@ -241,7 +241,7 @@ def _draw(
     curves = [r.curve for r in entry.runs]
     seeds = run.seeds
     drawn = []
-    bar = each(figs.FIGURES, f"{run.preset} figures", disable=not progress or None)
+    bar = each(figs.FIGURES, f"{run.preset} figures", disable=not opts.progress or None)
     for fig_name in bar:
         file = f"{fig_name}-{run.preset}.png"
         label = f"{run.preset}, seed {seeds[run.shown]}"
@@ -251,7 +251,7 @@ def _draw(
             )
         facts = figs.draw_figure(fig_name, model, out / file, curves=curves,
                                  reference=_reference(run.preset), label=label,
-                                 centres=centres)  # fmt: skip
+                                 centres=centres, dpi=opts.dpi)  # fmt: skip
         entry.figures[fig_name] = {"file": file, **facts}
         drawn.append((file, figs.caption(fig_name, run, facts)))
     return drawn

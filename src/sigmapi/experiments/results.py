@@ -74,6 +74,8 @@ class ReproduceOptions:
         Training runs at once (default: one per core, as many as fit in half the available
         memory; :func:`~sigmapi.experiments.executor.plan_workers`). The results do not
         depend on it.
+    dpi : int
+        Resolution of the report's figures (default 100; 300 for print).
     """
 
     seeds: tuple[int, ...] = (0, 1, 2)
@@ -82,6 +84,7 @@ class ReproduceOptions:
     save_models: str = "shown"
     n_test: int | None = None
     workers: int | None = None
+    dpi: int = 100
 
     def __post_init__(self) -> None:
         from sigmapi import _validate
@@ -90,6 +93,7 @@ class ReproduceOptions:
         _validate.choice("save_models", self.save_models, SAVE_MODELS)
         if self.workers is not None:
             _validate.integer("workers", self.workers, 1)
+        _validate.integer("dpi", self.dpi, 20, 1200, fix="300 for print")
 
     @property
     def n_checkpoints(self) -> int:
