@@ -43,7 +43,7 @@ def main() -> None:
     parser.add_argument("--out", default=str(ROOT / "results" / "sweep.json"))
     args = parser.parse_args()
 
-    from sigmapi.experiments.executor import plan_workers
+    from sigmapi.executor import plan_workers
     from sigmapi.experiments.sweep import SweepSpec, run_sweep
 
     spec = SweepSpec.from_toml(_spec(args.preset, args.seeds, args.iterations))

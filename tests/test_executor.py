@@ -6,7 +6,7 @@ import pytest
 
 from sigmapi.config import SOMConfig
 from sigmapi.errors import UsageError
-from sigmapi.experiments.executor import job_memory, plan_workers, run_jobs
+from sigmapi.executor import job_memory, plan_workers, run_jobs
 from sigmapi.som import SigmaPiSOM
 
 

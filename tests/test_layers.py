@@ -20,7 +20,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("experiments",),
     ("figures", "reach"),
     ("plots", "analysis", "curves"),
-    ("metrics", "checkpoints"),
+    ("metrics", "checkpoints", "executor"),
     ("som",),
     ("io", "config", "kernels", "tasks", "ordering"),
     ("codes", "schedules"),

@@ -102,11 +102,13 @@ TINY = {"dim": 1, "grid": 7, "map_shape": (6,), "map_pairs": 500, "episodes": 20
 
 def test_experiment_is_deterministic_and_shapes_are_right() -> None:
     a = run_reach(**TINY)
-    b = run_reach(**TINY)
+    b = run_reach(**TINY, workers=2)  # seeds in two processes: the same result
     for s in a.success:
         assert a.success[s].shape == (2, 20)
         np.testing.assert_array_equal(a.success[s], b.success[s])
         np.testing.assert_array_equal(a.steps[s], b.steps[s])
+        np.testing.assert_array_equal(a.values[s], b.values[s])
+    assert a.map_metrics == b.map_metrics
     assert set(a.final_success()) == {"map", "retina", "retina_gaze", "true_z"}
     assert a.values["map"].shape == (51,)
     c = a.curves()["true_z"]

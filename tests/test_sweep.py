@@ -105,7 +105,7 @@ def test_sweep_runs_on_an_existing_dask_cluster_by_address(tmp_path):
     spec_file = tmp_path / "spec.toml"
     spec_file.write_text(SPEC.replace("seeds = [0, 1]", "seeds = [0]"))
     with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True,
-                                  dashboard_address=None) as cluster:  # fmt: skip
+                                  dashboard_address=":0") as cluster:  # fmt: skip
         r = subprocess.run(
             [sys.executable, "-m", "sigmapi.cli", "sweep", str(spec_file), "--out",
              str(tmp_path / "o"), "--engine", "dask", "--address", cluster.scheduler_address],

@@ -53,7 +53,9 @@ class Lines:
             return
         self._closed = True
         done, dt = self.n - self.start, time.perf_counter() - self._t0
-        rate = f" ({done / dt:,.0f} {self.unit}/s)" if dt > 0 and done > 0 and self.unit else ""
+        per_s = done / dt if dt > 0 else 0.0
+        shown = f"{per_s:,.0f}" if per_s >= 10 else f"{per_s:.2g}"
+        rate = f" ({shown} {self.unit}/s)" if dt > 0 and done > 0 and self.unit else ""
         unit = f" {self.unit}" if self.unit else ""
         print(f"{self.desc}: {done:,} of {self.total:,}{unit} in {dt:.1f} s{rate}",
               file=sys.stderr, flush=True)  # fmt: skip

@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from sigmapi.errors import UsageError
-from sigmapi.experiments.executor import ENGINES
+from sigmapi.executor import ENGINES
 from sigmapi.experiments.sweep import FIGURE, RESULTS, SweepSpec, draw_summary, run_sweep
 from sigmapi.progress import jobs_done
 

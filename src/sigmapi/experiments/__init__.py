@@ -4,7 +4,6 @@
 - :mod:`~sigmapi.experiments.results`: its options and typed results, report sections;
 - :mod:`~sigmapi.experiments.report_html`: the page;
 - :mod:`~sigmapi.experiments.reach_section`: the reach experiment as a report section;
-- :mod:`~sigmapi.experiments.executor`: independent jobs on a process pool or a Dask cluster;
 - :mod:`~sigmapi.experiments.sweep`: parameter and seed sweeps (``sigmapi sweep``).
 """
 

@@ -45,7 +45,7 @@ def reach_section(ctx: ReportContext) -> Section:
 
     quick = {"episodes": 150, "seeds": 1, "final_episodes": 50, **SMALL_MAP}
     cfg = ReachConfig(**quick) if ctx.quick else ReachConfig()
-    result = run_with_progress(cfg, disable=not ctx.progress or None)
+    result = run_with_progress(cfg, disable=not ctx.progress or None, workers=ctx.options.workers)
     fig = reach_figure(result)
     fig.savefig(ctx.out / FIGURE, dpi=120, facecolor="white")
 

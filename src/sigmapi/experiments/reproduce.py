@@ -29,7 +29,7 @@ from typing import Any
 
 from sigmapi import figures as figs
 from sigmapi.config import SOMConfig, list_presets, load_preset
-from sigmapi.experiments.executor import job_memory, plan_workers, run_jobs
+from sigmapi.executor import job_memory, plan_workers, run_jobs
 from sigmapi.experiments.reach_section import reach_section
 from sigmapi.experiments.report_html import linked_files, render
 from sigmapi.experiments.results import (
@@ -178,7 +178,7 @@ class SeedJob:
 
 def train_seed(job: SeedJob) -> tuple[SeedRun, dict[str, Any], dict[str, Any]]:
     """Train one seed with learning-curve checkpoints and evaluate it (a job of
-    :func:`~sigmapi.experiments.executor.run_jobs`); ``(run, header, arrays)`` of the model."""
+    :func:`~sigmapi.executor.run_jobs`); ``(run, header, arrays)`` of the model."""
     from sigmapi.curves import LearningCurve, checkpoints
 
     cfg = job.cfg

@@ -72,7 +72,7 @@ class ReproduceOptions:
         Test set size of the final metrics (default 10,000; ``quick``: 2,000).
     workers : int, optional
         Training runs at once (default: one per core, as many as fit in half the available
-        memory; :func:`~sigmapi.experiments.executor.plan_workers`). The results do not
+        memory; :func:`~sigmapi.executor.plan_workers`). The results do not
         depend on it.
     dpi : int
         Resolution of the report's figures (default 100; 300 for print).

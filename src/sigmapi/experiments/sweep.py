@@ -17,7 +17,7 @@ training and total seconds, ``status`` (``ok`` or ``failed``) and the ``error`` 
 run. The table is rewritten atomically after every finished run, so a killed sweep loses at
 most the runs in flight; started again with the same spec, it finds the finished runs in the
 table (by ``run_id``) and runs only the missing ones (failed ones again with
-``retry_failed``). Runs go through :mod:`sigmapi.experiments.executor`: a process pool sized
+``retry_failed``). Runs go through :mod:`sigmapi.executor`: a process pool sized
 to the cores and the memory budget, or a Dask cluster.
 """
 
@@ -37,7 +37,7 @@ from typing import Any
 
 from sigmapi.config import SOMConfig, load_preset
 from sigmapi.errors import ConfigError
-from sigmapi.experiments.executor import Outcome, job_memory, plan_workers, run_jobs
+from sigmapi.executor import Outcome, job_memory, plan_workers, run_jobs
 from sigmapi.io import atomic_write_bytes
 from sigmapi.metrics import Metrics, evaluate
 from sigmapi.som import SigmaPiSOM

@@ -19,6 +19,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sigmapi.config import SOMConfig
+from sigmapi.executor import job_memory, plan_workers, run_jobs
 from sigmapi.metrics import evaluate
 from sigmapi.progress import counter
 from sigmapi.reach.agent import ActorCritic
@@ -197,7 +198,7 @@ def _map_for_seed(
 
     def callback(model: SigmaPiSOM) -> None:
         if progress is not None:
-            progress(0, f"map {model.t_}/{config.map_pairs}")
+            progress(0, "learning the map")
 
     return learn_map_in_env(
         config.make_env(), config.som_config(som_seed), seed=env_seed, callback=callback
@@ -250,14 +251,46 @@ def run_episodes(
     return success, lost, steps, agent, env
 
 
+@dataclass(frozen=True)
+class _SeedJob:
+    config: ReachConfig
+    index: int
+    seq: np.random.SeedSequence
+
+
+def _run_seed(job: _SeedJob, progress: Progress | None = None) -> dict[str, Any]:
+    """Everything of one seed: its map, then every state's learner on the same episodes."""
+    cfg, ss, i = job.config, job.seq, job.index
+    model = _map_for_seed(cfg, ss, progress) if "map" in cfg.states else None
+    out: dict[str, Any] = {"map_metrics": _map_quality(model) if model is not None else None,
+                           "runs": {}, "values": {}}  # fmt: skip
+    start_rng = np.random.default_rng(
+        np.random.SeedSequence(ss.entropy, spawn_key=(*ss.spawn_key, 1))
+    )
+    starts = start_rng.integers(0, 2**31 - 1, size=cfg.episodes)
+    agent_seq = np.random.SeedSequence(ss.entropy, spawn_key=(*ss.spawn_key, 2))
+    for s in cfg.states:
+        succ, lost, steps, agent, env = run_episodes(cfg, s, model, starts, agent_seq, progress)
+        out["runs"][s] = (succ, lost, steps)
+        if i == 0:
+            out["values"][s] = value_over_z(agent, env, n=21 if cfg.dim == 2 else 51)
+    return out
+
+
 def run_reach(
-    config: ReachConfig | None = None, progress: Progress | None = None, **overrides: Any
+    config: ReachConfig | None = None,
+    progress: Progress | None = None,
+    *,
+    workers: int = 1,
+    **overrides: Any,
 ) -> ReachResult:
     """Train the actor-critic on every state of ``config.states`` for every seed.
 
     ``progress(n, phase)`` is called with the number of episodes just finished and a short
     description of the phase (for a progress bar; the total is ``seeds * len(states) *
-    episodes``; map learning reports 0 episodes). Returns a :class:`ReachResult`.
+    episodes``; map learning reports 0 episodes). ``workers > 1`` runs the seeds in parallel
+    processes (:mod:`sigmapi.executor`; the result does not depend on it), and progress then
+    counts whole seeds. Returns a :class:`ReachResult`.
 
     Examples
     --------
@@ -273,31 +306,46 @@ def run_reach(
         res.success[s] = np.zeros((cfg.seeds, cfg.episodes), dtype=bool)
         res.steps[s] = np.zeros((cfg.seeds, cfg.episodes), dtype=np.int64)
         res.lost[s] = np.zeros((cfg.seeds, cfg.episodes), dtype=bool)
-    root = np.random.SeedSequence(cfg.seed)
-    for i, ss in enumerate(root.spawn(cfg.seeds)):
-        model = _map_for_seed(cfg, ss, progress) if "map" in cfg.states else None
-        if model is not None:
-            res.map_metrics.append(_map_quality(model))
-        start_rng = np.random.default_rng(
-            np.random.SeedSequence(ss.entropy, spawn_key=(*ss.spawn_key, 1))
-        )
-        starts = start_rng.integers(0, 2**31 - 1, size=cfg.episodes)
-        agent_seq = np.random.SeedSequence(ss.entropy, spawn_key=(*ss.spawn_key, 2))
-        for s in cfg.states:
-            succ, lost, steps, agent, env = run_episodes(cfg, s, model, starts, agent_seq, progress)
+    seqs = np.random.SeedSequence(cfg.seed).spawn(cfg.seeds)
+    parallel = workers > 1 and cfg.seeds > 1
+    if parallel:
+        jobs = [(str(i), _SeedJob(cfg, i, ss)) for i, ss in enumerate(seqs)]
+        outcomes = {}
+        for o in run_jobs(_run_seed, jobs, workers=min(workers, cfg.seeds)):
+            if not o.ok:
+                raise RuntimeError(f"reach seed {o.key} failed: {o.error}")
+            outcomes[int(o.key)] = o.value
+            if progress is not None:
+                progress(len(cfg.states) * cfg.episodes, f"seed {o.key} done")
+        per_seed = [outcomes[i] for i in range(cfg.seeds)]
+    else:
+        per_seed = [_run_seed(_SeedJob(cfg, i, ss), progress) for i, ss in enumerate(seqs)]
+    for i, out in enumerate(per_seed):
+        if out["map_metrics"] is not None:
+            res.map_metrics.append(out["map_metrics"])
+        for s, (succ, lost, steps) in out["runs"].items():
             res.success[s][i], res.lost[s][i], res.steps[s][i] = succ, lost, steps
-            if i == 0:
-                axis, res.values[s] = value_over_z(agent, env, n=21 if cfg.dim == 2 else 51)
-                res.z_axis = axis
+        for s, (axis, values) in out["values"].items():
+            res.values[s] = values
+            res.z_axis = axis
     res.seconds = time.perf_counter() - t0
     return res
 
 
-def run_with_progress(cfg: ReachConfig, disable: bool | None = None) -> ReachResult:
-    """:func:`run_reach` with a progress bar on stderr (episodes, and the current phase)."""
+def run_with_progress(
+    cfg: ReachConfig, disable: bool | None = None, workers: int | None = None
+) -> ReachResult:
+    """:func:`run_reach` with a progress bar on stderr (episodes, and the current phase).
+
+    ``workers=None``: one seed per core, as many as fit in half the available memory
+    (:func:`sigmapi.executor.plan_workers`).
+    """
+    if workers is None:
+        per_seed = job_memory(cfg.som_config(cfg.seed), n_test=2000)
+        workers = plan_workers(None, per_seed, n_jobs=cfg.seeds).workers
     progress, bar = counter(cfg.seeds * len(cfg.states) * cfg.episodes, "reach", "ep", disable)
     with bar:
-        return run_reach(cfg, progress=progress)
+        return run_reach(cfg, progress=progress, workers=workers)
 
 
 def _map_quality(model: SigmaPiSOM) -> dict[str, float | int]:

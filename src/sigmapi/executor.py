@@ -177,7 +177,7 @@ def _run_dask(
     cluster = None
     if address is None:
         cluster = LocalCluster(n_workers=max(1, workers), threads_per_worker=1, processes=True,
-                               dashboard_address=None)  # fmt: skip
+                               dashboard_address=":0")  # fmt: skip
     try:
         with Client(address if address is not None else cluster) as client:
             futures = {client.submit(_call, fn, arg, key=f"sigmapi-{key}", pure=False): key
