@@ -108,7 +108,7 @@ class PopulationCode:
         if not np.all(np.isfinite(arr)):
             raise ValueError(f"{name} must be finite, got NaN or inf; remove them")
         if np.any(arr < 0.0) or np.any(arr > 1.0):
-            bad = arr[(arr < 0) | (arr > 1)][0]
+            bad = float(arr[(arr < 0) | (arr > 1)][0])
             raise ValueError(
                 f"{name} must lie in [0, 1], got {bad!r}; positions are fractions of the axis"
             )
