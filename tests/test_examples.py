@@ -15,6 +15,8 @@ import sigmapi
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = sorted((ROOT / "examples").glob("*.py"))
 NEEDS = {"compare_baselines.py": ("sklearn", "minisom")}
+FIGURES = {"compare_baselines.py": "sigma-pi", "noise.py": "caption: noise in every code"}
+"""Examples that draw a figure (``--out``), and a line their output must hold."""
 
 
 def test_every_example_is_named_in_the_readme():
@@ -29,14 +31,14 @@ def test_example_runs_small(path, tmp_path):
     for module in NEEDS.get(path.name, ()):
         pytest.importorskip(module)
     src = str(Path(sigmapi.__file__).resolve().parents[1])
+    out = ["--out", f"{path.stem}.png"] if path.name in FIGURES else []
     r = subprocess.run(
-        [sys.executable, str(path), "--small"], capture_output=True, text=True, timeout=300,
+        [sys.executable, str(path), "--small", *out], capture_output=True, text=True, timeout=300,
         cwd=tmp_path, env={**os.environ, "PYTHONPATH": src},
     )  # fmt: skip
     assert r.returncode == 0, r.stderr[-2000:]
-    if path.name != "compare_baselines.py":
-        # the maps order: thresholds: order R^2 >= 0.95 on every seed printed
+    if path.name in FIGURES:
+        assert FIGURES[path.name] in r.stdout and (tmp_path / f"{path.stem}.png").is_file()
+    else:  # the maps order: threshold: order R^2 >= 0.95 on every seed printed
         orders = [float(v) for v in re.findall(r"order R\^2 ([0-9.]+)", r.stdout)]
         assert orders and min(orders) >= 0.95, r.stdout
-    else:
-        assert "sigma-pi" in r.stdout and (tmp_path / "compare.png").is_file()
