@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from sigmapi import SigmaPiSOM
-from sigmapi.kernels import fast, get_backend, reference
+from sigmapi.kernels import WINNER_RULES, fast, get_backend, reference
 
 WEIGHT_ATOL = 1e-5
 MAP = (4, 5)
@@ -144,7 +144,7 @@ def test_batched_activation_and_winners(tol):
     h = fast.activation(state, x, y)
     assert h.shape == (x.shape[0], np.prod(MAP))
     np.testing.assert_allclose(h, h_ref, rtol=0, atol=1e-12 if tol == 0 else 1e-6)
-    for rule in ("soft", "argmax", "min_distance"):
+    for rule in WINNER_RULES:
         np.testing.assert_array_equal(
             fast.winners(state, h_ref, MAP, rule, 1.5, 15),
             reference.winners(w, h_ref, MAP, rule, 1.5, 15),
@@ -182,7 +182,7 @@ def test_state_round_trip_and_validation():
         fast.winners(fast.prepare(w), np.zeros((1, 20)), MAP, "max", 1.0, 15)
 
 
-@pytest.mark.parametrize("rule", ["soft", "min_distance"])
+@pytest.mark.parametrize("rule", ["soft", "min_distance", "soft_mean"])
 def test_save_load_continue_is_bit_exact(tmp_path, rule):
     kw = dict(map_shape=(3, 3), x_shape=(4, 4), y_shape=(4, 4), code_width=1.0,
               iterations=1600, seed=11, backend="fast", winner_rule=rule)  # fmt: skip
@@ -216,12 +216,12 @@ def test_paper_1d_full_run_reaches_the_papers_figures():
 
 @pytest.mark.slow
 def test_paper_2d_preset_learns_an_ordered_map():
-    # Known limit (see the preset): about one seed in three twists the map (seed 0 here),
-    # so order is required of two seeds of three; invariance and z error of all three.
+    # With the default ordering procedure every seed measured orders (README: 20 of 20 fresh
+    # seeds, within one >= 0.975, z error <= 0.575); thresholds are the targets.
     from sigmapi import evaluate, load_preset
 
     results = [
         evaluate(SigmaPiSOM(load_preset("paper-2d").replace(seed=s)).fit()) for s in range(3)
     ]
-    assert all(r.view_within_one >= 0.90 and r.z_error <= 0.6 for r in results)
-    assert sum(r.order_r2 >= 0.95 for r in results) >= 2
+    assert all(r.view_within_one >= 0.95 and r.z_error <= 0.6 for r in results)
+    assert all(r.order_r2 >= 0.95 and not r.folded for r in results)

@@ -101,3 +101,14 @@ def test_fold_detector_flags_a_folded_1d_map_without_z():
     assert m.order_r2 < 0.5  # measured 0.16: folded onto itself
     assert starved >= 1 and score >= 1.0 and m.folded
     assert m.to_dict()["fold_threshold"] == 1.0
+
+
+def test_fold_detector_flags_a_1d_fold_that_starves_no_unit():
+    # tiny-1d seed 7 folds (order R^2 0.02) with every unit winning: the far-apart view pairs
+    # (two views of one z on two branches of the fold) flag it
+    som = SigmaPiSOM(sigmapi.load_preset("tiny-1d"), ordering="none", seed=7).fit()
+    _, test = evaluation_sets(som, 4000)
+    starved, _, score = fold_indicators(som, test)
+    m = sigmapi.evaluate(som)
+    assert m.order_r2 < 0.5 and starved == 0
+    assert score >= 1.0 and m.folded

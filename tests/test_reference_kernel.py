@@ -41,6 +41,11 @@ def test_winner_rules_hand_computed():
     assert ref.winners(W, h, (5,), "soft", 1.0, 15)[0] == 2
     # sigma -> 0: soft is argmax
     assert ref.winners(W, h, (5,), "soft", 1e-5, 15)[0] == 0
+    # at the border the summed rule hands the end unit's input to its neighbour; the
+    # border-normalised rule does not: sums 1.587 vs 1.689, means 0.905 vs 0.716
+    hb = np.array([[1.0, 0.9, 0.3, 0.0, 0.0]])
+    assert ref.winners(W, hb, (5,), "soft", 1.0, 15)[0] == 1
+    assert ref.winners(W, hb, (5,), "soft_mean", 1.0, 15)[0] == 0
     # min distance: argmax(2h - |w|^2); make unit 0 expensive
     W[0, 0, 0] = 1.5
     assert ref.winners(W, h, (5,), "min_distance", 1.0, 15)[0] == 2

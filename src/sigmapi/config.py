@@ -53,14 +53,17 @@ class SOMConfig:
     sigma: tuple[tuple[float, float], ...] = PAPER_SIGMA.knots
     """Neighbourhood width on the map (grid units): [fraction, value] knots (8 -> 3.5 -> 1e-5)."""
     winner_rule: str = "soft"
-    """"soft" (Gaussian-smoothed argmax, the paper), "argmax", or "min_distance"."""
+    """"soft" (Gaussian-smoothed argmax, the paper; border-normalised under an ordering
+    procedure, see ``ordering``), "soft_mean" (always border-normalised), "argmax", or
+    "min_distance"."""
     soft_cut: int = 15
     """Half-width of the smoothing window of the soft winner, in map units (script: 15)."""
     init_scale: float = 0.1
     """Initial weights are uniform in [-init_scale, init_scale] (paper: 0.1)."""
     ordering: str = "crossview"
     """How the map comes to be ordered: "crossview" (sigmapi's: an ordered start computed from
-    the views alone, and the neighbourhood capped at ``ordering_sigma``; see
+    the views alone, the neighbourhood capped at ``ordering_sigma`` and the soft winner
+    normalised at the map border; see
     :mod:`sigmapi.ordering`) or "none" (the paper's random start and schedule, bit for bit)."""
     ordering_sigma: float = 3.0
     """With an ordering procedure: the largest neighbourhood width used (map units); the

@@ -19,7 +19,11 @@
     sends the two views of one z, and the best and second-best units of one view, to far-apart
     units along its seam. In 1-D this term is left out: the paper's soft winner swaps the two
     end units of many ordered maps (order R^2 0.966-0.98), which raises the topographic error
-    to 0.16 without a fold.
+    to 0.16 without a fold;
+  * for 1-D maps, ``F / FAR_SHARE`` with ``F`` the fraction of test pairs whose two views win
+    units ``FAR_UNITS`` (3) or more apart. A fold lays two branches of the map over the same
+    z's, and the two views of one z then land on different branches; in an ordered map they
+    land at most two units apart. This catches the folds of small maps that starve no unit.
 
   ``folded`` is ``fold_score >= FOLD_THRESHOLD`` (1.0). The thresholds were chosen on every map
   trained while building the ordering procedure (docs/algorithm.md, "Ordering procedures").
@@ -65,6 +69,12 @@ STARVED_SHARE = 0.1
 
 TWIST_S = 0.065
 """Maps of 2+ dimensions: ``(1 - within one) + topographic error`` that counts as one fold sign."""
+
+FAR_UNITS = 3.0
+"""1-D maps: two views whose winners are this many units apart (or more) count as far apart."""
+
+FAR_SHARE = 0.002
+"""1-D maps: the fraction of far-apart view pairs that counts as one fold sign."""
 
 FOLD_THRESHOLD = 1.0
 """``folded`` is ``fold_score >= FOLD_THRESHOLD``."""
@@ -205,9 +215,12 @@ def fold_indicators(
     coords = model.map_coords
     te = float(np.mean(chebyshev(coords, top2[:, 0], top2[:, 1]) > 1.0))
     score = float(starved)
+    apart = chebyshev(coords, w0, w1)
     if len(model.map_shape) >= 2:
-        within = float(np.mean(chebyshev(coords, w0, w1) <= 1.0))
+        within = float(np.mean(apart <= 1.0))
         score = max(score, ((1.0 - within) + te) / TWIST_S)
+    else:
+        score = max(score, float(np.mean(apart >= FAR_UNITS)) / FAR_SHARE)
     return starved, te, score
 
 

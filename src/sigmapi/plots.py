@@ -10,6 +10,7 @@ too fit any layout. Nothing here calls ``plt.show()``; the report draws on Agg f
 - :func:`plot_net`: the map in input space (each unit at the z it responds to).
 - :func:`plot_learning_curves`: metrics and cost against iterations, with the sigma schedule.
 - :func:`plot_invariance`: the winner as a function of x and y.
+- :func:`plot_sweep`: a metric of a parameter sweep against one parameter, over seeds.
 """
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ __all__ = [
     "plot_invariance",
     "plot_learning_curves",
     "plot_net",
+    "plot_sweep",
     "plot_weight_tiles",
 ]
 
@@ -353,4 +355,72 @@ def plot_invariance(
         fontsize=10,
     )
     ax.figure.colorbar(img, ax=ax, label=inv.value_label)
+    return ax
+
+
+def _number(v: Any) -> float | None:
+    try:
+        return float(v)
+    except (TypeError, ValueError):
+        return None
+
+
+def _truthy(v: Any) -> bool:
+    return v is True or str(v).strip().lower() in ("true", "1")
+
+
+def plot_sweep(
+    rows: Sequence[Mapping[str, Any]],
+    param: str,
+    metric: str,
+    group_by: Sequence[str] = (),
+    ax: Axes | None = None,
+) -> Axes:
+    """``metric`` against ``param`` over a sweep's rows: each seed a dot, the median a line
+    with the spread over seeds (min to max) as a band, folded runs as red crosses.
+
+    ``rows`` are sweep table rows (values may be strings, as read from CSV); rows whose
+    ``status`` is not ``ok`` are left out. One line per combination of ``group_by`` values.
+    A parameter whose values are not all numbers is drawn on a categorical axis.
+    """
+    ax = _axes(ax, (6.0, 4.0))
+    ok = [r for r in rows if r.get("status", "ok") == "ok"]
+    raw = list(dict.fromkeys(str(r[param]) for r in ok))
+    numeric = all(_number(v) is not None for v in raw)
+    if numeric:
+        raw.sort(key=float)
+    pos = {v: (float(v) if numeric else float(i)) for i, v in enumerate(raw)}
+    groups = list(dict.fromkeys(tuple(str(r[g]) for g in group_by) for r in ok))
+    folded_label: str | None = "folded run"
+    for gi, key in enumerate(groups):
+        color = f"C{gi % 10}"
+        label = ", ".join(f"{g} {v}" for g, v in zip(group_by, key, strict=True)) or None
+        xs, med, lo, hi = [], [], [], []
+        for v in raw:
+            sel = [r for r in ok if str(r[param]) == v
+                   and tuple(str(r[g]) for g in group_by) == key]  # fmt: skip
+            vals = np.array([float(r[metric]) for r in sel])
+            if vals.size == 0:
+                continue
+            x = pos[v]
+            xs.append(x)
+            med.append(float(np.median(vals)))
+            lo.append(float(vals.min()))
+            hi.append(float(vals.max()))
+            folded = np.array([_truthy(r.get("folded", False)) for r in sel])
+            ax.scatter(np.full(int((~folded).sum()), x), vals[~folded], s=14, color=color,
+                       alpha=0.6, zorder=3)  # fmt: skip
+            if folded.any():
+                ax.scatter(np.full(int(folded.sum()), x), vals[folded], s=40, marker="x",
+                           color="crimson", zorder=4, label=folded_label)  # fmt: skip
+                folded_label = None
+        ax.plot(xs, med, "-o", color=color, label=label, zorder=2)
+        ax.fill_between(xs, lo, hi, color=color, alpha=0.15, lw=0)
+    if not numeric:
+        ax.set_xticks([float(i) for i in range(len(raw))], raw)
+    ax.set_xlabel(param)
+    ax.set_ylabel(f"{metric} (median, min-max over seeds)")
+    handles, _ = ax.get_legend_handles_labels()
+    if handles:
+        ax.legend(fontsize=8)
     return ax

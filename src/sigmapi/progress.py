@@ -1,4 +1,5 @@
-"""Progress bars on stderr (tqdm): one for training runs, one for counted work such as episodes.
+"""Progress bars on stderr (tqdm): one for training runs, one for counted work such as episodes,
+one for parallel jobs (a line per finished job when stderr is not a terminal).
 
 Both return ``(callback, bar)``; use the bar as a context manager so that it closes.
 ``disable=None`` lets tqdm hide the bar when stderr is not a terminal.
@@ -13,7 +14,7 @@ from typing import TYPE_CHECKING, Any, Protocol, TypeVar
 if TYPE_CHECKING:
     from tqdm import tqdm
 
-__all__ = ["counter", "each", "progress_callback"]
+__all__ = ["counter", "each", "jobs_done", "progress_callback"]
 
 T = TypeVar("T")
 
@@ -64,3 +65,27 @@ def each(items: Iterable[T], desc: str, disable: bool | None = None) -> Iterable
     from tqdm import tqdm
 
     return tqdm(items, desc=desc, disable=disable, file=sys.stderr, leave=False)
+
+
+def jobs_done(
+    total: int, desc: str, disable: bool = False
+) -> tuple[Callable[[bool, str], None], tqdm[Any]]:
+    """A bar of ``total`` jobs; ``callback(ok, line)`` counts one finished job.
+
+    On a terminal the bar shows jobs done, failed and left; when stderr is a file (a log),
+    each finished job prints ``line`` instead, one line per job.
+    """
+    tty = sys.stderr.isatty()
+    bar = _bar(total, desc, "run", 0, disable or not tty)
+    done = failed = 0
+
+    def callback(ok: bool, line: str) -> None:
+        nonlocal done, failed
+        done += 1
+        failed += not ok
+        bar.set_postfix_str(f"failed {failed}, left {total - done}", refresh=False)
+        bar.update(1)
+        if not tty and not disable:
+            print(f"{desc}: [{done}/{total}] {line}", file=sys.stderr, flush=True)
+
+    return callback, bar

@@ -26,7 +26,7 @@ from sigmapi.codes import PopulationCode, grid_coordinates
 from sigmapi.config import SOMConfig
 from sigmapi.errors import ConfigError, ModelFileError, NotFittedError
 from sigmapi.kernels import KernelState, get_backend, reference
-from sigmapi.ordering import INIT_PAIRS, crossview_init
+from sigmapi.ordering import INIT_PAIRS, crossview_init, training_rule
 from sigmapi.tasks import Batch, TwoViewSampler
 
 __all__ = ["BLOCK", "SigmaPiSOM", "load_model"]
@@ -440,7 +440,7 @@ class SigmaPiSOM:
         c = self.config
         self._kernel.train_block(
             self._state, x0, y0, x1, y1, self.sigma_at(t), self.eps_at(t),
-            map_shape=self.map_shape, winner_rule=c.winner_rule, soft_cut=c.soft_cut,
+            map_shape=self.map_shape, winner_rule=self.winner_rule_, soft_cut=c.soft_cut,
             threads=c.threads,
         )  # fmt: skip
         self.t_ += x0.shape[0]
@@ -510,18 +510,25 @@ class SigmaPiSOM:
             return reference.activation(self.weights_, xa, ya)
         return np.asarray(self._kernel.activation(self._state, xa, ya), dtype=np.float64)
 
+    @property
+    def winner_rule_(self) -> str:
+        """The rule training uses: ``config.winner_rule``, border-normalised under an ordering
+        procedure (:func:`sigmapi.ordering.training_rule`)."""
+        return training_rule(self.config.winner_rule, self.config.ordering)
+
     def winner(
         self, x: ArrayLike, y: ArrayLike, rule: str | None = None, *, hard: bool = False
     ) -> NDArray[np.int64]:
         """Flat index of the winning unit per pair; ``(B,)``.
 
-        Uses the model's winner rule (default) or ``rule``, at the current sigma. ``hard=True``
+        Uses the model's winner rule (default: :attr:`winner_rule_`) or ``rule``, at the
+        current sigma. ``hard=True``
         takes the rule's limit at sigma -> 0: the soft winner becomes the argmax of the
         response (the metrics use this, so that mid-run maps are not smoothed).
         """
         h = self.respond(x, y)
-        rule = rule or self.config.winner_rule
-        if hard and rule == "soft":
+        rule = rule or self.winner_rule_
+        if hard and rule in ("soft", "soft_mean"):
             rule = "argmax"
         return np.asarray(
             self._kernel.winners(

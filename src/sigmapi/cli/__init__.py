@@ -1,8 +1,8 @@
 """The ``sigmapi`` command line: a thin front that maps flags onto the API's config objects.
 
 Sub-commands: ``train``, ``evaluate``, ``presets`` (:mod:`sigmapi.cli.train`), ``reproduce``,
-``figure`` (:mod:`sigmapi.cli.reproduce`), ``reach`` (:mod:`sigmapi.cli.reach`) and
-``compare`` (:mod:`sigmapi.cli.compare`); each
+``figure`` (:mod:`sigmapi.cli.reproduce`), ``reach`` (:mod:`sigmapi.cli.reach`), ``sweep``
+(:mod:`sigmapi.cli.sweep`) and ``compare`` (:mod:`sigmapi.cli.compare`); each
 module's ``register(subparsers)`` adds its parsers and sets ``func`` to a handler
 ``handler(args) -> int``.
 
@@ -16,7 +16,7 @@ import argparse
 import sys
 from collections.abc import Sequence
 
-from sigmapi.cli import compare, reach, reproduce, train
+from sigmapi.cli import compare, reach, reproduce, sweep, train
 from sigmapi.cli._common import Parser, check_output, resolve_config
 from sigmapi.errors import SigmapiError
 
@@ -32,7 +32,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"sigmapi {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser)
-    for module in (train, reproduce, reach, compare):
+    for module in (train, reproduce, reach, sweep, compare):
         module.register(sub)
     return parser
 

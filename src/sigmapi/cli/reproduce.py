@@ -37,7 +37,7 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
     if len(set(seeds)) != len(seeds):
         raise UsageError(f"--seeds must be distinct, got {seeds}")
     options = ReproduceOptions(seeds=tuple(seeds), quick=args.quick, progress=not args.quiet,
-                               save_models=args.models)  # fmt: skip
+                               save_models=args.models, workers=args.workers)  # fmt: skip
     result = reproduce(out, options)
     for name, res in result.presets.items():
         print(
@@ -96,6 +96,9 @@ def register(sub: Any) -> None:
     p.add_argument("--models", choices=SAVE_MODELS, default="shown",
                    help="which trained models to save: the one the figures show (default; the "
                    "best-ordered seed), all, or none")  # fmt: skip
+    p.add_argument("--workers", type=int, default=None,
+                   help="training runs at once (default: one per core, as many as fit in half "
+                   "the available memory; results do not depend on it)")  # fmt: skip
     p.add_argument("--quiet", action="store_true", help="no progress bars")
     p.set_defaults(func=cmd_reproduce)
 

@@ -3,11 +3,14 @@
 - :mod:`~sigmapi.experiments.reproduce`: the experiment loop (presets x seeds);
 - :mod:`~sigmapi.experiments.results`: its options and typed results, report sections;
 - :mod:`~sigmapi.experiments.report_html`: the page;
-- :mod:`~sigmapi.experiments.reach_section`: the reach experiment as a report section.
+- :mod:`~sigmapi.experiments.reach_section`: the reach experiment as a report section;
+- :mod:`~sigmapi.experiments.executor`: independent jobs on a process pool or a Dask cluster;
+- :mod:`~sigmapi.experiments.sweep`: parameter and seed sweeps (``sigmapi sweep``).
 """
 
 from sigmapi.experiments.reproduce import REFERENCE, SECTIONS, paper_presets, reproduce
 from sigmapi.experiments.results import ReportContext, ReproduceOptions, ReproduceResult, Section
+from sigmapi.experiments.sweep import SweepSpec, run_sweep
 
 __all__ = [
     "REFERENCE",
@@ -16,6 +19,8 @@ __all__ = [
     "ReproduceOptions",
     "ReproduceResult",
     "Section",
+    "SweepSpec",
     "paper_presets",
     "reproduce",
+    "run_sweep",
 ]

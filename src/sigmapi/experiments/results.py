@@ -70,6 +70,10 @@ class ReproduceOptions:
         Which trained models to write beside the report.
     n_test : int, optional
         Test set size of the final metrics (default 10,000; ``quick``: 2,000).
+    workers : int, optional
+        Training runs at once (default: one per core, as many as fit in half the available
+        memory; :func:`~sigmapi.experiments.executor.plan_workers`). The results do not
+        depend on it.
     """
 
     seeds: tuple[int, ...] = (0, 1, 2)
@@ -77,12 +81,15 @@ class ReproduceOptions:
     progress: bool = True
     save_models: str = "shown"
     n_test: int | None = None
+    workers: int | None = None
 
     def __post_init__(self) -> None:
         from sigmapi import _validate
 
         object.__setattr__(self, "seeds", tuple(self.seeds))
         _validate.choice("save_models", self.save_models, SAVE_MODELS)
+        if self.workers is not None:
+            _validate.integer("workers", self.workers, 1)
 
     @property
     def n_checkpoints(self) -> int:

@@ -15,9 +15,11 @@ from numpy.typing import NDArray
 
 __all__ = ["WINNER_RULES", "Kernel", "KernelState"]
 
-WINNER_RULES = ("soft", "argmax", "min_distance")
+WINNER_RULES = ("soft", "argmax", "min_distance", "soft_mean")
 """How the winner is chosen: ``"soft"`` (argmax of the Gaussian-smoothed activation, the
-paper), ``"argmax"``, ``"min_distance"`` (``argmin |vec(x y^T) - w_k|``)."""
+paper), ``"argmax"``, ``"min_distance"`` (``argmin |vec(x y^T) - w_k|``), ``"soft_mean"``
+(the soft rule with the smoothed activation divided by the window's weight inside the map, so
+that border units are not handicapped)."""
 
 
 class KernelState(Protocol):

@@ -249,7 +249,7 @@ def _pairs(x, y, tol, jbuf, pidx, pval):
 def _winner(h, scale, sqnorm, rule, sigma, cut, dims, strides, tmp, tmp2):
     """Winning unit of one activation vector ``h`` (K,); ties to the lowest index."""
     k_units = h.shape[0]
-    if rule == 0:  # soft: separable Gaussian smoothing over the map, window +-cut
+    if rule == 0 or rule == 3:  # soft: separable Gaussian smoothing over the map, window +-cut
         for k in range(k_units):
             tmp[k] = h[k]
         cur = tmp
@@ -264,9 +264,11 @@ def _winner(h, scale, sqnorm, rule, sigma, cut, dims, strides, tmp, tmp2):
             for k in range(k_units):
                 c = (k // st) % n
                 acc = 0.0
+                norm = 0.0
                 for c2 in range(max(0, c - m), min(n - 1, c + m) + 1):
                     acc += cur[k + (c2 - c) * st] * wts[abs(c2 - c)]
-                nxt[k] = acc
+                    norm += wts[abs(c2 - c)]
+                nxt[k] = acc / norm if rule == 3 else acc
             cur, nxt = nxt, cur
         best = 0
         for k in range(1, k_units):

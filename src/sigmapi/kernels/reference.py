@@ -126,10 +126,14 @@ def winners(
 
     ``rule``: ``"soft"`` argmax of the Gaussian-smoothed activation (the paper's rule),
     ``"argmax"`` plain argmax, ``"min_distance"`` ``argmin |vec(x y^T) - w_k|`` written as
-    ``argmax(2 h_k - |w_k|^2)`` (exact for unit-length data). Ties go to the lowest index.
+    ``argmax(2 h_k - |w_k|^2)`` (exact for unit-length data), ``"soft_mean"`` the soft rule
+    divided by the smoothing weight inside the map. Ties go to the lowest index.
     """
     if rule == "soft":
         return np.argmax(smooth(h, map_shape, sigma, cut), axis=1)
+    if rule == "soft_mean":
+        inside = smooth(np.ones((1, int(np.prod(map_shape)))), map_shape, sigma, cut)
+        return np.argmax(smooth(h, map_shape, sigma, cut) / inside, axis=1)
     if rule == "argmax":
         return np.argmax(h, axis=1)
     if rule == "min_distance":

@@ -1,0 +1,259 @@
+"""Parameter and seed sweeps: ``sigmapi sweep SPEC.toml --out DIR``.
+
+A spec names a preset, the seeds, fields fixed for every run (``[set]``) and a grid of values
+(``[grid]``); the sweep is the cross product of the grid and the seeds::
+
+    preset = "tiny-1d"          # any preset; [set] fixes other fields for every run
+    seeds = [0, 1]
+    [set]
+    ordering = "none"
+    [grid]                      # the cross product of these values
+    code_width = [0.5, 1.0]
+    iterations = [2000, 3000]
+
+Each run trains one model and evaluates it (:func:`sigmapi.evaluate`); ``DIR/results.csv``
+gets one row per run: the grid parameters, the seed, every metric (the fold score too), the
+training and total seconds, ``status`` (``ok`` or ``failed``) and the ``error`` of a failed
+run. The table is rewritten atomically after every finished run, so a killed sweep loses at
+most the runs in flight; started again with the same spec, it finds the finished runs in the
+table (by ``run_id``) and runs only the missing ones (failed ones again with
+``retry_failed``). Runs go through :mod:`sigmapi.experiments.executor`: a process pool sized
+to the cores and the memory budget, or a Dask cluster.
+"""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import io
+import itertools
+import json
+import time
+import tomllib
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from sigmapi.config import SOMConfig, load_preset
+from sigmapi.errors import ConfigError
+from sigmapi.experiments.executor import Outcome, job_memory, plan_workers, run_jobs
+from sigmapi.io import atomic_write_bytes
+from sigmapi.metrics import Metrics, evaluate
+from sigmapi.som import SigmaPiSOM
+
+__all__ = ["SweepRun", "SweepSpec", "draw_summary", "read_results", "run_sweep", "sweep_job"]
+
+RESULTS = "results.csv"
+"""The sweep's table in its output folder."""
+
+META_COLUMNS = ("run_id", "seed", "status", "error", "train_seconds", "total_seconds")
+METRIC_COLUMNS = tuple(f.name for f in dataclasses.fields(Metrics))
+
+
+@dataclass(frozen=True)
+class SweepRun:
+    """One run of a sweep: the grid point ``params``, the ``seed`` and the resolved config."""
+
+    run_id: str
+    params: dict[str, Any]
+    seed: int
+    config: SOMConfig
+    n_test: int
+
+
+@dataclass(frozen=True)
+class SweepSpec:
+    """A parsed sweep spec (module docstring); :meth:`runs` lists the cross product."""
+
+    preset: str
+    seeds: tuple[int, ...]
+    grid: dict[str, list[Any]]
+    fixed: dict[str, Any] = field(default_factory=dict)
+    n_test: int = 2000
+
+    @classmethod
+    def from_toml(cls, text: str, source: str = "sweep spec") -> SweepSpec:
+        """Parse and check a spec; every grid point must make a valid config."""
+        try:
+            data = tomllib.loads(text)
+        except tomllib.TOMLDecodeError as exc:
+            raise ConfigError(f"{source} is not valid TOML: {exc}") from None
+        unknown = sorted(set(data) - {"preset", "seeds", "set", "grid", "n_test"})
+        if unknown:
+            raise ConfigError(f"{source}: unknown key {unknown[0]!r}; a spec has preset, seeds, "
+                              "n_test, [set] and [grid]")  # fmt: skip
+        preset = data.get("preset")
+        if not isinstance(preset, str):
+            raise ConfigError(f"{source}: preset must be a preset name, got {preset!r}; "
+                              'e.g. preset = "tiny-1d"')  # fmt: skip
+        seeds = data.get("seeds", [0])
+        if (not isinstance(seeds, list) or not seeds
+                or not all(isinstance(s, int) and not isinstance(s, bool) and s >= 0
+                           for s in seeds)):  # fmt: skip
+            raise ConfigError(f"{source}: seeds must be a list of non-negative ints, got "
+                              f"{seeds!r}; e.g. seeds = [0, 1, 2]")  # fmt: skip
+        if len(set(seeds)) != len(seeds):
+            raise ConfigError(f"{source}: seeds must be distinct, got {seeds!r}")
+        grid = data.get("grid", {})
+        if not isinstance(grid, dict) or not all(isinstance(v, list) and v for v in grid.values()):
+            raise ConfigError(f"{source}: [grid] must map each field to a non-empty list of "
+                              f"values, got {grid!r}; e.g. code_width = [0.5, 1.0]")  # fmt: skip
+        fixed = data.get("set", {})
+        if not isinstance(fixed, dict):
+            raise ConfigError(f"{source}: [set] must be a table of fields, got {fixed!r}")
+        both = sorted(set(fixed) & set(grid))
+        if both:
+            raise ConfigError(f"{source}: {both[0]!r} is both in [set] and in [grid]; keep one")
+        if "seed" in grid or "seed" in fixed:
+            raise ConfigError(f"{source}: give seeds with seeds = [...], not as a field")
+        n_test = data.get("n_test", 2000)
+        if not isinstance(n_test, int) or isinstance(n_test, bool) or n_test < 2:
+            raise ConfigError(f"{source}: n_test must be an int >= 2, got {n_test!r}")
+        spec = cls(preset, tuple(seeds), grid, fixed, n_test)
+        spec.runs()  # every grid point makes a valid config: fail before anything trains
+        return spec
+
+    @classmethod
+    def read(cls, path: str | Path) -> SweepSpec:
+        p = Path(path)
+        if not p.is_file():
+            raise ConfigError(f"sweep spec {str(p)!r} does not exist; check the path")
+        return cls.from_toml(p.read_text("utf-8"), f"sweep spec {str(p)!r}")
+
+    def runs(self) -> list[SweepRun]:
+        """Every (grid point, seed), grid-major; configs checked here (ConfigError names the
+        grid point)."""
+        base = load_preset(self.preset).to_dict()
+        keys = sorted(self.grid)
+        out = []
+        for values in itertools.product(*(self.grid[k] for k in keys)):
+            params = dict(zip(keys, values, strict=True))
+            try:
+                cfg = SOMConfig.from_dict({**base, **self.fixed, **params})
+            except (ConfigError, TypeError) as exc:
+                raise ConfigError(f"grid point {params}: {exc}") from None
+            for seed in self.seeds:
+                rid = json.dumps({**params, "seed": seed}, sort_keys=True)
+                out.append(SweepRun(rid, params, seed, cfg.replace(seed=seed), self.n_test))
+        return out
+
+
+def sweep_job(run: SweepRun) -> dict[str, Any]:
+    """Train and evaluate one run (a job of the executor); its metrics and seconds."""
+    t0 = time.perf_counter()
+    model = SigmaPiSOM(run.config).fit()
+    train = time.perf_counter() - t0
+    metrics = evaluate(model, n_test=run.n_test).to_dict()
+    return {**metrics, "train_seconds": train, "total_seconds": time.perf_counter() - t0}
+
+
+def read_results(path: str | Path) -> list[dict[str, str]]:
+    """The rows of a sweep table (strings, as written); ``[]`` if there is none yet."""
+    p = Path(path)
+    if not p.is_file():
+        return []
+    with p.open(newline="", encoding="utf-8") as f:
+        return list(csv.DictReader(f))
+
+
+def _write(path: Path, columns: list[str], rows: list[dict[str, Any]]) -> None:
+    buf = io.StringIO()
+    writer = csv.DictWriter(buf, fieldnames=columns, extrasaction="ignore", lineterminator="\n")
+    writer.writeheader()
+    writer.writerows(rows)
+    atomic_write_bytes(path, buf.getvalue().encode("utf-8"))
+
+
+def _row(run: SweepRun, outcome: Outcome) -> dict[str, Any]:
+    row: dict[str, Any] = {"run_id": run.run_id, **run.params, "seed": run.seed}
+    if outcome.ok:
+        return {**row, **outcome.value, "status": "ok", "error": ""}
+    return {**row, "status": "failed", "error": outcome.error,
+            "total_seconds": round(outcome.seconds, 3)}  # fmt: skip
+
+
+def run_sweep(
+    spec: SweepSpec,
+    out: str | Path,
+    *,
+    engine: str = "local",
+    workers: int | None = None,
+    memory_budget: int | None = None,
+    address: str | None = None,
+    retry_failed: bool = False,
+    on_plan: Callable[[int, int, str], None] | None = None,
+    on_done: Callable[[bool, str], None] | None = None,
+) -> list[dict[str, Any]]:
+    """Run the missing runs of ``spec``, writing ``out/results.csv`` after each; all rows.
+
+    ``on_plan(n_to_run, n_skipped, reason)`` is called once before the first run and
+    ``on_done(ok, line)`` after each.
+    """
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    path = out / RESULTS
+    runs = spec.runs()
+    keep = {"ok", "failed"} if not retry_failed else {"ok"}
+    have = {r["run_id"]: r for r in read_results(path) if r.get("status") in keep}
+    ids = {r.run_id for r in runs}
+    rows: list[dict[str, Any]] = [r for r in have.values() if r["run_id"] in ids]
+    todo = [r for r in runs if r.run_id not in have]
+    columns = ["run_id", *sorted(spec.grid), "seed", *METRIC_COLUMNS, "train_seconds",
+               "total_seconds", "status", "error"]  # fmt: skip
+    per_job = max((job_memory(r.config, r.n_test) for r in todo), default=1)
+    plan = plan_workers(workers, per_job, memory_budget, n_jobs=max(1, len(todo)))
+    if on_plan is not None:
+        on_plan(len(todo), len(runs) - len(todo), plan.reason)
+    by_id = {r.run_id: r for r in todo}
+    jobs = [(r.run_id, r) for r in todo]
+    for outcome in run_jobs(sweep_job, jobs, workers=plan.workers, engine=engine,
+                            address=address):  # fmt: skip
+        run = by_id[outcome.key]
+        row = _row(run, outcome)
+        rows.append(row)
+        order = {r.run_id: i for i, r in enumerate(runs)}
+        rows.sort(key=lambda r: order.get(str(r["run_id"]), len(order)))
+        _write(path, columns, rows)
+        if on_done is not None:
+            what = ", ".join(f"{k} {v}" for k, v in run.params.items())
+            text = (f"order R^2 {row['order_r2']:.3f}{', FOLDED' if row['folded'] else ''}"
+                    if outcome.ok else f"FAILED: {outcome.error}")  # fmt: skip
+            on_done(outcome.ok, f"{what}, seed {run.seed}: {text} ({outcome.seconds:.0f} s)")
+    if not todo and not path.is_file():
+        _write(path, columns, rows)
+    return rows
+
+
+FIGURE = "sweep.png"
+"""The sweep's summary figure in its output folder."""
+
+
+def draw_summary(
+    spec: SweepSpec, rows: list[dict[str, Any]], path: str | Path, metric: str = "order_r2"
+) -> Path:
+    """``metric`` against the first grid parameter (lines: the other parameters' values),
+    median and spread over seeds, folded runs marked; written to ``path``."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from sigmapi.plots import plot_sweep
+
+    if metric not in METRIC_COLUMNS:
+        raise ConfigError(f"metric must be one of {list(METRIC_COLUMNS)}, got {metric!r}")
+    keys = sorted(spec.grid)
+    fig, ax = plt.subplots(figsize=(6.4, 4.2))
+    if keys:
+        plot_sweep(rows, keys[0], metric, group_by=keys[1:], ax=ax)
+    else:
+        plot_sweep([{**r, "preset": spec.preset} for r in rows], "preset", metric, ax=ax)
+    ok = sum(str(r.get("status")) == "ok" for r in rows)
+    folded = sum(str(r.get("folded")).lower() in ("true", "1") for r in rows)
+    ax.set_title(f"sweep of {spec.preset}: {ok} runs ok, {len(rows) - ok} failed, "
+                 f"{folded} folded; seeds {list(spec.seeds)}", fontsize=9)  # fmt: skip
+    p = Path(path)
+    fig.savefig(p, dpi=120, bbox_inches="tight", facecolor="white")
+    plt.close(fig)
+    return p

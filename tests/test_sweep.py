@@ -1,0 +1,100 @@
+"""``sigmapi sweep``: the grid x seeds table, the same on every engine, resumable, checked specs."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from sigmapi.errors import ConfigError
+from sigmapi.experiments.sweep import RESULTS, SweepSpec, read_results, run_sweep
+
+SPEC = """
+preset = "tiny-1d"
+seeds = [0, 1]
+n_test = 500
+[set]
+iterations = 1500
+[grid]
+code_width = [0.5, 1.0]
+ordering = ["none", "crossview"]
+"""
+
+
+def _table(rows):
+    skip = {"train_seconds", "total_seconds"}
+    return {r["run_id"]: {k: str(v) for k, v in r.items() if k not in skip} for r in rows}
+
+
+def test_spec_lists_the_cross_product_and_checks_every_point():
+    spec = SweepSpec.from_toml(SPEC)
+    runs = spec.runs()
+    assert len(runs) == 2 * 2 * 2
+    assert {(r.params["code_width"], r.params["ordering"], r.seed) for r in runs} == {
+        (w, o, s) for w in (0.5, 1.0) for o in ("none", "crossview") for s in (0, 1)
+    }
+    assert all(r.config.iterations == 1500 and r.config.seed == r.seed for r in runs)
+    with pytest.raises(ConfigError, match="grid point"):
+        SweepSpec.from_toml(SPEC.replace('["none", "crossview"]', '["none", "sideways"]'))
+    with pytest.raises(ConfigError, match="seeds must be a list of non-negative ints"):
+        SweepSpec.from_toml(SPEC.replace("seeds = [0, 1]", "seeds = [-1]"))
+    with pytest.raises(ConfigError, match="both in \\[set\\] and in \\[grid\\]"):
+        SweepSpec.from_toml(SPEC.replace("iterations = 1500", "code_width = 2.0"))
+    with pytest.raises(ConfigError, match="unknown key 'grids'"):
+        SweepSpec.from_toml(SPEC.replace("[grid]", "[grids]"))
+
+
+def test_local_pool_and_dask_cluster_give_the_same_table(tmp_path):
+    pytest.importorskip("distributed")
+    spec = SweepSpec.from_toml(SPEC)
+    local = run_sweep(spec, tmp_path / "local", workers=2)
+    dask = run_sweep(spec, tmp_path / "dask", engine="dask", workers=2)
+    assert len(local) == 8 and all(r["status"] == "ok" for r in local)
+    assert _table(local) == _table(dask)
+    # the table on disk holds the same runs, in grid order
+    on_disk = read_results(tmp_path / "local" / RESULTS)
+    assert [r["run_id"] for r in on_disk] == [r.run_id for r in spec.runs()]
+    assert _table(on_disk) == _table(local)
+
+
+def test_killed_sweep_runs_only_the_missing_runs_when_started_again(tmp_path):
+    spec_file = tmp_path / "spec.toml"
+    spec_file.write_text(SPEC.replace("iterations = 1500", "iterations = 6000"))
+    out = tmp_path / "out"
+    cmd = [sys.executable, "-m", "sigmapi.cli", "sweep", str(spec_file), "--out", str(out),
+           "--workers", "1"]  # fmt: skip
+    log = tmp_path / "first.log"
+    with log.open("w") as err:
+        proc = subprocess.Popen(cmd, stderr=err, start_new_session=True)
+        deadline = time.monotonic() + 120
+        while len(read_results(out / RESULTS)) < 3 and time.monotonic() < deadline:
+            assert proc.poll() is None, log.read_text()
+            time.sleep(0.05)
+        os.killpg(proc.pid, signal.SIGKILL)
+        proc.wait()
+    before = read_results(out / RESULTS)
+    assert 3 <= len(before) < 8, "the sweep should have been killed half-way"
+
+    again = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+    assert again.returncode == 0, again.stderr
+    assert f"{len(before)} finished already, {8 - len(before)} to run" in again.stderr
+    after = read_results(out / RESULTS)
+    assert len(after) == 8 and all(r["status"] == "ok" for r in after)
+    # the finished runs were not run again: their rows, seconds included, are unchanged
+    kept = {r["run_id"]: r for r in after}
+    assert all(kept[r["run_id"]] == r for r in before)
+    assert Path(out / "sweep.png").stat().st_size > 0
+
+
+def test_bad_spec_is_one_line_and_exit_2(tmp_path):
+    spec_file = tmp_path / "spec.toml"
+    spec_file.write_text(SPEC.replace('preset = "tiny-1d"', 'preset = "tiny-9d"'))
+    r = subprocess.run([sys.executable, "-m", "sigmapi.cli", "sweep", str(spec_file), "--out",
+                        str(tmp_path / "o")], capture_output=True, text=True)  # fmt: skip
+    assert r.returncode == 2
+    assert r.stderr.count("\n") == 1 and "unknown preset 'tiny-9d'" in r.stderr
