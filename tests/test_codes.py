@@ -8,7 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from sigmapi import ConfigError, PopulationCode
-from sigmapi.codes import grid_coordinates
+from sigmapi.codes import grid_coordinates, noisy
 
 
 def test_hill_values_match_formula():
@@ -84,3 +84,24 @@ def test_bad_parameters_are_named(kwargs, match):
 def test_bad_positions_are_refused(p):
     with pytest.raises(ValueError, match="p must"):
         PopulationCode((9,)).encode(p)
+
+
+def test_noisy_codes_have_the_stated_statistics():
+    """Thresholds: over 20,000 draws the Poisson mean is within 2 % of the rate at each unit,
+    and the Gaussian noise sd within 2 % of level x peak."""
+    rng = np.random.default_rng(0)
+    c = np.repeat(PopulationCode((9,)).encode([[0.4]]), 20_000, axis=0)
+    counts = noisy(c, "poisson", 10.0, rng, normalize=False)
+    want = 10.0 * c[0] / c[0].max()
+    big = want > 1.0
+    np.testing.assert_allclose(counts.mean(0)[big], want[big], rtol=0.02)
+    assert np.all(counts == np.round(counts)) and np.all(counts >= 0)
+    g = noisy(c, "gaussian", 0.1, rng, normalize=False) - c
+    assert abs(g.std() / (0.1 * c[0].max()) - 1.0) < 0.02
+    unit = noisy(c[:50], "gaussian", 0.3, rng)
+    np.testing.assert_allclose(np.linalg.norm(unit, axis=1), 1.0)
+    np.testing.assert_array_equal(noisy(c[:5], "gaussian", 0.0, rng), c[:5])
+    with pytest.raises(ValueError, match="kind must be one of"):
+        noisy(c, "uniform", 1.0, rng)
+    with pytest.raises(ValueError, match="level must be"):
+        noisy(c, "poisson", 0.0, rng)

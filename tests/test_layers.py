@@ -18,7 +18,7 @@ PACKAGE = SRC / "sigmapi"
 LAYERS: tuple[tuple[str, ...], ...] = (
     ("cli",),
     ("experiments",),
-    ("figures", "reach"),
+    ("figures", "reach", "baselines"),
     ("plots", "analysis", "curves"),
     ("metrics", "checkpoints", "executor"),
     ("som",),

@@ -25,12 +25,15 @@ from numpy.typing import ArrayLike, NDArray
 
 from sigmapi import _validate
 
-__all__ = ["MIN_WIDTH", "PopulationCode", "grid_coordinates"]
+__all__ = ["MIN_WIDTH", "NOISE_KINDS", "PopulationCode", "grid_coordinates", "noisy"]
 
 MIN_WIDTH = 0.1
 """Narrowest hill (grid units). Half-way between two units a hill of width w is
 ``exp(-d / (8 w^2))`` of its peak in d dimensions: at w = 0.1 that is 4e-6 in 1-D, at w = 0.02
 it underflows in 2-D and the normalised code becomes NaN."""
+
+NOISE_KINDS = ("poisson", "gaussian")
+"""Kinds of noise :func:`noisy` adds to codes."""
 
 
 def grid_coordinates(shape: tuple[int, ...]) -> NDArray[np.float64]:
@@ -119,7 +122,7 @@ class PopulationCode:
         if not np.all(np.isfinite(arr)):
             raise ValueError(f"{name} must be finite, got NaN or inf; remove them")
         if np.any(arr < 0.0) or np.any(arr > 1.0):
-            bad = arr[(arr < 0) | (arr > 1)][0]
+            bad = float(arr[(arr < 0) | (arr > 1)][0])
             raise ValueError(
                 f"{name} must lie in [0, 1], got {bad!r}; positions are fractions of the axis"
             )
@@ -257,3 +260,47 @@ class PopulationCode:
             "normalize": bool(self.normalize),
             "periodic": bool(self.periodic),
         }
+
+
+def noisy(
+    codes: ArrayLike,
+    kind: str,
+    level: float,
+    rng: np.random.Generator,
+    normalize: bool = True,
+) -> NDArray[np.float64]:
+    """Noisy versions of population codes ``(B, n)``, as a population of neurons would give.
+
+    ``kind="poisson"``: spike counts ``k_u ~ Poisson(level * c_u / max_u c_u)``, ``level`` the
+    expected count of the most active unit (its peak rate times the counting window); fewer
+    spikes, more noise. ``kind="gaussian"``: ``c_u + level * max_u c_u * N(0, 1)``, additive
+    noise with a standard deviation of ``level`` times the peak. With ``normalize`` every
+    noisy code is L2-normalised again, like the clean codes (a code without a single spike
+    stays zero).
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(0)
+    >>> c = PopulationCode((15,)).encode([[0.5]])
+    >>> k = noisy(c, "poisson", 20.0, rng, normalize=False)
+    >>> bool(np.all(k == np.round(k))), int(k.argmax()) in (6, 7, 8)
+    (True, True)
+    """
+    _validate.choice("kind", kind, NOISE_KINDS)
+    arr = np.asarray(codes, dtype=np.float64)
+    if arr.ndim != 2:
+        raise ValueError(f"codes must have shape (B, n), got {arr.shape}")
+    peak = np.max(np.abs(arr), axis=1, keepdims=True)
+    peak = np.where(peak > 0, peak, 1.0)
+    if kind == "poisson":
+        rate = _validate.positive("level", level, fix="the expected spike count at the peak")
+        if np.any(arr < 0):
+            raise ValueError("Poisson noise needs codes >= 0 (firing rates), got a negative one")
+        out = rng.poisson(rate * arr / peak).astype(np.float64)
+    else:
+        sd = _validate.number("level", level, 0.0, None, fix="a fraction of the peak, e.g. 0.1")
+        out = arr + sd * peak * rng.standard_normal(arr.shape)
+    if normalize:
+        norm = np.linalg.norm(out, axis=1, keepdims=True)
+        out = out / np.where(norm > 0, norm, 1.0)
+    return out

@@ -58,6 +58,7 @@ __all__ = [
     "affine_fit",
     "evaluate",
     "fold_indicators",
+    "grid_spacing",
     "z_decoder",
 ]
 
@@ -130,6 +131,12 @@ def z_decoder(
     return table
 
 
+def grid_spacing(x_shape: tuple[int, ...], periodic: bool = False) -> NDArray[np.float64]:
+    """Grid spacings per unit of position along each axis of x: z errors are reported in them."""
+    n = np.asarray(x_shape, dtype=np.float64)
+    return n if periodic else n - 1.0
+
+
 def chebyshev(
     map_coords: NDArray[np.float64], a: NDArray[np.int64], b: NDArray[np.int64]
 ) -> NDArray[np.float64]:
@@ -174,9 +181,7 @@ def evaluate(
     same = float(np.mean(w0 == w1))
     within = float(np.mean(chebyshev(coords, w0, w1) <= 1.0))
 
-    spacing = np.asarray(model.x_shape, dtype=np.float64) - 1.0
-    if model.config.periodic:
-        spacing = np.asarray(model.x_shape, dtype=np.float64)
+    spacing = grid_spacing(model.x_shape, model.config.periodic)
     table = z_decoder(wc, calibration.z, coords)
     err = (table[w0] - test.z) * spacing
     z_error = float(np.sqrt(np.mean(np.sum(err**2, axis=1))))

@@ -14,6 +14,7 @@ bit, wherever the run was cut.
 from __future__ import annotations
 
 import copy
+import dataclasses
 import math
 import threading
 from collections.abc import Callable
@@ -38,6 +39,14 @@ BLOCK = 1000
 """Iterations per block of training data (one random child stream per block)."""
 
 Callback = Callable[["SigmaPiSOM"], None]
+Views = tuple[ArrayLike, ArrayLike, ArrayLike, ArrayLike]
+"""Your own two-view data ``(x0, y0, x1, y1)``: codes ``(B, n_x)``, ``(B, n_y)``, ``(B, n_x)``,
+``(B, n_y)``; row b holds two views of the same body-centred position."""
+
+_FIELDS = tuple(f.name for f in dataclasses.fields(SOMConfig) if f.name != "extra")
+"""The hyperparameters :meth:`SigmaPiSOM.get_params` lists (``extra`` holds notes, no parameter)."""
+
+_SHAPE_FIELDS = ("map_shape", "x_shape", "y_shape")
 
 MAX_WEIGHT = 1e30
 """Largest weight magnitude a model starts from; with :data:`MAX_PRODUCT`, the fast kernel's
@@ -93,7 +102,14 @@ class SigmaPiSOM:
                 "pass hyperparameters as keywords instead"
             )
         cfg = config or SOMConfig()
-        self.config = cfg.replace(**overrides) if overrides else cfg
+        if overrides:
+            cfg = cfg.replace(**overrides)
+            for k, v in overrides.items():
+                # store the caller's object where validation only rebuilt an identical value:
+                # scikit-learn's ``clone`` checks that ``__init__`` kept every parameter as given
+                if k in _FIELDS and _identical(v, getattr(cfg, k)):
+                    object.__setattr__(cfg, k, v)
+        self.config = cfg
         self.t_ = 0
         self._state: KernelState | None = None
         self._kernel = get_backend(self.config.backend)
@@ -165,7 +181,8 @@ class SigmaPiSOM:
         ``ordering="crossview"``: an ordered start computed from view pairs alone
         (:func:`sigmapi.ordering.crossview_init`): the first ``INIT_PAIRS`` of ``views`` when
         given (your own data), else as many pairs of the built-in task from the run's own
-        random stream (child ``spawn_key=(2,)``).
+        random stream (child ``spawn_key=(2,)``); with ``same_view`` (the ablation) view 0
+        stands in for view 1 there too.
         """
         c = self.config
         self.check_memory()
@@ -178,6 +195,8 @@ class SigmaPiSOM:
             views = (b.x0, b.y0, b.x1, b.y1)
         else:
             views = tuple(v[:INIT_PAIRS] for v in views)
+        if c.same_view:  # the ablation never sees a second view, not even for its start
+            views = (views[0], views[1], views[0], views[1])
         return crossview_init(
             views, self.x_shape, self.y_shape, self.map_shape, c.ordering_sigma / 2.0
         )
@@ -259,18 +278,148 @@ class SigmaPiSOM:
         self._block_cache = (b, batch)
         return batch
 
-    def fit(self, n_iter: int | None = None, callback: Callback | None = None) -> SigmaPiSOM:
-        """Train from fresh initial weights for ``n_iter`` iterations (default: the whole run).
+    def fit(
+        self,
+        views: Views | int | None = None,
+        callback: Callback | None = None,
+        *,
+        n_iter: int | None = None,
+    ) -> SigmaPiSOM:
+        """Train from fresh initial weights; returns ``self``.
 
-        ``callback(model)`` is called at least once per block of ``BLOCK`` iterations.
-        Returns ``self``.
+        Parameters
+        ----------
+        views : (x0, y0, x1, y1), optional
+            Your own two-view data: codes of shape ``(B, n_x)``, ``(B, n_y)``, ``(B, n_x)``,
+            ``(B, n_y)`` (positions become codes with :meth:`encode_views`); row b holds two
+            views of one body-centred position, and the winner found from ``(x0[b], y0[b])``
+            learns ``(x1[b], y1[b])``. Without it the model trains on its built-in task (the
+            relation and codes of its config). An int is taken as ``n_iter``, so the older
+            call ``fit(5000)`` keeps working.
+        callback : callable, optional
+            ``callback(model)``, called at least once per block of ``BLOCK`` iterations.
+        n_iter : int, optional
+            Iterations to run (default: the configured run, ``config.iterations``).
+
+        Notes
+        -----
+        With ``views`` the run has the configured length as well, whatever the number of rows:
+        the rows are used in passes, each pass in a fresh random order drawn from the run's
+        seed (child stream ``spawn_key=(3, pass)``), so the schedule runs to its end, as
+        MiniSom's ``train(data, num_iteration)`` does. ``ordering="crossview"`` computes its
+        ordered start from the first rows of ``views`` (never from the built-in task).
+        :meth:`partial_fit` with ``views`` instead uses each row once, in the given order.
+
+        Examples
+        --------
+        >>> som = SigmaPiSOM(map_shape=(6,), x_shape=(6,), y_shape=(6,), iterations=3000, seed=0)
+        >>> rng = np.random.default_rng(0)
+        >>> z = rng.uniform(0, 1, (500, 1))
+        >>> px0 = rng.uniform(np.maximum(0, 2 * z - 1), np.minimum(1, 2 * z))  # x + y = 2 z
+        >>> px1 = rng.uniform(np.maximum(0, 2 * z - 1), np.minimum(1, 2 * z))
+        >>> views = som.encode_views(px0, 2 * z - px0, px1, 2 * z - px1)
+        >>> som.fit(views).t_
+        3000
         """
+        if isinstance(views, int | np.integer) and not isinstance(views, bool):
+            if n_iter is not None:
+                raise ConfigError(
+                    f"n_iter was given twice ({views} and n_iter={n_iter}); pass it once"
+                )
+            n_iter = int(views)
+            views = None
         with self._lock:
-            self._set_weights(self.initial_weights())
-            self.t_ = 0
-            return self.partial_fit(
-                n_iter if n_iter is not None else self.config.iterations, callback=callback
+            if views is None:
+                self._set_weights(self.initial_weights())
+                self.t_ = 0
+                return self.partial_fit(
+                    n_iter if n_iter is not None else self.config.iterations, callback=callback
+                )
+            return self._fit_views(views, n_iter, callback)
+
+    def _fit_views(self, views: Any, n_iter: int | None, callback: Callback | None) -> SigmaPiSOM:
+        """:meth:`fit` on the user's ``views`` (its Notes): passes in seeded random orders."""
+        data = self._check_views(views)
+        rows = data[0].shape[0]
+        if rows == 0:
+            raise ConfigError("views must hold at least one row (pair of views), got 0 rows")
+        total = self.config.iterations if n_iter is None else n_iter
+        total = _validate.integer("n_iter", total, 0)
+        self._set_weights(self.initial_weights(data))
+        self.t_ = 0
+        npass = 0
+        while self.t_ < total:
+            order = self._seq(3, npass).permutation(rows)[: total - self.t_]
+            for s in range(0, order.size, BLOCK):
+                idx = order[s : s + BLOCK]
+                self._run_views(data[0][idx], data[1][idx], data[2][idx], data[3][idx])
+                if callback is not None:
+                    callback(self)
+            npass += 1
+        return self
+
+    def encode_views(
+        self, px0: ArrayLike, py0: ArrayLike, px1: ArrayLike, py1: ArrayLike
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """Two views given as positions, as the codes :meth:`fit` takes: ``(x0, y0, x1, y1)``.
+
+        ``px0``, ``px1`` are retinal positions and ``py0``, ``py1`` gaze directions, each of
+        shape ``(B, d)`` (``(B,)`` in 1-D) in [0, 1], fractions of the axis (rescale your
+        units first); row b of the four arrays shows the same body-centred position twice.
+        The codes are the model's own (:attr:`x_code`, :attr:`y_code`).
+        """
+        pos = {"px0": px0, "py0": py0, "px1": px1, "py1": py1}
+        codes = [self.x_code if name[1] == "x" else self.y_code for name in pos]
+        out = tuple(
+            code.encode(code.check_positions(p, name))
+            for code, (name, p) in zip(codes, pos.items(), strict=True)
+        )
+        return out[0], out[1], out[2], out[3]
+
+    # ------------------------------------------------------------------ scikit-learn parameters
+    def get_params(self, deep: bool = True) -> dict[str, Any]:
+        """The hyperparameters, as scikit-learn's ``get_params``: every field of the config.
+
+        ``SigmaPiSOM(**model.get_params())`` is an unfitted model with the same
+        hyperparameters (what ``sklearn.base.clone`` builds; ``extra``, the preset's notes, is
+        left out). ``deep`` is there for scikit-learn's signature: nothing is nested.
+
+        Examples
+        --------
+        >>> som = SigmaPiSOM(map_shape=(6,), seed=0)
+        >>> som.get_params()["map_shape"], som.set_params(iterations=2000).config.iterations
+        ((6,), 2000)
+        """
+        return {k: getattr(self.config, k) for k in _FIELDS}
+
+    def set_params(self, **params: Any) -> SigmaPiSOM:
+        """Change hyperparameters (``config`` and/or fields of :class:`SOMConfig`); returns self.
+
+        A fitted model keeps its weights and iteration count (so ``set_params(eps=0.001)``
+        followed by :meth:`partial_fit` continues with the new value), except when a grid
+        changes (``map_shape``, ``x_shape``, ``y_shape``): the weights no longer fit and are
+        discarded (call :meth:`fit`). A new ``seed`` re-seeds the random streams; a new
+        ``backend`` moves the weights onto that kernel.
+        """
+        cfg = params.pop("config", self.config)
+        if not isinstance(cfg, SOMConfig):
+            raise ConfigError(
+                f"config must be a sigmapi.SOMConfig, got {type(cfg).__name__}; "
+                "or pass single hyperparameters, e.g. set_params(iterations=50000)"
             )
+        old, new = self.config, cfg.replace(**params) if params else cfg
+        weights = self.weights_ if self.is_fitted else None
+        self.config = new
+        self._block_cache = None
+        if new.seed != old.seed:
+            self.seed_entropy_ = int(np.random.SeedSequence(new.seed).entropy)  # type: ignore[arg-type]
+        if new.backend != old.backend:
+            self._kernel = get_backend(new.backend)
+        if any(getattr(new, k) != getattr(old, k) for k in _SHAPE_FIELDS):
+            self._state, self._weights_cache, self.t_ = None, None, 0
+        elif new.backend != old.backend and weights is not None:
+            self._set_weights(np.array(weights))
+        return self
 
     def partial_fit(
         self,
@@ -289,7 +438,8 @@ class SigmaPiSOM:
         views : (x0, y0, x1, y1), optional
             Your own data: codes of shape ``(T, n_x)``, ``(T, n_y)``, ``(T, n_x)``,
             ``(T, n_y)``; iteration t finds the winner from ``(x0[t], y0[t])`` and learns
-            ``(x1[t], y1[t])``. The schedule continues at ``t_``.
+            ``(x1[t], y1[t])`` (``(x0[t], y0[t])`` with ``same_view``). Each row is used once,
+            in order; the schedule continues at ``t_``. :meth:`fit` runs a whole schedule.
         callback : callable, optional
             ``callback(model)``, called after every chunk of at most ``BLOCK`` iterations.
 
@@ -311,7 +461,7 @@ class SigmaPiSOM:
                 self._set_weights(self.initial_weights((x0, y0, x1, y1)))
             for s in range(0, x0.shape[0], BLOCK):
                 sl = slice(s, s + BLOCK)
-                self._run(x0[sl], y0[sl], x1[sl], y1[sl])
+                self._run_views(x0[sl], y0[sl], x1[sl], y1[sl])
                 if callback is not None:
                     callback(self)
             return self
@@ -330,13 +480,19 @@ class SigmaPiSOM:
             stop = min(BLOCK, off + end - self.t_)
             batch = self.training_block(b)
             sl = slice(off, stop)
-            if self.config.same_view:
-                self._run(batch.x0[sl], batch.y0[sl], batch.x0[sl], batch.y0[sl])
-            else:
-                self._run(batch.x0[sl], batch.y0[sl], batch.x1[sl], batch.y1[sl])
+            self._run_views(batch.x0[sl], batch.y0[sl], batch.x1[sl], batch.y1[sl])
             if callback is not None:
                 callback(self)
         return self
+
+    def _run_views(
+        self, x0: NDArray[Any], y0: NDArray[Any], x1: NDArray[Any], y1: NDArray[Any]
+    ) -> None:
+        """One stretch of iterations on view pairs; the ablation ``same_view`` learns view 0."""
+        if self.config.same_view:
+            self._run(x0, y0, x0, y0)
+        else:
+            self._run(x0, y0, x1, y1)
 
     def _run(self, x0: NDArray[Any], y0: NDArray[Any], x1: NDArray[Any], y1: NDArray[Any]) -> None:
         t = np.arange(self.t_, self.t_ + x0.shape[0])
@@ -350,16 +506,24 @@ class SigmaPiSOM:
         self._weights_cache = None
 
     def _check_views(self, views: Any) -> tuple[NDArray[np.float64], ...]:
-        try:
-            x0, y0, x1, y1 = views
-        except (TypeError, ValueError):
-            raise ValueError("views must be a tuple (x0, y0, x1, y1) of code arrays") from None
+        if isinstance(views, np.ndarray):
+            got = f"one array of shape {views.shape}"
+        elif isinstance(views, tuple | list):
+            got = f"a {type(views).__name__} of {len(views)} items"
+        else:
+            got = type(views).__name__
+        if got.startswith("one array") or not isinstance(views, tuple | list) or len(views) != 4:
+            raise ConfigError(
+                f"views must be a tuple (x0, y0, x1, y1) of 4 code arrays, got {got}; row b "
+                "holds two views of one position (encode positions with model.encode_views)"
+            )
+        x0, y0, x1, y1 = views
         x0 = self._check_codes(x0, "x0", self.x_shape)
         y0 = self._check_codes(y0, "y0", self.y_shape)
         x1 = self._check_codes(x1, "x1", self.x_shape)
         y1 = self._check_codes(y1, "y1", self.y_shape)
         if not (x0.shape[0] == y0.shape[0] == x1.shape[0] == y1.shape[0]):
-            raise ValueError(
+            raise ConfigError(
                 f"views must have the same number of rows, got {x0.shape[0]}, {y0.shape[0]}, "
                 f"{x1.shape[0]}, {y1.shape[0]}"
             )
@@ -376,18 +540,18 @@ class SigmaPiSOM:
     def _check_codes(a: ArrayLike, name: str, shape: tuple[int, ...]) -> NDArray[np.float64]:
         arr = np.asarray(a)
         if arr.dtype.kind not in "fiub":
-            raise ValueError(f"{name} must be a numeric array, got dtype {arr.dtype}")
+            raise ConfigError(f"{name} must be a numeric array, got dtype {arr.dtype}")
         arr = arr.astype(np.float64, copy=False)
         n = math.prod(shape)
         if arr.ndim == 1:
             arr = arr[None, :]
         if arr.ndim != 2 or arr.shape[1] != n:
-            raise ValueError(
+            raise ConfigError(
                 f"{name} must have shape (B, {n}) (codes on grid {shape}, flattened in C order), "
                 f"got {np.shape(a)}; encode positions with model.x_code.encode / y_code.encode"
             )
         if not np.isfinite(arr.sum()) and not np.all(np.isfinite(arr)):  # one pass when finite
-            raise ValueError(f"{name} must be finite, got NaN or inf values")
+            raise ConfigError(f"{name} must be finite, got NaN or inf values")
         return arr
 
     # ------------------------------------------------------------------ using the map
@@ -666,6 +830,15 @@ class SigmaPiSOM:
             f"SigmaPiSOM(map_shape={self.map_shape}, x_shape={self.x_shape}, "
             f"y_shape={self.y_shape}, backend={self.backend!r}, {fitted})"
         )
+
+
+def _identical(given: Any, stored: Any) -> bool:
+    """Whether ``given`` equals ``stored`` with the same types all the way down."""
+    if type(given) is not type(stored):
+        return False
+    if isinstance(given, tuple):
+        return len(given) == len(stored) and all(map(_identical, given, stored))
+    return bool(given == stored)
 
 
 def load_model(path: str | Path, backend: str | None = None) -> SigmaPiSOM:

@@ -1,8 +1,8 @@
 """The ``sigmapi`` command line: a thin front that maps flags onto the API's config objects.
 
 Sub-commands: ``train``, ``evaluate``, ``presets`` (:mod:`sigmapi.cli.train`), ``reproduce``,
-``figure`` (:mod:`sigmapi.cli.reproduce`), ``reach`` (:mod:`sigmapi.cli.reach`) and ``sweep``
-(:mod:`sigmapi.cli.sweep`); each
+``figure`` (:mod:`sigmapi.cli.reproduce`), ``reach`` (:mod:`sigmapi.cli.reach`), ``sweep``
+(:mod:`sigmapi.cli.sweep`) and ``compare`` (:mod:`sigmapi.cli.compare`); each
 module's ``register(subparsers)`` adds its parsers and sets ``func`` to a handler
 ``handler(args) -> int``.
 
@@ -18,7 +18,7 @@ import sys
 import threading
 from collections.abc import Sequence
 
-from sigmapi.cli import reach, reproduce, sweep, train
+from sigmapi.cli import compare, reach, reproduce, sweep, train
 from sigmapi.cli._common import Parser, check_output, resolve_config
 from sigmapi.errors import SigmapiError
 
@@ -34,7 +34,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"sigmapi {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser)
-    for module in (train, reproduce, reach, sweep):
+    for module in (train, reproduce, reach, sweep, compare):
         module.register(sub)
     for action in sub._choices_actions:  # `sigmapi CMD --help` opens with its one-line summary
         cmd = sub.choices[action.dest]
