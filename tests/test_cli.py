@@ -99,3 +99,16 @@ def test_config_file_overrides_preset(tmp_path):
 
     m = sigmapi.load(out)
     assert m.t_ == 1500 and m.map_shape == (5,)
+
+
+def test_train_warns_in_one_line_when_the_map_looks_folded(tmp_path):
+    # tiny-1d seed 7 with the paper's start folds (order R^2 0.02) without starving a unit;
+    # the default ordering procedure orders the same seed and gives no warning
+    bad = run("train", "--preset", "tiny-1d", "--seed", "7", "--set", 'ordering="none"',
+              "--out", str(tmp_path / "bad.npz"))  # fmt: skip
+    assert bad.returncode == 0, bad.stderr
+    warning = [ln for ln in bad.stderr.splitlines() if "looks folded" in ln]
+    assert len(warning) == 1 and "units >= 3 apart" in warning[0]
+    assert 'ordering="crossview"' in warning[0]
+    good = run("train", "--preset", "tiny-1d", "--seed", "7", "--out", str(tmp_path / "g.npz"))
+    assert good.returncode == 0 and "looks folded" not in good.stderr

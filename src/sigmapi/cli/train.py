@@ -7,6 +7,8 @@ import json
 import sys
 from typing import Any
 
+import numpy as np
+
 from sigmapi import _validate
 from sigmapi.checkpoints import (
     checkpoint_dir,
@@ -17,7 +19,13 @@ from sigmapi.checkpoints import (
 from sigmapi.cli._common import add_config_flags, check_output, resolve_config
 from sigmapi.config import list_presets, load_preset
 from sigmapi.errors import ModelFileError, UsageError
-from sigmapi.metrics import FOLD_THRESHOLD, evaluate, evaluation_sets, fold_indicators
+from sigmapi.metrics import (
+    FOLD_THRESHOLD,
+    chebyshev,
+    evaluate,
+    evaluation_sets,
+    fold_indicators,
+)
 from sigmapi.progress import progress_callback
 from sigmapi.som import SigmaPiSOM, load_model
 
@@ -96,8 +104,16 @@ def _finished_run(out: Any, cfg: Any) -> SigmaPiSOM:
 def _warn_if_folded(model: SigmaPiSOM, n: int = 4000) -> None:
     """One warning line when the trained map looks folded (the z-free fold score)."""
     _, test = evaluation_sets(model, n)
-    starved, te, score = fold_indicators(model, test)
+    w0 = model.winner(test.x0, test.y0, hard=True)
+    w1 = model.winner(test.x1, test.y1, hard=True)
+    starved, te, score = fold_indicators(model, test, w0, w1)
     if score >= FOLD_THRESHOLD:
+        apart = chebyshev(model.map_coords, w0, w1)
+        sign = (
+            f"views of one z on units >= 3 apart: {np.mean(apart >= 3):.1%}"
+            if len(model.map_shape) == 1
+            else f"views within one unit: {np.mean(apart <= 1):.1%}, topographic error {te:.3f}"
+        )
         hint = (
             'train with --set ordering="crossview"'
             if model.config.ordering == "none"
@@ -106,7 +122,7 @@ def _warn_if_folded(model: SigmaPiSOM, n: int = 4000) -> None:
         print(
             f"sigmapi train: warning: the map looks folded (fold score {score:.2f} >= "
             f"{FOLD_THRESHOLD:g}: {starved} starved unit{'' if starved == 1 else 's'}, "
-            f"topographic error {te:.3f}); {hint}",
+            f"{sign}); {hint}",
             file=sys.stderr,
         )
 
