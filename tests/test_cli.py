@@ -112,3 +112,13 @@ def test_train_warns_in_one_line_when_the_map_looks_folded(tmp_path):
     assert 'ordering="crossview"' in warning[0]
     good = run("train", "--preset", "tiny-1d", "--seed", "7", "--out", str(tmp_path / "g.npz"))
     assert good.returncode == 0 and "looks folded" not in good.stderr
+
+
+@pytest.mark.parametrize("command", ["reproduce", "reach", "sweep"])
+def test_workers_must_be_positive_one_line_exit_2(command, tmp_path):
+    spec = [str(tmp_path / "spec.toml"), "--out", str(tmp_path / "o")]
+    extra = spec if command == "sweep" else []
+    r = run(command, *extra, "--workers", "0")
+    assert r.returncode == 2
+    assert r.stderr.strip().endswith("argument --workers: must be a positive int, got '0'")
+    assert r.stderr.count("\n") == 1

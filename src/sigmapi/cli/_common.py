@@ -35,6 +35,23 @@ class Parser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {message}\n")
 
 
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be a positive int, got {text!r}")
+    return value
+
+
+def add_workers_flag(p: argparse.ArgumentParser, what: str) -> None:
+    """``--workers N``: how many ``what`` run at once (:func:`sigmapi.executor.plan_workers`)."""
+    p.add_argument("--workers", type=_positive_int, default=None,
+                   help=f"{what} at once (default: one per core, as many as fit in the memory "
+                   "budget, half the available memory; results do not depend on it)")  # fmt: skip
+
+
 def add_config_flags(p: argparse.ArgumentParser) -> None:
     """``--preset``, ``--config``, ``--set``, ``--seed`` and ``--backend``."""
     p.add_argument(

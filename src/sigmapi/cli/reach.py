@@ -13,7 +13,12 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from sigmapi.cli._common import add_dataclass_flags, check_output, dataclass_values
+from sigmapi.cli._common import (
+    add_dataclass_flags,
+    add_workers_flag,
+    check_output,
+    dataclass_values,
+)
 from sigmapi.errors import UsageError
 from sigmapi.reach.config import ReachConfig
 from sigmapi.reach.experiment import run_with_progress
@@ -41,9 +46,7 @@ def register(sub: Any) -> None:
     )
     p.add_argument("--force", action="store_true", help="overwrite existing output files")
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
-    p.add_argument("--workers", type=int, default=None,
-                   help="seeds run at once (default: one per core, as many as fit in half the "
-                   "available memory; results do not depend on it)")  # fmt: skip
+    add_workers_flag(p, "seeds run")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_reach)
 
@@ -69,8 +72,6 @@ def cmd_reach(args: argparse.Namespace) -> int:
             f"model file {values['model_path']!r} does not exist; train one with `sigmapi train`"
         )
     cfg = ReachConfig(**values)
-    if args.workers is not None and args.workers < 1:
-        raise UsageError(f"--workers must be a positive int, got {args.workers}")
     result = run_with_progress(cfg, disable=args.quiet or None, workers=args.workers)
     fig = reach_figure(result)
     fig.savefig(out, dpi=120)

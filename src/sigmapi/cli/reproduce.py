@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from sigmapi import _validate
-from sigmapi.cli._common import check_output
+from sigmapi.cli._common import add_workers_flag, check_output
 from sigmapi.curves import LearningCurve, checkpoints
 from sigmapi.errors import UsageError
 from sigmapi.experiments import ReproduceOptions, reproduce
@@ -102,9 +102,7 @@ def register(sub: Any) -> None:
     p.add_argument("--models", choices=SAVE_MODELS, default="shown",
                    help="which trained models to save: the one the figures show (default; the "
                    "best-ordered seed), all, or none")  # fmt: skip
-    p.add_argument("--workers", type=int, default=None,
-                   help="training runs at once (default: one per core, as many as fit in half "
-                   "the available memory; results do not depend on it)")  # fmt: skip
+    add_workers_flag(p, "training runs")
     p.add_argument("--quiet", action="store_true", help="no progress bars")
     p.add_argument(
         "--dpi", type=int, default=DPI, help=f"figure resolution (default {DPI}; 300 for print)"

@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from sigmapi.cli._common import add_workers_flag
 from sigmapi.errors import UsageError
 from sigmapi.executor import ENGINES
 from sigmapi.experiments.sweep import FIGURE, RESULTS, SweepSpec, draw_summary, run_sweep
@@ -61,9 +62,7 @@ def register(sub: Any) -> None:
     p.add_argument("--engine", choices=ENGINES, default="local",
                    help="local: a process pool on this machine (default); dask: a Dask "
                    "cluster (--address, or a local one)")  # fmt: skip
-    p.add_argument("--workers", type=int, default=None,
-                   help="runs at once (default: one per core, as many as fit the memory "
-                   "budget)")  # fmt: skip
+    add_workers_flag(p, "runs")
     p.add_argument("--memory-budget", type=float, default=None, metavar="GIB",
                    help="memory the parallel runs may use together (default: half of the "
                    "available memory)")  # fmt: skip
