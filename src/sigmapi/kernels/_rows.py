@@ -169,8 +169,15 @@ def _respond_row(raw, scale, x, y, tol, ahead, jb, pi, pv, acc, h):
     ``jb``, ``pi``, ``pv``, ``acc``: scratch for :func:`_pairs` and the float64 sums.
     """
     n = _pairs(x, y, tol, jb, pi, pv)
-    k_units = raw.shape[1]
-    for k in range(k_units):
+    activate(raw, scale, pi, pv, n, ahead, 0, raw.shape[1], acc, h)
+
+
+@njit(cache=True, nogil=True)
+def activate(raw, scale, pi, pv, n, ahead, k0, k1, acc, h):
+    """Units ``[k0, k1)``: ``h[k] = scale[k] sum_q raw[pi[q], k] pv[q]`` over the ``n`` kept
+    pairs, summed in float64 in ``acc``; prefetching the row ``ahead`` pairs on (0: none).
+    Serves inference (:func:`_respond_row`) and training (``fast._unit_chunk``)."""
+    for k in range(k0, k1):
         acc[k] = 0.0
     for q in range(min(ahead, n)):
         prefetch_row(raw, pi[q])
@@ -179,9 +186,9 @@ def _respond_row(raw, scale, x, y, tol, ahead, jb, pi, pv, acc, h):
             prefetch_row(raw, pi[q + ahead])
         row = raw[pi[q]]
         val = pv[q]
-        for k in range(k_units):
+        for k in range(k0, k1):
             acc[k] += row[k] * val
-    for k in range(k_units):
+    for k in range(k0, k1):
         h[k] = scale[k] * acc[k]
 
 

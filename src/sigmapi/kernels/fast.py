@@ -47,7 +47,7 @@ from numpy.typing import NDArray
 
 from sigmapi import _validate
 from sigmapi.kernels import _rows, reference
-from sigmapi.kernels._rows import _pairs, _winner, prefetch, prefetch_row
+from sigmapi.kernels._rows import _pairs, _winner, activate, prefetch
 from sigmapi.kernels.base import WINNER_RULES, columns_to_dense
 
 __all__ = [
@@ -344,19 +344,7 @@ def _unit_chunk(
                 for k in range(u0, u1):
                     row[k] += gain[k] * val
     if do_act:
-        for k in range(k0, k1):
-            acc[k] = 0.0
-        for q in range(min(ahead, n0)):
-            prefetch_row(raw, pi0[q])
-        for q in range(n0):
-            if ahead > 0 and q + ahead < n0:
-                prefetch_row(raw, pi0[q + ahead])
-            row = raw[pi0[q]]
-            val = pv0[q]
-            for k in range(k0, k1):
-                acc[k] += row[k] * val
-        for k in range(k0, k1):
-            h[k] = scale[k] * acc[k]
+        activate(raw, scale, pi0, pv0, n0, ahead, k0, k1, acc, h)
 
 
 @njit(cache=True)
