@@ -206,13 +206,13 @@ def run_sweep(
     if on_plan is not None:
         on_plan(len(todo), len(runs) - len(todo), plan.reason)
     by_id = {r.run_id: r for r in todo}
+    order = {r.run_id: i for i, r in enumerate(runs)}
     jobs = [(r.run_id, r) for r in todo]
     for outcome in run_jobs(sweep_job, jobs, workers=plan.workers, engine=engine,
                             address=address):  # fmt: skip
         run = by_id[outcome.key]
         row = _row(run, outcome)
         rows.append(row)
-        order = {r.run_id: i for i, r in enumerate(runs)}
         rows.sort(key=lambda r: order.get(str(r["run_id"]), len(order)))
         _write(path, columns, rows)
         if on_done is not None:
