@@ -176,20 +176,41 @@ def _respond_row(raw, scale, x, y, tol, ahead, jb, pi, pv, acc, h):
 def activate(raw, scale, pi, pv, n, ahead, k0, k1, acc, h):
     """Units ``[k0, k1)``: ``h[k] = scale[k] sum_q raw[pi[q], k] pv[q]`` over the ``n`` kept
     pairs, summed in float64 in ``acc``; prefetching the row ``ahead`` pairs on (0: none).
-    Serves inference (:func:`_respond_row`) and training (``fast._unit_chunk``)."""
-    for k in range(k0, k1):
-        acc[k] = 0.0
+    Serves inference (:func:`_respond_row`) and training (``fast._unit_chunk``).
+
+    Written for the vectoriser: the loops over units run over slices from index 0 (a loop from
+    ``k0`` indexes with possibly negative numbers, whose wrap-around check kept LLVM from
+    vectorising it: 3.7x slower, ``benchmarks/README.md``), and each pass takes four pairs,
+    so that a unit's sum stays in a register for four products. The sum is still taken pair
+    after pair, ``(((acc + r0 v0) + r1 v1) + r2 v2) + r3 v3``: the same result, bit for bit,
+    as one pair per pass.
+    """
+    a = acc[k0:k1]
+    m = k1 - k0
+    for k in range(m):
+        a[k] = 0.0
     for q in range(min(ahead, n)):
         prefetch_row(raw, pi[q])
-    for q in range(n):
-        if ahead > 0 and q + ahead < n:
-            prefetch_row(raw, pi[q + ahead])
-        row = raw[pi[q]]
-        val = pv[q]
-        for k in range(k0, k1):
-            acc[k] += row[k] * val
-    for k in range(k0, k1):
-        h[k] = scale[k] * acc[k]
+    q = 0
+    while q + 4 <= n:
+        if ahead > 0:
+            for d in range(q + ahead, min(q + ahead + 4, n)):
+                prefetch_row(raw, pi[d])
+        r0, r1 = raw[pi[q], k0:k1], raw[pi[q + 1], k0:k1]
+        r2, r3 = raw[pi[q + 2], k0:k1], raw[pi[q + 3], k0:k1]
+        v0, v1, v2, v3 = pv[q], pv[q + 1], pv[q + 2], pv[q + 3]
+        for k in range(m):
+            a[k] = (((a[k] + r0[k] * v0) + r1[k] * v1) + r2[k] * v2) + r3[k] * v3
+        q += 4
+    for r in range(q, n):
+        row = raw[pi[r], k0:k1]
+        val = pv[r]
+        for k in range(m):
+            a[k] += row[k] * val
+    hs = h[k0:k1]
+    sc = scale[k0:k1]
+    for k in range(m):
+        hs[k] = sc[k] * a[k]
 
 
 @njit(cache=True)

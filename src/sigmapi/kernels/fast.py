@@ -318,31 +318,36 @@ def _unit_chunk(
     u0 = max(lo, k0)
     u1 = min(hi, k1)
     if u0 < u1 and n1 > 0:
+        # loops over slices from 0, so that LLVM vectorises them (see _rows.activate)
+        g = gain[u0:u1]
+        m = u1 - u0
         for q in range(min(ahead, n1)):
             prefetch(raw, pi1[q], u0, u1)
         if track:
-            for k in range(u0, u1):
-                acc[k] = 0.0
+            a = acc[u0:u1]
+            for k in range(m):
+                a[k] = 0.0
             for q in range(n1):
                 if ahead > 0 and q + ahead < n1:
                     prefetch(raw, pi1[q + ahead], u0, u1)
-                row = raw[pi1[q]]
+                row = raw[pi1[q], u0:u1]
                 val = pv1[q]
-                for k in range(u0, u1):
+                for k in range(m):
                     old = float(row[k])
-                    row[k] = old + gain[k] * val
+                    row[k] = old + g[k] * val
                     new = float(row[k])
-                    acc[k] += new * new - old * old
-            for k in range(u0, u1):
-                sqnorm[k] += acc[k]
+                    a[k] += new * new - old * old
+            sq = sqnorm[u0:u1]
+            for k in range(m):
+                sq[k] += a[k]
         else:
             for q in range(n1):
                 if ahead > 0 and q + ahead < n1:
                     prefetch(raw, pi1[q + ahead], u0, u1)
-                row = raw[pi1[q]]
+                row = raw[pi1[q], u0:u1]
                 val = pv1[q]
-                for k in range(u0, u1):
-                    row[k] += gain[k] * val
+                for k in range(m):
+                    row[k] += g[k] * val
     if do_act:
         activate(raw, scale, pi0, pv0, n0, ahead, k0, k1, acc, h)
 
