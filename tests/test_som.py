@@ -168,3 +168,17 @@ def test_learning_from_the_same_view_is_clearly_worse(learned):
     same = _metrics(same_view=True)
     assert same["view_consistency"] <= learned["view_consistency"] - 0.2
     assert same["z_error"] >= learned["z_error"] + 0.1
+
+
+@pytest.mark.parametrize("backend", ["reference", "fast"])
+@pytest.mark.parametrize("rule", ["soft", "soft_mean", "argmax", "min_distance"])
+def test_hard_scores_argmax_is_the_hard_winner(model_2d, backend, rule):
+    """``metrics.hard_scores`` (one response pass in ``evaluate``) picks the same units as
+    ``winner(hard=True)``, for every rule and on both kernels."""
+    from sigmapi.metrics import evaluation_sets, hard_scores
+
+    m = sigmapi.SigmaPiSOM(model_2d.config.replace(winner_rule=rule, backend=backend))
+    m.fit(n_iter=300)
+    _, test = evaluation_sets(m, 500)
+    w = m.winner(test.x0, test.y0, hard=True)
+    np.testing.assert_array_equal(np.argmax(hard_scores(m, test.x0, test.y0), axis=1), w)

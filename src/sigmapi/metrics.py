@@ -59,6 +59,7 @@ __all__ = [
     "evaluate",
     "fold_indicators",
     "grid_spacing",
+    "hard_scores",
     "z_decoder",
 ]
 
@@ -174,7 +175,8 @@ def evaluate(
     if test is None or calibration is None:
         calibration, test = evaluation_sets(model, n_test, seed)
     coords = model.map_coords
-    w0 = model.winner(test.x0, test.y0, hard=True)
+    scores = hard_scores(model, test.x0, test.y0)  # one pass: view 0's winners and fold score
+    w0 = np.argmax(scores, axis=1)
     w1 = model.winner(test.x1, test.y1, hard=True)
     wc = model.winner(calibration.x0, calibration.y0, hard=True)
 
@@ -193,7 +195,7 @@ def evaluate(
     order = 1.0 - sse / sst if sst > 0 else float("nan")
 
     usage = float(np.unique(w0).size / model.n_units)
-    starved, te, score = fold_indicators(model, test, w0, w1)
+    starved, te, score = fold_indicators(model, test, w0, w1, scores)
     return Metrics(
         same, within, z_error, order, usage, int(test.z.shape[0]),
         fold_score=score, folded=score >= FOLD_THRESHOLD, starved_units=starved,
@@ -206,11 +208,12 @@ def fold_indicators(
     test: Batch,
     w0: NDArray[np.int64] | None = None,
     w1: NDArray[np.int64] | None = None,
+    scores: NDArray[np.float64] | None = None,
 ) -> tuple[int, float, float]:
     """``(starved units, topographic error, fold score)`` from view pairs alone (never z).
 
-    ``w0``, ``w1``: the hard winners of the two views, when already known. Definitions in the
-    module docstring.
+    ``w0``, ``w1``: the hard winners of the two views, and ``scores``: :func:`hard_scores` of
+    view 0, when already known. Definitions in the module docstring.
     """
     if w0 is None:
         w0 = model.winner(test.x0, test.y0, hard=True)
@@ -218,9 +221,8 @@ def fold_indicators(
         w1 = model.winner(test.x1, test.y1, hard=True)
     wins = np.bincount(np.concatenate([w0, w1]), minlength=model.n_units)
     starved = int(np.sum(wins < STARVED_SHARE * wins.sum() / model.n_units))
-    scores = model.respond(test.x0, test.y0)
-    if model.config.winner_rule == "min_distance":
-        scores = 2.0 * scores - model.unit_sqnorms()[None, :]
+    if scores is None:
+        scores = hard_scores(model, test.x0, test.y0)
     top2 = np.argpartition(-scores, 1, axis=1)[:, :2]
     coords = model.map_coords
     te = float(np.mean(chebyshev(coords, top2[:, 0], top2[:, 1]) > 1.0))
@@ -232,6 +234,19 @@ def fold_indicators(
     else:
         score = max(score, float(np.mean(apart >= FAR_UNITS)) / FAR_SHARE)
     return starved, te, score
+
+
+def hard_scores(
+    model: SigmaPiSOM, x: NDArray[np.float64], y: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """Per-unit scores ``(B, K)`` whose row-wise argmax is the hard winner
+    (``model.winner(x, y, hard=True)``, the same units, ties to the lowest index): the
+    response ``h``, or ``2 h - |w_k|^2`` under the ``min_distance`` rule."""
+    h = model.respond(x, y)
+    if model.winner_rule_ == "min_distance":
+        h *= 2.0
+        h -= model.unit_sqnorms()[None, :]
+    return h
 
 
 def evaluation_sets(model: SigmaPiSOM, n: int, seed: int = EVAL_SEED) -> tuple[Batch, Batch]:
