@@ -23,6 +23,16 @@ def run_child(script: str | Path, args: list[str], src: Path | None = None) -> d
     return dict(json.loads(proc.stdout.strip().splitlines()[-1]))
 
 
+def commit(src: Path | None) -> str | None:
+    """The git commit of the checkout holding ``src`` (None if there is none)."""
+    if src is None:
+        return None
+    proc = subprocess.run(
+        ["git", "-C", str(src), "rev-parse", "HEAD"], capture_output=True, text=True, check=False
+    )
+    return proc.stdout.strip() or None
+
+
 def machine(**extra: Any) -> dict[str, Any]:
     """The platform, CPU count, load average now and Python version (and ``extra``)."""
     return {

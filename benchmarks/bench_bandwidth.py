@@ -25,6 +25,9 @@ variants alternating (``--repeats`` rounds, medians), so all see the same machin
 - variants: ``fast`` (as shipped), ``fast-noprefetch`` (``TRAIN_PREFETCH_AHEAD = 0``, the
   kernel before prefetching), ``fast-threads`` (``threads = true``); ``reference``: the dense
   kernel on the first ``--ref-iters`` iterations.
+- ``--baseline-src``: the variant ``baseline``, the fast kernel of another checkout's ``src``
+  (e.g. the commit before a kernel change), measured the same way, alternating with the
+  others; ``gain_over_baseline`` is ``fast``'s iterations/s over its.
 - ``c_simulator_it_per_s``: the authors' C simulator at paper-2d, 11.1 it/s, *measured
   earlier* on this machine (issue 12: rebuilt here, alternating runs), not in this run.
 """
@@ -224,18 +227,23 @@ def main() -> None:
     parser.add_argument("--ref-iters", type=int, default=100, help="dense reference iterations")
     parser.add_argument("--triad-mib", type=int, default=512)
     parser.add_argument("--out", type=Path, default=ROOT / "results" / "bandwidth.json")
+    parser.add_argument("--baseline-src", type=Path, help="another checkout's src to compare")
+    parser.add_argument("--baseline-label", help="what the baseline is (default: its git commit)")
     args = parser.parse_args()
+    variants = VARIANTS if args.baseline_src is None else (*VARIANTS, "baseline")
 
     triads: list[dict[str, Any]] = []
-    rounds: dict[str, dict[str, list[Any]]] = {p: {v: [] for v in VARIANTS} for p in args.presets}
+    rounds: dict[str, dict[str, list[Any]]] = {p: {v: [] for v in variants} for p in args.presets}
     refs: dict[str, list[float]] = {p: [] for p in args.presets}
     for r in range(args.repeats):
         triads.append(_common.run_child(__file__, ["triad", str(args.triad_mib)]))
         print(f"round {r} triad: {triads[-1]}", flush=True)
         for preset in args.presets:
-            for v in VARIANTS:
+            for v in variants:
                 win = [str(args.windows), str(args.window)]
-                res = _common.run_child(__file__, ["windows", preset, v, *win])
+                src = args.baseline_src.resolve() if v == "baseline" else None
+                args_v = ["windows", preset, "fast" if v == "baseline" else v, *win]
+                res = _common.run_child(__file__, args_v, src=src)
                 rounds[preset][v].append(res["windows"])
                 ips = statistics.median(w["it_per_s"] for w in res["windows"])
                 print(f"round {r} {preset} {v}: median window {ips:.0f} it/s", flush=True)
@@ -264,6 +272,10 @@ def main() -> None:
             / per_variant["fast-noprefetch"]["it_per_s"],
             "c_simulator_it_per_s_measured_earlier": C_SIMULATOR_IT_PER_S.get(preset),
         }
+        if "baseline" in per_variant:
+            presets[preset]["gain_over_baseline"] = (
+                per_variant["fast"]["it_per_s"] / per_variant["baseline"]["it_per_s"]
+            )
         print(f"{preset}: {presets[preset]['variants']['fast']}", flush=True)
     import numba
 
@@ -278,6 +290,7 @@ def main() -> None:
                 "rounds": triads,
             },
             "presets": presets,
+            "baseline": args.baseline_label or _common.commit(args.baseline_src),
         },
     )
 

@@ -28,14 +28,13 @@ from __future__ import annotations
 import argparse
 import json
 import statistics
-import subprocess
 import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from _common import machine, run_child, write_result
+from _common import commit, machine, run_child, write_result
 
 ROOT = Path(__file__).resolve().parent
 SRC = ROOT.parent / "src"
@@ -98,15 +97,6 @@ def child(model_path: str, backend: str, calls: int, batches: int, with_eval: bo
     return out
 
 
-def _commit(src: Path | None) -> str | None:
-    if src is None:
-        return None
-    proc = subprocess.run(
-        ["git", "-C", str(src), "rev-parse", "HEAD"], capture_output=True, text=True, check=False
-    )
-    return proc.stdout.strip() or None
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--model", required=True, help="a paper-2d model file (sigmapi train)")
@@ -155,7 +145,7 @@ def main() -> None:
         "winners_checksums": {
             name: sorted({r["winners_checksum"] for r in runs}) for name, runs in rounds.items()
         },
-        "baseline": args.baseline_label or _commit(args.baseline_src),
+        "baseline": args.baseline_label or commit(args.baseline_src),
         "rounds": rounds,
     }
     write_result(args.out, result)
