@@ -22,3 +22,31 @@ def test_pinned_regression_values(small_1d):
     som.fit()
     assert float(som.weights_.sum()) == pytest.approx(12.068579904420085, abs=1e-9)
     assert float(som.weights_[3, 2, 4]) == pytest.approx(0.0039448768137741366, abs=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("rule", "raw_sum", "scale_sum", "raw_100_7"),
+    [
+        ("min_distance", 2949999.638814942, 0.00618240772816806, 61.62022018432617),
+        ("soft", 60729349.146619424, 0.052797115526014765, 54.4423713684082),
+    ],
+)
+def test_pinned_fast_kernel_values(rule, raw_sum, scale_sum, raw_100_7):
+    """The fast kernel's float32 state after a short 2-D run, pinned: the kernel before its
+    loops were vectorised (6b83f92) and after give the same values, bit for bit, here. A speed
+    change to the fast kernel must leave these alone; a change here changes what ``fit``
+    learns."""
+    from sigmapi import SOMConfig
+
+    cfg = SOMConfig(
+        map_shape=(6, 6), x_shape=(7, 7), y_shape=(7, 7), code_width=1.0, iterations=2000,
+        winner_rule=rule, kernel_tol=1e-4, backend="fast", seed=0,
+        sigma=((0.0, 3.0), (0.5, 1e-5)), eps=((0.0, 0.1), (1.0, 0.01)),
+    )  # fmt: skip
+    state = SigmaPiSOM(cfg).fit()._state
+    raw = state.raw.astype(np.float64)
+    # relative 1e-9: room for another CPU's summation order in numpy's sum and libm's exp,
+    # none for a change of the kernel's arithmetic (rounding differences grow over 2,000 steps)
+    assert float(raw.sum()) == pytest.approx(raw_sum, rel=1e-9)
+    assert float(state.scale.sum()) == pytest.approx(scale_sum, rel=1e-9)
+    assert float(raw[100, 7]) == pytest.approx(raw_100_7, rel=1e-9)
