@@ -16,6 +16,10 @@ using the structure of the problem:
   (their decay, being O(1), is still applied exactly).
 - **float32 storage** of ``V`` (accumulation in float64), laid out ``(n_x * n_y, K)`` so that
   one input pair touches the weights of all units contiguously.
+- **Vectorised loops over units.** Every loop over a range of units runs over array slices
+  indexed from 0, which LLVM turns into SIMD code (a loop indexed from ``k0`` kept the
+  wrap-around check of possibly negative indices and stayed scalar: 2.5-3.7x slower, with
+  the same arithmetic). The activation takes four input pairs per pass over the units.
 - **Parallel over units**, in fixed chunks: every unit's arithmetic is the same whatever the
   number of threads, so results do not depend on it (no reductions across units).
 
