@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import json
 import re
 
 import numpy as np
 import pytest
 
 import sigmapi
+from sigmapi.cli import main
 from sigmapi.experiments.chain import (
     TARGET_RATIO,
     chain_config,
@@ -120,3 +122,26 @@ def test_the_single_maps_joint_code_is_the_outer_product_of_eye_and_head_codes()
     assert np.allclose(joint, outer.reshape(50, -1), rtol=0, atol=1e-12)
     retina = sigmapi.PopulationCode((15, 1)).encode(np.hstack([p[:, :1], np.zeros((50, 1))]))
     assert np.array_equal(retina, one.encode(p[:, :1]))
+
+
+SMALL_FLAGS = ["--set", "map_shape=[9]", "--set", "x_shape=[9]", "--set", "y_shape=[9]",
+               "--set", "iterations=15000", "--set", 'winner_rule="argmax"',
+               "--train-pairs", "3000", "--n-test", "2000"]  # fmt: skip
+
+
+def test_command_line_json_is_run_chains_result(capsys, small_run):
+    assert main(["chain", *SMALL_FLAGS, "--seeds", "0", "1", "2", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert set(out) == {"settings", "seeds", "summary"}
+    for got, want in zip(out["seeds"], small_run["seeds"], strict=True):
+        assert got["ratio"] == want["ratio"] and got["map_a"] == want["map_a"]
+    assert out["settings"]["config"]["ordering"] == "crossview"
+
+
+def test_command_line_table_and_user_mistakes(capsys):
+    assert main(["chain", *SMALL_FLAGS, "--seeds", "4"]) == 0
+    out = capsys.readouterr().out
+    assert "z error" in out and "of 1 seeds: chain z error <= 2 x" in out
+    assert main(["chain", "--preset", "paper-2d"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "config.map_shape must be 1-D" in err[0]
