@@ -123,7 +123,10 @@ def chain_config(config: SOMConfig | None = None, iterations: int | None = None)
     """
     cfg = config if config is not None else load_preset("paper-1d").replace(ordering="crossview")
     if not isinstance(cfg, SOMConfig):
-        raise _validate.fail("config", "a sigmapi.SOMConfig or None", type(cfg).__name__)
+        raise _validate.fail(
+            "config", "a sigmapi.SOMConfig or None", type(cfg).__name__,
+            "load a preset with sigmapi.load_preset(name)",
+        )  # fmt: skip
     for name in ("map_shape", "x_shape", "y_shape"):
         if len(getattr(cfg, name)) != 1:
             raise _validate.fail(
