@@ -2,7 +2,8 @@
 
 Sub-commands: ``train``, ``evaluate``, ``presets`` (:mod:`sigmapi.cli.train`), ``reproduce``,
 ``figure`` (:mod:`sigmapi.cli.reproduce`), ``reach`` (:mod:`sigmapi.cli.reach`), ``sweep``
-(:mod:`sigmapi.cli.sweep`) and ``compare`` (:mod:`sigmapi.cli.compare`); each
+(:mod:`sigmapi.cli.sweep`), ``compare`` (:mod:`sigmapi.cli.compare`) and ``chain``
+(:mod:`sigmapi.cli.chain`); each
 module's ``register(subparsers)`` adds its parsers and sets ``func`` to a handler
 ``handler(args) -> int``.
 
@@ -18,7 +19,7 @@ import sys
 import threading
 from collections.abc import Sequence
 
-from sigmapi.cli import compare, reach, reproduce, sweep, train
+from sigmapi.cli import chain, compare, reach, reproduce, sweep, train
 from sigmapi.cli._common import Parser, check_output, resolve_config
 from sigmapi.errors import SigmapiError
 
@@ -34,7 +35,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"sigmapi {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser)
-    for module in (train, reproduce, reach, sweep, compare):
+    for module in (train, reproduce, reach, sweep, compare, chain):
         module.register(sub)
     for action in sub._choices_actions:  # `sigmapi CMD --help` opens with its one-line summary
         cmd = sub.choices[action.dest]

@@ -5,6 +5,7 @@
 - :mod:`~sigmapi.experiments.report_html`: the page;
 - :mod:`~sigmapi.experiments.reach_section`: the reach experiment as a report section;
 - :mod:`~sigmapi.experiments.sweep`: parameter and seed sweeps (``sigmapi sweep``).
+- :mod:`~sigmapi.experiments.chain`: a chain of two maps (retina -> head -> body) against one.
 """
 
 from sigmapi.experiments.reproduce import REFERENCE, SECTIONS, paper_presets, reproduce

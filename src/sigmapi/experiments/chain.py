@@ -1,0 +1,317 @@
+"""A chain of frames: two Sigma-Pi maps in a row against one map on the whole transformation.
+
+Three 1-D positions in [0, 1]: the retinal position x, the eye-in-head angle e and the
+head-on-body angle u. The head-centred position is ``a = (x + e) / 2`` and the body-centred
+position ``z = (a + u) / 2`` (the paper's ``mean`` relation at both stages).
+
+- **The chain.** Map A (retina + eye -> head) is a :class:`~sigmapi.som.SigmaPiSOM` trained
+  on its built-in task (two views of the same a). Its output code for B is its response to
+  (x, e), rectified and scaled to unit length like the input codes (``code="response"``), or
+  a population code of its hard winner's position on the map (``code="winner"``, the width of
+  the input codes). Map B (A's code + head -> body) is a second Sigma-Pi map with
+  ``x_shape = A.map_shape``, trained with ``fit(views)`` on view pairs of two triples
+  (x, e, u), (x', e', u') with the same z. Both maps learn without a teacher; B learns
+  whatever orientation A's map took.
+- **The single map.** One Sigma-Pi map whose second input is the joint code of (e, u): the
+  2-D population code on a ``(n_e, n_u)`` grid, which for Gaussian hills is the outer product
+  ``e_code (x) u_code`` flattened, with the retina on a ``(n_x, 1)`` grid. Its units are
+  third-order, ``h_k = sum w_k,i,(j,l) x_i e_j u_l``, built from the second-order machinery.
+  Trained with ``fit(views)`` on the same triples' views, with the same config as map B
+  (iterations, schedules, winner rule, ordering procedure): only the grids differ.
+
+Both routes are scored on the same calibration and test triples (drawn from the fixed
+evaluation seed, never trained on) by the definitions of :mod:`sigmapi.metrics`: **z error**
+(per-unit mean z of the calibration wins, RMSE on the test set, in grid spacings of the head
+code u), **view consistency** (the two views of one test z win the same unit), **view within
+one**, **order R^2** (affine fit of z on the winner's map coordinate) and **usage**; and the
+cost: Sigma-Pi weights and training seconds (the chain's include computing A's code of B's
+training views).
+
+Triples are drawn as the task's views are (:meth:`sigmapi.tasks.TwoViewSampler.sample_view`):
+z uniform in [0, 1]; a view (a, u) of z; then a view (x, e) of a.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+from typing import Any, NamedTuple
+
+import numpy as np
+from numpy.typing import NDArray
+
+from sigmapi import _validate
+from sigmapi.codes import PopulationCode
+from sigmapi.config import SOMConfig, load_preset
+from sigmapi.errors import ConfigError
+from sigmapi.metrics import EVAL_SEED, affine_fit, evaluate, z_decoder
+from sigmapi.som import SigmaPiSOM
+from sigmapi.tasks import TwoViewSampler
+
+__all__ = [
+    "CODES",
+    "TARGET_RATIO",
+    "Triples",
+    "chain_config",
+    "head_code",
+    "run_chain",
+    "sample_triples",
+    "score_winners",
+]
+
+Array = NDArray[np.float64]
+
+CODES = ("response", "winner")
+"""What map A hands to map B: its normalised response, or a code of its winner's position."""
+
+TARGET_RATIO = 2.0
+"""Issue 13's acceptance: the chain's z error at most this many times the single map's."""
+
+DATA_KEY = 16
+"""Child stream ``SeedSequence(seed, spawn_key=(DATA_KEY,))`` of the training triples; apart
+from the streams a model of the same seed draws (spawn keys 0-3)."""
+
+
+class Triples(NamedTuple):
+    """Two views (x, e, u) of each of ``n`` body-centred positions z; every array ``(n, 1)``."""
+
+    x0: Array
+    e0: Array
+    u0: Array
+    x1: Array
+    e1: Array
+    u1: Array
+    z: Array
+
+    def view(self, v: int) -> tuple[Array, Array, Array]:
+        """``(x, e, u)`` of view ``v`` (0 or 1)."""
+        return (self.x0, self.e0, self.u0) if v == 0 else (self.x1, self.e1, self.u1)
+
+
+_MEAN = TwoViewSampler("mean", PopulationCode((2,)), PopulationCode((2,)))
+"""The paper's relation; only its view sampler is used (the codes are not)."""
+
+
+def sample_triples(n: int, rng: np.random.Generator) -> Triples:
+    """``n`` body-centred positions z, uniform in [0, 1], with two views (x, e, u) of each.
+
+    Each view: (a, u) with ``(a + u) / 2 = z``, then (x, e) with ``(x + e) / 2 = a``, both
+    drawn as the paper's task draws a view (:meth:`~sigmapi.tasks.TwoViewSampler.sample_view`).
+
+    Examples
+    --------
+    >>> t = sample_triples(5, np.random.default_rng(0))
+    >>> bool(np.allclose(((t.x1 + t.e1) / 2 + t.u1) / 2, t.z)), t.z.shape
+    (True, (5, 1))
+    """
+    _validate.integer("n", n, 1)
+    z = rng.uniform(0.0, 1.0, (n, 1))
+    views: list[Array] = []
+    for _ in range(2):
+        a, u = _MEAN.sample_view(z, rng)
+        x, e = _MEAN.sample_view(a, rng)
+        views += [x, e, u]
+    x0, e0, u0, x1, e1, u1 = views
+    return Triples(x0, e0, u0, x1, e1, u1, z)
+
+
+def chain_config(config: SOMConfig | None = None, iterations: int | None = None) -> SOMConfig:
+    """The config every map of the comparison starts from (default: paper-1d, crossview).
+
+    It must be 1-D (``map_shape``, ``x_shape`` and ``y_shape`` of one axis), non-periodic,
+    with the ``mean`` relation; map A uses it as it is.
+    """
+    cfg = config if config is not None else load_preset("paper-1d").replace(ordering="crossview")
+    if not isinstance(cfg, SOMConfig):
+        raise _validate.fail(
+            "config", "a sigmapi.SOMConfig or None", type(cfg).__name__,
+            "load a preset with sigmapi.load_preset(name)",
+        )  # fmt: skip
+    for name in ("map_shape", "x_shape", "y_shape"):
+        if len(getattr(cfg, name)) != 1:
+            raise _validate.fail(
+                f"config.{name}", "1-D (one axis)", getattr(cfg, name),
+                "the chain of frames is built on 1-D positions, e.g. (15,)",
+            )  # fmt: skip
+    if cfg.periodic or cfg.relation != "mean":
+        raise ConfigError(
+            f"config must be non-periodic with relation 'mean', got periodic={cfg.periodic}, "
+            f"relation={cfg.relation!r}; the chain composes two means: a = (x + e) / 2, "
+            "z = (a + u) / 2"
+        )
+    if iterations is not None:
+        cfg = cfg.replace(iterations=_validate.integer("iterations", iterations, 1))
+    return cfg
+
+
+def head_code(model_a: SigmaPiSOM, x: Array, e: Array, code: str = "response") -> Array:
+    """Map A's output for retinal positions ``x`` and eye angles ``e`` ``(B, 1)``: ``(B, n_a)``.
+
+    ``"response"``: A's activations, rectified and scaled to length 1 (as the input codes
+    are); ``"winner"``: the population code (the input codes' width) of the hard winner's
+    position as a fraction of A's map.
+    """
+    _validate.choice("code", code, CODES)
+    xc, ec = model_a.x_code.encode(x), model_a.y_code.encode(e)
+    if code == "winner":
+        n = model_a.map_shape[0]
+        k = model_a.winner(xc, ec, hard=True)
+        pos = k[:, None] / max(n - 1, 1)
+        return PopulationCode(model_a.map_shape, model_a.config.code_width).encode(pos)
+    h = np.maximum(model_a.respond(xc, ec), 0.0)
+    norm = np.linalg.norm(h, axis=1, keepdims=True)
+    return np.asarray(h / np.where(norm > 0, norm, 1.0))
+
+
+def score_winners(
+    cal: NDArray[np.int64],
+    w0: NDArray[np.int64],
+    w1: NDArray[np.int64],
+    z_cal: Array,
+    z_test: Array,
+    n_units: int,
+    spacing: float,
+) -> dict[str, float]:
+    """Metrics of a 1-D map from its hard winners (definitions of :mod:`sigmapi.metrics`).
+
+    ``cal``: winners of the calibration views, ``w0``, ``w1``: of the test views 0 and 1;
+    ``z_cal``, ``z_test`` ``(N, 1)``; ``spacing``: grid spacings per unit of z.
+    """
+    coords = np.arange(n_units, dtype=np.float64)[:, None]
+    table = z_decoder(cal, z_cal, coords)
+    z_error = float(np.sqrt(np.mean((table[w0] - z_test) ** 2))) * spacing
+    beta = affine_fit(coords[cal], z_cal)
+    pred = coords[w0] * beta[0] + beta[1]
+    sst = float(np.sum((z_test - z_test.mean()) ** 2))
+    return {
+        "z_error": z_error,
+        "view_consistency": float(np.mean(w0 == w1)),
+        "view_within_one": float(np.mean(np.abs(w0 - w1) <= 1)),
+        "order_r2": 1.0 - float(np.sum((pred - z_test) ** 2)) / sst,
+        "usage": float(np.unique(w0).size / n_units),
+    }
+
+
+def _single_inputs(model: SigmaPiSOM, t: Triples, v: int) -> tuple[Array, Array]:
+    """The single map's codes of view ``v``: x on its ``(n_x, 1)`` grid, (e, u) jointly."""
+    x, e, u = t.view(v)
+    return model.x_code.encode(np.hstack([x, np.zeros_like(x)])), model.y_code.encode(
+        np.hstack([e, u])
+    )
+
+
+def _run_seed(
+    seed: int, cfg: SOMConfig, train_pairs: int, code: str, cal: Triples, test: Triples
+) -> dict[str, Any]:
+    rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(DATA_KEY,)))
+    train = sample_triples(train_pairs, rng)
+    spacing = float(cfg.y_shape[0] - 1)
+
+    # the chain: A on its own task, then B on A's code of the triples' views and the head code
+    start = time.perf_counter()
+    a = SigmaPiSOM(cfg, seed=seed).fit()
+    b = SigmaPiSOM(cfg.replace(x_shape=a.map_shape), seed=seed)
+
+    def chain_inputs(t: Triples, v: int) -> tuple[Array, Array]:
+        x, e, u = t.view(v)
+        return head_code(a, x, e, code), b.y_code.encode(u)
+
+    b.fit((*chain_inputs(train, 0), *chain_inputs(train, 1)))
+    chain_seconds = time.perf_counter() - start
+
+    def chain_winners(t: Triples, v: int) -> NDArray[np.int64]:
+        return b.winner(*chain_inputs(t, v), hard=True)
+
+    # the single map on the whole transformation: same triples, same config but the grids
+    start = time.perf_counter()
+    s = SigmaPiSOM(cfg.replace(x_shape=(cfg.x_shape[0], 1), y_shape=(*cfg.y_shape, *cfg.y_shape)),
+                   seed=seed)  # fmt: skip
+    s.fit((*_single_inputs(s, train, 0), *_single_inputs(s, train, 1)))
+    single_seconds = time.perf_counter() - start
+
+    def single_winners(t: Triples, v: int) -> NDArray[np.int64]:
+        return s.winner(*_single_inputs(s, t, v), hard=True)
+
+    out: dict[str, Any] = {"seed": seed}
+    m_a = evaluate(a)
+    out["map_a"] = {k: getattr(m_a, k) for k in ("z_error", "view_consistency", "order_r2")}
+    for name, model, winners, weights, secs in (
+        ("chain", b, chain_winners, a.weights_.size + b.weights_.size, chain_seconds),
+        ("single", s, single_winners, s.weights_.size, single_seconds),
+    ):
+        scores = score_winners(
+            winners(cal, 0), winners(test, 0), winners(test, 1), cal.z, test.z,
+            model.n_units, spacing,
+        )  # fmt: skip
+        out[name] = {**scores, "weights": int(weights), "train_seconds": secs}
+    out["ratio"] = out["chain"]["z_error"] / out["single"]["z_error"]
+    return out
+
+
+def run_chain(
+    seeds: Sequence[int] = (0, 1, 2),
+    *,
+    config: SOMConfig | None = None,
+    iterations: int | None = None,
+    train_pairs: int = 20_000,
+    n_test: int = 10_000,
+    code: str = "response",
+) -> dict[str, Any]:
+    """The chain of frames against the single map, per seed and summarised.
+
+    Parameters
+    ----------
+    seeds : sequence of int
+        Each seed draws its own training triples and seeds all three maps.
+    config : SOMConfig, optional
+        Settings of every map (default: paper-1d with ``ordering="crossview"``); 1-D, the
+        ``mean`` relation (:func:`chain_config`). Map B and the single map change only grids.
+    iterations : int, optional
+        Iterations of each of the three maps (default: ``config.iterations``).
+    train_pairs : int
+        View pairs of triples that map B and the single map are trained on (map A trains on
+        its built-in task for its whole run).
+    n_test : int
+        Calibration and test triples (each), from the fixed evaluation seed.
+    code : {"response", "winner"}
+        What map A hands to map B (:func:`head_code`).
+
+    Returns
+    -------
+    dict
+        ``"settings"``; ``"seeds"``: one dict per seed with ``"map_a"`` (its own
+        :func:`~sigmapi.metrics.evaluate` on the head-centred task), ``"chain"`` and
+        ``"single"`` (z_error, view_consistency, view_within_one, order_r2, usage, weights,
+        train_seconds) and ``"ratio"`` (chain z error / single z error); ``"summary"``: the
+        medians of both routes, the median and worst ratio and how many seeds meet
+        ``ratio <= TARGET_RATIO``.
+    """
+    cfg = chain_config(config, iterations)
+    seeds = tuple(_validate.integer("seeds", s, 0) for s in seeds)
+    if not seeds:
+        raise ConfigError("seeds must name at least one seed, got none; e.g. (0, 1, 2)")
+    _validate.integer("train_pairs", train_pairs, 10, fix="e.g. 20000")
+    _validate.integer("n_test", n_test, 10, fix="e.g. 10000")
+    _validate.choice("code", code, CODES)
+    cal_rng, test_rng = (
+        np.random.default_rng(s) for s in np.random.SeedSequence(EVAL_SEED).spawn(2)
+    )
+    cal, test = sample_triples(n_test, cal_rng), sample_triples(n_test, test_rng)
+    per_seed = [_run_seed(s, cfg, train_pairs, code, cal, test) for s in seeds]
+
+    def med(route: str, key: str) -> float:
+        return float(np.median([r[route][key] for r in per_seed]))
+
+    ratios = [r["ratio"] for r in per_seed]
+    keys = ("z_error", "view_consistency", "order_r2", "usage", "weights", "train_seconds")
+    summary: dict[str, Any] = {
+        route: {k: med(route, k) for k in keys} for route in ("chain", "single")
+    }
+    summary.update(
+        ratio_median=float(np.median(ratios)), ratio_worst=float(max(ratios)),
+        met=int(sum(r <= TARGET_RATIO for r in ratios)), n_seeds=len(seeds),
+        target_ratio=TARGET_RATIO, map_a_order_r2_min=min(r["map_a"]["order_r2"] for r in per_seed),
+    )  # fmt: skip
+    settings = {"config": cfg.to_dict(), "train_pairs": train_pairs, "n_test": n_test,
+                "code": code, "seeds": list(seeds)}  # fmt: skip
+    return {"settings": settings, "seeds": per_seed, "summary": summary}
