@@ -34,7 +34,7 @@ def _problem(n_iter: int = 2000, seed: int = 3, width: float = 1.0, eps: float =
     return som.initial_weights(), (x0, y0, x1, y1, som.sigma_at(t), np.full(n_iter, eps))
 
 
-def _train(kernel, w, data, rule="soft", tol=None, chunks=(1000,)):
+def _train(kernel, w, data, rule="soft", tol=None, chunks=(1000,), periodic=False):
     state = kernel.prepare(w) if tol is None else kernel.prepare(w, tol)
     out, s = [], 0
     n = data[0].shape[0]
@@ -43,7 +43,12 @@ def _train(kernel, w, data, rule="soft", tol=None, chunks=(1000,)):
             sl = slice(s, min(n, s + c))
             out.append(
                 kernel.train_block(
-                    state, *(a[sl] for a in data), map_shape=MAP, winner_rule=rule, soft_cut=15
+                    state,
+                    *(a[sl] for a in data),
+                    map_shape=MAP,
+                    winner_rule=rule,
+                    soft_cut=15,
+                    periodic=periodic,
                 )
             )
             s = sl.stop
@@ -85,6 +90,38 @@ def test_other_rules_match_reference(rule):
     state, win = _train(fast, w, data, rule, tol=0.0)
     np.testing.assert_array_equal(win, win_ref)
     np.testing.assert_allclose(fast.export(state), reference.export(ref_state), atol=1e-10)
+
+
+@pytest.mark.parametrize("rule", WINNER_RULES)
+def test_periodic_map_matches_reference(rule):
+    """A torus (every map axis wraps): exact mode gives the reference's winners at every step
+    and its weights to 1e-10; the default mode the same winner at >= 99.9 % of the steps."""
+    w, data = _problem(n_iter=1000, seed=7)
+    ref_state, win_ref = _train(reference, w, data, rule, periodic=True)
+    state, win = _train(fast, w, data, rule, tol=0.0, periodic=True)
+    np.testing.assert_array_equal(win, win_ref)
+    np.testing.assert_allclose(fast.export(state), reference.export(ref_state), atol=1e-10)
+    _, win32 = _train(fast, w, data, rule, tol=1e-6, periodic=True)
+    assert np.mean(win32 == win_ref) >= 0.999
+    _, win_bounded = _train(reference, w, data, rule)
+    assert not np.array_equal(win_bounded, win_ref)  # the wrap changes the run
+
+
+def test_periodic_winners_of_match_reference():
+    w, data = _problem(n_iter=40, seed=2)
+    state = fast.prepare(w, 0.0)
+    x, y = data[0], data[1]
+    for rule in WINNER_RULES:
+        for sigma in (0.7, 2.5):
+            want = reference.winners_of(w, x, y, MAP, rule, sigma, 15, True)
+            h = reference.activation(w, x, y)
+            np.testing.assert_array_equal(
+                fast.winners_of(state, x, y, MAP, rule, sigma, 15, True), want
+            )
+            np.testing.assert_array_equal(fast.winners(state, h, MAP, rule, sigma, 15, True), want)
+            np.testing.assert_array_equal(
+                fast.winners_of(state, x[:1], y[:1], MAP, rule, sigma, 15, True), want[:1]
+            )
 
 
 def test_renormalisation_of_scale_is_exact():

@@ -21,6 +21,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("figures", "reach", "baselines"),
     ("plots", "analysis", "curves"),
     ("metrics", "checkpoints", "executor"),
+    ("circular",),
     ("som",),
     ("io", "config", "kernels", "tasks", "ordering"),
     ("codes", "schedules"),

@@ -141,3 +141,44 @@ def test_train_block_equals_plain_loop():
     )
     np.testing.assert_array_equal(win, win_loop)
     np.testing.assert_allclose(W, W_loop, rtol=1e-12, atol=1e-15)
+
+
+def test_wrapped_neighbourhood_hand_computed():
+    """On a ring of 5 the winner 0 has the units 1 and 4 at distance 1, 2 and 3 at distance 2;
+    on a 3 x 4 torus unit (0, 0) has (2, 3) as a diagonal neighbour (distance^2 = 2)."""
+    a = ref.neighbourhood(np.array([0]), (5,), 1.0, periodic=True)[0]
+    raw = np.exp(-np.array([0.0, 1.0, 4.0, 4.0, 1.0]) / 2.0)
+    np.testing.assert_allclose(a, raw / np.linalg.norm(raw))
+    t = ref.neighbourhood(np.array([0]), (3, 4), 1.0, periodic=True)[0].reshape(3, 4)
+    d2 = np.array([[0, 1, 4, 1], [1, 2, 5, 2], [1, 2, 5, 2]], dtype=float)
+    raw2 = np.exp(-d2 / 2.0)
+    np.testing.assert_allclose(t, raw2 / np.linalg.norm(raw2))
+    # the fast kernel's compiled neighbourhood: the same numbers (times eps) and a cover
+    from sigmapi.kernels import fast
+
+    ea = np.zeros(12)
+    dims, strides = np.array([3, 4]), np.array([4, 1])
+    lo, hi = fast._neighbourhood(0, 1.0, 0.5, 0.5, dims, strides, True, ea)
+    np.testing.assert_allclose(ea, 0.5 * t.ravel(), rtol=1e-12)
+    kept = np.flatnonzero(t.ravel() > 0.5 * t.max())
+    assert lo <= kept.min() and kept.max() < hi  # units 0, 1, 3, 4, 8 kept: [0, 9)
+    assert (lo, hi) == (0, 9)
+
+
+def test_wrapped_smoothing_hand_computed():
+    """A ring of 5: one active unit spreads to both sides of the wrap, every unit counted once
+    at its distance the shorter way round; the window cut applies to that distance. On a ring
+    "soft" and "soft_mean" pick the same unit (the window weight is the same everywhere)."""
+    h = np.array([[1.0, 0.0, 0.0, 0.0, 0.0]])
+    g = ref.smooth(h, (5,), 1.0, 15, periodic=True)
+    np.testing.assert_allclose(g[0], np.exp(-np.array([0.0, 1.0, 4.0, 4.0, 1.0]) / 2.0))
+    g1 = ref.smooth(h, (5,), 1.0, 1, periodic=True)
+    np.testing.assert_allclose(g1[0], [1.0, np.exp(-0.5), 0.0, 0.0, np.exp(-0.5)])
+    bounded = ref.smooth(h, (5,), 1.0, 15)
+    assert bounded[0, 4] == pytest.approx(np.exp(-8.0))  # the bounded map: 4 units away
+    rng = np.random.default_rng(1)
+    hs = rng.random((50, 6))
+    for shape in ((6,), (2, 3)):
+        soft = ref.winners(np.empty(0), hs, shape, "soft", 1.3, 15, periodic=True)
+        mean = ref.winners(np.empty(0), hs, shape, "soft_mean", 1.3, 15, periodic=True)
+        np.testing.assert_array_equal(soft, mean)

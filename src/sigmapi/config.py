@@ -96,8 +96,13 @@ class SOMConfig:
     """L2-normalise input codes to length 1 (the script does)."""
     periodic: bool = False
     """Periodic input axes (rings); the paper's are bounded."""
+    map_periodic: bool = False
+    """Periodic map: every map axis wraps around (a ring in 1-D, a torus in 2-D), in the
+    neighbourhood and the soft winner's smoothing; the paper's map is bounded. For angles,
+    with ``periodic`` codes and the relation "sum_mod"."""
     relation: str = "mean"
-    """z = f(x, y): "mean" (the paper, z = (x + y) / 2), "sum" or "difference"."""
+    """z = f(x, y): "mean" (the paper, z = (x + y) / 2), "sum", "difference", or "sum_mod"
+    (angles: z = (x + y) mod 1, needs ``periodic`` codes)."""
     iterations: int = 300_000
     """Length of the run; schedule milestones are fractions of it."""
     eps: float | tuple[tuple[float, float], ...] = 0.01
@@ -151,7 +156,7 @@ class SOMConfig:
             v = _validate.number(name, getattr(self, name), 0.0, hi, lo_open=True, fix=_RANGE_FIX)
             set_(self, name, v)
         set_(self, "ordering_sigma", _validate.positive("ordering_sigma", self.ordering_sigma))
-        for name in ("code_normalize", "periodic", "same_view", "threads"):
+        for name in ("code_normalize", "periodic", "map_periodic", "same_view", "threads"):
             _validate.boolean(name, getattr(self, name))
         its = _validate.integer("iterations", self.iterations, 1, fix="the paper runs 300000")
         set_(self, "iterations", its)
@@ -160,6 +165,16 @@ class SOMConfig:
         )
         set_(self, "soft_cut", cut)
         _validate.choice("relation", self.relation, tuple(RELATIONS))
+        if self.map_periodic and len(self.map_shape) > 1 and self.ordering == "crossview":
+            raise ConfigError(
+                f"ordering='crossview' orders a periodic map of one dimension (a ring), got "
+                f"map_shape {self.map_shape}; set ordering='none' for a torus"
+            )
+        if RELATIONS[self.relation].circular and not self.periodic:
+            raise ConfigError(
+                f"relation {self.relation!r} relates angles (0 and 1 are the same place), so "
+                "it needs periodic codes, got periodic = false; set periodic = true"
+            )
         _validate.choice("ordering", self.ordering, ORDERINGS)
         _validate.choice("winner_rule", self.winner_rule, WINNER_RULES)
         _validate.choice("backend", self.backend, BACKEND_NAMES)

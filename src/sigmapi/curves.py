@@ -48,7 +48,7 @@ def costs(model: SigmaPiSOM, batch: Batch) -> tuple[float, float]:
     in one pass (one winner search, one activation of view 1, one weight export).
     """
     k, dist = model.cost_terms(batch)
-    a = reference.neighbourhood(k, model.map_shape, model.sigma_)
+    a = reference.neighbourhood(k, model.map_shape, model.sigma_, model.config.map_periodic)
     rows = np.arange(k.size)
     return float(np.mean(np.sum(a * dist, axis=1))), float(np.mean(dist[rows, k]))
 

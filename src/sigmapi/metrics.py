@@ -45,6 +45,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sigmapi import _memory, _validate
+from sigmapi.circular import circular_metrics, map_distance
 
 if TYPE_CHECKING:
     from sigmapi.som import SigmaPiSOM
@@ -101,9 +102,16 @@ class Metrics:
     folded: bool = False
     starved_units: int = 0
     topographic_error: float = 0.0
+    circular: dict[str, float | bool] | None = None
+    """Maps of angles only (a relation with circular z): ``order_circular``, ``seam_jump``,
+    ``seam_gap``, ``seam_units_win`` and ``seamless`` (:mod:`sigmapi.circular`); their
+    ``z_error`` is then the circular one. None for every other relation."""
 
     def to_dict(self) -> dict[str, float | int | bool]:
-        return asdict(self)
+        """The metrics as one flat table (the circular ones beside the rest, when present)."""
+        out = asdict(self)
+        out.update(out.pop("circular") or {})
+        return out
 
 
 def affine_fit(coords: NDArray[np.float64], z: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -139,10 +147,21 @@ def grid_spacing(x_shape: tuple[int, ...], periodic: bool = False) -> NDArray[np
 
 
 def chebyshev(
-    map_coords: NDArray[np.float64], a: NDArray[np.int64], b: NDArray[np.int64]
+    map_coords: NDArray[np.float64],
+    a: NDArray[np.int64],
+    b: NDArray[np.int64],
+    ring: tuple[int, ...] | None = None,
 ) -> NDArray[np.float64]:
-    """Chebyshev distance on the map grid between units ``a`` and ``b``."""
+    """Chebyshev distance on the map grid between units ``a`` and ``b``; ``ring``: the shape
+    of a periodic map, whose distances go the shorter way round."""
+    if ring is not None:
+        return map_distance(map_coords, a, b, ring, True)
     return np.max(np.abs(map_coords[a] - map_coords[b]), axis=1)
+
+
+def _ring(model: SigmaPiSOM) -> tuple[int, ...] | None:
+    """The map's shape if it wraps around (for :func:`chebyshev`), else None."""
+    return model.map_shape if model.config.map_periodic else None
 
 
 def evaluate(
@@ -181,7 +200,7 @@ def evaluate(
     wc = model.winner(calibration.x0, calibration.y0, hard=True)
 
     same = float(np.mean(w0 == w1))
-    within = float(np.mean(chebyshev(coords, w0, w1) <= 1.0))
+    within = float(np.mean(chebyshev(coords, w0, w1, _ring(model)) <= 1.0))
 
     spacing = grid_spacing(model.x_shape, model.config.periodic)
     table = z_decoder(wc, calibration.z, coords)
@@ -196,10 +215,15 @@ def evaluate(
 
     usage = float(np.unique(w0).size / model.n_units)
     starved, te, score = fold_indicators(model, test, w0, w1, scores)
+    circ = None
+    if model.sampler.relation.circular:  # angles: z error the shorter way round, seam
+        circ = circular_metrics(wc, calibration.z, w0, w1, test.z, coords, model.map_shape,
+                                model.config.map_periodic, spacing)  # fmt: skip
+        z_error = float(circ.pop("z_error"))
     return Metrics(
         same, within, z_error, order, usage, int(test.z.shape[0]),
         fold_score=score, folded=score >= FOLD_THRESHOLD, starved_units=starved,
-        topographic_error=te,
+        topographic_error=te, circular=circ,
     )  # fmt: skip
 
 
@@ -225,9 +249,9 @@ def fold_indicators(
         scores = hard_scores(model, test.x0, test.y0)
     top2 = np.argpartition(-scores, 1, axis=1)[:, :2]
     coords = model.map_coords
-    te = float(np.mean(chebyshev(coords, top2[:, 0], top2[:, 1]) > 1.0))
+    te = float(np.mean(chebyshev(coords, top2[:, 0], top2[:, 1], _ring(model)) > 1.0))
     score = float(starved)
-    apart = chebyshev(coords, w0, w1)
+    apart = chebyshev(coords, w0, w1, _ring(model))
     if len(model.map_shape) >= 2:
         within = float(np.mean(apart <= 1.0))
         score = max(score, ((1.0 - within) + te) / TWIST_S)

@@ -34,6 +34,12 @@ at sigma 8 on a 15-unit map it would erase any start within 25,000 iterations.
    0.99 on about half of the 1-D seeds). With an ordering procedure the soft winner takes
    the weighted *mean* over the window inside the map (rule ``"soft_mean"``); away from the
    borders the two rules pick the same unit.
+5. **A ring** (a periodic 1-D map, ``SOMConfig.map_periodic``). On angles the cross-view
+   components come in pairs: the two leading ones are about ``cos`` and ``sin`` of the angle
+   z (the shared cause is a point on a circle). ``atan2`` of the two scores places each pair
+   round the ring, and the neighbourhood that averages the outer products wraps around. The
+   smooth basis wraps around too when the codes are periodic. A torus (a periodic map of two
+   or more dimensions) has no such start: use ``ordering="none"`` there.
 """
 
 from __future__ import annotations
@@ -68,19 +74,23 @@ modes per axis so that the eigenproblem stays small (5 per axis for 2-D inputs).
 
 
 def smooth_basis(
-    shape: tuple[int, ...], width: float, max_modes: int | None = None
+    shape: tuple[int, ...], width: float, max_modes: int | None = None, periodic: bool = False
 ) -> NDArray[np.float64]:
     """Smooth features of codes on grid ``shape``: ``(n, r)``, C order over the axes.
 
     Per axis, the eigenvectors of the Gaussian kernel matrix ``exp(-(i - j)^2 / (2 width^2))``
     with eigenvalue at least ``KEEP`` times the largest (at most ``max_modes``), scaled by their
     eigenvalues; axes are combined by Kronecker products. ``codes @ basis`` is the code
-    blurred by the kernel, expressed in its ``r`` leading modes.
+    blurred by the kernel, expressed in its ``r`` leading modes. ``periodic``: the code's axes
+    are rings, ``|i - j|`` is taken the shorter way round.
     """
     basis = np.ones((1, 1))
     for n in shape:
         c = np.arange(n, dtype=np.float64)
-        gram = np.exp(-((c[:, None] - c[None, :]) ** 2) / (2.0 * width**2))
+        d = np.abs(c[:, None] - c[None, :])
+        if periodic:
+            d = np.minimum(d, n - d)
+        gram = np.exp(-(d**2) / (2.0 * width**2))
         vals, vecs = np.linalg.eigh(gram)
         keep = vals >= KEEP * vals[-1]
         if max_modes is not None:
@@ -106,17 +116,19 @@ def crossview_scores(
     y_shape: tuple[int, ...],
     n_components: int,
     blur: float | None = None,
+    periodic: bool = False,
 ) -> NDArray[np.float64]:
     """Oriented cross-view component scores of each view pair: ``(B, n_components)``.
 
     Column ``a`` is a function of the pair's shared cause (z) that grows with retinal axis
-    ``a`` (steps 1 and 2 of the module docstring). Reads the views only.
+    ``a`` (steps 1 and 2 of the module docstring). Reads the views only. ``periodic``: the
+    codes' axes are rings (the smooth basis wraps around).
     """
     x0, y0, x1, y1 = views
     width = blur if blur is not None else BLUR_FRACTION * max(max(x_shape), max(y_shape))
     per_axis = int(MAX_FEATURES ** (1.0 / (len(x_shape) + len(y_shape))))
-    bx = smooth_basis(x_shape, width, per_axis)
-    by = smooth_basis(y_shape, width, per_axis)
+    bx = smooth_basis(x_shape, width, per_axis, periodic)
+    by = smooth_basis(y_shape, width, per_axis, periodic)
 
     def features(x: NDArray[np.float64], y: NDArray[np.float64]) -> NDArray[np.float64]:
         a, b = x @ bx, y @ by
@@ -163,11 +175,14 @@ def crossview_init(
     y_shape: tuple[int, ...],
     map_shape: tuple[int, ...],
     sigma: float,
+    periodic: bool = False,
+    ring: bool = False,
 ) -> NDArray[np.float64]:
     """Ordered initial weights ``(n_units, n_x, n_y)`` from view pairs (module docstring).
 
     ``sigma`` is the width (map units) of the neighbourhood that averages the outer products
-    ``x1 y1^T`` of the pairs placed near each unit.
+    ``x1 y1^T`` of the pairs placed near each unit. ``periodic``: the codes' axes are rings.
+    ``ring``: the map is a periodic 1-D map (step 5 of the module docstring).
     """
     n, d = views[0].shape[0], len(map_shape)
     if n < 4 * d:
@@ -175,14 +190,27 @@ def crossview_init(
             f"ordering='crossview' needs at least {4 * d} view pairs to start from, got {n}; "
             "pass more views or set ordering='none'"
         )
+    if ring and d != 1:
+        raise ConfigError(
+            f"ordering='crossview' orders a periodic map of one dimension (a ring), got "
+            f"map_shape {map_shape}; set ordering='none' for a torus"
+        )
+    sizes = np.asarray(map_shape, dtype=np.float64)
     # small dense problems: one BLAS thread is faster, and far faster on a busy machine
     # (a 625 x 625 eigh: 0.17 s on one thread, 3.6 s on two with other work running)
     with threadpool_limits(limits=1, user_api="blas"):
-        scores = crossview_scores(views, x_shape, y_shape, d)
-        ranks = (np.argsort(np.argsort(scores, axis=0, kind="stable"), axis=0) + 0.5) / n
-        place = ranks * (np.asarray(map_shape, dtype=np.float64) - 1.0)
+        if ring:  # the two leading components are cos and sin of the angle: atan2 orders it
+            cs = crossview_scores(views, x_shape, y_shape, 2, periodic=periodic)
+            place = (np.arctan2(cs[:, 1], cs[:, 0]) / (2.0 * np.pi) % 1.0)[:, None] * sizes
+        else:
+            scores = crossview_scores(views, x_shape, y_shape, d, periodic=periodic)
+            ranks = (np.argsort(np.argsort(scores, axis=0, kind="stable"), axis=0) + 0.5) / n
+            place = ranks * (sizes - 1.0)
         units = grid_coordinates(map_shape)
-        d2 = ((units[:, None, :] - place[None, :, :]) ** 2).sum(axis=-1)
+        diff = np.abs(units[:, None, :] - place[None, :, :])
+        if ring:
+            diff = np.minimum(diff, sizes - diff)
+        d2 = (diff**2).sum(axis=-1)
         a = np.exp(-(d2 - d2.min(axis=1, keepdims=True)) / (2.0 * sigma**2))
         a /= a.sum(axis=1, keepdims=True)
         # W[k] = sum_a a[k, a] x1[a] y1[a]^T as matrix products over chunks of pairs (BLAS;

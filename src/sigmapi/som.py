@@ -198,8 +198,9 @@ class SigmaPiSOM:
         if c.same_view:  # the ablation never sees a second view, not even for its start
             views = (views[0], views[1], views[0], views[1])
         return crossview_init(
-            views, self.x_shape, self.y_shape, self.map_shape, c.ordering_sigma / 2.0
-        )
+            views, self.x_shape, self.y_shape, self.map_shape, c.ordering_sigma / 2.0,
+            periodic=c.periodic, ring=c.map_periodic,
+        )  # fmt: skip
 
     def memory_estimate(self) -> int:
         """Bytes this model needs at its peak: the float64 start, the backend's copy (float64,
@@ -500,7 +501,7 @@ class SigmaPiSOM:
         self._kernel.train_block(
             self._state, x0, y0, x1, y1, self.sigma_at(t), self.eps_at(t),
             map_shape=self.map_shape, winner_rule=self.winner_rule_, soft_cut=c.soft_cut,
-            threads=c.threads,
+            threads=c.threads, periodic=c.map_periodic,
         )  # fmt: skip
         self.t_ += x0.shape[0]
         self._weights_cache = None
@@ -599,7 +600,14 @@ class SigmaPiSOM:
             rule = "argmax"
         return np.asarray(
             self._kernel.winners_of(
-                self._state, xa, ya, self.map_shape, rule, self.sigma_, self.config.soft_cut
+                self._state,
+                xa,
+                ya,
+                self.map_shape,
+                rule,
+                self.sigma_,
+                self.config.soft_cut,
+                self.config.map_periodic,
             ),
             dtype=np.int64,
         )
@@ -641,7 +649,7 @@ class SigmaPiSOM:
         """
         k, dist = self.cost_terms(batch)
         s = self.sigma_ if sigma is None else float(sigma)
-        a = reference.neighbourhood(k, self.map_shape, s)
+        a = reference.neighbourhood(k, self.map_shape, s, self.config.map_periodic)
         return float(np.mean(np.sum(a * dist, axis=1)))
 
     def clone(self) -> SigmaPiSOM:

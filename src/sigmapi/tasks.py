@@ -46,6 +46,9 @@ class Relation:
         likewise for y). Given for the built-in relations, so that the rare z whose views are
         hard to hit by rejection (z within a hair of the border) are drawn from the same
         distribution directly instead of after millions of rejections.
+    circular : bool
+        z is an angle, a fraction of a turn in [0, 1) where 0 and 1 are the same place (for
+        periodic codes): the metrics measure z the shorter way round the circle.
 
     Examples
     --------
@@ -62,10 +65,16 @@ class Relation:
     z_range: tuple[float, float] = (0.0, 1.0)
     x_bounds: Callable[[Array], tuple[Array, Array]] | None = None
     y_bounds: Callable[[Array], tuple[Array, Array]] | None = None
+    circular: bool = False
 
 
 def _clip01(lo: Array, hi: Array) -> tuple[Array, Array]:
     return np.maximum(lo, 0.0), np.minimum(hi, 1.0)
+
+
+def _whole_turn(z: Array) -> tuple[Array, Array]:
+    """Bounds of a circular relation: every angle in [0, 1) has a partner for every z."""
+    return np.zeros_like(z), np.ones_like(z)
 
 
 RELATIONS: dict[str, Relation] = {
@@ -81,8 +90,15 @@ RELATIONS: dict[str, Relation] = {
         "difference", lambda x, y: x - y, lambda z, x: x - z, lambda z, y: z + y,
         (-1.0, 1.0), lambda z: _clip01(z, 1 + z), lambda z: _clip01(-z, 1 - z),
     ),
+    "sum_mod": Relation(
+        "sum_mod", lambda x, y: (x + y) % 1.0, lambda z, x: (z - x) % 1.0,
+        lambda z, y: (z - y) % 1.0, (0.0, 1.0), _whole_turn, _whole_turn, circular=True,
+    ),
 }  # fmt: skip
-"""Built-in relations: the paper's ``mean``, the plain ``sum`` and the ``difference`` x - y."""
+"""Built-in relations: the paper's ``mean``, the plain ``sum``, the ``difference`` x - y, and
+``sum_mod``, z = (x + y) mod 1, for angles as fractions of a turn (a head direction from the
+body's direction and the head-on-body angle; needs periodic codes): every x goes with every
+z, so the sampler accepts each view at its first draw."""
 
 
 def get_relation(relation: str | Relation) -> Relation:
@@ -124,7 +140,8 @@ class TwoViewSampler:
         Parameters
         ----------
         relation : str or Relation
-            ``"mean"`` (the paper), ``"sum"``, ``"difference"`` or a custom :class:`Relation`.
+            ``"mean"`` (the paper), ``"sum"``, ``"difference"``, ``"sum_mod"`` (angles) or a
+            custom :class:`Relation`.
         x_code, y_code : PopulationCode
             Codes of the retinal position x and the gaze direction y; same number of dimensions.
 

@@ -108,7 +108,8 @@ def _warn_if_folded(model: SigmaPiSOM, n: int = 4000) -> None:
     w1 = model.winner(test.x1, test.y1, hard=True)
     starved, te, score = fold_indicators(model, test, w0, w1)
     if score >= FOLD_THRESHOLD:
-        apart = chebyshev(model.map_coords, w0, w1)
+        ring = model.map_shape if model.config.map_periodic else None
+        apart = chebyshev(model.map_coords, w0, w1, ring)
         sign = (
             f"views of one z on units >= 3 apart: {np.mean(apart >= 3):.1%}"
             if len(model.map_shape) == 1

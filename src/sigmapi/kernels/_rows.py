@@ -116,8 +116,12 @@ def _pairs(x, y, tol, jbuf, pidx, pval):
 
 
 @njit(cache=True, nogil=True)
-def _winner(h, scale, sqnorm, rule, sigma, cut, dims, strides, tmp, tmp2):
-    """Winning unit of one activation vector ``h`` (K,); ties to the lowest index."""
+def _winner(h, scale, sqnorm, rule, sigma, cut, dims, strides, wrap, tmp, tmp2):
+    """Winning unit of one activation vector ``h`` (K,); ties to the lowest index.
+
+    ``wrap``: the map's axes are rings; the smoothing window wraps around and holds every unit
+    once (offsets ``-(n-1)//2 .. n//2`` at most), at its distance the shorter way round.
+    """
     k_units = h.shape[0]
     if rule == 0 or rule == 3:  # soft: separable Gaussian smoothing over the map, window +-cut
         for k in range(k_units):
@@ -135,9 +139,15 @@ def _winner(h, scale, sqnorm, rule, sigma, cut, dims, strides, tmp, tmp2):
                 c = (k // st) % n
                 acc = 0.0
                 norm = 0.0
-                for c2 in range(max(0, c - m), min(n - 1, c + m) + 1):
-                    acc += cur[k + (c2 - c) * st] * wts[abs(c2 - c)]
-                    norm += wts[abs(c2 - c)]
+                if wrap:
+                    for o in range(-min(cut, (n - 1) // 2), min(cut, n // 2) + 1):
+                        c2 = (c + o) % n
+                        acc += cur[k + (c2 - c) * st] * wts[abs(o)]
+                        norm += wts[abs(o)]
+                else:
+                    for c2 in range(max(0, c - m), min(n - 1, c + m) + 1):
+                        acc += cur[k + (c2 - c) * st] * wts[abs(c2 - c)]
+                        norm += wts[abs(c2 - c)]
                 nxt[k] = acc / norm if rule == 3 else acc
             cur, nxt = nxt, cur
         best = 0
@@ -248,18 +258,18 @@ def respond_rows_parallel(raw, scale, x, y, tol, ahead, order, h):
 
 @njit(cache=True)
 def winners_rows(
-    raw, scale, sqnorm, x, y, tol, ahead, rule, sigma, cut, dims, strides,
+    raw, scale, sqnorm, x, y, tol, ahead, rule, sigma, cut, dims, strides, wrap,
     jb, pi, pv, acc, h, t1, t2, out,
 ):  # fmt: skip
     """Serial winners ``out`` ``(B,)`` of the rows of ``x``, ``y`` (``h``: one row of scratch)."""
     for b in range(x.shape[0]):
         _respond_row(raw, scale, x[b], y[b], tol, ahead, jb, pi, pv, acc, h)
-        out[b] = _winner(h, scale, sqnorm, rule, sigma, cut, dims, strides, t1, t2)
+        out[b] = _winner(h, scale, sqnorm, rule, sigma, cut, dims, strides, wrap, t1, t2)
 
 
 @njit(cache=True, parallel=True)
 def winners_rows_parallel(
-    raw, scale, sqnorm, x, y, tol, ahead, rule, sigma, cut, dims, strides, order, out
+    raw, scale, sqnorm, x, y, tol, ahead, rule, sigma, cut, dims, strides, wrap, order, out
 ):  # fmt: skip
     """:func:`winners_rows` in parallel blocks of rows, visited in ``order``."""
     n_rows = x.shape[0]
@@ -270,4 +280,4 @@ def winners_rows_parallel(
         for r in range(c * BLOCK_ROWS, min(n_rows, (c + 1) * BLOCK_ROWS)):
             b = order[r]
             _respond_row(raw, scale, x[b], y[b], tol, ahead, jb, pi, pv, acc, h)
-            out[b] = _winner(h, scale, sqnorm, rule, sigma, cut, dims, strides, t1, t2)
+            out[b] = _winner(h, scale, sqnorm, rule, sigma, cut, dims, strides, wrap, t1, t2)

@@ -74,6 +74,7 @@ class Kernel(Protocol[S]):
 
     Shapes: weights ``(K, n_x, n_y)``; codes ``x`` ``(B, n_x)``, ``y`` ``(B, n_y)``;
     activations ``h`` ``(B, K)``; ``K`` map units on ``map_shape``, flattened in C order.
+    ``periodic``: the map's axes wrap around (grid distances the shorter way round).
     """
 
     NAME: str
@@ -118,6 +119,7 @@ class Kernel(Protocol[S]):
         rule: str,
         sigma: float,
         cut: int,
+        periodic: bool = ...,
     ) -> NDArray[np.int64]:
         """Winning unit per row of ``h`` under ``rule`` (one of :data:`WINNER_RULES`)."""
         ...
@@ -131,6 +133,7 @@ class Kernel(Protocol[S]):
         rule: str,
         sigma: float,
         cut: int,
+        periodic: bool = ...,
     ) -> NDArray[np.int64]:
         """Winning unit of each pair ``(x_b, y_b)``, ``(B,)``: the same as ``winners`` of
         ``activation``, for one pair as fast as the kernel allows (no per-call preparation)."""
@@ -150,8 +153,10 @@ class Kernel(Protocol[S]):
         winner_rule: str,
         soft_cut: int,
         threads: bool = False,
+        periodic: bool = False,
     ) -> NDArray[np.int64]:
         """``len(x0)`` learning iterations in place: winner of view 0 at ``sigmas[t]``,
         Kohonen update towards view 1 at rate ``eps[t]``. Returns the winners ``(T,)``.
-        ``threads``: the kernel may use several threads (the result must not change)."""
+        ``threads``: the kernel may use several threads (the result must not change).
+        ``periodic``: every map axis wraps around (a ring in 1-D, a torus in 2-D)."""
         ...

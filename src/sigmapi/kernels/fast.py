@@ -261,10 +261,13 @@ def from_state_arrays(
 
 
 @njit(cache=True, nogil=True)
-def _neighbourhood(winner, sigma, eps, tol, dims, strides, ea):
-    """``ea[k] = eps * a_k`` (L2-normalised Gaussian around ``winner``).
+def _neighbourhood(winner, sigma, eps, tol, dims, strides, wrap, ea):
+    """``ea[k] = eps * a_k`` (L2-normalised Gaussian around ``winner``; ``wrap``: the map's
+    axes are rings, distances go the shorter way round).
 
-    Returns the flat index range ``[lo, hi)`` holding every unit with ``a_k > tol max a``.
+    Returns the flat index range ``[lo, hi)`` from the first to the last unit with
+    ``a_k > tol max a`` (on a ring these may lie at both ends: the range then covers the
+    units between them too, whose update the caller skips below the threshold).
     """
     k_units = ea.shape[0]
     ssq = 0.0
@@ -273,7 +276,10 @@ def _neighbourhood(winner, sigma, eps, tol, dims, strides, ea):
         for ax in range(dims.shape[0]):
             c = (k // strides[ax]) % dims[ax]
             cw = (winner // strides[ax]) % dims[ax]
-            d2 += float(c - cw) ** 2
+            dc = abs(c - cw)
+            if wrap:
+                dc = min(dc, dims[ax] - dc)
+            d2 += float(dc) ** 2
         a = np.exp(-d2 / (2.0 * sigma * sigma))
         ea[k] = a
         ssq += a * a
@@ -376,8 +382,8 @@ def _buffers(k_units, n_pairs, ny):
 
 @njit(cache=True, parallel=True)
 def _train(
-    raw, scale, sqnorm, x0, y0, x1, y1, sigmas, eps, dims, strides, rule, cut, tol, out, track,
-    threads, ahead,
+    raw, scale, sqnorm, x0, y0, x1, y1, sigmas, eps, dims, strides, wrap, rule, cut, tol, out,
+    track, threads, ahead,
 ):  # fmt: skip
     """The training driver: iterations in order; ``threads``: update the units in parallel
     chunks of :data:`CHUNK` (same arithmetic per unit, so the same result), else in one call
@@ -398,9 +404,9 @@ def _train(
         _unit_chunk(raw, scale, sqnorm, 0, k_units, ea, 1.0, 0, 0,
                     pi1, pv1, 0, pi0, pv0, n0, True, track, h, gain, acc, ahead)  # fmt: skip
     for t in range(n_iter):
-        w = _winner(h, scale, sqnorm, rule, sigmas[t], cut, dims, strides, t1, t2)
+        w = _winner(h, scale, sqnorm, rule, sigmas[t], cut, dims, strides, wrap, t1, t2)
         out[t] = w
-        lo, hi = _neighbourhood(w, sigmas[t], eps[t], tol, dims, strides, ea)
+        lo, hi = _neighbourhood(w, sigmas[t], eps[t], tol, dims, strides, wrap, ea)
         thr = tol * ea[w]
         n1 = _pairs(x1[t], y1[t], tol, jb, pi1, pv1)
         more = t + 1 < n_iter
@@ -500,6 +506,7 @@ def winners(
     rule: str,
     sigma: float,
     cut: int,
+    periodic: bool = False,
 ) -> NDArray[np.int64]:
     """Winning unit per row of activations ``h`` ``(B, K)``; ``(B,)``, ties to the lowest index.
 
@@ -510,7 +517,7 @@ def winners(
     if rule == "min_distance":
         wn = sqnorms(state)
         return np.argmax(2.0 * np.asarray(h, dtype=np.float64) - wn[None, :], axis=1)
-    return reference.winners(np.empty((0, 0, 0)), h, map_shape, rule, sigma, cut)
+    return reference.winners(np.empty((0, 0, 0)), h, map_shape, rule, sigma, cut, periodic)
 
 
 def winners_of(
@@ -521,6 +528,7 @@ def winners_of(
     rule: str,
     sigma: float,
     cut: int,
+    periodic: bool = False,
 ) -> NDArray[np.int64]:
     """Winning unit of each pair ``(x_b, y_b)``; ``(B,)``: activation and winner in one pass.
 
@@ -536,7 +544,7 @@ def winners_of(
     out = np.empty(xa.shape[0], dtype=np.int64)
     args = (state.raw, state.scale, state.sqnorm, xa, ya, state.tol,
             _ahead(state, PREFETCH_AHEAD), code,
-            float(sigma), int(cut), dims, strides)  # fmt: skip
+            float(sigma), int(cut), dims, strides, bool(periodic))  # fmt: skip
     if xa.shape[0] <= SERIAL_ROWS:
         jb, pi, pv, acc, h, t1, t2 = state.scratch()
         _rows.winners_rows(*args, jb, pi, pv, acc, h, t1, t2, out)
@@ -558,6 +566,7 @@ def train_block(
     winner_rule: str,
     soft_cut: int,
     threads: bool = False,
+    periodic: bool = False,
 ) -> NDArray[np.int64]:
     """Run ``len(x0)`` learning iterations in order, updating ``state`` in place.
 
@@ -566,7 +575,8 @@ def train_block(
     :func:`sigmapi.kernels.reference.train_block`). Returns the winners ``(T,)``.
 
     ``threads``: update the units on numba's threads (the same result) when the map is large
-    enough (:data:`PARALLEL_MIN_WORK`) and numba has more than one thread.
+    enough (:data:`PARALLEL_MIN_WORK`) and numba has more than one thread. ``periodic``: every
+    map axis wraps around (a ring, a torus).
     """
     k_units, nx, ny = state.shape
     dims, strides = _grid(tuple(map_shape), k_units)
@@ -588,7 +598,7 @@ def train_block(
         state.norms_valid = False
     parallel = threads and k_units * nx * ny >= PARALLEL_MIN_WORK and numba.get_num_threads() > 1
     driver: Any = _train  # a numba dispatcher (its stubs do not know the signature)
-    driver(state.raw, state.scale, state.sqnorm, *xs, sg, ep, dims, strides, code,
-           int(soft_cut), state.tol, out, track, bool(parallel),
+    driver(state.raw, state.scale, state.sqnorm, *xs, sg, ep, dims, strides, bool(periodic),
+           code, int(soft_cut), state.tol, out, track, bool(parallel),
            _ahead(state, TRAIN_PREFETCH_AHEAD))  # fmt: skip
     return out

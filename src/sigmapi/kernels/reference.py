@@ -10,6 +10,8 @@ One learning iteration (Fig. 7 of the chapter; docs/algorithm.md):
 2. winner ``k*``: argmax of h smoothed over the map with a Gaussian of width sigma
    (:func:`soft_winner`), or plain argmax, or min distance ``argmax(2 h_k - |w_k|^2)``
 3. ``a_k = exp(-|k - k*|^2 / (2 sigma^2))``, L2-normalised      (:func:`neighbourhood`)
+
+On a periodic (toroidal) map, grid distances in steps 2 and 3 go the shorter way round.
 4. ``w_kij += eps a_k (x1_i y1_j - w_kij)`` with the OTHER view   (:func:`kohonen_update`)
 
 This module satisfies the kernel contract (:class:`sigmapi.kernels.base.Kernel`): its state
@@ -100,23 +102,33 @@ def _coords(map_shape: tuple[int, ...]) -> NDArray[np.float64]:
     return coords
 
 
-def _smoothing_matrix(n: int, sigma: float, cut: int) -> NDArray[np.float64]:
-    d = np.arange(n)[:, None] - np.arange(n)[None, :]
+def _grid_offsets(n: int, periodic: bool) -> NDArray[np.int64]:
+    """``|i - j|`` between the units of an axis of ``n``; on a ring the shorter way round."""
+    d = np.abs(np.arange(n)[:, None] - np.arange(n)[None, :])
+    return np.minimum(d, n - d) if periodic else d
+
+
+def _smoothing_matrix(n: int, sigma: float, cut: int, periodic: bool) -> NDArray[np.float64]:
+    d = _grid_offsets(n, periodic)
     g = np.exp(-(d.astype(np.float64) ** 2) / (2.0 * sigma**2))
     g[np.abs(d) > cut] = 0.0
     return g
 
 
-def smooth(h: Array, map_shape: tuple[int, ...], sigma: float, cut: int) -> NDArray[np.float64]:
+def smooth(
+    h: Array, map_shape: tuple[int, ...], sigma: float, cut: int, periodic: bool = False
+) -> NDArray[np.float64]:
     """Convolve activations ``(B, K)`` over the map grid with a Gaussian of width ``sigma``.
 
-    Non-periodic, summed over a window of ``cut`` units each way along every axis (the
-    authors' script: cut = 15). Separable: one matrix product per map axis.
+    Summed over a window of ``cut`` units each way along every axis (the authors' script:
+    cut = 15). On a bounded map (the paper) the window stops at the border; on a ``periodic``
+    map it wraps around, and every unit of the window counts once, at its distance the
+    shorter way round. Separable: one matrix product per map axis.
     """
     b = h.shape[0]
     g = np.asarray(h, dtype=np.float64).reshape((b, *map_shape))
     for axis, n in enumerate(map_shape):
-        m = _smoothing_matrix(n, sigma, cut)
+        m = _smoothing_matrix(n, sigma, cut, periodic)
         g = np.moveaxis(np.tensordot(g, m, axes=([axis + 1], [1])), -1, axis + 1)
     return g.reshape(b, -1)
 
@@ -128,19 +140,23 @@ def winners(
     rule: str,
     sigma: float,
     cut: int,
+    periodic: bool = False,
 ) -> NDArray[np.int64]:
     """Winning unit per row of activations ``h`` ``(B, K)``; ``(B,)`` flat indices.
 
     ``rule``: ``"soft"`` argmax of the Gaussian-smoothed activation (the paper's rule),
     ``"argmax"`` plain argmax, ``"min_distance"`` ``argmin |vec(x y^T) - w_k|`` written as
     ``argmax(2 h_k - |w_k|^2)`` (exact for unit-length data), ``"soft_mean"`` the soft rule
-    divided by the smoothing weight inside the map. Ties go to the lowest index.
+    divided by the smoothing weight inside the map. ``periodic``: the map wraps around (the
+    smoothing window too; "soft" and "soft_mean" then differ by a constant factor). Ties go
+    to the lowest index.
     """
     if rule == "soft":
-        return np.argmax(smooth(h, map_shape, sigma, cut), axis=1)
+        return np.argmax(smooth(h, map_shape, sigma, cut, periodic), axis=1)
     if rule == "soft_mean":
-        inside = smooth(np.ones((1, int(np.prod(map_shape)))), map_shape, sigma, cut)
-        return np.argmax(smooth(h, map_shape, sigma, cut) / inside, axis=1)
+        ones = np.ones((1, int(np.prod(map_shape))))
+        inside = smooth(ones, map_shape, sigma, cut, periodic)
+        return np.argmax(smooth(h, map_shape, sigma, cut, periodic) / inside, axis=1)
     if rule == "argmax":
         return np.argmax(h, axis=1)
     if rule == "min_distance":
@@ -157,21 +173,26 @@ def winners_of(
     rule: str,
     sigma: float,
     cut: int,
+    periodic: bool = False,
 ) -> NDArray[np.int64]:
     """Winning unit of each pair ``(x_b, y_b)``: :func:`winners` of :func:`activation`."""
-    return winners(W, activation(W, x, y), map_shape, rule, sigma, cut)
+    return winners(W, activation(W, x, y), map_shape, rule, sigma, cut, periodic)
 
 
 def neighbourhood(
-    winner: NDArray[np.int64], map_shape: tuple[int, ...], sigma: float
+    winner: NDArray[np.int64], map_shape: tuple[int, ...], sigma: float, periodic: bool = False
 ) -> NDArray[np.float64]:
     """Gaussian neighbourhood around each winner, L2-normalised; ``(B,)`` -> ``(B, K)``.
 
-    ``a_k = exp(-|g_k - g_k*|^2 / (2 sigma^2)) / norm`` with grid coordinates ``g``
-    (non-periodic map).
+    ``a_k = exp(-|g_k - g_k*|^2 / (2 sigma^2)) / norm`` with grid coordinates ``g``; on a
+    ``periodic`` map each axis's difference is taken the shorter way round the ring.
     """
     coords = _coords(map_shape)
-    d2 = ((coords[None, :, :] - coords[np.asarray(winner)][:, None, :]) ** 2).sum(axis=2)
+    diff = np.abs(coords[None, :, :] - coords[np.asarray(winner)][:, None, :])
+    if periodic:
+        n = np.asarray(map_shape, dtype=np.float64)
+        diff = np.minimum(diff, n - diff)
+    d2 = (diff**2).sum(axis=2)
     a = np.exp(-d2 / (2.0 * sigma**2))
     return a / np.linalg.norm(a, axis=1, keepdims=True)
 
@@ -196,20 +217,22 @@ def train_block(
     winner_rule: str,
     soft_cut: int,
     threads: bool = False,
+    periodic: bool = False,
 ) -> NDArray[np.int64]:
     """Run ``len(x0)`` learning iterations in order, updating ``W`` in place.
 
     Iteration ``t`` finds the winner of view ``(x0[t], y0[t])`` at width ``sigmas[t]`` (rule
     ``winner_rule``, smoothing window ``soft_cut``) and learns view ``(x1[t], y1[t])`` with
     rate ``eps[t]``. Returns the winners ``(T,)``. ``threads`` is ignored: this kernel is
-    written to be read, on one thread.
+    written to be read, on one thread. ``periodic``: every map axis wraps around (a ring in
+    1-D, a torus in 2-D), in the winner's smoothing and in the neighbourhood.
     """
     t_total = x0.shape[0]
     out = np.empty(t_total, dtype=np.int64)
     for t in range(t_total):
         h = activation(W, x0[t : t + 1], y0[t : t + 1])
-        k = winners(W, h, map_shape, winner_rule, float(sigmas[t]), soft_cut)
-        a = neighbourhood(k, map_shape, float(sigmas[t]))[0]
+        k = winners(W, h, map_shape, winner_rule, float(sigmas[t]), soft_cut, periodic)
+        a = neighbourhood(k, map_shape, float(sigmas[t]), periodic)[0]
         kohonen_update(W, a, x1[t], y1[t], float(eps[t]))
         out[t] = k[0]
     return out
