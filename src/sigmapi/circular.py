@@ -21,9 +21,9 @@ linear metrics of :mod:`sigmapi.metrics` would call that distance 0.98, so for s
   wrap-around pair of a periodic map included): one grid spacing per map unit on an ordered
   15-unit ring of 15-unit codes, more at a seam or a fold. ``seam_gap``: the largest map
   distance (Chebyshev, the shorter way round on a periodic map) between two winning units
-  whose decoded z lie within ``NEAR_STEPS`` steps of each other *across* the wrap: 1 on an
-  ordered ring, ``K - 1`` on a bounded map whose ends meet at the wrap; the map's largest
-  distance if no two units decode z near each other across the wrap. ``seam_units_win``:
+  whose decoded z lie within ``NEAR_STEPS`` steps of each other (the shorter way round): 1
+  on an ordered ring; ``K - 1`` on a bounded map, whose two ends decode neighbouring angles
+  (wherever on the circle the map's ends lie, not only at z = 0). ``seam_units_win``:
   along every z axis some unit decodes z within ``NEAR_STEPS`` steps of the wrap on each
   side, and every unit there (units that never win included, placed by the ring fit) wins
   at least ``STARVED_SHARE`` of a uniform share of the test views. ``seamless``:
@@ -43,6 +43,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 __all__ = [
+    "CIRCULAR_KEYS",
     "NEAR_STEPS",
     "RingFit",
     "circular_means",
@@ -62,6 +63,9 @@ the turn, in input grid spacings)."""
 NEAR_STEPS = 1.5
 """Two units decode z near each other when their decoded z differ by at most this many steps
 (``1 / K`` of a turn) along every z axis: neighbours on an ordered ring differ by one."""
+
+CIRCULAR_KEYS = ("order_circular", "seam_jump", "seam_gap", "seam_units_win", "seamless")
+"""The metrics :func:`circular_metrics` adds for maps of angles (beside a circular z error)."""
 
 STARVED_SHARE = 0.1
 """A unit is starved when it wins fewer than this fraction of a uniform share of the views
@@ -191,11 +195,8 @@ def seam(
     a, b = (g.ravel() for g in np.meshgrid(units, units, indexing="ij"))
     diff = table[a] - table[b]
     near = np.all(np.abs(wrap(diff)) <= NEAR_STEPS * step, axis=1)
-    across = np.any(np.abs(diff) > 0.5, axis=1)
-    dist = map_distance(coords, a[near & across], b[near & across], map_shape, periodic)
-    sizes = np.asarray(map_shape, dtype=np.float64)
-    largest = float((sizes // 2 if periodic else sizes - 1).max())
-    seam_gap = float(dist.max()) if dist.size else largest
+    dist = map_distance(coords, a[near], b[near], map_shape, periodic)
+    seam_gap = float(dist.max(initial=0.0))
 
     units_win = True
     for ax in range(table.shape[1]):

@@ -35,12 +35,14 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from sigmapi.circular import CIRCULAR_KEYS
 from sigmapi.config import SOMConfig, load_preset
 from sigmapi.errors import ConfigError
 from sigmapi.executor import Outcome, job_memory, plan_workers, run_jobs
 from sigmapi.io import atomic_write_bytes
 from sigmapi.metrics import Metrics, evaluate
 from sigmapi.som import SigmaPiSOM
+from sigmapi.tasks import get_relation
 
 __all__ = ["SweepRun", "SweepSpec", "draw_summary", "read_results", "run_sweep", "sweep_job"]
 
@@ -48,7 +50,8 @@ RESULTS = "results.csv"
 """The sweep's table in its output folder."""
 
 META_COLUMNS = ("run_id", "seed", "status", "error", "train_seconds", "total_seconds")
-METRIC_COLUMNS = tuple(f.name for f in dataclasses.fields(Metrics))
+METRIC_COLUMNS = tuple(f.name for f in dataclasses.fields(Metrics) if f.name != "circular")
+"""The metric columns of every sweep; a sweep of angles adds :data:`CIRCULAR_KEYS`."""
 
 
 @dataclass(frozen=True)
@@ -199,7 +202,9 @@ def run_sweep(
     ids = {r.run_id for r in runs}
     rows: list[dict[str, Any]] = [r for r in have.values() if r["run_id"] in ids]
     todo = [r for r in runs if r.run_id not in have]
-    columns = ["run_id", *sorted(spec.grid), "seed", *METRIC_COLUMNS, "train_seconds",
+    angles = any(get_relation(r.config.relation).circular for r in runs)
+    metrics = (*METRIC_COLUMNS, *(CIRCULAR_KEYS if angles else ()))
+    columns = ["run_id", *sorted(spec.grid), "seed", *metrics, "train_seconds",
                "total_seconds", "status", "error"]  # fmt: skip
     per_job = max((job_memory(r.config, r.n_test) for r in todo), default=1)
     plan = plan_workers(workers, per_job, memory_budget, n_jobs=max(1, len(todo)))
@@ -241,8 +246,10 @@ def draw_summary(
 
     from sigmapi.plots import plot_sweep
 
-    if metric not in METRIC_COLUMNS:
-        raise ConfigError(f"metric must be one of {list(METRIC_COLUMNS)}, got {metric!r}")
+    if metric not in (*METRIC_COLUMNS, *CIRCULAR_KEYS):
+        raise ConfigError(
+            f"metric must be one of {[*METRIC_COLUMNS, *CIRCULAR_KEYS]}, got {metric!r}"
+        )
     keys = sorted(spec.grid)
     fig, ax = plt.subplots(figsize=(6.4, 4.2))
     if keys:
