@@ -106,3 +106,12 @@ def test_a_small_ring_learns_angles_without_a_seam(ordering):
         )  # fmt: skip
         m = evaluate(SigmaPiSOM(cfg).fit(), n_test=2000).to_dict()
         assert m["seamless"] and m["order_circular"] >= 0.95, (seed, m)
+
+
+def test_transform_places_ring_units_round_the_turn():
+    cfg = load_preset("angles-1d").replace(map_shape=(8,), x_shape=(8,), y_shape=(8,), seed=0)
+    som = SigmaPiSOM(cfg, iterations=500).fit()
+    b = som.sampler.sample(50, np.random.default_rng(0))
+    np.testing.assert_allclose(som.transform(b.x0, b.y0)[:, 0], som.winner(b.x0, b.y0) / 8)
+    som.set_params(map_periodic=False)  # a bounded map of 8 units: k / 7
+    np.testing.assert_allclose(som.transform(b.x0, b.y0)[:, 0], som.winner(b.x0, b.y0) / 7)

@@ -412,6 +412,7 @@ class SigmaPiSOM:
         weights = self.weights_ if self.is_fitted else None
         self.config = new
         self._block_cache = None
+        self._unit_positions = None  # transform()'s table follows map_shape and map_periodic
         if new.seed != old.seed:
             self.seed_entropy_ = int(np.random.SeedSequence(new.seed).entropy)  # type: ignore[arg-type]
         if new.backend != old.backend:
@@ -613,10 +614,12 @@ class SigmaPiSOM:
         )
 
     def transform(self, x: ArrayLike, y: ArrayLike) -> NDArray[np.float64]:
-        """Map coordinates of the winner as fractions of each map axis, ``(B, d_map)`` in [0, 1]."""
+        """Map coordinates of the winner as fractions of each map axis, ``(B, d_map)`` in [0, 1]
+        (on a periodic map, fractions of the turn in [0, 1): unit ``k`` of ``n`` at ``k / n``)."""
         k = self.winner(x, y)
         if self._unit_positions is None:
-            scale = np.maximum(np.asarray(self.map_shape, dtype=np.float64) - 1.0, 1.0)
+            n = np.asarray(self.map_shape, dtype=np.float64)
+            scale = n if self.config.map_periodic else np.maximum(n - 1.0, 1.0)
             self._unit_positions = self.map_coords / scale
         return self._unit_positions[k]
 
