@@ -319,7 +319,7 @@ def _unit_chunk(
             ss = 0.0
             for p in range(n_pairs):
                 raw[p, k] = raw[p, k] * sn
-                v = float(raw[p, k])
+                v = np.float64(raw[p, k])
                 ss += v * v
             sqnorm[k] = ss
             sn = 1.0
@@ -343,9 +343,12 @@ def _unit_chunk(
                 row = raw[pi1[q], u0:u1]
                 val = pv1[q]
                 for k in range(m):
-                    old = float(row[k])
+                    # np.float64, not float(): numba types float() of a float32 as float32,
+                    # which made these squares float32 (weights of 1e-23 to 1e-19 then gave
+                    # denormal products, 40x slower, late in long runs)
+                    old = np.float64(row[k])
                     row[k] = old + g[k] * val
-                    new = float(row[k])
+                    new = np.float64(row[k])
                     a[k] += new * new - old * old
             sq = sqnorm[u0:u1]
             for k in range(m):
