@@ -16,8 +16,8 @@ from sigmapi.experiments.chain import (
     head_code,
     run_chain,
     sample_triples,
-    score_winners,
 )
+from sigmapi.metrics import winner_metrics
 
 SMALL = sigmapi.load_preset("paper-1d").replace(
     ordering="crossview", map_shape=(9,), x_shape=(9,), y_shape=(9,), iterations=15_000,
@@ -79,10 +79,10 @@ def test_head_code_is_a_unit_length_code_of_map_a():
     assert np.all(np.diff(resp.argmax(axis=1)) > 0)
 
 
-def test_score_winners_on_a_perfect_map():
+def test_winner_metrics_on_a_perfect_map():
     z = np.linspace(0, 1, 900)[:, None]
     w = np.minimum((z[:, 0] * 9).astype(np.int64), 8)
-    m = score_winners(w, w, w, z, z, 9, 8.0)
+    m = winner_metrics(w, z, w, w, z, np.arange(9.0)[:, None], 8.0)
     # the quantisation floor: cells of 1/9, error 1/9/sqrt(12) of z, 8/9/sqrt(12) spacings
     assert m["z_error"] == pytest.approx(8 / 9 / np.sqrt(12), rel=0.01)
     assert m["view_consistency"] == m["usage"] == 1.0 and m["order_r2"] > 0.98

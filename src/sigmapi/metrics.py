@@ -61,6 +61,7 @@ __all__ = [
     "fold_indicators",
     "grid_spacing",
     "hard_scores",
+    "winner_metrics",
     "z_decoder",
 ]
 
@@ -199,21 +200,9 @@ def evaluate(
     w1 = model.winner(test.x1, test.y1, hard=True)
     wc = model.winner(calibration.x0, calibration.y0, hard=True)
 
-    same = float(np.mean(w0 == w1))
-    within = float(np.mean(chebyshev(coords, w0, w1, _ring(model)) <= 1.0))
-
     spacing = grid_spacing(model.x_shape, model.config.periodic)
-    table = z_decoder(wc, calibration.z, coords)
-    err = (table[w0] - test.z) * spacing
-    z_error = float(np.sqrt(np.mean(np.sum(err**2, axis=1))))
-
-    beta = affine_fit(coords[wc], calibration.z)
-    pred = _affine_predict(beta, coords[w0])
-    sse = float(np.sum((pred - test.z) ** 2))
-    sst = float(np.sum((test.z - test.z.mean(axis=0)) ** 2))
-    order = 1.0 - sse / sst if sst > 0 else float("nan")
-
-    usage = float(np.unique(w0).size / model.n_units)
+    m = winner_metrics(wc, calibration.z, w0, w1, test.z, coords, spacing, _ring(model))
+    z_error = m["z_error"]
     starved, te, score = fold_indicators(model, test, w0, w1, scores)
     circ = None
     if model.sampler.relation.circular:  # angles: z error the shorter way round, seam
@@ -221,10 +210,43 @@ def evaluate(
                                 model.config.map_periodic, spacing)  # fmt: skip
         z_error = float(circ.pop("z_error"))
     return Metrics(
-        same, within, z_error, order, usage, int(test.z.shape[0]),
+        m["view_consistency"], m["view_within_one"], z_error, m["order_r2"], m["usage"],
+        int(test.z.shape[0]),
         fold_score=score, folded=score >= FOLD_THRESHOLD, starved_units=starved,
         topographic_error=te, circular=circ,
     )  # fmt: skip
+
+
+def winner_metrics(
+    wc: NDArray[np.int64],
+    z_cal: NDArray[np.float64],
+    w0: NDArray[np.int64],
+    w1: NDArray[np.int64],
+    z_test: NDArray[np.float64],
+    coords: NDArray[np.float64],
+    spacing: float | NDArray[np.float64],
+    ring: tuple[int, ...] | None = None,
+) -> dict[str, float]:
+    """View consistency, within one, z error, order R^2 and usage from hard winners alone.
+
+    ``wc``: winners of the calibration views (positions ``z_cal`` ``(N, d)``); ``w0``, ``w1``:
+    of the two test views (positions ``z_test``); ``coords``: the map's unit coordinates
+    ``(K, d_map)``; ``spacing``: input grid spacings per unit of z; ``ring``: the shape of a
+    periodic map. The definitions of the module docstring, for :func:`evaluate` and for maps
+    scored on data of their own (e.g. ``sigmapi.experiments.chain``).
+    """
+    table = z_decoder(wc, z_cal, coords)
+    err = (table[w0] - z_test) * spacing
+    beta = affine_fit(coords[wc], z_cal)
+    sse = float(np.sum((_affine_predict(beta, coords[w0]) - z_test) ** 2))
+    sst = float(np.sum((z_test - z_test.mean(axis=0)) ** 2))
+    return {
+        "view_consistency": float(np.mean(w0 == w1)),
+        "view_within_one": float(np.mean(chebyshev(coords, w0, w1, ring) <= 1.0)),
+        "z_error": float(np.sqrt(np.mean(np.sum(err**2, axis=1)))),
+        "order_r2": 1.0 - sse / sst if sst > 0 else float("nan"),
+        "usage": float(np.unique(w0).size / coords.shape[0]),
+    }
 
 
 def fold_indicators(

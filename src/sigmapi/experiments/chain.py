@@ -44,7 +44,7 @@ from sigmapi import _validate
 from sigmapi.codes import PopulationCode
 from sigmapi.config import SOMConfig, load_preset
 from sigmapi.errors import ConfigError
-from sigmapi.metrics import EVAL_SEED, affine_fit, evaluate, z_decoder
+from sigmapi.metrics import EVAL_SEED, evaluate, winner_metrics
 from sigmapi.som import SigmaPiSOM
 from sigmapi.tasks import TwoViewSampler
 
@@ -56,7 +56,6 @@ __all__ = [
     "head_code",
     "run_chain",
     "sample_triples",
-    "score_winners",
 ]
 
 Array = NDArray[np.float64]
@@ -163,35 +162,6 @@ def head_code(model_a: SigmaPiSOM, x: Array, e: Array, code: str = "response") -
     return np.asarray(h / np.where(norm > 0, norm, 1.0))
 
 
-def score_winners(
-    cal: NDArray[np.int64],
-    w0: NDArray[np.int64],
-    w1: NDArray[np.int64],
-    z_cal: Array,
-    z_test: Array,
-    n_units: int,
-    spacing: float,
-) -> dict[str, float]:
-    """Metrics of a 1-D map from its hard winners (definitions of :mod:`sigmapi.metrics`).
-
-    ``cal``: winners of the calibration views, ``w0``, ``w1``: of the test views 0 and 1;
-    ``z_cal``, ``z_test`` ``(N, 1)``; ``spacing``: grid spacings per unit of z.
-    """
-    coords = np.arange(n_units, dtype=np.float64)[:, None]
-    table = z_decoder(cal, z_cal, coords)
-    z_error = float(np.sqrt(np.mean((table[w0] - z_test) ** 2))) * spacing
-    beta = affine_fit(coords[cal], z_cal)
-    pred = coords[w0] * beta[0] + beta[1]
-    sst = float(np.sum((z_test - z_test.mean()) ** 2))
-    return {
-        "z_error": z_error,
-        "view_consistency": float(np.mean(w0 == w1)),
-        "view_within_one": float(np.mean(np.abs(w0 - w1) <= 1)),
-        "order_r2": 1.0 - float(np.sum((pred - z_test) ** 2)) / sst,
-        "usage": float(np.unique(w0).size / n_units),
-    }
-
-
 def _single_inputs(model: SigmaPiSOM, t: Triples, v: int) -> tuple[Array, Array]:
     """The single map's codes of view ``v``: x on its ``(n_x, 1)`` grid, (e, u) jointly."""
     x, e, u = t.view(v)
@@ -239,9 +209,9 @@ def _run_seed(
         ("chain", b, chain_winners, a.weights_.size + b.weights_.size, chain_seconds),
         ("single", s, single_winners, s.weights_.size, single_seconds),
     ):
-        scores = score_winners(
-            winners(cal, 0), winners(test, 0), winners(test, 1), cal.z, test.z,
-            model.n_units, spacing,
+        scores = winner_metrics(
+            winners(cal, 0), cal.z, winners(test, 0), winners(test, 1), test.z,
+            model.map_coords, spacing,
         )  # fmt: skip
         out[name] = {**scores, "weights": int(weights), "train_seconds": secs}
     out["ratio"] = out["chain"]["z_error"] / out["single"]["z_error"]
