@@ -26,7 +26,7 @@ linear metrics of :mod:`sigmapi.metrics` would call that distance 0.98, so for s
   (wherever on the circle the map's ends lie, not only at z = 0). ``seam_units_win``:
   along every z axis some unit decodes z within ``NEAR_STEPS`` steps of the wrap on each
   side, and every unit there (units that never win included, placed by the ring fit) wins
-  at least ``STARVED_SHARE`` of a uniform share of the test views. ``seamless``:
+  often enough not to be starved (:func:`sigmapi.metrics.starved_mask`). ``seamless``:
   ``seam_units_win``, ``seam_gap <= 1`` and ``seam_jump`` at most ``SEAM_JUMP_STEPS`` (2)
   ideal steps (a map unit's share of the turn in grid spacings: 1 for 15 units on 15-unit
   codes).
@@ -66,10 +66,6 @@ NEAR_STEPS = 1.5
 
 CIRCULAR_KEYS = ("order_circular", "seam_jump", "seam_gap", "seam_units_win", "seamless")
 """The metrics :func:`circular_metrics` adds for maps of angles (beside a circular z error)."""
-
-STARVED_SHARE = 0.1
-"""A unit is starved when it wins fewer than this fraction of a uniform share of the views
-(as in :mod:`sigmapi.metrics`)."""
 
 
 def wrap(d: Array) -> Array:
@@ -217,20 +213,21 @@ def circular_metrics(
     wc: NDArray[np.int64],
     z_cal: Array,
     w0: NDArray[np.int64],
-    w1: NDArray[np.int64],
     z_test: Array,
     coords: Array,
     map_shape: tuple[int, ...],
     periodic: bool,
     spacing: Array,
+    starved: NDArray[np.bool_],
 ) -> dict[str, Any]:
     """Metrics of a map of angles (module docstring): ``z_error`` (circular) and the extra
     keys ``order_circular``, ``seam_jump``, ``seam_gap``, ``seam_units_win``, ``seamless``.
 
     ``wc``: winners of the calibration views, ``z_cal`` their z ``(N, d)`` in [0, 1);
-    ``w0``, ``w1``: winners of the two test views, ``z_test`` their z; ``coords`` ``(K,
-    map_ndim)``: map grid coordinates; ``periodic``: the map wraps around; ``spacing``
-    ``(d,)``: input grid spacings per turn (the code's units along each axis).
+    ``w0``: winners of test view 0, ``z_test`` their z; ``coords`` ``(K, map_ndim)``: map
+    grid coordinates; ``periodic``: the map wraps around; ``spacing`` ``(d,)``: input grid
+    spacings per turn (the code's units along each axis); ``starved`` ``(K,)``: the starved
+    units (:func:`sigmapi.metrics.starved_mask` of both test views).
     """
     k = coords.shape[0]
     fit = ring_fit(coords[wc], z_cal, map_shape)
@@ -245,8 +242,6 @@ def circular_metrics(
     spread = float(np.sum(wrap(z_test - mean_z) ** 2))
     order = 1.0 - float(np.sum(resid**2)) / spread if spread > 0 else float("nan")
 
-    wins = np.bincount(np.concatenate([w0, w1]), minlength=k)
-    starved = wins < STARVED_SHARE * wins.sum() / k
     out = {"z_error": z_error, "order_circular": order}
     out.update(seam(table, won, starved, fit, coords, map_shape, periodic, spacing))
     return out

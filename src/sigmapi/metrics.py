@@ -61,6 +61,7 @@ __all__ = [
     "fold_indicators",
     "grid_spacing",
     "hard_scores",
+    "starved_mask",
     "winner_metrics",
     "z_decoder",
 ]
@@ -206,8 +207,9 @@ def evaluate(
     starved, te, score = fold_indicators(model, test, w0, w1, scores)
     circ = None
     if model.sampler.relation.circular:  # angles: z error the shorter way round, seam
-        circ = circular_metrics(wc, calibration.z, w0, w1, test.z, coords, model.map_shape,
-                                model.config.map_periodic, spacing)  # fmt: skip
+        circ = circular_metrics(wc, calibration.z, w0, test.z, coords, model.map_shape,
+                                model.config.map_periodic, spacing,
+                                starved_mask(w0, w1, model.n_units))  # fmt: skip
         z_error = float(circ.pop("z_error"))
     return Metrics(
         m["view_consistency"], m["view_within_one"], z_error, m["order_r2"], m["usage"],
@@ -265,8 +267,7 @@ def fold_indicators(
         w0 = model.winner(test.x0, test.y0, hard=True)
     if w1 is None:
         w1 = model.winner(test.x1, test.y1, hard=True)
-    wins = np.bincount(np.concatenate([w0, w1]), minlength=model.n_units)
-    starved = int(np.sum(wins < STARVED_SHARE * wins.sum() / model.n_units))
+    starved = int(np.sum(starved_mask(w0, w1, model.n_units)))
     if scores is None:
         scores = hard_scores(model, test.x0, test.y0)
     top2 = np.argpartition(-scores, 1, axis=1)[:, :2]
@@ -280,6 +281,13 @@ def fold_indicators(
     else:
         score = max(score, float(np.mean(apart >= FAR_UNITS)) / FAR_SHARE)
     return starved, te, score
+
+
+def starved_mask(w0: NDArray[np.int64], w1: NDArray[np.int64], n_units: int) -> NDArray[np.bool_]:
+    """The starved units ``(K,)``: those winning fewer than ``STARVED_SHARE`` of a uniform
+    share of the views (both views of every test pair), for the fold score and the seam."""
+    wins = np.bincount(np.concatenate([w0, w1]), minlength=n_units)
+    return np.asarray(wins < STARVED_SHARE * wins.sum() / n_units)
 
 
 def hard_scores(
