@@ -15,7 +15,7 @@ import gymnasium as _gymnasium
 from sigmapi._version import __version__
 from sigmapi.codes import PopulationCode
 from sigmapi.config import SOMConfig, list_presets, load_preset
-from sigmapi.errors import ConfigError, ModelFileError, NotFittedError, SigmapiError
+from sigmapi.errors import ConfigError, DataError, ModelFileError, NotFittedError, SigmapiError
 from sigmapi.metrics import Metrics, evaluate
 from sigmapi.schedules import PiecewiseLinear
 from sigmapi.som import SigmaPiSOM
@@ -25,6 +25,7 @@ from sigmapi.tasks import Batch, Relation, TwoViewSampler
 __all__ = [
     "Batch",
     "ConfigError",
+    "DataError",
     "Metrics",
     "ModelFileError",
     "NotFittedError",

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 __all__ = [
     "ConfigError",
+    "DataError",
     "ModelFileError",
     "NotFittedError",
     "NumericalError",
@@ -24,15 +25,26 @@ class SigmapiError(Exception):
 
 
 class ConfigError(SigmapiError, ValueError):
-    """A configuration value (API argument, TOML preset, ``--set`` override) is invalid."""
+    """A setting is invalid: a hyperparameter, an API argument, a TOML file or preset, a
+    ``key=value`` override."""
+
+
+class DataError(SigmapiError, ValueError):
+    """An array is unfit to use: wrong shape or dtype, NaN or inf, out of range, or arrays
+    whose rows do not match (codes, views, positions)."""
 
 
 class ModelFileError(SigmapiError, ValueError):
     """A model file or checkpoint is missing, damaged, of another version, or hostile."""
 
 
-class NotFittedError(SigmapiError, RuntimeError):
-    """The model has no weights yet: call ``fit`` (or ``partial_fit``) first."""
+class NotFittedError(SigmapiError, RuntimeError, AttributeError):
+    """The model has no weights yet: call ``fit`` (or ``partial_fit``) first.
+
+    An ``AttributeError`` too, as scikit-learn's: the learned attributes (``weights_``,
+    ``t_``) of an unfitted model do not exist, so ``hasattr`` and
+    ``sklearn.utils.validation.check_is_fitted`` tell an unfitted model.
+    """
 
 
 class ResourceError(SigmapiError, MemoryError):
@@ -44,4 +56,8 @@ class NumericalError(SigmapiError, FloatingPointError):
 
 
 class UsageError(SigmapiError):
-    """A mistake on the command line, reported as one line with exit status 2."""
+    """A mistake on the command line, reported as one line with exit status 2.
+
+    The command line's own (:mod:`sigmapi.cli`), as it names flags: library code raises
+    :class:`ConfigError` for a bad setting and :class:`DataError` for a bad array.
+    """
