@@ -24,6 +24,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from sigmapi import _validate
+from sigmapi.errors import ConfigError, DataError
 
 __all__ = ["MIN_WIDTH", "NOISE_KINDS", "PopulationCode", "grid_coordinates", "noisy"]
 
@@ -110,20 +111,27 @@ class PopulationCode:
         return n if self.periodic else n - 1.0
 
     def check_positions(self, p: ArrayLike, name: str = "p") -> NDArray[np.float64]:
-        """Validate positions: shape ``(B, d)``, finite, within ``[0, 1]``."""
-        arr = np.asarray(p, dtype=np.float64)
+        """Validate positions: shape ``(B, d)``, finite, within ``[0, 1]``; returns them as
+        float64 ``(B, d)``. Raises :class:`~sigmapi.errors.DataError` naming ``name``."""
+        try:
+            arr = np.asarray(p, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise DataError(
+                f"{name} must be an array of numbers (positions in [0, 1]), got "
+                f"{type(p).__name__}; pass one row per position"
+            ) from None
         if arr.ndim == 1 and self.ndim == 1:
             arr = arr[:, None]
         if arr.ndim != 2 or arr.shape[1] != self.ndim:
-            raise ValueError(
+            raise DataError(
                 f"{name} must have shape (B, {self.ndim}) for a {self.ndim}-D code, got "
                 f"{arr.shape}; pass one row per position"
             )
         if not np.all(np.isfinite(arr)):
-            raise ValueError(f"{name} must be finite, got NaN or inf; remove them")
+            raise DataError(f"{name} must be finite, got NaN or inf; remove them")
         if np.any(arr < 0.0) or np.any(arr > 1.0):
             bad = float(arr[(arr < 0) | (arr > 1)][0])
-            raise ValueError(
+            raise DataError(
                 f"{name} must lie in [0, 1], got {bad!r}; positions are fractions of the axis"
             )
         return arr
@@ -166,7 +174,7 @@ class PopulationCode:
         """
         arr = self.check_positions(points, "points")
         if arr.shape[0] == 0:
-            raise ValueError("points must hold at least one position, got none")
+            raise DataError("points must hold at least one position (m >= 1 rows), got none")
         d2 = self._sq_dist(arr * self.scale)
         hills = np.exp(-d2 / (2.0 * self.width**2)).max(axis=0)
         return self._finish(hills[None, :])[0]
@@ -181,7 +189,10 @@ class PopulationCode:
         corner snaps to the nearest unit so that every point of the L sits on a unit.
         """
         if self.ndim != 2:
-            raise ValueError(f"l_shape needs a 2-D code, this code is {self.ndim}-D")
+            raise ConfigError(
+                f"l_shape needs a code of 2 dimensions, got a {self.ndim}-D code of shape "
+                f"{self.shape}; make it with PopulationCode((n, n))"
+            )
         if corner is None:
             corner = (0.25, 0.25)
         c0, c1 = (
@@ -208,8 +219,9 @@ class PopulationCode:
         if arr.ndim == 1:
             arr = arr[None, :]
         if arr.ndim != 2 or arr.shape[1] != self.size:
-            raise ValueError(
-                f"codes must have shape (B, {self.size}) for grid {self.shape}, got {arr.shape}"
+            raise DataError(
+                f"codes must have shape (B, {self.size}) for grid {self.shape}, got {arr.shape}; "
+                "one code per row, flattened in C order"
             )
         b = arr.shape[0]
         grid = arr.reshape((b, *self.shape))
@@ -289,13 +301,16 @@ def noisy(
     _validate.choice("kind", kind, NOISE_KINDS)
     arr = np.asarray(codes, dtype=np.float64)
     if arr.ndim != 2:
-        raise ValueError(f"codes must have shape (B, n), got {arr.shape}")
+        raise DataError(f"codes must have shape (B, n), got {arr.shape}; one code per row")
     peak = np.max(np.abs(arr), axis=1, keepdims=True)
     peak = np.where(peak > 0, peak, 1.0)
     if kind == "poisson":
         rate = _validate.positive("level", level, fix="the expected spike count at the peak")
         if np.any(arr < 0):
-            raise ValueError("Poisson noise needs codes >= 0 (firing rates), got a negative one")
+            raise DataError(
+                f"codes must be >= 0 for Poisson noise (firing rates), got {float(arr.min())!r}; "
+                'use kind="gaussian" for signed codes'
+            )
         out = rng.poisson(rate * arr / peak).astype(np.float64)
     else:
         sd = _validate.number("level", level, 0.0, None, fix="a fraction of the peak, e.g. 0.1")

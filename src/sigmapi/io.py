@@ -57,7 +57,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sigmapi import _memory
-from sigmapi.errors import ModelFileError
+from sigmapi.errors import DataError, ModelFileError
 
 __all__ = [
     "FORMAT",
@@ -230,7 +230,11 @@ def write_model(
     data = {k: np.ascontiguousarray(v) for k, v in arrays.items()}
     for k, v in data.items():
         if not _MEMBER.match(f"{k}.npy") or k == "header" or v.dtype.str not in _FLOATS:
-            raise ValueError(f"array {k!r} ({v.dtype}) cannot be stored in a model file")
+            raise DataError(
+                f"array {k!r} must be float64 or float32, named 'weights' or 'state_<name>' "
+                f"(lower case), to be stored in a model file, got dtype {v.dtype}; a backend's "
+                "state_arrays must return such arrays"
+            )
     full = {
         "format": FORMAT,
         "version": VERSION,
@@ -247,29 +251,42 @@ def write_model(
 # ---------------------------------------------------------------------------- reading
 
 
-def _npy_header(stream: IO[bytes]) -> tuple[str, tuple[int, ...], int]:
-    """(descr, shape, bytes of the npy header) of an npy stream; raises ValueError if damaged."""
+def _damaged(name: str, detail: Any) -> ModelFileError:
+    """The error of file ``name`` whose archive structure is damaged, ``detail`` saying where."""
+    return ModelFileError(f"{name!r} is damaged or not a sigmapi model file ({detail})")
+
+
+def _bad_header(name: str, detail: Any) -> ModelFileError:
+    """The error of file ``name`` whose header does not describe a model's arrays."""
+    return ModelFileError(f"{name!r}: header is damaged ({detail})")
+
+
+def _npy_header(stream: IO[bytes], name: str) -> tuple[str, tuple[int, ...], int]:
+    """(descr, shape, bytes of the npy header) of an npy stream of file ``name``; raises
+    :class:`~sigmapi.errors.ModelFileError` if it is damaged."""
     pre = stream.read(8)
     if len(pre) != 8 or pre[:6] != b"\x93NUMPY" or pre[6] not in (1, 2, 3) or pre[7] != 0:
-        raise ValueError("not an npy array")
+        raise _damaged(name, "not an npy array")
     fmt = "<H" if pre[6] == 1 else "<I"
     raw_len = stream.read(struct.calcsize(fmt))
     if len(raw_len) != struct.calcsize(fmt):
-        raise ValueError("npy header is cut short")
+        raise _damaged(name, "npy header is cut short")
     (n,) = struct.unpack(fmt, raw_len)
     if n > 4096:
-        raise ValueError(f"npy header of {n} bytes (at most 4096)")
+        raise _damaged(name, f"npy header of {n} bytes (at most 4096)")
     text = stream.read(n)
     if len(text) != n:
-        raise ValueError("npy header is cut short")
+        raise _damaged(name, "npy header is cut short")
     d = ast.literal_eval(text.decode("latin1" if pre[6] < 3 else "utf-8").strip())
     if not isinstance(d, dict) or set(d) != {"descr", "fortran_order", "shape"}:
-        raise ValueError("npy header is not a dict of descr, fortran_order, shape")
+        raise _damaged(name, "npy header is not a dict of descr, fortran_order, shape")
     descr, shape = d["descr"], d["shape"]
     if d["fortran_order"] is not False or descr not in _DESCR:
-        raise ValueError(f"npy array of dtype {descr!r} / fortran order (not what sigmapi writes)")
+        raise _damaged(
+            name, f"npy array of dtype {descr!r} / fortran order (not what sigmapi writes)"
+        )
     if not isinstance(shape, tuple) or not all(type(s) is int and s >= 0 for s in shape):
-        raise ValueError(f"npy shape {shape!r} is not a tuple of ints >= 0")
+        raise _damaged(name, f"npy shape {shape!r} is not a tuple of ints >= 0")
     return descr, shape, 8 + len(raw_len) + n
 
 
@@ -278,25 +295,28 @@ def _read_member(
     info: zipfile.ZipInfo,
     descrs: tuple[str, ...],
     shape: tuple[int, ...] | None,
+    name: str,
     max_bytes: int = MAX_HEADER,
 ) -> NDArray[Any]:
-    """One member as an array, checked against ``descrs`` and ``shape`` (None: 1-D, at most
-    ``max_bytes``) before its data is read; read in chunks into an array of that size."""
+    """One member of file ``name`` as an array, checked against ``descrs`` and ``shape``
+    (None: 1-D, at most ``max_bytes``) before its data is read; read in chunks into an array
+    of that size. Raises :class:`~sigmapi.errors.ModelFileError` if it does not fit."""
+    member = info.filename
     with zf.open(info) as stream:
-        descr, found, pre = _npy_header(stream)
+        descr, found, pre = _npy_header(stream, name)
         if descr not in descrs:
-            raise ValueError(f"{info.filename} has dtype {descr!r}, expected one of {descrs}")
+            raise _damaged(name, f"{member} has dtype {descr!r}, expected one of {descrs}")
         itemsize = np.dtype(_DESCR[descr]).itemsize
         if shape is None:
             if len(found) != 1 or found[0] * itemsize > max_bytes:
-                raise ValueError(f"{info.filename} must be 1-D of at most {max_bytes} bytes")
+                raise _damaged(name, f"{member} must be 1-D of at most {max_bytes} bytes")
         elif found != shape:
-            raise ValueError(f"{info.filename} has shape {found}, the header declares {shape}")
+            raise _damaged(name, f"{member} has shape {found}, the header declares {shape}")
         nbytes = int(np.prod(found, dtype=object)) * itemsize
         if info.file_size != pre + nbytes:
-            raise ValueError(
-                f"{info.filename} holds {info.file_size} bytes, its npy header declares "
-                f"{pre + nbytes}"
+            raise _damaged(
+                name,
+                f"{member} holds {info.file_size} bytes, its npy header declares {pre + nbytes}",
             )
         out = np.empty(found, dtype=_DESCR[descr])
         view = memoryview(out.reshape(-1).view(np.uint8))  # type: ignore[arg-type]
@@ -304,24 +324,24 @@ def _read_member(
         while done < nbytes:
             chunk = stream.read(min(_CHUNK, nbytes - done))
             if not chunk:
-                raise ValueError(f"{info.filename} ends after {done} of {nbytes} bytes")
+                raise _damaged(name, f"{member} ends after {done} of {nbytes} bytes")
             view[done : done + len(chunk)] = chunk
             done += len(chunk)
         if stream.read(1):  # also makes zipfile check the member's CRC
-            raise ValueError(f"{info.filename} holds more than its npy header declares")
+            raise _damaged(name, f"{member} holds more than its npy header declares")
     return out
 
 
-def _dims(header: dict[str, Any]) -> tuple[int, int, int]:
+def _dims(header: dict[str, Any], name: str) -> tuple[int, int, int]:
     """(n_units, n_x, n_y) of the header's config: what bounds every array's size."""
     cfg = header.get("config")
     if not isinstance(cfg, dict):
-        raise ValueError("the header has no config table")
+        raise _bad_header(name, "the header has no config table")
     dims = []
     for key in ("map_shape", "x_shape", "y_shape"):
         s = cfg.get(key)
         if not isinstance(s, list) or not s or not all(type(v) is int and v >= 1 for v in s):
-            raise ValueError(f"config {key} is not a list of positive ints")
+            raise _bad_header(name, f"config {key} is not a list of positive ints")
         dims.append(int(np.prod(s, dtype=object)))
     return dims[0], dims[1], dims[2]
 
@@ -329,46 +349,52 @@ def _dims(header: dict[str, Any]) -> tuple[int, int, int]:
 Expect = dict[str, tuple[tuple[str, ...], tuple[int, ...]]]
 
 
-def _declared(header: dict[str, Any]) -> Expect:
-    """Member name -> (allowed dtypes, shape) that the header declares, bounded by its config.
+def _declared(header: dict[str, Any], source: str) -> Expect:
+    """Member name -> (allowed dtypes, shape) that the header of file ``source`` declares,
+    bounded by its config; raises :class:`~sigmapi.errors.ModelFileError` if it cannot.
 
     Version 2 declares every array; version 1 declared the weights, and its state arrays were
     the fast kernel's (``raw``, ``scale``, ``sqnorm``) of fixed shapes.
     """
-    k, nx, ny = _dims(header)
+    k, nx, ny = _dims(header, source)
     n_weights = k * nx * ny
     if header["version"] == 1:
         out: Expect = {"weights": (_FLOATS, (k, nx, ny))}
         states = header.get("state_sha256")
         if not isinstance(states, dict):
-            raise ValueError("state_sha256 is not a table")
+            raise _bad_header(source, "state_sha256 is not a table")
         fixed: Expect = {"raw": (_FLOATS, (nx * ny, k)), "scale": (("<f8",), (k,))}
         fixed["sqnorm"] = fixed["scale"]
         for name in states:
             if name not in fixed:
-                raise ValueError(f"unknown version-1 state array {name!r}")
+                raise _bad_header(source, f"unknown version-1 state array {name!r}")
             out[f"state_{name}"] = fixed[name]
         return out
     decl = header.get("arrays")
     if not isinstance(decl, dict) or not decl or len(decl) > _MAX_MEMBERS - 1:
-        raise ValueError("the header's arrays table is missing or too long")
+        raise _bad_header(source, "the header's arrays table is missing or too long")
     out = {}
     for name, d in decl.items():
         if not isinstance(name, str) or not _MEMBER.match(f"{name}.npy") or name == "header":
-            raise ValueError(f"array name {name!r} is not one sigmapi writes")
+            raise _bad_header(source, f"array name {name!r} is not one sigmapi writes")
         shape = d.get("shape") if isinstance(d, dict) else None
         if not isinstance(shape, list) or not all(type(s) is int and s >= 0 for s in shape):
-            raise ValueError(f"array {name!r}: declared shape {shape!r} is not a list of ints")
+            raise _bad_header(
+                source, f"array {name!r}: declared shape {shape!r} is not a list of ints"
+            )
         if d.get("dtype") not in _FLOATS or not isinstance(d.get("sha256"), str):
-            raise ValueError(f"array {name!r}: declared dtype or checksum is invalid")
+            raise _bad_header(source, f"array {name!r}: declared dtype or checksum is invalid")
         if int(np.prod(shape, dtype=object)) > n_weights:
-            raise ValueError(
+            raise _bad_header(
+                source,
                 f"array {name!r} declares shape {shape}, larger than the config's "
-                f"{n_weights} weights"
+                f"{n_weights} weights",
             )
         out[name] = ((d["dtype"],), tuple(shape))
     if "weights" in out and out["weights"][1] != (k, nx, ny):
-        raise ValueError(f"weights declare shape {out['weights'][1]}, the config needs {k, nx, ny}")
+        raise _bad_header(
+            source, f"weights declare shape {out['weights'][1]}, the config needs {k, nx, ny}"
+        )
     return out
 
 
@@ -395,12 +421,12 @@ def read_archive(
             fh.seek(0)
             with zipfile.ZipFile(fh) as zf:
                 infos = _members(zf, name)
-                head = _read_member(zf, infos["header"], ("|u1",), None)
+                head = _read_member(zf, infos["header"], ("|u1",), None, name)
                 header = _parse_header(head, name, kind)
                 try:
-                    declared = _declared(header)
-                except (ValueError, KeyError, TypeError) as exc:
-                    raise ModelFileError(f"{name!r}: header is damaged ({exc})") from None
+                    declared = _declared(header, name)
+                except (KeyError, TypeError) as exc:
+                    raise _bad_header(name, exc) from None
                 found = set(infos) - {"header"}
                 if found != set(declared):
                     raise ModelFileError(
@@ -413,11 +439,13 @@ def read_archive(
                 )
                 _memory.check(need, f"loading {name!r}", "load it on a larger machine",
                               error=ModelFileError)  # fmt: skip
-                arrays = {n: _read_member(zf, infos[n], *declared[n]) for n in sorted(declared)}
+                arrays = {
+                    n: _read_member(zf, infos[n], *declared[n], name) for n in sorted(declared)
+                }
     except ModelFileError:
         raise
     except _DAMAGE as exc:
-        raise ModelFileError(f"{name!r} is damaged or not a sigmapi model file ({exc})") from None
+        raise _damaged(name, exc) from None
     return header, arrays
 
 
