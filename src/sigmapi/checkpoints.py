@@ -1,4 +1,4 @@
-"""Training checkpoints that survive a kill: ``sigmapi train --checkpoint-every N [--resume]``.
+"""Training checkpoints that survive a kill (``sigmapi train`` writes them and resumes from them).
 
 Checkpoints of a run writing ``OUT`` live in the folder ``OUT.ckpt/`` as ordinary model files
 ``step-000000012000.npz`` (weights, backend state, iteration count, seed entropy, config, and
@@ -11,8 +11,8 @@ with exactly the weights of an uninterrupted run.
 Safety: a checkpoint folder that is a symbolic link is refused (its files would be pruned
 wherever it points); temporary files of checkpoint writes killed earlier (``.step-*.tmp``,
 idle for a minute) are removed by the next write; only names of this pattern are ever
-deleted. When the run has finished, :func:`remove_checkpoints` deletes them (the CLI does,
-unless ``--keep-checkpoints``).
+deleted. When the run has finished, :func:`remove_checkpoints` deletes them (the command line
+does, unless asked to keep them).
 """
 
 from __future__ import annotations
@@ -54,7 +54,7 @@ def _check_folder(folder: Path) -> None:
         raise ModelFileError(
             f"checkpoint folder {str(folder)!r} is a symbolic link (to "
             f"{os.readlink(folder)!r}); refused, as its files would be written and pruned "
-            "there: remove the link or choose another --out"
+            "there: remove the link or write the run to another path"
         )
     if folder.exists() and not folder.is_dir():
         raise ModelFileError(f"checkpoint folder {str(folder)!r} exists and is not a folder")

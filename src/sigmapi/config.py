@@ -287,7 +287,7 @@ def load_config_file(path: str | Path, base: SOMConfig | None = None) -> SOMConf
     """Read a TOML config file; its keys override ``base`` (default: the dataclass defaults)."""
     p = Path(path)
     if not p.is_file():
-        raise ConfigError(f"config file {str(p)!r} does not exist; check the --config path")
+        raise ConfigError(f"config file {str(p)!r} does not exist; check the path")
     try:
         text = p.read_text("utf-8")
     except (OSError, UnicodeDecodeError) as exc:
@@ -316,12 +316,15 @@ def _from_toml(data: dict[str, Any], source: str, base: SOMConfig | None = None)
 def parse_override(item: str) -> tuple[str, Any]:
     """Parse ``key=value``; the value is read as TOML (numbers, true/false, lists) or a string."""
     if "=" not in item:
-        raise ConfigError(f"--set expects key=value, got {item!r}; e.g. --set iterations=50000")
+        raise ConfigError(f"an override must be key=value, got {item!r}; e.g. iterations=50000")
     key, _, raw = item.partition("=")
     key = key.strip()
     raw = raw.strip()
     if not key:
-        raise ConfigError(f"--set expects key=value with a non-empty key, got {item!r}")
+        raise ConfigError(
+            f"an override must be key=value with a non-empty key, got {item!r}; "
+            "e.g. iterations=50000"
+        )
     try:
         value = tomllib.loads(f"v = {raw}")["v"]
     except tomllib.TOMLDecodeError:
@@ -330,7 +333,7 @@ def parse_override(item: str) -> tuple[str, Any]:
 
 
 def apply_overrides(cfg: SOMConfig, items: list[str]) -> SOMConfig:
-    """Apply ``key=value`` overrides (the CLI's ``--set``) to ``cfg``."""
+    """Apply ``key=value`` overrides to ``cfg`` (each a field of :class:`SOMConfig`)."""
     changes: dict[str, Any] = {}
     for item in items:
         key, value = parse_override(item)
@@ -343,4 +346,4 @@ def apply_overrides(cfg: SOMConfig, items: list[str]) -> SOMConfig:
     try:
         return SOMConfig.from_dict(merged)
     except TypeError as exc:
-        raise ConfigError(f"--set: {exc}") from None
+        raise ConfigError(f"override: {exc}") from None

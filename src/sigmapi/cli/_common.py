@@ -16,13 +16,14 @@ from pathlib import Path
 from typing import Any, NoReturn
 
 from sigmapi.config import SOMConfig, apply_overrides, load_config_file, load_preset
-from sigmapi.errors import UsageError
+from sigmapi.errors import ConfigError, UsageError
 from sigmapi.kernels import BACKENDS
 
 __all__ = [
     "Parser",
     "add_config_flags",
     "add_dataclass_flags",
+    "apply_set_flags",
     "check_output",
     "dataclass_values",
     "field_docs",
@@ -75,13 +76,24 @@ def resolve_config(args: argparse.Namespace) -> SOMConfig:
     """The config of ``--preset`` / ``--config`` / ``--set`` / ``--seed`` / ``--backend``."""
     cfg = load_preset(args.preset) if args.preset else SOMConfig()
     if getattr(args, "config", None):
-        cfg = load_config_file(args.config, base=cfg)
-    cfg = apply_overrides(cfg, list(getattr(args, "set", None) or []))
+        try:
+            cfg = load_config_file(args.config, base=cfg)
+        except ConfigError as exc:
+            raise ConfigError(f"--config: {exc}") from None
+    cfg = apply_set_flags(cfg, getattr(args, "set", None))
     if getattr(args, "seed", None) is not None:
         cfg = cfg.replace(seed=args.seed)
     if getattr(args, "backend", None):
         cfg = cfg.replace(backend=args.backend)
     return cfg
+
+
+def apply_set_flags(cfg: SOMConfig, items: list[str] | None) -> SOMConfig:
+    """``cfg`` with the ``--set key=value`` overrides; their errors name the flag."""
+    try:
+        return apply_overrides(cfg, list(items or []))
+    except ConfigError as exc:
+        raise ConfigError(f"--set: {exc}") from None
 
 
 def check_output(path: str | Path, force: bool, what: str = "output file") -> Path:

@@ -10,7 +10,8 @@ import argparse
 import json
 from typing import Any
 
-from sigmapi.config import apply_overrides, load_preset
+from sigmapi.cli._common import apply_set_flags
+from sigmapi.config import load_preset
 from sigmapi.experiments.chain import CODES, run_chain
 
 __all__ = ["cmd_chain", "register"]
@@ -43,7 +44,7 @@ def register(sub: Any) -> None:
 
 def cmd_chain(args: argparse.Namespace) -> int:
     cfg = load_preset(args.preset).replace(ordering="crossview")
-    cfg = apply_overrides(cfg, list(args.set or []))
+    cfg = apply_set_flags(cfg, args.set)
     result = run_chain(args.seeds, config=cfg, train_pairs=args.train_pairs,
                        n_test=args.n_test, code=args.code)  # fmt: skip
     if args.json:
