@@ -70,7 +70,7 @@ def test_same_view_ablation_holds_for_your_own_data():
 )
 def test_bad_views_are_named_with_shape_and_expected_shape(views, match):
     som = SigmaPiSOM(SMALL)
-    with pytest.raises(sigmapi.ConfigError, match=match):
+    with pytest.raises(sigmapi.DataError, match=match):
         som.fit(views(_views(som, 50, 5)))
 
 
@@ -82,7 +82,7 @@ def test_encode_views_gives_the_models_codes():
         np.testing.assert_array_equal(got, want)
     one_d = som.encode_views(b.px0[:, 0], b.py0[:, 0], b.px1[:, 0], b.py1[:, 0])
     np.testing.assert_array_equal(one_d[0], b.x0)
-    with pytest.raises(ValueError, match=r"py1 must lie in \[0, 1\], got 1.5"):
+    with pytest.raises(sigmapi.DataError, match=r"py1 must lie in \[0, 1\], got 1.5"):
         som.encode_views(b.px0, b.py0, b.px1, np.full_like(b.py1, 1.5))
 
 

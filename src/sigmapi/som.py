@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import copy
 import dataclasses
-import math
 import threading
 from collections.abc import Callable
 from pathlib import Path
@@ -27,11 +26,12 @@ from numpy.typing import ArrayLike, NDArray
 from sigmapi import _memory, _validate
 from sigmapi.codes import PopulationCode, grid_coordinates
 from sigmapi.config import SOMConfig
-from sigmapi.errors import ConfigError, ModelFileError, NotFittedError, NumericalError
+from sigmapi.errors import ConfigError, DataError, ModelFileError, NotFittedError, NumericalError
 from sigmapi.kernels import KernelState, get_backend, reference
 from sigmapi.kernels.base import columns_to_dense, columns_top
 from sigmapi.ordering import INIT_PAIRS, crossview_init, training_rule
 from sigmapi.tasks import Batch, TwoViewSampler
+from sigmapi.views import CodeViews, Views, check_pairs, check_views, encode_views
 
 __all__ = ["BLOCK", "SigmaPiSOM", "load_model"]
 
@@ -39,9 +39,6 @@ BLOCK = 1000
 """Iterations per block of training data (one random child stream per block)."""
 
 Callback = Callable[["SigmaPiSOM"], None]
-Views = tuple[ArrayLike, ArrayLike, ArrayLike, ArrayLike]
-"""Your own two-view data ``(x0, y0, x1, y1)``: codes ``(B, n_x)``, ``(B, n_y)``, ``(B, n_x)``,
-``(B, n_y)``; row b holds two views of the same body-centred position."""
 
 _FIELDS = tuple(f.name for f in dataclasses.fields(SOMConfig) if f.name != "extra")
 """The hyperparameters :meth:`SigmaPiSOM.get_params` lists (``extra`` holds notes, no parameter)."""
@@ -49,12 +46,9 @@ _FIELDS = tuple(f.name for f in dataclasses.fields(SOMConfig) if f.name != "extr
 _SHAPE_FIELDS = ("map_shape", "x_shape", "y_shape")
 
 MAX_WEIGHT = 1e30
-"""Largest weight magnitude a model starts from; with :data:`MAX_PRODUCT`, the fast kernel's
-float32 ``raw = W / scale`` (scale >= 2**-50) stays below about 2e30, far from 3.4e38."""
-
-MAX_PRODUCT = 1e15
-"""Largest ``|x_i y_j|`` of the views a model learns (weights move towards ``x y^T``): keeps
-every backend's weights far inside float32's range (see :data:`sigmapi.config.MAX_INIT_SCALE`)."""
+"""Largest weight magnitude a model starts from; with :data:`sigmapi.views.MAX_PRODUCT`, the
+fast kernel's float32 ``raw = W / scale`` (scale >= 2**-50) stays below about 2e30, far from
+3.4e38."""
 
 
 class SigmaPiSOM:
@@ -343,7 +337,7 @@ class SigmaPiSOM:
         data = self._check_views(views)
         rows = data[0].shape[0]
         if rows == 0:
-            raise ConfigError("views must hold at least one row (pair of views), got 0 rows")
+            raise DataError("views must hold at least one row (pair of views), got 0 rows")
         total = self.config.iterations if n_iter is None else n_iter
         total = _validate.integer("n_iter", total, 0)
         self._set_weights(self.initial_weights(data))
@@ -361,7 +355,7 @@ class SigmaPiSOM:
 
     def encode_views(
         self, px0: ArrayLike, py0: ArrayLike, px1: ArrayLike, py1: ArrayLike
-    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    ) -> CodeViews:
         """Two views given as positions, as the codes :meth:`fit` takes: ``(x0, y0, x1, y1)``.
 
         ``px0``, ``px1`` are retinal positions and ``py0``, ``py1`` gaze directions, each of
@@ -369,13 +363,7 @@ class SigmaPiSOM:
         units first); row b of the four arrays shows the same body-centred position twice.
         The codes are the model's own (:attr:`x_code`, :attr:`y_code`).
         """
-        pos = {"px0": px0, "py0": py0, "px1": px1, "py1": py1}
-        codes = [self.x_code if name[1] == "x" else self.y_code for name in pos]
-        out = tuple(
-            code.encode(code.check_positions(p, name))
-            for code, (name, p) in zip(codes, pos.items(), strict=True)
-        )
-        return out[0], out[1], out[2], out[3]
+        return encode_views(self.x_code, self.y_code, px0, py0, px1, py1)
 
     # ------------------------------------------------------------------ scikit-learn parameters
     def get_params(self, deep: bool = True) -> dict[str, Any]:
@@ -507,54 +495,9 @@ class SigmaPiSOM:
         self.t_ += x0.shape[0]
         self._weights_cache = None
 
-    def _check_views(self, views: Any) -> tuple[NDArray[np.float64], ...]:
-        if isinstance(views, np.ndarray):
-            got = f"one array of shape {views.shape}"
-        elif isinstance(views, tuple | list):
-            got = f"a {type(views).__name__} of {len(views)} items"
-        else:
-            got = type(views).__name__
-        if got.startswith("one array") or not isinstance(views, tuple | list) or len(views) != 4:
-            raise ConfigError(
-                f"views must be a tuple (x0, y0, x1, y1) of 4 code arrays, got {got}; row b "
-                "holds two views of one position (encode positions with model.encode_views)"
-            )
-        x0, y0, x1, y1 = views
-        x0 = self._check_codes(x0, "x0", self.x_shape)
-        y0 = self._check_codes(y0, "y0", self.y_shape)
-        x1 = self._check_codes(x1, "x1", self.x_shape)
-        y1 = self._check_codes(y1, "y1", self.y_shape)
-        if not (x0.shape[0] == y0.shape[0] == x1.shape[0] == y1.shape[0]):
-            raise ConfigError(
-                f"views must have the same number of rows, got {x0.shape[0]}, {y0.shape[0]}, "
-                f"{x1.shape[0]}, {y1.shape[0]}"
-            )
-        top = float(np.abs(x1).max(initial=0.0)) * float(np.abs(y1).max(initial=0.0))
-        if top > MAX_PRODUCT:
-            raise ValueError(
-                f"views x1 and y1 must have |x1_i y1_j| <= {MAX_PRODUCT:g} (the weights learn "
-                f"x1 y1^T and would overflow), got up to {top:.3g}; scale your codes to "
-                "about 1 (model.x_code.encode gives unit-length codes)"
-            )
-        return x0, y0, x1, y1
-
-    @staticmethod
-    def _check_codes(a: ArrayLike, name: str, shape: tuple[int, ...]) -> NDArray[np.float64]:
-        arr = np.asarray(a)
-        if arr.dtype.kind not in "fiub":
-            raise ConfigError(f"{name} must be a numeric array, got dtype {arr.dtype}")
-        arr = arr.astype(np.float64, copy=False)
-        n = math.prod(shape)
-        if arr.ndim == 1:
-            arr = arr[None, :]
-        if arr.ndim != 2 or arr.shape[1] != n:
-            raise ConfigError(
-                f"{name} must have shape (B, {n}) (codes on grid {shape}, flattened in C order), "
-                f"got {np.shape(a)}; encode positions with model.x_code.encode / y_code.encode"
-            )
-        if not np.isfinite(arr.sum()) and not np.all(np.isfinite(arr)):  # one pass when finite
-            raise ConfigError(f"{name} must be finite, got NaN or inf values")
-        return arr
+    def _check_views(self, views: Any) -> CodeViews:
+        """``views`` checked against the model's grids (:func:`sigmapi.views.check_views`)."""
+        return check_views(views, self.x_shape, self.y_shape)
 
     # ------------------------------------------------------------------ using the map
     def respond(self, x: ArrayLike, y: ArrayLike) -> NDArray[np.float64]:
@@ -571,13 +514,7 @@ class SigmaPiSOM:
     def _pairs_of(self, x: ArrayLike, y: ArrayLike) -> tuple[NDArray[np.float64], ...]:
         """Checked codes ``(B, n_x)`` and ``(B, n_y)`` of a fitted model's input pairs."""
         self._check_fitted()
-        xa = self._check_codes(x, "x", self.x_shape)
-        ya = self._check_codes(y, "y", self.y_shape)
-        if xa.shape[0] != ya.shape[0]:
-            raise ValueError(
-                f"x and y must have the same number of rows, got {xa.shape[0]} and {ya.shape[0]}"
-            )
-        return xa, ya
+        return check_pairs(x, y, self.x_shape, self.y_shape)
 
     @property
     def winner_rule_(self) -> str:

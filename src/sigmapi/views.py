@@ -1,0 +1,153 @@
+"""Views: the checks of the code arrays a map learns from and answers, before any arithmetic.
+
+A *view* is one input pair ``(x, y)``: a code ``x`` of shape ``(B, n_x)`` (retinal position)
+and a code ``y`` of shape ``(B, n_y)`` (gaze direction), each flattened in C order over its
+grid (:class:`~sigmapi.codes.PopulationCode`). Training data are two views of the same
+body-centred positions, ``(x0, y0, x1, y1)``: the winner is found from view 0 and learns
+view 1. The functions here turn what a caller passes into float64 arrays of those shapes, or
+raise :class:`~sigmapi.errors.DataError` (a ``ValueError``) naming the array, the shape
+expected, what was received and the fix. They know grids and codes, not the estimator.
+
+Examples
+--------
+>>> from sigmapi.codes import PopulationCode
+>>> code = PopulationCode((5,))
+>>> x0, y0, x1, y1 = encode_views(code, code, [0.2], [0.4], [0.5], [0.1])
+>>> check_views((x0, y0, x1, y1), (5,), (5,))[0].shape
+(1, 5)
+>>> check_codes(np.zeros((2, 4)), "x", (5,))  # doctest: +ELLIPSIS
+Traceback (most recent call last):
+    ...
+sigmapi.errors.DataError: x must have shape (B, 5) (codes on grid (5,), ...), got (2, 4); ...
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from sigmapi.codes import PopulationCode
+from sigmapi.errors import DataError
+
+__all__ = [
+    "MAX_PRODUCT",
+    "CodeViews",
+    "Views",
+    "check_codes",
+    "check_pairs",
+    "check_views",
+    "encode_views",
+]
+
+MAX_PRODUCT = 1e15
+"""Largest ``|x_i y_j|`` of the views a model learns (weights move towards ``x y^T``): keeps
+every backend's weights far inside float32's range (see :data:`sigmapi.config.MAX_INIT_SCALE`)."""
+
+Views = tuple[ArrayLike, ArrayLike, ArrayLike, ArrayLike]
+"""Your own two-view data ``(x0, y0, x1, y1)``: codes ``(B, n_x)``, ``(B, n_y)``, ``(B, n_x)``,
+``(B, n_y)``; row b holds two views of the same body-centred position."""
+
+Array = NDArray[np.float64]
+CodeViews = tuple[Array, Array, Array, Array]
+"""Checked views: four float64 arrays of the same number of rows."""
+
+
+def check_codes(a: ArrayLike, name: str, shape: tuple[int, ...]) -> Array:
+    """``a`` as float64 codes ``(B, prod(shape))`` (one row ``(n,)`` becomes ``(1, n)``).
+
+    Raises :class:`~sigmapi.errors.DataError` unless ``a`` is numeric, of that shape, and
+    finite.
+    """
+    arr = np.asarray(a)
+    if arr.dtype.kind not in "fiub":
+        raise DataError(
+            f"{name} must be a numeric array, got dtype {arr.dtype}; pass codes as floats"
+        )
+    arr = arr.astype(np.float64, copy=False)
+    n = math.prod(shape)
+    if arr.ndim == 1:
+        arr = arr[None, :]
+    if arr.ndim != 2 or arr.shape[1] != n:
+        raise DataError(
+            f"{name} must have shape (B, {n}) (codes on grid {shape}, flattened in C order), "
+            f"got {np.shape(a)}; encode positions with model.x_code.encode / y_code.encode"
+        )
+    if not np.isfinite(arr.sum()) and not np.all(np.isfinite(arr)):  # one pass when finite
+        raise DataError(f"{name} must be finite, got NaN or inf values; remove those rows")
+    return arr
+
+
+def _same_rows(arrays: dict[str, Array], what: str) -> None:
+    rows = [a.shape[0] for a in arrays.values()]
+    if len(set(rows)) > 1:
+        raise DataError(
+            f"{what} must have the same number of rows, got {', '.join(map(str, rows))}; "
+            f"row b of {', '.join(arrays)} holds one sample"
+        )
+
+
+def check_pairs(
+    x: ArrayLike, y: ArrayLike, x_shape: tuple[int, ...], y_shape: tuple[int, ...]
+) -> tuple[Array, Array]:
+    """Input pairs ``x`` ``(B, n_x)`` and ``y`` ``(B, n_y)`` as checked codes (see
+    :func:`check_codes`), of the same number of rows."""
+    xa, ya = check_codes(x, "x", x_shape), check_codes(y, "y", y_shape)
+    _same_rows({"x": xa, "y": ya}, "x and y")
+    return xa, ya
+
+
+def check_views(views: Any, x_shape: tuple[int, ...], y_shape: tuple[int, ...]) -> CodeViews:
+    """Two views ``(x0, y0, x1, y1)`` as checked codes of the same number of rows.
+
+    Besides :func:`check_codes` on each array: ``|x1_i y1_j|`` must stay within
+    :data:`MAX_PRODUCT` (the weights learn ``x1 y1^T``).
+    """
+    if isinstance(views, np.ndarray):
+        got = f"one array of shape {views.shape}"
+    elif isinstance(views, tuple | list):
+        got = f"a {type(views).__name__} of {len(views)} items"
+    else:
+        got = type(views).__name__
+    if got.startswith("one array") or not isinstance(views, tuple | list) or len(views) != 4:
+        raise DataError(
+            f"views must be a tuple (x0, y0, x1, y1) of 4 code arrays, got {got}; row b "
+            "holds two views of one position (encode positions with model.encode_views)"
+        )
+    shapes = (x_shape, y_shape, x_shape, y_shape)
+    names = ("x0", "y0", "x1", "y1")
+    arrays = {n: check_codes(v, n, s) for n, v, s in zip(names, views, shapes, strict=True)}
+    _same_rows(arrays, "views")
+    x0, y0, x1, y1 = arrays.values()
+    top = float(np.abs(x1).max(initial=0.0)) * float(np.abs(y1).max(initial=0.0))
+    if top > MAX_PRODUCT:
+        raise DataError(
+            f"views x1 and y1 must have |x1_i y1_j| <= {MAX_PRODUCT:g} (the weights learn "
+            f"x1 y1^T and would overflow), got up to {top:.3g}; scale your codes to "
+            "about 1 (model.x_code.encode gives unit-length codes)"
+        )
+    return x0, y0, x1, y1
+
+
+def encode_views(
+    x_code: PopulationCode,
+    y_code: PopulationCode,
+    px0: ArrayLike,
+    py0: ArrayLike,
+    px1: ArrayLike,
+    py1: ArrayLike,
+) -> CodeViews:
+    """Two views given as positions, as codes ``(x0, y0, x1, y1)``.
+
+    ``px0``, ``px1`` are encoded with ``x_code`` and ``py0``, ``py1`` with ``y_code``; each is
+    of shape ``(B, d)`` (``(B,)`` in 1-D) in [0, 1], checked by
+    :meth:`~sigmapi.codes.PopulationCode.check_positions` under its own name.
+    """
+    pos = {"px0": px0, "py0": py0, "px1": px1, "py1": py1}
+    out = [
+        code.encode(code.check_positions(p, name))
+        for code, (name, p) in zip((x_code, y_code, x_code, y_code), pos.items(), strict=True)
+    ]
+    return out[0], out[1], out[2], out[3]
