@@ -46,12 +46,12 @@ def test_pickle_and_deepcopy_carry_state_arrays_and_continue_bit_exact(backend):
     assert b"sigmapi.kernels" not in data and b"numba" not in data  # arrays, not modules
     for twin in (pickle.loads(data), copy.deepcopy(som)):
         assert twin.t_ == som.t_ and twin.config == som.config and twin.backend == backend
-        assert twin.seed_entropy_ == som.seed_entropy_
+        assert twin.seed_entropy == som.seed_entropy
         np.testing.assert_array_equal(twin.weights_, som.weights_)
         np.testing.assert_array_equal(twin.partial_fit(700).weights_,
                                       copy.deepcopy(som).partial_fit(700).weights_)  # fmt: skip
     fresh = pickle.loads(pickle.dumps(SigmaPiSOM(_cfg(backend))))
-    assert not fresh.is_fitted and fresh.seed_entropy_ == SigmaPiSOM(_cfg(backend)).seed_entropy_
+    assert not fresh.is_fitted and fresh.seed_entropy == SigmaPiSOM(_cfg(backend)).seed_entropy
 
 
 def test_copy_copy_does_not_share_the_weights():

@@ -42,14 +42,14 @@ def test_round_trip_is_exact(tmp_path, map_shape, n_in, ndim, t, seed, data):
             )
         )
     ).reshape(k, n_in**ndim, (n_in + 1) ** ndim)
-    entropy = str(SigmaPiSOM(cfg).seed_entropy_)
+    entropy = str(SigmaPiSOM(cfg).seed_entropy)
     som = SigmaPiSOM.from_arrays(
         {"config": cfg.to_dict(), "t": t, "seed_entropy": entropy}, {"weights": w}
     )
     path = som.save(tmp_path / "m.npz")
     back = sigmapi.load(path)
     np.testing.assert_array_equal(back.weights_, w)
-    assert back.t_ == t and back.config == cfg and back.seed_entropy_ == som.seed_entropy_
+    assert back.t_ == t and back.config == cfg and back.seed_entropy == som.seed_entropy
 
 
 def test_atomic_write_leaves_no_temp_files(tmp_path, small_1d):
@@ -127,14 +127,14 @@ def test_not_a_zip_and_missing_file(tmp_path):
         sigmapi.load(tmp_path / "z.npz")
 
 
-def test_to_arrays_from_arrays_and_clone(small_1d):
+def test_to_arrays_from_arrays_and_replay_twin(small_1d):
     som = SigmaPiSOM(small_1d).fit(n_iter=1500)
     header, arrays = som.to_arrays()
     assert json.loads(json.dumps(header)) == header
     back = SigmaPiSOM.from_arrays(header, arrays)
     np.testing.assert_array_equal(back.weights_, som.weights_)
-    assert back.t_ == som.t_ and back.seed_entropy_ == som.seed_entropy_
-    twin = som.clone()
+    assert back.t_ == som.t_ and back.seed_entropy == som.seed_entropy
+    twin = som.replay_twin()
     assert not twin.is_fitted and twin.config == som.config
     np.testing.assert_array_equal(twin.fit(som.t_).weights_, som.weights_)
     with pytest.raises(ModelFileError, match="the config needs"):

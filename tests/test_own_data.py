@@ -97,7 +97,7 @@ def test_get_params_and_set_params():
     np.testing.assert_array_equal(som.weights_, before)  # a fitted model keeps its weights
     assert som.t_ == 500 and som.eps_at(0) == 0.02
     som.set_params(seed=5)
-    assert som.seed_entropy_ == 5
+    assert som.seed_entropy == 5
     som.set_params(map_shape=(9,))
     assert not som.is_fitted and som.n_units == 9  # the weights no longer fit
     with pytest.raises(sigmapi.ConfigError, match="unknown config key 'map_size'"):

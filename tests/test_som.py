@@ -16,6 +16,24 @@ def test_unfitted_model_says_call_fit(small_1d):
         som.winner(x, x)
     with pytest.raises(NotFittedError):
         _ = som.weights_
+    with pytest.raises(NotFittedError, match="call fit"):
+        _ = som.t_  # learned state: only a fitted model has it
+    assert not hasattr(som, "t_") and not hasattr(som, "weights_")  # as scikit-learn's
+
+
+def test_scikit_learn_tells_a_fitted_model(small_1d):
+    validation = pytest.importorskip("sklearn.utils.validation")
+    exceptions = pytest.importorskip("sklearn.exceptions")
+    som = SigmaPiSOM(small_1d)
+    for attributes in (None, "t_", "weights_"):
+        with pytest.raises(exceptions.NotFittedError):
+            validation.check_is_fitted(som, attributes)
+    som.fit(n_iter=10)
+    for attributes in (None, "t_", "weights_"):
+        validation.check_is_fitted(som, attributes)
+    som.set_params(map_shape=(5,))  # the weights no longer fit: unfitted again
+    with pytest.raises(exceptions.NotFittedError):
+        validation.check_is_fitted(som)
 
 
 def test_init_stores_hyperparameters_and_weights_are_in_range(small_1d):

@@ -70,7 +70,10 @@ class SigmaPiSOM:
     weights_ : ndarray, shape (n_units, n_x, n_y)
         Sigma-Pi weights (float64 copy of the backend's state).
     t_ : int
-        Learning iterations done so far.
+        Learning iterations done so far (a fitted model's; :class:`NotFittedError` before).
+    seed_entropy : int
+        Entropy of the run's random streams: ``seed`` when given, else drawn afresh when the
+        model is made; a model file keeps it, so that an unseeded run can be replayed.
 
     References
     ----------
@@ -104,16 +107,35 @@ class SigmaPiSOM:
                 if k in _FIELDS and _identical(v, getattr(cfg, k)):
                     object.__setattr__(cfg, k, v)
         self.config = cfg
-        self.t_ = 0
+        self._t = 0
         self._state: KernelState | None = None
         self._kernel = get_backend(self.config.backend)
-        seed = self.config.seed
-        self.seed_entropy_: int = int(np.random.SeedSequence(seed).entropy)  # type: ignore[arg-type]
+        self.seed_entropy = _entropy(self.config.seed)
         self._block_cache: tuple[int, Batch] | None = None
         self._weights_cache: NDArray[np.float64] | None = None
         self._lock = threading.RLock()
         self._unit_positions: NDArray[np.float64] | None = None  # transform()'s table
         self._sigma_cache: tuple[int, float] | None = None  # (t_, sigma at t_)
+
+    @property
+    def t_(self) -> int:
+        """Learning iterations done so far; raises :class:`NotFittedError` before fitting."""
+        self._check_fitted()
+        return self._t
+
+    @t_.setter
+    def t_(self, value: int) -> None:
+        self._t = int(value)
+
+    def __sklearn_is_fitted__(self) -> bool:
+        """What ``sklearn.utils.validation.check_is_fitted`` asks: whether there are weights."""
+        return self.is_fitted
+
+    def __sklearn_tags__(self) -> Any:
+        """scikit-learn's tags (asked by its checks from 1.6 on): unsupervised, needs fitting."""
+        from sklearn.utils import Tags, TargetTags
+
+        return Tags(estimator_type=None, target_tags=TargetTags(required=False))
 
     # ------------------------------------------------------------------ shapes and codes
     @property
@@ -163,7 +185,7 @@ class SigmaPiSOM:
 
     # ------------------------------------------------------------------ state
     def _seq(self, *key: int) -> np.random.Generator:
-        ss = np.random.SeedSequence(self.seed_entropy_, spawn_key=key)
+        ss = np.random.SeedSequence(self.seed_entropy, spawn_key=key)
         return np.random.Generator(np.random.PCG64(ss))
 
     def initial_weights(
@@ -402,11 +424,11 @@ class SigmaPiSOM:
         self._block_cache = None
         self._unit_positions = None  # transform()'s table follows map_shape and map_periodic
         if new.seed != old.seed:
-            self.seed_entropy_ = int(np.random.SeedSequence(new.seed).entropy)  # type: ignore[arg-type]
+            self.seed_entropy = _entropy(new.seed)
         if new.backend != old.backend:
             self._kernel = get_backend(new.backend)
         if any(getattr(new, k) != getattr(old, k) for k in _SHAPE_FIELDS):
-            self._state, self._weights_cache, self.t_ = None, None, 0
+            self._state, self._weights_cache, self._t = None, None, 0
         elif new.backend != old.backend and weights is not None:
             self._set_weights(np.array(weights))
         return self
@@ -458,11 +480,11 @@ class SigmaPiSOM:
         if self._state is None:
             self._set_weights(self.initial_weights())
         if n_iter is None:
-            n_iter = self.config.iterations - self.t_
+            n_iter = self.config.iterations - self._t
             if n_iter <= 0:
                 raise ValueError(
                     f"the configured run of {self.config.iterations} iterations is complete "
-                    f"(t_ = {self.t_}); pass n_iter to train further"
+                    f"(t_ = {self._t}); pass n_iter to train further"
                 )
         end = self.t_ + _validate.integer("n_iter", n_iter, 0)
         while self.t_ < end:
@@ -592,14 +614,16 @@ class SigmaPiSOM:
         a = reference.neighbourhood(k, self.map_shape, s, self.config.map_periodic)
         return float(np.mean(np.sum(a * dist, axis=1)))
 
-    def clone(self) -> SigmaPiSOM:
-        """An unfitted model with this one's config and random streams.
+    def replay_twin(self) -> SigmaPiSOM:
+        """An unfitted model with this one's config and random streams (its seed entropy).
 
-        ``clone().fit(model.t_)`` replays the run that made ``model`` (the training data of
-        every iteration is a pure function of the seed entropy and the iteration number).
+        ``model.replay_twin().fit(model.t_)`` replays the run that made ``model`` (the
+        training data of every iteration is a pure function of the seed entropy and the
+        iteration number). ``sklearn.base.clone(model)`` instead builds a model from the
+        hyperparameters alone: with ``seed=None``, other random streams.
         """
         twin = SigmaPiSOM(self.config)
-        twin.seed_entropy_ = self.seed_entropy_
+        twin.seed_entropy = self.seed_entropy
         return twin
 
     # ------------------------------------------------------------------ state as arrays, files
@@ -644,7 +668,7 @@ class SigmaPiSOM:
         header = {
             "config": self.config.to_dict(),
             "t": int(self.t_),
-            "seed_entropy": str(self.seed_entropy_),
+            "seed_entropy": str(self.seed_entropy),
             "backend": self.backend,
         }
         return header, arrays
@@ -717,7 +741,7 @@ class SigmaPiSOM:
         if entropy < 0:
             raise ModelFileError(f"{name!r}: seed_entropy must be >= 0, got {entropy}")
         model = cls(cfg)
-        model.seed_entropy_ = entropy
+        model.seed_entropy = entropy
         if state and header.get("backend") == model.backend:
             try:
                 model._state = model._kernel.from_state_arrays(n, state, tol=cfg.kernel_tol)
@@ -756,14 +780,14 @@ class SigmaPiSOM:
         if self.is_fitted:
             header, arrays = self.to_arrays()
             return {"header": header, "arrays": arrays}
-        header = {"config": self.config.to_dict(), "seed_entropy": str(self.seed_entropy_)}
+        header = {"config": self.config.to_dict(), "seed_entropy": str(self.seed_entropy)}
         return {"header": header, "arrays": None}
 
     def __setstate__(self, state: dict[str, Any]) -> None:
         header, arrays = state["header"], state["arrays"]
         if arrays is None:
             twin = SigmaPiSOM(SOMConfig.from_dict(header["config"]))
-            twin.seed_entropy_ = int(header["seed_entropy"])
+            twin.seed_entropy = int(header["seed_entropy"])
         else:
             twin = SigmaPiSOM.from_arrays(header, arrays, source="pickle")
         self.__dict__.update(twin.__dict__)
@@ -778,6 +802,11 @@ class SigmaPiSOM:
             f"SigmaPiSOM(map_shape={self.map_shape}, x_shape={self.x_shape}, "
             f"y_shape={self.y_shape}, backend={self.backend!r}, {fitted})"
         )
+
+
+def _entropy(seed: int | None) -> int:
+    """The entropy of the random streams of ``seed``: ``seed`` itself, or fresh for None."""
+    return int(np.random.SeedSequence(seed).entropy)  # type: ignore[arg-type]
 
 
 def _identical(given: Any, stored: Any) -> bool:

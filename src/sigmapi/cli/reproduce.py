@@ -73,7 +73,7 @@ def cmd_figure(args: argparse.Namespace) -> int:
     if args.name == "curves":
         # the training data are a pure function of the seed: re-running the model's schedule
         # from its seed replays the same run, now with checkpoints
-        twin = model.clone()
+        twin = model.replay_twin()
         callback, bar = progress_callback(model.t_, "replaying the run", disable=args.quiet or None)
         at = checkpoints(model.t_, N_CHECKPOINTS)
         curve = LearningCurve(at=at, n_test=CURVE_TEST, then=callback)
