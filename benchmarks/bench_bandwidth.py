@@ -96,7 +96,10 @@ def child_windows(preset: str, variant: str, windows: int, window: int) -> dict[
         fast.TRAIN_PREFETCH_AHEAD = 0
     cfg = load_preset(preset).replace(backend="fast", seed=0, threads=variant == "fast-threads")
     model = SigmaPiSOM(cfg)
-    model.fit(n_iter=20)  # the ordered start; loads (or compiles) the kernel
+    try:  # the ordered start; loads (or compiles) the kernel
+        model.fit(iterations=20)
+    except TypeError:  # --baseline-src: a checkout from before fit(views, *, iterations)
+        model.fit(20)
     state: Any = model._state  # the kernel's own state: the benchmark reads its scales
     out = []
     for w in range(windows):
@@ -123,9 +126,9 @@ def child_reference(preset: str, n_iter: int) -> dict[str, Any]:
     from sigmapi import SigmaPiSOM, load_preset
 
     model = SigmaPiSOM(load_preset(preset).replace(backend="reference", seed=0))
-    model.fit(n_iter=2)
+    model.fit(iterations=2)
     t0 = time.perf_counter()
-    model.partial_fit(n_iter)
+    model.partial_fit(iterations=n_iter)
     return {"iterations": n_iter, "it_per_s": n_iter / (time.perf_counter() - t0)}
 
 

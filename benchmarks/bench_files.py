@@ -62,7 +62,7 @@ def main(argv: list[str] | None = None) -> int:
         model, source = sigmapi.load(args.model), Path(args.model).name
     else:
         cfg = sigmapi.load_preset(args.preset).replace(seed=0)
-        model = sigmapi.SigmaPiSOM(cfg).fit(n_iter=args.iterations)
+        model = sigmapi.SigmaPiSOM(cfg).fit(iterations=args.iterations)
         source = f"{args.preset}, seed 0, {args.iterations} iterations"
     times: dict[str, dict[str, list[float]]] = {k: {"save": [], "load": []} for k in
                                                 ("v1", "v2", "v2_compressed")}  # fmt: skip

@@ -68,12 +68,12 @@ def child_speed(kernel: str, preset: str, n_iter: int, threads: int) -> dict[str
         backend=kernel.split("-")[0], seed=0, threads=kernel.endswith("threads")
     )
     warm = SigmaPiSOM(cfg.replace(iterations=cfg.iterations))
-    warm.fit(n_iter=min(50, n_iter))  # numba: load (or compile) the cached machine code
+    warm.fit(iterations=min(50, n_iter))  # numba: load (or compile) the cached machine code
     model = SigmaPiSOM(cfg)
-    model.fit(n_iter=0)
+    model.fit(iterations=0)
     model.training_block(0)
     t0 = time.perf_counter()
-    model.partial_fit(n_iter)
+    model.partial_fit(iterations=n_iter)
     dt = time.perf_counter() - t0
     return {"iterations": n_iter, "seconds": dt, "it_per_s": n_iter / dt}
 
@@ -92,10 +92,10 @@ def child_train(preset: str, seed: int, threads: int, checkpoints: int) -> dict[
     cal, test = evaluation_sets(model, 10_000)
     step = cfg.iterations // checkpoints
     curve, train_s, eval_s, reached = [], 0.0, [], None
-    model.fit(n_iter=0)
+    model.fit(iterations=0)
     while model.t_ < cfg.iterations:
         t0 = time.perf_counter()
-        model.partial_fit(min(step, cfg.iterations - model.t_))
+        model.partial_fit(iterations=min(step, cfg.iterations - model.t_))
         train_s += time.perf_counter() - t0
         t0 = time.perf_counter()
         m = evaluate(model, test=test, calibration=cal).to_dict()

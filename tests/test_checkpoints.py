@@ -74,7 +74,7 @@ def test_damaged_newest_checkpoint_falls_back_to_previous(tmp_path):
     folder = tmp_path / "m.npz.ckpt"
     model = SigmaPiSOM(_cfg())
     for _ in range(3):
-        model.partial_fit(1000)
+        model.partial_fit(iterations=1000)
         write_checkpoint(model, folder)
     newest = list_checkpoints(folder)[0][1]
     data = bytearray(newest.read_bytes())
@@ -88,7 +88,7 @@ def test_damaged_newest_checkpoint_falls_back_to_previous(tmp_path):
 def test_resume_with_another_config_is_refused(tmp_path):
     out = tmp_path / "m.npz"
     model = SigmaPiSOM(_cfg())
-    model.partial_fit(500)
+    model.partial_fit(iterations=500)
     write_checkpoint(model, checkpoint_dir(out))
     r = subprocess.run(
         [sys.executable, "-m", "sigmapi.cli", "train", *ARGS[:-1], "5", "--out", str(out),

@@ -72,7 +72,7 @@ def test_user_mistakes_exit_2_with_one_line(tmp_path, args, needle):
     os.mkfifo(tmp_path / "fifo")
     if "good.npz" in args:
         small = SigmaPiSOM(map_shape=(3,), x_shape=(4,), y_shape=(4,), backend="reference")
-        small.fit(n_iter=20).save(tmp_path / "good.npz")
+        small.fit(iterations=20).save(tmp_path / "good.npz")
     r = run(*args, cwd=tmp_path)
     assert r.returncode == 2
     lines = [ln for ln in r.stderr.splitlines() if ln.strip()]

@@ -227,7 +227,7 @@ def test_state_round_trip_and_validation():
 def test_save_load_continue_is_bit_exact(tmp_path, rule):
     kw = dict(map_shape=(3, 3), x_shape=(4, 4), y_shape=(4, 4), code_width=1.0,
               iterations=1600, seed=11, backend="fast", winner_rule=rule)  # fmt: skip
-    a = SigmaPiSOM(**kw).fit(n_iter=1300)
+    a = SigmaPiSOM(**kw).fit(iterations=1300)
     path = a.save(tmp_path / "m.npz")
     a.partial_fit()
     b = SigmaPiSOM.load(path)
@@ -319,11 +319,11 @@ def test_model_inference_after_training_equals_a_fresh_model(rule):
     # training: after partial_fit the model answers like one rebuilt from its arrays
     kw = dict(map_shape=(3, 4), x_shape=(5, 5), y_shape=(5, 5), code_width=1.0,
               iterations=900, seed=3, winner_rule=rule)  # fmt: skip
-    som = SigmaPiSOM(**kw).fit(n_iter=300)
+    som = SigmaPiSOM(**kw).fit(iterations=300)
     b = som.training_block(0)
     x, y = b.x0[:40], b.y0[:40]
     before = som.winner(x[:1], y[:1]), som.respond(x, y), som.transform(x, y)
-    som.partial_fit(300)
+    som.partial_fit(iterations=300)
     fresh = SigmaPiSOM.from_arrays(*som.to_arrays())
     for model in (som, fresh):
         assert model.t_ == 600

@@ -26,13 +26,13 @@ from sigmapi.io import header_digest, read_archive, write_model
 DATA = Path(__file__).parent / "data"
 V1_CFG = dict(map_shape=(3,), x_shape=(4,), y_shape=(5,), iterations=400, seed=7, ordering="none")
 """The config of tests/data/v1-*.npz: written by sigmapi before format version 2 (commit
-'tests/data: two model files in format version 1'), after fit(n_iter=250)."""
+'tests/data: two model files in format version 1'), after fit(iterations=250)."""
 
 
 def _small(backend="fast", **kw):
     cfg = SOMConfig(map_shape=(3,), x_shape=(4,), y_shape=(4,), iterations=300, seed=1,
                     backend=backend, **kw)  # fmt: skip
-    return SigmaPiSOM(cfg).fit(n_iter=200)
+    return SigmaPiSOM(cfg).fit(iterations=200)
 
 
 # ---------------------------------------------------------------------------- versions, sizes
@@ -42,9 +42,11 @@ def _small(backend="fast", **kw):
 def test_version_1_files_still_load_and_continue_bit_exact(backend):
     old = sigmapi.load(DATA / f"v1-{backend}.npz")
     assert old.t_ == 250 and old.backend == backend
-    fresh = SigmaPiSOM(**V1_CFG, backend=backend).fit(n_iter=250)
+    fresh = SigmaPiSOM(**V1_CFG, backend=backend).fit(iterations=250)
     np.testing.assert_array_equal(old.weights_, fresh.weights_)
-    np.testing.assert_array_equal(old.partial_fit(50).weights_, fresh.partial_fit(50).weights_)
+    np.testing.assert_array_equal(
+        old.partial_fit(iterations=50).weights_, fresh.partial_fit(iterations=50).weights_
+    )
     assert read_archive(DATA / f"v1-{backend}.npz")[0]["version"] == 1
 
 
@@ -75,7 +77,9 @@ def test_round_trip_and_continuation_are_bit_exact(tmp_path, backend, compress):
     assert kinds == {zipfile.ZIP_DEFLATED if compress else zipfile.ZIP_STORED}
     b = sigmapi.load(path)
     np.testing.assert_array_equal(a.weights_, b.weights_)
-    np.testing.assert_array_equal(a.partial_fit(100).weights_, b.partial_fit(100).weights_)
+    np.testing.assert_array_equal(
+        a.partial_fit(iterations=100).weights_, b.partial_fit(iterations=100).weights_
+    )
     # another backend starts from the same weights
     c = sigmapi.load(path, backend="reference" if backend == "fast" else "fast")
     np.testing.assert_allclose(c.weights_, SigmaPiSOM.load(path).weights_, rtol=1e-7)

@@ -41,24 +41,26 @@ def _cfg(backend="fast"):
 
 @pytest.mark.parametrize("backend", ["reference", "fast"])
 def test_pickle_and_deepcopy_carry_state_arrays_and_continue_bit_exact(backend):
-    som = SigmaPiSOM(_cfg(backend)).fit(n_iter=1500)
+    som = SigmaPiSOM(_cfg(backend)).fit(iterations=1500)
     data = pickle.dumps(som)
     assert b"sigmapi.kernels" not in data and b"numba" not in data  # arrays, not modules
     for twin in (pickle.loads(data), copy.deepcopy(som)):
         assert twin.t_ == som.t_ and twin.config == som.config and twin.backend == backend
         assert twin.seed_entropy == som.seed_entropy
         np.testing.assert_array_equal(twin.weights_, som.weights_)
-        np.testing.assert_array_equal(twin.partial_fit(700).weights_,
-                                      copy.deepcopy(som).partial_fit(700).weights_)  # fmt: skip
+        np.testing.assert_array_equal(
+            twin.partial_fit(iterations=700).weights_,
+            copy.deepcopy(som).partial_fit(iterations=700).weights_,
+        )
     fresh = pickle.loads(pickle.dumps(SigmaPiSOM(_cfg(backend))))
     assert not fresh.is_fitted and fresh.seed_entropy == SigmaPiSOM(_cfg(backend)).seed_entropy
 
 
 def test_copy_copy_does_not_share_the_weights():
-    som = SigmaPiSOM(_cfg()).fit(n_iter=1000)
+    som = SigmaPiSOM(_cfg()).fit(iterations=1000)
     before = som.weights_.copy()
     twin = copy.copy(som)
-    twin.partial_fit(500)
+    twin.partial_fit(iterations=500)
     assert twin.t_ == 1500 and som.t_ == 1000
     np.testing.assert_array_equal(som.weights_, before)
     assert not np.array_equal(twin.weights_, before)
@@ -66,15 +68,19 @@ def test_copy_copy_does_not_share_the_weights():
 
 @pytest.mark.parametrize("backend", ["reference", "fast"])
 def test_partial_fit_from_two_threads_loses_no_iteration(backend):
-    som = SigmaPiSOM(_cfg(backend)).fit(n_iter=0)
-    threads = [threading.Thread(target=som.partial_fit, args=(2500,)) for _ in range(2)]
+    som = SigmaPiSOM(_cfg(backend)).fit(iterations=0)
+    threads = [
+        threading.Thread(target=som.partial_fit, kwargs={"iterations": 2500}) for _ in range(2)
+    ]
     for t in threads:
         t.start()
     for t in threads:
         t.join()
     assert som.t_ == 5000
     # each call ran whole, one after the other: the same as one run of 5,000 iterations
-    np.testing.assert_array_equal(som.weights_, SigmaPiSOM(_cfg(backend)).fit(5000).weights_)
+    np.testing.assert_array_equal(
+        som.weights_, SigmaPiSOM(_cfg(backend)).fit(iterations=5000).weights_
+    )
 
 
 # ---------------------------------------------------------------------------- signals
@@ -86,7 +92,7 @@ from sigmapi import SigmaPiSOM
 from sigmapi.cli import _terminate
 signal.signal(signal.SIGTERM, _terminate)  # what sigmapi.cli.main installs
 som = SigmaPiSOM(map_shape=(30,), x_shape=(120,), y_shape=(120,), backend="reference",
-                 seed=0, ordering="none").fit(n_iter=1)
+                 seed=0, ordering="none").fit(iterations=1)
 print("saving", flush=True)
 while True:
     som.save(sys.argv[1])

@@ -155,7 +155,7 @@ def test_every_bad_value_is_named(kwargs, match):
 
 
 def test_api_inputs_are_validated(small_1d):
-    som = SigmaPiSOM(small_1d).fit(n_iter=10)
+    som = SigmaPiSOM(small_1d).fit(iterations=10)
     x = som.x_code.encode([[0.3]])
     with pytest.raises(ValueError, match=r"x must have shape \(B, 7\)"):
         som.winner(np.zeros((1, 8)), x)
@@ -165,8 +165,8 @@ def test_api_inputs_are_validated(small_1d):
         som.respond(np.full((1, 7), np.inf), x)
     with pytest.raises(ValueError, match="same number of rows"):
         som.respond(np.vstack([x, x]), x)
-    with pytest.raises(ConfigError, match="n_iter must be"):
-        som.partial_fit(-3)
+    with pytest.raises(ConfigError, match="iterations must be an int >= 0, got -3"):
+        som.partial_fit(iterations=-3)
     with pytest.raises(ValueError, match="n_test must be"):
         sigmapi.evaluate(som, n_test=1)
     with pytest.raises(ConfigError, match=r"config must be a sigmapi\.SOMConfig"):

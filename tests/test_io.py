@@ -53,14 +53,14 @@ def test_round_trip_is_exact(tmp_path, map_shape, n_in, ndim, t, seed, data):
 
 
 def test_atomic_write_leaves_no_temp_files(tmp_path, small_1d):
-    som = SigmaPiSOM(small_1d).fit(n_iter=10)
+    som = SigmaPiSOM(small_1d).fit(iterations=10)
     som.save(tmp_path / "m.npz")
     som.save(tmp_path / "m.npz")  # overwrite in place
     assert sorted(p.name for p in tmp_path.iterdir()) == ["m.npz"]
 
 
 def _saved(tmp_path, small_1d):
-    return SigmaPiSOM(small_1d).fit(n_iter=10).save(tmp_path / "m.npz")
+    return SigmaPiSOM(small_1d).fit(iterations=10).save(tmp_path / "m.npz")
 
 
 def test_truncated_file_fails_cleanly(tmp_path, small_1d):
@@ -128,7 +128,7 @@ def test_not_a_zip_and_missing_file(tmp_path):
 
 
 def test_to_arrays_from_arrays_and_replay_twin(small_1d):
-    som = SigmaPiSOM(small_1d).fit(n_iter=1500)
+    som = SigmaPiSOM(small_1d).fit(iterations=1500)
     header, arrays = som.to_arrays()
     assert json.loads(json.dumps(header)) == header
     back = SigmaPiSOM.from_arrays(header, arrays)
@@ -136,7 +136,7 @@ def test_to_arrays_from_arrays_and_replay_twin(small_1d):
     assert back.t_ == som.t_ and back.seed_entropy == som.seed_entropy
     twin = som.replay_twin()
     assert not twin.is_fitted and twin.config == som.config
-    np.testing.assert_array_equal(twin.fit(som.t_).weights_, som.weights_)
+    np.testing.assert_array_equal(twin.fit(iterations=som.t_).weights_, som.weights_)
     with pytest.raises(ModelFileError, match="the config needs"):
         SigmaPiSOM.from_arrays(header, {"weights": arrays["weights"][:, :3]})
 

@@ -26,7 +26,7 @@ def test_fit_views_runs_the_whole_schedule_in_seeded_passes():
     a = som.fit(views).weights_.copy()
     assert som.t_ == SMALL.iterations
     np.testing.assert_array_equal(SigmaPiSOM(SMALL).fit(views).weights_, a)
-    assert SigmaPiSOM(SMALL).fit(views, n_iter=1000).t_ == 1000
+    assert SigmaPiSOM(SMALL).fit(views, iterations=1000).t_ == 1000
     # other data, other map; and not the built-in task's map
     assert not np.array_equal(SigmaPiSOM(SMALL).fit(_views(som, 700, 2)).weights_, a)
     assert not np.array_equal(SigmaPiSOM(SMALL).fit().weights_, a)
@@ -35,17 +35,27 @@ def test_fit_views_runs_the_whole_schedule_in_seeded_passes():
 def test_fit_views_orders_from_the_users_views():
     som = SigmaPiSOM(SMALL)
     views = _views(som, 500, 3)
-    start = SigmaPiSOM(SMALL).fit(views, n_iter=0).weights_
+    start = SigmaPiSOM(SMALL).fit(views, iterations=0).weights_
     want = crossview_init(views, (7,), (7,), (7,), SMALL.ordering_sigma / 2.0)
     np.testing.assert_allclose(start, want, rtol=0, atol=1e-12)
-    assert not np.allclose(start, SigmaPiSOM(SMALL).fit(n_iter=0).weights_)
+    assert not np.allclose(start, SigmaPiSOM(SMALL).fit(iterations=0).weights_)
 
 
-def test_fit_with_an_int_is_still_the_iteration_count():
-    a = SigmaPiSOM(SMALL).fit(800).weights_
-    np.testing.assert_array_equal(a, SigmaPiSOM(SMALL).fit(n_iter=800).weights_)
-    with pytest.raises(ValueError, match="n_iter was given twice"):
-        SigmaPiSOM(SMALL).fit(800, n_iter=800)
+@pytest.mark.parametrize("method", ["fit", "partial_fit"])
+def test_an_int_in_place_of_views_names_the_keyword(method):
+    som = SigmaPiSOM(SMALL)
+    with pytest.raises(sigmapi.ConfigError, match=rf"int 800; .*{method}\(iterations=800\)"):
+        getattr(som, method)(800)
+    assert not som.is_fitted
+    with pytest.raises(TypeError):  # keyword-only after the data
+        getattr(som, method)(None, 800)
+
+
+def test_partial_fit_with_views_takes_no_iteration_count():
+    som = SigmaPiSOM(SMALL)
+    with pytest.raises(sigmapi.ConfigError, match="iterations must be None when partial_fit"):
+        som.partial_fit(_views(som, 50, 5), iterations=20)
+    assert som.partial_fit(_views(som, 50, 5)).t_ == 50
 
 
 def test_same_view_ablation_holds_for_your_own_data():
@@ -91,7 +101,7 @@ def test_get_params_and_set_params():
     params = som.get_params()
     assert params["map_shape"] == (7,) and params["seed"] == 0 and "extra" not in params
     assert SigmaPiSOM(**params).config == som.config
-    som.fit(500)
+    som.fit(iterations=500)
     before = som.weights_.copy()
     assert som.set_params(eps=0.02) is som
     np.testing.assert_array_equal(som.weights_, before)  # a fitted model keeps its weights

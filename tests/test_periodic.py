@@ -42,12 +42,12 @@ def test_config_validates_map_periodic_and_angles():
 
 def test_ring_model_saves_loads_and_continues_bit_for_bit(tmp_path):
     cfg = load_preset("angles-1d").replace(iterations=2000, seed=3)
-    model = SigmaPiSOM(cfg).fit(1000)
+    model = SigmaPiSOM(cfg).fit(iterations=1000)
     model.save(tmp_path / "ring.npz")
     back = sigmapi.load(tmp_path / "ring.npz")
     assert back.config.map_periodic and back.config.relation == "sum_mod"
-    model.fit(2000)
-    back.fit(2000)
+    model.fit(iterations=2000)
+    back.fit(iterations=2000)
     np.testing.assert_array_equal(model.weights_, back.weights_)
 
 

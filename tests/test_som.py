@@ -28,7 +28,7 @@ def test_scikit_learn_tells_a_fitted_model(small_1d):
     for attributes in (None, "t_", "weights_"):
         with pytest.raises(exceptions.NotFittedError):
             validation.check_is_fitted(som, attributes)
-    som.fit(n_iter=10)
+    som.fit(iterations=10)
     for attributes in (None, "t_", "weights_"):
         validation.check_is_fitted(som, attributes)
     som.set_params(map_shape=(5,))  # the weights no longer fit: unfitted again
@@ -75,7 +75,7 @@ def test_same_seed_same_run_other_seed_other_run(small_1d):
 @pytest.mark.parametrize("cut", [1, 999, 1500, 2999])
 def test_partial_fit_in_pieces_equals_one_fit(small_1d, cut):
     whole = SigmaPiSOM(small_1d).fit()
-    pieces = SigmaPiSOM(small_1d).fit(n_iter=cut)
+    pieces = SigmaPiSOM(small_1d).fit(iterations=cut)
     assert pieces.t_ == cut
     pieces.partial_fit()  # the rest of the schedule
     assert pieces.t_ == 3000
@@ -84,7 +84,7 @@ def test_partial_fit_in_pieces_equals_one_fit(small_1d, cut):
 
 def test_save_load_continue_is_bit_exact(small_1d, tmp_path):
     whole = SigmaPiSOM(small_1d).fit()
-    half = SigmaPiSOM(small_1d).fit(n_iter=1234)
+    half = SigmaPiSOM(small_1d).fit(iterations=1234)
     path = half.save(tmp_path / "half.npz")
     loaded = sigmapi.load(path)
     assert loaded.t_ == 1234 and loaded.config == half.config
@@ -95,18 +95,18 @@ def test_save_load_continue_is_bit_exact(small_1d, tmp_path):
 
 def test_unseeded_runs_are_reproducible_from_their_file(small_1d, tmp_path):
     cfg = small_1d.replace(seed=None)
-    a = SigmaPiSOM(cfg).fit(n_iter=500)
+    a = SigmaPiSOM(cfg).fit(iterations=500)
     b = sigmapi.load(a.save(tmp_path / "a.npz"))
-    a.partial_fit(500)
-    b.partial_fit(500)
+    a.partial_fit(iterations=500)
+    b.partial_fit(iterations=500)
     np.testing.assert_array_equal(a.weights_, b.weights_)
 
 
-def test_partial_fit_past_the_run_needs_n_iter(small_1d):
+def test_partial_fit_past_the_run_needs_iterations(small_1d):
     som = SigmaPiSOM(small_1d).fit()
-    with pytest.raises(ValueError, match="complete"):
+    with pytest.raises(ConfigError, match=r"complete .* partial_fit\(iterations=1000\)"):
         som.partial_fit()
-    som.partial_fit(100)
+    som.partial_fit(iterations=100)
     assert som.t_ == 3100
     assert som.sigma_ == pytest.approx(1e-5)
 
@@ -137,7 +137,7 @@ def test_views_api_trains_on_user_data(small_1d):
 
 
 def test_cost_falls_during_learning(small_1d):
-    som = SigmaPiSOM(small_1d).fit(n_iter=200)
+    som = SigmaPiSOM(small_1d).fit(iterations=200)
     test = som.sampler.sample(500, np.random.default_rng(9))
     early = som.cost(test, sigma=1.0)
     som.partial_fit()
@@ -196,7 +196,7 @@ def test_hard_scores_argmax_is_the_hard_winner(model_2d, backend, rule):
     from sigmapi.metrics import evaluation_sets, hard_scores
 
     m = sigmapi.SigmaPiSOM(model_2d.config.replace(winner_rule=rule, backend=backend))
-    m.fit(n_iter=300)
+    m.fit(iterations=300)
     _, test = evaluation_sets(m, 500)
     w = m.winner(test.x0, test.y0, hard=True)
     np.testing.assert_array_equal(np.argmax(hard_scores(m, test.x0, test.y0), axis=1), w)

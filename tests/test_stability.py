@@ -81,7 +81,7 @@ def test_same_result_on_every_backend_and_resume_point(tmp_path, cut):
     finals = {}
     for backend in ("reference", "fast"):
         whole = SigmaPiSOM(cfg, backend=backend).fit()
-        part = SigmaPiSOM(cfg, backend=backend).fit(n_iter=cut)
+        part = SigmaPiSOM(cfg, backend=backend).fit(iterations=cut)
         back = sigmapi.load(part.save(tmp_path / f"{backend}.npz"))
         assert back.backend == backend
         back.partial_fit()

@@ -297,10 +297,10 @@ class SigmaPiSOM:
 
     def fit(
         self,
-        views: Views | int | None = None,
-        callback: Callback | None = None,
+        views: Views | None = None,
         *,
-        n_iter: int | None = None,
+        iterations: int | None = None,
+        callback: Callback | None = None,
     ) -> SigmaPiSOM:
         """Train from fresh initial weights; returns ``self``.
 
@@ -311,12 +311,11 @@ class SigmaPiSOM:
             ``(B, n_y)`` (positions become codes with :meth:`encode_views`); row b holds two
             views of one body-centred position, and the winner found from ``(x0[b], y0[b])``
             learns ``(x1[b], y1[b])``. Without it the model trains on its built-in task (the
-            relation and codes of its config). An int is taken as ``n_iter``, so the older
-            call ``fit(5000)`` keeps working.
+            relation and codes of its config).
+        iterations : int, optional
+            Iterations to run (default: the configured run, ``config.iterations``).
         callback : callable, optional
             ``callback(model)``, called at least once per block of ``BLOCK`` iterations.
-        n_iter : int, optional
-            Iterations to run (default: the configured run, ``config.iterations``).
 
         Notes
         -----
@@ -338,42 +337,22 @@ class SigmaPiSOM:
         >>> som.fit(views).t_
         3000
         """
-        if isinstance(views, int | np.integer) and not isinstance(views, bool):
-            if n_iter is not None:
-                raise ConfigError(
-                    f"n_iter was given twice ({views} and n_iter={n_iter}); pass it once"
-                )
-            n_iter = int(views)
-            views = None
         with self._lock:
-            if views is None:
-                self._set_weights(self.initial_weights())
-                self.t_ = 0
-                return self.partial_fit(
-                    n_iter if n_iter is not None else self.config.iterations, callback=callback
-                )
-            return self._fit_views(views, n_iter, callback)
-
-    def _fit_views(self, views: Any, n_iter: int | None, callback: Callback | None) -> SigmaPiSOM:
-        """:meth:`fit` on the user's ``views`` (its Notes): passes in seeded random orders."""
-        data = self._check_views(views)
-        rows = data[0].shape[0]
-        if rows == 0:
-            raise DataError("views must hold at least one row (pair of views), got 0 rows")
-        total = self.config.iterations if n_iter is None else n_iter
-        total = _validate.integer("n_iter", total, 0)
-        self._set_weights(self.initial_weights(data))
-        self.t_ = 0
-        npass = 0
-        while self.t_ < total:
-            order = self._seq(3, npass).permutation(rows)[: total - self.t_]
-            for s in range(0, order.size, BLOCK):
-                idx = order[s : s + BLOCK]
-                self._run_views(data[0][idx], data[1][idx], data[2][idx], data[3][idx])
-                if callback is not None:
-                    callback(self)
-            npass += 1
-        return self
+            data = self._check_views(views, "fit")
+            total = _count(self.config.iterations if iterations is None else iterations)
+            rows = 0 if data is None else data[0].shape[0]
+            if data is not None and rows == 0:
+                raise DataError("views must hold at least one row (pair of views), got 0 rows")
+            self._set_weights(self.initial_weights(data))
+            self._t = 0
+            if data is None:
+                return self._partial_fit(None, total, callback)
+            npass = 0
+            while self._t < total:
+                order = self._seq(3, npass).permutation(rows)[: total - self._t]
+                self._train_rows(data, order, callback)
+                npass += 1
+            return self
 
     def encode_views(
         self, px0: ArrayLike, py0: ArrayLike, px1: ArrayLike, py1: ArrayLike
@@ -435,23 +414,24 @@ class SigmaPiSOM:
 
     def partial_fit(
         self,
-        n_iter: int | None = None,
+        views: Views | None = None,
         *,
-        views: tuple[ArrayLike, ArrayLike, ArrayLike, ArrayLike] | None = None,
+        iterations: int | None = None,
         callback: Callback | None = None,
     ) -> SigmaPiSOM:
         """Continue training where the schedule stopped; returns ``self``.
 
         Parameters
         ----------
-        n_iter : int, optional
-            Iterations to run on the model's own two-view data (default: the rest of the
-            configured run). Ignored when ``views`` is given.
         views : (x0, y0, x1, y1), optional
             Your own data: codes of shape ``(T, n_x)``, ``(T, n_y)``, ``(T, n_x)``,
             ``(T, n_y)``; iteration t finds the winner from ``(x0[t], y0[t])`` and learns
             ``(x1[t], y1[t])`` (``(x0[t], y0[t])`` with ``same_view``). Each row is used once,
-            in order; the schedule continues at ``t_``. :meth:`fit` runs a whole schedule.
+            in order (T iterations); the schedule continues at ``t_``. :meth:`fit` runs a
+            whole schedule. Without it the model continues on its built-in task.
+        iterations : int, optional
+            Iterations to run on the built-in task (default: the rest of the configured run).
+            Not with ``views``, whose rows are the iterations.
         callback : callable, optional
             ``callback(model)``, called after every chunk of at most ``BLOCK`` iterations.
 
@@ -459,43 +439,55 @@ class SigmaPiSOM:
         iteration is lost; the order in which they run is the threads'.
         """
         with self._lock:
-            return self._partial_fit(n_iter, views, callback)
+            data = self._check_views(views, "partial_fit")
+            if data is not None and iterations is not None:
+                raise ConfigError(
+                    f"iterations must be None when partial_fit is given views (one iteration "
+                    f"per row), got {iterations!r}; pass the first rows, views[i][:n], or "
+                    "fit(views, iterations=n) for passes over them"
+                )
+            n = None if iterations is None else _count(iterations)
+            return self._partial_fit(data, n, callback)
 
     def _partial_fit(
-        self,
-        n_iter: int | None,
-        views: tuple[ArrayLike, ArrayLike, ArrayLike, ArrayLike] | None,
-        callback: Callback | None,
+        self, data: CodeViews | None, iterations: int | None, callback: Callback | None
     ) -> SigmaPiSOM:
-        if views is not None:
-            x0, y0, x1, y1 = self._check_views(views)
-            if self._state is None:
-                self._set_weights(self.initial_weights((x0, y0, x1, y1)))
-            for s in range(0, x0.shape[0], BLOCK):
-                sl = slice(s, s + BLOCK)
-                self._run_views(x0[sl], y0[sl], x1[sl], y1[sl])
-                if callback is not None:
-                    callback(self)
-            return self
         if self._state is None:
-            self._set_weights(self.initial_weights())
-        if n_iter is None:
-            n_iter = self.config.iterations - self._t
-            if n_iter <= 0:
-                raise ValueError(
+            self._set_weights(self.initial_weights(data))
+        if data is not None:
+            self._train_rows(data, None, callback)
+            return self
+        if iterations is None:
+            iterations = self.config.iterations - self._t
+            if iterations <= 0:
+                raise ConfigError(
                     f"the configured run of {self.config.iterations} iterations is complete "
-                    f"(t_ = {self._t}); pass n_iter to train further"
+                    f"(t_ = {self._t}); pass iterations to train further, e.g. "
+                    "partial_fit(iterations=1000)"
                 )
-        end = self.t_ + _validate.integer("n_iter", n_iter, 0)
-        while self.t_ < end:
-            b, off = divmod(self.t_, BLOCK)
-            stop = min(BLOCK, off + end - self.t_)
+        end = self._t + iterations
+        while self._t < end:
+            b, off = divmod(self._t, BLOCK)
+            stop = min(BLOCK, off + end - self._t)
             batch = self.training_block(b)
             sl = slice(off, stop)
             self._run_views(batch.x0[sl], batch.y0[sl], batch.x1[sl], batch.y1[sl])
             if callback is not None:
                 callback(self)
         return self
+
+    def _train_rows(
+        self, data: CodeViews, order: NDArray[np.intp] | None, callback: Callback | None
+    ) -> None:
+        """Iterations on the rows ``order`` of ``data`` (None: all, as given), in chunks of at
+        most ``BLOCK`` rows, calling ``callback`` after each."""
+        n = data[0].shape[0] if order is None else order.size
+        for s in range(0, n, BLOCK):
+            rows = slice(s, s + BLOCK) if order is None else order[s : s + BLOCK]
+            x0, y0, x1, y1 = (v[rows] for v in data)
+            self._run_views(x0, y0, x1, y1)
+            if callback is not None:
+                callback(self)
 
     def _run_views(
         self, x0: NDArray[Any], y0: NDArray[Any], x1: NDArray[Any], y1: NDArray[Any]
@@ -517,8 +509,15 @@ class SigmaPiSOM:
         self.t_ += x0.shape[0]
         self._weights_cache = None
 
-    def _check_views(self, views: Any) -> CodeViews:
+    def _check_views(self, views: Any, method: str) -> CodeViews | None:
         """``views`` checked against the model's grids (:func:`sigmapi.views.check_views`)."""
+        if views is None:
+            return None
+        if _validate.is_int(views):
+            raise ConfigError(
+                f"views must be a tuple (x0, y0, x1, y1) of code arrays or None, got the int "
+                f"{views}; pass an iteration count by name: {method}(iterations={views})"
+            )
         return check_views(views, self.x_shape, self.y_shape)
 
     # ------------------------------------------------------------------ using the map
@@ -617,8 +616,8 @@ class SigmaPiSOM:
     def replay_twin(self) -> SigmaPiSOM:
         """An unfitted model with this one's config and random streams (its seed entropy).
 
-        ``model.replay_twin().fit(model.t_)`` replays the run that made ``model`` (the
-        training data of every iteration is a pure function of the seed entropy and the
+        ``model.replay_twin().fit(iterations=model.t_)`` replays the run that made ``model``
+        (the training data of every iteration is a pure function of the seed entropy and the
         iteration number). ``sklearn.base.clone(model)`` instead builds a model from the
         hyperparameters alone: with ``seed=None``, other random streams.
         """
@@ -807,6 +806,11 @@ class SigmaPiSOM:
 def _entropy(seed: int | None) -> int:
     """The entropy of the random streams of ``seed``: ``seed`` itself, or fresh for None."""
     return int(np.random.SeedSequence(seed).entropy)  # type: ignore[arg-type]
+
+
+def _count(iterations: Any) -> int:
+    """An iteration count to run, checked: an int >= 0."""
+    return _validate.integer("iterations", iterations, 0)
 
 
 def _identical(given: Any, stored: Any) -> bool:

@@ -78,7 +78,7 @@ def cmd_figure(args: argparse.Namespace) -> int:
         at = checkpoints(model.t_, N_CHECKPOINTS)
         curve = LearningCurve(at=at, n_test=CURVE_TEST, then=callback)
         with bar:
-            twin.fit(model.t_, callback=curve)
+            twin.fit(iterations=model.t_, callback=curve)
         if not np.allclose(twin.weights_, model.weights_, rtol=1e-6, atol=1e-9):
             print("note: the replayed run ended with weights that differ from the file's "
                   "(another backend?); curves show the replay", file=sys.stderr)  # fmt: skip

@@ -62,7 +62,7 @@ def cmd_train(args: argparse.Namespace) -> int:
             print(f"resuming from {out} (iteration {model.t_})", file=sys.stderr)
     if model is None:
         model = SigmaPiSOM(cfg)
-        model.partial_fit(0)  # initial weights, iteration 0
+        model.partial_fit(iterations=0)  # initial weights, iteration 0
     callback, bar = progress_callback(
         cfg.iterations, f"train {args.preset}", start=model.t_, disable=args.quiet or None
     )
@@ -71,7 +71,7 @@ def cmd_train(args: argparse.Namespace) -> int:
             step = cfg.iterations - model.t_
             if every is not None:
                 step = min(step, every - model.t_ % every)
-            model.partial_fit(step, callback=callback)
+            model.partial_fit(iterations=step, callback=callback)
             if every is not None and model.t_ % every == 0 and model.t_ < cfg.iterations:
                 write_checkpoint(model, folder)
     model.save(out, compress=args.compress)
