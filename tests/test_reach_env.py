@@ -38,7 +38,7 @@ def test_registered_id_makes_the_env_and_reimport_is_harmless() -> None:
 
 def test_import_sigmapi_alone_registers_the_id() -> None:
     code = (
-        "import gymnasium, sigmapi, sys; assert 'sigmapi.reach' not in sys.modules; "
+        "import gymnasium, sigmapi, sys; assert 'sigmapi.envs' not in sys.modules; "
         "env = gymnasium.make('sigmapi/GazeReach-v0', dim=1, grid=7); env.reset(seed=0)"
     )
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)

@@ -3,7 +3,7 @@
 Weber & Wermter, "A self-organizing map of Sigma-Pi units", Neurocomputing 70 (2007) 2552-2560.
 
 Importing the package registers the Gymnasium environment ``sigmapi/GazeReach-v0``
-(:class:`sigmapi.reach.GazeReachEnv`) by its entry-point string: ``gymnasium.make`` loads the
+(:class:`sigmapi.envs.GazeReachEnv`) by its entry-point string: ``gymnasium.make`` loads the
 environment's module when it is first made.
 """
 
@@ -44,4 +44,6 @@ __all__ = [
 ]
 
 if "sigmapi/GazeReach-v0" not in _gymnasium.registry:
-    _gymnasium.register(id="sigmapi/GazeReach-v0", entry_point="sigmapi.reach.env:GazeReachEnv")
+    _gymnasium.register(
+        id="sigmapi/GazeReach-v0", entry_point="sigmapi.envs.gaze_reach:GazeReachEnv"
+    )

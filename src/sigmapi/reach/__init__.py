@@ -1,29 +1,22 @@
-"""From map to action: the gaze-and-reach task, map observations and an actor-critic learner.
-
-``import sigmapi`` registers the Gymnasium environment ``sigmapi/GazeReach-v0``
-(:class:`GazeReachEnv`; keyword arguments of ``gymnasium.make`` go to its constructor).
-
-    >>> import gymnasium as gym
-    >>> import sigmapi
-    >>> env = gym.make("sigmapi/GazeReach-v0", dim=1, grid=9)
-    >>> obs, info = env.reset(seed=0)
-    >>> sorted(obs)
-    ['gaze', 'retina']
-"""
+"""From map to action: the reach experiment (the environment and wrappers are in
+:mod:`sigmapi.envs`, the learner in :mod:`sigmapi.agents`; re-exported here)."""
 
 from __future__ import annotations
 
-from sigmapi.reach.agent import ActorCritic
-from sigmapi.reach.config import ReachConfig
-from sigmapi.reach.env import GazeReachEnv, move_table
-from sigmapi.reach.experiment import ReachResult, learn_map_in_env, run_reach, run_with_progress
-from sigmapi.reach.views import collect_saccade_views
-from sigmapi.reach.wrappers import (
+from sigmapi.agents import ActorCritic
+from sigmapi.envs import (
+    ENV_ID,
     CodeObservation,
+    GazeReachEnv,
     MapObservation,
     TrueZObservation,
+    collect_saccade_views,
+    learn_map_in_env,
     make_state_env,
+    move_table,
 )
+from sigmapi.reach.config import ReachConfig
+from sigmapi.reach.experiment import ReachResult, run_reach, run_with_progress
 
 __all__ = [
     "ENV_ID",
@@ -41,6 +34,3 @@ __all__ = [
     "run_reach",
     "run_with_progress",
 ]
-
-ENV_ID = "sigmapi/GazeReach-v0"
-"""The environment's Gymnasium id (registered by ``import sigmapi``)."""

@@ -11,12 +11,12 @@ from dataclasses import dataclass
 from typing import Any
 
 from sigmapi import _memory, _validate
+from sigmapi.agents.actor_critic import ActorCritic
 from sigmapi.config import SOMConfig, list_presets, load_preset
+from sigmapi.envs.gaze_reach import GazeReachEnv
+from sigmapi.envs.wrappers import FEATURES, STATES
 from sigmapi.errors import ConfigError
 from sigmapi.kernels import BACKENDS
-from sigmapi.reach.agent import ActorCritic
-from sigmapi.reach.env import GazeReachEnv
-from sigmapi.reach.wrappers import FEATURES, STATES
 from sigmapi.som import SigmaPiSOM
 
 __all__ = ["SMALL_MAP", "ReachConfig"]

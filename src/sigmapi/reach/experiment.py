@@ -18,20 +18,18 @@ import gymnasium as gym
 import numpy as np
 from numpy.typing import NDArray
 
-from sigmapi.config import SOMConfig
+from sigmapi.agents.actor_critic import ActorCritic
+from sigmapi.envs.gaze_reach import GazeReachEnv
+from sigmapi.envs.views import learn_map_in_env
+from sigmapi.envs.wrappers import Features, TrueZObservation, make_state_env
 from sigmapi.executor import job_memory, plan_workers, run_jobs
 from sigmapi.metrics import evaluate
 from sigmapi.progress import counter
-from sigmapi.reach.agent import ActorCritic
 from sigmapi.reach.config import ReachConfig
-from sigmapi.reach.env import GazeReachEnv
-from sigmapi.reach.views import collect_saccade_views
-from sigmapi.reach.wrappers import Features, TrueZObservation, make_state_env
 from sigmapi.som import SigmaPiSOM, load_model
 
 __all__ = [
     "ReachResult",
-    "learn_map_in_env",
     "run_episodes",
     "run_reach",
     "run_with_progress",
@@ -39,22 +37,6 @@ __all__ = [
 ]
 
 Progress = Callable[[int, str], None]
-
-
-def learn_map_in_env(
-    env: GazeReachEnv,
-    config: SOMConfig,
-    seed: int | None = None,
-    callback: Callable[[SigmaPiSOM], None] | None = None,
-) -> SigmaPiSOM:
-    """Train a :class:`~sigmapi.SigmaPiSOM` on saccade views gathered in ``env``.
-
-    ``config.iterations`` view pairs are collected with
-    :func:`~sigmapi.reach.collect_saccade_views` (no teacher, no access to z) and learned
-    with ``partial_fit(views=...)``: the winner from one view, the update from the other.
-    """
-    views = collect_saccade_views(env, config.iterations, seed=seed)
-    return SigmaPiSOM(config).partial_fit(views=views, callback=callback)
 
 
 def value_over_z(

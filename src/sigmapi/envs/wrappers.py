@@ -24,8 +24,8 @@ from numpy.typing import NDArray
 
 from sigmapi import _validate
 from sigmapi.codes import PopulationCode, grid_coordinates
+from sigmapi.envs.gaze_reach import GazeReachEnv, Obs
 from sigmapi.errors import ConfigError
-from sigmapi.reach.env import GazeReachEnv, Obs
 from sigmapi.som import SigmaPiSOM
 
 __all__ = [
@@ -79,7 +79,7 @@ class MapObservation(gym.ObservationWrapper[Features, Any, Obs]):
         A (wrapped) :class:`GazeReachEnv` whose codes match the model's ``x_shape`` and
         ``y_shape`` (same grid, same code width).
     model : SigmaPiSOM
-        A trained map (``sigmapi.load(path)`` or :func:`~sigmapi.reach.learn_map_in_env`).
+        A trained map (``sigmapi.load(path)`` or :func:`~sigmapi.envs.learn_map_in_env`).
     features : {"response", "bump"}
         ``"response"`` (default): the activations ``h_k`` clipped at 0 and L2-normalised, a
         sparse localized code of z (each unit is tuned to a patch of z; on a trained 7x7 map

@@ -8,14 +8,18 @@ without reading ``z``.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 from numpy.typing import NDArray
 
 from sigmapi import _validate
+from sigmapi.config import SOMConfig
+from sigmapi.envs.gaze_reach import GazeReachEnv
 from sigmapi.errors import ConfigError
-from sigmapi.reach.env import GazeReachEnv
+from sigmapi.som import SigmaPiSOM
 
-__all__ = ["collect_saccade_views"]
+__all__ = ["collect_saccade_views", "learn_map_in_env"]
 
 
 def collect_saccade_views(
@@ -26,9 +30,9 @@ def collect_saccade_views(
     Per pair the object lies anywhere in the workspace (uniform ``z``, the goal region
     included: the map must know the goal's z too) and, while the body keeps still, the eye
     makes two saccades (each to a uniform fixation that keeps the object on the retina, the
-    environment's :meth:`~sigmapi.reach.GazeReachEnv.saccade_targets`); the two fixations are
+    environment's :meth:`~sigmapi.envs.GazeReachEnv.saccade_targets`); the two fixations are
     the two views, coded as the environment codes its observations
-    (:meth:`~sigmapi.reach.GazeReachEnv.codes`). Computed for all pairs at once rather than by
+    (:meth:`~sigmapi.envs.GazeReachEnv.codes`). Computed for all pairs at once rather than by
     stepping: the environment ends an episode as soon as ``z`` is in the goal box, so stepping
     could never show a goal ``z`` twice. Only the codes are used for learning, never ``z``.
 
@@ -61,3 +65,19 @@ def collect_saccade_views(
     x1, y1 = env.codes(z, env.saccade_targets(z, rng))
     f64 = [np.asarray(v, dtype=np.float64) for v in (x0, y0, x1, y1)]
     return f64[0], f64[1], f64[2], f64[3]
+
+
+def learn_map_in_env(
+    env: GazeReachEnv,
+    config: SOMConfig,
+    seed: int | None = None,
+    callback: Callable[[SigmaPiSOM], None] | None = None,
+) -> SigmaPiSOM:
+    """Train a :class:`~sigmapi.SigmaPiSOM` on saccade views gathered in ``env``.
+
+    ``config.iterations`` view pairs are collected with
+    :func:`collect_saccade_views` (no teacher, no access to z) and learned
+    with ``partial_fit(views=...)``: the winner from one view, the update from the other.
+    """
+    views = collect_saccade_views(env, config.iterations, seed=seed)
+    return SigmaPiSOM(config).partial_fit(views=views, callback=callback)
