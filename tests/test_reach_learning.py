@@ -84,8 +84,10 @@ def test_map_bump_is_centred_on_the_models_winner(tiny_map: SigmaPiSOM) -> None:
 
 
 def test_wrapper_errors(tiny_map: SigmaPiSOM) -> None:
-    with pytest.raises(ConfigError, match="make the env with grid=5"):
+    with pytest.raises(ConfigError, match=r"the map reads x on \(5, 5\) units \(25 values\)"):
         MapObservation(GazeReachEnv(grid=7), tiny_map)
+    with pytest.raises(ConfigError, match="make the environment with the map's code"):
+        MapObservation(GazeReachEnv(grid=5, code_width=1.0), tiny_map)
     with pytest.raises(ConfigError, match="keys must be"):
         CodeObservation(GazeReachEnv(grid=5), ("retina", "nose"))
     with pytest.raises(ConfigError, match="needs a trained model"):

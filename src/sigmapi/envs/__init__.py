@@ -1,4 +1,5 @@
-"""Worlds to learn in: the gaze-and-reach task, its observation wrappers and its saccade views.
+"""Worlds to learn in, behind a view-source protocol: the gaze-and-reach task, the observation
+wrappers (which read observation spaces, not classes) and the saccade views a map learns from.
 
 ``import sigmapi`` registers the Gymnasium environment ``sigmapi/GazeReach-v0``
 (:class:`GazeReachEnv`; keyword arguments of ``gymnasium.make`` go to its constructor).
@@ -14,9 +15,19 @@
 from __future__ import annotations
 
 from sigmapi.envs.gaze_reach import GazeReachEnv, move_table
-from sigmapi.envs.views import collect_saccade_views, learn_map_in_env
+from sigmapi.envs.protocols import (
+    OBS_KEYS,
+    Obs,
+    PlacedViewSource,
+    Views,
+    ViewSource,
+    check_view_space,
+    view_space,
+)
+from sigmapi.envs.views import collect_saccade_views, learn_map_in_env, view_source
 from sigmapi.envs.wrappers import (
     FEATURES,
+    STATE_WRAPPERS,
     STATES,
     CodeObservation,
     MapObservation,
@@ -28,16 +39,25 @@ from sigmapi.envs.wrappers import (
 __all__ = [
     "ENV_ID",
     "FEATURES",
+    "OBS_KEYS",
     "STATES",
+    "STATE_WRAPPERS",
     "CodeObservation",
     "GazeReachEnv",
     "MapObservation",
+    "Obs",
+    "PlacedViewSource",
     "TrueZObservation",
+    "ViewSource",
+    "Views",
     "bump_features",
+    "check_view_space",
     "collect_saccade_views",
     "learn_map_in_env",
     "make_state_env",
     "move_table",
+    "view_source",
+    "view_space",
 ]
 
 ENV_ID = "sigmapi/GazeReach-v0"

@@ -39,12 +39,10 @@ from numpy.typing import NDArray
 
 from sigmapi import _validate
 from sigmapi.codes import _WIDTH_FIX, MIN_WIDTH, PopulationCode
+from sigmapi.envs.protocols import Obs, Views, view_space
 from sigmapi.errors import ConfigError
 
 __all__ = ["GazeReachEnv", "move_table"]
-
-Obs = dict[str, Any]
-"""Observation: ``{"retina": float32 code of x, "gaze": float32 code of y}``."""
 
 
 def move_table(dim: int, diagonal: bool = False) -> NDArray[np.float64]:
@@ -184,12 +182,7 @@ class GazeReachEnv(gym.Env[Obs, np.int64]):
 
         self.code = PopulationCode((self.grid,) * self.dim, width=self.code_width)
         n = self.code.size
-        self.observation_space = spaces.Dict(
-            {
-                "retina": spaces.Box(0.0, 1.0, (n,), dtype=np.float32),
-                "gaze": spaces.Box(0.0, 1.0, (n,), dtype=np.float32),
-            }
-        )
+        self.observation_space = view_space(n, n)
         self.action_space = spaces.Discrete(len(self.moves))
         self._z = np.full(self.dim, 0.5)
         self._y = np.full(self.dim, 0.5)
@@ -225,7 +218,50 @@ class GazeReachEnv(gym.Env[Obs, np.int64]):
         lo, hi = self.gaze_range(z)
         return lo + (hi - lo) * rng.random(z.shape)
 
-    def codes(
+    # ------------------------------------------------------------------ view source
+    @property
+    def x_code(self) -> PopulationCode:
+        """The code of the retinal position ``x`` (the ``"retina"`` observation)."""
+        return self.code
+
+    @property
+    def y_code(self) -> PopulationCode:
+        """The code of the gaze ``y`` (the ``"gaze"`` observation)."""
+        return self.code
+
+    @property
+    def z_dim(self) -> int:
+        """Dimensions of the body-centred position ``z`` (``info["z"]``)."""
+        return self.dim
+
+    def views_of(
+        self, z: NDArray[np.float64], rng: np.random.Generator
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """One view of each ``z`` ``(B, dim)`` after a saccade (:meth:`saccade_targets`): the
+        retina and gaze codes as the observation holds them (float32 values), as float64."""
+        x, y = self._codes(z, self.saccade_targets(z, rng))
+        return x.astype(np.float64), y.astype(np.float64)
+
+    def sample_views(self, n: int, rng: np.random.Generator) -> Views:
+        """``n`` pairs of views of one ``z`` each: the body keeps still, the eye looks around.
+
+        Per pair the object lies anywhere in the workspace (uniform ``z``, the goal region
+        included: the map must know the goal's ``z`` too) and the eye makes two saccades
+        (:meth:`views_of`). Computed for all pairs at once rather than by stepping: an episode
+        ends as soon as ``z`` is in the goal box, so stepping could never show a goal ``z``
+        twice. ``rng`` draws ``z``, then view 0's fixations, then view 1's.
+        """
+        n = _validate.integer("n", n, 1, fix="e.g. n=20000")
+        if self.saccade_rate == 0.0:
+            raise ConfigError(
+                "saccade_rate must be > 0 to collect views: a still eye never shows a second view"
+            )
+        z = rng.random((n, self.dim))
+        x0, y0 = self.views_of(z, rng)
+        x1, y1 = self.views_of(z, rng)
+        return x0, y0, x1, y1
+
+    def _codes(
         self, z: NDArray[np.float64], y: NDArray[np.float64]
     ) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
         """What the agent sees of objects at ``z`` with gaze ``y`` (both ``(B, dim)``): the
@@ -233,12 +269,8 @@ class GazeReachEnv(gym.Env[Obs, np.int64]):
         x = np.clip(2.0 * z - y, 0.0, 1.0)
         return self.code.encode(x).astype(np.float32), self.code.encode(y).astype(np.float32)
 
-    def encode(self, p: NDArray[np.float64]) -> NDArray[np.float32]:
-        """Code of one position ``p`` ``(dim,)`` in [0, 1]: ``self.code.encode``, as float32."""
-        return self.code.encode(p[None, :])[0].astype(np.float32)
-
     def _obs(self) -> Obs:
-        retina, gaze = self.codes(self._z[None, :], self._y[None, :])
+        retina, gaze = self._codes(self._z[None, :], self._y[None, :])
         return {"retina": retina[0], "gaze": gaze[0]}
 
     def _info(self, saccade: bool, event: str) -> dict[str, Any]:

@@ -1,83 +1,103 @@
-"""Training data for the map from the robot's own behaviour: saccades while the body is still.
+"""Training data for the map from the body's own behaviour: saccades while the body is still.
 
 While the body keeps still, ``z`` does not change, and every saccade shows the same object at
 a new retinal position under a new gaze: two views ``(x0, y0)`` and ``(x1, y1)`` of one ``z``,
 exactly what the Sigma-Pi SOM learns from (docs/algorithm.md), gathered without a teacher and
-without reading ``z``.
+without reading ``z``. Any :class:`~sigmapi.envs.ViewSource` provides them; these functions
+check what it returns and learn a map from it.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import Any
 
+import gymnasium as gym
 import numpy as np
-from numpy.typing import NDArray
 
 from sigmapi import _validate
 from sigmapi.config import SOMConfig
-from sigmapi.envs.gaze_reach import GazeReachEnv
+from sigmapi.envs.protocols import Views, ViewSource
 from sigmapi.errors import ConfigError
 from sigmapi.som import SigmaPiSOM
 
-__all__ = ["collect_saccade_views", "learn_map_in_env"]
+__all__ = ["collect_saccade_views", "learn_map_in_env", "view_source"]
 
 
-def collect_saccade_views(
-    env: GazeReachEnv, n_pairs: int, seed: int | None = None
-) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+def view_source(source: Any) -> ViewSource:
+    """``source`` as a :class:`~sigmapi.envs.ViewSource`: a Gymnasium environment is
+    unwrapped first (wrappers hide the world's attributes); anything else must implement the
+    protocol itself."""
+    base = source.unwrapped if isinstance(source, gym.Env) else source
+    if not isinstance(base, ViewSource):
+        raise ConfigError(
+            f"source must be a view source (x_code, y_code and sample_views(n, rng), see "
+            f"sigmapi.envs.ViewSource), got {type(base).__name__}"
+        )
+    return base
+
+
+def collect_saccade_views(source: Any, n_pairs: int, seed: int | None = None) -> Views:
     """Gather ``n_pairs`` pairs of views of the same ``z`` by keeping still and looking around.
-
-    Per pair the object lies anywhere in the workspace (uniform ``z``, the goal region
-    included: the map must know the goal's z too) and, while the body keeps still, the eye
-    makes two saccades (each to a uniform fixation that keeps the object on the retina, the
-    environment's :meth:`~sigmapi.envs.GazeReachEnv.saccade_targets`); the two fixations are
-    the two views, coded as the environment codes its observations
-    (:meth:`~sigmapi.envs.GazeReachEnv.codes`). Computed for all pairs at once rather than by
-    stepping: the environment ends an episode as soon as ``z`` is in the goal box, so stepping
-    could never show a goal ``z`` twice. Only the codes are used for learning, never ``z``.
 
     Parameters
     ----------
-    env : GazeReachEnv
-        The environment (unwrapped: its observations are the retina and gaze codes).
+    source : ViewSource or gymnasium.Env
+        What shows the views (:meth:`~sigmapi.envs.ViewSource.sample_views`), e.g. a
+        :class:`~sigmapi.envs.GazeReachEnv`, wrapped or not.
     n_pairs : int
         Number of view pairs.
     seed : int, optional
-        Seed of the object positions and fixations.
+        Seed of the source's random choices (object positions, fixations).
 
     Returns
     -------
-    x0, y0, x1, y1 : ndarray, shape (n_pairs, grid**dim)
-        Codes of the two views, ready for ``SigmaPiSOM.partial_fit(views=...)``.
+    x0, y0, x1, y1 : ndarray, float64
+        Codes of the two views, ``(n_pairs, x_code.size)`` and ``(n_pairs, y_code.size)``,
+        ready for ``SigmaPiSOM.fit(views)``. Only the codes are returned, never ``z``.
     """
     n_pairs = _validate.integer("n_pairs", n_pairs, 1, fix="e.g. n_pairs=20000")
-    if not isinstance(env, GazeReachEnv):
+    src = view_source(source)
+    views = src.sample_views(n_pairs, np.random.default_rng(seed))
+    sizes = (src.x_code.size, src.y_code.size) * 2
+    if len(views) != 4:
         raise ConfigError(
-            f"env must be a GazeReachEnv (use env.unwrapped), got {type(env).__name__}"
+            f"{type(src).__name__}.sample_views must return (x0, y0, x1, y1), got "
+            f"{len(views)} arrays"
         )
-    if env.saccade_rate == 0.0:
-        raise ConfigError(
-            "saccade_rate must be > 0 to collect views: a still eye never shows a second view"
-        )
-    rng = np.random.default_rng(seed)
-    z = rng.random((n_pairs, env.dim))
-    x0, y0 = env.codes(z, env.saccade_targets(z, rng))
-    x1, y1 = env.codes(z, env.saccade_targets(z, rng))
-    f64 = [np.asarray(v, dtype=np.float64) for v in (x0, y0, x1, y1)]
-    return f64[0], f64[1], f64[2], f64[3]
+    out = []
+    for name, v, size in zip(("x0", "y0", "x1", "y1"), views, sizes, strict=True):
+        arr = np.asarray(v, dtype=np.float64)
+        if arr.shape != (n_pairs, size):
+            raise ConfigError(
+                f"{type(src).__name__}.sample_views gave {name} of shape {arr.shape}, expected "
+                f"({n_pairs}, {size}) (n pairs x the size of its code)"
+            )
+        out.append(arr)
+    return out[0], out[1], out[2], out[3]
 
 
 def learn_map_in_env(
-    env: GazeReachEnv,
+    source: Any,
     config: SOMConfig,
     seed: int | None = None,
     callback: Callable[[SigmaPiSOM], None] | None = None,
 ) -> SigmaPiSOM:
-    """Train a :class:`~sigmapi.SigmaPiSOM` on saccade views gathered in ``env``.
+    """Train a :class:`~sigmapi.SigmaPiSOM` on saccade views of ``source``.
 
-    ``config.iterations`` view pairs are collected with
-    :func:`collect_saccade_views` (no teacher, no access to z) and learned
-    with ``partial_fit(views=...)``: the winner from one view, the update from the other.
+    ``config.iterations`` view pairs are collected with :func:`collect_saccade_views` (no
+    teacher, no access to z) and learned with ``partial_fit(views=...)``: the winner from one
+    view, the update from the other. ``config`` must code x and y as the source does
+    (``x_shape``, ``y_shape``, ``code_width``, ...: the map's ``x_code`` and ``y_code`` equal
+    the source's).
     """
-    views = collect_saccade_views(env, config.iterations, seed=seed)
-    return SigmaPiSOM(config).partial_fit(views=views, callback=callback)
+    src = view_source(source)
+    som = SigmaPiSOM(config)
+    for axis, mine, theirs in (("x", som.x_code, src.x_code), ("y", som.y_code, src.y_code)):
+        if mine != theirs:
+            raise ConfigError(
+                f"the map codes {axis} as {mine} but the source as {theirs}; give the map's "
+                f"config the source's code ({axis}_shape, code_width, ...)"
+            )
+    views = collect_saccade_views(src, config.iterations, seed=seed)
+    return som.partial_fit(views=views, callback=callback)

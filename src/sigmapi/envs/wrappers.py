@@ -1,7 +1,12 @@
-"""Observation wrappers: the state a learner sees in the gaze-and-reach task.
+"""Observation wrappers: the state a learner sees.
 
 Each wrapper turns the environment's ``{"retina", "gaze"}`` codes into one float32 feature
-vector of L2 length 1 (so that one learning rate means the same for every state):
+vector of L2 length 1 (so that one learning rate means the same for every state). They read
+the environment through its interface only (:mod:`sigmapi.envs.protocols`): the observation
+space (a ``Dict`` of 1-D ``Box`` codes), ``info["z"]`` for the oracle, and, where the world
+offers them, its codes (``x_code``, ``y_code`` of a :class:`~sigmapi.envs.ViewSource`) to check
+that a map reads them as it was trained. The gaze-and-reach world is one such environment,
+not the only one.
 
 - :class:`MapObservation`: the learned Sigma-Pi map's reading of ``(x, y)`` (the paper's
   route: "the output is a suitable input to a reinforcement-learnt network");
@@ -15,6 +20,7 @@ vector of L2 length 1 (so that one learning rate means the same for every state)
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any, SupportsFloat
 
 import gymnasium as gym
@@ -24,13 +30,14 @@ from numpy.typing import NDArray
 
 from sigmapi import _validate
 from sigmapi.codes import PopulationCode, grid_coordinates
-from sigmapi.envs.gaze_reach import GazeReachEnv, Obs
+from sigmapi.envs.protocols import Obs, PlacedViewSource, ViewSource, check_view_space
 from sigmapi.errors import ConfigError
 from sigmapi.som import SigmaPiSOM
 
 __all__ = [
     "FEATURES",
     "STATES",
+    "STATE_WRAPPERS",
     "CodeObservation",
     "MapObservation",
     "TrueZObservation",
@@ -38,19 +45,16 @@ __all__ = [
     "make_state_env",
 ]
 
-STATES = ("map", "retina", "retina_gaze", "true_z")
-"""State representations compared by the experiment."""
 FEATURES = ("response", "bump")
 """How the map's reading becomes features (see :class:`MapObservation`)."""
 
 Features = NDArray[np.float32]
 
 
-def _base(env: gym.Env[Any, Any]) -> GazeReachEnv:
+def _codes_of(env: gym.Env[Any, Any]) -> ViewSource | None:
+    """The world under ``env`` if it declares its codes (a view source), else None."""
     base = env.unwrapped
-    if not isinstance(base, GazeReachEnv):
-        raise ConfigError(f"env must wrap a GazeReachEnv, got {type(base).__name__}")
-    return base
+    return base if isinstance(base, ViewSource) else None
 
 
 def _unit(v: NDArray[np.float64]) -> Features:
@@ -76,8 +80,9 @@ class MapObservation(gym.ObservationWrapper[Features, Any, Obs]):
     Parameters
     ----------
     env : gym.Env
-        A (wrapped) :class:`GazeReachEnv` whose codes match the model's ``x_shape`` and
-        ``y_shape`` (same grid, same code width).
+        An environment whose ``"retina"`` and ``"gaze"`` codes are the model's (sizes
+        checked on the observation space; the codes themselves, width included, where the
+        world declares them as a :class:`~sigmapi.envs.ViewSource`).
     model : SigmaPiSOM
         A trained map (``sigmapi.load(path)`` or :func:`~sigmapi.envs.learn_map_in_env`).
     features : {"response", "bump"}
@@ -102,21 +107,28 @@ class MapObservation(gym.ObservationWrapper[Features, Any, Obs]):
         width: float = 1.0,
     ):
         super().__init__(env)
-        base = _base(env)
         if features not in FEATURES:
             raise ConfigError(f"features must be one of {FEATURES}, got {features!r}")
-        shape = (base.grid,) * base.dim
-        if tuple(model.x_shape) != shape or tuple(model.y_shape) != shape:
-            raise ConfigError(
-                f"the map reads x on {model.x_shape} and y on {model.y_shape} units but the "
-                f"environment codes them on {shape}; make the env with grid={model.x_shape[0]}, "
-                f"dim={len(model.x_shape)}"
-            )
-        if model.config.code_width != base.code_width:
-            raise ConfigError(
-                f"the map was trained on codes of width {model.config.code_width} but the env "
-                f"uses code_width={base.code_width}; make the env with the model's width"
-            )
+        sizes = check_view_space(env.observation_space)
+        for key, axis, code in (("retina", "x", model.x_code), ("gaze", "y", model.y_code)):
+            if sizes[key] != code.size:
+                raise ConfigError(
+                    f"the map reads {axis} on {code.shape} units ({code.size} values) but the "
+                    f"environment's {key!r} observation has {sizes[key]} values; make the "
+                    f"environment with the map's codes ({axis} on {code.shape} units)"
+                )
+        source = _codes_of(env)
+        if source is not None:
+            for axis, mine, theirs in (
+                ("x", model.x_code, source.x_code),
+                ("y", model.y_code, source.y_code),
+            ):
+                if mine != theirs:
+                    raise ConfigError(
+                        f"the map was trained on {axis} codes {mine} but the environment codes "
+                        f"{axis} as {theirs}; make the environment with the map's code (e.g. "
+                        f"its width {mine.width})"
+                    )
         self.model = model
         self.features = features
         self.width = _validate.positive("width", width, fix="in map grid units, e.g. 1.0")
@@ -135,14 +147,13 @@ class MapObservation(gym.ObservationWrapper[Features, Any, Obs]):
 class CodeObservation(gym.ObservationWrapper[Features, Any, Obs]):
     """The raw codes as features: ``keys=("retina",)`` or ``("retina", "gaze")`` side by side.
 
-    Concatenated, then L2-normalised: ``Box(0, 1, (len(keys) * grid**dim,), float32)``. A
+    Concatenated, then L2-normalised: ``Box(0, 1, (sum of the entries' sizes,), float32)``. A
     learner linear in these features sums a function of x and a function of y; it cannot form
     their conjunction (what a Sigma-Pi unit computes).
     """
 
     def __init__(self, env: gym.Env[Obs, Any], keys: tuple[str, ...] = ("retina",)):
         super().__init__(env)
-        base = _base(env)
         keys = tuple(keys)
         if (
             not keys
@@ -150,10 +161,9 @@ class CodeObservation(gym.ObservationWrapper[Features, Any, Obs]):
             or len(set(keys)) != len(keys)
         ):
             raise ConfigError(f"keys must be distinct names from ('retina', 'gaze'), got {keys!r}")
+        sizes = check_view_space(env.observation_space, keys)
         self.keys = keys
-        self.observation_space = spaces.Box(
-            0.0, 1.0, (len(keys) * base.code.size,), dtype=np.float32
-        )
+        self.observation_space = spaces.Box(0.0, 1.0, (sum(sizes.values()),), dtype=np.float32)
 
     def observation(self, observation: Obs) -> Features:
         v = np.concatenate([np.asarray(observation[k], dtype=np.float64) for k in self.keys])
@@ -161,15 +171,17 @@ class CodeObservation(gym.ObservationWrapper[Features, Any, Obs]):
 
 
 class TrueZObservation(gym.Wrapper[Features, Any, Any, Any]):
-    """Oracle state: a Gaussian bump code of the true ``z`` (from ``info``) on a grid.
+    """Oracle state: a Gaussian bump code of the true ``z`` (``info["z"]``) on a grid.
 
     Parameters
     ----------
     env : gym.Env
-        A (wrapped) :class:`GazeReachEnv`.
+        An environment whose ``info`` holds ``"z"``, the body-centred position in
+        ``[0, 1]^d`` (:mod:`sigmapi.envs.protocols`).
     shape : tuple of int, optional
-        Grid of the code (default: ``(grid,) * dim`` of the env); give the map's shape for a
-        like-for-like comparison.
+        Grid of the code, one axis per dimension of ``z``; give the map's shape for a
+        like-for-like comparison. Default: the grid of the world's retina code
+        (``x_code.shape`` of a :class:`~sigmapi.envs.ViewSource`).
     width : float
         Width of the bump in grid units (as :class:`MapObservation`'s ``width``).
 
@@ -180,13 +192,19 @@ class TrueZObservation(gym.Wrapper[Features, Any, Any, Any]):
         self, env: gym.Env[Obs, Any], shape: tuple[int, ...] | None = None, width: float = 1.0
     ):
         super().__init__(env)  # type: ignore[arg-type]  # (gymnasium's stubs bind the wrong type var)
-        base = _base(env)
-        self.code = PopulationCode(
-            shape if shape is not None else (base.grid,) * base.dim, width=1.0
-        )
-        if self.code.ndim != base.dim:
+        if shape is None:
+            source = _codes_of(env)
+            if source is None:
+                raise ConfigError(
+                    f"shape must be given: {type(env.unwrapped).__name__} declares no x_code "
+                    "to take the grid from; pass e.g. shape=model.map_shape"
+                )
+            shape = source.x_code.shape
+        self.code = PopulationCode(shape, width=1.0)
+        base = env.unwrapped
+        if isinstance(base, PlacedViewSource) and self.code.ndim != base.z_dim:
             raise ConfigError(
-                f"shape must have {base.dim} axes for a {base.dim}-D task, got {shape!r}"
+                f"shape must have {base.z_dim} axes for a {base.z_dim}-D z, got {shape!r}"
             )
         self.width = _validate.positive("width", width, fix="in grid units, e.g. 1.0")
         self.observation_space = spaces.Box(0.0, 1.0, (self.code.size,), dtype=np.float32)
@@ -196,15 +214,55 @@ class TrueZObservation(gym.Wrapper[Features, Any, Any, Any]):
         g = np.clip(np.atleast_2d(z), 0.0, 1.0) * self.code.scale
         return bump_features(g, self.code.coords, self.width).astype(np.float32)
 
+    def _features(self, info: dict[str, Any]) -> Features:
+        z = np.asarray(info.get("z", ()), dtype=np.float64)
+        if z.shape != (self.code.ndim,):
+            raise ConfigError(
+                f"the true_z state reads info['z'], the body-centred position ({self.code.ndim} "
+                f"numbers for a code on {self.code.shape}), got {info.get('z')!r}"
+            )
+        return self.encode(z)[0]
+
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[Features, dict[str, Any]]:
         _, info = self.env.reset(seed=seed, options=options)
-        return self.encode(info["z"])[0], info
+        return self._features(info), info
 
     def step(self, action: Any) -> tuple[Features, SupportsFloat, bool, bool, dict[str, Any]]:
         _, r, terminated, truncated, info = self.env.step(action)
-        return self.encode(info["z"])[0], r, terminated, truncated, info
+        return self._features(info), r, terminated, truncated, info
+
+
+StateWrapper = Callable[[gym.Env[Obs, Any], SigmaPiSOM | None, str, float], gym.Env[Features, Any]]
+"""Builds a state: ``(env, model, features, width) -> wrapped env``."""
+
+
+def _map_state(
+    env: gym.Env[Obs, Any], model: SigmaPiSOM | None, features: str, width: float
+) -> gym.Env[Features, Any]:
+    if model is None:
+        raise ConfigError("state 'map' needs a trained model: pass model=sigmapi.load(path)")
+    return MapObservation(env, model, features=features, width=width)
+
+
+def _true_z_state(
+    env: gym.Env[Obs, Any], model: SigmaPiSOM | None, features: str, width: float
+) -> gym.Env[Features, Any]:
+    shape = tuple(model.map_shape) if model is not None else None
+    return TrueZObservation(env, shape=shape, width=width)
+
+
+STATE_WRAPPERS: dict[str, StateWrapper] = {
+    "map": _map_state,
+    "retina": lambda env, model, features, width: CodeObservation(env, ("retina",)),
+    "retina_gaze": lambda env, model, features, width: CodeObservation(env, ("retina", "gaze")),
+    "true_z": _true_z_state,
+}
+"""The states a learner can observe, by name: one entry per state (:data:`STATES`)."""
+
+STATES = tuple(STATE_WRAPPERS)
+"""State representations compared by the experiment."""
 
 
 def make_state_env(
@@ -217,17 +275,8 @@ def make_state_env(
     """Wrap ``env`` so that it observes ``state`` (one of :data:`STATES`).
 
     ``"map"`` needs ``model``; ``"true_z"`` codes z on the model's map grid when a model is
-    given (like for like), else on the env's input grid.
+    given (like for like), else on the grid of the world's retina code.
     """
-    if state == "map":
-        if model is None:
-            raise ConfigError("state 'map' needs a trained model: pass model=sigmapi.load(path)")
-        return MapObservation(env, model, features=features, width=width)
-    if state == "retina":
-        return CodeObservation(env, ("retina",))
-    if state == "retina_gaze":
-        return CodeObservation(env, ("retina", "gaze"))
-    if state == "true_z":
-        shape = tuple(model.map_shape) if model is not None else None
-        return TrueZObservation(env, shape=shape, width=width)
-    raise ConfigError(f"state must be one of {STATES}, got {state!r}")
+    if state not in STATE_WRAPPERS:
+        raise ConfigError(f"state must be one of {STATES}, got {state!r}")
+    return STATE_WRAPPERS[state](env, model, features, width)

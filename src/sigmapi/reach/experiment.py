@@ -19,9 +19,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sigmapi.agents.actor_critic import ActorCritic
-from sigmapi.envs.gaze_reach import GazeReachEnv
+from sigmapi.envs.protocols import PlacedViewSource
 from sigmapi.envs.views import learn_map_in_env
 from sigmapi.envs.wrappers import Features, TrueZObservation, make_state_env
+from sigmapi.errors import ConfigError
 from sigmapi.executor import job_memory, plan_workers, run_jobs
 from sigmapi.metrics import evaluate
 from sigmapi.progress import counter
@@ -48,31 +49,35 @@ def value_over_z(
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """The critic's value on a grid of z, averaged over ``n_views`` random gazes per z.
 
-    Returns ``(z_axis, V)``: ``z_axis`` ``(n,)`` and ``V`` of shape ``(n,)`` (1-D) or
-    ``(n, n)`` (2-D, indexed ``[z0, z1]``).
+    The world under ``state_env`` must show a given z
+    (:class:`~sigmapi.envs.PlacedViewSource`). Returns ``(z_axis, V)``: ``z_axis`` ``(n,)``
+    and ``V`` of shape ``(n,) * z_dim`` (in 2-D indexed ``[z0, z1]``).
     """
-    base: GazeReachEnv = state_env.unwrapped  # type: ignore[assignment]
+    base = state_env.unwrapped
+    if not isinstance(base, PlacedViewSource):
+        raise ConfigError(
+            f"the value over z needs a world that shows a given z (views_of, z_dim), got "
+            f"{type(base).__name__}"
+        )
     if not isinstance(state_env, (TrueZObservation, gym.ObservationWrapper)):
         raise TypeError(f"state_env must be made by make_state_env, got {type(state_env).__name__}")
     rng = np.random.default_rng(seed)
     axis = np.linspace(0.0, 1.0, n)
-    zs = np.stack(np.meshgrid(*([axis] * base.dim), indexing="ij"), axis=-1).reshape(-1, base.dim)
+    dim = base.z_dim
+    zs = np.stack(np.meshgrid(*([axis] * dim), indexing="ij"), axis=-1).reshape(-1, dim)
     out = np.empty(len(zs))
     for i, z in enumerate(zs):
         if isinstance(state_env, TrueZObservation):
             out[i] = agent.value(state_env.encode(z[None, :])[0])
             continue
-        lo, hi = base.gaze_range(z)
-        ys = lo + (hi - lo) * rng.random((n_views, base.dim))
-        xs = np.clip(2.0 * z - ys, 0.0, 1.0)
-        cx, cy = base.code.encode(xs).astype(np.float32), base.code.encode(ys).astype(np.float32)
+        cx, cy = base.views_of(np.repeat(z[None, :], n_views, axis=0), rng)
         out[i] = np.mean(
             [
                 agent.value(state_env.observation({"retina": a, "gaze": b}))
                 for a, b in zip(cx, cy, strict=True)
             ]
         )
-    return axis, out.reshape((n,) * base.dim)
+    return axis, out.reshape((n,) * dim)
 
 
 @dataclass
