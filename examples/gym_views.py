@@ -15,7 +15,7 @@ import argparse
 import gymnasium as gym
 
 import sigmapi
-from sigmapi.reach import collect_saccade_views
+from sigmapi.envs import collect_saccade_views
 
 
 def main() -> None:
@@ -30,8 +30,9 @@ def main() -> None:
                           winner_rule="argmax")  # fmt: skip
     # an episode starts with the object outside the goal region and the still body keeps it
     # there: a tiny goal region, so that the recording shows every z
-    env = gym.make("sigmapi/GazeReach-v0", dim=1, grid=grid, goal_radius=1e-3)
-    views = collect_saccade_views(env.unwrapped, pairs, seed=0)  # (x0, y0, x1, y1) codes
+    env = gym.make("sigmapi/GazeReach-v0", dim=1, grid=grid, code_width=cfg.code_width,
+                   goal_radius=1e-3)  # fmt: skip
+    views = collect_saccade_views(env, pairs, seed=0)  # (x0, y0, x1, y1) codes
     env.close()
     for seed in seeds:
         m = sigmapi.evaluate(sigmapi.SigmaPiSOM(cfg, seed=seed).fit(views))

@@ -9,10 +9,11 @@ import gymnasium as gym
 import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
+from gymnasium.wrappers import TimeLimit
 
 import sigmapi
+from sigmapi.envs import ENV_ID, GazeReachConfig, GazeReachEnv, collect_saccade_views
 from sigmapi.errors import ConfigError
-from sigmapi.reach import ENV_ID, GazeReachEnv, collect_saccade_views
 
 # action indices: 0 stay, 1 +axis0, 2 -axis0, 3 +axis1, 4 -axis1
 STAY, RIGHT, LEFT, UP, DOWN = range(5)
@@ -102,16 +103,47 @@ def test_leaving_the_workspace_gives_minus_0_3_and_terminates() -> None:
     assert env.observation_space.contains(obs)
 
 
-def test_time_limit_truncates_and_termination_wins_on_the_last_step() -> None:
-    env = make(max_steps=3, saccade_rate=0.0)
+def test_time_limit_is_gymnasiums_and_termination_counts_on_the_last_step() -> None:
+    env = TimeLimit(make(saccade_rate=0.0), max_episode_steps=3)
     env.reset(seed=0, options={"z": [0.8, 0.8], "y": [0.7, 0.7]})
     flags = [env.step(STAY)[2:4] for _ in range(3)]
     assert flags == [(False, False), (False, False), (False, True)]
     env.reset(seed=0, options={"z": [0.7, 0.5], "y": [0.5, 0.5]})
     env.step(LEFT)
     env.step(STAY)
-    _, r, term, trunc, _ = env.step(LEFT)  # reached on the last allowed step
-    assert (r, term, trunc) == (1.0, True, False)
+    _, r, term, _, info = env.step(LEFT)  # reached on the last allowed step
+    assert (r, term, info["is_success"]) == (1.0, True, True)
+    raw = make(saccade_rate=0.0)  # the world alone never truncates
+    raw.reset(seed=0, options={"z": [0.8, 0.8], "y": [0.7, 0.7]})
+    assert not any(raw.step(STAY)[3] for _ in range(500))
+
+
+def test_one_set_of_defaults_for_make_the_class_and_the_config() -> None:
+    cfg = GazeReachConfig()
+    made = gym.make(ENV_ID)
+    assert made.spec.max_episode_steps == cfg.max_episode_steps == 50
+    for env in (made.unwrapped, GazeReachEnv()):
+        assert (env.dim, env.grid, env.code_width, env.step_size, env.goal_radius,
+                env.saccade_rate) == (cfg.dim, cfg.grid, cfg.code_width, cfg.step_size,
+                                      cfg.goal_radius, cfg.saccade_rate)  # fmt: skip
+    assert (cfg.dim, cfg.grid, cfg.code_width) == (2, 15, 1.0)  # the reach experiment's
+    built = cfg.make_env()
+    assert isinstance(built, TimeLimit)
+    assert built._max_episode_steps == cfg.max_episode_steps  # (TimeLimit has no public name)
+    made.close()
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"max_episode_steps": 0}, "max_episode_steps must be an int >= 1, got 0"),
+        ({"grid": 1}, "grid must be an int >= 2"),
+        ({"goal_radius": 0.5}, "leave 5 % of the workspace outside the goal box"),
+    ],
+)
+def test_config_checks_the_world_without_building_it(kwargs: dict, match: str) -> None:
+    with pytest.raises(ConfigError, match=match):
+        GazeReachConfig(**kwargs)
 
 
 def test_no_saccade_keeps_gaze_and_a_move_off_the_retina_forces_one() -> None:
@@ -161,7 +193,6 @@ def test_random_restart_never_starts_in_the_goal() -> None:
         ({"step_size": 0.0}, "step_size"),
         ({"goal": [0.5, 2.0]}, "goal must be"),
         ({"dim": 1, "diagonal": True}, "diagonal"),
-        ({"max_steps": 0}, "max_steps must be an int >= 1"),
     ],
 )
 def test_constructor_errors_name_the_parameter(kwargs: dict, match: str) -> None:

@@ -26,7 +26,7 @@ from sigmapi.reach.plots import plot_reach_curves, plot_value_function, reach_fi
 @pytest.fixture(scope="module")
 def tiny_map() -> SigmaPiSOM:
     som = SigmaPiSOM(
-        map_shape=(4, 4), x_shape=(5, 5), y_shape=(5, 5), iterations=300,
+        map_shape=(4, 4), x_shape=(5, 5), y_shape=(5, 5), code_width=1.0, iterations=300,
         sigma=((0.0, 2.0), (0.8, 0.7)), backend="reference", seed=0,
     )  # fmt: skip
     return som.fit()
@@ -87,7 +87,7 @@ def test_wrapper_errors(tiny_map: SigmaPiSOM) -> None:
     with pytest.raises(ConfigError, match=r"the map reads x on \(5, 5\) units \(25 values\)"):
         MapObservation(GazeReachEnv(grid=7), tiny_map)
     with pytest.raises(ConfigError, match="make the environment with the map's code"):
-        MapObservation(GazeReachEnv(grid=5, code_width=1.0), tiny_map)
+        MapObservation(GazeReachEnv(grid=5, code_width=0.5), tiny_map)
     with pytest.raises(ConfigError, match="keys must be"):
         CodeObservation(GazeReachEnv(grid=5), ("retina", "nose"))
     with pytest.raises(ConfigError, match="needs a trained model"):

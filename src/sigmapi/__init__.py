@@ -3,8 +3,9 @@
 Weber & Wermter, "A self-organizing map of Sigma-Pi units", Neurocomputing 70 (2007) 2552-2560.
 
 Importing the package registers the Gymnasium environment ``sigmapi/GazeReach-v0``
-(:class:`sigmapi.envs.GazeReachEnv`) by its entry-point string: ``gymnasium.make`` loads the
-environment's module when it is first made.
+(:class:`sigmapi.envs.GazeReachEnv`) by its entry-point string, with its time limit:
+``gymnasium.make`` loads the environment's module when it is first made and wraps it in
+``TimeLimit``.
 """
 
 # first: a quiet Ctrl-C while the command line starts (see _startup.py)
@@ -44,6 +45,10 @@ __all__ = [
 ]
 
 if "sigmapi/GazeReach-v0" not in _gymnasium.registry:
+    # the time limit is defined here only (GazeReachConfig reads it back): 50 steps, 3x the
+    # longest shortest path of the 2-D task (16 moves from a corner to the goal box)
     _gymnasium.register(
-        id="sigmapi/GazeReach-v0", entry_point="sigmapi.envs.gaze_reach:GazeReachEnv"
+        id="sigmapi/GazeReach-v0",
+        entry_point="sigmapi.envs.gaze_reach:GazeReachEnv",
+        max_episode_steps=50,
     )

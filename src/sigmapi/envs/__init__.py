@@ -14,7 +14,7 @@ wrappers (which read observation spaces, not classes) and the saccade views a ma
 
 from __future__ import annotations
 
-from sigmapi.envs.gaze_reach import GazeReachEnv, move_table
+from sigmapi.envs.gaze_reach import ENV_ID, GazeReachConfig, GazeReachEnv, move_table
 from sigmapi.envs.protocols import (
     OBS_KEYS,
     Obs,
@@ -43,6 +43,7 @@ __all__ = [
     "STATES",
     "STATE_WRAPPERS",
     "CodeObservation",
+    "GazeReachConfig",
     "GazeReachEnv",
     "MapObservation",
     "Obs",
@@ -59,6 +60,3 @@ __all__ = [
     "view_source",
     "view_space",
 ]
-
-ENV_ID = "sigmapi/GazeReach-v0"
-"""The gaze-and-reach environment's Gymnasium id (registered by ``import sigmapi``)."""

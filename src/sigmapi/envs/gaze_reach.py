@@ -20,7 +20,12 @@ Dynamics of one step
    uniformly among the directions that keep the object on the retina (``x`` in ``[0, 1]^d``).
    A move that pushes the object off the retina at the current fixation forces such a
    saccade (a corrective saccade), so a live object is always seen.
-4. ``truncated`` when ``max_steps`` steps passed without termination (time limit).
+
+The time limit is not the world's own: ``gymnasium.make(ENV_ID)`` wraps the environment in
+Gymnasium's ``TimeLimit`` with the ``max_episode_steps`` registered by ``import sigmapi``
+(``truncated`` once that many steps passed), and code that builds the class directly wraps it
+itself (:meth:`GazeReachConfig.make_env`). :class:`GazeReachConfig` holds the defaults of the
+world and of its time limit, once, for ``gymnasium.make``, the class and ``sigmapi reach``.
 
 Actions: ``0`` stay, then ``+`` and ``-`` along each axis (``1 + 2 * axis + (0 for +, 1 for
 -)``): 3 actions in 1-D, 5 in 2-D; ``diagonal=True`` adds the four diagonal moves in 2-D (9
@@ -30,11 +35,13 @@ actions, each diagonal moving ``step_size`` along both axes).
 from __future__ import annotations
 
 import itertools
+from dataclasses import dataclass
 from typing import Any, SupportsFloat
 
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
+from gymnasium.wrappers import TimeLimit
 from numpy.typing import NDArray
 
 from sigmapi import _validate
@@ -42,7 +49,10 @@ from sigmapi.codes import _WIDTH_FIX, MIN_WIDTH, PopulationCode
 from sigmapi.envs.protocols import Obs, Views, view_space
 from sigmapi.errors import ConfigError
 
-__all__ = ["GazeReachEnv", "move_table"]
+__all__ = ["ENV_ID", "GazeReachConfig", "GazeReachEnv", "move_table"]
+
+ENV_ID = "sigmapi/GazeReach-v0"
+"""The environment's Gymnasium id (registered by ``import sigmapi``, with its time limit)."""
 
 
 def move_table(dim: int, diagonal: bool = False) -> NDArray[np.float64]:
@@ -72,8 +82,108 @@ def _unit_vector(value: Any, dim: int) -> NDArray[np.float64] | None:
     return v
 
 
+def _registered_time_limit() -> int:
+    """The ``max_episode_steps`` that ``import sigmapi`` registers for :data:`ENV_ID` (the one
+    place it is written; ``import sigmapi`` always runs before this module)."""
+    steps = gym.spec(ENV_ID).max_episode_steps
+    if steps is None:  # pragma: no cover - the registration gives one
+        raise RuntimeError(f"{ENV_ID} is registered without max_episode_steps")
+    return int(steps)
+
+
+def _check_world(
+    dim: Any,
+    grid: Any,
+    code_width: Any,
+    step_size: Any,
+    goal: Any,
+    goal_radius: Any,
+    saccade_rate: Any,
+) -> tuple[int, int, float, float, NDArray[np.float64], float, float]:
+    """The world's parameters in their canonical types, or a ConfigError naming the first bad
+    one (the checks of :class:`GazeReachConfig` and :class:`GazeReachEnv`, written once)."""
+    if not _validate.is_int(dim) or dim not in (1, 2):
+        raise _validate.fail("dim", "1 or 2", dim, "the task has 1-D and 2-D variants")
+    dim = int(dim)
+    grid = _validate.integer("grid", grid, 2, fix="use e.g. grid=15 (the paper's 2-D network)")
+    code_width = _validate.number("code_width", code_width, MIN_WIDTH, fix=_WIDTH_FIX)
+    step_size = _validate.number(
+        "step_size", step_size, 0.0, 0.5, lo_open=True, fix="use e.g. 0.05"
+    )
+    g = _unit_vector(goal, dim)
+    if g is None:
+        raise ConfigError(
+            f"goal must be a number or {dim} numbers in [0, 1], got {goal!r}; "
+            "the default 0.5 is straight ahead"
+        )
+    goal_radius = _validate.number(
+        "goal_radius", goal_radius, 0.0, 0.5, lo_open=True, fix="use e.g. 0.1"
+    )
+    free = 1.0 - float(np.prod(np.minimum(g + goal_radius, 1.0) - np.maximum(g - goal_radius, 0)))
+    if free < 0.05:
+        raise _validate.fail(
+            "goal_radius", "small enough to leave 5 % of the workspace outside the goal box",
+            goal_radius, f"the box covers {100 * (1 - free):.0f} %; use e.g. 0.1",
+        )  # fmt: skip
+    saccade_rate = _validate.number(
+        "saccade_rate", saccade_rate, 0.0, 1.0, fix="a probability per step"
+    )
+    return dim, grid, code_width, step_size, g, goal_radius, saccade_rate
+
+
+@dataclass(frozen=True)
+class GazeReachConfig:
+    """The gaze-and-reach world and its time limit: the defaults of ``gymnasium.make(ENV_ID)``,
+    of :class:`GazeReachEnv` and of ``sigmapi reach`` (the goal lies straight ahead, at 0.5)."""
+
+    dim: int = 2
+    """1 or 2: dimensions of the task."""
+    grid: int = 15
+    """Units per axis of the retina and gaze codes (15x15 in 2-D, the paper's Fig. 8 network)."""
+    code_width: float = 1.0
+    """Width of the input hills in grid units (1.0: the paper-2d preset; the 1-D paper: 0.5)."""
+    step_size: float = 0.05
+    """How far one move shifts z along an axis."""
+    goal_radius: float = 0.1
+    """Half-width of the goal box around z = 0.5 (straight ahead, within grasp range)."""
+    saccade_rate: float = 1.0
+    """Probability of a saccade per step (1: on every step, the hardest case)."""
+    max_episode_steps: int = _registered_time_limit()
+    """Time limit per episode (Gymnasium's TimeLimit; the default is the registered one, 3x
+    the longest shortest path in 2-D)."""
+
+    def __post_init__(self) -> None:
+        dim, grid, width, step, _, radius, rate = _check_world(
+            self.dim, self.grid, self.code_width, self.step_size, 0.5, self.goal_radius,
+            self.saccade_rate,
+        )  # fmt: skip
+        for name, value in (("dim", dim), ("grid", grid), ("code_width", width),
+                            ("step_size", step), ("goal_radius", radius),
+                            ("saccade_rate", rate)):  # fmt: skip
+            object.__setattr__(self, name, value)
+        steps = _validate.integer("max_episode_steps", self.max_episode_steps, 1, fix="e.g. 50")
+        object.__setattr__(self, "max_episode_steps", steps)
+
+    def env_kwargs(self) -> dict[str, Any]:
+        """Keyword arguments of :class:`GazeReachEnv` (also of ``gymnasium.make``)."""
+        return {
+            "dim": self.dim, "grid": self.grid, "code_width": self.code_width,
+            "step_size": self.step_size, "goal_radius": self.goal_radius,
+            "saccade_rate": self.saccade_rate,
+        }  # fmt: skip
+
+    def make_env(self, render_mode: str | None = None) -> TimeLimit[Obs, np.int64]:
+        """The environment under its time limit, as ``gymnasium.make`` builds it (without
+        Gymnasium's checking wrappers)."""
+        env = GazeReachEnv(**self.env_kwargs(), render_mode=render_mode)
+        return TimeLimit(env, max_episode_steps=self.max_episode_steps)
+
+
 class GazeReachEnv(gym.Env[Obs, np.int64]):
     """Gaze-and-reach task: move the body until the seen object lies in the grasp region.
+
+    Defaults are those of :class:`GazeReachConfig`. The environment never truncates an episode
+    itself: its time limit is Gymnasium's ``TimeLimit`` (``gymnasium.make`` adds it).
 
     Parameters
     ----------
@@ -84,7 +194,7 @@ class GazeReachEnv(gym.Env[Obs, np.int64]):
         ``grid**2`` units); must match the map's ``x_shape`` / ``y_shape`` when a trained
         map reads the observations.
     code_width : float
-        Width of the Gaussian hills in grid units (the paper: 0.5).
+        Width of the Gaussian hills in grid units.
     step_size : float
         How far one move shifts ``z`` along an axis, as a fraction of the workspace.
     goal : float or sequence of float
@@ -93,8 +203,6 @@ class GazeReachEnv(gym.Env[Obs, np.int64]):
         Half-width of the goal box (Chebyshev radius): the grasp range.
     saccade_rate : float
         Probability of a saccade (a new gaze direction) per step, in [0, 1]; 1 = every step.
-    max_steps : int
-        Time limit: the episode is truncated after this many steps.
     reward_reach, reward_fail : float
         Reward on reaching the goal (+1) and on losing the object (-0.3).
     diagonal : bool
@@ -125,54 +233,25 @@ class GazeReachEnv(gym.Env[Obs, np.int64]):
 
     def __init__(
         self,
-        dim: int = 2,
-        grid: int = 9,
-        code_width: float = 0.5,
-        step_size: float = 0.05,
+        dim: int = GazeReachConfig.dim,
+        grid: int = GazeReachConfig.grid,
+        code_width: float = GazeReachConfig.code_width,
+        step_size: float = GazeReachConfig.step_size,
         goal: float | tuple[float, ...] = 0.5,
-        goal_radius: float = 0.1,
-        saccade_rate: float = 1.0,
-        max_steps: int = 100,
+        goal_radius: float = GazeReachConfig.goal_radius,
+        saccade_rate: float = GazeReachConfig.saccade_rate,
         reward_reach: float = 1.0,
         reward_fail: float = -0.3,
         diagonal: bool = False,
         render_mode: str | None = None,
     ) -> None:
-        if not _validate.is_int(dim) or dim not in (1, 2):
-            raise _validate.fail("dim", "1 or 2", dim, "the task has 1-D and 2-D variants")
-        self.dim = int(dim)
-        self.grid = _validate.integer("grid", grid, 2, fix="use e.g. grid=9 (the paper: 15)")
-        self.code_width = _validate.number("code_width", code_width, MIN_WIDTH, fix=_WIDTH_FIX)
-        self.step_size = _validate.number(
-            "step_size", step_size, 0.0, 0.5, lo_open=True, fix="use e.g. 0.05"
-        )
-        g = _unit_vector(goal, self.dim)
-        if g is None:
-            raise ConfigError(
-                f"goal must be a number or {self.dim} numbers in [0, 1], got {goal!r}; "
-                "the default 0.5 is straight ahead"
-            )
-        self.goal = g
-        self.goal_radius = _validate.number(
-            "goal_radius", goal_radius, 0.0, 0.5, lo_open=True, fix="use e.g. 0.1"
-        )
-        lo, hi = (
-            np.maximum(self.goal - self.goal_radius, 0.0),
-            np.minimum(self.goal + self.goal_radius, 1.0),
-        )
-        free = 1.0 - float(np.prod(hi - lo))
-        if free < 0.05:
-            raise _validate.fail(
-                "goal_radius", "small enough to leave 5 % of the workspace outside the goal box",
-                goal_radius, f"the box covers {100 * (1 - free):.0f} %; use e.g. 0.1",
-            )  # fmt: skip
+        (self.dim, self.grid, self.code_width, self.step_size, self.goal, self.goal_radius,
+         self.saccade_rate) = _check_world(
+            dim, grid, code_width, step_size, goal, goal_radius, saccade_rate
+        )  # fmt: skip
         self.render_mode = _validate.choice(
             "render_mode", render_mode, (None, *self.metadata["render_modes"])
         )
-        self.saccade_rate = _validate.number(
-            "saccade_rate", saccade_rate, 0.0, 1.0, fix="a probability per step"
-        )
-        self.max_steps = _validate.integer("max_steps", max_steps, 1, fix="use e.g. 100")
         self.reward_reach = _validate.number("reward_reach", reward_reach, fix="e.g. 1.0")
         self.reward_fail = _validate.number("reward_fail", reward_fail, fix="e.g. -0.3")
         self.diagonal = _validate.boolean("diagonal", diagonal)
@@ -186,7 +265,6 @@ class GazeReachEnv(gym.Env[Obs, np.int64]):
         self.action_space = spaces.Discrete(len(self.moves))
         self._z = np.full(self.dim, 0.5)
         self._y = np.full(self.dim, 0.5)
-        self._t = 0
         self._done = True  # no episode yet: step() needs reset()
 
     # ------------------------------------------------------------------ helpers
@@ -311,7 +389,6 @@ class GazeReachEnv(gym.Env[Obs, np.int64]):
             self._y = y
         else:
             self._saccade()
-        self._t = 0
         self._done = False
         return self._obs(), self._info(True, "")
 
@@ -324,15 +401,13 @@ class GazeReachEnv(gym.Env[Obs, np.int64]):
     def step(self, action: Any) -> tuple[Obs, SupportsFloat, bool, bool, dict[str, Any]]:
         if self._done:
             raise gym.error.ResetNeeded(
-                "the episode has ended (terminated or truncated) or not begun; call reset() "
-                "before step()"
+                "the episode has ended (terminated) or not begun; call reset() before step()"
             )
         if not self.action_space.contains(action):
             raise ValueError(
                 f"action must be an int in [0, {len(self.moves)}), got {action!r}; see env.moves"
             )
         self._z = self._z + self.moves[int(action)]
-        self._t += 1
         reward = 0.0
         event = ""
         if self.in_goal(self._z):
@@ -340,8 +415,7 @@ class GazeReachEnv(gym.Env[Obs, np.int64]):
         elif not self.in_view(self._z):
             reward, event = self.reward_fail, "left_view"
         terminated = event != ""
-        truncated = not terminated and self._t >= self.max_steps
-        self._done = terminated or truncated
+        self._done = terminated
         # the eye: one uniform draw per step whatever happens, so rollouts stay in lockstep
         u = self.np_random.random()
         saccade = False
@@ -350,7 +424,7 @@ class GazeReachEnv(gym.Env[Obs, np.int64]):
             if u < self.saccade_rate or np.any(x < 0.0) or np.any(x > 1.0):
                 self._saccade()
                 saccade = True
-        return self._obs(), reward, terminated, truncated, self._info(saccade, event)
+        return self._obs(), reward, terminated, False, self._info(saccade, event)
 
     def render(self) -> NDArray[np.uint8] | None:
         """A picture of the workspace ``[0, 1]^d`` (``render_mode="rgb_array"``), else None.

@@ -10,6 +10,8 @@ import dataclasses
 from dataclasses import dataclass
 from typing import Any
 
+from gymnasium.wrappers import TimeLimit
+
 from sigmapi import _memory, _validate
 from sigmapi.agents.actor_critic import ActorCritic
 from sigmapi.config import SOMConfig, list_presets, load_preset
@@ -104,6 +106,7 @@ class ReachConfig:
         _validate.choice("map_preset", self.map_preset, ("none", *list_presets()))
         object.__setattr__(self, "map_shape", tuple(int(n) for n in self.map_shape))
         self.make_env()  # validates the task's parameters
+        _validate.integer("max_steps", self.max_steps, 1)
         ActorCritic(1, 1, self.gamma, self.critic_lr, self.actor_lr, self.beta)
         if self.model_path is None:  # the map is learned here: its weights and its views
             som = SigmaPiSOM(self.som_config(self.seed))
@@ -120,11 +123,12 @@ class ReachConfig:
         return {
             "dim": self.dim, "grid": self.grid, "code_width": self.code_width,
             "step_size": self.step_size, "goal_radius": self.goal_radius,
-            "saccade_rate": self.saccade_rate, "max_steps": self.max_steps,
+            "saccade_rate": self.saccade_rate,
         }  # fmt: skip
 
-    def make_env(self) -> GazeReachEnv:
-        return GazeReachEnv(**self.env_kwargs())
+    def make_env(self) -> TimeLimit[Any, Any]:
+        """The environment under its time limit (``max_steps``)."""
+        return TimeLimit(GazeReachEnv(**self.env_kwargs()), max_episode_steps=self.max_steps)
 
     def som_config(self, seed: int) -> SOMConfig:
         """The map's config for ``map_pairs`` saccade views.

@@ -205,7 +205,13 @@ def run_episodes(
     """Train one learner on ``state`` over the episodes that start from seeds ``starts``."""
     env = make_state_env(config.make_env(), state, model, config.features, config.feature_width)
     n_features = int(np.prod(env.observation_space.shape or (1,)))
-    n_actions = int(env.unwrapped.action_space.n)  # type: ignore[attr-defined]
+    space = env.action_space
+    if not isinstance(space, gym.spaces.Discrete):
+        raise ConfigError(
+            f"the actor-critic chooses among discrete actions; the environment's action space "
+            f"is {space}; give the environment a Discrete action space"
+        )
+    n_actions, first = int(space.n), int(space.start)
     agent = ActorCritic(
         n_features,
         n_actions,
@@ -224,14 +230,14 @@ def run_episodes(
         t = 0
         while True:
             a = agent.act(phi)
-            phi2, r, terminated, truncated, info = env.step(a)
+            phi2, r, terminated, truncated, info = env.step(first + a)
             agent.update(phi, a, float(r), phi2, terminated)
             phi = phi2
             t += 1
             if terminated or truncated:
                 break
-        success[ep] = info["event"] == "reached"
-        lost[ep] = info["event"] == "left_view"
+        success[ep] = bool(info["is_success"])
+        lost[ep] = terminated and not success[ep]  # ended by the world without success
         steps[ep] = t
         if progress is not None:
             progress(1, state)
