@@ -18,7 +18,7 @@ PACKAGE = SRC / "sigmapi"
 LAYERS: tuple[tuple[str, ...], ...] = (
     ("cli",),
     ("experiments",),
-    ("figures", "reach", "envs", "agents", "baselines"),
+    ("figures", "envs", "agents", "baselines"),
     ("plots", "analysis", "curves"),
     ("metrics", "checkpoints", "executor"),
     ("circular",),

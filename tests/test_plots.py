@@ -130,11 +130,14 @@ def test_one_seed_shows_no_spread():
 
 
 def test_reach_value_maps_share_one_colour_scale():
-    from sigmapi.reach import run_reach
-    from sigmapi.reach.plots import reach_figure
+    from sigmapi.experiments.reach import REACH
+    from sigmapi.experiments.reach_config import ReachConfig
+    from sigmapi.experiments.reach_plots import reach_figure
 
-    res = run_reach(dim=2, grid=5, map_shape=(3, 3), map_pairs=300, episodes=4, seeds=1,
-                    block=2, final_episodes=2, max_steps=10, backend="reference")  # fmt: skip
+    cfg = ReachConfig().replace(dim=2, grid=5, map_shape=(3, 3), iterations=300, episodes=4,
+                                block=2, final_episodes=2, max_episode_steps=10,
+                                backend="reference")  # fmt: skip
+    res = REACH.run(cfg, seeds=[0])
     clims = {ax.images[0].get_clim() for ax in reach_figure(res).axes if ax.images}
     assert len(clims) == 1
 

@@ -3,24 +3,27 @@
 from __future__ import annotations
 
 import json
+from functools import partial
 
+import gymnasium as gym
 import numpy as np
 import pytest
 
 from sigmapi import SigmaPiSOM
+from sigmapi.agents import ActorCritic, ActorCriticConfig, actor_critic_for, run_episodes
 from sigmapi.cli import main
-from sigmapi.errors import ConfigError
-from sigmapi.reach import (
-    ActorCritic,
+from sigmapi.envs import (
     CodeObservation,
     GazeReachEnv,
     MapObservation,
-    ReachConfig,
     TrueZObservation,
     make_state_env,
-    run_reach,
 )
-from sigmapi.reach.plots import plot_reach_curves, plot_value_function, reach_figure
+from sigmapi.errors import ConfigError
+from sigmapi.executor import run_jobs
+from sigmapi.experiments.reach import REACH
+from sigmapi.experiments.reach_config import SMALL_MAP, MapConfig, ReachConfig, ReachRunConfig
+from sigmapi.experiments.reach_plots import plot_reach_curves, plot_value_function, reach_figure
 
 
 @pytest.fixture(scope="module")
@@ -53,6 +56,22 @@ def test_actor_critic_softmax_and_seeded_choices() -> None:
     assert a[0] == a[1]
     with pytest.raises(ConfigError, match="gamma must be a number in"):
         ActorCritic(3, 3, gamma=1.5)
+    with pytest.raises(ConfigError, match="beta must be a number in"):
+        ActorCriticConfig(beta=-1)
+    assert ActorCritic(3, 3).config == ActorCriticConfig()  # one set of defaults
+
+
+def test_the_episode_loop_refuses_what_the_actor_critic_cannot_learn() -> None:
+    env = make_state_env(ReachConfig().env.make_env(), "retina")
+    boxed = gym.wrappers.TransformAction(
+        env, lambda a: 0, gym.spaces.Box(-1.0, 1.0, (2,), dtype=np.float32)
+    )
+    with pytest.raises(ConfigError, match="discrete actions, but the environment's action"):
+        actor_critic_for(boxed, ActorCriticConfig())
+    with pytest.raises(ConfigError, match="1-D Box observation"):
+        actor_critic_for(ReachConfig().env.make_env(), ActorCriticConfig())
+    with pytest.raises(ConfigError, match="discrete actions"):
+        run_episodes(boxed, ActorCritic(10, 2), [0])
 
 
 def test_wrappers_give_unit_float32_features_in_their_space(tiny_map: SigmaPiSOM) -> None:
@@ -98,13 +117,14 @@ def test_wrapper_errors(tiny_map: SigmaPiSOM) -> None:
         TrueZObservation(GazeReachEnv(grid=5), width=0)
 
 
-TINY = {"dim": 1, "grid": 7, "map_shape": (6,), "map_pairs": 500, "episodes": 20, "seeds": 2,
-        "block": 10, "final_episodes": 10, "max_steps": 30, "backend": "reference"}  # fmt: skip
+TINY = {"dim": 1, "grid": 7, "map_shape": (6,), "iterations": 500, "episodes": 20, "block": 10,
+        "final_episodes": 10, "max_episode_steps": 30, "backend": "reference"}  # fmt: skip
 
 
-def test_experiment_is_deterministic_and_shapes_are_right() -> None:
-    a = run_reach(**TINY)
-    b = run_reach(**TINY, workers=2)  # seeds in two processes: the same result
+def test_experiment_is_deterministic_and_shapes_are_right(tmp_path) -> None:
+    cfg = ReachConfig().replace(**TINY)
+    a = REACH.run(cfg, seeds=[0, 1])
+    b = REACH.run(cfg, seeds=[0, 1], executor=partial(run_jobs, workers=2))  # two processes
     for s in a.success:
         assert a.success[s].shape == (2, 20)
         np.testing.assert_array_equal(a.success[s], b.success[s])
@@ -117,50 +137,74 @@ def test_experiment_is_deterministic_and_shapes_are_right() -> None:
     assert c["success"].shape == (2,)
     d = a.to_dict()
     json.dumps(d)
+    assert set(d) == {"success", "success_per_seed", "lost", "timed_out", "ratio_map_to_true_z",
+                      "curves", "map_metrics", "config", "seconds"}  # fmt: skip
+    assert d["config"]["seeds"] == [0, 1] and d["config"]["map"]["iterations"] == 500
+    assert set(d["config"]) == {"env", "map", "agent", "run", "seeds"}
     for s in a.success:  # counted: never a rounding residue such as -8.7e-17
         last = ~a.success[s][:, -10:] & ~a.lost[s][:, -10:]
         assert d["timed_out"][s] == last.sum() / last.size  # exactly, not 1 - success - lost
         assert d["success"][s] + d["lost"][s] + d["timed_out"][s] == pytest.approx(1.0)
+    assert "final success rate over the last 10 of 20 episodes, 2 seeds:" in a.table()
     fig = reach_figure(a)
     assert len(fig.axes) >= 6
     assert plot_reach_curves(a, "steps") is not None
     assert plot_value_function(a, "true_z") is not None
+    assert a.figure(tmp_path) == [tmp_path / "reach.png"] and (tmp_path / "reach.png").is_file()
+
+
+def test_seed_s_is_child_s_of_the_root_seed() -> None:
+    cfg = ReachConfig().replace(**TINY, states=("retina",))
+    both = REACH.run(cfg, seeds=[0, 1])
+    second = REACH.run(cfg, seeds=[1])
+    np.testing.assert_array_equal(both.steps["retina"][1], second.steps["retina"][0])
+    other_root = REACH.run(cfg.replace(seed=1), seeds=[1])
+    assert not np.array_equal(other_root.steps["retina"][0], second.steps["retina"][0])
+    for bad in ([], [0, 0], [-1]):
+        with pytest.raises(ConfigError, match="seeds must be"):
+            REACH.run(cfg, seeds=bad)
 
 
 def test_true_z_learner_learns_to_reach_1d() -> None:
     """Upper-bound learner in the 1-D task: success rises well above its first block."""
-    res = run_reach(dim=1, grid=7, episodes=150, seeds=1, block=50, final_episodes=50,
-                    states=("true_z",))  # fmt: skip
-    c = res.curves()["true_z"]["success"]
+    cfg = ReachConfig().replace(dim=1, grid=7, episodes=150, block=50, final_episodes=50,
+                                states=("true_z",))  # fmt: skip
+    c = REACH.run(cfg, seeds=[0]).curves()["true_z"]["success"]
     assert c[-1] >= 0.8 and c[-1] > c[0]
 
 
-def test_reach_config_validation() -> None:
+def test_reach_config_parts_check_their_fields() -> None:
     with pytest.raises(ConfigError, match="final_episodes must be <= episodes"):
-        ReachConfig(episodes=10, final_episodes=20)
+        ReachRunConfig(episodes=10, final_episodes=20)
     with pytest.raises(ConfigError, match="states must be distinct names"):
-        ReachConfig(states=("map", "eye"))
-    with pytest.raises(ConfigError, match="unknown ReachConfig field"):
+        ReachRunConfig(states=("map", "eye"))
+    with pytest.raises(ConfigError, match="unknown reach config field 'episode'"):
         ReachConfig().replace(episode=3)
+    with pytest.raises(ConfigError, match="preset must be one of"):
+        MapConfig(preset="paper-3d")
+    with pytest.raises(ConfigError, match="feature_width must be"):
+        MapConfig(feature_width=0)
+    with pytest.raises(ConfigError, match="env must be a GazeReachConfig"):
+        ReachConfig(env=MapConfig())  # type: ignore[arg-type]
+    cfg = ReachConfig().replace(grid=7, episodes=250, gamma=0.5, iterations=10)
+    assert (cfg.env.grid, cfg.run.episodes, cfg.agent.gamma, cfg.map.iterations) == (
+        7, 250, 0.5, 10)  # fmt: skip
 
 
 def test_the_map_learns_with_the_paper_2d_preset_or_the_small_map_schedule() -> None:
     from sigmapi import load_preset
-    from sigmapi.reach.config import SMALL_MAP
 
     cfg = ReachConfig()
     som = cfg.som_config(seed=3)
     p2 = load_preset("paper-2d")
     assert (som.map_shape, som.x_shape, som.y_shape) == ((15, 15),) * 3
-    assert som.code_width == cfg.code_width == p2.code_width
+    assert som.code_width == cfg.env.code_width == p2.code_width
     for name in ("winner_rule", "ordering", "ordering_sigma", "kernel_tol", "eps", "sigma"):
         assert getattr(som, name) == getattr(p2, name), name
-    assert (som.iterations, som.seed, som.backend) == (cfg.map_pairs, 3, "auto")
-    small = ReachConfig(**SMALL_MAP).som_config(seed=3)
+    assert (som.iterations, som.seed, som.backend) == (cfg.map.iterations, 3, "auto")
+    small = ReachConfig().replace(**SMALL_MAP).som_config(seed=3)
     assert small.map_shape == (7, 7) and small.x_shape == (7, 7) and small.code_width == 0.5
     assert small.winner_rule == "soft" and small.iterations == 10_000
-    with pytest.raises(ConfigError, match="map_preset must be one of"):
-        ReachConfig(map_preset="paper-3d")
 
 
 def test_cli_reach_json_and_figure(tmp_path, capsys) -> None:
@@ -172,6 +216,9 @@ def test_cli_reach_json_and_figure(tmp_path, capsys) -> None:
     assert rc == 0 and out.stat().st_size > 10_000
     data = json.loads(capsys.readouterr().out)
     assert set(data["success"]) == {"map", "retina", "retina_gaze", "true_z"}
+    assert data["config"]["seeds"] == [0]
+    assert data["config"]["map"]["iterations"] == 500  # --map-pairs: iterations' old spelling
+    assert data["config"]["env"]["max_episode_steps"] == 30  # --max-steps likewise
 
 
 def test_cli_reach_user_mistakes_exit_2(tmp_path, capsys) -> None:
@@ -189,8 +236,9 @@ def test_cli_reach_user_mistakes_exit_2(tmp_path, capsys) -> None:
 
 @pytest.mark.slow
 def test_acceptance_map_reaches_95_percent_of_true_z_2d() -> None:
-    """The acceptance run: 2-D task, saccade on every step, the 15x15 paper-2d map, 5 seeds:
-    map >= 0.95 x true-z success (measured 1.001; per seed 0.98-1.04, README)."""
-    res = run_reach(ReachConfig(states=("map", "true_z")))
+    """The acceptance run: 2-D task, saccade on every step, the 15x15 paper-2d map, the
+    default seeds: map >= 0.95 x true-z success (the measured values: README)."""
+    cfg = ReachConfig().replace(states=("map", "true_z"))
+    res = REACH.run(cfg, seeds=REACH.default_seeds)
     final = res.final_success()
     assert final["map"] >= 0.95 * final["true_z"], final

@@ -1,7 +1,17 @@
-"""Learners that act on a state: the actor-critic of the authors' docking model."""
+"""Learners that act on a state: the actor-critic of the authors' docking model, and the
+episode loop that trains it in any Gymnasium environment with a feature observation and
+discrete actions."""
 
 from __future__ import annotations
 
-from sigmapi.agents.actor_critic import ActorCritic
+from sigmapi.agents.actor_critic import ActorCritic, ActorCriticConfig
+from sigmapi.agents.episodes import Episodes, actor_critic_for, discrete_actions, run_episodes
 
-__all__ = ["ActorCritic"]
+__all__ = [
+    "ActorCritic",
+    "ActorCriticConfig",
+    "Episodes",
+    "actor_critic_for",
+    "discrete_actions",
+    "run_episodes",
+]

@@ -19,12 +19,43 @@ Learning: An Introduction (1998), section 6.6.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from sigmapi import _validate
 
-__all__ = ["ActorCritic"]
+__all__ = ["ActorCritic", "ActorCriticConfig"]
+
+
+@dataclass(frozen=True)
+class ActorCriticConfig:
+    """The learner's settings, the defaults of :class:`ActorCritic` (the authors' docking
+    model)."""
+
+    gamma: float = 0.9
+    """Discount of the actor-critic (the authors: 0.9)."""
+    critic_lr: float = 0.1
+    """Learning rate of the critic (the authors: 0.1), per unit of |phi|^2."""
+    actor_lr: float = 0.1
+    """Learning rate of the actor (the authors: 0.1), per unit of |phi|^2."""
+    beta: float = 2.0
+    """Inverse temperature of the softmax policy (the authors: 2)."""
+
+    def __post_init__(self) -> None:
+        checked = {
+            "gamma": _validate.number("gamma", self.gamma, 0.0, 1.0, fix="the authors use 0.9"),
+            "critic_lr": _validate.number(
+                "critic_lr", self.critic_lr, 0.0, 10.0, fix="the authors use 0.1"
+            ),
+            "actor_lr": _validate.number(
+                "actor_lr", self.actor_lr, 0.0, 10.0, fix="the authors use 0.1"
+            ),
+            "beta": _validate.number("beta", self.beta, 0.0, 1e6, fix="the authors use 2"),
+        }
+        for name, value in checked.items():
+            object.__setattr__(self, name, value)
 
 
 class ActorCritic:
@@ -37,12 +68,14 @@ class ActorCritic:
     n_actions : int
         Number of discrete actions.
     gamma : float
-        Discount (authors: 0.9).
+        Discount.
     critic_lr, actor_lr : float
-        Learning rates of the critic and the actor (authors: 0.1 each), per unit of
-        ``|phi|^2``: the wrappers give features of L2 length 1.
+        Learning rates of the critic and the actor, per unit of ``|phi|^2``: the wrappers
+        give features of L2 length 1.
     beta : float
-        Inverse temperature of the softmax (authors: 2).
+        Inverse temperature of the softmax.
+
+    Defaults are :class:`ActorCriticConfig`'s (the authors' values), and so are the checks.
     seed : int or numpy.random.Generator, optional
         Source of the action choices.
 
@@ -59,23 +92,32 @@ class ActorCritic:
         self,
         n_features: int,
         n_actions: int,
-        gamma: float = 0.9,
-        critic_lr: float = 0.1,
-        actor_lr: float = 0.1,
-        beta: float = 2.0,
+        gamma: float = ActorCriticConfig.gamma,
+        critic_lr: float = ActorCriticConfig.critic_lr,
+        actor_lr: float = ActorCriticConfig.actor_lr,
+        beta: float = ActorCriticConfig.beta,
         seed: int | np.random.Generator | None = None,
     ) -> None:
         self.n_features = _validate.integer("n_features", n_features, 1)
         self.n_actions = _validate.integer("n_actions", n_actions, 1)
-        self.gamma = _validate.number("gamma", gamma, 0.0, 1.0, fix="the authors use 0.9")
-        self.critic_lr = _validate.number(
-            "critic_lr", critic_lr, 0.0, 10.0, fix="the authors use 0.1"
-        )
-        self.actor_lr = _validate.number("actor_lr", actor_lr, 0.0, 10.0, fix="the authors use 0.1")
-        self.beta = _validate.number("beta", beta, 0.0, 1e6, fix="the authors use 2")
+        self.config = ActorCriticConfig(gamma, critic_lr, actor_lr, beta)  # checks them
+        self.gamma, self.critic_lr = self.config.gamma, self.config.critic_lr
+        self.actor_lr, self.beta = self.config.actor_lr, self.config.beta
         self.rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
         self.v_ = np.zeros(self.n_features)
         self.w_ = np.zeros((self.n_actions, self.n_features))
+
+    @classmethod
+    def from_config(
+        cls,
+        config: ActorCriticConfig,
+        n_features: int,
+        n_actions: int,
+        seed: int | np.random.Generator | None = None,
+    ) -> ActorCritic:
+        """A learner with ``config``'s settings for ``n_features`` features and ``n_actions``."""
+        return cls(n_features, n_actions, config.gamma, config.critic_lr, config.actor_lr,
+                   config.beta, seed=seed)  # fmt: skip
 
     def _phi(self, phi: ArrayLike) -> NDArray[np.float64]:
         arr = np.asarray(phi, dtype=np.float64).ravel()

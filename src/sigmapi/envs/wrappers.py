@@ -39,6 +39,7 @@ __all__ = [
     "STATES",
     "STATE_WRAPPERS",
     "CodeObservation",
+    "Features",
     "MapObservation",
     "TrueZObservation",
     "bump_features",
@@ -49,6 +50,7 @@ FEATURES = ("response", "bump")
 """How the map's reading becomes features (see :class:`MapObservation`)."""
 
 Features = NDArray[np.float32]
+"""A state: one float32 feature vector of L2 length 1."""
 
 
 def _codes_of(env: gym.Env[Any, Any]) -> ViewSource | None:

@@ -1,11 +1,12 @@
 """The reach experiment as a section of the reproduction report (``sigmapi reproduce``).
 
 The report (:mod:`sigmapi.experiments.reproduce`) calls :func:`reach_section`: it
-runs the comparison of :func:`sigmapi.reach.run_reach` (the 2-D task, a saccade on every step,
-the same actor-critic on four state representations), draws the figure and returns the
-section. ``--quick`` runs 1 seed of 150 episodes on the small 7x7 map
-(:data:`~sigmapi.reach.config.SMALL_MAP`); the full run is the defaults of
-:class:`~sigmapi.reach.ReachConfig` (5 seeds of 600 episodes, the acceptance run).
+runs the reach experiment (:data:`~sigmapi.experiments.reach.REACH`: the 2-D task, a saccade on
+every step, the same actor-critic on four state representations), draws the figure and
+returns the section. ``--quick`` runs 1 seed of 150 episodes on the small 7x7 map
+(:data:`~sigmapi.experiments.reach_config.SMALL_MAP`); the full run is the defaults of
+:class:`~sigmapi.experiments.reach_config.ReachConfig` on the experiment's default seeds (the
+acceptance run).
 """
 
 from __future__ import annotations
@@ -13,9 +14,9 @@ from __future__ import annotations
 import html
 from typing import TYPE_CHECKING
 
+from sigmapi.experiments.reach import REACH, run_with_progress
+from sigmapi.experiments.reach_config import SMALL_MAP, ReachConfig
 from sigmapi.experiments.results import Section
-from sigmapi.reach.config import SMALL_MAP, ReachConfig
-from sigmapi.reach.experiment import run_with_progress
 
 if TYPE_CHECKING:
     from sigmapi.experiments.results import ReportContext
@@ -41,13 +42,13 @@ EXPLANATION = {
 
 def reach_section(ctx: ReportContext) -> Section:
     """Run the reach comparison (smaller with ``ctx.quick``) and return its report section."""
-    from sigmapi.reach.plots import reach_figure  # matplotlib: only when drawing
-
-    quick = {"episodes": 150, "seeds": 1, "final_episodes": 50, **SMALL_MAP}
-    cfg = ReachConfig(**quick) if ctx.quick else ReachConfig()
-    result = run_with_progress(cfg, disable=not ctx.progress or None, workers=ctx.options.workers)
-    fig = reach_figure(result)
-    fig.savefig(ctx.out / FIGURE, dpi=120, facecolor="white")
+    quick = {"episodes": 150, "final_episodes": 50, **SMALL_MAP}
+    cfg = ReachConfig().replace(**quick) if ctx.quick else ReachConfig()
+    seeds = (0,) if ctx.quick else REACH.default_seeds
+    result = run_with_progress(
+        cfg, seeds, disable=not ctx.progress or None, workers=ctx.options.workers
+    )
+    result.save_figure(ctx.out / FIGURE)
 
     final = result.final_success()
     per_seed = result.final_success_per_seed()
@@ -58,15 +59,16 @@ def reach_section(ctx: ReportContext) -> Section:
         for state in final
     )
     ratio = final["map"] / final["true_z"] if final.get("true_z") else float("nan")
+    env, agent, run = cfg.env, cfg.agent, cfg.run
     body = (
         f"<p>The 2-D gaze-and-reach task (<code>sigmapi/GazeReach-v0</code>), a saccade with "
-        f"probability {cfg.saccade_rate:g} per step, {cfg.grid}x{cfg.grid} retina and gaze "
-        f"codes, a {'x'.join(map(str, cfg.map_shape))} Sigma-Pi map learned from "
-        f"{cfg.map_pairs:,} saccade view pairs per seed; the same actor-critic (discount "
-        f"{cfg.gamma}, rates {cfg.critic_lr}/{cfg.actor_lr}, inverse temperature {cfg.beta}) on "
-        f"each state, {cfg.episodes} episodes x {cfg.seeds} seeds. Final success = rate over the "
-        f"last {cfg.final_episodes} episodes. Map / true z = {ratio:.3f} "
-        f"(target: at least 0.95).</p>"
+        f"probability {env.saccade_rate:g} per step, {env.grid}x{env.grid} retina and gaze "
+        f"codes, a {'x'.join(map(str, cfg.map.map_shape))} Sigma-Pi map learned from "
+        f"{cfg.map.iterations:,} saccade view pairs per seed; the same actor-critic (discount "
+        f"{agent.gamma}, rates {agent.critic_lr}/{agent.actor_lr}, inverse temperature "
+        f"{agent.beta}) on each state, {run.episodes} episodes x {len(seeds)} seeds. Final "
+        f"success = rate over the last {run.final_episodes} episodes. Map / true z = "
+        f"{ratio:.3f} (target: at least 0.95).</p>"
         "<table><tr><th>state</th><th>final success (mean)</th><th>per seed</th>"
         f"<th>what the learner sees</th></tr>{rows}</table>"
     )
@@ -75,7 +77,7 @@ def reach_section(ctx: ReportContext) -> Section:
         html=body,
         figures=[(FIGURE, CAPTION)],
         data={
-            "config": {"episodes": cfg.episodes, "seeds": cfg.seeds, "quick": ctx.quick},
+            "config": {"episodes": run.episodes, "seeds": len(seeds), "quick": ctx.quick},
             "success": final,
             "success_per_seed": {k: [float(x) for x in v] for k, v in per_seed.items()},
             "map_over_true_z": ratio,

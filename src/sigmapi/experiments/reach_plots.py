@@ -8,15 +8,28 @@ objects that draw on the Agg canvas when saved with ``fig.savefig(path)``.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
+from numpy.typing import NDArray
 
-from sigmapi.reach.experiment import ReachResult
+from sigmapi.experiments.reach_config import ReachConfig
 
-__all__ = ["LABELS", "plot_reach_curves", "plot_value_function", "reach_figure"]
+__all__ = ["LABELS", "ReachData", "plot_reach_curves", "plot_value_function", "reach_figure"]
+
+
+class ReachData(Protocol):
+    """What the figures read of a :class:`~sigmapi.experiments.reach_result.ReachResult`."""
+
+    config: ReachConfig
+    seeds: tuple[int, ...]
+    values: dict[str, NDArray[np.float64]]
+    z_axis: NDArray[np.float64]
+
+    def curves(self) -> dict[str, dict[str, NDArray[np.float64]]]: ...
+
 
 LABELS = {
     "map": "Sigma-Pi map (learned)",
@@ -33,7 +46,7 @@ def _ax(ax: Axes | None) -> Axes:
     return ax
 
 
-def plot_reach_curves(result: ReachResult, metric: str = "success", ax: Axes | None = None) -> Axes:
+def plot_reach_curves(result: ReachData, metric: str = "success", ax: Axes | None = None) -> Axes:
     """Learning curves per state: ``metric`` "success" (rate per block, band = 1 sd over
     seeds) or "steps" (mean steps of the successful episodes per block)."""
     if metric not in ("success", "steps"):
@@ -49,12 +62,11 @@ def plot_reach_curves(result: ReachResult, metric: str = "success", ax: Axes | N
             ax.plot(
                 ep, c["steps_to_reach"], color=COLORS.get(state), label=LABELS.get(state, state)
             )
-    cfg = result.config
-    ax.set_xlabel(f"episode (blocks of {cfg.block})")
+    ax.set_xlabel(f"episode (blocks of {result.config.run.block})")
     if metric == "success":
         ax.set_ylabel("success rate")
         ax.set_ylim(0.0, 1.02)
-        ax.set_title(f"reaching success, mean of {cfg.seeds} seeds")
+        ax.set_title(f"reaching success, mean of {len(result.seeds)} seeds")
     else:
         ax.set_ylabel("steps to reach (successes)")
         ax.set_title("steps to reach the goal")
@@ -63,7 +75,7 @@ def plot_reach_curves(result: ReachResult, metric: str = "success", ax: Axes | N
 
 
 def plot_value_function(
-    result: ReachResult, state: str, ax: Axes | None = None, **kwargs: Any
+    result: ReachData, state: str, ax: Axes | None = None, **kwargs: Any
 ) -> Axes:
     """The critic's value over body-centred z (seed 0) for ``state``, with the goal region.
 
@@ -73,8 +85,8 @@ def plot_value_function(
         raise ValueError(f"no value function for state {state!r}; have {sorted(result.values)}")
     ax = _ax(ax)
     v, z = result.values[state], result.z_axis
-    cfg = result.config
-    lo, hi = 0.5 - cfg.goal_radius, 0.5 + cfg.goal_radius
+    radius = result.config.env.goal_radius
+    lo, hi = 0.5 - radius, 0.5 + radius
     if v.ndim == 2:
         im = ax.imshow(
             v.T, origin="lower", extent=(0, 1, 0, 1), cmap=kwargs.pop("cmap", "viridis"), **kwargs
@@ -92,7 +104,7 @@ def plot_value_function(
     return ax
 
 
-def reach_figure(result: ReachResult) -> Figure:
+def reach_figure(result: ReachData) -> Figure:
     """The comparison on one page: success and steps curves, then the value over z per state."""
     states = list(result.values)
     n = max(len(states), 2)
@@ -113,10 +125,11 @@ def reach_figure(result: ReachResult) -> Figure:
                   "vmax": max(float(v.max()) for v in values)}  # fmt: skip
     for i, s in enumerate(states):
         plot_value_function(result, s, fig.add_subplot(grid[1, i]), **shared)
-    cfg = result.config
+    env, agent = result.config.env, result.config.agent
     fig.suptitle(
-        f"Gaze-and-reach, {cfg.dim}-D, saccade rate {cfg.saccade_rate:g}: actor-critic "
-        f"(gamma {cfg.gamma:g}, rates {cfg.critic_lr:g}/{cfg.actor_lr:g}, beta {cfg.beta:g}); "
+        f"Gaze-and-reach, {env.dim}-D, saccade rate {env.saccade_rate:g}: actor-critic "
+        f"(gamma {agent.gamma:g}, rates {agent.critic_lr:g}/{agent.actor_lr:g}, "
+        f"beta {agent.beta:g}); "
         "bottom: critic's value over z after training (seed 0; white: goal region)",
         fontsize=10,
     )

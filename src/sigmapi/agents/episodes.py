@@ -1,0 +1,100 @@
+"""Episodes of learning: one actor-critic in one Gymnasium environment, step by step.
+
+The loop reads only Gymnasium's interface: a 1-D ``Box`` observation (the features a wrapper
+of :mod:`sigmapi.envs.wrappers` gives), a ``Discrete`` action space, ``terminated`` and
+``truncated`` (the time limit, Gymnasium's ``TimeLimit``) and ``info["is_success"]``. Any
+environment that offers them can be learned, the gaze-and-reach world or another.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+from numpy.typing import NDArray
+
+from sigmapi.agents.actor_critic import ActorCritic, ActorCriticConfig
+from sigmapi.errors import ConfigError
+
+__all__ = ["Episodes", "actor_critic_for", "discrete_actions", "run_episodes"]
+
+
+@dataclass(frozen=True)
+class Episodes:
+    """What became of each episode, ``(n_episodes,)`` each.
+
+    ``success``: ``info["is_success"]`` at the last step; ``failed``: the world ended the
+    episode without success (terminated, e.g. the object left the view); the rest ran into the
+    time limit. ``steps``: steps taken.
+    """
+
+    success: NDArray[np.bool_]
+    failed: NDArray[np.bool_]
+    steps: NDArray[np.int64]
+
+
+def discrete_actions(space: spaces.Space[Any]) -> tuple[int, int]:
+    """``(n, start)`` of a ``Discrete`` action space; a ConfigError for any other space."""
+    if not isinstance(space, spaces.Discrete):
+        raise ConfigError(
+            f"the actor-critic chooses among discrete actions, but the environment's action "
+            f"space is {space}; give the environment a Discrete action space"
+        )
+    return int(space.n), int(space.start)
+
+
+def actor_critic_for(
+    env: gym.Env[Any, Any],
+    config: ActorCriticConfig,
+    seed: int | np.random.Generator | None = None,
+) -> ActorCritic:
+    """An :class:`ActorCritic` sized for ``env``: its features (a 1-D ``Box`` observation)
+    and its actions (a ``Discrete`` space)."""
+    obs = env.observation_space
+    if not isinstance(obs, spaces.Box) or len(obs.shape) != 1:
+        raise ConfigError(
+            f"the actor-critic learns over a feature vector, a 1-D Box observation, got {obs}; "
+            "wrap the environment with sigmapi.envs.make_state_env"
+        )
+    n_actions, _ = discrete_actions(env.action_space)
+    return ActorCritic.from_config(config, int(obs.shape[0]), n_actions, seed=seed)
+
+
+def run_episodes(
+    env: gym.Env[Any, Any],
+    agent: ActorCritic,
+    starts: Sequence[int] | NDArray[np.int64],
+    on_episode: Callable[[], None] | None = None,
+) -> Episodes:
+    """Learn over one episode per entry of ``starts`` (the seed of its ``reset``).
+
+    After every step the agent learns from ``(s, a, r, s')`` (``s'`` terminal only when
+    ``terminated``: a time limit is no part of the task). ``on_episode()`` is called after each
+    episode (a progress bar).
+    """
+    _, first = discrete_actions(env.action_space)
+    n = len(starts)
+    success = np.zeros(n, dtype=bool)
+    failed = np.zeros(n, dtype=bool)
+    steps = np.zeros(n, dtype=np.int64)
+    for ep in range(n):
+        phi, info = env.reset(seed=int(starts[ep]))
+        t = 0
+        while True:
+            a = agent.act(phi)
+            phi2, r, terminated, truncated, info = env.step(first + a)
+            agent.update(phi, a, float(r), phi2, terminated)
+            phi = phi2
+            t += 1
+            if terminated or truncated:
+                break
+        success[ep] = bool(info["is_success"])
+        failed[ep] = terminated and not success[ep]
+        steps[ep] = t
+        if on_episode is not None:
+            on_episode()
+    return Episodes(success, failed, steps)

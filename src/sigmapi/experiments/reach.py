@@ -1,0 +1,268 @@
+"""The reach experiment: one actor-critic, several state representations, many seeds.
+
+:data:`REACH` (a :class:`ReachExperiment`) runs a
+:class:`~sigmapi.experiments.reach_config.ReachConfig` on a list of seeds and returns a
+:class:`~sigmapi.experiments.reach_result.ReachResult`. Seed ``s`` of a run is child ``s`` of
+``SeedSequence(config.run.seed)``, so seeds ``0..N-1`` are the N independent streams of
+``sigmapi reach --seeds N``. Per seed, everything random comes from
+that stream: its child 0 seeds the map's data (saccade views) and weights, child 1 the
+episodes' start states (identical for every state representation: same learner, same
+episodes), child 2 the learner's action choices (the same stream for every representation).
+
+Examples
+--------
+>>> cfg = ReachConfig().replace(dim=1, grid=7, map_shape=(7,), iterations=500, episodes=20,
+...                             block=10, final_episodes=10, states=("retina", "true_z"))
+>>> res = REACH.run(cfg, seeds=[0])
+>>> sorted(res.final_success())
+['retina', 'true_z']
+"""
+
+from __future__ import annotations
+
+import functools
+import time
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from numpy.typing import NDArray
+
+from sigmapi import _memory, _validate
+from sigmapi.agents import ActorCritic, actor_critic_for, run_episodes
+from sigmapi.envs import (
+    Features,
+    PlacedViewSource,
+    TrueZObservation,
+    learn_map_in_env,
+    make_state_env,
+)
+from sigmapi.errors import ConfigError
+from sigmapi.executor import Outcome, job_memory, plan_workers, run_jobs
+from sigmapi.experiments.reach_config import ReachConfig
+from sigmapi.experiments.reach_result import ReachResult
+from sigmapi.metrics import evaluate
+from sigmapi.progress import counter
+from sigmapi.som import SigmaPiSOM, load_model
+
+__all__ = [
+    "REACH",
+    "Executor",
+    "Progress",
+    "ReachExperiment",
+    "run_with_progress",
+    "value_over_z",
+]
+
+Progress = Callable[[int, str], None]
+"""``progress(n, phase)``: ``n`` episodes just finished (0 while the map learns), and what runs."""
+Executor = Callable[[Callable[[Any], Any], Sequence[tuple[str, Any]]], Iterable[Outcome]]
+"""Runs ``fn`` on each ``(key, arg)`` job and yields an :class:`~sigmapi.executor.Outcome` per
+job, e.g. ``functools.partial(sigmapi.executor.run_jobs, workers=4)``."""
+
+
+def value_over_z(
+    agent: ActorCritic,
+    state_env: gym.Env[Features, Any],
+    n: int = 21,
+    n_views: int = 8,
+    seed: int = 0,
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The critic's value on a grid of z, averaged over ``n_views`` random gazes per z.
+
+    The world under ``state_env`` must show a given z
+    (:class:`~sigmapi.envs.PlacedViewSource`). Returns ``(z_axis, V)``: ``z_axis`` ``(n,)``
+    and ``V`` of shape ``(n,) * z_dim`` (in 2-D indexed ``[z0, z1]``).
+    """
+    base = state_env.unwrapped
+    if not isinstance(base, PlacedViewSource):
+        raise ConfigError(
+            f"the value over z needs a world that shows a given z (views_of, z_dim), got "
+            f"{type(base).__name__}"
+        )
+    if not isinstance(state_env, (TrueZObservation, gym.ObservationWrapper)):
+        raise TypeError(f"state_env must be made by make_state_env, got {type(state_env).__name__}")
+    rng = np.random.default_rng(seed)
+    axis = np.linspace(0.0, 1.0, n)
+    dim = base.z_dim
+    zs = np.stack(np.meshgrid(*([axis] * dim), indexing="ij"), axis=-1).reshape(-1, dim)
+    out = np.empty(len(zs))
+    for i, z in enumerate(zs):
+        if isinstance(state_env, TrueZObservation):
+            out[i] = agent.value(state_env.encode(z[None, :])[0])
+            continue
+        cx, cy = base.views_of(np.repeat(z[None, :], n_views, axis=0), rng)
+        out[i] = np.mean(
+            [
+                agent.value(state_env.observation({"retina": a, "gaze": b}))
+                for a, b in zip(cx, cy, strict=True)
+            ]
+        )
+    return axis, out.reshape((n,) * dim)
+
+
+def _child(ss: np.random.SeedSequence, k: int) -> np.random.SeedSequence:
+    return np.random.SeedSequence(ss.entropy, spawn_key=(*ss.spawn_key, k))
+
+
+def _map_for_seed(
+    config: ReachConfig, ss: np.random.SeedSequence, progress: Progress | None = None
+) -> SigmaPiSOM:
+    if config.map.model_path is not None:
+        return load_model(Path(config.map.model_path))
+    r = np.random.default_rng(_child(ss, 0))
+    env_seed, som_seed = (int(v) for v in r.integers(0, 2**31 - 1, size=2))
+
+    def callback(model: SigmaPiSOM) -> None:
+        if progress is not None:
+            progress(0, "learning the map")
+
+    return learn_map_in_env(
+        config.env.make_env(), config.som_config(som_seed), seed=env_seed, callback=callback
+    )
+
+
+@dataclass(frozen=True)
+class _SeedJob:
+    config: ReachConfig
+    first: bool
+    seq: np.random.SeedSequence
+
+
+def _run_seed(job: _SeedJob, progress: Progress | None = None) -> dict[str, Any]:
+    """Everything of one seed: its map, then every state's learner on the same episodes."""
+    cfg, ss = job.config, job.seq
+    model = _map_for_seed(cfg, ss, progress) if "map" in cfg.run.states else None
+    out: dict[str, Any] = {"map_metrics": _map_quality(model) if model is not None else None,
+                           "runs": {}, "values": {}}  # fmt: skip
+    starts = np.random.default_rng(_child(ss, 1)).integers(0, 2**31 - 1, size=cfg.run.episodes)
+    for s in cfg.run.states:
+        env = make_state_env(cfg.env.make_env(), s, model, cfg.map.features, cfg.map.feature_width)
+        agent = actor_critic_for(env, cfg.agent, seed=np.random.default_rng(_child(ss, 2)))
+        done = None if progress is None else functools.partial(progress, 1, s)
+        ep = run_episodes(env, agent, starts, on_episode=done)
+        out["runs"][s] = (ep.success, ep.failed, ep.steps)
+        if job.first:
+            out["values"][s] = value_over_z(agent, env, n=21 if cfg.env.dim == 2 else 51)
+    return out
+
+
+def _map_quality(model: SigmaPiSOM) -> dict[str, float | int]:
+    """The project's map metrics (docs/algorithm.md) on a small test set, for the record."""
+    return evaluate(model, n_test=2000).to_dict()
+
+
+def _check_memory(config: ReachConfig) -> None:
+    """Refuse a map (and its views) that this machine cannot hold, before anything is built."""
+    if config.map.model_path is not None or "map" not in config.run.states:
+        return
+    som = SigmaPiSOM(config.som_config(config.run.seed))
+    n_x, n_y = int(np.prod(som.x_shape)), int(np.prod(som.y_shape))
+    _memory.check(
+        som.memory_estimate() + config.map.iterations * 2 * (n_x + n_y) * 8,
+        f"the reach experiment's map ({'x'.join(map(str, som.map_shape))} units on "
+        f"{n_x} x {n_y} inputs, {config.map.iterations} views)",
+        "use a smaller grid, map_shape or iterations",
+    )
+
+
+def _seeds(seeds: Iterable[int]) -> tuple[int, ...]:
+    out = tuple(seeds)
+    if not out or len(set(out)) != len(out):
+        raise _validate.fail("seeds", "a non-empty list of distinct ints >= 0", list(out))
+    return tuple(_validate.integer("seeds", s, 0) for s in out)
+
+
+class ReachExperiment:
+    """The same actor-critic on each state representation, over seeds (``sigmapi reach``)."""
+
+    name = "reach"
+    summary = "learn to reach with an actor-critic on the learned map vs. other states"
+    config_type = ReachConfig
+    default_seeds: tuple[int, ...] = (0, 1, 2, 3, 4)
+    """The seeds of the acceptance run (``sigmapi reach`` without ``--seeds``)."""
+
+    def run(
+        self,
+        config: ReachConfig,
+        *,
+        seeds: Iterable[int],
+        executor: Executor | None = None,
+        progress: Progress | None = None,
+    ) -> ReachResult:
+        """Train the actor-critic on every state of ``config.run.states`` for every seed.
+
+        ``progress(n, phase)`` is called with the number of episodes just finished and a short
+        description of the phase (for a progress bar; the total is ``len(seeds) *
+        len(states) * episodes``). With an ``executor`` the seeds run as its jobs (in parallel
+        processes, say; the result does not depend on it), and progress then counts whole
+        seeds. Returns a :class:`~sigmapi.experiments.reach_result.ReachResult`.
+        """
+        if not isinstance(config, ReachConfig):
+            raise _validate.fail("config", "a ReachConfig", config)
+        seeds = _seeds(seeds)
+        _check_memory(config)
+        t0 = time.perf_counter()
+        run = config.run
+        shape = (len(seeds), run.episodes)
+        res = ReachResult(config, seeds)
+        for s in run.states:
+            res.success[s] = np.zeros(shape, dtype=bool)
+            res.steps[s] = np.zeros(shape, dtype=np.int64)
+            res.lost[s] = np.zeros(shape, dtype=bool)
+        root = np.random.SeedSequence(run.seed)
+        jobs = [_SeedJob(config, i == 0, _child(root, s)) for i, s in enumerate(seeds)]
+        if executor is None:
+            per_seed = [_run_seed(job, progress) for job in jobs]
+        else:
+            outcomes = {}
+            for o in executor(_run_seed, [(str(i), job) for i, job in enumerate(jobs)]):
+                if not o.ok:
+                    raise RuntimeError(f"reach seed {seeds[int(o.key)]} failed: {o.error}")
+                outcomes[int(o.key)] = o.value
+                if progress is not None:
+                    progress(len(run.states) * run.episodes, f"seed {seeds[int(o.key)]} done")
+            per_seed = [outcomes[i] for i in range(len(jobs))]
+        for i, out in enumerate(per_seed):
+            if out["map_metrics"] is not None:
+                res.map_metrics.append(out["map_metrics"])
+            for s, (succ, lost, steps) in out["runs"].items():
+                res.success[s][i], res.lost[s][i], res.steps[s][i] = succ, lost, steps
+            for s, (axis, values) in out["values"].items():
+                res.values[s] = values
+                res.z_axis = axis
+        res.seconds = time.perf_counter() - t0
+        return res
+
+
+REACH = ReachExperiment()
+"""The reach experiment."""
+
+
+def run_with_progress(
+    config: ReachConfig,
+    seeds: Iterable[int],
+    disable: bool | None = None,
+    workers: int | None = None,
+) -> ReachResult:
+    """:meth:`REACH.run <ReachExperiment.run>` with a progress bar on stderr (episodes, and
+    the current phase) and the seeds in parallel processes.
+
+    ``workers=None``: one seed per core, as many as fit in half the available memory
+    (:func:`sigmapi.executor.plan_workers`).
+    """
+    seeds = _seeds(seeds)
+    _check_memory(config)  # before the bar opens: a refusal is the only line
+    if workers is None:
+        per_seed = job_memory(config.som_config(config.run.seed), n_test=2000)
+        workers = plan_workers(None, per_seed, n_jobs=len(seeds)).workers
+    executor = None
+    if workers > 1 and len(seeds) > 1:
+        executor = functools.partial(run_jobs, workers=min(workers, len(seeds)))
+    total = len(seeds) * len(config.run.states) * config.run.episodes
+    progress, bar = counter(total, "reach", "ep", disable)
+    with bar:
+        return REACH.run(config, seeds=seeds, executor=executor, progress=progress)

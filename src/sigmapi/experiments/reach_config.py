@@ -1,0 +1,194 @@
+"""The settings of one reach comparison, in four frozen parts: the world, the map, the learner
+and the run.
+
+- :class:`~sigmapi.envs.GazeReachConfig` (``env``): the gaze-and-reach world and its time limit;
+- :class:`MapConfig` (``map``): the Sigma-Pi map learned in the world, and how the learner
+  reads it;
+- :class:`~sigmapi.agents.ActorCriticConfig` (``agent``): the actor-critic;
+- :class:`ReachRunConfig` (``run``): which states are compared, for how many episodes.
+
+Each part checks its own fields when it is built and builds nothing else. :class:`ReachConfig`
+holds one of each; field names are unique across the parts, so
+``ReachConfig().replace(grid=7, episodes=150)`` finds each field's part. The seeds are not
+settings: they are given to the run (:meth:`~sigmapi.experiments.reach.ReachExperiment.run`).
+The ``sigmapi reach`` options are generated from the parts' fields (:mod:`sigmapi.cli.reach`),
+so a field added here is a command-line option too.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
+
+from sigmapi import _validate
+from sigmapi.agents import ActorCriticConfig
+from sigmapi.codes import PopulationCode
+from sigmapi.config import BACKEND_NAMES, SOMConfig, list_presets, load_preset
+from sigmapi.envs import FEATURES, STATES, GazeReachConfig, GazeReachEnv
+from sigmapi.errors import ConfigError
+
+__all__ = ["SMALL_MAP", "MapConfig", "ReachConfig", "ReachRunConfig"]
+
+
+@dataclass(frozen=True)
+class MapConfig:
+    """The Sigma-Pi map a reach learner reads: its size, how it learns, how it is read."""
+
+    map_shape: tuple[int, ...] = (15, 15)
+    """Grid of the Sigma-Pi map learned in the environment (``sigmapi reach`` picks 12 units
+    for a 1-D task when it is not given)."""
+    iterations: int = 100_000
+    """Iterations of the map, one per saccade view pair it learns from (paper-2d's length)."""
+    preset: str = "paper-2d"
+    """The SOM preset the map learns with: its winner rule, schedules, ordering procedure and
+    kernel tolerance (the codes come from the world, the size, length and seed from here).
+    "none": the small-map schedule (soft winner, random start; see MapConfig.som_config)."""
+    backend: str = "auto"
+    """Kernel that learns and reads the map ("auto": the fast one when it is installed)."""
+    model_path: str | None = None
+    """A trained model file to use for every seed instead of learning a map per seed."""
+    features: str = "response"
+    """Map features: "response" (activations clipped at 0, L2-normalised) or "bump" (Gaussian
+    around the winner on the map grid); the README's reach section compares the two."""
+    feature_width: float = 1.0
+    """Width of the bump features (map and true-z codes), in grid units."""
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "map_shape", _validate.shape("map_shape", self.map_shape))
+        its = _validate.integer("iterations", self.iterations, 1, fix="paper-2d runs 100000")
+        object.__setattr__(self, "iterations", its)
+        _validate.choice("preset", self.preset, ("none", *list_presets()))
+        _validate.choice("backend", self.backend, BACKEND_NAMES)
+        if self.model_path is not None and not isinstance(self.model_path, str):
+            raise _validate.fail("model_path", "a file name or None", self.model_path)
+        _validate.choice("features", self.features, FEATURES)
+        width = _validate.positive("feature_width", self.feature_width, fix="e.g. 1.0")
+        object.__setattr__(self, "feature_width", width)
+
+    def som_config(self, x_code: PopulationCode, y_code: PopulationCode, seed: int) -> SOMConfig:
+        """The map's config for views coded by ``x_code`` and ``y_code`` (the world's codes).
+
+        With a ``preset`` (default ``paper-2d``): that preset, on the world's codes, this
+        map's shape, length (``iterations``) and backend. Its ordering procedure
+        (``crossview``) is what orders a 15x15 map from saccade views (README).
+
+        ``preset="none"``, the small-map schedule: the neighbourhood shrinks from the map's
+        size to 30 % of it over the first 30 % of the run, then to 0.7 units at 80 %: a longer
+        ordering phase and a wider final neighbourhood than the paper's 1-D schedule, because
+        a 2-D map trained on only ~10^4 views twists under the paper's schedule shape (README,
+        the small-map setting).
+        """
+        if x_code.width != y_code.width or (x_code.height, x_code.normalize, x_code.periodic) != (
+            y_code.height, y_code.normalize, y_code.periodic,
+        ):  # fmt: skip
+            raise ConfigError(
+                f"a map's x and y codes differ only in shape, got {x_code} and {y_code}"
+            )
+        codes: dict[str, Any] = {
+            "x_shape": x_code.shape, "y_shape": y_code.shape, "code_width": x_code.width,
+            "code_height": x_code.height, "code_normalize": x_code.normalize,
+            "periodic": x_code.periodic,
+        }  # fmt: skip
+        run: dict[str, Any] = {"map_shape": self.map_shape, "iterations": self.iterations,
+               "backend": self.backend, "seed": seed}  # fmt: skip
+        if self.preset != "none":
+            return load_preset(self.preset).replace(**codes, **run)
+        m = float(max(self.map_shape))
+        return SOMConfig(**codes, **run, sigma=((0.0, m), (0.3, max(m / 3.5, 1.0)), (0.8, 0.7)))
+
+
+@dataclass(frozen=True)
+class ReachRunConfig:
+    """What is compared and for how long: the states, the episodes, the curves' blocks."""
+
+    states: tuple[str, ...] = STATES
+    """State representations to compare."""
+    episodes: int = 600
+    """Episodes of reinforcement learning per seed and state."""
+    block: int = 50
+    """Episodes per point of the learning curves."""
+    final_episodes: int = 200
+    """The final success rate is measured over this many last episodes."""
+    seed: int = 0
+    """Root seed: seed s of a run uses child s of SeedSequence(seed)."""
+
+    def __post_init__(self) -> None:
+        for name in ("episodes", "block", "final_episodes"):
+            object.__setattr__(self, name, _validate.integer(name, getattr(self, name), 1))
+        if self.final_episodes > self.episodes:
+            raise ConfigError(
+                f"final_episodes must be <= episodes ({self.episodes}), got {self.final_episodes}"
+            )
+        object.__setattr__(self, "seed", _validate.integer("seed", self.seed, 0))
+        states = tuple(self.states)
+        bad = [s for s in states if s not in STATES]
+        if not states or bad or len(set(states)) != len(states):
+            raise ConfigError(f"states must be distinct names from {STATES}, got {states!r}")
+        object.__setattr__(self, "states", states)
+
+
+@dataclass(frozen=True)
+class ReachConfig:
+    """Everything one reach comparison depends on, but its seeds. Defaults: the 2-D task, a
+    saccade on every step, the paper-2d map, the authors' actor-critic, 600 episodes."""
+
+    env: GazeReachConfig = field(default_factory=GazeReachConfig)
+    """The world and its time limit."""
+    map: MapConfig = field(default_factory=MapConfig)
+    """The map learned in the world."""
+    agent: ActorCriticConfig = field(default_factory=ActorCriticConfig)
+    """The learner."""
+    run: ReachRunConfig = field(default_factory=ReachRunConfig)
+    """The states, episodes and curves."""
+
+    PARTS: ClassVar[dict[str, type]] = {
+        "env": GazeReachConfig, "map": MapConfig, "agent": ActorCriticConfig,
+        "run": ReachRunConfig,
+    }  # fmt: skip
+    """Each part's name and class."""
+
+    def __post_init__(self) -> None:
+        for name, cls in self.PARTS.items():
+            if not isinstance(getattr(self, name), cls):
+                raise _validate.fail(name, f"a {cls.__name__}", getattr(self, name))
+
+    def replace(self, **changes: Any) -> ReachConfig:
+        """A copy with ``changes``, fields of any part by name (``grid=7, episodes=150``)."""
+        owner = {f.name: part for part, cls in self.PARTS.items() for f in dataclasses.fields(cls)}
+        bad = sorted(set(changes) - set(owner))
+        if bad:
+            raise ConfigError(
+                f"unknown reach config field {bad[0]!r}; valid: {', '.join(sorted(owner))}"
+            )
+        parts = {
+            part: dataclasses.replace(getattr(self, part), **{
+                k: v for k, v in changes.items() if owner[k] == part
+            })
+            for part in self.PARTS
+        }  # fmt: skip
+        return ReachConfig(**parts)
+
+    def to_dict(self) -> dict[str, dict[str, Any]]:
+        """The parts as JSON-able tables (tuples as lists): ``{"env": {...}, "map": ...}``."""
+        return {
+            part: {
+                k: (list(v) if isinstance(v, tuple) else v)
+                for k, v in dataclasses.asdict(getattr(self, part)).items()
+            }
+            for part in self.PARTS
+        }
+
+    def som_config(self, seed: int) -> SOMConfig:
+        """The config of the map of seed ``seed``, on the world's codes
+        (:meth:`MapConfig.som_config`)."""
+        world = GazeReachEnv(**self.env.env_kwargs())
+        return self.map.som_config(world.x_code, world.y_code, seed)
+
+
+SMALL_MAP: dict[str, Any] = {
+    "grid": 7, "code_width": 0.5, "map_shape": (7, 7), "iterations": 10_000, "preset": "none",
+}  # fmt: skip
+"""The 7x7 setting, the experiment's default before the paper-scale map: 7x7 codes of width
+0.5, a 7x7 map on 10,000 views with the small-map schedule (``ReachConfig().replace(**SMALL_MAP)``;
+``sigmapi reach --grid 7 --code-width 0.5 --map-shape 7x7 --iterations 10000 --preset none``)."""

@@ -1,0 +1,146 @@
+"""The outcome of a reach comparison: per-episode records, the curves and rates computed from
+them, its JSON form, its table and its figure."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from sigmapi.experiments.reach_config import ReachConfig
+
+__all__ = ["FIGURE", "ReachResult"]
+
+FIGURE = "reach.png"
+"""The file name :meth:`ReachResult.figure` writes in its folder."""
+
+
+@dataclass
+class ReachResult:
+    """Outcome of :meth:`~sigmapi.experiments.reach.ReachExperiment.run`.
+
+    ``success[state]``, ``lost[state]`` and ``steps[state]`` have shape ``(len(seeds),
+    episodes)``, one row per seed in the order of ``seeds``: whether each episode reached the
+    goal, whether it lost the object (the world ended it without success; the rest timed out)
+    and how many steps it took; ``values[state]`` is the critic's value over z (the first
+    seed), on ``z_axis``.
+    """
+
+    config: ReachConfig
+    seeds: tuple[int, ...]
+    success: dict[str, NDArray[np.bool_]] = field(default_factory=dict)
+    steps: dict[str, NDArray[np.int64]] = field(default_factory=dict)
+    lost: dict[str, NDArray[np.bool_]] = field(default_factory=dict)
+    values: dict[str, NDArray[np.float64]] = field(default_factory=dict)
+    z_axis: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
+    map_metrics: list[dict[str, float | int]] = field(default_factory=list)
+    seconds: float = 0.0
+
+    def final_success(self) -> dict[str, float]:
+        """Success rate over the last ``final_episodes`` episodes, mean over seeds."""
+        return {s: float(v.mean()) for s, v in self.final_success_per_seed().items()}
+
+    def final_lost(self) -> dict[str, float]:
+        """Fraction of the last ``final_episodes`` episodes that lost the object (seed mean)."""
+        f = self.config.run.final_episodes
+        return {s: float(v[:, -f:].mean()) for s, v in self.lost.items()}
+
+    def final_timed_out(self) -> dict[str, float]:
+        """Fraction of the last ``final_episodes`` episodes that neither reached nor lost the
+        object (seed mean), counted (not ``1 - success - lost``, which rounds to -1e-17)."""
+        f = self.config.run.final_episodes
+        return {
+            s: float((~v[:, -f:] & ~self.lost[s][:, -f:]).mean()) for s, v in self.success.items()
+        }
+
+    def final_success_per_seed(self) -> dict[str, NDArray[np.float64]]:
+        f = self.config.run.final_episodes
+        return {s: v[:, -f:].mean(axis=1) for s, v in self.success.items()}
+
+    def ratio_map_to_true_z(self) -> float | None:
+        """Final success of the map over that of the true z (None without both or at 0)."""
+        final = self.final_success()
+        if "map" in final and "true_z" in final and final["true_z"] > 0:
+            return final["map"] / final["true_z"]
+        return None
+
+    def curves(self) -> dict[str, dict[str, NDArray[np.float64]]]:
+        """Per state: ``episode`` (block ends), ``success`` and ``steps_to_reach`` per block.
+
+        Each is ``(n_blocks,)`` mean over seeds, with ``*_sd`` the standard deviation over
+        seeds; steps to reach average the successful episodes only (NaN when none).
+        """
+        b = self.config.run.block
+        out: dict[str, dict[str, NDArray[np.float64]]] = {}
+        for s in self.success:
+            succ, steps = self.success[s], self.steps[s].astype(np.float64)
+            nb = succ.shape[1] // b
+            sb = succ[:, : nb * b].reshape(succ.shape[0], nb, b)
+            tb = steps[:, : nb * b].reshape(succ.shape[0], nb, b)
+            rate = sb.mean(axis=2)
+            with np.errstate(invalid="ignore", divide="ignore"):
+                reach_steps = np.where(sb, tb, 0.0).sum(axis=2) / sb.sum(axis=2)
+            ok = np.isfinite(reach_steps)
+            cnt = ok.sum(axis=0)
+            mean_steps = np.where(
+                cnt > 0, np.where(ok, reach_steps, 0.0).sum(axis=0) / np.maximum(cnt, 1), np.nan
+            )
+            out[s] = {
+                "episode": (np.arange(nb) + 1.0) * b,
+                "success": rate.mean(axis=0),
+                "success_sd": rate.std(axis=0),
+                "steps_to_reach": mean_steps,
+            }
+        return out
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-able summary: final success (mean and per seed), lost and timed-out shares,
+        the curves, the maps' metrics, the config (its parts and the seeds) and the time."""
+        curves = self.curves()
+        return {
+            "success": self.final_success(),
+            "success_per_seed": {s: v.tolist() for s, v in self.final_success_per_seed().items()},
+            "lost": self.final_lost(),
+            "timed_out": self.final_timed_out(),
+            "ratio_map_to_true_z": self.ratio_map_to_true_z(),
+            "curves": {
+                s: {k: [None if not np.isfinite(x) else float(x) for x in v] for k, v in c.items()}
+                for s, c in curves.items()
+            },
+            "map_metrics": self.map_metrics,
+            "config": {**self.config.to_dict(), "seeds": list(self.seeds)},
+            "seconds": self.seconds,
+        }
+
+    def table(self) -> str:
+        """The final success of each state as lines of text (per seed, and the lost share)."""
+        run = self.config.run
+        per_seed = self.final_success_per_seed()
+        lost = self.final_lost()
+        lines = [
+            f"final success rate over the last {run.final_episodes} of {run.episodes} "
+            f"episodes, {len(self.seeds)} seeds:"
+        ]
+        for s, v in self.final_success().items():
+            seeds = " ".join(f"{x:.3f}" for x in per_seed[s])
+            lines.append(f"  {s:12s} {v:.3f}   per seed: {seeds}   (lost {lost[s]:.3f})")
+        ratio = self.ratio_map_to_true_z()
+        if ratio is not None:
+            lines.append(f"  map / true_z = {ratio:.3f}")
+        return "\n".join(lines)
+
+    def save_figure(self, path: str | Path, dpi: int = 120) -> Path:
+        """Draw the comparison (:func:`~sigmapi.experiments.reach_plots.reach_figure`) to
+        ``path`` (.png, .pdf or .svg) and return it."""
+        from sigmapi.experiments.reach_plots import reach_figure  # matplotlib: only to draw
+
+        out = Path(path)
+        reach_figure(self).savefig(out, dpi=dpi, facecolor="white")
+        return out
+
+    def figure(self, out_dir: str | Path) -> list[Path]:
+        """Write the figure (:data:`FIGURE`) into ``out_dir``; returns the files written."""
+        return [self.save_figure(Path(out_dir) / FIGURE)]
