@@ -89,9 +89,9 @@ class MapObservation(gym.ObservationWrapper[Features, Any, Obs]):
         A trained map (``sigmapi.load(path)`` or :func:`~sigmapi.envs.learn_map_in_env`).
     features : {"response", "bump"}
         ``"response"`` (default): the activations ``h_k`` clipped at 0 and L2-normalised, a
-        sparse localized code of z (each unit is tuned to a patch of z; on a trained 7x7 map
-        about 8 units carry the pattern, the top 4 hold 64 % of its energy); it degrades
-        gracefully when the two views of a z pick neighbouring winners. ``"bump"``: a
+        sparse localized code of z (each unit is tuned to a patch of z, and a few
+        neighbouring units carry the pattern); it degrades gracefully when the two views of
+        a z pick neighbouring winners. ``"bump"``: a
         Gaussian bump of width ``width`` map units around the winning unit on the map grid
         (all-or-nothing per winner; relies on the map's topography for generalisation).
     width : float
