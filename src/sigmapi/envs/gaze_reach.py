@@ -46,6 +46,7 @@ from numpy.typing import NDArray
 
 from sigmapi import _validate
 from sigmapi.codes import _WIDTH_FIX, MIN_WIDTH, PopulationCode
+from sigmapi.envs.gaze_render import draw_workspace
 from sigmapi.envs.protocols import Obs, Views, view_space
 from sigmapi.errors import ConfigError
 
@@ -435,27 +436,4 @@ class GazeReachEnv(gym.Env[Obs, np.int64]):
         """
         if self.render_mode != "rgb_array":
             return None
-        size, pad = 96, 16
-        rows = size if self.dim == 2 else 24
-        img = np.full((rows + 2 * pad, size + 2 * pad, 3), 255, dtype=np.uint8)
-
-        def px(p: NDArray[np.float64]) -> tuple[int, int]:
-            c = int(np.clip(round(pad + p[0] * (size - 1)), 0, size + 2 * pad - 1))
-            if self.dim == 1:
-                return pad + rows // 2, c
-            r = int(np.clip(round(pad + (1.0 - p[1]) * (size - 1)), 0, rows + 2 * pad - 1))
-            return r, c
-
-        img[pad : pad + rows, pad : pad + size] = (225, 225, 225)
-        lo = np.maximum(self.goal - self.goal_radius, 0.0)
-        hi = np.minimum(self.goal + self.goal_radius, 1.0)
-        (r0, c0), (r1, c1) = px(lo), px(hi)
-        r0, r1 = (pad, pad + rows) if self.dim == 1 else (r1, r0 + 1)
-        img[r0:r1, c0 : c1 + 1] = (150, 220, 150)
-        gr, gc = px(self._y)
-        img[pad : pad + rows, gc] = (40, 90, 220)
-        if self.dim == 2:
-            img[gr, pad : pad + size] = (40, 90, 220)
-        zr, zc = px(self._z)
-        img[max(zr - 3, 0) : zr + 4, max(zc - 3, 0) : zc + 4] = (220, 40, 40)
-        return img
+        return draw_workspace(self.goal, self.goal_radius, self._y, self._z)
