@@ -184,7 +184,9 @@ class GazeReachEnv(gym.Env[Obs, np.int64]):
     """Gaze-and-reach task: move the body until the seen object lies in the grasp region.
 
     Defaults are those of :class:`GazeReachConfig`. The environment never truncates an episode
-    itself: its time limit is Gymnasium's ``TimeLimit`` (``gymnasium.make`` adds it).
+    itself: its time limit is Gymnasium's ``TimeLimit`` (``gymnasium.make`` adds it). It is a
+    view source (:class:`~sigmapi.envs.PlacedViewSource`: :attr:`x_code`, :attr:`y_code`,
+    :meth:`sample_views`, :meth:`views_of`), so a map can learn from its saccades.
 
     Parameters
     ----------
