@@ -5,8 +5,8 @@ from __future__ import annotations
 import pytest
 
 from sigmapi.config import SOMConfig
-from sigmapi.errors import UsageError
-from sigmapi.executor import job_memory, plan_workers, run_jobs
+from sigmapi.errors import ConfigError
+from sigmapi.executor import Executor, job_memory, plan_workers, run_jobs
 from sigmapi.som import SigmaPiSOM
 
 
@@ -41,8 +41,10 @@ def test_dask_local_cluster_gives_the_same_outcomes():
 
 
 def test_unknown_engine_is_refused():
-    with pytest.raises(UsageError, match="engine must be one of"):
+    with pytest.raises(ConfigError, match="engine must be one of"):
         list(run_jobs(_square_or_fail, JOBS, engine="spark"))
+    with pytest.raises(ConfigError, match="engine must be one of"):
+        Executor(engine="spark")
 
 
 def test_memory_budget_limits_the_workers():
@@ -50,8 +52,19 @@ def test_memory_budget_limits_the_workers():
     assert plan.workers == 2 and "memory limits" in plan.reason
     assert plan_workers(8, per_job=1 << 20, budget=1 << 30, n_jobs=3).workers == 3
     assert plan_workers(2, per_job=1 << 40, budget=1 << 30).workers == 1
-    with pytest.raises(UsageError, match="workers must be a positive int"):
+    with pytest.raises(ConfigError, match="workers must be an int >= 1, got 0"):
         plan_workers(0, per_job=1)
+
+
+def test_executor_holds_the_settings_and_plans_with_them():
+    ex = Executor(workers=3, memory_budget=7 << 30)
+    assert ex.plan(per_job=3 << 30, n_jobs=10).workers == 2
+    assert ex.plan(per_job=1 << 20, n_jobs=0).workers == 1
+    assert [o.value for o in ex.run(_square_or_fail, JOBS[:3], workers=1)] == [0, 1, 4]
+    with pytest.raises(ConfigError, match="address names a Dask scheduler"):
+        Executor(address="tcp://localhost:8786")
+    with pytest.raises(ConfigError, match="workers must be an int >= 1"):
+        Executor(workers=0)
 
 
 def test_job_memory_grows_with_the_weights():

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import matplotlib
@@ -151,3 +152,71 @@ def test_unknown_figure_name_is_refused(capsys):
         main(["figure", "nope", "m.npz", "--out", "x.png"])
     assert exc.value.code == 2
     assert "invalid choice" in capsys.readouterr().err
+
+
+# ------------------------------------------------------------------ the protocol (base.py)
+
+
+@pytest.mark.parametrize(
+    ("seeds", "message"),
+    [
+        ((), "seeds must name at least one seed"),
+        ([0, -1], "seeds must be a list of non-negative ints"),
+        ([1.5], "seeds must be a list of non-negative ints"),
+        ("012", "seeds must be a list of non-negative ints"),
+        ([3, 3], "seeds must be distinct, got [3, 3]"),
+    ],
+)
+def test_check_seeds_names_what_is_wrong(seeds, message):
+    from sigmapi.errors import ConfigError
+    from sigmapi.experiments import check_seeds
+
+    with pytest.raises(ConfigError, match=re.escape(message)):
+        check_seeds(seeds)
+    assert check_seeds([4, 0, 2]) == (4, 0, 2)
+
+
+def test_register_refuses_bad_names_configs_and_taken_names():
+    from dataclasses import dataclass
+
+    from sigmapi.errors import ConfigError
+    from sigmapi.experiments import REGISTRY, register
+
+    @dataclass(frozen=True)
+    class Cfg:
+        n: int = 1
+
+    @dataclass
+    class Mutable:
+        n: int = 1
+
+    class Toy:
+        summary, config_type = "a toy", Cfg
+
+        def __init__(self, name, config_type=Cfg):
+            self.name, self.config_type = name, config_type
+
+    with pytest.raises(ConfigError, match="experiment name must be lower-case words"):
+        register(Toy("Bad Name"))
+    with pytest.raises(ConfigError, match="must be a frozen dataclass"):
+        register(Toy("toy", Mutable))
+    toy = register(Toy("toy-taken"))
+    try:
+        assert register(toy) is toy  # registering it again is no change
+        with pytest.raises(ConfigError, match="'toy-taken' is taken"):
+            register(Toy("toy-taken"))
+    finally:
+        del REGISTRY["toy-taken"]
+
+
+def test_write_result_is_atomic_json_that_reads_back(tmp_path):
+    from sigmapi.experiments import read_result, write_result
+
+    class Done:
+        def to_dict(self):
+            return {"methods": [{"name": "a", "z_error": 0.25}], "seeds": [0, 1]}
+
+    path = write_result(Done(), tmp_path / "new")
+    assert path == tmp_path / "new" / "result.json"
+    assert read_result(tmp_path / "new") == read_result(path) == Done().to_dict()
+    assert not [p for p in path.parent.iterdir() if p != path]  # no temp file left

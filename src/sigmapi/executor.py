@@ -2,8 +2,8 @@
 
 A *job* is a picklable module-level function applied to one picklable argument. The
 executor runs each job once and yields an :class:`Outcome` per job as it finishes; a job that
-raises is recorded with its error and the others go on. ``sigmapi reproduce`` trains its seeds
-through it and ``sigmapi sweep`` its grid.
+raises is recorded with its error and the others go on. Every experiment runs its per-seed
+jobs through it (:mod:`sigmapi.experiments`); :class:`Executor` holds where they run.
 
 Engines
 -------
@@ -15,8 +15,8 @@ Engines
     :mod:`dask.distributed`: the cluster at ``address`` (``tcp://host:8786``), or a local
     cluster of ``workers`` single-threaded processes started for the run. Dask was chosen over
     Ray because it is pure Python with a small install (``pip install 'sigmapi[sweep]'``), its
-    ``LocalCluster`` starts in about a second, and a scheduler address is all a user needs to
-    move the same sweep onto a cluster (dask-jobqueue, Kubernetes, SSH).
+    ``LocalCluster`` starts quickly, and a scheduler address is all a user needs to move the
+    same sweep onto a cluster (dask-jobqueue, Kubernetes, SSH).
 
 Memory
 ------
@@ -35,13 +35,14 @@ from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wai
 from dataclasses import dataclass
 from typing import Any
 
-from sigmapi import _memory
+from sigmapi import _memory, _validate
 from sigmapi.config import SOMConfig
-from sigmapi.errors import UsageError
+from sigmapi.errors import ConfigError
 from sigmapi.som import SigmaPiSOM
 
 __all__ = [
     "ENGINES",
+    "Executor",
     "Outcome",
     "WorkerPlan",
     "available_memory",
@@ -103,9 +104,7 @@ def plan_workers(
     ``budget`` defaults to half of :func:`available_memory`.
     """
     cpus = os.cpu_count() or 1
-    want = cpus if workers is None else workers
-    if want < 1:
-        raise UsageError(f"workers must be a positive int, got {want}; pass --workers 1 or more")
+    want = cpus if workers is None else _validate.integer("workers", workers, 1)
     budget = available_memory() // 2 if budget is None else budget
     fit = max(1, budget // max(per_job, 1))
     n = max(1, min(want, fit, n_jobs if n_jobs else want))
@@ -114,6 +113,53 @@ def plan_workers(
     if fit < want:
         reason += "; memory limits the parallel jobs"
     return WorkerPlan(n, reason)
+
+
+@dataclass(frozen=True)
+class Executor:
+    """Where an experiment's jobs run: the engine, how many at once, and the memory they share.
+
+    Experiments take one (``executor=None``: one job after another in this process) and call
+    :meth:`plan` and :meth:`run`; the results do not depend on it.
+
+    Examples
+    --------
+    >>> Executor(workers=2).plan(per_job=1 << 20, n_jobs=5).workers
+    2
+    """
+
+    engine: str = "local"
+    """``"local"``: a process pool of this machine; ``"dask"``: a Dask cluster."""
+    workers: int | None = None
+    """Jobs at once (None: one per core, as many as fit in the memory budget)."""
+    address: str | None = None
+    """Scheduler of a running Dask cluster, e.g. ``"tcp://10.0.0.5:8786"`` (engine ``"dask"``;
+    None: a local cluster started for the run)."""
+    memory_budget: int | None = None
+    """Bytes the parallel jobs may use together (None: half of the memory available)."""
+
+    def __post_init__(self) -> None:
+        _validate.choice("engine", self.engine, ENGINES)
+        if self.workers is not None:
+            _validate.integer("workers", self.workers, 1)
+        if self.memory_budget is not None:
+            _validate.integer("memory_budget", self.memory_budget, 1, fix="in bytes")
+        if self.address is not None and self.engine != "dask":
+            raise ConfigError(
+                f"address names a Dask scheduler, got {self.address!r} with engine "
+                f"{self.engine!r}; use engine 'dask' with it"
+            )
+
+    def plan(self, per_job: int, n_jobs: int) -> WorkerPlan:
+        """How many of ``n_jobs`` jobs of ``per_job`` bytes each run at once
+        (:func:`plan_workers`)."""
+        return plan_workers(self.workers, per_job, self.memory_budget, n_jobs=max(1, n_jobs))
+
+    def run(
+        self, fn: Callable[[Any], Any], jobs: Sequence[tuple[str, Any]], workers: int
+    ) -> Iterator[Outcome]:
+        """:func:`run_jobs` on this engine, ``workers`` at once (from :meth:`plan`)."""
+        return run_jobs(fn, jobs, workers=workers, engine=self.engine, address=self.address)
 
 
 def _call(fn: Callable[[Any], Any], arg: Any) -> tuple[Any, str | None, float]:
@@ -140,8 +186,7 @@ def run_jobs(
     ``fn`` and the args must be picklable (a module-level function) for ``workers > 1`` and
     for Dask. ``workers`` is the number of jobs at once (see :func:`plan_workers`).
     """
-    if engine not in ENGINES:
-        raise UsageError(f"engine must be one of {list(ENGINES)}, got {engine!r}")
+    _validate.choice("engine", engine, ENGINES)
     if engine == "dask":
         yield from _run_dask(fn, jobs, workers, address)
         return
@@ -171,7 +216,7 @@ def _run_dask(
     try:
         from distributed import Client, LocalCluster, as_completed
     except ImportError:  # pragma: no cover - depends on the install
-        raise UsageError(
+        raise ConfigError(
             "engine 'dask' needs dask.distributed; install it with pip install 'sigmapi[sweep]'"
         ) from None
     cluster = None

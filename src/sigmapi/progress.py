@@ -5,7 +5,8 @@ episodes) and :func:`jobs_done` (parallel runs) return ``(callback, bar)``; use 
 context manager so that it closes.
 ``disable=None`` draws a bar when stderr is a terminal and otherwise writes one line per phase
 and one per finished run (``sigmapi reproduce > log 2>&1`` shows where it is);
-``disable=True`` writes nothing.
+``disable=True`` writes nothing. :class:`Progress` carries that choice into an experiment
+(``progress=None``: nothing is written).
 """
 
 from __future__ import annotations
@@ -13,12 +14,13 @@ from __future__ import annotations
 import sys
 import time
 from collections.abc import Callable, Iterable, Iterator
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Protocol, TypeVar
 
 if TYPE_CHECKING:
     from tqdm import tqdm
 
-__all__ = ["Lines", "counter", "each", "jobs_done", "progress_callback"]
+__all__ = ["Lines", "Progress", "counter", "each", "jobs_done", "progress_callback"]
 
 T = TypeVar("T")
 
@@ -149,3 +151,49 @@ def jobs_done(
         bar.update(1)
 
     return callback, bar
+
+
+@dataclass(frozen=True)
+class Progress:
+    """How an experiment shows where it is, on stderr: the bars and lines of this module.
+
+    ``Progress()`` draws bars on a terminal and writes plain lines in a log;
+    ``Progress(disable=True)`` (what :meth:`of` makes of ``None``) writes nothing.
+    """
+
+    disable: bool | None = None
+    """None: bars on a terminal, lines in a log; True: nothing."""
+
+    @staticmethod
+    def of(progress: Progress | None) -> Progress:
+        """``progress``, or the silent one for ``None``."""
+        return progress if progress is not None else Progress(disable=True)
+
+    @property
+    def enabled(self) -> bool:
+        return self.disable is not True
+
+    def training(
+        self, total: int, desc: str, start: int = 0
+    ) -> tuple[Callable[[Any], None], tqdm[Any] | Lines]:
+        """:func:`progress_callback`."""
+        return progress_callback(total, desc, start, self.disable)
+
+    def counter(
+        self, total: int, desc: str, unit: str
+    ) -> tuple[Callable[[int, str], None], tqdm[Any] | Lines]:
+        """:func:`counter`."""
+        return counter(total, desc, unit, self.disable)
+
+    def each(self, items: Iterable[T], desc: str) -> Iterable[T]:
+        """:func:`each`."""
+        return each(items, desc, self.disable)
+
+    def jobs(self, total: int, desc: str) -> tuple[Callable[[bool, str], None], tqdm[Any] | Lines]:
+        """:func:`jobs_done`."""
+        return jobs_done(total, desc, disable=not self.enabled)
+
+    def note(self, line: str) -> None:
+        """One line on stderr (nothing when disabled)."""
+        if self.enabled:
+            print(line, file=sys.stderr, flush=True)

@@ -1,5 +1,7 @@
-"""Experiments above the library: the reproduction run, its HTML report, the reach section.
+"""Experiments above the library: one protocol, a registry, and the experiments in it.
 
+- :mod:`~sigmapi.experiments.base`: the :class:`Experiment` protocol, :data:`REGISTRY`,
+  :func:`register`, :func:`write_result` (``result.json``) and :func:`check_seeds`;
 - :mod:`~sigmapi.experiments.reproduce`: the experiment loop (presets x seeds);
 - :mod:`~sigmapi.experiments.results`: its options and typed results, report sections;
 - :mod:`~sigmapi.experiments.report_html`: the page;
@@ -8,19 +10,35 @@
 - :mod:`~sigmapi.experiments.chain`: a chain of two maps (retina -> head -> body) against one.
 """
 
+from sigmapi.experiments.base import (
+    REGISTRY,
+    Experiment,
+    Result,
+    check_seeds,
+    read_result,
+    register,
+    write_result,
+)
 from sigmapi.experiments.reproduce import REFERENCE, SECTIONS, paper_presets, reproduce
 from sigmapi.experiments.results import ReportContext, ReproduceOptions, ReproduceResult, Section
 from sigmapi.experiments.sweep import SweepSpec, run_sweep
 
 __all__ = [
     "REFERENCE",
+    "REGISTRY",
     "SECTIONS",
+    "Experiment",
     "ReportContext",
     "ReproduceOptions",
     "ReproduceResult",
+    "Result",
     "Section",
     "SweepSpec",
+    "check_seeds",
     "paper_presets",
+    "read_result",
+    "register",
     "reproduce",
     "run_sweep",
+    "write_result",
 ]

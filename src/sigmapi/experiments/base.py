@@ -1,0 +1,268 @@
+"""One protocol for every experiment: a typed config in, seeds given apart, a result out as data.
+
+An :class:`Experiment` names a command (``name``), says in one line what it does (``summary``)
+and holds its settings in ``config_type``, a frozen dataclass with a docstring under each
+field: the command-line options are generated from those fields (:mod:`sigmapi.cli`), so a
+field added there is an option too. ``run(config, seeds=..., out=..., executor=...,
+progress=...)`` returns a :class:`Result`: ``to_dict()`` (JSON-able: what ``--json`` prints
+and :func:`write_result` stores as ``result.json``, the data that documents are rendered from),
+``table()`` (the console text) and ``figure(out_dir)`` (the figures it writes).
+
+Seeds are not part of a config: every experiment takes them as ``seeds``, a list of distinct
+non-negative ints checked by :func:`check_seeds`, and says its default ones
+(:meth:`Experiment.default_seeds`). Per-seed jobs run through the :class:`~sigmapi.executor.
+Executor` (:func:`run_all`); ``executor=None`` runs them one after another in this process.
+
+Adding an experiment
+--------------------
+One module in ``sigmapi/experiments/`` with its config dataclass, its result (``to_dict``,
+``table``, ``figure``) and an experiment object passed to :func:`register` at import time;
+one import line in ``sigmapi/experiments/__init__.py``. The command ``sigmapi NAME`` then
+exists with an option per config field and the common ones (seeds, output folder, JSON,
+executor, quiet). The reach experiment, for instance, registers from
+``sigmapi/experiments/reach.py``::
+
+    @dataclass(frozen=True)
+    class ReachRun:
+        episodes: int = 600
+        \"\"\"Episodes of reinforcement learning per seed and state.\"\"\"
+
+    class Reach(Experiment[ReachRun]):
+        name, summary, config_type = "reach", "learn to reach from the map", ReachRun
+
+        def run(self, config, *, seeds, out=None, executor=None, progress=None):
+            ...  # -> a Result
+
+    register(Reach())
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import re
+import types
+from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
+from typing import Any, Protocol, TypeVar, runtime_checkable
+
+from sigmapi import _validate
+from sigmapi.errors import ConfigError
+from sigmapi.executor import Executor
+from sigmapi.io import atomic_write_bytes
+from sigmapi.progress import Progress
+
+__all__ = [
+    "REGISTRY",
+    "RESULT_FILE",
+    "Experiment",
+    "Result",
+    "check_seeds",
+    "read_result",
+    "register",
+    "run_all",
+    "write_result",
+]
+
+RESULT_FILE = "result.json"
+"""The file :func:`write_result` writes into an experiment's output folder."""
+
+C = TypeVar("C")
+
+
+@runtime_checkable
+class Result(Protocol):
+    """What an experiment's run returns."""
+
+    def to_dict(self) -> dict[str, Any]:
+        """Everything the result states, JSON-able (``result.json``, ``--json``)."""
+        ...
+
+    def table(self) -> str:
+        """The result as console text (a few lines a person reads)."""
+        ...
+
+    def figure(self, out_dir: Path) -> list[Path]:
+        """Write the result's figures into the folder ``out_dir``; the files written."""
+        ...
+
+
+class Experiment(Protocol[C]):
+    """A named experiment: a config type, default seeds, and a run that returns a :class:`Result`.
+
+    Subclass it to inherit the defaults of the optional attributes and of
+    :meth:`default_seeds`; an object with the same members works as well.
+    """
+
+    name: str
+    """The command (``sigmapi NAME``) and the registry key: lower case, words joined by ``-``."""
+    summary: str
+    """One line for ``--help``: what the experiment does."""
+    config_type: type[C]
+    """The settings: a frozen dataclass, a docstring under each field; ``config_type()``
+    builds the default config where every field has a default."""
+    quick: C | None = None
+    """A short config for a first look (None: the experiment has none)."""
+    seeds: tuple[int, ...] = (0, 1, 2)
+    """The default seeds."""
+    quick_seeds: tuple[int, ...] | None = None
+    """The default seeds of the quick config (None: :attr:`seeds`)."""
+    default_out: str | None = None
+    """The folder the command line writes into by default (None: one must be given)."""
+    resumes: bool = False
+    """Whether a run into a folder that holds a run of the same config continues it (so that
+    writing into a folder that is not empty is no mistake)."""
+    aliases: Mapping[str, str] = types.MappingProxyType({})
+    """A second command-line spelling per config field, e.g. ``{"save_models": "--models"}``."""
+
+    def default_seeds(self, config: C, *, quick: bool = False) -> tuple[int, ...]:
+        """The seeds to run ``config`` with when none are given."""
+        if quick and self.quick_seeds is not None:
+            return self.quick_seeds
+        return self.seeds
+
+    def run(
+        self,
+        config: C,
+        *,
+        seeds: Sequence[int],
+        out: Path | None = None,
+        executor: Executor | None = None,
+        progress: Progress | None = None,
+    ) -> Result:
+        """Run ``config`` for each of ``seeds``.
+
+        Parameters
+        ----------
+        config : config_type
+            The settings.
+        seeds : sequence of int
+            Distinct non-negative ints (:func:`check_seeds`).
+        out : Path, optional
+            A folder for what the run writes as it goes (a sweep's table, a report's models);
+            None where the experiment writes nothing while it runs.
+        executor : Executor, optional
+            Where the per-seed jobs run (None: one after another in this process).
+        progress : Progress, optional
+            Progress on stderr (None: nothing).
+        """
+        ...
+
+
+REGISTRY: dict[str, Experiment[Any]] = {}
+"""Every registered experiment by name; the command line has a sub-command for each."""
+
+_NAME = re.compile(r"[a-z][a-z0-9]*(-[a-z0-9]+)*")
+
+
+def register(experiment: Experiment[C]) -> Experiment[C]:
+    """Add ``experiment`` to :data:`REGISTRY` under its ``name``; returns it.
+
+    The name must be a command word not taken by another experiment, the config type a frozen
+    dataclass.
+    """
+    name = getattr(experiment, "name", None)
+    if not isinstance(name, str) or not _NAME.fullmatch(name):
+        raise _validate.fail("experiment name", "lower-case words joined by '-'", name,
+                             'e.g. "reproduce" or "chain"')  # fmt: skip
+    cls = getattr(experiment, "config_type", None)
+    if not (isinstance(cls, type) and dataclasses.is_dataclass(cls)
+            and cls.__dataclass_params__.frozen):  # type: ignore[attr-defined]  # fmt: skip
+        raise _validate.fail(f"config_type of experiment {name!r}", "a frozen dataclass", cls,
+                             "decorate it with @dataclass(frozen=True)")  # fmt: skip
+    if not getattr(experiment, "summary", ""):
+        raise ConfigError(
+            f"experiment {name!r} has no summary; give it one line saying what it does"
+        )
+    if REGISTRY.get(name, experiment) is not experiment:
+        raise ConfigError(
+            f"experiment name {name!r} is taken by {REGISTRY[name]!r}; choose another"
+        )
+    REGISTRY[name] = experiment
+    return experiment
+
+
+def check_seeds(seeds: Any, name: str = "seeds") -> tuple[int, ...]:
+    """``seeds`` as a tuple of ints: at least one, each >= 0, no two alike.
+
+    The one check of every experiment's seeds (``name`` says where they came from).
+
+    Examples
+    --------
+    >>> check_seeds([2, 0, 1])
+    (2, 0, 1)
+    >>> check_seeds([0, 0])
+    Traceback (most recent call last):
+    ...
+    sigmapi.errors.ConfigError: seeds must be distinct, got [0, 0]; e.g. 0 1 2
+    """
+    fix = "e.g. 0 1 2"
+    if isinstance(seeds, (str, bytes)) or not isinstance(seeds, Sequence):
+        raise _validate.fail(name, "a list of non-negative ints", seeds, fix)
+    if not seeds:
+        raise ConfigError(f"{name} must name at least one seed, got none; {fix}")
+    if not all(_validate.is_int(s) and s >= 0 for s in seeds):
+        raise _validate.fail(name, "a list of non-negative ints", list(seeds), fix)
+    if len(set(seeds)) != len(seeds):
+        raise _validate.fail(name, "distinct", list(seeds), fix)
+    return tuple(int(s) for s in seeds)
+
+
+def write_result(result: Result, out_dir: str | Path) -> Path:
+    """Write ``result.to_dict()`` to ``out_dir/result.json`` atomically (the folder is made)."""
+    folder = Path(out_dir)
+    folder.mkdir(parents=True, exist_ok=True)
+    text = json.dumps(result.to_dict(), indent=2)
+    return atomic_write_bytes(folder / RESULT_FILE, (text + "\n").encode("utf-8"))
+
+
+def read_result(path: str | Path) -> dict[str, Any]:
+    """The dict a :func:`write_result` wrote: ``path`` is its folder or the file itself."""
+    p = Path(path)
+    if p.is_dir():
+        p = p / RESULT_FILE
+    if not p.is_file():
+        raise ConfigError(f"no result at {str(p)!r}; run the experiment with that output folder")
+    data = json.loads(p.read_text("utf-8"))
+    if not isinstance(data, dict):
+        raise ConfigError(f"{str(p)!r} holds no experiment result (not a JSON object)")
+    return data
+
+
+def run_all(
+    fn: Callable[[Any], Any],
+    jobs: Sequence[tuple[str, Any]],
+    *,
+    executor: Executor | None,
+    per_job: int,
+    progress: Progress | None,
+    desc: str,
+    describe: Callable[[str, Any], str] | None = None,
+    verbose: Callable[[Any], Any] | None = None,
+) -> dict[str, Any]:
+    """Run ``fn`` on each ``(key, arg)`` of ``jobs`` through ``executor``; the values by key.
+
+    ``per_job`` (bytes, :func:`~sigmapi.executor.job_memory`) bounds the jobs at once. With
+    progress, one bar (or line) per finished job, ``describe(key, value)`` its text; where the
+    jobs run one by one in this process, ``verbose(arg)`` gives each job instead a progress of
+    its own (e.g. a bar of its training iterations). A failed job raises ``RuntimeError``
+    naming it, once the jobs in flight are done.
+    """
+    ex = executor if executor is not None else Executor(workers=1)
+    show = Progress.of(progress)
+    plan = ex.plan(per_job, len(jobs))
+    in_process = plan.workers == 1 and ex.engine == "local"
+    if in_process and verbose is not None and show.enabled:
+        jobs = [(key, verbose(arg)) for key, arg in jobs]
+        show = Progress(disable=True)  # the jobs show their own
+    elif not in_process:
+        show.note(f"{desc}: {len(jobs)} jobs, {plan.reason}")
+    done, bar = show.jobs(len(jobs), desc)
+    values: dict[str, Any] = {}
+    with bar:
+        for o in ex.run(fn, jobs, plan.workers):
+            if not o.ok:
+                raise RuntimeError(f"{desc}: {o.key} failed: {o.error}")
+            values[o.key] = o.value
+            done(True, describe(o.key, o.value) if describe else f"{o.key} ({o.seconds:.0f} s)")
+    return {key: values[key] for key, _ in jobs}
