@@ -145,3 +145,18 @@ def test_command_line_table_and_user_mistakes(capsys):
     assert main(["chain", "--preset", "paper-2d"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "config.map_shape must be 1-D" in err[0]
+
+
+def test_seeds_run_through_the_executor_with_the_same_result():
+    from sigmapi.executor import Executor
+
+    tiny = {"config": SMALL.replace(iterations=2000), "train_pairs": 300, "n_test": 200}
+    one = run_chain((0, 1), **tiny)
+    pool = run_chain((0, 1), **tiny, executor=Executor(workers=2))
+    strip = ("train_seconds",)
+    for got, want in zip(pool["seeds"], one["seeds"], strict=True):
+        for route in ("chain", "single"):
+            assert {k: v for k, v in got[route].items() if k not in strip} == {
+                k: v for k, v in want[route].items() if k not in strip
+            }
+        assert got["ratio"] == want["ratio"]

@@ -19,6 +19,7 @@ from sigmapi.experiments.base import (
     register,
     write_result,
 )
+from sigmapi.experiments.chain import run_chain
 from sigmapi.experiments.reproduce import REFERENCE, SECTIONS, paper_presets, reproduce
 from sigmapi.experiments.results import ReportContext, ReproduceOptions, ReproduceResult, Section
 from sigmapi.experiments.sweep import SweepSpec, run_sweep
@@ -39,6 +40,7 @@ __all__ = [
     "read_result",
     "register",
     "reproduce",
+    "run_chain",
     "run_sweep",
     "write_result",
 ]

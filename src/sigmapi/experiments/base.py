@@ -53,6 +53,7 @@ from sigmapi.io import atomic_write_bytes
 from sigmapi.progress import Progress
 
 __all__ = [
+    "KEY_VALUES",
     "REGISTRY",
     "RESULT_FILE",
     "Experiment",
@@ -68,6 +69,10 @@ RESULT_FILE = "result.json"
 """The file :func:`write_result` writes into an experiment's output folder."""
 
 C = TypeVar("C")
+
+KEY_VALUES: Mapping[str, Any] = types.MappingProxyType({"repeat": True, "metavar": "KEY=VALUE"})
+"""Field metadata of a config field of ``key=value`` strings (``field(default=(),
+metadata=KEY_VALUES)``): given once per value on the command line, as values may hold commas."""
 
 
 @runtime_checkable

@@ -29,30 +29,45 @@ training views).
 
 Triples are drawn as the task's views are (:meth:`sigmapi.tasks.TwoViewSampler.sample_view`):
 z uniform in [0, 1]; a view (a, u) of z; then a view (x, e) of a.
+
+The experiment ``chain`` (:class:`Chain`, settings :class:`ChainConfig`) runs one job per seed
+through the executor; :func:`run_chain` is the same from Python with a :class:`SOMConfig`.
 """
 
 from __future__ import annotations
 
 import time
 from collections.abc import Sequence
-from typing import Any, NamedTuple
+from dataclasses import dataclass, field
+from pathlib import Path
+from types import MappingProxyType
+from typing import Any, Literal, NamedTuple, get_args
 
 import numpy as np
 from numpy.typing import NDArray
 
 from sigmapi import _validate
 from sigmapi.codes import PopulationCode
-from sigmapi.config import SOMConfig, load_preset
+from sigmapi.config import SOMConfig, apply_overrides, load_preset
 from sigmapi.errors import ConfigError
+from sigmapi.executor import Executor, job_memory
+from sigmapi.experiments.base import KEY_VALUES, Experiment, check_seeds, register, run_all
 from sigmapi.metrics import EVAL_SEED, evaluate, winner_metrics
+from sigmapi.progress import Progress
 from sigmapi.som import SigmaPiSOM
 from sigmapi.tasks import TwoViewSampler
 
 __all__ = [
+    "CHAIN",
     "CODES",
     "TARGET_RATIO",
+    "Chain",
+    "ChainConfig",
+    "ChainJob",
+    "ChainResult",
     "Triples",
     "chain_config",
+    "chain_seed",
     "head_code",
     "run_chain",
     "sample_triples",
@@ -60,7 +75,8 @@ __all__ = [
 
 Array = NDArray[np.float64]
 
-CODES = ("response", "winner")
+Code = Literal["response", "winner"]
+CODES: tuple[str, ...] = get_args(Code)
 """What map A hands to map B: its normalised response, or a code of its winner's position."""
 
 TARGET_RATIO = 2.0
@@ -170,9 +186,24 @@ def _single_inputs(model: SigmaPiSOM, t: Triples, v: int) -> tuple[Array, Array]
     )
 
 
-def _run_seed(
-    seed: int, cfg: SOMConfig, train_pairs: int, code: str, cal: Triples, test: Triples
-) -> dict[str, Any]:
+@dataclass(frozen=True)
+class ChainJob:
+    """One seed of the comparison (a job of the executor): its maps and their scores."""
+
+    seed: int
+    cfg: SOMConfig
+    train_pairs: int
+    code: str
+    cal: Triples
+    test: Triples
+
+
+def chain_seed(job: ChainJob) -> dict[str, Any]:
+    """Train map A, map B and the single map on seed ``job.seed``'s triples and score both
+    routes on the shared calibration and test triples (one entry of ``"seeds"``)."""
+    seed, cfg, train_pairs, code, cal, test = (
+        job.seed, job.cfg, job.train_pairs, job.code, job.cal, job.test,
+    )  # fmt: skip
     rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(DATA_KEY,)))
     train = sample_triples(train_pairs, rng)
     spacing = float(cfg.y_shape[0] - 1)
@@ -218,6 +249,127 @@ def _run_seed(
     return out
 
 
+SUMMARY_KEYS = ("z_error", "view_consistency", "order_r2", "usage", "weights", "train_seconds")
+"""The scores summarised per route (medians over seeds)."""
+
+
+@dataclass(frozen=True)
+class ChainConfig:
+    """What ``sigmapi chain`` trains: the preset of every map and the data of maps B and single."""
+
+    preset: str = "paper-1d"
+    """The 1-D preset every map starts from (``sigmapi presets``), with sigmapi's ordering
+    procedure (``crossview``)."""
+    overrides: tuple[str, ...] = field(default=(), metadata=KEY_VALUES)
+    """``key=value`` changes to the preset, e.g. ``iterations=50000`` (one per change)."""
+    train_pairs: int = 20_000
+    """View pairs of triples that map B and the single map are trained on."""
+    n_test: int = 10_000
+    """Calibration and test triples (each), from the fixed evaluation seed."""
+    code: Code = "response"
+    """What map A hands to map B: its normalised response, or a code of its winner's position."""
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "overrides", tuple(self.overrides))
+        _validate.integer("train_pairs", self.train_pairs, 10, fix="e.g. 20000")
+        _validate.integer("n_test", self.n_test, 10, fix="e.g. 10000")
+        _validate.choice("code", self.code, CODES)
+        self.som_config  # noqa: B018 (an unknown preset or a bad override fails here, not later)
+
+    @property
+    def som_config(self) -> SOMConfig:
+        """The preset with ``ordering="crossview"`` and the overrides (:func:`chain_config`)."""
+        cfg = load_preset(self.preset).replace(ordering="crossview")
+        return chain_config(apply_overrides(cfg, list(self.overrides)))
+
+
+@dataclass
+class ChainResult:
+    """Both routes per seed (:func:`chain_seed`) and the settings they ran with."""
+
+    config: SOMConfig
+    train_pairs: int
+    n_test: int
+    code: str
+    per_seed: list[dict[str, Any]]
+
+    def summary(self) -> dict[str, Any]:
+        """The medians of both routes, the median and worst ratio and how many seeds meet
+        ``ratio <= TARGET_RATIO``."""
+        per_seed = self.per_seed
+
+        def med(route: str, key: str) -> float:
+            return float(np.median([r[route][key] for r in per_seed]))
+
+        ratios = [r["ratio"] for r in per_seed]
+        out: dict[str, Any] = {
+            route: {k: med(route, k) for k in SUMMARY_KEYS} for route in ("chain", "single")
+        }
+        out.update(
+            ratio_median=float(np.median(ratios)), ratio_worst=float(max(ratios)),
+            met=int(sum(r <= TARGET_RATIO for r in ratios)), n_seeds=len(per_seed),
+            target_ratio=TARGET_RATIO,
+            map_a_order_r2_min=min(r["map_a"]["order_r2"] for r in per_seed),
+        )  # fmt: skip
+        return out
+
+    def to_dict(self) -> dict[str, Any]:
+        """``"settings"``, ``"seeds"`` (one dict per seed) and ``"summary"``."""
+        settings = {"config": self.config.to_dict(), "train_pairs": self.train_pairs,
+                    "n_test": self.n_test, "code": self.code,
+                    "seeds": [r["seed"] for r in self.per_seed]}  # fmt: skip
+        return {"settings": settings, "seeds": self.per_seed, "summary": self.summary()}
+
+    def table(self) -> str:
+        """Both routes per seed, then the summary line."""
+        rows = ["seed  route   z error  same winner  order R^2  usage  weights  seconds"]
+        for r in self.per_seed:
+            for route in ("chain", "single"):
+                m = r[route]
+                rows.append(
+                    f"{r['seed']:<5d} {route:7s} {m['z_error']:7.3f}  "
+                    f"{m['view_consistency']:11.3f}  {m['order_r2']:9.3f}  {m['usage']:5.2f}  "
+                    f"{m['weights']:7d}  {m['train_seconds']:7.1f}"
+                )
+        s = self.summary()
+        rows.append(
+            f"{s['met']} of {s['n_seeds']} seeds: chain z error <= {s['target_ratio']:g} x the "
+            f"single map's (median ratio {s['ratio_median']:.2f}, worst {s['ratio_worst']:.2f})"
+        )
+        return "\n".join(rows)
+
+    def figure(self, out_dir: Path) -> list[Path]:
+        """The comparison has no figure: nothing is written."""
+        return []
+
+
+def _run(
+    cfg: SOMConfig,
+    seeds: Sequence[int],
+    train_pairs: int,
+    n_test: int,
+    code: str,
+    executor: Executor | None,
+    progress: Progress | None,
+) -> ChainResult:
+    seeds = check_seeds(seeds)
+    cal_rng, test_rng = (
+        np.random.default_rng(s) for s in np.random.SeedSequence(EVAL_SEED).spawn(2)
+    )
+    cal, test = sample_triples(n_test, cal_rng), sample_triples(n_test, test_rng)
+    jobs = [(f"seed {s}", ChainJob(s, cfg, train_pairs, code, cal, test)) for s in seeds]
+    single = cfg.replace(x_shape=(cfg.x_shape[0], 1), y_shape=(*cfg.y_shape, *cfg.y_shape))
+    per_job = 2 * job_memory(cfg, n_test) + job_memory(single, n_test)
+
+    def describe(key: str, r: dict[str, Any]) -> str:
+        return (f"{key}: chain z error {r['chain']['z_error']:.3f}, single "
+                f"{r['single']['z_error']:.3f}")  # fmt: skip
+
+    done = run_all(chain_seed, jobs, executor=executor, per_job=per_job, progress=progress,
+                   desc="chain", describe=describe)  # fmt: skip
+    return ChainResult(cfg, train_pairs, n_test, code, list(done.values()))
+
+
 def run_chain(
     seeds: Sequence[int] = (0, 1, 2),
     *,
@@ -226,6 +378,8 @@ def run_chain(
     train_pairs: int = 20_000,
     n_test: int = 10_000,
     code: str = "response",
+    executor: Executor | None = None,
+    progress: Progress | None = None,
 ) -> dict[str, Any]:
     """The chain of frames against the single map, per seed and summarised.
 
@@ -245,6 +399,10 @@ def run_chain(
         Calibration and test triples (each), from the fixed evaluation seed.
     code : {"response", "winner"}
         What map A hands to map B (:func:`head_code`).
+    executor : Executor, optional
+        Where the seeds run (None: one after another in this process).
+    progress : Progress, optional
+        A line or bar per finished seed on stderr (None: nothing).
 
     Returns
     -------
@@ -254,34 +412,39 @@ def run_chain(
         ``"single"`` (z_error, view_consistency, view_within_one, order_r2, usage, weights,
         train_seconds) and ``"ratio"`` (chain z error / single z error); ``"summary"``: the
         medians of both routes, the median and worst ratio and how many seeds meet
-        ``ratio <= TARGET_RATIO``.
+        ``ratio <= TARGET_RATIO`` (:meth:`ChainResult.to_dict`).
     """
     cfg = chain_config(config, iterations)
-    seeds = tuple(_validate.integer("seeds", s, 0) for s in seeds)
-    if not seeds:
-        raise ConfigError("seeds must name at least one seed, got none; e.g. (0, 1, 2)")
+    seeds = check_seeds(seeds)
     _validate.integer("train_pairs", train_pairs, 10, fix="e.g. 20000")
     _validate.integer("n_test", n_test, 10, fix="e.g. 10000")
     _validate.choice("code", code, CODES)
-    cal_rng, test_rng = (
-        np.random.default_rng(s) for s in np.random.SeedSequence(EVAL_SEED).spawn(2)
-    )
-    cal, test = sample_triples(n_test, cal_rng), sample_triples(n_test, test_rng)
-    per_seed = [_run_seed(s, cfg, train_pairs, code, cal, test) for s in seeds]
+    return _run(cfg, seeds, train_pairs, n_test, code, executor, progress).to_dict()
 
-    def med(route: str, key: str) -> float:
-        return float(np.median([r[route][key] for r in per_seed]))
 
-    ratios = [r["ratio"] for r in per_seed]
-    keys = ("z_error", "view_consistency", "order_r2", "usage", "weights", "train_seconds")
-    summary: dict[str, Any] = {
-        route: {k: med(route, k) for k in keys} for route in ("chain", "single")
-    }
-    summary.update(
-        ratio_median=float(np.median(ratios)), ratio_worst=float(max(ratios)),
-        met=int(sum(r <= TARGET_RATIO for r in ratios)), n_seeds=len(seeds),
-        target_ratio=TARGET_RATIO, map_a_order_r2_min=min(r["map_a"]["order_r2"] for r in per_seed),
-    )  # fmt: skip
-    settings = {"config": cfg.to_dict(), "train_pairs": train_pairs, "n_test": n_test,
-                "code": code, "seeds": list(seeds)}  # fmt: skip
-    return {"settings": settings, "seeds": per_seed, "summary": summary}
+class Chain(Experiment[ChainConfig]):
+    """Train map A (retina + eye -> head-centred) on its task, map B (A's response + head ->
+    body-centred) and one third-order map on the whole transformation on the same triples, and
+    score both routes by the same metrics."""
+
+    name = "chain"
+    summary = "a chain of two maps (retina -> head -> body) against one map on the whole task"
+    config_type = ChainConfig
+    seeds = (0, 1, 2)
+    default_out = "chain"
+    aliases = MappingProxyType({"overrides": "--set"})
+
+    def run(
+        self,
+        config: ChainConfig,
+        *,
+        seeds: Sequence[int],
+        out: Path | None = None,
+        executor: Executor | None = None,
+        progress: Progress | None = None,
+    ) -> ChainResult:
+        return _run(config.som_config, seeds, config.train_pairs, config.n_test, config.code,
+                    executor, progress)  # fmt: skip
+
+
+CHAIN = register(Chain())
