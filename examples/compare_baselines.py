@@ -3,8 +3,8 @@
 Needs the extra: ``pip install 'sigmapi[baselines]'``. The same as ``sigmapi compare``, from
 Python:
 
-    python examples/compare_baselines.py           # the quick comparison (about a minute)
-    python examples/compare_baselines.py --small   # a few seconds
+    python examples/compare_baselines.py           # the quick comparison
+    python examples/compare_baselines.py --small   # a tiny one
 """
 
 from __future__ import annotations
@@ -12,8 +12,8 @@ from __future__ import annotations
 import argparse
 import dataclasses
 
-from sigmapi.baselines import QUICK, run_compare
 from sigmapi.baselines.plots import compare_figure
+from sigmapi.experiments.compare import QUICK, QUICK_SEEDS, run_compare
 
 
 def main() -> None:
@@ -21,14 +21,14 @@ def main() -> None:
     parser.add_argument("--small", action="store_true", help="a tiny run (for the tests)")
     parser.add_argument("--out", default="compare.png", help="figure file")
     args = parser.parse_args()
-    cfg = QUICK
+    cfg, seeds = QUICK, QUICK_SEEDS
     if args.small:
-        small = {"seeds": (0,), "train_pairs": 500, "som_iterations": 2000, "rbm_epochs": 1,
-                 "n_test": 200, "overrides": ("iterations=5000",)}  # fmt: skip
-        cfg = dataclasses.replace(cfg, **small)
-    result = run_compare(cfg)
+        small = {"train_pairs": 500, "som_iterations": 2000, "rbm_epochs": 1, "n_test": 200,
+                 "overrides": ("iterations=5000",)}  # fmt: skip
+        cfg, seeds = dataclasses.replace(cfg, **small), (0,)
+    result = run_compare(cfg, seeds=seeds)
     print(result.table())
-    compare_figure(result).savefig(args.out, dpi=120)
+    compare_figure(result.to_dict()).savefig(args.out, dpi=120)
     print(result.caption())
 
 

@@ -12,18 +12,18 @@ import pytest
 import sigmapi
 from sigmapi import SigmaPiSOM, SOMConfig
 from sigmapi.baselines import (
-    CompareConfig,
     GainFieldNetwork,
     KohonenSOM,
     MiniSomMap,
     RBMFeatures,
     fit_readout,
-    run_compare,
+    score_readout,
+    score_units,
 )
-from sigmapi.baselines.experiment import score_readout, score_units
 from sigmapi.baselines.kohonen import _train, nearest_unit
-from sigmapi.cli import compare as compare_cli
 from sigmapi.cli import main
+from sigmapi.experiments import compare
+from sigmapi.experiments.compare import CompareConfig, run_compare
 from sigmapi.metrics import evaluation_sets, grid_spacing
 
 pytest.importorskip("sklearn")
@@ -140,10 +140,10 @@ def test_compare_ranks_the_sigma_pi_map_above_first_order_maps():
     cfg = CompareConfig(
         preset="paper-1d", overrides=("map_shape=[9]", "x_shape=[9]", "y_shape=[9]",
                                       "iterations=15000", 'winner_rule="argmax"'),
-        seeds=(0, 1, 2), train_pairs=3000, som_iterations=20_000, n_test=1000,
+        train_pairs=3000, som_iterations=20_000, n_test=1000,
         methods=("kohonen", "minisom", "kohonen two-view"),
     )  # fmt: skip
-    d = run_compare(cfg).to_dict()
+    d = run_compare(cfg, seeds=(0, 1, 2)).to_dict()
     by = {m["name"]: m for m in d["methods"]}
     assert list(by) == ["sigma-pi", "kohonen", "kohonen two-view", "minisom"]
     ref = by["sigma-pi"]
@@ -168,7 +168,7 @@ def test_compare_cli_json_table_and_figure(tmp_path):
     assert r.returncode == 0, r.stderr
     d = json.loads(r.stdout)
     names = [m["name"] for m in d["methods"]]
-    assert names == list(sigmapi.baselines.METHODS)
+    assert names == list(compare.METHODS)
     for m in d["methods"]:
         assert {"name", "view_consistency", "z_error", "labels_used"} <= set(m)
         assert 0 <= m["view_consistency"] <= 1 and m["z_error"] > 0 and m["labels_used"] == 200
@@ -202,7 +202,7 @@ def test_compare_cli_user_mistakes_are_one_line(args, needle, tmp_path, monkeypa
 
 def test_compare_cli_names_the_missing_extra(tmp_path, monkeypatch, capsys):
     monkeypatch.chdir(tmp_path)
-    monkeypatch.setattr(compare_cli, "_installed", lambda: {"sklearn"})
+    monkeypatch.setattr(compare, "installed", lambda: {"sklearn"})
     assert main(["compare", "--quick"]) == 2
     err = capsys.readouterr().err
     assert "need minisom (not installed here)" in err and "pip install 'sigmapi[baselines]'" in err

@@ -1,16 +1,20 @@
 """The figure of ``sigmapi compare``: z error against labels, and view consistency.
 
-Functions take ``ax=None`` (a new figure when None) and return the Axes;
+Functions draw from the comparison's data, the dict of ``CompareResult.to_dict()`` (also its
+``result.json``): ``methods`` (per method its medians: ``z_error_by_labels``,
+``view_consistency``, ``unit_consistency``), ``quantisation_floor`` and ``config`` (``labels``,
+``seeds``). They take ``ax=None`` (a new figure when None) and return the Axes;
 :func:`compare_figure` lays out both panels and returns the Figure. Nothing is shown.
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from typing import Any
+
 import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
-
-from sigmapi.baselines.experiment import CompareResult
 
 __all__ = ["compare_figure", "plot_consistency", "plot_labels_curve"]
 
@@ -32,37 +36,39 @@ def _ax(ax: Axes | None) -> Axes:
     return ax
 
 
-def plot_labels_curve(result: CompareResult, ax: Axes | None = None) -> Axes:
+def plot_labels_curve(result: Mapping[str, Any], ax: Axes | None = None) -> Axes:
     """z error (median over seeds) against the number of labelled samples, per method."""
     ax = _ax(ax)
-    for name, score in result.scores.items():
-        curve = score.median_curve()
+    for method in result["methods"]:
+        name = method["name"]
+        curve = {int(n): e for n, e in method["z_error_by_labels"].items()}
         color, ls, marker = STYLE.get(name, ("k", "-", "."))
         ref = name == "sigma-pi"  # on top, so a method with the same curve does not hide it
         ax.plot(list(curve), list(curve.values()), color=color, linestyle=ls, marker=marker,
                 markersize=4, label=name, zorder=3 if ref else 2,
                 linewidth=2.5 if ref else 1.2)  # fmt: skip
-    ax.axhline(result.floor, color="0.5", linewidth=0.8)
-    ax.annotate("winner-only floor", (min(result.config.labels), result.floor),
+    floor = result["quantisation_floor"]
+    ax.axhline(floor, color="0.5", linewidth=0.8)
+    ax.annotate("winner-only floor", (min(result["config"]["labels"]), floor),
                 xytext=(2, 3), textcoords="offset points", fontsize=7, color="0.4")  # fmt: skip
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel("labelled samples given to the read-out")
     ax.set_ylabel("z error (grid spacings)")
-    n = len(result.config.seeds)
+    n = len(result["config"]["seeds"])
     ax.set_title(f"z error vs labels, median of {n} seed{'s' * (n > 1)}")
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=7, ncol=3, loc="upper center", bbox_to_anchor=(0.5, -0.14))
     return ax
 
 
-def plot_consistency(result: CompareResult, ax: Axes | None = None) -> Axes:
+def plot_consistency(result: Mapping[str, Any], ax: Axes | None = None) -> Axes:
     """Same place for both views (with all labels) and same unit (no label), per method."""
     ax = _ax(ax)
-    names = list(result.scores)
+    names = [m["name"] for m in result["methods"]]
     pos = np.arange(len(names))
-    place = [float(np.median(result.scores[n].view_consistency)) for n in names]
-    unit = [float(np.median(result.scores[n].unit_consistency)) for n in names]
+    place = [float(m["view_consistency"]) for m in result["methods"]]
+    unit = [float(m["unit_consistency"]) for m in result["methods"]]
     ax.barh(pos + 0.2, place, height=0.4, color="C0", label="same place (read-out binned)")
     ax.barh(pos - 0.2, unit, height=0.4, color="0.6", label="same unit (no label)")
     ax.set_yticks(pos, names, fontsize=8)
@@ -75,8 +81,8 @@ def plot_consistency(result: CompareResult, ax: Axes | None = None) -> Axes:
     return ax
 
 
-def compare_figure(result: CompareResult) -> Figure:
-    """Both panels side by side."""
+def compare_figure(result: Mapping[str, Any]) -> Figure:
+    """Both panels side by side (``result``: the comparison's dict, see the module docstring)."""
     fig = Figure(figsize=(11, 5), layout="constrained")
     left, right = fig.subplots(1, 2, width_ratios=(1.2, 1))
     plot_labels_curve(result, left)

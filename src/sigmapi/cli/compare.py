@@ -10,22 +10,24 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import importlib.util
 import json
 import sys
 from typing import Any
 
-from sigmapi.baselines import METHODS, QUICK, CompareConfig, run_compare
 from sigmapi.cli._common import check_output
 from sigmapi.errors import UsageError
+from sigmapi.experiments.compare import (
+    METHODS,
+    QUICK,
+    QUICK_SEEDS,
+    SEEDS,
+    CompareConfig,
+    check_installed,
+    run_compare,
+)
+from sigmapi.progress import Progress
 
 __all__ = ["cmd_compare", "register"]
-
-NEEDS = {"minisom": "minisom", "basis functions": "sklearn", "rbm": "sklearn"}
-"""Methods that need an optional module (the extra ``sigmapi[baselines]``)."""
-
-PACKAGES = {"minisom": "minisom", "sklearn": "scikit-learn"}
-"""The package that installs each module."""
 
 
 def register(sub: Any) -> None:
@@ -64,8 +66,6 @@ def _config(args: argparse.Namespace) -> CompareConfig:
             changes[key] = getattr(args, key)
     if args.set:
         changes["overrides"] = tuple(args.set)
-    if args.seeds is not None:
-        changes["seeds"] = tuple(args.seeds)
     if args.methods is not None:
         changes["methods"] = tuple(m.strip() for m in args.methods.split(",") if m.strip())
     return dataclasses.replace(base, **changes)
@@ -78,20 +78,10 @@ def cmd_compare(args: argparse.Namespace) -> int:
     if out.suffix.lower() not in (".png", ".pdf", ".svg"):
         raise UsageError(f"--out must end in .png, .pdf or .svg, got {str(out)!r}")
     cfg = _config(args)
-    missing = sorted({NEEDS[m] for m in cfg.methods if m in NEEDS} - _installed())
-    if missing:
-        names = " and ".join(PACKAGES[m] for m in missing)
-        raise UsageError(
-            f"the baselines need {names} (not installed here); "
-            "pip install 'sigmapi[baselines]', or leave those methods out with --methods"
-        )
-
-    def progress(line: str) -> None:
-        if not args.quiet:
-            print(f"compare: {line}", file=sys.stderr, flush=True)
-
-    result = run_compare(cfg, progress)
-    fig = compare_figure(result)
+    check_installed(cfg.methods)
+    seeds = args.seeds if args.seeds is not None else (QUICK_SEEDS if args.quick else SEEDS)
+    result = run_compare(cfg, None if args.quiet else Progress(), seeds=seeds)
+    fig = compare_figure(result.to_dict())
     fig.savefig(out, dpi=120)
     caption = result.caption()
     out.with_suffix(".txt").write_text(caption + "\n", encoding="utf-8")
@@ -102,7 +92,3 @@ def cmd_compare(args: argparse.Namespace) -> int:
         print(caption)
     print(f"wrote {out} ({result.seconds:.0f} s)", file=sys.stderr)
     return 0
-
-
-def _installed() -> set[str]:
-    return {name for name in ("minisom", "sklearn") if importlib.util.find_spec(name)}

@@ -6,8 +6,9 @@
 - :mod:`~sigmapi.experiments.results`: its options and typed results, report sections;
 - :mod:`~sigmapi.experiments.report_html`: the page;
 - :mod:`~sigmapi.experiments.reach_section`: the reach experiment as a report section;
-- :mod:`~sigmapi.experiments.sweep`: parameter and seed sweeps (``sigmapi sweep``).
-- :mod:`~sigmapi.experiments.chain`: a chain of two maps (retina -> head -> body) against one.
+- :mod:`~sigmapi.experiments.sweep`: parameter and seed sweeps (``sigmapi sweep``);
+- :mod:`~sigmapi.experiments.chain`: a chain of two maps (retina -> head -> body) against one;
+- :mod:`~sigmapi.experiments.compare`: the Sigma-Pi map beside the baselines.
 """
 
 from sigmapi.experiments.base import (
@@ -20,6 +21,7 @@ from sigmapi.experiments.base import (
     write_result,
 )
 from sigmapi.experiments.chain import run_chain
+from sigmapi.experiments.compare import CompareConfig, CompareResult, run_compare
 from sigmapi.experiments.reproduce import REFERENCE, SECTIONS, paper_presets, reproduce
 from sigmapi.experiments.results import ReportContext, ReproduceOptions, ReproduceResult, Section
 from sigmapi.experiments.sweep import SweepSpec, run_sweep
@@ -28,6 +30,8 @@ __all__ = [
     "REFERENCE",
     "REGISTRY",
     "SECTIONS",
+    "CompareConfig",
+    "CompareResult",
     "Experiment",
     "ReportContext",
     "ReproduceOptions",
@@ -41,6 +45,7 @@ __all__ = [
     "register",
     "reproduce",
     "run_chain",
+    "run_compare",
     "run_sweep",
     "write_result",
 ]

@@ -25,15 +25,21 @@ task per seed, the recording a user would make) and scored on the same evaluatio
   all labels (what its read-out needs); **labels to match**: the fewest ``L`` whose z error
   is within 10 % of the Sigma-Pi map's with all labels (None: not within ``labels``).
 
-Values over seeds are medians; every seed's value is kept.
+Values over seeds are medians; every seed's value is kept. Each seed is one job of the
+executor (:func:`compare_seed`); the experiment ``compare`` (:class:`Compare`) is
+:func:`run_compare` on the command line.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import importlib.util
+import sys
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
+from types import MappingProxyType
 from typing import Any
 
 import numpy as np
@@ -41,20 +47,31 @@ from numpy.typing import NDArray
 
 from sigmapi import _validate
 from sigmapi.baselines.kohonen import KohonenSOM, MiniSomMap
-from sigmapi.baselines.readout import GainFieldNetwork, RBMFeatures, fit_readout
+from sigmapi.baselines.readout import GainFieldNetwork, RBMFeatures
+from sigmapi.baselines.scoring import score_readout, score_units
 from sigmapi.config import SOMConfig, apply_overrides, load_preset
 from sigmapi.errors import ConfigError
-from sigmapi.metrics import evaluation_sets, grid_spacing, z_decoder
+from sigmapi.executor import Executor, job_memory
+from sigmapi.experiments.base import KEY_VALUES, Experiment, check_seeds, register, run_all
+from sigmapi.io import atomic_write_bytes
+from sigmapi.metrics import evaluation_sets, grid_spacing
+from sigmapi.progress import Progress
 from sigmapi.som import SigmaPiSOM
 from sigmapi.tasks import Batch
 
 __all__ = [
+    "COMPARE",
     "LABELS",
     "METHODS",
     "QUICK",
+    "QUICK_SEEDS",
+    "SEEDS",
+    "Compare",
     "CompareConfig",
+    "CompareJob",
     "CompareResult",
     "MethodScore",
+    "compare_seed",
     "run_compare",
 ]
 
@@ -84,6 +101,9 @@ SIGMA_PI_CHANGES: dict[str, dict[str, Any]] = {
 """The Sigma-Pi map (sigmapi's ordering procedure, whatever the preset says) and its two
 ablations: learning from the view it saw, and the paper's random start."""
 
+FIGURE = "compare.png"
+"""The comparison's figure in its output folder (its caption beside it, ``compare.txt``)."""
+
 MATCH_SHARE = 1.1
 """labels needed: the z error within this factor of the error with all labels."""
 
@@ -94,10 +114,8 @@ class CompareConfig:
 
     preset: str = "paper-1d"
     """The task and the Sigma-Pi map's settings (a preset name; ``sigmapi presets``)."""
-    overrides: tuple[str, ...] = ()
-    """``key=value`` changes to the preset (as ``--set``), e.g. ``("iterations=50000",)``."""
-    seeds: tuple[int, ...] = (0, 1, 2, 3, 4)
-    """Seeds: each draws its own training data and trains every method on it."""
+    overrides: tuple[str, ...] = field(default=(), metadata=KEY_VALUES)
+    """``key=value`` changes to the preset, e.g. ``iterations=50000`` (one per change)."""
     train_pairs: int = 20_000
     """View pairs recorded per seed (every method trains on these rows)."""
     som_iterations: int = 100_000
@@ -110,10 +128,6 @@ class CompareConfig:
     """Methods to run, a subset of :data:`METHODS`; "sigma-pi" always runs."""
 
     def __post_init__(self) -> None:
-        seeds = tuple(_validate.integer("seeds", s, 0) for s in self.seeds)
-        if not seeds:
-            raise ConfigError("seeds must name at least one seed, got none; e.g. 0 1 2 3 4")
-        object.__setattr__(self, "seeds", seeds)
         _validate.integer("train_pairs", self.train_pairs, 100, fix="e.g. 20000")
         _validate.integer("som_iterations", self.som_iterations, 1, fix="e.g. 100000")
         _validate.integer("rbm_epochs", self.rbm_epochs, 1, fix="e.g. 10")
@@ -136,9 +150,20 @@ class CompareConfig:
         return apply_overrides(load_preset(self.preset), list(self.overrides))
 
 
-QUICK = CompareConfig(seeds=(0, 1), train_pairs=10_000, som_iterations=20_000, rbm_epochs=5,
-                      n_test=5000)  # fmt: skip
-"""``--quick``: two seeds, less data, shorter baselines (about a minute)."""
+QUICK = CompareConfig(train_pairs=10_000, som_iterations=20_000, rbm_epochs=5, n_test=5000)
+"""The quick comparison: less data, shorter baselines (with :data:`QUICK_SEEDS`)."""
+
+SEEDS = (0, 1, 2, 3, 4)
+"""The default seeds: each draws its own training data and trains every method on it."""
+
+QUICK_SEEDS = (0, 1)
+"""The seeds of the quick comparison."""
+
+NEEDS = {"minisom": "minisom", "basis functions": "sklearn", "rbm": "sklearn"}
+"""Methods that need an optional module (the extra ``sigmapi[baselines]``)."""
+
+PACKAGES = {"minisom": "minisom", "sklearn": "scikit-learn"}
+"""The package that installs each optional module."""
 
 
 @dataclass
@@ -177,6 +202,8 @@ class CompareResult:
     config: CompareConfig
     scores: dict[str, MethodScore]
     seconds: float = 0.0
+    seeds: tuple[int, ...] = SEEDS
+    """The seeds, in the order of the scores' lists."""
 
     @property
     def reference(self) -> MethodScore:
@@ -220,9 +247,11 @@ class CompareResult:
                 },
             })  # fmt: skip
         cfg = dataclasses.asdict(self.config)
+        head = {"preset": cfg.pop("preset"), "overrides": cfg.pop("overrides")}
+        config = {**head, "seeds": list(self.seeds), **cfg, "labels": list(self.config.labels)}
         return {
             "methods": methods,
-            "config": {**cfg, "seeds": list(self.config.seeds), "labels": list(self.config.labels)},
+            "config": config,
             "z_error_unit": "input grid spacings",
             "quantisation_floor": self.floor,
             "seconds": self.seconds,
@@ -248,10 +277,20 @@ class CompareResult:
         )
         return "\n".join(rows)
 
+    def figure(self, out_dir: Path) -> list[Path]:
+        """``compare.png`` (:func:`~sigmapi.baselines.plots.compare_figure`) and its caption
+        beside it, ``compare.txt``; returns the figure's path."""
+        from sigmapi.baselines.plots import compare_figure  # matplotlib: only when drawing
+
+        out = Path(out_dir) / FIGURE
+        compare_figure(self.to_dict()).savefig(out, dpi=120)
+        atomic_write_bytes(out.with_suffix(".txt"), (self.caption() + "\n").encode("utf-8"))
+        return [out]
+
     def caption(self) -> str:
         """A caption computed from the result."""
         cfg, ref = self.config, self.reference
-        n = len(cfg.seeds)
+        n = len(self.seeds)
         parts = [
             f"{cfg.preset} task, {cfg.train_pairs:,} recorded view pairs per seed, median of {n} "
             f"seed{'s' * (n > 1)}. The Sigma-Pi map puts both views of one z on the same unit "
@@ -276,65 +315,6 @@ class CompareResult:
         return " ".join(parts)
 
 
-# ------------------------------------------------------------------ scoring
-
-
-def _bins(z: Array, lo: float, hi: float, shape: tuple[int, ...]) -> NDArray[np.int64]:
-    """Flat cell of each read-out ``z`` ``(B, d)`` on a grid of ``shape`` cells over [lo, hi]."""
-    n = np.asarray(shape)
-    cell = np.clip(np.floor((z - lo) / (hi - lo) * n), 0, n - 1).astype(np.int64)
-    return np.asarray(np.ravel_multi_index(tuple(cell.T), shape), dtype=np.int64)
-
-
-def score_units(
-    unit: Callable[[Array, Array], NDArray[np.int64]],
-    coords: Array,
-    cal: Batch,
-    test: Batch,
-    labels: Sequence[int],
-    spacing: Array,
-) -> tuple[float, float, dict[int, float]]:
-    """View consistency and z error per number of labels of a map whose output is a unit.
-
-    Returns ``(view consistency, the same again (a map's unit needs no label), curve)``.
-    """
-    w0, w1, wc = unit(test.x0, test.y0), unit(test.x1, test.y1), unit(cal.x0, cal.y0)
-    curve = {}
-    for n in labels:
-        table = z_decoder(wc[:n], cal.z[:n], coords)
-        curve[n] = _rmse(table[w0] - test.z, spacing)
-    same = float(np.mean(w0 == w1))
-    return same, same, curve
-
-
-def score_readout(
-    features: Callable[[Array, Array], Array],
-    cal: Batch,
-    test: Batch,
-    labels: Sequence[int],
-    spacing: Array,
-    cells: tuple[tuple[float, float], tuple[int, ...]],
-) -> tuple[float, float, dict[int, float]]:
-    """View consistency and z error per number of labels of a read-out.
-
-    Returns ``(same cell of the binned read-out, same most active middle-layer unit (no
-    label used), curve)``.
-    """
-    fc, f0, f1 = features(cal.x0, cal.y0), features(test.x0, test.y0), features(test.x1, test.y1)
-    curve = {}
-    for n in labels:
-        readout = fit_readout(fc[:n], cal.z[:n])
-        curve[n] = _rmse(readout(f0) - test.z, spacing)
-    (lo, hi), shape = cells
-    b0, b1 = _bins(readout(f0), lo, hi, shape), _bins(readout(f1), lo, hi, shape)
-    unit = float(np.mean(np.argmax(f0, axis=1) == np.argmax(f1, axis=1)))
-    return float(np.mean(b0 == b1)), unit, curve
-
-
-def _rmse(err: Array, spacing: Array) -> float:
-    return float(np.sqrt(np.mean(np.sum((err * spacing) ** 2, axis=1))))
-
-
 # ------------------------------------------------------------------ the run
 
 
@@ -355,39 +335,127 @@ def _train(name: str, cfg: CompareConfig, som_cfg: SOMConfig, views: Views, seed
     return RBMFeatures(n_hidden, cfg.rbm_epochs, seed=seed).fit(views)
 
 
-def run_compare(cfg: CompareConfig, progress: Callable[[str], None] | None = None) -> CompareResult:
-    """Train and score every method of ``cfg`` on every seed; see the module docstring."""
-    start = time.perf_counter()
+@dataclass(frozen=True)
+class CompareJob:
+    """One seed of the comparison (a job of the executor): every method on that seed's data."""
+
+    seed: int
+    cfg: CompareConfig
+    cal: Batch
+    test: Batch
+    progress: bool = False
+    """Write a line per method on stderr (when the jobs run one by one in this process)."""
+
+
+Scores = dict[str, tuple[float, float, dict[int, float], float]]
+"""Per method: view consistency, unit consistency, z error per labels, seconds."""
+
+
+def compare_seed(job: CompareJob) -> Scores:
+    """Train and score every method of ``job.cfg`` on seed ``job.seed``'s recording."""
+    cfg, seed, cal, test = job.cfg, job.seed, job.cal, job.test
     som_cfg = cfg.som_config
     base = SigmaPiSOM(som_cfg)
-    cal, test = evaluation_sets(base, cfg.n_test)
     spacing = grid_spacing(som_cfg.x_shape, som_cfg.periodic)
     cells = (base.sampler.relation.z_range, som_cfg.map_shape)
+    rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(13,)))
+    b = base.sampler.sample(cfg.train_pairs, rng)
+    views = (b.x0, b.y0, b.x1, b.y1)
+    out: Scores = {}
+    for name in cfg.methods:
+        if job.progress:
+            print(f"compare: seed {seed}: {name}", file=sys.stderr, flush=True)
+        t0 = time.perf_counter()
+        model = _train(name, cfg, som_cfg, views, seed)
+        if hasattr(model, "winner"):
+            unit = _hard_winner(model) if isinstance(model, SigmaPiSOM) else model.winner
+            vc, uc, curve = score_units(unit, base.map_coords, cal, test, cfg.labels, spacing)
+        else:
+            vc, uc, curve = score_readout(model.features, cal, test, cfg.labels, spacing, cells)
+        out[name] = (vc, uc, curve, time.perf_counter() - t0)
+    return out
+
+
+def check_installed(methods: Sequence[str]) -> None:
+    """Refuse, before anything trains, methods whose optional module is not installed."""
+    missing = sorted({NEEDS[m] for m in methods if m in NEEDS} - installed())
+    if missing:
+        names = " and ".join(PACKAGES[m] for m in missing)
+        raise ConfigError(
+            f"the baselines need {names} (not installed here); "
+            "pip install 'sigmapi[baselines]', or leave those methods out"
+        )
+
+
+def installed() -> set[str]:
+    """The optional modules of the baselines that are installed here."""
+    return {name for name in PACKAGES if importlib.util.find_spec(name)}
+
+
+def run_compare(
+    cfg: CompareConfig,
+    progress: Progress | None = None,
+    *,
+    seeds: Sequence[int] = SEEDS,
+    executor: Executor | None = None,
+) -> CompareResult:
+    """Train and score every method of ``cfg`` on every seed; see the module docstring.
+
+    Each seed (its recording, every method trained on it) is one job of ``executor`` (None:
+    one after another in this process); ``progress`` writes a line per method, or per seed
+    where the seeds run in parallel.
+    """
+    start = time.perf_counter()
+    seeds = check_seeds(seeds)
+    check_installed(cfg.methods)
+    cal, test = evaluation_sets(SigmaPiSOM(cfg.som_config), cfg.n_test)
+    jobs = [(f"seed {seed}", CompareJob(seed, cfg, cal, test)) for seed in seeds]
+    done = run_all(compare_seed, jobs, executor=executor,
+                   per_job=job_memory(cfg.som_config, cfg.n_test), progress=progress,
+                   desc="compare", verbose=_verbose)  # fmt: skip
     scores = {name: MethodScore(name) for name in cfg.methods}
-    for seed in cfg.seeds:
-        rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(13,)))
-        b = base.sampler.sample(cfg.train_pairs, rng)
-        views = (b.x0, b.y0, b.x1, b.y1)
-        for name in cfg.methods:
-            if progress is not None:
-                progress(f"seed {seed}: {name}")
-            t0 = time.perf_counter()
-            model = _train(name, cfg, som_cfg, views, seed)
-            if hasattr(model, "winner"):
-                if isinstance(model, SigmaPiSOM):
-                    unit = _hard_winner(model)
-                else:
-                    unit = model.winner
-                vc, uc, curve = score_units(unit, base.map_coords, cal, test, cfg.labels, spacing)
-            else:
-                vc, uc, curve = score_readout(model.features, cal, test, cfg.labels, spacing, cells)
+    for per_method in done.values():
+        for name, (vc, uc, curve, seconds) in per_method.items():
             s = scores[name]
             s.view_consistency.append(vc)
             s.unit_consistency.append(uc)
             s.z_error_by_labels.append(curve)
-            s.seconds.append(time.perf_counter() - t0)
-    return CompareResult(cfg, scores, time.perf_counter() - start)
+            s.seconds.append(seconds)
+    return CompareResult(cfg, scores, time.perf_counter() - start, seeds)
+
+
+def _verbose(job: CompareJob) -> CompareJob:
+    return dataclasses.replace(job, progress=True)
 
 
 def _hard_winner(model: SigmaPiSOM) -> Callable[[Array, Array], NDArray[np.int64]]:
     return lambda x, y: model.winner(x, y, hard=True)
+
+
+class Compare(Experiment[CompareConfig]):
+    """Train the Sigma-Pi map, its ablations, first-order SOMs (sigmapi's and MiniSom), a
+    basis-function network and an RBM + read-out on the same two-view data and score them by
+    the same metrics."""
+
+    name = "compare"
+    summary = "the Sigma-Pi map beside the baselines a user would pick instead"
+    config_type = CompareConfig
+    quick = QUICK
+    seeds = SEEDS
+    quick_seeds = QUICK_SEEDS
+    default_out = "compare"
+    aliases = MappingProxyType({"overrides": "--set"})
+
+    def run(
+        self,
+        config: CompareConfig,
+        *,
+        seeds: Sequence[int],
+        out: Path | None = None,
+        executor: Executor | None = None,
+        progress: Progress | None = None,
+    ) -> CompareResult:
+        return run_compare(config, progress, seeds=seeds, executor=executor)
+
+
+COMPARE = register(Compare())
