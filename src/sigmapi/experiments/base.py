@@ -190,7 +190,8 @@ def register(experiment: Experiment[C]) -> Experiment[C]:
 def check_seeds(seeds: Any, name: str = "seeds") -> tuple[int, ...]:
     """``seeds`` as a tuple of ints: at least one, each >= 0, no two alike.
 
-    The one check of every experiment's seeds (``name`` says where they came from).
+    The one check of every experiment's seeds (``name`` says where they came from, e.g.
+    ``"sweep spec 'a.toml': seeds"``).
 
     Examples
     --------
@@ -199,9 +200,9 @@ def check_seeds(seeds: Any, name: str = "seeds") -> tuple[int, ...]:
     >>> check_seeds([0, 0])
     Traceback (most recent call last):
     ...
-    sigmapi.errors.ConfigError: seeds must be distinct, got [0, 0]; e.g. 0 1 2
+    sigmapi.errors.ConfigError: seeds must be distinct, got [0, 0]; e.g. [0, 1, 2]
     """
-    fix = "e.g. 0 1 2"
+    fix = "e.g. [0, 1, 2]"
     if isinstance(seeds, (str, bytes)) or not isinstance(seeds, Sequence):
         raise _validate.fail(name, "a list of non-negative ints", seeds, fix)
     if not seeds:

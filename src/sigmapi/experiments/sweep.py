@@ -19,6 +19,9 @@ most the runs in flight; started again with the same spec, it finds the finished
 table (by ``run_id``) and runs only the missing ones (failed ones again with
 ``retry_failed``). Runs go through :mod:`sigmapi.executor`: a process pool sized
 to the cores and the memory budget, or a Dask cluster.
+
+The experiment ``sweep`` (:class:`Sweep`, settings :class:`SweepConfig`: the spec file) is
+:func:`run_sweep` on the command line; seeds given to it replace the spec's.
 """
 
 from __future__ import annotations
@@ -28,23 +31,38 @@ import dataclasses
 import io
 import itertools
 import json
+import statistics
 import time
 import tomllib
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from sigmapi import _validate
 from sigmapi.circular import CIRCULAR_KEYS
 from sigmapi.config import SOMConfig, load_preset
 from sigmapi.errors import ConfigError
-from sigmapi.executor import Outcome, job_memory, plan_workers, run_jobs
+from sigmapi.executor import Executor, Outcome, job_memory
+from sigmapi.experiments.base import Experiment, check_seeds, register
 from sigmapi.io import atomic_write_bytes
 from sigmapi.metrics import Metrics, evaluate
+from sigmapi.progress import Progress
 from sigmapi.som import SigmaPiSOM
 from sigmapi.tasks import get_relation
 
-__all__ = ["SweepRun", "SweepSpec", "draw_summary", "read_results", "run_sweep", "sweep_job"]
+__all__ = [
+    "SWEEP",
+    "Sweep",
+    "SweepConfig",
+    "SweepResult",
+    "SweepRun",
+    "SweepSpec",
+    "draw_summary",
+    "read_results",
+    "run_sweep",
+    "sweep_job",
+]
 
 RESULTS = "results.csv"
 """The sweep's table in its output folder."""
@@ -90,14 +108,7 @@ class SweepSpec:
         if not isinstance(preset, str):
             raise ConfigError(f"{source}: preset must be a preset name, got {preset!r}; "
                               'e.g. preset = "tiny-1d"')  # fmt: skip
-        seeds = data.get("seeds", [0])
-        if (not isinstance(seeds, list) or not seeds
-                or not all(isinstance(s, int) and not isinstance(s, bool) and s >= 0
-                           for s in seeds)):  # fmt: skip
-            raise ConfigError(f"{source}: seeds must be a list of non-negative ints, got "
-                              f"{seeds!r}; e.g. seeds = [0, 1, 2]")  # fmt: skip
-        if len(set(seeds)) != len(seeds):
-            raise ConfigError(f"{source}: seeds must be distinct, got {seeds!r}")
+        seeds = check_seeds(data.get("seeds", [0]), f"{source}: seeds")
         grid = data.get("grid", {})
         if not isinstance(grid, dict) or not all(isinstance(v, list) and v for v in grid.values()):
             raise ConfigError(f"{source}: [grid] must map each field to a non-empty list of "
@@ -113,7 +124,7 @@ class SweepSpec:
         n_test = data.get("n_test", 2000)
         if not isinstance(n_test, int) or isinstance(n_test, bool) or n_test < 2:
             raise ConfigError(f"{source}: n_test must be an int >= 2, got {n_test!r}")
-        spec = cls(preset, tuple(seeds), grid, fixed, n_test)
+        spec = cls(preset, seeds, grid, fixed, n_test)
         spec.runs()  # every grid point makes a valid config: fail before anything trains
         return spec
 
@@ -123,6 +134,11 @@ class SweepSpec:
         if not p.is_file():
             raise ConfigError(f"sweep spec {str(p)!r} does not exist; check the path")
         return cls.from_toml(p.read_text("utf-8"), f"sweep spec {str(p)!r}")
+
+    def to_dict(self) -> dict[str, Any]:
+        """The spec as its TOML file holds it (``set`` for :attr:`fixed`)."""
+        return {"preset": self.preset, "seeds": list(self.seeds), "n_test": self.n_test,
+                "set": self.fixed, "grid": self.grid}  # fmt: skip
 
     def runs(self) -> list[SweepRun]:
         """Every (grid point, seed), grid-major; configs checked here (ConfigError names the
@@ -190,10 +206,22 @@ def run_sweep(
 ) -> list[dict[str, Any]]:
     """Run the missing runs of ``spec``, writing ``out/results.csv`` after each; all rows.
 
-    ``on_plan(n_to_run, n_skipped, reason)`` is called once before the first run and
-    ``on_done(ok, line)`` after each.
+    ``engine``, ``workers``, ``memory_budget`` (bytes) and ``address`` say where the runs go
+    (:class:`~sigmapi.executor.Executor`). ``on_plan(n_to_run, n_skipped, reason)`` is called
+    once before the first run and ``on_done(ok, line)`` after each.
     """
-    out = Path(out)
+    executor = Executor(engine, workers, address, memory_budget)
+    return _sweep(spec, Path(out), executor, retry_failed, on_plan, on_done)
+
+
+def _sweep(
+    spec: SweepSpec,
+    out: Path,
+    executor: Executor,
+    retry_failed: bool,
+    on_plan: Callable[[int, int, str], None] | None,
+    on_done: Callable[[bool, str], None] | None,
+) -> list[dict[str, Any]]:
     out.mkdir(parents=True, exist_ok=True)
     path = out / RESULTS
     runs = spec.runs()
@@ -207,14 +235,12 @@ def run_sweep(
     columns = ["run_id", *sorted(spec.grid), "seed", *metrics, "train_seconds",
                "total_seconds", "status", "error"]  # fmt: skip
     per_job = max((job_memory(r.config, r.n_test) for r in todo), default=1)
-    plan = plan_workers(workers, per_job, memory_budget, n_jobs=max(1, len(todo)))
+    plan = executor.plan(per_job, len(todo))
     if on_plan is not None:
         on_plan(len(todo), len(runs) - len(todo), plan.reason)
     by_id = {r.run_id: r for r in todo}
     order = {r.run_id: i for i, r in enumerate(runs)}
-    jobs = [(r.run_id, r) for r in todo]
-    for outcome in run_jobs(sweep_job, jobs, workers=plan.workers, engine=engine,
-                            address=address):  # fmt: skip
+    for outcome in executor.run(sweep_job, [(r.run_id, r) for r in todo], plan.workers):
         run = by_id[outcome.key]
         row = _row(run, outcome)
         rows.append(row)
@@ -246,10 +272,7 @@ def draw_summary(
 
     from sigmapi.plots import plot_sweep
 
-    if metric not in (*METRIC_COLUMNS, *CIRCULAR_KEYS):
-        raise ConfigError(
-            f"metric must be one of {[*METRIC_COLUMNS, *CIRCULAR_KEYS]}, got {metric!r}"
-        )
+    _validate.choice("metric", metric, METRICS)
     keys = sorted(spec.grid)
     fig, ax = plt.subplots(figsize=(6.4, 4.2))
     if keys:
@@ -264,3 +287,132 @@ def draw_summary(
     fig.savefig(p, dpi=120, bbox_inches="tight", facecolor="white")
     plt.close(fig)
     return p
+
+
+# ------------------------------------------------------------------ the experiment
+
+METRICS = (*METRIC_COLUMNS, *CIRCULAR_KEYS)
+"""What the summary figure may show."""
+
+
+@dataclass(frozen=True)
+class SweepConfig:
+    """What ``sigmapi sweep`` runs: a spec file, and how failed runs and the figure are handled."""
+
+    spec: str
+    """The sweep spec, a TOML file: preset, seeds, n_test, [set] and [grid] (see
+    :mod:`sigmapi.experiments.sweep`); its seeds are the sweep's default seeds."""
+    retry_failed: bool = False
+    """Run failed runs again (otherwise finished runs, failed or not, are kept)."""
+    metric: str = "order_r2"
+    """The metric of the summary figure (a column of the table)."""
+
+    def __post_init__(self) -> None:
+        _validate.choice("metric", self.metric, METRICS)
+        self.read_spec()  # a missing or bad spec fails here, before anything runs
+
+    def read_spec(self) -> SweepSpec:
+        """The parsed spec (:meth:`SweepSpec.read`)."""
+        return SweepSpec.read(self.spec)
+
+
+def _typed(value: Any) -> Any:
+    """A value of the table as written (a string) back as a bool, int or float where it is one."""
+    if not isinstance(value, str) or value in ("", "nan"):
+        return value
+    if value in ("True", "False"):
+        return value == "True"
+    for kind in (int, float):
+        try:
+            return kind(value)
+        except ValueError:
+            pass
+    return value
+
+
+@dataclass
+class SweepResult:
+    """The table of a sweep (every run of its spec, in grid order) and its settings."""
+
+    spec: SweepSpec
+    rows: list[dict[str, Any]]
+    metric: str = "order_r2"
+
+    def to_dict(self) -> dict[str, Any]:
+        """``spec``, ``table`` (the file), counts, and ``rows`` (the table's rows, typed)."""
+        rows = [{k: _typed(v) for k, v in r.items()} for r in self.rows]
+        failed = sum(r.get("status") != "ok" for r in rows)
+        return {"spec": self.spec.to_dict(), "table": RESULTS, "runs": len(rows),
+                "failed": failed, "rows": rows}  # fmt: skip
+
+    def table(self) -> str:
+        """Per grid point: the runs that finished and the median of :attr:`metric` over them."""
+        keys = sorted(self.spec.grid)
+        points: dict[str, list[float]] = {}
+        for r in self.rows:
+            point = ", ".join(f"{k} {r[k]}" for k in keys) or self.spec.preset
+            value = _typed(r.get(self.metric))
+            ok = str(r.get("status")) == "ok" and isinstance(value, (int, float))
+            points.setdefault(point, []).extend([float(value)] if ok else [])
+        lines = [f"{'grid point':40s} {'ok runs':>7s} {self.metric:>12s} (median)"]
+        for point, values in points.items():
+            median = f"{statistics.median(values):12.3f}" if values else f"{'-':>12s}"
+            lines.append(f"{point:40s} {len(values):7d} {median}")
+        d = self.to_dict()
+        lines.append(f"{d['runs']} runs, {d['failed']} failed; the table: {RESULTS}")
+        return "\n".join(lines)
+
+    def figure(self, out_dir: Path) -> list[Path]:
+        """The summary figure, ``sweep.png`` (:func:`draw_summary`)."""
+        return [draw_summary(self.spec, self.rows, Path(out_dir) / FIGURE, self.metric)]
+
+
+class Sweep(Experiment[SweepConfig]):
+    """Train and evaluate the cross product of a grid of parameters and the seeds of a spec
+    file; the table is written after every run, so that a sweep started again in the same
+    folder runs only the missing runs."""
+
+    name = "sweep"
+    summary = "train and evaluate a grid of parameters x seeds"
+    config_type = SweepConfig
+    resumes = True
+
+    def default_seeds(self, config: SweepConfig, *, quick: bool = False) -> tuple[int, ...]:
+        """The spec's seeds."""
+        return config.read_spec().seeds
+
+    def run(
+        self,
+        config: SweepConfig,
+        *,
+        seeds: Sequence[int],
+        out: Path | None = None,
+        executor: Executor | None = None,
+        progress: Progress | None = None,
+    ) -> SweepResult:
+        """Run the missing runs of the spec (with ``seeds``) into ``out`` (required)."""
+        if out is None:
+            raise ConfigError("out must be a folder for the sweep's table, got None; the table "
+                              "is written there after every run")  # fmt: skip
+        spec = dataclasses.replace(config.read_spec(), seeds=check_seeds(seeds))
+        ex = executor if executor is not None else Executor(workers=1)
+        show = Progress.of(progress)
+        state: dict[str, Any] = {}
+
+        def on_plan(n_run: int, n_skip: int, reason: str) -> None:
+            show.note(f"sweep: {n_run + n_skip} runs, {n_skip} finished already, {n_run} to "
+                      f"run; engine {ex.engine}, {reason}")  # fmt: skip
+            state["done"], state["bar"] = show.jobs(n_run, "sweep")
+
+        def on_done(ok: bool, line: str) -> None:
+            state["done"](ok, line)
+
+        try:
+            rows = _sweep(spec, Path(out), ex, config.retry_failed, on_plan, on_done)
+        finally:
+            if "bar" in state:
+                state["bar"].close()
+        return SweepResult(spec, rows, config.metric)
+
+
+SWEEP = register(Sweep())
