@@ -11,30 +11,39 @@ paper and writes into ``DIR``:
 - the figures, ``<figure>-<preset>.png`` for the figures of :data:`~sigmapi.figures.FIGURES`;
 - the trained models, ``<preset>-seed<S>.npz``: by default the one the figures show (the
   best-ordered seed; ``sigmapi figure`` redraws from it), or every seed's, or none
-  (``--models shown|all|none``; a paper-2d model file is about 140 MB).
+  (``save_models``; a paper-2d file holds its 225 x 225 x 225 weights, so it is large).
 
 Experiments add sections to the report: a section is a function ``section(ctx:
 ReportContext) -> Section | None``; the default, :data:`SECTIONS`, is the reach experiment.
+
+The experiment ``reproduce`` (:class:`Reproduce`, settings :class:`ReproduceConfig`) is
+:func:`reproduce` with the seeds, executor and progress given apart; each (preset, seed) is one
+job of the executor.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import json
-import sys
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
+from types import MappingProxyType
 from typing import Any
 
 from sigmapi import figures as figs
 from sigmapi.config import SOMConfig, list_presets, load_preset
-from sigmapi.executor import job_memory, plan_workers, run_jobs
+from sigmapi.errors import ConfigError
+from sigmapi.executor import Executor, job_memory
+from sigmapi.experiments.base import Experiment, register, run_all
 from sigmapi.experiments.reach_section import reach_section
 from sigmapi.experiments.report_html import linked_files, render
 from sigmapi.experiments.results import (
+    REPORT,
     PresetResult,
     ReportContext,
+    ReproduceConfig,
     ReproduceOptions,
     ReproduceResult,
     Section,
@@ -42,12 +51,12 @@ from sigmapi.experiments.results import (
 )
 from sigmapi.io import atomic_write_bytes
 from sigmapi.metrics import evaluate
-from sigmapi.progress import each, jobs_done, progress_callback
+from sigmapi.progress import Progress
 from sigmapi.som import SigmaPiSOM
 
 __all__ = [
-    "QUICK_ITERATIONS", "REFERENCE", "SECTIONS", "SeedJob", "paper_presets", "reproduce",
-    "train_seed",
+    "QUICK_ITERATIONS", "REFERENCE", "REPRODUCE", "SECTIONS", "Reproduce", "SeedJob",
+    "paper_presets", "reproduce", "train_seed",
 ]  # fmt: skip
 
 REFERENCE: dict[str, dict[str, float]] = {
@@ -69,11 +78,10 @@ REFERENCE["paper-1d-crossview"] = REFERENCE["paper-1d"]
 Z_ERROR_FLOOR["paper-1d-crossview"] = Z_ERROR_FLOOR["paper-1d"]
 
 QUICK_ITERATIONS: dict[str, int] = {"paper-1d": 60_000, "paper-2d": 20_000}
-"""Iterations of each preset in ``--quick`` runs (the schedule is compressed to fit).
+"""Iterations of each preset in quick runs (the schedule is compressed to fit).
 
-paper-2d at 20,000 (seeds 0-2, default ordering): ordered (order R^2 0.981-0.983) but not
-converged (within one 0.94, z error 0.69), so the fold detector flags it (fold score 1.6-1.8);
-at 6,000 the map was still partly twisted (R^2 0.92)."""
+paper-2d's quick run is long enough for its map to order but not to converge, so the fold
+detector may flag it; a much shorter one leaves the map partly twisted."""
 
 SectionFn = Callable[[ReportContext], Section | None]
 
@@ -108,6 +116,7 @@ def reproduce(
     *,
     presets: Sequence[tuple[str, SOMConfig]] | None = None,
     sections: Sequence[SectionFn] | None = None,
+    executor: Executor | None = None,
 ) -> ReproduceResult:
     """Train and evaluate each paper preset for the seeds; write the report into ``out``.
 
@@ -122,6 +131,8 @@ def reproduce(
     sections : sequence of callables, optional
         Functions that add report sections (default :data:`SECTIONS`, the reach
         experiment); ``()`` for none.
+    executor : Executor, optional
+        Where the training runs go (default: this machine, ``options.workers`` at once).
 
     Returns
     -------
@@ -129,14 +140,16 @@ def reproduce(
         What ``metrics.json`` holds (``result.to_dict()``).
     """
     opts = options or ReproduceOptions()
+    ex = executor if executor is not None else Executor(workers=opts.workers)
     started = time.perf_counter()
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     runs_of = paper_presets(opts.quick) if presets is None else list(presets)
-    result = ReproduceResult(opts)
+    result = ReproduceResult(opts, out=out)
+    progress = Progress() if opts.progress else None
     models: dict[str, list[SigmaPiSOM]] = {}
     figures: dict[str, list[tuple[str, str]]] = {}
-    trained = _train_all(runs_of, opts)
+    trained = _train_all(runs_of, opts, ex, progress)
     for name, cfg in runs_of:
         runs, models[name] = trained[name]
         # figures show the best-ordered seed (the first on ties), and say which
@@ -148,19 +161,58 @@ def reproduce(
             if opts.save_models == "all" or (opts.save_models == "shown" and i == shown):
                 models[name][i].save(out / f"{name}-seed{seed}.npz")
         run = figs.RunInfo(name, cfg, opts.seeds, shown, opts.curve_test)
-        figures[name] = _draw(run, models[name][shown], entry, out, opts)
+        figures[name] = _draw(run, models[name][shown], entry, out, opts, progress)
+        result.figure_files += [out / file for file, _ in figures[name]]
     ctx = ReportContext(out, opts, models)
     added = [s for s in (fn(ctx) for fn in (SECTIONS if sections is None else sections)) if s]
     for s in added:
         result.sections[s.title] = s.data
+        result.figure_files += [out / file for file, _ in s.figures]
     result.total_seconds = time.perf_counter() - started
     atomic_write_bytes(out / "metrics.json", json.dumps(result.to_dict(), indent=2).encode())
     text = render(result, figures, added)
     missing = [f for f in linked_files(text) if not (out / f).is_file()]
     if missing:
         raise RuntimeError(f"report links files that were not written: {missing}")
-    atomic_write_bytes(out / "report.html", text.encode())
+    atomic_write_bytes(out / REPORT, text.encode())
     return result
+
+
+class Reproduce(Experiment[ReproduceConfig]):
+    """Train the paper presets (each under both ordering procedures) for the seeds, evaluate
+    them, draw the figures of the paper and write the report: report.html, metrics.json, the
+    figures and the trained models the figures show."""
+
+    name = "reproduce"
+    summary = "train the paper presets and write the report"
+    config_type = ReproduceConfig
+    quick = ReproduceConfig(quick=True)
+    seeds = tuple(range(10))
+    quick_seeds = (0,)
+    default_out = "report"
+    aliases = MappingProxyType({"save_models": "--models"})
+
+    def run(
+        self,
+        config: ReproduceConfig,
+        *,
+        seeds: Sequence[int],
+        out: Path | None = None,
+        executor: Executor | None = None,
+        progress: Progress | None = None,
+    ) -> ReproduceResult:
+        """:func:`reproduce` into ``out`` (required: the report's folder)."""
+        if out is None:
+            raise ConfigError("out must be the report's folder, got None; e.g. Path('report')")
+        ex = executor if executor is not None else Executor(workers=1)
+        fields = {f.name: getattr(config, f.name) for f in dataclasses.fields(ReproduceConfig)}
+        opts = ReproduceOptions(**fields, seeds=tuple(seeds),
+                                progress=Progress.of(progress).enabled,
+                                workers=ex.workers)  # fmt: skip
+        return reproduce(out, opts, executor=ex)
+
+
+REPRODUCE = register(Reproduce())
 
 
 @dataclass(frozen=True)
@@ -183,8 +235,8 @@ def train_seed(job: SeedJob) -> tuple[SeedRun, dict[str, Any], dict[str, Any]]:
 
     cfg = job.cfg
     model = SigmaPiSOM(cfg, seed=job.seed)
-    callback, bar = progress_callback(
-        cfg.iterations, f"{job.name} seed {job.seed}", disable=not job.progress or None
+    callback, bar = Progress(disable=not job.progress or None).training(
+        cfg.iterations, f"{job.name} seed {job.seed}"
     )
     curve = LearningCurve(at=checkpoints(cfg.iterations, job.n_checkpoints),
                           n_test=job.curve_test, then=callback)  # fmt: skip
@@ -198,38 +250,44 @@ def train_seed(job: SeedJob) -> tuple[SeedRun, dict[str, Any], dict[str, Any]]:
 
 
 def _train_all(
-    runs_of: Sequence[tuple[str, SOMConfig]], opts: ReproduceOptions
+    runs_of: Sequence[tuple[str, SOMConfig]],
+    opts: ReproduceOptions,
+    executor: Executor,
+    progress: Progress | None,
 ) -> dict[str, tuple[list[SeedRun], list[SigmaPiSOM]]]:
     """Train every (preset, seed), in parallel where cores and memory allow."""
     jobs = [(f"{name} seed {seed}", SeedJob(name, cfg, seed, opts.n_checkpoints,
                                             opts.curve_test, opts.test_size))
             for name, cfg in runs_of for seed in opts.seeds]  # fmt: skip
     per_job = max(job_memory(cfg, opts.test_size) for _, cfg in runs_of)
-    plan = plan_workers(opts.workers, per_job, n_jobs=len(jobs))
-    if plan.workers == 1:  # in this process, with a bar per run
-        jobs = [(key, replace(job, progress=opts.progress)) for key, job in jobs]
-    elif opts.progress:
-        print(f"reproduce: {len(jobs)} training runs, {plan.reason}", file=sys.stderr)
-    done, bar = jobs_done(len(jobs), "reproduce", disable=not opts.progress or plan.workers == 1)
-    finished: dict[str, tuple[SeedRun, SigmaPiSOM]] = {}
-    with bar:
-        for o in run_jobs(train_seed, jobs, workers=plan.workers):
-            if not o.ok:
-                raise RuntimeError(f"training {o.key} failed: {o.error}")
-            run, header, arrays = o.value
-            finished[o.key] = (run, SigmaPiSOM.from_arrays(header, arrays, source=o.key))
-            m = run.metrics
-            done(True, f"{o.key}: {run.train_seconds:.0f} s, order R^2 {m.order_r2:.3f}"
-                       f"{', FOLDED' if m.folded else ''}")  # fmt: skip
+
+    def describe(key: str, value: tuple[SeedRun, Any, Any]) -> str:
+        run, m = value[0], value[0].metrics
+        return (f"{key}: {run.train_seconds:.0f} s, order R^2 {m.order_r2:.3f}"
+                f"{', FOLDED' if m.folded else ''}")  # fmt: skip
+
+    done = run_all(train_seed, jobs, executor=executor, per_job=per_job, progress=progress,
+                   desc="reproduce", describe=describe,
+                   verbose=lambda job: replace(job, progress=True))  # fmt: skip
     out: dict[str, tuple[list[SeedRun], list[SigmaPiSOM]]] = {}
     for name, _ in runs_of:
-        pairs = [finished[f"{name} seed {seed}"] for seed in opts.seeds]
-        out[name] = ([p[0] for p in pairs], [p[1] for p in pairs])
+        runs, models = [], []
+        for seed in opts.seeds:
+            key = f"{name} seed {seed}"
+            run, header, arrays = done[key]
+            runs.append(run)
+            models.append(SigmaPiSOM.from_arrays(header, arrays, source=key))
+        out[name] = (runs, models)
     return out
 
 
 def _draw(
-    run: figs.RunInfo, model: SigmaPiSOM, entry: PresetResult, out: Path, opts: ReproduceOptions
+    run: figs.RunInfo,
+    model: SigmaPiSOM,
+    entry: PresetResult,
+    out: Path,
+    opts: ReproduceOptions,
+    progress: Progress | None,
 ) -> list[tuple[str, str]]:
     """Draw every figure of one preset into ``out``; ``(file, caption)`` per figure.
 
@@ -241,7 +299,7 @@ def _draw(
     curves = [r.curve for r in entry.runs]
     seeds = run.seeds
     drawn = []
-    bar = each(figs.FIGURES, f"{run.preset} figures", disable=not opts.progress or None)
+    bar = Progress.of(progress).each(figs.FIGURES, f"{run.preset} figures")
     for fig_name in bar:
         file = f"{fig_name}-{run.preset}.png"
         label = f"{run.preset}, seed {seeds[run.shown]}"

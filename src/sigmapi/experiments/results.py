@@ -1,6 +1,7 @@
 """What the reproduction run takes and gives: its options, its typed results, report sections.
 
-:class:`ReproduceOptions` holds the run settings; :class:`ReproduceResult` (one
+:class:`ReproduceConfig` holds its settings (the command-line options), :class:`ReproduceOptions`
+those with the run's seeds, progress and workers; :class:`ReproduceResult` (one
 :class:`PresetResult` per preset, one :class:`SeedRun` per seed) is what ``metrics.json``
 holds, through ``to_dict()``. A :class:`Section` is a part of the report that an experiment
 adds (e.g. the reach experiment); it receives a :class:`ReportContext`.
@@ -8,11 +9,14 @@ adds (e.g. the reach experiment); it receives a :class:`ReportContext`.
 
 from __future__ import annotations
 
+import shutil
 import statistics
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Literal, get_args
 
+from sigmapi import _validate
+from sigmapi.experiments.base import check_seeds
 from sigmapi.metrics import ORDERED_R2
 
 if TYPE_CHECKING:
@@ -25,6 +29,7 @@ __all__ = [
     "SAVE_MODELS",
     "PresetResult",
     "ReportContext",
+    "ReproduceConfig",
     "ReproduceOptions",
     "ReproduceResult",
     "Section",
@@ -37,7 +42,8 @@ METRIC_KEYS = (
 
 """The metrics the report tabulates (mean and sd over seeds)."""
 
-SAVE_MODELS = ("shown", "all", "none")
+SaveModels = Literal["shown", "all", "none"]
+SAVE_MODELS: tuple[str, ...] = get_args(SaveModels)
 """Which trained models the report writes: the one the figures show, all, or none."""
 
 N_CHECKPOINTS = 20
@@ -49,50 +55,32 @@ CURVE_TEST = 1000
 N_TEST = 10_000
 """Test set size of the final metrics."""
 
+REPORT = "report.html"
+"""The report's page in its folder."""
+
 QUICK_SIZES = {"n_checkpoints": 12, "curve_test": 300, "n_test": 2000}
 """Smaller measurements of ``quick`` runs (checkpoints, their test sets, the final test set)."""
 
 
 @dataclass(frozen=True)
-class ReproduceOptions:
-    """Settings of one reproduction run.
+class ReproduceConfig:
+    """What one reproduction run measures and writes (the seeds are given apart)."""
 
-    Attributes
-    ----------
-    seeds : tuple of int
-        Training seeds; figures other than the learning curves show the model of the seed
-        with the highest order R^2 (the first on ties), and say which.
-    quick : bool
-        Fewer iterations per preset, smaller measurements: a first look.
-    progress : bool
-        Show progress bars on stderr.
-    save_models : {"shown", "all", "none"}
-        Which trained models to write beside the report.
-    n_test : int, optional
-        Test set size of the final metrics (default 10,000; ``quick``: 2,000).
-    workers : int, optional
-        Training runs at once (default: one per core, as many as fit in half the available
-        memory; :func:`~sigmapi.executor.plan_workers`). The results do not
-        depend on it.
-    dpi : int
-        Resolution of the report's figures (default 100; 300 for print).
-    """
-
-    seeds: tuple[int, ...] = (0, 1, 2)
     quick: bool = False
-    progress: bool = True
-    save_models: str = "shown"
+    """Fewer iterations per preset, smaller measurements: a first look."""
+    save_models: SaveModels = "shown"
+    """Which trained models to write beside the report: the one the figures show (the
+    best-ordered seed), all, or none."""
     n_test: int | None = None
-    workers: int | None = None
+    """Test set size of the final metrics (None: 10,000; quick: 2,000)."""
     dpi: int = 100
+    """Resolution of the report's figures (300 for print)."""
 
     def __post_init__(self) -> None:
-        from sigmapi import _validate
-
-        object.__setattr__(self, "seeds", tuple(self.seeds))
+        _validate.boolean("quick", self.quick)
         _validate.choice("save_models", self.save_models, SAVE_MODELS)
-        if self.workers is not None:
-            _validate.integer("workers", self.workers, 1)
+        if self.n_test is not None:
+            _validate.integer("n_test", self.n_test, 2, fix="e.g. 10000")
         _validate.integer("dpi", self.dpi, 20, 1200, fix="300 for print")
 
     @property
@@ -108,6 +96,40 @@ class ReproduceOptions:
         if self.n_test is not None:
             return self.n_test
         return QUICK_SIZES["n_test"] if self.quick else N_TEST
+
+
+@dataclass(frozen=True)
+class ReproduceOptions(ReproduceConfig):
+    """A :class:`ReproduceConfig` with the run's seeds, progress and workers (what the report
+    and its sections see, :class:`ReportContext`).
+
+    Attributes
+    ----------
+    seeds : tuple of int
+        Training seeds; figures other than the learning curves show the model of the seed
+        with the highest order R^2 (the first on ties), and say which.
+    progress : bool
+        Show progress bars on stderr.
+    workers : int, optional
+        Training runs at once (default: one per core, as many as fit in half the available
+        memory; :func:`~sigmapi.executor.plan_workers`). The results do not
+        depend on it.
+    """
+
+    seeds: tuple[int, ...] = (0, 1, 2)
+    progress: bool = True
+    workers: int | None = None
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        object.__setattr__(self, "seeds", check_seeds(self.seeds))
+        if self.workers is not None:
+            _validate.integer("workers", self.workers, 1)
+
+    @property
+    def config(self) -> ReproduceConfig:
+        """The settings without the run's."""
+        return ReproduceConfig(self.quick, self.save_models, self.n_test, self.dpi)
 
 
 @dataclass
@@ -182,6 +204,10 @@ class ReproduceResult:
     sections: dict[str, dict[str, Any]] = field(default_factory=dict)
     """Per added section (by title): the numbers it stores."""
     total_seconds: float = 0.0
+    out: Path | None = None
+    """The report folder."""
+    figure_files: list[Path] = field(default_factory=list)
+    """The figures of the report, in its folder."""
 
     def to_dict(self) -> dict[str, Any]:
         o = self.options
@@ -191,6 +217,23 @@ class ReproduceResult:
             "presets": {name: p.to_dict() for name, p in self.presets.items()},
             "sections": self.sections, "total_seconds": self.total_seconds,
         }  # fmt: skip
+
+    def table(self) -> str:
+        """The mean metrics of each preset over the seeds, and the report's file."""
+        lines = [f"{name}: " + ", ".join(f"{k} {v:.3f}" for k, v in res.mean().items())
+                 for name, res in self.presets.items()]  # fmt: skip
+        if self.out is not None:
+            lines.append(f"report: {self.out / REPORT}")
+        return "\n".join(lines)
+
+    def figure(self, out_dir: Path) -> list[Path]:
+        """The report's figures, drawn with it into its folder (copied into ``out_dir`` when
+        that is another folder)."""
+        folder = Path(out_dir)
+        if self.out is not None and folder.resolve() == Path(self.out).resolve():
+            return list(self.figure_files)
+        folder.mkdir(parents=True, exist_ok=True)
+        return [Path(shutil.copy2(f, folder / f.name)) for f in self.figure_files]
 
 
 @dataclass(frozen=True)
