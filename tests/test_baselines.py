@@ -163,8 +163,8 @@ TINY = ["--set", "iterations=5000", "--seeds", "0", "--train-pairs", "500",
 
 
 def test_compare_cli_json_table_and_figure(tmp_path):
-    out = tmp_path / "c.png"
-    r = _cli(*TINY, "--json", "--quiet", "--out", str(out))
+    out = tmp_path / "c" / "compare.png"
+    r = _cli(*TINY, "--json", "--quiet", "--out", str(out.parent))
     assert r.returncode == 0, r.stderr
     d = json.loads(r.stdout)
     names = [m["name"] for m in d["methods"]]
@@ -175,7 +175,8 @@ def test_compare_cli_json_table_and_figure(tmp_path):
     assert out.stat().st_size > 10_000
     caption = out.with_suffix(".txt").read_text()
     assert "median of 1 seed." in caption and "rbm:" in caption
-    r = _cli(*TINY, "--methods", "kohonen", "--out", str(out))  # exists, no --force
+    assert json.loads((out.parent / "result.json").read_text()) == d
+    r = _cli(*TINY, "--methods", "kohonen", "--out", str(out.parent))  # not empty, no --force
     assert r.returncode == 2 and "--force" in r.stderr and "Traceback" not in r.stderr
 
 
@@ -186,12 +187,13 @@ def test_compare_cli_json_table_and_figure(tmp_path):
         (["--preset", "nope"], "unknown preset 'nope'"),
         (["--set", "map_size=3"], "unknown config key 'map_size'"),
         (["--seeds"], "expected at least one argument"),
-        (["--out", "c.txt"], "--out must end in .png"),
+        (["--out", "c.txt"], "--out 'c.txt' is a file; give a folder"),
         (["--train-pairs", "5"], "train_pairs must be an int >= 100"),
     ],
 )
 def test_compare_cli_user_mistakes_are_one_line(args, needle, tmp_path, monkeypatch, capsys):
     monkeypatch.chdir(tmp_path)
+    (tmp_path / "c.txt").write_text("a file")
     try:
         code = main(["compare", *args])
     except SystemExit as exc:  # argparse's own errors

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 import sigmapi
+import sigmapi.experiments
 from sigmapi.cli import main
 from sigmapi.experiments.chain import (
     TARGET_RATIO,
@@ -129,17 +130,19 @@ SMALL_FLAGS = ["--set", "map_shape=[9]", "--set", "x_shape=[9]", "--set", "y_sha
                "--train-pairs", "3000", "--n-test", "2000"]  # fmt: skip
 
 
-def test_command_line_json_is_run_chains_result(capsys, small_run):
-    assert main(["chain", *SMALL_FLAGS, "--seeds", "0", "1", "2", "--json"]) == 0
+def test_command_line_json_is_run_chains_result(capsys, small_run, tmp_path):
+    argv = ["chain", *SMALL_FLAGS, "--seeds", "0", "1", "2", "--workers", "1"]
+    assert main([*argv, "--json", "--out", str(tmp_path)]) == 0
     out = json.loads(capsys.readouterr().out)
     assert set(out) == {"settings", "seeds", "summary"}
     for got, want in zip(out["seeds"], small_run["seeds"], strict=True):
         assert got["ratio"] == want["ratio"] and got["map_a"] == want["map_a"]
     assert out["settings"]["config"]["ordering"] == "crossview"
+    assert sigmapi.experiments.read_result(tmp_path) == out
 
 
-def test_command_line_table_and_user_mistakes(capsys):
-    assert main(["chain", *SMALL_FLAGS, "--seeds", "4"]) == 0
+def test_command_line_table_and_user_mistakes(capsys, tmp_path):
+    assert main(["chain", *SMALL_FLAGS, "--seeds", "4", "--out", str(tmp_path / "c")]) == 0
     out = capsys.readouterr().out
     assert "z error" in out and "of 1 seeds: chain z error <= 2 x" in out
     assert main(["chain", "--preset", "paper-2d"]) == 2

@@ -63,12 +63,20 @@ def test_presets_lists_paper_1d():
         (["evaluate", "good.npz", "--n-test", "10000000000"], "needs about"),
         (["figure", "fig8", "good.npz", "--out", "f.png", "--seed", "-1"], "--seed must be"),
         (["reach", "--grid", "300"], "needs about"),
-        (["reproduce", "--quick", "--dpi", "5", "--out", "r"], "--dpi must be an int in [20,"),
+        (["reproduce", "--quick", "--dpi", "5", "--out", "r"], "dpi must be an int in [20,"),
+        (["reproduce", "--quick", "--seeds", "2", "2"], "seeds must be distinct, got [2, 2]"),
+        (["reproduce", "--quick", "--models", "some"], "invalid choice: 'some'"),
+        (["chain", "--code", "spikes"], "invalid choice: 'spikes'"),
+        (["chain", "--out", "bad.npz"], "is a file; give a folder"),
+        (["sweep", "missing.toml", "--out", "o"], "does not exist"),
+        (["sweep", "s.toml", "--out", "o", "--address", "tcp://h:1"], "address names a Dask"),
+        (["sweep", "s.toml"], "the following arguments are required: --out"),
         (["figure", "net", "good.npz", "--out", "f.png", "--dpi", "5"], "--dpi must be"),
     ],
 )  # fmt: skip
 def test_user_mistakes_exit_2_with_one_line(tmp_path, args, needle):
     (tmp_path / "bad.npz").write_text("not a model")
+    (tmp_path / "s.toml").write_text('preset = "tiny-1d"\n')
     os.mkfifo(tmp_path / "fifo")
     if "good.npz" in args:
         small = SigmaPiSOM(map_shape=(3,), x_shape=(4,), y_shape=(4,), backend="reference")

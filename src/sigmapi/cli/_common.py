@@ -8,12 +8,13 @@ import dataclasses
 import inspect
 import itertools
 import os
+import re
 import tempfile
 import textwrap
 import typing
-from collections.abc import Callable
+from collections.abc import Callable, Collection, Mapping
 from pathlib import Path
-from typing import Any, NoReturn
+from typing import Any, Literal, NoReturn
 
 from sigmapi.config import SOMConfig, apply_overrides, load_config_file, load_preset
 from sigmapi.errors import ConfigError, UsageError
@@ -27,6 +28,7 @@ __all__ = [
     "check_output",
     "dataclass_values",
     "field_docs",
+    "plain",
     "resolve_config",
 ]
 
@@ -46,7 +48,7 @@ def _positive_int(text: str) -> int:
     return value
 
 
-def add_workers_flag(p: argparse.ArgumentParser, what: str) -> None:
+def add_workers_flag(p: argparse.ArgumentParser | argparse._ArgumentGroup, what: str) -> None:
     """``--workers N``: how many ``what`` run at once (:func:`sigmapi.executor.plan_workers`)."""
     p.add_argument("--workers", type=_positive_int, default=None,
                    help=f"{what} at once (default: one per core, as many as fit in the memory "
@@ -162,44 +164,104 @@ def _names(text: str) -> tuple[str, ...]:
     return tuple(s.strip() for s in text.split(",") if s.strip())
 
 
-def _flag_type(hint: Any) -> tuple[Callable[[str], Any], str]:
-    """The argparse ``type`` of a field's type hint, and how its default is written."""
+_ROLE = re.compile(r":(?:[a-z]+:)?[a-z]+:`(~?)([^`<]*?)\s*(?:<([^>]*)>)?`")
+_LITERAL = re.compile(r"``([^`]+)``|`([^`]+)`")
+
+
+def plain(text: str) -> str:
+    """Docstring text as ``--help`` shows it: Sphinx roles and literals as plain words.
+
+    ``:class:`~sigmapi.experiments.Chain``` becomes ``Chain``, ``:func:`f <sigmapi.f>``` ``f``,
+    double-backquoted literals lose their quotes; runs of white space become one space.
+
+    Examples
+    --------
+    >>> plain("see :func:`~sigmapi.metrics.evaluate` and ``ordering="none"``")
+    'see evaluate and ordering="none"'
+    """
+
+    def role(m: re.Match[str]) -> str:
+        tilde, title, target = m.group(1), m.group(2).strip(), m.group(3)
+        if target is not None and title:
+            return title
+        name = title or (target or "")
+        return name.rsplit(".", 1)[-1] if tilde else name
+
+    text = _ROLE.sub(role, text)
+    text = _LITERAL.sub(lambda m: m.group(1) or m.group(2), text)
+    return " ".join(text.split())
+
+
+def _help(text: str) -> str:
+    """``text`` for argparse, which formats help with ``%``."""
+    return plain(text).replace("%", "%%")
+
+
+def _flag_kwargs(f: dataclasses.Field[Any], hint: Any) -> tuple[dict[str, Any], str]:
+    """The argparse keyword arguments of a field of type ``hint``, and its default as written."""
     origin, args = typing.get_origin(hint), typing.get_args(hint)
+    simple = [a for a in (args or (hint,)) if a is not type(None)] if origin is not Literal else []
+    default: Any = f.default
+    shown = str(default)
+    if f.metadata.get("repeat"):
+        kwargs: dict[str, Any] = {"action": "append", "metavar": f.metadata.get("metavar")}
+        return kwargs, " ".join(map(str, default)) if default else "none"
+    if origin is Literal:
+        return {"type": type(args[0]), "choices": args}, shown
+    kind: Callable[[str], Any]
     if origin is tuple and args == (int, Ellipsis):
-        return grid, "x"
-    if origin is tuple and args == (str, Ellipsis):
-        return _names, ","
-    simple = [a for a in (args or (hint,)) if a is not type(None)]
-    if len(simple) == 1 and simple[0] in (int, float, str):
-        return simple[0], ""
-    raise TypeError(f"no command-line type for a field of type {hint!r}")
+        kind, joiner = grid, "x"
+    elif origin is tuple and args == (str, Ellipsis):
+        kind, joiner = _names, ","
+    elif simple == [bool]:
+        if default is not False:
+            raise TypeError(f"a bool field becomes an on-switch; {f.name} must default to False")
+        return {"action": "store_true"}, "off"
+    elif len(simple) == 1 and simple[0] in (int, float, str):
+        kind, joiner = simple[0], ""
+    else:
+        raise TypeError(f"no command-line type for a field of type {hint!r}")
+    if joiner and isinstance(default, tuple):
+        shown = joiner.join(map(str, default))
+    return {"type": kind, "metavar": f.metadata.get("metavar", f.name.upper())}, shown
 
 
 def add_dataclass_flags(
-    p: argparse.ArgumentParser, cls: type, aliases: dict[str, str] | None = None
+    p: argparse.ArgumentParser,
+    cls: type,
+    aliases: Mapping[str, str] | None = None,
+    skip: Collection[str] = (),
 ) -> None:
     """One option ``--field-name`` per field of dataclass ``cls``, its help the field's docstring.
 
-    Options default to None (the field's own default applies); ``aliases`` adds a second
-    spelling for a field (e.g. ``{"model_path": "--model"}``). Values are not checked here:
-    ``cls`` checks them when it is built (:func:`dataclass_values`).
+    A field without a default is a positional argument. Options default to None (the field's
+    own default applies); a bool field is an on-switch; a ``Literal`` field offers its values;
+    ``tuple[int, ...]`` is written ``8x8`` and ``tuple[str, ...]`` ``a,b``; a field with
+    metadata ``{"repeat": True}`` is given once per value. ``aliases`` adds a second spelling
+    for a field (e.g. ``{"model_path": "--model"}``); fields in ``skip`` get no option. Values
+    are not checked here: ``cls`` checks them when it is built (:func:`dataclass_values`).
     """
     hints = typing.get_type_hints(cls)
     docs = field_docs(cls)
     for f in dataclasses.fields(cls):
-        kind, joiner = _flag_type(hints[f.name])
-        default = f.default
-        if joiner and isinstance(default, tuple):
-            default = joiner.join(map(str, default))
+        if f.name in skip:
+            continue
+        kwargs, shown = _flag_kwargs(f, hints[f.name])
+        text = _help(docs.get(f.name, f.name.replace("_", " ")))
+        if f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING:
+            kwargs.pop("metavar", None)
+            p.add_argument(f.name, help=text, **kwargs)
+            continue
         flags = [f"--{f.name.replace('_', '-')}"]
         if aliases and f.name in aliases:
             flags.append(aliases[f.name])
-        help_text = docs.get(f.name, f.name.replace("_", " "))
-        p.add_argument(*flags, dest=f.name, type=kind, default=None,
-                       metavar=f.name.upper(), help=f"{help_text} (default {default})")  # fmt: skip
+        if f.default is not None:  # a None default is explained by the docstring
+            text = f"{text.removesuffix('.')} (default {shown})"
+        p.add_argument(*flags, dest=f.name, default=None, help=text, **kwargs)
 
 
 def dataclass_values(args: argparse.Namespace, cls: type) -> dict[str, Any]:
-    """The fields of ``cls`` given on the command line (the options left out are not listed)."""
+    """The fields of ``cls`` given on the command line (the options left out are not listed);
+    repeated values as a tuple."""
     given = ((f.name, getattr(args, f.name, None)) for f in dataclasses.fields(cls))
-    return {name: value for name, value in given if value is not None}
+    return {name: tuple(v) if isinstance(v, list) else v for name, v in given if v is not None}

@@ -125,7 +125,7 @@ class CompareConfig:
     n_test: int = 10_000
     """Test z's (and calibration z's, the pool the labels are drawn from)."""
     methods: tuple[str, ...] = tuple(METHODS)
-    """Methods to run, a subset of :data:`METHODS`; "sigma-pi" always runs."""
+    """Methods to run (default: all of them); "sigma-pi" always runs."""
 
     def __post_init__(self) -> None:
         _validate.integer("train_pairs", self.train_pairs, 100, fix="e.g. 20000")

@@ -72,7 +72,7 @@ class ReproduceConfig:
     """Which trained models to write beside the report: the one the figures show (the
     best-ordered seed), all, or none."""
     n_test: int | None = None
-    """Test set size of the final metrics (None: 10,000; quick: 2,000)."""
+    """Test set size of the final metrics (default: 10,000, and 2,000 in quick runs)."""
     dpi: int = 100
     """Resolution of the report's figures (300 for print)."""
 

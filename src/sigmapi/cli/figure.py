@@ -1,8 +1,4 @@
-"""``sigmapi reproduce`` (the report, :mod:`sigmapi.experiments`) and ``sigmapi figure``.
-
-``sigmapi figure NAME MODEL --out FILE`` draws one of the figures of the report for a model
-file.
-"""
+"""``sigmapi figure NAME MODEL --out FILE``: one of the figures of the report for a model file."""
 
 from __future__ import annotations
 
@@ -14,40 +10,15 @@ from typing import Any
 import numpy as np
 
 from sigmapi import _validate
-from sigmapi.cli._common import add_workers_flag, check_output
+from sigmapi.cli._common import check_output
 from sigmapi.curves import LearningCurve, checkpoints
 from sigmapi.errors import UsageError
-from sigmapi.experiments import ReproduceOptions, reproduce
-from sigmapi.experiments.results import CURVE_TEST, N_CHECKPOINTS, SAVE_MODELS
+from sigmapi.experiments.results import CURVE_TEST, N_CHECKPOINTS
 from sigmapi.figures import DPI, FIGURES, draw_figure
 from sigmapi.progress import progress_callback
 from sigmapi.som import load_model
 
-__all__ = ["cmd_figure", "cmd_reproduce", "register"]
-
-
-def cmd_reproduce(args: argparse.Namespace) -> int:
-    out = Path(args.out)
-    if out.exists() and not out.is_dir():
-        raise UsageError(f"--out {str(out)!r} is a file; give a folder for the report")
-    if out.exists() and any(out.iterdir()) and not args.force:
-        raise UsageError(f"--out folder {str(out)!r} is not empty; pass --force to write into it")
-    seeds = args.seeds if args.seeds is not None else ([0] if args.quick else list(range(10)))
-    if any(s < 0 for s in seeds):
-        raise UsageError(f"--seeds must be non-negative ints, got {seeds}")
-    if len(set(seeds)) != len(seeds):
-        raise UsageError(f"--seeds must be distinct, got {seeds}")
-    _validate.integer("--dpi", args.dpi, 20, 1200, fix="300 for print", error=UsageError)
-    options = ReproduceOptions(seeds=tuple(seeds), quick=args.quick, progress=not args.quiet,
-                               save_models=args.models, workers=args.workers,
-                               dpi=args.dpi)  # fmt: skip
-    result = reproduce(out, options)
-    for name, res in result.presets.items():
-        print(
-            f"{name}: " + ", ".join(f"{k} {v:.3f}" for k, v in res.mean().items()), file=sys.stderr
-        )
-    print(f"wrote {out / 'report.html'} in {result.total_seconds:.0f} s", file=sys.stderr)
-    return 0
+__all__ = ["cmd_figure", "register"]
 
 
 def cmd_figure(args: argparse.Namespace) -> int:
@@ -90,25 +61,7 @@ def cmd_figure(args: argparse.Namespace) -> int:
 
 
 def register(sub: Any) -> None:
-    """Add ``sigmapi reproduce`` and ``sigmapi figure`` to the sub-parsers ``sub``."""
-    p = sub.add_parser("reproduce", help="train the paper presets and write the report")
-    p.add_argument("--out", default="report", help="folder for the report (default: ./report)")
-    p.add_argument("--seeds", type=int, nargs="+", default=None,
-                   help="training seeds (default: 0 to 9; with --quick: 0)")  # fmt: skip
-    p.add_argument("--quick", action="store_true",
-                   help="a short run for a first look (under a minute): fewer iterations, "
-                   "one seed")  # fmt: skip
-    p.add_argument("--force", action="store_true", help="write into a non-empty --out folder")
-    p.add_argument("--models", choices=SAVE_MODELS, default="shown",
-                   help="which trained models to save: the one the figures show (default; the "
-                   "best-ordered seed), all, or none")  # fmt: skip
-    add_workers_flag(p, "training runs")
-    p.add_argument("--quiet", action="store_true", help="no progress bars")
-    p.add_argument(
-        "--dpi", type=int, default=DPI, help=f"figure resolution (default {DPI}; 300 for print)"
-    )
-    p.set_defaults(func=cmd_reproduce)
-
+    """Add ``sigmapi figure`` to the sub-parsers ``sub``."""
     p = sub.add_parser("figure", help="draw one figure of a trained model")
     p.add_argument("name", choices=FIGURES, help="which figure")
     p.add_argument("model", help="model file written by `sigmapi train` or `sigmapi reproduce`")

@@ -1,0 +1,134 @@
+"""The sub-command of each registered experiment, generated from the experiment and its config.
+
+``sigmapi NAME`` gets an option per field of ``experiment.config_type``
+(:func:`~sigmapi.cli._common.add_dataclass_flags`) and the options every experiment shares:
+
+- ``--seeds S [S ...]``: the seeds themselves (not a count), distinct ints >= 0; default the
+  experiment's (:meth:`~sigmapi.experiments.Experiment.default_seeds`);
+- ``--out DIR``: the folder for ``result.json`` (``to_dict()``) and the figures; a folder that
+  is not empty needs ``--force``, unless the experiment resumes a run there (a sweep);
+- ``--json``: print ``to_dict()`` as one JSON object on stdout (else the table);
+- ``--quick``: start from the experiment's quick config and seeds (where it has one);
+- ``--workers``, ``--engine``, ``--address``, ``--memory-budget``: the executor;
+- ``--quiet``: no progress on stderr.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import sys
+from functools import partial
+from pathlib import Path
+from typing import Any
+
+from sigmapi.cli._common import (
+    Parser,
+    add_dataclass_flags,
+    add_workers_flag,
+    dataclass_values,
+    plain,
+)
+from sigmapi.errors import UsageError
+from sigmapi.executor import ENGINES, Executor
+from sigmapi.experiments.base import Experiment, check_seeds, write_result
+from sigmapi.progress import Progress
+
+__all__ = ["add_experiment", "run_experiment"]
+
+
+def _gib(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        value = 0.0
+    if not value > 0:
+        raise argparse.ArgumentTypeError(f"must be a positive number of GiB, got {text!r}")
+    return value
+
+
+def _seeds_default(experiment: Experiment[Any]) -> str:
+    """How ``--help`` states the default seeds."""
+    try:
+        config = experiment.config_type()
+    except TypeError:  # a field without a default: the seeds follow from the config
+        return "the config's"
+    text = " ".join(map(str, experiment.default_seeds(config)))
+    if experiment.quick is not None:
+        quick = experiment.default_seeds(experiment.quick, quick=True)
+        text += "; --quick: " + " ".join(map(str, quick))
+    return text
+
+
+def add_experiment(sub: Any, experiment: Experiment[Any]) -> Parser:
+    """Add the sub-command ``experiment.name`` to the sub-parsers ``sub``; returns its parser."""
+    summary = plain(experiment.summary)
+    p: Parser = sub.add_parser(experiment.name, help=summary,
+                               description=plain(type(experiment).__doc__ or summary))  # fmt: skip
+    common = p.add_argument_group("common to every experiment")
+    common.add_argument("--seeds", type=int, nargs="+", metavar="S",
+                        help=f"the seeds (not a count), distinct ints >= 0 "
+                        f"(default: {_seeds_default(experiment)})")  # fmt: skip
+    out = experiment.default_out
+    common.add_argument("--out", metavar="DIR", default=out, required=out is None,
+                        help="folder for result.json and the figures"
+                        + (f" (default: ./{out})" if out else ""))  # fmt: skip
+    common.add_argument("--force", action="store_true",
+                        help="write into an --out folder that is not empty")  # fmt: skip
+    common.add_argument("--json", action="store_true",
+                        help="print the result as one JSON object on stdout")  # fmt: skip
+    if experiment.quick is not None:
+        common.add_argument("--quick", action="store_true",
+                            help="a first look: shorter settings, fewer seeds")  # fmt: skip
+    add_workers_flag(common, "jobs")
+    common.add_argument("--engine", choices=ENGINES, default="local",
+                        help="local: a process pool on this machine (default); dask: a Dask "
+                        "cluster (--address, or a local one)")  # fmt: skip
+    common.add_argument("--address", help="Dask scheduler address, e.g. tcp://10.0.0.5:8786")
+    common.add_argument("--memory-budget", type=_gib, default=None, metavar="GIB",
+                        help="memory the parallel jobs may use together (default: half of the "
+                        "available memory)")  # fmt: skip
+    common.add_argument("--quiet", action="store_true", help="no progress on stderr")
+    taken = {a.dest for a in p._actions}
+    names = {f.name for f in dataclasses.fields(experiment.config_type)}
+    add_dataclass_flags(p, experiment.config_type, aliases=experiment.aliases,
+                        skip=names & taken)  # fmt: skip
+    p.set_defaults(func=partial(run_experiment, experiment))
+    return p
+
+
+def _out_folder(path: str, force: bool, resumes: bool) -> Path:
+    out = Path(path)
+    if out.exists() and not out.is_dir():
+        raise UsageError(f"--out {str(out)!r} is a file; give a folder")
+    if out.exists() and any(out.iterdir()) and not (force or resumes):
+        raise UsageError(f"--out folder {str(out)!r} is not empty; pass --force to write into it")
+    out.mkdir(parents=True, exist_ok=True)
+    return out
+
+
+def run_experiment(experiment: Experiment[Any], args: argparse.Namespace) -> int:
+    """Build the config from the flags, run the experiment, write ``result.json`` and the
+    figures into ``--out``, print the table (or the JSON)."""
+    quick = bool(getattr(args, "quick", False))
+    values = dataclass_values(args, experiment.config_type)
+    if quick and experiment.quick is not None:
+        config = dataclasses.replace(experiment.quick, **values)
+    else:
+        config = experiment.config_type(**values)
+    if args.seeds is not None:
+        seeds = check_seeds(args.seeds)
+    else:
+        seeds = experiment.default_seeds(config, quick=quick)
+    budget = None if args.memory_budget is None else int(args.memory_budget * 2**30)
+    executor = Executor(args.engine, args.workers, args.address, budget)
+    out = _out_folder(args.out, args.force, experiment.resumes)
+    progress = None if args.quiet else Progress()
+    result = experiment.run(config, seeds=seeds, out=out, executor=executor, progress=progress)
+    figures = result.figure(out)
+    written = write_result(result, out)
+    print(json.dumps(result.to_dict()) if args.json else result.table())
+    files = ", ".join(str(f) for f in [written, *figures])
+    print(f"sigmapi {experiment.name}: wrote {files}", file=sys.stderr)
+    return 0
