@@ -2,9 +2,13 @@
 
 from __future__ import annotations
 
+import importlib
 import json
 import re
+from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
+from types import MappingProxyType
+from typing import Literal
 
 import matplotlib
 
@@ -14,13 +18,19 @@ import pytest
 
 from sigmapi import SigmaPiSOM, SOMConfig
 from sigmapi.cli import main
+from sigmapi.errors import ConfigError
 from sigmapi.experiments import (
+    REGISTRY,
+    Experiment,
     ReportContext,
     ReproduceOptions,
     Section,
     paper_presets,
+    read_result,
+    register,
     reproduce,
 )
+from sigmapi.experiments.base import KEY_VALUES
 from sigmapi.experiments.report_html import linked_files
 from sigmapi.experiments.reproduce import QUICK_ITERATIONS
 from sigmapi.experiments.results import METRIC_KEYS
@@ -168,7 +178,6 @@ def test_unknown_figure_name_is_refused(capsys):
     ],
 )
 def test_check_seeds_names_what_is_wrong(seeds, message):
-    from sigmapi.errors import ConfigError
     from sigmapi.experiments import check_seeds
 
     with pytest.raises(ConfigError, match=re.escape(message)):
@@ -177,11 +186,6 @@ def test_check_seeds_names_what_is_wrong(seeds, message):
 
 
 def test_register_refuses_bad_names_configs_and_taken_names():
-    from dataclasses import dataclass
-
-    from sigmapi.errors import ConfigError
-    from sigmapi.experiments import REGISTRY, register
-
     @dataclass(frozen=True)
     class Cfg:
         n: int = 1
@@ -210,7 +214,7 @@ def test_register_refuses_bad_names_configs_and_taken_names():
 
 
 def test_write_result_is_atomic_json_that_reads_back(tmp_path):
-    from sigmapi.experiments import read_result, write_result
+    from sigmapi.experiments import write_result
 
     class Done:
         def to_dict(self):
@@ -220,3 +224,145 @@ def test_write_result_is_atomic_json_that_reads_back(tmp_path):
     assert path == tmp_path / "new" / "result.json"
     assert read_result(tmp_path / "new") == read_result(path) == Done().to_dict()
     assert not [p for p in path.parent.iterdir() if p != path]  # no temp file left
+
+
+# ------------------------------------------------------------------ the generated command line
+
+
+@dataclass(frozen=True)
+class ToyConfig:
+    """The settings of a toy experiment (:class:`ToyExperiment`)."""
+
+    label: str
+    """A positional argument: a field without a default (see :func:`~sigmapi.evaluate`)."""
+    scale: float = 1.0
+    """A number, ``2.5`` say."""
+    shape: tuple[int, ...] = (2, 3)
+    """A grid."""
+    kind: Literal["a", "b"] = "a"
+    """A choice of two."""
+    loud: bool = False
+    """An on-switch."""
+    changes: tuple[str, ...] = field(default=(), metadata=KEY_VALUES)
+    """``key=value`` pairs, one per change."""
+
+    def __post_init__(self) -> None:
+        if self.scale <= 0:
+            raise ConfigError(f"scale must be a number > 0, got {self.scale}")
+
+
+@dataclass
+class ToyResult:
+    config: ToyConfig
+    seeds: tuple[int, ...]
+    out: str | None
+
+    def to_dict(self):
+        return {"config": asdict(self.config), "seeds": list(self.seeds), "out": self.out}
+
+    def table(self):
+        return f"toy {self.config.label}: {len(self.seeds)} seeds"
+
+    def figure(self, out_dir):
+        path = Path(out_dir) / "toy.png"
+        path.write_bytes(b"\x89PNG\r\n\x1a\n")
+        return [path]
+
+
+class ToyExperiment(Experiment[ToyConfig]):
+    """A toy experiment that only echoes what it was given."""
+
+    name = "toy-echo"
+    summary = "echo the config and the seeds (a test)"
+    config_type = ToyConfig
+    quick = ToyConfig("quick", scale=0.5)
+    seeds = (7, 8)
+    quick_seeds = (9,)
+    default_out = None
+    aliases = MappingProxyType({"changes": "--set"})
+
+    def run(self, config, *, seeds, out=None, executor=None, progress=None):
+        assert executor is not None and progress is None  # the CLI gives one; --quiet
+        return ToyResult(config, tuple(seeds), None if out is None else str(out))
+
+
+@pytest.fixture
+def toy():
+    experiment = register(ToyExperiment())
+    yield experiment
+    del REGISTRY[experiment.name]
+
+
+def test_a_registered_experiment_gets_a_sub_command_with_a_flag_per_field(toy, tmp_path, capsys):
+    out = tmp_path / "o"
+    argv = ["toy-echo", "hello", "--scale", "2.5", "--shape", "4x5", "--kind", "b", "--loud",
+            "--set", "a=[1,2]", "--set", "b=3", "--seeds", "3", "1", "--out", str(out),
+            "--json", "--quiet"]  # fmt: skip
+    assert main(argv) == 0
+    got = json.loads(capsys.readouterr().out)
+    assert got["config"] == {"label": "hello", "scale": 2.5, "shape": [4, 5], "kind": "b",
+                             "loud": True, "changes": ["a=[1,2]", "b=3"]}  # fmt: skip
+    assert got["seeds"] == [3, 1] and got["out"] == str(out)
+    assert read_result(out) == got and (out / "toy.png").is_file()
+
+
+def test_quick_defaults_and_mistakes_of_a_registered_experiment(toy, tmp_path, capsys):
+    assert main(["toy-echo", "x", "--quick", "--out", str(tmp_path / "q"), "--quiet"]) == 0
+    assert capsys.readouterr().out.strip() == "toy x: 1 seeds"  # the quick seeds, (9,)
+    assert read_result(tmp_path / "q")["config"]["scale"] == 0.5  # the quick config
+    assert main(["toy-echo", "x", "--out", str(tmp_path / "d"), "--quiet", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["seeds"] == [7, 8]
+    for argv, message in [
+        (["--out", str(tmp_path / "q")], "is not empty; pass --force"),
+        (["--scale", "-1", "--out", str(tmp_path / "e")], "scale must be a number > 0"),
+        (["--seeds", "1", "1", "--out", str(tmp_path / "e")], "seeds must be distinct"),
+    ]:
+        assert main(["toy-echo", "x", *argv]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and message in err[0], err
+    assert not (tmp_path / "e").exists()  # refused before anything was made
+    with pytest.raises(SystemExit):
+        main(["toy-echo", "x", "--kind", "c", "--out", str(tmp_path / "e")])
+
+
+def test_every_registered_experiment_has_a_sub_command_and_plain_help(toy):
+    from sigmapi.cli import build_parser
+    from sigmapi.cli._common import field_docs
+
+    sub = next(a for a in build_parser()._actions if a.dest == "command")
+    assert {"chain", "compare", "reproduce", "sweep", "toy-echo"} <= set(REGISTRY)
+    for name, experiment in REGISTRY.items():
+        assert name in sub.choices, name
+        cls = experiment.config_type
+        assert set(field_docs(cls)) == {f.name for f in fields(cls)}, name  # a doc per field
+        text = sub.choices[name].format_help()
+        for f in fields(cls):
+            assert f"--{f.name.replace('_', '-')}" in text or f.name in text, (name, f.name)
+        for common in ("--seeds", "--out", "--json", "--workers", "--engine", "--quiet"):
+            assert common in text, (name, common)
+        assert ("--quick" in text) == (experiment.quick is not None), name
+    for name, parser in sub.choices.items():
+        text = parser.format_help()
+        assert not re.search(r":[a-z]+:`|``", text), f"Sphinx markup in `sigmapi {name} --help`"
+    toy_help = " ".join(sub.choices["toy-echo"].format_help().split())
+    assert "(see evaluate)" in toy_help and "A number, 2.5 say (default 1.0)" in toy_help
+    assert "(default: 7 8; --quick: 9)" in toy_help
+
+
+def test_reproduce_through_the_command_line_writes_the_report_and_result_json(
+    tmp_path, monkeypatch, capsys
+):
+    module = importlib.import_module("sigmapi.experiments.reproduce")  # not the function
+
+    monkeypatch.setattr(module, "paper_presets", lambda quick: [("tiny-1d", TINY_1D)])
+    monkeypatch.setattr(module, "SECTIONS", ())
+    out = tmp_path / "r"
+    argv = ["reproduce", "--seeds", "0", "1", "--out", str(out), "--models", "none",
+            "--n-test", "200", "--workers", "1", "--quiet"]  # fmt: skip
+    assert main(argv) == 0
+    assert capsys.readouterr().out.startswith("tiny-1d: view_consistency ")
+    data = read_result(out)
+    assert data == json.loads((out / "metrics.json").read_text())
+    assert data["seeds"] == [0, 1] and data["n_test"] == 200
+    assert (out / "report.html").is_file() and not list(out.glob("*.npz"))
+    assert {f"{name}-tiny-1d.png" for name in FIGURES} <= {p.name for p in out.iterdir()}

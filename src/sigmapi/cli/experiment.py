@@ -50,13 +50,18 @@ def _gib(text: str) -> float:
 
 def _seeds_default(experiment: Experiment[Any]) -> str:
     """How ``--help`` states the default seeds."""
-    try:
-        config = experiment.config_type()
-    except TypeError:  # a field without a default: the seeds follow from the config
-        return "the config's"
-    text = " ".join(map(str, experiment.default_seeds(config)))
+    if getattr(type(experiment), "default_seeds", None) is Experiment.default_seeds:
+        seeds, quick = experiment.seeds, experiment.quick_seeds or experiment.seeds
+    else:  # they may follow from the config: ask the default config, where there is one
+        try:
+            config = experiment.config_type()
+        except TypeError:  # a field without a default
+            return "the config's"
+        seeds = experiment.default_seeds(config)
+        if experiment.quick is not None:
+            quick = experiment.default_seeds(experiment.quick, quick=True)
+    text = " ".join(map(str, seeds))
     if experiment.quick is not None:
-        quick = experiment.default_seeds(experiment.quick, quick=True)
         text += "; --quick: " + " ".join(map(str, quick))
     return text
 
