@@ -141,13 +141,15 @@ def test_command_line_json_is_run_chains_result(capsys, small_run, tmp_path):
     assert sigmapi.experiments.read_result(tmp_path) == out
 
 
-def test_command_line_table_and_user_mistakes(capsys, tmp_path):
-    assert main(["chain", *SMALL_FLAGS, "--seeds", "4", "--out", str(tmp_path / "c")]) == 0
+def test_command_line_table_and_user_mistakes(capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert main(["chain", *SMALL_FLAGS, "--seeds", "4"]) == 0  # no --out: nothing written
     out = capsys.readouterr().out
     assert "z error" in out and "of 1 seeds: chain z error <= 2 x" in out
     assert main(["chain", "--preset", "paper-2d"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "config.map_shape must be 1-D" in err[0]
+    assert not list(tmp_path.iterdir())
 
 
 def test_seeds_run_through_the_executor_with_the_same_result():

@@ -70,7 +70,6 @@ def test_presets_lists_paper_1d():
         (["chain", "--out", "bad.npz"], "is a file; give a folder"),
         (["sweep", "missing.toml", "--out", "o"], "does not exist"),
         (["sweep", "s.toml", "--out", "o", "--address", "tcp://h:1"], "address names a Dask"),
-        (["sweep", "s.toml"], "the following arguments are required: --out"),
         (["figure", "net", "good.npz", "--out", "f.png", "--dpi", "5"], "--dpi must be"),
     ],
 )  # fmt: skip

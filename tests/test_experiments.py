@@ -283,6 +283,7 @@ class ToyExperiment(Experiment[ToyConfig]):
 
     def run(self, config, *, seeds, out=None, executor=None, progress=None):
         assert executor is not None and progress is None  # the CLI gives one; --quiet
+        assert out is None or out.is_dir()
         return ToyResult(config, tuple(seeds), None if out is None else str(out))
 
 
@@ -306,12 +307,15 @@ def test_a_registered_experiment_gets_a_sub_command_with_a_flag_per_field(toy, t
     assert read_result(out) == got and (out / "toy.png").is_file()
 
 
-def test_quick_defaults_and_mistakes_of_a_registered_experiment(toy, tmp_path, capsys):
+def test_quick_defaults_and_mistakes_of_a_registered_experiment(toy, tmp_path, capsys, monkeypatch):
     assert main(["toy-echo", "x", "--quick", "--out", str(tmp_path / "q"), "--quiet"]) == 0
     assert capsys.readouterr().out.strip() == "toy x: 1 seeds"  # the quick seeds, (9,)
     assert read_result(tmp_path / "q")["config"]["scale"] == 0.5  # the quick config
-    assert main(["toy-echo", "x", "--out", str(tmp_path / "d"), "--quiet", "--json"]) == 0
-    assert json.loads(capsys.readouterr().out)["seeds"] == [7, 8]
+    monkeypatch.chdir(tmp_path)
+    assert main(["toy-echo", "x", "--quiet", "--json"]) == 0  # no --out: nothing written
+    got = json.loads(capsys.readouterr().out)
+    assert got["seeds"] == [7, 8] and got["out"] is None
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["q"]
     for argv, message in [
         (["--out", str(tmp_path / "q")], "is not empty; pass --force"),
         (["--scale", "-1", "--out", str(tmp_path / "e")], "scale must be a number > 0"),

@@ -5,8 +5,9 @@
 
 - ``--seeds S [S ...]``: the seeds themselves (not a count), distinct ints >= 0; default the
   experiment's (:meth:`~sigmapi.experiments.Experiment.default_seeds`);
-- ``--out DIR``: the folder for ``result.json`` (``to_dict()``) and the figures; a folder that
-  is not empty needs ``--force``, unless the experiment resumes a run there (a sweep);
+- ``--out DIR``: the folder for ``result.json`` (``to_dict()``) and the figures (default the
+  experiment's, or nothing written); a folder that is not empty needs ``--force``, unless the
+  experiment resumes a run there (a sweep);
 - ``--json``: print ``to_dict()`` as one JSON object on stdout (else the table);
 - ``--quick``: start from the experiment's quick config and seeds (where it has one);
 - ``--workers``, ``--engine``, ``--address``, ``--memory-budget``: the executor;
@@ -76,9 +77,9 @@ def add_experiment(sub: Any, experiment: Experiment[Any]) -> Parser:
                         help=f"the seeds (not a count), distinct ints >= 0 "
                         f"(default: {_seeds_default(experiment)})")  # fmt: skip
     out = experiment.default_out
-    common.add_argument("--out", metavar="DIR", default=out, required=out is None,
-                        help="folder for result.json and the figures"
-                        + (f" (default: ./{out})" if out else ""))  # fmt: skip
+    common.add_argument("--out", metavar="DIR", default=out,
+                        help="folder for result.json and the figures (default: "
+                        + (f"./{out})" if out else "none: nothing is written)"))  # fmt: skip
     common.add_argument("--force", action="store_true",
                         help="write into an --out folder that is not empty")  # fmt: skip
     common.add_argument("--json", action="store_true",
@@ -128,12 +129,12 @@ def run_experiment(experiment: Experiment[Any], args: argparse.Namespace) -> int
         seeds = experiment.default_seeds(config, quick=quick)
     budget = None if args.memory_budget is None else int(args.memory_budget * 2**30)
     executor = Executor(args.engine, args.workers, args.address, budget)
-    out = _out_folder(args.out, args.force, experiment.resumes)
+    out = None if args.out is None else _out_folder(args.out, args.force, experiment.resumes)
     progress = None if args.quiet else Progress()
     result = experiment.run(config, seeds=seeds, out=out, executor=executor, progress=progress)
-    figures = result.figure(out)
-    written = write_result(result, out)
+    if out is not None:
+        files = [*result.figure(out), write_result(result, out)]
     print(json.dumps(result.to_dict()) if args.json else result.table())
-    files = ", ".join(str(f) for f in [written, *figures])
-    print(f"sigmapi {experiment.name}: wrote {files}", file=sys.stderr)
+    if out is not None:
+        print(f"sigmapi {experiment.name}: wrote {', '.join(map(str, files))}", file=sys.stderr)
     return 0

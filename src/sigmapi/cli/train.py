@@ -157,8 +157,8 @@ def register(sub: Any) -> None:
         "train",
         help="train a map and write a model file",
         description="Train a Sigma-Pi map and write it to a model file (.npz). Without "
-        "--preset this is preset paper-1d: the authors' 1-D run of 300,000 iterations "
-        "(a few minutes); try --preset tiny-1d for a run of seconds.",
+        "--preset this is preset paper-1d: the authors' 1-D run of 300,000 iterations; "
+        "try --preset tiny-1d for a short run.",
     )
     add_config_flags(p)
     p.add_argument("--out", required=True, help="model file to write (.npz)")

@@ -113,7 +113,8 @@ class Experiment(Protocol[C]):
     quick_seeds: tuple[int, ...] | None = None
     """The default seeds of the quick config (None: :attr:`seeds`)."""
     default_out: str | None = None
-    """The folder the command line writes into by default (None: one must be given)."""
+    """The folder the command line writes into by default (None: it writes nothing unless it
+    is given one)."""
     resumes: bool = False
     """Whether a run into a folder that holds a run of the same config continues it (so that
     writing into a folder that is not empty is no mistake)."""

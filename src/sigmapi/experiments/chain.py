@@ -431,7 +431,6 @@ class Chain(Experiment[ChainConfig]):
     summary = "a chain of two maps (retina -> head -> body) against one map on the whole task"
     config_type = ChainConfig
     seeds = (0, 1, 2)
-    default_out = "chain"
     aliases = MappingProxyType({"overrides": "--set"})
 
     def run(

@@ -375,6 +375,7 @@ class Sweep(Experiment[SweepConfig]):
     name = "sweep"
     summary = "train and evaluate a grid of parameters x seeds"
     config_type = SweepConfig
+    default_out = "sweep"
     resumes = True
 
     def default_seeds(self, config: SweepConfig, *, quick: bool = False) -> tuple[int, ...]:
