@@ -7,7 +7,6 @@ import json
 import re
 from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
-from types import MappingProxyType
 from typing import Literal
 
 import matplotlib
@@ -243,7 +242,7 @@ class ToyConfig:
     """A choice of two."""
     loud: bool = False
     """An on-switch."""
-    changes: tuple[str, ...] = field(default=(), metadata=KEY_VALUES)
+    overrides: tuple[str, ...] = field(default=(), metadata=KEY_VALUES)
     """``key=value`` pairs, one per change."""
 
     def __post_init__(self) -> None:
@@ -279,7 +278,6 @@ class ToyExperiment(Experiment[ToyConfig]):
     seeds = (7, 8)
     quick_seeds = (9,)
     default_out = None
-    aliases = MappingProxyType({"changes": "--set"})
 
     def run(self, config, *, seeds, out=None, executor=None, progress=None):
         assert executor is not None and progress is None  # the CLI gives one; --quiet
@@ -302,7 +300,7 @@ def test_a_registered_experiment_gets_a_sub_command_with_a_flag_per_field(toy, t
     assert main(argv) == 0
     got = json.loads(capsys.readouterr().out)
     assert got["config"] == {"label": "hello", "scale": 2.5, "shape": [4, 5], "kind": "b",
-                             "loud": True, "changes": ["a=[1,2]", "b=3"]}  # fmt: skip
+                             "loud": True, "overrides": ["a=[1,2]", "b=3"]}  # fmt: skip
     assert got["seeds"] == [3, 1] and got["out"] == str(out)
     assert read_result(out) == got and (out / "toy.png").is_file()
 

@@ -12,6 +12,9 @@
 - ``--quick``: start from the experiment's quick config and seeds (where it has one);
 - ``--workers``, ``--engine``, ``--address``, ``--memory-budget``: the executor;
 - ``--quiet``: no progress on stderr.
+
+A config field keeps its name as its option (``train_pairs``: ``--train-pairs``); the fields
+that have a second, shorter spelling on every command are in :data:`SPELLINGS`.
 """
 
 from __future__ import annotations
@@ -36,7 +39,14 @@ from sigmapi.executor import ENGINES, Executor
 from sigmapi.experiments.base import Experiment, check_seeds, write_result
 from sigmapi.progress import Progress
 
-__all__ = ["add_experiment", "run_experiment"]
+__all__ = ["SPELLINGS", "add_experiment", "run_experiment"]
+
+SPELLINGS: dict[str, str] = {
+    "overrides": "--set",  # key=value changes to a preset, as `sigmapi train --set`
+    "save_models": "--models",
+    "model_path": "--model",
+}
+"""A second option per config field name, the same on every command."""
 
 
 def _gib(text: str) -> float:
@@ -98,8 +108,7 @@ def add_experiment(sub: Any, experiment: Experiment[Any]) -> Parser:
     common.add_argument("--quiet", action="store_true", help="no progress on stderr")
     taken = {a.dest for a in p._actions}
     names = {f.name for f in dataclasses.fields(experiment.config_type)}
-    add_dataclass_flags(p, experiment.config_type, aliases=experiment.aliases,
-                        skip=names & taken)  # fmt: skip
+    add_dataclass_flags(p, experiment.config_type, aliases=SPELLINGS, skip=names & taken)
     p.set_defaults(func=partial(run_experiment, experiment))
     return p
 

@@ -118,8 +118,6 @@ class Experiment(Protocol[C]):
     resumes: bool = False
     """Whether a run into a folder that holds a run of the same config continues it (so that
     writing into a folder that is not empty is no mistake)."""
-    aliases: Mapping[str, str] = types.MappingProxyType({})
-    """A second command-line spelling per config field, e.g. ``{"save_models": "--models"}``."""
 
     def default_seeds(self, config: C, *, quick: bool = False) -> tuple[int, ...]:
         """The seeds to run ``config`` with when none are given."""

@@ -40,7 +40,6 @@ import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from types import MappingProxyType
 from typing import Any, Literal, NamedTuple, get_args
 
 import numpy as np
@@ -431,7 +430,6 @@ class Chain(Experiment[ChainConfig]):
     summary = "a chain of two maps (retina -> head -> body) against one map on the whole task"
     config_type = ChainConfig
     seeds = (0, 1, 2)
-    aliases = MappingProxyType({"overrides": "--set"})
 
     def run(
         self,

@@ -39,7 +39,6 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from types import MappingProxyType
 from typing import Any
 
 import numpy as np
@@ -444,7 +443,6 @@ class Compare(Experiment[CompareConfig]):
     seeds = SEEDS
     quick_seeds = QUICK_SEEDS
     default_out = "compare"
-    aliases = MappingProxyType({"overrides": "--set"})
 
     def run(
         self,

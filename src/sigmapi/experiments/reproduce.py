@@ -29,7 +29,6 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
-from types import MappingProxyType
 from typing import Any
 
 from sigmapi import figures as figs
@@ -190,7 +189,6 @@ class Reproduce(Experiment[ReproduceConfig]):
     seeds = tuple(range(10))
     quick_seeds = (0,)
     default_out = "report"
-    aliases = MappingProxyType({"save_models": "--models"})
 
     def run(
         self,
