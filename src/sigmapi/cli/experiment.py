@@ -34,7 +34,7 @@ from sigmapi.cli._common import (
     dataclass_values,
     plain,
 )
-from sigmapi.errors import UsageError
+from sigmapi.errors import ConfigError, UsageError
 from sigmapi.executor import ENGINES, Executor
 from sigmapi.experiments.base import Experiment, check_seeds, write_result
 from sigmapi.progress import Progress
@@ -123,15 +123,30 @@ def _out_folder(path: str, force: bool, resumes: bool) -> Path:
     return out
 
 
+def _config(experiment: Experiment[Any], values: dict[str, Any], quick: bool) -> Any:
+    """The config of the flags (from the quick one with ``--quick``); an error that only the
+    ``--set`` overrides cause names the flag, as ``sigmapi train`` does."""
+
+    def build(given: dict[str, Any]) -> Any:
+        if quick and experiment.quick is not None:
+            return dataclasses.replace(experiment.quick, **given)
+        return experiment.config_type(**given)
+
+    try:
+        return build(values)
+    except ConfigError as exc:
+        if "overrides" not in values:
+            raise
+        build({k: v for k, v in values.items() if k != "overrides"})  # fails alike: not --set's
+        raise ConfigError(f"--set: {exc}") from None
+
+
 def run_experiment(experiment: Experiment[Any], args: argparse.Namespace) -> int:
     """Build the config from the flags, run the experiment, write ``result.json`` and the
     figures into ``--out``, print the table (or the JSON)."""
     quick = bool(getattr(args, "quick", False))
     values = dataclass_values(args, experiment.config_type)
-    if quick and experiment.quick is not None:
-        config = dataclasses.replace(experiment.quick, **values)
-    else:
-        config = experiment.config_type(**values)
+    config = _config(experiment, values, quick)
     if args.seeds is not None:
         seeds = check_seeds(args.seeds)
     else:
