@@ -15,7 +15,8 @@ import numpy as np
 import pytest
 
 from sigmapi import SigmaPiSOM
-from sigmapi.kernels import WINNER_RULES, fast, get_backend, reference
+from sigmapi.kernels import fast, get_backend, reference
+from sigmapi.rules import WINNER_RULES
 
 WEIGHT_ATOL = 1e-5
 MAP = (4, 5)
@@ -48,7 +49,7 @@ def _train(kernel, w, data, rule="soft", tol=None, chunks=(1000,), periodic=Fals
                     map_shape=MAP,
                     winner_rule=rule,
                     soft_cut=15,
-                    periodic=periodic,
+                    map_periodic=periodic,
                 )
             )
             s = sl.stop

@@ -19,8 +19,8 @@ from typing import Any
 from sigmapi import _validate
 from sigmapi.codes import _WIDTH_FIX, MIN_WIDTH
 from sigmapi.errors import ConfigError
-from sigmapi.kernels import BACKENDS, WINNER_RULES
-from sigmapi.ordering import ORDERINGS
+from sigmapi.kernels import BACKENDS
+from sigmapi.rules import ORDERINGS, WINNER_RULES
 from sigmapi.schedules import PAPER_SIGMA, PiecewiseLinear
 from sigmapi.tasks import RELATIONS
 
@@ -120,8 +120,8 @@ class SOMConfig:
     ordering: str = "crossview"
     """How the map comes to be ordered: "crossview" (sigmapi's: an ordered start computed from
     the views alone, the neighbourhood capped at ``ordering_sigma`` and the soft winner
-    normalised at the map border; see
-    :mod:`sigmapi.ordering`) or "none" (the paper's random start and schedule, bit for bit)."""
+    normalised at the map border; see :mod:`sigmapi.rules.ordering`) or "none" (the paper's
+    random start and schedule, bit for bit)."""
     ordering_sigma: float = 3.0
     """With an ordering procedure: the largest neighbourhood width used (map units); the
     configured sigma schedule is cut off at this value. Ignored with ordering = "none"."""

@@ -29,7 +29,7 @@ from sigmapi.config import SOMConfig
 from sigmapi.errors import ConfigError, DataError, ModelFileError, NotFittedError, NumericalError
 from sigmapi.kernels import KernelState, get_backend, reference
 from sigmapi.kernels.base import columns_to_dense, columns_top
-from sigmapi.ordering import INIT_PAIRS, crossview_init, training_rule
+from sigmapi.rules import WinnerRule, ordering, winner_rule
 from sigmapi.tasks import Batch, TwoViewSampler
 from sigmapi.views import CodeViews, Views, check_pairs, check_views, encode_views
 
@@ -191,32 +191,21 @@ class SigmaPiSOM:
     def initial_weights(
         self, views: tuple[NDArray[np.float64], ...] | None = None
     ) -> NDArray[np.float64]:
-        """The run's initial weights ``(n_units, n_x, n_y)``.
+        """The run's initial weights ``(n_units, n_x, n_y)``, from the ordering procedure
+        (:mod:`sigmapi.rules.ordering`).
 
-        ``ordering="none"``: uniform in ``[-init_scale, init_scale]`` (the paper).
-        ``ordering="crossview"``: an ordered start computed from view pairs alone
-        (:func:`sigmapi.ordering.crossview_init`): the first ``INIT_PAIRS`` of ``views`` when
-        given (your own data), else as many pairs of the built-in task from the run's own
-        random stream (child ``spawn_key=(2,)``); with ``same_view`` (the ablation) view 0
-        stands in for view 1 there too.
+        ``ordering="none"``: uniform in ``[-init_scale, init_scale]`` (the paper), from the
+        run's child stream ``spawn_key=(0,)``. ``ordering="crossview"``: an ordered start
+        computed from view pairs alone: the first pairs of ``views`` when given (your own
+        data), else as many pairs of the built-in task from the run's own random stream
+        (child ``spawn_key=(2,)``).
         """
-        c = self.config
+        procedure = ordering(self.config.ordering)
         self.check_memory()
-        if c.ordering == "none":
-            s = c.init_scale
-            shape = (self.n_units, int(np.prod(self.x_shape)), int(np.prod(self.y_shape)))
-            return self._seq(0).uniform(-s, s, size=shape)
-        if views is None:
-            b = self.sampler.sample(INIT_PAIRS, self._seq(2))
+        if views is None and procedure.init_pairs:
+            b = self.sampler.sample(procedure.init_pairs, self._seq(2))
             views = (b.x0, b.y0, b.x1, b.y1)
-        else:
-            views = tuple(v[:INIT_PAIRS] for v in views)
-        if c.same_view:  # the ablation never sees a second view, not even for its start
-            views = (views[0], views[1], views[0], views[1])
-        return crossview_init(
-            views, self.x_shape, self.y_shape, self.map_shape, c.ordering_sigma / 2.0,
-            periodic=c.periodic, ring=c.map_periodic,
-        )  # fmt: skip
+        return procedure.initial_weights(self.config, self._seq(0), views)
 
     def memory_estimate(self) -> int:
         """Bytes this model needs at its peak: the float64 start, the backend's copy (float64,
@@ -267,13 +256,12 @@ class SigmaPiSOM:
         return self._weights_cache
 
     def sigma_at(self, t: int | NDArray[np.int64]) -> NDArray[np.float64]:
-        """Neighbourhood width at iteration(s) t of this run's schedule.
-
-        With an ordering procedure the schedule is cut off at ``ordering_sigma``.
-        """
+        """Neighbourhood width at iteration(s) t of this run's schedule, as the ordering
+        procedure caps it (``crossview``: at ``ordering_sigma``)."""
         c = self.config
-        sigma = c.sigma_schedule.at(t, c.iterations)
-        return sigma if c.ordering == "none" else np.minimum(sigma, c.ordering_sigma)
+        return ordering(c.ordering).cap_sigma(
+            c.sigma_schedule.at(t, c.iterations), c.ordering_sigma
+        )
 
     def eps_at(self, t: int | NDArray[np.int64]) -> NDArray[np.float64]:
         """Learning rate at iteration(s) t."""
@@ -504,7 +492,7 @@ class SigmaPiSOM:
         self._kernel.train_block(
             self._state, x0, y0, x1, y1, self.sigma_at(t), self.eps_at(t),
             map_shape=self.map_shape, winner_rule=self.winner_rule_, soft_cut=c.soft_cut,
-            threads=c.threads, periodic=c.map_periodic,
+            threads=c.threads, map_periodic=c.map_periodic,
         )  # fmt: skip
         self.t_ += x0.shape[0]
         self._weights_cache = None
@@ -538,32 +526,39 @@ class SigmaPiSOM:
         return check_pairs(x, y, self.x_shape, self.y_shape)
 
     @property
-    def winner_rule_(self) -> str:
-        """The rule training uses: ``config.winner_rule``, border-normalised under an ordering
-        procedure (:func:`sigmapi.ordering.training_rule`)."""
-        return training_rule(self.config.winner_rule, self.config.ordering)
+    def winner_rule_(self) -> WinnerRule:
+        """The rule training uses (a :class:`~sigmapi.rules.WinnerRule`): the one named by
+        ``config.winner_rule``, as the ordering procedure trains it (``crossview``: the soft
+        rule border-normalised)."""
+        c = self.config
+        return ordering(c.ordering).training_rule(winner_rule(c.winner_rule))
 
     def winner(
-        self, x: ArrayLike, y: ArrayLike, rule: str | None = None, *, hard: bool = False
+        self,
+        x: ArrayLike,
+        y: ArrayLike,
+        rule: WinnerRule | str | None = None,
+        *,
+        hard: bool = False,
     ) -> NDArray[np.int64]:
         """Flat index of the winning unit per pair; ``(B,)``.
 
-        Uses the model's winner rule (default: :attr:`winner_rule_`) or ``rule``, at the
-        current sigma. ``hard=True``
-        takes the rule's limit at sigma -> 0: the soft winner becomes the argmax of the
+        Uses the model's winner rule (default: :attr:`winner_rule_`) or ``rule`` (a rule or
+        its name), at the current sigma. ``hard=True`` takes the rule's limit at sigma -> 0
+        (:attr:`~sigmapi.rules.WinnerRule.hard`): the soft winner becomes the argmax of the
         response (the metrics use this, so that mid-run maps are not smoothed).
         """
         xa, ya = self._pairs_of(x, y)
-        rule = rule or self.winner_rule_
-        if hard and rule in ("soft", "soft_mean"):
-            rule = "argmax"
+        chosen = self.winner_rule_ if rule is None else winner_rule(rule, "rule")
+        if hard:
+            chosen = chosen.hard
         return np.asarray(
             self._kernel.winners_of(
                 self._state,
                 xa,
                 ya,
                 self.map_shape,
-                rule,
+                chosen,
                 self.sigma_,
                 self.config.soft_cut,
                 self.config.map_periodic,

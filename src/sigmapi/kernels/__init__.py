@@ -1,7 +1,7 @@
 """The arithmetic of the Sigma-Pi SOM behind one contract, and the registry of backends.
 
 - :mod:`~sigmapi.kernels.base`: the contract, :class:`Kernel` (the functions every backend
-  module offers, with shapes), :class:`KernelState` and :data:`WINNER_RULES`;
+  module offers, with shapes) and :class:`KernelState`;
 - :mod:`~sigmapi.kernels.reference`: dense NumPy, written to be read (the definition);
 - :mod:`~sigmapi.kernels.fast`: numba, sparse codes and lazy decay.
 
@@ -15,9 +15,9 @@ from typing import Any
 from sigmapi import _validate
 from sigmapi.errors import ConfigError
 from sigmapi.kernels import reference
-from sigmapi.kernels.base import WINNER_RULES, Kernel, KernelState
+from sigmapi.kernels.base import Kernel, KernelState
 
-__all__ = ["BACKENDS", "WINNER_RULES", "Kernel", "KernelState", "get_backend"]
+__all__ = ["BACKENDS", "Kernel", "KernelState", "get_backend"]
 
 BACKENDS = ("reference", "fast")
 """The kernels that exist (``"auto"`` picks ``"fast"``)."""

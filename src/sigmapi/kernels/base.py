@@ -1,4 +1,4 @@
-"""The kernel contract: what every backend module offers, and the winner rules it knows.
+"""The kernel contract: what every backend module offers.
 
 A kernel is a module that satisfies :class:`Kernel`; its state (the weights in the
 kernel's own layout) is opaque to the estimator, which only passes it back to the kernel.
@@ -8,18 +8,33 @@ The reference kernel's state is the dense weight array itself; the fast kernel's
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Protocol, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["WINNER_RULES", "Kernel", "KernelState", "columns_to_dense", "columns_top"]
+from sigmapi.rules import WinnerRule, winner_rule
+from sigmapi.rules.winners import Scoring
 
-WINNER_RULES = ("soft", "argmax", "min_distance", "soft_mean")
-"""How the winner is chosen: ``"soft"`` (argmax of the Gaussian-smoothed activation, the
-paper), ``"argmax"``, ``"min_distance"`` (``argmin |vec(x y^T) - w_k|``), ``"soft_mean"``
-(the soft rule with the smoothed activation divided by the window's weight inside the map, so
-that border units are not handicapped)."""
+__all__ = ["Kernel", "KernelState", "columns_to_dense", "columns_top", "rule_scores"]
+
+
+def rule_scores(
+    rule: WinnerRule | str,
+    h: NDArray[np.floating],
+    map_shape: tuple[int, ...],
+    sigma: float,
+    cut: int,
+    map_periodic: bool,
+    norms: Callable[[], NDArray[np.float64]],
+) -> NDArray[np.float64]:
+    """Scores ``(B, K)`` of activations ``h`` under ``rule`` (an object or its name) by the
+    rule's own arithmetic; ``norms()`` gives the units' ``|w_k|^2``, called only for a rule
+    that needs them. A kernel's winners of ``h`` are the row-wise argmax."""
+    r = winner_rule(rule, "rule")
+    at = Scoring(map_shape, sigma, cut, map_periodic, norms() if r.needs_norms else None)
+    return r.scores(h, at)
 
 
 def columns_top(
@@ -74,11 +89,17 @@ class Kernel(Protocol[S]):
 
     Shapes: weights ``(K, n_x, n_y)``; codes ``x`` ``(B, n_x)``, ``y`` ``(B, n_y)``;
     activations ``h`` ``(B, K)``; ``K`` map units on ``map_shape``, flattened in C order.
-    ``periodic``: the map's axes wrap around (grid distances the shorter way round).
+    ``map_periodic``: the map's axes wrap around (grid distances the shorter way round).
+    Winner rules are :class:`~sigmapi.rules.WinnerRule` objects or their names
+    (:data:`sigmapi.rules.WINNER_RULES`).
     """
 
     NAME: str
     """The backend's name (a member of :data:`sigmapi.kernels.BACKENDS`)."""
+
+    def supports(self, rule: WinnerRule | str) -> bool:
+        """Whether the kernel trains and finds winners with ``rule``."""
+        ...
 
     def prepare(self, weights: NDArray[np.float64], tol: float = ...) -> S:
         """State from dense float64 weights (``tol``: truncation tolerance, 0 = exact)."""
@@ -116,12 +137,12 @@ class Kernel(Protocol[S]):
         state: S,
         h: NDArray[np.floating],
         map_shape: tuple[int, ...],
-        rule: str,
+        rule: WinnerRule | str,
         sigma: float,
         cut: int,
-        periodic: bool = ...,
+        map_periodic: bool = ...,
     ) -> NDArray[np.int64]:
-        """Winning unit per row of ``h`` under ``rule`` (one of :data:`WINNER_RULES`)."""
+        """Winning unit per row of ``h`` under ``rule``."""
         ...
 
     def winners_of(
@@ -130,10 +151,10 @@ class Kernel(Protocol[S]):
         x: NDArray[np.floating],
         y: NDArray[np.floating],
         map_shape: tuple[int, ...],
-        rule: str,
+        rule: WinnerRule | str,
         sigma: float,
         cut: int,
-        periodic: bool = ...,
+        map_periodic: bool = ...,
     ) -> NDArray[np.int64]:
         """Winning unit of each pair ``(x_b, y_b)``, ``(B,)``: the same as ``winners`` of
         ``activation``, for one pair as fast as the kernel allows (no per-call preparation)."""
@@ -150,13 +171,13 @@ class Kernel(Protocol[S]):
         eps: NDArray[np.floating],
         *,
         map_shape: tuple[int, ...],
-        winner_rule: str,
+        winner_rule: WinnerRule | str,
         soft_cut: int,
         threads: bool = False,
-        periodic: bool = False,
+        map_periodic: bool = False,
     ) -> NDArray[np.int64]:
         """``len(x0)`` learning iterations in place: winner of view 0 at ``sigmas[t]``,
         Kohonen update towards view 1 at rate ``eps[t]``. Returns the winners ``(T,)``.
         ``threads``: the kernel may use several threads (the result must not change).
-        ``periodic``: every map axis wraps around (a ring in 1-D, a torus in 2-D)."""
+        ``map_periodic``: every map axis wraps around (a ring in 1-D, a torus in 2-D)."""
         ...

@@ -50,11 +50,14 @@ from numba import njit, prange
 from numpy.typing import NDArray
 
 from sigmapi import _validate
-from sigmapi.kernels import _rows, reference
-from sigmapi.kernels._rows import _pairs, _winner, activate, prefetch
-from sigmapi.kernels.base import WINNER_RULES, columns_to_dense
+from sigmapi.errors import ConfigError
+from sigmapi.kernels import _rows
+from sigmapi.kernels._rows import _pairs, _winner, activate, axis_distance, gaussian, prefetch
+from sigmapi.kernels.base import columns_to_dense, rule_scores
+from sigmapi.rules import WinnerRule, winner_rule
 
 __all__ = [
+    "COMPILED",
     "NAME",
     "FastState",
     "activation",
@@ -63,6 +66,7 @@ __all__ = [
     "prepare",
     "sqnorms",
     "state_arrays",
+    "supports",
     "train_block",
     "winners",
     "winners_of",
@@ -110,8 +114,31 @@ def _ahead(state: FastState, ahead: int) -> int:
     return ahead if state.raw.nbytes >= PREFETCH_MIN_BYTES else 0
 
 
-_RULES = {rule: code for code, rule in enumerate(WINNER_RULES)}
-"""Rule codes of the compiled :func:`_winner`: 0 soft, 1 argmax, 2 min_distance, 3 soft_mean."""
+COMPILED = {
+    "soft": _rows.SOFT,
+    "argmax": _rows.ARGMAX,
+    "min_distance": _rows.MIN_DISTANCE,
+    "soft_mean": _rows.SOFT_MEAN,
+}
+"""The winner rules this kernel computes, by name -> code of their compiled form in
+:func:`sigmapi.kernels._rows._winner`: the one place where rule objects become codes."""
+
+
+def supports(rule: WinnerRule | str) -> bool:
+    """Whether this kernel has the compiled form of winner rule ``rule`` (an object or name)."""
+    name = rule.name if isinstance(rule, WinnerRule) else rule
+    return name in COMPILED
+
+
+def _rule_code(rule: WinnerRule | str, field: str = "rule") -> tuple[WinnerRule, int]:
+    """The rule object and its compiled code; a ConfigError if it has no compiled form."""
+    r = winner_rule(rule, field)
+    if r.name not in COMPILED:
+        raise ConfigError(
+            f"{field} {r.name!r} has no compiled form in the fast kernel (it computes "
+            f"{tuple(COMPILED)}); use backend='reference', or add the rule to fast.COMPILED"
+        )
+    return r, COMPILED[r.name]
 
 
 @dataclass
@@ -261,9 +288,10 @@ def from_state_arrays(
 
 
 @njit(cache=True, nogil=True)
-def _neighbourhood(winner, sigma, eps, tol, dims, strides, wrap, ea):
-    """``ea[k] = eps * a_k`` (L2-normalised Gaussian around ``winner``; ``wrap``: the map's
-    axes are rings, distances go the shorter way round).
+def _neighbourhood(winner, sigma, eps, tol, dims, strides, map_periodic, ea):
+    """``ea[k] = eps * a_k``: the compiled form of
+    :func:`sigmapi.rules.neighbourhood.neighbourhood` (L2-normalised Gaussian around
+    ``winner``; ``map_periodic``: the map's axes are rings, distances go the shorter way).
 
     Returns the flat index range ``[lo, hi)`` from the first to the last unit with
     ``a_k > tol max a`` (on a ring these may lie at both ends: the range then covers the
@@ -276,11 +304,9 @@ def _neighbourhood(winner, sigma, eps, tol, dims, strides, wrap, ea):
         for ax in range(dims.shape[0]):
             c = (k // strides[ax]) % dims[ax]
             cw = (winner // strides[ax]) % dims[ax]
-            dc = abs(c - cw)
-            if wrap:
-                dc = min(dc, dims[ax] - dc)
+            dc = axis_distance(abs(c - cw), dims[ax], map_periodic)
             d2 += float(dc) ** 2
-        a = np.exp(-d2 / (2.0 * sigma * sigma))
+        a = gaussian(d2, sigma)
         ea[k] = a
         ssq += a * a
     norm = np.sqrt(ssq)
@@ -385,8 +411,8 @@ def _buffers(k_units, n_pairs, ny):
 
 @njit(cache=True, parallel=True)
 def _train(
-    raw, scale, sqnorm, x0, y0, x1, y1, sigmas, eps, dims, strides, wrap, rule, cut, tol, out,
-    track, threads, ahead,
+    raw, scale, sqnorm, x0, y0, x1, y1, sigmas, eps, dims, strides, map_periodic, rule, cut, tol,
+    out, track, threads, ahead,
 ):  # fmt: skip
     """The training driver: iterations in order; ``threads``: update the units in parallel
     chunks of :data:`CHUNK` (same arithmetic per unit, so the same result), else in one call
@@ -407,9 +433,9 @@ def _train(
         _unit_chunk(raw, scale, sqnorm, 0, k_units, ea, 1.0, 0, 0,
                     pi1, pv1, 0, pi0, pv0, n0, True, track, h, gain, acc, ahead)  # fmt: skip
     for t in range(n_iter):
-        w = _winner(h, scale, sqnorm, rule, sigmas[t], cut, dims, strides, wrap, t1, t2)
+        w = _winner(h, scale, sqnorm, rule, sigmas[t], cut, dims, strides, map_periodic, t1, t2)
         out[t] = w
-        lo, hi = _neighbourhood(w, sigmas[t], eps[t], tol, dims, strides, wrap, ea)
+        lo, hi = _neighbourhood(w, sigmas[t], eps[t], tol, dims, strides, map_periodic, ea)
         thr = tol * ea[w]
         n1 = _pairs(x1[t], y1[t], tol, jb, pi1, pv1)
         more = t + 1 < n_iter
@@ -440,13 +466,6 @@ def _grid(map_shape: tuple[int, ...], k_units: int) -> tuple[NDArray[np.int64], 
     dims.flags.writeable = False
     strides.flags.writeable = False
     return dims, strides
-
-
-def _rule_code(rule: str) -> int:
-    try:
-        return _RULES[rule]
-    except KeyError:
-        raise ValueError(f"rule must be one of {WINNER_RULES}, got {rule!r}") from None
 
 
 def _codes(a: NDArray[np.floating], n: int, name: str) -> NDArray[np.float64]:
@@ -506,21 +525,18 @@ def winners(
     state: FastState,
     h: NDArray[np.floating],
     map_shape: tuple[int, ...],
-    rule: str,
+    rule: WinnerRule | str,
     sigma: float,
     cut: int,
-    periodic: bool = False,
+    map_periodic: bool = False,
 ) -> NDArray[np.int64]:
     """Winning unit per row of activations ``h`` ``(B, K)``; ``(B,)``, ties to the lowest index.
 
-    Rules as :func:`sigmapi.kernels.reference.winners`; ``min_distance`` uses the tracked
-    norms ``|w_k|^2 = scale_k^2 sqnorm_k``. Vectorised over the batch.
+    The rule object's own arithmetic (vectorised over the batch, as in the reference kernel),
+    with the tracked norms ``|w_k|^2 = scale_k^2 sqnorm_k`` where the rule needs them.
     """
-    _rule_code(rule)
-    if rule == "min_distance":
-        wn = sqnorms(state)
-        return np.argmax(2.0 * np.asarray(h, dtype=np.float64) - wn[None, :], axis=1)
-    return reference.winners(np.empty((0, 0, 0)), h, map_shape, rule, sigma, cut, periodic)
+    s = rule_scores(rule, h, map_shape, sigma, cut, map_periodic, lambda: sqnorms(state))
+    return np.asarray(np.argmax(s, axis=1), dtype=np.int64)
 
 
 def winners_of(
@@ -528,10 +544,10 @@ def winners_of(
     x: NDArray[np.floating],
     y: NDArray[np.floating],
     map_shape: tuple[int, ...],
-    rule: str,
+    rule: WinnerRule | str,
     sigma: float,
     cut: int,
-    periodic: bool = False,
+    map_periodic: bool = False,
 ) -> NDArray[np.int64]:
     """Winning unit of each pair ``(x_b, y_b)``; ``(B,)``: activation and winner in one pass.
 
@@ -541,13 +557,13 @@ def winners_of(
     """
     xa, ya = _rows_of(state, x, y)
     dims, strides = _grid(tuple(map_shape), state.shape[0])
-    code = _rule_code(rule)
-    if code == _RULES["min_distance"]:
+    r, code = _rule_code(rule)
+    if r.needs_norms:
         state.refresh_norms()
     out = np.empty(xa.shape[0], dtype=np.int64)
     args = (state.raw, state.scale, state.sqnorm, xa, ya, state.tol,
             _ahead(state, PREFETCH_AHEAD), code,
-            float(sigma), int(cut), dims, strides, bool(periodic))  # fmt: skip
+            float(sigma), int(cut), dims, strides, bool(map_periodic))  # fmt: skip
     if xa.shape[0] <= SERIAL_ROWS:
         jb, pi, pv, acc, h, t1, t2 = state.scratch()
         _rows.winners_rows(*args, jb, pi, pv, acc, h, t1, t2, out)
@@ -566,10 +582,10 @@ def train_block(
     eps: NDArray[np.floating],
     *,
     map_shape: tuple[int, ...],
-    winner_rule: str,
+    winner_rule: WinnerRule | str,
     soft_cut: int,
     threads: bool = False,
-    periodic: bool = False,
+    map_periodic: bool = False,
 ) -> NDArray[np.int64]:
     """Run ``len(x0)`` learning iterations in order, updating ``state`` in place.
 
@@ -578,12 +594,12 @@ def train_block(
     :func:`sigmapi.kernels.reference.train_block`). Returns the winners ``(T,)``.
 
     ``threads``: update the units on numba's threads (the same result) when the map is large
-    enough (:data:`PARALLEL_MIN_WORK`) and numba has more than one thread. ``periodic``: every
-    map axis wraps around (a ring, a torus).
+    enough (:data:`PARALLEL_MIN_WORK`) and numba has more than one thread. ``map_periodic``:
+    every map axis wraps around (a ring, a torus).
     """
     k_units, nx, ny = state.shape
     dims, strides = _grid(tuple(map_shape), k_units)
-    code = _rule_code(winner_rule)
+    rule, code = _rule_code(winner_rule, "winner_rule")
     xs = [
         _codes(a, n, nm)
         for a, n, nm in ((x0, nx, "x0"), (y0, ny, "y0"), (x1, nx, "x1"), (y1, ny, "y1"))
@@ -594,14 +610,14 @@ def train_block(
     if any(a.shape[0] != n_iter for a in xs) or sg.shape != (n_iter,) or ep.shape != (n_iter,):
         raise ValueError("x0, y0, x1, y1, sigmas and eps must have the same length")
     out = np.empty(n_iter, dtype=np.int64)
-    track = code == _RULES["min_distance"]
+    track = rule.needs_norms  # the only rule that reads the norms keeps them current
     if track:
         state.refresh_norms()
     elif n_iter > 0:
         state.norms_valid = False
     parallel = threads and k_units * nx * ny >= PARALLEL_MIN_WORK and numba.get_num_threads() > 1
     driver: Any = _train  # a numba dispatcher (its stubs do not know the signature)
-    driver(state.raw, state.scale, state.sqnorm, *xs, sg, ep, dims, strides, bool(periodic),
+    driver(state.raw, state.scale, state.sqnorm, *xs, sg, ep, dims, strides, bool(map_periodic),
            code, int(soft_cut), state.tol, out, track, bool(parallel),
            _ahead(state, TRAIN_PREFETCH_AHEAD))  # fmt: skip
     return out
