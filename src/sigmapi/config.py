@@ -19,7 +19,7 @@ from typing import Any
 from sigmapi import _validate
 from sigmapi.codes import _WIDTH_FIX, MIN_WIDTH
 from sigmapi.errors import ConfigError
-from sigmapi.kernels import BACKENDS
+from sigmapi.kernels import BACKEND_CHOICES
 from sigmapi.rules import ORDERINGS, WINNER_RULES
 from sigmapi.schedules import PAPER_SIGMA, PiecewiseLinear
 from sigmapi.tasks import RELATIONS
@@ -34,7 +34,8 @@ __all__ = [
     "load_preset",
 ]
 
-BACKEND_NAMES = ("auto", *BACKENDS)
+BACKEND_NAMES = BACKEND_CHOICES
+"""The values of ``backend``: ``"auto"`` and the names of the backends (read when used)."""
 MAX_INIT_SCALE = 1e15
 MAX_CODE_HEIGHT = 1e7
 """Weights stay within init_scale and code_height**2 (a Kohonen update moves them towards the
@@ -128,7 +129,8 @@ class SOMConfig:
     same_view: bool = False
     """Ablation: learn from the view that chose the winner (the paper learns from the other)."""
     backend: str = "auto"
-    """Kernel: "auto" (fast if numba imports), "reference" or "fast"."""
+    """Kernel: "auto" (the fast kernel where numba imports, else the reference kernel) or a
+    backend's name (:data:`sigmapi.kernels.BACKENDS`)."""
     kernel_tol: float = 1e-6
     """Fast kernel: code and neighbourhood values below kernel_tol x their maximum are skipped
     (0 = exact). The reference kernel is always exact."""

@@ -29,8 +29,12 @@ measured in ``benchmarks/README.md`` (kernel tolerance table).
 
 State (:class:`FastState`): ``raw`` ``(n_x * n_y, K)`` (float32, or float64 when exact),
 ``scale`` ``(K,)`` and ``sqnorm`` ``(K,)`` = ``sum_p raw[p, k]**2`` (tracked incrementally for
-the ``min_distance`` rule; ``|w_k|^2 = scale_k^2 sqnorm_k``). :func:`state_arrays` returns all
-three, so a saved model continues bit for bit on this backend.
+the ``min_distance`` rule; ``|w_k|^2 = scale_k^2 sqnorm_k``). A model file stores all three
+(:func:`file_arrays`, the layout of :mod:`sigmapi.kernels.columns`, which reads without
+numba), so a saved model continues bit for bit on this backend. The rules are those of
+:mod:`sigmapi.rules`; their compiled forms are :func:`_neighbourhood` (the neighbourhood),
+:func:`_unit_chunk` (the Kohonen update as lazy decay) and ``_rows._winner`` (the winner
+rules of :data:`COMPILED`).
 
 References
 ----------
@@ -51,10 +55,11 @@ from numpy.typing import NDArray
 
 from sigmapi import _validate
 from sigmapi.errors import ConfigError
-from sigmapi.kernels import _rows
+from sigmapi.kernels import _rows, columns
 from sigmapi.kernels._rows import _pairs, _winner, activate, axis_distance, gaussian, prefetch
-from sigmapi.kernels.base import columns_to_dense, rule_scores
+from sigmapi.kernels.base import FileArrays, rule_scores
 from sigmapi.rules import WinnerRule, winner_rule
+from sigmapi.rules.neighbourhood import neighbourhood
 
 __all__ = [
     "COMPILED",
@@ -62,10 +67,15 @@ __all__ = [
     "FastState",
     "activation",
     "export",
-    "from_state_arrays",
+    "file_arrays",
+    "file_weights",
+    "from_file_arrays",
+    "max_abs",
+    "memory_bytes",
+    "neighbourhood",
     "prepare",
+    "scores",
     "sqnorms",
-    "state_arrays",
     "supports",
     "train_block",
     "winners",
@@ -187,7 +197,7 @@ class FastState:
     def refresh_norms(self) -> None:
         """Recompute ``sqnorm`` exactly from ``raw`` if it is stale."""
         if not self.norms_valid:
-            self.sqnorm[:] = _sqnorms(self.raw)
+            self.sqnorm[:] = columns.sqnorms(self.raw)
             self.norms_valid = True
 
 
@@ -218,62 +228,57 @@ def prepare(weights: NDArray[np.float64], tol: float = 1e-6) -> FastState:
         raise ValueError(f"weights must have shape (K, n_x, n_y), got {w.shape}")
     k, nx, ny = w.shape
     raw = np.ascontiguousarray(w.reshape(k, nx * ny).T, dtype=_storage_dtype(tol))
-    return FastState(raw, np.ones(k), _sqnorms(raw), tol, (k, nx, ny))
+    return FastState(raw, np.ones(k), columns.sqnorms(raw), tol, (k, nx, ny))
 
 
-def _sqnorms(raw: NDArray[np.floating]) -> NDArray[np.float64]:
-    """``sum_p raw[p, k]**2`` in float64, in blocks of rows (no full float64 copy)."""
-    sq = np.zeros(raw.shape[1])
-    for s in range(0, raw.shape[0], 4096):
-        r = raw[s : s + 4096].astype(np.float64)
-        sq += np.einsum("pk,pk->k", r, r)
-    return sq
+def memory_bytes(shape: tuple[int, int, int], tol: float = 1e-6) -> int:
+    """Bytes of the state of weights of ``shape``: ``raw`` in float32 (float64 when exact)."""
+    itemsize = np.dtype(_storage_dtype(_check_tol(tol))).itemsize
+    return itemsize * int(np.prod(shape, dtype=np.int64))
 
 
 def export(state: FastState) -> NDArray[np.float64]:
     """Dense float64 weights ``(K, n_x, n_y)``: ``scale[k] * raw[:, k]``."""
-    return columns_to_dense(state.raw, state.scale, state.shape)
+    return columns.columns_to_dense(state.raw, state.scale, state.shape)
 
 
-def state_arrays(state: FastState) -> dict[str, NDArray[np.floating]]:
-    """Arrays that restore ``state`` exactly: ``raw``, ``scale`` and, if current, ``sqnorm``."""
-    out = {"raw": state.raw.copy(), "scale": state.scale.copy()}
-    if state.norms_valid:
-        out["sqnorm"] = state.sqnorm.copy()
-    return out
+def max_abs(state: FastState) -> float:
+    """Largest ``|w_kij| = scale_k |raw[p, k]|``, without forming the dense weights."""
+    return columns.columns_top(state.raw, state.scale, state.shape)
 
 
-def from_state_arrays(
-    shape: tuple[int, int, int], arrays: dict[str, NDArray[np.floating]], tol: float = 1e-6
+def file_arrays(state: FastState) -> FileArrays:
+    """What a model file stores: ``state_raw``, ``state_scale`` and, if current,
+    ``state_sqnorm`` (:mod:`sigmapi.kernels.columns`), so that a saved model continues bit
+    for bit on this backend."""
+    return columns.to_file(state.raw, state.scale, state.sqnorm if state.norms_valid else None)
+
+
+def file_weights(shape: tuple[int, int, int], arrays: FileArrays) -> NDArray[np.float64]:
+    """Dense float64 weights of what :func:`file_arrays` wrote (``raw x scale``)."""
+    return columns.file_weights(shape, arrays)
+
+
+def from_file_arrays(
+    shape: tuple[int, int, int], arrays: FileArrays, tol: float = 1e-6
 ) -> FastState:
-    """Inverse of :func:`state_arrays` for weights of ``shape`` ``(K, n_x, n_y)``.
+    """The state :func:`file_arrays` wrote, for weights of ``shape`` ``(K, n_x, n_y)`` (also
+    from a version-1 file, whose ``weights`` must agree with ``raw x scale``).
 
     Raises ``ValueError`` if the arrays are missing, do not fit ``shape`` and ``tol``, or are
     not finite (scales must be > 0; ``sqnorm`` must agree with ``raw`` to 1e-6 relative).
     """
     tol = _check_tol(tol)
-    k, nx, ny = shape
-    missing = {"raw", "scale"} - set(arrays)
-    if missing or set(arrays) - {"raw", "scale", "sqnorm"}:
-        raise ValueError(f"fast state is the arrays raw, scale [, sqnorm], got {sorted(arrays)}")
-    raw, scale = arrays["raw"], arrays["scale"]
+    raw, scale, sq = columns.read_file(shape, arrays)
     dtype = _storage_dtype(tol)
-    if raw.shape != (nx * ny, k) or raw.dtype != dtype:
-        raise ValueError(
-            f"raw must be {np.dtype(dtype).name} of shape {(nx * ny, k)} for tol={tol}, "
-            f"got {raw.dtype} {raw.shape}"
-        )
-    if not np.all(np.isfinite(raw)):
-        raise ValueError("raw must be finite")
-    valid = "sqnorm" in arrays
-    exact = _sqnorms(raw)
-    sq = arrays["sqnorm"] if valid else exact
-    if scale.shape != (k,) or sq.shape != (k,):
-        raise ValueError(f"scale and sqnorm must have shape ({k},), got {scale.shape}, {sq.shape}")
-    if not np.all(np.isfinite(scale) & (scale > 0)):
-        raise ValueError("scale must be finite and > 0")
-    if not np.allclose(sq, exact, rtol=1e-6, atol=1e-12 * float(exact.max(initial=0.0))):
+    if raw.dtype != dtype:
+        raise ValueError(f"raw must be {np.dtype(dtype).name} for tol={tol}, got {raw.dtype}")
+    exact = columns.sqnorms(raw)
+    if sq is None:
+        sq = exact
+    elif not np.allclose(sq, exact, rtol=1e-6, atol=1e-12 * float(exact.max(initial=0.0))):
         raise ValueError("sqnorm disagrees with raw")
+    k, nx, ny = shape
     return FastState(
         np.ascontiguousarray(raw, dtype=dtype),
         np.ascontiguousarray(scale, dtype=np.float64),
@@ -521,6 +526,21 @@ def activation(
     return h
 
 
+def scores(
+    state: FastState,
+    h: NDArray[np.floating],
+    map_shape: tuple[int, ...],
+    rule: WinnerRule | str,
+    sigma: float,
+    cut: int,
+    map_periodic: bool = False,
+) -> NDArray[np.float64]:
+    """Per-unit scores ``(B, K)`` of activations ``h``: the rule object's own arithmetic
+    (vectorised over the batch, as in the reference kernel), with the tracked norms
+    ``|w_k|^2 = scale_k^2 sqnorm_k`` where the rule needs them."""
+    return rule_scores(rule, h, map_shape, sigma, cut, map_periodic, lambda: sqnorms(state))
+
+
 def winners(
     state: FastState,
     h: NDArray[np.floating],
@@ -532,10 +552,10 @@ def winners(
 ) -> NDArray[np.int64]:
     """Winning unit per row of activations ``h`` ``(B, K)``; ``(B,)``, ties to the lowest index.
 
-    The rule object's own arithmetic (vectorised over the batch, as in the reference kernel),
-    with the tracked norms ``|w_k|^2 = scale_k^2 sqnorm_k`` where the rule needs them.
+    The argmax of :func:`scores` (the compiled rules give the same units, see
+    :func:`winners_of`).
     """
-    s = rule_scores(rule, h, map_shape, sigma, cut, map_periodic, lambda: sqnorms(state))
+    s = scores(state, h, map_shape, rule, sigma, cut, map_periodic)
     return np.asarray(np.argmax(s, axis=1), dtype=np.int64)
 
 

@@ -18,7 +18,7 @@ round. Steps 2-4 are the rules' reference arithmetic (:mod:`sigmapi.rules`); thi
 runs them in order on dense weights, so it computes every rule there is.
 
 This module satisfies the kernel contract (:class:`sigmapi.kernels.base.Kernel`): its state
-is the dense weight array ``W`` itself.
+is the dense weight array ``W`` itself, and a model file holds it as ``weights``.
 """
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sigmapi import rules
-from sigmapi.kernels.base import rule_scores
+from sigmapi.kernels.base import FileArrays, dense_file_weights, rule_scores
 from sigmapi.rules import KOHONEN, WINNER_RULES, WinnerRule
 from sigmapi.rules.neighbourhood import neighbourhood
 
@@ -35,11 +35,15 @@ __all__ = [
     "NAME",
     "activation",
     "export",
-    "from_state_arrays",
+    "file_arrays",
+    "file_weights",
+    "from_file_arrays",
+    "max_abs",
+    "memory_bytes",
     "neighbourhood",
     "prepare",
+    "scores",
     "sqnorms",
-    "state_arrays",
     "supports",
     "train_block",
     "winners",
@@ -71,16 +75,31 @@ def export(state: NDArray[np.float64]) -> NDArray[np.float64]:
     return np.asarray(state, dtype=np.float64)
 
 
-def state_arrays(state: NDArray[np.float64]) -> dict[str, NDArray[np.floating]]:
-    """Arrays beyond the dense weights that restore the state exactly: none here."""
-    return {}
+def memory_bytes(shape: tuple[int, int, int], tol: float = 0.0) -> int:
+    """Bytes of the state of weights of ``shape``: the float64 weights."""
+    return 8 * int(np.prod(shape, dtype=np.int64))
 
 
-def from_state_arrays(
-    shape: tuple[int, int, int], arrays: dict[str, NDArray[np.floating]], tol: float = 0.0
+def max_abs(state: NDArray[np.float64]) -> float:
+    """Largest ``|w_kij|`` (NaN if the weights hold NaN)."""
+    return float(np.abs(state).max(initial=0.0))
+
+
+def file_arrays(state: NDArray[np.float64]) -> FileArrays:
+    """What a model file stores: the float64 ``weights`` ``(K, n_x, n_y)`` (a copy)."""
+    return {"weights": np.array(state, dtype=np.float64)}
+
+
+def file_weights(shape: tuple[int, int, int], arrays: FileArrays) -> NDArray[np.float64]:
+    """The dense weights :func:`file_arrays` wrote (checked against ``shape``)."""
+    return dense_file_weights(shape, arrays)
+
+
+def from_file_arrays(
+    shape: tuple[int, int, int], arrays: FileArrays, tol: float = 0.0
 ) -> NDArray[np.float64]:
-    """Inverse of :func:`state_arrays`: this kernel has no state beyond the weights."""
-    raise ValueError("the reference kernel has no backend state; load its weights instead")
+    """The state :func:`file_arrays` wrote: a float64 copy of its ``weights``."""
+    return prepare(file_weights(shape, arrays))
 
 
 def sqnorms(W: Array) -> NDArray[np.float64]:
@@ -101,6 +120,21 @@ def activation(W: Array, x: Array, y: Array) -> NDArray[np.float64]:
     return out
 
 
+def scores(
+    W: Array,
+    h: Array,
+    map_shape: tuple[int, ...],
+    rule: WinnerRule | str,
+    sigma: float,
+    cut: int,
+    map_periodic: bool = False,
+) -> NDArray[np.float64]:
+    """Per-unit scores ``(B, K)`` of activations ``h`` under ``rule`` (an object or its name,
+    one of :data:`sigmapi.rules.WINNER_RULES`): the rule's own arithmetic, with the norms of
+    ``W`` where it needs them; :func:`winners` is their row-wise argmax."""
+    return rule_scores(rule, h, map_shape, sigma, cut, map_periodic, lambda: sqnorms(W))
+
+
 def winners(
     W: Array,
     h: Array,
@@ -112,12 +146,10 @@ def winners(
 ) -> NDArray[np.int64]:
     """Winning unit per row of activations ``h`` ``(B, K)``; ``(B,)`` flat indices.
 
-    ``rule``: a :class:`~sigmapi.rules.WinnerRule` or its name (one of
-    :data:`sigmapi.rules.WINNER_RULES`), computed by its own arithmetic, with the units'
-    norms of ``W`` where it needs them. ``map_periodic``: the map wraps around (the
-    smoothing window too). Ties go to the lowest index.
+    The argmax of :func:`scores`; ``map_periodic``: the map wraps around (the smoothing
+    window too). Ties go to the lowest index.
     """
-    s = rule_scores(rule, h, map_shape, sigma, cut, map_periodic, lambda: sqnorms(W))
+    s = scores(W, h, map_shape, rule, sigma, cut, map_periodic)
     return np.asarray(np.argmax(s, axis=1), dtype=np.int64)
 
 
