@@ -101,15 +101,17 @@ def read_parts(
 ) -> ModelParts:
     """The parts of a model file's ``header`` and ``arrays`` (:func:`write_parts`), checked.
 
-    ``backend`` loads the model onto another kernel (which starts from the dense weights).
+    ``backend`` loads the model onto another kernel (which starts from the dense weights),
+    also where the backend that wrote it is not installed.
     Raises :class:`~sigmapi.errors.ModelFileError`, its message starting with ``source``, if
     the header and arrays do not make a model.
     """
     name = source
     try:
-        cfg = SOMConfig.from_dict(header["config"])
-        if backend is not None:
-            cfg = cfg.replace(backend=backend)
+        stored = header["config"]
+        if backend is not None and isinstance(stored, dict):  # also from a backend not here
+            stored = {**stored, "backend": backend}
+        cfg = SOMConfig.from_dict(stored)
     except (ConfigError, TypeError, KeyError) as exc:
         raise ModelFileError(f"{name!r}: stored config is invalid ({exc})") from None
     shape = (
