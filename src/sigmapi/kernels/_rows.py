@@ -209,8 +209,8 @@ def activate(raw, scale, pi, pv, n, ahead, k0, k1, acc, h):
     Serves inference (:func:`_respond_row`) and training (``fast._unit_chunk``).
 
     Written for the vectoriser: the loops over units run over slices from index 0 (a loop from
-    ``k0`` indexes with possibly negative numbers, whose wrap-around check kept LLVM from
-    vectorising it: 3.7x slower, ``benchmarks/README.md``), and each pass takes four pairs,
+    ``k0`` indexes with possibly negative numbers, whose wrap-around check keeps LLVM from
+    vectorising it; ``benchmarks/README.md``), and each pass takes four pairs,
     so that a unit's sum stays in a register for four products. The sum is still taken pair
     after pair, ``(((acc + r0 v0) + r1 v1) + r2 v2) + r3 v3``: the same result, bit for bit,
     as one pair per pass.

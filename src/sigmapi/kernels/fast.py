@@ -6,8 +6,8 @@ using the structure of the problem:
 
 - **Sparse codes.** The codes are Gaussian hills, so the outer product ``x y^T`` of a view has
   few non-negligible entries. Entries with ``|x_i y_j| <= tol * max|x| * max|y|`` are skipped,
-  in the activation and in the update (a 4-D ball of pairs around the peak; about 235 of
-  50,625 pairs for 15x15 codes of width 0.5 at ``tol = 1e-6``, about 2,500 for width 1).
+  in the activation and in the update: a 4-D ball of pairs around the peak, a small share
+  of the ``n_x n_y`` pairs for narrow codes (docs/algorithm.md counts them at paper-2d).
 - **Lazy decay.** Unit ``k`` stores ``W_k = s_k V_k`` with a scale ``s_k``. The Kohonen update
   ``W_k <- (1 - eps a_k) W_k + eps a_k x' y'^T`` becomes ``s_k <- s_k (1 - eps a_k)`` (O(1))
   plus the sparse ``V_k <- V_k + (eps a_k / s_k) x' y'^T``. Before ``s_k`` falls below
@@ -17,9 +17,9 @@ using the structure of the problem:
 - **float32 storage** of ``V`` (accumulation in float64), laid out ``(n_x * n_y, K)`` so that
   one input pair touches the weights of all units contiguously.
 - **Vectorised loops over units.** Every loop over a range of units runs over array slices
-  indexed from 0, which LLVM turns into SIMD code (a loop indexed from ``k0`` kept the
-  wrap-around check of possibly negative indices and stayed scalar: 2.5-3.7x slower, with
-  the same arithmetic). The activation takes four input pairs per pass over the units.
+  indexed from 0, which LLVM turns into SIMD code (a loop indexed from ``k0`` keeps the
+  wrap-around check of possibly negative indices and stays scalar, with the same
+  arithmetic). The activation takes four input pairs per pass over the units.
 - **Parallel over units**, in fixed chunks: every unit's arithmetic is the same whatever the
   number of threads, so results do not depend on it (no reductions across units).
 
@@ -94,10 +94,10 @@ PARALLEL_MIN_WORK = 1 << 18
 """With ``threads=True`` (``SOMConfig.threads``), training uses threads when ``K * n_x * n_y``
 is at least this; below it, synchronising the threads costs more than it saves.
 
-Off by default: one learning step is ~0.1-1 ms of work with two synchronisations, and on a
-shared 2-core machine a descheduled worker thread stalls every step (measured: 62 it/s with
-2 threads vs 390 it/s with 1 on paper-2d under a load average of 5). The batched
-:func:`activation` (one synchronisation per call) always uses all threads.
+Off by default: one learning step is little work between two synchronisations, so on a
+busy machine a descheduled worker thread stalls every step (the ``fast-threads`` variant of
+``benchmarks/bench_bandwidth.py`` measures it). The batched :func:`activation` (one
+synchronisation per call) always uses all threads.
 """
 
 SERIAL_ROWS = 16
@@ -113,10 +113,10 @@ TRAIN_PREFETCH_AHEAD = 8
 the update and in the activation pass (benchmarks/README.md: its effect)."""
 
 PREFETCH_MIN_BYTES = 1 << 21
-"""Prefetching is used only for weights of at least this many bytes (2 MiB, a core's L2 cache
-here): weights that stay in cache gain nothing from it and pay its instructions (measured in
-one bench_bandwidth.py round under load: paper-1d, 13.5 KB of weights, 354,000 it/s without,
-280,000 with; paper-2d, 45.6 MB, 1,362 it/s without, 2,196 with)."""
+"""Prefetching is used only for weights of at least this many bytes (about a core's L2
+cache): weights that stay in cache gain nothing from it and pay its instructions, while
+weights beyond the caches gain (the ``fast-noprefetch`` variant of
+``benchmarks/bench_bandwidth.py`` measures both)."""
 
 
 def _ahead(state: FastState, ahead: int) -> int:
@@ -375,8 +375,8 @@ def _unit_chunk(
                 val = pv1[q]
                 for k in range(m):
                     # np.float64, not float(): numba types float() of a float32 as float32,
-                    # which made these squares float32 (weights of 1e-23 to 1e-19 then gave
-                    # denormal products, 40x slower, late in long runs)
+                    # which made these squares float32 (tiny weights late in long runs then
+                    # gave denormal products, which the CPU computes far more slowly)
                     old = np.float64(row[k])
                     row[k] = old + g[k] * val
                     new = np.float64(row[k])
