@@ -7,13 +7,13 @@ never imports the estimator.
 
 The header holds the resolved ``config``, the iteration count ``t``, the ``seed_entropy`` of
 the random streams (a decimal string) and the ``backend`` that wrote the file. The arrays
-are the backend's own (:meth:`sigmapi.kernels.base.Kernel.file_arrays`: the reference
-kernel's float64 ``weights``, the fast kernel's ``state_raw``, ``state_scale`` and
-``state_sqnorm``), stored once in the backend's precision. The backend that wrote a file
-reads its state back bit for bit, so that the run continues exactly; any other backend
-starts from the dense weights of the arrays (read by the writer, or without it where it is
-not installed, :func:`sigmapi.kernels.file_weights`). Files of format version 1 stored the
-dense weights beside the fast kernel's state; they still load (the two must agree).
+are the backend's own (:meth:`sigmapi.kernels.base.Kernel.file_arrays`: dense ``weights``
+or ``state_<name>`` arrays of its layout), stored once in the backend's precision. The
+backend that wrote a file reads its state back bit for bit, so that the run continues
+exactly; any other backend starts from the dense weights of the arrays (read by the writer,
+or without it where it is not installed, :func:`sigmapi.kernels.file_weights`). Files of
+format version 1 stored the dense weights beside a backend's state; they still load (the
+kernel checks that the two agree).
 """
 
 from __future__ import annotations

@@ -509,9 +509,8 @@ class SigmaPiSOM:
         """Activations ``h[b, k] = x_b^T W_k y_b`` of every unit; ``(B, n_units)``.
 
         ``x`` ``(B, n_x)`` and ``y`` ``(B, n_y)`` are codes (``x_code.encode``), flattened in
-        C order. Computed by the model's kernel on its own state (for the fast kernel: the
-        sparse input pairs of each row against its float32 weights; one pair or a few rows in
-        the caller's thread, larger batches in parallel over rows).
+        C order. Computed by the model's kernel on its own state
+        (:meth:`sigmapi.kernels.base.Kernel.activation`).
         """
         xa, ya = self._pairs_of(x, y)
         return np.asarray(self._kernel.activation(self._state, xa, ya), dtype=np.float64)
@@ -575,7 +574,7 @@ class SigmaPiSOM:
     def unit_sqnorms(self) -> NDArray[np.float64]:
         """``|w_k|^2``, the squared length of every unit's weights; ``(n_units,)``.
 
-        From the kernel's state (the fast kernel tracks them), without forming ``weights_``.
+        From the kernel's state (a kernel may track them), without forming ``weights_``.
         """
         self._check_fitted()
         return np.asarray(self._kernel.sqnorms(self._state), dtype=np.float64)
