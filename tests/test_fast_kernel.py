@@ -15,7 +15,8 @@ import numpy as np
 import pytest
 
 from sigmapi import SigmaPiSOM
-from sigmapi.kernels import WINNER_RULES, fast, get_backend, reference
+from sigmapi.kernels import fast, get_backend, reference
+from sigmapi.rules import WINNER_RULES
 
 WEIGHT_ATOL = 1e-5
 MAP = (4, 5)
@@ -48,7 +49,7 @@ def _train(kernel, w, data, rule="soft", tol=None, chunks=(1000,), periodic=Fals
                     map_shape=MAP,
                     winner_rule=rule,
                     soft_cut=15,
-                    periodic=periodic,
+                    map_periodic=periodic,
                 )
             )
             s = sl.stop
@@ -205,22 +206,29 @@ def test_state_round_trip_and_validation():
     w, _ = _problem(n_iter=1)
     for tol in (0.0, 1e-6):
         s = fast.prepare(w, tol)
-        s2 = fast.from_state_arrays(w.shape, fast.state_arrays(s), tol)
+        s2 = fast.from_file_arrays(w.shape, fast.file_arrays(s), tol)
         np.testing.assert_array_equal(fast.export(s2), fast.export(s))
+        np.testing.assert_array_equal(
+            fast.file_weights(w.shape, fast.file_arrays(s)), fast.export(s)
+        )
         np.testing.assert_allclose(fast.export(s), w, rtol=1e-7 if tol else 0)
-    arrays = fast.state_arrays(fast.prepare(w, 1e-6))
+    arrays = fast.file_arrays(fast.prepare(w, 1e-6))
+    assert sorted(arrays) == ["state_raw", "state_scale", "state_sqnorm"]
     with pytest.raises(ValueError, match="raw must be float64"):
-        fast.from_state_arrays(w.shape, arrays, 0.0)
-    with pytest.raises(ValueError, match="raw, scale"):
-        fast.from_state_arrays(w.shape, {"raw": arrays["raw"]}, 1e-6)
+        fast.from_file_arrays(w.shape, arrays, 0.0)
+    with pytest.raises(ValueError, match="state_raw, state_scale"):
+        fast.from_file_arrays(w.shape, {"state_raw": arrays["state_raw"]}, 1e-6)
     with pytest.raises(ValueError, match="sqnorm disagrees"):
-        fast.from_state_arrays(w.shape, {**arrays, "sqnorm": arrays["sqnorm"] * 1.01}, 1e-6)
+        bad = {**arrays, "state_sqnorm": arrays["state_sqnorm"] * 1.01}
+        fast.from_file_arrays(w.shape, bad, 1e-6)
     with pytest.raises(ValueError, match="scale must be finite"):
-        fast.from_state_arrays(w.shape, {**arrays, "scale": arrays["scale"] * np.inf}, 1e-6)
+        fast.from_file_arrays(w.shape, {**arrays, "state_scale": arrays["state_scale"] * np.inf})
     with pytest.raises(ValueError, match="tol must be"):
         fast.prepare(w, 1.5)
     with pytest.raises(ValueError, match="rule must be"):
         fast.winners(fast.prepare(w), np.zeros((1, 20)), MAP, "max", 1.0, 15)
+    assert fast.memory_bytes(w.shape, 1e-6) == 4 * w.size
+    assert fast.memory_bytes(w.shape, 0.0) == 8 * w.size == reference.memory_bytes(w.shape, 1e-6)
 
 
 @pytest.mark.parametrize("rule", ["soft", "min_distance", "soft_mean"])

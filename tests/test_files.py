@@ -22,6 +22,7 @@ from sigmapi import ModelFileError, SigmaPiSOM, SOMConfig
 from sigmapi.checkpoints import list_checkpoints, remove_checkpoints, write_checkpoint
 from sigmapi.errors import NumericalError
 from sigmapi.io import header_digest, read_archive, write_model
+from sigmapi.kernels import BACKENDS
 
 DATA = Path(__file__).parent / "data"
 V1_CFG = dict(map_shape=(3,), x_shape=(4,), y_shape=(5,), iterations=400, seed=7, ordering="none")
@@ -38,7 +39,7 @@ def _small(backend="fast", **kw):
 # ---------------------------------------------------------------------------- versions, sizes
 
 
-@pytest.mark.parametrize("backend", ["reference", "fast"])
+@pytest.mark.parametrize("backend", sorted(p.stem[len("v1-") :] for p in DATA.glob("v1-*.npz")))
 def test_version_1_files_still_load_and_continue_bit_exact(backend):
     old = sigmapi.load(DATA / f"v1-{backend}.npz")
     assert old.t_ == 250 and old.backend == backend
@@ -67,11 +68,10 @@ def test_weights_are_stored_once_in_the_backends_precision(tmp_path):
     assert (tmp_path / "f.npz").stat().st_size < v1
 
 
-@pytest.mark.parametrize("backend", ["reference", "fast"])
+@pytest.mark.parametrize("backend", list(BACKENDS))
 @pytest.mark.parametrize("compress", [False, True])
 def test_round_trip_and_continuation_are_bit_exact(tmp_path, backend, compress):
-    rule = {"winner_rule": "min_distance"} if backend == "fast" else {}
-    a = _small(backend, **rule)
+    a = _small(backend, winner_rule="min_distance")  # the rule whose norms a state may track
     path = a.save(tmp_path / "m.npz", compress=compress)
     kinds = {i.compress_type for i in zipfile.ZipFile(path).infolist()}
     assert kinds == {zipfile.ZIP_DEFLATED if compress else zipfile.ZIP_STORED}
@@ -80,9 +80,10 @@ def test_round_trip_and_continuation_are_bit_exact(tmp_path, backend, compress):
     np.testing.assert_array_equal(
         a.partial_fit(iterations=100).weights_, b.partial_fit(iterations=100).weights_
     )
-    # another backend starts from the same weights
-    c = sigmapi.load(path, backend="reference" if backend == "fast" else "fast")
-    np.testing.assert_allclose(c.weights_, SigmaPiSOM.load(path).weights_, rtol=1e-7)
+    # every other backend starts from the same weights
+    for other in set(BACKENDS) - {backend}:
+        c = sigmapi.load(path, backend=other)
+        np.testing.assert_allclose(c.weights_, SigmaPiSOM.load(path).weights_, rtol=1e-7)
 
 
 def test_float64_reference_weights_round_trip_exactly(tmp_path):

@@ -23,7 +23,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("metrics", "checkpoints", "executor"),
     ("circular",),
     ("som",),
-    ("io", "config", "kernels", "tasks", "ordering", "views"),
+    ("io", "config", "kernels", "tasks", "rules", "views", "model_file"),
     ("codes", "schedules"),
     ("errors", "_validate", "_memory", "_startup", "progress", "_version"),
 )

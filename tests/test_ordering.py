@@ -8,7 +8,7 @@ import pytest
 import sigmapi
 from sigmapi import SigmaPiSOM, SOMConfig
 from sigmapi.metrics import evaluation_sets, fold_indicators
-from sigmapi.ordering import crossview_init, crossview_scores
+from sigmapi.rules.ordering import crossview_init, crossview_scores
 
 SMALL_2D = SOMConfig(
     map_shape=(8, 8), x_shape=(8, 8), y_shape=(8, 8), code_width=1.0, iterations=20_000,

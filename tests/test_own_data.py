@@ -7,7 +7,7 @@ import pytest
 
 import sigmapi
 from sigmapi import SigmaPiSOM, SOMConfig
-from sigmapi.ordering import crossview_init
+from sigmapi.rules.ordering import crossview_init
 
 SMALL = SOMConfig(
     map_shape=(7,), x_shape=(7,), y_shape=(7,), iterations=3000,

@@ -1,4 +1,5 @@
-"""Reference kernel: hand-computed tiny cases and equality with plain loops."""
+"""The reference arithmetic (the reference kernel and the rules it runs): hand-computed tiny
+cases and equality with plain loops."""
 
 from __future__ import annotations
 
@@ -6,6 +7,8 @@ import numpy as np
 import pytest
 
 from sigmapi.kernels import reference as ref
+from sigmapi.rules import KOHONEN
+from sigmapi.rules.neighbourhood import smooth
 
 
 def test_activation_hand_computed():
@@ -56,9 +59,9 @@ def test_winner_rules_hand_computed():
 def test_soft_winner_window_cut():
     # with cut 0 the smoothing is the identity
     h = np.array([[1.0, 0.0, 0.9, 0.9, 0.0]])
-    np.testing.assert_allclose(ref.smooth(h, (5,), 1.0, 0), h)
+    np.testing.assert_allclose(smooth(h, (5,), 1.0, 0), h)
     g1 = np.exp(-0.5)
-    np.testing.assert_allclose(ref.smooth(h, (5,), 1.0, 1)[0, 1], g1 * 1.0 + 0.0 + g1 * 0.9)
+    np.testing.assert_allclose(smooth(h, (5,), 1.0, 1)[0, 1], g1 * 1.0 + 0.0 + g1 * 0.9)
 
 
 def test_smoothing_2d_equals_plain_loop():
@@ -76,7 +79,7 @@ def test_smoothing_2d_equals_plain_loop():
                         if abs(rr - r) <= cut and abs(cc - c) <= cut:
                             w = np.exp(-((rr - r) ** 2 + (cc - c) ** 2) / (2 * sigma**2))
                             loop[b, r * 4 + c] += w * g[rr, cc]
-    np.testing.assert_allclose(ref.smooth(h, shape, sigma, cut), loop, rtol=1e-12)
+    np.testing.assert_allclose(smooth(h, shape, sigma, cut), loop, rtol=1e-12)
 
 
 def test_neighbourhood_hand_computed():
@@ -95,7 +98,7 @@ def test_one_update_hand_computed():
     a = np.array([1.0, 0.5])
     x1 = np.array([1.0, 0.0])
     y1 = np.array([0.0, 2.0])
-    ref.kohonen_update(W, a, x1, y1, eps=0.1)
+    KOHONEN.update(W, a, x1, y1, eps=0.1)
     # w += eps a (x y^T - w); x y^T = [[0, 2], [0, 0]]
     np.testing.assert_allclose(W[0], [[0.9, 1.1], [0.9, 0.9]])
     np.testing.assert_allclose(W[1], [[0.95, 1.05], [0.95, 0.95]])
@@ -146,10 +149,10 @@ def test_train_block_equals_plain_loop():
 def test_wrapped_neighbourhood_hand_computed():
     """On a ring of 5 the winner 0 has the units 1 and 4 at distance 1, 2 and 3 at distance 2;
     on a 3 x 4 torus unit (0, 0) has (2, 3) as a diagonal neighbour (distance^2 = 2)."""
-    a = ref.neighbourhood(np.array([0]), (5,), 1.0, periodic=True)[0]
+    a = ref.neighbourhood(np.array([0]), (5,), 1.0, map_periodic=True)[0]
     raw = np.exp(-np.array([0.0, 1.0, 4.0, 4.0, 1.0]) / 2.0)
     np.testing.assert_allclose(a, raw / np.linalg.norm(raw))
-    t = ref.neighbourhood(np.array([0]), (3, 4), 1.0, periodic=True)[0].reshape(3, 4)
+    t = ref.neighbourhood(np.array([0]), (3, 4), 1.0, map_periodic=True)[0].reshape(3, 4)
     d2 = np.array([[0, 1, 4, 1], [1, 2, 5, 2], [1, 2, 5, 2]], dtype=float)
     raw2 = np.exp(-d2 / 2.0)
     np.testing.assert_allclose(t, raw2 / np.linalg.norm(raw2))
@@ -170,15 +173,15 @@ def test_wrapped_smoothing_hand_computed():
     at its distance the shorter way round; the window cut applies to that distance. On a ring
     "soft" and "soft_mean" pick the same unit (the window weight is the same everywhere)."""
     h = np.array([[1.0, 0.0, 0.0, 0.0, 0.0]])
-    g = ref.smooth(h, (5,), 1.0, 15, periodic=True)
+    g = smooth(h, (5,), 1.0, 15, map_periodic=True)
     np.testing.assert_allclose(g[0], np.exp(-np.array([0.0, 1.0, 4.0, 4.0, 1.0]) / 2.0))
-    g1 = ref.smooth(h, (5,), 1.0, 1, periodic=True)
+    g1 = smooth(h, (5,), 1.0, 1, map_periodic=True)
     np.testing.assert_allclose(g1[0], [1.0, np.exp(-0.5), 0.0, 0.0, np.exp(-0.5)])
-    bounded = ref.smooth(h, (5,), 1.0, 15)
+    bounded = smooth(h, (5,), 1.0, 15)
     assert bounded[0, 4] == pytest.approx(np.exp(-8.0))  # the bounded map: 4 units away
     rng = np.random.default_rng(1)
     hs = rng.random((50, 6))
     for shape in ((6,), (2, 3)):
-        soft = ref.winners(np.empty(0), hs, shape, "soft", 1.3, 15, periodic=True)
-        mean = ref.winners(np.empty(0), hs, shape, "soft_mean", 1.3, 15, periodic=True)
+        soft = ref.winners(np.empty(0), hs, shape, "soft", 1.3, 15, map_periodic=True)
+        mean = ref.winners(np.empty(0), hs, shape, "soft_mean", 1.3, 15, map_periodic=True)
         np.testing.assert_array_equal(soft, mean)

@@ -7,6 +7,8 @@ import pytest
 
 import sigmapi
 from sigmapi import ConfigError, NotFittedError, SigmaPiSOM, SOMConfig
+from sigmapi.kernels import BACKENDS
+from sigmapi.rules import WINNER_RULES
 
 
 def test_unfitted_model_says_call_fit(small_1d):
@@ -188,11 +190,11 @@ def test_learning_from_the_same_view_is_clearly_worse(learned):
     assert same["z_error"] >= learned["z_error"] + 0.1
 
 
-@pytest.mark.parametrize("backend", ["reference", "fast"])
-@pytest.mark.parametrize("rule", ["soft", "soft_mean", "argmax", "min_distance"])
+@pytest.mark.parametrize("backend", list(BACKENDS))
+@pytest.mark.parametrize("rule", list(WINNER_RULES))
 def test_hard_scores_argmax_is_the_hard_winner(model_2d, backend, rule):
     """``metrics.hard_scores`` (one response pass in ``evaluate``) picks the same units as
-    ``winner(hard=True)``, for every rule and on both kernels."""
+    ``winner(hard=True)``, for every rule and on every backend."""
     from sigmapi.metrics import evaluation_sets, hard_scores
 
     m = sigmapi.SigmaPiSOM(model_2d.config.replace(winner_rule=rule, backend=backend))

@@ -12,6 +12,7 @@ import pytest
 
 import sigmapi
 from sigmapi import SigmaPiSOM, SOMConfig
+from sigmapi.kernels import BACKENDS
 
 fast = pytest.importorskip("sigmapi.kernels.fast")
 
@@ -72,24 +73,21 @@ def test_adversarial_schedule_matches_the_reference():
     np.testing.assert_allclose(fst.weights_, ref.weights_, atol=1e-12)
 
 
+@pytest.mark.parametrize("backend", list(BACKENDS))
 @pytest.mark.parametrize("cut", [500, 1000, 2345])
-def test_same_result_on_every_backend_and_resume_point(tmp_path, cut):
-    """Reference vs fast (default float32, tol 1e-6): same winners, weights within 1e-5;
-    and on each backend a save/load at any iteration continues bit for bit."""
+def test_same_result_on_every_backend_and_resume_point(tmp_path, backend, cut):
+    """On every backend a save/load at any iteration continues bit for bit; against the
+    reference (the definition), the fast kernel's default float32 at tol 1e-6 gives the same
+    winners at >= 99.9 % of test pairs and weights within 1e-5."""
     cfg = SOMConfig(map_shape=(6,), x_shape=(8,), y_shape=(8,), iterations=4000,
                     sigma=((0.0, 3.0), (0.5, 1e-5)), seed=7)  # fmt: skip
-    finals = {}
-    for backend in ("reference", "fast"):
-        whole = SigmaPiSOM(cfg, backend=backend).fit()
-        part = SigmaPiSOM(cfg, backend=backend).fit(iterations=cut)
-        back = sigmapi.load(part.save(tmp_path / f"{backend}.npz"))
-        assert back.backend == backend
-        back.partial_fit()
-        np.testing.assert_array_equal(back.weights_, whole.weights_)
-        finals[backend] = whole
-    test = finals["reference"].sampler.sample(2000, np.random.default_rng(0))
-    same = np.mean(
-        finals["reference"].winner(test.x0, test.y0) == finals["fast"].winner(test.x0, test.y0)
-    )
-    assert same >= 0.999
-    np.testing.assert_allclose(finals["fast"].weights_, finals["reference"].weights_, atol=1e-5)
+    whole = SigmaPiSOM(cfg, backend=backend).fit()
+    part = SigmaPiSOM(cfg, backend=backend).fit(iterations=cut)
+    back = sigmapi.load(part.save(tmp_path / f"{backend}.npz"))
+    assert back.backend == backend
+    back.partial_fit()
+    np.testing.assert_array_equal(back.weights_, whole.weights_)
+    ref = whole if backend == "reference" else SigmaPiSOM(cfg, backend="reference").fit()
+    test = ref.sampler.sample(2000, np.random.default_rng(0))
+    assert np.mean(ref.winner(test.x0, test.y0) == whole.winner(test.x0, test.y0)) >= 0.999
+    np.testing.assert_allclose(whole.weights_, ref.weights_, atol=1e-5)

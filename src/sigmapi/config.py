@@ -19,8 +19,8 @@ from typing import Any
 from sigmapi import _validate
 from sigmapi.codes import _WIDTH_FIX, MIN_WIDTH
 from sigmapi.errors import ConfigError
-from sigmapi.kernels import BACKENDS, WINNER_RULES
-from sigmapi.ordering import ORDERINGS
+from sigmapi.kernels import BACKEND_CHOICES
+from sigmapi.rules import ORDERINGS, WINNER_RULES
 from sigmapi.schedules import PAPER_SIGMA, PiecewiseLinear
 from sigmapi.tasks import RELATIONS
 
@@ -34,7 +34,8 @@ __all__ = [
     "load_preset",
 ]
 
-BACKEND_NAMES = ("auto", *BACKENDS)
+BACKEND_NAMES = BACKEND_CHOICES
+"""The values of ``backend``: ``"auto"`` and the names of the backends (read when used)."""
 MAX_INIT_SCALE = 1e15
 MAX_CODE_HEIGHT = 1e7
 """Weights stay within init_scale and code_height**2 (a Kohonen update moves them towards the
@@ -120,15 +121,16 @@ class SOMConfig:
     ordering: str = "crossview"
     """How the map comes to be ordered: "crossview" (sigmapi's: an ordered start computed from
     the views alone, the neighbourhood capped at ``ordering_sigma`` and the soft winner
-    normalised at the map border; see
-    :mod:`sigmapi.ordering`) or "none" (the paper's random start and schedule, bit for bit)."""
+    normalised at the map border; see :mod:`sigmapi.rules.ordering`) or "none" (the paper's
+    random start and schedule, bit for bit)."""
     ordering_sigma: float = 3.0
     """With an ordering procedure: the largest neighbourhood width used (map units); the
     configured sigma schedule is cut off at this value. Ignored with ordering = "none"."""
     same_view: bool = False
     """Ablation: learn from the view that chose the winner (the paper learns from the other)."""
     backend: str = "auto"
-    """Kernel: "auto" (fast if numba imports), "reference" or "fast"."""
+    """Kernel: "auto" (the fast kernel where numba imports, else the reference kernel) or a
+    backend's name (:data:`sigmapi.kernels.BACKENDS`)."""
     kernel_tol: float = 1e-6
     """Fast kernel: code and neighbourhood values below kernel_tol x their maximum are skipped
     (0 = exact). The reference kernel is always exact."""

@@ -13,7 +13,6 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from sigmapi.kernels import reference
 from sigmapi.metrics import evaluate, evaluation_sets
 
 if TYPE_CHECKING:
@@ -45,10 +44,9 @@ def costs(model: SigmaPiSOM, batch: Batch) -> tuple[float, float]:
     """The approximate cost of section 6.3 at the current sigma and with the winner alone.
 
     The same numbers as ``model.cost(batch)`` and ``model.cost(batch, sigma=1e-5)``, computed
-    in one pass (one winner search, one activation of view 1, one weight export).
+    in one pass (one winner search, one activation of view 1, one neighbourhood).
     """
-    k, dist = model.cost_terms(batch)
-    a = reference.neighbourhood(k, model.map_shape, model.sigma_, model.config.map_periodic)
+    k, dist, a = model.cost_terms(batch)
     rows = np.arange(k.size)
     return float(np.mean(np.sum(a * dist, axis=1))), float(np.mean(dist[rows, k]))
 

@@ -233,7 +233,7 @@ def write_model(
             raise DataError(
                 f"array {k!r} must be float64 or float32, named 'weights' or 'state_<name>' "
                 f"(lower case), to be stored in a model file, got dtype {v.dtype}; a backend's "
-                "state_arrays must return such arrays"
+                "file_arrays must return such arrays"
             )
     full = {
         "format": FORMAT,

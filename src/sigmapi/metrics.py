@@ -46,6 +46,7 @@ from numpy.typing import NDArray
 
 from sigmapi import _memory, _validate
 from sigmapi.circular import circular_metrics, map_distance
+from sigmapi.rules import Scoring
 
 if TYPE_CHECKING:
     from sigmapi.som import SigmaPiSOM
@@ -294,13 +295,13 @@ def hard_scores(
     model: SigmaPiSOM, x: NDArray[np.float64], y: NDArray[np.float64]
 ) -> NDArray[np.float64]:
     """Per-unit scores ``(B, K)`` whose row-wise argmax is the hard winner
-    (``model.winner(x, y, hard=True)``, the same units, ties to the lowest index): the
-    response ``h``, or ``2 h - |w_k|^2`` under the ``min_distance`` rule."""
-    h = model.respond(x, y)
-    if model.winner_rule_ == "min_distance":
-        h *= 2.0
-        h -= model.unit_sqnorms()[None, :]
-    return h
+    (``model.winner(x, y, hard=True)``, the same units, ties to the lowest index): the scores
+    of the model's rule at sigma -> 0 (the response ``h`` for the soft rules, ``2 h - |w_k|^2``
+    under ``min_distance``) on the model's response."""
+    rule, c = model.winner_rule_.hard, model.config
+    norms = model.unit_sqnorms() if rule.needs_norms else None
+    at = Scoring(model.map_shape, model.sigma_, c.soft_cut, c.map_periodic, norms)
+    return rule.scores(model.respond(x, y), at)
 
 
 def evaluation_sets(model: SigmaPiSOM, n: int, seed: int = EVAL_SEED) -> tuple[Batch, Batch]:

@@ -26,10 +26,11 @@ from numpy.typing import ArrayLike, NDArray
 from sigmapi import _memory, _validate
 from sigmapi.codes import PopulationCode, grid_coordinates
 from sigmapi.config import SOMConfig
-from sigmapi.errors import ConfigError, DataError, ModelFileError, NotFittedError, NumericalError
-from sigmapi.kernels import KernelState, get_backend, reference
-from sigmapi.kernels.base import columns_to_dense, columns_top
-from sigmapi.ordering import INIT_PAIRS, crossview_init, training_rule
+from sigmapi.errors import ConfigError, DataError, NotFittedError, NumericalError
+from sigmapi.kernels import KernelState, get_backend
+from sigmapi.kernels.base import MAX_WEIGHT
+from sigmapi.model_file import read_parts, write_parts
+from sigmapi.rules import WinnerRule, ordering, winner_rule
 from sigmapi.tasks import Batch, TwoViewSampler
 from sigmapi.views import CodeViews, Views, check_pairs, check_views, encode_views
 
@@ -44,11 +45,6 @@ _FIELDS = tuple(f.name for f in dataclasses.fields(SOMConfig) if f.name != "extr
 """The hyperparameters :meth:`SigmaPiSOM.get_params` lists (``extra`` holds notes, no parameter)."""
 
 _SHAPE_FIELDS = ("map_shape", "x_shape", "y_shape")
-
-MAX_WEIGHT = 1e30
-"""Largest weight magnitude a model starts from; with :data:`sigmapi.views.MAX_PRODUCT`, the
-fast kernel's float32 ``raw = W / scale`` (scale >= 2**-50) stays below about 2e30, far from
-3.4e38."""
 
 
 class SigmaPiSOM:
@@ -191,39 +187,28 @@ class SigmaPiSOM:
     def initial_weights(
         self, views: tuple[NDArray[np.float64], ...] | None = None
     ) -> NDArray[np.float64]:
-        """The run's initial weights ``(n_units, n_x, n_y)``.
+        """The run's initial weights ``(n_units, n_x, n_y)``, from the ordering procedure
+        (:mod:`sigmapi.rules.ordering`).
 
-        ``ordering="none"``: uniform in ``[-init_scale, init_scale]`` (the paper).
-        ``ordering="crossview"``: an ordered start computed from view pairs alone
-        (:func:`sigmapi.ordering.crossview_init`): the first ``INIT_PAIRS`` of ``views`` when
-        given (your own data), else as many pairs of the built-in task from the run's own
-        random stream (child ``spawn_key=(2,)``); with ``same_view`` (the ablation) view 0
-        stands in for view 1 there too.
+        ``ordering="none"``: uniform in ``[-init_scale, init_scale]`` (the paper), from the
+        run's child stream ``spawn_key=(0,)``. ``ordering="crossview"``: an ordered start
+        computed from view pairs alone: the first pairs of ``views`` when given (your own
+        data), else as many pairs of the built-in task from the run's own random stream
+        (child ``spawn_key=(2,)``).
         """
-        c = self.config
+        procedure = ordering(self.config.ordering)
         self.check_memory()
-        if c.ordering == "none":
-            s = c.init_scale
-            shape = (self.n_units, int(np.prod(self.x_shape)), int(np.prod(self.y_shape)))
-            return self._seq(0).uniform(-s, s, size=shape)
-        if views is None:
-            b = self.sampler.sample(INIT_PAIRS, self._seq(2))
+        if views is None and procedure.init_pairs:
+            b = self.sampler.sample(procedure.init_pairs, self._seq(2))
             views = (b.x0, b.y0, b.x1, b.y1)
-        else:
-            views = tuple(v[:INIT_PAIRS] for v in views)
-        if c.same_view:  # the ablation never sees a second view, not even for its start
-            views = (views[0], views[1], views[0], views[1])
-        return crossview_init(
-            views, self.x_shape, self.y_shape, self.map_shape, c.ordering_sigma / 2.0,
-            periodic=c.periodic, ring=c.map_periodic,
-        )  # fmt: skip
+        return procedure.initial_weights(self.config, self._seq(0), views)
 
     def memory_estimate(self) -> int:
-        """Bytes this model needs at its peak: the float64 start, the backend's copy (float64,
-        or float32 for the fast kernel with ``kernel_tol > 0``) and the float64 ``weights_``."""
-        n = self.n_units * int(np.prod(self.x_shape)) * int(np.prod(self.y_shape))
-        storage = 4 if self.backend == "fast" and self.config.kernel_tol > 0 else 8
-        return n * (8 + storage + 8)
+        """Bytes this model needs at its peak: the float64 start, the backend's state (its
+        own estimate, ``kernel.memory_bytes``) and the float64 ``weights_``."""
+        shape = (self.n_units, int(np.prod(self.x_shape)), int(np.prod(self.y_shape)))
+        n = shape[0] * shape[1] * shape[2]
+        return 16 * n + self._kernel.memory_bytes(shape, self.config.kernel_tol)
 
     def check_memory(self) -> None:
         """Raise :class:`~sigmapi.errors.ResourceError` (a MemoryError) before allocating if
@@ -240,8 +225,8 @@ class SigmaPiSOM:
         top = float(np.abs(weights).max(initial=0.0))
         if not top <= MAX_WEIGHT:  # also NaN
             raise NumericalError(
-                f"weights must be finite and at most {MAX_WEIGHT:g} in magnitude (the fast "
-                f"kernel stores float32 and scales lazily), got {top:.3g}; rescale them"
+                f"weights must be finite and at most {MAX_WEIGHT:g} in magnitude (a backend "
+                f"may store float32 and scale lazily), got {top:.3g}; rescale them"
             )
         self._state = self._kernel.prepare(weights, tol=self.config.kernel_tol)
         self._weights_cache = None
@@ -267,13 +252,12 @@ class SigmaPiSOM:
         return self._weights_cache
 
     def sigma_at(self, t: int | NDArray[np.int64]) -> NDArray[np.float64]:
-        """Neighbourhood width at iteration(s) t of this run's schedule.
-
-        With an ordering procedure the schedule is cut off at ``ordering_sigma``.
-        """
+        """Neighbourhood width at iteration(s) t of this run's schedule, as the ordering
+        procedure caps it (``crossview``: at ``ordering_sigma``)."""
         c = self.config
-        sigma = c.sigma_schedule.at(t, c.iterations)
-        return sigma if c.ordering == "none" else np.minimum(sigma, c.ordering_sigma)
+        return ordering(c.ordering).cap_sigma(
+            c.sigma_schedule.at(t, c.iterations), c.ordering_sigma
+        )
 
     def eps_at(self, t: int | NDArray[np.int64]) -> NDArray[np.float64]:
         """Learning rate at iteration(s) t."""
@@ -504,7 +488,7 @@ class SigmaPiSOM:
         self._kernel.train_block(
             self._state, x0, y0, x1, y1, self.sigma_at(t), self.eps_at(t),
             map_shape=self.map_shape, winner_rule=self.winner_rule_, soft_cut=c.soft_cut,
-            threads=c.threads, periodic=c.map_periodic,
+            threads=c.threads, map_periodic=c.map_periodic,
         )  # fmt: skip
         self.t_ += x0.shape[0]
         self._weights_cache = None
@@ -525,9 +509,8 @@ class SigmaPiSOM:
         """Activations ``h[b, k] = x_b^T W_k y_b`` of every unit; ``(B, n_units)``.
 
         ``x`` ``(B, n_x)`` and ``y`` ``(B, n_y)`` are codes (``x_code.encode``), flattened in
-        C order. Computed by the model's kernel on its own state (for the fast kernel: the
-        sparse input pairs of each row against its float32 weights; one pair or a few rows in
-        the caller's thread, larger batches in parallel over rows).
+        C order. Computed by the model's kernel on its own state
+        (:meth:`sigmapi.kernels.base.Kernel.activation`).
         """
         xa, ya = self._pairs_of(x, y)
         return np.asarray(self._kernel.activation(self._state, xa, ya), dtype=np.float64)
@@ -538,32 +521,39 @@ class SigmaPiSOM:
         return check_pairs(x, y, self.x_shape, self.y_shape)
 
     @property
-    def winner_rule_(self) -> str:
-        """The rule training uses: ``config.winner_rule``, border-normalised under an ordering
-        procedure (:func:`sigmapi.ordering.training_rule`)."""
-        return training_rule(self.config.winner_rule, self.config.ordering)
+    def winner_rule_(self) -> WinnerRule:
+        """The rule training uses (a :class:`~sigmapi.rules.WinnerRule`): the one named by
+        ``config.winner_rule``, as the ordering procedure trains it (``crossview``: the soft
+        rule border-normalised)."""
+        c = self.config
+        return ordering(c.ordering).training_rule(winner_rule(c.winner_rule))
 
     def winner(
-        self, x: ArrayLike, y: ArrayLike, rule: str | None = None, *, hard: bool = False
+        self,
+        x: ArrayLike,
+        y: ArrayLike,
+        rule: WinnerRule | str | None = None,
+        *,
+        hard: bool = False,
     ) -> NDArray[np.int64]:
         """Flat index of the winning unit per pair; ``(B,)``.
 
-        Uses the model's winner rule (default: :attr:`winner_rule_`) or ``rule``, at the
-        current sigma. ``hard=True``
-        takes the rule's limit at sigma -> 0: the soft winner becomes the argmax of the
+        Uses the model's winner rule (default: :attr:`winner_rule_`) or ``rule`` (a rule or
+        its name), at the current sigma. ``hard=True`` takes the rule's limit at sigma -> 0
+        (:attr:`~sigmapi.rules.WinnerRule.hard`): the soft winner becomes the argmax of the
         response (the metrics use this, so that mid-run maps are not smoothed).
         """
         xa, ya = self._pairs_of(x, y)
-        rule = rule or self.winner_rule_
-        if hard and rule in ("soft", "soft_mean"):
-            rule = "argmax"
+        chosen = self.winner_rule_ if rule is None else winner_rule(rule, "rule")
+        if hard:
+            chosen = chosen.hard
         return np.asarray(
             self._kernel.winners_of(
                 self._state,
                 xa,
                 ya,
                 self.map_shape,
-                rule,
+                chosen,
                 self.sigma_,
                 self.config.soft_cut,
                 self.config.map_periodic,
@@ -584,13 +574,17 @@ class SigmaPiSOM:
     def unit_sqnorms(self) -> NDArray[np.float64]:
         """``|w_k|^2``, the squared length of every unit's weights; ``(n_units,)``.
 
-        From the kernel's state (the fast kernel tracks them), without forming ``weights_``.
+        From the kernel's state (a kernel may track them), without forming ``weights_``.
         """
         self._check_fitted()
         return np.asarray(self._kernel.sqnorms(self._state), dtype=np.float64)
 
-    def cost_terms(self, batch: Batch) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
-        """Winners of view 0 ``(B,)`` and ``|x1 y1^T - w_k|^2`` for every unit ``(B, n_units)``.
+    def cost_terms(
+        self, batch: Batch, sigma: float | None = None
+    ) -> tuple[NDArray[np.int64], NDArray[np.float64], NDArray[np.float64]]:
+        """Winners of view 0 ``(B,)``, ``|x1 y1^T - w_k|^2`` for every unit ``(B, n_units)``
+        and the neighbourhood of each winner at width ``sigma`` (default: the current sigma)
+        ``(B, n_units)``, from the model's kernel.
 
         The distances use ``|x y^T|^2 = |x|^2 |y|^2`` and ``<x y^T, w_k> = h_k``, so no outer
         product is formed.
@@ -599,7 +593,9 @@ class SigmaPiSOM:
         h1 = self.respond(batch.x1, batch.y1)
         wn = self.unit_sqnorms()
         dn = (batch.x1**2).sum(1) * (batch.y1**2).sum(1)
-        return k, dn[:, None] - 2.0 * h1 + wn[None, :]
+        s = self.sigma_ if sigma is None else float(sigma)
+        a = self._kernel.neighbourhood(k, self.map_shape, s, self.config.map_periodic)
+        return k, dn[:, None] - 2.0 * h1 + wn[None, :], a
 
     def cost(self, batch: Batch, sigma: float | None = None) -> float:
         """Approximate cost of section 6.3 (after Kaski 1997), mean per sample.
@@ -608,9 +604,7 @@ class SigmaPiSOM:
         the winner of view 0 at width ``sigma`` (default: the current sigma) and the data
         outer product of view 1.
         """
-        k, dist = self.cost_terms(batch)
-        s = self.sigma_ if sigma is None else float(sigma)
-        a = reference.neighbourhood(k, self.map_shape, s, self.config.map_periodic)
+        _, dist, a = self.cost_terms(batch, sigma)
         return float(np.mean(np.sum(a * dist, axis=1)))
 
     def replay_twin(self) -> SigmaPiSOM:
@@ -630,47 +624,15 @@ class SigmaPiSOM:
         """The model as a JSON-able header and arrays (what a model file holds).
 
         The header holds the resolved ``config``, the iteration count ``t``, the
-        ``seed_entropy`` of the random streams (a decimal string) and the ``backend``. The
-        weights are stored once, in the backend's precision: the reference kernel's float64
-        ``weights`` ``(n_units, n_x, n_y)``, or the kernel's own state as ``state_<name>``
-        arrays (the fast kernel's float32 ``raw`` weights and per-unit ``scale``), from which
-        the weights follow and with which the model continues bit for bit on that backend.
+        ``seed_entropy`` of the random streams (a decimal string) and the ``backend``; the
+        arrays are the backend's own, in its precision, with which the model continues bit
+        for bit on that backend (:mod:`sigmapi.model_file`).
 
         Raises :class:`~sigmapi.errors.NumericalError` if the weights hold NaN or inf, so
         that no file is written that :func:`sigmapi.load` would refuse.
         """
         self._check_fitted()
-        state = self._kernel.state_arrays(self._state)
-        arrays = (
-            {f"state_{k}": v for k, v in state.items()}
-            if state
-            else {"weights": np.array(self.weights_)}
-        )
-        for k, v in arrays.items():
-            if not np.all(np.isfinite(v)):
-                raise NumericalError(
-                    f"the model's {k} hold NaN or inf values (an overflow in training, at "
-                    f"iteration <= {self.t_}); it cannot be saved: retrain with codes and "
-                    "init_scale of about 1"
-                )
-        n = (self.n_units, int(np.prod(self.x_shape)), int(np.prod(self.y_shape)))
-        top = (
-            columns_top(state["raw"], state["scale"], n)
-            if "raw" in state
-            else float(np.abs(arrays["weights"]).max(initial=0.0))
-        )
-        if not top <= MAX_WEIGHT:  # what load would refuse
-            raise NumericalError(
-                f"the model's weights reach {top:.3g}, beyond {MAX_WEIGHT:g} (an overflow in "
-                "training); it cannot be saved: retrain with codes and init_scale of about 1"
-            )
-        header = {
-            "config": self.config.to_dict(),
-            "t": int(self.t_),
-            "seed_entropy": str(self.seed_entropy),
-            "backend": self.backend,
-        }
-        return header, arrays
+        return write_parts(self.config, self.t_, self.seed_entropy, self._kernel, self._state)
 
     @classmethod
     def from_arrays(
@@ -680,78 +642,21 @@ class SigmaPiSOM:
         backend: str | None = None,
         source: str = "arrays",
     ) -> SigmaPiSOM:
-        """Rebuild a model from :meth:`to_arrays`'s header and arrays.
+        """Rebuild a model from :meth:`to_arrays`'s header and arrays (also of older files).
 
-        ``arrays`` holds ``weights``, or the fast kernel's ``state_raw`` and ``state_scale``
-        (and ``state_sqnorm``), or both (format version 1), which must then agree exactly.
         ``backend`` runs the model on another kernel (which starts from the weights; the
         kernel state is used only by the backend that wrote it). Raises
         :class:`~sigmapi.errors.ModelFileError`, its message starting with ``source``, if
-        the header and arrays do not make a model.
+        the header and arrays do not make a model (:func:`sigmapi.model_file.read_parts`).
         """
-        name = source
-        try:
-            cfg = SOMConfig.from_dict(header["config"])
-            if backend is not None:
-                cfg = cfg.replace(backend=backend)
-        except (ConfigError, TypeError, KeyError) as exc:
-            raise ModelFileError(f"{name!r}: stored config is invalid ({exc})") from None
-        n = (int(np.prod(cfg.map_shape)), int(np.prod(cfg.x_shape)), int(np.prod(cfg.y_shape)))
-        state = {k[len("state_") :]: v for k, v in arrays.items() if k.startswith("state_")}
-        w = arrays.get("weights")
-        bad = (
-            f"{name!r}: weights must be floats of magnitude <= {MAX_WEIGHT:g} (found NaN, "
-            "inf or an overflow such as raw x scale); the file is damaged or was edited"
-        )
-        if state:
-            try:
-                if not columns_top(state["raw"], state["scale"], n) <= MAX_WEIGHT:
-                    raise ModelFileError(bad)
-                dense = None
-                if w is not None or header.get("backend") != get_backend(cfg.backend).NAME:
-                    dense = columns_to_dense(state["raw"], state["scale"], n)
-            except (KeyError, ValueError) as exc:
-                if isinstance(exc, ModelFileError):
-                    raise
-                raise ModelFileError(f"{name!r}: backend state is invalid ({exc})") from None
-            if w is not None and not np.array_equal(np.asarray(dense), w):
-                raise ModelFileError(
-                    f"{name!r}: the backend state (raw x scale) disagrees with the stored "
-                    "weights; the file is damaged or was edited"
-                )
-            w = dense
-        elif w is None:
-            raise ModelFileError(f"{name!r}: holds neither weights nor a backend state")
-        if w is not None:
-            w = np.asarray(w)
-            if tuple(w.shape) != n:
-                raise ModelFileError(
-                    f"{name!r}: weights have shape {tuple(w.shape)}, the config needs {n}"
-                )
-            if w.dtype.kind != "f" or not float(np.abs(w).max(initial=0.0)) <= MAX_WEIGHT:
-                raise ModelFileError(bad)
-        t = _validate.integer(
-            f"{name!r}: iteration count", header.get("t"), 0, error=ModelFileError
-        )
-        try:
-            entropy = int(header["seed_entropy"])
-        except (KeyError, TypeError, ValueError):
-            raise ModelFileError(f"{name!r}: seed_entropy must be an integer string") from None
-        if entropy < 0:
-            raise ModelFileError(f"{name!r}: seed_entropy must be >= 0, got {entropy}")
-        model = cls(cfg)
-        model.seed_entropy = entropy
-        if state and header.get("backend") == model.backend:
-            try:
-                model._state = model._kernel.from_state_arrays(n, state, tol=cfg.kernel_tol)
-            except (ValueError, KeyError) as exc:
-                raise ModelFileError(f"{name!r}: backend state is invalid ({exc})") from None
+        parts = read_parts(header, arrays, backend, source)
+        model = cls(parts.config)
+        model.seed_entropy = parts.seed_entropy
+        if parts.state is not None:
+            model._state = parts.state
         else:
-            try:
-                model._set_weights(np.asarray(w, dtype=np.float64))
-            except NumericalError as exc:
-                raise ModelFileError(f"{name!r}: {exc}") from None
-        model.t_ = t
+            model._set_weights(np.asarray(parts.weights))
+        model.t_ = parts.t
         return model
 
     def save(self, path: str | Path, *, compress: bool = False) -> Path:

@@ -1,7 +1,8 @@
 """Compiled helpers of the fast kernel that work on one input pair (one row) at a time.
 
 - :func:`_pairs`: the sparse outer product ``x y^T`` of one view (the kept input pairs);
-- :func:`_winner`: the winning unit of one activation vector under a winner rule;
+- :func:`_winner`: the winning unit of one activation vector under a winner rule (the
+  compiled forms of the rules of :mod:`sigmapi.rules.winners`, by the codes below);
 - :func:`prefetch`, :func:`prefetch_row`: ask the CPU to start loading weights before they are
   needed;
 - the inference drivers: activations and winners of a batch of rows, serial (for one pair or
@@ -23,8 +24,16 @@ from numba import njit, prange, types
 from numba.core import cgutils
 from numba.extending import intrinsic
 
+from sigmapi.rules import neighbourhood
+
 __all__ = [
+    "ARGMAX",
     "BLOCK_ROWS",
+    "MIN_DISTANCE",
+    "SOFT",
+    "SOFT_MEAN",
+    "axis_distance",
+    "gaussian",
     "prefetch",
     "prefetch_row",
     "respond_rows",
@@ -35,6 +44,15 @@ __all__ = [
 
 BLOCK_ROWS = 16
 """Rows per parallel work item of the batched drivers."""
+
+SOFT, ARGMAX, MIN_DISTANCE, SOFT_MEAN = 0, 1, 2, 3
+"""Codes of the winner rules :func:`_winner` computes (``sigmapi.kernels.fast.COMPILED`` maps
+the rule objects to them); compiled in as constants."""
+
+gaussian: Any = njit(cache=True, nogil=True)(neighbourhood.gaussian)
+"""The map's Gaussian profile, compiled from :func:`sigmapi.rules.neighbourhood.gaussian`."""
+axis_distance: Any = njit(cache=True, nogil=True)(neighbourhood.axis_distance)
+"""Distance along a map axis, compiled from :func:`sigmapi.rules.neighbourhood.axis_distance`."""
 
 
 @intrinsic
@@ -116,14 +134,16 @@ def _pairs(x, y, tol, jbuf, pidx, pval):
 
 
 @njit(cache=True, nogil=True)
-def _winner(h, scale, sqnorm, rule, sigma, cut, dims, strides, wrap, tmp, tmp2):
-    """Winning unit of one activation vector ``h`` (K,); ties to the lowest index.
+def _winner(h, scale, sqnorm, rule, sigma, cut, dims, strides, map_periodic, tmp, tmp2):
+    """Winning unit of one activation vector ``h`` (K,) under the rule of code ``rule``;
+    ties to the lowest index. The compiled forms of the reference rules (same units).
 
-    ``wrap``: the map's axes are rings; the smoothing window wraps around and holds every unit
-    once (offsets ``-(n-1)//2 .. n//2`` at most), at its distance the shorter way round.
+    ``map_periodic``: the map's axes are rings; the smoothing window wraps around and holds
+    every unit once (offsets ``-(n-1)//2 .. n//2`` at most), at its distance the shorter way
+    round.
     """
     k_units = h.shape[0]
-    if rule == 0 or rule == 3:  # soft: separable Gaussian smoothing over the map, window +-cut
+    if rule == SOFT or rule == SOFT_MEAN:  # separable Gaussian smoothing, window +-cut
         for k in range(k_units):
             tmp[k] = h[k]
         cur = tmp
@@ -134,12 +154,12 @@ def _winner(h, scale, sqnorm, rule, sigma, cut, dims, strides, wrap, tmp, tmp2):
             m = min(cut, n - 1)
             wts = np.empty(m + 1)
             for d in range(m + 1):
-                wts[d] = np.exp(-(d * d) / (2.0 * sigma * sigma))
+                wts[d] = gaussian(d * d, sigma)
             for k in range(k_units):
                 c = (k // st) % n
                 acc = 0.0
                 norm = 0.0
-                if wrap:
+                if map_periodic:
                     for o in range(-min(cut, (n - 1) // 2), min(cut, n // 2) + 1):
                         c2 = (c + o) % n
                         acc += cur[k + (c2 - c) * st] * wts[abs(o)]
@@ -148,20 +168,20 @@ def _winner(h, scale, sqnorm, rule, sigma, cut, dims, strides, wrap, tmp, tmp2):
                     for c2 in range(max(0, c - m), min(n - 1, c + m) + 1):
                         acc += cur[k + (c2 - c) * st] * wts[abs(c2 - c)]
                         norm += wts[abs(c2 - c)]
-                nxt[k] = acc / norm if rule == 3 else acc
+                nxt[k] = acc / norm if rule == SOFT_MEAN else acc
             cur, nxt = nxt, cur
         best = 0
         for k in range(1, k_units):
             if cur[k] > cur[best]:
                 best = k
         return best
-    if rule == 1:
+    if rule == ARGMAX:
         best = 0
         for k in range(1, k_units):
             if h[k] > h[best]:
                 best = k
         return best
-    best = 0
+    best = 0  # MIN_DISTANCE: argmax of 2 h_k - |w_k|^2
     bval = 2.0 * h[0] - scale[0] * scale[0] * sqnorm[0]
     for k in range(1, k_units):
         v = 2.0 * h[k] - scale[k] * scale[k] * sqnorm[k]
@@ -189,8 +209,8 @@ def activate(raw, scale, pi, pv, n, ahead, k0, k1, acc, h):
     Serves inference (:func:`_respond_row`) and training (``fast._unit_chunk``).
 
     Written for the vectoriser: the loops over units run over slices from index 0 (a loop from
-    ``k0`` indexes with possibly negative numbers, whose wrap-around check kept LLVM from
-    vectorising it: 3.7x slower, ``benchmarks/README.md``), and each pass takes four pairs,
+    ``k0`` indexes with possibly negative numbers, whose wrap-around check keeps LLVM from
+    vectorising it; ``benchmarks/README.md``), and each pass takes four pairs,
     so that a unit's sum stays in a register for four products. The sum is still taken pair
     after pair, ``(((acc + r0 v0) + r1 v1) + r2 v2) + r3 v3``: the same result, bit for bit,
     as one pair per pass.
@@ -258,18 +278,19 @@ def respond_rows_parallel(raw, scale, x, y, tol, ahead, order, h):
 
 @njit(cache=True)
 def winners_rows(
-    raw, scale, sqnorm, x, y, tol, ahead, rule, sigma, cut, dims, strides, wrap,
+    raw, scale, sqnorm, x, y, tol, ahead, rule, sigma, cut, dims, strides, map_periodic,
     jb, pi, pv, acc, h, t1, t2, out,
 ):  # fmt: skip
     """Serial winners ``out`` ``(B,)`` of the rows of ``x``, ``y`` (``h``: one row of scratch)."""
     for b in range(x.shape[0]):
         _respond_row(raw, scale, x[b], y[b], tol, ahead, jb, pi, pv, acc, h)
-        out[b] = _winner(h, scale, sqnorm, rule, sigma, cut, dims, strides, wrap, t1, t2)
+        out[b] = _winner(h, scale, sqnorm, rule, sigma, cut, dims, strides, map_periodic, t1, t2)
 
 
 @njit(cache=True, parallel=True)
 def winners_rows_parallel(
-    raw, scale, sqnorm, x, y, tol, ahead, rule, sigma, cut, dims, strides, wrap, order, out
+    raw, scale, sqnorm, x, y, tol, ahead, rule, sigma, cut, dims, strides, map_periodic, order,
+    out,
 ):  # fmt: skip
     """:func:`winners_rows` in parallel blocks of rows, visited in ``order``."""
     n_rows = x.shape[0]
@@ -280,4 +301,6 @@ def winners_rows_parallel(
         for r in range(c * BLOCK_ROWS, min(n_rows, (c + 1) * BLOCK_ROWS)):
             b = order[r]
             _respond_row(raw, scale, x[b], y[b], tol, ahead, jb, pi, pv, acc, h)
-            out[b] = _winner(h, scale, sqnorm, rule, sigma, cut, dims, strides, wrap, t1, t2)
+            out[b] = _winner(
+                h, scale, sqnorm, rule, sigma, cut, dims, strides, map_periodic, t1, t2
+            )

@@ -1,62 +1,78 @@
-"""The kernel contract: what every backend module offers, and the winner rules it knows.
+"""The kernel contract: what every backend offers, from its state to its model file arrays.
 
-A kernel is a module that satisfies :class:`Kernel`; its state (the weights in the
-kernel's own layout) is opaque to the estimator, which only passes it back to the kernel.
-The reference kernel's state is the dense weight array itself; the fast kernel's is a
+A kernel (a module or an object) satisfies :class:`Kernel`. It owns its state (the weights in
+its own layout): it builds it from dense weights, says how much memory it needs, writes it
+into a model file and reads it back, and computes the activations, scores, winners,
+neighbourhood and learning iterations on it. The estimator only passes the state back to the
+kernel. The reference kernel's state is the dense weight array itself; the fast kernel's is a
 :class:`~sigmapi.kernels.fast.FastState`. Both satisfy :class:`KernelState`.
+
+Model file arrays: a kernel writes either ``weights`` (dense, ``(K, n_x, n_y)``; every kernel
+reads those, :func:`dense_file_weights`) or arrays of its own named ``state_<name>``
+(lower-case letters, digits and ``_``), float32 or float64 (what the file format stores).
+Another backend reads such a file through :meth:`Kernel.file_weights` of the one that wrote
+it.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Protocol, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["WINNER_RULES", "Kernel", "KernelState", "columns_to_dense", "columns_top"]
+from sigmapi.rules import WinnerRule, winner_rule
+from sigmapi.rules.winners import Scoring
 
-WINNER_RULES = ("soft", "argmax", "min_distance", "soft_mean")
-"""How the winner is chosen: ``"soft"`` (argmax of the Gaussian-smoothed activation, the
-paper), ``"argmax"``, ``"min_distance"`` (``argmin |vec(x y^T) - w_k|``), ``"soft_mean"``
-(the soft rule with the smoothed activation divided by the window's weight inside the map, so
-that border units are not handicapped)."""
+__all__ = [
+    "CONTRACT",
+    "MAX_WEIGHT",
+    "FileArrays",
+    "Kernel",
+    "KernelState",
+    "dense_file_weights",
+    "rule_scores",
+]
 
+MAX_WEIGHT = 1e30
+"""Largest weight magnitude a model holds (starts from, saves, loads): far inside every
+backend's storage, also the fast kernel's float32 ``raw = W / scale`` with ``scale >= 2**-50``
+(about 2e30 at most, against float32's 3.4e38)."""
 
-def columns_top(
-    raw: NDArray[np.floating], scale: NDArray[np.floating], shape: tuple[int, int, int]
-) -> float:
-    """Largest ``|W[k, i, j]|`` of the column layout with per-unit scales (see
-    :func:`columns_to_dense`), without forming ``W``; NaN or inf if ``raw`` holds them.
-
-    Raises ``ValueError`` if the shapes do not fit ``shape`` or a scale is not finite and > 0.
-    """
-    k, nx, ny = shape
-    raw, scale = np.asarray(raw), np.asarray(scale)
-    if raw.shape != (nx * ny, k) or raw.dtype.kind != "f":
-        raise ValueError(f"raw must be float of shape {(nx * ny, k)}, got {raw.dtype} {raw.shape}")
-    if scale.shape != (k,) or scale.dtype != np.float64:
-        raise ValueError(f"scale must be float64 of shape ({k},), got {scale.dtype} {scale.shape}")
-    if not np.all(np.isfinite(scale) & (scale > 0)):
-        raise ValueError("scale must be finite and > 0")
-    if raw.size == 0:
-        return 0.0
-    with np.errstate(over="ignore", invalid="ignore"):  # an overflow is the answer here
-        return float((np.abs(raw).max(axis=0).astype(np.float64) * scale).max())
+FileArrays = dict[str, NDArray[np.floating]]
+"""Model file arrays by member name (``weights`` or ``state_<name>``)."""
+Shape = tuple[int, int, int]
 
 
-def columns_to_dense(
-    raw: NDArray[np.floating], scale: NDArray[np.floating], shape: tuple[int, int, int]
+def rule_scores(
+    rule: WinnerRule | str,
+    h: NDArray[np.floating],
+    map_shape: tuple[int, ...],
+    sigma: float,
+    cut: int,
+    map_periodic: bool,
+    norms: Callable[[], NDArray[np.float64]],
 ) -> NDArray[np.float64]:
-    """Dense float64 weights ``(K, n_x, n_y)`` of the column layout with per-unit scales:
-    ``W[k] = scale[k] * raw[:, k]``, ``raw`` ``(n_x * n_y, K)`` (the fast kernel's state, as
-    a model file stores it; plain NumPy, so any backend can read such a file).
-    """
-    columns_top(raw[:0], scale, (shape[0], 0, 0))  # checks the scales
-    k, nx, ny = shape
-    if np.shape(raw) != (nx * ny, k):
-        raise ValueError(f"raw must have shape {(nx * ny, k)}, got {np.shape(raw)}")
-    w = np.asarray(raw).T.astype(np.float64) * scale[:, None]
-    return np.ascontiguousarray(w.reshape(k, nx, ny))
+    """Scores ``(B, K)`` of activations ``h`` under ``rule`` (an object or its name) by the
+    rule's own arithmetic; ``norms()`` gives the units' ``|w_k|^2``, called only for a rule
+    that needs them. A kernel's winners of ``h`` are the row-wise argmax."""
+    r = winner_rule(rule, "rule")
+    at = Scoring(map_shape, sigma, cut, map_periodic, norms() if r.needs_norms else None)
+    return r.scores(h, at)
+
+
+def dense_file_weights(shape: Shape, arrays: FileArrays) -> NDArray[np.float64]:
+    """Dense float64 weights of model file arrays that hold just ``weights`` ``(K, n_x, n_y)``
+    (the layout every kernel reads); ``ValueError`` if they do not."""
+    if set(arrays) != {"weights"}:
+        raise ValueError(f"dense weights are the one array 'weights', got {sorted(arrays)}")
+    w = np.asarray(arrays["weights"])
+    if tuple(w.shape) != tuple(shape):
+        raise ValueError(f"weights have shape {tuple(w.shape)}, the config needs {tuple(shape)}")
+    if w.dtype.kind != "f":
+        raise ValueError(f"weights must be floats, got {w.dtype}")
+    return np.asarray(w, dtype=np.float64)
 
 
 class KernelState(Protocol):
@@ -70,35 +86,51 @@ S = TypeVar("S", bound=KernelState)
 
 
 class Kernel(Protocol[S]):
-    """The functions of a kernel module (``S``: the type of its state).
+    """What a kernel offers (``S``: the type of its state).
 
     Shapes: weights ``(K, n_x, n_y)``; codes ``x`` ``(B, n_x)``, ``y`` ``(B, n_y)``;
     activations ``h`` ``(B, K)``; ``K`` map units on ``map_shape``, flattened in C order.
-    ``periodic``: the map's axes wrap around (grid distances the shorter way round).
+    ``map_periodic``: the map's axes wrap around (grid distances the shorter way round).
+    Winner rules are :class:`~sigmapi.rules.WinnerRule` objects or their names
+    (:data:`sigmapi.rules.WINNER_RULES`). ``tol``: the kernel's truncation tolerance
+    (``SOMConfig.kernel_tol``; 0 = exact), which an exact kernel ignores.
     """
 
     NAME: str
-    """The backend's name (a member of :data:`sigmapi.kernels.BACKENDS`)."""
+    """The backend's name (its key in :data:`sigmapi.kernels.REGISTRY`)."""
+
+    def supports(self, rule: WinnerRule | str) -> bool:
+        """Whether the kernel trains and finds winners with ``rule``."""
+        ...
+
+    def memory_bytes(self, shape: Shape, tol: float) -> int:
+        """Bytes of the state of weights of ``shape`` ``(K, n_x, n_y)`` at ``tol``."""
+        ...
 
     def prepare(self, weights: NDArray[np.float64], tol: float = ...) -> S:
-        """State from dense float64 weights (``tol``: truncation tolerance, 0 = exact)."""
+        """State from dense float64 weights ``(K, n_x, n_y)``."""
         ...
 
     def export(self, state: S) -> NDArray[np.float64]:
         """Dense float64 weights ``(K, n_x, n_y)`` of ``state``."""
         ...
 
-    def state_arrays(self, state: S) -> dict[str, NDArray[np.floating]]:
-        """Arrays beyond the dense weights that restore ``state`` exactly (may be empty)."""
+    def max_abs(self, state: S) -> float:
+        """Largest ``|w_kij|`` of ``state`` (NaN or inf if it holds them), without forming
+        the dense weights where the layout allows."""
         ...
 
-    def from_state_arrays(
-        self,
-        shape: tuple[int, int, int],
-        arrays: dict[str, NDArray[np.floating]],
-        tol: float = ...,
-    ) -> S:
-        """Inverse of :meth:`state_arrays` for weights of ``shape`` ``(K, n_x, n_y)``."""
+    def file_arrays(self, state: S) -> FileArrays:
+        """What a model file stores of ``state``: arrays that restore it exactly (copies)."""
+        ...
+
+    def from_file_arrays(self, shape: Shape, arrays: FileArrays, tol: float = ...) -> S:
+        """The state :meth:`file_arrays` wrote, for weights of ``shape``, bit for bit (also
+        from the files of earlier format versions); ``ValueError`` if the arrays do not fit."""
+        ...
+
+    def file_weights(self, shape: Shape, arrays: FileArrays) -> NDArray[np.float64]:
+        """Dense float64 weights of what :meth:`file_arrays` wrote (for another backend)."""
         ...
 
     def sqnorms(self, state: S) -> NDArray[np.float64]:
@@ -111,17 +143,30 @@ class Kernel(Protocol[S]):
         """``h[b, k] = x_b^T W_k y_b``; ``(B, K)``."""
         ...
 
+    def scores(
+        self,
+        state: S,
+        h: NDArray[np.floating],
+        map_shape: tuple[int, ...],
+        rule: WinnerRule | str,
+        sigma: float,
+        cut: int,
+        map_periodic: bool = ...,
+    ) -> NDArray[np.float64]:
+        """Per-unit scores ``(B, K)`` of ``h`` under ``rule``; the winners are their argmax."""
+        ...
+
     def winners(
         self,
         state: S,
         h: NDArray[np.floating],
         map_shape: tuple[int, ...],
-        rule: str,
+        rule: WinnerRule | str,
         sigma: float,
         cut: int,
-        periodic: bool = ...,
+        map_periodic: bool = ...,
     ) -> NDArray[np.int64]:
-        """Winning unit per row of ``h`` under ``rule`` (one of :data:`WINNER_RULES`)."""
+        """Winning unit per row of ``h`` under ``rule``, ``(B,)``; ties to the lowest index."""
         ...
 
     def winners_of(
@@ -130,13 +175,23 @@ class Kernel(Protocol[S]):
         x: NDArray[np.floating],
         y: NDArray[np.floating],
         map_shape: tuple[int, ...],
-        rule: str,
+        rule: WinnerRule | str,
         sigma: float,
         cut: int,
-        periodic: bool = ...,
+        map_periodic: bool = ...,
     ) -> NDArray[np.int64]:
         """Winning unit of each pair ``(x_b, y_b)``, ``(B,)``: the same as ``winners`` of
         ``activation``, for one pair as fast as the kernel allows (no per-call preparation)."""
+        ...
+
+    def neighbourhood(
+        self,
+        winner: NDArray[np.int64],
+        map_shape: tuple[int, ...],
+        sigma: float,
+        map_periodic: bool = ...,
+    ) -> NDArray[np.float64]:
+        """The L2-normalised Gaussian neighbourhood ``(B, K)`` around each winner ``(B,)``."""
         ...
 
     def train_block(
@@ -150,13 +205,20 @@ class Kernel(Protocol[S]):
         eps: NDArray[np.floating],
         *,
         map_shape: tuple[int, ...],
-        winner_rule: str,
+        winner_rule: WinnerRule | str,
         soft_cut: int,
         threads: bool = False,
-        periodic: bool = False,
+        map_periodic: bool = False,
     ) -> NDArray[np.int64]:
         """``len(x0)`` learning iterations in place: winner of view 0 at ``sigmas[t]``,
         Kohonen update towards view 1 at rate ``eps[t]``. Returns the winners ``(T,)``.
         ``threads``: the kernel may use several threads (the result must not change).
-        ``periodic``: every map axis wraps around (a ring in 1-D, a torus in 2-D)."""
+        ``map_periodic``: every map axis wraps around (a ring in 1-D, a torus in 2-D)."""
         ...
+
+
+CONTRACT: tuple[str, ...] = (
+    *Kernel.__annotations__,
+    *(n for n, v in vars(Kernel).items() if callable(v) and not n.startswith("_")),
+)
+"""The names every kernel defines (what :func:`sigmapi.kernels.register_backend` checks)."""

@@ -6,8 +6,8 @@ using the structure of the problem:
 
 - **Sparse codes.** The codes are Gaussian hills, so the outer product ``x y^T`` of a view has
   few non-negligible entries. Entries with ``|x_i y_j| <= tol * max|x| * max|y|`` are skipped,
-  in the activation and in the update (a 4-D ball of pairs around the peak; about 235 of
-  50,625 pairs for 15x15 codes of width 0.5 at ``tol = 1e-6``, about 2,500 for width 1).
+  in the activation and in the update: a 4-D ball of pairs around the peak, a small share
+  of the ``n_x n_y`` pairs for narrow codes (docs/algorithm.md counts them at paper-2d).
 - **Lazy decay.** Unit ``k`` stores ``W_k = s_k V_k`` with a scale ``s_k``. The Kohonen update
   ``W_k <- (1 - eps a_k) W_k + eps a_k x' y'^T`` becomes ``s_k <- s_k (1 - eps a_k)`` (O(1))
   plus the sparse ``V_k <- V_k + (eps a_k / s_k) x' y'^T``. Before ``s_k`` falls below
@@ -17,9 +17,9 @@ using the structure of the problem:
 - **float32 storage** of ``V`` (accumulation in float64), laid out ``(n_x * n_y, K)`` so that
   one input pair touches the weights of all units contiguously.
 - **Vectorised loops over units.** Every loop over a range of units runs over array slices
-  indexed from 0, which LLVM turns into SIMD code (a loop indexed from ``k0`` kept the
-  wrap-around check of possibly negative indices and stayed scalar: 2.5-3.7x slower, with
-  the same arithmetic). The activation takes four input pairs per pass over the units.
+  indexed from 0, which LLVM turns into SIMD code (a loop indexed from ``k0`` keeps the
+  wrap-around check of possibly negative indices and stays scalar, with the same
+  arithmetic). The activation takes four input pairs per pass over the units.
 - **Parallel over units**, in fixed chunks: every unit's arithmetic is the same whatever the
   number of threads, so results do not depend on it (no reductions across units).
 
@@ -29,8 +29,12 @@ measured in ``benchmarks/README.md`` (kernel tolerance table).
 
 State (:class:`FastState`): ``raw`` ``(n_x * n_y, K)`` (float32, or float64 when exact),
 ``scale`` ``(K,)`` and ``sqnorm`` ``(K,)`` = ``sum_p raw[p, k]**2`` (tracked incrementally for
-the ``min_distance`` rule; ``|w_k|^2 = scale_k^2 sqnorm_k``). :func:`state_arrays` returns all
-three, so a saved model continues bit for bit on this backend.
+the ``min_distance`` rule; ``|w_k|^2 = scale_k^2 sqnorm_k``). A model file stores all three
+(:func:`file_arrays`, the layout of :mod:`sigmapi.kernels.columns`, which reads without
+numba), so a saved model continues bit for bit on this backend. The rules are those of
+:mod:`sigmapi.rules`; their compiled forms are :func:`_neighbourhood` (the neighbourhood),
+:func:`_unit_chunk` (the Kohonen update as lazy decay) and ``_rows._winner`` (the winner
+rules of :data:`COMPILED`).
 
 References
 ----------
@@ -50,19 +54,29 @@ from numba import njit, prange
 from numpy.typing import NDArray
 
 from sigmapi import _validate
-from sigmapi.kernels import _rows, reference
-from sigmapi.kernels._rows import _pairs, _winner, activate, prefetch
-from sigmapi.kernels.base import WINNER_RULES, columns_to_dense
+from sigmapi.errors import ConfigError
+from sigmapi.kernels import _rows, columns
+from sigmapi.kernels._rows import _pairs, _winner, activate, axis_distance, gaussian, prefetch
+from sigmapi.kernels.base import FileArrays, rule_scores
+from sigmapi.rules import WinnerRule, winner_rule
+from sigmapi.rules.neighbourhood import neighbourhood
 
 __all__ = [
+    "COMPILED",
     "NAME",
     "FastState",
     "activation",
     "export",
-    "from_state_arrays",
+    "file_arrays",
+    "file_weights",
+    "from_file_arrays",
+    "max_abs",
+    "memory_bytes",
+    "neighbourhood",
     "prepare",
+    "scores",
     "sqnorms",
-    "state_arrays",
+    "supports",
     "train_block",
     "winners",
     "winners_of",
@@ -80,10 +94,10 @@ PARALLEL_MIN_WORK = 1 << 18
 """With ``threads=True`` (``SOMConfig.threads``), training uses threads when ``K * n_x * n_y``
 is at least this; below it, synchronising the threads costs more than it saves.
 
-Off by default: one learning step is ~0.1-1 ms of work with two synchronisations, and on a
-shared 2-core machine a descheduled worker thread stalls every step (measured: 62 it/s with
-2 threads vs 390 it/s with 1 on paper-2d under a load average of 5). The batched
-:func:`activation` (one synchronisation per call) always uses all threads.
+Off by default: one learning step is little work between two synchronisations, so on a
+busy machine a descheduled worker thread stalls every step (the ``fast-threads`` variant of
+``benchmarks/bench_bandwidth.py`` measures it). The batched :func:`activation` (one
+synchronisation per call) always uses all threads.
 """
 
 SERIAL_ROWS = 16
@@ -99,10 +113,10 @@ TRAIN_PREFETCH_AHEAD = 8
 the update and in the activation pass (benchmarks/README.md: its effect)."""
 
 PREFETCH_MIN_BYTES = 1 << 21
-"""Prefetching is used only for weights of at least this many bytes (2 MiB, a core's L2 cache
-here): weights that stay in cache gain nothing from it and pay its instructions (measured in
-one bench_bandwidth.py round under load: paper-1d, 13.5 KB of weights, 354,000 it/s without,
-280,000 with; paper-2d, 45.6 MB, 1,362 it/s without, 2,196 with)."""
+"""Prefetching is used only for weights of at least this many bytes (about a core's L2
+cache): weights that stay in cache gain nothing from it and pay its instructions, while
+weights beyond the caches gain (the ``fast-noprefetch`` variant of
+``benchmarks/bench_bandwidth.py`` measures both)."""
 
 
 def _ahead(state: FastState, ahead: int) -> int:
@@ -110,8 +124,31 @@ def _ahead(state: FastState, ahead: int) -> int:
     return ahead if state.raw.nbytes >= PREFETCH_MIN_BYTES else 0
 
 
-_RULES = {rule: code for code, rule in enumerate(WINNER_RULES)}
-"""Rule codes of the compiled :func:`_winner`: 0 soft, 1 argmax, 2 min_distance, 3 soft_mean."""
+COMPILED = {
+    "soft": _rows.SOFT,
+    "argmax": _rows.ARGMAX,
+    "min_distance": _rows.MIN_DISTANCE,
+    "soft_mean": _rows.SOFT_MEAN,
+}
+"""The winner rules this kernel computes, by name -> code of their compiled form in
+:func:`sigmapi.kernels._rows._winner`: the one place where rule objects become codes."""
+
+
+def supports(rule: WinnerRule | str) -> bool:
+    """Whether this kernel has the compiled form of winner rule ``rule`` (an object or name)."""
+    name = rule.name if isinstance(rule, WinnerRule) else rule
+    return name in COMPILED
+
+
+def _rule_code(rule: WinnerRule | str, field: str = "rule") -> tuple[WinnerRule, int]:
+    """The rule object and its compiled code; a ConfigError if it has no compiled form."""
+    r = winner_rule(rule, field)
+    if r.name not in COMPILED:
+        raise ConfigError(
+            f"{field} {r.name!r} has no compiled form in the fast kernel (it computes "
+            f"{tuple(COMPILED)}); use backend='reference', or add the rule to fast.COMPILED"
+        )
+    return r, COMPILED[r.name]
 
 
 @dataclass
@@ -160,7 +197,7 @@ class FastState:
     def refresh_norms(self) -> None:
         """Recompute ``sqnorm`` exactly from ``raw`` if it is stale."""
         if not self.norms_valid:
-            self.sqnorm[:] = _sqnorms(self.raw)
+            self.sqnorm[:] = columns.sqnorms(self.raw)
             self.norms_valid = True
 
 
@@ -191,62 +228,57 @@ def prepare(weights: NDArray[np.float64], tol: float = 1e-6) -> FastState:
         raise ValueError(f"weights must have shape (K, n_x, n_y), got {w.shape}")
     k, nx, ny = w.shape
     raw = np.ascontiguousarray(w.reshape(k, nx * ny).T, dtype=_storage_dtype(tol))
-    return FastState(raw, np.ones(k), _sqnorms(raw), tol, (k, nx, ny))
+    return FastState(raw, np.ones(k), columns.sqnorms(raw), tol, (k, nx, ny))
 
 
-def _sqnorms(raw: NDArray[np.floating]) -> NDArray[np.float64]:
-    """``sum_p raw[p, k]**2`` in float64, in blocks of rows (no full float64 copy)."""
-    sq = np.zeros(raw.shape[1])
-    for s in range(0, raw.shape[0], 4096):
-        r = raw[s : s + 4096].astype(np.float64)
-        sq += np.einsum("pk,pk->k", r, r)
-    return sq
+def memory_bytes(shape: tuple[int, int, int], tol: float = 1e-6) -> int:
+    """Bytes of the state of weights of ``shape``: ``raw`` in float32 (float64 when exact)."""
+    itemsize = np.dtype(_storage_dtype(_check_tol(tol))).itemsize
+    return itemsize * int(np.prod(shape, dtype=np.int64))
 
 
 def export(state: FastState) -> NDArray[np.float64]:
     """Dense float64 weights ``(K, n_x, n_y)``: ``scale[k] * raw[:, k]``."""
-    return columns_to_dense(state.raw, state.scale, state.shape)
+    return columns.columns_to_dense(state.raw, state.scale, state.shape)
 
 
-def state_arrays(state: FastState) -> dict[str, NDArray[np.floating]]:
-    """Arrays that restore ``state`` exactly: ``raw``, ``scale`` and, if current, ``sqnorm``."""
-    out = {"raw": state.raw.copy(), "scale": state.scale.copy()}
-    if state.norms_valid:
-        out["sqnorm"] = state.sqnorm.copy()
-    return out
+def max_abs(state: FastState) -> float:
+    """Largest ``|w_kij| = scale_k |raw[p, k]|``, without forming the dense weights."""
+    return columns.columns_top(state.raw, state.scale, state.shape)
 
 
-def from_state_arrays(
-    shape: tuple[int, int, int], arrays: dict[str, NDArray[np.floating]], tol: float = 1e-6
+def file_arrays(state: FastState) -> FileArrays:
+    """What a model file stores: ``state_raw``, ``state_scale`` and, if current,
+    ``state_sqnorm`` (:mod:`sigmapi.kernels.columns`), so that a saved model continues bit
+    for bit on this backend."""
+    return columns.to_file(state.raw, state.scale, state.sqnorm if state.norms_valid else None)
+
+
+def file_weights(shape: tuple[int, int, int], arrays: FileArrays) -> NDArray[np.float64]:
+    """Dense float64 weights of what :func:`file_arrays` wrote (``raw x scale``)."""
+    return columns.file_weights(shape, arrays)
+
+
+def from_file_arrays(
+    shape: tuple[int, int, int], arrays: FileArrays, tol: float = 1e-6
 ) -> FastState:
-    """Inverse of :func:`state_arrays` for weights of ``shape`` ``(K, n_x, n_y)``.
+    """The state :func:`file_arrays` wrote, for weights of ``shape`` ``(K, n_x, n_y)`` (also
+    from a version-1 file, whose ``weights`` must agree with ``raw x scale``).
 
     Raises ``ValueError`` if the arrays are missing, do not fit ``shape`` and ``tol``, or are
     not finite (scales must be > 0; ``sqnorm`` must agree with ``raw`` to 1e-6 relative).
     """
     tol = _check_tol(tol)
-    k, nx, ny = shape
-    missing = {"raw", "scale"} - set(arrays)
-    if missing or set(arrays) - {"raw", "scale", "sqnorm"}:
-        raise ValueError(f"fast state is the arrays raw, scale [, sqnorm], got {sorted(arrays)}")
-    raw, scale = arrays["raw"], arrays["scale"]
+    raw, scale, sq = columns.read_file(shape, arrays)
     dtype = _storage_dtype(tol)
-    if raw.shape != (nx * ny, k) or raw.dtype != dtype:
-        raise ValueError(
-            f"raw must be {np.dtype(dtype).name} of shape {(nx * ny, k)} for tol={tol}, "
-            f"got {raw.dtype} {raw.shape}"
-        )
-    if not np.all(np.isfinite(raw)):
-        raise ValueError("raw must be finite")
-    valid = "sqnorm" in arrays
-    exact = _sqnorms(raw)
-    sq = arrays["sqnorm"] if valid else exact
-    if scale.shape != (k,) or sq.shape != (k,):
-        raise ValueError(f"scale and sqnorm must have shape ({k},), got {scale.shape}, {sq.shape}")
-    if not np.all(np.isfinite(scale) & (scale > 0)):
-        raise ValueError("scale must be finite and > 0")
-    if not np.allclose(sq, exact, rtol=1e-6, atol=1e-12 * float(exact.max(initial=0.0))):
+    if raw.dtype != dtype:
+        raise ValueError(f"raw must be {np.dtype(dtype).name} for tol={tol}, got {raw.dtype}")
+    exact = columns.sqnorms(raw)
+    if sq is None:
+        sq = exact
+    elif not np.allclose(sq, exact, rtol=1e-6, atol=1e-12 * float(exact.max(initial=0.0))):
         raise ValueError("sqnorm disagrees with raw")
+    k, nx, ny = shape
     return FastState(
         np.ascontiguousarray(raw, dtype=dtype),
         np.ascontiguousarray(scale, dtype=np.float64),
@@ -261,9 +293,10 @@ def from_state_arrays(
 
 
 @njit(cache=True, nogil=True)
-def _neighbourhood(winner, sigma, eps, tol, dims, strides, wrap, ea):
-    """``ea[k] = eps * a_k`` (L2-normalised Gaussian around ``winner``; ``wrap``: the map's
-    axes are rings, distances go the shorter way round).
+def _neighbourhood(winner, sigma, eps, tol, dims, strides, map_periodic, ea):
+    """``ea[k] = eps * a_k``: the compiled form of
+    :func:`sigmapi.rules.neighbourhood.neighbourhood` (L2-normalised Gaussian around
+    ``winner``; ``map_periodic``: the map's axes are rings, distances go the shorter way).
 
     Returns the flat index range ``[lo, hi)`` from the first to the last unit with
     ``a_k > tol max a`` (on a ring these may lie at both ends: the range then covers the
@@ -276,11 +309,9 @@ def _neighbourhood(winner, sigma, eps, tol, dims, strides, wrap, ea):
         for ax in range(dims.shape[0]):
             c = (k // strides[ax]) % dims[ax]
             cw = (winner // strides[ax]) % dims[ax]
-            dc = abs(c - cw)
-            if wrap:
-                dc = min(dc, dims[ax] - dc)
+            dc = axis_distance(abs(c - cw), dims[ax], map_periodic)
             d2 += float(dc) ** 2
-        a = np.exp(-d2 / (2.0 * sigma * sigma))
+        a = gaussian(d2, sigma)
         ea[k] = a
         ssq += a * a
     norm = np.sqrt(ssq)
@@ -344,8 +375,8 @@ def _unit_chunk(
                 val = pv1[q]
                 for k in range(m):
                     # np.float64, not float(): numba types float() of a float32 as float32,
-                    # which made these squares float32 (weights of 1e-23 to 1e-19 then gave
-                    # denormal products, 40x slower, late in long runs)
+                    # which made these squares float32 (tiny weights late in long runs then
+                    # gave denormal products, which the CPU computes far more slowly)
                     old = np.float64(row[k])
                     row[k] = old + g[k] * val
                     new = np.float64(row[k])
@@ -385,8 +416,8 @@ def _buffers(k_units, n_pairs, ny):
 
 @njit(cache=True, parallel=True)
 def _train(
-    raw, scale, sqnorm, x0, y0, x1, y1, sigmas, eps, dims, strides, wrap, rule, cut, tol, out,
-    track, threads, ahead,
+    raw, scale, sqnorm, x0, y0, x1, y1, sigmas, eps, dims, strides, map_periodic, rule, cut, tol,
+    out, track, threads, ahead,
 ):  # fmt: skip
     """The training driver: iterations in order; ``threads``: update the units in parallel
     chunks of :data:`CHUNK` (same arithmetic per unit, so the same result), else in one call
@@ -407,9 +438,9 @@ def _train(
         _unit_chunk(raw, scale, sqnorm, 0, k_units, ea, 1.0, 0, 0,
                     pi1, pv1, 0, pi0, pv0, n0, True, track, h, gain, acc, ahead)  # fmt: skip
     for t in range(n_iter):
-        w = _winner(h, scale, sqnorm, rule, sigmas[t], cut, dims, strides, wrap, t1, t2)
+        w = _winner(h, scale, sqnorm, rule, sigmas[t], cut, dims, strides, map_periodic, t1, t2)
         out[t] = w
-        lo, hi = _neighbourhood(w, sigmas[t], eps[t], tol, dims, strides, wrap, ea)
+        lo, hi = _neighbourhood(w, sigmas[t], eps[t], tol, dims, strides, map_periodic, ea)
         thr = tol * ea[w]
         n1 = _pairs(x1[t], y1[t], tol, jb, pi1, pv1)
         more = t + 1 < n_iter
@@ -440,13 +471,6 @@ def _grid(map_shape: tuple[int, ...], k_units: int) -> tuple[NDArray[np.int64], 
     dims.flags.writeable = False
     strides.flags.writeable = False
     return dims, strides
-
-
-def _rule_code(rule: str) -> int:
-    try:
-        return _RULES[rule]
-    except KeyError:
-        raise ValueError(f"rule must be one of {WINNER_RULES}, got {rule!r}") from None
 
 
 def _codes(a: NDArray[np.floating], n: int, name: str) -> NDArray[np.float64]:
@@ -502,25 +526,37 @@ def activation(
     return h
 
 
+def scores(
+    state: FastState,
+    h: NDArray[np.floating],
+    map_shape: tuple[int, ...],
+    rule: WinnerRule | str,
+    sigma: float,
+    cut: int,
+    map_periodic: bool = False,
+) -> NDArray[np.float64]:
+    """Per-unit scores ``(B, K)`` of activations ``h``: the rule object's own arithmetic
+    (vectorised over the batch, as in the reference kernel), with the tracked norms
+    ``|w_k|^2 = scale_k^2 sqnorm_k`` where the rule needs them."""
+    return rule_scores(rule, h, map_shape, sigma, cut, map_periodic, lambda: sqnorms(state))
+
+
 def winners(
     state: FastState,
     h: NDArray[np.floating],
     map_shape: tuple[int, ...],
-    rule: str,
+    rule: WinnerRule | str,
     sigma: float,
     cut: int,
-    periodic: bool = False,
+    map_periodic: bool = False,
 ) -> NDArray[np.int64]:
     """Winning unit per row of activations ``h`` ``(B, K)``; ``(B,)``, ties to the lowest index.
 
-    Rules as :func:`sigmapi.kernels.reference.winners`; ``min_distance`` uses the tracked
-    norms ``|w_k|^2 = scale_k^2 sqnorm_k``. Vectorised over the batch.
+    The argmax of :func:`scores` (the compiled rules give the same units, see
+    :func:`winners_of`).
     """
-    _rule_code(rule)
-    if rule == "min_distance":
-        wn = sqnorms(state)
-        return np.argmax(2.0 * np.asarray(h, dtype=np.float64) - wn[None, :], axis=1)
-    return reference.winners(np.empty((0, 0, 0)), h, map_shape, rule, sigma, cut, periodic)
+    s = scores(state, h, map_shape, rule, sigma, cut, map_periodic)
+    return np.asarray(np.argmax(s, axis=1), dtype=np.int64)
 
 
 def winners_of(
@@ -528,10 +564,10 @@ def winners_of(
     x: NDArray[np.floating],
     y: NDArray[np.floating],
     map_shape: tuple[int, ...],
-    rule: str,
+    rule: WinnerRule | str,
     sigma: float,
     cut: int,
-    periodic: bool = False,
+    map_periodic: bool = False,
 ) -> NDArray[np.int64]:
     """Winning unit of each pair ``(x_b, y_b)``; ``(B,)``: activation and winner in one pass.
 
@@ -541,13 +577,13 @@ def winners_of(
     """
     xa, ya = _rows_of(state, x, y)
     dims, strides = _grid(tuple(map_shape), state.shape[0])
-    code = _rule_code(rule)
-    if code == _RULES["min_distance"]:
+    r, code = _rule_code(rule)
+    if r.needs_norms:
         state.refresh_norms()
     out = np.empty(xa.shape[0], dtype=np.int64)
     args = (state.raw, state.scale, state.sqnorm, xa, ya, state.tol,
             _ahead(state, PREFETCH_AHEAD), code,
-            float(sigma), int(cut), dims, strides, bool(periodic))  # fmt: skip
+            float(sigma), int(cut), dims, strides, bool(map_periodic))  # fmt: skip
     if xa.shape[0] <= SERIAL_ROWS:
         jb, pi, pv, acc, h, t1, t2 = state.scratch()
         _rows.winners_rows(*args, jb, pi, pv, acc, h, t1, t2, out)
@@ -566,10 +602,10 @@ def train_block(
     eps: NDArray[np.floating],
     *,
     map_shape: tuple[int, ...],
-    winner_rule: str,
+    winner_rule: WinnerRule | str,
     soft_cut: int,
     threads: bool = False,
-    periodic: bool = False,
+    map_periodic: bool = False,
 ) -> NDArray[np.int64]:
     """Run ``len(x0)`` learning iterations in order, updating ``state`` in place.
 
@@ -578,12 +614,12 @@ def train_block(
     :func:`sigmapi.kernels.reference.train_block`). Returns the winners ``(T,)``.
 
     ``threads``: update the units on numba's threads (the same result) when the map is large
-    enough (:data:`PARALLEL_MIN_WORK`) and numba has more than one thread. ``periodic``: every
-    map axis wraps around (a ring, a torus).
+    enough (:data:`PARALLEL_MIN_WORK`) and numba has more than one thread. ``map_periodic``:
+    every map axis wraps around (a ring, a torus).
     """
     k_units, nx, ny = state.shape
     dims, strides = _grid(tuple(map_shape), k_units)
-    code = _rule_code(winner_rule)
+    rule, code = _rule_code(winner_rule, "winner_rule")
     xs = [
         _codes(a, n, nm)
         for a, n, nm in ((x0, nx, "x0"), (y0, ny, "y0"), (x1, nx, "x1"), (y1, ny, "y1"))
@@ -594,14 +630,14 @@ def train_block(
     if any(a.shape[0] != n_iter for a in xs) or sg.shape != (n_iter,) or ep.shape != (n_iter,):
         raise ValueError("x0, y0, x1, y1, sigmas and eps must have the same length")
     out = np.empty(n_iter, dtype=np.int64)
-    track = code == _RULES["min_distance"]
+    track = rule.needs_norms  # the only rule that reads the norms keeps them current
     if track:
         state.refresh_norms()
     elif n_iter > 0:
         state.norms_valid = False
     parallel = threads and k_units * nx * ny >= PARALLEL_MIN_WORK and numba.get_num_threads() > 1
     driver: Any = _train  # a numba dispatcher (its stubs do not know the signature)
-    driver(state.raw, state.scale, state.sqnorm, *xs, sg, ep, dims, strides, bool(periodic),
+    driver(state.raw, state.scale, state.sqnorm, *xs, sg, ep, dims, strides, bool(map_periodic),
            code, int(soft_cut), state.tol, out, track, bool(parallel),
            _ahead(state, TRAIN_PREFETCH_AHEAD))  # fmt: skip
     return out

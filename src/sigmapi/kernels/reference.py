@@ -7,39 +7,44 @@ grid ``map_shape`` flattened in C order.
 One learning iteration (Fig. 7 of the chapter; docs/algorithm.md):
 
 1. ``h_k = x0^T W_k y0``                                    (:func:`activation`)
-2. winner ``k*``: argmax of h smoothed over the map with a Gaussian of width sigma
-   (:func:`soft_winner`), or plain argmax, or min distance ``argmax(2 h_k - |w_k|^2)``
+2. winner ``k*`` under the winner rule: the rule object's arithmetic
+   (:mod:`sigmapi.rules.winners`; the paper's: argmax of h smoothed over the map)
 3. ``a_k = exp(-|k - k*|^2 / (2 sigma^2))``, L2-normalised      (:func:`neighbourhood`)
+4. ``w_kij += eps a_k (x1_i y1_j - w_kij)`` with the OTHER view
+   (:data:`sigmapi.rules.KOHONEN`)
 
-On a periodic (toroidal) map, grid distances in steps 2 and 3 go the shorter way round.
-4. ``w_kij += eps a_k (x1_i y1_j - w_kij)`` with the OTHER view   (:func:`kohonen_update`)
+On a periodic map (``map_periodic``), grid distances in steps 2 and 3 go the shorter way
+round. Steps 2-4 are the rules' reference arithmetic (:mod:`sigmapi.rules`); this module
+runs them in order on dense weights, so it computes every rule there is.
 
 This module satisfies the kernel contract (:class:`sigmapi.kernels.base.Kernel`): its state
-is the dense weight array ``W`` itself. It also offers the steps of the iteration one by one
-(``smooth``, ``neighbourhood``, ``kohonen_update``), which the tests check by hand.
+is the dense weight array ``W`` itself, and a model file holds it as ``weights``.
 """
 
 from __future__ import annotations
 
-import functools
-
 import numpy as np
 from numpy.typing import NDArray
 
-from sigmapi.codes import grid_coordinates
-from sigmapi.kernels.base import WINNER_RULES
+from sigmapi import rules
+from sigmapi.kernels.base import FileArrays, dense_file_weights, rule_scores
+from sigmapi.rules import KOHONEN, WINNER_RULES, WinnerRule
+from sigmapi.rules.neighbourhood import neighbourhood
 
 __all__ = [
     "NAME",
     "activation",
     "export",
-    "from_state_arrays",
-    "kohonen_update",
+    "file_arrays",
+    "file_weights",
+    "from_file_arrays",
+    "max_abs",
+    "memory_bytes",
     "neighbourhood",
     "prepare",
-    "smooth",
+    "scores",
     "sqnorms",
-    "state_arrays",
+    "supports",
     "train_block",
     "winners",
     "winners_of",
@@ -50,6 +55,11 @@ NAME = "reference"
 
 # Activations of at most this many (sample x weight) products are formed at once.
 _CHUNK_ELEMS = 2**24
+
+
+def supports(rule: WinnerRule | str) -> bool:
+    """Every winner rule: this kernel runs the rule objects' own arithmetic."""
+    return isinstance(rule, WinnerRule) or rule in WINNER_RULES
 
 
 def prepare(weights: NDArray[np.float64], tol: float = 0.0) -> NDArray[np.float64]:
@@ -65,16 +75,31 @@ def export(state: NDArray[np.float64]) -> NDArray[np.float64]:
     return np.asarray(state, dtype=np.float64)
 
 
-def state_arrays(state: NDArray[np.float64]) -> dict[str, NDArray[np.floating]]:
-    """Arrays beyond the dense weights that restore the state exactly: none here."""
-    return {}
+def memory_bytes(shape: tuple[int, int, int], tol: float = 0.0) -> int:
+    """Bytes of the state of weights of ``shape``: the float64 weights."""
+    return 8 * int(np.prod(shape, dtype=np.int64))
 
 
-def from_state_arrays(
-    shape: tuple[int, int, int], arrays: dict[str, NDArray[np.floating]], tol: float = 0.0
+def max_abs(state: NDArray[np.float64]) -> float:
+    """Largest ``|w_kij|`` (NaN if the weights hold NaN)."""
+    return float(np.abs(state).max(initial=0.0))
+
+
+def file_arrays(state: NDArray[np.float64]) -> FileArrays:
+    """What a model file stores: the float64 ``weights`` ``(K, n_x, n_y)`` (a copy)."""
+    return {"weights": np.array(state, dtype=np.float64)}
+
+
+def file_weights(shape: tuple[int, int, int], arrays: FileArrays) -> NDArray[np.float64]:
+    """The dense weights :func:`file_arrays` wrote (checked against ``shape``)."""
+    return dense_file_weights(shape, arrays)
+
+
+def from_file_arrays(
+    shape: tuple[int, int, int], arrays: FileArrays, tol: float = 0.0
 ) -> NDArray[np.float64]:
-    """Inverse of :func:`state_arrays`: this kernel has no state beyond the weights."""
-    raise ValueError("the reference kernel has no backend state; load its weights instead")
+    """The state :func:`file_arrays` wrote: a float64 copy of its ``weights``."""
+    return prepare(file_weights(shape, arrays))
 
 
 def sqnorms(W: Array) -> NDArray[np.float64]:
@@ -95,74 +120,37 @@ def activation(W: Array, x: Array, y: Array) -> NDArray[np.float64]:
     return out
 
 
-@functools.lru_cache(maxsize=16)
-def _coords(map_shape: tuple[int, ...]) -> NDArray[np.float64]:
-    coords = grid_coordinates(map_shape)
-    coords.flags.writeable = False
-    return coords
-
-
-def _grid_offsets(n: int, periodic: bool) -> NDArray[np.int64]:
-    """``|i - j|`` between the units of an axis of ``n``; on a ring the shorter way round."""
-    d = np.abs(np.arange(n)[:, None] - np.arange(n)[None, :])
-    return np.minimum(d, n - d) if periodic else d
-
-
-def _smoothing_matrix(n: int, sigma: float, cut: int, periodic: bool) -> NDArray[np.float64]:
-    d = _grid_offsets(n, periodic)
-    g = np.exp(-(d.astype(np.float64) ** 2) / (2.0 * sigma**2))
-    g[np.abs(d) > cut] = 0.0
-    return g
-
-
-def smooth(
-    h: Array, map_shape: tuple[int, ...], sigma: float, cut: int, periodic: bool = False
+def scores(
+    W: Array,
+    h: Array,
+    map_shape: tuple[int, ...],
+    rule: WinnerRule | str,
+    sigma: float,
+    cut: int,
+    map_periodic: bool = False,
 ) -> NDArray[np.float64]:
-    """Convolve activations ``(B, K)`` over the map grid with a Gaussian of width ``sigma``.
-
-    Summed over a window of ``cut`` units each way along every axis (the authors' script:
-    cut = 15). On a bounded map (the paper) the window stops at the border; on a ``periodic``
-    map it wraps around, and every unit of the window counts once, at its distance the
-    shorter way round. Separable: one matrix product per map axis.
-    """
-    b = h.shape[0]
-    g = np.asarray(h, dtype=np.float64).reshape((b, *map_shape))
-    for axis, n in enumerate(map_shape):
-        m = _smoothing_matrix(n, sigma, cut, periodic)
-        g = np.moveaxis(np.tensordot(g, m, axes=([axis + 1], [1])), -1, axis + 1)
-    return g.reshape(b, -1)
+    """Per-unit scores ``(B, K)`` of activations ``h`` under ``rule`` (an object or its name,
+    one of :data:`sigmapi.rules.WINNER_RULES`): the rule's own arithmetic, with the norms of
+    ``W`` where it needs them; :func:`winners` is their row-wise argmax."""
+    return rule_scores(rule, h, map_shape, sigma, cut, map_periodic, lambda: sqnorms(W))
 
 
 def winners(
     W: Array,
     h: Array,
     map_shape: tuple[int, ...],
-    rule: str,
+    rule: WinnerRule | str,
     sigma: float,
     cut: int,
-    periodic: bool = False,
+    map_periodic: bool = False,
 ) -> NDArray[np.int64]:
     """Winning unit per row of activations ``h`` ``(B, K)``; ``(B,)`` flat indices.
 
-    ``rule``: ``"soft"`` argmax of the Gaussian-smoothed activation (the paper's rule),
-    ``"argmax"`` plain argmax, ``"min_distance"`` ``argmin |vec(x y^T) - w_k|`` written as
-    ``argmax(2 h_k - |w_k|^2)`` (exact for unit-length data), ``"soft_mean"`` the soft rule
-    divided by the smoothing weight inside the map. ``periodic``: the map wraps around (the
-    smoothing window too; "soft" and "soft_mean" then differ by a constant factor). Ties go
-    to the lowest index.
+    The argmax of :func:`scores`; ``map_periodic``: the map wraps around (the smoothing
+    window too). Ties go to the lowest index.
     """
-    if rule == "soft":
-        return np.argmax(smooth(h, map_shape, sigma, cut, periodic), axis=1)
-    if rule == "soft_mean":
-        ones = np.ones((1, int(np.prod(map_shape))))
-        inside = smooth(ones, map_shape, sigma, cut, periodic)
-        return np.argmax(smooth(h, map_shape, sigma, cut, periodic) / inside, axis=1)
-    if rule == "argmax":
-        return np.argmax(h, axis=1)
-    if rule == "min_distance":
-        wn = sqnorms(W)
-        return np.argmax(2.0 * h - wn[None, :], axis=1)
-    raise ValueError(f"rule must be one of {WINNER_RULES}, got {rule!r}")
+    s = scores(W, h, map_shape, rule, sigma, cut, map_periodic)
+    return np.asarray(np.argmax(s, axis=1), dtype=np.int64)
 
 
 def winners_of(
@@ -170,38 +158,13 @@ def winners_of(
     x: Array,
     y: Array,
     map_shape: tuple[int, ...],
-    rule: str,
+    rule: WinnerRule | str,
     sigma: float,
     cut: int,
-    periodic: bool = False,
+    map_periodic: bool = False,
 ) -> NDArray[np.int64]:
     """Winning unit of each pair ``(x_b, y_b)``: :func:`winners` of :func:`activation`."""
-    return winners(W, activation(W, x, y), map_shape, rule, sigma, cut, periodic)
-
-
-def neighbourhood(
-    winner: NDArray[np.int64], map_shape: tuple[int, ...], sigma: float, periodic: bool = False
-) -> NDArray[np.float64]:
-    """Gaussian neighbourhood around each winner, L2-normalised; ``(B,)`` -> ``(B, K)``.
-
-    ``a_k = exp(-|g_k - g_k*|^2 / (2 sigma^2)) / norm`` with grid coordinates ``g``; on a
-    ``periodic`` map each axis's difference is taken the shorter way round the ring.
-    """
-    coords = _coords(map_shape)
-    diff = np.abs(coords[None, :, :] - coords[np.asarray(winner)][:, None, :])
-    if periodic:
-        n = np.asarray(map_shape, dtype=np.float64)
-        diff = np.minimum(diff, n - diff)
-    d2 = (diff**2).sum(axis=2)
-    a = np.exp(-d2 / (2.0 * sigma**2))
-    return a / np.linalg.norm(a, axis=1, keepdims=True)
-
-
-def kohonen_update(W: Array, a: Array, x1: Array, y1: Array, eps: float) -> None:
-    """In place: ``W_k <- W_k + eps a_k (x1 y1^T - W_k)`` for one sample; ``a`` is ``(K,)``."""
-    ea = (eps * a)[:, None, None]
-    W *= 1.0 - ea
-    W += ea * np.outer(x1, y1)[None, :, :]
+    return winners(W, activation(W, x, y), map_shape, rule, sigma, cut, map_periodic)
 
 
 def train_block(
@@ -214,25 +177,27 @@ def train_block(
     eps: Array,
     *,
     map_shape: tuple[int, ...],
-    winner_rule: str,
+    winner_rule: WinnerRule | str,
     soft_cut: int,
     threads: bool = False,
-    periodic: bool = False,
+    map_periodic: bool = False,
 ) -> NDArray[np.int64]:
     """Run ``len(x0)`` learning iterations in order, updating ``W`` in place.
 
     Iteration ``t`` finds the winner of view ``(x0[t], y0[t])`` at width ``sigmas[t]`` (rule
     ``winner_rule``, smoothing window ``soft_cut``) and learns view ``(x1[t], y1[t])`` with
-    rate ``eps[t]``. Returns the winners ``(T,)``. ``threads`` is ignored: this kernel is
-    written to be read, on one thread. ``periodic``: every map axis wraps around (a ring in
-    1-D, a torus in 2-D), in the winner's smoothing and in the neighbourhood.
+    rate ``eps[t]`` (the Kohonen rule). Returns the winners ``(T,)``. ``threads`` is
+    ignored: this kernel is written to be read, on one thread. ``map_periodic``: every map
+    axis wraps around (a ring in 1-D, a torus in 2-D), in the winner's smoothing and in the
+    neighbourhood.
     """
+    rule = rules.winner_rule(winner_rule, "winner_rule")
     t_total = x0.shape[0]
     out = np.empty(t_total, dtype=np.int64)
     for t in range(t_total):
         h = activation(W, x0[t : t + 1], y0[t : t + 1])
-        k = winners(W, h, map_shape, winner_rule, float(sigmas[t]), soft_cut, periodic)
-        a = neighbourhood(k, map_shape, float(sigmas[t]), periodic)[0]
-        kohonen_update(W, a, x1[t], y1[t], float(eps[t]))
+        k = winners(W, h, map_shape, rule, float(sigmas[t]), soft_cut, map_periodic)
+        a = neighbourhood(k, map_shape, float(sigmas[t]), map_periodic)[0]
+        KOHONEN.update(W, a, x1[t], y1[t], float(eps[t]))
         out[t] = k[0]
     return out

@@ -1,4 +1,5 @@
-"""Ordering procedures: how a map starts so that it unfolds on every seed (docs/algorithm.md).
+"""Ordering procedures: how a map starts so that it unfolds on every seed (docs/algorithm.md,
+"Ordering procedures", which also holds what each step was measured to change).
 
 With the paper's random initial weights and a wide first neighbourhood, a Sigma-Pi map stays
 mirror-symmetric until the neighbourhood has shrunk to about a quarter of the map; the symmetry
@@ -12,8 +13,7 @@ from the two-view data alone (never z):
    ``(C01 + C10) / 2`` of the outer products ``x y^T`` of view 0 and view 1. The outer
    products are first expressed in a smooth basis (the leading eigenvectors of a Gaussian
    kernel of width ``blur`` on each input axis) so that near positions give near features;
-   without it the components of narrow codes are noisy (a rank correlation of 0.7 with z in
-   1-D, 0.99 with it).
+   without it the components of narrow codes follow z only loosely.
 2. **Orientation.** Within the span of the ``d`` leading components (``d`` = map
    dimensions), the combination that best predicts each axis of the retinal position (the
    centre of mass of the x code) is taken for the matching map axis. This fixes the sign,
@@ -24,37 +24,56 @@ from the two-view data alone (never z):
    of the pairs placed near it (one batch step of the cost function, docs/algorithm.md).
 
 Training then runs the configured schedule with the neighbourhood capped at
-``ordering_sigma``: the wide start of the paper's schedule exists to order a random map, and
-at sigma 8 on a 15-unit map it would erase any start within 25,000 iterations.
+``ordering_sigma`` (:meth:`Crossview.cap_sigma`): the wide start of the paper's schedule
+exists to order a random map, and a neighbourhood as wide as the map would erase any start
+long before it narrows.
 
-4. **Border-normalised soft winner** (:func:`training_rule`). The paper's soft winner sums
-   the Gaussian-weighted activations of a unit's neighbours; a unit at the map's border has
-   fewer neighbours, so while sigma is about 0.4-0.8 the second unit from an end wins the
-   inputs that belong to the end unit and the two ends swap (order R^2 0.966-0.98 instead of
-   0.99 on about half of the 1-D seeds). With an ordering procedure the soft winner takes
-   the weighted *mean* over the window inside the map (rule ``"soft_mean"``); away from the
-   borders the two rules pick the same unit.
+4. **Border-normalised soft winner** (:meth:`Crossview.training_rule`). The paper's soft
+   winner sums the Gaussian-weighted activations of a unit's neighbours; a unit at the map's
+   border has fewer neighbours, so while sigma is below one unit the second unit from an end
+   can win the inputs that belong to the end unit and the two ends swap. With an ordering
+   procedure the soft winner takes the weighted *mean* over the window inside the map (rule
+   ``"soft_mean"``); away from the borders the two rules pick the same unit.
 5. **A ring** (a periodic 1-D map, ``SOMConfig.map_periodic``). On angles the cross-view
    components come in pairs: the two leading ones are about ``cos`` and ``sin`` of the angle
    z (the shared cause is a point on a circle). ``atan2`` of the two scores places each pair
    round the ring, and the neighbourhood that averages the outer products wraps around. The
    smooth basis wraps around too when the codes are periodic. A torus (a periodic map of two
    or more dimensions) has no such start: use ``ordering="none"`` there.
+
+A procedure is an :class:`Ordering` object in :data:`ORDERINGS` (``SOMConfig.ordering``
+looks up there): it owns the initial weights, the sigma cap and the rule training uses.
 """
 
 from __future__ import annotations
 
+import math
+from abc import ABC, abstractmethod
+from typing import ClassVar, Protocol
+
 import numpy as np
+from numpy.random import Generator
 from numpy.typing import NDArray
 from threadpoolctl import threadpool_limits
 
 from sigmapi.codes import grid_coordinates
 from sigmapi.errors import ConfigError
+from sigmapi.rules.neighbourhood import axis_distance, gaussian
+from sigmapi.rules.winners import WinnerRule
 
-__all__ = ["ORDERINGS", "crossview_init", "crossview_scores", "smooth_basis", "training_rule"]
-
-ORDERINGS = ("crossview", "none")
-"""Ordering procedures: ``"crossview"`` (sigmapi's) and ``"none"`` (the paper's)."""
+__all__ = [
+    "CROSSVIEW",
+    "INIT_PAIRS",
+    "NONE",
+    "ORDERINGS",
+    "Crossview",
+    "NoOrdering",
+    "Ordering",
+    "OrderingSettings",
+    "crossview_init",
+    "crossview_scores",
+    "smooth_basis",
+]
 
 INIT_PAIRS = 1000
 """View pairs the cross-view start is computed from."""
@@ -176,13 +195,13 @@ def crossview_init(
     map_shape: tuple[int, ...],
     sigma: float,
     periodic: bool = False,
-    ring: bool = False,
+    map_periodic: bool = False,
 ) -> NDArray[np.float64]:
     """Ordered initial weights ``(n_units, n_x, n_y)`` from view pairs (module docstring).
 
     ``sigma`` is the width (map units) of the neighbourhood that averages the outer products
     ``x1 y1^T`` of the pairs placed near each unit. ``periodic``: the codes' axes are rings.
-    ``ring``: the map is a periodic 1-D map (step 5 of the module docstring).
+    ``map_periodic``: the map is a ring, a periodic 1-D map (step 5 of the module docstring).
     """
     n, d = views[0].shape[0], len(map_shape)
     if n < 4 * d:
@@ -190,16 +209,16 @@ def crossview_init(
             f"ordering='crossview' needs at least {4 * d} view pairs to start from, got {n}; "
             "pass more views or set ordering='none'"
         )
-    if ring and d != 1:
+    if map_periodic and d != 1:
         raise ConfigError(
             f"ordering='crossview' orders a periodic map of one dimension (a ring), got "
             f"map_shape {map_shape}; set ordering='none' for a torus"
         )
     sizes = np.asarray(map_shape, dtype=np.float64)
-    # small dense problems: one BLAS thread is faster, and far faster on a busy machine
-    # (a 625 x 625 eigh: 0.17 s on one thread, 3.6 s on two with other work running)
+    # small dense problems: on one BLAS thread they run faster than on several, and far
+    # faster on a busy machine (threads wait for each other at every step of the eigh)
     with threadpool_limits(limits=1, user_api="blas"):
-        if ring:  # the two leading components are cos and sin of the angle: atan2 orders it
+        if map_periodic:  # the two leading components are cos and sin of the angle
             cs = crossview_scores(views, x_shape, y_shape, 2, periodic=periodic)
             place = (np.arctan2(cs[:, 1], cs[:, 0]) / (2.0 * np.pi) % 1.0)[:, None] * sizes
         else:
@@ -207,14 +226,12 @@ def crossview_init(
             ranks = (np.argsort(np.argsort(scores, axis=0, kind="stable"), axis=0) + 0.5) / n
             place = ranks * (sizes - 1.0)
         units = grid_coordinates(map_shape)
-        diff = np.abs(units[:, None, :] - place[None, :, :])
-        if ring:
-            diff = np.minimum(diff, sizes - diff)
+        diff = axis_distance(np.abs(units[:, None, :] - place[None, :, :]), sizes, map_periodic)
         d2 = (diff**2).sum(axis=-1)
-        a = np.exp(-(d2 - d2.min(axis=1, keepdims=True)) / (2.0 * sigma**2))
+        a = gaussian(d2 - d2.min(axis=1, keepdims=True), sigma)
         a /= a.sum(axis=1, keepdims=True)
-        # W[k] = sum_a a[k, a] x1[a] y1[a]^T as matrix products over chunks of pairs (BLAS;
-        # a single einsum over (k, a, i, j) took 22 s of CPU at paper-2d, this 1 s)
+        # W[k] = sum_a a[k, a] x1[a] y1[a]^T as matrix products over chunks of pairs (BLAS),
+        # not one einsum over (k, a, i, j), which forms no product BLAS can take
         _, _, x1, y1 = views
         nx, ny = x1.shape[1], y1.shape[1]
         w = np.zeros((a.shape[0], nx * ny))
@@ -225,13 +242,114 @@ def crossview_init(
     return w.reshape(a.shape[0], nx, ny)
 
 
-def training_rule(winner_rule: str, ordering: str) -> str:
-    """The winner rule a model trains and answers with (step 4 of the module docstring).
+# ---------------------------------------------------------------------------- procedures
 
-    ``"soft"`` becomes the border-normalised ``"soft_mean"`` under an ordering procedure;
-    with ``ordering="none"`` and for every other rule it is ``winner_rule`` unchanged.
 
-    >>> training_rule("soft", "crossview"), training_rule("soft", "none")
-    ('soft_mean', 'soft')
+Views = tuple[NDArray[np.float64], ...] | None
+"""View pairs ``(x0, y0, x1, y1)``, codes ``(B, n_x)``, ``(B, n_y)``, ... (or none)."""
+Weights = NDArray[np.float64]
+"""Weights ``(n_units, n_x, n_y)``."""
+
+
+class OrderingSettings(Protocol):
+    """What an ordering procedure reads of a run's settings (a :class:`~sigmapi.SOMConfig`)."""
+
+    @property
+    def map_shape(self) -> tuple[int, ...]: ...
+    @property
+    def x_shape(self) -> tuple[int, ...]: ...
+    @property
+    def y_shape(self) -> tuple[int, ...]: ...
+    @property
+    def init_scale(self) -> float: ...
+    @property
+    def ordering_sigma(self) -> float: ...
+    @property
+    def same_view(self) -> bool: ...
+    @property
+    def periodic(self) -> bool: ...
+    @property
+    def map_periodic(self) -> bool: ...
+
+
+class Ordering(ABC):
+    """An ordering procedure: the initial weights, the sigma cap and the rule training uses."""
+
+    name: ClassVar[str]
+    """The procedure's name (its key in :data:`ORDERINGS`, ``SOMConfig.ordering``)."""
+    init_pairs: ClassVar[int] = 0
+    """View pairs :meth:`initial_weights` reads (0: it reads none)."""
+
+    @abstractmethod
+    def initial_weights(self, settings: OrderingSettings, rng: Generator, views: Views) -> Weights:
+        """Initial weights ``(n_units, n_x, n_y)``, from ``rng`` and/or the first
+        :attr:`init_pairs` rows of ``views`` ``(x0, y0, x1, y1)``."""
+
+    def cap_sigma(self, sigma: NDArray[np.float64], ordering_sigma: float) -> NDArray[np.float64]:
+        """The neighbourhood width the run trains with, from its schedule's ``sigma``."""
+        return sigma
+
+    def training_rule(self, rule: WinnerRule) -> WinnerRule:
+        """The winner rule a model trains and answers with, from the configured ``rule``."""
+        return rule
+
+    def __repr__(self) -> str:
+        return f"<ordering {self.name!r}>"
+
+
+class NoOrdering(Ordering):
+    """``"none"``: the paper's procedure, bit for bit: uniform random weights in
+    ``[-init_scale, init_scale]``, the configured schedule and winner rule unchanged."""
+
+    name = "none"
+
+    def initial_weights(self, settings: OrderingSettings, rng: Generator, views: Views) -> Weights:
+        s = settings.init_scale
+        shape = (math.prod(settings.map_shape), math.prod(settings.x_shape),
+                 math.prod(settings.y_shape))  # fmt: skip
+        return rng.uniform(-s, s, size=shape)
+
+
+class Crossview(Ordering):
+    """``"crossview"``, sigmapi's procedure (module docstring): an ordered start computed
+    from :data:`INIT_PAIRS` view pairs, sigma capped at ``ordering_sigma``, and the soft
+    winner normalised at the map's border.
+
+    Examples
+    --------
+    >>> from sigmapi.rules.winners import SOFT
+    >>> CROSSVIEW.training_rule(SOFT), NONE.training_rule(SOFT)
+    (<winner rule 'soft_mean'>, <winner rule 'soft'>)
+    >>> CROSSVIEW.cap_sigma(np.array([8.0, 1.0]), 3.0)
+    array([3., 1.])
     """
-    return "soft_mean" if winner_rule == "soft" and ordering != "none" else winner_rule
+
+    name = "crossview"
+    init_pairs = INIT_PAIRS
+
+    def initial_weights(self, settings: OrderingSettings, rng: Generator, views: Views) -> Weights:
+        """From the first :data:`INIT_PAIRS` rows of ``views`` (``rng`` is not used); with
+        ``same_view`` (the ablation, which never sees a second view) view 0 stands in for
+        view 1 here too."""
+        if views is None:
+            raise ValueError("ordering 'crossview' starts from view pairs; pass views")
+        views = tuple(v[: self.init_pairs] for v in views)
+        if settings.same_view:
+            views = (views[0], views[1], views[0], views[1])
+        return crossview_init(
+            views, settings.x_shape, settings.y_shape, settings.map_shape,
+            settings.ordering_sigma / 2.0, periodic=settings.periodic,
+            map_periodic=settings.map_periodic,
+        )  # fmt: skip
+
+    def cap_sigma(self, sigma: NDArray[np.float64], ordering_sigma: float) -> NDArray[np.float64]:
+        return np.minimum(sigma, ordering_sigma)
+
+    def training_rule(self, rule: WinnerRule) -> WinnerRule:
+        return rule.border_normalised
+
+
+CROSSVIEW, NONE = Crossview(), NoOrdering()
+
+ORDERINGS: dict[str, Ordering] = {CROSSVIEW.name: CROSSVIEW, NONE.name: NONE}
+"""Ordering procedures by name: ``"crossview"`` (sigmapi's) and ``"none"`` (the paper's)."""
