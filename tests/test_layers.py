@@ -23,6 +23,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("metrics", "checkpoints", "executor"),
     ("circular",),
     ("som",),
+    ("_grids", "_cost", "_params", "_persist"),
     ("io", "config", "kernels", "tasks", "rules", "views", "model_file"),
     ("codes", "schedules"),
     ("errors", "_validate", "_memory", "_startup", "progress", "_version"),

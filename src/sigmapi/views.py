@@ -29,8 +29,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from sigmapi import _validate
 from sigmapi.codes import PopulationCode
-from sigmapi.errors import DataError
+from sigmapi.errors import ConfigError, DataError
 
 __all__ = [
     "MAX_PRODUCT",
@@ -40,6 +41,7 @@ __all__ = [
     "check_pairs",
     "check_views",
     "encode_views",
+    "fit_views",
 ]
 
 MAX_PRODUCT = 1e15
@@ -129,6 +131,21 @@ def check_views(views: Any, x_shape: tuple[int, ...], y_shape: tuple[int, ...]) 
             "about 1 (model.x_code.encode gives unit-length codes)"
         )
     return x0, y0, x1, y1
+
+
+def fit_views(
+    views: Any, x_shape: tuple[int, ...], y_shape: tuple[int, ...], method: str
+) -> CodeViews | None:
+    """The ``views`` argument of ``fit`` / ``partial_fit`` (``method``): None (the built-in
+    task) or :func:`check_views`'s codes; an int is refused with the keyword that takes it."""
+    if views is None:
+        return None
+    if _validate.is_int(views):
+        raise ConfigError(
+            f"views must be a tuple (x0, y0, x1, y1) of code arrays or None, got the int "
+            f"{views}; pass an iteration count by name: {method}(iterations={views})"
+        )
+    return check_views(views, x_shape, y_shape)
 
 
 def encode_views(

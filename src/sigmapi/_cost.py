@@ -1,0 +1,69 @@
+"""The approximate cost of the chapter's section 6.3 (after Kaski 1997): :class:`CostMixin`.
+
+``E = mean_mu sum_k a_k^mu |x1^mu y1^mu^T - w_k|^2``: the neighbourhood ``a^mu`` of the winner
+of view 0, the data outer product of view 1. Computed from the model's kernel (activations,
+unit norms, neighbourhood) without forming an outer product.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from sigmapi.config import SOMConfig
+from sigmapi.tasks import Batch
+
+__all__ = ["CostMixin"]
+
+
+class CostMixin:
+    """``cost`` and its terms, for a model with a kernel, winners and responses."""
+
+    config: SOMConfig
+    _kernel: Any
+
+    if TYPE_CHECKING:
+
+        @property
+        def map_shape(self) -> tuple[int, ...]: ...
+
+        @property
+        def sigma_(self) -> float: ...
+
+        def winner(
+            self, x: ArrayLike, y: ArrayLike, rule: Any = None, *, hard: bool = False
+        ) -> NDArray[np.int64]: ...
+
+        def respond(self, x: ArrayLike, y: ArrayLike) -> NDArray[np.float64]: ...
+
+        def unit_sqnorms(self) -> NDArray[np.float64]: ...
+
+    def cost_terms(
+        self, batch: Batch, sigma: float | None = None
+    ) -> tuple[NDArray[np.int64], NDArray[np.float64], NDArray[np.float64]]:
+        """Winners of view 0 ``(B,)``, ``|x1 y1^T - w_k|^2`` for every unit ``(B, n_units)``
+        and the neighbourhood of each winner at width ``sigma`` (default: the current sigma)
+        ``(B, n_units)``, from the model's kernel.
+
+        The distances use ``|x y^T|^2 = |x|^2 |y|^2`` and ``<x y^T, w_k> = h_k``, so no outer
+        product is formed.
+        """
+        k = self.winner(batch.x0, batch.y0)
+        h1 = self.respond(batch.x1, batch.y1)
+        wn = self.unit_sqnorms()
+        dn = (batch.x1**2).sum(1) * (batch.y1**2).sum(1)
+        s = self.sigma_ if sigma is None else float(sigma)
+        a = self._kernel.neighbourhood(k, self.map_shape, s, self.config.map_periodic)
+        return k, dn[:, None] - 2.0 * h1 + wn[None, :], a
+
+    def cost(self, batch: Batch, sigma: float | None = None) -> float:
+        """Approximate cost of section 6.3 (after Kaski 1997), mean per sample.
+
+        ``E = mean_mu sum_k a_k^mu |x1^mu y1^mu^T - w_k|^2``, with the neighbourhood a^mu of
+        the winner of view 0 at width ``sigma`` (default: the current sigma) and the data
+        outer product of view 1.
+        """
+        _, dist, a = self.cost_terms(batch, sigma)
+        return float(np.mean(np.sum(a * dist, axis=1)))

@@ -1,0 +1,76 @@
+"""The estimator's grids and codes: :class:`GridsMixin`.
+
+Everything here follows from the config alone (no weights): the map, retina and gaze grids,
+the population codes the model encodes positions with, the built-in task's two-view sampler
+and the grid coordinates of the map units.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from sigmapi.codes import PopulationCode, grid_coordinates
+from sigmapi.config import SOMConfig
+from sigmapi.tasks import TwoViewSampler
+from sigmapi.views import CodeViews, encode_views
+
+__all__ = ["GridsMixin"]
+
+
+class GridsMixin:
+    """Grids, codes and the sampler of a model with a ``config`` (a :class:`SOMConfig`)."""
+
+    config: SOMConfig
+
+    @property
+    def map_shape(self) -> tuple[int, ...]:
+        return self.config.map_shape
+
+    @property
+    def x_shape(self) -> tuple[int, ...]:
+        return self.config.x_shape
+
+    @property
+    def y_shape(self) -> tuple[int, ...]:
+        return self.config.y_shape
+
+    @property
+    def n_units(self) -> int:
+        return int(np.prod(self.map_shape))
+
+    def _code(self, shape: tuple[int, ...]) -> PopulationCode:
+        c = self.config
+        return PopulationCode(shape, c.code_width, c.code_height, c.code_normalize, c.periodic)
+
+    @property
+    def x_code(self) -> PopulationCode:
+        """The code of x the model was trained with: ``x_code.encode(p)`` for positions p."""
+        return self._code(self.x_shape)
+
+    @property
+    def y_code(self) -> PopulationCode:
+        """The code of y the model was trained with."""
+        return self._code(self.y_shape)
+
+    @property
+    def sampler(self) -> TwoViewSampler:
+        """The two-view sampler of the model's relation and codes."""
+        return TwoViewSampler(self.config.relation, self.x_code, self.y_code)
+
+    @property
+    def map_coords(self) -> NDArray[np.float64]:
+        """Grid coordinates of the map units, ``(n_units, map_ndim)``, C order."""
+        return grid_coordinates(self.map_shape)
+
+    def encode_views(
+        self, px0: ArrayLike, py0: ArrayLike, px1: ArrayLike, py1: ArrayLike
+    ) -> CodeViews:
+        """Two views given as positions, as the codes :meth:`fit` takes: ``(x0, y0, x1, y1)``.
+
+        ``px0``, ``px1`` are retinal positions and ``py0``, ``py1`` gaze directions, each of
+        shape ``(B, d)`` (``(B,)`` in 1-D) in [0, 1], fractions of the axis (rescale your
+        units first); row b of the four arrays shows the same body-centred position twice.
+        The codes are the model's own (:attr:`x_code`, :attr:`y_code`).
+        """
+        return encode_views(self.x_code, self.y_code, px0, py0, px1, py1)

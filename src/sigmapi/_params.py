@@ -1,0 +1,144 @@
+"""The estimator's scikit-learn glue: hyperparameters in and out, and what its checks ask.
+
+:class:`ParamsMixin` gives :class:`sigmapi.SigmaPiSOM` scikit-learn's ``get_params`` /
+``set_params`` (every field of :class:`~sigmapi.config.SOMConfig` is one hyperparameter) and
+the hooks ``check_is_fitted`` and ``clone`` use. scikit-learn is imported only when one of
+its own functions asks.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import TYPE_CHECKING, Any, Self
+
+import numpy as np
+from numpy.typing import NDArray
+
+from sigmapi.config import SOMConfig
+from sigmapi.errors import ConfigError
+from sigmapi.kernels import KernelState, get_backend
+
+__all__ = ["FIELDS", "ParamsMixin", "stored_overrides"]
+
+FIELDS = tuple(f.name for f in dataclasses.fields(SOMConfig) if f.name != "extra")
+"""The hyperparameters ``get_params`` lists (``extra`` holds notes, no parameter)."""
+
+_SHAPE_FIELDS = ("map_shape", "x_shape", "y_shape")
+
+
+def entropy_of(seed: int | None) -> int:
+    """The entropy of the random streams of ``seed``: ``seed`` itself, or fresh for None."""
+    return int(np.random.SeedSequence(seed).entropy)  # type: ignore[arg-type]
+
+
+def stored_overrides(cfg: SOMConfig, overrides: dict[str, Any]) -> SOMConfig:
+    """``cfg`` with ``overrides`` applied, keeping the caller's objects where validation only
+    rebuilt an identical value (scikit-learn's ``clone`` checks that ``__init__`` kept every
+    parameter as given)."""
+    cfg = cfg.replace(**overrides)
+    for k, v in overrides.items():
+        if k in FIELDS and _identical(v, getattr(cfg, k)):
+            object.__setattr__(cfg, k, v)
+    return cfg
+
+
+class ParamsMixin:
+    """scikit-learn's parameter protocol over a ``config`` (a :class:`SOMConfig`)."""
+
+    config: SOMConfig
+    seed_entropy: int
+    _kernel: Any
+    _state: KernelState | None
+    _t: int
+    _block_cache: Any
+    _unit_positions: NDArray[np.float64] | None
+    _weights_cache: NDArray[np.float64] | None
+
+    if TYPE_CHECKING:
+
+        def __init__(self, config: SOMConfig | None = None, **overrides: Any) -> None: ...
+
+        @property
+        def is_fitted(self) -> bool: ...
+
+        @property
+        def weights_(self) -> NDArray[np.float64]: ...
+
+        def _set_weights(self, weights: NDArray[np.float64]) -> None: ...
+
+    def __sklearn_is_fitted__(self) -> bool:
+        """What ``sklearn.utils.validation.check_is_fitted`` asks: whether there are weights."""
+        return self.is_fitted
+
+    def __sklearn_tags__(self) -> Any:
+        """scikit-learn's tags (asked by its checks from 1.6 on): unsupervised, needs fitting."""
+        from sklearn.utils import Tags, TargetTags
+
+        return Tags(estimator_type=None, target_tags=TargetTags(required=False))
+
+    def get_params(self, deep: bool = True) -> dict[str, Any]:
+        """The hyperparameters, as scikit-learn's ``get_params``: every field of the config.
+
+        ``SigmaPiSOM(**model.get_params())`` is an unfitted model with the same
+        hyperparameters (what ``sklearn.base.clone`` builds; ``extra``, the preset's notes, is
+        left out). ``deep`` is there for scikit-learn's signature: nothing is nested.
+
+        Examples
+        --------
+        >>> from sigmapi import SigmaPiSOM
+        >>> som = SigmaPiSOM(map_shape=(6,), seed=0)
+        >>> som.get_params()["map_shape"], som.set_params(iterations=2000).config.iterations
+        ((6,), 2000)
+        """
+        return {k: getattr(self.config, k) for k in FIELDS}
+
+    def set_params(self, **params: Any) -> Self:
+        """Change hyperparameters (``config`` and/or fields of :class:`SOMConfig`); returns self.
+
+        A fitted model keeps its weights and iteration count (so ``set_params(eps=0.001)``
+        followed by :meth:`partial_fit` continues with the new value), except when a grid
+        changes (``map_shape``, ``x_shape``, ``y_shape``): the weights no longer fit and are
+        discarded (call :meth:`fit`). A new ``seed`` re-seeds the random streams; a new
+        ``backend`` moves the weights onto that kernel.
+        """
+        cfg = params.pop("config", self.config)
+        if not isinstance(cfg, SOMConfig):
+            raise ConfigError(
+                f"config must be a sigmapi.SOMConfig, got {type(cfg).__name__}; "
+                "or pass single hyperparameters, e.g. set_params(iterations=50000)"
+            )
+        old, new = self.config, cfg.replace(**params) if params else cfg
+        weights = self.weights_ if self.is_fitted else None
+        self.config = new
+        self._block_cache = None
+        self._unit_positions = None  # transform()'s table follows map_shape and map_periodic
+        if new.seed != old.seed:
+            self.seed_entropy = entropy_of(new.seed)
+        if new.backend != old.backend:
+            self._kernel = get_backend(new.backend)
+        if any(getattr(new, k) != getattr(old, k) for k in _SHAPE_FIELDS):
+            self._state, self._weights_cache, self._t = None, None, 0
+        elif new.backend != old.backend and weights is not None:
+            self._set_weights(np.array(weights))
+        return self
+
+    def replay_twin(self) -> Self:
+        """An unfitted model with this one's config and random streams (its seed entropy).
+
+        ``model.replay_twin().fit(iterations=model.t_)`` replays the run that made ``model``
+        (the training data of every iteration is a pure function of the seed entropy and the
+        iteration number). ``sklearn.base.clone(model)`` instead builds a model from the
+        hyperparameters alone: with ``seed=None``, other random streams.
+        """
+        twin = type(self)(self.config)
+        twin.seed_entropy = self.seed_entropy
+        return twin
+
+
+def _identical(given: Any, stored: Any) -> bool:
+    """Whether ``given`` equals ``stored`` with the same types all the way down."""
+    if type(given) is not type(stored):
+        return False
+    if isinstance(given, tuple):
+        return len(given) == len(stored) and all(map(_identical, given, stored))
+    return bool(given == stored)

@@ -1,0 +1,127 @@
+"""The estimator as arrays, files and pickles: :class:`PersistMixin`.
+
+What a model file holds is decided by :mod:`sigmapi.model_file` (it validates the parts and
+never imports the estimator) and how it is written by :mod:`sigmapi.io` (atomic, verified,
+never pickled); this mixin gives :class:`sigmapi.SigmaPiSOM` its ``to_arrays`` /
+``from_arrays``, ``save`` / ``load`` and the pickle hooks, which store the same arrays.
+"""
+
+from __future__ import annotations
+
+import copy
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Self
+
+import numpy as np
+from numpy.typing import NDArray
+
+from sigmapi.config import SOMConfig
+from sigmapi.kernels import KernelState
+from sigmapi.model_file import read_parts, write_parts
+
+__all__ = ["PersistMixin"]
+
+
+class PersistMixin:
+    """Arrays, files and pickles of an estimator with ``config``, ``t_`` and a kernel state."""
+
+    config: SOMConfig
+    seed_entropy: int
+    _kernel: Any
+    _state: KernelState | None
+
+    if TYPE_CHECKING:
+
+        def __init__(self, config: SOMConfig | None = None, **overrides: Any) -> None: ...
+
+        @property
+        def is_fitted(self) -> bool: ...
+
+        @property
+        def t_(self) -> int: ...
+
+        @t_.setter
+        def t_(self, value: int) -> None: ...
+
+        def _check_fitted(self) -> None: ...
+
+        def _set_weights(self, weights: NDArray[np.float64]) -> None: ...
+
+    def to_arrays(self) -> tuple[dict[str, Any], dict[str, NDArray[Any]]]:
+        """The model as a JSON-able header and arrays (what a model file holds).
+
+        The header holds the resolved ``config``, the iteration count ``t``, the
+        ``seed_entropy`` of the random streams (a decimal string) and the ``backend``; the
+        arrays are the backend's own, in its precision, with which the model continues bit
+        for bit on that backend (:mod:`sigmapi.model_file`).
+
+        Raises :class:`~sigmapi.errors.NumericalError` if the weights hold NaN or inf, so
+        that no file is written that :func:`sigmapi.load` would refuse.
+        """
+        self._check_fitted()
+        return write_parts(self.config, self.t_, self.seed_entropy, self._kernel, self._state)
+
+    @classmethod
+    def from_arrays(
+        cls,
+        header: dict[str, Any],
+        arrays: dict[str, NDArray[Any]],
+        backend: str | None = None,
+        source: str = "arrays",
+    ) -> Self:
+        """Rebuild a model from :meth:`to_arrays`'s header and arrays (also of older files).
+
+        ``backend`` runs the model on another kernel (which starts from the weights; the
+        kernel state is used only by the backend that wrote it). Raises
+        :class:`~sigmapi.errors.ModelFileError`, its message starting with ``source``, if
+        the header and arrays do not make a model (:func:`sigmapi.model_file.read_parts`).
+        """
+        parts = read_parts(header, arrays, backend, source)
+        model = cls(parts.config)
+        model.seed_entropy = parts.seed_entropy
+        if parts.state is not None:
+            model._state = parts.state
+        else:
+            model._set_weights(np.asarray(parts.weights))
+        model.t_ = parts.t
+        return model
+
+    def save(self, path: str | Path, *, compress: bool = False) -> Path:
+        """Write the model atomically to ``path`` (``.npz``, no pickle); returns the path.
+
+        ``compress=True`` deflates the arrays (for archives: smaller, slower). The ``.npz``
+        file is the format to keep models in; ``pickle`` works (it stores the same arrays)
+        but ties a file to Python and is never safe to load from others.
+        """
+        from sigmapi.io import write_model
+
+        return write_model(path, *self.to_arrays(), compress=compress)
+
+    @classmethod
+    def load(cls, path: str | Path, backend: str | None = None) -> Self:
+        """Read a model written by :meth:`save` (optionally onto another ``backend``)."""
+        from sigmapi.io import read_model
+
+        header, arrays = read_model(path)
+        return cls.from_arrays(header, arrays, backend=backend, source=str(path))
+
+    def __getstate__(self) -> dict[str, Any]:
+        """State arrays and the config, never modules or compiled kernels (see :meth:`save`)."""
+        if self.is_fitted:
+            header, arrays = self.to_arrays()
+            return {"header": header, "arrays": arrays}
+        header = {"config": self.config.to_dict(), "seed_entropy": str(self.seed_entropy)}
+        return {"header": header, "arrays": None}
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        header, arrays = state["header"], state["arrays"]
+        if arrays is None:
+            twin = type(self)(SOMConfig.from_dict(header["config"]))
+            twin.seed_entropy = int(header["seed_entropy"])
+        else:
+            twin = type(self).from_arrays(header, arrays, source="pickle")
+        self.__dict__.update(twin.__dict__)
+
+    def __copy__(self) -> Self:
+        """A full copy: a shallow one would share the weights while ``t_`` diverges."""
+        return copy.deepcopy(self)
