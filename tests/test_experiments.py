@@ -332,14 +332,15 @@ def test_every_registered_experiment_has_a_sub_command_and_plain_help(toy):
     from sigmapi.cli._common import field_docs
 
     sub = next(a for a in build_parser()._actions if a.dest == "command")
-    assert {"chain", "compare", "reproduce", "sweep", "toy-echo"} <= set(REGISTRY)
+    assert {"chain", "compare", "reach", "reproduce", "sweep", "toy-echo"} <= set(REGISTRY)
     for name, experiment in REGISTRY.items():
         assert name in sub.choices, name
-        cls = experiment.config_type
-        assert set(field_docs(cls)) == {f.name for f in fields(cls)}, name  # a doc per field
         text = sub.choices[name].format_help()
-        for f in fields(cls):
-            assert f"--{f.name.replace('_', '-')}" in text or f.name in text, (name, f.name)
+        parts = getattr(experiment.config_type, "PARTS", None) or {None: experiment.config_type}
+        for cls in parts.values():  # a config of parts (reach): each part's fields are options
+            assert set(field_docs(cls)) == {f.name for f in fields(cls)}, name  # a doc per field
+            for f in fields(cls):
+                assert f"--{f.name.replace('_', '-')}" in text or f.name in text, (name, f.name)
         for common in ("--seeds", "--out", "--json", "--workers", "--engine", "--quiet"):
             assert common in text, (name, common)
         assert ("--quick" in text) == (experiment.quick is not None), name

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-from functools import partial
 
 import gymnasium as gym
 import numpy as np
@@ -20,7 +19,7 @@ from sigmapi.envs import (
     make_state_env,
 )
 from sigmapi.errors import ConfigError
-from sigmapi.executor import run_jobs
+from sigmapi.executor import Executor
 from sigmapi.experiments.reach import REACH
 from sigmapi.experiments.reach_config import SMALL_MAP, MapConfig, ReachConfig, ReachRunConfig
 from sigmapi.experiments.reach_plots import plot_reach_curves, plot_value_function, reach_figure
@@ -124,7 +123,7 @@ TINY = {"dim": 1, "grid": 7, "map_shape": (6,), "iterations": 500, "episodes": 2
 def test_experiment_is_deterministic_and_shapes_are_right(tmp_path) -> None:
     cfg = ReachConfig().replace(**TINY)
     a = REACH.run(cfg, seeds=[0, 1])
-    b = REACH.run(cfg, seeds=[0, 1], executor=partial(run_jobs, workers=2))  # two processes
+    b = REACH.run(cfg, seeds=[0, 1], executor=Executor(workers=2))  # two processes
     for s in a.success:
         assert a.success[s].shape == (2, 20)
         np.testing.assert_array_equal(a.success[s], b.success[s])
@@ -161,7 +160,7 @@ def test_seed_s_is_child_s_of_the_root_seed() -> None:
     other_root = REACH.run(cfg.replace(seed=1), seeds=[1])
     assert not np.array_equal(other_root.steps["retina"][0], second.steps["retina"][0])
     for bad in ([], [0, 0], [-1]):
-        with pytest.raises(ConfigError, match="seeds must be"):
+        with pytest.raises(ConfigError, match="seeds must"):
             REACH.run(cfg, seeds=bad)
 
 
@@ -208,30 +207,30 @@ def test_the_map_learns_with_the_paper_2d_preset_or_the_small_map_schedule() -> 
 
 
 def test_cli_reach_json_and_figure(tmp_path, capsys) -> None:
-    out = tmp_path / "reach.png"
-    rc = main(["reach", "--dim", "1", "--grid", "7", "--map-shape", "6", "--map-pairs", "500",
-               "--episodes", "20", "--seeds", "1", "--block", "10", "--final-episodes", "10",
-               "--max-steps", "30",
+    out = tmp_path / "reach"
+    rc = main(["reach", "--dim", "1", "--grid", "7", "--map-shape", "6", "--iterations", "500",
+               "--episodes", "20", "--seeds", "0", "--block", "10", "--final-episodes", "10",
+               "--max-episode-steps", "30",
                "--backend", "reference", "--out", str(out), "--json", "--quiet"])  # fmt: skip
-    assert rc == 0 and out.stat().st_size > 10_000
+    assert rc == 0 and (out / "reach.png").stat().st_size > 10_000
     data = json.loads(capsys.readouterr().out)
     assert set(data["success"]) == {"map", "retina", "retina_gaze", "true_z"}
     assert data["config"]["seeds"] == [0]
-    assert data["config"]["map"]["iterations"] == 500  # --map-pairs: iterations' old spelling
-    assert data["config"]["env"]["max_episode_steps"] == 30  # --max-steps likewise
+    assert data["config"]["map"]["iterations"] == 500
+    assert data["config"]["env"]["max_episode_steps"] == 30
+    assert json.loads((out / "result.json").read_text("utf-8")) == data
 
 
 def test_cli_reach_user_mistakes_exit_2(tmp_path, capsys) -> None:
-    assert (
-        main(["reach", "--dim", "1", "--map-shape", "4x4", "--out", str(tmp_path / "a.png")]) == 2
-    )
-    assert "--map-shape must have 1 axes" in capsys.readouterr().err
-    assert main(["reach", "--episodes", "0", "--out", str(tmp_path / "a.png")]) == 2
+    out = str(tmp_path / "r")
+    assert main(["reach", "--dim", "1", "--map-shape", "4x4", "--out", out]) == 2
+    assert "map_shape must have 1 axes" in capsys.readouterr().err
+    assert main(["reach", "--episodes", "0", "--out", out]) == 2
     assert "episodes must be an int >= 1" in capsys.readouterr().err
-    assert (
-        main(["reach", "--model", str(tmp_path / "none.npz"), "--out", str(tmp_path / "a.png")])
-        == 2
-    )
+    assert main(["reach", "--model", str(tmp_path / "none.npz"), "--out", out, "--force"]) == 2
+    assert "does not exist" in capsys.readouterr().err
+    cfg = ReachConfig().replace(dim=1)  # the default map follows the task's dimension
+    assert cfg.map.map_shape == (12,)
 
 
 @pytest.mark.slow

@@ -20,7 +20,7 @@ import sys
 import threading
 from collections.abc import Sequence
 
-from sigmapi.cli import figure, reach, train
+from sigmapi.cli import figure, train
 from sigmapi.cli._common import Parser, check_output, resolve_config
 from sigmapi.cli.experiment import add_experiment
 from sigmapi.errors import SigmapiError
@@ -42,8 +42,6 @@ def build_parser() -> argparse.ArgumentParser:
         module.register(sub)
     for name in sorted(REGISTRY):
         add_experiment(sub, REGISTRY[name])
-    if "reach" not in REGISTRY:  # until the reach experiment is in the registry
-        reach.register(sub)
     for action in sub._choices_actions:  # `sigmapi CMD --help` opens with its one-line summary
         cmd = sub.choices[action.dest]
         if cmd.description is None and action.help:

@@ -227,7 +227,7 @@ def _flag_kwargs(f: dataclasses.Field[Any], hint: Any) -> tuple[dict[str, Any], 
 
 
 def add_dataclass_flags(
-    p: argparse.ArgumentParser,
+    p: argparse.ArgumentParser | argparse._ArgumentGroup,
     cls: type,
     aliases: Mapping[str, str] | None = None,
     skip: Collection[str] = (),

@@ -107,8 +107,10 @@ def add_experiment(sub: Any, experiment: Experiment[Any]) -> Parser:
                         "available memory)")  # fmt: skip
     common.add_argument("--quiet", action="store_true", help="no progress on stderr")
     taken = {a.dest for a in p._actions}
-    names = {f.name for f in dataclasses.fields(experiment.config_type)}
-    add_dataclass_flags(p, experiment.config_type, aliases=SPELLINGS, skip=names & taken)
+    for group, cls in _parts(experiment).items():
+        names = {f.name for f in dataclasses.fields(cls)}
+        where = p if group is None else p.add_argument_group(f"{group} settings")
+        add_dataclass_flags(where, cls, aliases=SPELLINGS, skip=names & taken)
     p.set_defaults(func=partial(run_experiment, experiment))
     return p
 
@@ -123,13 +125,25 @@ def _out_folder(path: str, force: bool, resumes: bool) -> Path:
     return out
 
 
+def _parts(experiment: Experiment[Any]) -> dict[str | None, type]:
+    """The dataclasses whose fields are the command's options: the config's own (key None),
+    or, for a config made of parts (a ``PARTS`` class attribute naming each part's dataclass,
+    and ``replace(**fields)`` finding the part of each field), every part's."""
+    parts = getattr(experiment.config_type, "PARTS", None)
+    return dict(parts) if parts else {None: experiment.config_type}
+
+
 def _config(experiment: Experiment[Any], values: dict[str, Any], quick: bool) -> Any:
     """The config of the flags (from the quick one with ``--quick``); an error that only the
     ``--set`` overrides cause names the flag, as ``sigmapi train`` does."""
+    start = experiment.quick if quick and experiment.quick is not None else None
 
     def build(given: dict[str, Any]) -> Any:
-        if quick and experiment.quick is not None:
-            return dataclasses.replace(experiment.quick, **given)
+        if None not in _parts(experiment):  # a config of parts: each field finds its part
+            base = start if start is not None else experiment.config_type()
+            return base.replace(**given) if given else base
+        if start is not None:
+            return dataclasses.replace(start, **given)
         return experiment.config_type(**given)
 
     try:
@@ -145,7 +159,9 @@ def run_experiment(experiment: Experiment[Any], args: argparse.Namespace) -> int
     """Build the config from the flags, run the experiment, write ``result.json`` and the
     figures into ``--out``, print the table (or the JSON)."""
     quick = bool(getattr(args, "quick", False))
-    values = dataclass_values(args, experiment.config_type)
+    values = {
+        k: v for cls in _parts(experiment).values() for k, v in dataclass_values(args, cls).items()
+    }
     config = _config(experiment, values, quick)
     if args.seeds is not None:
         seeds = check_seeds(args.seeds)

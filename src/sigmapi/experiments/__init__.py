@@ -5,7 +5,9 @@
 - :mod:`~sigmapi.experiments.reproduce`: the experiment loop (presets x seeds);
 - :mod:`~sigmapi.experiments.results`: its options and typed results, report sections;
 - :mod:`~sigmapi.experiments.report_html`: the page;
-- :mod:`~sigmapi.experiments.reach_section`: the reach experiment as a report section;
+- :mod:`~sigmapi.experiments.reach`: the gaze-and-reach learners (``sigmapi reach``), its
+  config and result in ``reach_config`` / ``reach_result``, its report section in
+  ``reach_section``;
 - :mod:`~sigmapi.experiments.sweep`: parameter and seed sweeps (``sigmapi sweep``);
 - :mod:`~sigmapi.experiments.chain`: a chain of two maps (retina -> head -> body) against one;
 - :mod:`~sigmapi.experiments.compare`: the Sigma-Pi map beside the baselines.
@@ -22,17 +24,20 @@ from sigmapi.experiments.base import (
 )
 from sigmapi.experiments.chain import run_chain
 from sigmapi.experiments.compare import CompareConfig, CompareResult, run_compare
+from sigmapi.experiments.reach import REACH, ReachExperiment
 from sigmapi.experiments.reproduce import REFERENCE, SECTIONS, paper_presets, reproduce
 from sigmapi.experiments.results import ReportContext, ReproduceOptions, ReproduceResult, Section
 from sigmapi.experiments.sweep import SweepSpec, run_sweep
 
 __all__ = [
+    "REACH",
     "REFERENCE",
     "REGISTRY",
     "SECTIONS",
     "CompareConfig",
     "CompareResult",
     "Experiment",
+    "ReachExperiment",
     "ReportContext",
     "ReproduceOptions",
     "ReproduceResult",

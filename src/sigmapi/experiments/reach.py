@@ -20,6 +20,7 @@ Examples
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import time
 from collections.abc import Callable, Iterable, Sequence
@@ -41,27 +42,23 @@ from sigmapi.envs import (
     make_state_env,
 )
 from sigmapi.errors import ConfigError
-from sigmapi.executor import Outcome, job_memory, plan_workers, run_jobs
-from sigmapi.experiments.reach_config import ReachConfig
+from sigmapi.executor import Executor, job_memory
+from sigmapi.experiments.base import Experiment, check_seeds, register, run_all
+from sigmapi.experiments.reach_config import SMALL_MAP, ReachConfig
 from sigmapi.experiments.reach_result import ReachResult
 from sigmapi.metrics import evaluate
-from sigmapi.progress import counter
+from sigmapi.progress import Progress
 from sigmapi.som import SigmaPiSOM, load_model
 
 __all__ = [
     "REACH",
-    "Executor",
-    "Progress",
     "ReachExperiment",
     "run_with_progress",
     "value_over_z",
 ]
 
-Progress = Callable[[int, str], None]
-"""``progress(n, phase)``: ``n`` episodes just finished (0 while the map learns), and what runs."""
-Executor = Callable[[Callable[[Any], Any], Sequence[tuple[str, Any]]], Iterable[Outcome]]
-"""Runs ``fn`` on each ``(key, arg)`` job and yields an :class:`~sigmapi.executor.Outcome` per
-job, e.g. ``functools.partial(sigmapi.executor.run_jobs, workers=4)``."""
+Tick = Callable[[int, str], None]
+"""``tick(n, phase)``: ``n`` episodes just finished (0 while the map learns), and what runs."""
 
 
 def value_over_z(
@@ -109,7 +106,7 @@ def _child(ss: np.random.SeedSequence, k: int) -> np.random.SeedSequence:
 
 
 def _map_for_seed(
-    config: ReachConfig, ss: np.random.SeedSequence, progress: Progress | None = None
+    config: ReachConfig, ss: np.random.SeedSequence, progress: Tick | None = None
 ) -> SigmaPiSOM:
     if config.map.model_path is not None:
         return load_model(Path(config.map.model_path))
@@ -130,10 +127,22 @@ class _SeedJob:
     config: ReachConfig
     first: bool
     seq: np.random.SeedSequence
+    seed: int
+    show: Progress | None = None
+    """A bar of this seed's episodes (set only where the job runs in the caller's process)."""
 
 
-def _run_seed(job: _SeedJob, progress: Progress | None = None) -> dict[str, Any]:
+def _run_seed(job: _SeedJob) -> dict[str, Any]:
     """Everything of one seed: its map, then every state's learner on the same episodes."""
+    if job.show is None:
+        return _seed_runs(job, None)
+    total = len(job.config.run.states) * job.config.run.episodes
+    tick, bar = job.show.counter(total, f"reach seed {job.seed}", "ep")
+    with bar:
+        return _seed_runs(job, tick)
+
+
+def _seed_runs(job: _SeedJob, progress: Tick | None) -> dict[str, Any]:
     cfg, ss = job.config, job.seq
     model = _map_for_seed(cfg, ss, progress) if "map" in cfg.run.states else None
     out: dict[str, Any] = {"map_metrics": _map_quality(model) if model is not None else None,
@@ -169,41 +178,48 @@ def _check_memory(config: ReachConfig) -> None:
     )
 
 
-def _seeds(seeds: Iterable[int]) -> tuple[int, ...]:
-    out = tuple(seeds)
-    if not out or len(set(out)) != len(out):
-        raise _validate.fail("seeds", "a non-empty list of distinct ints >= 0", list(out))
-    return tuple(_validate.integer("seeds", s, 0) for s in out)
+def _check_model(config: ReachConfig) -> None:
+    """A model file given for the map must exist (checked before any work starts)."""
+    path = config.map.model_path
+    if path is not None and "map" in config.run.states and not Path(path).is_file():
+        raise ConfigError(
+            f"model_path {path!r} does not exist; train one with `sigmapi train` or leave "
+            "model_path out to learn a map per seed"
+        )
 
 
-class ReachExperiment:
-    """The same actor-critic on each state representation, over seeds (``sigmapi reach``)."""
+class ReachExperiment(Experiment[ReachConfig]):
+    """Gaze-and-reach task: the same actor-critic on the learned Sigma-Pi map, the retina
+    code, retina and gaze codes, and the true z (the upper bound), over seeds."""
 
     name = "reach"
     summary = "learn to reach with an actor-critic on the learned map vs. other states"
     config_type = ReachConfig
-    default_seeds: tuple[int, ...] = (0, 1, 2, 3, 4)
-    """The seeds of the acceptance run (``sigmapi reach`` without ``--seeds``)."""
+    quick = ReachConfig().replace(episodes=150, final_episodes=50, **SMALL_MAP)
+    seeds = (0, 1, 2, 3, 4)
+    quick_seeds = (0,)
+    default_out = "reach"
 
     def run(
         self,
         config: ReachConfig,
         *,
-        seeds: Iterable[int],
+        seeds: Sequence[int],
+        out: Path | None = None,
         executor: Executor | None = None,
         progress: Progress | None = None,
     ) -> ReachResult:
         """Train the actor-critic on every state of ``config.run.states`` for every seed.
 
-        ``progress(n, phase)`` is called with the number of episodes just finished and a short
-        description of the phase (for a progress bar; the total is ``len(seeds) *
-        len(states) * episodes``). With an ``executor`` the seeds run as its jobs (in parallel
-        processes, say; the result does not depend on it), and progress then counts whole
-        seeds. Returns a :class:`~sigmapi.experiments.reach_result.ReachResult`.
+        Each seed is one job of ``executor`` (the result does not depend on where it runs);
+        run one by one in this process, a seed shows a bar of its episodes. ``out`` is not
+        used: the run writes nothing while it runs. Returns a
+        :class:`~sigmapi.experiments.reach_result.ReachResult`.
         """
         if not isinstance(config, ReachConfig):
             raise _validate.fail("config", "a ReachConfig", config)
-        seeds = _seeds(seeds)
+        seeds = check_seeds(seeds)
+        _check_model(config)
         _check_memory(config)
         t0 = time.perf_counter()
         run = config.run
@@ -214,31 +230,28 @@ class ReachExperiment:
             res.steps[s] = np.zeros(shape, dtype=np.int64)
             res.lost[s] = np.zeros(shape, dtype=bool)
         root = np.random.SeedSequence(run.seed)
-        jobs = [_SeedJob(config, i == 0, _child(root, s)) for i, s in enumerate(seeds)]
-        if executor is None:
-            per_seed = [_run_seed(job, progress) for job in jobs]
-        else:
-            outcomes = {}
-            for o in executor(_run_seed, [(str(i), job) for i, job in enumerate(jobs)]):
-                if not o.ok:
-                    raise RuntimeError(f"reach seed {seeds[int(o.key)]} failed: {o.error}")
-                outcomes[int(o.key)] = o.value
-                if progress is not None:
-                    progress(len(run.states) * run.episodes, f"seed {seeds[int(o.key)]} done")
-            per_seed = [outcomes[i] for i in range(len(jobs))]
-        for i, out in enumerate(per_seed):
-            if out["map_metrics"] is not None:
-                res.map_metrics.append(out["map_metrics"])
-            for s, (succ, lost, steps) in out["runs"].items():
+        jobs = [(str(s), _SeedJob(config, i == 0, _child(root, s), s)) for i, s in enumerate(seeds)]
+        values = run_all(
+            _run_seed, jobs, executor=executor,
+            per_job=job_memory(config.som_config(run.seed), n_test=2000), progress=progress,
+            desc="reach", verbose=lambda job: dataclasses.replace(job, show=progress),
+            describe=lambda key, _: f"seed {key}",
+        )  # fmt: skip
+        for i, (key, _) in enumerate(jobs):
+            got = values[key]
+            if got["map_metrics"] is not None:
+                res.map_metrics.append(got["map_metrics"])
+            for s, (succ, lost, steps) in got["runs"].items():
                 res.success[s][i], res.lost[s][i], res.steps[s][i] = succ, lost, steps
-            for s, (axis, values) in out["values"].items():
-                res.values[s] = values
+            for s, (axis, vals) in got["values"].items():
+                res.values[s] = vals
                 res.z_axis = axis
         res.seconds = time.perf_counter() - t0
         return res
 
 
 REACH = ReachExperiment()
+register(REACH)
 """The reach experiment."""
 
 
@@ -248,21 +261,7 @@ def run_with_progress(
     disable: bool | None = None,
     workers: int | None = None,
 ) -> ReachResult:
-    """:meth:`REACH.run <ReachExperiment.run>` with a progress bar on stderr (episodes, and
-    the current phase) and the seeds in parallel processes.
-
-    ``workers=None``: one seed per core, as many as fit in half the available memory
-    (:func:`sigmapi.executor.plan_workers`).
-    """
-    seeds = _seeds(seeds)
-    _check_memory(config)  # before the bar opens: a refusal is the only line
-    if workers is None:
-        per_seed = job_memory(config.som_config(config.run.seed), n_test=2000)
-        workers = plan_workers(None, per_seed, n_jobs=len(seeds)).workers
-    executor = None
-    if workers > 1 and len(seeds) > 1:
-        executor = functools.partial(run_jobs, workers=min(workers, len(seeds)))
-    total = len(seeds) * len(config.run.states) * config.run.episodes
-    progress, bar = counter(total, "reach", "ep", disable)
-    with bar:
-        return REACH.run(config, seeds=seeds, executor=executor, progress=progress)
+    """:meth:`REACH.run <ReachExperiment.run>` with progress on stderr and the seeds as jobs
+    of a local process pool (``workers=None``: one per core, as memory allows)."""
+    return REACH.run(config, seeds=list(seeds), executor=Executor(workers=workers),
+                     progress=Progress(disable=disable))  # fmt: skip

@@ -11,7 +11,7 @@ Each part checks its own fields when it is built and builds nothing else. :class
 holds one of each; field names are unique across the parts, so
 ``ReachConfig().replace(grid=7, episodes=150)`` finds each field's part. The seeds are not
 settings: they are given to the run (:meth:`~sigmapi.experiments.reach.ReachExperiment.run`).
-The ``sigmapi reach`` options are generated from the parts' fields (:mod:`sigmapi.cli.reach`),
+The ``sigmapi reach`` options are generated from the parts' fields (:mod:`sigmapi.cli.experiment`),
 so a field added here is a command-line option too.
 """
 
@@ -28,7 +28,13 @@ from sigmapi.config import BACKEND_NAMES, SOMConfig, list_presets, load_preset
 from sigmapi.envs import FEATURES, STATES, GazeReachConfig, GazeReachEnv
 from sigmapi.errors import ConfigError
 
-__all__ = ["SMALL_MAP", "MapConfig", "ReachConfig", "ReachRunConfig"]
+__all__ = ["SMALL_MAP", "MapConfig", "ReachConfig", "ReachRunConfig", "default_map_shape"]
+
+
+def default_map_shape(dim: Any) -> tuple[int, ...]:
+    """The map of a ``dim``-D task when none is given: 15x15 in 2-D (paper-2d), 12 units in
+    1-D."""
+    return (15, 15) if dim == 2 else (12,)
 
 
 @dataclass(frozen=True)
@@ -36,8 +42,8 @@ class MapConfig:
     """The Sigma-Pi map a reach learner reads: its size, how it learns, how it is read."""
 
     map_shape: tuple[int, ...] = (15, 15)
-    """Grid of the Sigma-Pi map learned in the environment (``sigmapi reach`` picks 12 units
-    for a 1-D task when it is not given)."""
+    """Grid of the Sigma-Pi map learned in the environment (a task of another dimension
+    given without a map: :func:`default_map_shape`)."""
     iterations: int = 100_000
     """Iterations of the map, one per saccade view pair it learns from (paper-2d's length)."""
     preset: str = "paper-2d"
@@ -152,6 +158,12 @@ class ReachConfig:
         for name, cls in self.PARTS.items():
             if not isinstance(getattr(self, name), cls):
                 raise _validate.fail(name, f"a {cls.__name__}", getattr(self, name))
+        dim, shape = self.env.dim, self.map.map_shape
+        if len(shape) != dim:
+            raise ConfigError(
+                f"map_shape must have {dim} axes for a task of dim {dim}, got "
+                f"{'x'.join(map(str, shape))}; e.g. map_shape {default_map_shape(dim)}"
+            )
 
     def replace(self, **changes: Any) -> ReachConfig:
         """A copy with ``changes``, fields of any part by name (``grid=7, episodes=150``)."""
@@ -161,6 +173,8 @@ class ReachConfig:
             raise ConfigError(
                 f"unknown reach config field {bad[0]!r}; valid: {', '.join(sorted(owner))}"
             )
+        if "dim" in changes and "map_shape" not in changes:  # the default map follows the task
+            changes = {**changes, "map_shape": default_map_shape(changes["dim"])}
         parts = {
             part: dataclasses.replace(getattr(self, part), **{
                 k: v for k, v in changes.items() if owner[k] == part

@@ -15,7 +15,7 @@ import html
 from typing import TYPE_CHECKING
 
 from sigmapi.experiments.reach import REACH, run_with_progress
-from sigmapi.experiments.reach_config import SMALL_MAP, ReachConfig
+from sigmapi.experiments.reach_config import ReachConfig
 from sigmapi.experiments.results import Section
 
 if TYPE_CHECKING:
@@ -42,9 +42,8 @@ EXPLANATION = {
 
 def reach_section(ctx: ReportContext) -> Section:
     """Run the reach comparison (smaller with ``ctx.quick``) and return its report section."""
-    quick = {"episodes": 150, "final_episodes": 50, **SMALL_MAP}
-    cfg = ReachConfig().replace(**quick) if ctx.quick else ReachConfig()
-    seeds = (0,) if ctx.quick else REACH.default_seeds
+    cfg = REACH.quick if ctx.quick and REACH.quick is not None else ReachConfig()
+    seeds = REACH.default_seeds(cfg, quick=ctx.quick)
     result = run_with_progress(
         cfg, seeds, disable=not ctx.progress or None, workers=ctx.options.workers
     )
