@@ -12,8 +12,8 @@ from __future__ import annotations
 import argparse
 import dataclasses
 
-from sigmapi.baselines.plots import compare_figure
 from sigmapi.experiments.compare import QUICK, QUICK_SEEDS, run_compare
+from sigmapi.viz.compare import compare_figure
 
 
 def main() -> None:

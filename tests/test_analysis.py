@@ -5,8 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from sigmapi import SigmaPiSOM, analysis
-from sigmapi.curves import checkpoints, costs
+from sigmapi import SigmaPiSOM
+from sigmapi.viz import analysis
+from sigmapi.viz.curves import checkpoints, costs
 
 
 def test_fig8_data_views_share_z(model_2d):

@@ -33,7 +33,7 @@ from sigmapi.experiments.base import KEY_VALUES
 from sigmapi.experiments.report_html import linked_files
 from sigmapi.experiments.reproduce import QUICK_ITERATIONS
 from sigmapi.experiments.results import METRIC_KEYS
-from sigmapi.figures import FIGURES
+from sigmapi.viz.figures import FIGURES
 
 TINY_1D = SOMConfig(map_shape=(5,), x_shape=(5,), y_shape=(5,), iterations=2000)
 TINY_2D = SOMConfig(map_shape=(3, 3), x_shape=(3, 3), y_shape=(3, 3), code_width=1.0,

@@ -18,8 +18,7 @@ PACKAGE = SRC / "sigmapi"
 LAYERS: tuple[tuple[str, ...], ...] = (
     ("cli",),
     ("experiments",),
-    ("figures", "envs", "agents", "baselines"),
-    ("plots", "analysis", "curves"),
+    ("envs", "agents", "baselines", "viz"),
     ("metrics", "checkpoints", "executor"),
     ("circular",),
     ("som",),

@@ -12,8 +12,8 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pytest
 
-from sigmapi import analysis, plots
-from sigmapi.figures import FIGURES, draw_figure
+from sigmapi.viz import analysis, plots
+from sigmapi.viz.figures import FIGURES, draw_figure
 
 PNG = b"\x89PNG\r\n\x1a\n"
 
@@ -106,7 +106,7 @@ def test_iteration_ticks_are_short_and_never_run_together(curves):
 
 def test_captions_say_twisted_when_the_data_do():
     from sigmapi import SOMConfig
-    from sigmapi.figures import RunInfo, caption
+    from sigmapi.viz.figures import RunInfo, caption
 
     run = RunInfo("quick-2d", SOMConfig(map_shape=(5, 5), x_shape=(5, 5), y_shape=(5, 5)), (0,), 0)
     fig8 = {"z": [0.5, 0.5], "polarity": "mirrored left-right", "polarity_r2": 0.41,

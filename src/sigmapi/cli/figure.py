@@ -11,12 +11,12 @@ import numpy as np
 
 from sigmapi import _validate
 from sigmapi.cli._common import check_output
-from sigmapi.curves import LearningCurve, checkpoints
 from sigmapi.errors import UsageError
 from sigmapi.experiments.results import CURVE_TEST, N_CHECKPOINTS
-from sigmapi.figures import DPI, FIGURES, draw_figure
 from sigmapi.progress import progress_callback
 from sigmapi.som import load_model
+from sigmapi.viz.curves import LearningCurve, checkpoints
+from sigmapi.viz.figures import DPI, FIGURES, draw_figure
 
 __all__ = ["cmd_figure", "register"]
 

@@ -277,9 +277,9 @@ class CompareResult:
         return "\n".join(rows)
 
     def figure(self, out_dir: Path) -> list[Path]:
-        """``compare.png`` (:func:`~sigmapi.baselines.plots.compare_figure`) and its caption
+        """``compare.png`` (:func:`~sigmapi.viz.compare.compare_figure`) and its caption
         beside it, ``compare.txt``; returns the figure's path."""
-        from sigmapi.baselines.plots import compare_figure  # matplotlib: only when drawing
+        from sigmapi.viz.compare import compare_figure  # matplotlib: only when drawing
 
         out = Path(out_dir) / FIGURE
         compare_figure(self.to_dict()).savefig(out, dpi=120)

@@ -8,7 +8,7 @@ paper and writes into ``DIR``:
   metrics beside the reference figures of docs/algorithm.md and a caption per figure;
 - ``metrics.json``: every number of the report (metrics per seed, learning curves, facts shown
   in the captions);
-- the figures, ``<figure>-<preset>.png`` for the figures of :data:`~sigmapi.figures.FIGURES`;
+- the figures, ``<figure>-<preset>.png`` for the figures of :data:`~sigmapi.viz.figures.FIGURES`;
 - the trained models, ``<preset>-seed<S>.npz``: by default the one the figures show (the
   best-ordered seed; ``sigmapi figure`` redraws from it), or every seed's, or none
   (``save_models``; a paper-2d file holds its 225 x 225 x 225 weights, so it is large).
@@ -31,7 +31,6 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
-from sigmapi import figures as figs
 from sigmapi.config import SOMConfig, list_presets, load_preset
 from sigmapi.errors import ConfigError
 from sigmapi.executor import Executor, job_memory
@@ -52,6 +51,7 @@ from sigmapi.io import atomic_write_bytes
 from sigmapi.metrics import evaluate
 from sigmapi.progress import Progress
 from sigmapi.som import SigmaPiSOM
+from sigmapi.viz import figures as figs
 
 __all__ = [
     "QUICK_ITERATIONS", "REFERENCE", "REPRODUCE", "SECTIONS", "Reproduce", "SeedJob",
@@ -229,7 +229,7 @@ class SeedJob:
 def train_seed(job: SeedJob) -> tuple[SeedRun, dict[str, Any], dict[str, Any]]:
     """Train one seed with learning-curve checkpoints and evaluate it (a job of
     :func:`~sigmapi.executor.run_jobs`); ``(run, header, arrays)`` of the model."""
-    from sigmapi.curves import LearningCurve, checkpoints
+    from sigmapi.viz.curves import LearningCurve, checkpoints
 
     cfg = job.cfg
     model = SigmaPiSOM(cfg, seed=job.seed)
@@ -291,7 +291,7 @@ def _draw(
 
     The facts each caption states are stored in ``entry.figures``.
     """
-    from sigmapi.analysis import receptive_field_centres
+    from sigmapi.viz.analysis import receptive_field_centres
 
     centres = receptive_field_centres(model, seed=0)
     curves = [r.curve for r in entry.runs]

@@ -270,7 +270,7 @@ def draw_summary(
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from sigmapi.plots import plot_sweep
+    from sigmapi.viz.plots import plot_sweep
 
     _validate.choice("metric", metric, METRICS)
     keys = sorted(spec.grid)

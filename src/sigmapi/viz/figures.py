@@ -117,7 +117,7 @@ def sigma_schedule(model: SigmaPiSOM, n: int = 400) -> tuple[list[float], list[f
 
 
 def _draw_fig8(model: SigmaPiSOM, inp: DrawInputs) -> tuple[Figure, Facts]:
-    from sigmapi import analysis, plots
+    from sigmapi.viz import analysis, plots
 
     d = len(model.x_shape)
     data = analysis.fig8_data(model, inp.seed, centres=inp.centres)
@@ -168,7 +168,7 @@ def _caption_fig8(run: RunInfo, facts: Facts) -> str:
 
 
 def _draw_weights(model: SigmaPiSOM, inp: DrawInputs) -> tuple[Figure, Facts]:
-    from sigmapi import analysis, plots
+    from sigmapi.viz import analysis, plots
 
     if len(model.x_shape) == 1:
         tiles = analysis.weight_tiles(model)
@@ -208,7 +208,7 @@ def _caption_weights(run: RunInfo, facts: Facts) -> str:
 
 
 def _draw_net(model: SigmaPiSOM, inp: DrawInputs) -> tuple[Figure, Facts]:
-    from sigmapi import analysis, plots
+    from sigmapi.viz import analysis, plots
 
     fig = _figure((6.4, 4.4) if len(model.x_shape) == 1 else (7.4, 6.0))
     plots.plot_net(
@@ -241,7 +241,7 @@ def _caption_net(run: RunInfo, facts: Facts) -> str:
 
 
 def _draw_invariance(model: SigmaPiSOM, inp: DrawInputs) -> tuple[Figure, Facts]:
-    from sigmapi import analysis, plots
+    from sigmapi.viz import analysis, plots
 
     if len(model.x_shape) == 1:
         inv = analysis.invariance_matrix(model)
@@ -280,7 +280,7 @@ def _caption_invariance(run: RunInfo, facts: Facts) -> str:
 
 
 def _draw_curves(model: SigmaPiSOM, inp: DrawInputs) -> tuple[Figure, Facts]:
-    from sigmapi import plots
+    from sigmapi.viz import plots
 
     curves = inp.curves
     if not curves:
@@ -357,7 +357,7 @@ def draw_figure(
     """
     spec = _spec(name)
     if centres is None and spec.needs_centres(len(model.x_shape)):
-        from sigmapi.analysis import receptive_field_centres
+        from sigmapi.viz.analysis import receptive_field_centres
 
         centres = receptive_field_centres(model, seed)
     inputs = DrawInputs(curves, reference, label, seed, centres)

@@ -1,6 +1,6 @@
 """What a trained map learned, as arrays: the computations behind the figures.
 
-Everything here is numerics on a fitted :class:`~sigmapi.som.SigmaPiSOM`; :mod:`sigmapi.plots`
+Everything here is numerics on a fitted :class:`~sigmapi.som.SigmaPiSOM`; :mod:`sigmapi.viz.plots`
 draws the results. Functions take a ``numpy.random.Generator`` or an int seed wherever they
 draw data, so a figure is a pure function of the model and the seed.
 

@@ -1,4 +1,4 @@
-"""Figures of the reproduction: thin drawing functions over the arrays of :mod:`sigmapi.analysis`.
+"""Figures of the reproduction: thin drawing functions over the arrays of :mod:`~.analysis`.
 
 Every function takes ``ax=None`` and returns the Axes it drew into; with ``ax=None`` it opens a
 new pyplot figure. Figures made of several panels (Fig. 8, the learning curves) draw their
@@ -24,7 +24,7 @@ from numpy.typing import NDArray
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
 
-    from sigmapi.analysis import Fig8Data, InvarianceMatrix
+    from sigmapi.viz.analysis import Fig8Data, InvarianceMatrix
 
 __all__ = [
     "plot_fig8",
@@ -275,7 +275,7 @@ def plot_learning_curves(
 
     ``curves``: one mapping per seed with columns ``t``, ``view_consistency``,
     ``view_within_one``, ``z_error``, ``cost``, ``cost_winner``, ``sigma`` (as written by
-    :meth:`sigmapi.analysis.LearningCurve.to_dict`); thin lines per seed, a thick line for
+    :meth:`sigmapi.viz.analysis.LearningCurve.to_dict`); thin lines per seed, a thick line for
     the mean. ``reference``: horizontal lines for ``view_consistency``,
     ``view_within_one``, ``z_error`` and ``z_error_floor``. ``schedule``: ``(t, sigma)`` of
     the full sigma schedule, drawn under the checkpoints.
