@@ -20,6 +20,7 @@ import pytest
 
 import sigmapi
 from sigmapi import SigmaPiSOM, SOMConfig
+from sigmapi.kernels import BACKENDS
 
 TINY = ["--preset", "tiny-1d", "--set", "iterations=3000", "--backend", "reference", "--quiet"]
 
@@ -39,7 +40,7 @@ def _cfg(backend="fast"):
 # ---------------------------------------------------------------------------- the model object
 
 
-@pytest.mark.parametrize("backend", ["reference", "fast"])
+@pytest.mark.parametrize("backend", BACKENDS)
 def test_pickle_and_deepcopy_carry_state_arrays_and_continue_bit_exact(backend):
     som = SigmaPiSOM(_cfg(backend)).fit(iterations=1500)
     data = pickle.dumps(som)
@@ -66,7 +67,7 @@ def test_copy_copy_does_not_share_the_weights():
     assert not np.array_equal(twin.weights_, before)
 
 
-@pytest.mark.parametrize("backend", ["reference", "fast"])
+@pytest.mark.parametrize("backend", BACKENDS)
 def test_partial_fit_from_two_threads_loses_no_iteration(backend):
     som = SigmaPiSOM(_cfg(backend)).fit(iterations=0)
     threads = [

@@ -17,6 +17,7 @@ from sigmapi._version import __version__
 from sigmapi.codes import PopulationCode
 from sigmapi.config import SOMConfig, list_presets, load_preset
 from sigmapi.errors import ConfigError, DataError, ModelFileError, NotFittedError, SigmapiError
+from sigmapi.kernels import register_backend
 from sigmapi.metrics import Metrics, evaluate
 from sigmapi.schedules import PiecewiseLinear
 from sigmapi.som import SigmaPiSOM
@@ -42,6 +43,7 @@ __all__ = [
     "list_presets",
     "load",
     "load_preset",
+    "register_backend",
 ]
 
 if "sigmapi/GazeReach-v0" not in _gymnasium.registry:

@@ -18,8 +18,8 @@
     of view-0 test pairs whose best and second-best units are not grid neighbours). A twist
     sends the two views of one z, and the best and second-best units of one view, to far-apart
     units along its seam. In 1-D this term is left out: the paper's soft winner swaps the two
-    end units of many ordered maps (order R^2 0.966-0.98), which raises the topographic error
-    to 0.16 without a fold;
+    end units of many well-ordered maps, which raises the topographic error without a fold
+    (measured in docs/algorithm.md, "Ordering procedures");
   * for 1-D maps, ``F / FAR_SHARE`` with ``F`` the fraction of test pairs whose two views win
     units ``FAR_UNITS`` (3) or more apart. A fold lays two branches of the map over the same
     z's, and the two views of one z then land on different branches; in an ordered map they
@@ -153,16 +153,16 @@ def chebyshev(
     map_coords: NDArray[np.float64],
     a: NDArray[np.int64],
     b: NDArray[np.int64],
-    ring: tuple[int, ...] | None = None,
+    periodic_shape: tuple[int, ...] | None = None,
 ) -> NDArray[np.float64]:
-    """Chebyshev distance on the map grid between units ``a`` and ``b``; ``ring``: the shape
-    of a periodic map, whose distances go the shorter way round."""
-    if ring is not None:
-        return map_distance(map_coords, a, b, ring, True)
+    """Chebyshev distance on the map grid between units ``a`` and ``b``; ``periodic_shape``:
+    the shape of a periodic map, whose distances go the shorter way round."""
+    if periodic_shape is not None:
+        return map_distance(map_coords, a, b, periodic_shape, True)
     return np.max(np.abs(map_coords[a] - map_coords[b]), axis=1)
 
 
-def _ring(model: SigmaPiSOM) -> tuple[int, ...] | None:
+def _periodic_shape(model: SigmaPiSOM) -> tuple[int, ...] | None:
     """The map's shape if it wraps around (for :func:`chebyshev`), else None."""
     return model.map_shape if model.config.map_periodic else None
 
@@ -203,7 +203,7 @@ def evaluate(
     wc = model.winner(calibration.x0, calibration.y0, hard=True)
 
     spacing = grid_spacing(model.x_shape, model.config.periodic)
-    m = winner_metrics(wc, calibration.z, w0, w1, test.z, coords, spacing, _ring(model))
+    m = winner_metrics(wc, calibration.z, w0, w1, test.z, coords, spacing, _periodic_shape(model))
     z_error = m["z_error"]
     starved, te, score = fold_indicators(model, test, w0, w1, scores)
     circ = None
@@ -228,15 +228,15 @@ def winner_metrics(
     z_test: NDArray[np.float64],
     coords: NDArray[np.float64],
     spacing: float | NDArray[np.float64],
-    ring: tuple[int, ...] | None = None,
+    periodic_shape: tuple[int, ...] | None = None,
 ) -> dict[str, float]:
     """View consistency, within one, z error, order R^2 and usage from hard winners alone.
 
     ``wc``: winners of the calibration views (positions ``z_cal`` ``(N, d)``); ``w0``, ``w1``:
     of the two test views (positions ``z_test``); ``coords``: the map's unit coordinates
-    ``(K, d_map)``; ``spacing``: input grid spacings per unit of z; ``ring``: the shape of a
-    periodic map. The definitions of the module docstring, for :func:`evaluate` and for maps
-    scored on data of their own (e.g. ``sigmapi.experiments.chain``).
+    ``(K, d_map)``; ``spacing``: input grid spacings per unit of z; ``periodic_shape``: the
+    shape of a periodic map. The definitions of the module docstring, for :func:`evaluate`
+    and for maps scored on data of their own (e.g. ``sigmapi.experiments.chain``).
     """
     table = z_decoder(wc, z_cal, coords)
     err = (table[w0] - z_test) * spacing
@@ -245,7 +245,7 @@ def winner_metrics(
     sst = float(np.sum((z_test - z_test.mean(axis=0)) ** 2))
     return {
         "view_consistency": float(np.mean(w0 == w1)),
-        "view_within_one": float(np.mean(chebyshev(coords, w0, w1, ring) <= 1.0)),
+        "view_within_one": float(np.mean(chebyshev(coords, w0, w1, periodic_shape) <= 1.0)),
         "z_error": float(np.sqrt(np.mean(np.sum(err**2, axis=1)))),
         "order_r2": 1.0 - sse / sst if sst > 0 else float("nan"),
         "usage": float(np.unique(w0).size / coords.shape[0]),
@@ -273,9 +273,9 @@ def fold_indicators(
         scores = hard_scores(model, test.x0, test.y0)
     top2 = np.argpartition(-scores, 1, axis=1)[:, :2]
     coords = model.map_coords
-    te = float(np.mean(chebyshev(coords, top2[:, 0], top2[:, 1], _ring(model)) > 1.0))
+    te = float(np.mean(chebyshev(coords, top2[:, 0], top2[:, 1], _periodic_shape(model)) > 1.0))
     score = float(starved)
-    apart = chebyshev(coords, w0, w1, _ring(model))
+    apart = chebyshev(coords, w0, w1, _periodic_shape(model))
     if len(model.map_shape) >= 2:
         within = float(np.mean(apart <= 1.0))
         score = max(score, ((1.0 - within) + te) / TWIST_S)
