@@ -25,7 +25,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("_grids", "_cost", "_params", "_persist"),
     ("io", "config", "kernels", "tasks", "rules", "views", "model_file"),
     ("codes", "schedules"),
-    ("errors", "_validate", "_memory", "_startup", "progress", "_version"),
+    ("errors", "_validate", "_memory", "_lock", "_startup", "progress", "_version"),
 )
 """Top to bottom: a module may import modules of its own layer (without a loop) or below."""
 

@@ -26,8 +26,15 @@ Parallel jobs must fit in memory together. :func:`plan_workers` caps the number 
 
 from __future__ import annotations
 
+import ctypes
 import multiprocessing
 import os
+import re
+import signal
+import socket
+import struct
+import sys
+import threading
 import time
 import traceback
 from collections.abc import Callable, Iterator, Sequence
@@ -46,14 +53,76 @@ __all__ = [
     "Outcome",
     "WorkerPlan",
     "available_memory",
+    "die_with_parent",
     "job_memory",
+    "parse_address",
     "plan_workers",
+    "probe_scheduler",
     "run_jobs",
 ]
 
 ENGINES = ("local", "dask")
 
 _MIB = 1 << 20
+
+CONNECT_TIMEOUT_S = 5.0
+"""Seconds to wait for a Dask scheduler to accept a connection and greet."""
+
+_LABEL = r"[A-Za-z0-9](?:[A-Za-z0-9-]{0,61}[A-Za-z0-9])?"
+_HOST = rf"(?:{_LABEL}(?:\.{_LABEL})*|\[[0-9A-Fa-f:.]+\])"
+_ADDRESS = re.compile(rf"(?:(tcp|tls)://)?({_HOST}):([0-9]{{1,5}})")
+
+
+def parse_address(address: str) -> tuple[str, str, int]:
+    """``(scheme, host, port)`` of a Dask scheduler address, ``tcp://HOST:PORT`` (or
+    ``tls://``, or ``HOST:PORT``); anything else raises ConfigError naming the form.
+
+    Examples
+    --------
+    >>> parse_address("tcp://10.0.0.5:8786")
+    ('tcp', '10.0.0.5', 8786)
+    """
+    m = _ADDRESS.fullmatch(address) if isinstance(address, str) and len(address) < 300 else None
+    port = int(m.group(3)) if m else 0
+    if m is None or not 1 <= port <= 65535:
+        shown = repr(address)[:80]
+        raise ConfigError(
+            f"address must be a Dask scheduler address tcp://HOST:PORT (or tls://HOST:PORT, "
+            f"port 1-65535), got {shown}; e.g. tcp://10.0.0.5:8786, as the scheduler prints it"
+        )
+    return m.group(1) or "tcp", m.group(2).strip("[]"), port
+
+
+def probe_scheduler(address: str, timeout: float = CONNECT_TIMEOUT_S) -> None:
+    """Raise ConfigError unless something at ``address`` accepts a connection within
+    ``timeout`` seconds and (``tcp``) greets as a Dask scheduler does: its first message, the
+    handshake, is a small frame. Checked before Dask reads a stranger's bytes as a frame
+    length (and asks for exabytes)."""
+    scheme, host, port = parse_address(address)
+    try:
+        with socket.create_connection((host, port), timeout=timeout) as sock:
+            if scheme != "tcp":
+                return  # a TLS greeting needs the certificates: Dask checks it
+            head = b""
+            while len(head) < 8:
+                chunk = sock.recv(8 - len(head))
+                if not chunk:
+                    break
+                head += chunk
+    except TimeoutError:
+        raise ConfigError(f"the Dask scheduler at {address!r} did not answer within "
+                          f"{timeout:g} s; check the address and that the scheduler runs "
+                          "(dask scheduler prints its address)") from None  # fmt: skip
+    except OSError as exc:
+        raise ConfigError(f"cannot connect to a Dask scheduler at {address!r}: "
+                          f"{exc.strerror or exc}; check the address and that the scheduler "
+                          "runs") from None  # fmt: skip
+    size = struct.unpack("<Q", head)[0] if len(head) == 8 else 0
+    if not 0 < size < _MIB:
+        raise ConfigError(
+            f"{address!r} does not answer as a Dask scheduler (its first bytes are no Dask "
+            "handshake); check the address and port"
+        )
 
 
 @dataclass(frozen=True)
@@ -144,11 +213,27 @@ class Executor:
             _validate.integer("workers", self.workers, 1)
         if self.memory_budget is not None:
             _validate.integer("memory_budget", self.memory_budget, 1, fix="in bytes")
-        if self.address is not None and self.engine != "dask":
+        if self.address is not None:
+            parse_address(self.address)
+            if self.engine != "dask":
+                raise ConfigError(
+                    f"address names a Dask scheduler, got {self.address!r} with engine "
+                    f"{self.engine!r}; use engine 'dask' with it"
+                )
+
+    def check(self) -> None:
+        """What can be checked before any job runs: that the engine's library is installed
+        and the scheduler at :attr:`address` answers (:func:`probe_scheduler`)."""
+        if self.engine != "dask":
+            return
+        try:
+            import distributed  # noqa: F401
+        except ImportError:  # pragma: no cover - depends on the install
             raise ConfigError(
-                f"address names a Dask scheduler, got {self.address!r} with engine "
-                f"{self.engine!r}; use engine 'dask' with it"
-            )
+                "engine 'dask' needs dask.distributed; install it with pip install 'sigmapi[sweep]'"
+            ) from None
+        if self.address is not None:
+            probe_scheduler(self.address)
 
     def plan(self, per_job: int, n_jobs: int) -> WorkerPlan:
         """How many of ``n_jobs`` jobs of ``per_job`` bytes each run at once
@@ -196,7 +281,8 @@ def run_jobs(
             yield Outcome(key, value, error, sec)
         return
     ctx = multiprocessing.get_context("spawn")
-    with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
+    with ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=die_with_parent,
+                             initargs=(os.getpid(),)) as pool:  # fmt: skip
         pending: dict[Future[Any], str] = {pool.submit(_call, fn, arg): key for key, arg in jobs}
         try:
             while pending:
@@ -210,6 +296,31 @@ def run_jobs(
                 fut.cancel()
 
 
+_PR_SET_PDEATHSIG = 1
+
+
+def die_with_parent(parent: int) -> None:
+    """Make this process (a pool worker) end when the process ``parent`` ends, SIGKILL
+    included: the kernel's parent-death signal on Linux (``prctl(PR_SET_PDEATHSIG)``), else a
+    daemon thread that polls the parent's pid each second."""
+    if sys.platform.startswith("linux"):
+        try:
+            libc = ctypes.CDLL(None, use_errno=True)
+            if libc.prctl(_PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0) == 0:
+                if os.getppid() != parent:  # the parent died before the call
+                    os._exit(1)
+                return
+        except (OSError, AttributeError):  # pragma: no cover - no prctl: poll instead
+            pass
+
+    def watch() -> None:  # pragma: no cover - not Linux
+        while os.getppid() == parent:
+            time.sleep(1.0)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="sigmapi-parent-watch", daemon=True).start()
+
+
 def _run_dask(
     fn: Callable[[Any], Any], jobs: Sequence[tuple[str, Any]], workers: int, address: str | None
 ) -> Iterator[Outcome]:
@@ -220,11 +331,14 @@ def _run_dask(
             "engine 'dask' needs dask.distributed; install it with pip install 'sigmapi[sweep]'"
         ) from None
     cluster = None
+    if address is not None:
+        probe_scheduler(address)
     if address is None:
         cluster = LocalCluster(n_workers=max(1, workers), threads_per_worker=1, processes=True,
                                dashboard_address=":0")  # fmt: skip
     try:
-        with Client(address if address is not None else cluster) as client:
+        target = address if address is not None else cluster
+        with Client(target, timeout=f"{CONNECT_TIMEOUT_S * 2:g}s") as client:
             futures = {client.submit(_call, fn, arg, key=f"sigmapi-{key}", pure=False): key
                        for key, arg in jobs}  # fmt: skip
             for fut in as_completed(futures):

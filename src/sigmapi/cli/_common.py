@@ -48,6 +48,27 @@ def _positive_int(text: str) -> int:
     return value
 
 
+MAX_VALUE = 4096
+"""Longest ``KEY=VALUE`` a flag takes (a config value is far shorter)."""
+
+
+def key_value(text: str) -> str:
+    """A ``KEY=VALUE`` flag's text, checked: one line, at most :data:`MAX_VALUE` characters
+    (a longer one is shown cut short)."""
+    shown = repr(text[:60]) + ("..." if len(text) > 60 else "")
+    if len(text) > MAX_VALUE:
+        raise argparse.ArgumentTypeError(
+            f"must be KEY=VALUE of at most {MAX_VALUE} characters, got {len(text):,} "
+            f"({shown}); put long values in a --config file"
+        )
+    if any(ord(c) < 32 or ord(c) == 127 for c in text):
+        raise argparse.ArgumentTypeError(
+            f"must be one line of KEY=VALUE without control characters (a newline?), got "
+            f"{shown}; give one --set per value"
+        )
+    return text
+
+
 def add_workers_flag(p: argparse.ArgumentParser | argparse._ArgumentGroup, what: str) -> None:
     """``--workers N``: how many ``what`` run at once (:func:`sigmapi.executor.plan_workers`)."""
     p.add_argument("--workers", type=_positive_int, default=None,
@@ -66,6 +87,7 @@ def add_config_flags(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--set",
         action="append",
+        type=key_value,
         metavar="KEY=VALUE",
         help="override one config key, e.g. --set iterations=50000 (repeatable)",
     )
@@ -205,6 +227,8 @@ def _flag_kwargs(f: dataclasses.Field[Any], hint: Any) -> tuple[dict[str, Any], 
     shown = str(default)
     if f.metadata.get("repeat"):
         kwargs: dict[str, Any] = {"action": "append", "metavar": f.metadata.get("metavar")}
+        if f.metadata.get("metavar") == "KEY=VALUE":
+            kwargs["type"] = key_value
         return kwargs, " ".join(map(str, default)) if default else "none"
     if origin is Literal:
         return {"type": type(args[0]), "choices": args}, shown

@@ -22,11 +22,14 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
+import os
 import sys
+import tempfile
 from functools import partial
 from pathlib import Path
 from typing import Any
 
+from sigmapi._lock import LOCK_NAME, output_lock
 from sigmapi.cli._common import (
     Parser,
     add_dataclass_flags,
@@ -36,7 +39,7 @@ from sigmapi.cli._common import (
 )
 from sigmapi.errors import ConfigError, UsageError
 from sigmapi.executor import ENGINES, Executor
-from sigmapi.experiments.base import Experiment, check_seeds, write_result
+from sigmapi.experiments.base import RESULT_FILE, Experiment, check_seeds, write_result
 from sigmapi.progress import Progress
 
 __all__ = ["SPELLINGS", "add_experiment", "run_experiment"]
@@ -54,8 +57,10 @@ def _gib(text: str) -> float:
         value = float(text)
     except ValueError:
         value = 0.0
-    if not value > 0:
-        raise argparse.ArgumentTypeError(f"must be a positive number of GiB, got {text!r}")
+    if not 0 < value < 2**40:  # NaN and inf too
+        raise argparse.ArgumentTypeError(
+            f"must be a positive, finite number of GiB, got {text[:40]!r}; e.g. 8"
+        )
     return value
 
 
@@ -115,12 +120,10 @@ def add_experiment(sub: Any, experiment: Experiment[Any]) -> Parser:
     return p
 
 
-def _out_folder(path: str, force: bool, resumes: bool) -> Path:
+def _make_folder(path: str) -> Path:
     out = Path(path)
     if out.exists() and not out.is_dir():
         raise UsageError(f"--out {str(out)!r} is a file; give a folder")
-    if out.exists() and any(out.iterdir()) and not (force or resumes):
-        raise UsageError(f"--out folder {str(out)!r} is not empty; pass --force to write into it")
     out.mkdir(parents=True, exist_ok=True)
     return out
 
@@ -131,6 +134,26 @@ def _parts(experiment: Experiment[Any]) -> dict[str | None, type]:
     and ``replace(**fields)`` finding the part of each field), every part's."""
     parts = getattr(experiment.config_type, "PARTS", None)
     return dict(parts) if parts else {None: experiment.config_type}
+
+
+def _check_folder(out: Path, force: bool, resumes: bool) -> None:
+    """Before any work: the folder takes files, and holds none of another run without
+    ``--force`` (a resuming experiment owns what it finds there)."""
+    if not (force or resumes) and any(p.name != LOCK_NAME for p in out.iterdir()):
+        raise UsageError(f"--out folder {str(out)!r} is not empty; pass --force to write into it")
+    for name in (RESULT_FILE,):
+        if (out / name).exists() and not (out / name).is_file():
+            raise UsageError(f"{str(out / name)!r} is a folder; the command writes a file there: "
+                             "move it away or give another --out")  # fmt: skip
+    try:  # find out now, not after a long run, that the folder takes no files
+        fd, probe = tempfile.mkstemp(prefix=".sigmapi.", suffix=".tmp", dir=out)
+        os.close(fd)
+        os.unlink(probe)
+    except OSError as exc:
+        raise UsageError(
+            f"cannot write into --out folder {str(out)!r}: {exc.strerror or exc}; choose "
+            "another --out"
+        ) from None
 
 
 def _config(experiment: Experiment[Any], values: dict[str, Any], quick: bool) -> Any:
@@ -169,12 +192,28 @@ def run_experiment(experiment: Experiment[Any], args: argparse.Namespace) -> int
         seeds = experiment.default_seeds(config, quick=quick)
     budget = None if args.memory_budget is None else int(args.memory_budget * 2**30)
     executor = Executor(args.engine, args.workers, args.address, budget)
-    out = None if args.out is None else _out_folder(args.out, args.force, experiment.resumes)
-    progress = None if args.quiet else Progress()
-    result = experiment.run(config, seeds=seeds, out=out, executor=executor, progress=progress)
-    if out is not None:
-        files = [*result.figure(out), write_result(result, out)]
+    if args.out is None:
+        result = _run(experiment, config, seeds, None, executor, args.quiet)
+    else:
+        out = _make_folder(args.out)
+        with output_lock(out, f"--out folder {str(out)!r}"):
+            _check_folder(out, args.force, experiment.resumes)
+            result = _run(experiment, config, seeds, out, executor, args.quiet)
+            files = [*result.figure(out), write_result(result, out)]
     print(json.dumps(result.to_dict()) if args.json else result.table())
-    if out is not None:
+    if args.out is not None:
         print(f"sigmapi {experiment.name}: wrote {', '.join(map(str, files))}", file=sys.stderr)
     return 0
+
+
+def _run(
+    experiment: Experiment[Any],
+    config: Any,
+    seeds: tuple[int, ...],
+    out: Path | None,
+    executor: Executor,
+    quiet: bool,
+) -> Any:
+    executor.check()  # a scheduler that does not answer: before any work
+    progress = None if quiet else Progress()
+    return experiment.run(config, seeds=seeds, out=out, executor=executor, progress=progress)

@@ -5,11 +5,13 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from sigmapi import _validate
+from sigmapi._lock import output_lock
 from sigmapi.checkpoints import (
     checkpoint_dir,
     find_resumable,
@@ -39,6 +41,11 @@ def cmd_train(args: argparse.Namespace) -> int:
         _validate.integer("--checkpoint-every", every, 1, fix="in iterations", error=UsageError)
     # --resume continues the same run, so it may replace that run's --out (checked below)
     out = check_output(args.out, args.force or args.resume)
+    with output_lock(out, f"--out {str(out)!r}"):  # one train per model file at a time
+        return _train(args, cfg, out, every)
+
+
+def _train(args: argparse.Namespace, cfg: Any, out: Path, every: int | None) -> int:
     folder = checkpoint_dir(out)
     model = None
     if args.resume:

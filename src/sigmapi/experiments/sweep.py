@@ -14,10 +14,13 @@ A spec names a preset, the seeds, fields fixed for every run (``[set]``) and a g
 Each run trains one model and evaluates it (:func:`sigmapi.evaluate`); ``DIR/results.csv``
 gets one row per run: the grid parameters, the seed, every metric (the fold score too), the
 training and total seconds, ``status`` (``ok`` or ``failed``) and the ``error`` of a failed
-run. The table is rewritten atomically after every finished run, so a killed sweep loses at
-most the runs in flight; started again with the same spec, it finds the finished runs in the
-table (by ``run_id``) and runs only the missing ones (failed ones again with
-``retry_failed``). Runs go through :mod:`sigmapi.executor`: a process pool sized
+run, and ``run_key``, the run's identity (:mod:`~sigmapi.experiments.sweep_table`: the
+resolved config, seed, ``n_test`` and model format). A row is appended after every finished
+run, so a killed sweep loses at most the runs in flight; started again with the same spec, it
+finds the finished runs in the table (by ``run_key``) and runs only the missing ones (failed
+ones again with ``retry_failed``). A table of another spec is refused, never rewritten (``add``
+adds to it on purpose); one command at a time writes a folder (:mod:`sigmapi._lock`); a spec
+names at most :data:`MAX_RUNS` runs. Runs go through :mod:`sigmapi.executor`: a process pool sized
 to the cores and the memory budget, or a Dask cluster.
 
 The experiment ``sweep`` (:class:`Sweep`, settings :class:`SweepConfig`: the spec file) is
@@ -26,11 +29,10 @@ The experiment ``sweep`` (:class:`Sweep`, settings :class:`SweepConfig`: the spe
 
 from __future__ import annotations
 
-import csv
 import dataclasses
-import io
 import itertools
 import json
+import math
 import statistics
 import time
 import tomllib
@@ -40,18 +42,28 @@ from pathlib import Path
 from typing import Any
 
 from sigmapi import _validate
+from sigmapi._lock import output_lock
 from sigmapi.circular import CIRCULAR_KEYS
 from sigmapi.config import SOMConfig, load_preset
 from sigmapi.errors import ConfigError
 from sigmapi.executor import Executor, Outcome, job_memory
-from sigmapi.experiments.base import Experiment, check_seeds, register
-from sigmapi.io import atomic_write_bytes
-from sigmapi.metrics import Metrics, evaluate
+from sigmapi.experiments.base import RESULT_FILE, Experiment, check_seeds, register
+from sigmapi.experiments.sweep_table import (
+    METRIC_COLUMNS,
+    RESULTS,
+    append_row,
+    open_table,
+    read_table,
+    run_key,
+)
+from sigmapi.metrics import evaluate
 from sigmapi.progress import Progress
 from sigmapi.som import SigmaPiSOM
 from sigmapi.tasks import get_relation
 
 __all__ = [
+    "MAX_RUNS",
+    "RESULTS",
     "SWEEP",
     "Sweep",
     "SweepConfig",
@@ -64,28 +76,44 @@ __all__ = [
     "sweep_job",
 ]
 
-RESULTS = "results.csv"
-"""The sweep's table in its output folder."""
+FIGURE = "sweep.png"
+"""The sweep's summary figure in its output folder."""
 
-META_COLUMNS = ("run_id", "seed", "status", "error", "train_seconds", "total_seconds")
-METRIC_COLUMNS = tuple(f.name for f in dataclasses.fields(Metrics) if f.name != "circular")
-"""The metric columns of every sweep; a sweep of angles adds :data:`CIRCULAR_KEYS`."""
+MAX_RUNS = 10_000
+"""Most runs (grid points x seeds) one spec may name; a larger sweep is several specs, each
+in its own --out folder (or several machines: engine dask)."""
 
 
 @dataclass(frozen=True)
 class SweepRun:
-    """One run of a sweep: the grid point ``params``, the ``seed`` and the resolved config."""
+    """One run of a sweep: the grid point ``params``, the ``seed``, the grid point's resolved
+    config (``point``; :attr:`config` adds the seed) and its identity ``run_key``
+    (:func:`~sigmapi.experiments.sweep_table.run_key`)."""
 
     run_id: str
+    run_key: str
     params: dict[str, Any]
     seed: int
-    config: SOMConfig
+    point: SOMConfig
     n_test: int
+
+    @property
+    def config(self) -> SOMConfig:
+        """The run's config: the grid point's with the run's seed."""
+        return self.point.replace(seed=self.seed)
+
+
+def _field(source: str, key: str) -> str:
+    return f"{source}: [grid] {key}"
 
 
 @dataclass(frozen=True)
 class SweepSpec:
-    """A parsed sweep spec (module docstring); :meth:`runs` lists the cross product."""
+    """A parsed sweep spec (module docstring); :meth:`runs` lists the cross product.
+
+    Grid values are stored as the config resolves them, each once (``[0.5, 1, 1.0]`` is
+    ``[0.5, 1.0]``), so that one config has one name.
+    """
 
     preset: str
     seeds: tuple[int, ...]
@@ -102,29 +130,44 @@ class SweepSpec:
             raise ConfigError(f"{source} is not valid TOML: {exc}") from None
         unknown = sorted(set(data) - {"preset", "seeds", "set", "grid", "n_test"})
         if unknown:
-            raise ConfigError(f"{source}: unknown key {unknown[0]!r}; a spec has preset, seeds, "
-                              "n_test, [set] and [grid]")  # fmt: skip
+            raise ConfigError(f"{source}: unknown key {unknown[0][:60]!r}; a spec has preset, "
+                              "seeds, n_test, [set] and [grid]")  # fmt: skip
         preset = data.get("preset")
         if not isinstance(preset, str):
-            raise ConfigError(f"{source}: preset must be a preset name, got {preset!r}; "
+            raise ConfigError(f"{source}: preset must be a preset name, got {preset!r:.60}; "
                               'e.g. preset = "tiny-1d"')  # fmt: skip
         seeds = check_seeds(data.get("seeds", [0]), f"{source}: seeds")
         grid = data.get("grid", {})
         if not isinstance(grid, dict) or not all(isinstance(v, list) and v for v in grid.values()):
-            raise ConfigError(f"{source}: [grid] must map each field to a non-empty list of "
-                              f"values, got {grid!r}; e.g. code_width = [0.5, 1.0]")  # fmt: skip
+            raise ConfigError(
+                f"{source}: [grid] must map each field to a non-empty list of values, got "
+                f"{grid!r:.200}; e.g. code_width = [0.5, 1.0]"
+            )
         fixed = data.get("set", {})
         if not isinstance(fixed, dict):
-            raise ConfigError(f"{source}: [set] must be a table of fields, got {fixed!r}")
+            raise ConfigError(f"{source}: [set] must be a table of fields, got {fixed!r:.200}")
         both = sorted(set(fixed) & set(grid))
         if both:
             raise ConfigError(f"{source}: {both[0]!r} is both in [set] and in [grid]; keep one")
         if "seed" in grid or "seed" in fixed:
             raise ConfigError(f"{source}: give seeds with seeds = [...], not as a field")
         n_test = data.get("n_test", 2000)
-        if not isinstance(n_test, int) or isinstance(n_test, bool) or n_test < 2:
-            raise ConfigError(f"{source}: n_test must be an int >= 2, got {n_test!r}")
-        spec = cls(preset, seeds, grid, fixed, n_test)
+        if not isinstance(n_test, int) or isinstance(n_test, bool) or not 2 <= n_test <= 10**7:
+            raise ConfigError(f"{source}: n_test must be an int in [2, 10000000], got "
+                              f"{n_test!r:.60}")  # fmt: skip
+        base = _base(preset, fixed, source)
+        resolved = {}
+        for key in sorted(grid):  # each value once, as the config resolves it
+            values: dict[str, Any] = {}
+            for value in grid[key]:
+                try:
+                    got = SOMConfig.from_dict({**base, key: value}).to_dict()[key]
+                except (ConfigError, TypeError) as exc:
+                    raise ConfigError(f"grid point {key} = {value!r:.60}: {exc}") from None
+                values.setdefault(json.dumps(got, sort_keys=True), got)
+            resolved[key] = list(values.values())
+        spec = cls(preset, seeds, resolved, fixed, n_test)
+        spec.count()  # bounded before anything is built
         spec.runs()  # every grid point makes a valid config: fail before anything trains
         return spec
 
@@ -132,30 +175,62 @@ class SweepSpec:
     def read(cls, path: str | Path) -> SweepSpec:
         p = Path(path)
         if not p.is_file():
-            raise ConfigError(f"sweep spec {str(p)!r} does not exist; check the path")
-        return cls.from_toml(p.read_text("utf-8"), f"sweep spec {str(p)!r}")
+            raise ConfigError(f"sweep spec {str(p)!r} does not exist or is not a file; check "
+                              "the path")  # fmt: skip
+        if p.stat().st_size > 1 << 20:
+            raise ConfigError(f"sweep spec {str(p)!r} is over 1 MB; a spec is a short TOML "
+                              "file (module sigmapi.experiments.sweep)")  # fmt: skip
+        try:
+            text = p.read_bytes().decode("utf-8")
+        except UnicodeDecodeError as exc:
+            raise ConfigError(f"sweep spec {str(p)!r} is not UTF-8 text (byte {exc.start}); "
+                              "save it as UTF-8") from None  # fmt: skip
+        return cls.from_toml(text, f"sweep spec {str(p)!r}")
 
     def to_dict(self) -> dict[str, Any]:
         """The spec as its TOML file holds it (``set`` for :attr:`fixed`)."""
         return {"preset": self.preset, "seeds": list(self.seeds), "n_test": self.n_test,
                 "set": self.fixed, "grid": self.grid}  # fmt: skip
 
+    def count(self) -> int:
+        """The number of runs (grid points x seeds); over :data:`MAX_RUNS` raises ConfigError."""
+        n = math.prod(len(v) for v in self.grid.values()) * len(self.seeds)
+        if n > MAX_RUNS:
+            sizes = " x ".join(f"{len(v)} {k}" for k, v in sorted(self.grid.items()))
+            raise ConfigError(
+                f"the sweep names {n:,} runs ({sizes or 'no grid'} x {len(self.seeds)} seeds), "
+                f"more than {MAX_RUNS:,}; split it into several specs, each with its own --out"
+            )
+        return n
+
     def runs(self) -> list[SweepRun]:
         """Every (grid point, seed), grid-major; configs checked here (ConfigError names the
         grid point)."""
-        base = load_preset(self.preset).to_dict()
+        self.count()
+        base = _base(self.preset, self.fixed, "sweep spec")
         keys = sorted(self.grid)
         out = []
         for values in itertools.product(*(self.grid[k] for k in keys)):
             params = dict(zip(keys, values, strict=True))
             try:
-                cfg = SOMConfig.from_dict({**base, **self.fixed, **params})
+                cfg = SOMConfig.from_dict({**base, **params})
             except (ConfigError, TypeError) as exc:
                 raise ConfigError(f"grid point {params}: {exc}") from None
+            resolved = cfg.to_dict()
             for seed in self.seeds:
                 rid = json.dumps({**params, "seed": seed}, sort_keys=True)
-                out.append(SweepRun(rid, params, seed, cfg.replace(seed=seed), self.n_test))
+                key = run_key(resolved, seed, self.n_test)
+                out.append(SweepRun(rid, key, params, seed, cfg, self.n_test))
         return out
+
+
+def _base(preset: str, fixed: dict[str, Any], source: str) -> dict[str, Any]:
+    """The preset with the spec's ``[set]``, checked."""
+    base = load_preset(preset).to_dict()
+    try:
+        return SOMConfig.from_dict({**base, **fixed}).to_dict()
+    except (ConfigError, TypeError) as exc:
+        raise ConfigError(f"{source}: [set]: {exc}") from None
 
 
 def sweep_job(run: SweepRun) -> dict[str, Any]:
@@ -168,28 +243,31 @@ def sweep_job(run: SweepRun) -> dict[str, Any]:
 
 
 def read_results(path: str | Path) -> list[dict[str, str]]:
-    """The rows of a sweep table (strings, as written); ``[]`` if there is none yet."""
-    p = Path(path)
-    if not p.is_file():
-        return []
-    with p.open(newline="", encoding="utf-8") as f:
-        return list(csv.DictReader(f))
-
-
-def _write(path: Path, columns: list[str], rows: list[dict[str, Any]]) -> None:
-    buf = io.StringIO()
-    writer = csv.DictWriter(buf, fieldnames=columns, extrasaction="ignore", lineterminator="\n")
-    writer.writeheader()
-    writer.writerows(rows)
-    atomic_write_bytes(path, buf.getvalue().encode("utf-8"))
+    """The rows of a sweep table (strings, as written; the last row of each run, in file
+    order); ``[]`` if there is none yet. A damaged table raises ConfigError."""
+    table = read_table(path)
+    return [] if table is None else list(table.rows.values())
 
 
 def _row(run: SweepRun, outcome: Outcome) -> dict[str, Any]:
-    row: dict[str, Any] = {"run_id": run.run_id, **run.params, "seed": run.seed}
+    row: dict[str, Any] = {"run_id": run.run_id, "run_key": run.run_key, **run.params,
+                           "seed": run.seed}  # fmt: skip
     if outcome.ok:
         return {**row, **outcome.value, "status": "ok", "error": ""}
-    return {**row, "status": "failed", "error": outcome.error,
-            "total_seconds": round(outcome.seconds, 3)}  # fmt: skip
+    error = " ".join(str(outcome.error).split())[:2000]  # one line, bounded
+    return {**row, "status": "failed", "error": error, "total_seconds": round(outcome.seconds, 3)}
+
+
+def _job_memory(runs: Sequence[SweepRun]) -> int:
+    """The largest job's memory (:func:`~sigmapi.executor.job_memory`), estimated once per
+    distinct model size."""
+    seen: dict[Any, int] = {}
+    for r in runs:
+        c = r.point
+        size = (c.map_shape, c.x_shape, c.y_shape, c.backend, c.kernel_tol, r.n_test)
+        if size not in seen:
+            seen[size] = job_memory(c, r.n_test)
+    return max(seen.values(), default=1)
 
 
 def run_sweep(
@@ -201,17 +279,20 @@ def run_sweep(
     memory_budget: int | None = None,
     address: str | None = None,
     retry_failed: bool = False,
+    add: bool = False,
     on_plan: Callable[[int, int, str], None] | None = None,
     on_done: Callable[[bool, str], None] | None = None,
 ) -> list[dict[str, Any]]:
-    """Run the missing runs of ``spec``, writing ``out/results.csv`` after each; all rows.
+    """Run the missing runs of ``spec``, appending each to ``out/results.csv``; this spec's rows.
 
     ``engine``, ``workers``, ``memory_budget`` (bytes) and ``address`` say where the runs go
-    (:class:`~sigmapi.executor.Executor`). ``on_plan(n_to_run, n_skipped, reason)`` is called
-    once before the first run and ``on_done(ok, line)`` after each.
+    (:class:`~sigmapi.executor.Executor`). A table there that holds runs of another spec is
+    refused unless ``add`` (:func:`~sigmapi.experiments.sweep_table.open_table`).
+    ``on_plan(n_to_run, n_skipped, reason)`` is called once before the first run and
+    ``on_done(ok, line)`` after each.
     """
     executor = Executor(engine, workers, address, memory_budget)
-    return _sweep(spec, Path(out), executor, retry_failed, on_plan, on_done)
+    return _sweep(spec, Path(out), executor, retry_failed, on_plan, on_done, add=add)
 
 
 def _sweep(
@@ -221,43 +302,46 @@ def _sweep(
     retry_failed: bool,
     on_plan: Callable[[int, int, str], None] | None,
     on_done: Callable[[bool, str], None] | None,
+    *,
+    add: bool = False,
 ) -> list[dict[str, Any]]:
+    if out.exists() and not out.is_dir():
+        raise ConfigError(f"out {str(out)!r} is a file; give a folder for the sweep's table")
     out.mkdir(parents=True, exist_ok=True)
-    path = out / RESULTS
-    runs = spec.runs()
-    keep = {"ok", "failed"} if not retry_failed else {"ok"}
-    have = {r["run_id"]: r for r in read_results(path) if r.get("status") in keep}
-    ids = {r.run_id for r in runs}
-    rows: list[dict[str, Any]] = [r for r in have.values() if r["run_id"] in ids]
-    todo = [r for r in runs if r.run_id not in have]
-    angles = any(get_relation(r.config.relation).circular for r in runs)
-    metrics = (*METRIC_COLUMNS, *(CIRCULAR_KEYS if angles else ()))
-    columns = ["run_id", *sorted(spec.grid), "seed", *metrics, "train_seconds",
-               "total_seconds", "status", "error"]  # fmt: skip
-    per_job = max((job_memory(r.config, r.n_test) for r in todo), default=1)
-    plan = executor.plan(per_job, len(todo))
-    if on_plan is not None:
-        on_plan(len(todo), len(runs) - len(todo), plan.reason)
-    by_id = {r.run_id: r for r in todo}
-    order = {r.run_id: i for i, r in enumerate(runs)}
-    for outcome in executor.run(sweep_job, [(r.run_id, r) for r in todo], plan.workers):
-        run = by_id[outcome.key]
-        row = _row(run, outcome)
-        rows.append(row)
-        rows.sort(key=lambda r: order.get(str(r["run_id"]), len(order)))
-        _write(path, columns, rows)
-        if on_done is not None:
-            what = ", ".join(f"{k} {v}" for k, v in run.params.items())
-            text = (f"order R^2 {row['order_r2']:.3f}{', FOLDED' if row['folded'] else ''}"
-                    if outcome.ok else f"FAILED: {outcome.error}")  # fmt: skip
-            on_done(outcome.ok, f"{what}, seed {run.seed}: {text} ({outcome.seconds:.0f} s)")
-    if not todo and not path.is_file():
-        _write(path, columns, rows)
-    return rows
-
-
-FIGURE = "sweep.png"
-"""The sweep's summary figure in its output folder."""
+    with output_lock(out, f"--out folder {str(out)!r}"):
+        path = out / RESULTS
+        runs = spec.runs()
+        angles = any(get_relation(r.point.relation).circular for r in runs)
+        metrics = (*METRIC_COLUMNS, *(CIRCULAR_KEYS if angles else ()))
+        columns = ["run_id", "run_key", *sorted(spec.grid), "seed", *metrics, "train_seconds",
+                   "total_seconds", "status", "error"]  # fmt: skip
+        for name in (FIGURE, RESULT_FILE):  # what is written after the runs: checked before them
+            if (out / name).exists() and not (out / name).is_file():
+                raise ConfigError(
+                    f"{str(out / name)!r} is not a file (a folder?); the sweep writes it after its "
+                    "runs: move it away or give a new --out"
+                )
+        executor.check()
+        have = open_table(path, columns, {r.run_key for r in runs}, add=add)
+        keep = {"ok", "failed"} if not retry_failed else {"ok"}
+        done = {k: r for k, r in have.items() if r["status"] in keep}
+        todo = [r for r in runs if r.run_key not in done]
+        plan = executor.plan(_job_memory(todo), len(todo))
+        if on_plan is not None:
+            on_plan(len(todo), len(runs) - len(todo), plan.reason)
+        by_id = {r.run_key: r for r in todo}
+        rows: dict[str, dict[str, Any]] = dict(have)
+        for outcome in executor.run(sweep_job, [(r.run_key, r) for r in todo], plan.workers):
+            run = by_id[outcome.key]
+            row = _row(run, outcome)
+            append_row(path, columns, row)
+            rows[run.run_key] = {c: row.get(c, "") for c in columns}
+            if on_done is not None:
+                what = ", ".join(f"{k} {v}" for k, v in run.params.items())
+                text = (f"order R^2 {row['order_r2']:.3f}{', FOLDED' if row['folded'] else ''}"
+                        if outcome.ok else f"FAILED: {outcome.error}")  # fmt: skip
+                on_done(outcome.ok, f"{what}, seed {run.seed}: {text} ({outcome.seconds:.0f} s)")
+        return [rows[r.run_key] for r in runs if r.run_key in rows]
 
 
 def draw_summary(
@@ -304,6 +388,9 @@ class SweepConfig:
     :mod:`sigmapi.experiments.sweep`); its seeds are the sweep's default seeds."""
     retry_failed: bool = False
     """Run failed runs again (otherwise finished runs, failed or not, are kept)."""
+    add: bool = False
+    """Add this spec's runs to an --out table that holds another spec's runs (its rows are
+    kept; otherwise such a table is refused)."""
     metric: str = "order_r2"
     """The metric of the summary figure (a column of the table)."""
 
@@ -409,7 +496,9 @@ class Sweep(Experiment[SweepConfig]):
             state["done"](ok, line)
 
         try:
-            rows = _sweep(spec, Path(out), ex, config.retry_failed, on_plan, on_done)
+            rows = _sweep(
+                spec, Path(out), ex, config.retry_failed, on_plan, on_done, add=config.add
+            )
         finally:
             if "bar" in state:
                 state["bar"].close()
