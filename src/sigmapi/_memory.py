@@ -12,7 +12,7 @@ import os
 
 from sigmapi.errors import ResourceError
 
-__all__ = ["available", "check", "human"]
+__all__ = ["available", "check", "check_count", "human"]
 
 
 def available() -> int | None:
@@ -47,3 +47,9 @@ def check(need: int, what: str, fix: str, error: type[Exception] = ResourceError
             f"{what} needs about {human(need)} of memory, more than the {human(have)} "
             f"available on this machine; {fix}"
         )
+
+
+def check_count(name: str, n: int, each: int, fix: str) -> None:
+    """Raise :class:`~sigmapi.errors.ResourceError` if ``n`` items (a user-given size, the
+    parameter ``name``) of ``each`` bytes exceed the memory available now."""
+    check(int(n) * int(each), f"{name}={int(n):,}", fix)

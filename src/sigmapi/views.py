@@ -104,8 +104,8 @@ def check_pairs(
 def check_views(views: Any, x_shape: tuple[int, ...], y_shape: tuple[int, ...]) -> CodeViews:
     """Two views ``(x0, y0, x1, y1)`` as checked codes of the same number of rows.
 
-    Besides :func:`check_codes` on each array: ``|x1_i y1_j|`` must stay within
-    :data:`MAX_PRODUCT` (the weights learn ``x1 y1^T``).
+    Besides :func:`check_codes` on each array: ``|x_i y_j|`` of each view must stay within
+    :data:`MAX_PRODUCT` (the weights learn ``x1 y1^T``, the winner weighs ``x0 y0^T``).
     """
     if isinstance(views, np.ndarray):
         got = f"one array of shape {views.shape}"
@@ -123,13 +123,15 @@ def check_views(views: Any, x_shape: tuple[int, ...], y_shape: tuple[int, ...]) 
     arrays = {n: check_codes(v, n, s) for n, v, s in zip(names, views, shapes, strict=True)}
     _same_rows(arrays, "views")
     x0, y0, x1, y1 = arrays.values()
-    top = float(np.abs(x1).max(initial=0.0)) * float(np.abs(y1).max(initial=0.0))
-    if top > MAX_PRODUCT:
-        raise DataError(
-            f"views x1 and y1 must have |x1_i y1_j| <= {MAX_PRODUCT:g} (the weights learn "
-            f"x1 y1^T and would overflow), got up to {top:.3g}; scale your codes to "
-            "about 1 (model.x_code.encode gives unit-length codes)"
-        )
+    for xv, yv, pair in ((x0, y0, "x0 and y0"), (x1, y1, "x1 and y1")):
+        # the weights learn x1 y1^T; the winner (and an ordering's eigh) uses x0 y0^T alike
+        top = float(np.abs(xv).max(initial=0.0)) * float(np.abs(yv).max(initial=0.0))
+        if top > MAX_PRODUCT:
+            raise DataError(
+                f"views {pair} must have |x_i y_j| <= {MAX_PRODUCT:g} (the map multiplies "
+                f"them and would overflow), got up to {top:.3g}; scale your codes to about 1 "
+                "(model.x_code.encode gives unit-length codes)"
+            )
     return x0, y0, x1, y1
 
 

@@ -44,7 +44,7 @@ from gymnasium import spaces
 from gymnasium.wrappers import TimeLimit
 from numpy.typing import NDArray
 
-from sigmapi import _validate
+from sigmapi import _memory, _validate
 from sigmapi.codes import _WIDTH_FIX, MIN_WIDTH, PopulationCode
 from sigmapi.envs.gaze_render import draw_workspace
 from sigmapi.envs.protocols import Obs, Views, view_space
@@ -107,6 +107,9 @@ def _check_world(
         raise _validate.fail("dim", "1 or 2", dim, "the task has 1-D and 2-D variants")
     dim = int(dim)
     grid = _validate.integer("grid", grid, 2, fix="use e.g. grid=15 (the paper's 2-D network)")
+    n = grid**dim  # the code's (n, n) float64 table of hills, and one copy of it
+    _memory.check(16 * n * n, f"a world of grid={grid}, dim={dim} ({n:,} units a view)",
+                  "use a smaller grid (the paper's 2-D network: grid=15)")  # fmt: skip
     code_width = _validate.number("code_width", code_width, MIN_WIDTH, fix=_WIDTH_FIX)
     step_size = _validate.number(
         "step_size", step_size, 0.0, 0.5, lo_open=True, fix="use e.g. 0.05"

@@ -45,7 +45,7 @@ from typing import Any, Literal, NamedTuple, get_args
 import numpy as np
 from numpy.typing import NDArray
 
-from sigmapi import _validate
+from sigmapi import _memory, _validate
 from sigmapi.codes import PopulationCode
 from sigmapi.config import SOMConfig, apply_overrides, load_preset
 from sigmapi.errors import ConfigError
@@ -352,6 +352,9 @@ def _run(
     progress: Progress | None,
 ) -> ChainResult:
     seeds = check_seeds(seeds)
+    width = 8 * 3 * (int(np.prod(cfg.x_shape)) + int(np.prod(cfg.y_shape)))  # a triple, float64
+    _memory.check_count("train_pairs", train_pairs, 2 * width, "e.g. --train-pairs 20000")
+    _memory.check_count("n_test", n_test, 4 * width, "e.g. --n-test 10000")
     cal_rng, test_rng = (
         np.random.default_rng(s) for s in np.random.SeedSequence(EVAL_SEED).spawn(2)
     )

@@ -44,7 +44,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from sigmapi import _validate
+from sigmapi import _memory, _validate
 from sigmapi.baselines.kohonen import KohonenSOM, MiniSomMap
 from sigmapi.baselines.readout import GainFieldNetwork, RBMFeatures
 from sigmapi.baselines.scoring import score_readout, score_units
@@ -407,7 +407,11 @@ def run_compare(
     start = time.perf_counter()
     seeds = check_seeds(seeds)
     check_installed(cfg.methods)
-    cal, test = evaluation_sets(SigmaPiSOM(cfg.som_config), cfg.n_test)
+    som = SigmaPiSOM(cfg.som_config)
+    width = 8 * (int(np.prod(som.x_shape)) + int(np.prod(som.y_shape)))  # a view pair, float64
+    _memory.check_count("train_pairs", cfg.train_pairs, 2 * width, "e.g. --train-pairs 20000")
+    _memory.check_count("n_test", cfg.n_test, 4 * width + 32 * som.n_units, "e.g. --n-test 10000")
+    cal, test = evaluation_sets(som, cfg.n_test)
     jobs = [(f"seed {seed}", CompareJob(seed, cfg, cal, test)) for seed in seeds]
     done = run_all(compare_seed, jobs, executor=executor,
                    per_job=job_memory(cfg.som_config, cfg.n_test), progress=progress,

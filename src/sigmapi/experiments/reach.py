@@ -166,6 +166,8 @@ def _map_quality(model: SigmaPiSOM) -> dict[str, float | int]:
 
 def _check_memory(config: ReachConfig) -> None:
     """Refuse a map (and its views) that this machine cannot hold, before anything is built."""
+    run = config.run  # the start states and, per seed and state, three (episodes,) arrays
+    _memory.check_count("episodes", run.episodes, 8 + 17 * len(run.states), "e.g. --episodes 600")
     if config.map.model_path is not None or "map" not in config.run.states:
         return
     som = SigmaPiSOM(config.som_config(config.run.seed))
