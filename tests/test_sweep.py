@@ -10,6 +10,8 @@ import time
 from pathlib import Path
 
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from sigmapi.errors import ConfigError
 from sigmapi.experiments.sweep import RESULTS, SweepSpec, read_results, run_sweep
@@ -116,3 +118,51 @@ def test_sweep_runs_on_an_existing_dask_cluster_by_address(tmp_path):
     assert len(rows) == 4 and all(row["status"] == "ok" for row in rows)
     local = run_sweep(SweepSpec.read(spec_file), tmp_path / "local", workers=1)
     assert _table(rows) == _table(local)
+
+
+TINY_SPEC = (
+    SPEC.replace("n_test = 500", "n_test = 50")
+    .replace("iterations = 1500", 'iterations = 60\nbackend = "reference"')
+    .replace('ordering = ["none", "crossview"]\n', "")
+)
+
+
+class _Killed(BaseException):
+    """Stands for a SIGKILL between two runs (nothing after it runs)."""
+
+
+@pytest.fixture(scope="module")
+def uninterrupted(tmp_path_factory):
+    out = tmp_path_factory.mktemp("whole")
+    run_sweep(SweepSpec.from_toml(TINY_SPEC), out, workers=1)
+    return _table(read_results(out / RESULTS))
+
+
+@given(after=st.integers(0, 4), torn=st.integers(0, 120))
+@settings(max_examples=6, deadline=None, suppress_health_check=list(HealthCheck))
+def test_a_sweep_killed_anywhere_and_resumed_gives_the_uninterrupted_table(
+    tmp_path_factory, uninterrupted, after, torn
+):
+    """Killed after ``after`` runs, with ``torn`` bytes of a row half-written, then resumed."""
+    spec = SweepSpec.from_toml(TINY_SPEC)
+    out = tmp_path_factory.mktemp("killed")
+    done = []
+
+    def kill_after(ok, line):
+        done.append(line)
+        if len(done) == after:
+            raise _Killed
+
+    try:
+        run_sweep(spec, out, workers=1, on_done=kill_after)
+    except _Killed:
+        pass
+    whole = (out / RESULTS).read_bytes()
+    lines = whole.splitlines(keepends=True)
+    if torn and len(lines) > 1:  # the next row cut short, as a kill during its write leaves it
+        with (out / RESULTS).open("ab") as f:
+            f.write(lines[1][: min(torn, len(lines[1]) - 1)])
+    rows = run_sweep(spec, out, workers=1)
+    assert len(rows) == 4
+    assert _table(read_results(out / RESULTS)) == uninterrupted
+    assert (out / RESULTS).read_bytes().startswith(whole)  # the finished rows kept as written

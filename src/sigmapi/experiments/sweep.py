@@ -167,8 +167,7 @@ class SweepSpec:
                 values.setdefault(json.dumps(got, sort_keys=True), got)
             resolved[key] = list(values.values())
         spec = cls(preset, seeds, resolved, fixed, n_test)
-        spec.count()  # bounded before anything is built
-        spec.runs()  # every grid point makes a valid config: fail before anything trains
+        spec.count()  # bounded; a point invalid only jointly fails in runs(), before any run
         return spec
 
     @classmethod
