@@ -555,3 +555,30 @@ def test_views_scaled_by_1e300_are_a_data_error(ordering, which):
     som = SigmaPiSOM(_cfg("reference").replace(ordering=ordering, iterations=50))
     with pytest.raises(DataError, match="scale your codes"):
         som.fit(tuple(views))
+
+
+def test_empty_and_ragged_views_are_data_errors():
+    from sigmapi.errors import DataError
+
+    som = SigmaPiSOM(_cfg("reference"))
+    with pytest.raises(DataError, match="px0 holds no positions"):
+        som.encode_views([], [], [], [])
+    with pytest.raises(DataError, match="rectangular"):
+        som.encode_views([[0.1], [0.2, 0.3]], [0.1], [0.1], [0.1])
+    with pytest.raises(DataError, match="rectangular"):
+        som.fit(([[0.1] * 5, [0.2] * 4], [[0.1] * 5], [[0.1] * 5], [[0.1] * 5]))
+
+
+def test_views_repeated_by_stride_0_are_checked_at_the_cost_of_their_data():
+    from sigmapi.errors import DataError
+    from sigmapi.views import check_views
+
+    row = np.float32([0.1, 0.2, 0.3, 0.4, 0.5])
+    big = np.broadcast_to(row, (10**12, 5))
+    t0 = time.perf_counter()
+    views = check_views((big,) * 4, (5,), (5,))
+    assert time.perf_counter() - t0 < 1 and views[0].shape == (10**12, 5)
+    assert views[0].dtype == np.float64 and 0 in views[0].strides  # no (B, n) copy
+    bad = np.broadcast_to(np.float32([0.1, np.nan, 0.3, 0.4, 0.5]), (10**12, 5))
+    with pytest.raises(DataError, match="finite"):
+        check_views((big, big, bad, big), (5,), (5,))

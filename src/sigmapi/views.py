@@ -57,18 +57,37 @@ CodeViews = tuple[Array, Array, Array, Array]
 """Checked views: four float64 arrays of the same number of rows."""
 
 
+def _asarray(a: ArrayLike, name: str, what: str) -> NDArray[Any]:
+    """``np.asarray(a)``; ragged nested lists raise DataError naming ``name``."""
+    try:
+        return np.asarray(a)
+    except (ValueError, TypeError) as exc:
+        raise DataError(
+            f"{name} must be a rectangular array of {what}, got {type(a).__name__} that numpy "
+            f"cannot make one of ({str(exc)[:80]}); give every row the same length"
+        ) from None
+
+
+def _distinct(arr: NDArray[Any]) -> NDArray[Any]:
+    """The part of ``arr`` that holds every value once where an axis repeats it (stride 0, as
+    ``np.broadcast_to`` makes): checks then cost the data, not the shape."""
+    repeated = [st == 0 and dim > 1 for st, dim in zip(arr.strides, arr.shape, strict=True)]
+    if not any(repeated):
+        return arr
+    return arr[tuple(slice(0, 1) if r else slice(None) for r in repeated)]
+
+
 def check_codes(a: ArrayLike, name: str, shape: tuple[int, ...]) -> Array:
     """``a`` as float64 codes ``(B, prod(shape))`` (one row ``(n,)`` becomes ``(1, n)``).
 
     Raises :class:`~sigmapi.errors.DataError` unless ``a`` is numeric, of that shape, and
-    finite.
+    finite. Rows repeated by a stride of 0 are checked (and converted) once.
     """
-    arr = np.asarray(a)
+    arr = _asarray(a, name, "codes")
     if arr.dtype.kind not in "fiub":
         raise DataError(
             f"{name} must be a numeric array, got dtype {arr.dtype}; pass codes as floats"
         )
-    arr = arr.astype(np.float64, copy=False)
     n = math.prod(shape)
     if arr.ndim == 1:
         arr = arr[None, :]
@@ -77,7 +96,13 @@ def check_codes(a: ArrayLike, name: str, shape: tuple[int, ...]) -> Array:
             f"{name} must have shape (B, {n}) (codes on grid {shape}, flattened in C order), "
             f"got {np.shape(a)}; encode positions with model.x_code.encode / y_code.encode"
         )
-    if not np.isfinite(arr.sum()) and not np.all(np.isfinite(arr)):  # one pass when finite
+    part = _distinct(arr)
+    if part is not arr:  # keep the repetition a view: no (B, n) copy
+        arr = np.broadcast_to(part.astype(np.float64, copy=False), arr.shape)
+        part = _distinct(arr)
+    else:
+        arr = part = arr.astype(np.float64, copy=False)
+    if not np.isfinite(part.sum()) and not np.all(np.isfinite(part)):  # one pass when finite
         raise DataError(f"{name} must be finite, got NaN or inf values; remove those rows")
     return arr
 
@@ -125,7 +150,8 @@ def check_views(views: Any, x_shape: tuple[int, ...], y_shape: tuple[int, ...]) 
     x0, y0, x1, y1 = arrays.values()
     for xv, yv, pair in ((x0, y0, "x0 and y0"), (x1, y1, "x1 and y1")):
         # the weights learn x1 y1^T; the winner (and an ordering's eigh) uses x0 y0^T alike
-        top = float(np.abs(xv).max(initial=0.0)) * float(np.abs(yv).max(initial=0.0))
+        top = float(np.abs(_distinct(xv)).max(initial=0.0))
+        top *= float(np.abs(_distinct(yv)).max(initial=0.0))
         if top > MAX_PRODUCT:
             raise DataError(
                 f"views {pair} must have |x_i y_j| <= {MAX_PRODUCT:g} (the map multiplies "
@@ -165,6 +191,10 @@ def encode_views(
     :meth:`~sigmapi.codes.PopulationCode.check_positions` under its own name.
     """
     pos = {"px0": px0, "py0": py0, "px1": px1, "py1": py1}
+    for name, p in pos.items():
+        if _asarray(p, name, "positions").size == 0:
+            raise DataError(f"{name} holds no positions, got an empty array; give at least "
+                            "one row (one position per row)")  # fmt: skip
     out = [
         code.encode(code.check_positions(p, name))
         for code, (name, p) in zip((x_code, y_code, x_code, y_code), pos.items(), strict=True)
