@@ -7,7 +7,10 @@
   experiment's (:meth:`~sigmapi.experiments.Experiment.default_seeds`);
 - ``--out DIR``: the folder for ``result.json`` (``to_dict()``) and the figures (default the
   experiment's, or nothing written); a folder that is not empty needs ``--force``, unless the
-  experiment resumes a run there (a sweep);
+  experiment resumes a run there (a sweep: it owns its table, figure and ``result.json``, and
+  refuses a table it did not write, ``--force`` or not); the folder is locked while the
+  command runs (:mod:`sigmapi._lock`: a second command on it stops at once) and checked to
+  take files before any work;
 - ``--json``: print ``to_dict()`` as one JSON object on stdout (else the table);
 - ``--quick``: start from the experiment's quick config and seeds (where it has one);
 - ``--workers``, ``--engine``, ``--address``, ``--memory-budget``: the executor;

@@ -42,6 +42,7 @@ def cmd_train(args: argparse.Namespace) -> int:
     # --resume continues the same run, so it may replace that run's --out (checked below)
     out = check_output(args.out, args.force or args.resume)
     with output_lock(out, f"--out {str(out)!r}"):  # one train per model file at a time
+        check_output(out, args.force or args.resume)  # again: one may have finished meanwhile
         return _train(args, cfg, out, every)
 
 
