@@ -7,6 +7,7 @@ from __future__ import annotations
 import copy
 import os
 import pickle
+import shutil
 import signal
 import stat
 import subprocess
@@ -249,25 +250,36 @@ def _spec(tmp_path, text=SPEC3, name="spec.toml"):
         ("code_width = [0.5, 1.0]", "code_width = [0.5, 0.75]"),  # another grid
     ],
 )
-def test_sweep_refuses_a_table_of_another_spec_and_leaves_it_as_it_is(tmp_path, capsys, change):
+def test_sweep_refuses_a_table_of_another_spec_and_leaves_it_as_it_is(
+    tmp_path, capsys, swept, change
+):
     out = tmp_path / "o"
-    rc, err = _main(capsys, "sweep", _spec(tmp_path), "--out", out, "--quiet")
-    assert rc == 0, err
+    shutil.copytree(swept, out)
     table = (out / "results.csv").read_bytes()
     other = _spec(tmp_path, SPEC3.replace(*change), "other.toml")
     rc, err = _main(capsys, "sweep", other, "--out", out, "--quiet")
     _one_line_2(rc, err, "another spec", "--add", "new --out")
     assert (out / "results.csv").read_bytes() == table
+
+
+@pytest.fixture(scope="module")
+def swept(tmp_path_factory):
+    """A folder holding the finished sweep of :data:`SPEC3`."""
+    from sigmapi.cli import main
+
+    root = tmp_path_factory.mktemp("swept")
+    assert main(["sweep", str(_spec(root)), "--out", str(root / "o"), "--quiet"]) == 0
+    return root / "o"
+
+
+def test_sweep_add_keeps_the_other_specs_rows_and_reports_only_its_own(tmp_path, capsys, swept):
+    out = tmp_path / "o"
+    shutil.copytree(swept, out)
+    table = (out / "results.csv").read_bytes()
     # the same spec again: everything finished already, nothing rewritten
     rc, err = _main(capsys, "sweep", _spec(tmp_path), "--out", out)
     assert rc == 0 and "2 finished already, 0 to run" in err
     assert (out / "results.csv").read_bytes() == table
-
-
-def test_sweep_add_keeps_the_other_specs_rows_and_reports_only_its_own(tmp_path, capsys):
-    out = tmp_path / "o"
-    assert _main(capsys, "sweep", _spec(tmp_path), "--out", out, "--quiet")[0] == 0
-    table = (out / "results.csv").read_bytes()
     other = _spec(tmp_path, SPEC3.replace("seeds = [0]", "seeds = [1]"), "other.toml")
     rc, err = _main(capsys, "sweep", other, "--out", out, "--quiet", "--add", "--json")
     assert rc == 0, err
@@ -296,9 +308,9 @@ def test_sweep_never_replaces_a_file_that_is_no_table_of_its_own(tmp_path, capsy
     assert not (out / "sweep.png").exists()
 
 
-def test_a_damaged_table_on_resume_is_one_line_before_anything_is_written(tmp_path, capsys):
+def test_a_damaged_table_on_resume_is_one_line_before_anything_is_written(tmp_path, capsys, swept):
     out = tmp_path / "o"
-    assert _main(capsys, "sweep", _spec(tmp_path), "--out", out, "--quiet")[0] == 0
+    shutil.copytree(swept, out)
     good = (out / "results.csv").read_text()
     header, first, *_ = good.splitlines(keepends=True)
     cols = header.strip().split(",")
@@ -318,9 +330,9 @@ def test_a_damaged_table_on_resume_is_one_line_before_anything_is_written(tmp_pa
         assert (out / "sweep.png").stat().st_mtime_ns == png
 
 
-def test_a_torn_last_row_is_dropped_and_run_again(tmp_path, capsys):
+def test_a_torn_last_row_is_dropped_and_run_again(tmp_path, capsys, swept):
     out = tmp_path / "o"
-    assert _main(capsys, "sweep", _spec(tmp_path), "--out", out, "--quiet")[0] == 0
+    shutil.copytree(swept, out)
     full = (out / "results.csv").read_text()
     lines = full.splitlines(keepends=True)
     (out / "results.csv").write_text("".join(lines[:-1]) + lines[-1][:25])  # killed mid-write

@@ -148,15 +148,15 @@ def check_views(views: Any, x_shape: tuple[int, ...], y_shape: tuple[int, ...]) 
     arrays = {n: check_codes(v, n, s) for n, v, s in zip(names, views, shapes, strict=True)}
     _same_rows(arrays, "views")
     x0, y0, x1, y1 = arrays.values()
-    for xv, yv, pair in ((x0, y0, "x0 and y0"), (x1, y1, "x1 and y1")):
+    for xv, yv, v in ((x1, y1, "1"), (x0, y0, "0")):
         # the weights learn x1 y1^T; the winner (and an ordering's eigh) uses x0 y0^T alike
         top = float(np.abs(_distinct(xv)).max(initial=0.0))
         top *= float(np.abs(_distinct(yv)).max(initial=0.0))
         if top > MAX_PRODUCT:
             raise DataError(
-                f"views {pair} must have |x_i y_j| <= {MAX_PRODUCT:g} (the map multiplies "
-                f"them and would overflow), got up to {top:.3g}; scale your codes to about 1 "
-                "(model.x_code.encode gives unit-length codes)"
+                f"views x{v} and y{v} must have |x{v}_i y{v}_j| <= {MAX_PRODUCT:g} (the map "
+                f"multiplies them and would overflow), got up to {top:.3g}; scale your codes to "
+                "about 1 (model.x_code.encode gives unit-length codes)"
             )
     return x0, y0, x1, y1
 
