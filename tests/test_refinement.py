@@ -148,3 +148,15 @@ def test_over_seeds_the_refinement_lowers_the_cost_and_raises_consistency():
         )
     assert min(drops) > 0, drops
     assert float(np.median(gains)) > 0, gains
+
+
+def test_the_learning_curve_records_every_round():
+    from sigmapi.curves import LearningCurve
+
+    cfg = SMALL.replace(backend="reference", refine_pairs=1000)
+    curve = LearningCurve(at=[1000, 3000], n_test=300)
+    SigmaPiSOM(cfg).fit(callback=curve)
+    cols = curve.to_dict()
+    assert cols["t"] == [1000.0, 3000.0, 3000.0, 3000.0]
+    assert cols["refined"] == [0.0, 0.0, 1000.0, 2000.0]
+    assert all(np.isfinite(cols["cost_winner"]))
