@@ -144,9 +144,9 @@ def cmd_presets(args: argparse.Namespace) -> int:
     for name in list_presets():
         cfg = load_preset(name)
         print(
-            f"{name:12s} map {'x'.join(map(str, cfg.map_shape)):6s} "
+            f"{name:16s} map {'x'.join(map(str, cfg.map_shape)):6s} "
             f"x {'x'.join(map(str, cfg.x_shape)):6s} y {'x'.join(map(str, cfg.y_shape)):6s} "
-            f"{cfg.iterations:>8d} iterations  {cfg.extra.get('source', '')}"
+            f"{cfg.iterations:>8d} iterations  {cfg.extra.get('procedure', 'sigmapi')}"
         )
     return 0
 
@@ -157,7 +157,8 @@ def register(sub: Any) -> None:
         "train",
         help="train a map and write a model file",
         description="Train a Sigma-Pi map and write it to a model file (.npz). Without "
-        "--preset this is preset paper-1d: the authors' 1-D run of 300,000 iterations; "
+        "--preset this is preset paper-1d: the paper's 1-D task, 300,000 iterations by "
+        "sigmapi's procedure (paper-1d-authors: the authors' run); "
         "try --preset tiny-1d for a short run.",
     )
     add_config_flags(p)
