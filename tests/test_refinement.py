@@ -129,8 +129,9 @@ def test_bad_settings_name_their_field(field):
 
 def test_over_seeds_the_refinement_lowers_the_cost_and_raises_consistency():
     """Five seeds of a 9-unit 1-D map (fast kernel): the winner-only cost (Eq. 5 at sigma ->
-    0) falls on every seed and the median view consistency rises. Measured: cost down 3-9 %
-    on each seed; view consistency +0.01 to +0.05."""
+    0) falls on every seed and the median view consistency rises. Measured (seeds 0-4):
+    cost down 0.6-0.9 % on each seed, view consistency +0.011 to +0.030 (median +0.027);
+    the thresholds: any fall of the cost on every seed, a median gain above 0.01."""
     if "fast" not in BACKENDS:
         pytest.skip("numba is not installed")
     cfg = sigmapi.load_preset("tiny-1d").replace(
@@ -147,7 +148,7 @@ def test_over_seeds_the_refinement_lowers_the_cost_and_raises_consistency():
             - evaluate(plain, n_test=3000).view_consistency
         )
     assert min(drops) > 0, drops
-    assert float(np.median(gains)) > 0, gains
+    assert float(np.median(gains)) > 0.01, gains
 
 
 def test_the_learning_curve_records_every_round():
@@ -160,3 +161,19 @@ def test_the_learning_curve_records_every_round():
     assert cols["t"] == [1000.0, 3000.0, 3000.0, 3000.0]
     assert cols["refined"] == [0.0, 0.0, 1000.0, 2000.0]
     assert all(np.isfinite(cols["cost_winner"]))
+
+
+def test_the_fast_refinement_does_not_depend_on_threads():
+    if "fast" not in BACKENDS:
+        pytest.skip("numba is not installed")
+    import numba
+
+    cfg = SMALL.replace(backend="fast", map_shape=(4, 4), x_shape=(6, 6), y_shape=(6, 6),
+                        code_width=1.0, kernel_tol=1e-4, threads=True)  # fmt: skip
+    before = numba.get_num_threads()
+    try:
+        numba.set_num_threads(1)
+        one = SigmaPiSOM(cfg).fit().weights_
+    finally:
+        numba.set_num_threads(before)
+    np.testing.assert_array_equal(SigmaPiSOM(cfg).fit().weights_, one)
