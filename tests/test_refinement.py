@@ -177,3 +177,20 @@ def test_the_fast_refinement_does_not_depend_on_threads():
     finally:
         numba.set_num_threads(before)
     np.testing.assert_array_equal(SigmaPiSOM(cfg).fit().weights_, one)
+
+
+def test_the_rest_of_the_run_and_the_command_line_include_the_refinement(tmp_path):
+    from sigmapi.cli import main
+
+    cfg = SMALL.replace(backend="reference")
+    whole = SigmaPiSOM(cfg).fit()
+    part = SigmaPiSOM(cfg).fit(iterations=1000)
+    assert part.refined_ == 0  # a partial training: no refinement yet
+    np.testing.assert_array_equal(part.partial_fit().weights_, whole.weights_)
+    out = tmp_path / "m.npz"
+    flags = [f"--set={k}={v}" for k, v in (("map_shape", "[6]"), ("x_shape", "[7]"),
+             ("y_shape", "[7]"), ("iterations", 3000), ("refine_rounds", 2),
+             ("refine_pairs", 1500), ("kernel_tol", 0.0), ("backend", '"reference"'))]  # fmt: skip
+    assert main(["train", "--preset", "tiny-1d", "--seed", "1", *flags, "--out", str(out),
+                 "--quiet"]) == 0  # fmt: skip
+    assert sigmapi.load(out).refined_ == 3000

@@ -9,9 +9,9 @@ pickles (:mod:`sigmapi._persist`), view checks (:mod:`sigmapi.views`).
 Random streams: one :class:`numpy.random.SeedSequence` per run. The initial weights come from
 its child ``spawn_key=(0,)``; the training data of iterations ``[b * BLOCK, (b + 1) * BLOCK)``
 from child ``(1, b)``; the refinement's pairs of round ``r``, block ``b`` from child
-``(4, r, b)`` (:mod:`sigmapi._refine`). The data of any iteration is therefore a pure function of the seed and
-the iteration number: stopping, saving, loading and continuing gives the same run, bit for
-bit, wherever the run was cut.
+``(4, r, b)`` (:mod:`sigmapi._refine`). The data of any iteration is therefore a pure function
+of the seed and the iteration number: stopping, saving, loading and continuing gives the same
+run, bit for bit, wherever the run was cut.
 """
 
 from __future__ import annotations
@@ -307,7 +307,8 @@ class SigmaPiSOM(GridsMixin, CostMixin, ParamsMixin, PersistMixin, RefineMixin):
             in order (T iterations); the schedule continues at ``t_``. :meth:`fit` runs a
             whole schedule. Without it the model continues on its built-in task.
         iterations : int, optional
-            Iterations to run on the built-in task (default: the rest of the configured run).
+            Iterations to run on the built-in task (default: the rest of the configured run,
+            its refinement included).
             Not with ``views``, whose rows are the iterations.
         callback : callable, optional
             ``callback(model)``, called after every chunk of at most ``BLOCK`` iterations.
@@ -334,6 +335,7 @@ class SigmaPiSOM(GridsMixin, CostMixin, ParamsMixin, PersistMixin, RefineMixin):
         if data is not None:
             self._train_rows(data, None, callback)
             return self
+        rest = iterations is None  # the rest of the configured run, refinement included
         if iterations is None:
             iterations = self.config.iterations - self._t
             if iterations <= 0 and self._refined < self.refine_total:
@@ -355,6 +357,9 @@ class SigmaPiSOM(GridsMixin, CostMixin, ParamsMixin, PersistMixin, RefineMixin):
             self._run_views(batch.x0[sl], batch.y0[sl], batch.x1[sl], batch.y1[sl])
             if callback is not None:
                 callback(self)
+        if rest and self._refined < self.refine_total:
+            self._check_refiner()
+            self._refine(None, callback)
         return self
 
     def _train_rows(

@@ -55,7 +55,7 @@ def cmd_train(args: argparse.Namespace) -> int:
             print(f"resuming from {found.path} (iteration {model.t_})", file=sys.stderr)
         elif out.exists() and not args.force:
             model = _finished_run(out, cfg)
-            if model.t_ >= cfg.iterations:
+            if model.t_ >= cfg.iterations and model.refined_ >= model.refine_total:
                 print(f"{out} is this run, complete ({model.t_} iterations); nothing to do",
                       file=sys.stderr)  # fmt: skip
                 return 0
@@ -74,6 +74,8 @@ def cmd_train(args: argparse.Namespace) -> int:
             model.partial_fit(iterations=step, callback=callback)
             if every is not None and model.t_ % every == 0 and model.t_ < cfg.iterations:
                 write_checkpoint(model, folder)
+    if model.refined_ < model.refine_total:
+        model.refine()  # the config's refinement after the training (rules/refinement.py)
     model.save(out, compress=args.compress)
     print(f"wrote {out} ({model.t_} iterations, backend {model.backend})", file=sys.stderr)
     if not args.keep_checkpoints:
