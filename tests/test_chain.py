@@ -20,7 +20,7 @@ from sigmapi.experiments.chain import (
 )
 from sigmapi.metrics import winner_metrics
 
-SMALL = sigmapi.load_preset("paper-1d").replace(
+SMALL = sigmapi.load_preset("paper-1d-authors").replace(
     ordering="crossview", map_shape=(9,), x_shape=(9,), y_shape=(9,), iterations=15_000,
     winner_rule="argmax",
 )  # fmt: skip

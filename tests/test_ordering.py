@@ -46,13 +46,16 @@ def test_crossview_start_is_ordered_and_oriented_like_the_retina():
 
 
 def test_ordering_none_keeps_the_paper_procedure():
-    assert sigmapi.load_preset("paper-1d").ordering == "none"
-    assert sigmapi.load_preset("paper-2d").ordering == "crossview"
-    som = SigmaPiSOM(sigmapi.load_preset("paper-1d"), seed=0)
+    for name in ("paper-1d", "paper-2d"):  # sigmapi's procedure; the authors' one name away
+        assert sigmapi.load_preset(name).ordering == "crossview"
+        assert sigmapi.load_preset(name).refine_rounds > 0
+        authors = sigmapi.load_preset(f"{name}-authors")
+        assert authors.ordering == "none" and authors.refine_rounds == 0
+    som = SigmaPiSOM(sigmapi.load_preset("paper-1d-authors"), seed=0)
     w = som.initial_weights()
     assert -0.1 <= w.min() and w.max() <= 0.1  # the paper's uniform start
     assert float(som.sigma_at(0)) == 8.0  # and its full schedule
-    cross = SigmaPiSOM(sigmapi.load_preset("paper-1d"), ordering="crossview", seed=0)
+    cross = SigmaPiSOM(sigmapi.load_preset("paper-1d"), seed=0)
     assert float(cross.sigma_at(0)) == 3.0 and float(cross.sigma_at(299_999)) == 1e-5
 
 

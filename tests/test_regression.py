@@ -24,6 +24,23 @@ def test_pinned_regression_values(small_1d):
     assert float(som.weights_[3, 2, 4]) == pytest.approx(0.0039448768137741366, abs=1e-12)
 
 
+def test_the_authors_preset_is_the_authors_run():
+    """paper-1d-authors is the preset paper-1d was before the refinement (its config field
+    for field: the same run, bit for bit, as the streams and arithmetic pinned above)."""
+    import sigmapi
+
+    cfg = sigmapi.load_preset("paper-1d-authors")
+    want = {
+        "map_shape": (15,), "x_shape": (15,), "y_shape": (15,), "code_width": 0.5,
+        "code_height": 1.0, "code_normalize": True, "periodic": False, "relation": "mean",
+        "iterations": 300_000, "eps": 0.01, "winner_rule": "soft", "soft_cut": 15,
+        "init_scale": 0.1, "ordering": "none", "refine_rounds": 0, "map_periodic": False,
+        "same_view": False, "kernel_tol": 1e-6,
+        "sigma": ((0.0, 8.0), (0.11, 3.5), (0.6666666666666666, 1e-5)),
+    }  # fmt: skip
+    assert {k: getattr(cfg, k) for k in want} == want
+
+
 @pytest.mark.parametrize(
     ("rule", "raw_sum", "scale_sum", "raw_100_7"),
     [

@@ -114,14 +114,14 @@ def test_partial_fit_past_the_run_needs_iterations(small_1d):
 
 
 def test_schedule_is_the_papers():
-    som = SigmaPiSOM(sigmapi.load_preset("paper-1d"))
+    som = SigmaPiSOM(sigmapi.load_preset("paper-1d-authors"))
     assert som.sigma_at(0) == 8.0
     assert som.sigma_at(33_000) == pytest.approx(3.5)
     assert som.sigma_at(200_000) == pytest.approx(1e-5)
     assert som.sigma_at(116_500) == pytest.approx((3.5 + 1e-5) / 2)
     assert som.eps_at(123) == 0.01
     # milestones scale with the run
-    short = SigmaPiSOM(sigmapi.load_preset("paper-1d"), iterations=30_000)
+    short = SigmaPiSOM(sigmapi.load_preset("paper-1d-authors"), iterations=30_000)
     assert short.sigma_at(3_300) == pytest.approx(3.5)
 
 

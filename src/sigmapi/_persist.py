@@ -29,6 +29,7 @@ class PersistMixin:
     seed_entropy: int
     _kernel: Any
     _state: KernelState | None
+    _refined: int
 
     if TYPE_CHECKING:
 
@@ -59,7 +60,9 @@ class PersistMixin:
         that no file is written that :func:`sigmapi.load` would refuse.
         """
         self._check_fitted()
-        return write_parts(self.config, self.t_, self.seed_entropy, self._kernel, self._state)
+        return write_parts(
+            self.config, self.t_, self.seed_entropy, self._kernel, self._state, self._refined
+        )
 
     @classmethod
     def from_arrays(
@@ -84,6 +87,7 @@ class PersistMixin:
         else:
             model._set_weights(np.asarray(parts.weights))
         model.t_ = parts.t
+        model._refined = parts.refined
         return model
 
     def save(self, path: str | Path, *, compress: bool = False) -> Path:

@@ -126,6 +126,16 @@ class SOMConfig:
     ordering_sigma: float = 3.0
     """With an ordering procedure: the largest neighbourhood width used (map units); the
     configured sigma schedule is cut off at this value. Ignored with ordering = "none"."""
+    refine_rounds: int = 0
+    """Rounds of the batch refinement after training (:mod:`sigmapi.rules.refinement`, section
+    6.3): hard winners of view 0 with the weights fixed, then every unit's weights to the
+    mean of view 1's outer products over the pairs it won. 0 = off (the run as before)."""
+    refine_pairs: int = 200_000
+    """View pairs per refinement round on the built-in task (fresh pairs from the run's own
+    stream); with ``fit(views)`` a round is one pass over your rows instead."""
+    refine_sigma: float = 0.0
+    """Neighbourhood width of the refinement's weighted mean (map units); 0 = each unit the
+    mean of the pairs it won alone."""
     same_view: bool = False
     """Ablation: learn from the view that chose the winner (the paper learns from the other)."""
     backend: str = "auto"
@@ -161,6 +171,16 @@ class SOMConfig:
         for name in ("code_normalize", "periodic", "map_periodic", "same_view", "threads"):
             _validate.boolean(name, getattr(self, name))
         its = _validate.integer("iterations", self.iterations, 1, fix="the paper runs 300000")
+        set_(
+            self,
+            "refine_rounds",
+            _validate.integer(
+                "refine_rounds", self.refine_rounds, 0, fix="0 turns the refinement off"
+            ),
+        )
+        set_(self, "refine_pairs", _validate.integer("refine_pairs", self.refine_pairs, 1))
+        set_(self, "refine_sigma", _validate.number("refine_sigma", self.refine_sigma, 0.0,
+                                                    fix="0 is the winner alone"))  # fmt: skip
         set_(self, "iterations", its)
         cut = _validate.integer(
             "soft_cut", self.soft_cut, 0, fix="in map units; the script uses 15"

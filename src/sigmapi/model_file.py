@@ -6,7 +6,8 @@ arrays hold and checks them; :class:`sigmapi.SigmaPiSOM` turns the parts into a 
 never imports the estimator.
 
 The header holds the resolved ``config``, the iteration count ``t``, the ``seed_entropy`` of
-the random streams (a decimal string) and the ``backend`` that wrote the file. The arrays
+the random streams (a decimal string), the ``backend`` that wrote the file and, for a run
+with refinement, ``refined`` (its pairs done; absent: 0). The arrays
 are the backend's own (:meth:`sigmapi.kernels.base.Kernel.file_arrays`: dense ``weights``
 or ``state_<name>`` arrays of its layout), stored once in the backend's precision. The
 backend that wrote a file reads its state back bit for bit, so that the run continues
@@ -52,6 +53,8 @@ class ModelParts:
         The kernel's own state, read back bit for bit (the file's writer is the backend).
     weights : ndarray of shape (n_units, n_x, n_y) or None
         Dense float64 weights for the backend to prepare (set where ``state`` is None).
+    refined : int
+        Refinement pairs done (header ``refined``; absent in files without refinement: 0).
     """
 
     config: SOMConfig
@@ -59,10 +62,16 @@ class ModelParts:
     seed_entropy: int
     state: KernelState | None = None
     weights: NDArray[np.float64] | None = None
+    refined: int = 0
 
 
 def write_parts(
-    config: SOMConfig, t: int, seed_entropy: int, kernel: Kernel[Any], state: Any
+    config: SOMConfig,
+    t: int,
+    seed_entropy: int,
+    kernel: Kernel[Any],
+    state: Any,
+    refined: int = 0,
 ) -> tuple[dict[str, Any], dict[str, NDArray[Any]]]:
     """The header and arrays of a model file holding ``state``, the state of ``kernel``.
 
@@ -90,6 +99,8 @@ def write_parts(
         "seed_entropy": str(seed_entropy),
         "backend": kernel.NAME,
     }
+    if config.refine_rounds > 0 or refined:  # files of runs without refinement as before
+        header["refined"] = int(refined)
     return header, arrays
 
 
@@ -147,4 +158,7 @@ def read_parts(
         raise ModelFileError(f"{name!r}: seed_entropy must be an integer string") from None
     if entropy < 0:
         raise ModelFileError(f"{name!r}: seed_entropy must be >= 0, got {entropy}")
-    return ModelParts(cfg, t, entropy, state, weights)
+    refined = _validate.integer(
+        f"{name!r}: refinement pairs done", header.get("refined", 0), 0, error=ModelFileError
+    )
+    return ModelParts(cfg, t, entropy, state, weights, refined)

@@ -8,9 +8,10 @@ pickles (:mod:`sigmapi._persist`), view checks (:mod:`sigmapi.views`).
 
 Random streams: one :class:`numpy.random.SeedSequence` per run. The initial weights come from
 its child ``spawn_key=(0,)``; the training data of iterations ``[b * BLOCK, (b + 1) * BLOCK)``
-from child ``(1, b)``. The data of any iteration is therefore a pure function of the seed and
-the iteration number: stopping, saving, loading and continuing gives the same run, bit for
-bit, wherever the run was cut.
+from child ``(1, b)``; the refinement's pairs of round ``r``, block ``b`` from child
+``(4, r, b)`` (:mod:`sigmapi._refine`). The data of any iteration is therefore a pure function
+of the seed and the iteration number: stopping, saving, loading and continuing gives the same
+run, bit for bit, wherever the run was cut.
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ from sigmapi._cost import CostMixin
 from sigmapi._grids import GridsMixin
 from sigmapi._params import ParamsMixin, entropy_of, stored_overrides
 from sigmapi._persist import PersistMixin
+from sigmapi._refine import RefineMixin
 from sigmapi.config import SOMConfig
 from sigmapi.errors import ConfigError, DataError, NotFittedError, NumericalError
 from sigmapi.kernels import KernelState, get_backend
@@ -44,7 +46,7 @@ BLOCK = 1000
 Callback = Callable[["SigmaPiSOM"], None]
 
 
-class SigmaPiSOM(GridsMixin, CostMixin, ParamsMixin, PersistMixin):
+class SigmaPiSOM(GridsMixin, CostMixin, ParamsMixin, PersistMixin, RefineMixin):
     """Self-organizing map of Sigma-Pi units, ``h_k = sum_ij w_kij x_i y_j``.
 
     Trained without a teacher on two views of the same body-centred position z: the winner is
@@ -102,6 +104,8 @@ class SigmaPiSOM(GridsMixin, CostMixin, ParamsMixin, PersistMixin):
         self._lock = threading.RLock()
         self._unit_positions: NDArray[np.float64] | None = None  # transform()'s table
         self._sigma_cache: tuple[int, float] | None = None  # (t_, sigma at t_)
+        self._refined = 0  # refinement pairs done (all rounds)
+        self._refine_acc = None  # (round, its sums so far)
 
     @property
     def t_(self) -> int:
@@ -147,7 +151,8 @@ class SigmaPiSOM(GridsMixin, CostMixin, ParamsMixin, PersistMixin):
         own estimate, ``kernel.memory_bytes``) and the float64 ``weights_``."""
         shape = (self.n_units, int(np.prod(self.x_shape)), int(np.prod(self.y_shape)))
         n = shape[0] * shape[1] * shape[2]
-        return 16 * n + self._kernel.memory_bytes(shape, self.config.kernel_tol)
+        sums = 8 * n if self.config.refine_rounds > 0 else 0  # the refinement's accumulators
+        return 16 * n + sums + self._kernel.memory_bytes(shape, self.config.kernel_tol)
 
     def check_memory(self) -> None:
         """Raise :class:`~sigmapi.errors.ResourceError` (a MemoryError) before allocating if
@@ -267,15 +272,21 @@ class SigmaPiSOM(GridsMixin, CostMixin, ParamsMixin, PersistMixin):
             rows = 0 if data is None else data[0].shape[0]
             if data is not None and rows == 0:
                 raise DataError("views must hold at least one row (pair of views), got 0 rows")
+            self._check_refiner()
             self._set_weights(self.initial_weights(data))
             self._t = 0
+            self._refined = 0
+            self._refine_acc = None
             if data is None:
-                return self._partial_fit(None, total, callback)
-            npass = 0
-            while self._t < total:
-                order = self._seq(3, npass).permutation(rows)[: total - self._t]
-                self._train_rows(data, order, callback)
-                npass += 1
+                self._partial_fit(None, total, callback)
+            else:
+                npass = 0
+                while self._t < total:
+                    order = self._seq(3, npass).permutation(rows)[: total - self._t]
+                    self._train_rows(data, order, callback)
+                    npass += 1
+            if self._t >= self.config.iterations:
+                self._refine(data, callback)
             return self
 
     def partial_fit(
@@ -296,7 +307,8 @@ class SigmaPiSOM(GridsMixin, CostMixin, ParamsMixin, PersistMixin):
             in order (T iterations); the schedule continues at ``t_``. :meth:`fit` runs a
             whole schedule. Without it the model continues on its built-in task.
         iterations : int, optional
-            Iterations to run on the built-in task (default: the rest of the configured run).
+            Iterations to run on the built-in task (default: the rest of the configured run,
+            its refinement included).
             Not with ``views``, whose rows are the iterations.
         callback : callable, optional
             ``callback(model)``, called after every chunk of at most ``BLOCK`` iterations.
@@ -323,8 +335,13 @@ class SigmaPiSOM(GridsMixin, CostMixin, ParamsMixin, PersistMixin):
         if data is not None:
             self._train_rows(data, None, callback)
             return self
+        rest = iterations is None  # the rest of the configured run, refinement included
         if iterations is None:
             iterations = self.config.iterations - self._t
+            if iterations <= 0 and self._refined < self.refine_total:
+                self._check_refiner()
+                self._refine(None, callback)  # the configured run continues
+                return self
             if iterations <= 0:
                 raise ConfigError(
                     f"the configured run of {self.config.iterations} iterations is complete "
@@ -340,6 +357,9 @@ class SigmaPiSOM(GridsMixin, CostMixin, ParamsMixin, PersistMixin):
             self._run_views(batch.x0[sl], batch.y0[sl], batch.x1[sl], batch.y1[sl])
             if callback is not None:
                 callback(self)
+        if rest and self._refined < self.refine_total:
+            self._check_refiner()
+            self._refine(None, callback)
         return self
 
     def _train_rows(

@@ -63,7 +63,7 @@ def _train(args: argparse.Namespace, cfg: Any, out: Path, every: int | None) -> 
             print(f"resuming from {found.path} (iteration {model.t_})", file=sys.stderr)
         elif out.exists() and not args.force:
             model = _finished_run(out, cfg)
-            if model.t_ >= cfg.iterations:
+            if model.t_ >= cfg.iterations and model.refined_ >= model.refine_total:
                 print(f"{out} is this run, complete ({model.t_} iterations); nothing to do",
                       file=sys.stderr)  # fmt: skip
                 return 0
@@ -82,6 +82,8 @@ def _train(args: argparse.Namespace, cfg: Any, out: Path, every: int | None) -> 
             model.partial_fit(iterations=step, callback=callback)
             if every is not None and model.t_ % every == 0 and model.t_ < cfg.iterations:
                 write_checkpoint(model, folder)
+    if model.refined_ < model.refine_total:
+        model.refine()  # the config's refinement after the training (rules/refinement.py)
     model.save(out, compress=args.compress)
     print(f"wrote {out} ({model.t_} iterations, backend {model.backend})", file=sys.stderr)
     if not args.keep_checkpoints:
@@ -152,9 +154,9 @@ def cmd_presets(args: argparse.Namespace) -> int:
     for name in list_presets():
         cfg = load_preset(name)
         print(
-            f"{name:12s} map {'x'.join(map(str, cfg.map_shape)):6s} "
+            f"{name:16s} map {'x'.join(map(str, cfg.map_shape)):6s} "
             f"x {'x'.join(map(str, cfg.x_shape)):6s} y {'x'.join(map(str, cfg.y_shape)):6s} "
-            f"{cfg.iterations:>8d} iterations  {cfg.extra.get('source', '')}"
+            f"{cfg.iterations:>8d} iterations  {cfg.extra.get('procedure', 'sigmapi')}"
         )
     return 0
 
@@ -165,7 +167,8 @@ def register(sub: Any) -> None:
         "train",
         help="train a map and write a model file",
         description="Train a Sigma-Pi map and write it to a model file (.npz). Without "
-        "--preset this is preset paper-1d: the authors' 1-D run of 300,000 iterations; "
+        "--preset this is preset paper-1d: the paper's 1-D task, 300,000 iterations by "
+        "sigmapi's procedure (paper-1d-authors: the authors' run); "
         "try --preset tiny-1d for a short run.",
     )
     add_config_flags(p)

@@ -68,13 +68,15 @@ Z_ERROR_FLOOR: dict[str, float] = {"paper-1d": 0.27}
 
 PAPER_PRESETS = ("paper-1d", "paper-2d")
 
-OTHER_PROCEDURE = {"paper-1d": ("paper-1d-crossview", "crossview"),
-                   "paper-2d": ("paper-2d-none", "none")}  # fmt: skip
-"""Each paper preset's run under the other ordering procedure, on the same seeds: the
-authors' 1-D run with sigmapi's ordered start, and the 2-D preset with the paper's random one."""
+OTHER_PROCEDURE = {"paper-1d": "paper-1d-authors", "paper-2d": "paper-2d-authors"}
+"""Each paper preset (sigmapi's procedure: ordered start, then refinement) beside the
+authors' procedure at the same sizes (random start, no refinement), on the same seeds."""
 
-REFERENCE["paper-1d-crossview"] = REFERENCE["paper-1d"]
-Z_ERROR_FLOOR["paper-1d-crossview"] = Z_ERROR_FLOOR["paper-1d"]
+REFERENCE["paper-1d-authors"] = REFERENCE["paper-1d"]
+Z_ERROR_FLOOR["paper-1d-authors"] = Z_ERROR_FLOOR["paper-1d"]
+
+QUICK_REFINE_PAIRS = 20_000
+"""Refinement pairs per round in quick runs."""
 
 QUICK_ITERATIONS: dict[str, int] = {"paper-1d": 60_000, "paper-2d": 20_000}
 """Iterations of each preset in quick runs (the schedule is compressed to fit).
@@ -92,13 +94,13 @@ def paper_presets(quick: bool) -> list[tuple[str, SOMConfig]]:
     """The paper presets that ship, shortened to :data:`QUICK_ITERATIONS` when ``quick``."""
     out: list[tuple[str, SOMConfig]] = []
     for name in (n for n in PAPER_PRESETS if n in list_presets()):
-        cfg = load_preset(name)
-        if quick:
-            it = QUICK_ITERATIONS.get(name, max(1000, cfg.iterations // 10))
-            cfg = cfg.replace(iterations=min(cfg.iterations, it))
-        out.append((name, cfg))
-        other, ordering = OTHER_PROCEDURE[name]
-        out.append((other, cfg.replace(ordering=ordering)))
+        for preset in (name, OTHER_PROCEDURE[name]):
+            cfg = load_preset(preset)
+            if quick:
+                it = QUICK_ITERATIONS.get(name, max(1000, cfg.iterations // 10))
+                pairs = min(cfg.refine_pairs, QUICK_REFINE_PAIRS)
+                cfg = cfg.replace(iterations=min(cfg.iterations, it), refine_pairs=pairs)
+            out.append((preset, cfg))
     return out
 
 

@@ -23,14 +23,17 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sigmapi.rules import WinnerRule, winner_rule
+from sigmapi.rules.refinement import Sums
 from sigmapi.rules.winners import Scoring
 
 __all__ = [
     "CONTRACT",
     "MAX_WEIGHT",
+    "REFINER",
     "FileArrays",
     "Kernel",
     "KernelState",
+    "Refiner",
     "dense_file_weights",
     "rule_scores",
 ]
@@ -222,3 +225,46 @@ CONTRACT: tuple[str, ...] = (
     *(n for n, v in vars(Kernel).items() if callable(v) and not n.startswith("_")),
 )
 """The names every kernel defines (what :func:`sigmapi.kernels.register_backend` checks)."""
+
+
+class Refiner(Protocol[S]):
+    """What a kernel offers for the refinement (:mod:`sigmapi.rules.refinement`); optional.
+
+    A kernel without these methods trains but does not refine: a config with
+    ``refine_rounds > 0`` on it is a :class:`~sigmapi.errors.ConfigError` naming the
+    backends that refine (no silent fallback to another kernel).
+    """
+
+    def refine_start(self, state: S) -> Sums:
+        """Empty float64 accumulators of one round, in the kernel's layout."""
+        ...
+
+    def refine_block(
+        self,
+        state: S,
+        acc: Sums,
+        x0: NDArray[np.floating],
+        y0: NDArray[np.floating],
+        x1: NDArray[np.floating],
+        y1: NDArray[np.floating],
+        *,
+        map_shape: tuple[int, ...],
+        winner_rule: WinnerRule | str,
+        soft_cut: int,
+        sigma: float,
+        map_periodic: bool = False,
+    ) -> NDArray[np.int64]:
+        """Add ``len(x0)`` pairs to ``acc`` in order: the winner of view 0 on the fixed
+        ``state`` under ``winner_rule`` (a hard rule), view 1's outer product weighted by the
+        assignment at width ``sigma`` (0: the winner alone). Returns the winners. The sums
+        must not depend on how the stream is cut into blocks, nor on threads."""
+        ...
+
+    def refine_finish(self, state: S, acc: Sums) -> S:
+        """The state of the new weights: ``sums / mass`` per unit, unchanged where the mass
+        is 0 (:meth:`sigmapi.rules.refinement.BatchMean.finish`)."""
+        ...
+
+
+REFINER: tuple[str, ...] = ("refine_start", "refine_block", "refine_finish")
+"""The methods a kernel that refines defines (:class:`Refiner`)."""

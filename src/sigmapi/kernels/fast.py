@@ -58,8 +58,9 @@ from sigmapi.errors import ConfigError
 from sigmapi.kernels import _rows, columns
 from sigmapi.kernels._rows import _pairs, _winner, activate, axis_distance, gaussian, prefetch
 from sigmapi.kernels.base import FileArrays, rule_scores
-from sigmapi.rules import WinnerRule, winner_rule
+from sigmapi.rules import BATCH_MEAN, WinnerRule, winner_rule
 from sigmapi.rules.neighbourhood import neighbourhood
+from sigmapi.rules.refinement import Sums, assignment
 
 __all__ = [
     "COMPILED",
@@ -74,6 +75,9 @@ __all__ = [
     "memory_bytes",
     "neighbourhood",
     "prepare",
+    "refine_block",
+    "refine_finish",
+    "refine_start",
     "scores",
     "sqnorms",
     "supports",
@@ -641,3 +645,78 @@ def train_block(
            code, int(soft_cut), state.tol, out, track, bool(parallel),
            _ahead(state, TRAIN_PREFETCH_AHEAD))  # fmt: skip
     return out
+
+
+# ---------------------------------------------------------------------------- refinement
+
+
+@njit(cache=True, nogil=True)
+def _refine_sums(sums, mass, a, x1, y1, tol, jb, pi, pv):  # pragma: no cover - compiled
+    """``sums[k, p] += a[b, k] * (x1_i y1_j)`` for the sparse pairs ``p = i n_y + j`` of
+    every row ``b`` in order and the units with ``a[b, k] > tol max_k a[b, k]``; ``mass +=
+    a[b]`` (the reference's arithmetic, :meth:`sigmapi.rules.BatchMean.accumulate`)."""
+    k_units = a.shape[1]
+    units = np.empty(k_units, dtype=np.int64)
+    for b in range(a.shape[0]):
+        top = 0.0
+        for k in range(k_units):
+            top = max(top, a[b, k])
+        thr = tol * top
+        nu = 0
+        for k in range(k_units):
+            if a[b, k] > thr:
+                units[nu] = k
+                nu += 1
+        n = _pairs(x1[b], y1[b], tol, jb, pi, pv)
+        for r in range(nu):
+            k = units[r]
+            ak = a[b, k]
+            row = sums[k]
+            for q in range(n):
+                row[pi[q]] += ak * pv[q]
+        for k in range(k_units):
+            mass[k] += a[b, k]
+
+
+def refine_start(state: FastState) -> Sums:
+    """Empty accumulators: sums ``(K, n_x * n_y)`` (a unit's pairs contiguous, unlike the
+    weights' layout: a pair adds to few units), mass ``(K,)``."""
+    k, nx, ny = state.shape
+    return Sums(np.zeros((k, nx * ny)), np.zeros(k))
+
+
+def refine_block(
+    state: FastState,
+    acc: Sums,
+    x0: NDArray[np.floating],
+    y0: NDArray[np.floating],
+    x1: NDArray[np.floating],
+    y1: NDArray[np.floating],
+    *,
+    map_shape: tuple[int, ...],
+    winner_rule: WinnerRule | str,
+    soft_cut: int,
+    sigma: float,
+    map_periodic: bool = False,
+) -> NDArray[np.int64]:
+    """Add ``len(x0)`` pairs to ``acc`` in order (as
+    :func:`sigmapi.kernels.reference.refine_block`): winners of view 0 on the fixed state,
+    then the sparse outer products of view 1 (pairs and units below ``tol`` of their peak
+    skipped) added one pair after another, on one thread (the same sums for any blocks)."""
+    _, nx, ny = state.shape
+    k = winners_of(state, x0, y0, map_shape, winner_rule, 0.0, soft_cut, map_periodic)
+    a = np.ascontiguousarray(assignment(k, map_shape, float(sigma), map_periodic))
+    x1a, y1a = _codes(x1, nx, "x1"), _codes(y1, ny, "y1")
+    jb, pi, pv = state.scratch()[:3]
+    driver: Any = _refine_sums  # a numba dispatcher
+    driver(acc.sums, acc.mass, a, x1a, y1a, state.tol, jb, pi, pv)
+    acc.pairs += int(x1a.shape[0])
+    return k
+
+
+def refine_finish(state: FastState, acc: Sums) -> FastState:
+    """The state of the new weights (:meth:`sigmapi.rules.BatchMean.finish` on the dense
+    sums), stored as :func:`prepare` stores weights."""
+    k, nx, ny = state.shape
+    dense = Sums(acc.sums.reshape(k, nx, ny), acc.mass, acc.pairs)
+    return prepare(BATCH_MEAN.finish(export(state), dense), tol=state.tol)

@@ -28,8 +28,9 @@ from numpy.typing import NDArray
 
 from sigmapi import rules
 from sigmapi.kernels.base import FileArrays, dense_file_weights, rule_scores
-from sigmapi.rules import KOHONEN, WINNER_RULES, WinnerRule
+from sigmapi.rules import BATCH_MEAN, KOHONEN, WINNER_RULES, WinnerRule
 from sigmapi.rules.neighbourhood import neighbourhood
+from sigmapi.rules.refinement import Sums, assignment
 
 __all__ = [
     "NAME",
@@ -42,6 +43,9 @@ __all__ = [
     "memory_bytes",
     "neighbourhood",
     "prepare",
+    "refine_block",
+    "refine_finish",
+    "refine_start",
     "scores",
     "sqnorms",
     "supports",
@@ -201,3 +205,36 @@ def train_block(
         KOHONEN.update(W, a, x1[t], y1[t], float(eps[t]))
         out[t] = k[0]
     return out
+
+
+def refine_start(W: Array) -> Sums:
+    """Empty accumulators of a refinement round: sums ``(K, n_x, n_y)`` and mass ``(K,)``."""
+    k, nx, ny = W.shape
+    return BATCH_MEAN.start((k, nx, ny))
+
+
+def refine_block(
+    W: Array,
+    acc: Sums,
+    x0: Array,
+    y0: Array,
+    x1: Array,
+    y1: Array,
+    *,
+    map_shape: tuple[int, ...],
+    winner_rule: WinnerRule | str,
+    soft_cut: int,
+    sigma: float,
+    map_periodic: bool = False,
+) -> NDArray[np.int64]:
+    """Add ``len(x0)`` pairs to ``acc`` (:meth:`sigmapi.rules.BatchMean.accumulate`): winners
+    of view 0 on the fixed ``W``, view 1's outer products weighted by
+    :func:`~sigmapi.rules.refinement.assignment` at ``sigma``. Returns the winners."""
+    k = winners_of(W, x0, y0, map_shape, winner_rule, 0.0, soft_cut, map_periodic)
+    BATCH_MEAN.accumulate(acc, assignment(k, map_shape, float(sigma), map_periodic), x1, y1)
+    return k
+
+
+def refine_finish(W: Array, acc: Sums) -> NDArray[np.float64]:
+    """The new weights (:meth:`sigmapi.rules.BatchMean.finish`)."""
+    return BATCH_MEAN.finish(W, acc)

@@ -6,13 +6,16 @@
   neighbourhood and the soft winner's smoothing);
 - :mod:`~sigmapi.rules.learning`: the Kohonen learning rule;
 - :mod:`~sigmapi.rules.ordering`: ordering procedures (``none``, ``crossview``): initial
-  weights, sigma cap, the rule training uses.
+  weights, sigma cap, the rule training uses;
+- :mod:`~sigmapi.rules.refinement`: the batch refinement after training (section 6.3: hard
+  winners with the weights fixed, weights to the mean of their pairs).
 
 Each kind has a registry, a dict name -> object: :data:`WINNER_RULES`,
-:data:`NEIGHBOURHOODS`, :data:`LEARNING_RULES`, :data:`ORDERINGS`. The config's string
-fields look up there (:func:`lookup`). The kernels (:mod:`sigmapi.kernels`) compute the rules:
-the reference kernel by calling the objects' arithmetic, a compiled kernel by its compiled
-form of the rules it declares (``kernel.supports(rule)``).
+:data:`NEIGHBOURHOODS`, :data:`LEARNING_RULES`, :data:`ORDERINGS`,
+:data:`REFINEMENTS`. The config's string fields look up there (:func:`lookup`). The kernels
+(:mod:`sigmapi.kernels`) compute the rules: the reference kernel by calling the objects'
+arithmetic, a compiled kernel by its compiled form of the rules it declares
+(``kernel.supports(rule)``).
 
 Adding a winner rule: a :class:`~sigmapi.rules.winners.WinnerRule` subclass and its entry in
 :data:`WINNER_RULES` (``rules/winners.py``); for the fast kernel, its compiled form
@@ -28,15 +31,19 @@ from sigmapi import _validate
 from sigmapi.rules.learning import KOHONEN, LEARNING_RULES, Kohonen
 from sigmapi.rules.neighbourhood import GAUSSIAN, NEIGHBOURHOODS, Gaussian
 from sigmapi.rules.ordering import ORDERINGS, Ordering, OrderingSettings
+from sigmapi.rules.refinement import BATCH_MEAN, REFINEMENTS, BatchMean
 from sigmapi.rules.winners import WINNER_RULES, Scoring, WinnerRule
 
 __all__ = [
+    "BATCH_MEAN",
     "GAUSSIAN",
     "KOHONEN",
     "LEARNING_RULES",
     "NEIGHBOURHOODS",
     "ORDERINGS",
+    "REFINEMENTS",
     "WINNER_RULES",
+    "BatchMean",
     "Gaussian",
     "Kohonen",
     "Ordering",

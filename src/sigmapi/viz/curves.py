@@ -56,9 +56,13 @@ class LearningCurve:
     """A ``fit`` callback that measures the model at checkpoints during training.
 
     Call it as ``model.fit(callback=curve)``; each time the model passes a checkpoint it
-    records the iteration, sigma, the metrics of :func:`sigmapi.metrics.evaluate` on a small
+    records the iteration, sigma, the refinement pairs done (``refined``; 0 while training),
+    the metrics of :func:`sigmapi.metrics.evaluate` on a small
     fixed test set, and the approximate cost of section 6.3 (at the current sigma, and
-    ``cost_winner``: with the winner alone, sigma -> 0, comparable across the run).
+    ``cost_winner``: with the winner alone, sigma -> 0, comparable across the run). After the
+    training it also records the end of every refinement round on the built-in task
+    (:mod:`sigmapi.rules.refinement`; ``refined`` a multiple of ``config.refine_pairs``), so
+    the cost's fall over the rounds is part of the curve.
 
     Parameters
     ----------
@@ -91,6 +95,12 @@ class LearningCurve:
     def __call__(self, model: SigmaPiSOM) -> None:
         if self.then is not None:
             self.then(model)
+        refined = model.refined_
+        if refined:
+            per = model.config.refine_pairs
+            if refined % per == 0 and refined not in {int(r["refined"]) for r in self.records}:
+                self.records.append(self.measure(model))
+            return
         done = {int(r["t"]) for r in self.records}
         due = [t for t in self.at if t <= model.t_ and t not in done]
         if not due or model.t_ in done:
@@ -106,6 +116,7 @@ class LearningCurve:
         cost, cost_winner = costs(model, test)
         return {
             "t": float(model.t_),
+            "refined": float(model.refined_),
             "sigma": model.sigma_,
             **{k: float(v) for k, v in m.items() if k != "n_test"},
             "cost": cost,

@@ -1,0 +1,151 @@
+"""The batch refinement after the training (section 6.3; :mod:`sigmapi.rules.refinement`):
+:class:`RefineMixin`.
+
+Round ``r`` on the built-in task draws ``config.refine_pairs`` pairs from the run's child
+streams ``(4, r, block)``; with ``fit(views)`` a round is one pass over the rows. A round's
+winners use the weights of its start, which stay unchanged until the round ends, so a model
+saved within a round (``refined_`` is in the model file) replays that round's pairs so far
+and continues to the same weights, bit for bit.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from sigmapi.config import SOMConfig
+from sigmapi.errors import ConfigError, DataError
+from sigmapi.kernels.base import REFINER
+from sigmapi.rules.refinement import Sums
+from sigmapi.views import CodeViews, Views, fit_views
+
+if TYPE_CHECKING:
+    from sigmapi.rules import WinnerRule
+    from sigmapi.tasks import TwoViewSampler
+
+__all__ = ["RefineMixin"]
+
+BLOCK = 1000
+"""Pairs per block of a refinement round (one random child stream per block)."""
+
+
+class RefineMixin:
+    """``refine`` and its progress, for a model with a kernel, random streams and a lock."""
+
+    config: SOMConfig
+    _kernel: Any
+    _state: Any
+    _lock: threading.RLock
+    _refined: int
+    _refine_acc: tuple[int, Sums] | None
+    _weights_cache: Any
+
+    if TYPE_CHECKING:
+
+        @property
+        def map_shape(self) -> tuple[int, ...]: ...
+        @property
+        def x_shape(self) -> tuple[int, ...]: ...
+        @property
+        def y_shape(self) -> tuple[int, ...]: ...
+        @property
+        def backend(self) -> str: ...
+        @property
+        def sampler(self) -> TwoViewSampler: ...
+        @property
+        def winner_rule_(self) -> WinnerRule: ...
+        def _check_fitted(self) -> None: ...
+        def _seq(self, *key: int) -> np.random.Generator: ...
+
+    @property
+    def refined_(self) -> int:
+        """Refinement pairs done so far, all rounds (:meth:`refine`); 0 before or without."""
+        self._check_fitted()
+        return self._refined
+
+    @property
+    def refine_total(self) -> int:
+        """Refinement pairs of the configured run on the built-in task (rounds x pairs)."""
+        return self.config.refine_rounds * self.config.refine_pairs
+
+    @property
+    def refine_rounds_done_(self) -> int:
+        """Refinement rounds complete on the built-in task (:attr:`refined_` // pairs)."""
+        return self.refined_ // self.config.refine_pairs
+
+    def refine(
+        self, views: Views | None = None, *, callback: Callable[[Any], None] | None = None
+    ) -> Any:
+        """Run the rest of the configured refinement (``config.refine_rounds`` rounds,
+        :mod:`sigmapi.rules.refinement`) on the trained map; returns ``self``.
+
+        Without ``views`` round ``r`` draws ``config.refine_pairs`` fresh pairs of the
+        built-in task from the run's child streams ``(4, r, b)``, so a model saved during the
+        refinement (:attr:`refined_` is in the model file) continues to the same weights,
+        bit for bit. With ``views`` each round is one pass over the rows in the given order
+        (give the same rows to continue). ``fit`` calls this after the training.
+        ``callback(model)`` is called after every block of at most ``BLOCK`` pairs.
+        """
+        with self._lock:
+            self._check_fitted()
+            self._check_refiner()
+            data = fit_views(views, self.x_shape, self.y_shape, "refine")
+            if data is not None and data[0].shape[0] == 0:
+                raise DataError("views must hold at least one row (pair of views), got 0 rows")
+            return self._refine(data, callback)
+
+    def _check_refiner(self) -> None:
+        """A ConfigError if the config refines and the backend lacks the methods."""
+        missing = [m for m in REFINER if not hasattr(self._kernel, m)]
+        if self.config.refine_rounds > 0 and missing:
+            from sigmapi.kernels import REGISTRY
+
+            able = sorted(n for n, k in REGISTRY.items() if all(hasattr(k, m) for m in REFINER))
+            raise ConfigError(
+                f"backend {self.backend!r} does not refine (it lacks {', '.join(missing)}), "
+                f"got refine_rounds = {self.config.refine_rounds}; set refine_rounds = 0 or "
+                f"use a backend that refines: {', '.join(able)}"
+            )
+
+    def _refine(self, data: CodeViews | None, callback: Callable[[Any], None] | None) -> Any:
+        c = self.config
+        per = c.refine_pairs if data is None else data[0].shape[0]
+        kernel = self._kernel
+        rule = self.winner_rule_.hard
+        while self._refined < c.refine_rounds * per:
+            r, done = divmod(self._refined, per)
+            if self._refine_acc is None or self._refine_acc[0] != r:
+                # a round's winners use the weights of its start: replay its pairs so far
+                self._refine_acc = (r, kernel.refine_start(self._state))
+            acc = self._refine_acc[1]
+            while acc.pairs < per:
+                lo = acc.pairs
+                if data is None:
+                    b, off = divmod(lo, BLOCK)
+                    stop = min(BLOCK, per - b * BLOCK)
+                    batch = self.sampler.sample(BLOCK, self._seq(4, r, b))
+                    views = tuple(v[off:stop] for v in (batch.x0, batch.y0, batch.x1, batch.y1))
+                else:
+                    views = tuple(v[lo : lo + BLOCK] for v in data)
+                x0, y0, x1, y1 = views
+                if c.same_view:
+                    x1, y1 = x0, y0
+                kernel.refine_block(
+                    self._state, acc, x0, y0, x1, y1, map_shape=self.map_shape,
+                    winner_rule=rule, soft_cut=c.soft_cut, sigma=c.refine_sigma,
+                    map_periodic=c.map_periodic,
+                )  # fmt: skip
+                if acc.pairs >= per:
+                    self._state = kernel.refine_finish(self._state, acc)
+                    self._weights_cache = None
+                    self._refine_acc = None
+                if lo + len(x0) > done:
+                    self._refined = r * per + lo + len(x0)
+                    if callback is not None:
+                        callback(self)
+                if self._refine_acc is None:
+                    break
+        return self
