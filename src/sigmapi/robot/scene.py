@@ -1,0 +1,277 @@
+"""The robot in MuJoCo: the model file, poses, the head camera's projection and its pixels.
+
+The model (``robot.xml`` beside this module, written from MuJoCo primitives) is a torso on a
+planar base (slide x, slide y, yaw), a neck with pan and tilt joints, a head camera on the tilt
+link set off from both joint axes (8 cm ahead of and 6 cm above the tilt axis), a three-joint
+arm (shoulder yaw, shoulder pitch, elbow), a table and a red ball on it. A :class:`Scene` holds
+one ``MjModel`` and ``MjData`` and places the robot and the ball by their joint positions
+(:meth:`Scene.pose`), reads MuJoCo's own camera pose, projects points through it
+(:meth:`Scene.project`) and renders the cameras offscreen (:meth:`Scene.render`).
+
+Headless rendering: importing this module sets ``MUJOCO_GL=egl`` unless the variable is
+already set (MuJoCo reads it once, at import), so a machine without a display renders through
+EGL.
+
+Pixel coordinates: ``(u, v)`` with ``u`` along the image columns (left to right) and ``v``
+along the rows (top to bottom), both continuous with 0 at the image's left and top edges, so
+pixel ``(row i, column j)`` covers ``u`` in ``[j, j + 1)`` and ``v`` in ``[i, i + 1)``.
+"""
+
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("MUJOCO_GL", "egl")
+
+from dataclasses import dataclass
+from importlib import resources
+from typing import Any
+
+import mujoco
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from sigmapi.errors import ConfigError
+
+__all__ = [
+    "HEAD_SIZE",
+    "NECK_HEIGHT",
+    "OBJECT_RADIUS",
+    "TABLE_HEIGHT",
+    "Pose",
+    "Scene",
+    "blob_centroid",
+    "load_model",
+]
+
+HEAD_SIZE = 64
+"""Side of the head camera's square image, pixels."""
+OBJECT_RADIUS = 0.04
+"""Radius of the ball, metres (``robot.xml``)."""
+TABLE_HEIGHT = 0.72
+"""Height of the table top, metres (``robot.xml``)."""
+NECK_HEIGHT = 1.28
+"""Height of the neck point above the floor: on the pan axis, at the tilt axis (metres)."""
+
+_ARM = ("shoulder_yaw", "shoulder_pitch", "elbow")
+
+
+def load_model() -> mujoco.MjModel:
+    """The robot's ``MjModel``, compiled from the package's ``robot.xml``."""
+    xml = resources.files("sigmapi.robot").joinpath("robot.xml").read_text("utf-8")
+    return mujoco.MjModel.from_xml_string(xml)
+
+
+@dataclass(frozen=True)
+class Pose:
+    """Where everything is: base ``(x, y, yaw)`` in the world, neck ``(pan, tilt)``, the
+    ball's centre ``(x, y, z)`` in the world, arm joints (shoulder yaw, pitch, elbow).
+    Angles in radians."""
+
+    base: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    neck: tuple[float, float] = (0.0, 0.7)
+    object: tuple[float, float, float] = (0.55, 0.0, TABLE_HEIGHT + OBJECT_RADIUS)
+    arm: tuple[float, float, float] = (0.0, 0.0, 0.0)
+
+
+class Scene:
+    """One robot model and its state, with the head camera's geometry and pixels.
+
+    Parameters
+    ----------
+    head_size : int
+        Side of the head camera's square image (pixels, at most 240: the offscreen buffer).
+
+    Examples
+    --------
+    >>> scene = Scene()
+    >>> scene.pose(Pose(neck=(0.0, 0.7)))
+    >>> u, v = scene.project(scene.object_position())[0]
+    >>> 0 <= u <= 64 and 0 <= v <= 64
+    True
+    """
+
+    def __init__(self, head_size: int = HEAD_SIZE) -> None:
+        if not isinstance(head_size, int) or not 8 <= head_size <= 240:
+            raise ConfigError(f"head_size must be an int in [8, 240], got {head_size!r}")
+        self.model = load_model()
+        self.data = mujoco.MjData(self.model)
+        self.head_size = head_size
+        m = self.model
+        self._cam = m.camera("head").id
+        self._third = m.camera("third").id
+        self.fovy = float(np.deg2rad(m.cam_fovy[self._cam]))
+        self.focal = 0.5 * head_size / np.tan(0.5 * self.fovy)
+        """Focal length of the head camera in pixels (MuJoCo's ``fovy`` is vertical)."""
+        self._q = {n: int(m.joint(n).qposadr[0]) for n in ("base_x", "base_y", "base_yaw",
+                   "neck_pan", "neck_tilt", *_ARM)}  # fmt: skip
+        self._obj_q = int(m.joint("object").qposadr[0])
+        self._obj_v = int(m.joint("object").dofadr[0])
+        self._act = {m.actuator(i).name: i for i in range(m.nu)}
+        self.neck_range = np.array([m.joint("neck_pan").range, m.joint("neck_tilt").range])
+        """Joint limits ``[[pan_lo, pan_hi], [tilt_lo, tilt_hi]]`` in radians."""
+        self._torso = m.body("torso").id
+        self._head = m.body("head").id
+        self._shoulder = m.body("shoulder").id
+        self._hand_site = m.site("hand").id
+        self.arm_range = np.array([m.joint(n).range for n in _ARM])
+        """Joint limits of the arm ``(3, 2)``, radians."""
+        self._object_geom = m.geom("object").id
+        self._hand_geom = m.geom("hand").id
+        self._robot_geoms = {m.geom(n).id for n in ("base", "torso")}
+        self._table_geoms = {m.geom(n).id for n in ("table_top", "leg_a", "leg_b", "leg_c",
+                             "leg_d")}  # fmt: skip
+        self._renderers: dict[tuple[int, int], Any] = {}
+        self.pose(Pose())
+
+    # ------------------------------------------------------------------ state
+    def pose(self, pose: Pose, forward: bool = True) -> None:
+        """Set every joint to ``pose`` (the actuators' targets too) and run MuJoCo's forward
+        pass (kinematics, camera poses and contacts), unless ``forward`` is False."""
+        q = self.data.qpos
+        for name, value in zip(("base_x", "base_y", "base_yaw"), pose.base, strict=True):
+            q[self._q[name]] = value
+        for name, value in zip(("neck_pan", "neck_tilt"), pose.neck, strict=True):
+            q[self._q[name]] = value
+        for name, value in zip(_ARM, pose.arm, strict=True):
+            q[self._q[name]] = value
+        q[self._obj_q : self._obj_q + 3] = pose.object
+        q[self._obj_q + 3 : self._obj_q + 7] = (1.0, 0.0, 0.0, 0.0)
+        self.data.qvel[:] = 0.0
+        for name, i in self._act.items():
+            self.data.ctrl[i] = q[self._q[name]]
+        if forward:
+            mujoco.mj_forward(self.model, self.data)
+
+    def set_neck(self, pan: float, tilt: float) -> None:
+        """Move the neck only and update the camera pose (kinematics, no contacts)."""
+        self.data.qpos[self._q["neck_pan"]] = pan
+        self.data.qpos[self._q["neck_tilt"]] = tilt
+        self.data.ctrl[self._act["neck_pan"]] = pan
+        self.data.ctrl[self._act["neck_tilt"]] = tilt
+        mujoco.mj_kinematics(self.model, self.data)
+        mujoco.mj_camlight(self.model, self.data)
+
+    def arm_joints(self) -> NDArray[np.float64]:
+        """The arm's joint positions ``(yaw, pitch, elbow)``, radians."""
+        return np.array([self.data.qpos[self._q[n]] for n in _ARM])
+
+    def set_arm_targets(self, q: NDArray[np.float64]) -> None:
+        """Set the arm's position actuators' targets ``(yaw, pitch, elbow)`` (radians)."""
+        for name, value in zip(_ARM, q, strict=True):
+            self.data.ctrl[self._act[name]] = value
+
+    def shoulder_position(self) -> NDArray[np.float64]:
+        """The shoulder joint's centre in the world ``(3,)``."""
+        return np.array(self.data.xpos[self._shoulder])
+
+    def hand_position(self) -> NDArray[np.float64]:
+        """The hand's centre in the world ``(3,)``."""
+        return np.array(self.data.site_xpos[self._hand_site])
+
+    def joint(self, name: str) -> float:
+        """The position of joint ``name`` (radians or metres)."""
+        return float(self.data.qpos[self._q[name]])
+
+    def object_position(self) -> NDArray[np.float64]:
+        """The ball's centre in the world, ``(3,)``."""
+        return np.array(self.data.xpos[self.model.body("object").id])
+
+    def torso_frame(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """The torso's pose: origin ``(3,)`` and rotation ``(3, 3)`` (columns: its axes)."""
+        return np.array(self.data.xpos[self._torso]), self.data.xmat[self._torso].reshape(3, 3)
+
+    def in_torso_frame(self, p: ArrayLike) -> NDArray[np.float64]:
+        """World points ``(B, 3)`` in the torso's frame, relative to the neck point."""
+        _, r = self.torso_frame()
+        return (np.atleast_2d(np.asarray(p, dtype=np.float64)) - self.neck_point()) @ r
+
+    def neck_point(self) -> NDArray[np.float64]:
+        """The neck point in the world ``(3,)``: on the pan axis at the tilt axis's height
+        (the origin of the head body, which the pan and tilt joints leave in place)."""
+        return np.array(self.data.xpos[self._head])
+
+    # ------------------------------------------------------------------ the head camera
+    def camera_pose(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """The head camera's position ``(3,)`` and rotation ``(3, 3)`` as MuJoCo computed them
+        (columns: the camera's x right, y up, z backwards; it looks along -z)."""
+        return np.array(self.data.cam_xpos[self._cam]), self.data.cam_xmat[self._cam].reshape(3, 3)
+
+    def project(self, points: ArrayLike) -> NDArray[np.float64]:
+        """Pixel coordinates ``(B, 2)`` of world points ``(B, 3)`` in the head camera: the
+        pinhole of MuJoCo's camera pose and ``fovy``; NaN for points behind the camera.
+
+        ``u = W/2 + f X / (-Z)``, ``v = H/2 - f Y / (-Z)`` with ``(X, Y, Z)`` the point in the
+        camera's frame and ``f = (H/2) / tan(fovy/2)``.
+        """
+        c, r = self.camera_pose()
+        pc = (np.atleast_2d(np.asarray(points, dtype=np.float64)) - c) @ r
+        depth = -pc[:, 2]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            uv = np.stack([pc[:, 0] / depth, -pc[:, 1] / depth], axis=1) * self.focal
+        uv += 0.5 * self.head_size
+        uv[depth <= 0] = np.nan
+        return uv
+
+    def ray(self, uv: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """The inverse of :meth:`project`: the camera's position and the unit direction of the
+        line of sight through pixel coordinates ``uv`` ``(2,)``, in the world."""
+        c, r = self.camera_pose()
+        u, v = np.asarray(uv, dtype=np.float64) - 0.5 * self.head_size
+        d = r @ np.array([u / self.focal, -v / self.focal, -1.0])
+        return c, d / np.linalg.norm(d)
+
+    # ------------------------------------------------------------------ pixels
+    def render(self, camera: str = "head", size: tuple[int, int] | None = None) -> NDArray[Any]:
+        """An RGB image ``(H, W, 3)`` uint8 of camera ``"head"`` (``head_size`` square) or
+        ``"third"`` (default 240 x 320), top row first."""
+        if camera not in ("head", "third"):
+            raise ConfigError(f"camera must be 'head' or 'third', got {camera!r}")
+        if size is None:
+            size = (self.head_size,) * 2 if camera == "head" else (240, 320)
+        r = self._renderers.get(size)
+        if r is None:
+            r = self._renderers[size] = mujoco.Renderer(self.model, *size)
+        r.update_scene(self.data, camera=self._cam if camera == "head" else self._third)
+        return np.asarray(r.render())
+
+    def close(self) -> None:
+        """Free the offscreen renderers (their GL contexts)."""
+        for r in self._renderers.values():
+            r.close()
+        self._renderers.clear()
+
+    # ------------------------------------------------------------------ contacts
+    def contacts(self) -> set[tuple[int, int]]:
+        """The geom pairs in contact now (each pair sorted), from the last forward pass."""
+        n = self.data.ncon
+        g = np.sort(np.stack([self.data.contact.geom1[:n], self.data.contact.geom2[:n]]), axis=0)
+        return {(int(a), int(b)) for a, b in g.T}
+
+    def robot_touches_table(self) -> bool:
+        """Whether the base or torso is in contact with the table (a bump)."""
+        return any(
+            (a in self._robot_geoms and b in self._table_geoms)
+            or (b in self._robot_geoms and a in self._table_geoms)
+            for a, b in self.contacts()
+        )
+
+    def hand_touches_object(self) -> bool:
+        """Whether the hand is in contact with the ball."""
+        pair = tuple(sorted((self._hand_geom, self._object_geom)))
+        return pair in self.contacts()
+
+
+def blob_centroid(image: NDArray[Any]) -> NDArray[np.float64] | None:
+    """Pixel coordinates ``(u, v)`` of the red blob's centroid in an RGB ``image``, or None.
+
+    A pixel belongs to the blob when its red channel exceeds 150 and green and blue stay below
+    100 (the ball is drawn in one flat red, ``emission="1"``; the table, floor and robot are
+    not red); the centroid is the mean of the pixel centres (``j + 0.5``, ``i + 0.5``).
+    """
+    img = np.asarray(image)
+    mask = (img[..., 0] > 150) & (img[..., 1] < 100) & (img[..., 2] < 100)
+    rows, cols = np.nonzero(mask)
+    if rows.size == 0:
+        return None
+    return np.array([cols.mean() + 0.5, rows.mean() + 0.5])
