@@ -54,3 +54,6 @@ if "sigmapi/GazeReach-v0" not in _gymnasium.registry:
         entry_point="sigmapi.envs.gaze_reach:GazeReachEnv",
         max_episode_steps=50,
     )
+if "sigmapi/RobotDock-v0" not in _gymnasium.registry:  # needs sigmapi[robot] when made
+    _gymnasium.register(id="sigmapi/RobotDock-v0", entry_point="sigmapi.robot.env:RobotDockEnv",
+                        max_episode_steps=100)  # fmt: skip

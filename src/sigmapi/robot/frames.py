@@ -159,17 +159,23 @@ class Frames:
         return self.scene.neck_point() + r @ self.torso_position(z)[0]
 
     # ------------------------------------------------------------------ looking
-    def saccade(self, rng: np.random.Generator, max_tries: int = 1000) -> F64:
+    def saccade(self, rng: np.random.Generator, max_tries: int = 1024) -> F64:
         """Move the neck to a pose drawn uniformly within its limits among those that keep
-        the ball in view (rejection sampling; MuJoCo's camera pose for every candidate);
-        returns the neck angles ``(2,)``. A ConfigError if none of ``max_tries`` sees it."""
+        the ball in view, and return the neck angles ``(2,)``.
+
+        Rejection sampling: candidates are drawn in batches of 32 and the first one whose
+        projection of the ball lies in view is taken (the camera poses of the candidates from
+        :meth:`Scene.head_camera_poses`). A ConfigError if none of ``max_tries`` sees it.
+        """
         lo, hi = self.scene.neck_range[:, 0], self.scene.neck_range[:, 1]
         p = self.scene.object_position()
-        for _ in range(max_tries):
-            neck = lo + (hi - lo) * rng.random(2)
-            self.scene.set_neck(*neck)
-            if self.in_view(self.scene.project(p)[0]):
-                return neck
+        for _ in range(0, max_tries, 32):
+            neck = lo + (hi - lo) * rng.random((32, 2))
+            seen = np.flatnonzero(self.in_view(self.scene.project_from(
+                *self.scene.head_camera_poses(neck), p)))  # fmt: skip
+            if seen.size:
+                self.scene.set_neck(*neck[seen[0]])
+                return neck[seen[0]]
         raise ConfigError(
             f"no neck pose of {max_tries} keeps the ball in view (ball at {p.tolist()}); "
             "place it inside the workspace"

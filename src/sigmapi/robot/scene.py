@@ -121,6 +121,13 @@ class Scene:
         self._robot_geoms = {m.geom(n).id for n in ("base", "torso")}
         self._table_geoms = {m.geom(n).id for n in ("table_top", "leg_a", "leg_b", "leg_c",
                              "leg_d")}  # fmt: skip
+        self._chain = {
+            "neck": _offset(m.body_pos[m.body("neck").id], m.body_quat[m.body("neck").id]),
+            "head": _offset(m.body_pos[self._head], m.body_quat[self._head]),
+            "camera": _offset(m.cam_pos[self._cam], m.cam_quat[self._cam]),
+        }
+        self._pan_axis = np.array(m.jnt_axis[m.joint("neck_pan").id])
+        self._tilt_axis = np.array(m.jnt_axis[m.joint("neck_tilt").id])
         self._renderers: dict[tuple[int, int], Any] = {}
         self.pose(Pose())
 
@@ -213,6 +220,40 @@ class Scene:
         uv[depth <= 0] = np.nan
         return uv
 
+    def head_camera_poses(self, neck: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """The head camera's poses for neck angles ``(B, 2)`` (pan, tilt) with the torso where
+        it is now, without moving the neck: positions ``(B, 3)``, rotations ``(B, 3, 3)``.
+
+        The model's kinematic chain (torso -> neck body -> pan -> head body -> tilt -> camera,
+        offsets and axes read from the compiled model) in NumPy, for many candidate gazes at
+        once; ``tests/test_robot.py`` checks it against MuJoCo's ``cam_xpos``/``cam_xmat``.
+        """
+        q = np.atleast_2d(np.asarray(neck, dtype=np.float64))
+        o, r = self.torso_frame()
+        pan = _axis_rotations(self._pan_axis, q[:, 0])
+        tilt = _axis_rotations(self._tilt_axis, q[:, 1])
+        r_neck = r @ self._chain["neck"][1]  # (3, 3)
+        r_pan = np.einsum("ij,bjk->bik", r_neck, pan)
+        r_head = np.einsum("bij,jk->bik", r_pan, self._chain["head"][1])
+        r_tilt = np.einsum("bij,bjk->bik", r_head, tilt)
+        p_head = o + r @ self._chain["neck"][0] + r_pan @ self._chain["head"][0]
+        pos = p_head + r_tilt @ self._chain["camera"][0]
+        return pos, np.einsum("bij,jk->bik", r_tilt, self._chain["camera"][1])
+
+    def project_from(
+        self, pos: NDArray[np.float64], rot: NDArray[np.float64], point: ArrayLike
+    ) -> NDArray[np.float64]:
+        """Pixel coordinates ``(B, 2)`` of one world point ``(3,)`` seen from camera poses
+        ``pos`` ``(B, 3)``, ``rot`` ``(B, 3, 3)`` (:meth:`head_camera_poses`); the pinhole of
+        :meth:`project`, NaN behind the camera."""
+        pc = np.einsum("bi,bij->bj", np.asarray(point, dtype=np.float64) - pos, rot)
+        depth = -pc[:, 2]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            uv = np.stack([pc[:, 0] / depth, -pc[:, 1] / depth], axis=1) * self.focal
+        uv += 0.5 * self.head_size
+        uv[depth <= 0] = np.nan
+        return uv
+
     def ray(self, uv: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """The inverse of :meth:`project`: the camera's position and the unit direction of the
         line of sight through pixel coordinates ``uv`` ``(2,)``, in the world."""
@@ -260,6 +301,20 @@ class Scene:
         """Whether the hand is in contact with the ball."""
         pair = tuple(sorted((self._hand_geom, self._object_geom)))
         return pair in self.contacts()
+
+
+def _offset(pos: ArrayLike, quat: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """A child frame's offset in its parent: position ``(3,)`` and rotation ``(3, 3)``."""
+    mat = np.zeros(9)
+    mujoco.mju_quat2Mat(mat, np.asarray(quat, dtype=np.float64))
+    return np.array(pos, dtype=np.float64), mat.reshape(3, 3)
+
+
+def _axis_rotations(axis: NDArray[np.float64], angles: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Rotation matrices ``(B, 3, 3)`` about the unit ``axis`` by ``angles`` (Rodrigues)."""
+    k = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
+    s, c = np.sin(angles)[:, None, None], np.cos(angles)[:, None, None]
+    return np.eye(3) + s * k + (1.0 - c) * (k @ k)
 
 
 def blob_centroid(image: NDArray[Any]) -> NDArray[np.float64] | None:
