@@ -189,7 +189,9 @@ def _run_seed(job: _SeedJob) -> dict[str, Any]:
         )  # fmt: skip
         out["model"] = model
     for s in cfg.states:
-        out["runs"][s], _ = run_episodes(cfg, s, model, job.seed)
+        out["runs"][s], agent = run_episodes(cfg, s, model, job.seed)
+        if s == "map":
+            out["agent"] = agent
     return out
 
 
@@ -204,6 +206,7 @@ class RobotResult:
     map_metrics: list[dict[str, Any]] = field(default_factory=list)
     unit_z: list[NDArray[np.float64]] = field(default_factory=list)
     model: SigmaPiSOM | None = None
+    agent: ActorCritic | None = None
     seconds: float = 0.0
 
     def final(self, key: str = "success") -> dict[str, NDArray[np.float64]]:
@@ -315,17 +318,27 @@ def run_robot(
             res.map_metrics.append(outcomes[sd]["map_metrics"])
             res.unit_z.append(outcomes[sd]["unit_z"])
     res.model = outcomes[seeds[0]].get("model")
+    res.agent = outcomes[seeds[0]].get("agent")
     res.seconds = time.perf_counter() - t0
     return res
 
 
-def write_outputs(result: RobotResult, out_dir: Path) -> list[Path]:
-    """``result.json`` and the figures (:mod:`sigmapi.robot.plots`) in ``out_dir``."""
+def write_outputs(result: RobotResult, out_dir: Path, render: Path | None = None) -> list[Path]:
+    """``result.json``, the figures (:mod:`sigmapi.robot.plots`) and, with ``render``, a GIF
+    of one episode of the first seed's map learner (third-person and head cameras)."""
     import json
 
-    from sigmapi.robot.plots import robot_figures
+    from sigmapi.robot.plots import film_episode, robot_figures, write_gif
 
     out_dir.mkdir(parents=True, exist_ok=True)
     path = out_dir / "result.json"
     path.write_text(json.dumps(result.to_dict(), indent=1) + "\n", encoding="utf-8")
-    return [path, *robot_figures(result, out_dir)]
+    film = None
+    if result.model is not None and result.agent is not None:
+        env = make_env(result.config, render_mode="rgb_array")
+        film = film_episode(env, result.model, result.agent, seed=result.seeds[0])
+        env.close()
+    paths = [path, *robot_figures(result, out_dir, film)]
+    if render is not None and film:
+        paths.append(write_gif(film, render))
+    return paths

@@ -212,13 +212,8 @@ class Scene:
         camera's frame and ``f = (H/2) / tan(fovy/2)``.
         """
         c, r = self.camera_pose()
-        pc = (np.atleast_2d(np.asarray(points, dtype=np.float64)) - c) @ r
-        depth = -pc[:, 2]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            uv = np.stack([pc[:, 0] / depth, -pc[:, 1] / depth], axis=1) * self.focal
-        uv += 0.5 * self.head_size
-        uv[depth <= 0] = np.nan
-        return uv
+        pts = np.atleast_2d(np.asarray(points, dtype=np.float64))
+        return np.concatenate([self.project_from(c[None], r[None], p) for p in pts])
 
     def head_camera_poses(self, neck: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """The head camera's poses for neck angles ``(B, 2)`` (pan, tilt) with the torso where
