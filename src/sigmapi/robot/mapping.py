@@ -4,7 +4,7 @@
 winner, learning rate 0.1 -> 0.01, the cross-view ordered start) on the robot's codes, with a
 neighbourhood that ends at 0.5 map units instead of 1e-5. Chosen on seeds 0-2 (not on the
 reported ones): a final width of 1e-5 left each unit's weights the noise of its last few
-samples, and on the robot's views that cost order R^2 (measured in the README).
+samples, and on the robot's views that cost order R^2 on the tuning seeds.
 
 :func:`score_map` scores a map on view pairs whose ``z`` is known, with the definitions of
 :func:`sigmapi.evaluate` (``sigmapi.metrics``): the same keys, the same fold score.
