@@ -18,7 +18,7 @@ PACKAGE = SRC / "sigmapi"
 LAYERS: tuple[tuple[str, ...], ...] = (
     ("cli",),
     ("experiments",),
-    ("envs", "agents", "baselines", "viz", "robot"),
+    ("envs", "agents", "baselines", "viz"),
     ("metrics", "checkpoints", "executor"),
     ("circular",),
     ("som",),

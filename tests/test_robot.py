@@ -17,7 +17,7 @@ if os.environ.get("CI") == "true":
 else:
     pytest.importorskip("mujoco")
 
-from sigmapi.robot import (
+from sigmapi.envs.robot import (
     Frames,
     Pose,
     RobotViews,
@@ -28,7 +28,7 @@ from sigmapi.robot import (
     perceived_target,
     scripted_reach,
 )
-from sigmapi.robot.scene import OBJECT_RADIUS, TABLE_HEIGHT
+from sigmapi.envs.robot.scene import OBJECT_RADIUS, TABLE_HEIGHT
 
 
 @pytest.fixture(scope="module")
@@ -110,7 +110,7 @@ def test_view_source_shapes_and_determinism():
     source = RobotViews(grid=6)
     a = source.sample_views_with_z(20, np.random.default_rng(1))
     b = source.sample_views_with_z(20, np.random.default_rng(1))
-    assert source.x_shape == source.y_shape == (6, 6)
+    assert source.x_code.shape == source.y_code.shape == (6, 6)
     for arr in a.views:
         assert arr.shape == (20, 36)
         np.testing.assert_allclose(np.linalg.norm(arr, axis=1), 1.0)
@@ -157,7 +157,7 @@ def test_dock_env_passes_check_env_and_renders_both_cameras(rendering: Scene):
 
 
 def test_docking_reaches_and_touches_the_ball():
-    from sigmapi.robot.env import RobotDockEnv
+    from sigmapi.envs.robot.env import RobotDockEnv
 
     env = RobotDockEnv(grid=6)
     _, info = env.reset(seed=4)
@@ -172,14 +172,66 @@ def test_docking_reaches_and_touches_the_ball():
     assert info["touched"] and info["is_success"]
 
 
+def test_the_view_sources_follow_the_protocol():
+    from sigmapi.envs import PlacedViewSource, collect_saccade_views
+    from sigmapi.envs.robot import RobotDockEnv
+
+    source = RobotViews(grid=5)
+    env = RobotDockEnv(grid=5)
+    for s in (source, env):
+        assert isinstance(s, PlacedViewSource)
+        assert s.x_code == s.y_code == source.x_code and s.z_dim == 2
+    views = collect_saccade_views(env, 7, seed=0)  # on a scene of its own
+    assert [v.shape for v in views] == [(7, 25)] * 4
+    x, y = env.views_of(np.array([[0.5, 0.5], [0.2, 0.9]]), np.random.default_rng(0))
+    assert x.shape == y.shape == (2, 25)
+
+
+def test_the_env_offers_what_the_wrappers_read():
+    import gymnasium as gym
+
+    import sigmapi
+    from sigmapi.envs import make_state_env
+
+    env = gym.make("sigmapi/RobotDock-v0", grid=5)
+    obs, info = env.reset(seed=1)
+    assert set(obs) == {"retina", "gaze"} and obs["retina"].dtype == np.float32
+    assert info["z"].shape == (2,) and info["is_success"] is False
+    model = sigmapi.SigmaPiSOM(
+        sigmapi.SOMConfig(
+            map_shape=(3, 3), x_shape=(5, 5), y_shape=(5, 5), code_width=1.0, iterations=50
+        )
+    ).fit(RobotViews(grid=5).sample_views(50, np.random.default_rng(0)))
+    for state in ("map", "retina", "retina_gaze", "true_z"):
+        phi, _ = make_state_env(gym.make("sigmapi/RobotDock-v0", grid=5), state, model).reset(
+            seed=0
+        )
+        assert phi.dtype == np.float32 and abs(float(np.linalg.norm(phi)) - 1.0) < 1e-5
+    wide = sigmapi.SigmaPiSOM(model.config.replace(code_width=2.0))
+    with pytest.raises(sigmapi.ConfigError, match="width"):
+        make_state_env(env, "map", wide)  # the world declares its codes: they are checked
+
+
+def test_the_command_line_starts_without_mujoco():
+    import subprocess
+    import sys
+
+    code = "import sys, sigmapi.cli; sigmapi.cli.build_parser(); print('mujoco' in sys.modules)"
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert r.stdout.strip() == "False"
+
+
 def test_tiny_learn_and_dock_run():
-    from sigmapi.experiments.robot import QUICK, run_robot
+    from sigmapi.experiments.robot import QUICK, ROBOT
 
     cfg = QUICK.replace(
         map_pairs=300, map_iterations=600, eval_pairs=200, episodes=6, final_episodes=3,
         block=3, grid=6, map_shape=(4, 4), max_steps=30,
     )  # fmt: skip
-    d = run_robot(cfg, seeds=(0,)).to_dict()
+    res = ROBOT.run(cfg, seeds=[0])
+    d = res.to_dict()
     assert set(d["success"]) == {"map", "retina", "retina_gaze", "true_z"}
     for key in ("order_r2", "fold_score", "folded", "view_within_one", "z_error"):
         assert key in d
+    again = ROBOT.run(cfg.replace(states=("retina",)), seeds=[0])
+    np.testing.assert_array_equal(again.success["retina"], res.success["retina"])

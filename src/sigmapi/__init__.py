@@ -2,10 +2,11 @@
 
 Weber & Wermter, "A self-organizing map of Sigma-Pi units", Neurocomputing 70 (2007) 2552-2560.
 
-Importing the package registers the Gymnasium environment ``sigmapi/GazeReach-v0``
-(:class:`sigmapi.envs.GazeReachEnv`) by its entry-point string, with its time limit:
-``gymnasium.make`` loads the environment's module when it is first made and wraps it in
-``TimeLimit``.
+Importing the package registers the Gymnasium environments ``sigmapi/GazeReach-v0``
+(:class:`sigmapi.envs.GazeReachEnv`) and ``sigmapi/RobotDock-v0``
+(:class:`sigmapi.envs.robot.RobotDockEnv`, with ``sigmapi[robot]``) by their entry-point
+strings, with their time limits: ``gymnasium.make`` loads the environment's module when it is
+first made and wraps it in ``TimeLimit``.
 """
 
 # first: a quiet Ctrl-C while the command line starts (see _startup.py)
@@ -54,6 +55,10 @@ if "sigmapi/GazeReach-v0" not in _gymnasium.registry:
         entry_point="sigmapi.envs.gaze_reach:GazeReachEnv",
         max_episode_steps=50,
     )
-if "sigmapi/RobotDock-v0" not in _gymnasium.registry:  # needs sigmapi[robot] when made
-    _gymnasium.register(id="sigmapi/RobotDock-v0", entry_point="sigmapi.robot.env:RobotDockEnv",
-                        max_episode_steps=100)  # fmt: skip
+if "sigmapi/RobotDock-v0" not in _gymnasium.registry:
+    # the simulated robot (sigmapi.envs.robot); making it needs the robot extra (MuJoCo)
+    _gymnasium.register(
+        id="sigmapi/RobotDock-v0",
+        entry_point="sigmapi.envs.robot.env:RobotDockEnv",
+        max_episode_steps=100,
+    )

@@ -9,7 +9,7 @@ environment that offers them can be learned, the gaze-and-reach world or another
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import gymnasium as gym
@@ -29,12 +29,14 @@ class Episodes:
 
     ``success``: ``info["is_success"]`` at the last step; ``failed``: the world ended the
     episode without success (terminated, e.g. the object left the view); the rest ran into the
-    time limit. ``steps``: steps taken.
+    time limit. ``steps``: steps taken. ``info``: for each key asked of
+    :func:`run_episodes` (``info_keys``), ``info[key]`` at the last step of each episode.
     """
 
     success: NDArray[np.bool_]
     failed: NDArray[np.bool_]
     steps: NDArray[np.int64]
+    info: dict[str, NDArray[Any]] = field(default_factory=dict)
 
 
 def discrete_actions(space: spaces.Space[Any]) -> tuple[int, int]:
@@ -69,18 +71,21 @@ def run_episodes(
     agent: ActorCritic,
     starts: Sequence[int] | NDArray[np.int64],
     on_episode: Callable[[], None] | None = None,
+    info_keys: Sequence[str] = (),
 ) -> Episodes:
     """Learn over one episode per entry of ``starts`` (the seed of its ``reset``).
 
     After every step the agent learns from ``(s, a, r, s')`` (``s'`` terminal only when
     ``terminated``: a time limit is no part of the task). ``on_episode()`` is called after each
-    episode (a progress bar).
+    episode (a progress bar). ``info_keys``: entries of the last step's ``info`` to keep per
+    episode (:attr:`Episodes.info`), e.g. what ended it.
     """
     _, first = discrete_actions(env.action_space)
     n = len(starts)
     success = np.zeros(n, dtype=bool)
     failed = np.zeros(n, dtype=bool)
     steps = np.zeros(n, dtype=np.int64)
+    kept: dict[str, list[Any]] = {k: [] for k in info_keys}
     for ep in range(n):
         phi, info = env.reset(seed=int(starts[ep]))
         t = 0
@@ -95,6 +100,8 @@ def run_episodes(
         success[ep] = bool(info["is_success"])
         failed[ep] = terminated and not success[ep]
         steps[ep] = t
+        for k, values in kept.items():
+            values.append(info[k])
         if on_episode is not None:
             on_episode()
-    return Episodes(success, failed, steps)
+    return Episodes(success, failed, steps, {k: np.asarray(v) for k, v in kept.items()})

@@ -1,9 +1,9 @@
 """Figures of the robot experiment: the map on the table, learning curves, a film strip.
 
 Thin plot functions (``ax`` in, Axes out) and :func:`robot_figures`, which writes them for a
-result of :func:`sigmapi.experiments.robot.run_robot`; :func:`film_episode` renders one
-docking episode of the map's learner and :func:`write_gif` saves frames as an animated GIF
-(Pillow, which matplotlib installs).
+:class:`~sigmapi.experiments.robot_result.RobotResult`; :func:`film_episode` renders one
+docking episode of the first seed's map learner and :func:`write_gif` saves frames as an
+animated GIF (Pillow, which matplotlib installs).
 """
 
 from __future__ import annotations
@@ -14,9 +14,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from sigmapi.robot.frames import Frames
-from sigmapi.robot.scene import Scene
-from sigmapi.robot.states import make_state
+from sigmapi.envs.robot.frames import Frames
+from sigmapi.envs.robot.scene import Scene
 
 __all__ = ["film_episode", "plot_curves", "plot_unit_positions", "robot_figures", "write_gif"]
 
@@ -65,19 +64,21 @@ def plot_curves(curves: dict[str, dict[str, list[float]]], ax: Any = None) -> An
     return ax
 
 
-def film_episode(
-    env: Any, model: Any, agent: Any, seed: int = 0, max_frames: int = 60
-) -> list[NDArray[np.uint8]]:
-    """Frames (``env.render()``) of one episode of ``agent`` on the map's state of ``env``
-    (made with ``render_mode="rgb_array"``)."""
-    state_env = make_state(env, "map", model)
-    phi, _ = state_env.reset(seed=seed)
+def film_episode(result: Any, max_frames: int = 60) -> list[NDArray[np.uint8]]:
+    """Frames (``env.render()``: third-person and head cameras) of one episode of the first
+    seed's map learner of ``result``, acting on its policy after training; empty without one."""
+    if result.model is None or result.agent is None:
+        return []
+    env = result.config.state_env("map", result.model, render_mode="rgb_array")
+    start = np.random.default_rng(np.random.SeedSequence(result.seeds[0], spawn_key=(3,)))
+    phi, _ = env.reset(seed=int(start.integers(0, 2**31 - 1)))
     frames = [env.render()]
     for _ in range(max_frames - 1):
-        phi, _, terminated, truncated, _ = state_env.step(agent.act(phi))
+        phi, _, terminated, truncated, _ = env.step(result.agent.act(phi))
         frames.append(env.render())
         if terminated or truncated:
             break
+    env.close()
     return frames
 
 

@@ -1,7 +1,7 @@
 """The three frames of the robot, measured in the simulator: retina x, gaze y, body-centred z.
 
 - **retina x**: where the ball is in the head camera's image, ``(u, v)`` pixels, either from
-  the rendered pixels (the red blob's centroid, :func:`~sigmapi.robot.scene.blob_centroid`)
+  the rendered pixels (the red blob's centroid, :func:`~sigmapi.envs.robot.scene.blob_centroid`)
   or from the camera's exact projection of the ball's centre (:meth:`Scene.project`); as a
   position in ``[0, 1]^2``: ``(u - m) / (W - 2 m)``, ``(v - m) / (H - 2 m)`` with a margin of
   ``m`` pixels (a view keeps the whole ball inside the image).
@@ -25,10 +25,10 @@ from numpy.typing import NDArray
 
 from sigmapi import _validate
 from sigmapi.codes import PopulationCode
+from sigmapi.envs.robot.scene import OBJECT_RADIUS, TABLE_HEIGHT, Pose, Scene, blob_centroid
 from sigmapi.errors import ConfigError
-from sigmapi.robot.scene import OBJECT_RADIUS, TABLE_HEIGHT, Pose, Scene, blob_centroid
 
-__all__ = ["RETINA_SOURCES", "Frames", "Workspace"]
+__all__ = ["RETINA_SOURCES", "Frames", "FramesCodes", "Workspace"]
 
 RETINA_SOURCES = ("projection", "pixels")
 """Where the retinal position comes from: the camera's exact projection, or the rendered
@@ -195,3 +195,26 @@ class Frames:
         self.scene.pose(Pose(), forward=False)
         self.scene.set_neck(0.0, 0.7)
         self.scene.pose(Pose(object=tuple(self.world_position(z))))
+
+
+class FramesCodes:
+    """The codes of a view source on the robot's :class:`Frames` (``self.frames``): retina and
+    gaze on one ``grid x grid`` code, and a 2-D ``z`` (what
+    :class:`~sigmapi.envs.PlacedViewSource` asks besides its methods)."""
+
+    frames: Frames
+
+    @property
+    def x_code(self) -> PopulationCode:
+        """The code of the retinal position (``grid x grid`` units)."""
+        return self.frames.code
+
+    @property
+    def y_code(self) -> PopulationCode:
+        """The code of the gaze (the retina's grid and width)."""
+        return self.frames.code
+
+    @property
+    def z_dim(self) -> int:
+        """Dimensions of ``z``: the ball's azimuth and elevation (workspace units)."""
+        return 2

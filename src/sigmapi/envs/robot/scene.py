@@ -8,9 +8,10 @@ one ``MjModel`` and ``MjData`` and places the robot and the ball by their joint 
 (:meth:`Scene.pose`), reads MuJoCo's own camera pose, projects points through it
 (:meth:`Scene.project`) and renders the cameras offscreen (:meth:`Scene.render`).
 
-Headless rendering: importing this module sets ``MUJOCO_GL=egl`` unless the variable is
-already set (MuJoCo reads it once, at import), so a machine without a display renders through
-EGL.
+MuJoCo is imported on first use (:func:`mujoco_module`), not with this module: ``import
+sigmapi`` and the command line start without it. Headless rendering: that first import sets
+``MUJOCO_GL=egl`` unless the variable is already set (MuJoCo reads it once, at import), so a
+machine without a display renders through EGL.
 
 Pixel coordinates: ``(u, v)`` with ``u`` along the image columns (left to right) and ``v``
 along the rows (top to bottom), both continuous with 0 at the image's left and top edges, so
@@ -20,18 +21,18 @@ pixel ``(row i, column j)`` covers ``u`` in ``[j, j + 1)`` and ``v`` in ``[i, i 
 from __future__ import annotations
 
 import os
-
-os.environ.setdefault("MUJOCO_GL", "egl")
-
 from dataclasses import dataclass
 from importlib import resources
-from typing import Any
+from types import ModuleType
+from typing import TYPE_CHECKING, Any
 
-import mujoco
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from sigmapi.errors import ConfigError
+
+if TYPE_CHECKING:
+    import mujoco
 
 __all__ = [
     "HEAD_SIZE",
@@ -42,6 +43,7 @@ __all__ = [
     "Scene",
     "blob_centroid",
     "load_model",
+    "mujoco_module",
 ]
 
 HEAD_SIZE = 64
@@ -56,10 +58,23 @@ NECK_HEIGHT = 1.28
 _ARM = ("shoulder_yaw", "shoulder_pitch", "elbow")
 
 
+def mujoco_module() -> ModuleType:
+    """The ``mujoco`` package, imported on first use (after ``MUJOCO_GL=egl`` unless the
+    variable is set); an ImportError that names the extra to install when it is missing."""
+    os.environ.setdefault("MUJOCO_GL", "egl")
+    try:
+        import mujoco
+    except ImportError as exc:
+        raise ImportError(
+            f"the simulated robot needs MuJoCo: pip install 'sigmapi[robot]' ({exc})"
+        ) from exc
+    return mujoco
+
+
 def load_model() -> mujoco.MjModel:
     """The robot's ``MjModel``, compiled from the package's ``robot.xml``."""
-    xml = resources.files("sigmapi.robot").joinpath("robot.xml").read_text("utf-8")
-    return mujoco.MjModel.from_xml_string(xml)
+    xml = resources.files("sigmapi.envs.robot").joinpath("robot.xml").read_text("utf-8")
+    return mujoco_module().MjModel.from_xml_string(xml)
 
 
 @dataclass(frozen=True)
@@ -87,15 +102,16 @@ class Scene:
     >>> scene = Scene()
     >>> scene.pose(Pose(neck=(0.0, 0.7)))
     >>> u, v = scene.project(scene.object_position())[0]
-    >>> 0 <= u <= 64 and 0 <= v <= 64
+    >>> bool(0 <= u <= 64 and 0 <= v <= 64)
     True
     """
 
     def __init__(self, head_size: int = HEAD_SIZE) -> None:
         if not isinstance(head_size, int) or not 8 <= head_size <= 240:
             raise ConfigError(f"head_size must be an int in [8, 240], got {head_size!r}")
+        self._mj = mujoco_module()
         self.model = load_model()
-        self.data = mujoco.MjData(self.model)
+        self.data = self._mj.MjData(self.model)
         self.head_size = head_size
         m = self.model
         self._cam = m.camera("head").id
@@ -148,7 +164,7 @@ class Scene:
         for name, i in self._act.items():
             self.data.ctrl[i] = q[self._q[name]]
         if forward:
-            mujoco.mj_forward(self.model, self.data)
+            self._mj.mj_forward(self.model, self.data)
 
     def set_neck(self, pan: float, tilt: float) -> None:
         """Move the neck only and update the camera pose (kinematics, no contacts)."""
@@ -156,8 +172,8 @@ class Scene:
         self.data.qpos[self._q["neck_tilt"]] = tilt
         self.data.ctrl[self._act["neck_pan"]] = pan
         self.data.ctrl[self._act["neck_tilt"]] = tilt
-        mujoco.mj_kinematics(self.model, self.data)
-        mujoco.mj_camlight(self.model, self.data)
+        self._mj.mj_kinematics(self.model, self.data)
+        self._mj.mj_camlight(self.model, self.data)
 
     def arm_joints(self) -> NDArray[np.float64]:
         """The arm's joint positions ``(yaw, pitch, elbow)``, radians."""
@@ -267,7 +283,7 @@ class Scene:
             size = (self.head_size,) * 2 if camera == "head" else (240, 320)
         r = self._renderers.get(size)
         if r is None:
-            r = self._renderers[size] = mujoco.Renderer(self.model, *size)
+            r = self._renderers[size] = self._mj.Renderer(self.model, *size)
         r.update_scene(self.data, camera=self._cam if camera == "head" else self._third)
         return np.asarray(r.render())
 
@@ -301,7 +317,7 @@ class Scene:
 def _offset(pos: ArrayLike, quat: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """A child frame's offset in its parent: position ``(3,)`` and rotation ``(3, 3)``."""
     mat = np.zeros(9)
-    mujoco.mju_quat2Mat(mat, np.asarray(quat, dtype=np.float64))
+    mujoco_module().mju_quat2Mat(mat, np.asarray(quat, dtype=np.float64))
     return np.array(pos, dtype=np.float64), mat.reshape(3, 3)
 
 

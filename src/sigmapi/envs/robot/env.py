@@ -11,7 +11,7 @@ Dynamics of one step
 2. Outcome, in this order: the ball's body-centred position ``z`` inside the goal box (the
    grasp region: ``|z - goal|_inf <= goal_radius`` in workspace units) -> docked, reward
    ``reward_reach`` (+1), terminated; the arm then reaches for the ball where the head sees it
-   (:func:`~sigmapi.robot.reach.scripted_reach`, in the physics), and ``info["is_success"]``
+   (:func:`~sigmapi.envs.robot.reach.scripted_reach`, in the physics), and ``info["is_success"]``
    is whether the hand touched it. ``z`` outside the workspace ``[0, 1]^2``, or the base or
    torso touching the table -> reward ``reward_fail`` (-0.3), terminated. Otherwise 0.
 3. The head: with probability ``saccade_rate`` it makes a saccade to a neck pose, uniform
@@ -20,6 +20,12 @@ Dynamics of one step
 
 The time limit is set at registration (``gymnasium.make("sigmapi/RobotDock-v0")``:
 ``max_episode_steps=100``), not here.
+
+The environment is a :class:`~sigmapi.envs.PlacedViewSource` too (:attr:`~RobotDockEnv.x_code`,
+:attr:`~RobotDockEnv.y_code`, ``sample_views``, ``views_of``; through a
+:class:`~sigmapi.envs.robot.RobotViews` of its codes on a scene of its own, so recording views
+leaves the episode as it is): :func:`~sigmapi.envs.learn_map_in_env` learns a map in it, and
+the wrappers of :mod:`sigmapi.envs.wrappers` check a map's codes against it.
 """
 
 from __future__ import annotations
@@ -32,22 +38,25 @@ from gymnasium import spaces
 from numpy.typing import NDArray
 
 from sigmapi import _validate
+from sigmapi.envs.protocols import Obs, Views, view_space
+from sigmapi.envs.robot.frames import RETINA_SOURCES, Frames, FramesCodes, Workspace
+from sigmapi.envs.robot.reach import perceived_target, scripted_reach
+from sigmapi.envs.robot.scene import OBJECT_RADIUS, TABLE_HEIGHT, Pose, Scene
+from sigmapi.envs.robot.views import RobotViews
 from sigmapi.errors import ConfigError
-from sigmapi.robot.frames import RETINA_SOURCES, Frames, Workspace
-from sigmapi.robot.reach import perceived_target, scripted_reach
-from sigmapi.robot.scene import OBJECT_RADIUS, TABLE_HEIGHT, Pose, Scene
 
-__all__ = ["ACTIONS", "RobotDockEnv"]
+__all__ = ["ACTIONS", "ENV_ID", "RobotDockEnv"]
+
+ENV_ID = "sigmapi/RobotDock-v0"
+"""The environment's Gymnasium id (registered by ``import sigmapi``, with its time limit)."""
 
 ACTIONS = ("forward", "backward", "turn_left", "turn_right")
 """The base's moves, by action index (the authors' docking robot's four)."""
 
-Obs = dict[str, Any]
-
 _TABLE_EDGE = 0.15  # world x of the table's near edge (robot.xml)
 
 
-class RobotDockEnv(gym.Env[Obs, np.int64]):
+class RobotDockEnv(FramesCodes, gym.Env[Obs, np.int64]):
     """Dock the simulated robot at the table so that its arm can reach the ball.
 
     Parameters
@@ -131,24 +140,39 @@ class RobotDockEnv(gym.Env[Obs, np.int64]):
                 f"goal must be 2 numbers with the grasp region inside [0, 1]^2, got {goal!r}"
             )
         n = self.frames.code.size
-        self.observation_space = spaces.Dict(
-            {
-                "retina": spaces.Box(0.0, 1.0, (n,), dtype=np.float32),
-                "gaze": spaces.Box(0.0, 1.0, (n,), dtype=np.float32),
-            }
-        )
+        self.observation_space = view_space(n, n)
         self.action_space = spaces.Discrete(len(ACTIONS))
+        self._views: RobotViews | None = None
         self._base = np.zeros(3)
         self._seen: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None
         self._uv = np.zeros(2)
         self._done = True
 
-    # ------------------------------------------------------------------ helpers
     @property
     def grid(self) -> int:
         """Units per axis of the codes."""
         return self.frames.grid
 
+    # ------------------------------------------------------------------ view source
+    @property
+    def view_source(self) -> RobotViews:
+        """The saccade views of this robot's codes (built on first use, on its own scene)."""
+        if self._views is None:
+            self._views = RobotViews(self.grid, self.frames.code.width, retina=self.retina,
+                                     margin=self.frames.margin)  # fmt: skip
+        return self._views
+
+    def sample_views(self, n: int, rng: np.random.Generator) -> Views:
+        """``n`` view pairs of the still robot (:meth:`RobotViews.sample_views`)."""
+        return self.view_source.sample_views(n, rng)
+
+    def views_of(
+        self, z: NDArray[np.float64], rng: np.random.Generator
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """One view of each workspace position ``z`` ``(B, 2)`` (:meth:`RobotViews.views_of`)."""
+        return self.view_source.views_of(z, rng)
+
+    # ------------------------------------------------------------------ helpers
     def z(self) -> NDArray[np.float64]:
         """The ball's body-centred position now, workspace units ``(2,)`` (analysis only)."""
         return self.frames.z(self.frames.direction(self.scene.object_position()[None, :]))[0]
@@ -272,3 +296,5 @@ class RobotDockEnv(gym.Env[Obs, np.int64]):
 
     def close(self) -> None:
         self.scene.close()
+        if self._views is not None:
+            self._views.frames.scene.close()

@@ -2,13 +2,15 @@
 
 The base keeps still and the ball lies still on the table; the head makes two saccades, each
 to a neck pose drawn uniformly among those that keep the ball in view
-(:meth:`~sigmapi.robot.frames.Frames.saccade`). The two ``(retina, gaze)`` readings are two
+(:meth:`~sigmapi.envs.robot.frames.Frames.saccade`). The two ``(retina, gaze)`` readings are two
 views of one ``z``: the data :meth:`SigmaPiSOM.fit(views) <sigmapi.SigmaPiSOM.fit>` learns
 from. A share ``moved_share`` of the pairs is spoiled as in a real recording: the ball is moved
 to a fresh random place between the two views, so the pair's views show two different ``z``.
 
-The ball's places are uniform over the :class:`~sigmapi.robot.frames.Workspace` in
-``(azimuth, elevation)``; ``z`` is recorded for analysis only.
+The ball's places are uniform over the :class:`~sigmapi.envs.robot.frames.Workspace` in
+``(azimuth, elevation)``; ``z`` is recorded for analysis only. :class:`RobotViews` is a
+:class:`~sigmapi.envs.PlacedViewSource`: :func:`~sigmapi.envs.collect_saccade_views` and
+:func:`~sigmapi.envs.learn_map_in_env` take it as they take any view source.
 """
 
 from __future__ import annotations
@@ -19,8 +21,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sigmapi import _validate
-from sigmapi.robot.frames import RETINA_SOURCES, Frames, Workspace
-from sigmapi.robot.scene import Scene
+from sigmapi.envs.protocols import Views
+from sigmapi.envs.robot.frames import RETINA_SOURCES, Frames, FramesCodes, Workspace
+from sigmapi.envs.robot.scene import Scene
+from sigmapi.errors import DataError
 
 __all__ = ["RobotViewBatch", "RobotViews"]
 
@@ -50,13 +54,17 @@ class RobotViewBatch(NamedTuple):
     py1: F64
 
     @property
-    def views(self) -> tuple[F64, F64, F64, F64]:
+    def views(self) -> Views:
         """``(x0, y0, x1, y1)``, for ``SigmaPiSOM.fit(views)``."""
         return self.x0, self.y0, self.x1, self.y1
 
 
-class RobotViews:
-    """A view source on the simulated robot: ``sample_views(n, rng)`` gives view pairs.
+class RobotViews(FramesCodes):
+    """A view source on the simulated robot (:class:`~sigmapi.envs.PlacedViewSource`).
+
+    ``sample_views(n, rng)`` gives ``n`` view pairs, ``views_of(z, rng)`` one view of each
+    given ``z``; the codes are :attr:`x_code` (retina) and :attr:`y_code` (gaze), both on a
+    ``grid x grid`` grid.
 
     Parameters
     ----------
@@ -78,7 +86,7 @@ class RobotViews:
     --------
     >>> source = RobotViews(grid=7)
     >>> x0, y0, x1, y1 = source.sample_views(3, np.random.default_rng(0))
-    >>> x0.shape, y1.shape, source.x_shape
+    >>> x0.shape, y1.shape, source.x_code.shape
     ((3, 49), (3, 49), (7, 7))
     """
 
@@ -97,19 +105,22 @@ class RobotViews:
         self.retina = _validate.choice("retina", retina, RETINA_SOURCES)
         self.frames = Frames(Scene(), grid, code_width, margin, workspace)
 
-    @property
-    def x_shape(self) -> tuple[int, int]:
-        """Grid of the retina code."""
-        return (self.frames.grid, self.frames.grid)
-
-    @property
-    def y_shape(self) -> tuple[int, int]:
-        """Grid of the gaze code."""
-        return (self.frames.grid, self.frames.grid)
-
-    def sample_views(self, n: int, rng: np.random.Generator) -> tuple[F64, F64, F64, F64]:
+    def sample_views(self, n: int, rng: np.random.Generator) -> Views:
         """``n`` view pairs ``(x0, y0, x1, y1)``, codes ``(n, grid**2)`` each."""
         return self.sample_views_with_z(n, rng).views
+
+    def views_of(self, z: F64, rng: np.random.Generator) -> tuple[F64, F64]:
+        """One view of each workspace position ``z`` ``(B, 2)`` (the body at the origin, a
+        saccade to a neck pose that sees the ball): the codes ``x`` and ``y``."""
+        z = np.atleast_2d(np.asarray(z, dtype=np.float64))
+        if z.ndim != 2 or z.shape[1] != 2:
+            raise _validate.fail("z", "positions of shape (B, 2)", z.shape, error=DataError)
+        pos = np.empty((2, len(z), 2))
+        for i, place in enumerate(z):
+            self.frames.place_still(place)
+            pos[0, i], pos[1, i] = self._view(rng)
+        x, y = (self.frames.code.encode(np.clip(p, 0.0, 1.0)) for p in pos)
+        return x, y
 
     def _view(self, rng: np.random.Generator) -> tuple[F64, F64]:
         while True:

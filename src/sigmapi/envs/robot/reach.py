@@ -12,11 +12,10 @@ contact in MuJoCo's collision detection) before the script ends.
 
 from __future__ import annotations
 
-import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from sigmapi.robot.scene import OBJECT_RADIUS, TABLE_HEIGHT, Scene
+from sigmapi.envs.robot.scene import OBJECT_RADIUS, TABLE_HEIGHT, Scene, mujoco_module
 
 __all__ = ["LINK", "arm_ik", "perceived_target", "scripted_reach"]
 
@@ -76,6 +75,7 @@ def scripted_reach(scene: Scene, target: NDArray[np.float64] | None) -> bool:
     down = arm_ik(scene, target)
     if above is None or down is None:
         return False
+    mujoco = mujoco_module()
     m, d = scene.model, scene.data
     start = scene.arm_joints()
     yaw0 = start[0]

@@ -1,0 +1,138 @@
+"""The settings of one robot run: the recorded views, the map, the docking world, the learner.
+
+One flat frozen dataclass (:class:`RobotConfig`), a docstring under each field, so that the
+command-line options are its fields; :meth:`RobotConfig.agent` gives the learner's part as the
+:class:`~sigmapi.agents.ActorCriticConfig` the agents take, :meth:`RobotConfig.make_env` and
+:meth:`RobotConfig.state_env` the docking world as ``gymnasium.make`` builds it and as each
+state sees it.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from typing import Any
+
+import gymnasium as gym
+
+from sigmapi import _validate
+from sigmapi.agents import ActorCriticConfig
+from sigmapi.config import BACKEND_NAMES
+from sigmapi.envs import FEATURES, STATES, Features, TrueZObservation, make_state_env
+from sigmapi.envs.robot.env import ENV_ID
+from sigmapi.envs.robot.frames import RETINA_SOURCES
+from sigmapi.errors import ConfigError
+from sigmapi.som import SigmaPiSOM
+
+__all__ = ["QUICK", "RobotConfig"]
+
+
+@dataclass(frozen=True)
+class RobotConfig:
+    """Everything one robot run depends on but its seeds (the CLI's options are its fields)."""
+
+    grid: int = 12
+    """Units per axis of the retina and gaze codes."""
+    code_width: float = 1.0
+    """Width of the codes' hills, grid units."""
+    map_shape: tuple[int, ...] = (8, 8)
+    """Grid of the Sigma-Pi map."""
+    map_pairs: int = 10_000
+    """View pairs recorded from saccades for the map (body and ball still)."""
+    map_iterations: int = 40_000
+    """Learning iterations of the map (the recorded pairs are used in passes)."""
+    moved_share: float = 0.0
+    """Share of recorded pairs in which the ball moved between the two views (a nuisance)."""
+    eval_pairs: int = 3000
+    """Calibration and test pairs (each) that score the map against the true z."""
+    backend: str = "auto"
+    """Kernel that learns and reads the map ("auto": the fast one when it is installed)."""
+    retina: str = "projection"
+    """Retinal position in the docking episodes: "projection" or "pixels" (rendered, slower)."""
+    saccade_rate: float = 1.0
+    """Probability of a saccade per docking step (1: the head looks around every step)."""
+    max_steps: int = 100
+    """Time limit of a docking episode (Gymnasium's TimeLimit)."""
+    episodes: int = 400
+    """Docking episodes per seed and state."""
+    final_episodes: int = 100
+    """Final success is measured over this many last episodes."""
+    block: int = 50
+    """Episodes per point of the learning curves."""
+    features: str = "response"
+    """Map features: "response" (activations clipped at 0, L2-normalised) or "bump"."""
+    feature_width: float = 1.0
+    """Width of the bump features (map and true-z codes), in grid units."""
+    gamma: float = ActorCriticConfig.gamma
+    """Discount of the actor-critic (the authors' docking: 0.9)."""
+    critic_lr: float = ActorCriticConfig.critic_lr
+    """Learning rate of the critic (the authors: 0.1), per unit of |phi|^2."""
+    actor_lr: float = ActorCriticConfig.actor_lr
+    """Learning rate of the actor (the authors: 0.1), per unit of |phi|^2."""
+    beta: float = ActorCriticConfig.beta
+    """Inverse temperature of the softmax policy (the authors: 2)."""
+    states: tuple[str, ...] = STATES
+    """States compared: map, retina, retina_gaze, true_z."""
+
+    def __post_init__(self) -> None:
+        for name in ("grid", "map_pairs", "map_iterations", "eval_pairs", "episodes",
+                     "final_episodes", "block", "max_steps"):  # fmt: skip
+            object.__setattr__(self, name, _validate.integer(name, getattr(self, name), 1))
+        if self.final_episodes > self.episodes:
+            raise ConfigError(
+                f"final_episodes must be <= episodes ({self.episodes}), got {self.final_episodes}"
+            )
+        states = tuple(self.states)
+        if not states or any(s not in STATES for s in states) or len(set(states)) != len(states):
+            raise ConfigError(f"states must be distinct names from {STATES}, got {states!r}")
+        object.__setattr__(self, "states", states)
+        object.__setattr__(self, "map_shape", _validate.shape("map_shape", self.map_shape))
+        if len(self.map_shape) != 2:
+            raise _validate.fail("map_shape", "2 axes (z is 2-D)", self.map_shape, "e.g. 8x8")
+        for name, lo, hi in (("moved_share", 0.0, 1.0), ("saccade_rate", 0.0, 1.0)):
+            object.__setattr__(self, name, _validate.number(name, getattr(self, name), lo, hi))
+        _validate.choice("retina", self.retina, RETINA_SOURCES)
+        _validate.choice("backend", self.backend, BACKEND_NAMES)
+        _validate.choice("features", self.features, FEATURES)
+        object.__setattr__(
+            self, "feature_width", _validate.positive("feature_width", self.feature_width)
+        )
+        self.agent()  # checks the learner's fields
+
+    def agent(self) -> ActorCriticConfig:
+        """The learner's settings."""
+        return ActorCriticConfig(self.gamma, self.critic_lr, self.actor_lr, self.beta)
+
+    def env_kwargs(self) -> dict[str, Any]:
+        """The docking world's keyword arguments (``gymnasium.make``'s, time limit included)."""
+        return {"grid": self.grid, "code_width": self.code_width, "retina": self.retina,
+                "saccade_rate": self.saccade_rate, "max_episode_steps": self.max_steps}  # fmt: skip
+
+    def make_env(self, **kwargs: Any) -> gym.Env[Any, Any]:
+        """The docking world through ``gymnasium.make`` (its TimeLimit included); ``kwargs``
+        go to it too (e.g. ``render_mode="rgb_array"``)."""
+        return gym.make(ENV_ID, **self.env_kwargs(), **kwargs)
+
+    def state_env(
+        self, state: str, model: SigmaPiSOM | None = None, **kwargs: Any
+    ) -> gym.Env[Features, Any]:
+        """The docking world as ``state`` sees it (:mod:`sigmapi.envs.wrappers`); ``"true_z"``
+        codes z on the map's grid (like for like), ``"map"`` needs ``model``."""
+        env = self.make_env(**kwargs)
+        if state == "true_z":
+            return TrueZObservation(env, shape=self.map_shape, width=self.feature_width)
+        return make_state_env(env, state, model, self.features, self.feature_width)
+
+    def replace(self, **changes: Any) -> RobotConfig:
+        """A copy with ``changes``."""
+        return dataclasses.replace(self, **changes)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-able (tuples as lists)."""
+        return {k: list(v) if isinstance(v, tuple) else v
+                for k, v in dataclasses.asdict(self).items()}  # fmt: skip
+
+
+QUICK = RobotConfig(map_pairs=3000, map_iterations=12_000, eval_pairs=1000, episodes=150,
+                    final_episodes=50, block=25)  # fmt: skip
+"""``sigmapi robot --quick``: a smaller map run and fewer episodes (minutes, not tens)."""

@@ -1,0 +1,121 @@
+"""The map the robot learns from its own view pairs, and its scores against the true ``z``.
+
+:func:`learn_map` records view pairs from the still robot's saccades
+(:func:`~sigmapi.envs.collect_saccade_views` on a :class:`~sigmapi.envs.robot.RobotViews`)
+and fits the map on them. :func:`robot_som_config` is the map's configuration: the
+``paper-2d`` preset (min-distance winner, learning rate 0.1 -> 0.01, the cross-view ordered
+start) on the robot's codes, with a neighbourhood that ends at 0.5 map units instead of 1e-5.
+Chosen on seeds 0-2 (not on the reported ones): a final width of 1e-5 left each unit's weights
+the noise of its last few samples, and on the robot's views that cost order R^2 on the tuning
+seeds.
+
+:func:`score_map` scores a map on view pairs whose ``z`` is known, with the definitions of
+:func:`sigmapi.evaluate` (``sigmapi.metrics``): the same keys, the same fold score.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from sigmapi.codes import PopulationCode
+from sigmapi.config import SOMConfig, load_preset
+from sigmapi.envs import collect_saccade_views
+from sigmapi.envs.robot.views import RobotViewBatch, RobotViews
+from sigmapi.experiments.robot_config import RobotConfig
+from sigmapi.metrics import (
+    EVAL_SEED,
+    FOLD_THRESHOLD,
+    fold_indicators,
+    grid_spacing,
+    hard_scores,
+    winner_metrics,
+)
+from sigmapi.som import SigmaPiSOM
+from sigmapi.tasks import Batch
+
+__all__ = [
+    "ROBOT_SIGMA",
+    "evaluation_pairs",
+    "learn_map",
+    "robot_som_config",
+    "score_map",
+    "unit_positions",
+]
+
+ROBOT_SIGMA = ((0.0, 3.0), (0.5, 1.0), (1.0, 0.5))
+"""The map's neighbourhood width (map units) over the run: 3 -> 1 at half-way -> 0.5."""
+
+
+def robot_som_config(
+    code: PopulationCode,
+    map_shape: tuple[int, ...],
+    iterations: int,
+    seed: int,
+    backend: str = "auto",
+) -> SOMConfig:
+    """The ``paper-2d`` preset on the robot's codes (``code``, retina and gaze alike), a
+    ``map_shape`` map, ``iterations`` long, with :data:`ROBOT_SIGMA`."""
+    return load_preset("paper-2d").replace(
+        map_shape=tuple(map_shape), x_shape=code.shape, y_shape=code.shape,
+        code_width=code.width, iterations=iterations, sigma=ROBOT_SIGMA, seed=seed,
+        backend=backend,
+    )  # fmt: skip
+
+
+def learn_map(config: RobotConfig, rng: np.random.Generator) -> SigmaPiSOM:
+    """The map of one run: ``config.map_pairs`` view pairs recorded from the still robot's
+    saccades (``config.moved_share`` of them spoiled), then ``fit(views)``; the views' and the
+    weights' seeds drawn from ``rng``."""
+    source = RobotViews(config.grid, config.code_width, moved_share=config.moved_share)
+    views_seed, som_seed = (int(v) for v in rng.integers(0, 2**31 - 1, size=2))
+    views = collect_saccade_views(source, config.map_pairs, seed=views_seed)
+    cfg = robot_som_config(source.x_code, config.map_shape, config.map_iterations, som_seed,
+                           config.backend)  # fmt: skip
+    return SigmaPiSOM(cfg).fit(views)
+
+
+def evaluation_pairs(config: RobotConfig) -> tuple[RobotViewBatch, RobotViewBatch]:
+    """Calibration and test pairs (unmoved) drawn from :data:`~sigmapi.metrics.EVAL_SEED`:
+    the same for every seed and run."""
+    source = RobotViews(config.grid, config.code_width)
+    cal, test = (np.random.default_rng(s) for s in np.random.SeedSequence(EVAL_SEED).spawn(2))
+    return (source.sample_views_with_z(config.eval_pairs, cal),
+            source.sample_views_with_z(config.eval_pairs, test))  # fmt: skip
+
+
+def unit_positions(model: SigmaPiSOM, calibration: RobotViewBatch) -> NDArray[np.float64]:
+    """Each unit's preferred ``z``: the mean ``z`` of the calibration views it wins (NaN for a
+    unit that wins none), ``(n_units, 2)``."""
+    wc = model.winner(calibration.x0, calibration.y0, hard=True)
+    out = np.full((model.n_units, 2), np.nan)
+    for k in np.unique(wc):
+        out[k] = calibration.z[wc == k].mean(axis=0)
+    return out
+
+
+def _batch(b: RobotViewBatch) -> Batch:
+    return Batch(b.x0, b.y0, b.x1, b.y1, b.z, b.px0, b.py0, b.px1, b.py1)
+
+
+def score_map(
+    model: SigmaPiSOM, calibration: RobotViewBatch, test: RobotViewBatch
+) -> dict[str, float | int | bool]:
+    """The map's metrics against the true ``z`` of the pairs (keys of ``sigmapi evaluate``).
+
+    ``calibration`` fits the z decoder and the affine order fit; ``test`` is scored (both
+    should hold unmoved pairs). z is the workspace position of the ball's direction, so the
+    z error is in grid spacings of the codes per unit of the workspace.
+    """
+    scores = hard_scores(model, test.x0, test.y0)
+    w0 = np.argmax(scores, axis=1)
+    w1 = model.winner(test.x1, test.y1, hard=True)
+    wc = model.winner(calibration.x0, calibration.y0, hard=True)
+    spacing = grid_spacing(model.x_shape)
+    m = winner_metrics(wc, calibration.z, w0, w1, test.z, model.map_coords, spacing)
+    starved, te, score = fold_indicators(model, _batch(test), w0, w1, scores)
+    return {
+        **m, "n_test": int(test.z.shape[0]), "fold_score": score,
+        "fold_threshold": FOLD_THRESHOLD, "folded": bool(score >= FOLD_THRESHOLD),
+        "starved_units": starved, "topographic_error": te,
+    }  # fmt: skip

@@ -1,0 +1,168 @@
+"""The outcome of a robot run: per-episode records, the map's metrics, the rates and curves
+computed from them, its JSON form, its table and its figures."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from sigmapi.agents import ActorCritic
+from sigmapi.experiments.robot_config import RobotConfig
+from sigmapi.som import SigmaPiSOM
+
+__all__ = ["RobotResult"]
+
+
+def _summary(values: NDArray[np.float64]) -> dict[str, float]:
+    return {"mean": float(np.mean(values)), "median": float(np.median(values)),
+            "min": float(np.min(values))}  # fmt: skip
+
+
+def _nan_stat(fn: Any, values: NDArray[np.float64]) -> float | None:
+    return float(fn(values)) if np.any(np.isfinite(values)) else None
+
+
+@dataclass
+class RobotResult:
+    """Outcome of :meth:`~sigmapi.experiments.robot.RobotExperiment.run`.
+
+    ``success[state]``, ``docked[state]`` and ``steps[state]`` have shape ``(len(seeds),
+    episodes)``, a row per seed in the order of ``seeds``: whether the hand touched the ball
+    (``info["is_success"]``), whether the base docked, and the steps taken. ``map_metrics``
+    and ``unit_z`` (each unit's preferred z) per seed; ``model`` and ``agent``: the first
+    seed's map and its learner (for the figures).
+    """
+
+    config: RobotConfig
+    seeds: tuple[int, ...]
+    success: dict[str, NDArray[np.bool_]] = field(default_factory=dict)
+    docked: dict[str, NDArray[np.bool_]] = field(default_factory=dict)
+    steps: dict[str, NDArray[np.int64]] = field(default_factory=dict)
+    map_metrics: list[dict[str, Any]] = field(default_factory=list)
+    unit_z: list[NDArray[np.float64]] = field(default_factory=list)
+    model: SigmaPiSOM | None = None
+    agent: ActorCritic | None = None
+    seconds: float = 0.0
+    _film: list[NDArray[np.uint8]] | None = field(default=None, repr=False)
+
+    def final(self, key: str = "success") -> dict[str, NDArray[np.float64]]:
+        """Per state, the rate of ``key`` (``"success"`` or ``"docked"``) over the last
+        ``final_episodes`` episodes, one per seed."""
+        f = self.config.final_episodes
+        table = self.success if key == "success" else self.docked
+        return {s: r[:, -f:].mean(axis=1) for s, r in table.items()}
+
+    def reach_given_docked(self) -> dict[str, NDArray[np.float64]]:
+        """Per state and seed, the share of the last ``final_episodes`` docked episodes in
+        which the hand touched the ball (NaN for a seed that docked in none)."""
+        f = self.config.final_episodes
+        out = {}
+        for s, d in self.docked.items():
+            n = d[:, -f:].sum(axis=1)
+            hit = (self.success[s][:, -f:] & d[:, -f:]).sum(axis=1)
+            out[s] = np.where(n > 0, hit / np.maximum(n, 1), np.nan)
+        return out
+
+    def curves(self) -> dict[str, dict[str, list[float]]]:
+        """Per state: block ends, success per block (mean and sd over seeds)."""
+        b = self.config.block
+        out = {}
+        for s, r in self.success.items():
+            nb = r.shape[1] // b
+            rate = r[:, : nb * b].reshape(-1, nb, b).mean(axis=2)
+            out[s] = {
+                "episode": [float((i + 1) * b) for i in range(nb)],
+                "success": rate.mean(axis=0).tolist(),
+                "success_sd": rate.std(axis=0).tolist(),
+            }
+        return out
+
+    def map_summary(self) -> dict[str, Any]:
+        """The maps' metrics with the keys of ``sigmapi evaluate`` (means over seeds;
+        ``folded``: any seed folded), ``order_r2_min`` and ``folded_seeds``."""
+        if not self.map_metrics:
+            return {}
+        out: dict[str, Any] = {}
+        for k, v in self.map_metrics[0].items():
+            vals = [m[k] for m in self.map_metrics]
+            out[k] = any(vals) if isinstance(v, bool) else float(np.mean(vals))
+        out["order_r2_min"] = float(min(m["order_r2"] for m in self.map_metrics))
+        out["folded_seeds"] = int(sum(bool(m["folded"]) for m in self.map_metrics))
+        return out
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-able: the map's metrics (keys of ``sigmapi evaluate``), ``success`` per state
+        (final, mean over seeds) with its median and worst seed, docking, the reach given
+        docking, the map's margins over the other states, the curves and the config."""
+        final, docked, reach = self.final(), self.final("docked"), self.reach_given_docked()
+        success = {s: float(v.mean()) for s, v in final.items()}
+        margins = {}
+        if "map" in final:
+            for s in ("retina", "retina_gaze"):
+                if s in final:
+                    margins[f"map_minus_{s}"] = _summary(final["map"] - final[s])
+        ratio = None
+        if "map" in success and success.get("true_z"):
+            per_seed = _summary(final["map"] / np.maximum(final["true_z"], 1e-12))
+            ratio = {**per_seed, "mean": success["map"] / success["true_z"]}
+        return {
+            **self.map_summary(),
+            "success": success,
+            "success_per_seed": {s: v.tolist() for s, v in final.items()},
+            "success_summary": {s: _summary(v) for s, v in final.items()},
+            "docked": {s: float(v.mean()) for s, v in docked.items()},
+            "reach_given_docked": {s: _nan_stat(np.nanmean, v) for s, v in reach.items()},
+            "reach_given_docked_min": {s: _nan_stat(np.nanmin, v) for s, v in reach.items()},
+            "ratio_map_to_true_z": ratio,
+            "margins": margins,
+            "map_metrics": self.map_metrics,
+            "curves": self.curves(),
+            "config": self.config.to_dict(),
+            "seeds": list(self.seeds),
+            "seconds": self.seconds,
+        }
+
+    def table(self) -> str:
+        """A few lines for a terminal."""
+        d = self.to_dict()
+        lines = []
+        if self.map_metrics:
+            lines.append(
+                f"map ({len(self.seeds)} seeds): order R^2 {d['order_r2']:.3f} "
+                f"(min {d['order_r2_min']:.3f}), within one {d['view_within_one']:.3f}, "
+                f"fold score {d['fold_score']:.2f}, folded {d['folded_seeds']}"
+            )
+        lines.append(f"final success over the last {self.config.final_episodes} of "
+                     f"{self.config.episodes} episodes:")  # fmt: skip
+        for s, v in d["success"].items():
+            seeds = " ".join(f"{x:.2f}" for x in d["success_per_seed"][s])
+            reach = d["reach_given_docked"][s]
+            lines.append(
+                f"  {s:12s} {v:.3f}  docked {d['docked'][s]:.3f}  reach|docked "
+                f"{'-' if reach is None else f'{reach:.3f}'}   per seed: {seeds}"
+            )
+        if d["ratio_map_to_true_z"] is not None:
+            lines.append(f"  map / true_z = {d['ratio_map_to_true_z']['mean']:.3f}")
+        return "\n".join(lines)
+
+    def film(self) -> list[NDArray[np.uint8]]:
+        """Frames of one episode of the first seed's map learner (rendered once, then kept;
+        :func:`~sigmapi.experiments.robot_plots.film_episode`)."""
+        if self._film is None:
+            from sigmapi.experiments.robot_plots import film_episode
+
+            self._film = film_episode(self)
+        return self._film
+
+    def figure(self, out_dir: str | Path) -> list[Path]:
+        """Write the figures into ``out_dir`` (:func:`~sigmapi.experiments.robot_plots.
+        robot_figures`: the map on the table, the learning curves, a film strip)."""
+        from sigmapi.experiments.robot_plots import robot_figures
+
+        folder = Path(out_dir)
+        folder.mkdir(parents=True, exist_ok=True)
+        return robot_figures(self, folder, self.film())
