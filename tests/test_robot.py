@@ -235,3 +235,15 @@ def test_tiny_learn_and_dock_run():
         assert key in d
     again = ROBOT.run(cfg.replace(states=("retina",)), seeds=[0])
     np.testing.assert_array_equal(again.success["retina"], res.success["retina"])
+
+
+def test_projection_at_many_necks_matches_mujoco(scene: Scene):
+    """The chain walked in NumPy for candidate gazes gives MuJoCo's own camera's pixels."""
+    scene.pose(Pose(base=(0.1, -0.2, 0.3), object=(0.5, 0.1, TABLE_HEIGHT + OBJECT_RADIUS)))
+    rng = np.random.default_rng(0)
+    lo, hi = scene.neck_range[:, 0], scene.neck_range[:, 1]
+    necks = lo + (hi - lo) * rng.random((5, 2))
+    fast = scene.project_at_necks(necks, scene.object_position())
+    for q, uv in zip(necks, fast, strict=True):
+        scene.set_neck(*q)
+        np.testing.assert_allclose(uv, scene.project(scene.object_position())[0], atol=1e-9)

@@ -175,7 +175,11 @@ class RobotDockEnv(FramesCodes, gym.Env[Obs, np.int64]):
     # ------------------------------------------------------------------ helpers
     def z(self) -> NDArray[np.float64]:
         """The ball's body-centred position now, workspace units ``(2,)`` (analysis only)."""
-        return self.frames.z(self.frames.direction(self.scene.object_position()[None, :]))[0]
+        return self.frames.z(self._direction()[None, :])[0]
+
+    def _direction(self) -> NDArray[np.float64]:
+        """The ball's direction now, ``(azimuth, elevation)`` in radians."""
+        return self.frames.direction(self.scene.object_position()[None, :])[0]
 
     def in_goal(self, z: NDArray[np.float64]) -> bool:
         """Whether ``z`` lies in the grasp region."""
@@ -212,15 +216,16 @@ class RobotDockEnv(FramesCodes, gym.Env[Obs, np.int64]):
 
     def _obs(self) -> Obs:
         assert self._seen is not None
-        x, y = (self.frames.code.encode(np.clip(p, 0.0, 1.0)[None, :])[0] for p in self._seen)
-        return {"retina": x.astype(np.float32), "gaze": y.astype(np.float32)}
+        x, y = self.frames.code.encode(np.clip(np.stack(self._seen), 0.0, 1.0)).astype(np.float32)
+        return {"retina": x, "gaze": y}
 
-    def _info(self, event: str, touched: bool = False) -> dict[str, Any]:
-        p = self.scene.object_position()[None, :]
-        d = self.frames.direction(p)[0]
+    def _info(
+        self, event: str, direction: NDArray[np.float64], touched: bool = False
+    ) -> dict[str, Any]:
         x, y = self._seen if self._seen is not None else (np.full(2, np.nan),) * 2
         return {
-            "z": self.frames.z(d[None, :])[0], "direction": d, "x": x.copy(), "y": y.copy(),
+            "z": self.frames.z(direction[None, :])[0], "direction": direction,
+            "x": x.copy(), "y": y.copy(),
             "event": event, "docked": event == "docked", "touched": touched,
             "is_success": event == "docked" and (touched or not self.reach),
         }  # fmt: skip
@@ -251,7 +256,7 @@ class RobotDockEnv(FramesCodes, gym.Env[Obs, np.int64]):
         else:  # pragma: no cover - the workspace always has room
             raise RuntimeError("found no start pose in 1000 tries")
         self._done = False
-        return self._obs(), self._info("")
+        return self._obs(), self._info("", self._direction())
 
     def step(self, action: Any) -> tuple[Obs, SupportsFloat, bool, bool, dict[str, Any]]:
         if self._done:
@@ -266,7 +271,8 @@ class RobotDockEnv(FramesCodes, gym.Env[Obs, np.int64]):
         else:
             base = np.array([x, y, yaw + (self.turn if a == 2 else -self.turn)])
         self._set_base(base)
-        z = self.z()
+        d = self._direction()  # before the reach, which may push the ball
+        z = self.frames.z(d[None, :])[0]
         reward, event, touched = 0.0, "", False
         u = self.np_random.random()  # one draw per step, whatever happens
         if self.scene.robot_touches_table():
@@ -279,7 +285,7 @@ class RobotDockEnv(FramesCodes, gym.Env[Obs, np.int64]):
                 touched = scripted_reach(self.scene, perceived_target(self.scene, self._uv))
         terminated = event != ""
         self._done = terminated
-        return self._obs(), reward, terminated, False, self._info(event, touched)
+        return self._obs(), reward, terminated, False, self._info(event, d, touched)
 
     def render(self) -> NDArray[np.uint8] | None:
         """The third-person camera (240 x 320) beside the head camera (scaled to 240 x 240),

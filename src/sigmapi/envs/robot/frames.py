@@ -164,15 +164,14 @@ class Frames:
         the ball in view, and return the neck angles ``(2,)``.
 
         Rejection sampling: candidates are drawn in batches of 32 and the first one whose
-        projection of the ball lies in view is taken (the camera poses of the candidates from
-        :meth:`Scene.head_camera_poses`). A ConfigError if none of ``max_tries`` sees it.
+        projection of the ball lies in view is taken (:meth:`Scene.project_at_necks`). A
+        ConfigError if none of ``max_tries`` sees it.
         """
         lo, hi = self.scene.neck_range[:, 0], self.scene.neck_range[:, 1]
         p = self.scene.object_position()
         for _ in range(0, max_tries, 32):
             neck = lo + (hi - lo) * rng.random((32, 2))
-            seen = np.flatnonzero(self.in_view(self.scene.project_from(
-                *self.scene.head_camera_poses(neck), p)))  # fmt: skip
+            seen = np.flatnonzero(self.in_view(self.scene.project_at_necks(neck, p)))
             if seen.size:
                 self.scene.set_neck(*neck[seen[0]])
                 return neck[seen[0]]

@@ -25,7 +25,8 @@ LINK = 0.35
 _FOLD = np.deg2rad([0.0, -150.0])  # pitch, elbow: forearm folded back, hand behind the shoulder
 _LIFT = np.deg2rad([120.0, -150.0])  # upper arm raised forward, hand above the table's edge
 _ABOVE = 0.12  # metres above the target for the approach
-_PHASE_S = 0.4  # seconds per waypoint
+_PHASE_S = 0.3  # seconds per waypoint
+_TICK = 5  # physics steps per update of the arm's targets (and per look for a touch)
 
 
 def perceived_target(scene: Scene, uv: NDArray[np.float64]) -> NDArray[np.float64] | None:
@@ -66,8 +67,9 @@ def scripted_reach(scene: Scene, target: NDArray[np.float64] | None) -> bool:
     """Reach for the world point ``target`` in the physics; True if the hand touched the ball.
 
     The arm's actuators follow four waypoints (:data:`_PHASE_S` seconds each, the targets
-    interpolated linearly in joint space) while ``mj_step`` integrates everything: base and
-    neck hold their poses, the ball lies free on the table and can be pushed.
+    interpolated linearly in joint space, updated every :data:`_TICK` physics steps) while
+    ``mj_step`` integrates everything: base and neck hold their poses, the ball lies free on
+    the table and can be pushed.
     """
     if target is None:
         return False
@@ -80,16 +82,15 @@ def scripted_reach(scene: Scene, target: NDArray[np.float64] | None) -> bool:
     start = scene.arm_joints()
     yaw0 = start[0]
     waypoints = [np.array([yaw0, *_FOLD]), np.array([above[0], *_LIFT]), above, down]
-    steps = max(1, round(_PHASE_S / m.opt.timestep))
+    ticks = max(1, round(_PHASE_S / (_TICK * m.opt.timestep)))
     mujoco.mj_forward(m, d)
     q = start
     for goal in waypoints:
-        for i in range(1, steps + 1):
-            scene.set_arm_targets(q + (goal - q) * (i / steps))
-            mujoco.mj_step(m, d)
-            if i % 5 == 0 and scene.hand_touches_object():
+        for i in range(1, ticks + 1):
+            scene.set_arm_targets(q + (goal - q) * (i / ticks))
+            mujoco.mj_step(m, d, _TICK)
+            if scene.hand_touches_object():
                 return True
         q = goal
-    for _ in range(steps):  # hold the last waypoint: the hand settles onto the ball
-        mujoco.mj_step(m, d)
+    mujoco.mj_step(m, d, _TICK * ticks)  # hold the last waypoint: the hand settles on the ball
     return scene.hand_touches_object()

@@ -124,6 +124,7 @@ class Scene:
         self._obj_q = int(m.joint("object").qposadr[0])
         self._obj_v = int(m.joint("object").dofadr[0])
         self._act = {m.actuator(i).name: i for i in range(m.nu)}
+        self._arm_act = np.array([self._act[n] for n in _ARM])
         self.neck_range = np.array([m.joint("neck_pan").range, m.joint("neck_tilt").range])
         """Joint limits ``[[pan_lo, pan_hi], [tilt_lo, tilt_hi]]`` in radians."""
         self._torso = m.body("torso").id
@@ -134,9 +135,11 @@ class Scene:
         """Joint limits of the arm ``(3, 2)``, radians."""
         self._object_geom = m.geom("object").id
         self._hand_geom = m.geom("hand").id
-        self._robot_geoms = {m.geom(n).id for n in ("base", "torso")}
-        self._table_geoms = {m.geom(n).id for n in ("table_top", "leg_a", "leg_b", "leg_c",
-                             "leg_d")}  # fmt: skip
+        self._is_robot = np.zeros(m.ngeom, dtype=bool)
+        self._is_robot[[m.geom(n).id for n in ("base", "torso")]] = True
+        self._is_table = np.zeros(m.ngeom, dtype=bool)
+        self._is_table[[m.geom(n).id for n in ("table_top", "leg_a", "leg_b", "leg_c",
+                        "leg_d")]] = True  # fmt: skip
         self._chain = {
             "neck": _offset(m.body_pos[m.body("neck").id], m.body_quat[m.body("neck").id]),
             "head": _offset(m.body_pos[self._head], m.body_quat[self._head]),
@@ -181,8 +184,7 @@ class Scene:
 
     def set_arm_targets(self, q: NDArray[np.float64]) -> None:
         """Set the arm's position actuators' targets ``(yaw, pitch, elbow)`` (radians)."""
-        for name, value in zip(_ARM, q, strict=True):
-            self.data.ctrl[self._act[name]] = value
+        self.data.ctrl[self._arm_act] = q
 
     def shoulder_position(self) -> NDArray[np.float64]:
         """The shoulder joint's centre in the world ``(3,)``."""
@@ -228,41 +230,36 @@ class Scene:
         camera's frame and ``f = (H/2) / tan(fovy/2)``.
         """
         c, r = self.camera_pose()
-        pts = np.atleast_2d(np.asarray(points, dtype=np.float64))
-        return np.concatenate([self.project_from(c[None], r[None], p) for p in pts])
+        return self._pinhole((np.atleast_2d(np.asarray(points, dtype=np.float64)) - c) @ r)
 
-    def head_camera_poses(self, neck: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """The head camera's poses for neck angles ``(B, 2)`` (pan, tilt) with the torso where
-        it is now, without moving the neck: positions ``(B, 3)``, rotations ``(B, 3, 3)``.
+    def project_at_necks(self, neck: ArrayLike, point: ArrayLike) -> NDArray[np.float64]:
+        """Pixel coordinates ``(B, 2)`` of one world point ``(3,)`` in the head camera at neck
+        angles ``(B, 2)`` (the torso where it is now), without moving the neck.
 
         The model's kinematic chain (torso -> neck body -> pan -> head body -> tilt -> camera,
-        offsets and axes read from the compiled model) in NumPy, for many candidate gazes at
-        once; ``tests/test_robot.py`` checks it against MuJoCo's ``cam_xpos``/``cam_xmat``.
+        offsets and axes read from the compiled model) in NumPy, walked down from the point:
+        into the neck body's frame once, then per candidate back through the pan rotation, the
+        head's offset, the tilt rotation and the camera's offset (rotations of vectors, no
+        matrices built). ``tests/test_robot.py`` checks it against MuJoCo's camera pose.
         """
         q = np.atleast_2d(np.asarray(neck, dtype=np.float64))
         o, r = self.torso_frame()
-        pan = _axis_rotations(self._pan_axis, q[:, 0])
-        tilt = _axis_rotations(self._tilt_axis, q[:, 1])
-        r_neck = r @ self._chain["neck"][1]  # (3, 3)
-        r_pan = np.einsum("ij,bjk->bik", r_neck, pan)
-        r_head = np.einsum("bij,jk->bik", r_pan, self._chain["head"][1])
-        r_tilt = np.einsum("bij,bjk->bik", r_head, tilt)
-        p_head = o + r @ self._chain["neck"][0] + r_pan @ self._chain["head"][0]
-        pos = p_head + r_tilt @ self._chain["camera"][0]
-        return pos, np.einsum("bij,jk->bik", r_tilt, self._chain["camera"][1])
+        (n_pos, n_rot), (h_pos, h_rot), (c_pos, c_rot) = (
+            self._chain[k] for k in ("neck", "head", "camera")
+        )
+        a = ((np.asarray(point, dtype=np.float64) - o) @ r - n_pos) @ n_rot  # neck body (3,)
+        b = (_unrotate(self._pan_axis, q[:, 0], a) - h_pos) @ h_rot  # head body (B, 3)
+        pc = (_unrotate(self._tilt_axis, q[:, 1], b) - c_pos) @ c_rot  # camera (B, 3)
+        return self._pinhole(pc)
 
-    def project_from(
-        self, pos: NDArray[np.float64], rot: NDArray[np.float64], point: ArrayLike
-    ) -> NDArray[np.float64]:
-        """Pixel coordinates ``(B, 2)`` of one world point ``(3,)`` seen from camera poses
-        ``pos`` ``(B, 3)``, ``rot`` ``(B, 3, 3)`` (:meth:`head_camera_poses`); the pinhole of
-        :meth:`project`, NaN behind the camera."""
-        pc = np.einsum("bi,bij->bj", np.asarray(point, dtype=np.float64) - pos, rot)
-        depth = -pc[:, 2]
+    def _pinhole(self, pc: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Pixel coordinates ``(B, 2)`` of points ``(B, 3)`` in the camera's frame."""
+        depth = -pc[:, 2:]
         with np.errstate(divide="ignore", invalid="ignore"):
-            uv = np.stack([pc[:, 0] / depth, -pc[:, 1] / depth], axis=1) * self.focal
+            uv = pc[:, :2] * (self.focal / depth)
+        uv[:, 1] *= -1.0
         uv += 0.5 * self.head_size
-        uv[depth <= 0] = np.nan
+        uv[depth[:, 0] <= 0] = np.nan
         return uv
 
     def ray(self, uv: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -294,24 +291,23 @@ class Scene:
         self._renderers.clear()
 
     # ------------------------------------------------------------------ contacts
-    def contacts(self) -> set[tuple[int, int]]:
-        """The geom pairs in contact now (each pair sorted), from the last forward pass."""
-        n = self.data.ncon
-        g = np.sort(np.stack([self.data.contact.geom1[:n], self.data.contact.geom2[:n]]), axis=0)
-        return {(int(a), int(b)) for a, b in g.T}
-
     def robot_touches_table(self) -> bool:
         """Whether the base or torso is in contact with the table (a bump)."""
-        return any(
-            (a in self._robot_geoms and b in self._table_geoms)
-            or (b in self._robot_geoms and a in self._table_geoms)
-            for a, b in self.contacts()
-        )
+        n = self.data.ncon
+        if n == 0:
+            return False
+        g1, g2 = self.data.contact.geom1[:n], self.data.contact.geom2[:n]
+        robot, table = self._is_robot, self._is_table
+        return bool(np.any((robot[g1] & table[g2]) | (robot[g2] & table[g1])))
 
     def hand_touches_object(self) -> bool:
         """Whether the hand is in contact with the ball."""
-        pair = tuple(sorted((self._hand_geom, self._object_geom)))
-        return pair in self.contacts()
+        n = self.data.ncon
+        if n == 0:
+            return False
+        g1, g2 = self.data.contact.geom1[:n], self.data.contact.geom2[:n]
+        hand, ball = self._hand_geom, self._object_geom
+        return bool(np.any(((g1 == hand) & (g2 == ball)) | ((g1 == ball) & (g2 == hand))))
 
 
 def _offset(pos: ArrayLike, quat: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -321,11 +317,15 @@ def _offset(pos: ArrayLike, quat: ArrayLike) -> tuple[NDArray[np.float64], NDArr
     return np.array(pos, dtype=np.float64), mat.reshape(3, 3)
 
 
-def _axis_rotations(axis: NDArray[np.float64], angles: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Rotation matrices ``(B, 3, 3)`` about the unit ``axis`` by ``angles`` (Rodrigues)."""
+def _unrotate(
+    axis: NDArray[np.float64], angles: NDArray[np.float64], v: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """Vectors ``v`` (``(3,)`` or ``(B, 3)``) rotated about the unit ``axis`` by ``-angles``
+    ``(B,)`` (the inverse of a joint's rotation; Rodrigues on vectors), ``(B, 3)``."""
     k = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
-    s, c = np.sin(angles)[:, None, None], np.cos(angles)[:, None, None]
-    return np.eye(3) + s * k + (1.0 - c) * (k @ k)
+    s, c = np.sin(angles)[:, None], np.cos(angles)[:, None]
+    along = np.outer(1.0 - c[:, 0], axis) * (v @ axis)[..., None]
+    return v * c - (v @ k.T) * s + along  # k.T: v @ k.T is axis x v
 
 
 def blob_centroid(image: NDArray[Any]) -> NDArray[np.float64] | None:
