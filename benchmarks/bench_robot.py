@@ -5,6 +5,9 @@ Usage (from the repository root; needs ``pip install -e '.[robot]'``)::
     python benchmarks/bench_robot.py speed [--baseline-src OLD/src]   # ~2 min on 2 cores
     python benchmarks/bench_robot.py pixels                           # 1,000 scenes, ~10 s
     python benchmarks/bench_robot.py map                              # 15 maps, ~6 min
+    python benchmarks/bench_robot.py docking                          # the acceptance run
+    python benchmarks/bench_robot.py docking --quick                  # sigmapi robot --quick
+    python benchmarks/bench_robot.py docking --seeds 0,1,2 --tag tuning
 
 Each writes one JSON file in ``benchmarks/results/``:
 
@@ -13,9 +16,10 @@ Each writes one JSON file in ``benchmarks/results/``:
   cameras every step (``render_mode="rgb_array"``, ``env.render()``) and with the retina read
   from the rendered head camera (``retina="pixels"``), and the episode loop of the map's
   learner (``run_episodes`` on the map state, the agent learning). Wall and CPU seconds (the
-  machine is shared: CPU time is the steadier number), the median of ``--repeats`` runs, each
-  in a fresh process; with ``--baseline-src`` the same on another checkout (e.g. the commit
-  before a speed change), the code bases alternating, and the ratios.
+  machine is shared: CPU time is the steadier number), the median and the best of
+  ``--repeats`` runs, each in a fresh process; with ``--baseline-src`` the same on another
+  checkout (e.g. the commit before a speed change), the code bases alternating, and the
+  ratios.
 - ``robot-pixels.json``: the ball's retinal position from the rendered head camera (the red
   blob's centroid) against the camera's exact projection of its centre, over ``--scenes``
   random scenes (ball placed, head after a saccade): RMS, mean, 99th percentile and largest
@@ -24,6 +28,10 @@ Each writes one JSON file in ``benchmarks/results/``:
   ``learn_map``: 10,000 pairs, 40,000 iterations, 8x8 map) on ``--seeds`` (default 100-104,
   not the tuning seeds 0-2) at each ``--moved-share``, scored against the true body-centred
   direction with ``sigmapi evaluate``'s metrics (order R^2, fold score, ...).
+- ``robot-docking.json`` (``--quick``: ``robot-docking-quick.json``; ``--tag T``:
+  ``robot-docking-T.json``): ``sigmapi robot --json`` run as a user runs it (default seeds
+  100-104, none tuned on; ``--quick``: its own seed), its JSON, and its wall-clock and CPU
+  seconds (the command and its worker processes).
 """
 
 from __future__ import annotations
@@ -32,7 +40,9 @@ import argparse
 import json
 import resource
 import statistics
+import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 from typing import Any
@@ -160,7 +170,7 @@ def _speed(args: argparse.Namespace) -> dict[str, Any]:
     runs: dict[str, dict[str, list[dict[str, Any]]]] = {b: {m: [] for m in MODES} for b in bases}
     for r in range(args.repeats):
         for mode in MODES:
-            n = args.steps if mode != "pixels" else args.steps // 2
+            n = {"render": args.steps // 8, "pixels": args.steps // 3}.get(mode, args.steps)
             for name, src in bases.items():
                 out = run_child(__file__, ["speed", mode, str(n)], src)
                 runs[name][mode].append(out)
@@ -173,10 +183,13 @@ def _speed(args: argparse.Namespace) -> dict[str, Any]:
             steps = [o["steps"] for o in outs]
             cpu = [o["cpu_s"] for o in outs]
             wall = [o["wall_s"] for o in outs]
+            per_cpu = list(map(_ratio, steps, cpu))
             summary[name][mode] = {
                 "steps_per_s_wall": round(statistics.median(map(_ratio, steps, wall)), 1),
-                "steps_per_s_cpu": round(statistics.median(map(_ratio, steps, cpu)), 1),
-                "ms_per_step_cpu": round(1e3 / statistics.median(map(_ratio, steps, cpu)), 3),
+                "steps_per_s_cpu": round(statistics.median(per_cpu), 1),
+                "steps_per_s_cpu_best": round(max(per_cpu), 1),
+                "ms_per_step_cpu": round(1e3 / statistics.median(per_cpu), 3),
+                "ms_per_step_cpu_best": round(1e3 / max(per_cpu), 3),
                 "max_rss_mb": round(max(o["max_rss_mb"] for o in outs), 1),
             }
         this = summary[name]
@@ -188,8 +201,33 @@ def _speed(args: argparse.Namespace) -> dict[str, Any]:
         summary["speedup_over_baseline_cpu"] = {
             m: round(old[m]["ms_per_step_cpu"] / new[m]["ms_per_step_cpu"], 2) for m in MODES
         }
+        summary["speedup_over_baseline_cpu_best"] = {
+            m: round(old[m]["ms_per_step_cpu_best"] / new[m]["ms_per_step_cpu_best"], 2)
+            for m in MODES
+        }
         summary["baseline_commit"] = commit(bases["baseline"])
     return {"runs": runs, "summary": summary, "repeats": args.repeats, "steps": args.steps}
+
+
+def _docking(args: argparse.Namespace) -> dict[str, Any]:
+    exe = Path(sys.executable).with_name("sigmapi")
+    cmd = [str(exe), "robot", "--json", "--quiet"]
+    if args.quick:
+        cmd.append("--quick")
+    if args.seeds_given:
+        cmd += ["--seeds", *args.seeds.split(",")]
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    with tempfile.TemporaryDirectory() as out:
+        t0 = time.perf_counter()
+        proc = subprocess.run([*cmd, "--out", out], capture_output=True, text=True, check=False)
+        wall = time.perf_counter() - t0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    if proc.returncode != 0:
+        raise RuntimeError(f"{' '.join(cmd)} failed:\n{proc.stderr[-3000:]}")
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return {"sigmapi_command": " ".join(["sigmapi", *cmd[1:], "--out", "DIR"]),
+            "wall_s": round(wall, 1), "cpu_s": round(cpu, 1),
+            "result": json.loads(proc.stdout)}  # fmt: skip
 
 
 def main() -> None:
@@ -205,26 +243,36 @@ def main() -> None:
         print(json.dumps(out))
         return
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("what", choices=("speed", "pixels", "map"))
-    parser.add_argument("--repeats", type=int, default=3, help="speed: runs per case")
-    parser.add_argument("--steps", type=int, default=2000, help="speed: steps per run")
+    parser.add_argument("what", choices=("speed", "pixels", "map", "docking"))
+    parser.add_argument("--repeats", type=int, default=5, help="speed: runs per case")
+    parser.add_argument("--steps", type=int, default=3000,
+                        help="speed: steps a run (rendering: 1/8, pixels: 1/3)")  # fmt: skip
     parser.add_argument("--baseline-src", help="speed: another checkout's src/ to compare")
     parser.add_argument("--scenes", type=int, default=1000, help="pixels: random scenes")
-    parser.add_argument("--seeds", default="100,101,102,103,104", help="map: seeds")
+    parser.add_argument("--seeds", default=None, help="map, docking: seeds (default 100-104)")
+    parser.add_argument("--quick", action="store_true", help="docking: sigmapi robot --quick")
+    parser.add_argument("--tag", help="docking: a name for the result file")
     parser.add_argument("--moved-share", default="0,0.1,0.3", help="map: moved shares")
     args = parser.parse_args()
+    args.seeds_given = args.seeds is not None
+    args.seeds = args.seeds or "100,101,102,103,104"
     t0 = time.perf_counter()
     if args.what == "speed":
         result = _speed(args)
     elif args.what == "pixels":
         result = run_child(__file__, ["pixels", str(args.scenes), "0"], SRC)
-    else:
+    elif args.what == "map":
         result = run_child(__file__, ["map", args.seeds, args.moved_share], SRC)
+    else:
+        result = _docking(args)
     result["command"] = " ".join(["python benchmarks/bench_robot.py", *sys.argv[1:]])
     result["seconds"] = round(time.perf_counter() - t0, 1)
     result["commit"] = commit(SRC)
     result["machine"] = machine()
-    write_result(RESULTS / f"robot-{args.what}.json", result)
+    name = args.what
+    if args.what == "docking" and (args.quick or args.tag):
+        name += f"-{args.tag or 'quick'}"
+    write_result(RESULTS / f"robot-{name}.json", result)
 
 
 if __name__ == "__main__":

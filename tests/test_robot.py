@@ -247,3 +247,20 @@ def test_projection_at_many_necks_matches_mujoco(scene: Scene):
     for q, uv in zip(necks, fast, strict=True):
         scene.set_neck(*q)
         np.testing.assert_allclose(uv, scene.project(scene.object_position())[0], atol=1e-9)
+
+
+def test_every_start_can_dock_without_touching_the_table():
+    """The ball at the far end of its start range: the base poses that put it at the grasp
+    region's corners and centre, facing the table within 0.25 rad, clear the table."""
+    from sigmapi.envs.robot.env import _TABLE_EDGE, BALL_BEYOND_EDGE, RobotDockEnv
+
+    env = RobotDockEnv(grid=5)
+    ball = (_TABLE_EDGE + BALL_BEYOND_EDGE[1], 0.3, TABLE_HEIGHT + OBJECT_RADIUS)
+    r = env.goal_radius
+    for dz in ((0, 0), (-r, -r), (-r, r), (r, -r), (r, r)):
+        for yaw in (-0.25, 0.0, 0.25):
+            env.scene.pose(Pose(base=(0.0, 0.0, yaw), object=ball))
+            offset = env.frames.world_position(env.goal + np.array(dz)) - np.array(ball)
+            env.scene.pose(Pose(base=(-offset[0], -offset[1], yaw), object=ball))
+            np.testing.assert_allclose(env.z(), env.goal + np.array(dz), atol=1e-9)
+            assert not env.scene.robot_touches_table(), (dz, yaw)

@@ -45,7 +45,7 @@ from sigmapi.envs.robot.scene import OBJECT_RADIUS, TABLE_HEIGHT, Pose, Scene
 from sigmapi.envs.robot.views import RobotViews
 from sigmapi.errors import ConfigError
 
-__all__ = ["ACTIONS", "ENV_ID", "RobotDockEnv"]
+__all__ = ["ACTIONS", "BALL_BEYOND_EDGE", "ENV_ID", "RobotDockEnv"]
 
 ENV_ID = "sigmapi/RobotDock-v0"
 """The environment's Gymnasium id (registered by ``import sigmapi``, with its time limit)."""
@@ -54,6 +54,11 @@ ACTIONS = ("forward", "backward", "turn_left", "turn_right")
 """The base's moves, by action index (the authors' docking robot's four)."""
 
 _TABLE_EDGE = 0.15  # world x of the table's near edge (robot.xml)
+BALL_BEYOND_EDGE = (0.05, 0.22)
+"""How far beyond the table's near edge the ball lies at the start (metres, uniform): close
+enough that every base pose of the grasp region that faces the table (within 0.25 rad) clears
+the edge with the torso's box and the base's disc, so that every episode can dock; a ball
+further in is in the grasp region only from poses that touch the table."""
 
 
 class RobotDockEnv(FramesCodes, gym.Env[Obs, np.int64]):
@@ -241,7 +246,7 @@ class RobotDockEnv(FramesCodes, gym.Env[Obs, np.int64]):
             raise ConfigError(f"RobotDock takes no reset options, got {sorted(options)}")
         rng = self.np_random
         for _ in range(1000):
-            ball = np.array([_TABLE_EDGE + rng.uniform(0.12, 0.4), rng.uniform(-0.5, 0.5),
+            ball = np.array([_TABLE_EDGE + rng.uniform(*BALL_BEYOND_EDGE), rng.uniform(-0.5, 0.5),
                              TABLE_HEIGHT + OBJECT_RADIUS])  # fmt: skip
             z = rng.random(2)
             if self.in_goal(z):
