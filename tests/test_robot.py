@@ -264,3 +264,12 @@ def test_every_start_can_dock_without_touching_the_table():
             env.scene.pose(Pose(base=(-offset[0], -offset[1], yaw), object=ball))
             np.testing.assert_allclose(env.z(), env.goal + np.array(dz), atol=1e-9)
             assert not env.scene.robot_touches_table(), (dz, yaw)
+
+
+def test_render_takes_a_gif_file_name():
+    import sigmapi
+    from sigmapi.experiments.robot_config import RobotConfig
+
+    assert RobotConfig(render="episode.gif").render == "episode.gif"
+    with pytest.raises(sigmapi.ConfigError, match=r"render must be a file name ending in \.gif"):
+        RobotConfig(render="episode.mp4")

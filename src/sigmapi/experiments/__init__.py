@@ -8,6 +8,9 @@
 - :mod:`~sigmapi.experiments.reach`: the gaze-and-reach learners (``sigmapi reach``), its
   config and result in ``reach_config`` / ``reach_result``, its report section in
   ``reach_section``;
+- :mod:`~sigmapi.experiments.robot`: the simulated robot learns the map and docks on it
+  (``sigmapi robot``), its config, map, result and figures in ``robot_config``,
+  ``robot_map``, ``robot_result``, ``robot_plots``;
 - :mod:`~sigmapi.experiments.sweep`: parameter and seed sweeps (``sigmapi sweep``);
 - :mod:`~sigmapi.experiments.chain`: a chain of two maps (retina -> head -> body) against one;
 - :mod:`~sigmapi.experiments.compare`: the Sigma-Pi map beside the baselines.
@@ -27,12 +30,14 @@ from sigmapi.experiments.compare import CompareConfig, CompareResult, run_compar
 from sigmapi.experiments.reach import REACH, ReachExperiment
 from sigmapi.experiments.reproduce import REFERENCE, SECTIONS, paper_presets, reproduce
 from sigmapi.experiments.results import ReportContext, ReproduceOptions, ReproduceResult, Section
+from sigmapi.experiments.robot import ROBOT, RobotExperiment
 from sigmapi.experiments.sweep import SweepSpec, run_sweep
 
 __all__ = [
     "REACH",
     "REFERENCE",
     "REGISTRY",
+    "ROBOT",
     "SECTIONS",
     "CompareConfig",
     "CompareResult",
@@ -42,6 +47,7 @@ __all__ = [
     "ReproduceOptions",
     "ReproduceResult",
     "Result",
+    "RobotExperiment",
     "Section",
     "SweepSpec",
     "check_seeds",

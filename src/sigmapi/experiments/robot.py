@@ -12,8 +12,10 @@ the authors' docking model then learns on each state (:data:`~sigmapi.envs.STATE
 (:meth:`RobotConfig.state_env <sigmapi.experiments.robot_config.RobotConfig.state_env>`), and
 :func:`~sigmapi.agents.run_episodes`.
 
-Each (seed, state) is one job, the map state's job learning that seed's map first, so that an
-executor spreads the learners over its workers; the result does not depend on how they ran.
+Each (seed, state) is one job of the :class:`~sigmapi.executor.Executor`, the map state's job
+learning that seed's map first, so that the learners spread over the workers; the result does
+not depend on how they ran. ``sigmapi robot`` is generated from :data:`ROBOT` and
+:class:`~sigmapi.experiments.robot_config.RobotConfig` (the experiment registry).
 
 Examples
 --------
@@ -25,10 +27,12 @@ Examples
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import time
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -36,9 +40,11 @@ import numpy as np
 from sigmapi import _validate
 from sigmapi.agents import actor_critic_for, run_episodes
 from sigmapi.codes import PopulationCode
+from sigmapi.envs.robot.scene import mujoco_module
 from sigmapi.envs.robot.views import RobotViewBatch
-from sigmapi.executor import Outcome, run_jobs
+from sigmapi.executor import Executor
 from sigmapi.executor import job_memory as _som_job_memory
+from sigmapi.experiments.base import Experiment, check_seeds, register, run_all
 from sigmapi.experiments.robot_config import QUICK, RobotConfig
 from sigmapi.experiments.robot_map import (
     evaluation_pairs,
@@ -48,15 +54,9 @@ from sigmapi.experiments.robot_map import (
     unit_positions,
 )
 from sigmapi.experiments.robot_result import RobotResult
-from sigmapi.progress import counter
+from sigmapi.progress import Progress
 
-__all__ = ["INFO_KEYS", "QUICK", "ROBOT", "RobotExperiment", "job_memory", "run_with_progress"]
-
-Progress = Callable[[int, str], None]
-"""``progress(n, phase)``: ``n`` episodes just finished (0 while the map learns), and what runs."""
-Executor = Callable[[Callable[[Any], Any], Sequence[tuple[str, Any]]], Iterable[Outcome]]
-"""Runs ``fn`` on each ``(key, arg)`` job and yields an :class:`~sigmapi.executor.Outcome` per
-job, e.g. ``functools.partial(sigmapi.executor.run_jobs, workers=2)``."""
+__all__ = ["INFO_KEYS", "QUICK", "ROBOT", "RobotExperiment", "job_memory"]
 
 INFO_KEYS = ("docked", "event")
 """What the experiment keeps of each episode's last ``info`` besides ``is_success``."""
@@ -72,14 +72,26 @@ class _Job:
     seed: int
     state: str
     evaluation: tuple[RobotViewBatch, RobotViewBatch] | None
+    show: Progress | None = None
+    """A bar of this job's episodes (set only where the job runs in the caller's process)."""
 
 
 def _run_job(job: _Job) -> dict[str, Any]:
     """One learner on one state of one seed (the map's job learns and scores the map first)."""
+    if job.show is None:
+        return _learner(job, None)
+    tick, bar = job.show.counter(job.config.episodes, f"robot seed {job.seed} {job.state}", "ep")
+    with bar:
+        return _learner(job, tick)
+
+
+def _learner(job: _Job, tick: Callable[[int, str], None] | None) -> dict[str, Any]:
     cfg = job.config
     out: dict[str, Any] = {}
     model = None
     if job.state == "map":
+        if tick is not None:
+            tick(0, "learning the map")
         model = learn_map(cfg, _child(job.seed, 0))
         assert job.evaluation is not None
         cal, test = job.evaluation
@@ -89,7 +101,8 @@ def _run_job(job: _Job) -> dict[str, Any]:
     env = cfg.state_env(job.state, model)
     agent = actor_critic_for(env, cfg.agent(), seed=_child(job.seed, 2))
     starts = _child(job.seed, 1).integers(0, 2**31 - 1, size=cfg.episodes)
-    out["episodes"] = run_episodes(env, agent, starts, info_keys=INFO_KEYS)
+    done = None if tick is None else functools.partial(tick, 1, "docking")
+    out["episodes"] = run_episodes(env, agent, starts, on_episode=done, info_keys=INFO_KEYS)
     out["agent"] = agent
     env.close()
     return out
@@ -105,96 +118,70 @@ def job_memory(config: RobotConfig) -> int:
     return _som_job_memory(som, n_test=config.eval_pairs) + views
 
 
-def _seeds(seeds: Iterable[int]) -> tuple[int, ...]:
-    out = tuple(seeds)
-    if not out or len(set(out)) != len(out):
-        raise _validate.fail("seeds", "a non-empty list of distinct ints >= 0", list(out))
-    return tuple(_validate.integer("seeds", s, 0) for s in out)
-
-
-class RobotExperiment:
-    """Learn the map on the simulated robot, then dock on each state (``sigmapi robot``)."""
+class RobotExperiment(Experiment[RobotConfig]):
+    """A simulated robot (MuJoCo) records view pairs from its saccades and learns the
+    Sigma-Pi map; then an actor-critic docks on the map, the retina code, retina and gaze
+    codes and the true z (the upper bound), over seeds."""
 
     name = "robot"
     summary = "a simulated robot learns the map from its own saccades, then docks on it"
     config_type = RobotConfig
     quick = QUICK
-    default_seeds: tuple[int, ...] = (100, 101, 102, 103, 104)
+    seeds = (100, 101, 102, 103, 104)
     """The seeds of the acceptance run: none of them was tuned on (tuning used 0-2)."""
-    quick_seeds: tuple[int, ...] = (0,)
-    """The seed of ``--quick``: a tuning seed (a first look should not peek at the reported
+    quick_seeds = (0,)
+    """The seed of ``--quick``: a tuning seed (a first look does not peek at the reported
     ones)."""
+    default_out = "robot"
 
     def run(
         self,
         config: RobotConfig,
         *,
-        seeds: Iterable[int],
+        seeds: Sequence[int],
+        out: Path | None = None,
         executor: Executor | None = None,
         progress: Progress | None = None,
     ) -> RobotResult:
         """Learn the map and dock on every state of ``config.states`` for every seed.
 
-        ``progress(n, phase)`` is called with the episodes just finished (a job's whole run
-        when an ``executor`` runs the jobs, in parallel processes say; the result does not
-        depend on it). Returns a :class:`~sigmapi.experiments.robot_result.RobotResult`.
+        Each (seed, state) is one job of ``executor``; run one by one in this process, a job
+        shows a bar of its episodes. ``out`` is not used: the run writes nothing while it
+        runs. Returns a :class:`~sigmapi.experiments.robot_result.RobotResult`.
         """
         if not isinstance(config, RobotConfig):
             raise _validate.fail("config", "a RobotConfig", config)
-        seeds = _seeds(seeds)
+        seeds = check_seeds(seeds)
+        mujoco_module()  # before any work: says which extra to install
         t0 = time.perf_counter()
-        evaluation = evaluation_pairs(config) if "map" in config.states else None
+        evaluation = None
+        if "map" in config.states:
+            Progress.of(progress).note("robot: recording the evaluation views")
+            evaluation = evaluation_pairs(config)
         jobs = [(f"{seed}/{state}", _Job(config, seed, state, evaluation if state == "map"
                                           else None))
                 for seed in seeds for state in config.states]  # fmt: skip
-        outcomes: dict[str, dict[str, Any]] = {}
-        if executor is None:
-            for key, job in jobs:
-                if progress is not None:
-                    progress(0, f"seed {job.seed} {job.state}")
-                outcomes[key] = _run_job(job)
-                if progress is not None:
-                    progress(config.episodes, f"seed {job.seed} {job.state} done")
-        else:
-            for o in executor(_run_job, jobs):
-                if not o.ok:
-                    raise RuntimeError(f"robot job {o.key} failed: {o.error}")
-                outcomes[o.key] = o.value
-                if progress is not None:
-                    progress(config.episodes, f"{o.key} done")
+        values = run_all(
+            _run_job, jobs, executor=executor, per_job=job_memory(config), progress=progress,
+            desc="robot", verbose=lambda job: dataclasses.replace(job, show=progress),
+            describe=lambda key, _: f"seed {key}",
+        )  # fmt: skip
         res = RobotResult(config, seeds)
         for state in config.states:
-            eps = [outcomes[f"{seed}/{state}"]["episodes"] for seed in seeds]
+            eps = [values[f"{seed}/{state}"]["episodes"] for seed in seeds]
             res.success[state] = np.stack([e.success for e in eps])
             res.docked[state] = np.stack([e.info["docked"].astype(bool) for e in eps])
             res.steps[state] = np.stack([e.steps for e in eps])
         if "map" in config.states:
             for seed in seeds:
-                res.map_metrics.append(outcomes[f"{seed}/map"]["map_metrics"])
-                res.unit_z.append(outcomes[f"{seed}/map"]["unit_z"])
-            first = outcomes[f"{seeds[0]}/map"]
+                res.map_metrics.append(values[f"{seed}/map"]["map_metrics"])
+                res.unit_z.append(values[f"{seed}/map"]["unit_z"])
+            first = values[f"{seeds[0]}/map"]
             res.model, res.agent = first["model"], first["agent"]
         res.seconds = time.perf_counter() - t0
         return res
 
 
 ROBOT = RobotExperiment()
+register(ROBOT)
 """The robot experiment."""
-
-
-def run_with_progress(
-    config: RobotConfig,
-    seeds: Iterable[int],
-    disable: bool | None = None,
-    workers: int = 1,
-) -> RobotResult:
-    """:meth:`ROBOT.run <RobotExperiment.run>` with a progress bar on stderr (episodes, and the
-    current phase), the jobs in ``workers`` parallel processes."""
-    seeds = _seeds(seeds)
-    n_jobs = len(seeds) * len(config.states)
-    executor = None
-    if workers > 1 and n_jobs > 1:
-        executor = functools.partial(run_jobs, workers=min(workers, n_jobs))
-    progress, bar = counter(n_jobs * config.episodes, "robot", "ep", disable)
-    with bar:
-        return ROBOT.run(config, seeds=seeds, executor=executor, progress=progress)

@@ -73,6 +73,9 @@ class RobotConfig:
     """Inverse temperature of the softmax policy (the authors: 2)."""
     states: tuple[str, ...] = STATES
     """States compared: map, retina, retina_gaze, true_z."""
+    render: str | None = None
+    """Also write an animated GIF of one episode of the first seed's map learner (third-person
+    and head cameras) to this file."""
 
     def __post_init__(self) -> None:
         for name in ("grid", "map_pairs", "map_iterations", "eval_pairs", "episodes",
@@ -98,6 +101,8 @@ class RobotConfig:
             self, "feature_width", _validate.positive("feature_width", self.feature_width)
         )
         self.agent()  # checks the learner's fields
+        if self.render is not None and not str(self.render).lower().endswith(".gif"):
+            raise _validate.fail("render", "a file name ending in .gif", self.render)
 
     def agent(self) -> ActorCriticConfig:
         """The learner's settings."""

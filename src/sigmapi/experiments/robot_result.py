@@ -160,9 +160,13 @@ class RobotResult:
 
     def figure(self, out_dir: str | Path) -> list[Path]:
         """Write the figures into ``out_dir`` (:func:`~sigmapi.experiments.robot_plots.
-        robot_figures`: the map on the table, the learning curves, a film strip)."""
-        from sigmapi.experiments.robot_plots import robot_figures
+        robot_figures`: the map on the table, the learning curves, a film strip) and, with
+        ``config.render``, the filmed episode as an animated GIF at that path."""
+        from sigmapi.experiments.robot_plots import robot_figures, write_gif
 
         folder = Path(out_dir)
         folder.mkdir(parents=True, exist_ok=True)
-        return robot_figures(self, folder, self.film())
+        paths = robot_figures(self, folder, self.film())
+        if self.config.render is not None and self.film():
+            paths.append(write_gif(self.film(), Path(self.config.render)))
+        return paths

@@ -60,14 +60,16 @@ _ARM = ("shoulder_yaw", "shoulder_pitch", "elbow")
 
 def mujoco_module() -> ModuleType:
     """The ``mujoco`` package, imported on first use (after ``MUJOCO_GL=egl`` unless the
-    variable is set); an ImportError that names the extra to install when it is missing."""
+    variable is set); a ConfigError that names the extra to install when it is missing (as
+    the baselines' and Dask's extras do)."""
     os.environ.setdefault("MUJOCO_GL", "egl")
     try:
         import mujoco
     except ImportError as exc:
-        raise ImportError(
-            f"the simulated robot needs MuJoCo: pip install 'sigmapi[robot]' ({exc})"
-        ) from exc
+        raise ConfigError(
+            f"the simulated robot needs MuJoCo (not installed here: {exc}); "
+            "pip install 'sigmapi[robot]'"
+        ) from None
     return mujoco
 
 
