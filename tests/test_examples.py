@@ -14,8 +14,9 @@ import sigmapi
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = sorted((ROOT / "examples").glob("*.py"))
-NEEDS = {"compare_baselines.py": ("sklearn", "minisom")}
-FIGURES = {"compare_baselines.py": "sigma-pi", "noise.py": "caption: noise in every code"}
+NEEDS = {"compare_baselines.py": ("sklearn", "minisom"), "robot.py": ("mujoco",)}
+FIGURES = {"compare_baselines.py": "sigma-pi", "noise.py": "caption: noise in every code",
+           "robot.py": "docking on map"}  # fmt: skip
 """Examples that draw a figure (``--out``), and a line their output must hold."""
 
 
