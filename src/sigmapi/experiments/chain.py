@@ -79,7 +79,8 @@ CODES: tuple[str, ...] = get_args(Code)
 """What map A hands to map B: its normalised response, or a code of its winner's position."""
 
 TARGET_RATIO = 2.0
-"""Issue 13's acceptance: the chain's z error at most this many times the single map's."""
+"""The acceptance bound of the chain of frames: the chain's z error at most this many times
+the single map's."""
 
 DATA_KEY = 16
 """Child stream ``SeedSequence(seed, spawn_key=(DATA_KEY,))`` of the training triples; apart
