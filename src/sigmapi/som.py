@@ -390,6 +390,68 @@ class SigmaPiSOM(GridsMixin, CostMixin, ParamsMixin, PersistMixin, RefineMixin):
         self.t_ += x0.shape[0]
         self._weights_cache = None
 
+    def learn_gated(
+        self,
+        views: Views,
+        gates: ArrayLike,
+        *,
+        sigma: float | None = None,
+        eps: float | None = None,
+    ) -> SigmaPiSOM:
+        """Reward-gated iterations outside the schedule; returns ``self``.
+
+        Iteration ``t`` finds the winner of ``(x0[t], y0[t])`` and moves unit ``k`` towards
+        ``x1[t] y1[t]^T`` by ``eps gates[t, k] a_k`` (docs/algorithm.md, "Reward-gated
+        plasticity"; :func:`sigmapi.kernels.reference.train_gated_block`). The schedule's clock
+        ``t_`` does not move: these iterations come after (or between) its runs.
+
+        Parameters
+        ----------
+        views : (x0, y0, x1, y1)
+            Codes of shape ``(T, n_x)``, ``(T, n_y)``, ``(T, n_x)``, ``(T, n_y)``.
+        gates : array, shape (T, n_units)
+            Per iteration and unit, in ``[0, 1]`` (:func:`sigmapi.rules.gating.reward_gate`).
+        sigma, eps : float, optional
+            Neighbourhood width and learning rate (default: the schedule's at ``t_``).
+        """
+        self._check_fitted()
+        with self._lock:
+            data = fit_views(views, self.x_shape, self.y_shape, "learn_gated")
+            assert data is not None  # views is not None
+            n = data[0].shape[0]
+            g = np.asarray(gates, dtype=np.float64)
+            if g.shape != (n, self.n_units):
+                raise DataError(
+                    f"gates must have shape ({n}, {self.n_units}) (one row per view pair, one "
+                    f"column per unit), got {g.shape}; give one gate per unit and pair"
+                )
+            if not np.all(np.isfinite(g)) or g.min(initial=0.0) < 0 or g.max(initial=0.0) > 1:
+                raise DataError(
+                    f"gates must be finite numbers in [0, 1], got values in "
+                    f"[{g.min():.3g}, {g.max():.3g}]; clip them (0: no change, 1: the full "
+                    "update)"
+                )
+            kernel: Any = self._kernel
+            if not hasattr(kernel, "train_gated_block"):
+                raise ConfigError(
+                    f"backend {self.backend!r} has no gated update (train_gated_block); use "
+                    "backend 'reference' or 'fast'"
+                )
+            s = self.sigma_ if sigma is None else _validate.number("sigma", sigma, 0.0)
+            e = (
+                float(self.eps_at(self.t_))
+                if eps is None
+                else _validate.number("eps", eps, 0.0, 1.0, fix="a learning rate, e.g. 0.01")
+            )
+            c = self.config
+            kernel.train_gated_block(
+                self._state, *data, np.full(n, s), np.full(n, e), g,
+                map_shape=self.map_shape, winner_rule=self.winner_rule_, soft_cut=c.soft_cut,
+                map_periodic=c.map_periodic,
+            )  # fmt: skip
+            self._weights_cache = None
+        return self
+
     # ------------------------------------------------------------------ using the map
     def respond(self, x: ArrayLike, y: ArrayLike) -> NDArray[np.float64]:
         """Activations ``h[b, k] = x_b^T W_k y_b`` of every unit; ``(B, n_units)``.

@@ -1,4 +1,4 @@
-# Over 400 lines: one kernel (its compiled helpers, two training drivers, public functions).
+# Over 400 lines: one kernel (its compiled helpers, three training drivers, public functions).
 """Fast CPU kernel: numba, sparse codes, lazy decay, parallel over map units.
 
 Computes the same learning iteration as :mod:`sigmapi.kernels.reference` (the definition),
@@ -82,6 +82,7 @@ __all__ = [
     "sqnorms",
     "supports",
     "train_block",
+    "train_gated_block",
     "winners",
     "winners_of",
 ]
@@ -460,6 +461,50 @@ def _train(
                         pi1, pv1, n1, pi0, pv0, n0, more, track, h, gain, acc, ahead)  # fmt: skip
 
 
+@njit(cache=True, parallel=True)
+def _train_gated(
+    raw, scale, sqnorm, x0, y0, x1, y1, sigmas, eps, gates, dims, strides, map_periodic, rule,
+    cut, tol, out, track, threads, ahead,
+):  # fmt: skip
+    """:func:`_train` with the neighbourhood of iteration ``t`` scaled by ``gates[t]`` per unit
+    (reward-gated plasticity). Truncation keeps :func:`_train`'s threshold, ``tol`` times the
+    ungated winner's ``eps a``; a gated unit below it gets only its (exact) decay."""
+    k_units = raw.shape[1]
+    jb, pi0, pv0, pi1, pv1, h, ea, gain, acc, t1, t2 = _buffers(k_units, raw.shape[0], y0.shape[1])
+    n_chunks = (k_units + CHUNK - 1) // CHUNK
+    n_iter = x0.shape[0]
+    if n_iter == 0:
+        return
+    n0 = _pairs(x0[0], y0[0], tol, jb, pi0, pv0)
+    if threads:
+        for c in prange(n_chunks):
+            _unit_chunk(raw, scale, sqnorm, c * CHUNK, min(k_units, (c + 1) * CHUNK), ea, 1.0,
+                        0, 0, pi1, pv1, 0, pi0, pv0, n0, True, track, h, gain, acc,
+                        ahead)  # fmt: skip
+    else:
+        _unit_chunk(raw, scale, sqnorm, 0, k_units, ea, 1.0, 0, 0,
+                    pi1, pv1, 0, pi0, pv0, n0, True, track, h, gain, acc, ahead)  # fmt: skip
+    for t in range(n_iter):
+        w = _winner(h, scale, sqnorm, rule, sigmas[t], cut, dims, strides, map_periodic, t1, t2)
+        out[t] = w
+        lo, hi = _neighbourhood(w, sigmas[t], eps[t], tol, dims, strides, map_periodic, ea)
+        thr = tol * ea[w]
+        for k in range(k_units):
+            ea[k] = ea[k] * gates[t, k]
+        n1 = _pairs(x1[t], y1[t], tol, jb, pi1, pv1)
+        more = t + 1 < n_iter
+        if more:
+            n0 = _pairs(x0[t + 1], y0[t + 1], tol, jb, pi0, pv0)
+        if threads:
+            for c in prange(n_chunks):
+                _unit_chunk(raw, scale, sqnorm, c * CHUNK, min(k_units, (c + 1) * CHUNK), ea,
+                            thr, lo, hi, pi1, pv1, n1, pi0, pv0, n0, more, track, h, gain,
+                            acc, ahead)  # fmt: skip
+        else:
+            _unit_chunk(raw, scale, sqnorm, 0, k_units, ea, thr, lo, hi,
+                        pi1, pv1, n1, pi0, pv0, n0, more, track, h, gain, acc, ahead)  # fmt: skip
+
+
 # ---------------------------------------------------------------------------- public interface
 
 
@@ -643,6 +688,53 @@ def train_block(
     driver: Any = _train  # a numba dispatcher (its stubs do not know the signature)
     driver(state.raw, state.scale, state.sqnorm, *xs, sg, ep, dims, strides, bool(map_periodic),
            code, int(soft_cut), state.tol, out, track, bool(parallel),
+           _ahead(state, TRAIN_PREFETCH_AHEAD))  # fmt: skip
+    return out
+
+
+def train_gated_block(
+    state: FastState,
+    x0: NDArray[np.floating],
+    y0: NDArray[np.floating],
+    x1: NDArray[np.floating],
+    y1: NDArray[np.floating],
+    sigmas: NDArray[np.floating],
+    eps: NDArray[np.floating],
+    gates: NDArray[np.floating],
+    *,
+    map_shape: tuple[int, ...],
+    winner_rule: WinnerRule | str,
+    soft_cut: int,
+    map_periodic: bool = False,
+) -> NDArray[np.int64]:
+    """:func:`train_block` with the gates ``(T, K)`` of
+    :func:`sigmapi.kernels.reference.train_gated_block` (reward-gated plasticity): iteration
+    ``t`` updates unit ``k`` with ``eps[t] gates[t, k] a_k``. On one thread (a step of a task
+    is one iteration: too little work to share). Returns the winners ``(T,)``."""
+    k_units, nx, ny = state.shape
+    dims, strides = _grid(tuple(map_shape), k_units)
+    rule, code = _rule_code(winner_rule, "winner_rule")
+    xs = [
+        _codes(a, n, nm)
+        for a, n, nm in ((x0, nx, "x0"), (y0, ny, "y0"), (x1, nx, "x1"), (y1, ny, "y1"))
+    ]
+    n_iter = xs[0].shape[0]
+    sg = np.ascontiguousarray(sigmas, dtype=np.float64)
+    ep = np.ascontiguousarray(eps, dtype=np.float64)
+    gt = np.ascontiguousarray(gates, dtype=np.float64)
+    if any(a.shape[0] != n_iter for a in xs) or sg.shape != (n_iter,) or ep.shape != (n_iter,):
+        raise ValueError("x0, y0, x1, y1, sigmas and eps must have the same length")
+    if gt.shape != (n_iter, k_units):
+        raise ValueError(f"gates must have shape ({n_iter}, {k_units}), got {gt.shape}")
+    out = np.empty(n_iter, dtype=np.int64)
+    track = rule.needs_norms
+    if track:
+        state.refresh_norms()
+    elif n_iter > 0:
+        state.norms_valid = False
+    driver: Any = _train_gated  # a numba dispatcher
+    driver(state.raw, state.scale, state.sqnorm, *xs, sg, ep, gt, dims, strides,
+           bool(map_periodic), code, int(soft_cut), state.tol, out, track, False,
            _ahead(state, TRAIN_PREFETCH_AHEAD))  # fmt: skip
     return out
 

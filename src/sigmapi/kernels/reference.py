@@ -50,6 +50,7 @@ __all__ = [
     "sqnorms",
     "supports",
     "train_block",
+    "train_gated_block",
     "winners",
     "winners_of",
 ]
@@ -203,6 +204,42 @@ def train_block(
         k = winners(W, h, map_shape, rule, float(sigmas[t]), soft_cut, map_periodic)
         a = neighbourhood(k, map_shape, float(sigmas[t]), map_periodic)[0]
         KOHONEN.update(W, a, x1[t], y1[t], float(eps[t]))
+        out[t] = k[0]
+    return out
+
+
+def train_gated_block(
+    W: Array,
+    x0: Array,
+    y0: Array,
+    x1: Array,
+    y1: Array,
+    sigmas: Array,
+    eps: Array,
+    gates: Array,
+    *,
+    map_shape: tuple[int, ...],
+    winner_rule: WinnerRule | str,
+    soft_cut: int,
+    map_periodic: bool = False,
+) -> NDArray[np.int64]:
+    """:func:`train_block` with a gate per iteration and unit (reward-gated plasticity,
+    :mod:`sigmapi.rules.gating`): iteration ``t`` learns with the neighbourhood
+    ``a_k * gates[t, k]``, so ``w_k += eps[t] gates[t, k] a_k (x1_i y1_j - w_k)``.
+
+    ``gates`` ``(T, K)`` in ``[0, 1]``: 0 leaves unit ``k`` as it was, 1 is the ungated rule.
+    The winner is found on the weights as they are before iteration ``t``, as in
+    :func:`train_block`. Returns the winners ``(T,)``.
+    """
+    rule = rules.winner_rule(winner_rule, "winner_rule")
+    g = np.asarray(gates, dtype=np.float64)
+    t_total = x0.shape[0]
+    out = np.empty(t_total, dtype=np.int64)
+    for t in range(t_total):
+        h = activation(W, x0[t : t + 1], y0[t : t + 1])
+        k = winners(W, h, map_shape, rule, float(sigmas[t]), soft_cut, map_periodic)
+        a = neighbourhood(k, map_shape, float(sigmas[t]), map_periodic)[0]
+        KOHONEN.update(W, a * g[t], x1[t], y1[t], float(eps[t]))
         out[t] = k[0]
     return out
 
