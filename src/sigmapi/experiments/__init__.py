@@ -11,6 +11,9 @@
 - :mod:`~sigmapi.experiments.robot`: the simulated robot learns the map and docks on it
   (``sigmapi robot``), its config, map, result and figures in ``robot_config``,
   ``robot_map``, ``robot_result``, ``robot_plots``;
+- :mod:`~sigmapi.experiments.reward`: a map whose plasticity is gated by reward against the
+  frozen map and a shuffled-reward control (``sigmapi reward``), its config, result and
+  figure in ``reward_config``, ``reward_result``, ``reward_plots``;
 - :mod:`~sigmapi.experiments.sweep`: parameter and seed sweeps (``sigmapi sweep``);
 - :mod:`~sigmapi.experiments.chain`: a chain of two maps (retina -> head -> body) against one;
 - :mod:`~sigmapi.experiments.compare`: the Sigma-Pi map beside the baselines.
@@ -30,6 +33,7 @@ from sigmapi.experiments.compare import CompareConfig, CompareResult, run_compar
 from sigmapi.experiments.reach import REACH, ReachExperiment
 from sigmapi.experiments.reproduce import REFERENCE, SECTIONS, paper_presets, reproduce
 from sigmapi.experiments.results import ReportContext, ReproduceOptions, ReproduceResult, Section
+from sigmapi.experiments.reward import REWARD, RewardExperiment
 from sigmapi.experiments.robot import ROBOT, RobotExperiment
 from sigmapi.experiments.sweep import SweepSpec, run_sweep
 
@@ -37,6 +41,7 @@ __all__ = [
     "REACH",
     "REFERENCE",
     "REGISTRY",
+    "REWARD",
     "ROBOT",
     "SECTIONS",
     "CompareConfig",
@@ -47,6 +52,7 @@ __all__ = [
     "ReproduceOptions",
     "ReproduceResult",
     "Result",
+    "RewardExperiment",
     "RobotExperiment",
     "Section",
     "SweepSpec",

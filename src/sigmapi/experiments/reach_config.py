@@ -28,13 +28,66 @@ from sigmapi.config import BACKEND_NAMES, SOMConfig, list_presets, load_preset
 from sigmapi.envs import FEATURES, STATES, GazeReachConfig, GazeReachEnv
 from sigmapi.errors import ConfigError
 
-__all__ = ["SMALL_MAP", "MapConfig", "ReachConfig", "ReachRunConfig", "default_map_shape"]
+__all__ = [
+    "SMALL_MAP",
+    "MapConfig",
+    "ReachConfig",
+    "ReachRunConfig",
+    "check_parts",
+    "default_map_shape",
+    "parts_dict",
+    "replaced_parts",
+]
 
 
 def default_map_shape(dim: Any) -> tuple[int, ...]:
     """The map of a ``dim``-D task when none is given: 15x15 in 2-D (paper-2d), 12 units in
     1-D."""
     return (15, 15) if dim == 2 else (12,)
+
+
+def check_parts(config: Any, parts: dict[str, type]) -> None:
+    """Each part of a config of parts (``env``, ``map``, ...) is of its class, and the map has
+    an axis per dimension of the world's task (a ConfigError naming the first that is not)."""
+    for name, cls in parts.items():
+        if not isinstance(getattr(config, name), cls):
+            raise _validate.fail(name, f"a {cls.__name__}", getattr(config, name))
+    dim, shape = config.env.dim, config.map.map_shape
+    if len(shape) != dim:
+        raise ConfigError(
+            f"map_shape must have {dim} axes for a task of dim {dim}, got "
+            f"{'x'.join(map(str, shape))}; e.g. map_shape {default_map_shape(dim)}"
+        )
+
+
+def replaced_parts(
+    config: Any, parts: dict[str, type], changes: dict[str, Any], kind: str
+) -> dict[str, Any]:
+    """The parts of ``config`` with ``changes`` (fields of any part, by name); an unknown
+    field is a ConfigError that lists the valid ones (``kind``: "reach", "reward", ...)."""
+    owner = {f.name: part for part, cls in parts.items() for f in dataclasses.fields(cls)}
+    bad = sorted(set(changes) - set(owner))
+    if bad:
+        raise ConfigError(
+            f"unknown {kind} config field {bad[0]!r}; valid: {', '.join(sorted(owner))}"
+        )
+    return {
+        part: dataclasses.replace(
+            getattr(config, part), **{k: v for k, v in changes.items() if owner[k] == part}
+        )
+        for part in parts
+    }
+
+
+def parts_dict(config: Any, parts: dict[str, type]) -> dict[str, dict[str, Any]]:
+    """The parts of ``config`` as JSON-able tables (tuples as lists)."""
+    return {
+        part: {
+            k: (list(v) if isinstance(v, tuple) else v)
+            for k, v in dataclasses.asdict(getattr(config, part)).items()
+        }
+        for part in parts
+    }
 
 
 @dataclass(frozen=True)
@@ -155,43 +208,17 @@ class ReachConfig:
     """Each part's name and class."""
 
     def __post_init__(self) -> None:
-        for name, cls in self.PARTS.items():
-            if not isinstance(getattr(self, name), cls):
-                raise _validate.fail(name, f"a {cls.__name__}", getattr(self, name))
-        dim, shape = self.env.dim, self.map.map_shape
-        if len(shape) != dim:
-            raise ConfigError(
-                f"map_shape must have {dim} axes for a task of dim {dim}, got "
-                f"{'x'.join(map(str, shape))}; e.g. map_shape {default_map_shape(dim)}"
-            )
+        check_parts(self, self.PARTS)
 
     def replace(self, **changes: Any) -> ReachConfig:
         """A copy with ``changes``, fields of any part by name (``grid=7, episodes=150``)."""
-        owner = {f.name: part for part, cls in self.PARTS.items() for f in dataclasses.fields(cls)}
-        bad = sorted(set(changes) - set(owner))
-        if bad:
-            raise ConfigError(
-                f"unknown reach config field {bad[0]!r}; valid: {', '.join(sorted(owner))}"
-            )
         if "dim" in changes and "map_shape" not in changes:  # the default map follows the task
             changes = {**changes, "map_shape": default_map_shape(changes["dim"])}
-        parts = {
-            part: dataclasses.replace(getattr(self, part), **{
-                k: v for k, v in changes.items() if owner[k] == part
-            })
-            for part in self.PARTS
-        }  # fmt: skip
-        return ReachConfig(**parts)
+        return ReachConfig(**replaced_parts(self, self.PARTS, changes, "reach"))
 
     def to_dict(self) -> dict[str, dict[str, Any]]:
         """The parts as JSON-able tables (tuples as lists): ``{"env": {...}, "map": ...}``."""
-        return {
-            part: {
-                k: (list(v) if isinstance(v, tuple) else v)
-                for k, v in dataclasses.asdict(getattr(self, part)).items()
-            }
-            for part in self.PARTS
-        }
+        return parts_dict(self, self.PARTS)
 
     def som_config(self, seed: int) -> SOMConfig:
         """The config of the map of seed ``seed``, on the world's codes

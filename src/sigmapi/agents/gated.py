@@ -1,0 +1,143 @@
+"""Episodes in which the map keeps learning, its plasticity gated by reward
+(docs/algorithm.md, "Reward-gated plasticity").
+
+The loop of :func:`~sigmapi.agents.run_episodes`, with one addition after every step: the
+map learns the step's view pair, each unit ``k`` with the gate ``g_k = f(delta) b_k``
+(:func:`sigmapi.rules.gating.reward_gate`: the critic's TD error ``delta`` of the step and
+the chosen action's actor weights). The pair is the view the step started from (it finds the
+winner) and a second fixation of the same object while the body is still (it is learned), the
+two-view rule of the map's unsupervised training; the world shows the second fixation
+(:meth:`~sigmapi.envs.PlacedViewSource.views_of` of the step's object), the learner never reads
+``z``. The state the actor-critic sees is the map's reading at each step
+(:class:`~sigmapi.envs.MapObservation`), so it reads the map as it changes.
+
+``surprises``: a sequence of global factors to use instead of the step's own ``f(delta)``
+(step ``t`` of the run takes ``surprises[t % len]``): the shuffled-reward control, the same
+factors in another order, uncoupled from what happens.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Any, cast
+
+import gymnasium as gym
+import numpy as np
+from numpy.typing import NDArray
+
+from sigmapi import _validate
+from sigmapi.agents.actor_critic import ActorCritic
+from sigmapi.agents.episodes import Episodes, discrete_actions
+from sigmapi.envs import MapObservation, PlacedViewSource
+from sigmapi.envs.protocols import Obs
+from sigmapi.errors import ConfigError
+from sigmapi.rules.gating import action_feedback, surprise
+
+__all__ = ["VIEWS", "GatedEpisodes", "Gating", "run_gated_episodes"]
+
+VIEWS = ("start", "next")
+"""Which state of a step the map learns (:attr:`Gating.view`)."""
+
+
+@dataclass(frozen=True)
+class Gating:
+    """How the map learns during the episodes: the gate's parts and the update's size."""
+
+    surprise: str = "positive"
+    """Global factor of the TD error (:data:`sigmapi.rules.gating.SURPRISE`)."""
+    feedback: str = "action"
+    """Per-unit feedback (:data:`sigmapi.rules.gating.FEEDBACK`)."""
+    scale: float = 1.0
+    """TD error that opens the gate fully."""
+    eps: float = 0.05
+    """Learning rate of the gated update."""
+    sigma: float = 1.0
+    """Neighbourhood width of the gated update, in map units."""
+    view: str = "start"
+    """The view that learns: "start" (the state the step started from, whose TD error and
+    action the gate holds) or "next" (the state the step led to: the goal's own view on the
+    rewarded step; an object that left the workspace is not learned)."""
+
+    def __post_init__(self) -> None:
+        _validate.choice("view", self.view, VIEWS)
+
+
+@dataclass(frozen=True)
+class GatedEpisodes:
+    """:class:`~sigmapi.agents.Episodes` of the run and the global factor ``f(delta)`` of
+    each of its steps, in order (``surprises``), and how many steps changed the map."""
+
+    episodes: Episodes
+    surprises: NDArray[np.float64]
+    updates: int
+
+
+def run_gated_episodes(
+    env: MapObservation,
+    agent: ActorCritic,
+    starts: Sequence[int] | NDArray[np.int64],
+    gating: Gating,
+    rng: np.random.Generator,
+    surprises: NDArray[np.float64] | None = None,
+    on_episode: Callable[[], None] | None = None,
+) -> GatedEpisodes:
+    """Learn over one episode per entry of ``starts``, the map learning as it is gated.
+
+    ``env``: the world read through its map (:class:`~sigmapi.envs.MapObservation`; its
+    ``model`` is changed in place). ``rng``: the second fixations. ``surprises``: the
+    shuffled-reward control's factors (see the module's text), else None.
+    """
+    if not isinstance(env, MapObservation):
+        raise ConfigError(f"the gated map learns under a MapObservation, got {type(env).__name__}")
+    world = env.unwrapped
+    if not isinstance(world, PlacedViewSource):
+        raise ConfigError(
+            f"the gated map needs a world that shows an object from a second fixation "
+            f"(views_of), got {type(world).__name__}"
+        )
+    if surprises is not None and len(surprises) == 0:
+        raise ConfigError("surprises must hold at least one factor, got none")
+    model = env.model
+    inner = cast(gym.Env[Obs, Any], env.env)
+    _, first = discrete_actions(env.action_space)
+    n = len(starts)
+    success = np.zeros(n, dtype=bool)
+    failed = np.zeros(n, dtype=bool)
+    steps = np.zeros(n, dtype=np.int64)
+    seen: list[float] = []
+    updates = 0
+    for ep in range(n):
+        obs, info = inner.reset(seed=int(starts[ep]))
+        phi = env.observation(obs)
+        t = 0
+        while True:
+            a = agent.act(phi)
+            obs2, r, terminated, truncated, info2 = inner.step(first + a)
+            phi2 = env.observation(obs2)
+            delta = agent.update(phi, a, float(r), phi2, terminated)
+            f = float(surprise(delta, gating.surprise, gating.scale))
+            seen.append(f)
+            if surprises is not None:
+                f = float(surprises[(len(seen) - 1) % len(surprises)])
+            gate = f * action_feedback(agent.w_[a], gating.feedback)
+            seen_obs, seen_z = (obs, info["z"]) if gating.view == "start" else (obs2, info2["z"])
+            z = np.asarray(seen_z, dtype=np.float64)[None, :]
+            if gate.max(initial=0.0) > 0.0 and np.all((z >= 0.0) & (z <= 1.0)):
+                x1, y1 = world.views_of(z, rng)
+                x0 = np.asarray(seen_obs["retina"], dtype=np.float64)[None, :]
+                y0 = np.asarray(seen_obs["gaze"], dtype=np.float64)[None, :]
+                model.learn_gated((x0, y0, x1, y1), gate[None, :], sigma=gating.sigma,
+                                  eps=gating.eps)  # fmt: skip
+                phi2 = env.observation(obs2)  # the next state as the changed map reads it
+                updates += 1
+            phi, obs, info = phi2, obs2, info2
+            t += 1
+            if terminated or truncated:
+                break
+        success[ep] = bool(info["is_success"])
+        failed[ep] = terminated and not success[ep]
+        steps[ep] = t
+        if on_episode is not None:
+            on_episode()
+    return GatedEpisodes(Episodes(success, failed, steps), np.asarray(seen), updates)

@@ -1,0 +1,243 @@
+"""The reward experiment: does a map whose plasticity is gated by reward come to serve the task?
+
+:data:`REWARD` (a :class:`RewardExperiment`) runs a
+:class:`~sigmapi.experiments.reward_config.RewardConfig` on a list of seeds and returns a
+:class:`~sigmapi.experiments.reward_result.RewardResult`. Per seed, one map is learned
+without a teacher in the gaze-and-reach world (as the reach experiment's), and the same
+actor-critic learns to reach on three copies of it (``methods``):
+
+- ``frozen``: the map as it was learned (the reach experiment's map state);
+- ``gated``: the map keeps learning during the episodes, each step's Kohonen update of unit
+  ``k`` gated by the TD error and the chosen action's feedback onto ``k``
+  (:func:`~sigmapi.agents.gated.run_gated_episodes`; docs/algorithm.md, "Reward-gated
+  plasticity");
+- ``shuffled``: the control: the same loop, with the gated run's global factors ``f(delta)``
+  replayed in a random order, so the gates have the same sizes but no relation to the task.
+
+Seed ``s`` of a run is child ``s`` of ``SeedSequence(config.run.seed)``; its child 0 seeds
+the map, child 1 the episodes' starts (the same for every method), child 2 the learner's action
+choices (the same stream for every method), child 3 the test objects that score the maps,
+child 4 the shuffle, child 5 the second fixations of the gated updates.
+
+Scores of each map after its episodes (:func:`map_scores`): the magnification near the goal
+(units whose preferred z lies within ``near_radius`` of the goal, per unit area of z, over the
+used units per unit area of the whole workspace), and view consistency and order R^2 on objects
+away from the goal (the map's quality where reward does not shape it).
+
+Examples
+--------
+>>> cfg = RewardConfig().replace(grid=5, map_shape=(5, 5), iterations=400, episodes=8,
+...                              block=4, final_episodes=4, n_test=200)
+>>> res = REWARD.run(cfg, seeds=[0])
+>>> [m["name"] for m in res.to_dict()["methods"]]
+['frozen', 'gated', 'shuffled']
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import functools
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from sigmapi import _validate
+from sigmapi.agents import actor_critic_for, run_episodes, run_gated_episodes
+from sigmapi.codes import grid_coordinates
+from sigmapi.envs import GazeReachEnv, MapObservation, learn_map_in_env
+from sigmapi.executor import Executor, job_memory
+from sigmapi.experiments.base import Experiment, check_seeds, register, run_all
+from sigmapi.experiments.reward_config import RewardConfig
+from sigmapi.experiments.reward_result import RewardResult
+from sigmapi.metrics import winner_metrics
+from sigmapi.progress import Progress
+from sigmapi.som import SigmaPiSOM
+
+__all__ = ["REWARD", "Probes", "RewardExperiment", "map_scores", "preferred_z", "probe_objects"]
+
+Tick = Callable[[int, str], None]
+
+
+def _child(ss: np.random.SeedSequence, k: int) -> np.random.SeedSequence:
+    return np.random.SeedSequence(ss.entropy, spawn_key=(*ss.spawn_key, k))
+
+
+def _rng(ss: np.random.SeedSequence, k: int) -> np.random.Generator:
+    return np.random.default_rng(_child(ss, k))
+
+
+@dataclass(frozen=True)
+class Probes:
+    """Objects at random ``z`` ``(N, d)`` and two views of each (``x0, y0``, ``x1, y1``)."""
+
+    z: NDArray[np.float64]
+    views: tuple[NDArray[np.float64], ...]
+
+
+def probe_objects(world: GazeReachEnv, n: int, rng: np.random.Generator) -> Probes:
+    """``n`` objects uniform in the workspace, each seen from two random fixations."""
+    z = rng.random((n, world.z_dim))
+    x0, y0 = world.views_of(z, rng)
+    x1, y1 = world.views_of(z, rng)
+    return Probes(z, (x0, y0, x1, y1))
+
+
+def preferred_z(model: SigmaPiSOM, objects: Probes) -> NDArray[np.float64]:
+    """Each unit's preferred z ``(n_units, d)``: the mean z of the test objects whose first
+    view it wins; NaN for a unit that wins none."""
+    w = model.winner(objects.views[0], objects.views[1])
+    counts = np.bincount(w, minlength=model.n_units).astype(np.float64)
+    sums = np.zeros((model.n_units, objects.z.shape[1]))
+    np.add.at(sums, w, objects.z)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(counts[:, None] > 0, sums / counts[:, None], np.nan)
+
+
+def map_scores(
+    model: SigmaPiSOM, objects: Probes, goal: NDArray[np.float64], near_radius: float
+) -> dict[str, float]:
+    """Magnification near the goal and the map's quality away from it.
+
+    ``magnification``: (units whose :func:`preferred_z` lies in the box ``|z - goal|_inf <=
+    near_radius``, over the box's area inside the workspace) / (units that win anything, over
+    the workspace's area 1). 1 is a map that spends its units evenly; the area is that of the
+    box clipped to ``[0, 1]^d``. ``units_near``: the count. ``view_consistency_away`` and
+    ``order_r2_away``: :func:`~sigmapi.metrics.winner_metrics` on the objects outside the box
+    (calibration on half of them, scores on the other half; NaN with fewer than 4 there).
+    """
+    pz = preferred_z(model, objects)
+    used = np.all(np.isfinite(pz), axis=1)
+    near_units = used & np.all(np.abs(np.nan_to_num(pz) - goal) <= near_radius, axis=1)
+    area = float(np.prod(np.minimum(goal + near_radius, 1.0) - np.maximum(goal - near_radius, 0)))
+    n_used = int(used.sum())
+    mag = (near_units.sum() / area) / n_used if n_used else float("nan")
+    away = np.any(np.abs(objects.z - goal) > near_radius, axis=1)
+    m = {"view_consistency": float("nan"), "order_r2": float("nan")}
+    if away.sum() >= 4:  # none away when the box covers the workspace
+        z = objects.z[away]
+        x0, y0, x1, y1 = (v[away] for v in objects.views)
+        w0, w1 = model.winner(x0, y0), model.winner(x1, y1)
+        half = len(z) // 2
+        coords = grid_coordinates(tuple(model.map_shape))
+        m = winner_metrics(w0[:half], z[:half], w0[half:], w1[half:], z[half:], coords, 1.0)
+    return {
+        "magnification": float(mag),
+        "units_near": int(near_units.sum()),
+        "units_used": n_used,
+        "view_consistency_away": m["view_consistency"],
+        "order_r2_away": m["order_r2"],
+    }
+
+
+@dataclass(frozen=True)
+class _SeedJob:
+    config: RewardConfig
+    seq: np.random.SeedSequence
+    seed: int
+    show: Progress | None = None
+    """A bar of this seed's episodes (set only where the job runs in the caller's process)."""
+
+
+def _run_seed(job: _SeedJob) -> dict[str, Any]:
+    if job.show is None:
+        return _seed_runs(job, None)
+    total = len(job.config.run.methods) * job.config.run.episodes
+    tick, bar = job.show.counter(total, f"reward seed {job.seed}", "ep")
+    with bar:
+        return _seed_runs(job, tick)
+
+
+def _learn_map(cfg: RewardConfig, ss: np.random.SeedSequence) -> SigmaPiSOM:
+    env_seed, som_seed = (int(v) for v in _rng(ss, 0).integers(0, 2**31 - 1, size=2))
+    return learn_map_in_env(cfg.env.make_env(), cfg.som_config(som_seed), seed=env_seed)
+
+
+def _seed_runs(job: _SeedJob, progress: Tick | None) -> dict[str, Any]:
+    """One seed: its map, then each method's learner on the same episodes, then the scores."""
+    cfg, ss = job.config, job.seq
+    run = cfg.run
+    learned = _learn_map(cfg, ss)
+    world = GazeReachEnv(**cfg.env.env_kwargs())
+    objects = probe_objects(world, run.n_test, _rng(ss, 3))
+    goal = np.asarray(world.goal, dtype=np.float64)
+    starts = _rng(ss, 1).integers(0, 2**31 - 1, size=run.episodes)
+    out: dict[str, Any] = {"initial": map_scores(learned, objects, goal, run.near_radius),
+                           "initial_units": preferred_z(learned, objects), "runs": {}}  # fmt: skip
+    factors: NDArray[np.float64] | None = None
+    for m in sorted(run.methods, key=("frozen", "gated", "shuffled").index):
+        model = copy.copy(learned)
+        env = MapObservation(cfg.env.make_env(), model, cfg.map.features, cfg.map.feature_width)
+        agent = actor_critic_for(env, cfg.agent, seed=_rng(ss, 2))
+        done = None if progress is None else functools.partial(progress, 1, m)
+        updates = 0
+        if m == "frozen":
+            ep = run_episodes(env, agent, starts, on_episode=done)
+        else:
+            replay = None
+            if m == "shuffled":
+                assert factors is not None  # the gated run came first
+                replay = _rng(ss, 4).permutation(factors)
+            got = run_gated_episodes(env, agent, starts, cfg.gate.gating(), _rng(ss, 5),
+                                     surprises=replay, on_episode=done)  # fmt: skip
+            ep, updates = got.episodes, got.updates
+            if m == "gated":
+                factors = got.surprises
+        out["runs"][m] = {
+            "success": ep.success, "steps": ep.steps, "lost": ep.failed, "updates": updates,
+            "scores": map_scores(model, objects, goal, run.near_radius),
+            "units": preferred_z(model, objects),
+        }  # fmt: skip
+    return out
+
+
+class RewardExperiment(Experiment[RewardConfig]):
+    """The frozen map, the reward-gated map and the shuffled-reward control, over seeds."""
+
+    name = "reward"
+    summary = "a map whose plasticity is gated by reward vs. the frozen map and a shuffled control"
+    config_type = RewardConfig
+    quick = RewardConfig().replace(episodes=100, block=25, final_episodes=25, iterations=4000,
+                                   n_test=1000)  # fmt: skip
+    seeds = (900, 901, 902, 903, 904, 905, 906, 907, 908, 909)
+    quick_seeds = (0,)
+    default_out = "reward"
+
+    def run(
+        self,
+        config: RewardConfig,
+        *,
+        seeds: Sequence[int],
+        out: Path | None = None,
+        executor: Executor | None = None,
+        progress: Progress | None = None,
+    ) -> RewardResult:
+        """Every method of ``config.run.methods`` for every seed; each seed is one job of
+        ``executor`` (the result does not depend on where it runs). ``out`` is not used: the
+        run writes nothing while it runs."""
+        if not isinstance(config, RewardConfig):
+            raise _validate.fail("config", "a RewardConfig", config)
+        seeds = check_seeds(seeds)
+        t0 = time.perf_counter()
+        root = np.random.SeedSequence(config.run.seed)
+        jobs = [(str(s), _SeedJob(config, _child(root, s), s)) for s in seeds]
+        values = run_all(
+            _run_seed, jobs, executor=executor,
+            per_job=job_memory(config.som_config(config.run.seed), n_test=config.run.n_test),
+            progress=progress, desc="reward",
+            verbose=lambda job: dataclasses.replace(job, show=progress),
+            describe=lambda key, _: f"seed {key}",
+        )  # fmt: skip
+        res = RewardResult.collect(config, seeds, [values[k] for k, _ in jobs])
+        res.seconds = time.perf_counter() - t0
+        return res
+
+
+REWARD = RewardExperiment()
+register(REWARD)
+"""The reward experiment."""

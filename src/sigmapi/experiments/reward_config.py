@@ -1,0 +1,178 @@
+"""The settings of one reward-gating comparison, in five frozen parts: the world, the map, the
+learner, the gate and the run.
+
+- :class:`~sigmapi.envs.GazeReachConfig` (``env``): the gaze-and-reach world;
+- :class:`~sigmapi.experiments.reach_config.MapConfig` (``map``): the map learned without a
+  teacher before the episodes (the reach experiment's);
+- :class:`~sigmapi.agents.ActorCriticConfig` (``agent``): the actor-critic;
+- :class:`GateConfig` (``gate``): how the map keeps learning during the episodes;
+- :class:`RewardRunConfig` (``run``): which methods, how many episodes, how it is scored.
+
+Field names are unique across the parts, so ``RewardConfig().replace(episodes=150,
+gate_eps=0.1)`` finds each field's part, and ``sigmapi reward`` has an option per field
+(:mod:`sigmapi.cli.experiment`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
+
+from sigmapi import _validate
+from sigmapi.agents import ActorCriticConfig, Gating
+from sigmapi.agents.gated import VIEWS
+from sigmapi.config import SOMConfig
+from sigmapi.envs import GazeReachConfig, GazeReachEnv
+from sigmapi.errors import ConfigError
+from sigmapi.experiments.reach_config import (
+    SMALL_MAP,
+    MapConfig,
+    check_parts,
+    parts_dict,
+    replaced_parts,
+)
+from sigmapi.rules.gating import FEEDBACK, SURPRISE
+
+__all__ = ["METHODS", "GateConfig", "RewardConfig", "RewardRunConfig"]
+
+METHODS = ("frozen", "gated", "shuffled")
+"""The compared maps: frozen after unsupervised learning; learning on, gated by the step's
+TD error and the chosen action; learning on with the gated run's factors shuffled in time."""
+
+
+@dataclass(frozen=True)
+class GateConfig:
+    """How the map keeps learning during the episodes (docs/algorithm.md, "Reward-gated
+    plasticity")."""
+
+    surprise: str = "positive"
+    """Global factor of the TD error: "positive" (max(delta, 0)), "absolute" (|delta|) or
+    "constant" (1: the action's feedback alone)."""
+    feedback: str = "action"
+    """Per-unit feedback: "action" (the chosen action's actor weights, positive part, over
+    their largest) or "none" (every unit 1)."""
+    gate_scale: float = 0.5
+    """TD error that opens the gate fully (the factor is clipped to [0, 1])."""
+    gate_eps: float = 0.1
+    """Learning rate of the gated update."""
+    gate_sigma: float = 1.0
+    """Neighbourhood width of the gated update, in map units."""
+    gate_view: str = "start"
+    """The view that learns: "start" (the state whose TD error and action the gate holds) or
+    "next" (the state the step led to, the goal's own view on the rewarded step)."""
+
+    def __post_init__(self) -> None:
+        _validate.choice("surprise", self.surprise, SURPRISE)
+        _validate.choice("feedback", self.feedback, FEEDBACK)
+        _validate.choice("gate_view", self.gate_view, VIEWS)
+        scale = _validate.positive("gate_scale", self.gate_scale, fix="e.g. 0.5")
+        eps = _validate.number("gate_eps", self.gate_eps, 0.0, 1.0, lo_open=True, fix="e.g. 0.1")
+        sigma = _validate.number("gate_sigma", self.gate_sigma, 0.0, 1e3, fix="e.g. 1.0")
+        for name, value in (("gate_scale", scale), ("gate_eps", eps), ("gate_sigma", sigma)):
+            object.__setattr__(self, name, value)
+
+    def gating(self) -> Gating:
+        """The loop's settings (:class:`~sigmapi.agents.gated.Gating`)."""
+        return Gating(self.surprise, self.feedback, self.gate_scale, self.gate_eps,
+                      self.gate_sigma, self.gate_view)  # fmt: skip
+
+
+@dataclass(frozen=True)
+class RewardRunConfig:
+    """What is compared, for how long, and how the maps are scored."""
+
+    methods: tuple[str, ...] = METHODS
+    """Maps to compare ("frozen", "gated", "shuffled"; "shuffled" needs "gated")."""
+    episodes: int = 300
+    """Episodes of reinforcement learning per seed and method."""
+    block: int = 20
+    """Episodes per point of the learning curves (and the window of the 80 % criterion)."""
+    final_episodes: int = 100
+    """The final success rate is measured over this many last episodes."""
+    target: float = 0.8
+    """Success rate over a block that counts as learned (episodes to reach it)."""
+    near_radius: float = 0.2
+    """Chebyshev radius around the goal of the region "near the goal" (the magnification)."""
+    n_test: int = 4000
+    """Test objects (views at random z) that score the maps."""
+    seed: int = 0
+    """Root seed: seed s of a run uses child s of SeedSequence(seed)."""
+
+    def __post_init__(self) -> None:
+        for name in ("episodes", "block", "final_episodes", "n_test"):
+            object.__setattr__(self, name, _validate.integer(name, getattr(self, name), 1))
+        if self.final_episodes > self.episodes or self.block > self.episodes:
+            raise ConfigError(
+                f"final_episodes and block must be <= episodes ({self.episodes}), got "
+                f"{self.final_episodes} and {self.block}"
+            )
+        target = _validate.number("target", self.target, 0.0, 1.0, lo_open=True, fix="e.g. 0.8")
+        near = _validate.number("near_radius", self.near_radius, 0.0, 0.5, lo_open=True,
+                                fix="e.g. 0.2")  # fmt: skip
+        object.__setattr__(self, "target", target)
+        object.__setattr__(self, "near_radius", near)
+        object.__setattr__(self, "seed", _validate.integer("seed", self.seed, 0))
+        methods = tuple(self.methods)
+        bad = [m for m in methods if m not in METHODS]
+        if not methods or bad or len(set(methods)) != len(methods):
+            raise ConfigError(f"methods must be distinct names from {METHODS}, got {methods!r}")
+        if "shuffled" in methods and "gated" not in methods:
+            raise ConfigError(
+                "methods: 'shuffled' replays the gated run's factors in another order, so it "
+                f"needs 'gated' too, got {methods!r}; add 'gated'"
+            )
+        object.__setattr__(self, "methods", methods)
+
+
+@dataclass(frozen=True)
+class RewardConfig:
+    """Everything one reward-gating comparison depends on, but its seeds. Defaults: the 7x7
+    world and map of the reach experiment's small setting, the authors' actor-critic."""
+
+    env: GazeReachConfig = field(
+        default_factory=lambda: GazeReachConfig(
+            grid=SMALL_MAP["grid"], code_width=SMALL_MAP["code_width"]
+        )
+    )
+    """The world and its time limit."""
+    map: MapConfig = field(
+        default_factory=lambda: MapConfig(
+            map_shape=SMALL_MAP["map_shape"],
+            iterations=SMALL_MAP["iterations"],
+            preset=SMALL_MAP["preset"],
+        )
+    )
+    """The map learned without a teacher before the episodes."""
+    agent: ActorCriticConfig = field(default_factory=ActorCriticConfig)
+    """The learner."""
+    gate: GateConfig = field(default_factory=GateConfig)
+    """The gated learning during the episodes."""
+    run: RewardRunConfig = field(default_factory=RewardRunConfig)
+    """The methods, episodes and scores."""
+
+    PARTS: ClassVar[dict[str, type]] = {
+        "env": GazeReachConfig, "map": MapConfig, "agent": ActorCriticConfig,
+        "gate": GateConfig, "run": RewardRunConfig,
+    }  # fmt: skip
+    """Each part's name and class."""
+
+    def __post_init__(self) -> None:
+        check_parts(self, self.PARTS)
+        if self.map.model_path is not None:
+            raise ConfigError(
+                "model_path must be None for the reward experiment: each seed learns its own "
+                f"map, the one the methods start from, got {self.map.model_path!r}"
+            )
+
+    def replace(self, **changes: Any) -> RewardConfig:
+        """A copy with ``changes``, fields of any part by name (``episodes=150``)."""
+        return RewardConfig(**replaced_parts(self, self.PARTS, changes, "reward"))
+
+    def to_dict(self) -> dict[str, dict[str, Any]]:
+        """The parts as JSON-able tables (tuples as lists)."""
+        return parts_dict(self, self.PARTS)
+
+    def som_config(self, seed: int) -> SOMConfig:
+        """The config of the map of seed ``seed``, on the world's codes."""
+        world = GazeReachEnv(**self.env.env_kwargs())
+        return self.map.som_config(world.x_code, world.y_code, seed)

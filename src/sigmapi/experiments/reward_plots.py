@@ -1,0 +1,108 @@
+"""Figures of the reward comparison: success over episodes per method, and where each map's
+units lie in z (the magnification near the goal).
+
+Functions take ``ax=None`` (a new figure when None) and return the Axes, except
+:func:`reward_figure`, which lays out the comparison and returns the Figure; pyplot is never
+touched.
+"""
+
+from __future__ import annotations
+
+from typing import Protocol
+
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+from matplotlib.patches import Rectangle
+from numpy.typing import NDArray
+
+from sigmapi.envs import GazeReachEnv
+from sigmapi.experiments.reward_config import RewardConfig
+
+__all__ = ["LABELS", "plot_reward_curves", "plot_units", "reward_figure"]
+
+
+class RewardData(Protocol):
+    """What the figures read of a :class:`~sigmapi.experiments.reward_result.RewardResult`."""
+
+    config: RewardConfig
+    seeds: tuple[int, ...]
+    units: dict[str, NDArray[np.float64]]
+    scores: dict[str, dict[str, NDArray[np.float64]]]
+
+    def curves(self) -> dict[str, dict[str, NDArray[np.float64]]]: ...
+
+
+LABELS = {"frozen": "frozen map", "gated": "reward-gated map", "shuffled": "shuffled reward",
+          "initial": "learned map (before)"}  # fmt: skip
+COLORS = {"frozen": "C0", "gated": "C2", "shuffled": "C3", "initial": "C0"}
+
+
+def _ax(ax: Axes | None) -> Axes:
+    if ax is None:
+        ax = Figure(figsize=(5, 3.5), layout="constrained").subplots()
+    return ax
+
+
+def plot_reward_curves(result: RewardData, ax: Axes | None = None) -> Axes:
+    """Success rate per block, mean over seeds (line), band from the worst to the best seed."""
+    ax = _ax(ax)
+    for m, c in result.curves().items():
+        ax.plot(c["episode"], c["success"], color=COLORS.get(m), label=LABELS.get(m, m))
+        ax.fill_between(c["episode"], c["success_min"], c["success_max"], color=COLORS.get(m),
+                        alpha=0.15, linewidth=0)  # fmt: skip
+    ax.axhline(result.config.run.target, color="0.5", linestyle=":", linewidth=1)
+    ax.set_xlabel(f"episode (blocks of {result.config.run.block})")
+    ax.set_ylabel("success rate")
+    ax.set_ylim(0.0, 1.02)
+    ax.set_title(f"reaching success, mean of {len(result.seeds)} seeds (band: min-max)")
+    ax.legend(loc="lower right", fontsize=8)
+    ax.grid(alpha=0.3)
+    return ax
+
+
+def plot_units(result: RewardData, method: str, ax: Axes | None = None) -> Axes:
+    """The first seed's units at their preferred z, neighbours on the map joined, with the goal
+    box (grey) and the region "near the goal" (dashed) whose units the magnification counts."""
+    ax = _ax(ax)
+    cfg = result.config
+    pz = result.units[method]
+    shape = tuple(cfg.map.map_shape)
+    grid = pz.reshape(*shape, -1)
+    for axis in range(len(shape)):
+        for line in (
+            np.moveaxis(grid, axis, 0).reshape(shape[axis], -1, grid.shape[-1]).transpose(1, 0, 2)
+        ):
+            ax.plot(line[:, 0], line[:, 1], color="0.6", linewidth=0.6)
+    ax.plot(pz[:, 0], pz[:, 1], "o", color=COLORS.get(method), markersize=3)
+    goal = np.asarray(GazeReachEnv(**cfg.env.env_kwargs()).goal)
+    r, rn = cfg.env.goal_radius, cfg.run.near_radius
+    ax.add_patch(Rectangle(tuple(goal - r), 2 * r, 2 * r, color="0.85", zorder=0))
+    ax.add_patch(Rectangle(tuple(goal - rn), 2 * rn, 2 * rn, fill=False, linestyle="--",
+                           edgecolor="k", linewidth=0.8))  # fmt: skip
+    mag = result.scores[method]["magnification"]
+    near = result.scores[method]["units_near"]
+    ax.set_title(f"{LABELS.get(method, method)}: {int(near[0])} units near, x{mag[0]:.2f}",
+                 fontsize=9)  # fmt: skip
+    ax.set_xlim(0, 1)
+    ax.set_ylim(0, 1)
+    ax.set_aspect("equal")
+    ax.set_xlabel("z[0]")
+    ax.set_ylabel("z[1]")
+    return ax
+
+
+def reward_figure(result: RewardData) -> Figure:
+    """Curves on the left, each method's units in z on the right (first seed)."""
+    methods = [m for m in ("frozen", "gated", "shuffled") if m in result.units]
+    if result.config.env.dim != 2:  # the units in z are drawn for the 2-D task
+        methods = []
+    fig = Figure(figsize=(4.2 + 3.0 * len(methods), 3.6), layout="constrained")
+    axes = fig.subplots(1, 1 + len(methods), width_ratios=[1.5] + [1.0] * len(methods))
+    axes = np.atleast_1d(axes)
+    plot_reward_curves(result, axes[0])
+    for ax, m in zip(axes[1:], methods, strict=True):
+        plot_units(result, m, ax)
+    fig.suptitle(f"seed {result.seeds[0]} maps: magnification = units per area near the goal "
+                 "over units per area overall", fontsize=9)  # fmt: skip
+    return fig

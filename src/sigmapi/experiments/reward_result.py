@@ -1,0 +1,194 @@
+"""The outcome of a reward-gating comparison: per-episode records and map scores per method
+and seed, the summaries computed from them (median, worst, counts over seeds), its JSON form
+(``"methods"``: one object per method), its table and its figure."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from sigmapi.experiments.reward_config import RewardConfig
+
+__all__ = ["FIGURE", "MAGNIFICATION_TARGET", "RewardResult", "episodes_to_target"]
+
+FIGURE = "reward.png"
+"""The file name :meth:`RewardResult.figure` writes in its folder."""
+
+MAGNIFICATION_TARGET = 1.5
+"""The gated map's magnification near the goal over the frozen map's that counts as shaped."""
+
+SCORES = ("magnification", "units_near", "units_used", "view_consistency_away", "order_r2_away")
+"""The map scores of :func:`~sigmapi.experiments.reward.map_scores`, per method and seed."""
+
+
+def episodes_to_target(success: NDArray[np.bool_], block: int, target: float) -> int | None:
+    """Episodes until a block of ``block`` episodes first succeeds at rate ``>= target``: the
+    end of that block (blocks ``[0, block)``, ``[block, 2 block)``, ...); None if none does."""
+    nb = success.size // block
+    rates = success[: nb * block].reshape(nb, block).mean(axis=1)
+    hit = np.flatnonzero(rates >= target)
+    return int((hit[0] + 1) * block) if hit.size else None
+
+
+def _summary(values: list[float | None], higher: bool = True) -> dict[str, Any]:
+    """Median and worst over seeds (None, e.g. a target never reached, counts as worst)."""
+    known = [v for v in values if v is not None and np.isfinite(v)]
+    worst: float | None
+    if len(known) < len(values):
+        worst = None
+    else:
+        worst = float(min(known) if higher else max(known))
+    filled = [v if v is not None and np.isfinite(v) else (-np.inf if higher else np.inf)
+              for v in values]  # fmt: skip
+    med = float(np.median(filled)) if filled else float("nan")
+    return {"median": med if np.isfinite(med) else None, "worst": worst,
+            "per_seed": [None if v is None else float(v) for v in values]}  # fmt: skip
+
+
+@dataclass
+class RewardResult:
+    """Outcome of :meth:`~sigmapi.experiments.reward.RewardExperiment.run`.
+
+    ``success[m]``, ``lost[m]``, ``steps[m]``: ``(len(seeds), episodes)`` per method ``m``, one
+    row per seed in the order of ``seeds``; ``scores[m][name]``: ``(len(seeds),)`` map scores
+    after the episodes (``initial``: the learned map before them); ``units[m]``: the preferred
+    z of each unit of the first seed's map ``(n_units, d)`` (NaN: wins nothing).
+    """
+
+    config: RewardConfig
+    seeds: tuple[int, ...]
+    success: dict[str, NDArray[np.bool_]] = field(default_factory=dict)
+    lost: dict[str, NDArray[np.bool_]] = field(default_factory=dict)
+    steps: dict[str, NDArray[np.int64]] = field(default_factory=dict)
+    updates: dict[str, NDArray[np.int64]] = field(default_factory=dict)
+    scores: dict[str, dict[str, NDArray[np.float64]]] = field(default_factory=dict)
+    units: dict[str, NDArray[np.float64]] = field(default_factory=dict)
+    seconds: float = 0.0
+
+    @classmethod
+    def collect(
+        cls, config: RewardConfig, seeds: tuple[int, ...], per_seed: list[dict[str, Any]]
+    ) -> RewardResult:
+        """The result of the per-seed values of the run (in the order of ``seeds``)."""
+        res = cls(config, seeds)
+        methods = config.run.methods
+        for m in methods:
+            runs = [v["runs"][m] for v in per_seed]
+            res.success[m] = np.stack([r["success"] for r in runs])
+            res.lost[m] = np.stack([r["lost"] for r in runs])
+            res.steps[m] = np.stack([r["steps"] for r in runs])
+            res.updates[m] = np.array([r["updates"] for r in runs], dtype=np.int64)
+            res.scores[m] = {k: np.array([r["scores"][k] for r in runs]) for k in SCORES}
+            res.units[m] = runs[0]["units"]
+        res.scores["initial"] = {k: np.array([v["initial"][k] for v in per_seed]) for k in SCORES}
+        res.units["initial"] = per_seed[0]["initial_units"]
+        return res
+
+    def curves(self) -> dict[str, dict[str, NDArray[np.float64]]]:
+        """Per method: ``episode`` (block ends), ``success`` (rate per block, mean over
+        seeds), ``success_sd``, ``success_min`` and ``success_max`` over seeds."""
+        b = self.config.run.block
+        out: dict[str, dict[str, NDArray[np.float64]]] = {}
+        for m, succ in self.success.items():
+            nb = succ.shape[1] // b
+            rate = succ[:, : nb * b].reshape(succ.shape[0], nb, b).mean(axis=2)
+            out[m] = {"episode": (np.arange(nb) + 1.0) * b, "success": rate.mean(axis=0),
+                      "success_sd": rate.std(axis=0), "success_min": rate.min(axis=0),
+                      "success_max": rate.max(axis=0)}  # fmt: skip
+        return out
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-able: ``methods`` (per method its name, final success, episodes to the target
+        rate, magnification near the goal and its ratio to the frozen map, the quality away
+        from the goal; median, worst and per seed over the seeds), the map before the
+        episodes (``initial_map``), the acceptance counts, the config and the time."""
+        run = self.config.run
+        f = run.final_episodes
+        n = len(self.seeds)
+        frozen_ep = self._episodes("frozen") if "frozen" in self.success else None
+        base_mag = self.scores["initial"]["magnification"]
+        methods = []
+        for m in run.methods:
+            ep = self._episodes(m)
+            final = self.success[m][:, -f:].mean(axis=1)
+            mag = self.scores[m]["magnification"]
+            ratio = mag / base_mag
+            entry: dict[str, Any] = {
+                "name": m,
+                "final_success": _summary(final.tolist()),
+                "lost": float(self.lost[m][:, -f:].mean()),
+                "episodes_to_target": _summary(
+                    [None if e is None else float(e) for e in ep], higher=False
+                ),
+                "reached_target": sum(e is not None for e in ep),
+                "magnification": _summary(mag.tolist()),
+                "magnification_ratio": _summary(ratio.tolist()),
+                "magnification_ratio_met": int(np.sum(ratio >= MAGNIFICATION_TARGET)),
+                "units_near": _summary(self.scores[m]["units_near"].tolist()),
+                "view_consistency_away": _summary(self.scores[m]["view_consistency_away"].tolist()),
+                "order_r2_away": _summary(self.scores[m]["order_r2_away"].tolist()),
+                "gated_updates": _summary(self.updates[m].astype(float).tolist()),
+            }
+            if frozen_ep is not None:
+                entry["fewer_episodes_than_frozen"] = sum(
+                    _earlier(a, b, run.episodes) for a, b in zip(ep, frozen_ep, strict=True)
+                )
+            methods.append(entry)
+        c = self.curves()
+        return {
+            "methods": methods,
+            "initial_map": {k: _summary(v.tolist()) for k, v in self.scores["initial"].items()},
+            "n_seeds": n,
+            "target": run.target,
+            "magnification_target": MAGNIFICATION_TARGET,
+            "curves": {m: {k: v.tolist() for k, v in cm.items()} for m, cm in c.items()},
+            "config": {**self.config.to_dict(), "seeds": list(self.seeds)},
+            "seconds": self.seconds,
+        }
+
+    def _episodes(self, m: str) -> list[int | None]:
+        run = self.config.run
+        return [episodes_to_target(s, run.block, run.target) for s in self.success[m]]
+
+    def table(self) -> str:
+        """Per method: final success, episodes to the target, magnification, away quality."""
+        d = self.to_dict()
+        lines = [f"{len(self.seeds)} seeds; median (worst) over seeds; target success "
+                 f"{d['target']:.0%} per block of {self.config.run.block}"]  # fmt: skip
+        for e in d["methods"]:
+            et = e["episodes_to_target"]
+            lines.append(
+                f"  {e['name']:9s} final {_fmt(e['final_success'])}  episodes to target "
+                f"{_fmt(et, 0)} reached {e['reached_target']}/{d['n_seeds']}  magnification "
+                f"{_fmt(e['magnification'])} ratio {_fmt(e['magnification_ratio'])}  away: "
+                f"consistency {_fmt(e['view_consistency_away'])} order "
+                f"{_fmt(e['order_r2_away'])}"
+            )
+        return "\n".join(lines)
+
+    def save_figure(self, path: str | Path, dpi: int = 120) -> Path:
+        """Draw the comparison (:func:`~sigmapi.experiments.reward_plots.reward_figure`)."""
+        from sigmapi.experiments.reward_plots import reward_figure  # matplotlib: only to draw
+
+        out = Path(path)
+        reward_figure(self).savefig(out, dpi=dpi, facecolor="white")
+        return out
+
+    def figure(self, out_dir: str | Path) -> list[Path]:
+        """Write the figure (:data:`FIGURE`) into ``out_dir``; returns the files written."""
+        return [self.save_figure(Path(out_dir) / FIGURE)]
+
+
+def _earlier(a: int | None, b: int | None, never: int) -> bool:
+    """Whether ``a`` episodes is fewer than ``b`` (None: never, after ``never``)."""
+    return (never + 1 if a is None else a) < (never + 1 if b is None else b)
+
+
+def _fmt(s: dict[str, Any], digits: int = 2) -> str:
+    med, worst = s["median"], s["worst"]
+    show = lambda v: "never" if v is None else f"{v:.{digits}f}"  # noqa: E731
+    return f"{show(med)} ({show(worst)})"
