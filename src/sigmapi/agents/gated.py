@@ -4,10 +4,12 @@
 The loop of :func:`~sigmapi.agents.run_episodes`, with one addition after every step: the
 map learns the step's view pair, each unit ``k`` with the gate ``g_k = f(delta) b_k``
 (:func:`sigmapi.rules.gating.reward_gate`: the critic's TD error ``delta`` of the step and
-the chosen action's actor weights). The pair is the view the step started from (it finds the
-winner) and a second fixation of the same object while the body is still (it is learned), the
-two-view rule of the map's unsupervised training; the world shows the second fixation
-(:meth:`~sigmapi.envs.PlacedViewSource.views_of` of the step's object), the learner never reads
+the chosen action's actor weights, after the step's update). The pair is the view the step
+led to (``view="next"``, the default: on the rewarded step, the goal's own view) or the view it
+started from (``view="start"``), which finds the winner, and a second fixation of the same
+object while the body is still, which is learned: the two-view rule of the map's unsupervised
+training. The world shows the second fixation
+(:meth:`~sigmapi.envs.PlacedViewSource.views_of` of that object); the learner never reads
 ``z``. The state the actor-critic sees is the map's reading at each step
 (:class:`~sigmapi.envs.MapObservation`), so it reads the map as it changes.
 
@@ -48,16 +50,16 @@ class Gating:
     """Global factor of the TD error (:data:`sigmapi.rules.gating.SURPRISE`)."""
     feedback: str = "action"
     """Per-unit feedback (:data:`sigmapi.rules.gating.FEEDBACK`)."""
-    scale: float = 1.0
+    scale: float = 0.5
     """TD error that opens the gate fully."""
-    eps: float = 0.05
+    eps: float = 0.3
     """Learning rate of the gated update."""
     sigma: float = 1.0
     """Neighbourhood width of the gated update, in map units."""
-    view: str = "start"
-    """The view that learns: "start" (the state the step started from, whose TD error and
-    action the gate holds) or "next" (the state the step led to: the goal's own view on the
-    rewarded step; an object that left the workspace is not learned)."""
+    view: str = "next"
+    """The view that learns: "next" (the state the step led to: the goal's own view on the
+    rewarded step; an object that left the workspace is not learned) or "start" (the state
+    the step started from)."""
 
     def __post_init__(self) -> None:
         _validate.choice("view", self.view, VIEWS)

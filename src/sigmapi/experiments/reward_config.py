@@ -45,28 +45,28 @@ class GateConfig:
     """How the map keeps learning during the episodes (docs/algorithm.md, "Reward-gated
     plasticity")."""
 
-    surprise: str = "positive"
+    surprise: str = Gating.surprise
     """Global factor of the TD error: "positive" (max(delta, 0)), "absolute" (|delta|) or
     "constant" (1: the action's feedback alone)."""
-    feedback: str = "action"
+    feedback: str = Gating.feedback
     """Per-unit feedback: "action" (the chosen action's actor weights, positive part, over
     their largest) or "none" (every unit 1)."""
-    gate_scale: float = 0.5
+    gate_scale: float = Gating.scale
     """TD error that opens the gate fully (the factor is clipped to [0, 1])."""
-    gate_eps: float = 0.1
+    gate_eps: float = Gating.eps
     """Learning rate of the gated update."""
-    gate_sigma: float = 1.0
+    gate_sigma: float = Gating.sigma
     """Neighbourhood width of the gated update, in map units."""
-    gate_view: str = "start"
-    """The view that learns: "start" (the state whose TD error and action the gate holds) or
-    "next" (the state the step led to, the goal's own view on the rewarded step)."""
+    gate_view: str = Gating.view
+    """The view that learns: "next" (the state the step led to, the goal's own view on the
+    rewarded step) or "start" (the state the step started from)."""
 
     def __post_init__(self) -> None:
         _validate.choice("surprise", self.surprise, SURPRISE)
         _validate.choice("feedback", self.feedback, FEEDBACK)
         _validate.choice("gate_view", self.gate_view, VIEWS)
         scale = _validate.positive("gate_scale", self.gate_scale, fix="e.g. 0.5")
-        eps = _validate.number("gate_eps", self.gate_eps, 0.0, 1.0, lo_open=True, fix="e.g. 0.1")
+        eps = _validate.number("gate_eps", self.gate_eps, 0.0, 1.0, lo_open=True, fix="e.g. 0.3")
         sigma = _validate.number("gate_sigma", self.gate_sigma, 0.0, 1e3, fix="e.g. 1.0")
         for name, value in (("gate_scale", scale), ("gate_eps", eps), ("gate_sigma", sigma)):
             object.__setattr__(self, name, value)
