@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import argparse
 import json
 import os
+import re
 import subprocess
 import sys
 
@@ -45,7 +47,15 @@ def test_presets_lists_paper_1d():
         (["train", "--preset", "nope", "--out", "x.npz"], "unknown preset 'nope'"),
         (["train", *TINY, "--set", "iterations=-5", "--out", "x.npz"], "iterations must be"),
         (["train", *TINY, "--set", "color=red", "--out", "x.npz"], "unknown config key 'color'"),
-        (["train", *TINY, "--set", "novalue", "--out", "x.npz"], "key=value"),
+        (["train", *TINY, "--set", "novalue", "--out", "x.npz"], "must be KEY=VALUE"),
+        (["train", *TINY, "--set", "iterations", "5000", "--out", "x.npz"],
+         "--set takes KEY=VALUE as one word, got --set iterations 5000; write --set "
+         "iterations=5000"),
+        (["compare", "--quick", "--set", "iterations", "5000"], "write --set iterations=5000"),
+        (["train", *TINY, "--set", "map_shape=4x4", "--out", "x.npz"],
+         "--set: map_shape (4, 4) has 2 axes, but the task is 1-D (x_shape (9,)"),
+        (["train", *TINY, "--config", "c2.toml", "--out", "x.npz"],
+         "--config: map_shape (3, 3) has 2 axes, but the task is 1-D"),
         (["train", *TINY, "--config", "missing.toml", "--out", "x.npz"], "does not exist"),
         (["train", *TINY, "--out", "no/such/dir/x.npz"], "does not exist"),
         (["evaluate", "missing.npz"], "does not exist"),
@@ -76,6 +86,7 @@ def test_presets_lists_paper_1d():
 def test_user_mistakes_exit_2_with_one_line(tmp_path, args, needle):
     (tmp_path / "bad.npz").write_text("not a model")
     (tmp_path / "s.toml").write_text('preset = "tiny-1d"\n')
+    (tmp_path / "c2.toml").write_text("map_shape = [3, 3]\n")
     os.mkfifo(tmp_path / "fifo")
     if "good.npz" in args:
         small = SigmaPiSOM(map_shape=(3,), x_shape=(4,), y_shape=(4,), backend="reference")
@@ -129,3 +140,45 @@ def test_workers_must_be_positive_one_line_exit_2(command, tmp_path):
     assert r.returncode == 2
     assert r.stderr.strip().endswith("argument --workers: must be a positive int, got '0'")
     assert r.stderr.count("\n") == 1
+
+
+def test_set_takes_a_grid_as_the_options_and_the_errors_write_it():
+    from sigmapi.config import apply_overrides, load_preset
+
+    base = load_preset("tiny-1d")
+    for text in ("7", "[7]", "(7,)", "( 7 , )"):
+        assert apply_overrides(base, [f"map_shape={text}"]).map_shape == (7,), text
+    two = load_preset("paper-2d")
+    for text in ("6x5", "6X5", "[6, 5]", "(6, 5)"):
+        assert apply_overrides(two, [f"map_shape={text}"]).map_shape == (6, 5), text
+    assert apply_overrides(base, ["ordering=none"]).ordering == "none"  # text stays text
+
+
+def _helps() -> dict[str, str]:
+    """Every sub-command's ``--help``, as argparse prints it."""
+    from sigmapi.cli import build_parser
+
+    parser = build_parser()
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    return {"": parser.format_help(), **{n: p.format_help() for n, p in sub.choices.items()}}
+
+
+def test_help_texts_show_no_sphinx_markup_and_no_unmeasured_durations():
+    role = re.compile(r":[a-z]+:`|``|`~")
+    for name, text in _helps().items():
+        assert not role.search(text), (name, role.search(text))
+        assert "see --help of the API" not in text, name
+        assert "few minutes" not in text and "few seconds" not in text, name
+
+
+def test_compare_help_shows_the_config_defaults():
+    import dataclasses
+
+    from sigmapi.experiments.compare import CompareConfig
+
+    text = " ".join(_helps()["compare"].split())
+    for f in dataclasses.fields(CompareConfig):
+        if isinstance(f.default, int) and not isinstance(f.default, bool):
+            assert f"(default {f.default})" in text, f.name
+        elif isinstance(f.default, str):
+            assert f"(default {f.default})" in text, f.name

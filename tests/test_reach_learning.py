@@ -221,10 +221,37 @@ def test_cli_reach_json_and_figure(tmp_path, capsys) -> None:
     assert json.loads((out / "result.json").read_text("utf-8")) == data
 
 
+def test_gym_make_without_arguments_is_the_world_of_sigmapi_reach() -> None:
+    """``gymnasium.make(ENV_ID)`` and ``sigmapi reach`` without options build one world: the
+    command passes no world setting of its own (its options default to the config's), and
+    the config's world is what the registered id makes."""
+    from sigmapi.cli import build_parser
+    from sigmapi.cli._common import dataclass_values
+    from sigmapi.envs import ENV_ID, GazeReachConfig
+
+    args = build_parser().parse_args(["reach"])
+    assert dataclass_values(args, GazeReachConfig) == {}  # the command's world: the config's
+    world = REACH.config_type().env
+    made = gym.make(ENV_ID)
+    try:
+        for name, value in world.env_kwargs().items():
+            assert getattr(made.unwrapped, name) == value, name
+        assert made.spec is not None
+        assert made.spec.max_episode_steps == world.max_episode_steps
+    finally:
+        made.close()
+
+
 def test_cli_reach_user_mistakes_exit_2(tmp_path, capsys) -> None:
     out = str(tmp_path / "r")
     assert main(["reach", "--dim", "1", "--map-shape", "4x4", "--out", out]) == 2
-    assert "map_shape must have 1 axes" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "map_shape must have 1 axis for a task of dim 1, got 4x4 (2-D)" in err
+    assert "give map_shape 12" in err and "or dim 2" in err  # both settings, each a fix
+    for bad in ("0", "3"):  # the flag at fault is --dim, not the map it implies
+        assert main(["reach", "--dim", bad, "--out", out]) == 2
+        err = capsys.readouterr().err
+        assert f"dim must be 1 or 2, got {bad}" in err and "map_shape" not in err
     assert main(["reach", "--episodes", "0", "--out", out]) == 2
     assert "episodes must be an int >= 1" in capsys.readouterr().err
     assert main(["reach", "--model", str(tmp_path / "none.npz"), "--out", out, "--force"]) == 2

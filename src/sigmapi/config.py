@@ -10,6 +10,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+import re
 import tomllib
 from dataclasses import dataclass, field
 from importlib import resources
@@ -29,6 +30,7 @@ __all__ = [
     "SOMConfig",
     "apply_overrides",
     "check_extra",
+    "check_map_fits_task",
     "list_presets",
     "load_config_file",
     "load_preset",
@@ -350,8 +352,51 @@ def parse_override(item: str) -> tuple[str, Any]:
     try:
         value = tomllib.loads(f"v = {raw}")["v"]
     except tomllib.TOMLDecodeError:
-        value = raw
+        value = _shape_text(raw)
     return key, value
+
+
+_GRID_TEXT = re.compile(r"\d+(?:\s*x\s*\d+)+")
+_TUPLE_TEXT = re.compile(r"\(\s*\d+\s*(?:,\s*\d+\s*)*,?\s*\)")
+
+
+def _shape_text(raw: str) -> Any:
+    """``raw`` as a grid when it is written as the command line writes one (``15x15``, the
+    option ``--map-shape``'s form) or as a Python tuple of ints (``(15,)``, the form of the
+    shape errors' examples); any other text stays a string."""
+    if _GRID_TEXT.fullmatch(raw.lower()):
+        return tuple(int(v) for v in raw.lower().split("x"))
+    if _TUPLE_TEXT.fullmatch(raw):
+        return tuple(int(v) for v in raw.strip("() ").split(",") if v.strip())
+    return raw
+
+
+SHAPE_KEYS = ("map_shape", "x_shape", "y_shape")
+"""The keys that set the map's and the task's dimensions (:func:`check_map_fits_task`)."""
+
+
+def check_map_fits_task(cfg: SOMConfig) -> SOMConfig:
+    """``cfg`` if its map has as many axes as its task (``x_shape``), else a ConfigError
+    naming both settings.
+
+    A map of another dimension than the task it learns cannot lay the task out on its grid:
+    a 2-D map on the 1-D task folds whatever the seed. The SOM itself accepts such shapes
+    (they are plain array sizes for the user's own codes); the commands that train on a
+    preset's task check them (``sigmapi train``, the overrides of a preset).
+    """
+    m, t = len(cfg.map_shape), len(cfg.x_shape)
+
+    def axes(n: int) -> str:
+        return f"{n} axis" if n == 1 else f"{n} axes"
+
+    if m != t:
+        raise ConfigError(
+            f"map_shape {cfg.map_shape} has {axes(m)}, but the task is {t}-D (x_shape "
+            f"{cfg.x_shape}, y_shape {cfg.y_shape}): a {m}-D map cannot lay out a {t}-D task "
+            f"(it folds whatever the seed); give map_shape {axes(t)}, e.g. map_shape="
+            f"{'x'.join(['15'] * t)}, or x_shape and y_shape of {axes(m)} for the {m}-D task"
+        )
+    return cfg
 
 
 def apply_overrides(cfg: SOMConfig, items: list[str]) -> SOMConfig:
@@ -366,6 +411,7 @@ def apply_overrides(cfg: SOMConfig, items: list[str]) -> SOMConfig:
     _check_keys(changes)
     merged.update(changes)
     try:
-        return SOMConfig.from_dict(merged)
+        out = SOMConfig.from_dict(merged)
     except TypeError as exc:
         raise ConfigError(f"override: {exc}") from None
+    return check_map_fits_task(out) if set(changes) & set(SHAPE_KEYS) else out

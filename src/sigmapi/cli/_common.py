@@ -9,14 +9,21 @@ import inspect
 import itertools
 import os
 import re
+import sys
 import tempfile
 import textwrap
 import typing
-from collections.abc import Callable, Collection, Mapping
+from collections.abc import Callable, Collection, Mapping, Sequence
 from pathlib import Path
 from typing import Any, Literal, NoReturn
 
-from sigmapi.config import SOMConfig, apply_overrides, load_config_file, load_preset
+from sigmapi.config import (
+    SOMConfig,
+    apply_overrides,
+    check_map_fits_task,
+    load_config_file,
+    load_preset,
+)
 from sigmapi.errors import ConfigError, UsageError
 from sigmapi.kernels import BACKENDS
 
@@ -37,6 +44,21 @@ class Parser(argparse.ArgumentParser):
     def error(self, message: str) -> NoReturn:  # one line, exit 2, as argparse does, no usage dump
         self.exit(2, f"{self.prog}: error: {message}\n")
 
+    def parse_known_args(  # type: ignore[override]
+        self, args: Sequence[str] | None = None, namespace: argparse.Namespace | None = None
+    ) -> tuple[argparse.Namespace, list[str]]:
+        """argparse's, but ``--set KEY VALUE`` (a space for the ``=``) is refused with the
+        fix, not reported as an unrecognised argument ``VALUE``."""
+        argv = list(sys.argv[1:] if args is None else args)
+        flags = {s for a in self._actions if a.type is key_value for s in a.option_strings}
+        for flag, key, value in zip(argv, argv[1:], argv[2:], strict=False):
+            if flag == "--":
+                break
+            if flag in flags and "=" not in key and not value.startswith("-"):
+                self.error(f"{flag} takes KEY=VALUE as one word, got {flag} {key} {value}; "
+                           f"write {flag} {key}={value}")  # fmt: skip
+        return super().parse_known_args(argv, namespace)
+
 
 def _positive_int(text: str) -> int:
     try:
@@ -56,6 +78,10 @@ def key_value(text: str) -> str:
     """A ``KEY=VALUE`` flag's text, checked: one line, at most :data:`MAX_VALUE` characters
     (a longer one is shown cut short)."""
     shown = repr(text[:60]) + ("..." if len(text) > 60 else "")
+    if "=" not in text:
+        raise argparse.ArgumentTypeError(
+            f"must be KEY=VALUE, got {shown}; e.g. iterations=50000 (no space around the =)"
+        )
     if len(text) > MAX_VALUE:
         raise argparse.ArgumentTypeError(
             f"must be KEY=VALUE of at most {MAX_VALUE} characters, got {len(text):,} "
@@ -109,7 +135,10 @@ def resolve_config(args: argparse.Namespace) -> SOMConfig:
         cfg = cfg.replace(seed=args.seed)
     if getattr(args, "backend", None):
         cfg = cfg.replace(backend=args.backend)
-    return cfg
+    try:
+        return check_map_fits_task(cfg)
+    except ConfigError as exc:  # a preset's shapes agree: --config set them
+        raise ConfigError(f"--config: {exc}") from None
 
 
 def apply_set_flags(cfg: SOMConfig, items: list[str] | None) -> SOMConfig:
@@ -194,12 +223,15 @@ def plain(text: str) -> str:
     """Docstring text as ``--help`` shows it: Sphinx roles and literals as plain words.
 
     ``:class:`~sigmapi.experiments.Chain``` becomes ``Chain``, ``:func:`f <sigmapi.f>``` ``f``,
-    double-backquoted literals lose their quotes; runs of white space become one space.
+    literals lose their quotes but a command line, which keeps one pair of backquotes as the
+    hand-written help texts quote commands; runs of white space become one space.
 
     Examples
     --------
-    >>> plain("see :func:`~sigmapi.metrics.evaluate` and ``ordering="none"``")
-    'see evaluate and ordering="none"'
+    >>> plain("see :func:`~sigmapi.metrics.evaluate` and ``ordering='none'``")
+    "see evaluate and ordering='none'"
+    >>> plain("a preset name (``sigmapi presets``)")
+    'a preset name (`sigmapi presets`)'
     """
 
     def role(m: re.Match[str]) -> str:
@@ -210,7 +242,12 @@ def plain(text: str) -> str:
         return name.rsplit(".", 1)[-1] if tilde else name
 
     text = _ROLE.sub(role, text)
-    text = _LITERAL.sub(lambda m: m.group(1) or m.group(2), text)
+
+    def literal(m: re.Match[str]) -> str:
+        body = m.group(1) or m.group(2)
+        return f"`{body}`" if body.startswith("sigmapi ") else body
+
+    text = _LITERAL.sub(literal, text)
     return " ".join(text.split())
 
 

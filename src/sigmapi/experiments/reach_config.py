@@ -54,9 +54,12 @@ def check_parts(config: Any, parts: dict[str, type]) -> None:
             raise _validate.fail(name, f"a {cls.__name__}", getattr(config, name))
     dim, shape = config.env.dim, config.map.map_shape
     if len(shape) != dim:
+        axes = "1 axis" if dim == 1 else f"{dim} axes"
         raise ConfigError(
-            f"map_shape must have {dim} axes for a task of dim {dim}, got "
-            f"{'x'.join(map(str, shape))}; e.g. map_shape {default_map_shape(dim)}"
+            f"map_shape must have {axes} for a task of dim {dim}, got "
+            f"{'x'.join(map(str, shape))} ({len(shape)}-D); give map_shape "
+            f"{'x'.join(map(str, default_map_shape(dim)))} (the dim-{dim} default), or "
+            f"dim {len(shape)} for a {len(shape)}-D task"
         )
 
 
