@@ -150,3 +150,25 @@ def test_figure_dpi_on_request(model_1d, tmp_path: Path):
     small = mpimg.imread(tmp_path / "a.png")
     big = mpimg.imread(tmp_path / "b.png")
     assert big.shape[1] > 2.5 * small.shape[1]
+
+
+def test_compare_figure_log_axes_read_plain_numbers():
+    import re
+
+    from sigmapi.viz.compare import compare_figure
+
+    labels = [10, 20, 50, 100, 200, 500, 1000, 2000, 5000, 10000]
+    methods = [
+        {"name": name, "view_consistency": 0.5, "unit_consistency": 0.4,
+         "z_error_by_labels": {str(n): 0.55 + k / np.sqrt(n) for n in labels}}
+        for name, k in (("sigma-pi", 4.0), ("kohonen", 2.0))
+    ]  # fmt: skip
+    result = {"methods": methods, "quantisation_floor": 0.45,
+              "config": {"labels": labels, "seeds": [0, 1]}}  # fmt: skip
+    ax = compare_figure(result).axes[0]
+    for axis, (lo, hi) in ((ax.xaxis, ax.get_xlim()), (ax.yaxis, ax.get_ylim())):
+        shown = [axis.get_major_formatter()(v) for v in axis.get_majorticklocs() if lo <= v <= hi]
+        assert len(shown) >= 3, shown  # the z error spans less than a decade: still 3 ticks
+        assert all(re.fullmatch(r"\d+(\.\d+)?", t) for t in shown), shown  # not 6x10^-1
+        assert axis.get_minor_formatter()(3.0) == ""
+    assert "1000" in [ax.xaxis.get_major_formatter()(v) for v in ax.xaxis.get_majorticklocs()]

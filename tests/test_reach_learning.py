@@ -23,6 +23,7 @@ from sigmapi.executor import Executor
 from sigmapi.experiments.reach import REACH
 from sigmapi.experiments.reach_config import SMALL_MAP, MapConfig, ReachConfig, ReachRunConfig
 from sigmapi.experiments.reach_plots import plot_reach_curves, plot_value_function, reach_figure
+from sigmapi.experiments.reach_result import ReachResult
 
 
 @pytest.fixture(scope="module")
@@ -137,7 +138,8 @@ def test_experiment_is_deterministic_and_shapes_are_right(tmp_path) -> None:
     d = a.to_dict()
     json.dumps(d)
     assert set(d) == {"success", "success_per_seed", "lost", "timed_out", "ratio_map_to_true_z",
-                      "curves", "map_metrics", "config", "seconds"}  # fmt: skip
+                      "final_rise", "levelled_off", "curves", "map_metrics", "config",
+                      "seconds"}  # fmt: skip
     assert d["config"]["seeds"] == [0, 1] and d["config"]["map"]["iterations"] == 500
     assert set(d["config"]) == {"env", "map", "agent", "run", "seeds"}
     for s in a.success:  # counted: never a rounding residue such as -8.7e-17
@@ -268,3 +270,57 @@ def test_acceptance_map_reaches_95_percent_of_true_z_2d() -> None:
     res = REACH.run(cfg, seeds=REACH.default_seeds)
     final = res.final_success()
     assert final["map"] >= 0.95 * final["true_z"], final
+
+
+def _synthetic_result(**run: int) -> ReachResult:
+    """A result of 4 seeds x 400 episodes without training: "flat" succeeds on every other
+    episode throughout; "ramp" climbs linearly from 0 to 1 over the run (success where a
+    fixed pattern lies below the ramp); steps are the episode index mod 40 + seed."""
+    cfg = ReachConfig().replace(states=("retina", "true_z"), episodes=400, block=50,
+                                final_episodes=200, **run)  # fmt: skip
+    res = ReachResult(cfg, (5, 6, 7, 8))
+    ep = np.arange(400)
+    u = (ep * 0.618034) % 1.0  # an even spread of thresholds, the same for every seed
+    flat = np.tile(ep % 2 == 0, (4, 1))
+    ramp = np.tile(u < ep / 399.0, (4, 1))
+    for state, succ in (("true_z", flat), ("retina", ramp)):
+        res.success[state] = succ
+        res.lost[state] = np.zeros_like(succ)
+        res.steps[state] = (ep % 40 + np.arange(4)[:, None] + 1).astype(np.int64)
+    res.values = {s: np.zeros((21, 21)) for s in ("retina", "true_z")}
+    res.z_axis = np.linspace(0, 1, 21)
+    return res
+
+
+def test_a_learner_still_rising_at_the_last_episode_is_named_from_the_data() -> None:
+    res = _synthetic_result()
+    rise = res.final_rise()
+    # the ramp rises 199/399 of the way across the last 200 episodes; the flat one not at all
+    assert rise["retina"] == pytest.approx(199 / 399, abs=0.05)
+    assert abs(rise["true_z"]) < 0.02
+    assert res.still_rising() == ["retina"]
+    d = res.to_dict()
+    assert d["levelled_off"] == {"retina": False, "true_z": True}
+    assert "not levelled off (rise >= 0.05 over the last 200 of 400 episodes): retina" in (
+        res.table()
+    )
+    calm = _synthetic_result(plateau_rise=0.9)  # a threshold above the ramp's rise
+    assert calm.still_rising() == [] and "every learner levelled off" in calm.table()
+    with pytest.raises(ConfigError, match="plateau_rise must be"):
+        ReachRunConfig(plateau_rise=0.0)
+
+
+def test_reach_figure_names_rising_learners_and_spreads_and_labels_every_panel() -> None:
+    res = _synthetic_result()
+    fig = reach_figure(res)
+    success, steps = fig.axes[0], fig.axes[1]
+    labels = [t.get_text() for t in success.get_legend().get_texts()]
+    assert any(t.startswith("retina only (still rising: +0.") for t in labels), labels
+    assert not any("still rising" in t for t in labels if t.startswith("true z")), labels
+    assert steps.get_legend() is not None and len(steps.get_legend().get_texts()) == 2
+    assert len(steps.collections) == 2  # a quartile band per state
+    c = res.curves()["true_z"]  # seeds' mean steps differ by 1 each: quartiles of 4 seeds
+    np.testing.assert_allclose(c["steps_q75"] - c["steps_q25"], 1.5)
+    assert "not levelled off" in fig._suptitle.get_text() and "seed 5" in fig._suptitle.get_text()
+    bars = [ax for ax in fig.axes if ax.get_label() == "<colorbar>"]
+    assert len(bars) == 2 and all("V(z)" in ax.get_ylabel() for ax in bars)

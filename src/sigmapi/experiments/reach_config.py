@@ -172,6 +172,10 @@ class ReachRunConfig:
     """Episodes per point of the learning curves."""
     final_episodes: int = 200
     """The final success rate is measured over this many last episodes."""
+    plateau_rise: float = 0.05
+    """A learner has levelled off when its success rate rises by less than this over the last
+    final_episodes episodes (a line fitted to each seed's episodes there, mean over seeds);
+    the figure and the table name every learner that has not."""
     seed: int = 0
     """Root seed: seed s of a run uses child s of SeedSequence(seed)."""
 
@@ -183,6 +187,9 @@ class ReachRunConfig:
                 f"final_episodes must be <= episodes ({self.episodes}), got {self.final_episodes}"
             )
         object.__setattr__(self, "seed", _validate.integer("seed", self.seed, 0))
+        rise = _validate.number("plateau_rise", self.plateau_rise, 0.0, 1.0, lo_open=True,
+                                fix="a share of success rate, e.g. 0.05")  # fmt: skip
+        object.__setattr__(self, "plateau_rise", rise)
         states = tuple(self.states)
         bad = [s for s in states if s not in STATES]
         if not states or bad or len(set(states)) != len(states):

@@ -8,6 +8,7 @@ objects that draw on the Agg canvas when saved with ``fig.savefig(path)``.
 
 from __future__ import annotations
 
+import textwrap
 from typing import Any, Protocol
 
 import numpy as np
@@ -30,6 +31,12 @@ class ReachData(Protocol):
 
     def curves(self) -> dict[str, dict[str, NDArray[np.float64]]]: ...
 
+    def final_rise(self) -> dict[str, float]: ...
+
+    def still_rising(self) -> list[str]: ...
+
+    def levelling_note(self) -> str: ...
+
 
 LABELS = {
     "map": "Sigma-Pi map (learned)",
@@ -47,37 +54,45 @@ def _ax(ax: Axes | None) -> Axes:
 
 
 def plot_reach_curves(result: ReachData, metric: str = "success", ax: Axes | None = None) -> Axes:
-    """Learning curves per state: ``metric`` "success" (rate per block, band = 1 sd over
-    seeds) or "steps" (mean steps of the successful episodes per block)."""
+    """Learning curves per state, with a legend: ``metric`` "success" (rate per block, mean
+    over seeds, band = 1 sd over seeds; a learner that had not levelled off at the last
+    episode, :meth:`~sigmapi.experiments.reach_result.ReachResult.still_rising`, is marked
+    so in the legend) or "steps" (mean steps of the successful episodes per block, band =
+    the quartiles over seeds)."""
     if metric not in ("success", "steps"):
         raise ValueError(f"metric must be 'success' or 'steps', got {metric!r}")
     ax = _ax(ax)
+    rising, rise = result.still_rising(), result.final_rise()
     for state, c in result.curves().items():
-        ep = c["episode"]
+        ep, color, label = c["episode"], COLORS.get(state), LABELS.get(state, state)
         if metric == "success":
-            ax.plot(ep, c["success"], color=COLORS.get(state), label=LABELS.get(state, state))
-            ax.fill_between(ep, c["success"] - c["success_sd"], c["success"] + c["success_sd"],
-                            color=COLORS.get(state), alpha=0.15, linewidth=0)  # fmt: skip
+            if state in rising:
+                label += f" (still rising: {rise[state]:+.2f})"
+            ax.plot(ep, c["success"], color=color, label=label)
+            lo, hi = c["success"] - c["success_sd"], c["success"] + c["success_sd"]
         else:
-            ax.plot(
-                ep, c["steps_to_reach"], color=COLORS.get(state), label=LABELS.get(state, state)
-            )
-    ax.set_xlabel(f"episode (blocks of {result.config.run.block})")
+            ax.plot(ep, c["steps_to_reach"], color=color, label=label)
+            lo, hi = c["steps_q25"], c["steps_q75"]
+        ax.fill_between(ep, lo, hi, color=color, alpha=0.15, linewidth=0)
+    n, run = len(result.seeds), result.config.run
+    ax.set_xlabel(f"episode (blocks of {run.block})")
     if metric == "success":
         ax.set_ylabel("success rate")
         ax.set_ylim(0.0, 1.02)
-        ax.set_title(f"reaching success, mean of {len(result.seeds)} seeds")
+        ax.set_title(f"reaching success, mean of {n} seed{'s' * (n > 1)} (band: 1 sd)", fontsize=9)
     else:
         ax.set_ylabel("steps to reach (successes)")
-        ax.set_title("steps to reach the goal")
+        ax.set_title(f"steps to reach, mean of {n} seed{'s' * (n > 1)} (band: IQR)", fontsize=9)
     ax.grid(alpha=0.3)
+    ax.legend(fontsize=7, loc="lower right" if metric == "success" else "upper right")
     return ax
 
 
 def plot_value_function(
     result: ReachData, state: str, ax: Axes | None = None, **kwargs: Any
 ) -> Axes:
-    """The critic's value over body-centred z (seed 0) for ``state``, with the goal region.
+    """The critic's value over body-centred z (the first seed) for ``state``, with the goal
+    region; its colour bar (2-D) or y axis (1-D) is labelled.
 
     2-D: an image over (z0, z1); 1-D: a curve. Extra ``kwargs`` go to ``imshow`` / ``plot``.
     """
@@ -94,12 +109,13 @@ def plot_value_function(
         ax.plot([lo, hi, hi, lo, lo], [lo, lo, hi, hi, lo], color="w", lw=1.2)
         ax.set_xlabel("z0")
         ax.set_ylabel("z1")
-        ax.figure.colorbar(im, ax=ax, fraction=0.046, pad=0.04)
+        bar = ax.figure.colorbar(im, ax=ax, fraction=0.046, pad=0.04)
+        bar.set_label("V(z): expected discounted reward", fontsize=8)
     else:
         ax.plot(z, v, color=COLORS.get(state), **kwargs)
         ax.axvspan(lo, hi, color="0.85", zorder=0)
         ax.set_xlabel("z")
-        ax.set_ylabel("V(z)")
+        ax.set_ylabel("V(z): expected discounted reward")
     ax.set_title(f"V over z: {LABELS.get(state, state)}", fontsize=9)
     return ax
 
@@ -108,14 +124,14 @@ def reach_figure(result: ReachData) -> Figure:
     """The comparison on one page: success and steps curves, then the value over z per state."""
     states = list(result.values)
     n = max(len(states), 2)
-    fig = Figure(figsize=(3.2 * n, 7.0), layout="constrained")
+    width = max(3.2 * n, 9.6)
+    fig = Figure(figsize=(width, 7.0), layout="constrained")
     grid = fig.add_gridspec(2, n)
     half = n // 2
     ax0 = fig.add_subplot(grid[0, :half])
     ax1 = fig.add_subplot(grid[0, half:])
     plot_reach_curves(result, "success", ax0)
     plot_reach_curves(result, "steps", ax1)
-    ax0.legend(fontsize=8, loc="lower right")
     values = [np.asarray(result.values[s]) for s in states]
     shared: dict[
         str, float
@@ -126,11 +142,14 @@ def reach_figure(result: ReachData) -> Figure:
     for i, s in enumerate(states):
         plot_value_function(result, s, fig.add_subplot(grid[1, i]), **shared)
     env, agent = result.config.env, result.config.agent
-    fig.suptitle(
+    title = (
         f"Gaze-and-reach, {env.dim}-D, saccade rate {env.saccade_rate:g}: actor-critic "
         f"(gamma {agent.gamma:g}, rates {agent.critic_lr:g}/{agent.actor_lr:g}, "
         f"beta {agent.beta:g}); "
-        "bottom: critic's value over z after training (seed 0; white: goal region)",
-        fontsize=10,
+        f"bottom: critic's value over z after training (seed {result.seeds[0]}; white: goal "
+        f"region)",
+        result.levelling_note(),
     )
+    chars = int(width * 13)  # about as many characters of 10-point text fit an inch
+    fig.suptitle("\n".join(textwrap.fill(t, chars) for t in title), fontsize=10)
     return fig

@@ -60,6 +60,31 @@ class ReachResult:
         f = self.config.run.final_episodes
         return {s: v[:, -f:].mean(axis=1) for s, v in self.success.items()}
 
+    def final_rise_per_seed(self) -> dict[str, NDArray[np.float64]]:
+        """How much the success rate still rose over the last ``final_episodes`` episodes:
+        per state and seed, the change across that window of a least-squares line through
+        the episodes' outcomes (1 reached, 0 not), ``(len(seeds),)``."""
+        f = self.config.run.final_episodes
+        t = np.arange(f, dtype=np.float64) - (f - 1) / 2.0
+        denom = float(t @ t)
+        out = {}
+        for s, v in self.success.items():
+            y = v[:, -f:].astype(np.float64)
+            slope = (y @ t) / denom if denom > 0 else np.zeros(len(y))
+            out[s] = slope * (f - 1)
+        return out
+
+    def final_rise(self) -> dict[str, float]:
+        """:meth:`final_rise_per_seed`, mean over seeds (the rise of the seeds' mean curve)."""
+        return {s: float(v.mean()) for s, v in self.final_rise_per_seed().items()}
+
+    def still_rising(self) -> list[str]:
+        """The states whose success rate had not levelled off at the last episode: a rise of
+        at least ``plateau_rise`` over the last ``final_episodes`` (:meth:`final_rise`), so
+        that their final rate is the episode budget's as much as the state's."""
+        limit = self.config.run.plateau_rise
+        return [s for s, r in self.final_rise().items() if r >= limit]
+
     def ratio_map_to_true_z(self) -> float | None:
         """Final success of the map over that of the true z (None without both or at 0)."""
         final = self.final_success()
@@ -70,8 +95,10 @@ class ReachResult:
     def curves(self) -> dict[str, dict[str, NDArray[np.float64]]]:
         """Per state: ``episode`` (block ends), ``success`` and ``steps_to_reach`` per block.
 
-        Each is ``(n_blocks,)`` mean over seeds, with ``*_sd`` the standard deviation over
-        seeds; steps to reach average the successful episodes only (NaN when none).
+        Each is ``(n_blocks,)`` mean over seeds, with ``success_sd`` the standard deviation
+        over seeds; steps to reach average the successful episodes only (NaN when none), and
+        ``steps_q25`` / ``steps_q75`` are the quartiles over the seeds of each seed's mean
+        (the seeds with a success in the block; NaN when none has one).
         """
         b = self.config.run.block
         out: dict[str, dict[str, NDArray[np.float64]]] = {}
@@ -88,17 +115,24 @@ class ReachResult:
             mean_steps = np.where(
                 cnt > 0, np.where(ok, reach_steps, 0.0).sum(axis=0) / np.maximum(cnt, 1), np.nan
             )
+            quartiles = np.full((2, nb), np.nan)
+            for j in range(nb):
+                if ok[:, j].any():
+                    quartiles[:, j] = np.percentile(reach_steps[ok[:, j], j], (25, 75))
             out[s] = {
                 "episode": (np.arange(nb) + 1.0) * b,
                 "success": rate.mean(axis=0),
                 "success_sd": rate.std(axis=0),
                 "steps_to_reach": mean_steps,
+                "steps_q25": quartiles[0],
+                "steps_q75": quartiles[1],
             }
         return out
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-able summary: final success (mean and per seed), lost and timed-out shares,
-        the curves, the maps' metrics, the config (its parts and the seeds) and the time."""
+        the rise over the final episodes and whether each learner levelled off, the curves,
+        the maps' metrics, the config (its parts and the seeds) and the time."""
         curves = self.curves()
         return {
             "success": self.final_success(),
@@ -106,6 +140,8 @@ class ReachResult:
             "lost": self.final_lost(),
             "timed_out": self.final_timed_out(),
             "ratio_map_to_true_z": self.ratio_map_to_true_z(),
+            "final_rise": self.final_rise(),
+            "levelled_off": {s: s not in self.still_rising() for s in self.success},
             "curves": {
                 s: {k: [None if not np.isfinite(x) else float(x) for x in v] for k, v in c.items()}
                 for s, c in curves.items()
@@ -119,18 +155,33 @@ class ReachResult:
         """The final success of each state as lines of text (per seed, and the lost share)."""
         run = self.config.run
         per_seed = self.final_success_per_seed()
-        lost = self.final_lost()
+        lost, rise = self.final_lost(), self.final_rise()
         lines = [
             f"final success rate over the last {run.final_episodes} of {run.episodes} "
             f"episodes, {len(self.seeds)} seeds:"
         ]
         for s, v in self.final_success().items():
             seeds = " ".join(f"{x:.3f}" for x in per_seed[s])
-            lines.append(f"  {s:12s} {v:.3f}   per seed: {seeds}   (lost {lost[s]:.3f})")
+            lines.append(f"  {s:12s} {v:.3f}   per seed: {seeds}   (lost {lost[s]:.3f}, "
+                         f"rise {rise[s]:+.3f})")  # fmt: skip
         ratio = self.ratio_map_to_true_z()
         if ratio is not None:
             lines.append(f"  map / true_z = {ratio:.3f}")
+        lines.append(f"  rise: the change of the success rate across those episodes (a line "
+                     f"fitted per seed); {self.levelling_note()}")  # fmt: skip
         return "\n".join(lines)
+
+    def levelling_note(self) -> str:
+        """One sentence, from the data: which learners had not levelled off at the last
+        episode (:meth:`still_rising`), or that all had."""
+        run, rising = self.config.run, self.still_rising()
+        window = f"over the last {run.final_episodes} of {run.episodes} episodes"
+        if not rising:
+            return f"every learner levelled off (rise < {run.plateau_rise:g} {window})"
+        return (
+            f"not levelled off (rise >= {run.plateau_rise:g} {window}): {', '.join(rising)}; "
+            "their final rates are the episode budget's as much as the state's (--episodes)"
+        )
 
     def save_figure(self, path: str | Path, dpi: int = 120) -> Path:
         """Draw the comparison (:func:`~sigmapi.experiments.reach_plots.reach_figure`) to

@@ -13,6 +13,7 @@ from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
+from matplotlib import ticker
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
@@ -53,6 +54,7 @@ def plot_labels_curve(result: Mapping[str, Any], ax: Axes | None = None) -> Axes
                 xytext=(2, 3), textcoords="offset points", fontsize=7, color="0.4")  # fmt: skip
     ax.set_xscale("log")
     ax.set_yscale("log")
+    _plain_log_ticks(ax)
     ax.set_xlabel("labelled samples given to the read-out")
     ax.set_ylabel("z error (grid spacings)")
     n = len(result["config"]["seeds"])
@@ -60,6 +62,18 @@ def plot_labels_curve(result: Mapping[str, Any], ax: Axes | None = None) -> Axes
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=7, ncol=3, loc="upper center", bbox_to_anchor=(0.5, -0.14))
     return ax
+
+
+def _plain_log_ticks(ax: Axes) -> None:
+    """Log axes labelled with plain numbers (``0.5``, ``2``, ``1000``; not ``5x10^-1``):
+    ticks at 1, 2 and 5 times the powers of ten (more on an axis that spans less than about
+    a decade, so that it has a few), the minor ticks unlabelled."""
+    for axis, (lo, hi) in ((ax.xaxis, ax.get_xlim()), (ax.yaxis, ax.get_ylim())):
+        narrow = np.log10(hi / lo) < 1.3 if lo > 0 and hi > lo else False
+        subs = (1.0, 1.5, 2.0, 3.0, 5.0, 7.0) if narrow else (1.0, 2.0, 5.0)
+        axis.set_major_locator(ticker.LogLocator(base=10, subs=subs))
+        axis.set_major_formatter(ticker.FuncFormatter(lambda v, _: f"{v:g}"))
+        axis.set_minor_formatter(ticker.NullFormatter())
 
 
 def plot_consistency(result: Mapping[str, Any], ax: Axes | None = None) -> Axes:
