@@ -138,8 +138,8 @@ def test_experiment_is_deterministic_and_shapes_are_right(tmp_path) -> None:
     d = a.to_dict()
     json.dumps(d)
     assert set(d) == {"success", "success_per_seed", "lost", "timed_out", "ratio_map_to_true_z",
-                      "final_rise", "levelled_off", "curves", "map_metrics", "config",
-                      "seconds"}  # fmt: skip
+                      "final_rise", "final_rise_se", "levelled_off", "curves", "map_metrics",
+                      "config", "seconds"}  # fmt: skip
     assert d["config"]["seeds"] == [0, 1] and d["config"]["map"]["iterations"] == 500
     assert set(d["config"]) == {"env", "map", "agent", "run", "seeds"}
     for s in a.success:  # counted: never a rounding residue such as -8.7e-17
@@ -299,6 +299,7 @@ def test_a_learner_still_rising_at_the_last_episode_is_named_from_the_data() -> 
     assert rise["retina"] == pytest.approx(199 / 399, abs=0.05)
     assert abs(rise["true_z"]) < 0.02
     assert res.still_rising() == ["retina"]
+    assert res.final_rise_se() == {"retina": 0.0, "true_z": 0.0}  # every seed alike
     d = res.to_dict()
     assert d["levelled_off"] == {"retina": False, "true_z": True}
     assert "not levelled off (rise >= 0.05 over the last 200 of 400 episodes): retina" in (
@@ -324,3 +325,14 @@ def test_reach_figure_names_rising_learners_and_spreads_and_labels_every_panel()
     assert "not levelled off" in fig._suptitle.get_text() and "seed 5" in fig._suptitle.get_text()
     bars = [ax for ax in fig.axes if ax.get_label() == "<colorbar>"]
     assert len(bars) == 2 and all("V(z)" in ax.get_ylabel() for ax in bars)
+
+
+def test_a_longer_budget_repeats_the_shorter_run_then_goes_on() -> None:
+    """docs/guide/reach-levelling.md: the first episodes of a longer run of the same seeds are
+    the shorter run's, so one long run shows the learners at the default budget too."""
+    cfg = ReachConfig().replace(**{**TINY, "states": ("retina", "true_z")})
+    short = REACH.run(cfg, seeds=[2])
+    long = REACH.run(cfg.replace(episodes=35), seeds=[2])
+    for s in short.success:
+        np.testing.assert_array_equal(long.success[s][:, :20], short.success[s])
+        np.testing.assert_array_equal(long.steps[s][:, :20], short.steps[s])

@@ -78,6 +78,14 @@ class ReachResult:
         """:meth:`final_rise_per_seed`, mean over seeds (the rise of the seeds' mean curve)."""
         return {s: float(v.mean()) for s, v in self.final_rise_per_seed().items()}
 
+    def final_rise_se(self) -> dict[str, float | None]:
+        """The standard error of :meth:`final_rise` over seeds (None with one seed): the
+        rise of a learner that has levelled off scatters around 0 by about this much."""
+        return {
+            s: float(v.std(ddof=1) / np.sqrt(len(v))) if len(v) > 1 else None
+            for s, v in self.final_rise_per_seed().items()
+        }
+
     def still_rising(self) -> list[str]:
         """The states whose success rate had not levelled off at the last episode: a rise of
         at least ``plateau_rise`` over the last ``final_episodes`` (:meth:`final_rise`), so
@@ -141,6 +149,7 @@ class ReachResult:
             "timed_out": self.final_timed_out(),
             "ratio_map_to_true_z": self.ratio_map_to_true_z(),
             "final_rise": self.final_rise(),
+            "final_rise_se": self.final_rise_se(),
             "levelled_off": {s: s not in self.still_rising() for s in self.success},
             "curves": {
                 s: {k: [None if not np.isfinite(x) else float(x) for x in v] for k, v in c.items()}
@@ -155,20 +164,22 @@ class ReachResult:
         """The final success of each state as lines of text (per seed, and the lost share)."""
         run = self.config.run
         per_seed = self.final_success_per_seed()
-        lost, rise = self.final_lost(), self.final_rise()
+        lost, rise, se = self.final_lost(), self.final_rise(), self.final_rise_se()
         lines = [
             f"final success rate over the last {run.final_episodes} of {run.episodes} "
             f"episodes, {len(self.seeds)} seeds:"
         ]
         for s, v in self.final_success().items():
             seeds = " ".join(f"{x:.3f}" for x in per_seed[s])
+            spread = "" if se[s] is None else f" +- {se[s]:.3f}"
             lines.append(f"  {s:12s} {v:.3f}   per seed: {seeds}   (lost {lost[s]:.3f}, "
-                         f"rise {rise[s]:+.3f})")  # fmt: skip
+                         f"rise {rise[s]:+.3f}{spread})")  # fmt: skip
         ratio = self.ratio_map_to_true_z()
         if ratio is not None:
             lines.append(f"  map / true_z = {ratio:.3f}")
         lines.append(f"  rise: the change of the success rate across those episodes (a line "
-                     f"fitted per seed); {self.levelling_note()}")  # fmt: skip
+                     "fitted per seed; +- its standard error over seeds); "
+                     f"{self.levelling_note()}")  # fmt: skip
         return "\n".join(lines)
 
     def levelling_note(self) -> str:
