@@ -3,7 +3,7 @@ longer, and each learner's success and rise read at the default budget and at th
 
 Usage (from the repository root)::
 
-    python benchmarks/bench_reach_levelling.py                    # sigmapi reach, 1800 episodes
+    python benchmarks/bench_reach_levelling.py                    # sigmapi reach, 1200 episodes
     python benchmarks/bench_reach_levelling.py --from DIR         # a run already made there
 
 The run is ``sigmapi reach --episodes N --seeds S... --out DIR --json --quiet``, as a user runs
@@ -116,7 +116,7 @@ def _time_log(path: Path) -> dict[str, float]:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--episodes", type=int, default=1800)
+    ap.add_argument("--episodes", type=int, default=1200)
     ap.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2, 3, 4])
     ap.add_argument("--checkpoint", type=int, default=600, help="the default budget")
     ap.add_argument("--from", dest="src_dir", type=Path, help="read DIR/result.json, run nothing")

@@ -98,21 +98,22 @@ class MapConfig:
     """The Sigma-Pi map a reach learner reads: its size, how it learns, how it is read."""
 
     map_shape: tuple[int, ...] = (15, 15)
-    """Grid of the Sigma-Pi map learned in the environment (a task of another dimension
-    given without a map: :func:`default_map_shape`)."""
+    """Grid of the Sigma-Pi map learned in the environment (a 1-D task given without one
+    gets a map of 12 units)."""
     iterations: int = 100_000
     """Iterations of the map, one per saccade view pair it learns from (paper-2d's length)."""
     preset: str = "paper-2d"
     """The SOM preset the map learns with: its winner rule, schedules, ordering procedure and
     kernel tolerance (the codes come from the world, the size, length and seed from here).
-    "none": the small-map schedule (soft winner, random start; see MapConfig.som_config)."""
+    "none": the small-map schedule (the paper's soft winner and random start, a longer
+    ordering phase)."""
     backend: str = "auto"
     """Kernel that learns and reads the map ("auto": the fast one when it is installed)."""
     model_path: str | None = None
     """A trained model file to use for every seed instead of learning a map per seed."""
     features: str = "response"
     """Map features: "response" (activations clipped at 0, L2-normalised) or "bump" (Gaussian
-    around the winner on the map grid); the README's reach section compares the two."""
+    around the winner on the map grid)."""
     feature_width: float = 1.0
     """Width of the bump features (map and true-z codes), in grid units."""
 
