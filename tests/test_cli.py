@@ -182,3 +182,11 @@ def test_compare_help_shows_the_config_defaults():
             assert f"(default {f.default})" in text, f.name
         elif isinstance(f.default, str):
             assert f"(default {f.default})" in text, f.name
+
+
+def test_train_help_states_the_presets_lengths_as_they_are():
+    from sigmapi.config import load_preset
+
+    text = " ".join(_helps()["train"].split())
+    assert f"paper-1d: the paper's 1-D task, {load_preset('paper-1d').iterations:,} iter" in text
+    assert f"({load_preset('tiny-1d').iterations:,} iterations)" in text

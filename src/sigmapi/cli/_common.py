@@ -102,12 +102,17 @@ def add_workers_flag(p: argparse.ArgumentParser | argparse._ArgumentGroup, what:
                    "budget, half the available memory; results do not depend on it)")  # fmt: skip
 
 
+DEFAULT_PRESET = "paper-1d"
+"""The preset of ``sigmapi train`` without ``--preset``."""
+
+
 def add_config_flags(p: argparse.ArgumentParser) -> None:
     """``--preset``, ``--config``, ``--set``, ``--seed`` and ``--backend``."""
+    its = load_preset(DEFAULT_PRESET).iterations  # read, not restated: the preset may change
     p.add_argument(
         "--preset",
-        default="paper-1d",
-        help="preset name (default paper-1d: 300,000 iterations; see `sigmapi presets`)",
+        default=DEFAULT_PRESET,
+        help=f"preset name (default {DEFAULT_PRESET}: {its:,} iterations; see `sigmapi presets`)",
     )
     p.add_argument("--config", help="TOML file whose keys override the preset")
     p.add_argument(
