@@ -556,7 +556,16 @@ STATES = {"map": "learned map", "retina": "retina code", "retina_gaze": "retina 
 
 @table("robot-docking")
 def _robot_docking() -> Table:
-    data = load("robot-docking")
+    return _docking("robot-docking")
+
+
+@table("robot-docking-tuning")
+def _robot_docking_tuning() -> Table:
+    return _docking("robot-docking-tuning")
+
+
+def _docking(name: str) -> Table:
+    data = load(name)
     res = data["result"]
     rows = []
     for state, per_seed in res["success_per_seed"].items():
@@ -568,7 +577,7 @@ def _robot_docking() -> Table:
             f"{res['config']['final_episodes']} of {res['config']['episodes']} episodes; "
             f"{num(data['cpu_s'] / 60, '.1f')} CPU minutes.")  # fmt: skip
     return Table(["state the learner sees", "success, median (worst seed)", "per seed",
-                  "reach touching the ball, of docked"], rows, [_rel("robot-docking")], note,
+                  "reach touching the ball, of docked"], rows, [_rel(name)], note,
                  _command(data))  # fmt: skip
 
 
