@@ -98,7 +98,7 @@ def test_the_site_builds_with_warnings_as_errors(tmp_path):
     assert re.search(r"compute: \d+ CPU seconds", (out / "tutorial.html").read_text("utf-8"))
     # a results page shows a number of its JSON, rendered by the build
     ceiling = sigmapi_results.load("ceiling-1d")["presets"]["paper-1d"]["summary"]
-    cell = sigmapi_results.mw(ceiling["view_consistency"])
+    cell = sigmapi_results.mw(ceiling["view_consistency"]).replace(" / ", "\u00a0/\u00a0")
     assert cell in (out / "results" / "reproduction.html").read_text("utf-8")
     # the API page of the estimator documents its methods, inherited ones included
     api = (out / "generated" / "sigmapi.SigmaPiSOM.html").read_text("utf-8")

@@ -650,7 +650,9 @@ class ResultsTable(SphinxDirective):
         if name not in TABLES:
             raise self.error(f"no results table {name!r}; known: {', '.join(sorted(TABLES))}")
         try:
-            text = TABLES[name]().markdown()
+            # "median / worst" and seed ranges stay on one line in a narrow column
+            text = TABLES[name]().markdown().replace(" / ", "\u00a0/\u00a0")
+            text = re.sub(r"(?<=\d)-(?=\d)", "\u2011", text)
         except ExtensionError as e:
             raise self.error(f"results table {name!r}: {e}") from None
         for src in _sources_of(name):
