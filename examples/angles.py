@@ -1,4 +1,7 @@
-"""Angles on a ring: periodic codes, z = (x + y) mod 1, and a periodic (ring) map.
+"""Angles on a ring
+================
+
+Angles on a ring: periodic codes, z = (x + y) mod 1, and a periodic (ring) map.
 
 x and y are angles, fractions of a turn where 0 and 1 are the same place (a body direction and
 a head-on-body angle, say); z = (x + y) mod 1 (the head direction). The preset ``angles-1d``
@@ -7,6 +10,8 @@ A bounded map (the paper's) learns the same angles as well, view for view, but w
 its two ends decode neighbouring angles, so two nearby z win units at opposite ends of the map
 (``seam_gap``: the largest map distance between units that decode neighbouring angles). The
 ring has no seam: the units on both sides of the wrap win, one unit apart.
+
+Run it::
 
     python examples/angles.py            # 15-unit ring, 3 seeds (a few seconds each)
     python examples/angles.py --small    # a 10-unit ring, one seed
@@ -20,7 +25,7 @@ import sigmapi
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=(__doc__ or "").partition("\n")[0])
     parser.add_argument("--small", action="store_true", help="a tiny run (for the tests)")
     args = parser.parse_args()
     cfg = sigmapi.load_preset("angles-1d")  # periodic codes, relation "sum_mod", a ring

@@ -1,9 +1,14 @@
-"""A chain of frames: retina + eye -> head-centred map, its response + head -> body-centred map.
+"""A chain of frames
+=================
+
+A chain of frames: retina + eye -> head-centred map, its response + head -> body-centred map.
 
 Both maps learn without a teacher, each from two views of its own invariant (the head-centred
 position a = (x + e) / 2, then the body-centred z = (a + u) / 2). Beside them, one map learns
 the whole transformation at once from the retina and the joint code of (eye, head): third-order
 Sigma-Pi units on the same triples (``sigmapi.experiments.chain``, docs/algorithm.md).
+
+Run it::
 
     python examples/chain.py            # paper-1d sizes, 300,000 iterations per map, 5 seeds
     python examples/chain.py --small    # a second or two
@@ -18,7 +23,7 @@ from sigmapi.experiments.chain import run_chain
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=(__doc__ or "").partition("\n")[0])
     parser.add_argument("--small", action="store_true", help="a tiny run (for the tests)")
     parser.add_argument("--code", choices=("response", "winner"), default="response",
                         help="what map A hands to map B (default: its response)")  # fmt: skip

@@ -1,7 +1,10 @@
-"""The Sigma-Pi map beside a first-order SOM, MiniSom, a basis-function network and an RBM.
+"""The Sigma-Pi map beside the baselines
+=====================================
+
+The Sigma-Pi map beside a first-order SOM, MiniSom, a basis-function network and an RBM.
 
 Needs the extra: ``pip install 'sigmapi[baselines]'``. The same as ``sigmapi compare``, from
-Python:
+Python::
 
     python examples/compare_baselines.py           # the quick comparison
     python examples/compare_baselines.py --small   # a tiny one
@@ -17,7 +20,7 @@ from sigmapi.viz.compare import compare_figure
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=(__doc__ or "").partition("\n")[0])
     parser.add_argument("--small", action="store_true", help="a tiny run (for the tests)")
     parser.add_argument("--out", default="compare.png", help="figure file")
     args = parser.parse_args()

@@ -1,8 +1,11 @@
-"""Record views in the Gymnasium environment and train a Sigma-Pi map on them.
+"""Views recorded in the Gymnasium environment
+===========================================
+
+Record views in the Gymnasium environment and train a Sigma-Pi map on them.
 
 The body keeps still while the eye makes saccades: each saccade shows the same object at a
 new retinal position under a new gaze, two views of one body-centred z, gathered without a
-teacher (``info["z"]`` is never read). Paper-1d sizes (15 + 15 inputs, 15 units):
+teacher (``info["z"]`` is never read). Paper-1d sizes (15 + 15 inputs, 15 units)::
 
     python examples/gym_views.py            # 20,000 recorded pairs, 5 seeds
     python examples/gym_views.py --small    # a few seconds
@@ -19,7 +22,7 @@ from sigmapi.envs import collect_saccade_views
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=(__doc__ or "").partition("\n")[0])
     parser.add_argument("--small", action="store_true", help="a tiny run (for the tests)")
     args = parser.parse_args()
     grid, pairs, seeds = 15, 20_000, range(5)

@@ -1,10 +1,15 @@
-"""Noisy population codes: z error and view consistency against the noise level, as a figure.
+"""Noisy population codes
+======================
+
+Noisy population codes: z error and view consistency against the noise level, as a figure.
 
 Every code the map sees, in training and in testing, is made noisy with
 :func:`sigmapi.codes.noisy`: Poisson spike counts at a chosen expected count of the most
 active unit, or additive Gaussian noise (standard deviation a fraction of the peak). The
 Sigma-Pi map (paper-1d sizes, sigmapi's ordering procedure) trains on 20,000 noisy view pairs
 with ``fit(views)`` and is scored by ``evaluate`` on noisy test and calibration views.
+
+Run it::
 
     python examples/noise.py --out noise.png            # 3 seeds, about 3 minutes
     python examples/noise.py --small --out noise.png    # seconds
@@ -83,7 +88,7 @@ def draw(results: dict, floor: float, seeds) -> Figure:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=(__doc__ or "").partition("\n")[0])
     parser.add_argument("--small", action="store_true", help="a tiny run (for the tests)")
     parser.add_argument("--out", default="noise.png", help="figure file")
     args = parser.parse_args()

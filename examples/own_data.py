@@ -1,8 +1,11 @@
-"""Train a Sigma-Pi map on two-view data you recorded yourself (positions in your units).
+"""Your own two-view data
+======================
+
+Train a Sigma-Pi map on two-view data you recorded yourself (positions in your units).
 
 A setup records, for objects that stay put, two glimpses each: the retinal angle and the
 gaze angle (degrees) before and after a saccade. Rescale them to [0, 1], turn them into the
-model's codes with ``encode_views``, save them, and ``fit(views)``:
+model's codes with ``encode_views``, save them, and ``fit(views)``::
 
     python examples/own_data.py            # paper-1d sizes, 20,000 pairs, 5 seeds
     python examples/own_data.py --small    # a few seconds
@@ -34,7 +37,7 @@ def record(n: int, rng: np.random.Generator) -> dict[str, np.ndarray]:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=(__doc__ or "").partition("\n")[0])
     parser.add_argument("--small", action="store_true", help="a tiny run (for the tests)")
     args = parser.parse_args()
     cfg = sigmapi.load_preset("paper-1d").replace(refine_rounds=0)  # as the README measured

@@ -1,4 +1,7 @@
-"""Other relations: the built-in difference, and a relation you write yourself.
+"""Other relations
+===============
+
+Other relations: the built-in difference, and a relation you write yourself.
 
 - ``relation="difference"``: z = x - y, e.g. the retinal position of an object from its
   body-centred position x and the gaze y (z in [-1, 1]).
@@ -8,6 +11,8 @@
   same relation (the model's config knows only the built-in relations by name). Give the
   bounds of x and y for each z: without them the sampler finds views of z near the border by
   rejection alone, which took 49 s for 20,000 pairs of this relation (0.1 s with them).
+
+Run it::
 
     python examples/relations.py            # paper-1d sizes, 3 seeds
     python examples/relations.py --small    # a few seconds
@@ -34,7 +39,7 @@ WEIGHTED = sigmapi.Relation(
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=(__doc__ or "").partition("\n")[0])
     parser.add_argument("--small", action="store_true", help="a tiny run (for the tests)")
     args = parser.parse_args()
     cfg = sigmapi.load_preset("paper-1d").replace(refine_rounds=0)  # as the README measured

@@ -1,10 +1,13 @@
-"""A body: the simulated robot records its own views, learns the map, then docks on it.
+"""A body: the simulated robot
+===========================
+
+A body: the simulated robot records its own views, learns the map, then docks on it.
 
 The robot (MuJoCo, ``pip install 'sigmapi[robot]'``) keeps its base still while its head makes
 saccades: two views of one ball, the retinal position (head camera) and the neck angles, coded
 as population codes. The Sigma-Pi map learns the body-centred direction from those pairs
 without being told it; then the authors' actor-critic learns to dock the base at the table on
-the map's response, beside the true direction as a code (the upper bound):
+the map's response, beside the true direction as a code (the upper bound)::
 
     python examples/robot.py [--out robot.png]   # the experiment's map, 300 episodes per state
     python examples/robot.py --small              # seconds
@@ -33,7 +36,7 @@ from sigmapi.experiments.robot_map import (
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=(__doc__ or "").partition("\n")[0])
     parser.add_argument("--small", action="store_true", help="a tiny run (for the tests)")
     parser.add_argument("--out", help="draw the map on the table and the curves to this file")
     args = parser.parse_args()

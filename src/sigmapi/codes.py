@@ -1,7 +1,7 @@
 """Population codes: Gaussian hills of activity on grids of units.
 
 A position ``p`` in ``[0, 1]^d`` sits at grid coordinate ``p * (n - 1)`` on an axis of ``n``
-units (``p * n`` on a periodic axis, where 0 and 1 are the same place). The code of ``p`` is
+units (``p * n`` on a periodic axis, where 0 and 1 are the same place). The code of ``p`` is::
 
     c_u = height * exp(-|g_u - p (n - 1)|^2 / (2 width^2))
 

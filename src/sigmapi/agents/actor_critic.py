@@ -37,9 +37,9 @@ class ActorCriticConfig:
     gamma: float = 0.9
     """Discount of the actor-critic (the authors: 0.9)."""
     critic_lr: float = 0.1
-    """Learning rate of the critic (the authors: 0.1), per unit of |phi|^2."""
+    """Learning rate of the critic (the authors: 0.1), per unit of ``|phi|^2``."""
     actor_lr: float = 0.1
-    """Learning rate of the actor (the authors: 0.1), per unit of |phi|^2."""
+    """Learning rate of the actor (the authors: 0.1), per unit of ``|phi|^2``."""
     beta: float = 2.0
     """Inverse temperature of the softmax policy (the authors: 2)."""
 
@@ -75,9 +75,12 @@ class ActorCritic:
     beta : float
         Inverse temperature of the softmax.
 
-    Defaults are :class:`ActorCriticConfig`'s (the authors' values), and so are the checks.
     seed : int or numpy.random.Generator, optional
         Source of the action choices.
+
+    Notes
+    -----
+    Defaults are :class:`ActorCriticConfig`'s (the authors' values), and so are the checks.
 
     Examples
     --------

@@ -218,6 +218,8 @@ class GazeReachEnv(gym.Env[Obs, np.int64]):
         workspace (grey), the goal box (green), the gaze direction (blue lines) and the
         object (red).
 
+    Notes
+    -----
     Observations are ``{"retina": code of x, "gaze": code of y}``, float32 vectors of
     ``grid**dim`` values in [0, 1] (L2-normalised Gaussian hills, C order over the grid).
     ``info`` holds ``z``, ``x``, ``y`` (float64 positions), ``saccade`` (the eye moved this

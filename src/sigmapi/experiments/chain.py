@@ -259,8 +259,8 @@ class ChainConfig:
 
     preset: str = "paper-1d"
     """The 1-D preset every map starts from (``sigmapi presets``), with sigmapi's ordering
-    procedure (``crossview``) and no refinement (``refine_rounds=0``, as the README measured
-    the chain; an override can turn it on)."""
+    procedure (``crossview``) and no refinement (``refine_rounds=0``, the setting
+    docs/results/chain.md measures; an override can turn it on)."""
     overrides: tuple[str, ...] = field(default=(), metadata=KEY_VALUES)
     """``key=value`` changes to the preset, e.g. ``iterations=50000`` (one per change)."""
     train_pairs: int = 20_000

@@ -1,0 +1,106 @@
+"""The documentation: the site builds with warnings as errors, the README is a front page.
+
+The build is the README's documented command (``python -m sphinx -W --keep-going -b html docs
+OUT``) into a temporary folder: the tutorial notebook executes, the results pages render their
+tables from ``benchmarks/results/*.json``. The gallery's examples are run by
+``tests/test_examples.py`` already, so this build skips running them a second time
+(``SIGMAPI_DOCS_GALLERY=False``); the documented command runs them.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+DOCS = ROOT / "docs"
+README = (ROOT / "README.md").read_text("utf-8")
+
+pytest.importorskip("sphinx")
+pytest.importorskip("myst_nb")
+pytest.importorskip("sphinx_gallery")
+sys.path.insert(0, str(DOCS / "_ext"))
+import sigmapi_results  # noqa: E402
+
+
+def test_readme_is_a_front_page():
+    assert len(README.splitlines()) <= 150
+    assert "python -m sphinx -W --keep-going -b html docs docs/_build/html" in README
+
+
+def test_ci_runs_exactly_the_readme_test_command():
+    command = "pip install -e '.[test]' && python -m pytest"
+    assert command in README
+    ci = [ln for ln in (ROOT / ".ci" / "run").read_text("utf-8").splitlines() if ln.strip()]
+    assert ci[-1].strip() == command
+
+
+def test_readme_headline_table_is_the_rendered_one():
+    """The README's one table is the docs' ``headline`` table, rendered from the JSON."""
+    rendered = sigmapi_results.TABLES["headline"]().markdown().split("\n\n")[0]
+    assert rendered in README
+
+
+def test_every_results_table_on_a_page_renders_and_names_its_files():
+    used = set()
+    for page in DOCS.rglob("*.md"):
+        used |= set(re.findall(r"```\{results-table\} (\S+)", page.read_text("utf-8")))
+    assert used and used <= set(sigmapi_results.TABLES)
+    for name in sorted(used):
+        table = sigmapi_results.TABLES[name]()
+        assert table.rows, name
+        assert all(len(r) == len(table.header) for r in table.rows), name
+        assert all((ROOT / s).is_file() for s in table.sources), name
+
+
+def test_result_values_follow_the_json(tmp_path, monkeypatch):
+    """A table reads its numbers from the file: change the file and the table changes."""
+    import json
+
+    data = json.loads((ROOT / "benchmarks" / "results" / "files.json").read_text("utf-8"))
+    data["bytes"]["v2"] = 12_345_678
+    (tmp_path / "files.json").write_text(json.dumps(data), "utf-8")
+    monkeypatch.setattr(sigmapi_results, "RESULTS", tmp_path)
+    assert "12.3 MB" in sigmapi_results.TABLES["files"]().markdown()
+    del data["bytes"]
+    (tmp_path / "files.json").write_text(json.dumps(data), "utf-8")
+    with pytest.raises(Exception, match="bytes"):
+        sigmapi_results.TABLES["files"]()
+
+
+def test_the_site_builds_with_warnings_as_errors(tmp_path):
+    out = tmp_path / "html"
+    env = {**os.environ, "SIGMAPI_DOCS_GALLERY": "False", "MPLBACKEND": "Agg"}
+    r = subprocess.run(
+        [sys.executable, "-m", "sphinx", "-W", "--keep-going", "-b", "html", "-q",
+         "-d", str(tmp_path / "doctrees"), str(DOCS), str(out)],
+        capture_output=True, text=True, timeout=900, cwd=ROOT, env=env,
+    )  # fmt: skip
+    assert r.returncode == 0, (r.stdout + r.stderr)[-4000:]
+    for page in (
+        "index",
+        "getting-started",
+        "tutorial",
+        "api",
+        "generated/sigmapi.SigmaPiSOM",
+        "guide/index",
+        "results/reproduction",
+        "results/speed",
+        "auto_examples/index",
+    ):
+        assert (out / f"{page}.html").is_file(), page
+    # the notebook ran: its last cell printed the compute it took
+    assert re.search(r"compute: \d+ CPU seconds", (out / "tutorial.html").read_text("utf-8"))
+    # a results page shows a number of its JSON, rendered by the build
+    ceiling = sigmapi_results.load("ceiling-1d")["presets"]["paper-1d"]["summary"]
+    cell = sigmapi_results.mw(ceiling["view_consistency"]).replace(" / ", "\u00a0/\u00a0")
+    assert cell in (out / "results" / "reproduction.html").read_text("utf-8")
+    # the API page of the estimator documents its methods, inherited ones included
+    api = (out / "generated" / "sigmapi.SigmaPiSOM.html").read_text("utf-8")
+    for method in ("fit", "partial_fit", "winner", "respond", "encode_views", "save"):
+        assert f'id="sigmapi.SigmaPiSOM.{method}"' in api, method
