@@ -12,6 +12,9 @@ children), their peak resident memory, the 1-minute load average sampled every 1
 ran (the machine is shared: wall seconds depend on it; CPU seconds much less), and under
 ``metrics`` the run's whole ``metrics.json`` (its keys: the docstring of
 ``sigmapi.experiments.reproduce``). The docs render the reproduction page from this file.
+A run with other options (``--args``, e.g. fewer seeds on a loaded machine) adds
+``default_run_estimate``: the default run's CPU and 2-core wall seconds extrapolated from it
+(:func:`default_estimate`).
 """
 
 from __future__ import annotations
@@ -39,6 +42,42 @@ def _sample_load(stop: threading.Event, into: list[float]) -> None:
         into.append(os.getloadavg()[0])
 
 
+def default_estimate(metrics: dict[str, Any], cpu: float) -> dict[str, Any]:
+    """CPU and 2-core wall seconds of the default run, from a run on fewer seeds.
+
+    Per preset, the median CPU seconds of one seed's job without its compile, times the
+    seeds the default run trains there; plus this run's compile seconds and the CPU seconds
+    spent outside the training jobs (the ceilings, figures, the reach section: none depends
+    on the number of seeds). The wall estimate spreads the training jobs over 2 cores and
+    counts the rest as serial (an upper bound for it: the reach section runs in parallel).
+    """
+    from sigmapi.experiments.reproduce import REPRODUCE
+    from sigmapi.experiments.results import ReproduceConfig
+
+    seeds, seeds_2d = len(REPRODUCE.seeds), ReproduceConfig().seeds_2d
+    jobs, jobs_default, compiled = 0.0, 0.0, 0.0
+    per_preset = {}
+    for name, p in metrics["presets"].items():
+        runs = p["runs"]
+        per_seed = sorted(r["cpu_seconds"] - r["compile_seconds"] for r in runs)
+        median = per_seed[len(per_seed) // 2]
+        n = seeds if len(p["config"]["map_shape"]) == 1 else min(seeds, seeds_2d or seeds)
+        jobs += sum(r["cpu_seconds"] for r in runs)
+        compiled += sum(r["compile_seconds"] for r in runs)
+        jobs_default += n * median
+        per_preset[name] = {"seeds_run": len(runs), "seeds_default": n,
+                            "cpu_per_seed_median": round(median, 1)}  # fmt: skip
+    rest = cpu - jobs
+    return {
+        "how": " ".join((default_estimate.__doc__ or "").split()),
+        "presets": per_preset,
+        "cpu_outside_training_jobs": round(rest, 1),
+        "compile_seconds": round(compiled, 1),
+        "cpu_seconds": round(jobs_default + compiled + rest, 1),
+        "wall_seconds_2_cores": round((jobs_default + compiled) / 2 + rest, 1),
+    }
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", default=str(ROOT / "results" / "reproduce.json"))
@@ -48,6 +87,7 @@ def main() -> None:
     args = parser.parse_args()
     report = Path(args.report or tempfile.mkdtemp(prefix="reproduce-"))
     options = ["--out", str(report), "--force", "--models", "none", *args.args]
+    default = not args.args
     code = "import sys; from sigmapi.cli import main; sys.exit(main(sys.argv[1:]))"
     cmd = [sys.executable, "-c", code, "reproduce", *options]
     loads = [os.getloadavg()[0]]
@@ -75,6 +115,7 @@ def main() -> None:
         "cpu_per_wall": round(cpu / wall, 2),
         "peak_rss_mb": round(after.ru_maxrss / 1024, 1),  # the largest child process
         "load_average_1min": load,
+        "default_run_estimate": None if default else default_estimate(metrics, cpu),
         "console": proc.stdout.strip().splitlines(),
         "metrics": metrics,
     }

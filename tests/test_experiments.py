@@ -162,7 +162,7 @@ def test_each_bullet_is_computed_for_its_own_preset(run):
     assert set(bullets) == {"paper-1d", "paper-1d-authors", "tiny-2d"}
     assert "then 2 refinement rounds of 1,000 pairs" in bullets["paper-1d"]
     assert "no refinement" in bullets["paper-1d-authors"]
-    assert "ordering none" in bullets["paper-1d-authors"]
+    assert "ordering <code>none</code>" in bullets["paper-1d-authors"]
     for name, line in bullets.items():
         res = data["presets"][name]
         n = len(res["runs"])

@@ -150,3 +150,24 @@ def test_figure_dpi_on_request(model_1d, tmp_path: Path):
     small = mpimg.imread(tmp_path / "a.png")
     big = mpimg.imread(tmp_path / "b.png")
     assert big.shape[1] > 2.5 * small.shape[1]
+
+
+def test_learning_curves_draw_the_refinement_on_its_own_axis_and_the_ceiling(model_1d):
+    from sigmapi import SigmaPiSOM
+    from sigmapi.viz.curves import LearningCurve, checkpoints
+
+    som = SigmaPiSOM(model_1d.config.replace(refine_rounds=2, refine_pairs=1000))
+    curve = LearningCurve(at=checkpoints(2000, 3), n_test=100)
+    som.fit(callback=curve)
+    ax = plots.plot_learning_curves([curve.to_dict()], ceiling={"view_consistency": 0.9})
+    panels = ax.child_axes
+    refine = [p for p in panels if p.get_xscale() == "linear"]
+    assert len(refine) == 4 and refine[-1].get_xlabel() == "refinement pairs"
+    # the refinement starts from the last training record: x = 0, then one point per round
+    xs = [list(line.get_xdata()) for line in refine[0].get_lines() if len(line.get_xdata()) > 2]
+    assert [0.0, 1000.0, 2000.0] in xs
+    train_x = [x for line in panels[0].get_lines() for x in line.get_xdata()]
+    assert max(train_x) == 2000  # the training axis ends at the last training iteration
+    labels = [line.get_label() for p in panels for line in p.get_lines()]
+    assert "the rule's ceiling (fixed point) 0.900" in labels
+    assert not plots.has_refinement([{"t": [1.0], "refined": [0.0]}])

@@ -105,6 +105,11 @@ QUICK_ITERATIONS: dict[str, int] = {"paper-1d": 60_000, "paper-2d": 20_000}
 paper-2d's quick run is long enough for its map to order but not to converge, so the fold
 detector may flag it; a much shorter one leaves the map partly twisted."""
 
+CEILING_ROUNDS = 8
+"""At most this many rounds of the fixed-point search for the ceiling (quick runs:
+:data:`QUICK_CEILING_ROUNDS`); each round of the 2-D task costs seconds."""
+QUICK_CEILING_ROUNDS = 3
+
 SectionFn = Callable[[ReportContext], Section | None]
 
 SECTIONS: tuple[SectionFn, ...] = (reach_section,)
@@ -408,7 +413,8 @@ def _ceiling(
             return done.ceiling
     t0 = time.perf_counter()
     for _ in Progress.of(progress).each([name], f"{name} ceiling (fixed point of Eq. 7)"):
-        found = fixed_point(model, n_test=opts.test_size)
+        found = fixed_point(model, n_test=opts.test_size, max_rounds=QUICK_CEILING_ROUNDS
+                            if opts.quick else CEILING_ROUNDS)  # fmt: skip
     return {**found.to_dict(), "preset": name, "seed": seed,
             "seconds": time.perf_counter() - t0}  # fmt: skip
 
