@@ -213,6 +213,11 @@ def test_quick_presets_are_short_and_quick_options_small():
     assert quick.test_size < full.test_size and quick.curve_test < full.curve_test
     with pytest.raises(ValueError, match="save_models must be one of"):
         ReproduceOptions(save_models="some")
+    with pytest.raises(ConfigError, match="seeds_2d must be an int"):
+        ReproduceOptions(seeds_2d=0)
+    opts = ReproduceOptions(seeds=(4, 2, 7), seeds_2d=2)
+    assert opts.seeds_of(TINY_1D) == (4, 2, 7) and opts.seeds_of(TINY_2D) == (4, 2)
+    assert ReproduceOptions(seeds=(4, 2), seeds_2d=None).seeds_of(TINY_2D) == (4, 2)
 
 
 def test_figure_command_writes_one_figure(tmp_path, capsys):
