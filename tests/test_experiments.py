@@ -73,6 +73,7 @@ def test_report_has_every_figure_and_links_only_existing_files(run):
         for name in FIGURES:
             assert f"{name}-{preset}.png" in links
     assert "metrics.json" in links
+    assert "seeds [0, 1, 2] (tiny-2d: the first 2);" in text
 
 
 def test_metrics_json_holds_runs_curves_and_figure_facts(run):

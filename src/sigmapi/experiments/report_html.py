@@ -208,6 +208,15 @@ def _procedure(cfg: SOMConfig) -> str:
     return f"{_PROCEDURE[cfg.ordering]}, {cfg.iterations:,} iterations per seed, {refine}"
 
 
+def _fewer(result: ReproduceResult) -> str:
+    """Which presets trained fewer of the seeds (the 2-D ones: ``seeds_2d``), if any."""
+    n = len(result.options.seeds)
+    fewer = [(k, len(p.runs)) for k, p in result.presets.items() if len(p.runs) < n]
+    if not fewer:
+        return ""
+    return " (" + ", ".join(f"{html.escape(k)}: the first {m}" for k, m in fewer) + ")"
+
+
 def _bullet(name: str, res: PresetResult) -> str:
     """One preset's line, every fact computed from its own config and runs."""
     cfg, n = res.config, len(res.runs)
@@ -251,7 +260,7 @@ def render(
         "involving different coordinate systems</i> (Humanoid Robots, Human-like Machines, 2007). "
         "A map of Sigma-Pi units learns, without a teacher, to respond to the body-centred "
         "position z = (x + y) / 2 of an object seen at retinal position x with gaze y.</p>",
-        f"<p>sigmapi {__version__}; seeds {list(opts.seeds)}; "
+        f"<p>sigmapi {__version__}; seeds {list(opts.seeds)}{_fewer(result)}; "
         f"{_QUICK_NOTE if opts.quick else 'full paper runs'}; "
         f"{result.total_seconds:.0f} s in all.</p><ul>{''.join(runs)}</ul>",
         "<h2>Metrics</h2>",
