@@ -42,6 +42,16 @@ def _sample_load(stop: threading.Event, into: list[float]) -> None:
         into.append(os.getloadavg()[0])
 
 
+def _compile_cpu(run: dict[str, Any]) -> float:
+    """CPU seconds of a job's one-time compile (0 if it compiled nothing)."""
+    return float(run.get("compile_cpu_seconds", 0.0))
+
+
+def _job_cpu(run: dict[str, Any]) -> float:
+    """CPU seconds of a job without its compile (``cpu_seconds`` excludes it)."""
+    return float(run["cpu_seconds"])
+
+
 def default_estimate(metrics: dict[str, Any], cpu: float) -> dict[str, Any]:
     """CPU and 2-core wall seconds of the default run, from a run on fewer seeds.
 
@@ -59,11 +69,11 @@ def default_estimate(metrics: dict[str, Any], cpu: float) -> dict[str, Any]:
     per_preset = {}
     for name, p in metrics["presets"].items():
         runs = p["runs"]
-        per_seed = sorted(r["cpu_seconds"] - r["compile_seconds"] for r in runs)
+        per_seed = sorted(_job_cpu(r) for r in runs)
         median = per_seed[len(per_seed) // 2]
         n = seeds if len(p["config"]["map_shape"]) == 1 else min(seeds, seeds_2d or seeds)
         jobs += sum(r["cpu_seconds"] for r in runs)
-        compiled += sum(r["compile_seconds"] for r in runs)
+        compiled += sum(_compile_cpu(r) for r in runs)
         jobs_default += n * median
         per_preset[name] = {"seeds_run": len(runs), "seeds_default": n,
                             "cpu_per_seed_median": round(median, 1)}  # fmt: skip

@@ -139,6 +139,8 @@ def test_figures_show_the_worst_ordered_seed_and_say_why(run):
         assert f"seed {res['shown_seed']}, {res['shown_reason']}" in html.unescape(text)
     authors = data["presets"]["paper-1d-authors"]
     assert "the comparison is about twisting" in authors["shown_reason"]
+    twisted = any(r["order_r2"] < 0.95 for r in authors["runs"])
+    assert ("twisted (order R²" in authors["shown_reason"]) == twisted
 
 
 def test_figure_seed_picks_a_twisted_map_of_the_authors_procedure():
@@ -152,8 +154,11 @@ def test_figure_seed_picks_a_twisted_map_of_the_authors_procedure():
     runs = [seed_run(0, 0.99), seed_run(1, 0.41), seed_run(2, 0.98), seed_run(3, 0.41)]
     i, why = figure_seed(runs, AUTHORS_1D)
     assert i == 1 and "twisted (order R² 0.410 < 0.95; 2 of 4 seeds twisted)" in why
+    assert "the comparison is about twisting" in why
     i, why = figure_seed(runs[::2], REFINED_1D)
     assert i == 1 and "still ordered" in why and "at least as ordered" in why
+    i, why = figure_seed(runs[::2], AUTHORS_1D)
+    assert i == 1 and "no seed twisted here" in why
 
 
 def test_each_bullet_is_computed_for_its_own_preset(run):

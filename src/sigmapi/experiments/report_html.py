@@ -226,8 +226,11 @@ def _bullet(name: str, res: PresetResult) -> str:
     if res.refines:
         times += f", refinement {res.seconds('refine_seconds'):.1f} s"
     compiled = sum(r.compile_seconds for r in res.runs)
+    compiled_cpu = sum(r.compile_cpu_seconds for r in res.runs)
     compile_note = (
-        f"; numba's one-time compile {compiled:.0f} s in all, apart" if compiled >= 0.5 else ""
+        f"; numba's one-time compile {compiled:.0f} s ({compiled_cpu:.0f} CPU s) in all, apart"
+        if compiled >= 0.5
+        else ""
     )
     gain = ""
     if res.refines:

@@ -168,14 +168,14 @@ class SeedRun:
     train_seconds, refine_seconds : float
         Wall seconds of the training iterations and of the refinement rounds, without the
         learning-curve checkpoints, the evaluations and the one-time compile.
-    compile_seconds : float
+    compile_seconds, compile_cpu_seconds : float
         numba's one-time compile in the worker process that ran this seed (a small warm-up
-        run of the same rules, timed apart); 0 once a process has compiled, or for a kernel
-        that compiles nothing.
+        run of the same rules, timed apart), wall and CPU seconds; 0 once a process has
+        compiled, or for a kernel that compiles nothing.
     measure_seconds : float
         Learning-curve checkpoints and the evaluations of the unrefined and final maps.
     cpu_seconds : float
-        CPU seconds of the whole job in its process (compile and measurements included).
+        CPU seconds of the job in its process (measurements included, the compile not).
     unrefined : Metrics or None
         The map at the end of the training, before the refinement (the same run); None when
         the preset does not refine.
@@ -191,6 +191,7 @@ class SeedRun:
     compile_seconds: float = 0.0
     measure_seconds: float = 0.0
     cpu_seconds: float = 0.0
+    compile_cpu_seconds: float = 0.0
 
     def metric(self, key: str, stage: Stage = "refined") -> float:
         m = self.unrefined if stage == "unrefined" and self.unrefined is not None else self.metrics
@@ -200,6 +201,7 @@ class SeedRun:
         return {"seed": self.seed, "train_seconds": self.train_seconds,
                 "refine_seconds": self.refine_seconds, "compile_seconds": self.compile_seconds,
                 "measure_seconds": self.measure_seconds, "cpu_seconds": self.cpu_seconds,
+                "compile_cpu_seconds": self.compile_cpu_seconds,
                 "backend": self.backend, **self.metrics.to_dict(),
                 "unrefined": None if self.unrefined is None else self.unrefined.to_dict(),
                 "curve": self.curve}  # fmt: skip
@@ -279,7 +281,8 @@ class PresetResult:
         }  # fmt: skip
 
 
-SECONDS = ("train_seconds", "refine_seconds", "compile_seconds", "measure_seconds", "cpu_seconds")
+SECONDS = ("train_seconds", "refine_seconds", "compile_seconds", "measure_seconds", "cpu_seconds",
+           "compile_cpu_seconds")  # fmt: skip
 """The times of a :class:`SeedRun`, whose medians over seeds :meth:`PresetResult.to_dict`
 stores (``seconds``)."""
 
