@@ -171,3 +171,24 @@ def test_learning_curves_draw_the_refinement_on_its_own_axis_and_the_ceiling(mod
     labels = [line.get_label() for p in panels for line in p.get_lines()]
     assert "the rule's ceiling (fixed point) 0.900" in labels
     assert not plots.has_refinement([{"t": [1.0], "refined": [0.0]}])
+
+
+def test_fig8_caption_counts_the_same_winner_and_gives_the_distance_a_scale():
+    from sigmapi import SOMConfig
+    from sigmapi.viz.figures import RunInfo, caption
+
+    cfg = SOMConfig(map_shape=(15,), x_shape=(15,), y_shape=(15,), refine_rounds=3)
+    run = RunInfo("paper-1d", cfg, (0, 1), 1, why="the worst-ordered of its 2 seeds")
+    facts = {"z": [0.57], "polarity": "reversed (mirrored)", "polarity_r2": 0.99,
+             "invariance_spread": 0.32, "winners": [5, 5, 6, 5], "same_winner": 3,
+             "within_one": 4, "refined_pairs": 300_000}  # fmt: skip
+    text = caption("fig8", run, facts)
+    assert "on the refined map (after 300,000 refinement pairs)" in text
+    assert "The same unit wins 3 of the 4 pairs (4 of 4 within one unit of it; hard winners " \
+           "5, 5, 6, 5)" in text  # fmt: skip
+    assert (
+        "each response scaled to unit length, is 0.32 (0 = the same shape, 1.41 = no unit" in text
+    )
+    assert "seed 1: the worst-ordered of its 2 seeds" in text
+    text = caption("fig8", run, {**facts, "same_winner": 4, "winners": [5, 5, 5, 5]})
+    assert "The same unit wins all 4 pairs" in text

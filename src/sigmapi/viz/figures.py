@@ -172,11 +172,13 @@ def _caption_fig8(run: RunInfo, facts: Facts) -> str:
     n = len(facts.get("winners", [])) or 4
     if "same_winner" in facts:
         k, near = facts["same_winner"], facts["within_one"]
+        units = ", ".join(map(str, facts["winners"]))
         alike = (
-            f"The same unit wins all {n} pairs"
+            f"The same unit wins all {n} pairs (hard winners {units}); the"
             if k == n
-            else f"The same unit wins {k} of the {n} pairs ({near} of {n} within one unit of it)"
-        ) + f" (hard winners {', '.join(map(str, facts['winners']))}); the"
+            else f"The same unit wins {k} of the {n} pairs ({near} of {n} within one unit of "
+            f"it; hard winners {units}); the"
+        )
     else:
         alike = "The"
     refined = facts.get("refined_pairs", 0)
