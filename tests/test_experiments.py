@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import html
 import importlib
 import json
 import re
@@ -38,18 +39,24 @@ from sigmapi.viz.figures import FIGURES
 TINY_1D = SOMConfig(map_shape=(5,), x_shape=(5,), y_shape=(5,), iterations=2000)
 TINY_2D = SOMConfig(map_shape=(3, 3), x_shape=(3, 3), y_shape=(3, 3), code_width=1.0,
                     iterations=1000)  # fmt: skip
+REFINED_1D = TINY_1D.replace(refine_rounds=2, refine_pairs=1000)
+"""A tiny run with sigmapi's refinement after the training (two rounds)."""
+AUTHORS_1D = TINY_1D.replace(ordering="none", iterations=1000)
+"""The paper's random start on the same tiny task, shorter: some seeds twist."""
 
 
-def _options(seeds=(0,), n_test=100, save_models="none") -> ReproduceOptions:
-    return ReproduceOptions(seeds=seeds, progress=False, n_test=n_test, save_models=save_models)
+def _options(seeds=(0,), n_test=100, save_models="none", **kw) -> ReproduceOptions:
+    return ReproduceOptions(seeds=seeds, progress=False, n_test=n_test, save_models=save_models,
+                            **kw)  # fmt: skip
 
 
 @pytest.fixture(scope="module")
 def run(tmp_path_factory) -> tuple[Path, dict]:
     out = tmp_path_factory.mktemp("report")
     result = reproduce(
-        out, _options(seeds=(0, 1), n_test=300, save_models="all"),
-        presets=[("tiny-1d", TINY_1D), ("tiny-2d", TINY_2D)], sections=(),
+        out, _options(seeds=(0, 1, 2), n_test=300, save_models="all", seeds_2d=2),
+        presets=[("paper-1d", REFINED_1D), ("paper-1d-authors", AUTHORS_1D),
+                 ("tiny-2d", TINY_2D)], sections=(),
     )  # fmt: skip
     return out, result.to_dict()
 
@@ -62,22 +69,111 @@ def test_report_has_every_figure_and_links_only_existing_files(run):
     for f in links:
         assert (out / f).is_file(), f"report links missing file {f}"
         assert not Path(f).is_absolute() and ".." not in Path(f).parts
-    for preset in ("tiny-1d", "tiny-2d"):
+    for preset in ("paper-1d", "paper-1d-authors", "tiny-2d"):
         for name in FIGURES:
             assert f"{name}-{preset}.png" in links
     assert "metrics.json" in links
+    assert "seeds [0, 1, 2] (tiny-2d: the first 2);" in text
 
 
 def test_metrics_json_holds_runs_curves_and_figure_facts(run):
     out, results = run
     data = json.loads((out / "metrics.json").read_text())
     assert data == json.loads(json.dumps(results))
-    res = data["presets"]["tiny-1d"]
-    assert [r["seed"] for r in res["runs"]] == [0, 1]
-    assert set(METRIC_KEYS) <= set(res["mean"]) and set(METRIC_KEYS) <= set(res["sd"])
-    assert res["runs"][0]["curve"]["t"][-1] == TINY_1D.iterations
+    res = data["presets"]["paper-1d"]
+    assert [r["seed"] for r in res["runs"]] == [0, 1, 2]
+    assert set(METRIC_KEYS) <= set(res["mean"]) and set(METRIC_KEYS) <= set(res["median"])
+    curve = res["runs"][0]["curve"]
+    trained = [t for t, r in zip(curve["t"], curve["refined"], strict=True) if r == 0]
+    assert trained[-1] == REFINED_1D.iterations
+    assert [r for r in curve["refined"] if r > 0] == [1000, 2000]  # one record per round
     assert "polarity" in res["figures"]["fig8"]
-    assert (out / "tiny-2d-seed1.npz").is_file()
+    # the 2-D preset trains the first seeds_2d seeds only
+    assert data["presets"]["tiny-2d"]["seeds"] == [0, 1]
+    assert (out / "tiny-2d-seed1.npz").is_file() and not (out / "tiny-2d-seed2.npz").exists()
+    for run_ in res["runs"]:
+        times = [run_[k] for k in ("train_seconds", "refine_seconds", "measure_seconds")]
+        assert all(t >= 0 for t in times) and run_["cpu_seconds"] > 0
+
+
+def test_unrefined_and_refined_maps_both_appear_and_differ(run):
+    out, data = run
+    res = data["presets"]["paper-1d"]
+    for r in res["runs"]:  # the map at the end of the training, evaluated there
+        assert r["unrefined"] is not None
+        assert r["unrefined"]["view_consistency"] != r["view_consistency"]
+    assert res["unrefined"]["median"] != res["median"]
+    assert data["presets"]["paper-1d-authors"]["unrefined"] is None  # it does not refine
+    text = (out / "report.html").read_text()
+    assert "paper-1d<br>before refinement (same runs)" in text
+    assert "paper-1d, before refinement" in text  # its rows in the per-seed table
+    for stage in (res["median"], res["unrefined"]["median"]):
+        assert f"{stage['view_consistency']:.3f} <small>(" in text  # median (worst seed)
+    assert "median <small>(worst seed)</small>" in text
+
+
+def test_the_ceiling_is_computed_drawn_and_tabulated(run):
+    out, data = run
+    res, authors = data["presets"]["paper-1d"], data["presets"]["paper-1d-authors"]
+    ceiling = res["ceiling"]
+    assert ceiling["preset"] == "paper-1d" and ceiling["seed"] == res["shown_seed"]
+    assert ceiling["rounds"] >= 1 and 0.0 < ceiling["view_consistency"] <= 1.0
+    assert authors["ceiling"] == ceiling  # the same task: its twin's ceiling
+    facts = res["figures"]["curves"]
+    assert facts["ceiling"]["view_consistency"] == ceiling["view_consistency"]
+    assert facts["refinement_rounds"] == 2
+    text = (out / "report.html").read_text()
+    assert "the rule's ceiling<br>fixed point from paper-1d seed" in text
+    assert f"<td>{ceiling['view_consistency']:.3f}</td>" in text
+    assert "Dash-dot lines: the learning rule's ceiling" in html.unescape(text)
+
+
+def test_figures_show_the_worst_ordered_seed_and_say_why(run):
+    out, data = run
+    text = (out / "report.html").read_text()
+    for name in ("paper-1d", "paper-1d-authors"):
+        res = data["presets"][name]
+        r2 = {r["seed"]: r["order_r2"] for r in res["runs"]}
+        assert res["shown_seed"] == min(r2, key=lambda s: (r2[s], s))
+        assert res["shown_reason"].startswith("the worst-ordered of its 3 seeds")
+        assert f"seed {res['shown_seed']}, {res['shown_reason']}" in html.unescape(text)
+    authors = data["presets"]["paper-1d-authors"]
+    assert "the comparison is about twisting" in authors["shown_reason"]
+    twisted = any(r["order_r2"] < 0.95 for r in authors["runs"])
+    assert ("twisted (order R²" in authors["shown_reason"]) == twisted
+
+
+def test_figure_seed_picks_a_twisted_map_of_the_authors_procedure():
+    from sigmapi.experiments.reproduce import figure_seed
+    from sigmapi.experiments.results import SeedRun
+    from sigmapi.metrics import Metrics
+
+    def seed_run(seed, r2):
+        return SeedRun(seed, 1.0, "reference", Metrics(0.5, 0.9, 0.5, r2, 1.0, 100), {})
+
+    runs = [seed_run(0, 0.99), seed_run(1, 0.41), seed_run(2, 0.98), seed_run(3, 0.41)]
+    i, why = figure_seed(runs, AUTHORS_1D)
+    assert i == 1 and "twisted (order R² 0.410 < 0.95; 2 of 4 seeds twisted)" in why
+    assert "the comparison is about twisting" in why
+    i, why = figure_seed(runs[::2], REFINED_1D)
+    assert i == 1 and "still ordered" in why and "at least as ordered" in why
+    i, why = figure_seed(runs[::2], AUTHORS_1D)
+    assert i == 1 and "no seed twisted here" in why
+
+
+def test_each_bullet_is_computed_for_its_own_preset(run):
+    out, data = run
+    text = html.unescape((out / "report.html").read_text())
+    bullets = dict(re.findall(r"<li><b>([^<]+)</b>: (.*?)</li>", text))
+    assert set(bullets) == {"paper-1d", "paper-1d-authors", "tiny-2d"}
+    assert "then 2 refinement rounds of 1,000 pairs" in bullets["paper-1d"]
+    assert "no refinement" in bullets["paper-1d-authors"]
+    assert "ordering <code>none</code>" in bullets["paper-1d-authors"]
+    for name, line in bullets.items():
+        res = data["presets"][name]
+        n = len(res["runs"])
+        assert f"{res['ordered']} of {n} ordered" in line
+        assert f"median view consistency {res['median']['view_consistency']:.3f}" in line
 
 
 def test_metrics_table_sits_beside_reference_figures(tmp_path):
@@ -123,6 +219,11 @@ def test_quick_presets_are_short_and_quick_options_small():
     assert quick.test_size < full.test_size and quick.curve_test < full.curve_test
     with pytest.raises(ValueError, match="save_models must be one of"):
         ReproduceOptions(save_models="some")
+    with pytest.raises(ConfigError, match="seeds_2d must be an int"):
+        ReproduceOptions(seeds_2d=0)
+    opts = ReproduceOptions(seeds=(4, 2, 7), seeds_2d=2)
+    assert opts.seeds_of(TINY_1D) == (4, 2, 7) and opts.seeds_of(TINY_2D) == (4, 2)
+    assert ReproduceOptions(seeds=(4, 2), seeds_2d=None).seeds_of(TINY_2D) == (4, 2)
 
 
 def test_figure_command_writes_one_figure(tmp_path, capsys):
@@ -357,13 +458,16 @@ def test_reproduce_through_the_command_line_writes_the_report_and_result_json(
 ):
     module = importlib.import_module("sigmapi.experiments.reproduce")  # not the function
 
-    monkeypatch.setattr(module, "paper_presets", lambda quick: [("tiny-1d", TINY_1D)])
+    monkeypatch.setattr(module, "paper_presets", lambda quick: [("tiny-1d", REFINED_1D)])
     monkeypatch.setattr(module, "SECTIONS", ())
     out = tmp_path / "r"
     argv = ["reproduce", "--seeds", "0", "1", "--out", str(out), "--models", "none",
             "--n-test", "200", "--workers", "1", "--quiet"]  # fmt: skip
     assert main(argv) == 0
-    assert capsys.readouterr().out.startswith("tiny-1d: view_consistency ")
+    printed = capsys.readouterr().out  # the report's statistic, labelled
+    assert printed.startswith("tiny-1d: median of 2 seeds: view_consistency ")
+    assert "tiny-1d: median before refinement of 2 seeds: view_consistency " in printed
+    assert "the rule's ceiling (fixed point of Eq. 7 from seed" in printed
     data = read_result(out)
     assert data == json.loads((out / "metrics.json").read_text())
     assert data["seeds"] == [0, 1] and data["n_test"] == 200

@@ -11,11 +11,17 @@ import html
 import re
 from typing import TYPE_CHECKING
 
-from sigmapi.experiments.results import METRIC_KEYS, ORDERED_R2
+from sigmapi.experiments.results import METRIC_KEYS, ORDERED_R2, OTHER_PROCEDURE
 
 if TYPE_CHECKING:
     from sigmapi.config import SOMConfig
-    from sigmapi.experiments.results import ReproduceResult, Section
+    from sigmapi.experiments.results import (
+        PresetResult,
+        ReproduceResult,
+        Section,
+        SeedRun,
+        Stage,
+    )
 
 __all__ = ["linked_files", "render"]
 
@@ -42,45 +48,129 @@ _QUICK_NOTE = (
 )
 
 
+_LABEL = {
+    "view_consistency": "view consistency", "view_within_one": "view within one",
+    "z_error": "z error (grid spacings)", "order_r2": "order R²", "usage": "usage",
+    "fold_score": "fold score",
+}  # fmt: skip
+
+
+def _groups(result: ReproduceResult) -> list[list[str]]:
+    """The presets side by side: each paper preset with its authors' twin, the rest alone."""
+    names, seen, out = list(result.presets), set(), []
+    for name in names:
+        if name in seen:
+            continue
+        group = [name] + [t for t in (OTHER_PROCEDURE.get(name),) if t in result.presets]
+        seen.update(group)
+        out.append(group)
+    return out
+
+
+def _cell(res: PresetResult, key: str, stage: Stage) -> str:
+    med, worst = res.median(stage)[key], res.worst(stage)[key]
+    return f"{med:.3f}" if len(res.runs) == 1 else f"{med:.3f} <small>({worst:.3f})</small>"
+
+
+def _summary(result: ReproduceResult) -> str:
+    """Per task, one table: sigmapi's map after and before its refinement (the same runs),
+    the authors' procedure, the rule's ceiling and the paper's reference, side by side."""
+    out = []
+    for group in _groups(result):
+        cols: list[tuple[str, PresetResult, Stage]] = []
+        for name in group:
+            res = result.presets[name]
+            n = len(res.runs)
+            what = "refined" if res.refines else "final map"
+            cols.append((f"{html.escape(name)}<br>{what}, {n} seed{'s' * (n != 1)}", res,
+                         "refined"))  # fmt: skip
+            if res.refines:
+                cols.append((f"{html.escape(name)}<br>before refinement (same runs)", res,
+                             "unrefined"))  # fmt: skip
+        first = result.presets[group[0]]
+        ceiling, ref = first.ceiling, first.reference
+        head = "".join(f"<th>{c}</th>" for c, _, _ in cols)
+        if ceiling is not None:
+            head += (f"<th>the rule's ceiling<br>fixed point from {html.escape(ceiling['preset'])}"
+                     f" seed {ceiling['seed']}</th>")  # fmt: skip
+        head += "<th>reference<br>(docs/algorithm.md)</th>" if ref else ""
+        rows = []
+        for key in METRIC_KEYS:
+            cells = "".join(f"<td>{_cell(res, key, stage)}</td>" for _, res, stage in cols)
+            if ceiling is not None:
+                cells += f"<td>{float(ceiling[key]):.3f}</td>" if key in ceiling else "<td></td>"
+            if ref:
+                r = ref.get(key)
+                floor = first.z_error_floor if key == "z_error" else None
+                note = f" (floor {floor:.2f})" if floor is not None else ""
+                cells += f"<td>{'' if r is None else f'{r:.3f}'}{note}</td>"
+            rows.append(f"<tr><td>{_LABEL[key]}</td>{cells}</tr>")
+        ordered = "".join(
+            f"<td>{res.ordered_count(stage)} of {len(res.runs)}"
+            f"{_flagged(res.folded_seeds(stage))}</td>" for _, res, stage in cols
+        )  # fmt: skip
+        pad = "<td></td>" * ((ceiling is not None) + bool(ref))
+        rows.append(f"<tr><td>seeds ordered (R² &ge; {ORDERED_R2})</td>{ordered}{pad}</tr>")
+        out.append(
+            "<table><tr><th>median <small>(worst seed)</small></th>" + head + "</tr>"
+            + "".join(rows) + "</table>"
+        )  # fmt: skip
+    return "".join(out)
+
+
+def _flagged(seeds: list[int]) -> str:
+    if not seeds:
+        return ", none flagged folded"
+    return f", flagged folded: seed{'s' if len(seeds) != 1 else ''} {', '.join(map(str, seeds))}"
+
+
 def _table(result: ReproduceResult) -> str:
+    """Every seed's value of every metric, per preset and stage, with the statistics."""
     rows = []
     for name, res in result.presets.items():
         ref = res.reference
-        mean, sd, med, worst = res.mean(), res.sd(), res.median(), res.worst()
-        for key in METRIC_KEYS:
-            value = med[key]
-            per_seed = ", ".join(_seed_value(r.metric(key), r.metrics.folded) for r in res.runs)
-            r = ref.get(key)
-            note = ""
-            if r is not None:
-                better = value <= r * 1.1 if key == "z_error" else value >= r - 0.05
-                cls, word = ("good", "close") if better else ("bad", "off")
-                note = f"<span class='{cls}'>{word}</span>"
-            if key == "z_error" and res.z_error_floor is not None:
-                note += f" (floor {res.z_error_floor:.2f})"
-            if key == "order_r2":
-                n, folded = len(res.runs), res.folded_seeds()
-                cls = "good" if res.ordered_count() == n else "bad"
-                note += (
-                    f"<span class='{cls}'>{res.ordered_count()} of {n} ordered "
-                    f"(R<sup>2</sup> &ge; {ORDERED_R2})</span>"
+        stages: list[Stage] = ["refined", "unrefined"] if res.refines else ["refined"]
+        for stage in stages:
+            label = name if stage == "refined" else f"{name}, before refinement"
+            mean, sd = res.mean(stage), res.sd(stage)
+            med, worst = res.median(stage), res.worst(stage)
+            for key in METRIC_KEYS:
+                value = med[key]
+                per_seed = ", ".join(
+                    _seed_value(r.metric(key, stage), _folded(r, stage)) for r in res.runs
                 )
-                if folded:
-                    note += f"; flagged folded: seed{'s' if len(folded) != 1 else ''} "
-                    note += ", ".join(map(str, folded))
-                else:
-                    note += "; none flagged folded"
-            rows.append(
-                f"<tr><td>{html.escape(name)}</td><td>{key}</td><td>{value:.3f}</td>"
-                f"<td>{worst[key]:.3f}</td><td>{_mean_sd(mean[key], sd[key], len(res.runs))}</td>"
-                f"<td>{per_seed}</td><td>{'' if r is None else f'{r:.3f}'}</td>"
-                f"<td>{note}</td></tr>"
-            )
+                r = ref.get(key)
+                note = ""
+                if r is not None:
+                    better = value <= r * 1.1 if key == "z_error" else value >= r - 0.05
+                    cls, word = ("good", "close") if better else ("bad", "off")
+                    note = f"<span class='{cls}'>{word}</span>"
+                if key == "z_error" and res.z_error_floor is not None:
+                    note += f" (floor {res.z_error_floor:.2f})"
+                if key == "order_r2":
+                    n, count = len(res.runs), res.ordered_count(stage)
+                    cls = "good" if count == n else "bad"
+                    note += (
+                        f"<span class='{cls}'>{count} of {n} ordered "
+                        f"(R<sup>2</sup> &ge; {ORDERED_R2})</span>"
+                    ) + _flagged(res.folded_seeds(stage)).replace(", ", "; ", 1)
+                rows.append(
+                    f"<tr><td>{html.escape(label)}</td><td>{key}</td><td>{value:.3f}</td>"
+                    f"<td>{worst[key]:.3f}</td>"
+                    f"<td>{_mean_sd(mean[key], sd[key], len(res.runs))}</td>"
+                    f"<td>{per_seed}</td><td>{'' if r is None else f'{r:.3f}'}</td>"
+                    f"<td>{note}</td></tr>"
+                )
     return (
         "<table><tr><th>run</th><th>metric</th><th>median</th><th>worst seed</th>"
         "<th>mean ± sd</th><th>per seed (<b>bold</b>: flagged folded)</th><th>reference</th>"
         "<th></th></tr>" + "".join(rows) + "</table>"
     )
+
+
+def _folded(run: SeedRun, stage: Stage) -> bool:
+    m = run.unrefined if stage == "unrefined" and run.unrefined is not None else run.metrics
+    return bool(m.folded)
 
 
 def _mean_sd(mean: float, sd: float, n: int) -> str:
@@ -101,10 +191,60 @@ def _figure_html(file: str, caption: str) -> str:
 
 
 def _source(cfg: SOMConfig) -> str:
-    """The preset's own note on where its values come from, if it has one."""
-    extra = cfg.extra or {}
-    parts = [str(extra[k]) for k in ("source", "evidence") if extra.get(k)]
-    return f"; preset: {html.escape('; '.join(parts))}" if parts else ""
+    """The preset's own note on where its values come from, if it has one (its settings'
+    provenance; the measurements are this run's, stated beside it)."""
+    source = (cfg.extra or {}).get("source")
+    return f" Values from: {html.escape(str(source))}." if source else ""
+
+
+def _procedure(cfg: SOMConfig) -> str:
+    """How the preset trains, from its config: ordering, training, refinement."""
+    refine = (
+        f"then {cfg.refine_rounds} refinement round{'s' if cfg.refine_rounds != 1 else ''} "
+        f"of {cfg.refine_pairs:,} pairs (section 6.3)"
+        if cfg.refine_rounds > 0
+        else "no refinement"
+    )
+    return f"{_PROCEDURE[cfg.ordering]}, {cfg.iterations:,} iterations per seed, {refine}"
+
+
+def _fewer(result: ReproduceResult) -> str:
+    """Which presets trained fewer of the seeds (the 2-D ones: ``seeds_2d``), if any."""
+    n = len(result.options.seeds)
+    fewer = [(k, len(p.runs)) for k, p in result.presets.items() if len(p.runs) < n]
+    if not fewer:
+        return ""
+    return " (" + ", ".join(f"{html.escape(k)}: the first {m}" for k, m in fewer) + ")"
+
+
+def _bullet(name: str, res: PresetResult) -> str:
+    """One preset's line, every fact computed from its own config and runs."""
+    cfg, n = res.config, len(res.runs)
+    seeds = ", ".join(str(r.seed) for r in res.runs)
+    med, worst = res.median(), res.worst()
+    times = f"training {res.seconds('train_seconds'):.1f} s"
+    if res.refines:
+        times += f", refinement {res.seconds('refine_seconds'):.1f} s"
+    compiled = sum(r.compile_seconds for r in res.runs)
+    compiled_cpu = sum(r.compile_cpu_seconds for r in res.runs)
+    compile_note = (
+        f"; numba's one-time compile {compiled:.0f} s ({compiled_cpu:.0f} CPU s) in all, apart"
+        if compiled >= 0.5
+        else ""
+    )
+    gain = ""
+    if res.refines:
+        before = res.median("unrefined")["view_consistency"]
+        gain = f" (before refinement {before:.3f})"
+    return (
+        f"<li><b>{html.escape(name)}</b>: map {'x'.join(map(str, cfg.map_shape))}, inputs "
+        f"{'x'.join(map(str, cfg.x_shape))} + {'x'.join(map(str, cfg.y_shape))}, "
+        f"{_procedure(cfg)}; backend {res.runs[0].backend}. "
+        f"{n} seed{'s' if n != 1 else ''} ({seeds}): {res.ordered_count()} of {n} ordered, "
+        f"median view consistency {med['view_consistency']:.3f}{gain}, worst seed "
+        f"{worst['view_consistency']:.3f}; per seed (median) {times}{compile_note}. Figures: "
+        f"seed {res.shown_seed}, {html.escape(res.shown_reason)}.{_source(cfg)}</li>"
+    )
 
 
 def render(
@@ -114,17 +254,7 @@ def render(
     from sigmapi._version import __version__
 
     title = "sigmapi reproduction of Weber &amp; Wermter (2007)"
-    runs = []
-    for name, res in result.presets.items():
-        cfg = res.config
-        secs = sum(r.train_seconds for r in res.runs)
-        runs.append(
-            f"<li><b>{html.escape(name)}</b>: map {'x'.join(map(str, cfg.map_shape))}, inputs "
-            f"{'x'.join(map(str, cfg.x_shape))} + {'x'.join(map(str, cfg.y_shape))}, "
-            f"{cfg.iterations:,} iterations per seed, {_PROCEDURE[cfg.ordering]}, "
-            f"backend {res.runs[0].backend}, "
-            f"{secs:.0f} s of training in all{_source(cfg)}</li>"
-        )
+    runs = [_bullet(name, res) for name, res in result.presets.items()]
     opts = result.options
     body = [
         f"<h1>{title}</h1>",
@@ -133,7 +263,7 @@ def render(
         "involving different coordinate systems</i> (Humanoid Robots, Human-like Machines, 2007). "
         "A map of Sigma-Pi units learns, without a teacher, to respond to the body-centred "
         "position z = (x + y) / 2 of an object seen at retinal position x with gaze y.</p>",
-        f"<p>sigmapi {__version__}; seeds {list(opts.seeds)}; "
+        f"<p>sigmapi {__version__}; seeds {list(opts.seeds)}{_fewer(result)}; "
         f"{_QUICK_NOTE if opts.quick else 'full paper runs'}; "
         f"{result.total_seconds:.0f} s in all.</p><ul>{''.join(runs)}</ul>",
         "<h2>Metrics</h2>",
@@ -143,6 +273,16 @@ def render(
         "of an affine fit from winner coordinates to z; <i>usage</i>, the fraction of units that "
         "win. Reference: the authors' 1-D script re-stated in NumPy, 300,000 iterations, 4 "
         "seeds.</p>",
+        "<p>Medians over the seeds, the worst seed in brackets (the largest z error and fold "
+        "score, else the smallest value). <i>Before refinement</i>: the same runs' maps at the "
+        "end of the training, evaluated there, before the batch refinement of section 6.3. "
+        "<i>The rule's ceiling</i>: the fixed point of Eq. 7 (each unit the mean of x' y'^T "
+        "over the views it wins, with the winners of those weights) reached from one map of "
+        "the task, computed on a grid of z and views without sampling (sigmapi.viz.ceiling): "
+        "where the rule's weights go from that map when no noise of a learning rate or of "
+        "finitely many pairs is left.</p>",
+        _summary(result),
+        "<h3>Every seed</h3>",
         _table(result),
         "<p>All numbers, per seed, and the learning curves: <a href='metrics.json'>metrics.json"
         "</a>.</p>",

@@ -1,17 +1,41 @@
 """The reproduction run: ``sigmapi reproduce --out DIR``, the project's main job.
 
-Trains the paper presets (``paper-1d``, and ``paper-2d`` where that preset ships) for a few
-seeds, recording learning curves at checkpoints, evaluates them, draws the figures of the
-paper and writes into ``DIR``:
+Trains the paper presets (``paper-1d``, and ``paper-2d`` where that preset ships), each
+beside the authors' procedure at the same sizes (``paper-1d-authors``, ``paper-2d-authors``),
+on the seeds (the 2-D presets on the first ``seeds_2d`` of them: a 2-D run costs about 20
+1-D runs), recording learning curves at checkpoints. Each run's map is evaluated twice at no
+extra training: at the end of the training, before the refinement (the unrefined map of the
+same run), and at the end. The rule's ceiling, the fixed point of Eq. 7 reached from the map
+the figures show (:mod:`sigmapi.viz.ceiling`), is computed once per task and drawn in the
+learning curves. numba's one-time compile runs before each worker's first job and is timed
+apart (:func:`compile_once`). The run draws the figures of the paper and writes into ``DIR``:
 
-- ``report.html``: self-contained (it links only the PNG files beside it), with the measured
-  metrics beside the reference figures of docs/algorithm.md and a caption per figure;
-- ``metrics.json``: every number of the report (metrics per seed, learning curves, facts shown
-  in the captions);
-- the figures, ``<figure>-<preset>.png`` for the figures of :data:`~sigmapi.viz.figures.FIGURES`;
-- the trained models, ``<preset>-seed<S>.npz``: by default the one the figures show (the
-  best-ordered seed; ``sigmapi figure`` redraws from it), or every seed's, or none
-  (``save_models``; a paper-2d file holds its 225 x 225 x 225 weights, so it is large).
+- ``report.html``: self-contained (it links only the PNG files beside it): per task a table
+  of medians (worst seed in brackets) of sigmapi's map after and before its refinement, the
+  authors' procedure, the ceiling and the reference figures of docs/algorithm.md; every
+  seed's values; the figures with captions computed from the data;
+- ``metrics.json``: every number of the report (below);
+- the figures, ``<figure>-<preset>.png`` for the figures of :data:`~sigmapi.viz.figures.FIGURES`,
+  of the seed :func:`figure_seed` chooses (the worst-ordered; the caption says why);
+- the trained models, ``<preset>-seed<S>.npz``: by default the one the figures show
+  (``sigmapi figure`` redraws from it), or every seed's, or none (``save_models``; a
+  paper-2d file holds its 225 x 225 x 225 weights, so it is large).
+
+``metrics.json`` (``ReproduceResult.to_dict()``; ``benchmarks/results/reproduce.json`` holds
+the default run's, with the command and times that made it) has the top-level keys
+
+- ``quick``, ``seeds``, ``seeds_2d``, ``n_test``, ``curve_test``: the run's settings;
+- ``presets``: per preset name, ``config`` (resolved), ``seeds``, ``runs`` (per seed: the final
+  metrics of :func:`sigmapi.evaluate`, ``unrefined`` (the same before the refinement, or null),
+  ``curve`` (the learning-curve columns), ``train_seconds``, ``refine_seconds``,
+  ``compile_seconds``, ``measure_seconds``, ``cpu_seconds``), the statistics of the final maps
+  (``median``, ``worst``, ``mean``, ``sd``, ``ordered``, ``folded_seeds``), ``unrefined`` (the
+  same statistics before the refinement, or null), ``ceiling`` (the fixed point's metrics,
+  ``preset`` and ``seed`` of the map it started from, ``rounds``, ``changed``, ``seconds``),
+  ``reference``, ``z_error_floor``, ``shown_seed`` and ``shown_reason``, ``figures`` (per
+  figure its file and the facts its caption states) and ``seconds`` (medians of the times);
+- ``sections``: per added section (the reach experiment), the numbers it stores;
+- ``total_seconds``: wall seconds of the whole run.
 
 Experiments add sections to the report: a section is a function ``section(ctx:
 ReportContext) -> Section | None``; the default, :data:`SECTIONS`, is the reach experiment.
@@ -38,6 +62,7 @@ from sigmapi.experiments.base import Experiment, register, run_all
 from sigmapi.experiments.reach_section import reach_section
 from sigmapi.experiments.report_html import linked_files, render
 from sigmapi.experiments.results import (
+    OTHER_PROCEDURE,
     REPORT,
     PresetResult,
     ReportContext,
@@ -48,14 +73,14 @@ from sigmapi.experiments.results import (
     SeedRun,
 )
 from sigmapi.io import atomic_write_bytes
-from sigmapi.metrics import evaluate
+from sigmapi.metrics import ORDERED_R2, evaluate
 from sigmapi.progress import Progress
 from sigmapi.som import SigmaPiSOM
 from sigmapi.viz import figures as figs
 
 __all__ = [
-    "QUICK_ITERATIONS", "REFERENCE", "REPRODUCE", "SECTIONS", "Reproduce", "SeedJob",
-    "paper_presets", "reproduce", "train_seed",
+    "OTHER_PROCEDURE", "QUICK_ITERATIONS", "REFERENCE", "REPRODUCE", "SECTIONS", "Reproduce",
+    "SeedJob", "compile_once", "figure_seed", "paper_presets", "reproduce", "train_seed",
 ]  # fmt: skip
 
 REFERENCE: dict[str, dict[str, float]] = {
@@ -68,10 +93,6 @@ Z_ERROR_FLOOR: dict[str, float] = {"paper-1d": 0.27}
 
 PAPER_PRESETS = ("paper-1d", "paper-2d")
 
-OTHER_PROCEDURE = {"paper-1d": "paper-1d-authors", "paper-2d": "paper-2d-authors"}
-"""Each paper preset (sigmapi's procedure: ordered start, then refinement) beside the
-authors' procedure at the same sizes (random start, no refinement), on the same seeds."""
-
 REFERENCE["paper-1d-authors"] = REFERENCE["paper-1d"]
 Z_ERROR_FLOOR["paper-1d-authors"] = Z_ERROR_FLOOR["paper-1d"]
 
@@ -83,6 +104,11 @@ QUICK_ITERATIONS: dict[str, int] = {"paper-1d": 60_000, "paper-2d": 20_000}
 
 paper-2d's quick run is long enough for its map to order but not to converge, so the fold
 detector may flag it; a much shorter one leaves the map partly twisted."""
+
+CEILING_ROUNDS = 8
+"""At most this many rounds of the fixed-point search for the ceiling (quick runs:
+:data:`QUICK_CEILING_ROUNDS`); each round of the 2-D task costs seconds."""
+QUICK_CEILING_ROUNDS = 3
 
 SectionFn = Callable[[ReportContext], Section | None]
 
@@ -153,15 +179,16 @@ def reproduce(
     trained = _train_all(runs_of, opts, ex, progress)
     for name, cfg in runs_of:
         runs, models[name] = trained[name]
-        # figures show the best-ordered seed (the first on ties), and say which
-        shown = max(range(len(runs)), key=lambda i: (runs[i].metrics.order_r2, -i))
+        shown, why = figure_seed(runs, cfg)
+        seeds = opts.seeds_of(cfg)
         entry = PresetResult(cfg, runs, REFERENCE.get(name, {}), Z_ERROR_FLOOR.get(name),
-                             opts.seeds[shown])  # fmt: skip
+                             seeds[shown], why)  # fmt: skip
+        entry.ceiling = _ceiling(name, result, models[name][shown], seeds[shown], opts, progress)
         result.presets[name] = entry
-        for i, seed in enumerate(opts.seeds):
+        for i, seed in enumerate(seeds):
             if opts.save_models == "all" or (opts.save_models == "shown" and i == shown):
                 models[name][i].save(out / f"{name}-seed{seed}.npz")
-        run = figs.RunInfo(name, cfg, opts.seeds, shown, opts.curve_test)
+        run = figs.RunInfo(name, cfg, seeds, shown, opts.curve_test, why)
         figures[name] = _draw(run, models[name][shown], entry, out, opts, progress)
         result.figure_files += [out / file for file, _ in figures[name]]
     ctx = ReportContext(out, opts, models)
@@ -228,25 +255,86 @@ class SeedJob:
     progress: bool = False
 
 
+_COMPILED: set[tuple[Any, ...]] = set()
+"""The rule combinations this process has compiled (:func:`compile_once`)."""
+
+
+def compile_once(cfg: SOMConfig) -> float:
+    """Compile the kernel functions ``cfg`` trains, refines and is measured with, once per
+    process, on a small run of the same rules; the wall seconds it took (0 if done before).
+
+    numba compiles a function on its first call (or loads it from its cache), whatever the
+    sizes of the arrays, so a 3-unit map of the same rules, ordering, refinement and
+    dimensions calls the same compiled code as the preset: the training times of
+    :func:`train_seed` then hold no compile time, which is reported apart.
+    """
+    from sigmapi.viz.curves import LearningCurve
+
+    key = (cfg.backend, cfg.winner_rule, cfg.ordering, cfg.refine_rounds > 0, cfg.refine_sigma,
+           len(cfg.map_shape), len(cfg.x_shape), cfg.periodic, cfg.map_periodic, cfg.same_view,
+           cfg.threads)  # fmt: skip
+    if key in _COMPILED:
+        return 0.0
+    t0 = time.perf_counter()
+    small = cfg.replace(map_shape=(3,) * len(cfg.map_shape), x_shape=(4,) * len(cfg.x_shape),
+                        y_shape=(4,) * len(cfg.y_shape), iterations=2000, seed=0,
+                        refine_rounds=min(cfg.refine_rounds, 1),
+                        refine_pairs=min(cfg.refine_pairs, 500))  # fmt: skip
+    model = SigmaPiSOM(small).fit(callback=LearningCurve(at=[small.iterations], n_test=50))
+    evaluate(model, n_test=50)
+    _COMPILED.add(key)
+    return time.perf_counter() - t0
+
+
 def train_seed(job: SeedJob) -> tuple[SeedRun, dict[str, Any], dict[str, Any]]:
     """Train one seed with learning-curve checkpoints and evaluate it (a job of
-    :func:`~sigmapi.executor.run_jobs`); ``(run, header, arrays)`` of the model."""
+    :func:`~sigmapi.executor.run_jobs`); ``(run, header, arrays)`` of the model.
+
+    The map at the end of the training is evaluated there, before the refinement (the
+    unrefined map of the same run, at no extra training); the times of the training, the
+    refinement, the measurements and the one-time compile are taken apart (:class:`SeedRun`).
+    """
     from sigmapi.viz.curves import LearningCurve, checkpoints
 
     cfg = job.cfg
+    compile_c0 = time.process_time()
+    compile_s = compile_once(cfg)
+    c0 = time.process_time()
+    compile_cpu = c0 - compile_c0
     model = SigmaPiSOM(cfg, seed=job.seed)
     callback, bar = Progress(disable=not job.progress or None).training(
         cfg.iterations, f"{job.name} seed {job.seed}"
     )
     curve = LearningCurve(at=checkpoints(cfg.iterations, job.n_checkpoints),
                           n_test=job.curve_test, then=callback)  # fmt: skip
+    marks: dict[str, Any] = {}
+
+    def step(m: SigmaPiSOM) -> None:
+        curve(m)
+        if "trained" not in marks and m.t_ >= cfg.iterations and m.refined_ == 0:
+            marks["trained"] = time.perf_counter()
+            marks["curve_s"] = curve.seconds
+            if cfg.refine_rounds > 0:
+                marks["unrefined"] = evaluate(m, n_test=job.test_size)
+            marks["eval_s"] = time.perf_counter() - marks["trained"]
+
     t0 = time.perf_counter()
     with bar:
-        model.fit(callback=curve)
-    seconds = time.perf_counter() - t0
+        model.fit(callback=step)
+    end = time.perf_counter()
+    e0 = time.perf_counter()
     metrics = evaluate(model, n_test=job.test_size)
+    final_eval = time.perf_counter() - e0
+    trained = marks.get("trained", end)
+    train_s = trained - t0 - marks.get("curve_s", curve.seconds)
+    refine_s = end - trained - marks.get("eval_s", 0.0) - (curve.seconds - marks.get("curve_s", 0))
     header, arrays = model.to_arrays()
-    return SeedRun(job.seed, seconds, model.backend, metrics, curve.to_dict()), header, arrays
+    run = SeedRun(job.seed, train_s, model.backend, metrics, curve.to_dict(),
+                  unrefined=marks.get("unrefined"), refine_seconds=max(refine_s, 0.0),
+                  compile_seconds=compile_s, compile_cpu_seconds=compile_cpu,
+                  measure_seconds=curve.seconds + marks.get("eval_s", 0.0) + final_eval,
+                  cpu_seconds=time.process_time() - c0)  # fmt: skip
+    return run, header, arrays
 
 
 def _train_all(
@@ -258,27 +346,83 @@ def _train_all(
     """Train every (preset, seed), in parallel where cores and memory allow."""
     jobs = [(f"{name} seed {seed}", SeedJob(name, cfg, seed, opts.n_checkpoints,
                                             opts.curve_test, opts.test_size))
-            for name, cfg in runs_of for seed in opts.seeds]  # fmt: skip
+            for name, cfg in runs_of for seed in opts.seeds_of(cfg)]  # fmt: skip
     per_job = max(job_memory(cfg, opts.test_size) for _, cfg in runs_of)
 
     def describe(key: str, value: tuple[SeedRun, Any, Any]) -> str:
         run, m = value[0], value[0].metrics
-        return (f"{key}: {run.train_seconds:.0f} s, order R^2 {m.order_r2:.3f}"
-                f"{', FOLDED' if m.folded else ''}")  # fmt: skip
+        refine = f" + refinement {run.refine_seconds:.0f} s" if run.unrefined else ""
+        before = f" (before refinement {run.unrefined.order_r2:.3f})" if run.unrefined else ""
+        compiled = f"; compile {run.compile_seconds:.0f} s apart" if run.compile_seconds else ""
+        return (f"{key}: training {run.train_seconds:.0f} s{refine}{compiled}, order R^2 "
+                f"{m.order_r2:.3f}{before}{', FOLDED' if m.folded else ''}")  # fmt: skip
 
     done = run_all(train_seed, jobs, executor=executor, per_job=per_job, progress=progress,
                    desc="reproduce", describe=describe,
                    verbose=lambda job: replace(job, progress=True))  # fmt: skip
     out: dict[str, tuple[list[SeedRun], list[SigmaPiSOM]]] = {}
-    for name, _ in runs_of:
+    for name, cfg in runs_of:
         runs, models = [], []
-        for seed in opts.seeds:
+        for seed in opts.seeds_of(cfg):
             key = f"{name} seed {seed}"
             run, header, arrays = done[key]
             runs.append(run)
             models.append(SigmaPiSOM.from_arrays(header, arrays, source=key))
         out[name] = (runs, models)
     return out
+
+
+def figure_seed(runs: Sequence[SeedRun], cfg: SOMConfig) -> tuple[int, str]:
+    """The run the figures show, and why: the worst-ordered seed (lowest order R^2 of the
+    final map, the first on ties).
+
+    For the authors' procedure (random start) the comparison is about twisted maps, so its
+    worst-ordered map is the one to see; for sigmapi's, the worst-ordered map is the case a
+    reader would doubt (the others are at least as ordered). The reason names the seeds
+    and the values it was chosen from.
+    """
+    i = min(range(len(runs)), key=lambda j: (runs[j].metrics.order_r2, j))
+    r2 = runs[i].metrics.order_r2
+    if len(runs) == 1:
+        return i, f"its only seed (order R² {r2:.3f})"
+    n_twisted = sum(r.metrics.order_r2 < ORDERED_R2 for r in runs)
+    authors = cfg.ordering == "none"
+    if r2 < ORDERED_R2:
+        state = (f"twisted (order R² {r2:.3f} < {ORDERED_R2}; {n_twisted} of {len(runs)} seeds "
+                 "twisted)")  # fmt: skip
+        what = "the comparison is about twisting" if authors else "the map to doubt"
+    else:
+        state = f"still ordered (order R² {r2:.3f}; every seed ≥ {ORDERED_R2})"
+        what = (
+            "no seed twisted here; the comparison is about twisting, so the least ordered"
+            if authors
+            else "the others are at least as ordered"
+        )
+    return i, f"the worst-ordered of its {len(runs)} seeds, {state}: {what}"
+
+
+def _ceiling(
+    name: str,
+    result: ReproduceResult,
+    model: SigmaPiSOM,
+    seed: int,
+    opts: ReproduceOptions,
+    progress: Progress | None,
+) -> dict[str, Any]:
+    """The rule's ceiling for preset ``name``: its twin's (same task) when the twin ran
+    first, else the fixed point reached from ``model`` (:func:`sigmapi.viz.ceiling.fixed_point`)."""
+    from sigmapi.viz.ceiling import fixed_point
+
+    for twin, other in OTHER_PROCEDURE.items():
+        done = result.presets.get(twin)
+        if other == name and done is not None and done.ceiling is not None:
+            return done.ceiling
+    t0 = time.perf_counter()
+    for _ in Progress.of(progress).each([name], f"{name} ceiling (fixed point of Eq. 7)"):
+        found = fixed_point(model, n_test=opts.test_size, max_rounds=QUICK_CEILING_ROUNDS
+                            if opts.quick else CEILING_ROUNDS)  # fmt: skip
+    return {**found.to_dict(), "preset": name, "seed": seed,
+            "seconds": time.perf_counter() - t0}  # fmt: skip
 
 
 def _draw(
@@ -309,7 +453,8 @@ def _draw(
             )
         facts = figs.draw_figure(fig_name, model, out / file, curves=curves,
                                  reference=_reference(run.preset), label=label,
-                                 centres=centres, dpi=opts.dpi)  # fmt: skip
+                                 centres=centres, dpi=opts.dpi,
+                                 ceiling=entry.ceiling)  # fmt: skip
         entry.figures[fig_name] = {"file": file, **facts}
         drawn.append((file, figs.caption(fig_name, run, facts)))
     return drawn

@@ -26,6 +26,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "METRIC_KEYS",
+    "OTHER_PROCEDURE",
     "SAVE_MODELS",
     "PresetResult",
     "ReportContext",
@@ -40,7 +41,14 @@ METRIC_KEYS = (
     "view_consistency", "view_within_one", "z_error", "order_r2", "usage", "fold_score",
 )  # fmt: skip
 
-"""The metrics the report tabulates (mean and sd over seeds)."""
+"""The metrics the report tabulates (median, worst seed, mean and sd over seeds)."""
+
+WORSE_IS_LARGER = ("z_error", "fold_score")
+"""Metrics whose worst seed has the largest value (the others: the smallest)."""
+
+Stage = Literal["refined", "unrefined"]
+"""Which map of a run: at its end (``refined``, after the refinement where the preset has
+one) or at the end of the training, before the refinement (``unrefined``)."""
 
 SaveModels = Literal["shown", "all", "none"]
 SAVE_MODELS: tuple[str, ...] = get_args(SaveModels)
@@ -54,6 +62,10 @@ CURVE_TEST = 1000
 
 N_TEST = 10_000
 """Test set size of the final metrics."""
+
+OTHER_PROCEDURE = {"paper-1d": "paper-1d-authors", "paper-2d": "paper-2d-authors"}
+"""Each paper preset (sigmapi's procedure: ordered start, then refinement) beside the
+authors' procedure at the same sizes (random start, no refinement), on the same seeds."""
 
 REPORT = "report.html"
 """The report's page in its folder."""
@@ -70,7 +82,12 @@ class ReproduceConfig:
     """Fewer iterations per preset, smaller measurements: a first look."""
     save_models: SaveModels = "shown"
     """Which trained models to write beside the report: the one the figures show (the
-    best-ordered seed), all, or none."""
+    worst-ordered seed), all, or none."""
+    seeds_2d: int | None = 5
+    """How many of the seeds the 2-D presets train: the first ones (as many as there are
+    seeds for all of them; None in Python). A 2-D run costs about as much as 20 1-D runs;
+    the default keeps the whole run within 15 minutes on two cores (measured in
+    benchmarks/results/reproduce.json)."""
     n_test: int | None = None
     """Test set size of the final metrics (default: 10,000, and 2,000 in quick runs)."""
     dpi: int = 100
@@ -81,6 +98,8 @@ class ReproduceConfig:
         _validate.choice("save_models", self.save_models, SAVE_MODELS)
         if self.n_test is not None:
             _validate.integer("n_test", self.n_test, 2, fix="e.g. 10000")
+        if self.seeds_2d is not None:
+            _validate.integer("seeds_2d", self.seeds_2d, 1, fix="e.g. 5, or None for all")
         _validate.integer("dpi", self.dpi, 20, 1200, fix="300 for print")
 
     @property
@@ -106,8 +125,9 @@ class ReproduceOptions(ReproduceConfig):
     Attributes
     ----------
     seeds : tuple of int
-        Training seeds; figures other than the learning curves show the model of the seed
-        with the highest order R^2 (the first on ties), and say which.
+        Training seeds (2-D presets: the first ``seeds_2d`` of them); figures other than the
+        learning curves show the model of the seed with the lowest order R^2 (the first on
+        ties), and say why.
     progress : bool
         Show progress bars on stderr.
     workers : int, optional
@@ -129,70 +149,142 @@ class ReproduceOptions(ReproduceConfig):
     @property
     def config(self) -> ReproduceConfig:
         """The settings without the run's."""
-        return ReproduceConfig(self.quick, self.save_models, self.n_test, self.dpi)
+        return ReproduceConfig(self.quick, self.save_models, self.seeds_2d, self.n_test, self.dpi)
+
+    def seeds_of(self, cfg: SOMConfig) -> tuple[int, ...]:
+        """The seeds a preset trains: all of :attr:`seeds`, the first ``seeds_2d`` in 2-D."""
+        if len(cfg.map_shape) >= 2 and self.seeds_2d is not None:
+            return self.seeds[: self.seeds_2d]
+        return self.seeds
 
 
 @dataclass
 class SeedRun:
-    """One trained seed: its metrics, learning curve and training time."""
+    """One trained seed: its metrics (after and before the refinement), learning curve and
+    times.
+
+    Attributes
+    ----------
+    train_seconds, refine_seconds : float
+        Wall seconds of the training iterations and of the refinement rounds, without the
+        learning-curve checkpoints, the evaluations and the one-time compile.
+    compile_seconds, compile_cpu_seconds : float
+        numba's one-time compile in the worker process that ran this seed (a small warm-up
+        run of the same rules, timed apart), wall and CPU seconds; 0 once a process has
+        compiled, or for a kernel that compiles nothing.
+    measure_seconds : float
+        Learning-curve checkpoints and the evaluations of the unrefined and final maps.
+    cpu_seconds : float
+        CPU seconds of the job in its process (measurements included, the compile not).
+    unrefined : Metrics or None
+        The map at the end of the training, before the refinement (the same run); None when
+        the preset does not refine.
+    """
 
     seed: int
     train_seconds: float
     backend: str
     metrics: Metrics
     curve: dict[str, list[float]]
+    unrefined: Metrics | None = None
+    refine_seconds: float = 0.0
+    compile_seconds: float = 0.0
+    measure_seconds: float = 0.0
+    cpu_seconds: float = 0.0
+    compile_cpu_seconds: float = 0.0
 
-    def metric(self, key: str) -> float:
-        return float(getattr(self.metrics, key))
+    def metric(self, key: str, stage: Stage = "refined") -> float:
+        m = self.unrefined if stage == "unrefined" and self.unrefined is not None else self.metrics
+        return float(getattr(m, key))
 
     def to_dict(self) -> dict[str, Any]:
-        return {"seed": self.seed, "train_seconds": self.train_seconds, "backend": self.backend,
-                **self.metrics.to_dict(), "curve": self.curve}  # fmt: skip
+        return {"seed": self.seed, "train_seconds": self.train_seconds,
+                "refine_seconds": self.refine_seconds, "compile_seconds": self.compile_seconds,
+                "measure_seconds": self.measure_seconds, "cpu_seconds": self.cpu_seconds,
+                "compile_cpu_seconds": self.compile_cpu_seconds,
+                "backend": self.backend, **self.metrics.to_dict(),
+                "unrefined": None if self.unrefined is None else self.unrefined.to_dict(),
+                "curve": self.curve}  # fmt: skip
 
 
 @dataclass
 class PresetResult:
-    """The runs of one preset over the seeds, the reference figures, and the figures drawn."""
+    """The runs of one preset over its seeds, the reference figures, the seed the figures
+    show (and why), the rule's ceiling, and the figures drawn."""
 
     config: SOMConfig
     runs: list[SeedRun]
     reference: dict[str, float]
     z_error_floor: float | None
     shown_seed: int
+    shown_reason: str = ""
+    """Why the figures show ``shown_seed`` (computed from the data)."""
+    ceiling: dict[str, Any] | None = None
+    """The fixed point of Eq. 7 reached from one map of the task
+    (:func:`sigmapi.viz.ceiling.fixed_point`; its metrics, the seed and preset of the map
+    it started from, rounds); None when not computed."""
     figures: dict[str, dict[str, Any]] = field(default_factory=dict)
     """Per figure: its file and the facts its caption states."""
 
-    def mean(self) -> dict[str, float]:
-        return {k: statistics.fmean(r.metric(k) for r in self.runs) for k in METRIC_KEYS}
+    @property
+    def refines(self) -> bool:
+        """Whether the runs have an unrefined map to compare (the preset refines)."""
+        return all(r.unrefined is not None for r in self.runs) and bool(self.runs)
 
-    def sd(self) -> dict[str, float]:
-        return {k: statistics.pstdev(r.metric(k) for r in self.runs) for k in METRIC_KEYS}
+    def _values(self, key: str, stage: Stage) -> list[float]:
+        return [r.metric(key, stage) for r in self.runs]
 
-    def median(self) -> dict[str, float]:
-        return {k: statistics.median(r.metric(k) for r in self.runs) for k in METRIC_KEYS}
+    def mean(self, stage: Stage = "refined") -> dict[str, float]:
+        return {k: statistics.fmean(self._values(k, stage)) for k in METRIC_KEYS}
 
-    def worst(self) -> dict[str, float]:
+    def sd(self, stage: Stage = "refined") -> dict[str, float]:
+        return {k: statistics.pstdev(self._values(k, stage)) for k in METRIC_KEYS}
+
+    def median(self, stage: Stage = "refined") -> dict[str, float]:
+        return {k: statistics.median(self._values(k, stage)) for k in METRIC_KEYS}
+
+    def worst(self, stage: Stage = "refined") -> dict[str, float]:
         """Per metric, the worst seed's value (largest z error and fold score, else smallest)."""
-        pick = {k: (max if k in ("z_error", "fold_score") else min) for k in METRIC_KEYS}
-        return {k: pick[k](r.metric(k) for r in self.runs) for k in METRIC_KEYS}
+        pick = {k: (max if k in WORSE_IS_LARGER else min) for k in METRIC_KEYS}
+        return {k: pick[k](self._values(k, stage)) for k in METRIC_KEYS}
 
-    def ordered_count(self) -> int:
+    def ordered_count(self, stage: Stage = "refined") -> int:
         """Seeds whose map is ordered: order R^2 >= ORDERED_R2."""
-        return sum(r.metrics.order_r2 >= ORDERED_R2 for r in self.runs)
+        return sum(v >= ORDERED_R2 for v in self._values("order_r2", stage))
 
-    def folded_seeds(self) -> list[int]:
+    def folded_seeds(self, stage: Stage = "refined") -> list[int]:
         """Seeds the z-free fold detector flags."""
-        return [r.seed for r in self.runs if r.metrics.folded]
+        unrefined = stage == "unrefined"
+        return [r.seed for r in self.runs
+                if (r.unrefined if unrefined and r.unrefined else r.metrics).folded]  # fmt: skip
+
+    def seconds(self, key: str) -> float:
+        """Median over seeds of a time of :class:`SeedRun` (e.g. ``"train_seconds"``)."""
+        return statistics.median(float(getattr(r, key)) for r in self.runs)
+
+    def _stage(self, stage: Stage) -> dict[str, Any]:
+        return {"median": self.median(stage), "worst": self.worst(stage),
+                "mean": self.mean(stage), "sd": self.sd(stage),
+                "ordered": self.ordered_count(stage),
+                "folded_seeds": self.folded_seeds(stage)}  # fmt: skip
 
     def to_dict(self) -> dict[str, Any]:
         return {
-            "config": self.config.to_dict(), "runs": [r.to_dict() for r in self.runs],
-            "mean": self.mean(), "sd": self.sd(), "median": self.median(),
-            "worst": self.worst(), "ordered": self.ordered_count(),
-            "folded_seeds": self.folded_seeds(), "reference": self.reference,
+            "config": self.config.to_dict(), "seeds": [r.seed for r in self.runs],
+            "runs": [r.to_dict() for r in self.runs],
+            **self._stage("refined"),
+            "unrefined": self._stage("unrefined") if self.refines else None,
+            "ceiling": self.ceiling, "reference": self.reference,
             "z_error_floor": self.z_error_floor, "figures": self.figures,
-            "shown_seed": self.shown_seed,
+            "shown_seed": self.shown_seed, "shown_reason": self.shown_reason,
+            "seconds": {k: self.seconds(k) for k in SECONDS},
         }  # fmt: skip
+
+
+SECONDS = ("train_seconds", "refine_seconds", "compile_seconds", "measure_seconds", "cpu_seconds",
+           "compile_cpu_seconds")  # fmt: skip
+"""The times of a :class:`SeedRun`, whose medians over seeds :meth:`PresetResult.to_dict`
+stores (``seconds``)."""
 
 
 @dataclass
@@ -212,16 +304,33 @@ class ReproduceResult:
     def to_dict(self) -> dict[str, Any]:
         o = self.options
         return {
-            "quick": o.quick, "seeds": list(o.seeds), "n_test": o.test_size,
+            "quick": o.quick, "seeds": list(o.seeds), "seeds_2d": o.seeds_2d,
+            "n_test": o.test_size,
             "curve_test": o.curve_test,
             "presets": {name: p.to_dict() for name, p in self.presets.items()},
             "sections": self.sections, "total_seconds": self.total_seconds,
         }  # fmt: skip
 
     def table(self) -> str:
-        """The mean metrics of each preset over the seeds, and the report's file."""
-        lines = [f"{name}: " + ", ".join(f"{k} {v:.3f}" for k, v in res.mean().items())
-                 for name, res in self.presets.items()]  # fmt: skip
+        """Per preset the median metrics over its seeds, labelled (after and before the
+        refinement, and the rule's ceiling, where there are), and the report's file: the
+        statistics of the report's table."""
+        lines = []
+        for name, res in self.presets.items():
+            n = len(res.runs)
+            stages = [("median", res.median())]
+            if res.refines:
+                stages.append(("median before refinement", res.median("unrefined")))
+            for label, values in stages:
+                text = ", ".join(f"{k} {v:.3f}" for k, v in values.items())
+                lines.append(f"{name}: {label} of {n} seed{'s' if n != 1 else ''}: {text}")
+            lines.append(f"{name}: {res.ordered_count()} of {n} ordered; worst seed: "
+                         f"view_consistency {res.worst()['view_consistency']:.3f}, "
+                         f"order_r2 {res.worst()['order_r2']:.3f}")  # fmt: skip
+            if res.ceiling is not None:
+                lines.append(f"{name}: the rule's ceiling (fixed point of Eq. 7 from seed "
+                             f"{res.ceiling['seed']} of {res.ceiling['preset']}): "
+                             f"view_consistency {res.ceiling['view_consistency']:.3f}")  # fmt: skip
         if self.out is not None:
             lines.append(f"report: {self.out / REPORT}")
         return "\n".join(lines)

@@ -7,6 +7,8 @@
   caption computed from the data;
 - :mod:`~sigmapi.viz.curves`: learning curves (checkpoints, costs, the ``LearningCurve``
   callback);
+- :mod:`~sigmapi.viz.ceiling`: the learning rule's ceiling, the fixed point of Eq. 7 reached
+  from a map (drawn in the learning curves);
 - :mod:`~sigmapi.viz.compare`: the figure of the comparison with the baselines.
 
 matplotlib is imported by the drawing modules only, when they are imported.

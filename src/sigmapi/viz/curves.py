@@ -7,6 +7,7 @@
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
@@ -90,6 +91,8 @@ class LearningCurve:
     seed: int = 12345
     then: Callable[[Any], None] | None = None
     records: list[dict[str, float]] = field(default_factory=list)
+    seconds: float = 0.0
+    """Wall seconds spent measuring so far (kept out of the training times)."""
     _sets: tuple[Batch, Batch] | None = field(default=None, repr=False)
 
     def __call__(self, model: SigmaPiSOM) -> None:
@@ -109,6 +112,13 @@ class LearningCurve:
 
     def measure(self, model: SigmaPiSOM) -> dict[str, float]:
         """The record of ``model`` now (called by ``__call__`` at checkpoints)."""
+        started = time.perf_counter()
+        try:
+            return self._measure(model)
+        finally:
+            self.seconds += time.perf_counter() - started
+
+    def _measure(self, model: SigmaPiSOM) -> dict[str, float]:
         if self._sets is None:
             self._sets = evaluation_sets(model, self.n_test, self.seed)
         cal, test = self._sets

@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from sigmapi.metrics import ORDERED_R2
+from sigmapi.metrics import ORDERED_R2, chebyshev
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -39,10 +39,13 @@ DPI = 100
 """Resolution of raster figures by default (``draw_figure(..., dpi=300)`` for print; a
 ``.pdf`` or ``.svg`` path gives vector graphics)."""
 SAME_RESPONSE = 0.5
-"""Fig. 8 caption: responses "agree" when the largest distance between the normalised
-responses (0 = identical, 2 = opposite) is at most this."""
+"""Fig. 8 caption: responses "agree" when the largest distance between the responses, each
+scaled to unit length, is at most this (0 = the same shape; sqrt 2 = 1.41 for non-negative
+responses with no unit in common)."""
 CURVE_REFERENCES = ("view_consistency", "z_error", "z_error_floor")
 """Reference keys the curves figure draws as lines (plots.plot_learning_curves)."""
+CURVE_CEILING = ("view_consistency", "z_error")
+"""Metrics of the rule's ceiling the curves figure draws as lines."""
 
 Facts = dict[str, Any]
 
@@ -53,7 +56,9 @@ class DrawInputs:
 
     ``curves``: learning-curve columns, one mapping per seed (the curves figure);
     ``reference``: reference lines for it; ``label``: how titles name the model; ``seed``:
-    seed of sampled inputs; ``centres``: receptive-field centres (computed when needed).
+    seed of sampled inputs; ``centres``: receptive-field centres (computed when needed);
+    ``ceiling``: the rule's ceiling (metrics of :func:`sigmapi.viz.ceiling.fixed_point`),
+    drawn as lines in the curves.
     """
 
     curves: Sequence[dict[str, list[float]]] | None = None
@@ -61,6 +66,7 @@ class DrawInputs:
     label: str = ""
     seed: int = 0
     centres: Any = None
+    ceiling: dict[str, Any] | None = None
 
     @property
     def tag(self) -> str:
@@ -69,25 +75,33 @@ class DrawInputs:
 
 @dataclass(frozen=True)
 class RunInfo:
-    """What a caption says about the run: preset, config, seeds, the seed shown, test size."""
+    """What a caption says about the run: preset, config, seeds, the seed shown (index into
+    ``seeds``), test size, and why that seed is shown (computed from the data)."""
 
     preset: str
     config: SOMConfig
     seeds: tuple[int, ...]
     shown: int
     curve_test: int = 0
+    why: str = ""
+
+    @property
+    def procedure(self) -> str:
+        """The run's training, and its refinement where it has one."""
+        cfg = self.config
+        refined = (
+            f", then {cfg.refine_rounds} x {cfg.refine_pairs:,} refinement pairs"
+            if cfg.refine_rounds > 0
+            else ", no refinement"
+        )
+        return f"{cfg.iterations:,} iterations{refined}"
 
     @property
     def what(self) -> str:
         cfg, seeds = self.config, self.seeds
         shape = "x".join(map(str, cfg.map_shape)) + ("-unit" if len(cfg.map_shape) == 1 else "")
-        which = (
-            "" if len(seeds) == 1 else f", the best-ordered of seeds {', '.join(map(str, seeds))}"
-        )
-        return (
-            f"{self.preset} ({shape} map, {cfg.iterations:,} iterations, "
-            f"seed {seeds[self.shown]}{which})"
-        )
+        which = f": {self.why}" if self.why else ""
+        return f"{self.preset} ({shape} map, {self.procedure}; seed {seeds[self.shown]}{which})"
 
 
 @dataclass(frozen=True)
@@ -121,19 +135,30 @@ def _draw_fig8(model: SigmaPiSOM, inp: DrawInputs) -> tuple[Figure, Facts]:
 
     d = len(model.x_shape)
     data = analysis.fig8_data(model, inp.seed, centres=inp.centres)
+    pairs = slice(0, data.n_pairs)
+    winners = model.winner(data.x[pairs], data.y[pairs], hard=True)
+    unit, count = np.unique(winners, return_counts=True)
+    top = int(unit[np.argmax(count)])
+    apart = chebyshev(model.map_coords, winners, np.full_like(winners, top))
     fig = _figure((11.0, 5.6) if d == 2 else (12.0, 5.2))
     ax = fig.add_axes((0.0, 0.0, 1.0, 1.0))
     zs = ", ".join(f"{v:.2f}" for v in data.z)
+    which = "refined map" if model.refined_ else "map"
     plots.plot_fig8(
         data, ax=ax,
-        title=f"Fig. 8{inp.tag}\nleft: map response h to {data.n_pairs} (x, y) pairs with the "
-        f"same z = ({zs}); right: to patterns\nmap polarity: {data.polarity.name}",
+        title=f"Fig. 8 of the {which}{inp.tag}\nleft: map response h to {data.n_pairs} (x, y) "
+        f"pairs with the same z = ({zs}), the same winner in {int(count.max())} of "
+        f"{data.n_pairs}; right: to patterns\nmap polarity: {data.polarity.name}",
     )  # fmt: skip
     return fig, {
         "z": data.z.tolist(),
         "polarity": data.polarity.name,
         "polarity_r2": data.polarity.r2,
         "invariance_spread": data.invariance_spread,
+        "winners": [int(w) for w in winners],
+        "same_winner": int(count.max()),
+        "within_one": int(np.sum(apart <= 1.0)),
+        "refined_pairs": int(model.refined_),
     }
 
 
@@ -144,6 +169,20 @@ def _caption_fig8(run: RunInfo, facts: Facts) -> str:
         pattern = "two hills on x with a single hill on y (and the reverse)"
     spread, r2 = facts["invariance_spread"], facts["polarity_r2"]
     agree = "agree" if spread <= SAME_RESPONSE else "differ"
+    n = len(facts.get("winners", [])) or 4
+    if "same_winner" in facts:
+        k, near = facts["same_winner"], facts["within_one"]
+        units = ", ".join(map(str, facts["winners"]))
+        alike = (
+            f"The same unit wins all {n} pairs (hard winners {units}); the"
+            if k == n
+            else f"The same unit wins {k} of the {n} pairs ({near} of {n} within one unit of "
+            f"it; hard winners {units}); the"
+        )
+    else:
+        alike = "The"
+    refined = facts.get("refined_pairs", 0)
+    map_is = f"the refined map (after {refined:,} refinement pairs)" if refined else "the map"
     if r2 >= ORDERED_R2:
         shown = (
             f"the pattern reappears on the map, {facts['polarity']} relative to the input "
@@ -155,10 +194,12 @@ def _caption_fig8(run: RunInfo, facts: Facts) -> str:
             f"{ORDERED_R2}), so the pattern does not reappear as one piece"
         )
     return (
-        f"Fig. 8 of the chapter, {run.what}. Left: four random (x, y) pairs that share one "
-        f"body-centred z = ({', '.join(f'{v:.2f}' for v in facts['z'])}); rows x, y and the "
-        f"map activation h. The responses {agree} (largest distance between the normalised "
-        f"responses: {spread:.2f}, 0 = identical). Right: {pattern}; {shown}. "
+        f"Fig. 8 of the chapter on {map_is}, {run.what}. Left: {n} random (x, y) pairs that "
+        f"share one body-centred z = ({', '.join(f'{v:.2f}' for v in facts['z'])}); rows x, "
+        f"y and the map activation h. {alike} responses {agree}: the largest distance between "
+        f"two of them, each response scaled to unit length, is {spread:.2f} (0 = the same "
+        f"shape, 1.41 = no unit in common; they agree up to {SAME_RESPONSE}). "
+        f"Right: {pattern}; {shown}. "
         "The paper's 2-D run came out rotated by 180 degrees: the orientation is arbitrary "
         "before learning and consistent after it."
     )
@@ -285,33 +326,61 @@ def _draw_curves(model: SigmaPiSOM, inp: DrawInputs) -> tuple[Figure, Facts]:
     curves = inp.curves
     if not curves:
         raise ValueError("the curves figure needs learning curves (curves=...)")
-    fig = _figure((8.5, 9.0))
+    ceiling = {k: float(v) for k, v in (inp.ceiling or {}).items() if k in CURVE_CEILING}
+    fig = _figure((10.5, 9.0))
+    trained = [int(sum(1 for r in c.get("refined", []) if r == 0) or len(c["t"])) for c in curves]
     plots.plot_learning_curves(
         curves, ax=fig.add_axes((0.0, 0.0, 1.0, 1.0)), reference=inp.reference,
-        schedule=sigma_schedule(model),
-        title=f"Learning curves{inp.tag}, measured at {len(curves[0]['t'])} checkpoints",
+        schedule=sigma_schedule(model), ceiling=ceiling,
+        title=f"Learning curves{inp.tag}, measured at {trained[0]} training checkpoints"
+        + (" and after every refinement round" if plots.has_refinement(curves) else ""),
     )  # fmt: skip
+    rounds = [int(sum(1 for r in c.get("refined", []) if r > 0)) for c in curves]
     return fig, {
-        "checkpoints": len(curves[0]["t"]),
+        "checkpoints": trained[0],
+        "refinement_rounds": rounds[0],
         "final": {k: v[-1] for k, v in curves[0].items()},
         "reference_lines": sorted(k for k in (inp.reference or {}) if k in CURVE_REFERENCES),
+        "ceiling": ceiling,
+        "ceiling_from": {k: (inp.ceiling or {}).get(k) for k in ("preset", "seed")},
     }
 
 
 def _caption_curves(run: RunInfo, facts: Facts) -> str:
+    rounds = facts.get("refinement_rounds", 0)
+    refine = (
+        f" Right of the training axis, on its own axis: the {rounds} refinement "
+        f"round{'s' if rounds != 1 else ''} after the training (x: refinement pairs done; 0 "
+        "= the end of the training)."
+        if rounds
+        else ""
+    )
+    ceiling = facts.get("ceiling") or {}
+    source = facts.get("ceiling_from") or {}
+    line = (
+        " Dash-dot lines: the learning rule's ceiling, the fixed point of Eq. 7 reached from "
+        f"seed {source.get('seed')} of {source.get('preset')} (view consistency "
+        f"{ceiling['view_consistency']:.3f}"
+        + (f", z error {ceiling['z_error']:.3f}" if "z_error" in ceiling else "")
+        + "; each unit the mean of x' y'^T over the views it wins, computed on a grid, "
+        "sigmapi.viz.ceiling)."
+        if "view_consistency" in ceiling
+        else ""
+    )
     return (
         f"Learning curves of {run.preset} over seeds {list(run.seeds)} (thin: each seed, thick: "
         f"mean), measured on {run.curve_test} test z's at {facts['checkpoints']} log-spaced "
-        "checkpoints: view consistency, z error, the approximate cost of section 6.3 (at the "
-        "sigma of the moment, and with the winner alone) and the neighbourhood width sigma with "
-        "its schedule. The table's metrics use a larger test set: the last points differ from "
-        "it by sampling."
+        "training checkpoints: view consistency, z error, the approximate cost of section 6.3 "
+        "(at the sigma of the moment, and with the winner alone) and the neighbourhood width "
+        f"sigma with its schedule.{refine} The table's metrics use a larger test set: the last "
+        "points differ from it by sampling."
         + (
             " Dashed lines: reference figures of docs/algorithm.md "
             f"({', '.join(facts['reference_lines'])})."
             if facts.get("reference_lines")
             else ""
         )
+        + line
     )
 
 
@@ -347,20 +416,23 @@ def draw_figure(
     seed: int = 0,
     centres: Any = None,
     dpi: int = DPI,
+    ceiling: dict[str, Any] | None = None,
 ) -> Facts:
     """Draw figure ``name`` (one of :data:`FIGURES`) of ``model`` into ``path``.
 
     ``curves`` (learning-curve columns, one mapping per seed) is needed for ``"curves"``;
     ``reference`` adds reference lines to it; ``label`` names the model in titles; ``seed``
     draws the Fig. 8 inputs and the receptive-field sampling; ``centres`` reuses computed
-    receptive-field centres. Returns the facts the caption states (JSON-able).
+    receptive-field centres; ``ceiling`` (metrics of the rule's fixed point,
+    :func:`sigmapi.viz.ceiling.fixed_point`, with its ``preset`` and ``seed``) adds the
+    ceiling lines to ``"curves"``. Returns the facts the caption states (JSON-able).
     """
     spec = _spec(name)
     if centres is None and spec.needs_centres(len(model.x_shape)):
         from sigmapi.viz.analysis import receptive_field_centres
 
         centres = receptive_field_centres(model, seed)
-    inputs = DrawInputs(curves, reference, label, seed, centres)
+    inputs = DrawInputs(curves, reference, label, seed, centres, ceiling)
     fig, facts = spec.draw(model, inputs)
     tight = "tight" if spec.tight else None
     fig.savefig(Path(path), dpi=dpi, bbox_inches=tight, facecolor="white")

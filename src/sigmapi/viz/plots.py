@@ -27,6 +27,7 @@ if TYPE_CHECKING:
     from sigmapi.viz.analysis import Fig8Data, InvarianceMatrix
 
 __all__ = [
+    "has_refinement",
     "plot_fig8",
     "plot_invariance",
     "plot_learning_curves",
@@ -264,30 +265,53 @@ def plot_net(
 # ----------------------------------------------------------------------------- learning curves
 
 
+def has_refinement(curves: Sequence[Mapping[str, Sequence[float]]]) -> bool:
+    """Whether any curve holds records of refinement rounds (``refined > 0``)."""
+    return any(any(float(r) > 0 for r in c.get("refined", [])) for c in curves)
+
+
+def _split(c: Mapping[str, Sequence[float]]) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
+    """Masks of a curve's training records and of its refinement records (the latter with
+    the last training record first: the refinement starts from it)."""
+    n = len(c["t"])
+    refined = np.asarray(c.get("refined", [0.0] * n), dtype=float)
+    train = refined == 0
+    rounds = refined > 0
+    if rounds.any() and train.any():
+        rounds[np.flatnonzero(train)[-1]] = True
+    return train, rounds
+
+
 def plot_learning_curves(
     curves: Sequence[Mapping[str, Sequence[float]]],
     ax: Axes | None = None,
     reference: Mapping[str, float] | None = None,
     schedule: tuple[Sequence[float], Sequence[float]] | None = None,
     title: str | None = None,
+    ceiling: Mapping[str, float] | None = None,
 ) -> Axes:
     """Learning curves: view consistency, z error and cost against iterations, and sigma.
 
-    ``curves``: one mapping per seed with columns ``t``, ``view_consistency``,
+    ``curves``: one mapping per seed with columns ``t``, ``refined``, ``view_consistency``,
     ``view_within_one``, ``z_error``, ``cost``, ``cost_winner``, ``sigma`` (as written by
-    :meth:`sigmapi.viz.analysis.LearningCurve.to_dict`); thin lines per seed, a thick line for
-    the mean. ``reference``: horizontal lines for ``view_consistency``,
-    ``view_within_one``, ``z_error`` and ``z_error_floor``. ``schedule``: ``(t, sigma)`` of
-    the full sigma schedule, drawn under the checkpoints.
+    :meth:`sigmapi.viz.curves.LearningCurve.to_dict`); thin lines per seed, a thick line for
+    the mean. Records of the training (``refined`` 0) go on a log axis of iterations; those
+    of the refinement rounds after it (``refined`` > 0) on a linear axis of refinement pairs
+    to its right, starting from the last training record. ``reference``: dashed horizontal
+    lines for ``view_consistency``, ``view_within_one``, ``z_error`` and ``z_error_floor``.
+    ``ceiling``: dash-dot lines of the learning rule's ceiling for the same metrics
+    (:func:`sigmapi.viz.ceiling.fixed_point`), across both axes. ``schedule``: ``(t,
+    sigma)`` of the full sigma schedule, drawn under the checkpoints.
     """
-    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
+    from matplotlib.ticker import FuncFormatter, LogLocator, MaxNLocator, NullFormatter
 
-    ax = _axes(ax, (8.0, 9.0), container=True)
+    ax = _axes(ax, (10.0, 9.0), container=True)
     _container(ax, title or "Learning curves (measured at checkpoints during training)")
     curves = [c for c in curves if len(c.get("t", [])) > 0]
     if not curves:
         raise ValueError("curves must hold at least one curve with checkpoints")
-    ref = dict(reference or {})
+    ref, top_line = dict(reference or {}), dict(ceiling or {})
+    refine = has_refinement(curves)
     panels = [
         ("view consistency,\nunit usage", [("view_consistency", "view consistency"),
                               ("view_within_one", "view within one"),
@@ -297,29 +321,60 @@ def plot_learning_curves(
         ("sigma (map units)", [("sigma", "at checkpoints")]),
     ]  # fmt: skip
     n = len(panels)
-    left, right, bottom, top, gap = 0.12, 0.70, 0.06, 0.93, 0.035
+    left, right, bottom, top, gap = 0.10, 0.70, 0.06, 0.93, 0.035
+    main_right = right - 0.17 if refine else right
     h = (top - bottom - gap * (n - 1)) / n
-    axes = []
+    axes, raxes = [], []
     for p, (label, series) in enumerate(panels):
-        pa = _inset(ax, left, top - (p + 1) * h - p * gap, right - left, h)
+        y0 = top - (p + 1) * h - p * gap
+        pa = _inset(ax, left, y0, main_right - left, h)
+        ra = _inset(ax, main_right + 0.015, y0, right - main_right - 0.015, h) if refine else None
+        if ra is not None:
+            ra.sharey(pa)
+            raxes.append(ra)
         axes.append(pa)
         for s, (key, name) in enumerate(series):
             colour = f"C{s}"
-            runs = [np.asarray(c[key], dtype=float) for c in curves if key in c]
-            ts = [np.asarray(c["t"], dtype=float) for c in curves if key in c]
-            for t, v in zip(ts, runs, strict=True):
-                pa.plot(t, v, "-", color=colour, lw=0.8, alpha=0.4)
-            same_t = all(len(t) == len(ts[0]) and np.allclose(t, ts[0]) for t in ts)
-            if runs and same_t:
-                mean_label = f"{name} (mean of {len(runs)})" if len(runs) > 1 else name
-                pa.plot(
-                    ts[0], np.mean(runs, axis=0), "-o", color=colour, lw=1.8, ms=3, label=mean_label
+            have = [c for c in curves if key in c]
+            parts = [_split(c) for c in have]
+            for part, target in ((0, pa), (1, ra)):
+                if target is None:
+                    continue
+                xs = [np.asarray(c["t" if part == 0 else "refined"], dtype=float)[m[part]]
+                      for c, m in zip(have, parts, strict=True)]  # fmt: skip
+                vs = [np.asarray(c[key], dtype=float)[m[part]]
+                      for c, m in zip(have, parts, strict=True)]  # fmt: skip
+                if key == "sigma":  # log axis: sigma 0 (the refinement's winner alone) left out
+                    pos = [v > 0 for v in vs]
+                    xs = [x[k] for x, k in zip(xs, pos, strict=True)]
+                    vs = [v[k] for v, k in zip(vs, pos, strict=True)]
+                for x, v in zip(xs, vs, strict=True):
+                    target.plot(x, v, "-", color=colour, lw=0.8, alpha=0.4)
+                same = bool(xs) and all(
+                    len(x) == len(xs[0]) and len(x) > 0 and np.allclose(x, xs[0]) for x in xs
                 )
-            if key in ref:
-                pa.axhline(ref[key], color=colour, ls="--", lw=1, label=f"reference {ref[key]:g}")
+                if same:
+                    many = len(vs) > 1
+                    target.plot(xs[0], np.mean(vs, axis=0), "-o", color=colour, lw=1.8, ms=3,
+                                label=(f"{name} (mean of {len(vs)})" if many else name)
+                                if part == 0 else None)  # fmt: skip
+            for target in (pa, ra):
+                if target is None:
+                    continue
+                first = target is pa
+                if key in ref:
+                    target.axhline(ref[key], color=colour, ls="--", lw=1,
+                                   label=f"reference {ref[key]:g}" if first else None)  # fmt: skip
+                if key in top_line:
+                    target.axhline(top_line[key], color=colour, ls="-.", lw=1.2,
+                                   label=f"the rule's ceiling (fixed point) {top_line[key]:.3f}"
+                                   if first else None)  # fmt: skip
         if label.startswith("z error") and "z_error_floor" in ref:
-            pa.axhline(ref["z_error_floor"], color="0.4", ls=":", lw=1,
-                       label=f"quantisation floor {ref['z_error_floor']:g}")  # fmt: skip
+            for target in (pa, ra):
+                if target is not None:
+                    target.axhline(ref["z_error_floor"], color="0.4", ls=":", lw=1,
+                                   label=f"quantisation floor {ref['z_error_floor']:g}"
+                                   if target is pa else None)  # fmt: skip
         if label.startswith("sigma") and schedule is not None:
             st, sv = (np.asarray(v, dtype=float) for v in schedule)
             keep = st > 0
@@ -332,14 +387,32 @@ def plot_learning_curves(
         pa.xaxis.set_minor_formatter(NullFormatter())
         pa.set_ylabel(label)
         pa.grid(alpha=0.3, which="both")
-        pa.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+        legend_of = ra if ra is not None else pa
+        handles, names = pa.get_legend_handles_labels()
+        legend_of.legend(handles, names, fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0))
+        if ra is not None:
+            ra.grid(alpha=0.3)
+            ra.tick_params(labelleft=False)
+            ra.xaxis.set_major_locator(MaxNLocator(nbins=3, integer=True))
+            ra.xaxis.set_major_formatter(FuncFormatter(_count_label))
+            if p == 0:
+                ra.set_title("refinement", fontsize=9)
         if p < n - 1:
             pa.tick_params(labelbottom=False)
+            if ra is not None:
+                ra.tick_params(labelbottom=False)
     axes[-1].set_xlabel("training iteration")
-    lo = min(float(np.min(c["t"])) for c in curves)
-    hi = max(float(np.max(c["t"])) for c in curves)
+    if raxes:
+        raxes[-1].set_xlabel("refinement pairs")
+    train_t = [np.asarray(c["t"], dtype=float)[_split(c)[0]] for c in curves]
+    lo = min(float(np.min(t)) for t in train_t if t.size)
+    hi = max(float(np.max(t)) for t in train_t if t.size)
     for pa in axes:
         pa.set_xlim(lo * 0.9, hi * 1.1)
+    if raxes:
+        top_r = max(float(np.max(c.get("refined", [0.0]))) for c in curves)
+        for ra in raxes:
+            ra.set_xlim(-0.06 * top_r, top_r * 1.06)
     return ax
 
 
