@@ -13,7 +13,9 @@
   ``robot_map``, ``robot_result``, ``robot_plots``;
 - :mod:`~sigmapi.experiments.sweep`: parameter and seed sweeps (``sigmapi sweep``);
 - :mod:`~sigmapi.experiments.chain`: a chain of two maps (retina -> head -> body) against one;
-- :mod:`~sigmapi.experiments.compare`: the Sigma-Pi map beside the baselines.
+- :mod:`~sigmapi.experiments.compare`: the Sigma-Pi map beside the baselines;
+- :mod:`~sigmapi.experiments.stream`: maps learned from a stream of frames (the trace rule)
+  against explicit pairs (``sigmapi stream``).
 """
 
 from sigmapi.experiments.base import (
@@ -31,6 +33,7 @@ from sigmapi.experiments.reach import REACH, ReachExperiment
 from sigmapi.experiments.reproduce import REFERENCE, SECTIONS, paper_presets, reproduce
 from sigmapi.experiments.results import ReportContext, ReproduceOptions, ReproduceResult, Section
 from sigmapi.experiments.robot import ROBOT, RobotExperiment
+from sigmapi.experiments.stream import STREAM, StreamExperiment
 from sigmapi.experiments.sweep import SweepSpec, run_sweep
 
 __all__ = [
@@ -39,6 +42,7 @@ __all__ = [
     "REGISTRY",
     "ROBOT",
     "SECTIONS",
+    "STREAM",
     "CompareConfig",
     "CompareResult",
     "Experiment",
@@ -49,6 +53,7 @@ __all__ = [
     "Result",
     "RobotExperiment",
     "Section",
+    "StreamExperiment",
     "SweepSpec",
     "check_seeds",
     "paper_presets",
