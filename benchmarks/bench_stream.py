@@ -5,8 +5,9 @@ combined into one JSON with the commands, wall and CPU seconds and the load aver
     python benchmarks/bench_stream.py --groups 800-804 805-809 --traces 0,0.5 \\
         --work /tmp/stream --out benchmarks/results/stream.json
 
-A group whose folder already holds a ``result.json`` of the same settings is not run again
-(``--force`` runs it anyway), so an interrupted measurement continues with the next group.
+A group whose folder already holds a ``result.json`` is not run again (``--force`` runs it
+anyway), so an interrupted measurement continues with the next group; its timings are kept from
+the ``--out`` file where that holds them. ``--figure FILE.png`` draws the combined figure.
 """
 
 from __future__ import annotations
@@ -44,7 +45,12 @@ def main() -> None:
     p.add_argument("--work", type=Path, default=Path("/tmp/stream"), help="the groups' folders")
     p.add_argument("--out", type=Path, default=Path("benchmarks/results/stream.json"))
     p.add_argument("--force", action="store_true")
+    p.add_argument("--figure", type=Path, help="draw the combined figure into this .png")
     args = p.parse_args()
+    earlier = {}
+    if args.out.is_file():
+        old = json.loads(args.out.read_text("utf-8")).get("measured", {}).get("groups", [])
+        earlier = {g["command"]: g for g in old if "wall_seconds" in g}
     parts, commands = [], []
     for group in args.groups:
         folder = args.work / f"seeds-{group}"
@@ -65,7 +71,9 @@ def main() -> None:
             "--force",
         ]
         entry = {"command": " ".join(cmd), "load_avg_1min_before": os.getloadavg()[0]}
-        if args.force or not (folder / "result.json").is_file():
+        if not args.force and (folder / "result.json").is_file():
+            entry = earlier.get(entry["command"], entry)
+        else:
             before = resource.getrusage(resource.RUSAGE_CHILDREN)
             start = time.perf_counter()
             exe = [sys.executable, "-m", "sigmapi.cli", *cmd[1:]]
@@ -82,12 +90,19 @@ def main() -> None:
         parts.append(StreamResult.from_dict(read_result(folder)))
     result = StreamResult.combine(parts).to_dict()
     result["measured"] = {
+        "command": " ".join(["python", "benchmarks/bench_stream.py", *sys.argv[1:]]),
         "groups": commands,
         "machine": f"{platform.machine()}, {os.cpu_count()} cores, shared (see the load averages)",
     }
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(result, indent=2) + "\n", encoding="utf-8")
-    print(StreamResult.from_dict(result).table())
+    combined = StreamResult.from_dict(result)
+    print(combined.table())
+    if args.figure is not None:
+        from sigmapi.viz.stream import stream_figure
+
+        stream_figure(result).savefig(args.figure, dpi=120)
+        print(combined.caption())
 
 
 if __name__ == "__main__":

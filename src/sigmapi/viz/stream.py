@@ -40,9 +40,14 @@ def _dwell_axis(ax: Axes, dwells: list[int]) -> None:
     ax.set_xlabel("dwell time d (saccades per object position)")
 
 
-def plot_view_consistency(result: Mapping[str, Any], ax: Axes | None = None) -> Axes:
+def plot_view_consistency(
+    result: Mapping[str, Any], ax: Axes | None = None, *, margin: float | None = None
+) -> Axes:
     """View consistency over the dwell time: per stream method the median over seeds (line)
-    and best to worst seed (band); the map on explicit pairs as a horizontal line and band."""
+    and best to worst seed (band); the map on explicit pairs as a horizontal line and band.
+
+    ``margin``: zoom in on the pairs' median +- 3 margins and shade +- ``margin`` around it
+    (the acceptance's margin); values outside lie beyond the axis."""
     ax = _ax(ax)
     lines = _lines(result)
     dwells = sorted({m["dwell"] for v in lines.values() for m in v})
@@ -57,6 +62,12 @@ def plot_view_consistency(result: Mapping[str, Any], ax: Axes | None = None) -> 
         ax.plot(d, [m["view_consistency"] for m in entries], "o-", color=f"C{i}", label=name)
     _dwell_axis(ax, dwells)
     ax.set_ylabel("view consistency (same winner)")
+    if margin is not None:
+        mid = pairs["view_consistency"]
+        ax.axhspan(mid - margin, mid + margin, color="g", alpha=0.08, lw=0,
+                   label=f"explicit pairs +- {margin:g}")  # fmt: skip
+        ax.set_ylim(mid - 3 * margin, mid + 3 * margin)
+        ax.set_title("near explicit pairs", fontsize=10)
     ax.legend(fontsize=8, loc="lower right")
     return ax
 
@@ -82,10 +93,13 @@ def plot_fold_rate(result: Mapping[str, Any], ax: Axes | None = None) -> Axes:
 
 
 def stream_figure(result: Mapping[str, Any]) -> Figure:
-    """Both panels side by side: :func:`plot_view_consistency` and :func:`plot_fold_rate`."""
-    fig = Figure(figsize=(11, 4.2), layout="constrained")
-    left, right = fig.subplots(1, 2)
+    """Three panels side by side: :func:`plot_view_consistency` in full and near the map on
+    explicit pairs (the acceptance's margin, ``result["acceptance"]["margin"]``), and
+    :func:`plot_fold_rate`."""
+    fig = Figure(figsize=(15, 4.2), layout="constrained")
+    left, mid, right = fig.subplots(1, 3)
     plot_view_consistency(result, left)
+    plot_view_consistency(result, mid, margin=result["acceptance"]["margin"])
     plot_fold_rate(result, right)
     n = len(result["settings"]["seeds"])
     fig.suptitle(f"Learning from a stream ({result['settings']['preset']}, {n} seed"
