@@ -4,7 +4,8 @@ The estimator holds the state (weights, iteration count, random streams) and del
 arithmetic to a kernel (:mod:`sigmapi.kernels`) and its rules (:mod:`sigmapi.rules`). Its
 other jobs live beside it: grids and codes (:mod:`sigmapi._grids`), the cost
 (:mod:`sigmapi._cost`), scikit-learn's parameters (:mod:`sigmapi._params`), arrays, files and
-pickles (:mod:`sigmapi._persist`), view checks (:mod:`sigmapi.views`).
+pickles (:mod:`sigmapi._persist`), view checks (:mod:`sigmapi.views`), learning from a stream
+of frames (:mod:`sigmapi._stream`).
 
 Random streams: one :class:`numpy.random.SeedSequence` per run. The initial weights come from
 its child ``spawn_key=(0,)``; the training data of iterations ``[b * BLOCK, (b + 1) * BLOCK)``
@@ -30,6 +31,7 @@ from sigmapi._grids import GridsMixin
 from sigmapi._params import ParamsMixin, entropy_of, stored_overrides
 from sigmapi._persist import PersistMixin
 from sigmapi._refine import RefineMixin
+from sigmapi._stream import StreamMixin
 from sigmapi.config import SOMConfig
 from sigmapi.errors import ConfigError, DataError, NotFittedError, NumericalError
 from sigmapi.kernels import KernelState, get_backend
@@ -46,7 +48,7 @@ BLOCK = 1000
 Callback = Callable[["SigmaPiSOM"], None]
 
 
-class SigmaPiSOM(GridsMixin, CostMixin, ParamsMixin, PersistMixin, RefineMixin):
+class SigmaPiSOM(GridsMixin, CostMixin, ParamsMixin, PersistMixin, RefineMixin, StreamMixin):
     """Self-organizing map of Sigma-Pi units, ``h_k = sum_ij w_kij x_i y_j``.
 
     Trained without a teacher on two views of the same body-centred position z: the winner is
@@ -106,6 +108,7 @@ class SigmaPiSOM(GridsMixin, CostMixin, ParamsMixin, PersistMixin, RefineMixin):
         self._sigma_cache: tuple[int, float] | None = None  # (t_, sigma at t_)
         self._refined = 0  # refinement pairs done (all rounds)
         self._refine_acc = None  # (round, its sums so far)
+        self._trace: NDArray[np.float64] | None = None  # a stream's trace (_stream.py)
 
     @property
     def t_(self) -> int:
@@ -277,6 +280,7 @@ class SigmaPiSOM(GridsMixin, CostMixin, ParamsMixin, PersistMixin, RefineMixin):
             self._t = 0
             self._refined = 0
             self._refine_acc = None
+            self._trace = None
             if data is None:
                 self._partial_fit(None, total, callback)
             else:

@@ -20,7 +20,7 @@ from sigmapi import _validate
 from sigmapi.codes import PopulationCode
 from sigmapi.errors import ConfigError
 
-__all__ = ["RELATIONS", "Batch", "Relation", "TwoViewSampler", "get_relation"]
+__all__ = ["RELATIONS", "Batch", "Frames", "Relation", "TwoViewSampler", "get_relation"]
 
 Array = NDArray[np.float64]
 
@@ -128,6 +128,22 @@ class Batch(NamedTuple):
     py0: Array
     px1: Array
     py1: Array
+
+
+class Frames(NamedTuple):
+    """A stream of views in time order (:meth:`TwoViewSampler.stream`).
+
+    Codes ``x`` ``(T, n_x)``, ``y`` ``(T, n_y)``; positions ``z``, ``px``, ``py`` ``(T, d)``;
+    ``moved`` ``(T,)``: frame t shows the object at a new position (frame 0 does). A learner
+    reads the codes only.
+    """
+
+    x: Array
+    y: Array
+    z: Array
+    px: Array
+    py: Array
+    moved: NDArray[np.bool_]
 
 
 _REJECTION_ROUNDS = 8
@@ -241,6 +257,31 @@ class TwoViewSampler:
         yy = np.where(pick_x, rel.solve_y(zz, xx), yy)
         x[idx] = np.clip(xx, 0.0, 1.0)
         y[idx] = np.clip(yy, 0.0, 1.0)
+
+    def stream(self, n: int, dwell: int, rng: np.random.Generator) -> Frames:
+        """``n`` frames of the gaze-and-reach world as a robot sees them: the object stays at
+        one body-centred position ``z`` for ``dwell`` saccades, then moves to a fresh ``z``
+        (uniform, as :meth:`sample_z`); every saccade is a fresh view ``(x, y)`` of the
+        current ``z`` (:meth:`sample_view`). The moves fall on frames ``0, dwell, 2 dwell, ...``
+        and nothing in the codes marks them.
+
+        Examples
+        --------
+        >>> from sigmapi.codes import PopulationCode
+        >>> s = TwoViewSampler("mean", PopulationCode((15,)), PopulationCode((15,)))
+        >>> f = s.stream(6, 3, np.random.default_rng(0))
+        >>> f.x.shape, f.moved.tolist()
+        ((6, 15), [True, False, False, True, False, False])
+        >>> bool(np.allclose((f.px + f.py) / 2, f.z) and np.all(f.z[0] == f.z[2]))
+        True
+        """
+        n = _validate.integer("n", n, 0)
+        dwell = _validate.integer("dwell", dwell, 1, fix="saccades per object position")
+        segments = self.sample_z(-(-n // dwell), rng)
+        z = np.repeat(segments, dwell, axis=0)[:n]
+        px, py = self.sample_view(z, rng)
+        moved = np.arange(n) % dwell == 0
+        return Frames(self.x_code.encode(px), self.y_code.encode(py), z, px, py, moved)
 
     def sample(self, n: int, rng: np.random.Generator, z: Array | None = None) -> Batch:
         """``n`` pairs of views of ``n`` body-centred positions (drawn unless ``z`` is given)."""

@@ -36,8 +36,10 @@ from sigmapi.errors import ConfigError, DataError
 __all__ = [
     "MAX_PRODUCT",
     "CodeViews",
+    "StreamFrames",
     "Views",
     "check_codes",
+    "check_frames",
     "check_pairs",
     "check_views",
     "encode_views",
@@ -51,6 +53,10 @@ every backend's weights far inside float32's range (see :data:`sigmapi.config.MA
 Views = tuple[ArrayLike, ArrayLike, ArrayLike, ArrayLike]
 """Your own two-view data ``(x0, y0, x1, y1)``: codes ``(B, n_x)``, ``(B, n_y)``, ``(B, n_x)``,
 ``(B, n_y)``; row b holds two views of the same body-centred position."""
+
+StreamFrames = tuple[ArrayLike, ArrayLike]
+"""A stream ``(x, y)``: codes ``(T, n_x)`` and ``(T, n_y)``, row t the view of frame t, in time
+order, with no mark of when the object moved (``SigmaPiSOM.fit_stream``)."""
 
 Array = NDArray[np.float64]
 CodeViews = tuple[Array, Array, Array, Array]
@@ -132,12 +138,7 @@ def check_views(views: Any, x_shape: tuple[int, ...], y_shape: tuple[int, ...]) 
     Besides :func:`check_codes` on each array: ``|x_i y_j|`` of each view must stay within
     :data:`MAX_PRODUCT` (the weights learn ``x1 y1^T``, the winner weighs ``x0 y0^T``).
     """
-    if isinstance(views, np.ndarray):
-        got = f"one array of shape {views.shape}"
-    elif isinstance(views, tuple | list):
-        got = f"a {type(views).__name__} of {len(views)} items"
-    else:
-        got = type(views).__name__
+    got = _what(views)
     if got.startswith("one array") or not isinstance(views, tuple | list) or len(views) != 4:
         raise DataError(
             f"views must be a tuple (x0, y0, x1, y1) of 4 code arrays, got {got}; row b "
@@ -150,15 +151,51 @@ def check_views(views: Any, x_shape: tuple[int, ...], y_shape: tuple[int, ...]) 
     x0, y0, x1, y1 = arrays.values()
     for xv, yv, v in ((x1, y1, "1"), (x0, y0, "0")):
         # the weights learn x1 y1^T; the winner (and an ordering's eigh) uses x0 y0^T alike
-        top = float(np.abs(_distinct(xv)).max(initial=0.0))
-        top *= float(np.abs(_distinct(yv)).max(initial=0.0))
-        if top > MAX_PRODUCT:
-            raise DataError(
-                f"views x{v} and y{v} must have |x{v}_i y{v}_j| <= {MAX_PRODUCT:g} (the map "
-                f"multiplies them and would overflow), got up to {top:.3g}; scale your codes to "
-                "about 1 (model.x_code.encode gives unit-length codes)"
-            )
+        _check_product(xv, yv, f"views x{v} and y{v}", v)
     return x0, y0, x1, y1
+
+
+def _what(obj: Any) -> str:
+    """What a caller passed where a tuple of arrays belongs, in words."""
+    if isinstance(obj, np.ndarray):
+        return f"one array of shape {obj.shape}"
+    if isinstance(obj, tuple | list):
+        return f"a {type(obj).__name__} of {len(obj)} items"
+    return type(obj).__name__
+
+
+def _check_product(xv: Array, yv: Array, name: str, sub: str = "") -> None:
+    """A DataError unless ``|x_i y_j|`` stays within :data:`MAX_PRODUCT` (the map multiplies
+    them): ``name`` the arrays, ``sub`` their index in the message (``x1_i``)."""
+    top = float(np.abs(_distinct(xv)).max(initial=0.0))
+    top *= float(np.abs(_distinct(yv)).max(initial=0.0))
+    if top > MAX_PRODUCT:
+        raise DataError(
+            f"{name} must have |x{sub}_i y{sub}_j| <= {MAX_PRODUCT:g} (the map multiplies them "
+            f"and would overflow), got up to {top:.3g}; scale your codes to about 1 "
+            "(model.x_code.encode gives unit-length codes)"
+        )
+
+
+def check_frames(
+    frames: Any, x_shape: tuple[int, ...], y_shape: tuple[int, ...], least: int = 1
+) -> tuple[Array, Array]:
+    """A stream ``(x, y)`` as checked codes ``(T, n_x)``, ``(T, n_y)`` of at least ``least``
+    frames (see :func:`check_codes`; ``|x_i y_j|`` within :data:`MAX_PRODUCT`)."""
+    if isinstance(frames, np.ndarray) or not isinstance(frames, tuple | list) or len(frames) != 2:
+        raise DataError(
+            f"frames must be a tuple (x, y) of 2 code arrays, got {_what(frames)}; row t holds "
+            "the view of frame t (encode positions with model.x_code.encode / y_code.encode)"
+        )
+    x, y = check_codes(frames[0], "x", x_shape), check_codes(frames[1], "y", y_shape)
+    _same_rows({"x": x, "y": y}, "frames x and y")
+    if x.shape[0] < least:
+        raise DataError(
+            f"frames must hold at least {least} frame{'s' if least > 1 else ''}, got "
+            f"{x.shape[0]}; a stream learns frame t + 1 under the trace of the frames before"
+        )
+    _check_product(x, y, "frames x and y")
+    return x, y
 
 
 def fit_views(

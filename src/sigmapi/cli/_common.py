@@ -220,6 +220,21 @@ def _names(text: str) -> tuple[str, ...]:
     return tuple(s.strip() for s in text.split(",") if s.strip())
 
 
+def _numbers(kind: type) -> Callable[[str], tuple[Any, ...]]:
+    """A parser of comma-separated numbers of ``kind`` (``int`` or ``float``) such as ``1,2,4``."""
+
+    def parse(text: str) -> tuple[Any, ...]:
+        try:
+            return tuple(kind(v) for v in text.split(",") if v.strip())
+        except ValueError:
+            raise argparse.ArgumentTypeError(
+                f"expected {kind.__name__}s separated by commas such as 1,2,4, got {text!r}"
+            ) from None
+
+    parse.__name__ = f"{kind.__name__}s"
+    return parse
+
+
 _ROLE = re.compile(r":(?:[a-z]+:)?[a-z]+:`(~?)([^`<]*?)\s*(?:<([^>]*)>)?`")
 _LITERAL = re.compile(r"``([^`]+)``|`([^`]+)`")
 
@@ -275,8 +290,12 @@ def _flag_kwargs(f: dataclasses.Field[Any], hint: Any) -> tuple[dict[str, Any], 
     if origin is Literal:
         return {"type": type(args[0]), "choices": args}, shown
     kind: Callable[[str], Any]
-    if origin is tuple and args == (int, Ellipsis):
+    if origin is tuple and args == (int, Ellipsis) and f.metadata.get("sep") == ",":
+        kind, joiner = _numbers(int), ","
+    elif origin is tuple and args == (int, Ellipsis):
         kind, joiner = grid, "x"
+    elif origin is tuple and args == (float, Ellipsis):
+        kind, joiner = _numbers(float), ","
     elif origin is tuple and args == (str, Ellipsis):
         kind, joiner = _names, ","
     elif simple == [bool]:
@@ -302,7 +321,8 @@ def add_dataclass_flags(
 
     A field without a default is a positional argument. Options default to None (the field's
     own default applies); a bool field is an on-switch; a ``Literal`` field offers its values;
-    ``tuple[int, ...]`` is written ``8x8`` and ``tuple[str, ...]`` ``a,b``; a field with
+    ``tuple[int, ...]`` is written ``8x8`` (``1,2,4`` with metadata ``{"sep": ","}``),
+    ``tuple[float, ...]`` ``0,0.5`` and ``tuple[str, ...]`` ``a,b``; a field with
     metadata ``{"repeat": True}`` is given once per value. ``aliases`` adds a second spelling
     for a field (e.g. ``{"model_path": "--model"}``); fields in ``skip`` get no option. Values
     are not checked here: ``cls`` checks them when it is built (:func:`dataclass_values`).

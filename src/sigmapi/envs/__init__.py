@@ -24,7 +24,7 @@ from sigmapi.envs.protocols import (
     check_view_space,
     view_space,
 )
-from sigmapi.envs.views import collect_saccade_views, learn_map_in_env, view_source
+from sigmapi.envs.views import collect_saccade_views, collect_stream, learn_map_in_env, view_source
 from sigmapi.envs.wrappers import (
     FEATURES,
     STATE_WRAPPERS,
@@ -56,6 +56,7 @@ __all__ = [
     "bump_features",
     "check_view_space",
     "collect_saccade_views",
+    "collect_stream",
     "learn_map_in_env",
     "make_state_env",
     "move_table",

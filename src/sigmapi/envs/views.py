@@ -17,11 +17,11 @@ import numpy as np
 
 from sigmapi import _validate
 from sigmapi.config import SOMConfig
-from sigmapi.envs.protocols import Views, ViewSource
+from sigmapi.envs.protocols import PlacedViewSource, Views, ViewSource
 from sigmapi.errors import ConfigError
 from sigmapi.som import SigmaPiSOM
 
-__all__ = ["collect_saccade_views", "learn_map_in_env", "view_source"]
+__all__ = ["collect_saccade_views", "collect_stream", "learn_map_in_env", "view_source"]
 
 
 def view_source(source: Any) -> ViewSource:
@@ -75,6 +75,46 @@ def collect_saccade_views(source: Any, n_pairs: int, seed: int | None = None) ->
             )
         out.append(arr)
     return out[0], out[1], out[2], out[3]
+
+
+def collect_stream(
+    source: Any, n_frames: int, dwell: int, seed: int | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """A stream of ``n_frames`` views as the body sees them: the object stays at one place for
+    ``dwell`` saccades, then moves to a fresh place, and nothing marks when.
+
+    Parameters
+    ----------
+    source : PlacedViewSource or gymnasium.Env
+        What shows a given place (:meth:`~sigmapi.envs.PlacedViewSource.views_of`): the
+        gaze-and-reach world (:class:`~sigmapi.envs.GazeReachEnv`) or the robot's camera
+        (:class:`~sigmapi.envs.robot.RobotViews`), wrapped or not.
+    n_frames : int
+        Frames (saccades) of the stream.
+    dwell : int
+        Saccades per place of the object.
+    seed : int, optional
+        Seed of the places (uniform in ``[0, 1]`` per dimension of ``z``, as both sources
+        place the object) and of the source's saccades.
+
+    Returns
+    -------
+    x, y : ndarray, float64
+        Codes ``(n_frames, x_code.size)`` and ``(n_frames, y_code.size)`` in time order, ready
+        for ``SigmaPiSOM.fit_stream((x, y))``; ``z`` is not returned.
+    """
+    n_frames = _validate.integer("n_frames", n_frames, 1, fix="e.g. n_frames=20001")
+    dwell = _validate.integer("dwell", dwell, 1, fix="saccades per place of the object")
+    src = view_source(source)
+    if not isinstance(src, PlacedViewSource):
+        raise ConfigError(
+            f"source must show a given place to make a stream (views_of(z, rng) and z_dim, "
+            f"sigmapi.envs.PlacedViewSource), got {type(src).__name__}"
+        )
+    rng = np.random.default_rng(seed)
+    places = rng.random((-(-n_frames // dwell), src.z_dim))
+    x, y = src.views_of(np.repeat(places, dwell, axis=0)[:n_frames], rng)
+    return np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
 
 
 def learn_map_in_env(

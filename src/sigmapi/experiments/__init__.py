@@ -16,7 +16,9 @@
   figure in ``reward_config``, ``reward_result``, ``reward_plots``;
 - :mod:`~sigmapi.experiments.sweep`: parameter and seed sweeps (``sigmapi sweep``);
 - :mod:`~sigmapi.experiments.chain`: a chain of two maps (retina -> head -> body) against one;
-- :mod:`~sigmapi.experiments.compare`: the Sigma-Pi map beside the baselines.
+- :mod:`~sigmapi.experiments.compare`: the Sigma-Pi map beside the baselines;
+- :mod:`~sigmapi.experiments.stream`: maps learned from a stream of frames (the trace rule)
+  against explicit pairs (``sigmapi stream``).
 """
 
 from sigmapi.experiments.base import (
@@ -35,6 +37,7 @@ from sigmapi.experiments.reproduce import REFERENCE, SECTIONS, paper_presets, re
 from sigmapi.experiments.results import ReportContext, ReproduceOptions, ReproduceResult, Section
 from sigmapi.experiments.reward import REWARD, RewardExperiment
 from sigmapi.experiments.robot import ROBOT, RobotExperiment
+from sigmapi.experiments.stream import STREAM, StreamExperiment
 from sigmapi.experiments.sweep import SweepSpec, run_sweep
 
 __all__ = [
@@ -44,6 +47,7 @@ __all__ = [
     "REWARD",
     "ROBOT",
     "SECTIONS",
+    "STREAM",
     "CompareConfig",
     "CompareResult",
     "Experiment",
@@ -55,6 +59,7 @@ __all__ = [
     "RewardExperiment",
     "RobotExperiment",
     "Section",
+    "StreamExperiment",
     "SweepSpec",
     "check_seeds",
     "paper_presets",

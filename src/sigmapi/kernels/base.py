@@ -30,10 +30,12 @@ __all__ = [
     "CONTRACT",
     "MAX_WEIGHT",
     "REFINER",
+    "STREAMER",
     "FileArrays",
     "Kernel",
     "KernelState",
     "Refiner",
+    "Streamer",
     "dense_file_weights",
     "rule_scores",
 ]
@@ -268,3 +270,42 @@ class Refiner(Protocol[S]):
 
 REFINER: tuple[str, ...] = ("refine_start", "refine_block", "refine_finish")
 """The methods a kernel that refines defines (:class:`Refiner`)."""
+
+
+S_in = TypeVar("S_in", bound=KernelState, contravariant=True)
+
+
+class Streamer(Protocol[S_in]):
+    """What a kernel offers for learning from a stream (:mod:`sigmapi.rules.trace`); optional.
+
+    A kernel without it trains on view pairs but not on streams:
+    :meth:`sigmapi.SigmaPiSOM.fit_stream` on it is a :class:`~sigmapi.errors.ConfigError`
+    naming the backends that do.
+    """
+
+    def train_stream(
+        self,
+        state: S_in,
+        x: NDArray[np.floating],
+        y: NDArray[np.floating],
+        trace: NDArray[np.floating] | None,
+        sigmas: NDArray[np.floating],
+        eps: NDArray[np.floating],
+        *,
+        lam: float,
+        map_shape: tuple[int, ...],
+        winner_rule: WinnerRule | str,
+        soft_cut: int,
+        threads: bool = False,
+        map_periodic: bool = False,
+    ) -> tuple[NDArray[np.int64], NDArray[np.float64] | None]:
+        """The frames ``(x[t], y[t])`` in order, in place: the Kohonen update towards frame
+        ``t`` with rate ``eps[t]`` under the trace (if one exists), then frame ``t``'s winner
+        at ``sigmas[t]`` and the trace ``lam * trace + (1 - lam) * a`` of its neighbourhood
+        ``a``. Returns the winners ``(T,)`` and the trace ``(K,)`` (None while there is
+        none). The result must not depend on how the stream is cut, nor on threads."""
+        ...
+
+
+STREAMER: tuple[str, ...] = ("train_stream",)
+"""The methods a kernel that learns from streams defines (:class:`Streamer`)."""

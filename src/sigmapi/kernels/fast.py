@@ -59,6 +59,7 @@ from sigmapi.kernels import _rows, columns
 from sigmapi.kernels._rows import _pairs, _winner, activate, axis_distance, gaussian, prefetch
 from sigmapi.kernels.base import FileArrays, rule_scores
 from sigmapi.rules import BATCH_MEAN, WinnerRule, winner_rule
+from sigmapi.rules import trace as trace_rule
 from sigmapi.rules.neighbourhood import neighbourhood
 from sigmapi.rules.refinement import Sums, assignment
 
@@ -83,6 +84,7 @@ __all__ = [
     "supports",
     "train_block",
     "train_gated_block",
+    "train_stream",
     "winners",
     "winners_of",
 ]
@@ -737,6 +739,115 @@ def train_gated_block(
            bool(map_periodic), code, int(soft_cut), state.tol, out, track, False,
            _ahead(state, TRAIN_PREFETCH_AHEAD))  # fmt: skip
     return out
+
+
+# ---------------------------------------------------------------------------- stream learning
+
+_trace_step: Any = njit(cache=True, nogil=True)(trace_rule.trace_step)
+"""The trace rule's step, compiled from :func:`sigmapi.rules.trace.trace_step`."""
+
+
+@njit(cache=True, parallel=True)
+def _train_stream(
+    raw, scale, sqnorm, x, y, trace, primed, sigmas, eps, lam, dims, strides, map_periodic,
+    rule, cut, tol, out, track, threads, ahead,
+):  # fmt: skip
+    """The stream driver (:func:`sigmapi.kernels.reference.train_stream`): per frame, the
+    Kohonen update with ``eps[t] * trace`` towards the frame (if ``primed``), the frame's
+    activation on the updated weights (one pass over the units, :func:`_unit_chunk`), its
+    winner and neighbourhood, then the trace in place. Units with ``eps trace_k`` at most
+    ``tol`` of the largest get no additive update. Returns whether the trace now exists."""
+    k_units = raw.shape[1]
+    jb, pi, pv, _, _, h, ea, gain, acc, t1, t2 = _buffers(k_units, raw.shape[0], y.shape[1])
+    a = np.empty(k_units)
+    n_chunks = (k_units + CHUNK - 1) // CHUNK
+    for t in range(x.shape[0]):
+        n = _pairs(x[t], y[t], tol, jb, pi, pv)
+        lo = k_units
+        hi = 0
+        thr = 1.0
+        n1 = 0
+        if primed:
+            top = 0.0
+            for k in range(k_units):
+                ea[k] = eps[t] * trace[k]
+                top = max(top, ea[k])
+            thr = tol * top
+            for k in range(k_units):
+                if ea[k] > thr:
+                    lo = min(lo, k)
+                    hi = k + 1
+            n1 = n
+        else:
+            for k in range(k_units):
+                ea[k] = 0.0
+        if threads:
+            for c in prange(n_chunks):
+                _unit_chunk(raw, scale, sqnorm, c * CHUNK, min(k_units, (c + 1) * CHUNK), ea,
+                            thr, lo, hi, pi, pv, n1, pi, pv, n, True, track, h, gain, acc,
+                            ahead)  # fmt: skip
+        else:
+            _unit_chunk(raw, scale, sqnorm, 0, k_units, ea, thr, lo, hi,
+                        pi, pv, n1, pi, pv, n, True, track, h, gain, acc, ahead)  # fmt: skip
+        w = _winner(h, scale, sqnorm, rule, sigmas[t], cut, dims, strides, map_periodic, t1, t2)
+        out[t] = w
+        _neighbourhood(w, sigmas[t], 1.0, tol, dims, strides, map_periodic, a)
+        if primed:
+            for k in range(k_units):
+                trace[k] = _trace_step(trace[k], a[k], lam)
+        else:
+            for k in range(k_units):
+                trace[k] = a[k]
+            primed = True
+    return primed
+
+
+def train_stream(
+    state: FastState,
+    x: NDArray[np.floating],
+    y: NDArray[np.floating],
+    trace: NDArray[np.floating] | None,
+    sigmas: NDArray[np.floating],
+    eps: NDArray[np.floating],
+    *,
+    lam: float,
+    map_shape: tuple[int, ...],
+    winner_rule: WinnerRule | str,
+    soft_cut: int,
+    threads: bool = False,
+    map_periodic: bool = False,
+) -> tuple[NDArray[np.int64], NDArray[np.float64] | None]:
+    """Learn the frames of a stream in order under the trace rule, updating ``state`` in
+    place (as :func:`sigmapi.kernels.reference.train_stream`). Returns the winners ``(T,)``
+    and the trace ``(K,)`` after the last frame (None if there is none yet).
+
+    ``threads``: as :func:`train_block` (the same result on any number of threads).
+    """
+    k_units, nx, ny = state.shape
+    dims, strides = _grid(tuple(map_shape), k_units)
+    rule, code = _rule_code(winner_rule, "winner_rule")
+    xa, ya = _codes(x, nx, "x"), _codes(y, ny, "y")
+    n_frames = xa.shape[0]
+    sg = np.ascontiguousarray(sigmas, dtype=np.float64)
+    ep = np.ascontiguousarray(eps, dtype=np.float64)
+    if ya.shape[0] != n_frames or sg.shape != (n_frames,) or ep.shape != (n_frames,):
+        raise ValueError("x, y, sigmas and eps must have the same length")
+    tr = np.zeros(k_units) if trace is None else np.array(trace, dtype=np.float64)
+    if tr.shape != (k_units,):
+        raise ValueError(f"trace must have shape ({k_units},), got {tr.shape}")
+    out = np.empty(n_frames, dtype=np.int64)
+    track = rule.needs_norms
+    if track:
+        state.refresh_norms()
+    elif n_frames > 0:
+        state.norms_valid = False
+    parallel = threads and k_units * nx * ny >= PARALLEL_MIN_WORK and numba.get_num_threads() > 1
+    driver: Any = _train_stream  # a numba dispatcher
+    primed = driver(state.raw, state.scale, state.sqnorm, xa, ya, tr, trace is not None, sg, ep,
+                    float(lam), dims, strides, bool(map_periodic), code, int(soft_cut),
+                    state.tol, out, track, bool(parallel),
+                    _ahead(state, TRAIN_PREFETCH_AHEAD))  # fmt: skip
+    return out, (tr if primed else None)
 
 
 # ---------------------------------------------------------------------------- refinement

@@ -31,6 +31,7 @@ from sigmapi.kernels.base import FileArrays, dense_file_weights, rule_scores
 from sigmapi.rules import BATCH_MEAN, KOHONEN, WINNER_RULES, WinnerRule
 from sigmapi.rules.neighbourhood import neighbourhood
 from sigmapi.rules.refinement import Sums, assignment
+from sigmapi.rules.trace import trace_step
 
 __all__ = [
     "NAME",
@@ -51,6 +52,7 @@ __all__ = [
     "supports",
     "train_block",
     "train_gated_block",
+    "train_stream",
     "winners",
     "winners_of",
 ]
@@ -242,6 +244,48 @@ def train_gated_block(
         KOHONEN.update(W, a * g[t], x1[t], y1[t], float(eps[t]))
         out[t] = k[0]
     return out
+
+
+def train_stream(
+    W: Array,
+    x: Array,
+    y: Array,
+    trace: Array | None,
+    sigmas: Array,
+    eps: Array,
+    *,
+    lam: float,
+    map_shape: tuple[int, ...],
+    winner_rule: WinnerRule | str,
+    soft_cut: int,
+    threads: bool = False,
+    map_periodic: bool = False,
+) -> tuple[NDArray[np.int64], NDArray[np.float64] | None]:
+    """Learn the frames ``(x[t], y[t])`` of a stream in order under the trace rule
+    (:mod:`sigmapi.rules.trace`), updating ``W`` in place.
+
+    Frame ``t``: if a trace exists (``trace`` ``(K,)`` from the frames before this call, or
+    the one built from frames ``0 .. t-1``), the Kohonen update with rate ``eps[t]`` and the
+    trace as neighbourhood towards frame ``t``; then the winner of frame ``t`` on the updated
+    weights at width ``sigmas[t]``, its neighbourhood ``a`` and the next trace
+    ``lam * trace + (1 - lam) * a`` (``a`` alone when there was none). ``eps[0]`` is unused
+    when ``trace`` is None. Returns the winners ``(T,)`` and the trace after the last frame
+    (a copy of ``trace`` when there are no frames: None stays None). At ``lam = 0`` the iterations
+    are those of :func:`train_block` on the consecutive pairs ``(frame t, frame t + 1)``.
+    ``threads`` is ignored (one thread).
+    """
+    rule = rules.winner_rule(winner_rule, "winner_rule")
+    out = np.empty(x.shape[0], dtype=np.int64)
+    tr = None if trace is None else np.array(trace, dtype=np.float64)
+    for t in range(x.shape[0]):
+        if tr is not None:
+            KOHONEN.update(W, tr, x[t], y[t], float(eps[t]))
+        h = activation(W, x[t : t + 1], y[t : t + 1])
+        k = winners(W, h, map_shape, rule, float(sigmas[t]), soft_cut, map_periodic)
+        a = neighbourhood(k, map_shape, float(sigmas[t]), map_periodic)[0]
+        tr = a if tr is None else trace_step(tr, a, lam)
+        out[t] = k[0]
+    return out, tr
 
 
 def refine_start(W: Array) -> Sums:

@@ -1,0 +1,107 @@
+"""The figure of ``sigmapi stream``: view consistency and fold rate over the dwell time.
+
+Functions draw from the experiment's data, the dict of ``StreamResult.to_dict()`` (also its
+``result.json``): ``methods``, one entry per method and dwell time with ``name``, ``dwell``
+(None for the map on explicit pairs), the medians, ``fold_rate`` and ``per_seed`` values. They
+take ``ax=None`` (a new figure when None) and return the Axes; :func:`stream_figure` lays out
+both panels and returns the Figure. Nothing is shown.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+
+__all__ = ["plot_fold_rate", "plot_view_consistency", "stream_figure"]
+
+
+def _ax(ax: Axes | None) -> Axes:
+    if ax is None:
+        ax = Figure(figsize=(5.5, 4), layout="constrained").subplots()
+    return ax
+
+
+def _lines(result: Mapping[str, Any]) -> dict[str, list[Mapping[str, Any]]]:
+    """The stream methods by name, each a list of entries sorted by dwell time."""
+    out: dict[str, list[Mapping[str, Any]]] = {}
+    for m in result["methods"]:
+        if m["dwell"] is not None:
+            out.setdefault(m["name"], []).append(m)
+    return {k: sorted(v, key=lambda m: m["dwell"]) for k, v in out.items()}
+
+
+def _dwell_axis(ax: Axes, dwells: list[int]) -> None:
+    ax.set_xscale("log", base=2)
+    ax.set_xticks(dwells, [str(d) for d in dwells])
+    ax.set_xlabel("dwell time d (saccades per object position)")
+
+
+def plot_view_consistency(
+    result: Mapping[str, Any], ax: Axes | None = None, *, margin: float | None = None
+) -> Axes:
+    """View consistency over the dwell time: per stream method the median over seeds (line)
+    and best to worst seed (band); the map on explicit pairs as a horizontal line and band.
+
+    ``margin``: zoom in on the pairs' median +- 3 margins and shade +- ``margin`` around it
+    (the acceptance's margin); values outside lie beyond the axis."""
+    ax = _ax(ax)
+    lines = _lines(result)
+    dwells = sorted({m["dwell"] for v in lines.values() for m in v})
+    pairs = next(m for m in result["methods"] if m["dwell"] is None)
+    vals = pairs["per_seed"]["view_consistency"]
+    ax.axhspan(min(vals), max(vals), color="k", alpha=0.1, lw=0)
+    ax.axhline(pairs["view_consistency"], color="k", ls="--", label="explicit pairs")
+    for i, (name, entries) in enumerate(lines.items()):
+        d = [m["dwell"] for m in entries]
+        per = np.array([m["per_seed"]["view_consistency"] for m in entries])
+        ax.fill_between(d, per.min(axis=1), per.max(axis=1), color=f"C{i}", alpha=0.15, lw=0)
+        ax.plot(d, [m["view_consistency"] for m in entries], "o-", color=f"C{i}", label=name)
+    _dwell_axis(ax, dwells)
+    ax.set_ylabel("view consistency (same winner)")
+    if margin is not None:
+        mid = pairs["view_consistency"]
+        ax.axhspan(mid - margin, mid + margin, color="g", alpha=0.08, lw=0,
+                   label=f"explicit pairs +- {margin:g}")  # fmt: skip
+        ax.set_ylim(mid - 3 * margin, mid + 3 * margin)
+        ax.set_title("near explicit pairs", fontsize=10)
+    ax.legend(fontsize=8, loc="lower right")
+    return ax
+
+
+def plot_fold_rate(result: Mapping[str, Any], ax: Axes | None = None) -> Axes:
+    """Share of seeds whose map folded (:func:`sigmapi.metrics.fold_score`) over the dwell
+    time, per stream method; the map on explicit pairs as a horizontal line."""
+    ax = _ax(ax)
+    lines = _lines(result)
+    dwells = sorted({m["dwell"] for v in lines.values() for m in v})
+    pairs = next(m for m in result["methods"] if m["dwell"] is None)
+    ax.axhline(pairs["fold_rate"], color="k", ls="--", label="explicit pairs")
+    n = len(lines)
+    for i, (name, entries) in enumerate(lines.items()):
+        d = np.array([m["dwell"] for m in entries], dtype=float)
+        shift = 2.0 ** (0.06 * (i - (n - 1) / 2))  # side by side where rates coincide
+        ax.plot(d * shift, [m["fold_rate"] for m in entries], "o-", color=f"C{i}", label=name)
+    _dwell_axis(ax, dwells)
+    ax.set_ylim(-0.05, 1.05)
+    ax.set_ylabel("fold rate (share of seeds folded)")
+    ax.legend(fontsize=8, loc="best")
+    return ax
+
+
+def stream_figure(result: Mapping[str, Any]) -> Figure:
+    """Three panels side by side: :func:`plot_view_consistency` in full and near the map on
+    explicit pairs (the acceptance's margin, ``result["acceptance"]["margin"]``), and
+    :func:`plot_fold_rate`."""
+    fig = Figure(figsize=(15, 4.2), layout="constrained")
+    left, mid, right = fig.subplots(1, 3)
+    plot_view_consistency(result, left)
+    plot_view_consistency(result, mid, margin=result["acceptance"]["margin"])
+    plot_fold_rate(result, right)
+    n = len(result["settings"]["seeds"])
+    fig.suptitle(f"Learning from a stream ({result['settings']['preset']}, {n} seed"
+                 f"{'s' * (n > 1)})")  # fmt: skip
+    return fig
