@@ -86,7 +86,8 @@ def run_seed(preset: str, seed: int, overrides: list[str] | None = None) -> dict
 
 def summary(runs: list[dict[str, Any]], preset: str = "") -> dict[str, Any]:
     """Median and worst seed of every metric and time; seeds ordered and folded; per target
-    of ``preset`` (:data:`TARGETS`) how many seeds meet it, and how many meet all."""
+    of ``preset`` (:data:`TARGETS`) how many seeds meet it and how many measured it (a run
+    may lack a time), and how many meet all."""
     out: dict[str, Any] = {"seeds": len(runs)}
     for k in (*METRICS, *CIRCULAR, *TIMES):
         vals = [r[k] for r in runs if k in r]
@@ -106,6 +107,7 @@ def summary(runs: list[dict[str, Any]], preset: str = "") -> dict[str, Any]:
         meets = [{k: meets_target(r, k, *t) for k, t in targets.items()} for r in runs]
         out["targets"] = {k: f"{op} {bound:g}" for k, (op, bound) in targets.items()}
         out["meeting"] = {k: sum(bool(m[k]) for m in meets) for k in targets}
+        out["measured"] = {k: sum(m[k] is not None for m in meets) for k in targets}
         out["meeting_all"] = sum(all(m.values()) for m in meets)
     return out
 

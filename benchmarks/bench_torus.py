@@ -47,13 +47,23 @@ VARIANTS: dict[str, dict[str, Any]] = {
     "w05-soft": dict(code_width=0.5, winner_rule="soft", iterations=100_000,
                      eps=((0.0, 0.1), (0.7, 0.01), (1.0, 0.001)),
                      sigma=((0.0, 5.0), (0.3, 1.5), (0.7, 1e-5))),
+    # the same with 3 refinement rounds whose means take in the neighbours (refine_sigma)
+    "w05-soft-sigma07": dict(code_width=0.5, winner_rule="soft", iterations=100_000,
+                             eps=((0.0, 0.1), (0.7, 0.01), (1.0, 0.001)),
+                             sigma=((0.0, 5.0), (0.3, 1.5), (0.7, 1e-5)),
+                             refine_rounds=3, refine_sigma=0.7),
+    # twice the rounds
+    "w05-soft-sigma07-r6": dict(code_width=0.5, winner_rule="soft", iterations=100_000,
+                                eps=((0.0, 0.1), (0.7, 0.01), (1.0, 0.001)),
+                                sigma=((0.0, 5.0), (0.3, 1.5), (0.7, 1e-5)),
+                                refine_rounds=6, refine_sigma=0.7),
 }  # fmt: skip
-"""The torus variants by name (fields over :data:`BASE`)."""
+"""The torus variants by name (fields over :data:`BASE`; a variant's own fields win)."""
 
 
 def config(variant: str, seed: int) -> SOMConfig:
     """The config of ``variant`` at ``seed``."""
-    return SOMConfig(**BASE, **VARIANTS[variant], seed=seed)
+    return SOMConfig(**{**BASE, **VARIANTS[variant]}, seed=seed)
 
 
 def run_seed(variant: str, seed: int) -> dict[str, Any]:
