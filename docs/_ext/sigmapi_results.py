@@ -103,11 +103,17 @@ def mw(stats: dict[str, Any], fmt: str = ".3f") -> str:
 
 
 def seeds_label(seeds: Sequence[int]) -> str:
-    """``100-119`` for a run of consecutive seeds, else the list."""
-    s = sorted(int(x) for x in seeds)
-    if s and s == list(range(s[0], s[-1] + 1)) and len(s) > 2:
-        return f"{s[0]}-{s[-1]}"
-    return ", ".join(map(str, s))
+    """The seeds as runs: ``100-119``, ``700-704, 710-714``; a run of two or fewer is listed."""
+    s = sorted({int(x) for x in seeds})
+    runs: list[list[int]] = []
+    for x in s:
+        if runs and x == runs[-1][-1] + 1:
+            runs[-1].append(x)
+        else:
+            runs.append([x])
+    return ", ".join(
+        f"{r[0]}-{r[-1]}" if len(r) > 2 else ", ".join(map(str, r)) for r in runs
+    )
 
 
 def median_worst(values: Iterable[float], higher_is_better: bool = True) -> tuple[float, float]:
