@@ -111,9 +111,7 @@ def seeds_label(seeds: Sequence[int]) -> str:
             runs[-1].append(x)
         else:
             runs.append([x])
-    return ", ".join(
-        f"{r[0]}-{r[-1]}" if len(r) > 2 else ", ".join(map(str, r)) for r in runs
-    )
+    return ", ".join(f"{r[0]}-{r[-1]}" if len(r) > 2 else ", ".join(map(str, r)) for r in runs)
 
 
 def median_worst(values: Iterable[float], higher_is_better: bool = True) -> tuple[float, float]:
