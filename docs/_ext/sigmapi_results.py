@@ -202,6 +202,42 @@ def _ceiling() -> Table:
     )  # fmt: skip
 
 
+@table("reproduce")
+def _reproduce() -> Table:
+    """The default ``sigmapi reproduce``: each preset refined, before its refinement (the
+    same runs at the end of their training) and at the rule's ceiling."""
+    data = load("reproduce")
+    rows = []
+    for preset, p in get(data, "metrics.presets", "reproduce").items():
+        med, worst, unref = p["median"], p["worst"], p.get("unrefined")
+        ceiling = p.get("ceiling") or {}
+
+        def before(key: str, fmt: str = ".3f") -> str:
+            return num(unref["median"][key], fmt) if unref else "-"
+
+        rows.append([
+            f"`{preset}`", seeds_label(p["seeds"]),
+            f"{num(med['view_consistency'])} / {num(worst['view_consistency'])}",
+            before("view_consistency"),
+            num(ceiling["view_consistency"]) if "view_consistency" in ceiling else "-",
+            f"{num(med['z_error'])} / {num(worst['z_error'])}", before("z_error"),
+            f"{num(med['order_r2'])} / {num(worst['order_r2'])}",
+            f"{p['ordered']} of {len(p['seeds'])}",
+        ])  # fmt: skip
+    note = (
+        f"Median / worst seed; 'before' is the median of the same runs at the end of their "
+        f"training. The run took {num(get(data, 'wall_seconds', 'reproduce') / 60, '.1f')} min "
+        f"wall and {num(get(data, 'cpu_seconds', 'reproduce'), '.0f')} CPU s (1-minute load "
+        f"average {num(get(data, 'load_average_1min.median', 'reproduce'), '.1f')} median, "
+        f"{num(get(data, 'load_average_1min.max', 'reproduce'), '.1f')} at most)."
+    )
+    return Table(
+        ["preset", "seeds", "view consistency", "before refinement", "ceiling", "z error",
+         "before refinement", "order R²", "ordered"],
+        rows, [_rel("reproduce")], note, _command(data),
+    )  # fmt: skip
+
+
 @table("headline")
 def _headline() -> Table:
     """The README's one table: the presets as shipped, on seeds nothing was chosen on."""
