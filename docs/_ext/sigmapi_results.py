@@ -212,8 +212,8 @@ def _reproduce() -> Table:
         med, worst, unref = p["median"], p["worst"], p.get("unrefined")
         ceiling = p.get("ceiling") or {}
 
-        def before(key: str, fmt: str = ".3f") -> str:
-            return num(unref["median"][key], fmt) if unref else "-"
+        def before(key: str, unref: Any = unref) -> str:
+            return num(unref["median"][key]) if unref else "-"
 
         rows.append([
             f"`{preset}`", seeds_label(p["seeds"]),
