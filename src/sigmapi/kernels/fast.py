@@ -107,6 +107,9 @@ busy machine a descheduled worker thread stalls every step (the ``fast-threads``
 synchronisation per call) always uses all threads.
 """
 
+NO_GATES = np.empty((0, 0))
+"""The gates of an ungated training block: :func:`_train` learns with the plain neighbourhood."""
+
 SERIAL_ROWS = 16
 """Inference calls (:func:`activation`, :func:`winners_of`) with at most this many rows run in
 the caller's thread on scratch memory kept in the state (no thread start-up, no allocation
@@ -423,54 +426,17 @@ def _buffers(k_units, n_pairs, ny):
 
 @njit(cache=True, parallel=True)
 def _train(
-    raw, scale, sqnorm, x0, y0, x1, y1, sigmas, eps, dims, strides, map_periodic, rule, cut, tol,
-    out, track, threads, ahead,
-):  # fmt: skip
-    """The training driver: iterations in order; ``threads``: update the units in parallel
-    chunks of :data:`CHUNK` (same arithmetic per unit, so the same result), else in one call
-    (no parallel region is entered, so no thread is woken)."""
-    k_units = raw.shape[1]
-    jb, pi0, pv0, pi1, pv1, h, ea, gain, acc, t1, t2 = _buffers(k_units, raw.shape[0], y0.shape[1])
-    n_chunks = (k_units + CHUNK - 1) // CHUNK
-    n_iter = x0.shape[0]
-    if n_iter == 0:
-        return
-    n0 = _pairs(x0[0], y0[0], tol, jb, pi0, pv0)
-    if threads:
-        for c in prange(n_chunks):
-            _unit_chunk(raw, scale, sqnorm, c * CHUNK, min(k_units, (c + 1) * CHUNK), ea, 1.0,
-                        0, 0, pi1, pv1, 0, pi0, pv0, n0, True, track, h, gain, acc,
-                        ahead)  # fmt: skip
-    else:
-        _unit_chunk(raw, scale, sqnorm, 0, k_units, ea, 1.0, 0, 0,
-                    pi1, pv1, 0, pi0, pv0, n0, True, track, h, gain, acc, ahead)  # fmt: skip
-    for t in range(n_iter):
-        w = _winner(h, scale, sqnorm, rule, sigmas[t], cut, dims, strides, map_periodic, t1, t2)
-        out[t] = w
-        lo, hi = _neighbourhood(w, sigmas[t], eps[t], tol, dims, strides, map_periodic, ea)
-        thr = tol * ea[w]
-        n1 = _pairs(x1[t], y1[t], tol, jb, pi1, pv1)
-        more = t + 1 < n_iter
-        if more:
-            n0 = _pairs(x0[t + 1], y0[t + 1], tol, jb, pi0, pv0)
-        if threads:
-            for c in prange(n_chunks):
-                _unit_chunk(raw, scale, sqnorm, c * CHUNK, min(k_units, (c + 1) * CHUNK), ea,
-                            thr, lo, hi, pi1, pv1, n1, pi0, pv0, n0, more, track, h, gain,
-                            acc, ahead)  # fmt: skip
-        else:
-            _unit_chunk(raw, scale, sqnorm, 0, k_units, ea, thr, lo, hi,
-                        pi1, pv1, n1, pi0, pv0, n0, more, track, h, gain, acc, ahead)  # fmt: skip
-
-
-@njit(cache=True, parallel=True)
-def _train_gated(
     raw, scale, sqnorm, x0, y0, x1, y1, sigmas, eps, gates, dims, strides, map_periodic, rule,
     cut, tol, out, track, threads, ahead,
 ):  # fmt: skip
-    """:func:`_train` with the neighbourhood of iteration ``t`` scaled by ``gates[t]`` per unit
-    (reward-gated plasticity). Truncation keeps :func:`_train`'s threshold, ``tol`` times the
-    ungated winner's ``eps a``; a gated unit below it gets only its (exact) decay."""
+    """The training driver: iterations in order; ``threads``: update the units in parallel
+    chunks of :data:`CHUNK` (same arithmetic per unit, so the same result), else in one call
+    (no parallel region is entered, so no thread is woken).
+
+    ``gates`` ``(T, K)`` scales iteration ``t``'s neighbourhood per unit (reward-gated
+    plasticity); an empty array (:data:`NO_GATES`) is the ungated rule. Truncation keeps the
+    ungated threshold, ``tol`` times the winner's ``eps a``; a gated unit below it gets only
+    its (exact) decay."""
     k_units = raw.shape[1]
     jb, pi0, pv0, pi1, pv1, h, ea, gain, acc, t1, t2 = _buffers(k_units, raw.shape[0], y0.shape[1])
     n_chunks = (k_units + CHUNK - 1) // CHUNK
@@ -491,8 +457,9 @@ def _train_gated(
         out[t] = w
         lo, hi = _neighbourhood(w, sigmas[t], eps[t], tol, dims, strides, map_periodic, ea)
         thr = tol * ea[w]
-        for k in range(k_units):
-            ea[k] = ea[k] * gates[t, k]
+        if gates.shape[0] > 0:
+            for k in range(k_units):
+                ea[k] = ea[k] * gates[t, k]
         n1 = _pairs(x1[t], y1[t], tol, jb, pi1, pv1)
         more = t + 1 < n_iter
         if more:
@@ -688,8 +655,8 @@ def train_block(
         state.norms_valid = False
     parallel = threads and k_units * nx * ny >= PARALLEL_MIN_WORK and numba.get_num_threads() > 1
     driver: Any = _train  # a numba dispatcher (its stubs do not know the signature)
-    driver(state.raw, state.scale, state.sqnorm, *xs, sg, ep, dims, strides, bool(map_periodic),
-           code, int(soft_cut), state.tol, out, track, bool(parallel),
+    driver(state.raw, state.scale, state.sqnorm, *xs, sg, ep, NO_GATES, dims, strides,
+           bool(map_periodic), code, int(soft_cut), state.tol, out, track, bool(parallel),
            _ahead(state, TRAIN_PREFETCH_AHEAD))  # fmt: skip
     return out
 
@@ -734,7 +701,7 @@ def train_gated_block(
         state.refresh_norms()
     elif n_iter > 0:
         state.norms_valid = False
-    driver: Any = _train_gated  # a numba dispatcher
+    driver: Any = _train  # a numba dispatcher
     driver(state.raw, state.scale, state.sqnorm, *xs, sg, ep, gt, dims, strides,
            bool(map_periodic), code, int(soft_cut), state.tol, out, track, False,
            _ahead(state, TRAIN_PREFETCH_AHEAD))  # fmt: skip

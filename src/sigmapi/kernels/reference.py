@@ -198,6 +198,26 @@ def train_block(
     axis wraps around (a ring in 1-D, a torus in 2-D), in the winner's smoothing and in the
     neighbourhood.
     """
+    return _learn(W, x0, y0, x1, y1, sigmas, eps, None, map_shape, winner_rule, soft_cut,
+                  map_periodic)  # fmt: skip
+
+
+def _learn(
+    W: Array,
+    x0: Array,
+    y0: Array,
+    x1: Array,
+    y1: Array,
+    sigmas: Array,
+    eps: Array,
+    gates: Array | None,
+    map_shape: tuple[int, ...],
+    winner_rule: WinnerRule | str,
+    soft_cut: int,
+    map_periodic: bool,
+) -> NDArray[np.int64]:
+    """The iterations of :func:`train_block`; ``gates`` ``(T, K)`` scale iteration ``t``'s
+    neighbourhood per unit (:func:`train_gated_block`), ``None`` is the ungated rule."""
     rule = rules.winner_rule(winner_rule, "winner_rule")
     t_total = x0.shape[0]
     out = np.empty(t_total, dtype=np.int64)
@@ -205,7 +225,7 @@ def train_block(
         h = activation(W, x0[t : t + 1], y0[t : t + 1])
         k = winners(W, h, map_shape, rule, float(sigmas[t]), soft_cut, map_periodic)
         a = neighbourhood(k, map_shape, float(sigmas[t]), map_periodic)[0]
-        KOHONEN.update(W, a, x1[t], y1[t], float(eps[t]))
+        KOHONEN.update(W, a if gates is None else a * gates[t], x1[t], y1[t], float(eps[t]))
         out[t] = k[0]
     return out
 
@@ -233,17 +253,9 @@ def train_gated_block(
     The winner is found on the weights as they are before iteration ``t``, as in
     :func:`train_block`. Returns the winners ``(T,)``.
     """
-    rule = rules.winner_rule(winner_rule, "winner_rule")
     g = np.asarray(gates, dtype=np.float64)
-    t_total = x0.shape[0]
-    out = np.empty(t_total, dtype=np.int64)
-    for t in range(t_total):
-        h = activation(W, x0[t : t + 1], y0[t : t + 1])
-        k = winners(W, h, map_shape, rule, float(sigmas[t]), soft_cut, map_periodic)
-        a = neighbourhood(k, map_shape, float(sigmas[t]), map_periodic)[0]
-        KOHONEN.update(W, a * g[t], x1[t], y1[t], float(eps[t]))
-        out[t] = k[0]
-    return out
+    return _learn(W, x0, y0, x1, y1, sigmas, eps, g, map_shape, winner_rule, soft_cut,
+                  map_periodic)  # fmt: skip
 
 
 def train_stream(
