@@ -9,7 +9,8 @@ Trains each preset on each seed (its own procedure: ordered start, training, ref
 evaluates the map (:func:`sigmapi.evaluate`, 10,000 test z's) and writes
 ``benchmarks/results/ceiling.json``: per seed the metrics, the wall seconds of the training
 and of the refinement, the process CPU seconds (of the training and in all), and the
-machine's load average; per preset the median and worst seed of every metric, how many
+machine's load average (with ``--ceiling`` also the metrics of the map's fixed point of
+Eq. 7, the rule's own ceiling); per preset the median and worst seed of every metric, how many
 seeds ordered (order R^2 >= 0.95) and folded, and how many meet each target of
 :data:`TARGETS`.
 The refinement's progress is measured by the callback's first call past the training. Wall
@@ -51,9 +52,13 @@ TARGETS: dict[str, dict[str, tuple[str, float]]] = {
 (``cpu_s``: training and refinement, CPU seconds of the process) against a bound."""
 
 
-def run_seed(preset: str, seed: int, overrides: list[str] | None = None) -> dict[str, Any]:
+def run_seed(
+    preset: str, seed: int, overrides: list[str] | None = None, ceiling: bool = False
+) -> dict[str, Any]:
     """One seed of ``preset`` (with ``key=value`` ``overrides``): metrics and times; for a map
-    of angles also the circular metrics and ``seamless``."""
+    of angles also the circular metrics and ``seamless``. ``ceiling``: also the metrics of
+    the rule's fixed point reached from the map (:func:`sigmapi.viz.ceiling.fixed_point`,
+    after the times are taken)."""
     cfg = apply_overrides(sigmapi.load_preset(preset), overrides or []).replace(seed=seed)
     model = SigmaPiSOM(cfg)
     marks: list[tuple[float, float]] = []
@@ -70,6 +75,15 @@ def run_seed(preset: str, seed: int, overrides: list[str] | None = None) -> dict
     circular = {k: float(r[k]) for k in CIRCULAR if k in r}
     if "seamless" in r:
         circular["seamless"] = bool(r["seamless"])
+    if ceiling:
+        from sigmapi.viz.ceiling import fixed_point
+
+        fp = fixed_point(model)
+        fm = fp.metrics.to_dict()
+        circular["ceiling"] = {
+            **{k: float(fm[k]) for k in METRICS},
+            "rounds": fp.rounds, "converged": fp.converged,
+        }  # fmt: skip
     return {
         "seed": seed,
         **{k: float(r[k]) for k in METRICS},
@@ -95,6 +109,14 @@ def summary(runs: list[dict[str, Any]], preset: str = "") -> dict[str, Any]:
             continue
         worst = WORST.get(k, min) if k in METRICS else max
         out[k] = {"median": float(np.median(vals)), "worst": float(worst(vals))}
+    ceilings = [r["ceiling"] for r in runs if "ceiling" in r]
+    if ceilings:
+        out["ceiling"] = {
+            k: {"median": float(np.median([c[k] for c in ceilings])),
+                "worst": float(WORST.get(k, min)([c[k] for c in ceilings]))}
+            for k in ("view_consistency", "z_error")
+        }  # fmt: skip
+        out["ceiling"]["converged"] = sum(bool(c["converged"]) for c in ceilings)
     out["ordered"] = sum(r["order_r2"] >= 0.95 for r in runs)
     out["folded"] = sum(bool(r.get("folded", False)) for r in runs)
     if any("seamless" in r for r in runs):
@@ -132,6 +154,10 @@ def main() -> None:
         help="a config override for every preset (TOML)",
     )
     parser.add_argument("--label", default="", help="the result's name (default: the preset's)")
+    parser.add_argument(
+        "--ceiling", action="store_true",
+        help="also score each map's fixed point of Eq. 7 (sigmapi.viz.ceiling; 2-D: ~70 CPU s)",
+    )  # fmt: skip
     parser.add_argument("--out", default=str(ROOT / "results" / "ceiling.json"))
     args = parser.parse_args()
     # compile the kernels first, so that the first seed's times are the run's
@@ -147,7 +173,7 @@ def main() -> None:
         name = args.label or preset
         cfg = apply_overrides(sigmapi.load_preset(preset), args.overrides).to_dict()
         for seed in args.seeds:
-            runs.append(run_seed(preset, seed, args.overrides))
+            runs.append(run_seed(preset, seed, args.overrides, args.ceiling))
             print(name, json.dumps(runs[-1]), flush=True)
             result["presets"][name] = {"preset": preset, "overrides": args.overrides,
                                        "config": cfg, "summary": summary(runs, name),

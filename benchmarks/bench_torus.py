@@ -6,9 +6,10 @@ Usage (from the repository root)::
     python benchmarks/bench_torus.py --variants w10-mind --seeds 0 1 2 3 4 5 6 7 8 9
 
 A 10x10 torus (``map_periodic``) on 10x10 periodic codes, ``relation = "sum_mod"`` in both
-dimensions (z = (x + y) mod 1 per axis), random start (``ordering = "none"``: the crossview
-start refuses a torus), one refinement round of 100,000 pairs after the training. Each
-variant (:data:`VARIANTS`) sets the code width, winner rule and schedule. Per seed: the
+dimensions (z = (x + y) mod 1 per axis), the paper's random start (``ordering = "none"``;
+the ``cv-`` variants start from the cross-view start), one refinement round of 100,000 pairs
+after the training. Each variant (:data:`VARIANTS`) sets the code width, winner rule,
+schedule and refinement. Per seed: the
 metrics of :func:`sigmapi.evaluate` (the circular ones of :mod:`sigmapi.circular`) at the
 end of the training and after the refinement, and the process CPU seconds; per variant
 how many seeds end seamless with circular order >= 0.95. Writes
@@ -57,6 +58,35 @@ VARIANTS: dict[str, dict[str, Any]] = {
                                 eps=((0.0, 0.1), (0.7, 0.01), (1.0, 0.001)),
                                 sigma=((0.0, 5.0), (0.3, 1.5), (0.7, 1e-5)),
                                 refine_rounds=6, refine_sigma=0.7),
+    # the cross-view start on the torus (sigmapi.rules.ordering.torus_angles), sigma capped
+    # at ordering_sigma 3, then the winner-only refinement round
+    "cv-w05-soft": dict(code_width=0.5, winner_rule="soft", iterations=100_000,
+                        eps=((0.0, 0.1), (0.7, 0.01), (1.0, 0.001)),
+                        sigma=((0.0, 5.0), (0.3, 1.5), (0.7, 1e-5)), ordering="crossview"),
+    # the same with w05-soft-sigma07's 3 neighbourhood rounds
+    "cv-w05-soft-sigma07": dict(code_width=0.5, winner_rule="soft", iterations=100_000,
+                                eps=((0.0, 0.1), (0.7, 0.01), (1.0, 0.001)),
+                                sigma=((0.0, 5.0), (0.3, 1.5), (0.7, 1e-5)),
+                                ordering="crossview", refine_rounds=3, refine_sigma=0.7),
+    # the same with 6 rounds
+    "cv-w05-soft-sigma07-r6": dict(code_width=0.5, winner_rule="soft", iterations=100_000,
+                                   eps=((0.0, 0.1), (0.7, 0.01), (1.0, 0.001)),
+                                   sigma=((0.0, 5.0), (0.3, 1.5), (0.7, 1e-5)),
+                                   ordering="crossview", refine_rounds=6, refine_sigma=0.7),
+    # the training's neighbourhood stops at the refinement's 0.7 instead of going to 0
+    "cv-w05-soft-floor07": dict(code_width=0.5, winner_rule="soft", iterations=100_000,
+                                eps=((0.0, 0.1), (0.7, 0.01), (1.0, 0.001)),
+                                sigma=((0.0, 5.0), (0.3, 1.5), (0.7, 0.7)),
+                                ordering="crossview", refine_rounds=3, refine_sigma=0.7),
+    # cv-w05-soft-floor07 from the paper's random start (the start's share of the result)
+    "w05-soft-floor07": dict(code_width=0.5, winner_rule="soft", iterations=100_000,
+                             eps=((0.0, 0.1), (0.7, 0.01), (1.0, 0.001)),
+                             sigma=((0.0, 5.0), (0.3, 1.5), (0.7, 0.7)),
+                             refine_rounds=3, refine_sigma=0.7),
+    # paper-2d's rule and schedule at width 1.0 from the cross-view start
+    "cv-w10-mind": dict(code_width=1.0, winner_rule="min_distance", iterations=100_000,
+                        eps=((0.0, 0.1), (0.7, 0.01)),
+                        sigma=((0.0, 5.0), (0.3, 1.5), (0.7, 1e-5)), ordering="crossview"),
 }  # fmt: skip
 """The torus variants by name (fields over :data:`BASE`; a variant's own fields win)."""
 

@@ -202,6 +202,42 @@ def _ceiling() -> Table:
     )  # fmt: skip
 
 
+@table("torus")
+def _torus() -> Table:
+    """The torus variants (``benchmarks/bench_torus.py``): each at the end of its training,
+    then after its refinement."""
+    data = load("ceiling-torus")
+    rows = []
+    for name, v in data["variants"].items():
+        runs, cfg = v["runs"], v["config"]
+        seeds = [r["seed"] for r in runs]
+
+        def arrow(key: str, fmt: str = ".2f", runs: Any = runs) -> str:
+            b = statistics.median(float(r["before"][key]) for r in runs)
+            a = statistics.median(float(r["after"][key]) for r in runs)
+            return f"{num(b, fmt)} -> {num(a, fmt)}"
+
+        start = "cross-view" if cfg.get("ordering") == "crossview" else "random"
+        floor = cfg["sigma"][-1][1] if isinstance(cfg["sigma"], list) else cfg["sigma"]
+        ok = v["summary"]["after"]["seamless_and_order_circular_0.95"]
+        head, _, tail = name.partition(",")
+        rows.append([
+            f"`{head}`" + (f",{tail}" if tail else ""),
+            seeds_label(seeds), start, num(cfg["code_width"], ".1f"), f"{floor:g}",
+            f"{cfg['refine_rounds']} x sigma {cfg['refine_sigma']:g}",
+            arrow("view_consistency"), arrow("view_within_one"), arrow("order_circular", ".3f"),
+            arrow("seam_gap", ".1f"), f"**{ok} of {len(runs)}**",
+        ])  # fmt: skip
+    return Table(
+        ["variant", "seeds", "start", "code width", "last sigma", "refinement rounds",
+         "view consistency", "within one", "circular order", "seam gap",
+         "seamless, circular order >= 0.95"],
+        rows, [_rel("ceiling-torus")],
+        "Medians over the seeds, at the end of the training -> after the refinement.",
+        _command(data),
+    )  # fmt: skip
+
+
 @table("reproduce")
 def _reproduce() -> Table:
     """The default ``sigmapi reproduce``: each preset refined, before its refinement (the
@@ -258,6 +294,20 @@ def _headline() -> Table:
                     f"{s['ordered']} of {s['seeds']}",
                 ]
             )
+    torus = load("ceiling-torus")
+    sources.append(_rel("ceiling-torus"))
+    for name, v in torus["variants"].items():
+        if not name.endswith("(the preset angles-2d)"):
+            continue
+        after = [r["after"] for r in v["runs"]]
+        ok = v["summary"]["after"]["seamless_and_order_circular_0.95"]
+        rows.append([
+            "`angles-2d` (torus)", seeds_label([r["seed"] for r in v["runs"]]),
+            mw_of(_column(after, "view_consistency")),
+            mw_of(_column(after, "z_error"), higher_is_better=False),
+            mw_of(_column(after, "order_circular")) + " (circular)",
+            f"{ok} of {len(after)} seamless",
+        ])  # fmt: skip
     return Table(
         ["preset", "fresh seeds", "view consistency", "z error", "order R²", "ordered"],
         rows,

@@ -189,10 +189,10 @@ class SOMConfig:
         )
         set_(self, "soft_cut", cut)
         _validate.choice("relation", self.relation, tuple(RELATIONS))
-        if self.map_periodic and len(self.map_shape) > 1 and self.ordering == "crossview":
+        if self.map_periodic and len(self.map_shape) > 2 and self.ordering == "crossview":
             raise ConfigError(
-                f"ordering='crossview' orders a periodic map of one dimension (a ring), got "
-                f"map_shape {self.map_shape}; set ordering='none' for a torus"
+                f"ordering='crossview' orders a periodic map of one or two dimensions (a ring, "
+                f"a torus), got map_shape {self.map_shape}; set ordering='none'"
             )
         if RELATIONS[self.relation].circular and not self.periodic:
             raise ConfigError(

@@ -134,13 +134,13 @@ class MapConfig:
 
         With a ``preset`` (default ``paper-2d``): that preset, on the world's codes, this
         map's shape, length (``iterations``) and backend. Its ordering procedure
-        (``crossview``) is what orders a 15x15 map from saccade views (README).
+        (``crossview``) is what orders a 15x15 map from saccade views (docs/guide/reach.md).
 
         ``preset="none"``, the small-map schedule: the neighbourhood shrinks from the map's
         size to 30 % of it over the first 30 % of the run, then to 0.7 units at 80 %: a longer
         ordering phase and a wider final neighbourhood than the paper's 1-D schedule, because
-        a 2-D map trained on only ~10^4 views twists under the paper's schedule shape (README,
-        the small-map setting).
+        a 2-D map trained on only ~10^4 views twists under the paper's schedule shape
+        (docs/guide/reach.md, the small-map setting).
         """
         if x_code.width != y_code.width or (x_code.height, x_code.normalize, x_code.periodic) != (
             y_code.height, y_code.normalize, y_code.periodic,

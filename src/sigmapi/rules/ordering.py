@@ -38,8 +38,12 @@ long before it narrows.
    components come in pairs: the two leading ones are about ``cos`` and ``sin`` of the angle
    z (the shared cause is a point on a circle). ``atan2`` of the two scores places each pair
    round the ring, and the neighbourhood that averages the outer products wraps around. The
-   smooth basis wraps around too when the codes are periodic. A torus (a periodic map of two
-   or more dimensions) has no such start: use ``ordering="none"`` there.
+   smooth basis wraps around too when the codes are periodic. On a **torus** (a periodic
+   2-D map) the four leading components are ``cos`` and ``sin`` of both angles, mixed where
+   their eigenvalues tie; :func:`torus_angles` separates the two angles' planes by the one
+   property they have (the length of a pair's projection onto either plane is the same for
+   every pair) and places each pair by the two ``atan2``. Periodic maps of three or more
+   dimensions have no such start: use ``ordering="none"`` there.
 
 A procedure is an :class:`Ordering` object in :data:`ORDERINGS` (``SOMConfig.ordering``
 looks up there): it owns the initial weights, the sigma cap and the rule training uses.
@@ -73,6 +77,7 @@ __all__ = [
     "crossview_init",
     "crossview_scores",
     "smooth_basis",
+    "torus_angles",
 ]
 
 INIT_PAIRS = 1000
@@ -209,18 +214,18 @@ def crossview_init(
             f"ordering='crossview' needs at least {4 * d} view pairs to start from, got {n}; "
             "pass more views or set ordering='none'"
         )
-    if map_periodic and d != 1:
+    if map_periodic and d > 2:
         raise ConfigError(
-            f"ordering='crossview' orders a periodic map of one dimension (a ring), got "
-            f"map_shape {map_shape}; set ordering='none' for a torus"
+            f"ordering='crossview' orders a periodic map of one or two dimensions (a ring, a "
+            f"torus), got map_shape {map_shape}; set ordering='none'"
         )
     sizes = np.asarray(map_shape, dtype=np.float64)
     # small dense problems: on one BLAS thread they run faster than on several, and far
     # faster on a busy machine (threads wait for each other at every step of the eigh)
     with threadpool_limits(limits=1, user_api="blas"):
-        if map_periodic:  # the two leading components are cos and sin of the angle
-            cs = crossview_scores(views, x_shape, y_shape, 2, periodic=periodic)
-            place = (np.arctan2(cs[:, 1], cs[:, 0]) / (2.0 * np.pi) % 1.0)[:, None] * sizes
+        if map_periodic:  # the 2 d leading components are cos and sin of each angle
+            cs = crossview_scores(views, x_shape, y_shape, 2 * d, periodic=periodic)
+            place = torus_angles(cs) * sizes
         else:
             scores = crossview_scores(views, x_shape, y_shape, d, periodic=periodic)
             ranks = (np.argsort(np.argsort(scores, axis=0, kind="stable"), axis=0) + 0.5) / n
@@ -240,6 +245,54 @@ def crossview_init(
             outer = (x1[s : s + step, :, None] * y1[s : s + step, None, :]).reshape(-1, nx * ny)
             w += a[:, s : s + step] @ outer
     return w.reshape(a.shape[0], nx, ny)
+
+
+def torus_angles(scores: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The angles (in turns, ``[0, 1)``) that the cross-view scores of a ring or a torus
+    encode: ``(B, 2 d)`` scores -> ``(B, d)`` angles, ``d`` = 1 or 2 (step 5 of the module
+    docstring).
+
+    On a ring the two scores are about ``r (cos z, sin z)``. On a torus the four leading
+    components span ``cos`` and ``sin`` of both angles, but their eigenvalues tie (a square
+    problem), so each eigenvector may mix the two angles. What separates them: the scores
+    are an orthogonal image of ``r (cos z1, sin z1, cos z2, sin z2)``, so the squared length
+    of their projection ``|P_a s|^2`` onto the plane of either angle is the same for every
+    pair. The symmetric matrices ``Q`` with ``s^T Q s`` constant over the pairs are the
+    combinations of ``P_1`` and ``P_2``: the two directions of least variance of the
+    quadratic features ``s s^T``. Their combination without trace is ``P_1 - P_2`` (up to
+    scale), whose eigenvectors of eigenvalue +1 span one angle's plane and those of -1 the
+    other's; ``atan2`` within each plane gives the angle. Which angle becomes map axis 0,
+    and each angle's direction and offset, are symmetries of a torus: fixed by the data
+    (the same views give the same angles), not by z.
+    """
+    m = scores.shape[1]
+    if m not in (2, 4):
+        raise ValueError(f"torus_angles takes 2 or 4 scores per pair, got {m}")
+    if m == 2:  # the ring: the scores as they are (their mean is 0 by construction)
+        return (np.arctan2(scores[:, 1], scores[:, 0]) / (2.0 * np.pi) % 1.0)[:, None]
+    s = scores - scores.mean(axis=0)
+    iu = np.triu_indices(m)
+    scale = np.where(iu[0] == iu[1], 1.0, np.sqrt(2.0))  # <Q, s s^T> = q . feat
+    feat = (s[:, iu[0]] * s[:, iu[1]]) * scale
+    _, vecs = np.linalg.eigh(np.cov(feat, rowvar=False))
+    null = []
+    for v in vecs[:, :2].T:  # the two directions of least variance, as matrices
+        q = np.zeros((m, m))
+        q[iu] = v / scale
+        null.append(q + np.triu(q, 1).T)  # s^T Q s = v . feat
+    # the combination without trace: t_0 Q_1 - t_1 Q_0 (t = the traces)
+    t = [np.trace(q) for q in null]
+    diff = t[0] * null[1] - t[1] * null[0]
+    if np.linalg.norm(diff) == 0:
+        diff = null[0]
+    _, evecs = np.linalg.eigh(diff)
+    # a deterministic order of the planes: the plane of the larger eigenvalues first
+    planes = [evecs[:, 2:], evecs[:, :2]]
+    out = np.empty((s.shape[0], len(planes)))
+    for a, plane in enumerate(planes):
+        u = s @ plane
+        out[:, a] = np.arctan2(u[:, 1], u[:, 0]) / (2.0 * np.pi) % 1.0
+    return out
 
 
 # ---------------------------------------------------------------------------- procedures
