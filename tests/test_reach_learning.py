@@ -265,9 +265,9 @@ def test_cli_reach_user_mistakes_exit_2(tmp_path, capsys) -> None:
 @pytest.mark.slow
 def test_acceptance_map_reaches_95_percent_of_true_z_2d() -> None:
     """The acceptance run: 2-D task, saccade on every step, the 15x15 paper-2d map, the
-    default seeds: map >= 0.95 x true-z success (the measured values: README)."""
+    default seeds: map >= 0.95 x true-z success (the measured values: docs/guide/reach.md)."""
     cfg = ReachConfig().replace(states=("map", "true_z"))
-    res = REACH.run(cfg, seeds=REACH.default_seeds)
+    res = REACH.run(cfg, seeds=REACH.default_seeds(cfg))
     final = res.final_success()
     assert final["map"] >= 0.95 * final["true_z"], final
 
