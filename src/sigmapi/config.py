@@ -22,6 +22,7 @@ from sigmapi.codes import _WIDTH_FIX, MIN_WIDTH
 from sigmapi.errors import ConfigError
 from sigmapi.kernels import BACKEND_CHOICES
 from sigmapi.rules import ORDERINGS, WINNER_RULES
+from sigmapi.rules.ordering import check_periodic_map
 from sigmapi.schedules import PAPER_SIGMA, PiecewiseLinear
 from sigmapi.tasks import RELATIONS
 
@@ -189,11 +190,8 @@ class SOMConfig:
         )
         set_(self, "soft_cut", cut)
         _validate.choice("relation", self.relation, tuple(RELATIONS))
-        if self.map_periodic and len(self.map_shape) > 2 and self.ordering == "crossview":
-            raise ConfigError(
-                f"ordering='crossview' orders a periodic map of one or two dimensions (a ring, "
-                f"a torus), got map_shape {self.map_shape}; set ordering='none'"
-            )
+        if self.ordering == "crossview":
+            check_periodic_map(self.map_shape, self.map_periodic)
         if RELATIONS[self.relation].circular and not self.periodic:
             raise ConfigError(
                 f"relation {self.relation!r} relates angles (0 and 1 are the same place), so "

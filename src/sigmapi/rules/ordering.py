@@ -74,6 +74,7 @@ __all__ = [
     "NoOrdering",
     "Ordering",
     "OrderingSettings",
+    "check_periodic_map",
     "crossview_init",
     "crossview_scores",
     "smooth_basis",
@@ -206,7 +207,8 @@ def crossview_init(
 
     ``sigma`` is the width (map units) of the neighbourhood that averages the outer products
     ``x1 y1^T`` of the pairs placed near each unit. ``periodic``: the codes' axes are rings.
-    ``map_periodic``: the map is a ring, a periodic 1-D map (step 5 of the module docstring).
+    ``map_periodic``: the map is a ring or a torus, a periodic map of one or two dimensions
+    (step 5 of the module docstring).
     """
     n, d = views[0].shape[0], len(map_shape)
     if n < 4 * d:
@@ -214,11 +216,7 @@ def crossview_init(
             f"ordering='crossview' needs at least {4 * d} view pairs to start from, got {n}; "
             "pass more views or set ordering='none'"
         )
-    if map_periodic and d > 2:
-        raise ConfigError(
-            f"ordering='crossview' orders a periodic map of one or two dimensions (a ring, a "
-            f"torus), got map_shape {map_shape}; set ordering='none'"
-        )
+    check_periodic_map(map_shape, map_periodic)
     sizes = np.asarray(map_shape, dtype=np.float64)
     # small dense problems: on one BLAS thread they run faster than on several, and far
     # faster on a busy machine (threads wait for each other at every step of the eigh)
@@ -245,6 +243,16 @@ def crossview_init(
             outer = (x1[s : s + step, :, None] * y1[s : s + step, None, :]).reshape(-1, nx * ny)
             w += a[:, s : s + step] @ outer
     return w.reshape(a.shape[0], nx, ny)
+
+
+def check_periodic_map(map_shape: tuple[int, ...], map_periodic: bool) -> None:
+    """A ConfigError unless the cross-view start can order the map: any bounded map, and a
+    periodic one of one or two dimensions (a ring, a torus; step 5 of the module docstring)."""
+    if map_periodic and len(map_shape) > 2:
+        raise ConfigError(
+            f"ordering='crossview' orders a periodic map of one or two dimensions (a ring, a "
+            f"torus), got map_shape {tuple(map_shape)}; set ordering='none'"
+        )
 
 
 def torus_angles(scores: NDArray[np.float64]) -> NDArray[np.float64]:
