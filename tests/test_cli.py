@@ -36,6 +36,33 @@ def test_train_then_evaluate_json(tmp_path):
     assert 0 <= metrics["view_consistency"] <= metrics["view_within_one"] <= 1
 
 
+HEAVY = ("numba", "matplotlib", "sklearn", "mujoco", "dask")
+"""What the command line must not import to list its commands or say its version."""
+
+
+def test_help_version_and_presets_import_nothing_heavy_and_work_without_numba():
+    code = (
+        "import sys\n"
+        "from sigmapi.cli import main\n"
+        "for argv in (['--version'], ['--help'], ['presets']):\n"
+        "    try:\n"
+        "        main(argv)\n"
+        "    except SystemExit as exc:\n"
+        "        assert exc.code == 0, (argv, exc.code)\n"
+        f"    print('imported:', argv[0], sorted(m for m in {HEAVY!r} if m in sys.modules))\n"
+    )
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    lines = [line for line in r.stdout.splitlines() if line.startswith("imported:")]
+    assert lines == [f"imported: {a} []" for a in ("--version", "--help", "presets")], r.stdout
+    no_numba = "import sys; sys.modules['numba'] = None; from sigmapi.cli import main; "
+    for argv in (["--help"], ["presets"], ["reach", "--help"]):
+        r = subprocess.run([sys.executable, "-c", no_numba + f"sys.exit(main({argv!r}))"],
+                           capture_output=True, text=True, timeout=120)  # fmt: skip
+        assert r.returncode == 0, (argv, r.stderr)
+        assert "usage: sigmapi" in r.stdout or "paper-1d" in r.stdout, argv
+
+
 def test_presets_lists_paper_1d():
     r = run("presets")
     assert r.returncode == 0 and "paper-1d" in r.stdout

@@ -28,11 +28,10 @@ from sigmapi.experiments import (
     paper_presets,
     read_result,
     register,
-    reproduce,
 )
 from sigmapi.experiments.base import KEY_VALUES
 from sigmapi.experiments.report_html import linked_files
-from sigmapi.experiments.reproduce import QUICK_ITERATIONS
+from sigmapi.experiments.reproduce import QUICK_ITERATIONS, reproduce
 from sigmapi.experiments.results import METRIC_KEYS
 from sigmapi.viz.figures import FIGURES
 
@@ -311,6 +310,37 @@ def test_register_refuses_bad_names_configs_and_taken_names():
             register(Toy("toy-taken"))
     finally:
         del REGISTRY["toy-taken"]
+
+
+def test_experiments_are_registered_by_name_and_imported_on_first_use(tmp_path, monkeypatch):
+    from sigmapi.experiments import ENTRIES
+
+    for name, target, summary in ENTRIES:  # the line --help shows is the experiment's own
+        assert REGISTRY.entries[name].target == target
+        assert REGISTRY[name].summary == summary, name
+    (tmp_path / "lazy_toy_experiment.py").write_text(
+        "from dataclasses import dataclass\n"
+        "from sigmapi.experiments import register\n"
+        "@dataclass(frozen=True)\n"
+        "class Cfg:\n"
+        "    n: int = 1\n"
+        "class Toy:\n"
+        "    name, summary, config_type = 'lazy-toy', 'a toy', Cfg\n"
+        "TOY = register(Toy())\n"
+    )
+    monkeypatch.syspath_prepend(str(tmp_path))
+    REGISTRY.add("lazy-toy", "lazy_toy_experiment:TOY", "a toy")
+    try:
+        assert "lazy-toy" in REGISTRY and REGISTRY.loaded("lazy-toy") is None
+        assert "lazy_toy_experiment" not in __import__("sys").modules  # listed, not imported
+        toy = REGISTRY["lazy-toy"]
+        assert toy.name == "lazy-toy" and REGISTRY.loaded("lazy-toy") is toy
+        with pytest.raises(ConfigError, match="'lazy-toy' is taken by lazy_toy_experiment:TOY"):
+            REGISTRY.add("lazy-toy", "elsewhere:TOY", "a toy")
+        with pytest.raises(ConfigError, match="target of experiment 'x' must be 'module:object'"):
+            REGISTRY.add("x", "no colon", "a toy")
+    finally:
+        del REGISTRY["lazy-toy"]
 
 
 def test_write_result_is_atomic_json_that_reads_back(tmp_path):

@@ -3,9 +3,11 @@
 Sub-commands: one per experiment of :data:`sigmapi.experiments.REGISTRY` (``chain``,
 ``compare``, ``reproduce``, ``sweep``, ...), generated with its options from the experiment's
 config dataclass (:mod:`sigmapi.cli.experiment`); and the commands that are no experiment:
-``train``, ``evaluate``, ``presets`` (:mod:`sigmapi.cli.train`) and ``figure``
-(:mod:`sigmapi.cli.figure`), whose module's ``register(subparsers)`` adds its parsers. Every
-parser's ``func`` is a handler ``handler(args) -> int``.
+``train``, ``evaluate``, ``presets`` (:mod:`sigmapi.cli.train`, whose ``register(subparsers)``
+adds their parsers) and ``figure`` (:mod:`sigmapi.cli.figure`). Every parser's ``func`` is a
+handler ``handler(args) -> int``. A command's options are added, and its modules imported,
+only when it runs or its help is shown: ``sigmapi --help``, ``--version`` and ``presets``
+import no experiment, nor numba, matplotlib, scikit-learn, MuJoCo or Dask.
 
 A user mistake (unknown preset, bad value, missing file) prints one line to stderr and exits
 with status 2; no traceback: every :class:`~sigmapi.errors.SigmapiError` is printed the same
@@ -20,8 +22,8 @@ import sys
 import threading
 from collections.abc import Sequence
 
-from sigmapi.cli import figure, train
-from sigmapi.cli._common import Parser, check_output, resolve_config
+from sigmapi.cli import train
+from sigmapi.cli._common import LazyParser, Parser, check_output, resolve_config
 from sigmapi.cli.experiment import add_experiment
 from sigmapi.errors import SigmapiError
 from sigmapi.experiments import REGISTRY
@@ -29,19 +31,27 @@ from sigmapi.experiments import REGISTRY
 __all__ = ["build_parser", "check_output", "main", "resolve_config"]
 
 
+def _figure_options(p: Parser) -> None:
+    from sigmapi.cli import figure  # matplotlib: only for this command
+
+    figure.add_arguments(p)
+
+
 def build_parser() -> argparse.ArgumentParser:
-    """The ``sigmapi`` parser with every sub-command."""
+    """The ``sigmapi`` parser with every sub-command; a command's options, and the modules
+    they need, are added when it is used (:class:`~sigmapi.cli._common.LazyParser`), so that
+    ``sigmapi --help`` and ``--version`` import no experiment."""
     from sigmapi._version import __version__
 
     parser = Parser(
         prog="sigmapi", description="Sigma-Pi self-organizing maps (Weber & Wermter 2007)"
     )
     parser.add_argument("--version", action="version", version=f"sigmapi {__version__}")
-    sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser)
-    for module in (train, figure):
-        module.register(sub)
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=LazyParser)
+    train.register(sub)
+    sub.add_parser("figure", help="draw one figure of a trained model", fill=_figure_options)
     for name in sorted(REGISTRY):
-        add_experiment(sub, REGISTRY[name])
+        add_experiment(sub, name, REGISTRY.entries[name].summary)
     for action in sub._choices_actions:  # `sigmapi CMD --help` opens with its one-line summary
         cmd = sub.choices[action.dest]
         if cmd.description is None and action.help:

@@ -28,6 +28,7 @@ from sigmapi.errors import ConfigError, UsageError
 from sigmapi.kernels import BACKENDS
 
 __all__ = [
+    "LazyParser",
     "Parser",
     "add_config_flags",
     "add_dataclass_flags",
@@ -58,6 +59,33 @@ class Parser(argparse.ArgumentParser):
                 self.error(f"{flag} takes KEY=VALUE as one word, got {flag} {key} {value}; "
                            f"write {flag} {key}={value}")  # fmt: skip
         return super().parse_known_args(argv, namespace)
+
+
+class LazyParser(Parser):
+    """A sub-command's parser whose options ``fill(parser)`` adds when it is first used (its
+    arguments parsed or its help shown): listing the commands imports none of their modules."""
+
+    def __init__(self, *args: Any, fill: Callable[[Parser], None] | None = None, **kwargs: Any):
+        super().__init__(*args, **kwargs)
+        self._fill = fill
+
+    def filled(self) -> LazyParser:
+        """This parser with its options (added now if they are not yet)."""
+        fill, self._fill = self._fill, None
+        if fill is not None:
+            fill(self)
+        return self
+
+    def parse_known_args(  # type: ignore[override]
+        self, args: Sequence[str] | None = None, namespace: argparse.Namespace | None = None
+    ) -> tuple[argparse.Namespace, list[str]]:
+        return super(LazyParser, self.filled()).parse_known_args(args, namespace)
+
+    def format_help(self) -> str:
+        return super(LazyParser, self.filled()).format_help()
+
+    def format_usage(self) -> str:
+        return super(LazyParser, self.filled()).format_usage()
 
 
 def _positive_int(text: str) -> int:

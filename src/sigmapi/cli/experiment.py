@@ -42,10 +42,16 @@ from sigmapi.cli._common import (
 )
 from sigmapi.errors import ConfigError, UsageError
 from sigmapi.executor import ENGINES, Executor
-from sigmapi.experiments.base import RESULT_FILE, Experiment, check_seeds, write_result
+from sigmapi.experiments.base import (
+    REGISTRY,
+    RESULT_FILE,
+    Experiment,
+    check_seeds,
+    write_result,
+)
 from sigmapi.progress import Progress
 
-__all__ = ["SPELLINGS", "add_experiment", "run_experiment"]
+__all__ = ["SPELLINGS", "add_experiment", "add_experiment_options", "run_experiment"]
 
 SPELLINGS: dict[str, str] = {
     "overrides": "--set",  # key=value changes to a preset, as `sigmapi train --set`
@@ -85,11 +91,18 @@ def _seeds_default(experiment: Experiment[Any]) -> str:
     return text
 
 
-def add_experiment(sub: Any, experiment: Experiment[Any]) -> Parser:
-    """Add the sub-command ``experiment.name`` to the sub-parsers ``sub``; returns its parser."""
-    summary = plain(experiment.summary)
-    p: Parser = sub.add_parser(experiment.name, help=summary,
-                               description=plain(type(experiment).__doc__ or summary))  # fmt: skip
+def add_experiment(sub: Any, name: str, summary: str) -> Parser:
+    """Add the sub-command ``name`` to the sub-parsers ``sub`` (made with
+    ``parser_class=LazyParser``): its options are added, and the experiment
+    (``REGISTRY[name]``) imported, only when the command is used; returns its parser."""
+    return sub.add_parser(
+        name, help=plain(summary), fill=lambda p: add_experiment_options(p, REGISTRY[name])
+    )
+
+
+def add_experiment_options(p: Parser, experiment: Experiment[Any]) -> None:
+    """Give ``p`` the options of ``experiment`` (its config's fields and the common ones)."""
+    p.description = plain(type(experiment).__doc__ or experiment.summary)
     common = p.add_argument_group("common to every experiment")
     common.add_argument("--seeds", type=int, nargs="+", metavar="S",
                         help=f"the seeds (not a count), distinct ints >= 0 "
@@ -120,7 +133,6 @@ def add_experiment(sub: Any, experiment: Experiment[Any]) -> Parser:
         where = p if group is None else p.add_argument_group(f"{group} settings")
         add_dataclass_flags(where, cls, aliases=SPELLINGS, skip=names & taken)
     p.set_defaults(func=partial(run_experiment, experiment))
-    return p
 
 
 def _make_folder(path: str) -> Path:

@@ -18,7 +18,7 @@ from sigmapi.som import load_model
 from sigmapi.viz.curves import LearningCurve, checkpoints
 from sigmapi.viz.figures import DPI, FIGURES, draw_figure
 
-__all__ = ["cmd_figure", "register"]
+__all__ = ["add_arguments", "cmd_figure"]
 
 
 def cmd_figure(args: argparse.Namespace) -> int:
@@ -60,9 +60,8 @@ def cmd_figure(args: argparse.Namespace) -> int:
     return 0
 
 
-def register(sub: Any) -> None:
-    """Add ``sigmapi figure`` to the sub-parsers ``sub``."""
-    p = sub.add_parser("figure", help="draw one figure of a trained model")
+def add_arguments(p: Any) -> None:
+    """The options of ``sigmapi figure`` (its parser is filled when the command is used)."""
     p.add_argument("name", choices=FIGURES, help="which figure")
     p.add_argument("model", help="model file written by `sigmapi train` or `sigmapi reproduce`")
     p.add_argument("--out", required=True, help="image file to write (.png, .pdf or .svg)")

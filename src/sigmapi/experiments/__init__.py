@@ -21,6 +21,11 @@
   against explicit pairs (``sigmapi stream``).
 """
 
+from __future__ import annotations
+
+import importlib
+from typing import Any
+
 from sigmapi.experiments.base import (
     REGISTRY,
     Experiment,
@@ -30,17 +35,68 @@ from sigmapi.experiments.base import (
     register,
     write_result,
 )
-from sigmapi.experiments.chain import run_chain
-from sigmapi.experiments.compare import CompareConfig, CompareResult, run_compare
-from sigmapi.experiments.reach import REACH, ReachExperiment
-from sigmapi.experiments.reproduce import REFERENCE, SECTIONS, paper_presets, reproduce
-from sigmapi.experiments.results import ReportContext, ReproduceOptions, ReproduceResult, Section
-from sigmapi.experiments.reward import REWARD, RewardExperiment
-from sigmapi.experiments.robot import ROBOT, RobotExperiment
-from sigmapi.experiments.stream import STREAM, StreamExperiment
-from sigmapi.experiments.sweep import SweepSpec, run_sweep
+
+# name, "module:object", one line for ``sigmapi --help``: the command line lists these
+# without importing them; ``REGISTRY[name]`` imports the module when the command runs
+ENTRIES = (
+    ("chain", "sigmapi.experiments.chain:CHAIN",
+     "a chain of two maps (retina -> head -> body) against one map on the whole task"),
+    ("compare", "sigmapi.experiments.compare:COMPARE",
+     "the Sigma-Pi map beside the baselines a user would pick instead"),
+    ("reach", "sigmapi.experiments.reach:REACH",
+     "learn to reach with an actor-critic on the learned map vs. other states"),
+    ("reproduce", "sigmapi.experiments.reproduce:REPRODUCE",
+     "train the paper presets and write the report"),
+    ("reward", "sigmapi.experiments.reward:REWARD",
+     "a map whose plasticity is gated by reward vs. the frozen map and a shuffled control"),
+    ("robot", "sigmapi.experiments.robot:ROBOT",
+     "a simulated robot learns the map from its own saccades, then docks on it"),
+    ("stream", "sigmapi.experiments.stream:STREAM",
+     "learning from a stream of frames (trace rule) against explicit view pairs"),
+    ("sweep", "sigmapi.experiments.sweep:SWEEP",
+     "train and evaluate a grid of parameters x seeds"),
+)  # fmt: skip
+"""The experiments of the package: one entry each (a new experiment is one line here)."""
+
+for _entry in ENTRIES:
+    REGISTRY.add(*_entry)
+
+_LAZY = {
+    "REACH": "reach",
+    "ReachExperiment": "reach",
+    "REFERENCE": "reproduce",
+    "SECTIONS": "reproduce",
+    "paper_presets": "reproduce",
+    "REWARD": "reward",
+    "RewardExperiment": "reward",
+    "ROBOT": "robot",
+    "RobotExperiment": "robot",
+    "STREAM": "stream",
+    "StreamExperiment": "stream",
+    "SweepSpec": "sweep",
+    "run_sweep": "sweep",
+    "run_chain": "chain",
+    "CompareConfig": "compare",
+    "CompareResult": "compare",
+    "run_compare": "compare",
+    "ReportContext": "results",
+    "ReproduceOptions": "results",
+    "ReproduceResult": "results",
+    "Section": "results",
+}
+"""The names this package re-exports from its experiments, imported on first use."""
+
+
+def __getattr__(name: str) -> Any:
+    if name in _LAZY:
+        value = getattr(importlib.import_module(f"{__name__}.{_LAZY[name]}"), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
 
 __all__ = [
+    "ENTRIES",
     "REACH",
     "REFERENCE",
     "REGISTRY",
@@ -65,7 +121,6 @@ __all__ = [
     "paper_presets",
     "read_result",
     "register",
-    "reproduce",
     "run_chain",
     "run_compare",
     "run_sweep",

@@ -39,10 +39,13 @@ executor, quiet). The reach experiment, for instance, registers from
 from __future__ import annotations
 
 import dataclasses
+import importlib
 import json
 import re
+import sys
 import types
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, MutableMapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Protocol, TypeVar, runtime_checkable
 
@@ -56,7 +59,9 @@ __all__ = [
     "KEY_VALUES",
     "REGISTRY",
     "RESULT_FILE",
+    "Entry",
     "Experiment",
+    "Registry",
     "Result",
     "check_seeds",
     "read_result",
@@ -153,17 +158,101 @@ class Experiment(Protocol[C]):
         ...
 
 
-REGISTRY: dict[str, Experiment[Any]] = {}
-"""Every registered experiment by name; the command line has a sub-command for each."""
+@dataclass(frozen=True)
+class Entry:
+    """An experiment not imported yet: its name, ``"module:object"`` and its one-line summary
+    (what ``sigmapi --help`` shows without importing it)."""
+
+    name: str
+    target: str
+    summary: str
+
+    def load(self) -> Experiment[Any]:
+        """Import the module and return the object (an experiment named :attr:`name`)."""
+        module, _, attr = self.target.partition(":")
+        experiment = getattr(importlib.import_module(module), attr)
+        if getattr(experiment, "name", None) != self.name:
+            raise ConfigError(f"experiment entry {self.name!r} ({self.target}) loaded one named "
+                              f"{getattr(experiment, 'name', None)!r}; fix the entry")  # fmt: skip
+        return experiment
+
+    def importing(self, experiment: object) -> bool:
+        """Whether ``experiment`` is this entry's object, its module being imported now (the
+        module registers what the entry names)."""
+        module, _, attr = self.target.partition(":")
+        found = sys.modules.get(module)
+        return found is not None and getattr(found, attr, experiment) is experiment
+
+
+class Registry(MutableMapping[str, "Experiment[Any]"]):
+    """Experiments by name, each imported when first looked up (as Gymnasium does for its
+    environments): ``entries`` lists them all, loaded or not, with their summaries, so that
+    listing the commands imports no experiment."""
+
+    def __init__(self) -> None:
+        self.entries: dict[str, Entry] = {}
+        self._loaded: dict[str, Experiment[Any]] = {}
+
+    def __getitem__(self, name: str) -> Experiment[Any]:
+        if name not in self._loaded:
+            entry = self.entries[name]  # KeyError: no such experiment
+            experiment = entry.load()  # its module calls register(), or does not
+            self._loaded.setdefault(name, experiment)
+        return self._loaded[name]
+
+    def __setitem__(self, name: str, experiment: Experiment[Any]) -> None:
+        self._loaded[name] = experiment
+        if name not in self.entries:  # registered as an object: its entry only describes it
+            where = f"{type(experiment).__module__}:{type(experiment).__name__}"
+            self.entries[name] = Entry(name, where, str(getattr(experiment, "summary", "")))
+
+    def __delitem__(self, name: str) -> None:
+        del self.entries[name]
+        self._loaded.pop(name, None)
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self.entries)
+
+    def __len__(self) -> int:
+        return len(self.entries)
+
+    def __contains__(self, name: object) -> bool:
+        return name in self.entries
+
+    def loaded(self, name: str) -> Experiment[Any] | None:
+        """The experiment ``name`` if it has been imported (else None, importing nothing)."""
+        return self._loaded.get(name)
+
+    def add(self, name: str, target: str, summary: str) -> None:
+        """Register experiment ``name`` by its ``"module:object"`` without importing it."""
+        if not isinstance(name, str) or not _NAME.fullmatch(name):
+            raise _validate.fail("experiment name", "lower-case words joined by '-'", name,
+                                 'e.g. "reproduce" or "chain"')  # fmt: skip
+        if not re.fullmatch(r"[\w.]+:\w+", target):
+            raise _validate.fail(f"target of experiment {name!r}", "'module:object'", target,
+                                 'e.g. "sigmapi.experiments.chain:CHAIN"')  # fmt: skip
+        if not summary:
+            raise ConfigError(f"experiment {name!r} has no summary; give it one line")
+        known = self.entries.get(name)
+        if known is not None and known.target != target:
+            raise ConfigError(f"experiment name {name!r} is taken by {known.target}; "
+                              "choose another")  # fmt: skip
+        self.entries[name] = Entry(name, target, summary)
+
 
 _NAME = re.compile(r"[a-z][a-z0-9]*(-[a-z0-9]+)*")
+
+REGISTRY = Registry()
+"""Every registered experiment by name, imported on first look-up; the command line has a
+sub-command for each (:meth:`Registry.add` registers one by its ``"module:object"``)."""
 
 
 def register(experiment: Experiment[C]) -> Experiment[C]:
     """Add ``experiment`` to :data:`REGISTRY` under its ``name``; returns it.
 
     The name must be a command word not taken by another experiment, the config type a frozen
-    dataclass.
+    dataclass. A module named by a lazy entry (:meth:`Registry.add`) registers its experiment
+    when it is imported: that fills the entry.
     """
     name = getattr(experiment, "name", None)
     if not isinstance(name, str) or not _NAME.fullmatch(name):
@@ -178,10 +267,11 @@ def register(experiment: Experiment[C]) -> Experiment[C]:
         raise ConfigError(
             f"experiment {name!r} has no summary; give it one line saying what it does"
         )
-    if REGISTRY.get(name, experiment) is not experiment:
-        raise ConfigError(
-            f"experiment name {name!r} is taken by {REGISTRY[name]!r}; choose another"
-        )
+    loaded, entry = REGISTRY.loaded(name), REGISTRY.entries.get(name)
+    if loaded is None and entry is not None and not entry.importing(experiment):
+        raise ConfigError(f"experiment name {name!r} is taken by {entry.target}; choose another")
+    if loaded is not None and loaded is not experiment:
+        raise ConfigError(f"experiment name {name!r} is taken by {loaded!r}; choose another")
     REGISTRY[name] = experiment
     return experiment
 
