@@ -41,7 +41,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import commit, machine, write_result
-from sigmapi.experiments.reach_config import ReachRunConfig
+from sigmapi.experiments.reach.config import ReachRunConfig
 
 ROOT = Path(__file__).resolve().parent
 RESULTS = ROOT / "results"

@@ -11,7 +11,7 @@ CPU seconds of the run and its worker processes (user + system, from ``getrusage
 children), their peak resident memory, the 1-minute load average sampled every 10 s while it
 ran (the machine is shared: wall seconds depend on it; CPU seconds much less), and under
 ``metrics`` the run's whole ``metrics.json`` (its keys: the docstring of
-``sigmapi.experiments.reproduce``). The docs render the reproduction page from this file.
+``sigmapi.experiments.reproduce.run``). The docs render the reproduction page from this file.
 A run with other options (``--args``, e.g. fewer seeds on a loaded machine) adds
 ``default_run_estimate``: the default run's CPU and 2-core wall seconds extrapolated from it
 (:func:`default_estimate`).
@@ -61,8 +61,8 @@ def default_estimate(metrics: dict[str, Any], cpu: float) -> dict[str, Any]:
     on the number of seeds). The wall estimate spreads the training jobs over 2 cores and
     counts the rest as serial (an upper bound for it: the reach section runs in parallel).
     """
-    from sigmapi.experiments.reproduce import REPRODUCE
-    from sigmapi.experiments.results import ReproduceConfig
+    from sigmapi.experiments.reproduce.results import ReproduceConfig
+    from sigmapi.experiments.reproduce.run import REPRODUCE
 
     seeds, seeds_2d = len(REPRODUCE.seeds), ReproduceConfig().seeds_2d
     jobs, jobs_default, compiled = 0.0, 0.0, 0.0

@@ -73,7 +73,7 @@ def _child_speed(mode: str, steps: int) -> dict[str, Any]:
         from sigmapi.agents import ActorCriticConfig, actor_critic_for, run_episodes
         from sigmapi.envs import make_state_env
         from sigmapi.envs.robot import RobotViews
-        from sigmapi.experiments.robot_map import robot_som_config
+        from sigmapi.experiments.robot.map import robot_som_config
 
         source = RobotViews(12)
         cfg = robot_som_config(source.x_code, (8, 8), 2000, 0)
@@ -133,10 +133,8 @@ def _child_pixels(scenes: int, seed: int) -> dict[str, Any]:
 
 
 def _child_map(seeds: list[int], moved: list[float]) -> dict[str, Any]:
-    import numpy as np
-
-    from sigmapi.experiments.robot_config import RobotConfig
-    from sigmapi.experiments.robot_map import evaluation_pairs, learn_map, score_map
+    from sigmapi.experiments.robot.config import PLAN, RobotConfig
+    from sigmapi.experiments.robot.map import evaluation_pairs, learn_map, score_map
 
     base = RobotConfig()
     evaluation = evaluation_pairs(base)
@@ -145,7 +143,7 @@ def _child_map(seeds: list[int], moved: list[float]) -> dict[str, Any]:
         cfg = base.replace(moved_share=share)
         for seed in seeds:
             t0 = time.perf_counter()
-            rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(0,)))
+            rng = PLAN.rng(seed, "map")
             model = learn_map(cfg, rng)  # the experiment's own map of this seed
             m = score_map(model, *evaluation)
             rows.append({"seed": seed, "moved_share": share,

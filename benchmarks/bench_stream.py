@@ -23,7 +23,7 @@ import time
 from pathlib import Path
 
 from sigmapi.experiments.base import read_result
-from sigmapi.experiments.stream import StreamResult
+from sigmapi.experiments.stream.run import StreamResult
 
 
 def _seeds(text: str) -> list[int]:

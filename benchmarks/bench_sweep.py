@@ -9,7 +9,7 @@ Writes ``benchmarks/results/sweep.json``. The same sweep (``--preset``, seeds 0 
 grid) runs twice in one benchmark run, in fresh output folders: once with ``--workers 1``
 (one run at a time, in the sweep's own process) and once with the local executor's default
 plan (a process pool, one worker per core as the memory budget allows). Both pass through
-``sigmapi.experiments.sweep.run_sweep``; reported: wall seconds, runs per hour, their ratio,
+``sigmapi.experiments.sweep.run.run_sweep``; reported: wall seconds, runs per hour, their ratio,
 the workers used, and the check that both tables hold the same metrics.
 """
 
@@ -44,7 +44,7 @@ def main() -> None:
     args = parser.parse_args()
 
     from sigmapi.executor import plan_workers
-    from sigmapi.experiments.sweep import SweepSpec, run_sweep
+    from sigmapi.experiments.sweep.run import SweepSpec, run_sweep
 
     spec = SweepSpec.from_toml(_spec(args.preset, args.seeds, args.iterations))
     machine = {"cpus": os.cpu_count(), "platform": platform.platform(),

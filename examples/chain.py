@@ -6,7 +6,7 @@ A chain of frames: retina + eye -> head-centred map, its response + head -> body
 Both maps learn without a teacher, each from two views of its own invariant (the head-centred
 position a = (x + e) / 2, then the body-centred z = (a + u) / 2). Beside them, one map learns
 the whole transformation at once from the retina and the joint code of (eye, head): third-order
-Sigma-Pi units on the same triples (``sigmapi.experiments.chain``, docs/algorithm.md).
+Sigma-Pi units on the same triples (``sigmapi.experiments.chain.run``, docs/algorithm.md).
 
 Run it::
 
@@ -19,7 +19,7 @@ from __future__ import annotations
 import argparse
 
 import sigmapi
-from sigmapi.experiments.chain import run_chain
+from sigmapi.experiments.chain.run import run_chain
 
 
 def main() -> None:

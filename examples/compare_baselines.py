@@ -15,7 +15,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 
-from sigmapi.experiments.compare import QUICK, QUICK_SEEDS, run_compare
+from sigmapi.experiments.compare.run import QUICK, QUICK_SEEDS, run_compare
 from sigmapi.viz.compare import compare_figure
 
 

@@ -26,8 +26,8 @@ import numpy as np
 import sigmapi
 from sigmapi.agents import ActorCriticConfig, actor_critic_for, run_episodes
 from sigmapi.envs import collect_saccade_views, make_state_env
-from sigmapi.experiments.robot_config import RobotConfig
-from sigmapi.experiments.robot_map import (
+from sigmapi.experiments.robot.config import RobotConfig
+from sigmapi.experiments.robot.map import (
     evaluation_pairs,
     robot_som_config,
     score_map,
@@ -74,7 +74,7 @@ def main() -> None:
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
 
-        from sigmapi.experiments.robot_plots import plot_curves, plot_unit_positions
+        from sigmapi.experiments.robot.figures import plot_curves, plot_unit_positions
 
         fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.5))
         plot_unit_positions(unit_positions(model, calibration), shape, ax=left)

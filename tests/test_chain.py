@@ -11,7 +11,7 @@ import pytest
 import sigmapi
 import sigmapi.experiments
 from sigmapi.cli import main
-from sigmapi.experiments.chain import (
+from sigmapi.experiments.chain.run import (
     TARGET_RATIO,
     chain_config,
     head_code,

@@ -201,7 +201,7 @@ def test_help_texts_show_no_sphinx_markup_and_no_unmeasured_durations():
 def test_compare_help_shows_the_config_defaults():
     import dataclasses
 
-    from sigmapi.experiments.compare import CompareConfig
+    from sigmapi.experiments.compare.run import CompareConfig
 
     text = " ".join(_helps()["compare"].split())
     for f in dataclasses.fields(CompareConfig):

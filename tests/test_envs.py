@@ -28,7 +28,7 @@ from sigmapi.envs import (
     view_source,
 )
 from sigmapi.errors import ConfigError
-from sigmapi.experiments.reach import value_over_z
+from sigmapi.experiments.reach.run import value_over_z
 
 
 class LineWorld(gym.Env):

@@ -30,9 +30,9 @@ from sigmapi.experiments import (
     register,
 )
 from sigmapi.experiments.base import KEY_VALUES
-from sigmapi.experiments.report_html import linked_files
-from sigmapi.experiments.reproduce import QUICK_ITERATIONS, reproduce
-from sigmapi.experiments.results import METRIC_KEYS
+from sigmapi.experiments.reproduce.report_html import linked_files
+from sigmapi.experiments.reproduce.results import METRIC_KEYS
+from sigmapi.experiments.reproduce.run import QUICK_ITERATIONS, reproduce
 from sigmapi.viz.figures import FIGURES
 
 TINY_1D = SOMConfig(map_shape=(5,), x_shape=(5,), y_shape=(5,), iterations=2000)
@@ -143,8 +143,8 @@ def test_figures_show_the_worst_ordered_seed_and_say_why(run):
 
 
 def test_figure_seed_picks_a_twisted_map_of_the_authors_procedure():
-    from sigmapi.experiments.reproduce import figure_seed
-    from sigmapi.experiments.results import SeedRun
+    from sigmapi.experiments.reproduce.results import SeedRun
+    from sigmapi.experiments.reproduce.run import figure_seed
     from sigmapi.metrics import Metrics
 
     def seed_run(seed, r2):
@@ -486,7 +486,7 @@ def test_every_registered_experiment_has_a_sub_command_and_plain_help(toy):
 def test_reproduce_through_the_command_line_writes_the_report_and_result_json(
     tmp_path, monkeypatch, capsys
 ):
-    module = importlib.import_module("sigmapi.experiments.reproduce")  # not the function
+    module = importlib.import_module("sigmapi.experiments.reproduce.run")
 
     monkeypatch.setattr(module, "paper_presets", lambda quick: [("tiny-1d", REFINED_1D)])
     monkeypatch.setattr(module, "SECTIONS", ())

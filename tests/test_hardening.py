@@ -338,7 +338,7 @@ def test_a_torn_last_row_is_dropped_and_run_again(tmp_path, capsys, swept):
     (out / "results.csv").write_text("".join(lines[:-1]) + lines[-1][:25])  # killed mid-write
     rc, err = _main(capsys, "sweep", _spec(tmp_path), "--out", out)
     assert rc == 0 and "1 finished already, 1 to run" in err, err
-    from sigmapi.experiments.sweep import read_results
+    from sigmapi.experiments.sweep.run import read_results
 
     rows = read_results(out / "results.csv")
     assert len(rows) == 2 and all(r["status"] == "ok" for r in rows)
@@ -346,7 +346,7 @@ def test_a_torn_last_row_is_dropped_and_run_again(tmp_path, capsys, swept):
 
 
 def test_grid_values_are_resolved_and_named_once():
-    from sigmapi.experiments.sweep import SweepSpec
+    from sigmapi.experiments.sweep.run import SweepSpec
 
     a = SweepSpec.from_toml(SPEC3.replace("[0.5, 1.0]", "[0.5, 1, 1.0, 0.5]"))
     b = SweepSpec.from_toml(SPEC3)
@@ -360,7 +360,7 @@ def test_a_million_run_spec_is_refused_at_once_in_little_memory():
     import tracemalloc
 
     from sigmapi.errors import ConfigError
-    from sigmapi.experiments.sweep import SweepSpec
+    from sigmapi.experiments.sweep.run import SweepSpec
 
     grid = "\n".join(f"{k} = {v}" for k, v in {
         "iterations": list(range(1000, 1032)), "code_width": [0.5 + i / 100 for i in range(32)],

@@ -130,3 +130,36 @@ def test_the_import_graph_has_no_loop():
     for m in sorted(GRAPH):
         if m not in state:
             visit(m)
+
+
+KIT = "sigmapi.experiments.kit"
+SHARED = ("sigmapi.experiments", "sigmapi.experiments.base", KIT)
+"""What every experiment package may import from ``experiments/``: the registry and the kit."""
+
+BORROWS = {("reproduce", "reach"), ("reach", "reproduce"), ("reward", "reach")}
+"""An experiment package that uses another's parts: the report adds the reach section, written
+against the report's section type; the reward experiment's world and map are the reach
+experiment's config parts."""
+
+
+def _package(module: str) -> str | None:
+    """The experiment package of ``module`` (``reach`` for ``sigmapi.experiments.reach.run``)."""
+    parts = module.split(".")
+    if len(parts) < 3 or parts[1] != "experiments" or parts[2] in ("base", "kit"):
+        return None
+    return parts[2]
+
+
+def test_the_kit_imports_no_experiment_and_experiments_only_the_kit_and_their_own():
+    bad = []
+    for m, targets in GRAPH.items():
+        for t in targets:
+            if not t.startswith("sigmapi.experiments.") or t.startswith(SHARED[1:]):
+                continue
+            if m.startswith(KIT):
+                bad.append(f"{m} (the kit) imports the experiment module {t}")
+                continue
+            mine, theirs = _package(m), _package(t)
+            if mine is not None and theirs not in (mine, None) and (mine, theirs) not in BORROWS:
+                bad.append(f"{m} imports {t}, another experiment's module")
+    assert not bad, "\n".join(bad)

@@ -123,16 +123,16 @@ def test_captions_say_twisted_when_the_data_do():
 
 
 def test_one_seed_shows_no_spread():
-    from sigmapi.experiments.report_html import _mean_sd
+    from sigmapi.experiments.reproduce.report_html import _mean_sd
 
     assert _mean_sd(0.5, 0.0, 1) == "0.500 (one seed)"
     assert _mean_sd(0.5, 0.01, 3) == "0.500 ± 0.010"
 
 
 def test_reach_value_maps_share_one_colour_scale():
-    from sigmapi.experiments.reach import REACH
-    from sigmapi.experiments.reach_config import ReachConfig
-    from sigmapi.experiments.reach_plots import reach_figure
+    from sigmapi.experiments.reach.config import ReachConfig
+    from sigmapi.experiments.reach.figures import reach_figure
+    from sigmapi.experiments.reach.run import REACH
 
     cfg = ReachConfig().replace(dim=2, grid=5, map_shape=(3, 3), iterations=300, episodes=4,
                                 block=2, final_episodes=2, max_episode_steps=10,

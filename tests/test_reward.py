@@ -14,9 +14,9 @@ from sigmapi import SigmaPiSOM
 from sigmapi.agents import ActorCritic, Gating, run_gated_episodes
 from sigmapi.envs import GazeReachConfig, MapObservation, learn_map_in_env
 from sigmapi.errors import ConfigError, DataError
-from sigmapi.experiments.reward import REWARD, map_scores, probe_objects
-from sigmapi.experiments.reward_config import RewardConfig
-from sigmapi.experiments.reward_result import episodes_to_target
+from sigmapi.experiments.reward.config import RewardConfig
+from sigmapi.experiments.reward.result import episodes_to_target
+from sigmapi.experiments.reward.run import REWARD, map_scores, probe_objects
 from sigmapi.kernels import fast, reference
 from sigmapi.rules.gating import action_feedback, reward_gate, surprise
 

@@ -222,7 +222,7 @@ def test_the_command_line_starts_without_mujoco():
 
 
 def test_tiny_learn_and_dock_run():
-    from sigmapi.experiments.robot import QUICK, ROBOT
+    from sigmapi.experiments.robot.run import QUICK, ROBOT
 
     cfg = QUICK.replace(
         map_pairs=300, map_iterations=600, eval_pairs=200, episodes=6, final_episodes=3,
@@ -268,7 +268,7 @@ def test_every_start_can_dock_without_touching_the_table():
 
 def test_render_takes_a_gif_file_name():
     import sigmapi
-    from sigmapi.experiments.robot_config import RobotConfig
+    from sigmapi.experiments.robot.config import RobotConfig
 
     assert RobotConfig(render="episode.gif").render == "episode.gif"
     with pytest.raises(sigmapi.ConfigError, match=r"render must be a file name ending in \.gif"):

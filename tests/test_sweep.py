@@ -14,7 +14,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from sigmapi.errors import ConfigError
-from sigmapi.experiments.sweep import RESULTS, SweepSpec, read_results, run_sweep
+from sigmapi.experiments.sweep.run import RESULTS, SweepSpec, read_results, run_sweep
 
 SPEC = """
 preset = "tiny-1d"

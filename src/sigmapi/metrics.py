@@ -236,7 +236,7 @@ def winner_metrics(
     of the two test views (positions ``z_test``); ``coords``: the map's unit coordinates
     ``(K, d_map)``; ``spacing``: input grid spacings per unit of z; ``periodic_shape``: the
     shape of a periodic map. The definitions of the module docstring, for :func:`evaluate`
-    and for maps scored on data of their own (e.g. ``sigmapi.experiments.chain``).
+    and for maps scored on data of their own (e.g. ``sigmapi.experiments.chain.run``).
     """
     table = z_decoder(wc, z_cal, coords)
     err = (table[w0] - z_test) * spacing

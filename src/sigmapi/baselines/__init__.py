@@ -6,7 +6,7 @@
 - :class:`RBMFeatures` (scikit-learn's ``BernoulliRBM`` on ``[x; y]``, linear read-out);
 - :func:`score_units` and :func:`score_readout`: how a method is scored;
 - the comparison itself, every method on the same two-view data, is the experiment
-  ``sigmapi compare`` (:mod:`sigmapi.experiments.compare`, :func:`run_compare` there).
+  ``sigmapi compare`` (:mod:`sigmapi.experiments.compare.run`, :func:`run_compare` there).
 
 MiniSom and scikit-learn are the extra ``pip install 'sigmapi[baselines]'``; they are
 imported only when a method that needs them runs.

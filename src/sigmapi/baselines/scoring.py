@@ -3,7 +3,7 @@
 :func:`score_units` scores a map (its output is a unit); :func:`score_readout` a method whose
 output is a feature vector read out linearly (:func:`~sigmapi.baselines.readout.fit_readout`).
 Both return the view consistency, the same without labels, and the z error per number of
-labelled samples (the definitions in :mod:`sigmapi.experiments.compare`).
+labelled samples (the definitions in :mod:`sigmapi.experiments.compare.run`).
 """
 
 from __future__ import annotations

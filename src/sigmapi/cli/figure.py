@@ -12,7 +12,7 @@ import numpy as np
 from sigmapi import _validate
 from sigmapi.cli._common import check_output
 from sigmapi.errors import UsageError
-from sigmapi.experiments.results import CURVE_TEST, N_CHECKPOINTS
+from sigmapi.experiments.reproduce.results import CURVE_TEST, N_CHECKPOINTS
 from sigmapi.progress import progress_callback
 from sigmapi.som import load_model
 from sigmapi.viz.curves import LearningCurve, checkpoints

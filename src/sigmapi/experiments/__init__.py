@@ -1,24 +1,18 @@
-"""Experiments above the library: one protocol, a registry, and the experiments in it.
+"""Experiments above the library: one protocol, a registry, a kit, one package per experiment.
 
-- :mod:`~sigmapi.experiments.base`: the :class:`Experiment` protocol, :data:`REGISTRY`,
-  :func:`register`, :func:`write_result` (``result.json``) and :func:`check_seeds`;
-- :mod:`~sigmapi.experiments.reproduce`: the experiment loop (presets x seeds);
-- :mod:`~sigmapi.experiments.results`: its options and typed results, report sections;
-- :mod:`~sigmapi.experiments.report_html`: the page;
-- :mod:`~sigmapi.experiments.reach`: the gaze-and-reach learners (``sigmapi reach``), its
-  config and result in ``reach_config`` / ``reach_result``, its report section in
-  ``reach_section``;
-- :mod:`~sigmapi.experiments.robot`: the simulated robot learns the map and docks on it
-  (``sigmapi robot``), its config, map, result and figures in ``robot_config``,
-  ``robot_map``, ``robot_result``, ``robot_plots``;
-- :mod:`~sigmapi.experiments.reward`: a map whose plasticity is gated by reward against the
-  frozen map and a shuffled-reward control (``sigmapi reward``), its config, result and
-  figure in ``reward_config``, ``reward_result``, ``reward_plots``;
-- :mod:`~sigmapi.experiments.sweep`: parameter and seed sweeps (``sigmapi sweep``);
-- :mod:`~sigmapi.experiments.chain`: a chain of two maps (retina -> head -> body) against one;
-- :mod:`~sigmapi.experiments.compare`: the Sigma-Pi map beside the baselines;
-- :mod:`~sigmapi.experiments.stream`: maps learned from a stream of frames (the trace rule)
-  against explicit pairs (``sigmapi stream``).
+- :mod:`~sigmapi.experiments.base`: the :class:`Experiment` protocol, :data:`REGISTRY` (names
+  registered lazily: :data:`ENTRIES`), :func:`register`, :func:`write_result`
+  (``result.json``) and :func:`check_seeds`;
+- one package per experiment, each with its ``run`` (the experiment object and its run) and,
+  where it has them apart, ``config``, ``result`` and ``figures``; its ``__init__`` names its
+  guide and results page: :mod:`~sigmapi.experiments.reproduce` (the report: also ``results``
+  and ``report_html``), :mod:`~sigmapi.experiments.sweep`, :mod:`~sigmapi.experiments.compare`,
+  :mod:`~sigmapi.experiments.chain`, :mod:`~sigmapi.experiments.stream`,
+  :mod:`~sigmapi.experiments.reach` (also ``section``, its part of the report),
+  :mod:`~sigmapi.experiments.robot` (also ``map``) and :mod:`~sigmapi.experiments.reward`.
+
+A new experiment is one package and one line in :data:`ENTRIES`; nothing here imports an
+experiment until it is used (``sigmapi --help`` lists them from :data:`ENTRIES`).
 """
 
 from __future__ import annotations
@@ -39,21 +33,21 @@ from sigmapi.experiments.base import (
 # name, "module:object", one line for ``sigmapi --help``: the command line lists these
 # without importing them; ``REGISTRY[name]`` imports the module when the command runs
 ENTRIES = (
-    ("chain", "sigmapi.experiments.chain:CHAIN",
+    ("chain", "sigmapi.experiments.chain.run:CHAIN",
      "a chain of two maps (retina -> head -> body) against one map on the whole task"),
-    ("compare", "sigmapi.experiments.compare:COMPARE",
+    ("compare", "sigmapi.experiments.compare.run:COMPARE",
      "the Sigma-Pi map beside the baselines a user would pick instead"),
-    ("reach", "sigmapi.experiments.reach:REACH",
+    ("reach", "sigmapi.experiments.reach.run:REACH",
      "learn to reach with an actor-critic on the learned map vs. other states"),
-    ("reproduce", "sigmapi.experiments.reproduce:REPRODUCE",
+    ("reproduce", "sigmapi.experiments.reproduce.run:REPRODUCE",
      "train the paper presets and write the report"),
-    ("reward", "sigmapi.experiments.reward:REWARD",
+    ("reward", "sigmapi.experiments.reward.run:REWARD",
      "a map whose plasticity is gated by reward vs. the frozen map and a shuffled control"),
-    ("robot", "sigmapi.experiments.robot:ROBOT",
+    ("robot", "sigmapi.experiments.robot.run:ROBOT",
      "a simulated robot learns the map from its own saccades, then docks on it"),
-    ("stream", "sigmapi.experiments.stream:STREAM",
+    ("stream", "sigmapi.experiments.stream.run:STREAM",
      "learning from a stream of frames (trace rule) against explicit view pairs"),
-    ("sweep", "sigmapi.experiments.sweep:SWEEP",
+    ("sweep", "sigmapi.experiments.sweep.run:SWEEP",
      "train and evaluate a grid of parameters x seeds"),
 )  # fmt: skip
 """The experiments of the package: one entry each (a new experiment is one line here)."""
@@ -62,27 +56,27 @@ for _entry in ENTRIES:
     REGISTRY.add(*_entry)
 
 _LAZY = {
-    "REACH": "reach",
-    "ReachExperiment": "reach",
-    "REFERENCE": "reproduce",
-    "SECTIONS": "reproduce",
-    "paper_presets": "reproduce",
-    "REWARD": "reward",
-    "RewardExperiment": "reward",
-    "ROBOT": "robot",
-    "RobotExperiment": "robot",
-    "STREAM": "stream",
-    "StreamExperiment": "stream",
-    "SweepSpec": "sweep",
-    "run_sweep": "sweep",
-    "run_chain": "chain",
-    "CompareConfig": "compare",
-    "CompareResult": "compare",
-    "run_compare": "compare",
-    "ReportContext": "results",
-    "ReproduceOptions": "results",
-    "ReproduceResult": "results",
-    "Section": "results",
+    "REACH": "reach.run",
+    "ReachExperiment": "reach.run",
+    "REFERENCE": "reproduce.run",
+    "SECTIONS": "reproduce.run",
+    "paper_presets": "reproduce.run",
+    "REWARD": "reward.run",
+    "RewardExperiment": "reward.run",
+    "ROBOT": "robot.run",
+    "RobotExperiment": "robot.run",
+    "STREAM": "stream.run",
+    "StreamExperiment": "stream.run",
+    "SweepSpec": "sweep.run",
+    "run_sweep": "sweep.run",
+    "run_chain": "chain.run",
+    "CompareConfig": "compare.run",
+    "CompareResult": "compare.run",
+    "run_compare": "compare.run",
+    "ReportContext": "reproduce.results",
+    "ReproduceOptions": "reproduce.results",
+    "ReproduceResult": "reproduce.results",
+    "Section": "reproduce.results",
 }
 """The names this package re-exports from its experiments, imported on first use."""
 

@@ -15,12 +15,13 @@ Executor` (:func:`run_all`); ``executor=None`` runs them one after another in th
 
 Adding an experiment
 --------------------
-One module in ``sigmapi/experiments/`` with its config dataclass, its result (``to_dict``,
-``table``, ``figure``) and an experiment object passed to :func:`register` at import time;
-one import line in ``sigmapi/experiments/__init__.py``. The command ``sigmapi NAME`` then
-exists with an option per config field and the common ones (seeds, output folder, JSON,
-executor, quiet). The reach experiment, for instance, registers from
-``sigmapi/experiments/reach.py``::
+One package in ``sigmapi/experiments/`` whose ``run`` module holds its config dataclass, its
+result (``to_dict``, ``table``, ``figure``) and an experiment object passed to
+:func:`register` at import time; one line in ``ENTRIES`` of ``sigmapi/experiments/__init__.py``
+(name, ``"module:object"``, the one-line summary), so that the command line lists it without
+importing it. The command ``sigmapi NAME`` then exists with an option per config field and the
+common ones (seeds, output folder, JSON, executor, quiet). The reach experiment, for instance,
+registers from ``sigmapi/experiments/reach/run.py``::
 
     @dataclass(frozen=True)
     class ReachRun:
@@ -230,7 +231,7 @@ class Registry(MutableMapping[str, "Experiment[Any]"]):
                                  'e.g. "reproduce" or "chain"')  # fmt: skip
         if not re.fullmatch(r"[\w.]+:\w+", target):
             raise _validate.fail(f"target of experiment {name!r}", "'module:object'", target,
-                                 'e.g. "sigmapi.experiments.chain:CHAIN"')  # fmt: skip
+                                 'e.g. "sigmapi.experiments.chain.run:CHAIN"')  # fmt: skip
         if not summary:
             raise ConfigError(f"experiment {name!r} has no summary; give it one line")
         known = self.entries.get(name)

@@ -22,9 +22,14 @@ from sigmapi.envs import FEATURES, STATES, Features, TrueZObservation, make_stat
 from sigmapi.envs.robot.env import ENV_ID
 from sigmapi.envs.robot.frames import RETINA_SOURCES
 from sigmapi.errors import ConfigError
+from sigmapi.experiments.kit.seeds import SeedPlan
 from sigmapi.som import SigmaPiSOM
 
-__all__ = ["QUICK", "RobotConfig"]
+__all__ = ["PLAN", "QUICK", "RobotConfig"]
+
+PLAN = SeedPlan({"map": 0, "starts": 1, "agent": 2, "film": 3})
+"""The streams of a seed (:class:`~sigmapi.experiments.kit.seeds.SeedPlan`): children of
+``SeedSequence(seed)``."""
 
 
 @dataclass(frozen=True)

@@ -1,8 +1,8 @@
 """The reward experiment: does a map whose plasticity is gated by reward come to serve the task?
 
 :data:`REWARD` (a :class:`RewardExperiment`) runs a
-:class:`~sigmapi.experiments.reward_config.RewardConfig` on a list of seeds and returns a
-:class:`~sigmapi.experiments.reward_result.RewardResult`. Per seed, one map is learned
+:class:`~sigmapi.experiments.reward.config.RewardConfig` on a list of seeds and returns a
+:class:`~sigmapi.experiments.reward.result.RewardResult`. Per seed, one map is learned
 without a teacher in the gaze-and-reach world (as the reach experiment's), and the same
 actor-critic learns to reach on three copies of it (``methods``):
 
@@ -14,10 +14,11 @@ actor-critic learns to reach on three copies of it (``methods``):
 - ``shuffled``: the control: the same loop, with the gated run's global factors ``f(delta)``
   replayed in a random order, so the gates have the same sizes but no relation to the task.
 
-Seed ``s`` of a run is child ``s`` of ``SeedSequence(config.run.seed)``; its child 0 seeds
-the map, child 1 the episodes' starts (the same for every method), child 2 the learner's action
-choices (the same stream for every method), child 3 the test objects that score the maps,
-child 4 the shuffle, child 5 the second fixations of the gated updates.
+Seed ``s``'s random streams are those of :data:`PLAN` (each child ``(s, key)`` of
+``SeedSequence(0)``): ``"map"`` seeds the map, ``"starts"`` the episodes' starts (the same
+for every method), ``"agent"`` the learner's action choices (the same stream for every
+method), ``"probes"`` the test objects that score the maps, ``"shuffle"`` the shuffle,
+``"fixations"`` the second fixations of the gated updates.
 
 Scores of each map after its episodes (:func:`map_scores`): the magnification near the goal
 (units whose preferred z lies within ``near_radius`` of the goal, per unit area of z, over the
@@ -39,7 +40,7 @@ import copy
 import dataclasses
 import functools
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -53,23 +54,29 @@ from sigmapi.codes import grid_coordinates
 from sigmapi.envs import GazeReachEnv, MapObservation, learn_map_in_env
 from sigmapi.executor import Executor, job_memory
 from sigmapi.experiments.base import Experiment, check_seeds, register, run_all
-from sigmapi.experiments.reward_config import RewardConfig
-from sigmapi.experiments.reward_result import RewardResult
+from sigmapi.experiments.kit.jobs import Tick, counted
+from sigmapi.experiments.kit.seeds import SeedPlan
+from sigmapi.experiments.reward.config import RewardConfig
+from sigmapi.experiments.reward.result import RewardResult
 from sigmapi.metrics import winner_metrics
 from sigmapi.progress import Progress
 from sigmapi.som import SigmaPiSOM
 
-__all__ = ["REWARD", "Probes", "RewardExperiment", "map_scores", "preferred_z", "probe_objects"]
+__all__ = [
+    "PLAN",
+    "REWARD",
+    "Probes",
+    "RewardExperiment",
+    "map_scores",
+    "preferred_z",
+    "probe_objects",
+]
 
-Tick = Callable[[int, str], None]
 
-
-def _child(ss: np.random.SeedSequence, k: int) -> np.random.SeedSequence:
-    return np.random.SeedSequence(ss.entropy, spawn_key=(*ss.spawn_key, k))
-
-
-def _rng(ss: np.random.SeedSequence, k: int) -> np.random.Generator:
-    return np.random.default_rng(_child(ss, k))
+PLAN = SeedPlan(
+    {"map": 0, "starts": 1, "agent": 2, "probes": 3, "shuffle": 4, "fixations": 5}, root=0
+)
+"""The streams of a seed (:class:`~sigmapi.experiments.kit.seeds.SeedPlan`)."""
 
 
 @dataclass(frozen=True)
@@ -138,42 +145,37 @@ def map_scores(
 @dataclass(frozen=True)
 class _SeedJob:
     config: RewardConfig
-    seq: np.random.SeedSequence
     seed: int
     show: Progress | None = None
     """A bar of this seed's episodes (set only where the job runs in the caller's process)."""
 
 
 def _run_seed(job: _SeedJob) -> dict[str, Any]:
-    if job.show is None:
-        return _seed_runs(job, None)
     total = len(job.config.run.methods) * job.config.run.episodes
-    tick, bar = job.show.counter(total, f"reward seed {job.seed}", "ep")
-    with bar:
-        return _seed_runs(job, tick)
+    return counted(job.show, total, f"reward seed {job.seed}", lambda tick: _seed_runs(job, tick))
 
 
-def _learn_map(cfg: RewardConfig, ss: np.random.SeedSequence) -> SigmaPiSOM:
-    env_seed, som_seed = (int(v) for v in _rng(ss, 0).integers(0, 2**31 - 1, size=2))
+def _learn_map(cfg: RewardConfig, seed: int) -> SigmaPiSOM:
+    env_seed, som_seed = (int(v) for v in PLAN.rng(seed, "map").integers(0, 2**31 - 1, size=2))
     return learn_map_in_env(cfg.env.make_env(), cfg.som_config(som_seed), seed=env_seed)
 
 
 def _seed_runs(job: _SeedJob, progress: Tick | None) -> dict[str, Any]:
     """One seed: its map, then each method's learner on the same episodes, then the scores."""
-    cfg, ss = job.config, job.seq
+    cfg, seed = job.config, job.seed
     run = cfg.run
-    learned = _learn_map(cfg, ss)
+    learned = _learn_map(cfg, seed)
     world = GazeReachEnv(**cfg.env.env_kwargs())
-    objects = probe_objects(world, run.n_test, _rng(ss, 3))
+    objects = probe_objects(world, run.n_test, PLAN.rng(seed, "probes"))
     goal = np.asarray(world.goal, dtype=np.float64)
-    starts = _rng(ss, 1).integers(0, 2**31 - 1, size=run.episodes)
+    starts = PLAN.rng(seed, "starts").integers(0, 2**31 - 1, size=run.episodes)
     out: dict[str, Any] = {"initial": map_scores(learned, objects, goal, run.near_radius),
                            "initial_units": preferred_z(learned, objects), "runs": {}}  # fmt: skip
     factors: NDArray[np.float64] | None = None
     for m in sorted(run.methods, key=("frozen", "gated", "shuffled").index):
         model = copy.copy(learned)
         env = MapObservation(cfg.env.make_env(), model, cfg.map.features, cfg.map.feature_width)
-        agent = actor_critic_for(env, cfg.agent, seed=_rng(ss, 2))
+        agent = actor_critic_for(env, cfg.agent, seed=PLAN.rng(seed, "agent"))
         done = None if progress is None else functools.partial(progress, 1, m)
         updates = 0
         if m == "frozen":
@@ -182,8 +184,9 @@ def _seed_runs(job: _SeedJob, progress: Tick | None) -> dict[str, Any]:
             replay = None
             if m == "shuffled":
                 assert factors is not None  # the gated run came first
-                replay = _rng(ss, 4).permutation(factors)
-            got = run_gated_episodes(env, agent, starts, cfg.gate.gating(), _rng(ss, 5),
+                replay = PLAN.rng(seed, "shuffle").permutation(factors)
+            got = run_gated_episodes(env, agent, starts, cfg.gate.gating(),
+                                     PLAN.rng(seed, "fixations"),
                                      surprises=replay, on_episode=done)  # fmt: skip
             ep, updates = got.episodes, got.updates
             if m == "gated":
@@ -224,11 +227,10 @@ class RewardExperiment(Experiment[RewardConfig]):
             raise _validate.fail("config", "a RewardConfig", config)
         seeds = check_seeds(seeds)
         t0 = time.perf_counter()
-        root = np.random.SeedSequence(config.run.seed)
-        jobs = [(str(s), _SeedJob(config, _child(root, s), s)) for s in seeds]
+        jobs = [(str(s), _SeedJob(config, s)) for s in seeds]
         values = run_all(
             _run_seed, jobs, executor=executor,
-            per_job=job_memory(config.som_config(config.run.seed), n_test=config.run.n_test),
+            per_job=job_memory(config.som_config(0), n_test=config.run.n_test),
             progress=progress, desc="reward",
             verbose=lambda job: dataclasses.replace(job, show=progress),
             describe=lambda key, _: f"seed {key}",

@@ -59,9 +59,9 @@ from sigmapi.config import SOMConfig, list_presets, load_preset
 from sigmapi.errors import ConfigError
 from sigmapi.executor import Executor, job_memory
 from sigmapi.experiments.base import Experiment, register, run_all
-from sigmapi.experiments.reach_section import reach_section
-from sigmapi.experiments.report_html import linked_files, render
-from sigmapi.experiments.results import (
+from sigmapi.experiments.reach.section import reach_section
+from sigmapi.experiments.reproduce.report_html import linked_files, render
+from sigmapi.experiments.reproduce.results import (
     OTHER_PROCEDURE,
     REPORT,
     PresetResult,

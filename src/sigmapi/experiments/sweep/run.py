@@ -14,7 +14,7 @@ A spec names a preset, the seeds, fields fixed for every run (``[set]``) and a g
 Each run trains one model and evaluates it (:func:`sigmapi.evaluate`); ``DIR/results.csv``
 gets one row per run: the grid parameters, the seed, every metric (the fold score too), the
 training and total seconds, ``status`` (``ok`` or ``failed``) and the ``error`` of a failed
-run, and ``run_key``, the run's identity (:mod:`~sigmapi.experiments.sweep_table`: the
+run, and ``run_key``, the run's identity (:mod:`~sigmapi.experiments.sweep.table`: the
 resolved config, seed, ``n_test`` and model format). A row is appended after every finished
 run, so a killed sweep loses at most the runs in flight; started again with the same spec, it
 finds the finished runs in the table (by ``run_key``) and runs only the missing ones (failed
@@ -48,7 +48,7 @@ from sigmapi.config import SOMConfig, load_preset
 from sigmapi.errors import ConfigError
 from sigmapi.executor import Executor, Outcome, job_memory
 from sigmapi.experiments.base import RESULT_FILE, Experiment, check_seeds, register
-from sigmapi.experiments.sweep_table import (
+from sigmapi.experiments.sweep.table import (
     METRIC_COLUMNS,
     RESULTS,
     append_row,
@@ -88,7 +88,7 @@ in its own --out folder (or several machines: engine dask)."""
 class SweepRun:
     """One run of a sweep: the grid point ``params``, the ``seed``, the grid point's resolved
     config (``point``; :attr:`config` adds the seed) and its identity ``run_key``
-    (:func:`~sigmapi.experiments.sweep_table.run_key`)."""
+    (:func:`~sigmapi.experiments.sweep.table.run_key`)."""
 
     run_id: str
     run_key: str
@@ -178,7 +178,7 @@ class SweepSpec:
                               "the path")  # fmt: skip
         if p.stat().st_size > 1 << 20:
             raise ConfigError(f"sweep spec {str(p)!r} is over 1 MB; a spec is a short TOML "
-                              "file (module sigmapi.experiments.sweep)")  # fmt: skip
+                              "file (module sigmapi.experiments.sweep.run)")  # fmt: skip
         try:
             text = p.read_bytes().decode("utf-8")
         except UnicodeDecodeError as exc:
@@ -286,7 +286,7 @@ def run_sweep(
 
     ``engine``, ``workers``, ``memory_budget`` (bytes) and ``address`` say where the runs go
     (:class:`~sigmapi.executor.Executor`). A table there that holds runs of another spec is
-    refused unless ``add`` (:func:`~sigmapi.experiments.sweep_table.open_table`).
+    refused unless ``add`` (:func:`~sigmapi.experiments.sweep.table.open_table`).
     ``on_plan(n_to_run, n_skipped, reason)`` is called once before the first run and
     ``on_done(ok, line)`` after each.
     """
@@ -384,7 +384,7 @@ class SweepConfig:
 
     spec: str
     """The sweep spec, a TOML file: preset, seeds, n_test, [set] and [grid] (see
-    :mod:`sigmapi.experiments.sweep`); its seeds are the sweep's default seeds."""
+    :mod:`sigmapi.experiments.sweep.run`); its seeds are the sweep's default seeds."""
     retry_failed: bool = False
     """Run failed runs again (otherwise finished runs, failed or not, are kept)."""
     add: bool = False

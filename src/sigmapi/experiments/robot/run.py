@@ -1,21 +1,22 @@
 """The robot experiment: the map learned from the body's own saccades, then docking on it.
 
 :data:`ROBOT` (a :class:`RobotExperiment`) runs a
-:class:`~sigmapi.experiments.robot_config.RobotConfig` on a list of seeds and returns a
-:class:`~sigmapi.experiments.robot_result.RobotResult`. Per seed, everything random comes from
-``SeedSequence(seed)``: its child 0 seeds the map's recorded views and weights, child 1 the
-episodes' start states (the same for every state: same learner, same episodes), child 2 the
-learner's action choices. The map is scored on evaluation pairs drawn from
+:class:`~sigmapi.experiments.robot.config.RobotConfig` on a list of seeds and returns a
+:class:`~sigmapi.experiments.robot.result.RobotResult`. Per seed, everything random comes from
+the streams of :data:`PLAN`, children of ``SeedSequence(seed)``: ``"map"`` seeds the map's
+recorded views and weights, ``"starts"`` the episodes' start states (the same for every state:
+same learner, same episodes), ``"agent"`` the learner's action choices, ``"film"`` the start of
+the filmed episode. The map is scored on evaluation pairs drawn from
 :data:`~sigmapi.metrics.EVAL_SEED` (the same for every seed, never moved). The actor-critic of
 the authors' docking model then learns on each state (:data:`~sigmapi.envs.STATES`) through
 ``gymnasium.make("sigmapi/RobotDock-v0")`` and the state wrappers
-(:meth:`RobotConfig.state_env <sigmapi.experiments.robot_config.RobotConfig.state_env>`), and
+(:meth:`RobotConfig.state_env <sigmapi.experiments.robot.config.RobotConfig.state_env>`), and
 :func:`~sigmapi.agents.run_episodes`.
 
 Each (seed, state) is one job of the :class:`~sigmapi.executor.Executor`, the map state's job
 learning that seed's map first, so that the learners spread over the workers; the result does
 not depend on how they ran. ``sigmapi robot`` is generated from :data:`ROBOT` and
-:class:`~sigmapi.experiments.robot_config.RobotConfig` (the experiment registry).
+:class:`~sigmapi.experiments.robot.config.RobotConfig` (the experiment registry).
 
 Examples
 --------
@@ -30,7 +31,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -45,25 +46,22 @@ from sigmapi.envs.robot.views import RobotViewBatch
 from sigmapi.executor import Executor
 from sigmapi.executor import job_memory as _som_job_memory
 from sigmapi.experiments.base import Experiment, check_seeds, register, run_all
-from sigmapi.experiments.robot_config import QUICK, RobotConfig
-from sigmapi.experiments.robot_map import (
+from sigmapi.experiments.kit.jobs import Tick, counted
+from sigmapi.experiments.robot.config import PLAN, QUICK, RobotConfig
+from sigmapi.experiments.robot.map import (
     evaluation_pairs,
     learn_map,
     robot_som_config,
     score_map,
     unit_positions,
 )
-from sigmapi.experiments.robot_result import RobotResult
+from sigmapi.experiments.robot.result import RobotResult
 from sigmapi.progress import Progress
 
-__all__ = ["INFO_KEYS", "QUICK", "ROBOT", "RobotExperiment", "job_memory"]
+__all__ = ["INFO_KEYS", "PLAN", "QUICK", "ROBOT", "RobotExperiment", "job_memory"]
 
 INFO_KEYS = ("docked", "event")
 """What the experiment keeps of each episode's last ``info`` besides ``is_success``."""
-
-
-def _child(seed: int, k: int) -> np.random.Generator:
-    return np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(k,)))
 
 
 @dataclass(frozen=True)
@@ -78,29 +76,26 @@ class _Job:
 
 def _run_job(job: _Job) -> dict[str, Any]:
     """One learner on one state of one seed (the map's job learns and scores the map first)."""
-    if job.show is None:
-        return _learner(job, None)
-    tick, bar = job.show.counter(job.config.episodes, f"robot seed {job.seed} {job.state}", "ep")
-    with bar:
-        return _learner(job, tick)
+    desc = f"robot seed {job.seed} {job.state}"
+    return counted(job.show, job.config.episodes, desc, lambda tick: _learner(job, tick))
 
 
-def _learner(job: _Job, tick: Callable[[int, str], None] | None) -> dict[str, Any]:
+def _learner(job: _Job, tick: Tick | None) -> dict[str, Any]:
     cfg = job.config
     out: dict[str, Any] = {}
     model = None
     if job.state == "map":
         if tick is not None:
             tick(0, "learning the map")
-        model = learn_map(cfg, _child(job.seed, 0))
+        model = learn_map(cfg, PLAN.rng(job.seed, "map"))
         assert job.evaluation is not None
         cal, test = job.evaluation
         out["map_metrics"] = score_map(model, cal, test)
         out["unit_z"] = unit_positions(model, cal)
         out["model"] = model
     env = cfg.state_env(job.state, model)
-    agent = actor_critic_for(env, cfg.agent(), seed=_child(job.seed, 2))
-    starts = _child(job.seed, 1).integers(0, 2**31 - 1, size=cfg.episodes)
+    agent = actor_critic_for(env, cfg.agent(), seed=PLAN.rng(job.seed, "agent"))
+    starts = PLAN.rng(job.seed, "starts").integers(0, 2**31 - 1, size=cfg.episodes)
     done = None if tick is None else functools.partial(tick, 1, "docking")
     out["episodes"] = run_episodes(env, agent, starts, on_episode=done, info_keys=INFO_KEYS)
     out["agent"] = agent
@@ -147,7 +142,7 @@ class RobotExperiment(Experiment[RobotConfig]):
 
         Each (seed, state) is one job of ``executor``; run one by one in this process, a job
         shows a bar of its episodes. ``out`` is not used: the run writes nothing while it
-        runs. Returns a :class:`~sigmapi.experiments.robot_result.RobotResult`.
+        runs. Returns a :class:`~sigmapi.experiments.robot.result.RobotResult`.
         """
         if not isinstance(config, RobotConfig):
             raise _validate.fail("config", "a RobotConfig", config)

@@ -16,13 +16,13 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from numpy.typing import NDArray
 
-from sigmapi.experiments.reach_config import ReachConfig
+from sigmapi.experiments.reach.config import ReachConfig
 
 __all__ = ["LABELS", "ReachData", "plot_reach_curves", "plot_value_function", "reach_figure"]
 
 
 class ReachData(Protocol):
-    """What the figures read of a :class:`~sigmapi.experiments.reach_result.ReachResult`."""
+    """What the figures read of a :class:`~sigmapi.experiments.reach.result.ReachResult`."""
 
     config: ReachConfig
     seeds: tuple[int, ...]
@@ -56,7 +56,7 @@ def _ax(ax: Axes | None) -> Axes:
 def plot_reach_curves(result: ReachData, metric: str = "success", ax: Axes | None = None) -> Axes:
     """Learning curves per state, with a legend: ``metric`` "success" (rate per block, mean
     over seeds, band = 1 sd over seeds; a learner that had not levelled off at the last
-    episode, :meth:`~sigmapi.experiments.reach_result.ReachResult.still_rising`, is marked
+    episode, :meth:`~sigmapi.experiments.reach.result.ReachResult.still_rising`, is marked
     so in the legend) or "steps" (mean steps of the successful episodes per block, band =
     the quartiles over seeds)."""
     if metric not in ("success", "steps"):

@@ -1,11 +1,11 @@
 """The reach experiment as a section of the reproduction report (``sigmapi reproduce``).
 
-The report (:mod:`sigmapi.experiments.reproduce`) calls :func:`reach_section`: it
-runs the reach experiment (:data:`~sigmapi.experiments.reach.REACH`: the 2-D task, a saccade on
+The report (:mod:`sigmapi.experiments.reproduce.run`) calls :func:`reach_section`: it
+runs the reach experiment (:data:`~sigmapi.experiments.reach.run.REACH`: the 2-D task, a saccade on
 every step, the same actor-critic on four state representations), draws the figure and
 returns the section. ``--quick`` runs 1 seed of 150 episodes on the small 7x7 map
-(:data:`~sigmapi.experiments.reach_config.SMALL_MAP`); the full run is the defaults of
-:class:`~sigmapi.experiments.reach_config.ReachConfig` on the experiment's default seeds (the
+(:data:`~sigmapi.experiments.reach.config.SMALL_MAP`); the full run is the defaults of
+:class:`~sigmapi.experiments.reach.config.ReachConfig` on the experiment's default seeds (the
 acceptance run).
 """
 
@@ -14,12 +14,12 @@ from __future__ import annotations
 import html
 from typing import TYPE_CHECKING
 
-from sigmapi.experiments.reach import REACH, run_with_progress
-from sigmapi.experiments.reach_config import ReachConfig
-from sigmapi.experiments.results import Section
+from sigmapi.experiments.reach.config import ReachConfig
+from sigmapi.experiments.reach.run import REACH, run_with_progress
+from sigmapi.experiments.reproduce.results import Section
 
 if TYPE_CHECKING:
-    from sigmapi.experiments.results import ReportContext
+    from sigmapi.experiments.reproduce.results import ReportContext
 
 __all__ = ["reach_section"]
 

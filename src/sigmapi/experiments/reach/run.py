@@ -1,13 +1,12 @@
 """The reach experiment: one actor-critic, several state representations, many seeds.
 
 :data:`REACH` (a :class:`ReachExperiment`) runs a
-:class:`~sigmapi.experiments.reach_config.ReachConfig` on a list of seeds and returns a
-:class:`~sigmapi.experiments.reach_result.ReachResult`. Seed ``s`` of a run is child ``s`` of
-``SeedSequence(config.run.seed)``, so seeds ``0..N-1`` are the N independent streams of
-``sigmapi reach --seeds N``. Per seed, everything random comes from
-that stream: its child 0 seeds the map's data (saccade views) and weights, child 1 the
-episodes' start states (identical for every state representation: same learner, same
-episodes), child 2 the learner's action choices (the same stream for every representation).
+:class:`~sigmapi.experiments.reach.config.ReachConfig` on a list of seeds and returns a
+:class:`~sigmapi.experiments.reach.result.ReachResult`. Seed ``s``'s random streams are
+those of :data:`PLAN`: ``"map"`` seeds the map's data (saccade views) and weights,
+``"starts"`` the episodes' start states (identical for every state representation: same
+learner, same episodes), ``"agent"`` the learner's action choices (the same stream for every
+representation); each is child ``(s, key)`` of ``SeedSequence(0)``.
 
 Examples
 --------
@@ -23,7 +22,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import time
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -44,21 +43,21 @@ from sigmapi.envs import (
 from sigmapi.errors import ConfigError
 from sigmapi.executor import Executor, job_memory
 from sigmapi.experiments.base import Experiment, check_seeds, register, run_all
-from sigmapi.experiments.reach_config import SMALL_MAP, ReachConfig
-from sigmapi.experiments.reach_result import ReachResult
+from sigmapi.experiments.kit.jobs import Tick, counted
+from sigmapi.experiments.kit.seeds import SeedPlan
+from sigmapi.experiments.reach.config import SMALL_MAP, ReachConfig
+from sigmapi.experiments.reach.result import ReachResult
 from sigmapi.metrics import evaluate
 from sigmapi.progress import Progress
 from sigmapi.som import SigmaPiSOM, load_model
 
 __all__ = [
+    "PLAN",
     "REACH",
     "ReachExperiment",
     "run_with_progress",
     "value_over_z",
 ]
-
-Tick = Callable[[int, str], None]
-"""``tick(n, phase)``: ``n`` episodes just finished (0 while the map learns), and what runs."""
 
 
 def value_over_z(
@@ -101,16 +100,14 @@ def value_over_z(
     return axis, out.reshape((n,) * dim)
 
 
-def _child(ss: np.random.SeedSequence, k: int) -> np.random.SeedSequence:
-    return np.random.SeedSequence(ss.entropy, spawn_key=(*ss.spawn_key, k))
+PLAN = SeedPlan({"map": 0, "starts": 1, "agent": 2}, root=0)
+"""The streams of a seed (:class:`~sigmapi.experiments.kit.seeds.SeedPlan`)."""
 
 
-def _map_for_seed(
-    config: ReachConfig, ss: np.random.SeedSequence, progress: Tick | None = None
-) -> SigmaPiSOM:
+def _map_for_seed(config: ReachConfig, seed: int, progress: Tick | None = None) -> SigmaPiSOM:
     if config.map.model_path is not None:
         return load_model(Path(config.map.model_path))
-    r = np.random.default_rng(_child(ss, 0))
+    r = PLAN.rng(seed, "map")
     env_seed, som_seed = (int(v) for v in r.integers(0, 2**31 - 1, size=2))
 
     def callback(model: SigmaPiSOM) -> None:
@@ -126,7 +123,6 @@ def _map_for_seed(
 class _SeedJob:
     config: ReachConfig
     first: bool
-    seq: np.random.SeedSequence
     seed: int
     show: Progress | None = None
     """A bar of this seed's episodes (set only where the job runs in the caller's process)."""
@@ -134,23 +130,19 @@ class _SeedJob:
 
 def _run_seed(job: _SeedJob) -> dict[str, Any]:
     """Everything of one seed: its map, then every state's learner on the same episodes."""
-    if job.show is None:
-        return _seed_runs(job, None)
     total = len(job.config.run.states) * job.config.run.episodes
-    tick, bar = job.show.counter(total, f"reach seed {job.seed}", "ep")
-    with bar:
-        return _seed_runs(job, tick)
+    return counted(job.show, total, f"reach seed {job.seed}", lambda tick: _seed_runs(job, tick))
 
 
 def _seed_runs(job: _SeedJob, progress: Tick | None) -> dict[str, Any]:
-    cfg, ss = job.config, job.seq
-    model = _map_for_seed(cfg, ss, progress) if "map" in cfg.run.states else None
+    cfg, seed = job.config, job.seed
+    model = _map_for_seed(cfg, seed, progress) if "map" in cfg.run.states else None
     out: dict[str, Any] = {"map_metrics": _map_quality(model) if model is not None else None,
                            "runs": {}, "values": {}}  # fmt: skip
-    starts = np.random.default_rng(_child(ss, 1)).integers(0, 2**31 - 1, size=cfg.run.episodes)
+    starts = PLAN.rng(seed, "starts").integers(0, 2**31 - 1, size=cfg.run.episodes)
     for s in cfg.run.states:
         env = make_state_env(cfg.env.make_env(), s, model, cfg.map.features, cfg.map.feature_width)
-        agent = actor_critic_for(env, cfg.agent, seed=np.random.default_rng(_child(ss, 2)))
+        agent = actor_critic_for(env, cfg.agent, seed=PLAN.rng(seed, "agent"))
         done = None if progress is None else functools.partial(progress, 1, s)
         ep = run_episodes(env, agent, starts, on_episode=done)
         out["runs"][s] = (ep.success, ep.failed, ep.steps)
@@ -170,7 +162,7 @@ def _check_memory(config: ReachConfig) -> None:
     _memory.check_count("episodes", run.episodes, 8 + 17 * len(run.states), "e.g. --episodes 600")
     if config.map.model_path is not None or "map" not in config.run.states:
         return
-    som = SigmaPiSOM(config.som_config(config.run.seed))
+    som = SigmaPiSOM(config.som_config(0))
     n_x, n_y = int(np.prod(som.x_shape)), int(np.prod(som.y_shape))
     _memory.check(
         som.memory_estimate() + config.map.iterations * 2 * (n_x + n_y) * 8,
@@ -216,7 +208,7 @@ class ReachExperiment(Experiment[ReachConfig]):
         Each seed is one job of ``executor`` (the result does not depend on where it runs);
         run one by one in this process, a seed shows a bar of its episodes. ``out`` is not
         used: the run writes nothing while it runs. Returns a
-        :class:`~sigmapi.experiments.reach_result.ReachResult`.
+        :class:`~sigmapi.experiments.reach.result.ReachResult`.
         """
         if not isinstance(config, ReachConfig):
             raise _validate.fail("config", "a ReachConfig", config)
@@ -231,11 +223,10 @@ class ReachExperiment(Experiment[ReachConfig]):
             res.success[s] = np.zeros(shape, dtype=bool)
             res.steps[s] = np.zeros(shape, dtype=np.int64)
             res.lost[s] = np.zeros(shape, dtype=bool)
-        root = np.random.SeedSequence(run.seed)
-        jobs = [(str(s), _SeedJob(config, i == 0, _child(root, s), s)) for i, s in enumerate(seeds)]
+        jobs = [(str(s), _SeedJob(config, i == 0, s)) for i, s in enumerate(seeds)]
         values = run_all(
             _run_seed, jobs, executor=executor,
-            per_job=job_memory(config.som_config(run.seed), n_test=2000), progress=progress,
+            per_job=job_memory(config.som_config(0), n_test=2000), progress=progress,
             desc="reach", verbose=lambda job: dataclasses.replace(job, show=progress),
             describe=lambda key, _: f"seed {key}",
         )  # fmt: skip

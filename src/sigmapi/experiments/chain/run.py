@@ -47,10 +47,12 @@ from numpy.typing import NDArray
 
 from sigmapi import _memory, _validate
 from sigmapi.codes import PopulationCode
-from sigmapi.config import SOMConfig, apply_overrides, load_preset
+from sigmapi.config import SOMConfig
 from sigmapi.errors import ConfigError
 from sigmapi.executor import Executor, job_memory
 from sigmapi.experiments.base import KEY_VALUES, Experiment, check_seeds, register, run_all
+from sigmapi.experiments.kit.maps import MapSpec
+from sigmapi.experiments.kit.seeds import SeedPlan
 from sigmapi.metrics import EVAL_SEED, evaluate, winner_metrics
 from sigmapi.progress import Progress
 from sigmapi.som import SigmaPiSOM
@@ -82,9 +84,10 @@ TARGET_RATIO = 2.0
 """The acceptance bound of the chain of frames: the chain's z error at most this many times
 the single map's."""
 
-DATA_KEY = 16
-"""Child stream ``SeedSequence(seed, spawn_key=(DATA_KEY,))`` of the training triples; apart
-from the streams a model of the same seed draws (spawn keys 0-3)."""
+PLAN = SeedPlan({"triples": 16})
+"""The streams of a seed (:class:`~sigmapi.experiments.kit.seeds.SeedPlan`): the training
+triples, ``SeedSequence(seed, spawn_key=(16,))``, apart from the streams a model of the same
+seed draws (:data:`~sigmapi.experiments.kit.seeds.MODEL_KEYS`)."""
 
 
 class Triples(NamedTuple):
@@ -136,7 +139,9 @@ def chain_config(config: SOMConfig | None = None, iterations: int | None = None)
     It must be 1-D (``map_shape``, ``x_shape`` and ``y_shape`` of one axis), non-periodic,
     with the ``mean`` relation; map A uses it as it is.
     """
-    cfg = config if config is not None else load_preset("paper-1d").replace(refine_rounds=0)
+    cfg = (
+        config if config is not None else MapSpec("paper-1d", changes={"refine_rounds": 0}).config()
+    )
     if not isinstance(cfg, SOMConfig):
         raise _validate.fail(
             "config", "a sigmapi.SOMConfig or None", type(cfg).__name__,
@@ -204,7 +209,7 @@ def chain_seed(job: ChainJob) -> dict[str, Any]:
     seed, cfg, train_pairs, code, cal, test = (
         job.seed, job.cfg, job.train_pairs, job.code, job.cal, job.test,
     )  # fmt: skip
-    rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(DATA_KEY,)))
+    rng = PLAN.rng(seed, "triples")
     train = sample_triples(train_pairs, rng)
     spacing = float(cfg.y_shape[0] - 1)
 
@@ -281,8 +286,8 @@ class ChainConfig:
     def som_config(self) -> SOMConfig:
         """The preset with ``ordering="crossview"``, ``refine_rounds=0`` and the overrides
         (:func:`chain_config`)."""
-        cfg = load_preset(self.preset).replace(ordering="crossview", refine_rounds=0)
-        return chain_config(apply_overrides(cfg, list(self.overrides)))
+        spec = MapSpec(self.preset, self.overrides, {"ordering": "crossview", "refine_rounds": 0})
+        return chain_config(spec.config())
 
 
 @dataclass

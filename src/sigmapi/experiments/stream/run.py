@@ -28,10 +28,12 @@ from typing import Any
 import numpy as np
 
 from sigmapi import _validate
-from sigmapi.config import SOMConfig, apply_overrides, load_preset
+from sigmapi.config import SOMConfig
 from sigmapi.errors import ConfigError
 from sigmapi.executor import Executor, job_memory
 from sigmapi.experiments.base import KEY_VALUES, Experiment, check_seeds, register, run_all
+from sigmapi.experiments.kit.maps import MapSpec
+from sigmapi.experiments.kit.seeds import SeedPlan
 from sigmapi.io import atomic_write_bytes
 from sigmapi.metrics import evaluate
 from sigmapi.progress import Progress
@@ -53,6 +55,10 @@ __all__ = [
 STREAM_KEY = 7
 """Frames of seed s and dwell d: ``SeedSequence(s, spawn_key=(STREAM_KEY, d))``, apart from the
 model's own streams (:mod:`sigmapi.som`)."""
+
+PLAN = SeedPlan({"frames": STREAM_KEY})
+"""The streams of a seed (:class:`~sigmapi.experiments.kit.seeds.SeedPlan`): the frames,
+one stream per dwell time below it."""
 
 METRICS = ("view_consistency", "view_within_one", "z_error", "order_r2", "fold_score")
 """The scores of each map (:func:`sigmapi.evaluate`), besides ``folded``."""
@@ -103,7 +109,7 @@ class StreamConfig:
     @property
     def som_config(self) -> SOMConfig:
         """The preset with the overrides: the task and the map's settings."""
-        return apply_overrides(load_preset(self.preset), list(self.overrides))
+        return MapSpec(self.preset, self.overrides).config()
 
 
 QUICK = StreamConfig(overrides=("iterations=20000", "refine_pairs=20000"), dwells=(1, 4, 16),
@@ -139,7 +145,7 @@ def stream_job(job: StreamJob) -> list[dict[str, Any]]:
         start = time.perf_counter()
         return [scored(SigmaPiSOM(job.cfg, seed=job.seed).fit(), None, start)]
     model = SigmaPiSOM(job.cfg, seed=job.seed)
-    rng = np.random.default_rng(np.random.SeedSequence(job.seed, spawn_key=(STREAM_KEY, job.dwell)))
+    rng = PLAN.rng(job.seed, "frames", job.dwell)
     frames = model.sampler.stream(job.cfg.iterations + 1, job.dwell, rng)
     for lam in job.traces:
         start = time.perf_counter()

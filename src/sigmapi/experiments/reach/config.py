@@ -10,23 +10,24 @@ and the run.
 Each part checks its own fields when it is built and builds nothing else. :class:`ReachConfig`
 holds one of each; field names are unique across the parts, so
 ``ReachConfig().replace(grid=7, episodes=150)`` finds each field's part. The seeds are not
-settings: they are given to the run (:meth:`~sigmapi.experiments.reach.ReachExperiment.run`).
+settings: they are given to the run (:meth:`~sigmapi.experiments.reach.run.ReachExperiment.run`).
 The ``sigmapi reach`` options are generated from the parts' fields (:mod:`sigmapi.cli.experiment`),
 so a field added here is a command-line option too.
 """
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 from sigmapi import _validate
 from sigmapi.agents import ActorCriticConfig
 from sigmapi.codes import PopulationCode
-from sigmapi.config import BACKEND_NAMES, SOMConfig, list_presets, load_preset
+from sigmapi.config import BACKEND_NAMES, SOMConfig, list_presets
 from sigmapi.envs import FEATURES, STATES, GazeReachConfig, GazeReachEnv
 from sigmapi.errors import ConfigError
+from sigmapi.experiments.kit.maps import MapSpec
+from sigmapi.experiments.kit.parts import check_part_types, parts_dict, replaced_parts
 
 __all__ = [
     "SMALL_MAP",
@@ -35,8 +36,6 @@ __all__ = [
     "ReachRunConfig",
     "check_parts",
     "default_map_shape",
-    "parts_dict",
-    "replaced_parts",
 ]
 
 
@@ -47,11 +46,10 @@ def default_map_shape(dim: Any) -> tuple[int, ...]:
 
 
 def check_parts(config: Any, parts: dict[str, type]) -> None:
-    """Each part of a config of parts (``env``, ``map``, ...) is of its class, and the map has
-    an axis per dimension of the world's task (a ConfigError naming the first that is not)."""
-    for name, cls in parts.items():
-        if not isinstance(getattr(config, name), cls):
-            raise _validate.fail(name, f"a {cls.__name__}", getattr(config, name))
+    """Each part of a config of parts (``env``, ``map``, ...) is of its class
+    (:func:`~sigmapi.experiments.kit.parts.check_part_types`), and the map has an axis per
+    dimension of the world's task (a ConfigError naming the first that is not)."""
+    check_part_types(config, parts)
     dim, shape = config.env.dim, config.map.map_shape
     if len(shape) != dim:
         axes = "1 axis" if dim == 1 else f"{dim} axes"
@@ -61,36 +59,6 @@ def check_parts(config: Any, parts: dict[str, type]) -> None:
             f"{'x'.join(map(str, default_map_shape(dim)))} (the dim-{dim} default), or "
             f"dim {len(shape)} for a {len(shape)}-D task"
         )
-
-
-def replaced_parts(
-    config: Any, parts: dict[str, type], changes: dict[str, Any], kind: str
-) -> dict[str, Any]:
-    """The parts of ``config`` with ``changes`` (fields of any part, by name); an unknown
-    field is a ConfigError that lists the valid ones (``kind``: "reach", "reward", ...)."""
-    owner = {f.name: part for part, cls in parts.items() for f in dataclasses.fields(cls)}
-    bad = sorted(set(changes) - set(owner))
-    if bad:
-        raise ConfigError(
-            f"unknown {kind} config field {bad[0]!r}; valid: {', '.join(sorted(owner))}"
-        )
-    return {
-        part: dataclasses.replace(
-            getattr(config, part), **{k: v for k, v in changes.items() if owner[k] == part}
-        )
-        for part in parts
-    }
-
-
-def parts_dict(config: Any, parts: dict[str, type]) -> dict[str, dict[str, Any]]:
-    """The parts of ``config`` as JSON-able tables (tuples as lists)."""
-    return {
-        part: {
-            k: (list(v) if isinstance(v, tuple) else v)
-            for k, v in dataclasses.asdict(getattr(config, part)).items()
-        }
-        for part in parts
-    }
 
 
 @dataclass(frozen=True)
@@ -156,7 +124,7 @@ class MapConfig:
         run: dict[str, Any] = {"map_shape": self.map_shape, "iterations": self.iterations,
                "backend": self.backend, "seed": seed}  # fmt: skip
         if self.preset != "none":
-            return load_preset(self.preset).replace(**codes, **run)
+            return MapSpec(self.preset).config(**codes, **run)
         m = float(max(self.map_shape))
         return SOMConfig(**codes, **run, sigma=((0.0, m), (0.3, max(m / 3.5, 1.0)), (0.8, 0.7)))
 
@@ -177,8 +145,6 @@ class ReachRunConfig:
     """A learner has levelled off when its success rate rises by less than this over the last
     final_episodes episodes (a line fitted to each seed's episodes there, mean over seeds);
     the figure and the table name every learner that has not."""
-    seed: int = 0
-    """Root seed: seed s of a run uses child s of SeedSequence(seed)."""
 
     def __post_init__(self) -> None:
         for name in ("episodes", "block", "final_episodes"):
@@ -187,7 +153,6 @@ class ReachRunConfig:
             raise ConfigError(
                 f"final_episodes must be <= episodes ({self.episodes}), got {self.final_episodes}"
             )
-        object.__setattr__(self, "seed", _validate.integer("seed", self.seed, 0))
         rise = _validate.number("plateau_rise", self.plateau_rise, 0.0, 1.0, lo_open=True,
                                 fix="a share of success rate, e.g. 0.05")  # fmt: skip
         object.__setattr__(self, "plateau_rise", rise)

@@ -1,7 +1,7 @@
 """The HTML of the reproduction report: one self-contained page (it links only files beside it).
 
-:func:`render` turns a :class:`~sigmapi.experiments.results.ReproduceResult`, the captioned
-figures and the added sections into the page; :func:`linked_files` lists the local files a
+:func:`render` turns a :class:`~sigmapi.experiments.reproduce.results.ReproduceResult`, the
+captioned figures and the added sections into the page; :func:`linked_files` lists the local files a
 page links (the report checks that each exists before writing it).
 """
 
@@ -11,11 +11,11 @@ import html
 import re
 from typing import TYPE_CHECKING
 
-from sigmapi.experiments.results import METRIC_KEYS, ORDERED_R2, OTHER_PROCEDURE
+from sigmapi.experiments.reproduce.results import METRIC_KEYS, ORDERED_R2, OTHER_PROCEDURE
 
 if TYPE_CHECKING:
     from sigmapi.config import SOMConfig
-    from sigmapi.experiments.results import (
+    from sigmapi.experiments.reproduce.results import (
         PresetResult,
         ReproduceResult,
         Section,

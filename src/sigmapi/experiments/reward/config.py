@@ -2,7 +2,7 @@
 learner, the gate and the run.
 
 - :class:`~sigmapi.envs.GazeReachConfig` (``env``): the gaze-and-reach world;
-- :class:`~sigmapi.experiments.reach_config.MapConfig` (``map``): the map learned without a
+- :class:`~sigmapi.experiments.reach.config.MapConfig` (``map``): the map learned without a
   teacher before the episodes (the reach experiment's);
 - :class:`~sigmapi.agents.ActorCriticConfig` (``agent``): the actor-critic;
 - :class:`GateConfig` (``gate``): how the map keeps learning during the episodes;
@@ -24,13 +24,8 @@ from sigmapi.agents.gated import VIEWS
 from sigmapi.config import SOMConfig
 from sigmapi.envs import GazeReachConfig, GazeReachEnv
 from sigmapi.errors import ConfigError
-from sigmapi.experiments.reach_config import (
-    SMALL_MAP,
-    MapConfig,
-    check_parts,
-    parts_dict,
-    replaced_parts,
-)
+from sigmapi.experiments.kit.parts import parts_dict, replaced_parts
+from sigmapi.experiments.reach.config import SMALL_MAP, MapConfig, check_parts
 from sigmapi.rules.gating import FEEDBACK, SURPRISE
 
 __all__ = ["METHODS", "GateConfig", "RewardConfig", "RewardRunConfig"]
@@ -95,8 +90,6 @@ class RewardRunConfig:
     """Chebyshev radius around the goal of the region "near the goal" (the magnification)."""
     n_test: int = 4000
     """Test objects (views at random z) that score the maps."""
-    seed: int = 0
-    """Root seed: seed s of a run uses child s of SeedSequence(seed)."""
 
     def __post_init__(self) -> None:
         for name in ("episodes", "block", "final_episodes", "n_test"):
@@ -111,7 +104,6 @@ class RewardRunConfig:
                                 fix="e.g. 0.2")  # fmt: skip
         object.__setattr__(self, "target", target)
         object.__setattr__(self, "near_radius", near)
-        object.__setattr__(self, "seed", _validate.integer("seed", self.seed, 0))
         methods = tuple(self.methods)
         bad = [m for m in methods if m not in METHODS]
         if not methods or bad or len(set(methods)) != len(methods):

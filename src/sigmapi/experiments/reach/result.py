@@ -10,7 +10,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from sigmapi.experiments.reach_config import ReachConfig
+from sigmapi.experiments.kit.episodes import block_ends, block_rates, final_rates
+from sigmapi.experiments.reach.config import ReachConfig
 
 __all__ = ["FIGURE", "ReachResult"]
 
@@ -20,7 +21,7 @@ FIGURE = "reach.png"
 
 @dataclass
 class ReachResult:
-    """Outcome of :meth:`~sigmapi.experiments.reach.ReachExperiment.run`.
+    """Outcome of :meth:`~sigmapi.experiments.reach.run.ReachExperiment.run`.
 
     ``success[state]``, ``lost[state]`` and ``steps[state]`` have shape ``(len(seeds),
     episodes)``, one row per seed in the order of ``seeds``: whether each episode reached the
@@ -58,7 +59,7 @@ class ReachResult:
 
     def final_success_per_seed(self) -> dict[str, NDArray[np.float64]]:
         f = self.config.run.final_episodes
-        return {s: v[:, -f:].mean(axis=1) for s, v in self.success.items()}
+        return {s: final_rates(v, f) for s, v in self.success.items()}
 
     def final_rise_per_seed(self) -> dict[str, NDArray[np.float64]]:
         """How much the success rate still rose over the last ``final_episodes`` episodes:
@@ -115,7 +116,7 @@ class ReachResult:
             nb = succ.shape[1] // b
             sb = succ[:, : nb * b].reshape(succ.shape[0], nb, b)
             tb = steps[:, : nb * b].reshape(succ.shape[0], nb, b)
-            rate = sb.mean(axis=2)
+            rate = block_rates(succ, b)
             with np.errstate(invalid="ignore", divide="ignore"):
                 reach_steps = np.where(sb, tb, 0.0).sum(axis=2) / sb.sum(axis=2)
             ok = np.isfinite(reach_steps)
@@ -128,7 +129,7 @@ class ReachResult:
                 if ok[:, j].any():
                     quartiles[:, j] = np.percentile(reach_steps[ok[:, j], j], (25, 75))
             out[s] = {
-                "episode": (np.arange(nb) + 1.0) * b,
+                "episode": block_ends(nb, b),
                 "success": rate.mean(axis=0),
                 "success_sd": rate.std(axis=0),
                 "steps_to_reach": mean_steps,
@@ -195,9 +196,9 @@ class ReachResult:
         )
 
     def save_figure(self, path: str | Path, dpi: int = 120) -> Path:
-        """Draw the comparison (:func:`~sigmapi.experiments.reach_plots.reach_figure`) to
+        """Draw the comparison (:func:`~sigmapi.experiments.reach.figures.reach_figure`) to
         ``path`` (.png, .pdf or .svg) and return it."""
-        from sigmapi.experiments.reach_plots import reach_figure  # matplotlib: only to draw
+        from sigmapi.experiments.reach.figures import reach_figure  # matplotlib: only to draw
 
         out = Path(path)
         reach_figure(self).savefig(out, dpi=dpi, facecolor="white")

@@ -17,13 +17,13 @@ from matplotlib.patches import Rectangle
 from numpy.typing import NDArray
 
 from sigmapi.envs import GazeReachEnv
-from sigmapi.experiments.reward_config import RewardConfig
+from sigmapi.experiments.reward.config import RewardConfig
 
 __all__ = ["LABELS", "plot_reward_curves", "plot_units", "reward_figure"]
 
 
 class RewardData(Protocol):
-    """What the figures read of a :class:`~sigmapi.experiments.reward_result.RewardResult`."""
+    """What the figures read of a :class:`~sigmapi.experiments.reward.result.RewardResult`."""
 
     config: RewardConfig
     seeds: tuple[int, ...]

@@ -11,7 +11,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from sigmapi.experiments.reward_config import RewardConfig
+from sigmapi.experiments.kit.episodes import block_ends, block_rates, final_rates
+from sigmapi.experiments.reward.config import RewardConfig
 
 __all__ = ["FIGURE", "MAGNIFICATION_TARGET", "RewardResult", "episodes_to_target"]
 
@@ -22,14 +23,13 @@ MAGNIFICATION_TARGET = 1.5
 """The gated map's magnification near the goal over the frozen map's that counts as shaped."""
 
 SCORES = ("magnification", "units_near", "units_used", "view_consistency_away", "order_r2_away")
-"""The map scores of :func:`~sigmapi.experiments.reward.map_scores`, per method and seed."""
+"""The map scores of :func:`~sigmapi.experiments.reward.run.map_scores`, per method and seed."""
 
 
 def episodes_to_target(success: NDArray[np.bool_], block: int, target: float) -> int | None:
     """Episodes until a block of ``block`` episodes first succeeds at rate ``>= target``: the
     end of that block (blocks ``[0, block)``, ``[block, 2 block)``, ...); None if none does."""
-    nb = success.size // block
-    rates = success[: nb * block].reshape(nb, block).mean(axis=1)
+    rates = block_rates(success[None, :], block)[0]
     hit = np.flatnonzero(rates >= target)
     return int((hit[0] + 1) * block) if hit.size else None
 
@@ -51,7 +51,7 @@ def _summary(values: list[float | None], higher: bool = True) -> dict[str, Any]:
 
 @dataclass
 class RewardResult:
-    """Outcome of :meth:`~sigmapi.experiments.reward.RewardExperiment.run`.
+    """Outcome of :meth:`~sigmapi.experiments.reward.run.RewardExperiment.run`.
 
     ``success[m]``, ``lost[m]``, ``steps[m]``: ``(len(seeds), episodes)`` per method ``m``, one
     row per seed in the order of ``seeds``; ``scores[m][name]``: ``(len(seeds),)`` map scores
@@ -94,9 +94,8 @@ class RewardResult:
         b = self.config.run.block
         out: dict[str, dict[str, NDArray[np.float64]]] = {}
         for m, succ in self.success.items():
-            nb = succ.shape[1] // b
-            rate = succ[:, : nb * b].reshape(succ.shape[0], nb, b).mean(axis=2)
-            out[m] = {"episode": (np.arange(nb) + 1.0) * b, "success": rate.mean(axis=0),
+            rate = block_rates(succ, b)
+            out[m] = {"episode": block_ends(rate.shape[1], b), "success": rate.mean(axis=0),
                       "success_sd": rate.std(axis=0), "success_min": rate.min(axis=0),
                       "success_max": rate.max(axis=0)}  # fmt: skip
         return out
@@ -114,7 +113,7 @@ class RewardResult:
         methods = []
         for m in run.methods:
             ep = self._episodes(m)
-            final = self.success[m][:, -f:].mean(axis=1)
+            final = final_rates(self.success[m], f)
             mag = self.scores[m]["magnification"]
             ratio = mag / base_mag
             entry: dict[str, Any] = {
@@ -171,8 +170,8 @@ class RewardResult:
         return "\n".join(lines)
 
     def save_figure(self, path: str | Path, dpi: int = 120) -> Path:
-        """Draw the comparison (:func:`~sigmapi.experiments.reward_plots.reward_figure`)."""
-        from sigmapi.experiments.reward_plots import reward_figure  # matplotlib: only to draw
+        """Draw the comparison (:func:`~sigmapi.experiments.reward.figures.reward_figure`)."""
+        from sigmapi.experiments.reward.figures import reward_figure  # matplotlib: only to draw
 
         out = Path(path)
         reward_figure(self).savefig(out, dpi=dpi, facecolor="white")

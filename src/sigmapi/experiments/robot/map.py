@@ -3,11 +3,9 @@
 :func:`learn_map` records view pairs from the still robot's saccades
 (:func:`~sigmapi.envs.collect_saccade_views` on a :class:`~sigmapi.envs.robot.RobotViews`)
 and fits the map on them. :func:`robot_som_config` is the map's configuration: the
-``paper-2d`` preset (min-distance winner, learning rate 0.1 -> 0.01, the cross-view ordered
-start) on the robot's codes, with a neighbourhood that ends at 0.5 map units instead of 1e-5.
-Chosen on seeds 0-2 (not on the reported ones): a final width of 1e-5 left each unit's weights
-the noise of its last few samples, and on the robot's views that cost order R^2 on the tuning
-seeds.
+``robot-2d`` preset (``paper-2d``'s min-distance winner, learning rate 0.1 -> 0.01 and
+cross-view ordered start, with a neighbourhood that ends at 0.5 map units instead of 1e-5;
+the preset file gives the evidence) on the robot's codes.
 
 :func:`score_map` scores a map on view pairs whose ``z`` is known, with the definitions of
 :func:`sigmapi.evaluate` (``sigmapi.metrics``): the same keys, the same fold score.
@@ -19,10 +17,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sigmapi.codes import PopulationCode
-from sigmapi.config import SOMConfig, load_preset
+from sigmapi.config import SOMConfig
 from sigmapi.envs import collect_saccade_views
 from sigmapi.envs.robot.views import RobotViewBatch, RobotViews
-from sigmapi.experiments.robot_config import RobotConfig
+from sigmapi.experiments.kit.maps import MapSpec
+from sigmapi.experiments.robot.config import RobotConfig
 from sigmapi.metrics import (
     EVAL_SEED,
     FOLD_THRESHOLD,
@@ -35,7 +34,7 @@ from sigmapi.som import SigmaPiSOM
 from sigmapi.tasks import Batch
 
 __all__ = [
-    "ROBOT_SIGMA",
+    "ROBOT_MAP",
     "evaluation_pairs",
     "learn_map",
     "robot_som_config",
@@ -43,8 +42,10 @@ __all__ = [
     "unit_positions",
 ]
 
-ROBOT_SIGMA = ((0.0, 3.0), (0.5, 1.0), (1.0, 0.5))
-"""The map's neighbourhood width (map units) over the run: 3 -> 1 at half-way -> 0.5."""
+ROBOT_MAP = MapSpec("robot-2d")
+"""The map's settings: the ``robot-2d`` preset (``paper-2d``'s winner rule, learning rate and
+ordered start, a neighbourhood of 3 -> 1 at half-way -> 0.5 map units, no refinement rounds);
+the run sets its codes, size, length, seed and backend."""
 
 
 def robot_som_config(
@@ -54,15 +55,11 @@ def robot_som_config(
     seed: int,
     backend: str = "auto",
 ) -> SOMConfig:
-    """The ``paper-2d`` preset on the robot's codes (``code``, retina and gaze alike), a
-    ``map_shape`` map, ``iterations`` long, with :data:`ROBOT_SIGMA` and without the preset's
-    refinement rounds (the robot's map was chosen and measured before the refinement
-    existed; its final neighbourhood of 0.5 units does what the refinement does for the
-    preset's 1e-5)."""
-    return load_preset("paper-2d").replace(
+    """:data:`ROBOT_MAP` on the robot's codes (``code``, retina and gaze alike), a
+    ``map_shape`` map, ``iterations`` long."""
+    return ROBOT_MAP.config(
         map_shape=tuple(map_shape), x_shape=code.shape, y_shape=code.shape,
-        code_width=code.width, iterations=iterations, sigma=ROBOT_SIGMA, seed=seed,
-        backend=backend, refine_rounds=0,
+        code_width=code.width, iterations=iterations, seed=seed, backend=backend,
     )  # fmt: skip
 
 

@@ -11,7 +11,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sigmapi.agents import ActorCritic
-from sigmapi.experiments.robot_config import RobotConfig
+from sigmapi.experiments.kit.episodes import block_ends, block_rates, final_rates
+from sigmapi.experiments.robot.config import RobotConfig
 from sigmapi.som import SigmaPiSOM
 
 __all__ = ["RobotResult"]
@@ -28,7 +29,7 @@ def _nan_stat(fn: Any, values: NDArray[np.float64]) -> float | None:
 
 @dataclass
 class RobotResult:
-    """Outcome of :meth:`~sigmapi.experiments.robot.RobotExperiment.run`.
+    """Outcome of :meth:`~sigmapi.experiments.robot.run.RobotExperiment.run`.
 
     ``success[state]``, ``docked[state]`` and ``steps[state]`` have shape ``(len(seeds),
     episodes)``, a row per seed in the order of ``seeds``: whether the hand touched the ball
@@ -54,7 +55,7 @@ class RobotResult:
         ``final_episodes`` episodes, one per seed."""
         f = self.config.final_episodes
         table = self.success if key == "success" else self.docked
-        return {s: r[:, -f:].mean(axis=1) for s, r in table.items()}
+        return {s: final_rates(r, f) for s, r in table.items()}
 
     def reach_given_docked(self) -> dict[str, NDArray[np.float64]]:
         """Per state and seed, the share of the last ``final_episodes`` docked episodes in
@@ -72,10 +73,9 @@ class RobotResult:
         b = self.config.block
         out = {}
         for s, r in self.success.items():
-            nb = r.shape[1] // b
-            rate = r[:, : nb * b].reshape(-1, nb, b).mean(axis=2)
+            rate = block_rates(r, b)
             out[s] = {
-                "episode": [float((i + 1) * b) for i in range(nb)],
+                "episode": block_ends(rate.shape[1], b).tolist(),
                 "success": rate.mean(axis=0).tolist(),
                 "success_sd": rate.std(axis=0).tolist(),
             }
@@ -151,18 +151,18 @@ class RobotResult:
 
     def film(self) -> list[NDArray[np.uint8]]:
         """Frames of one episode of the first seed's map learner (rendered once, then kept;
-        :func:`~sigmapi.experiments.robot_plots.film_episode`)."""
+        :func:`~sigmapi.experiments.robot.figures.film_episode`)."""
         if self._film is None:
-            from sigmapi.experiments.robot_plots import film_episode
+            from sigmapi.experiments.robot.figures import film_episode
 
             self._film = film_episode(self)
         return self._film
 
     def figure(self, out_dir: str | Path) -> list[Path]:
-        """Write the figures into ``out_dir`` (:func:`~sigmapi.experiments.robot_plots.
+        """Write the figures into ``out_dir`` (:func:`~sigmapi.experiments.robot.figures.
         robot_figures`: the map on the table, the learning curves, a film strip) and, with
         ``config.render``, the filmed episode as an animated GIF at that path."""
-        from sigmapi.experiments.robot_plots import robot_figures, write_gif
+        from sigmapi.experiments.robot.figures import robot_figures, write_gif
 
         folder = Path(out_dir)
         folder.mkdir(parents=True, exist_ok=True)

@@ -48,10 +48,12 @@ from sigmapi import _memory, _validate
 from sigmapi.baselines.kohonen import KohonenSOM, MiniSomMap
 from sigmapi.baselines.readout import GainFieldNetwork, RBMFeatures
 from sigmapi.baselines.scoring import score_readout, score_units
-from sigmapi.config import SOMConfig, apply_overrides, load_preset
+from sigmapi.config import SOMConfig
 from sigmapi.errors import ConfigError
 from sigmapi.executor import Executor, job_memory
 from sigmapi.experiments.base import KEY_VALUES, Experiment, check_seeds, register, run_all
+from sigmapi.experiments.kit.maps import MapSpec
+from sigmapi.experiments.kit.seeds import SeedPlan
 from sigmapi.io import atomic_write_bytes
 from sigmapi.metrics import evaluation_sets, grid_spacing
 from sigmapi.progress import Progress
@@ -146,7 +148,7 @@ class CompareConfig:
     @property
     def som_config(self) -> SOMConfig:
         """The preset with the overrides: the task and the Sigma-Pi map's settings."""
-        return apply_overrides(load_preset(self.preset), list(self.overrides))
+        return MapSpec(self.preset, self.overrides).config()
 
 
 QUICK = CompareConfig(train_pairs=10_000, som_iterations=20_000, rbm_epochs=5, n_test=5000)
@@ -350,6 +352,11 @@ Scores = dict[str, tuple[float, float, dict[int, float], float]]
 """Per method: view consistency, unit consistency, z error per labels, seconds."""
 
 
+PLAN = SeedPlan({"data": 13})
+"""The streams of a seed (:class:`~sigmapi.experiments.kit.seeds.SeedPlan`): the recorded
+views, apart from the streams a model of the same seed draws."""
+
+
 def compare_seed(job: CompareJob) -> Scores:
     """Train and score every method of ``job.cfg`` on seed ``job.seed``'s recording."""
     cfg, seed, cal, test = job.cfg, job.seed, job.cal, job.test
@@ -357,7 +364,7 @@ def compare_seed(job: CompareJob) -> Scores:
     base = SigmaPiSOM(som_cfg)
     spacing = grid_spacing(som_cfg.x_shape, som_cfg.periodic)
     cells = (base.sampler.relation.z_range, som_cfg.map_shape)
-    rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(13,)))
+    rng = PLAN.rng(seed, "data")
     b = base.sampler.sample(cfg.train_pairs, rng)
     views = (b.x0, b.y0, b.x1, b.y1)
     out: Scores = {}

@@ -1,7 +1,7 @@
 """Figures of the robot experiment: the map on the table, learning curves, a film strip.
 
 Thin plot functions (``ax`` in, Axes out) and :func:`robot_figures`, which writes them for a
-:class:`~sigmapi.experiments.robot_result.RobotResult`; :func:`film_episode` renders one
+:class:`~sigmapi.experiments.robot.result.RobotResult`; :func:`film_episode` renders one
 docking episode of the first seed's map learner and :func:`write_gif` saves frames as an
 animated GIF (Pillow, which matplotlib installs).
 """
@@ -16,6 +16,7 @@ from numpy.typing import NDArray
 
 from sigmapi.envs.robot.frames import Frames
 from sigmapi.envs.robot.scene import Scene
+from sigmapi.experiments.robot.config import PLAN
 
 __all__ = ["film_episode", "plot_curves", "plot_unit_positions", "robot_figures", "write_gif"]
 
@@ -70,7 +71,7 @@ def film_episode(result: Any, max_frames: int = 60) -> list[NDArray[np.uint8]]:
     if result.model is None or result.agent is None:
         return []
     env = result.config.state_env("map", result.model, render_mode="rgb_array")
-    start = np.random.default_rng(np.random.SeedSequence(result.seeds[0], spawn_key=(3,)))
+    start = PLAN.rng(result.seeds[0], "film")
     phi, _ = env.reset(seed=int(start.integers(0, 2**31 - 1)))
     frames = [env.render()]
     for _ in range(max_frames - 1):

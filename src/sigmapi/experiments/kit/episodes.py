@@ -1,0 +1,34 @@
+"""The arithmetic of episode records, once: outcomes per seed and episode (a ``(seeds,
+episodes)`` array of bools, one row per seed) turned into block rates (the learning curves)
+and rates over the final episodes (what the tables report)."""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ["block_ends", "block_rates", "final_rates"]
+
+
+def block_rates(outcomes: NDArray[np.bool_], block: int) -> NDArray[np.float64]:
+    """The rate of each block of ``block`` episodes per seed, ``(seeds, episodes // block)``
+    (blocks ``[0, block)``, ``[block, 2 block)``, ...; a last, shorter block is left out).
+
+    Examples
+    --------
+    >>> block_rates(np.array([[True, False, True, True, False]]), 2)
+    array([[0.5, 1. ]])
+    """
+    n = outcomes.shape[1] // block
+    rates = outcomes[:, : n * block].reshape(outcomes.shape[0], n, block).mean(axis=2)
+    return np.asarray(rates, dtype=np.float64)
+
+
+def block_ends(n_blocks: int, block: int) -> NDArray[np.float64]:
+    """The episode that ends each block: ``block, 2 block, ...`` as floats."""
+    return np.asarray((np.arange(n_blocks) + 1.0) * block, dtype=np.float64)
+
+
+def final_rates(outcomes: NDArray[np.bool_], final: int) -> NDArray[np.float64]:
+    """Each seed's rate over its last ``final`` episodes, ``(seeds,)``."""
+    return np.asarray(outcomes[:, -final:].mean(axis=1), dtype=np.float64)

@@ -1,0 +1,8 @@
+"""The reproduce experiment (``sigmapi reproduce``): the paper presets trained and measured, and
+the report.
+
+Guide: docs/guide/reproduce.md; results: docs/results/reproduction.md.
+
+Modules (``run`` holds the experiment object, ``REGISTRY``'s entry): ``report_html``,
+``results``, ``run``.
+"""

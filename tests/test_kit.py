@@ -1,0 +1,70 @@
+"""The experiments' kit: the seed plan, the episode arithmetic and the map spec."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from sigmapi import load_preset
+from sigmapi.experiments.kit.episodes import block_ends, block_rates, final_rates
+from sigmapi.experiments.kit.maps import MapSpec
+from sigmapi.experiments.kit.seeds import SeedPlan
+
+
+def test_a_seed_plan_names_the_streams_each_experiment_drew_before():
+    from sigmapi.experiments.chain.run import PLAN as CHAIN
+    from sigmapi.experiments.compare.run import PLAN as COMPARE
+    from sigmapi.experiments.reach.run import PLAN as REACH
+    from sigmapi.experiments.reward.run import PLAN as REWARD
+    from sigmapi.experiments.robot.config import PLAN as ROBOT
+    from sigmapi.experiments.stream.run import PLAN as STREAM
+
+    def same(a: np.random.SeedSequence, b: np.random.SeedSequence) -> bool:
+        return (a.entropy, a.spawn_key) == (b.entropy, b.spawn_key)
+
+    root = np.random.SeedSequence(0)  # reach and reward: seed s is child s of the root 0
+    reward = ("map", "starts", "agent", "probes", "shuffle", "fixations")
+    for plan, names in ((REACH, ("map", "starts", "agent")), (REWARD, reward)):
+        for k, name in enumerate(names):
+            child = np.random.SeedSequence(root.entropy, spawn_key=(5, k))
+            assert same(plan.sequence(5, name), child), name
+    for k, name in enumerate(("map", "starts", "agent", "film")):  # robot: the seed's children
+        assert same(ROBOT.sequence(9, name), np.random.SeedSequence(9, spawn_key=(k,)))
+    assert same(STREAM.sequence(3, "frames", 16), np.random.SeedSequence(3, spawn_key=(7, 16)))
+    assert same(CHAIN.sequence(3, "triples"), np.random.SeedSequence(3, spawn_key=(16,)))
+    assert same(COMPARE.sequence(3, "data"), np.random.SeedSequence(3, spawn_key=(13,)))
+    a, b = REACH.rng(2, "starts").random(3), REACH.rng(2, "starts").random(3)
+    np.testing.assert_array_equal(a, b)
+    with pytest.raises(ValueError, match="share a spawn key"):
+        SeedPlan({"a": 1, "b": 1})
+    with pytest.raises(KeyError):
+        REACH.rng(0, "nope")
+
+
+def test_block_and_final_rates():
+    outcomes = np.array([[1, 0, 1, 1, 0, 0, 1], [0, 0, 1, 1, 1, 1, 0]], dtype=bool)
+    rates = block_rates(outcomes, 3)  # the 7th episode is in no block
+    np.testing.assert_array_equal(rates, [[2 / 3, 1 / 3], [1 / 3, 1.0]])
+    np.testing.assert_array_equal(block_ends(rates.shape[1], 3), [3.0, 6.0])
+    np.testing.assert_array_equal(final_rates(outcomes, 2), [0.5, 0.5])
+    assert block_rates(outcomes, 8).shape == (2, 0)
+
+
+def test_a_map_spec_applies_changes_then_overrides_then_the_fixed_fields():
+    spec = MapSpec("paper-1d", ("iterations=5000", "refine_rounds=2"), {"refine_rounds": 0})
+    cfg = spec.config(seed=4, backend="reference")
+    assert (cfg.iterations, cfg.refine_rounds, cfg.seed, cfg.backend) == (5000, 2, 4, "reference")
+    assert MapSpec("paper-1d").config() == load_preset("paper-1d")
+
+
+def test_the_robot_preset_is_paper_2d_with_the_robots_schedule():
+    """What the robot experiment trained before its schedule became a preset: paper-2d with
+    sigma 3 -> 1 -> 0.5 and no refinement rounds (the run sets sizes, codes and length)."""
+    robot = load_preset("robot-2d")
+    fixed = {"map_shape": (8, 8), "x_shape": (12, 12), "y_shape": (12, 12), "iterations": 40_000}
+    before = load_preset("paper-2d").replace(
+        sigma=((0.0, 3.0), (0.5, 1.0), (1.0, 0.5)), refine_rounds=0, **fixed
+    )
+    got, want = robot.to_dict(), before.to_dict()
+    got.pop("extra"), want.pop("extra")
+    assert got == want
