@@ -1,14 +1,20 @@
-"""The experiments' kit: the seed plan, the episode arithmetic and the map spec."""
+"""The experiments' kit: the seed plan, the episode arithmetic, the map spec, the worlds."""
 
 from __future__ import annotations
 
+import gymnasium as gym
 import numpy as np
 import pytest
 
 from sigmapi import load_preset
+from sigmapi.envs import GazeReachConfig, GazeReachEnv
+from sigmapi.errors import ConfigError
 from sigmapi.experiments.kit.episodes import block_ends, block_rates, final_rates
 from sigmapi.experiments.kit.maps import MapSpec
 from sigmapi.experiments.kit.seeds import SeedPlan
+from sigmapi.experiments.kit.worlds import WORLDS, World, get_world, register_world
+from sigmapi.experiments.reach.config import ReachConfig
+from sigmapi.experiments.reach.run import REACH, ReachExperiment
 
 
 def test_a_seed_plan_names_the_streams_each_experiment_drew_before():
@@ -68,3 +74,55 @@ def test_the_robot_preset_is_paper_2d_with_the_robots_schedule():
     got, want = robot.to_dict(), before.to_dict()
     got.pop("extra"), want.pop("extra")
     assert got == want
+
+
+class OffCentreReach(GazeReachEnv):
+    """A world no experiment knew: the gaze-and-reach world with its goal at 0.25."""
+
+    def __init__(self, **kwargs):
+        super().__init__(goal=0.25, **kwargs)
+
+
+def _toy_kwargs(settings):
+    return {**settings.env_kwargs(), "max_episode_steps": settings.max_episode_steps}
+
+
+def _toy_source(settings):
+    return OffCentreReach(**settings.env_kwargs())
+
+
+def test_a_new_world_is_one_entry_and_reach_runs_on_it():
+    toy_id = "sigmapi-test/OffCentreReach-v0"
+    gym.register(id=toy_id, entry_point=OffCentreReach)
+    try:
+        with pytest.raises(ConfigError, match="unknown world 'off-centre'"):
+            get_world("off-centre")
+        toy = register_world(World("off-centre", toy_id, GazeReachConfig, _toy_kwargs,
+                                   _toy_source, MapSpec("paper-2d"), (7, 8)))  # fmt: skip
+        assert get_world("off-centre") is toy
+        experiment = ReachExperiment(toy)
+        assert experiment.default_seeds(ReachConfig()) == (7, 8)  # the world's
+        cfg = ReachConfig().replace(dim=1, grid=7, map_shape=(6,), iterations=300, episodes=12,
+                                    block=6, final_episodes=6, max_episode_steps=25,
+                                    backend="reference")  # fmt: skip
+        assert isinstance(toy.make_env(cfg.env).unwrapped, OffCentreReach)
+        here = experiment.run(cfg, seeds=[0]).to_dict()
+        there = REACH.run(cfg, seeds=[0]).to_dict()
+        assert set(here["success"]) == set(there["success"]) == {"map", "retina", "retina_gaze",
+                                                                   "true_z"}  # fmt: skip
+        assert here["curves"] != there["curves"]  # another goal, other episodes
+        with pytest.raises(ConfigError, match="settings of world 'off-centre'"):
+            toy.make_env(object())
+    finally:
+        WORLDS.pop("off-centre", None)
+        gym.registry.pop(toy_id, None)
+
+
+def test_worlds_map_specs_and_seed_plans_travel_to_other_processes():
+    import pickle
+
+    from sigmapi.experiments.kit.worlds import GAZE_REACH
+    from sigmapi.experiments.robot.config import PLAN, ROBOT_WORLD
+
+    for value in (GAZE_REACH, ROBOT_WORLD, PLAN, MapSpec("paper-1d", changes={"eps": 0.1})):
+        assert pickle.loads(pickle.dumps(value)) == value

@@ -8,7 +8,6 @@ experiment fixes (the world's codes, the map's size, length, seed and backend).
 
 from __future__ import annotations
 
-import types
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
@@ -40,7 +39,7 @@ class MapSpec:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "overrides", tuple(self.overrides))
-        object.__setattr__(self, "changes", types.MappingProxyType(dict(self.changes)))
+        object.__setattr__(self, "changes", dict(self.changes))  # a copy (picklable)
 
     def config(self, **fixed: Any) -> SOMConfig:
         """The preset with ``changes``, ``overrides`` and then ``fixed`` (the fields the

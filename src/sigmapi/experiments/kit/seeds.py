@@ -17,7 +17,6 @@ Two derivations, so that published results stay as they were:
 
 from __future__ import annotations
 
-import types
 from collections.abc import Mapping
 from dataclasses import dataclass
 
@@ -50,7 +49,7 @@ class SeedPlan:
     def __post_init__(self) -> None:
         if len(set(self.keys.values())) != len(self.keys):
             raise ValueError(f"two streams of a seed plan share a spawn key: {dict(self.keys)}")
-        object.__setattr__(self, "keys", types.MappingProxyType(dict(self.keys)))
+        object.__setattr__(self, "keys", dict(self.keys))  # a copy (picklable)
 
     def sequence(self, seed: int, name: str, *more: int) -> np.random.SeedSequence:
         """The ``SeedSequence`` of stream ``name`` of ``seed`` (``more``: further keys below

@@ -24,10 +24,11 @@ from sigmapi import _validate
 from sigmapi.agents import ActorCriticConfig
 from sigmapi.codes import PopulationCode
 from sigmapi.config import BACKEND_NAMES, SOMConfig, list_presets
-from sigmapi.envs import FEATURES, STATES, GazeReachConfig, GazeReachEnv
+from sigmapi.envs import FEATURES, STATES, GazeReachConfig
 from sigmapi.errors import ConfigError
 from sigmapi.experiments.kit.maps import MapSpec
 from sigmapi.experiments.kit.parts import check_part_types, parts_dict, replaced_parts
+from sigmapi.experiments.kit.worlds import GAZE_REACH, World
 
 __all__ = [
     "SMALL_MAP",
@@ -96,6 +97,12 @@ class MapConfig:
         _validate.choice("features", self.features, FEATURES)
         width = _validate.positive("feature_width", self.feature_width, fix="e.g. 1.0")
         object.__setattr__(self, "feature_width", width)
+
+    def in_world(self, world: World, settings: Any, seed: int) -> SOMConfig:
+        """The map's config on the codes of ``world`` as ``settings`` make it
+        (:meth:`som_config`)."""
+        source = world.source(settings)
+        return self.som_config(source.x_code, source.y_code, seed)
 
     def som_config(self, x_code: PopulationCode, y_code: PopulationCode, seed: int) -> SOMConfig:
         """The map's config for views coded by ``x_code`` and ``y_code`` (the world's codes).
@@ -196,11 +203,10 @@ class ReachConfig:
         """The parts as JSON-able tables (tuples as lists): ``{"env": {...}, "map": ...}``."""
         return parts_dict(self, self.PARTS)
 
-    def som_config(self, seed: int) -> SOMConfig:
-        """The config of the map of seed ``seed``, on the world's codes
-        (:meth:`MapConfig.som_config`)."""
-        world = GazeReachEnv(**self.env.env_kwargs())
-        return self.map.som_config(world.x_code, world.y_code, seed)
+    def som_config(self, seed: int, world: World = GAZE_REACH) -> SOMConfig:
+        """The config of the map of seed ``seed``, on the codes of ``world``
+        (:meth:`MapConfig.in_world`)."""
+        return self.map.in_world(world, self.env, seed)
 
 
 SMALL_MAP: dict[str, Any] = {

@@ -35,6 +35,7 @@ from sigmapi import _memory, _validate
 from sigmapi.agents import ActorCritic, actor_critic_for, run_episodes
 from sigmapi.envs import (
     Features,
+    GazeReachConfig,
     PlacedViewSource,
     TrueZObservation,
     learn_map_in_env,
@@ -45,6 +46,7 @@ from sigmapi.executor import Executor, job_memory
 from sigmapi.experiments.base import Experiment, check_seeds, register, run_all
 from sigmapi.experiments.kit.jobs import Tick, counted
 from sigmapi.experiments.kit.seeds import SeedPlan
+from sigmapi.experiments.kit.worlds import GAZE_REACH, World
 from sigmapi.experiments.reach.config import SMALL_MAP, ReachConfig
 from sigmapi.experiments.reach.result import ReachResult
 from sigmapi.metrics import evaluate
@@ -104,7 +106,9 @@ PLAN = SeedPlan({"map": 0, "starts": 1, "agent": 2}, root=0)
 """The streams of a seed (:class:`~sigmapi.experiments.kit.seeds.SeedPlan`)."""
 
 
-def _map_for_seed(config: ReachConfig, seed: int, progress: Tick | None = None) -> SigmaPiSOM:
+def _map_for_seed(
+    config: ReachConfig, world: World, seed: int, progress: Tick | None = None
+) -> SigmaPiSOM:
     if config.map.model_path is not None:
         return load_model(Path(config.map.model_path))
     r = PLAN.rng(seed, "map")
@@ -114,14 +118,14 @@ def _map_for_seed(config: ReachConfig, seed: int, progress: Tick | None = None) 
         if progress is not None:
             progress(0, "learning the map")
 
-    return learn_map_in_env(
-        config.env.make_env(), config.som_config(som_seed), seed=env_seed, callback=callback
-    )
+    env, som = world.make_env(config.env), config.som_config(som_seed, world)
+    return learn_map_in_env(env, som, seed=env_seed, callback=callback)
 
 
 @dataclass(frozen=True)
 class _SeedJob:
     config: ReachConfig
+    world: World
     first: bool
     seed: int
     show: Progress | None = None
@@ -135,13 +139,14 @@ def _run_seed(job: _SeedJob) -> dict[str, Any]:
 
 
 def _seed_runs(job: _SeedJob, progress: Tick | None) -> dict[str, Any]:
-    cfg, seed = job.config, job.seed
-    model = _map_for_seed(cfg, seed, progress) if "map" in cfg.run.states else None
+    cfg, seed, world = job.config, job.seed, job.world
+    model = _map_for_seed(cfg, world, seed, progress) if "map" in cfg.run.states else None
     out: dict[str, Any] = {"map_metrics": _map_quality(model) if model is not None else None,
                            "runs": {}, "values": {}}  # fmt: skip
     starts = PLAN.rng(seed, "starts").integers(0, 2**31 - 1, size=cfg.run.episodes)
     for s in cfg.run.states:
-        env = make_state_env(cfg.env.make_env(), s, model, cfg.map.features, cfg.map.feature_width)
+        env = make_state_env(world.make_env(cfg.env), s, model, cfg.map.features,
+                             cfg.map.feature_width)  # fmt: skip
         agent = actor_critic_for(env, cfg.agent, seed=PLAN.rng(seed, "agent"))
         done = None if progress is None else functools.partial(progress, 1, s)
         ep = run_episodes(env, agent, starts, on_episode=done)
@@ -156,13 +161,13 @@ def _map_quality(model: SigmaPiSOM) -> dict[str, float | int]:
     return evaluate(model, n_test=2000).to_dict()
 
 
-def _check_memory(config: ReachConfig) -> None:
+def _check_memory(config: ReachConfig, world: World) -> None:
     """Refuse a map (and its views) that this machine cannot hold, before anything is built."""
     run = config.run  # the start states and, per seed and state, three (episodes,) arrays
     _memory.check_count("episodes", run.episodes, 8 + 17 * len(run.states), "e.g. --episodes 600")
     if config.map.model_path is not None or "map" not in config.run.states:
         return
-    som = SigmaPiSOM(config.som_config(0))
+    som = SigmaPiSOM(config.som_config(0, world))
     n_x, n_y = int(np.prod(som.x_shape)), int(np.prod(som.y_shape))
     _memory.check(
         som.memory_estimate() + config.map.iterations * 2 * (n_x + n_y) * 8,
@@ -184,15 +189,28 @@ def _check_model(config: ReachConfig) -> None:
 
 class ReachExperiment(Experiment[ReachConfig]):
     """Gaze-and-reach task: the same actor-critic on the learned Sigma-Pi map, the retina
-    code, retina and gaze codes, and the true z (the upper bound), over seeds."""
+    code, retina and gaze codes, and the true z (the upper bound), over seeds.
+
+    ``ReachExperiment(world)`` runs it in another registered world
+    (:data:`~sigmapi.experiments.kit.worlds.WORLDS`) whose settings are a
+    :class:`~sigmapi.envs.GazeReachConfig` (the config's ``env`` part); its default seeds are
+    the world's.
+    """
 
     name = "reach"
     summary = "learn to reach with an actor-critic on the learned map vs. other states"
     config_type = ReachConfig
     quick = ReachConfig().replace(episodes=150, final_episodes=50, **SMALL_MAP)
-    seeds = (0, 1, 2, 3, 4)
     quick_seeds = (0,)
     default_out = "reach"
+
+    def __init__(self, world: World = GAZE_REACH) -> None:
+        if not issubclass(world.settings, GazeReachConfig):
+            raise _validate.fail(f"settings of world {world.name!r}",
+                                 "a GazeReachConfig (the reach config's env part)",
+                                 world.settings.__name__)  # fmt: skip
+        self.world = world
+        self.seeds = world.seeds
 
     def run(
         self,
@@ -214,7 +232,7 @@ class ReachExperiment(Experiment[ReachConfig]):
             raise _validate.fail("config", "a ReachConfig", config)
         seeds = check_seeds(seeds)
         _check_model(config)
-        _check_memory(config)
+        _check_memory(config, self.world)
         t0 = time.perf_counter()
         run = config.run
         shape = (len(seeds), run.episodes)
@@ -223,10 +241,10 @@ class ReachExperiment(Experiment[ReachConfig]):
             res.success[s] = np.zeros(shape, dtype=bool)
             res.steps[s] = np.zeros(shape, dtype=np.int64)
             res.lost[s] = np.zeros(shape, dtype=bool)
-        jobs = [(str(s), _SeedJob(config, i == 0, s)) for i, s in enumerate(seeds)]
+        jobs = [(str(s), _SeedJob(config, self.world, i == 0, s)) for i, s in enumerate(seeds)]
         values = run_all(
             _run_seed, jobs, executor=executor,
-            per_job=job_memory(config.som_config(0), n_test=2000), progress=progress,
+            per_job=job_memory(config.som_config(0, self.world), n_test=2000), progress=progress,
             desc="reach", verbose=lambda job: dataclasses.replace(job, show=progress),
             describe=lambda key, _: f"seed {key}",
         )  # fmt: skip

@@ -22,9 +22,10 @@ from sigmapi import _validate
 from sigmapi.agents import ActorCriticConfig, Gating
 from sigmapi.agents.gated import VIEWS
 from sigmapi.config import SOMConfig
-from sigmapi.envs import GazeReachConfig, GazeReachEnv
+from sigmapi.envs import GazeReachConfig
 from sigmapi.errors import ConfigError
 from sigmapi.experiments.kit.parts import parts_dict, replaced_parts
+from sigmapi.experiments.kit.worlds import GAZE_REACH, World
 from sigmapi.experiments.reach.config import SMALL_MAP, MapConfig, check_parts
 from sigmapi.rules.gating import FEEDBACK, SURPRISE
 
@@ -164,7 +165,6 @@ class RewardConfig:
         """The parts as JSON-able tables (tuples as lists)."""
         return parts_dict(self, self.PARTS)
 
-    def som_config(self, seed: int) -> SOMConfig:
-        """The config of the map of seed ``seed``, on the world's codes."""
-        world = GazeReachEnv(**self.env.env_kwargs())
-        return self.map.som_config(world.x_code, world.y_code, seed)
+    def som_config(self, seed: int, world: World = GAZE_REACH) -> SOMConfig:
+        """The config of the map of seed ``seed``, on the codes of ``world``."""
+        return self.map.in_world(world, self.env, seed)

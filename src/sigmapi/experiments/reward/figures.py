@@ -16,7 +16,7 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Rectangle
 from numpy.typing import NDArray
 
-from sigmapi.envs import GazeReachEnv
+from sigmapi.experiments.kit.worlds import GAZE_REACH
 from sigmapi.experiments.reward.config import RewardConfig
 
 __all__ = ["LABELS", "plot_reward_curves", "plot_units", "reward_figure"]
@@ -75,7 +75,7 @@ def plot_units(result: RewardData, method: str, ax: Axes | None = None) -> Axes:
         ):
             ax.plot(line[:, 0], line[:, 1], color="0.6", linewidth=0.6)
     ax.plot(pz[:, 0], pz[:, 1], "o", color=COLORS.get(method), markersize=3)
-    goal = np.asarray(GazeReachEnv(**cfg.env.env_kwargs()).goal)
+    goal = np.asarray(GAZE_REACH.source(cfg.env).goal)
     r, rn = cfg.env.goal_radius, cfg.run.near_radius
     ax.add_patch(Rectangle(tuple(goal - r), 2 * r, 2 * r, color="0.85", zorder=0))
     ax.add_patch(Rectangle(tuple(goal - rn), 2 * rn, 2 * rn, fill=False, linestyle="--",

@@ -56,6 +56,7 @@ from sigmapi.executor import Executor, job_memory
 from sigmapi.experiments.base import Experiment, check_seeds, register, run_all
 from sigmapi.experiments.kit.jobs import Tick, counted
 from sigmapi.experiments.kit.seeds import SeedPlan
+from sigmapi.experiments.kit.worlds import GAZE_REACH, World
 from sigmapi.experiments.reward.config import RewardConfig
 from sigmapi.experiments.reward.result import RewardResult
 from sigmapi.metrics import winner_metrics
@@ -145,6 +146,7 @@ def map_scores(
 @dataclass(frozen=True)
 class _SeedJob:
     config: RewardConfig
+    world: World
     seed: int
     show: Progress | None = None
     """A bar of this seed's episodes (set only where the job runs in the caller's process)."""
@@ -155,26 +157,27 @@ def _run_seed(job: _SeedJob) -> dict[str, Any]:
     return counted(job.show, total, f"reward seed {job.seed}", lambda tick: _seed_runs(job, tick))
 
 
-def _learn_map(cfg: RewardConfig, seed: int) -> SigmaPiSOM:
+def _learn_map(cfg: RewardConfig, world: World, seed: int) -> SigmaPiSOM:
     env_seed, som_seed = (int(v) for v in PLAN.rng(seed, "map").integers(0, 2**31 - 1, size=2))
-    return learn_map_in_env(cfg.env.make_env(), cfg.som_config(som_seed), seed=env_seed)
+    return learn_map_in_env(world.make_env(cfg.env), cfg.som_config(som_seed, world), seed=env_seed)
 
 
 def _seed_runs(job: _SeedJob, progress: Tick | None) -> dict[str, Any]:
     """One seed: its map, then each method's learner on the same episodes, then the scores."""
-    cfg, seed = job.config, job.seed
+    cfg, seed, world = job.config, job.seed, job.world
     run = cfg.run
-    learned = _learn_map(cfg, seed)
-    world = GazeReachEnv(**cfg.env.env_kwargs())
-    objects = probe_objects(world, run.n_test, PLAN.rng(seed, "probes"))
-    goal = np.asarray(world.goal, dtype=np.float64)
+    learned = _learn_map(cfg, world, seed)
+    place = world.source(cfg.env)
+    objects = probe_objects(place, run.n_test, PLAN.rng(seed, "probes"))
+    goal = np.asarray(place.goal, dtype=np.float64)
     starts = PLAN.rng(seed, "starts").integers(0, 2**31 - 1, size=run.episodes)
     out: dict[str, Any] = {"initial": map_scores(learned, objects, goal, run.near_radius),
                            "initial_units": preferred_z(learned, objects), "runs": {}}  # fmt: skip
     factors: NDArray[np.float64] | None = None
     for m in sorted(run.methods, key=("frozen", "gated", "shuffled").index):
         model = copy.copy(learned)
-        env = MapObservation(cfg.env.make_env(), model, cfg.map.features, cfg.map.feature_width)
+        env = MapObservation(world.make_env(cfg.env), model, cfg.map.features,
+                             cfg.map.feature_width)  # fmt: skip
         agent = actor_critic_for(env, cfg.agent, seed=PLAN.rng(seed, "agent"))
         done = None if progress is None else functools.partial(progress, 1, m)
         updates = 0
@@ -208,8 +211,12 @@ class RewardExperiment(Experiment[RewardConfig]):
     quick = RewardConfig().replace(episodes=100, block=25, final_episodes=25, iterations=4000,
                                    n_test=1000)  # fmt: skip
     seeds = (900, 901, 902, 903, 904, 905, 906, 907, 908, 909)
+    """The seeds of the acceptance run (not the world's: none of them was tuned on)."""
     quick_seeds = (0,)
     default_out = "reward"
+
+    def __init__(self, world: World = GAZE_REACH) -> None:
+        self.world = world
 
     def run(
         self,
@@ -227,10 +234,10 @@ class RewardExperiment(Experiment[RewardConfig]):
             raise _validate.fail("config", "a RewardConfig", config)
         seeds = check_seeds(seeds)
         t0 = time.perf_counter()
-        jobs = [(str(s), _SeedJob(config, s)) for s in seeds]
+        jobs = [(str(s), _SeedJob(config, self.world, s)) for s in seeds]
         values = run_all(
             _run_seed, jobs, executor=executor,
-            per_job=job_memory(config.som_config(0), n_test=config.run.n_test),
+            per_job=job_memory(config.som_config(0, self.world), n_test=config.run.n_test),
             progress=progress, desc="reward",
             verbose=lambda job: dataclasses.replace(job, show=progress),
             describe=lambda key, _: f"seed {key}",

@@ -21,11 +21,14 @@ from sigmapi.config import BACKEND_NAMES
 from sigmapi.envs import FEATURES, STATES, Features, TrueZObservation, make_state_env
 from sigmapi.envs.robot.env import ENV_ID
 from sigmapi.envs.robot.frames import RETINA_SOURCES
+from sigmapi.envs.robot.views import RobotViews
 from sigmapi.errors import ConfigError
+from sigmapi.experiments.kit.maps import MapSpec
 from sigmapi.experiments.kit.seeds import SeedPlan
+from sigmapi.experiments.kit.worlds import World, register_world
 from sigmapi.som import SigmaPiSOM
 
-__all__ = ["PLAN", "QUICK", "RobotConfig"]
+__all__ = ["PLAN", "QUICK", "ROBOT_WORLD", "RobotConfig"]
 
 PLAN = SeedPlan({"map": 0, "starts": 1, "agent": 2, "film": 3})
 """The streams of a seed (:class:`~sigmapi.experiments.kit.seeds.SeedPlan`): children of
@@ -119,9 +122,9 @@ class RobotConfig:
                 "saccade_rate": self.saccade_rate, "max_episode_steps": self.max_steps}  # fmt: skip
 
     def make_env(self, **kwargs: Any) -> gym.Env[Any, Any]:
-        """The docking world through ``gymnasium.make`` (its TimeLimit included); ``kwargs``
-        go to it too (e.g. ``render_mode="rgb_array"``)."""
-        return gym.make(ENV_ID, **self.env_kwargs(), **kwargs)
+        """The docking world through ``gymnasium.make`` (:data:`ROBOT_WORLD`; its TimeLimit
+        included); ``kwargs`` go to it too (e.g. ``render_mode="rgb_array"``)."""
+        return ROBOT_WORLD.make_env(self, **kwargs)
 
     def state_env(
         self, state: str, model: SigmaPiSOM | None = None, **kwargs: Any
@@ -146,3 +149,28 @@ class RobotConfig:
 QUICK = RobotConfig(map_pairs=3000, map_iterations=12_000, eval_pairs=1000, episodes=150,
                     final_episodes=50, block=25)  # fmt: skip
 """``sigmapi robot --quick``: a smaller map run and fewer episodes (minutes, not tens)."""
+
+
+def _robot_kwargs(config: RobotConfig) -> dict[str, Any]:
+    return config.env_kwargs()
+
+
+def _robot_source(config: RobotConfig) -> RobotViews:
+    return RobotViews(config.grid, config.code_width, moved_share=config.moved_share)
+
+
+ROBOT_WORLD = register_world(
+    World(
+        name="robot",
+        env_id=ENV_ID,
+        settings=RobotConfig,
+        kwargs=_robot_kwargs,
+        source=_robot_source,
+        map=MapSpec("robot-2d"),
+        seeds=(100, 101, 102, 103, 104),
+    )
+)
+"""The simulated robot (:class:`~sigmapi.envs.robot.RobotDockEnv`, MuJoCo): its view pairs
+are recorded from the still robot's saccades (``moved_share`` of them spoiled); its map is
+the ``robot-2d`` preset; its default seeds are those of the acceptance run (none of them was
+tuned on: tuning used 0-2)."""

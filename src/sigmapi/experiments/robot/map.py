@@ -20,8 +20,7 @@ from sigmapi.codes import PopulationCode
 from sigmapi.config import SOMConfig
 from sigmapi.envs import collect_saccade_views
 from sigmapi.envs.robot.views import RobotViewBatch, RobotViews
-from sigmapi.experiments.kit.maps import MapSpec
-from sigmapi.experiments.robot.config import RobotConfig
+from sigmapi.experiments.robot.config import ROBOT_WORLD, RobotConfig
 from sigmapi.metrics import (
     EVAL_SEED,
     FOLD_THRESHOLD,
@@ -42,7 +41,7 @@ __all__ = [
     "unit_positions",
 ]
 
-ROBOT_MAP = MapSpec("robot-2d")
+ROBOT_MAP = ROBOT_WORLD.map
 """The map's settings: the ``robot-2d`` preset (``paper-2d``'s winner rule, learning rate and
 ordered start, a neighbourhood of 3 -> 1 at half-way -> 0.5 map units, no refinement rounds);
 the run sets its codes, size, length, seed and backend."""
@@ -67,7 +66,7 @@ def learn_map(config: RobotConfig, rng: np.random.Generator) -> SigmaPiSOM:
     """The map of one run: ``config.map_pairs`` view pairs recorded from the still robot's
     saccades (``config.moved_share`` of them spoiled), then ``fit(views)``; the views' and the
     weights' seeds drawn from ``rng``."""
-    source = RobotViews(config.grid, config.code_width, moved_share=config.moved_share)
+    source = ROBOT_WORLD.source(config)
     views_seed, som_seed = (int(v) for v in rng.integers(0, 2**31 - 1, size=2))
     views = collect_saccade_views(source, config.map_pairs, seed=views_seed)
     cfg = robot_som_config(source.x_code, config.map_shape, config.map_iterations, som_seed,

@@ -47,7 +47,7 @@ from sigmapi.executor import Executor
 from sigmapi.executor import job_memory as _som_job_memory
 from sigmapi.experiments.base import Experiment, check_seeds, register, run_all
 from sigmapi.experiments.kit.jobs import Tick, counted
-from sigmapi.experiments.robot.config import PLAN, QUICK, RobotConfig
+from sigmapi.experiments.robot.config import PLAN, QUICK, ROBOT_WORLD, RobotConfig
 from sigmapi.experiments.robot.map import (
     evaluation_pairs,
     learn_map,
@@ -122,7 +122,7 @@ class RobotExperiment(Experiment[RobotConfig]):
     summary = "a simulated robot learns the map from its own saccades, then docks on it"
     config_type = RobotConfig
     quick = QUICK
-    seeds = (100, 101, 102, 103, 104)
+    seeds = ROBOT_WORLD.seeds
     """The seeds of the acceptance run: none of them was tuned on (tuning used 0-2)."""
     quick_seeds = (0,)
     """The seed of ``--quick``: a tuning seed (a first look does not peek at the reported
