@@ -152,8 +152,8 @@ def _child_map(seeds: list[int], moved: list[float]) -> dict[str, Any]:
                             for k, v in m.items()}})  # fmt: skip
             print(json.dumps(rows[-1]), file=sys.stderr, flush=True)
     return {"rows": rows, "config": {k: v for k, v in base.to_dict().items()
-                                     if k in ("grid", "code_width", "map_shape", "map_pairs",
-                                              "map_iterations", "eval_pairs")}}  # fmt: skip
+                                     if k in ("grid", "code_width", "map_shape", "train_pairs",
+                                              "iterations", "eval_pairs")}}  # fmt: skip
 
 
 # ------------------------------------------------------------------ parents

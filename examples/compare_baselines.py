@@ -26,7 +26,7 @@ def main() -> None:
     args = parser.parse_args()
     cfg, seeds = QUICK, QUICK_SEEDS
     if args.small:
-        small = {"train_pairs": 500, "som_iterations": 2000, "rbm_epochs": 1, "n_test": 200,
+        small = {"train_pairs": 500, "baseline_iterations": 2000, "rbm_epochs": 1, "n_test": 200,
                  "overrides": ("iterations=5000",)}  # fmt: skip
         cfg, seeds = dataclasses.replace(cfg, **small), (0,)
     result = run_compare(cfg, seeds=seeds)

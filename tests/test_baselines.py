@@ -140,7 +140,7 @@ def test_compare_ranks_the_sigma_pi_map_above_first_order_maps():
     cfg = CompareConfig(
         preset="paper-1d", overrides=("map_shape=[9]", "x_shape=[9]", "y_shape=[9]",
                                       "iterations=15000", 'winner_rule="argmax"'),
-        train_pairs=3000, som_iterations=20_000, n_test=1000,
+        train_pairs=3000, baseline_iterations=20_000, n_test=1000,
         methods=("kohonen", "minisom", "kohonen two-view"),
     )  # fmt: skip
     d = run_compare(cfg, seeds=(0, 1, 2)).to_dict()
@@ -159,7 +159,7 @@ def _cli(*args: str) -> subprocess.CompletedProcess[str]:
 
 
 TINY = ["--set", "iterations=5000", "--seeds", "0", "--train-pairs", "500",
-        "--som-iterations", "2000", "--rbm-epochs", "1", "--n-test", "200"]  # fmt: skip
+        "--baseline-iterations", "2000", "--rbm-epochs", "1", "--n-test", "200"]  # fmt: skip
 
 
 def test_compare_cli_json_table_and_figure(tmp_path):

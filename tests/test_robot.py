@@ -225,7 +225,7 @@ def test_tiny_learn_and_dock_run():
     from sigmapi.experiments.robot.run import QUICK, ROBOT
 
     cfg = QUICK.replace(
-        map_pairs=300, map_iterations=600, eval_pairs=200, episodes=6, final_episodes=3,
+        train_pairs=300, iterations=600, eval_pairs=200, episodes=6, final_episodes=3,
         block=3, grid=6, map_shape=(4, 4), max_steps=30,
     )  # fmt: skip
     res = ROBOT.run(cfg, seeds=[0])

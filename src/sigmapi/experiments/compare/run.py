@@ -119,7 +119,7 @@ class CompareConfig:
     """``key=value`` changes to the preset, e.g. ``iterations=50000`` (one per change)."""
     train_pairs: int = 20_000
     """View pairs recorded per seed (every method trains on these rows)."""
-    som_iterations: int = 100_000
+    baseline_iterations: int = 100_000
     """Online updates of the first-order maps (sigmapi's and MiniSom)."""
     rbm_epochs: int = 10
     """Training passes of the RBM over the data."""
@@ -130,7 +130,7 @@ class CompareConfig:
 
     def __post_init__(self) -> None:
         _validate.integer("train_pairs", self.train_pairs, 100, fix="e.g. 20000")
-        _validate.integer("som_iterations", self.som_iterations, 1, fix="e.g. 100000")
+        _validate.integer("baseline_iterations", self.baseline_iterations, 1, fix="e.g. 100000")
         _validate.integer("rbm_epochs", self.rbm_epochs, 1, fix="e.g. 10")
         _validate.integer("n_test", self.n_test, LABELS[0], fix="e.g. 10000")
         for m in self.methods:
@@ -151,7 +151,7 @@ class CompareConfig:
         return MapSpec(self.preset, self.overrides).config()
 
 
-QUICK = CompareConfig(train_pairs=10_000, som_iterations=20_000, rbm_epochs=5, n_test=5000)
+QUICK = CompareConfig(train_pairs=10_000, baseline_iterations=20_000, rbm_epochs=5, n_test=5000)
 """The quick comparison: less data, shorter baselines (with :data:`QUICK_SEEDS`)."""
 
 SEEDS = (0, 1, 2, 3, 4)
@@ -323,7 +323,7 @@ def _train(name: str, cfg: CompareConfig, som_cfg: SOMConfig, views: Views, seed
     """Train method ``name`` on ``views``; returns the trained object."""
     if name.startswith("sigma-pi"):
         return SigmaPiSOM(som_cfg, seed=seed, **SIGMA_PI_CHANGES[name]).fit(views)
-    shape, its = som_cfg.map_shape, cfg.som_iterations
+    shape, its = som_cfg.map_shape, cfg.baseline_iterations
     if name == "kohonen":
         return KohonenSOM(shape, its, seed=seed).fit(views)
     if name == "kohonen two-view":

@@ -45,9 +45,9 @@ class RobotConfig:
     """Width of the codes' hills, grid units."""
     map_shape: tuple[int, ...] = (8, 8)
     """Grid of the Sigma-Pi map."""
-    map_pairs: int = 10_000
+    train_pairs: int = 10_000
     """View pairs recorded from saccades for the map (body and ball still)."""
-    map_iterations: int = 40_000
+    iterations: int = 40_000
     """Learning iterations of the map (the recorded pairs are used in passes)."""
     moved_share: float = 0.0
     """Share of recorded pairs in which the ball moved between the two views (a nuisance)."""
@@ -86,7 +86,7 @@ class RobotConfig:
     and head cameras) to this file."""
 
     def __post_init__(self) -> None:
-        for name in ("grid", "map_pairs", "map_iterations", "eval_pairs", "episodes",
+        for name in ("grid", "train_pairs", "iterations", "eval_pairs", "episodes",
                      "final_episodes", "block", "max_steps"):  # fmt: skip
             object.__setattr__(self, name, _validate.integer(name, getattr(self, name), 1))
         if self.final_episodes > self.episodes:
@@ -146,7 +146,7 @@ class RobotConfig:
                 for k, v in dataclasses.asdict(self).items()}  # fmt: skip
 
 
-QUICK = RobotConfig(map_pairs=3000, map_iterations=12_000, eval_pairs=1000, episodes=150,
+QUICK = RobotConfig(train_pairs=3000, iterations=12_000, eval_pairs=1000, episodes=150,
                     final_episodes=50, block=25)  # fmt: skip
 """``sigmapi robot --quick``: a smaller map run and fewer episodes (minutes, not tens)."""
 

@@ -63,13 +63,13 @@ def robot_som_config(
 
 
 def learn_map(config: RobotConfig, rng: np.random.Generator) -> SigmaPiSOM:
-    """The map of one run: ``config.map_pairs`` view pairs recorded from the still robot's
+    """The map of one run: ``config.train_pairs`` view pairs recorded from the still robot's
     saccades (``config.moved_share`` of them spoiled), then ``fit(views)``; the views' and the
     weights' seeds drawn from ``rng``."""
     source = ROBOT_WORLD.source(config)
     views_seed, som_seed = (int(v) for v in rng.integers(0, 2**31 - 1, size=2))
-    views = collect_saccade_views(source, config.map_pairs, seed=views_seed)
-    cfg = robot_som_config(source.x_code, config.map_shape, config.map_iterations, som_seed,
+    views = collect_saccade_views(source, config.train_pairs, seed=views_seed)
+    cfg = robot_som_config(source.x_code, config.map_shape, config.iterations, som_seed,
                            config.backend)  # fmt: skip
     return SigmaPiSOM(cfg).fit(views)
 

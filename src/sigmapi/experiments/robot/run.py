@@ -20,7 +20,7 @@ not depend on how they ran. ``sigmapi robot`` is generated from :data:`ROBOT` an
 
 Examples
 --------
->>> cfg = QUICK.replace(map_pairs=300, map_iterations=600, eval_pairs=200, episodes=4,
+>>> cfg = QUICK.replace(train_pairs=300, iterations=600, eval_pairs=200, episodes=4,
 ...                     final_episodes=2, block=2, grid=6, map_shape=(4, 4), max_steps=20)
 >>> sorted(ROBOT.run(cfg, seeds=[0]).to_dict()["success"])
 ['map', 'retina', 'retina_gaze', 'true_z']
@@ -108,8 +108,8 @@ def job_memory(config: RobotConfig) -> int:
     (:func:`sigmapi.executor.job_memory`) and its recorded and evaluation views."""
     n = config.grid**2
     som = robot_som_config(PopulationCode((config.grid,) * 2, width=config.code_width),
-                           config.map_shape, config.map_iterations, 0, config.backend)  # fmt: skip
-    views = (config.map_pairs + 2 * config.eval_pairs) * 4 * n * 8
+                           config.map_shape, config.iterations, 0, config.backend)  # fmt: skip
+    views = (config.train_pairs + 2 * config.eval_pairs) * 4 * n * 8
     return _som_job_memory(som, n_test=config.eval_pairs) + views
 
 
