@@ -33,6 +33,7 @@ from pathlib import Path
 from typing import Any
 
 from sigmapi._lock import LOCK_NAME, output_lock
+from sigmapi._outputs import MARKER, check_file, claim_folder, marked_as
 from sigmapi.cli._common import (
     Parser,
     add_dataclass_flags,
@@ -139,15 +140,14 @@ def _parts(experiment: Experiment[Any]) -> dict[str | None, type]:
     return dict(parts) if parts else {None: experiment.config_type}
 
 
-def _check_folder(out: Path, force: bool, resumes: bool) -> None:
-    """Before any work: the folder takes files, and holds none of another run without
-    ``--force`` (a resuming experiment owns what it finds there)."""
-    if not (force or resumes) and any(p.name != LOCK_NAME for p in out.iterdir()):
-        raise UsageError(f"--out folder {str(out)!r} is not empty; pass --force to write into it")
+def _check_folder(out: Path, force: bool, experiment: Experiment[Any]) -> None:
+    """Before any work: the folder takes files, and is this experiment's
+    (:func:`~sigmapi._outputs.claim_folder`: its marker, or empty, or ``--force``); a run
+    that does not resume needs ``--force`` to write over a run of its own there."""
     for name in (RESULT_FILE,):
-        if (out / name).exists() and not (out / name).is_file():
-            raise UsageError(f"{str(out / name)!r} is a folder; the command writes a file there: "
-                             "move it away or give another --out")  # fmt: skip
+        if (out / name).is_symlink() or ((out / name).exists() and not (out / name).is_file()):
+            raise UsageError(f"{str(out / name)!r} is a folder or a link; the command writes a "
+                             "file there: move it away or give another --out")  # fmt: skip
     try:  # find out now, not after a long run, that the folder takes no files
         fd, probe = tempfile.mkstemp(prefix=".sigmapi.", suffix=".tmp", dir=out)
         os.close(fd)
@@ -157,6 +157,17 @@ def _check_folder(out: Path, force: bool, resumes: bool) -> None:
             f"cannot write into --out folder {str(out)!r}: {exc.strerror or exc}; choose "
             "another --out"
         ) from None
+    own = marked_as(out) == experiment.name
+    if (
+        own
+        and not (force or experiment.resumes)
+        and any(p.name not in (LOCK_NAME, MARKER) for p in out.iterdir())
+    ):
+        raise UsageError(
+            f"--out folder {str(out)!r} is not empty; pass --force to write into it (it holds "
+            f"a {experiment.name} run), or give another --out"
+        )
+    claim_folder(out, experiment.name, force=force, owns=getattr(experiment, "owns", ()))
 
 
 def _config(experiment: Experiment[Any], values: dict[str, Any], quick: bool) -> Any:
@@ -200,13 +211,22 @@ def run_experiment(experiment: Experiment[Any], args: argparse.Namespace) -> int
     else:
         out = _make_folder(args.out)
         with output_lock(out, f"--out folder {str(out)!r}"):
-            _check_folder(out, args.force, experiment.resumes)
+            _check_folder(out, args.force, experiment)
+            for path, what in _files(experiment, config):
+                check_file(path, force=args.force, what=what)
             result = _run(experiment, config, seeds, out, executor, args.quiet)
             files = [*result.figure(out), write_result(result, out)]
     print(json.dumps(result.to_dict()) if args.json else result.table())
     if args.out is not None:
         print(f"sigmapi {experiment.name}: wrote {', '.join(map(str, files))}", file=sys.stderr)
     return 0
+
+
+def _files(experiment: Experiment[Any], config: Any) -> list[tuple[str, str]]:
+    """The files outside ``--out`` that ``config`` writes (an experiment's optional
+    ``files(config)``: ``(path, what)`` pairs), checked before the work."""
+    files = getattr(experiment, "files", None)
+    return list(files(config)) if files is not None else []
 
 
 def _run(

@@ -47,9 +47,9 @@ from pathlib import Path
 from typing import Any, Protocol, TypeVar, runtime_checkable
 
 from sigmapi import _validate
+from sigmapi._outputs import write_file
 from sigmapi.errors import ConfigError
 from sigmapi.executor import Executor
-from sigmapi.io import atomic_write_bytes
 from sigmapi.progress import Progress
 
 __all__ = [
@@ -218,7 +218,7 @@ def write_result(result: Result, out_dir: str | Path) -> Path:
     folder = Path(out_dir)
     folder.mkdir(parents=True, exist_ok=True)
     text = json.dumps(result.to_dict(), indent=2)
-    return atomic_write_bytes(folder / RESULT_FILE, (text + "\n").encode("utf-8"))
+    return write_file(folder / RESULT_FILE, (text + "\n").encode("utf-8"), what="result file")
 
 
 def read_result(path: str | Path) -> dict[str, Any]:

@@ -134,6 +134,10 @@ class RobotExperiment(Experiment[RobotConfig]):
     ones)."""
     default_out = "robot"
 
+    def files(self, config: RobotConfig) -> list[tuple[str, str]]:
+        """The file outside ``--out`` the run writes (``--render``), checked before the work."""
+        return [] if config.render is None else [(config.render, "--render file")]
+
     def run(
         self,
         config: RobotConfig,

@@ -103,6 +103,12 @@ class RobotConfig:
         self.agent()  # checks the learner's fields
         if self.render is not None and not str(self.render).lower().endswith(".gif"):
             raise _validate.fail("render", "a file name ending in .gif", self.render)
+        if self.render is not None and "map" not in states:
+            raise ConfigError(f"render films the map learner, but states {states!r} has no "
+                              "'map'; add map to --states, or drop --render")  # fmt: skip
+        if self.block > self.episodes:
+            raise ConfigError(f"block must be <= episodes ({self.episodes}), got {self.block}; "
+                              "a learning curve needs at least one full block")  # fmt: skip
 
     def agent(self) -> ActorCriticConfig:
         """The learner's settings."""

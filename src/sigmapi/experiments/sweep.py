@@ -43,6 +43,7 @@ from typing import Any
 
 from sigmapi import _validate
 from sigmapi._lock import output_lock
+from sigmapi._outputs import claim_folder, save_figure
 from sigmapi.circular import CIRCULAR_KEYS
 from sigmapi.config import SOMConfig, load_preset
 from sigmapi.errors import ConfigError
@@ -308,6 +309,7 @@ def _sweep(
         raise ConfigError(f"out {str(out)!r} is a file; give a folder for the sweep's table")
     out.mkdir(parents=True, exist_ok=True)
     with output_lock(out, f"--out folder {str(out)!r}"):
+        claim_folder(out, "sweep", force=False, owns=(RESULTS,))  # no other run's files lost
         path = out / RESULTS
         runs = spec.runs()
         angles = any(get_relation(r.point.relation).circular for r in runs)
@@ -367,7 +369,7 @@ def draw_summary(
     ax.set_title(f"sweep of {spec.preset}: {ok} runs ok, {len(rows) - ok} failed, "
                  f"{folded} folded; seeds {list(spec.seeds)}", fontsize=9)  # fmt: skip
     p = Path(path)
-    fig.savefig(p, dpi=120, bbox_inches="tight", facecolor="white")
+    save_figure(fig, p, dpi=120, bbox_inches="tight", facecolor="white")
     plt.close(fig)
     return p
 
@@ -463,6 +465,8 @@ class Sweep(Experiment[SweepConfig]):
     config_type = SweepConfig
     default_out = "sweep"
     resumes = True
+    owns = (RESULTS,)
+    """What an unmarked folder may hold: a table (checked strictly by the sweep itself)."""
 
     def default_seeds(self, config: SweepConfig, *, quick: bool = False) -> tuple[int, ...]:
         """The spec's seeds."""
