@@ -21,6 +21,8 @@ from sigmapi._outputs import MARKER, check_file, claim_folder, write_file
 from sigmapi.errors import ConfigError, UsageError
 from test_hardening import SPEC3, _main, _one_line_2
 
+os.environ.setdefault("MUJOCO_GL", "egl")  # before mujoco is imported: headless rendering
+
 SPEC = SPEC3.replace("[0.5, 1.0]", "[0.5]")  # one run
 
 

@@ -30,6 +30,7 @@ class PersistMixin:
     _kernel: Any
     _state: KernelState | None
     _refined: int
+    _refine_rows: int | None
 
     if TYPE_CHECKING:
 
@@ -61,7 +62,13 @@ class PersistMixin:
         """
         self._check_fitted()
         return write_parts(
-            self.config, self.t_, self.seed_entropy, self._kernel, self._state, self._refined
+            self.config,
+            self.t_,
+            self.seed_entropy,
+            self._kernel,
+            self._state,
+            self._refined,
+            getattr(self, "_refine_rows", None),
         )
 
     @classmethod
@@ -88,6 +95,7 @@ class PersistMixin:
             model._set_weights(np.asarray(parts.weights))
         model.t_ = parts.t
         model._refined = parts.refined
+        model._refine_rows = parts.refine_rows
         return model
 
     def save(self, path: str | Path, *, compress: bool = False) -> Path:

@@ -21,6 +21,10 @@ __all__ = ["boolean", "choice", "fail", "integer", "is_int", "number", "positive
 
 T = TypeVar("T")
 
+MAX_UNITS = 2**32
+"""Most units a shape may have (a map or a code): far beyond any memory, so that sizes stay
+within int64 and reach the memory checks as numbers."""
+
 
 def fail(
     name: str, constraint: str, value: Any, fix: str = "", error: type[Exception] = ConfigError
@@ -148,4 +152,7 @@ def shape(
         raise fail(name, constraint, value, fix, error) from None
     if not out or not all(is_int(s) and s >= 1 for s in out):
         raise fail(name, constraint, value, fix, error)
+    if math.prod(int(s) for s in out) > MAX_UNITS:
+        raise fail(name, f"a shape of at most {MAX_UNITS:,} units (2**32) in all", value, fix,
+                   error)  # fmt: skip
     return tuple(int(s) for s in out)

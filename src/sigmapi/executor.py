@@ -257,6 +257,25 @@ def _call(fn: Callable[[Any], Any], arg: Any) -> tuple[Any, str | None, float]:
         return None, last, time.perf_counter() - t0
 
 
+def job_error(where: str, error: str) -> Exception:
+    """The exception of a failed job (:attr:`Outcome.error`, ``"module.Class: message"``) to
+    raise in the caller: a sigmapi error as its own class, so that the command line says it in
+    one line as it would in this process; a ``MemoryError`` as a
+    :class:`~sigmapi.errors.ResourceError`; anything else (a bug) as ``RuntimeError``.
+    ``where`` names the job (e.g. ``"robot job 0/map"``) and leads the message."""
+    from sigmapi import errors
+
+    name, sep, message = error.partition(": ")
+    cls_name = name.rpartition(".")[2]
+    cls = getattr(errors, cls_name, None) if name.startswith(("sigmapi.", cls_name)) else None
+    if sep and isinstance(cls, type) and issubclass(cls, errors.SigmapiError):
+        return cls(f"{where}: {message}")
+    if sep and cls_name.endswith("MemoryError"):
+        return errors.ResourceError(f"{where}: out of memory ({message}); use a smaller "
+                                    "setting or fewer jobs at once (--workers)")  # fmt: skip
+    return RuntimeError(f"{where} failed: {error}")
+
+
 def run_jobs(
     fn: Callable[[Any], Any],
     jobs: Sequence[tuple[str, Any]],

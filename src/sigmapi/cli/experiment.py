@@ -33,7 +33,7 @@ from pathlib import Path
 from typing import Any
 
 from sigmapi._lock import LOCK_NAME, output_lock
-from sigmapi._outputs import MARKER, check_file, claim_folder, marked_as
+from sigmapi._outputs import MARKER, claim_folder, marked_as
 from sigmapi.cli._common import (
     Parser,
     add_dataclass_flags,
@@ -212,21 +212,15 @@ def run_experiment(experiment: Experiment[Any], args: argparse.Namespace) -> int
         out = _make_folder(args.out)
         with output_lock(out, f"--out folder {str(out)!r}"):
             _check_folder(out, args.force, experiment)
-            for path, what in _files(experiment, config):
-                check_file(path, force=args.force, what=what)
+            check = getattr(experiment, "before_writing", None)
+            if check is not None:  # what its figures and files outside --out need
+                check(config, force=args.force)
             result = _run(experiment, config, seeds, out, executor, args.quiet)
             files = [*result.figure(out), write_result(result, out)]
     print(json.dumps(result.to_dict()) if args.json else result.table())
     if args.out is not None:
         print(f"sigmapi {experiment.name}: wrote {', '.join(map(str, files))}", file=sys.stderr)
     return 0
-
-
-def _files(experiment: Experiment[Any], config: Any) -> list[tuple[str, str]]:
-    """The files outside ``--out`` that ``config`` writes (an experiment's optional
-    ``files(config)``: ``(path, what)`` pairs), checked before the work."""
-    files = getattr(experiment, "files", None)
-    return list(files(config)) if files is not None else []
 
 
 def _run(

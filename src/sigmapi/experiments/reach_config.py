@@ -23,7 +23,7 @@ from typing import Any, ClassVar
 
 from sigmapi import _validate
 from sigmapi.agents import ActorCriticConfig
-from sigmapi.codes import PopulationCode
+from sigmapi.codes import MAX_WIDTH, PopulationCode
 from sigmapi.config import BACKEND_NAMES, SOMConfig, list_presets, load_preset
 from sigmapi.envs import FEATURES, STATES, GazeReachConfig, GazeReachEnv
 from sigmapi.errors import ConfigError
@@ -126,7 +126,8 @@ class MapConfig:
         if self.model_path is not None and not isinstance(self.model_path, str):
             raise _validate.fail("model_path", "a file name or None", self.model_path)
         _validate.choice("features", self.features, FEATURES)
-        width = _validate.positive("feature_width", self.feature_width, fix="e.g. 1.0")
+        width = _validate.number("feature_width", self.feature_width, 0.0, MAX_WIDTH,
+                                 lo_open=True, fix="e.g. 1.0")  # fmt: skip
         object.__setattr__(self, "feature_width", width)
 
     def som_config(self, x_code: PopulationCode, y_code: PopulationCode, seed: int) -> SOMConfig:
@@ -187,6 +188,9 @@ class ReachRunConfig:
             raise ConfigError(
                 f"final_episodes must be <= episodes ({self.episodes}), got {self.final_episodes}"
             )
+        if self.block > self.episodes:
+            raise ConfigError(f"block must be <= episodes ({self.episodes}), got {self.block}; "
+                              "a learning curve needs at least one full block")  # fmt: skip
         object.__setattr__(self, "seed", _validate.integer("seed", self.seed, 0))
         rise = _validate.number("plateau_rise", self.plateau_rise, 0.0, 1.0, lo_open=True,
                                 fix="a share of success rate, e.g. 0.05")  # fmt: skip

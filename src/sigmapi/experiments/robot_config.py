@@ -17,6 +17,7 @@ import gymnasium as gym
 
 from sigmapi import _validate
 from sigmapi.agents import ActorCriticConfig
+from sigmapi.codes import MAX_WIDTH
 from sigmapi.config import BACKEND_NAMES
 from sigmapi.envs import FEATURES, STATES, Features, TrueZObservation, make_state_env
 from sigmapi.envs.robot.env import ENV_ID
@@ -78,7 +79,9 @@ class RobotConfig:
     and head cameras) to this file."""
 
     def __post_init__(self) -> None:
-        for name in ("grid", "map_pairs", "map_iterations", "eval_pairs", "episodes",
+        object.__setattr__(self, "grid", _validate.integer("grid", self.grid, 2, 1024, fix=(
+            "units per axis of the codes (grid**2 a view); e.g. 12")))  # fmt: skip
+        for name in ("map_pairs", "map_iterations", "eval_pairs", "episodes",
                      "final_episodes", "block", "max_steps"):  # fmt: skip
             object.__setattr__(self, name, _validate.integer(name, getattr(self, name), 1))
         if self.final_episodes > self.episodes:
@@ -98,7 +101,9 @@ class RobotConfig:
         _validate.choice("backend", self.backend, BACKEND_NAMES)
         _validate.choice("features", self.features, FEATURES)
         object.__setattr__(
-            self, "feature_width", _validate.positive("feature_width", self.feature_width)
+            self,
+            "feature_width",
+            _validate.number("feature_width", self.feature_width, 0.0, MAX_WIDTH, lo_open=True),
         )
         self.agent()  # checks the learner's fields
         if self.render is not None and not str(self.render).lower().endswith(".gif"):

@@ -45,7 +45,7 @@ from sigmapi import _validate
 from sigmapi._lock import output_lock
 from sigmapi._outputs import claim_folder, save_figure
 from sigmapi.circular import CIRCULAR_KEYS
-from sigmapi.config import SOMConfig, load_preset
+from sigmapi.config import SOMConfig, check_map_fits_task, load_preset
 from sigmapi.errors import ConfigError
 from sigmapi.executor import Executor, Outcome, job_memory
 from sigmapi.experiments.base import RESULT_FILE, Experiment, check_seeds, register
@@ -213,7 +213,7 @@ class SweepSpec:
         for values in itertools.product(*(self.grid[k] for k in keys)):
             params = dict(zip(keys, values, strict=True))
             try:
-                cfg = SOMConfig.from_dict({**base, **params})
+                cfg = check_map_fits_task(SOMConfig.from_dict({**base, **params}))  # as train
             except (ConfigError, TypeError) as exc:
                 raise ConfigError(f"grid point {params}: {exc}") from None
             resolved = cfg.to_dict()
@@ -397,7 +397,7 @@ class SweepConfig:
 
     def __post_init__(self) -> None:
         _validate.choice("metric", self.metric, METRICS)
-        self.read_spec()  # a missing or bad spec fails here, before anything runs
+        self.read_spec().runs()  # a missing or bad spec, or grid point, fails here: before any work
 
     def read_spec(self) -> SweepSpec:
         """The parsed spec (:meth:`SweepSpec.read`)."""
