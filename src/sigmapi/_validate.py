@@ -17,7 +17,18 @@ import numpy as np
 
 from sigmapi.errors import ConfigError
 
-__all__ = ["boolean", "choice", "fail", "integer", "is_int", "number", "positive", "shape"]
+__all__ = [
+    "MAX_WIDTH",
+    "boolean",
+    "choice",
+    "fail",
+    "integer",
+    "is_int",
+    "number",
+    "positive",
+    "shape",
+    "width",
+]
 
 T = TypeVar("T")
 
@@ -108,6 +119,25 @@ def number(
     if not ok:
         raise fail(name, _range("a number", lo, hi, lo_open, hi_open), value, fix, error)
     return float(value)
+
+
+MAX_WIDTH = 1e6
+"""Widest hill or neighbourhood (grid units) any width may be: far wider than any grid, so a
+code or neighbourhood is flat long before it; ``width**2`` of a width near 1e154 would
+overflow."""
+
+
+def width(
+    name: str, value: Any, lo: float = 0.0, *, lo_open: bool = False, fix: str = "",
+    error: type[Exception] = ConfigError,
+) -> float:  # fmt: skip
+    """``value`` as a finite float above ``lo`` (as :func:`number` says it) and at most
+    :data:`MAX_WIDTH`."""
+    v = number(name, value, lo, lo_open=lo_open, fix=fix, error=error)
+    if v > MAX_WIDTH:
+        raise fail(name, f"<= {MAX_WIDTH:g} (a width past any grid: flat already)", value, fix,
+                   error)  # fmt: skip
+    return v
 
 
 def positive(

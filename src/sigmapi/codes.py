@@ -24,6 +24,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from sigmapi import _validate
+from sigmapi._validate import MAX_WIDTH
 from sigmapi.errors import ConfigError, DataError
 
 __all__ = ["MAX_WIDTH", "MIN_WIDTH", "NOISE_KINDS", "PopulationCode", "grid_coordinates", "noisy"]
@@ -32,11 +33,6 @@ MIN_WIDTH = 0.1
 """Narrowest hill (grid units). Half-way between two units a hill of width w is
 ``exp(-d / (8 w^2))`` of its peak in d dimensions: at w = 0.1 that is 4e-6 in 1-D, at w = 0.02
 it underflows in 2-D and the normalised code becomes NaN."""
-
-MAX_WIDTH = 1e6
-"""Widest hill or neighbourhood (grid units) any width may be: far wider than any grid, so a
-code or neighbourhood is flat long before it; ``width**2`` of a width near 1e154 would
-overflow."""
 
 NOISE_KINDS = ("poisson", "gaussian")
 """Kinds of noise :func:`noisy` adds to codes."""
@@ -90,7 +86,7 @@ class PopulationCode:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "shape", _validate.shape("shape", self.shape))
-        _validate.number("width", self.width, MIN_WIDTH, MAX_WIDTH, fix=_WIDTH_FIX)
+        _validate.width("width", self.width, MIN_WIDTH, fix=_WIDTH_FIX)
         _validate.positive("height", self.height, fix="the paper uses 1.0")
         object.__setattr__(self, "_coords", grid_coordinates(self.shape))
 

@@ -171,13 +171,16 @@ class SOMConfig:
                 f"map_shape x x_shape x y_shape must hold at most 2**48 weights, got {weights:,} "
                 f"({self.map_shape} x {self.x_shape} x {self.y_shape}); use smaller shapes"
             )
-        cw = _validate.number("code_width", self.code_width, MIN_WIDTH, MAX_WIDTH, fix=_WIDTH_FIX)
+        cw = _validate.width("code_width", self.code_width, MIN_WIDTH, fix=_WIDTH_FIX)
         set_(self, "code_width", cw)
         for name, hi in (("code_height", MAX_CODE_HEIGHT), ("init_scale", MAX_INIT_SCALE)):
             v = _validate.number(name, getattr(self, name), 0.0, hi, lo_open=True, fix=_RANGE_FIX)
             set_(self, name, v)
-        set_(self, "ordering_sigma", _validate.number("ordering_sigma", self.ordering_sigma, 0.0,
-                                                      MAX_WIDTH, lo_open=True))  # fmt: skip
+        set_(
+            self,
+            "ordering_sigma",
+            _validate.width("ordering_sigma", self.ordering_sigma, lo_open=True),
+        )
         for name in ("code_normalize", "periodic", "map_periodic", "same_view", "threads"):
             _validate.boolean(name, getattr(self, name))
         its = _validate.integer("iterations", self.iterations, 1, fix="the paper runs 300000")
@@ -189,7 +192,7 @@ class SOMConfig:
             ),
         )
         set_(self, "refine_pairs", _validate.integer("refine_pairs", self.refine_pairs, 1))
-        rs = _validate.number("refine_sigma", self.refine_sigma, 0.0, MAX_WIDTH,
+        rs = _validate.width("refine_sigma", self.refine_sigma, 0.0,
                               fix="0 is the winner alone")  # fmt: skip
         set_(self, "refine_sigma", rs)
         set_(self, "iterations", its)
@@ -324,7 +327,7 @@ def load_config_file(path: str | Path, base: SOMConfig | None = None) -> SOMConf
     if not p.is_file():
         raise ConfigError(f"config file {str(p)!r} does not exist; check the path")
     try:
-        text = p.read_text("utf-8")
+        text = p.read_text("utf-8-sig")  # a byte order mark (Windows editors) is no key
     except (OSError, UnicodeDecodeError) as exc:
         raise ConfigError(f"config file {str(p)!r} cannot be read as UTF-8 text: {exc}") from None
     data = _parse_toml(text, f"config file {str(p)!r}")

@@ -32,7 +32,6 @@ from sigmapi._params import ParamsMixin, entropy_of, stored_overrides
 from sigmapi._persist import PersistMixin
 from sigmapi._refine import RefineMixin
 from sigmapi._stream import StreamMixin
-from sigmapi.codes import MAX_WIDTH
 from sigmapi.config import SOMConfig
 from sigmapi.errors import ConfigError, DataError, NotFittedError, NumericalError
 from sigmapi.kernels import KernelState, get_backend
@@ -455,8 +454,8 @@ class SigmaPiSOM(GridsMixin, CostMixin, ParamsMixin, PersistMixin, RefineMixin, 
                     f"backend {self.backend!r} has no gated update (train_gated_block); use "
                     "backend 'reference' or 'fast'"
                 )
-            s = self.sigma_ if sigma is None else _validate.number(
-                "sigma", sigma, 0.0, MAX_WIDTH, lo_open=True,
+            s = self.sigma_ if sigma is None else _validate.width(
+                "sigma", sigma, 0.0, lo_open=True,
                 fix="map units; e.g. 1e-5 moves the winner alone",
             )  # fmt: skip
             e = (

@@ -144,7 +144,7 @@ def _check_folder(out: Path, force: bool, experiment: Experiment[Any]) -> None:
     """Before any work: the folder takes files, and is this experiment's
     (:func:`~sigmapi._outputs.claim_folder`: its marker, or empty, or ``--force``); a run
     that does not resume needs ``--force`` to write over a run of its own there."""
-    for name in (RESULT_FILE,):
+    for name in (RESULT_FILE, *getattr(experiment, "writes", ())):
         if (out / name).is_symlink() or ((out / name).exists() and not (out / name).is_file()):
             raise UsageError(f"{str(out / name)!r} is a folder or a link; the command writes a "
                              "file there: move it away or give another --out")  # fmt: skip

@@ -45,7 +45,7 @@ from gymnasium.wrappers import TimeLimit
 from numpy.typing import NDArray
 
 from sigmapi import _memory, _validate
-from sigmapi.codes import _WIDTH_FIX, MAX_WIDTH, MIN_WIDTH, PopulationCode
+from sigmapi.codes import _WIDTH_FIX, MIN_WIDTH, PopulationCode
 from sigmapi.envs.gaze_render import draw_workspace
 from sigmapi.envs.protocols import Obs, Views, view_space
 from sigmapi.errors import ConfigError
@@ -110,7 +110,7 @@ def _check_world(
     n = grid**dim  # the code's (n, n) float64 table of hills, and one copy of it
     _memory.check(16 * n * n, f"a world of grid={grid}, dim={dim} ({n:,} units a view)",
                   "use a smaller grid (the paper's 2-D network: grid=15)")  # fmt: skip
-    code_width = _validate.number("code_width", code_width, MIN_WIDTH, MAX_WIDTH, fix=_WIDTH_FIX)
+    code_width = _validate.width("code_width", code_width, MIN_WIDTH, fix=_WIDTH_FIX)
     step_size = _validate.number(
         "step_size", step_size, 0.0, 0.5, lo_open=True, fix="use e.g. 0.05"
     )

@@ -23,7 +23,7 @@ from typing import Any, ClassVar
 
 from sigmapi import _validate
 from sigmapi.agents import ActorCriticConfig
-from sigmapi.codes import MAX_WIDTH, PopulationCode
+from sigmapi.codes import PopulationCode
 from sigmapi.config import BACKEND_NAMES, SOMConfig, list_presets, load_preset
 from sigmapi.envs import FEATURES, STATES, GazeReachConfig, GazeReachEnv
 from sigmapi.errors import ConfigError
@@ -126,7 +126,7 @@ class MapConfig:
         if self.model_path is not None and not isinstance(self.model_path, str):
             raise _validate.fail("model_path", "a file name or None", self.model_path)
         _validate.choice("features", self.features, FEATURES)
-        width = _validate.number("feature_width", self.feature_width, 0.0, MAX_WIDTH,
+        width = _validate.width("feature_width", self.feature_width, 0.0,
                                  lo_open=True, fix="e.g. 1.0")  # fmt: skip
         object.__setattr__(self, "feature_width", width)
 

@@ -17,7 +17,6 @@ import gymnasium as gym
 
 from sigmapi import _validate
 from sigmapi.agents import ActorCriticConfig
-from sigmapi.codes import MAX_WIDTH
 from sigmapi.config import BACKEND_NAMES
 from sigmapi.envs import FEATURES, STATES, Features, TrueZObservation, make_state_env
 from sigmapi.envs.robot.env import ENV_ID
@@ -103,7 +102,7 @@ class RobotConfig:
         object.__setattr__(
             self,
             "feature_width",
-            _validate.number("feature_width", self.feature_width, 0.0, MAX_WIDTH, lo_open=True),
+            _validate.width("feature_width", self.feature_width, 0.0, lo_open=True),
         )
         self.agent()  # checks the learner's fields
         if self.render is not None and not str(self.render).lower().endswith(".gif"):

@@ -181,7 +181,7 @@ class SweepSpec:
             raise ConfigError(f"sweep spec {str(p)!r} is over 1 MB; a spec is a short TOML "
                               "file (module sigmapi.experiments.sweep)")  # fmt: skip
         try:
-            text = p.read_bytes().decode("utf-8")
+            text = p.read_bytes().decode("utf-8-sig")  # a byte order mark is no key
         except UnicodeDecodeError as exc:
             raise ConfigError(f"sweep spec {str(p)!r} is not UTF-8 text (byte {exc.start}); "
                               "save it as UTF-8") from None  # fmt: skip
@@ -465,6 +465,8 @@ class Sweep(Experiment[SweepConfig]):
     config_type = SweepConfig
     default_out = "sweep"
     resumes = True
+    writes = (FIGURE,)
+    """The file written into --out besides the table and result.json (checked first)."""
     owns = (RESULTS,)
     """What an unmarked folder may hold: a table (checked strictly by the sweep itself)."""
 
