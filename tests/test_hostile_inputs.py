@@ -300,3 +300,110 @@ def test_an_error_in_an_experiments_job_is_one_line_and_exit_2(tmp_path, capsys,
         capsys, "stream", "--quick", "--out", tmp_path / "o", "--quiet", "--workers", "1"
     )  # in this process: the patched job runs
     _one_line_2(rc, err, "stream job seed 0 pairs: the job's own mistake")
+
+
+# ---------------------------------------------------------------- SIGTERM
+
+
+def test_sigterm_stops_a_parallel_sweep_at_once(tmp_path):
+    import signal
+    import time
+
+    spec = tmp_path / "s.toml"
+    spec.write_text('preset = "tiny-1d"\nseeds = [0, 1]\nn_test = 50\n[set]\n'
+                    'iterations = 400000\nbackend = "reference"\n')  # fmt: skip
+    out = tmp_path / "o"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "sigmapi.cli", "sweep", str(spec), "--out", str(out), "--quiet",
+         "--workers", "2"], stderr=subprocess.PIPE, text=True,
+        env={**os.environ, "PYTHONPATH": str(SRC)},
+    )  # fmt: skip
+    deadline = time.monotonic() + 120
+    while not (out / "results.csv").exists() and time.monotonic() < deadline:
+        time.sleep(0.2)
+    time.sleep(3)  # the workers start and train
+    t0 = time.monotonic()
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 143 and "terminated" in err, err
+    assert time.monotonic() - t0 < 10  # before: the runs in flight ran to their end (140 s)
+
+
+# ---------------------------------------------------------------- minor
+
+
+def test_load_onto_an_unknown_backend_blames_the_argument(tmp_path):
+    path = SigmaPiSOM(_small()).fit().save(tmp_path / "m.npz")
+    with pytest.raises(ConfigError, match="backend must be one of") as info:
+        sigmapi.load(path, backend="bogus")
+    assert str(path) not in str(info.value)
+
+
+def test_encode_views_refuses_mismatched_rows():
+    model = SigmaPiSOM(_small())
+    p = np.full(3, 0.5)
+    with pytest.raises(DataError, match="same number of rows"):
+        model.encode_views(p, np.full(4, 0.5), p, p)
+
+
+def test_train_out_naming_a_folder_writes_no_file_named_like_it(tmp_path, capsys):
+    target = tmp_path / "newdir"
+    rc, err = _main(capsys, "train", "--preset", "tiny-1d", "--set", "iterations=100",
+                    "--out", f"{target}/", "--quiet")  # fmt: skip
+    _one_line_2(rc, err, "names a folder")
+    assert not target.exists()
+
+
+def test_a_byte_order_mark_in_a_spec_or_config_is_read(tmp_path):
+    from sigmapi.config import load_config_file
+    from sigmapi.experiments.sweep import SweepSpec
+
+    spec = tmp_path / "s.toml"
+    spec.write_bytes(b'\xef\xbb\xbfpreset = "tiny-1d"\nseeds = [0]\n')
+    assert SweepSpec.read(spec).preset == "tiny-1d"
+    cfg = tmp_path / "c.toml"
+    cfg.write_bytes(b"\xef\xbb\xbfiterations = 1234\n")
+    assert load_config_file(cfg).iterations == 1234
+
+
+def test_gate_messages_name_parameters_that_exist():
+    from sigmapi.agents.gated import Gating
+    from sigmapi.rules.gating import reward_gate, surprise
+
+    with pytest.raises(ConfigError, match=r"^scale must be"):
+        surprise(1.0, "positive", scale=0.0)
+    with pytest.raises(ConfigError, match=r"^surprise_mode must be"):
+        reward_gate(1.0, [1.0], surprise_mode="bogus")
+    with pytest.raises(ConfigError, match=r"^feedback_mode must be"):
+        reward_gate(1.0, [1.0], feedback_mode="bogus")
+    with pytest.raises(ConfigError, match=r"^scale must be"):
+        Gating(scale=-1.0)
+    with pytest.raises(ConfigError, match=r"^sigma must be"):
+        Gating(sigma=0.0)
+
+
+def test_a_fixed_output_name_taken_by_a_folder_is_found_before_the_run(tmp_path, capsys):
+    out = tmp_path / "o"
+    (out / "compare.txt").mkdir(parents=True)
+    rc, err = _main(capsys, "compare", "--quick", "--out", out, "--force", "--quiet")
+    _one_line_2(rc, err, "compare.txt", "is a folder")
+
+
+DOCS_EXT = Path(__file__).resolve().parents[1] / "docs" / "_ext"
+
+
+@pytest.mark.parametrize(
+    "content",
+    ['{"bytes": 5}', "[1, 2]", '{"bytes": {"v2": "x"}}', "[" * 100_000 + "]" * 100_000, "{bad"],
+)
+def test_the_docs_extension_names_the_file_on_hostile_json(tmp_path, monkeypatch, content):
+    pytest.importorskip("sphinx")
+    monkeypatch.syspath_prepend(str(DOCS_EXT))
+    import sigmapi_results
+    from sphinx.errors import ExtensionError
+
+    monkeypatch.setattr(sigmapi_results, "RESULTS", tmp_path)
+    (tmp_path / "files.json").write_text(content)
+    sigmapi_results._load_cached.cache_clear()
+    with pytest.raises(ExtensionError, match=r"files\.json"):
+        sigmapi_results.TABLES["files"]()
