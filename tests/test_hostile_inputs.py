@@ -407,3 +407,22 @@ def test_the_docs_extension_names_the_file_on_hostile_json(tmp_path, monkeypatch
     sigmapi_results._load_cached.cache_clear()
     with pytest.raises(ExtensionError, match=r"files\.json"):
         sigmapi_results.TABLES["files"]()
+
+
+def test_learn_gated_without_views_is_a_data_error():
+    model = SigmaPiSOM(_small()).fit()
+    with pytest.raises(DataError, match="needs views"):
+        model.learn_gated(None, np.ones((1, 4)))
+
+
+def test_a_table_of_a_million_rows_is_refused_before_parsing(tmp_path):
+    import time
+
+    from sigmapi.experiments.sweep_table import read_table
+
+    p = tmp_path / "results.csv"
+    p.write_bytes(b"run_id,run_key\n" + b"a,b\n" * 1_000_000)
+    t0 = time.process_time()
+    with pytest.raises(ConfigError, match="over 200,000 rows"):
+        read_table(p)
+    assert time.process_time() - t0 < 2.0

@@ -427,7 +427,9 @@ class SigmaPiSOM(GridsMixin, CostMixin, ParamsMixin, PersistMixin, RefineMixin, 
         self._check_fitted()
         with self._lock:
             data = fit_views(views, self.x_shape, self.y_shape, "learn_gated")
-            assert data is not None  # views is not None
+            if data is None:
+                raise DataError("learn_gated needs views (x0, y0, x1, y1), one row per gated "
+                                "iteration, got None; pass the views the gates belong to")  # fmt: skip
             n = data[0].shape[0]
             try:
                 g = np.asarray(gates, dtype=np.float64)

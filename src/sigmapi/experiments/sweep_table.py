@@ -54,6 +54,9 @@ REQUIRED = ("run_id", "run_key", "seed", "status", "error", *METRIC_COLUMNS)
 MAX_FIELD = 1 << 16
 """Longest field (characters) a table of sigmapi's may hold; longer means damage."""
 
+MAX_ROWS = 200_000
+"""Most rows a table read may have: twenty specs of the most runs one names (``--add``)."""
+
 MAX_TABLE = 128 << 20
 """Largest table (bytes) read: ten times a table of the most runs a spec names, with room for
 ``--add``; a larger file is refused from its size, before it is read."""
@@ -139,6 +142,9 @@ def read_table(path: str | Path) -> Table | None:
     fd = os.open(p, os.O_RDONLY | _NOFOLLOW)
     with os.fdopen(fd, "rb") as fh:
         data = fh.read(MAX_TABLE + 1)
+    if data.count(b"\n") > MAX_ROWS + 1:  # counted before any row is parsed: cheap
+        raise ConfigError(f"sweep table {str(p)!r} holds over {MAX_ROWS:,} rows, more than a "
+                          "sweep writes; give a new --out")  # fmt: skip
     end = data.rfind(b"\n") + 1
     torn = len(data) - end
     try:
