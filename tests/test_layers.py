@@ -22,7 +22,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("metrics", "checkpoints", "executor"),
     ("circular",),
     ("som",),
-    ("_grids", "_cost", "_params", "_persist", "_refine", "_stream"),
+    ("_grids", "_cost", "_params", "_persist", "_refine", "_stream", "_outputs"),
     ("io", "config", "kernels", "tasks", "rules", "views", "model_file"),
     ("codes", "schedules"),
     ("errors", "_validate", "_memory", "_lock", "_startup", "progress", "_version"),

@@ -55,10 +55,20 @@ def _path(name: str) -> Path:
 
 @cache
 def _load_cached(path: Path, mtime: float) -> Any:
-    if path.suffix == ".csv":
-        with path.open(newline="", encoding="utf-8") as f:
-            return list(csv.DictReader(f))
-    return json.loads(path.read_text("utf-8"))
+    try:
+        if path.suffix == ".csv":
+            with path.open(newline="", encoding="utf-8") as f:
+                return list(csv.DictReader(f))
+        return json.loads(path.read_text("utf-8"))
+    except (ValueError, RecursionError, csv.Error, OSError) as exc:  # UnicodeError, JSON too
+        raise ExtensionError(
+            f"results file {path.name!r} cannot be read ({type(exc).__name__}: "
+            f"{str(exc)[:160]}); run the command that writes it again"
+        ) from None
+
+
+_read: list[str] = []
+"""The results files read by the table being rendered (named in its errors)."""
 
 
 def load(name: str) -> Any:
@@ -69,6 +79,7 @@ def load(name: str) -> Any:
             f"results file {_rel(name)} not found; run the command that writes it "
             "(named on its results page) or remove the table that reads it"
         )
+    _read.append(_rel(name))
     return _load_cached(path, path.stat().st_mtime)
 
 
@@ -153,10 +164,31 @@ TABLES: dict[str, Callable[[], Table]] = {}
 """Table name -> the function that renders it from its files."""
 
 
+_DATA_ERRORS = (KeyError, IndexError, TypeError, ValueError, AttributeError, ZeroDivisionError,
+                RecursionError)  # fmt: skip
+"""What a table's code raises on a file lacking a key or holding another type than it reads."""
+
+
 def table(name: str) -> Callable[[Callable[[], Table]], Callable[[], Table]]:
+    """Register the table ``name``; a file that lacks a key it reads, or holds another type
+    there, fails with an ExtensionError naming the table, the files and the key."""
+
     def register(fn: Callable[[], Table]) -> Callable[[], Table]:
-        TABLES[name] = fn
-        return fn
+        @functools.wraps(fn)
+        def checked() -> Table:
+            _read.clear()
+            try:
+                return fn()
+            except _DATA_ERRORS as exc:
+                files = ", ".join(dict.fromkeys(_read)) or "its results files"
+                what = f"no key {exc}" if isinstance(exc, KeyError) else f"{exc}"[:200]
+                raise ExtensionError(
+                    f"results table {name!r}: {files}: {what} ({type(exc).__name__}); run the "
+                    "command that writes it again, or fix the file"
+                ) from None
+
+        TABLES[name] = checked
+        return checked
 
     return register
 
@@ -796,7 +828,7 @@ class ResultRole(SphinxRole):
         try:
             value = get(load(name.strip()), key.strip(), name)
             text = _quote(value, fmt or ".3g")
-        except (ExtensionError, ValueError) as e:
+        except (ExtensionError, ValueError, TypeError, RecursionError) as e:
             msg = self.inliner.reporter.error(f"result {self.text!r}: {e}", line=self.lineno)
             return [self.inliner.problematic(self.rawtext, self.rawtext, msg)], [msg]
         self.env.note_dependency(str(_path(name.strip())))

@@ -15,11 +15,14 @@ from typing import TYPE_CHECKING, Any, Self
 import numpy as np
 from numpy.typing import NDArray
 
-from sigmapi.config import SOMConfig
+from sigmapi import _validate
+from sigmapi.config import BACKEND_NAMES, SOMConfig
 from sigmapi.kernels import KernelState
 from sigmapi.model_file import read_parts, write_parts
 
 __all__ = ["PersistMixin"]
+
+_BACKEND_FIX = "the backend to load the model onto, or None for the one that wrote it"
 
 
 class PersistMixin:
@@ -30,6 +33,7 @@ class PersistMixin:
     _kernel: Any
     _state: KernelState | None
     _refined: int
+    _refine_rows: int | None
 
     if TYPE_CHECKING:
 
@@ -61,7 +65,13 @@ class PersistMixin:
         """
         self._check_fitted()
         return write_parts(
-            self.config, self.t_, self.seed_entropy, self._kernel, self._state, self._refined
+            self.config,
+            self.t_,
+            self.seed_entropy,
+            self._kernel,
+            self._state,
+            self._refined,
+            getattr(self, "_refine_rows", None),
         )
 
     @classmethod
@@ -79,6 +89,8 @@ class PersistMixin:
         :class:`~sigmapi.errors.ModelFileError`, its message starting with ``source``, if
         the header and arrays do not make a model (:func:`sigmapi.model_file.read_parts`).
         """
+        if backend is not None:  # the caller's mistake, not the file's: said before reading
+            _validate.choice("backend", backend, BACKEND_NAMES, fix=_BACKEND_FIX)
         parts = read_parts(header, arrays, backend, source)
         model = cls(parts.config)
         model.seed_entropy = parts.seed_entropy
@@ -88,6 +100,7 @@ class PersistMixin:
             model._set_weights(np.asarray(parts.weights))
         model.t_ = parts.t
         model._refined = parts.refined
+        model._refine_rows = parts.refine_rows
         return model
 
     def save(self, path: str | Path, *, compress: bool = False) -> Path:
@@ -106,6 +119,8 @@ class PersistMixin:
         """Read a model written by :meth:`save` (optionally onto another ``backend``)."""
         from sigmapi.io import read_model
 
+        if backend is not None:
+            _validate.choice("backend", backend, BACKEND_NAMES, fix=_BACKEND_FIX)
         header, arrays = read_model(path)
         return cls.from_arrays(header, arrays, backend=backend, source=str(path))
 

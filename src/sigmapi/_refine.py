@@ -40,6 +40,7 @@ class RefineMixin:
     _state: Any
     _lock: threading.RLock
     _refined: int
+    _refine_rows: int | None
     _refine_acc: tuple[int, Sums] | None
     _weights_cache: Any
 
@@ -68,13 +69,18 @@ class RefineMixin:
 
     @property
     def refine_total(self) -> int:
-        """Refinement pairs of the configured run on the built-in task (rounds x pairs)."""
-        return self.config.refine_rounds * self.config.refine_pairs
+        """Refinement pairs of the configured run: rounds x pairs a round (the built-in
+        task's ``refine_pairs``, or the rows the refinement in progress runs on)."""
+        return self.config.refine_rounds * self._refine_per()
 
     @property
     def refine_rounds_done_(self) -> int:
-        """Refinement rounds complete on the built-in task (:attr:`refined_` // pairs)."""
-        return self.refined_ // self.config.refine_pairs
+        """Refinement rounds complete (:attr:`refined_` // pairs a round)."""
+        return self.refined_ // self._refine_per()
+
+    def _refine_per(self) -> int:
+        rows = getattr(self, "_refine_rows", None)
+        return self.config.refine_pairs if rows is None else rows
 
     def refine(
         self, views: Views | None = None, *, callback: Callable[[Any], None] | None = None
@@ -110,8 +116,28 @@ class RefineMixin:
                 f"use a backend that refines: {', '.join(able)}"
             )
 
+    def _check_same_rows(self, data: CodeViews | None) -> None:
+        """A refinement in progress continues only on what it started on (its pairs so far
+        count rounds of that many rows): a DataError naming what to pass otherwise."""
+        rows = None if data is None else int(data[0].shape[0])
+        was = getattr(self, "_refine_rows", None)
+        if self._refined == 0 or rows == was:
+            return
+        done = f"its refinement ran {self._refined:,} pairs on"
+        if was is None:
+            raise DataError(f"this model's refinement continues on the built-in task ({done} "
+                            f"it), got views of {rows:,} rows; call refine() without views, "
+                            "or fit() again to refine on your rows")  # fmt: skip
+        raise DataError(f"this model's refinement continues on the {was:,} view pairs it "
+                        f"started on ({done} them), got "
+                        f"{'no views' if rows is None else f'{rows:,} rows'}; pass the same "
+                        f"{was:,} rows to refine() (for a stream: its consecutive pairs "
+                        "x[:-1], y[:-1], x[1:], y[1:])")  # fmt: skip
+
     def _refine(self, data: CodeViews | None, callback: Callable[[Any], None] | None) -> Any:
         c = self.config
+        self._check_same_rows(data)
+        self._refine_rows = None if data is None else int(data[0].shape[0])
         per = c.refine_pairs if data is None else data[0].shape[0]
         kernel = self._kernel
         rule = self.winner_rule_.hard

@@ -29,3 +29,25 @@ def _interrupted(signum: int, frame: object) -> None:
 
 if is_command_line():
     signal.signal(signal.SIGINT, _interrupted)
+
+
+def check_thread_count() -> None:
+    """``NUMBA_NUM_THREADS``, which numba reads when it is imported and rejects with a
+    traceback unless it is an int >= 1, checked first: the command line says so in one line
+    and exits with status 2; imported as a library, a ConfigError says it."""
+    text = os.environ.get("NUMBA_NUM_THREADS")
+    if text is None or not text.strip().lstrip("+-").isdigit() or int(text) >= 1:
+        return  # unset, or not a number (numba ignores it, with a warning), or valid
+    message = (
+        f"NUMBA_NUM_THREADS must be an int >= 1, got {text[:40]!r}; unset it (numba then "
+        "uses one thread per core) or set e.g. NUMBA_NUM_THREADS=4"
+    )
+    if is_command_line():
+        sys.stderr.write(f"sigmapi: error: {message}\n")
+        sys.exit(2)
+    from sigmapi.errors import ConfigError
+
+    raise ConfigError(message)
+
+
+check_thread_count()

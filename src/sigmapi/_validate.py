@@ -17,9 +17,24 @@ import numpy as np
 
 from sigmapi.errors import ConfigError
 
-__all__ = ["boolean", "choice", "fail", "integer", "is_int", "number", "positive", "shape"]
+__all__ = [
+    "MAX_WIDTH",
+    "boolean",
+    "choice",
+    "fail",
+    "integer",
+    "is_int",
+    "number",
+    "positive",
+    "shape",
+    "width",
+]
 
 T = TypeVar("T")
+
+MAX_UNITS = 2**32
+"""Most units a shape may have (a map or a code): far beyond any memory, so that sizes stay
+within int64 and reach the memory checks as numbers."""
 
 
 def fail(
@@ -106,6 +121,25 @@ def number(
     return float(value)
 
 
+MAX_WIDTH = 1e6
+"""Widest hill or neighbourhood (grid units) any width may be: far wider than any grid, so a
+code or neighbourhood is flat long before it; ``width**2`` of a width near 1e154 would
+overflow."""
+
+
+def width(
+    name: str, value: Any, lo: float = 0.0, *, lo_open: bool = False, fix: str = "",
+    error: type[Exception] = ConfigError,
+) -> float:  # fmt: skip
+    """``value`` as a finite float above ``lo`` (as :func:`number` says it) and at most
+    :data:`MAX_WIDTH`."""
+    v = number(name, value, lo, lo_open=lo_open, fix=fix, error=error)
+    if v > MAX_WIDTH:
+        raise fail(name, f"<= {MAX_WIDTH:g} (a width past any grid: flat already)", value, fix,
+                   error)  # fmt: skip
+    return v
+
+
 def positive(
     name: str, value: Any, *, fix: str = "", error: type[Exception] = ConfigError
 ) -> float:
@@ -148,4 +182,7 @@ def shape(
         raise fail(name, constraint, value, fix, error) from None
     if not out or not all(is_int(s) and s >= 1 for s in out):
         raise fail(name, constraint, value, fix, error)
+    if math.prod(int(s) for s in out) > MAX_UNITS:
+        raise fail(name, f"a shape of at most {MAX_UNITS:,} units (2**32) in all", value, fix,
+                   error)  # fmt: skip
     return tuple(int(s) for s in out)

@@ -24,9 +24,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from sigmapi import _validate
+from sigmapi._validate import MAX_WIDTH
 from sigmapi.errors import ConfigError, DataError
 
-__all__ = ["MIN_WIDTH", "NOISE_KINDS", "PopulationCode", "grid_coordinates", "noisy"]
+__all__ = ["MAX_WIDTH", "MIN_WIDTH", "NOISE_KINDS", "PopulationCode", "grid_coordinates", "noisy"]
 
 MIN_WIDTH = 0.1
 """Narrowest hill (grid units). Half-way between two units a hill of width w is
@@ -85,7 +86,7 @@ class PopulationCode:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "shape", _validate.shape("shape", self.shape))
-        _validate.number("width", self.width, MIN_WIDTH, fix=_WIDTH_FIX)
+        _validate.width("width", self.width, MIN_WIDTH, fix=_WIDTH_FIX)
         _validate.positive("height", self.height, fix="the paper uses 1.0")
         object.__setattr__(self, "_coords", grid_coordinates(self.shape))
 

@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from sigmapi import _validate
-from sigmapi.codes import _WIDTH_FIX, MIN_WIDTH
+from sigmapi.codes import _WIDTH_FIX, MAX_WIDTH, MIN_WIDTH
 from sigmapi.errors import ConfigError
 from sigmapi.kernels import BACKEND_CHOICES
 from sigmapi.rules import ORDERINGS, WINNER_RULES
@@ -165,12 +165,22 @@ class SOMConfig:
                 f"x_shape and y_shape must have the same number of dimensions, got "
                 f"{self.x_shape} and {self.y_shape}"
             )
-        cw = _validate.number("code_width", self.code_width, MIN_WIDTH, fix=_WIDTH_FIX)
+        weights = math.prod(self.map_shape) * math.prod(self.x_shape) * math.prod(self.y_shape)
+        if weights > 2**48:  # past any memory; int64 sizes downstream stay exact
+            raise ConfigError(
+                f"map_shape x x_shape x y_shape must hold at most 2**48 weights, got {weights:,} "
+                f"({self.map_shape} x {self.x_shape} x {self.y_shape}); use smaller shapes"
+            )
+        cw = _validate.width("code_width", self.code_width, MIN_WIDTH, fix=_WIDTH_FIX)
         set_(self, "code_width", cw)
         for name, hi in (("code_height", MAX_CODE_HEIGHT), ("init_scale", MAX_INIT_SCALE)):
             v = _validate.number(name, getattr(self, name), 0.0, hi, lo_open=True, fix=_RANGE_FIX)
             set_(self, name, v)
-        set_(self, "ordering_sigma", _validate.positive("ordering_sigma", self.ordering_sigma))
+        set_(
+            self,
+            "ordering_sigma",
+            _validate.width("ordering_sigma", self.ordering_sigma, lo_open=True),
+        )
         for name in ("code_normalize", "periodic", "map_periodic", "same_view", "threads"):
             _validate.boolean(name, getattr(self, name))
         its = _validate.integer("iterations", self.iterations, 1, fix="the paper runs 300000")
@@ -182,8 +192,9 @@ class SOMConfig:
             ),
         )
         set_(self, "refine_pairs", _validate.integer("refine_pairs", self.refine_pairs, 1))
-        set_(self, "refine_sigma", _validate.number("refine_sigma", self.refine_sigma, 0.0,
-                                                    fix="0 is the winner alone"))  # fmt: skip
+        rs = _validate.width("refine_sigma", self.refine_sigma, 0.0,
+                              fix="0 is the winner alone")  # fmt: skip
+        set_(self, "refine_sigma", rs)
         set_(self, "iterations", its)
         cut = _validate.integer(
             "soft_cut", self.soft_cut, 0, fix="in map units; the script uses 15"
@@ -210,6 +221,11 @@ class SOMConfig:
             eps.knots[0][1] if len(eps.knots) == 1 and eps.knots[0][0] == 0 else eps.knots,
         )
         sig = PiecewiseLinear.coerce(self.sigma, "sigma")
+        if max(v for _, v in sig.knots) > MAX_WIDTH:
+            raise ConfigError(
+                f"sigma values must be <= {MAX_WIDTH:g} (map units), got "
+                f"{[v for _, v in sig.knots]}; a neighbourhood wider than the map is flat already"
+            )
         if min(v for _, v in sig.knots) <= 0:
             raise ConfigError(
                 f"sigma values must be > 0 (map units), got {[v for _, v in sig.knots]}; "
@@ -311,7 +327,7 @@ def load_config_file(path: str | Path, base: SOMConfig | None = None) -> SOMConf
     if not p.is_file():
         raise ConfigError(f"config file {str(p)!r} does not exist; check the path")
     try:
-        text = p.read_text("utf-8")
+        text = p.read_text("utf-8-sig")  # a byte order mark (Windows editors) is no key
     except (OSError, UnicodeDecodeError) as exc:
         raise ConfigError(f"config file {str(p)!r} cannot be read as UTF-8 text: {exc}") from None
     data = _parse_toml(text, f"config file {str(p)!r}")

@@ -257,6 +257,25 @@ def _call(fn: Callable[[Any], Any], arg: Any) -> tuple[Any, str | None, float]:
         return None, last, time.perf_counter() - t0
 
 
+def job_error(where: str, error: str) -> Exception:
+    """The exception of a failed job (:attr:`Outcome.error`, ``"module.Class: message"``) to
+    raise in the caller: a sigmapi error as its own class, so that the command line says it in
+    one line as it would in this process; a ``MemoryError`` as a
+    :class:`~sigmapi.errors.ResourceError`; anything else (a bug) as ``RuntimeError``.
+    ``where`` names the job (e.g. ``"robot job 0/map"``) and leads the message."""
+    from sigmapi import errors
+
+    name, sep, message = error.partition(": ")
+    cls_name = name.rpartition(".")[2]
+    cls = getattr(errors, cls_name, None) if name.startswith(("sigmapi.", cls_name)) else None
+    if sep and isinstance(cls, type) and issubclass(cls, errors.SigmapiError):
+        return cls(f"{where}: {message}")
+    if sep and cls_name.endswith("MemoryError"):
+        return errors.ResourceError(f"{where}: out of memory ({message}); use a smaller "
+                                    "setting or fewer jobs at once (--workers)")  # fmt: skip
+    return RuntimeError(f"{where} failed: {error}")
+
+
 def run_jobs(
     fn: Callable[[Any], Any],
     jobs: Sequence[tuple[str, Any]],
@@ -281,19 +300,31 @@ def run_jobs(
             yield Outcome(key, value, error, sec)
         return
     ctx = multiprocessing.get_context("spawn")
-    with ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=die_with_parent,
-                             initargs=(os.getpid(),)) as pool:  # fmt: skip
-        pending: dict[Future[Any], str] = {pool.submit(_call, fn, arg): key for key, arg in jobs}
-        try:
-            while pending:
-                done, _ = wait(pending, return_when=FIRST_COMPLETED)
-                for fut in done:
-                    key = pending.pop(fut)
-                    value, error, sec = fut.result()
-                    yield Outcome(key, value, error, sec)
-        finally:
-            for fut in pending:
-                fut.cancel()
+    pool = ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=die_with_parent,
+                               initargs=(os.getpid(),))  # fmt: skip
+    pending: dict[Future[Any], str] = {}
+    try:
+        pending = {pool.submit(_call, fn, arg): key for key, arg in jobs}
+        while pending:
+            done, _ = wait(pending, return_when=FIRST_COMPLETED)
+            for fut in done:
+                key = pending.pop(fut)
+                value, error, sec = fut.result()
+                yield Outcome(key, value, error, sec)
+    except BaseException:  # SIGTERM, Ctrl-C, a caller that stops early: stop the jobs now
+        _stop(pool, pending)
+        raise
+    pool.shutdown(wait=True)
+
+
+def _stop(pool: ProcessPoolExecutor, pending: dict[Future[Any], str]) -> None:
+    """End a pool at once: cancel the jobs not started, end the workers running the others
+    (a job is a pure function of its argument: nothing of it is lost but its time)."""
+    for fut in pending:
+        fut.cancel()
+    for proc in list((getattr(pool, "_processes", None) or {}).values()):
+        proc.terminate()
+    pool.shutdown(wait=False, cancel_futures=True)
 
 
 _PR_SET_PDEATHSIG = 1

@@ -63,6 +63,8 @@ class ModelParts:
     state: KernelState | None = None
     weights: NDArray[np.float64] | None = None
     refined: int = 0
+    refine_rows: int | None = None
+    """Rows a refinement round runs on (header ``refine_rows``; None: the built-in task)."""
 
 
 def write_parts(
@@ -72,6 +74,7 @@ def write_parts(
     kernel: Kernel[Any],
     state: Any,
     refined: int = 0,
+    refine_rows: int | None = None,
 ) -> tuple[dict[str, Any], dict[str, NDArray[Any]]]:
     """The header and arrays of a model file holding ``state``, the state of ``kernel``.
 
@@ -101,6 +104,8 @@ def write_parts(
     }
     if config.refine_rounds > 0 or refined:  # files of runs without refinement as before
         header["refined"] = int(refined)
+    if refined and refine_rows is not None:  # refined on given rows, not the built-in task
+        header["refine_rows"] = int(refine_rows)
     return header, arrays
 
 
@@ -161,4 +166,8 @@ def read_parts(
     refined = _validate.integer(
         f"{name!r}: refinement pairs done", header.get("refined", 0), 0, error=ModelFileError
     )
-    return ModelParts(cfg, t, entropy, state, weights, refined)
+    rows = header.get("refine_rows")
+    if rows is not None:
+        rows = _validate.integer(f"{name!r}: refinement rows a round", rows, 1,
+                                 error=ModelFileError)  # fmt: skip
+    return ModelParts(cfg, t, entropy, state, weights, refined, rows)

@@ -107,6 +107,7 @@ class SigmaPiSOM(GridsMixin, CostMixin, ParamsMixin, PersistMixin, RefineMixin, 
         self._unit_positions: NDArray[np.float64] | None = None  # transform()'s table
         self._sigma_cache: tuple[int, float] | None = None  # (t_, sigma at t_)
         self._refined = 0  # refinement pairs done (all rounds)
+        self._refine_rows: int | None = None  # rows a round of it (None: the built-in task)
         self._refine_acc = None  # (round, its sums so far)
         self._trace: NDArray[np.float64] | None = None  # a stream's trace (_stream.py)
 
@@ -150,12 +151,14 @@ class SigmaPiSOM(GridsMixin, CostMixin, ParamsMixin, PersistMixin, RefineMixin, 
         return procedure.initial_weights(self.config, self._seq(0), views)
 
     def memory_estimate(self) -> int:
-        """Bytes this model needs at its peak: the float64 start, the backend's state (its
-        own estimate, ``kernel.memory_bytes``) and the float64 ``weights_``."""
+        """Bytes this model needs at its peak: the float64 start and the ordered start's
+        working memory, the backend's state (its own estimate, ``kernel.memory_bytes``) and
+        the float64 ``weights_``."""
         shape = (self.n_units, int(np.prod(self.x_shape)), int(np.prod(self.y_shape)))
         n = shape[0] * shape[1] * shape[2]
         sums = 8 * n if self.config.refine_rounds > 0 else 0  # the refinement's accumulators
-        return 16 * n + sums + self._kernel.memory_bytes(shape, self.config.kernel_tol)
+        start = ordering(self.config.ordering).start_bytes(self.config.map_shape)
+        return 16 * n + sums + start + self._kernel.memory_bytes(shape, self.config.kernel_tol)
 
     def check_memory(self) -> None:
         """Raise :class:`~sigmapi.errors.ResourceError` (a MemoryError) before allocating if
@@ -275,6 +278,9 @@ class SigmaPiSOM(GridsMixin, CostMixin, ParamsMixin, PersistMixin, RefineMixin, 
             rows = 0 if data is None else data[0].shape[0]
             if data is not None and rows == 0:
                 raise DataError("views must hold at least one row (pair of views), got 0 rows")
+            if rows:  # each pass permutes every row: the int64 order, before any work
+                fix = "pass fewer rows (a random subset), or partial_fit(views): each row once"
+                _memory.check_count("views rows", rows, 8, fix)
             self._check_refiner()
             self._set_weights(self.initial_weights(data))
             self._t = 0
@@ -421,9 +427,18 @@ class SigmaPiSOM(GridsMixin, CostMixin, ParamsMixin, PersistMixin, RefineMixin, 
         self._check_fitted()
         with self._lock:
             data = fit_views(views, self.x_shape, self.y_shape, "learn_gated")
-            assert data is not None  # views is not None
+            if data is None:
+                raise DataError("learn_gated needs views (x0, y0, x1, y1), one row per gated "
+                                "iteration, got None; pass the views the gates belong to")  # fmt: skip
             n = data[0].shape[0]
-            g = np.asarray(gates, dtype=np.float64)
+            try:
+                g = np.asarray(gates, dtype=np.float64)
+            except (TypeError, ValueError) as exc:  # ragged rows, None, text
+                raise DataError(
+                    f"gates must be a ({n}, {self.n_units}) array of numbers in [0, 1], got "
+                    f"{type(gates).__name__} that numpy cannot make one of ({str(exc)[:80]}); "
+                    "give every row one gate per unit"
+                ) from None
             if g.shape != (n, self.n_units):
                 raise DataError(
                     f"gates must have shape ({n}, {self.n_units}) (one row per view pair, one "
@@ -441,7 +456,10 @@ class SigmaPiSOM(GridsMixin, CostMixin, ParamsMixin, PersistMixin, RefineMixin, 
                     f"backend {self.backend!r} has no gated update (train_gated_block); use "
                     "backend 'reference' or 'fast'"
                 )
-            s = self.sigma_ if sigma is None else _validate.number("sigma", sigma, 0.0)
+            s = self.sigma_ if sigma is None else _validate.width(
+                "sigma", sigma, 0.0, lo_open=True,
+                fix="map units; e.g. 1e-5 moves the winner alone",
+            )  # fmt: skip
             e = (
                 float(self.eps_at(self.t_))
                 if eps is None

@@ -16,7 +16,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from sigmapi import _validate
+from sigmapi import _memory, _validate
 from sigmapi.codes import PopulationCode
 from sigmapi.errors import ConfigError
 
@@ -277,8 +277,10 @@ class TwoViewSampler:
         """
         n = _validate.integer("n", n, 0)
         dwell = _validate.integer("dwell", dwell, 1, fix="saccades per object position")
+        each = 8 * (2 * (self.x_code.size + self.y_code.size) + 3 * len(self.x_code.shape) + 1)
+        _memory.check_count("n", n, each, "fewer frames")  # codes, views, z and the encoding
         segments = self.sample_z(-(-n // dwell), rng)
-        z = np.repeat(segments, dwell, axis=0)[:n]
+        z = np.repeat(segments, min(dwell, n), axis=0)[:n]  # a dwell past n: one position
         px, py = self.sample_view(z, rng)
         moved = np.arange(n) % dwell == 0
         return Frames(self.x_code.encode(px), self.y_code.encode(py), z, px, py, moved)

@@ -232,8 +232,14 @@ def encode_views(
         if _asarray(p, name, "positions").size == 0:
             raise DataError(f"{name} holds no positions, got an empty array; give at least "
                             "one row (one position per row)")  # fmt: skip
-    out = [
-        code.encode(code.check_positions(p, name))
+    checked = [
+        code.check_positions(p, name)
         for code, (name, p) in zip((x_code, y_code, x_code, y_code), pos.items(), strict=True)
     ]
+    rows = {name: len(c) for name, c in zip(pos, checked, strict=True)}
+    if len(set(rows.values())) > 1:  # row b of the four shows one position twice
+        raise DataError(f"px0, py0, px1 and py1 must have the same number of rows (one per "
+                        f"pair of views), got {rows}; give one row per pair in each")  # fmt: skip
+    out = [code.encode(c) for code, c in zip((x_code, y_code, x_code, y_code), checked,
+                                             strict=True)]  # fmt: skip
     return out[0], out[1], out[2], out[3]

@@ -34,7 +34,7 @@ from sigmapi.agents.episodes import Episodes, discrete_actions
 from sigmapi.envs import MapObservation, PlacedViewSource
 from sigmapi.envs.protocols import Obs
 from sigmapi.errors import ConfigError
-from sigmapi.rules.gating import action_feedback, surprise
+from sigmapi.rules.gating import FEEDBACK, SURPRISE, action_feedback, surprise
 
 __all__ = ["VIEWS", "GatedEpisodes", "Gating", "run_gated_episodes"]
 
@@ -63,6 +63,13 @@ class Gating:
 
     def __post_init__(self) -> None:
         _validate.choice("view", self.view, VIEWS)
+        _validate.choice("surprise", self.surprise, SURPRISE)
+        _validate.choice("feedback", self.feedback, FEEDBACK)
+        object.__setattr__(self, "scale", _validate.positive(
+            "scale", self.scale, fix="a TD error of this size opens the gate"))  # fmt: skip
+        object.__setattr__(self, "eps", _validate.number("eps", self.eps, 0.0, 1.0))
+        object.__setattr__(self, "sigma", _validate.width("sigma", self.sigma, 0.0,
+                                                          lo_open=True))  # fmt: skip
 
 
 @dataclass(frozen=True)

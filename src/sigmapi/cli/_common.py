@@ -185,6 +185,12 @@ def apply_set_flags(cfg: SOMConfig, items: list[str] | None) -> SOMConfig:
 def check_output(path: str | Path, force: bool, what: str = "output file") -> Path:
     """Refuse to overwrite an existing ``path`` without ``--force``; the folder must exist."""
     p = Path(path)
+    if str(path).endswith(("/", os.sep)) or p.is_dir():
+        raise UsageError(f"{what} {str(path)!r} names a folder; give a file name, e.g. "
+                         f"{str(p / 'model.npz')!r}")  # fmt: skip
+    if p.is_symlink():
+        raise UsageError(f"{what} {str(p)!r} is a symbolic link; sigmapi never writes through "
+                         "one: remove it, or give another file name")  # fmt: skip
     if p.exists() and not force:
         raise UsageError(f"{what} {str(p)!r} exists; pass --force to overwrite it")
     if p.exists() and p.is_dir():

@@ -33,6 +33,7 @@ from pathlib import Path
 from typing import Any
 
 from sigmapi._lock import LOCK_NAME, output_lock
+from sigmapi._outputs import MARKER, claim_folder, marked_as
 from sigmapi.cli._common import (
     Parser,
     add_dataclass_flags,
@@ -151,15 +152,14 @@ def _parts(experiment: Experiment[Any]) -> dict[str | None, type]:
     return dict(parts) if parts else {None: experiment.config_type}
 
 
-def _check_folder(out: Path, force: bool, resumes: bool) -> None:
-    """Before any work: the folder takes files, and holds none of another run without
-    ``--force`` (a resuming experiment owns what it finds there)."""
-    if not (force or resumes) and any(p.name != LOCK_NAME for p in out.iterdir()):
-        raise UsageError(f"--out folder {str(out)!r} is not empty; pass --force to write into it")
-    for name in (RESULT_FILE,):
-        if (out / name).exists() and not (out / name).is_file():
-            raise UsageError(f"{str(out / name)!r} is a folder; the command writes a file there: "
-                             "move it away or give another --out")  # fmt: skip
+def _check_folder(out: Path, force: bool, experiment: Experiment[Any]) -> None:
+    """Before any work: the folder takes files, and is this experiment's
+    (:func:`~sigmapi._outputs.claim_folder`: its marker, or empty, or ``--force``); a run
+    that does not resume needs ``--force`` to write over a run of its own there."""
+    for name in (RESULT_FILE, *getattr(experiment, "writes", ())):
+        if (out / name).is_symlink() or ((out / name).exists() and not (out / name).is_file()):
+            raise UsageError(f"{str(out / name)!r} is a folder or a link; the command writes a "
+                             "file there: move it away or give another --out")  # fmt: skip
     try:  # find out now, not after a long run, that the folder takes no files
         fd, probe = tempfile.mkstemp(prefix=".sigmapi.", suffix=".tmp", dir=out)
         os.close(fd)
@@ -169,6 +169,17 @@ def _check_folder(out: Path, force: bool, resumes: bool) -> None:
             f"cannot write into --out folder {str(out)!r}: {exc.strerror or exc}; choose "
             "another --out"
         ) from None
+    own = marked_as(out) == experiment.name
+    if (
+        own
+        and not (force or experiment.resumes)
+        and any(p.name not in (LOCK_NAME, MARKER) for p in out.iterdir())
+    ):
+        raise UsageError(
+            f"--out folder {str(out)!r} is not empty; pass --force to write into it (it holds "
+            f"a {experiment.name} run), or give another --out"
+        )
+    claim_folder(out, experiment.name, force=force, owns=getattr(experiment, "owns", ()))
 
 
 def _config(experiment: Experiment[Any], values: dict[str, Any], quick: bool) -> Any:
@@ -212,7 +223,10 @@ def run_experiment(experiment: Experiment[Any], args: argparse.Namespace) -> int
     else:
         out = _make_folder(args.out)
         with output_lock(out, f"--out folder {str(out)!r}"):
-            _check_folder(out, args.force, experiment.resumes)
+            _check_folder(out, args.force, experiment)
+            check = getattr(experiment, "before_writing", None)
+            if check is not None:  # what its figures and files outside --out need
+                check(config, force=args.force)
             result = _run(experiment, config, seeds, out, executor, args.quiet)
             files = [*result.figure(out), write_result(result, out)]
     print(json.dumps(result.to_dict()) if args.json else result.table())

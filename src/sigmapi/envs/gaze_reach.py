@@ -110,7 +110,7 @@ def _check_world(
     n = grid**dim  # the code's (n, n) float64 table of hills, and one copy of it
     _memory.check(16 * n * n, f"a world of grid={grid}, dim={dim} ({n:,} units a view)",
                   "use a smaller grid (the paper's 2-D network: grid=15)")  # fmt: skip
-    code_width = _validate.number("code_width", code_width, MIN_WIDTH, fix=_WIDTH_FIX)
+    code_width = _validate.width("code_width", code_width, MIN_WIDTH, fix=_WIDTH_FIX)
     step_size = _validate.number(
         "step_size", step_size, 0.0, 0.5, lo_open=True, fix="use e.g. 0.05"
     )

@@ -50,10 +50,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Protocol, TypeVar, runtime_checkable
 
-from sigmapi import _validate
+from sigmapi import _memory, _validate
+from sigmapi._outputs import write_file
 from sigmapi.errors import ConfigError
-from sigmapi.executor import Executor
-from sigmapi.io import atomic_write_bytes
+from sigmapi.executor import Executor, job_error
 from sigmapi.progress import Progress
 
 __all__ = [
@@ -309,7 +309,7 @@ def write_result(result: Result, out_dir: str | Path) -> Path:
     folder = Path(out_dir)
     folder.mkdir(parents=True, exist_ok=True)
     text = json.dumps(result.to_dict(), indent=2)
-    return atomic_write_bytes(folder / RESULT_FILE, (text + "\n").encode("utf-8"))
+    return write_file(folder / RESULT_FILE, (text + "\n").encode("utf-8"), what="result file")
 
 
 def read_result(path: str | Path) -> dict[str, Any]:
@@ -341,10 +341,13 @@ def run_all(
     ``per_job`` (bytes, :func:`~sigmapi.executor.job_memory`) bounds the jobs at once. With
     progress, one bar (or line) per finished job, ``describe(key, value)`` its text; where the
     jobs run one by one in this process, ``verbose(arg)`` gives each job instead a progress of
-    its own (e.g. a bar of its training iterations). A failed job raises ``RuntimeError``
-    naming it, once the jobs in flight are done.
+    its own (e.g. a bar of its training iterations). A failed job raises its own error
+    (:func:`~sigmapi.executor.job_error`: a sigmapi error as itself, a bug as
+    ``RuntimeError``), naming the job.
     """
     ex = executor if executor is not None else Executor(workers=1)
+    _memory.check(per_job, f"one {desc} job", "use smaller settings (a smaller map, grid or "
+                  "fewer pairs, episodes or test points)")  # fmt: skip
     show = Progress.of(progress)
     plan = ex.plan(per_job, len(jobs))
     in_process = plan.workers == 1 and ex.engine == "local"
@@ -358,7 +361,7 @@ def run_all(
     with bar:
         for o in ex.run(fn, jobs, plan.workers):
             if not o.ok:
-                raise RuntimeError(f"{desc}: {o.key} failed: {o.error}")
+                raise job_error(f"{desc} job {o.key}", o.error or "")
             values[o.key] = o.value
             done(True, describe(o.key, o.value) if describe else f"{o.key} ({o.seconds:.0f} s)")
     return {key: values[key] for key, _ in jobs}

@@ -50,8 +50,8 @@ def surprise(delta: ArrayLike, mode: str = "positive", scale: float = 1.0) -> ND
     >>> surprise([-0.5, 0.25], "absolute", scale=0.5).tolist()
     [1.0, 0.5]
     """
-    _validate.choice("surprise", mode, SURPRISE)
-    scale = _validate.positive("gate_scale", scale, fix="a TD error of this size opens the gate")
+    _validate.choice("surprise", mode, SURPRISE)  # the kind of surprise (mode)
+    scale = _validate.positive("scale", scale, fix="a TD error of this size opens the gate")
     d = np.asarray(delta, dtype=np.float64)
     if mode == "constant":
         return np.ones_like(d)
@@ -69,7 +69,7 @@ def action_feedback(weights: ArrayLike, mode: str = "action") -> NDArray[np.floa
     >>> action_feedback([0.2, -0.1, 0.4]).tolist()
     [0.5, 0.0, 1.0]
     """
-    _validate.choice("feedback", mode, FEEDBACK)
+    _validate.choice("feedback", mode, FEEDBACK)  # the kind of feedback (mode)
     w = np.asarray(weights, dtype=np.float64)
     if mode == "none":
         return np.ones_like(w)
@@ -95,4 +95,6 @@ def reward_gate(
     >>> reward_gate(-0.5, [0.2, -0.1, 0.4]).tolist()
     [0.0, 0.0, 0.0]
     """
+    _validate.choice("surprise_mode", surprise_mode, SURPRISE)  # named as this function's
+    _validate.choice("feedback_mode", feedback_mode, FEEDBACK)
     return float(surprise(delta, surprise_mode, scale)) * action_feedback(weights, feedback_mode)

@@ -356,6 +356,10 @@ class Ordering(ABC):
         """The neighbourhood width the run trains with, from its schedule's ``sigma``."""
         return sigma
 
+    def start_bytes(self, map_shape: tuple[int, ...]) -> int:
+        """Working memory of :meth:`initial_weights` besides the weights it returns (bytes)."""
+        return 0
+
     def training_rule(self, rule: WinnerRule) -> WinnerRule:
         """The winner rule a model trains and answers with, from the configured ``rule``."""
         return rule
@@ -411,6 +415,12 @@ class Crossview(Ordering):
 
     def cap_sigma(self, sigma: NDArray[np.float64], ordering_sigma: float) -> NDArray[np.float64]:
         return np.minimum(sigma, ordering_sigma)
+
+    def start_bytes(self, map_shape: tuple[int, ...]) -> int:
+        """The ``(n_units, init_pairs, d)`` offsets and the ``(n_units, init_pairs)`` squared
+        distances, profile and temporaries of :func:`crossview_init`, float64."""
+        k, d = math.prod(map_shape), len(map_shape)
+        return 8 * k * self.init_pairs * (2 * d + 4) + 8 * k * d
 
     def training_rule(self, rule: WinnerRule) -> WinnerRule:
         return rule.border_normalised

@@ -135,15 +135,23 @@ class RobotDockEnv(FramesCodes, gym.Env[Obs, np.int64]):
         )
         self.scene = Scene()
         self.frames = Frames(self.scene, grid, code_width, workspace=Workspace())
+        given = goal is not None
         if goal is None:  # straight ahead, 0.45 m from the neck point
             el = -np.arctan2(self.frames.drop, 0.45)
             e0, e1 = self.frames.elevation
             goal = (0.5, float((el - e0) / (e1 - e0)))
-        self.goal = np.asarray(goal, dtype=np.float64)
-        if self.goal.shape != (2,) or np.any(np.abs(self.goal - 0.5) > 0.5 - self.goal_radius):
-            raise ConfigError(
-                f"goal must be 2 numbers with the grasp region inside [0, 1]^2, got {goal!r}"
-            )
+        lo, hi = self.goal_radius, 1.0 - self.goal_radius
+        if isinstance(goal, (str, bytes)) or not hasattr(goal, "__len__") or len(goal) != 2:
+            raise _validate.fail("goal", "2 numbers (x, y) in [0, 1]^2", goal, "e.g. (0.5, 0.4)")
+        fix = (f"with goal_radius={self.goal_radius:g} the goal box must lie inside [0, 1]^2: "
+               f"each number in [{lo:.3g}, {hi:.3g}]")  # fmt: skip
+        pair = tuple(_validate.number("goal", g, lo, hi, fix=fix) if given else g for g in goal)
+        if not given and not all(lo <= g <= hi for g in pair):
+            raise _validate.fail("goal_radius", "small enough for the default goal's box to lie "
+                                 f"inside [0, 1]^2 (the default goal is {pair[0]:.3g}, "
+                                 f"{pair[1]:.3g})", self.goal_radius,
+                                 "give a smaller goal_radius, or a goal of your own")  # fmt: skip
+        self.goal = np.asarray(pair, dtype=np.float64)
         n = self.frames.code.size
         self.observation_space = view_space(n, n)
         self.action_space = spaces.Discrete(len(ACTIONS))

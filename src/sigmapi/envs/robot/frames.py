@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from sigmapi import _validate
+from sigmapi import _memory, _validate
 from sigmapi.codes import PopulationCode
 from sigmapi.envs.robot.scene import OBJECT_RADIUS, TABLE_HEIGHT, Pose, Scene, blob_centroid
 from sigmapi.errors import ConfigError
@@ -91,6 +91,9 @@ class Frames:
     ) -> None:
         self.scene = scene
         self.grid = _validate.integer("grid", grid, 2, fix="e.g. grid=9")
+        n = self.grid**2  # the code's (n, n) float64 table of hills, and one copy of it
+        _memory.check(16 * n * n, f"a robot world of grid={self.grid} ({n:,} units a view)",
+                      "use a smaller grid, e.g. grid=12")  # fmt: skip
         self.code = PopulationCode((self.grid, self.grid), width=code_width)
         w = scene.head_size
         self.margin = _validate.number("margin", margin, 0.0, w / 4, fix="pixels, e.g. 6")

@@ -70,7 +70,40 @@ def mujoco_module() -> ModuleType:
             f"the simulated robot needs MuJoCo (not installed here: {exc}); "
             "pip install 'sigmapi[robot]'"
         ) from None
+    except (RuntimeError, AttributeError, OSError) as exc:  # MUJOCO_GL names no platform here
+        raise _bad_gl(exc) from None
     return mujoco
+
+
+def _bad_gl(exc: BaseException) -> ConfigError:
+    gl = os.environ.get("MUJOCO_GL", "")
+    return ConfigError(
+        f"MUJOCO_GL must name a rendering platform this machine has (egl, glfw or osmesa), "
+        f"got {gl[:40]!r} ({type(exc).__name__}: {str(exc)[:120]}); unset it (sigmapi then "
+        "uses egl) or install that platform's library"
+    )
+
+
+_GL_OK: list[bool] = []
+
+
+def check_rendering() -> None:
+    """Before any work that renders: a ConfigError naming ``MUJOCO_GL`` if no offscreen
+    image can be rendered here (the platform's library missing); checked once a process."""
+    if _GL_OK:
+        return
+    mj = mujoco_module()
+    try:
+        model = mj.MjModel.from_xml_string("<mujoco><worldbody/></mujoco>")
+        renderer = mj.Renderer(model, 8, 8)
+        try:
+            renderer.update_scene(mj.MjData(model))
+            renderer.render()
+        finally:
+            renderer.close()
+    except (RuntimeError, AttributeError, OSError, ImportError) as exc:
+        raise _bad_gl(exc) from None
+    _GL_OK.append(True)
 
 
 def load_model() -> mujoco.MjModel:

@@ -454,6 +454,8 @@ class Compare(Experiment[CompareConfig]):
     seeds = SEEDS
     quick_seeds = QUICK_SEEDS
     default_out = "compare"
+    writes = (FIGURE, Path(FIGURE).with_suffix(".txt").name)
+    """The files written into --out besides result.json (checked before the work)."""
 
     def run(
         self,

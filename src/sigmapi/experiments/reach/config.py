@@ -95,7 +95,8 @@ class MapConfig:
         if self.model_path is not None and not isinstance(self.model_path, str):
             raise _validate.fail("model_path", "a file name or None", self.model_path)
         _validate.choice("features", self.features, FEATURES)
-        width = _validate.positive("feature_width", self.feature_width, fix="e.g. 1.0")
+        width = _validate.width("feature_width", self.feature_width, 0.0,
+                                 lo_open=True, fix="e.g. 1.0")  # fmt: skip
         object.__setattr__(self, "feature_width", width)
 
     def in_world(self, world: World, settings: Any, seed: int) -> SOMConfig:
@@ -160,6 +161,9 @@ class ReachRunConfig:
             raise ConfigError(
                 f"final_episodes must be <= episodes ({self.episodes}), got {self.final_episodes}"
             )
+        if self.block > self.episodes:
+            raise ConfigError(f"block must be <= episodes ({self.episodes}), got {self.block}; "
+                              "a learning curve needs at least one full block")  # fmt: skip
         rise = _validate.number("plateau_rise", self.plateau_rise, 0.0, 1.0, lo_open=True,
                                 fix="a share of success rate, e.g. 0.05")  # fmt: skip
         object.__setattr__(self, "plateau_rise", rise)

@@ -86,7 +86,9 @@ class RobotConfig:
     and head cameras) to this file."""
 
     def __post_init__(self) -> None:
-        for name in ("grid", "train_pairs", "iterations", "eval_pairs", "episodes",
+        object.__setattr__(self, "grid", _validate.integer("grid", self.grid, 2, 1024, fix=(
+            "units per axis of the codes (grid**2 a view); e.g. 12")))  # fmt: skip
+        for name in ("train_pairs", "iterations", "eval_pairs", "episodes",
                      "final_episodes", "block", "max_steps"):  # fmt: skip
             object.__setattr__(self, name, _validate.integer(name, getattr(self, name), 1))
         if self.final_episodes > self.episodes:
@@ -106,11 +108,19 @@ class RobotConfig:
         _validate.choice("backend", self.backend, BACKEND_NAMES)
         _validate.choice("features", self.features, FEATURES)
         object.__setattr__(
-            self, "feature_width", _validate.positive("feature_width", self.feature_width)
+            self,
+            "feature_width",
+            _validate.width("feature_width", self.feature_width, 0.0, lo_open=True),
         )
         self.agent()  # checks the learner's fields
         if self.render is not None and not str(self.render).lower().endswith(".gif"):
             raise _validate.fail("render", "a file name ending in .gif", self.render)
+        if self.render is not None and "map" not in states:
+            raise ConfigError(f"render films the map learner, but states {states!r} has no "
+                              "'map'; add map to --states, or drop --render")  # fmt: skip
+        if self.block > self.episodes:
+            raise ConfigError(f"block must be <= episodes ({self.episodes}), got {self.block}; "
+                              "a learning curve needs at least one full block")  # fmt: skip
 
     def agent(self) -> ActorCriticConfig:
         """The learner's settings."""

@@ -87,9 +87,15 @@ def write_gif(frames: list[NDArray[np.uint8]], path: Path, fps: int = 6) -> Path
     """Save ``frames`` as an animated GIF at ``path``."""
     from PIL import Image
 
+    from sigmapi._outputs import write_file
+
     images = [Image.fromarray(f) for f in frames]
-    images[0].save(path, save_all=True, append_images=images[1:], duration=1000 // fps, loop=0)
-    return path
+
+    def write(fh: Any) -> None:  # into a temp file, renamed over path: atomic, never a link
+        images[0].save(fh, format="GIF", save_all=True, append_images=images[1:],
+                       duration=1000 // fps, loop=0)  # fmt: skip
+
+    return write_file(path, write, what="--render file")
 
 
 def robot_figures(

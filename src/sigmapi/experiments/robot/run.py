@@ -38,10 +38,11 @@ from typing import Any
 
 import numpy as np
 
-from sigmapi import _validate
+from sigmapi import _memory, _validate
+from sigmapi._outputs import check_file
 from sigmapi.agents import actor_critic_for, run_episodes
 from sigmapi.codes import PopulationCode
-from sigmapi.envs.robot.scene import mujoco_module
+from sigmapi.envs.robot.scene import check_rendering, mujoco_module
 from sigmapi.envs.robot.views import RobotViewBatch
 from sigmapi.executor import Executor
 from sigmapi.executor import job_memory as _som_job_memory
@@ -129,6 +130,13 @@ class RobotExperiment(Experiment[RobotConfig]):
     ones)."""
     default_out = "robot"
 
+    def before_writing(self, config: RobotConfig, *, force: bool) -> None:
+        """What writing the figures needs, checked before the work: the ``--render`` file
+        (:func:`~sigmapi._outputs.check_file`) and an offscreen renderer (``MUJOCO_GL``)."""
+        if config.render is not None:
+            check_file(config.render, force=force, what="--render file")
+        check_rendering()
+
     def run(
         self,
         config: RobotConfig,
@@ -148,6 +156,12 @@ class RobotExperiment(Experiment[RobotConfig]):
             raise _validate.fail("config", "a RobotConfig", config)
         seeds = check_seeds(seeds)
         mujoco_module()  # before any work: says which extra to install
+        if config.retina == "pixels":
+            check_rendering()
+        per_job = job_memory(config)  # the main process records views too: checked first
+        _memory.check(per_job, f"a robot run of grid={config.grid}, eval_pairs="
+                      f"{config.eval_pairs:,}, map_pairs={config.map_pairs:,}",
+                      "use a smaller grid, map or fewer pairs")  # fmt: skip
         t0 = time.perf_counter()
         evaluation = None
         if "map" in config.states:
@@ -157,7 +171,7 @@ class RobotExperiment(Experiment[RobotConfig]):
                                           else None))
                 for seed in seeds for state in config.states]  # fmt: skip
         values = run_all(
-            _run_job, jobs, executor=executor, per_job=job_memory(config), progress=progress,
+            _run_job, jobs, executor=executor, per_job=per_job, progress=progress,
             desc="robot", verbose=lambda job: dataclasses.replace(job, show=progress),
             describe=lambda key, _: f"seed {key}",
         )  # fmt: skip

@@ -336,6 +336,8 @@ class StreamExperiment(Experiment[StreamConfig]):
     seeds = tuple(range(800, 810))
     quick_seeds = (0,)
     default_out = "stream"
+    writes = (FIGURE, Path(FIGURE).with_suffix(".txt").name)
+    """The files written into --out besides result.json (checked before the work)."""
 
     def run(
         self,

@@ -43,8 +43,9 @@ from typing import Any
 
 from sigmapi import _validate
 from sigmapi._lock import output_lock
+from sigmapi._outputs import claim_folder, save_figure
 from sigmapi.circular import CIRCULAR_KEYS
-from sigmapi.config import SOMConfig, load_preset
+from sigmapi.config import SOMConfig, check_map_fits_task, load_preset
 from sigmapi.errors import ConfigError
 from sigmapi.executor import Executor, Outcome, job_memory
 from sigmapi.experiments.base import RESULT_FILE, Experiment, check_seeds, register
@@ -180,7 +181,7 @@ class SweepSpec:
             raise ConfigError(f"sweep spec {str(p)!r} is over 1 MB; a spec is a short TOML "
                               "file (module sigmapi.experiments.sweep.run)")  # fmt: skip
         try:
-            text = p.read_bytes().decode("utf-8")
+            text = p.read_bytes().decode("utf-8-sig")  # a byte order mark is no key
         except UnicodeDecodeError as exc:
             raise ConfigError(f"sweep spec {str(p)!r} is not UTF-8 text (byte {exc.start}); "
                               "save it as UTF-8") from None  # fmt: skip
@@ -212,7 +213,7 @@ class SweepSpec:
         for values in itertools.product(*(self.grid[k] for k in keys)):
             params = dict(zip(keys, values, strict=True))
             try:
-                cfg = SOMConfig.from_dict({**base, **params})
+                cfg = check_map_fits_task(SOMConfig.from_dict({**base, **params}))  # as train
             except (ConfigError, TypeError) as exc:
                 raise ConfigError(f"grid point {params}: {exc}") from None
             resolved = cfg.to_dict()
@@ -308,6 +309,7 @@ def _sweep(
         raise ConfigError(f"out {str(out)!r} is a file; give a folder for the sweep's table")
     out.mkdir(parents=True, exist_ok=True)
     with output_lock(out, f"--out folder {str(out)!r}"):
+        claim_folder(out, "sweep", force=False, owns=(RESULTS,))  # no other run's files lost
         path = out / RESULTS
         runs = spec.runs()
         angles = any(get_relation(r.point.relation).circular for r in runs)
@@ -367,7 +369,7 @@ def draw_summary(
     ax.set_title(f"sweep of {spec.preset}: {ok} runs ok, {len(rows) - ok} failed, "
                  f"{folded} folded; seeds {list(spec.seeds)}", fontsize=9)  # fmt: skip
     p = Path(path)
-    fig.savefig(p, dpi=120, bbox_inches="tight", facecolor="white")
+    save_figure(fig, p, dpi=120, bbox_inches="tight", facecolor="white")
     plt.close(fig)
     return p
 
@@ -395,7 +397,7 @@ class SweepConfig:
 
     def __post_init__(self) -> None:
         _validate.choice("metric", self.metric, METRICS)
-        self.read_spec()  # a missing or bad spec fails here, before anything runs
+        self.read_spec().runs()  # a missing or bad spec, or grid point, fails here: before any work
 
     def read_spec(self) -> SweepSpec:
         """The parsed spec (:meth:`SweepSpec.read`)."""
@@ -463,6 +465,10 @@ class Sweep(Experiment[SweepConfig]):
     config_type = SweepConfig
     default_out = "sweep"
     resumes = True
+    writes = (FIGURE,)
+    """The file written into --out besides the table and result.json (checked first)."""
+    owns = (RESULTS,)
+    """What an unmarked folder may hold: a table (checked strictly by the sweep itself)."""
 
     def default_seeds(self, config: SweepConfig, *, quick: bool = False) -> tuple[int, ...]:
         """The spec's seeds."""

@@ -23,6 +23,7 @@ import io
 import json
 import math
 import os
+import stat
 from collections.abc import Collection, Sequence
 from pathlib import Path
 from typing import Any
@@ -52,6 +53,38 @@ REQUIRED = ("run_id", "run_key", "seed", "status", "error", *METRIC_COLUMNS)
 
 MAX_FIELD = 1 << 16
 """Longest field (characters) a table of sigmapi's may hold; longer means damage."""
+
+MAX_ROWS = 200_000
+"""Most rows a table read may have: twenty specs of the most runs one names (``--add``)."""
+
+MAX_TABLE = 128 << 20
+"""Largest table (bytes) read: ten times a table of the most runs a spec names, with room for
+``--add``; a larger file is refused from its size, before it is read."""
+
+_NOFOLLOW = getattr(os, "O_NOFOLLOW", 0)
+
+
+def _check_plain(p: Path) -> os.stat_result | None:
+    """``p``'s lstat (None: there is none), refused if it is a link, not a file, or a file
+    with other names (hard links: two folders would append to one table)."""
+    try:
+        st = p.lstat()
+    except FileNotFoundError:
+        return None
+    if stat.S_ISLNK(st.st_mode):
+        raise ConfigError(f"sweep table {str(p)!r} is a symbolic link; sigmapi never writes "
+                          "through one: put the file there, or give a new --out")  # fmt: skip
+    if not stat.S_ISREG(st.st_mode):
+        raise ConfigError(f"sweep table {str(p)!r} is not a file (a folder?); move it away or "
+                          "give a new --out")  # fmt: skip
+    if st.st_nlink > 1:
+        raise ConfigError(f"sweep table {str(p)!r} has {st.st_nlink} names (hard links), so "
+                          "two sweeps could append to it at once; copy it to a file of its own, "
+                          "or give a new --out")  # fmt: skip
+    if st.st_size > MAX_TABLE:
+        raise ConfigError(f"sweep table {str(p)!r} holds {st.st_size:,} bytes, over the "
+                          f"{MAX_TABLE:,} a sweep reads; give a new --out")  # fmt: skip
+    return st
 
 
 def run_key(config: dict[str, Any], seed: int, n_test: int) -> str:
@@ -104,12 +137,14 @@ def read_table(path: str | Path) -> Table | None:
     """The sweep table at ``path`` (None if there is none), checked: a file that is no sigmapi
     sweep table, or one damaged anywhere but a torn last line, raises ConfigError."""
     p = Path(path)
-    if not p.exists():
+    if _check_plain(p) is None:
         return None
-    if not p.is_file():
-        raise ConfigError(f"sweep table {str(p)!r} is not a file (a folder?); move it away or "
-                          "give a new --out")  # fmt: skip
-    data = p.read_bytes()
+    fd = os.open(p, os.O_RDONLY | _NOFOLLOW)
+    with os.fdopen(fd, "rb") as fh:
+        data = fh.read(MAX_TABLE + 1)
+    if data.count(b"\n") > MAX_ROWS + 1:  # counted before any row is parsed: cheap
+        raise ConfigError(f"sweep table {str(p)!r} holds over {MAX_ROWS:,} rows, more than a "
+                          "sweep writes; give a new --out")  # fmt: skip
     end = data.rfind(b"\n") + 1
     torn = len(data) - end
     try:
@@ -188,17 +223,23 @@ def open_table(
             f"{str(p)!r} has the columns {','.join(table.columns)[:300]}, this spec's are "
             f"{','.join(columns)[:300]}; it is left as it is: give a new --out"
         )
-    if table.torn:
-        size = p.stat().st_size
-        with p.open("r+b") as f:
-            f.truncate(size - table.torn)
+    try:  # find out now, not after the runs, that the table takes rows
+        fd = os.open(p, os.O_WRONLY | os.O_APPEND | _NOFOLLOW)
+    except OSError as exc:
+        raise ConfigError(f"cannot append to sweep table {str(p)!r}: {exc.strerror or exc}; "
+                          "make it writable, or give a new --out") from None  # fmt: skip
+    try:
+        if table.torn:
+            os.ftruncate(fd, os.fstat(fd).st_size - table.torn)
+    finally:
+        os.close(fd)
     return {k: r for k, r in table.rows.items() if k in keys}
 
 
 def append_row(path: str | Path, columns: Sequence[str], row: dict[str, Any]) -> None:
     """Append one row to the table at ``path`` with one ``write`` (and ``fsync``)."""
     data = _line(columns, row)
-    fd = os.open(path, os.O_WRONLY | os.O_APPEND)
+    fd = os.open(path, os.O_WRONLY | os.O_APPEND | _NOFOLLOW)
     try:
         view = memoryview(data)
         while view:

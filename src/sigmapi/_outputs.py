@@ -1,0 +1,169 @@
+"""The one writer of the files a command writes, and the folder an experiment owns.
+
+:func:`check_file` runs before the work: the path is no folder, device or link, an existing
+file is only replaced with ``force``, the folder exists and takes files. :func:`write_file`
+then writes it atomically (:func:`sigmapi.io.atomic_write`: a temporary file in the same
+folder, fsync'ed, renamed over the target; a full disk leaves the old file, never a cut one)
+and never through a symbolic link: a link is refused, or with ``force`` replaced by the file
+(its target is left as it is).
+
+An experiment's output folder holds one experiment: :func:`claim_folder` finds the marker file
+:data:`MARKER` (``{"experiment": NAME}``) there, or writes it into a folder that is empty but
+for the lock. A folder marked for another experiment is refused, ``--force`` or not; an
+unmarked folder that holds anything is refused without ``force`` (a user's own
+``result.json``, ``sweep.png`` or any other file is never replaced unasked).
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import os
+import re
+import stat
+import tempfile
+from collections.abc import Callable, Collection
+from pathlib import Path
+from typing import IO, Any
+
+from sigmapi._lock import LOCK_NAME
+from sigmapi.errors import UsageError
+from sigmapi.io import atomic_write, temp_pattern
+
+__all__ = ["MARKER", "check_file", "claim_folder", "marked_as", "save_figure", "write_file"]
+
+MARKER = ".sigmapi-experiment"
+"""The file that marks a folder as one experiment's output (JSON: ``{"experiment": NAME}``)."""
+
+_MAX_MARKER = 4096
+
+
+def _lstat(p: Path) -> os.stat_result | None:
+    try:
+        return p.lstat()
+    except FileNotFoundError:
+        return None
+    except OSError as exc:
+        raise UsageError(f"cannot access {str(p)!r}: {exc.strerror or exc}; choose another "
+                         "path") from None  # fmt: skip
+
+
+def check_file(path: str | Path, *, force: bool, what: str = "output file") -> Path:
+    """Before the work: ``path`` may be written by :func:`write_file` (see the module's
+    docstring); raises :class:`~sigmapi.errors.UsageError` naming ``what`` and the fix."""
+    p = Path(path)
+    name = f"{what} {str(p)!r}"
+    if str(path).endswith(os.sep) or p.name in ("", ".", ".."):
+        raise UsageError(f"{name} names a folder; give a file name")
+    st = _lstat(p)
+    if st is not None:
+        if stat.S_ISLNK(st.st_mode) and not force:
+            raise UsageError(f"{name} is a symbolic link; sigmapi never writes through one: "
+                             "remove it, or pass --force to replace the link itself")  # fmt: skip
+        if stat.S_ISDIR(st.st_mode):
+            raise UsageError(f"{name} is a folder; give a file name")
+        if not (stat.S_ISREG(st.st_mode) or stat.S_ISLNK(st.st_mode)):
+            raise UsageError(f"{name} is not a regular file (a device or FIFO?); give a file name")
+        if not force:
+            raise UsageError(f"{name} exists; pass --force to overwrite it")
+    parent = p.parent if str(p.parent) else Path(".")
+    if not parent.is_dir():
+        raise UsageError(f"folder {str(parent)!r} of {name} does not exist; create it first")
+    try:  # find out now, not after a long run, that the folder takes no files
+        fd, probe = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=parent)
+        os.close(fd)
+        os.unlink(probe)
+    except OSError as exc:
+        raise UsageError(f"cannot write {name} into {str(parent)!r}: {exc.strerror or exc}; "
+                         "choose another folder") from None  # fmt: skip
+    return p
+
+
+def write_file(
+    path: str | Path,
+    data: bytes | Callable[[IO[bytes]], None],
+    *,
+    force: bool = True,
+    what: str = "output file",
+) -> Path:
+    """Write ``data`` (bytes, or a function writing to a binary file) to ``path`` atomically,
+    never through a link; an existing file is replaced only with ``force`` (the default: a
+    command checks its targets with :func:`check_file` before its work, then writes)."""
+    p = Path(path)
+    st = _lstat(p)
+    if st is not None and stat.S_ISLNK(st.st_mode) and not force:
+        check_file(p, force=False, what=what)  # raises: a link
+    if st is not None and not force:
+        check_file(p, force=False, what=what)  # raises: it exists
+    if st is not None and not (stat.S_ISREG(st.st_mode) or stat.S_ISLNK(st.st_mode)):
+        check_file(p, force=True, what=what)  # raises: a folder or device
+    if isinstance(data, (bytes, bytearray, memoryview)):
+        payload = bytes(data)
+
+        def write(fh: IO[bytes]) -> None:
+            fh.write(payload)
+
+        return atomic_write(p, write)
+    return atomic_write(p, data)
+
+
+def save_figure(fig: Any, path: str | Path, **kwargs: Any) -> Path:
+    """Save the matplotlib figure ``fig`` to ``path`` through :func:`write_file` (the format
+    from the suffix; ``kwargs`` go to ``savefig``)."""
+    buf = io.BytesIO()
+    fmt = Path(path).suffix.lstrip(".") or "png"
+    fig.savefig(buf, format=fmt, **kwargs)
+    return write_file(path, buf.getvalue())
+
+
+def marked_as(folder: str | Path) -> str | None:
+    """The experiment whose marker :data:`MARKER` is in ``folder`` (None: no marker)."""
+    p = Path(folder) / MARKER
+    st = _lstat(p)
+    if st is None:
+        return None
+    bad = UsageError(f"{str(p)!r} is not a sigmapi marker file; move it away or give another "
+                     "output folder")  # fmt: skip
+    if not stat.S_ISREG(st.st_mode) or st.st_size > _MAX_MARKER:
+        raise bad
+    try:
+        data = json.loads(p.read_bytes().decode("utf-8"))
+    except (OSError, UnicodeError, ValueError):
+        raise bad from None
+    if not isinstance(data, dict) or not isinstance(data.get("experiment"), str):
+        raise bad
+    return str(data["experiment"])
+
+
+def claim_folder(
+    folder: str | Path, experiment: str, *, force: bool, owns: Collection[str] = ()
+) -> Path:
+    """Make the existing ``folder`` the output folder of ``experiment``, before its work.
+
+    A folder marked for ``experiment`` is its own (what is in it may be replaced); one marked
+    for another experiment is refused; an unmarked one must be empty but for the lock, the
+    names in ``owns`` (files the experiment checks itself, e.g. a sweep's table) and
+    temporary files of sigmapi's writes, unless ``force``. Then the marker is written.
+    """
+    out = Path(folder)
+    owner = marked_as(out)
+    where = f"--out folder {str(out)!r}"
+    if owner is not None and owner != experiment:
+        raise UsageError(f"{where} holds a run of the experiment {owner!r} (its marker "
+                         f"{MARKER}), not of {experiment!r}; give another --out")  # fmt: skip
+    if owner is None:
+        pattern = temp_pattern()
+        foreign = sorted(
+            e.name
+            for e in out.iterdir()
+            if e.name not in (LOCK_NAME, *owns) and not re.fullmatch(pattern, e.name)
+        )
+        if foreign and not force:
+            shown = ", ".join(foreign[:5]) + (f" and {len(foreign) - 5} more" if foreign[5:]
+                                               else "")  # fmt: skip
+            raise UsageError(
+                f"{where} is not empty; pass --force to write into it, or give another --out "
+                f"(it holds no sigmapi {experiment} run, but {shown}: left as they are)"
+            )
+        write_file(out / MARKER, (json.dumps({"experiment": experiment}) + "\n").encode())
+    return out
