@@ -236,7 +236,7 @@ def test_environment_widths_are_bounded():
 
     with pytest.raises(ConfigError, match="1e\\+06"):
         PopulationCode((9,), width=1e200)
-    from sigmapi.experiments.robot_config import RobotConfig
+    from sigmapi.experiments.robot.config import RobotConfig
 
     with pytest.raises(ConfigError, match="feature_width"):
         RobotConfig(feature_width=1e200)
@@ -418,7 +418,7 @@ def test_learn_gated_without_views_is_a_data_error():
 def test_a_table_of_a_million_rows_is_refused_before_parsing(tmp_path):
     import time
 
-    from sigmapi.experiments.sweep_table import read_table
+    from sigmapi.experiments.sweep.table import read_table
 
     p = tmp_path / "results.csv"
     p.write_bytes(b"run_id,run_key\n" + b"a,b\n" * 1_000_000)

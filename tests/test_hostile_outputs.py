@@ -231,7 +231,7 @@ def test_render_path_problems_are_found_before_the_run(tmp_path, capsys, where):
 
 
 def test_render_without_the_map_state_is_refused():
-    from sigmapi.experiments.robot_config import RobotConfig
+    from sigmapi.experiments.robot.config import RobotConfig
 
     with pytest.raises(ConfigError, match="add map to --states"):
         RobotConfig(states=("retina",), render="f.gif")
