@@ -3,9 +3,10 @@
 Sub-commands: one per experiment of :data:`sigmapi.experiments.REGISTRY` (``chain``,
 ``compare``, ``reproduce``, ``sweep``, ...), generated with its options from the experiment's
 config dataclass (:mod:`sigmapi.cli.experiment`); and the commands that are no experiment:
-``train``, ``evaluate``, ``presets`` (:mod:`sigmapi.cli.train`) and ``figure``
-(:mod:`sigmapi.cli.figure`), whose module's ``register(subparsers)`` adds its parsers. Every
-parser's ``func`` is a handler ``handler(args) -> int``.
+``train``, ``evaluate``, ``presets`` (:mod:`sigmapi.cli.train`), ``figure``
+(:mod:`sigmapi.cli.figure`) and ``export`` (:mod:`sigmapi.cli.export`), whose module's
+``register(subparsers)`` adds its parsers. Every parser's ``func`` is a handler
+``handler(args) -> int``.
 
 A user mistake (unknown preset, bad value, missing file) prints one line to stderr and exits
 with status 2; no traceback: every :class:`~sigmapi.errors.SigmapiError` is printed the same
@@ -20,7 +21,7 @@ import sys
 import threading
 from collections.abc import Sequence
 
-from sigmapi.cli import figure, train
+from sigmapi.cli import export, figure, train
 from sigmapi.cli._common import Parser, check_output, resolve_config
 from sigmapi.cli.experiment import add_experiment
 from sigmapi.errors import SigmapiError
@@ -38,7 +39,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"sigmapi {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser)
-    for module in (train, figure):
+    for module in (train, figure, export):
         module.register(sub)
     for name in sorted(REGISTRY):
         add_experiment(sub, REGISTRY[name])
