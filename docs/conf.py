@@ -34,6 +34,7 @@ extensions = [
     "sphinx.ext.autosummary",
     "sphinx.ext.napoleon",
     "sphinx.ext.mathjax",
+    "sphinx-mathjax-offline",  # MathJax served from the built site itself: no network at view time
     "sphinx.ext.viewcode",
     "sphinx_gallery.gen_gallery",
     "sigmapi_results",
@@ -42,12 +43,13 @@ extensions = [
 source_suffix = {".rst": "restructuredtext", ".md": "myst-nb"}
 root_doc = "index"
 exclude_patterns = ["_build", "**.ipynb_checkpoints", "auto_examples/*.ipynb",
-                    "auto_examples/*.py", "sg_execution_times.rst", "README.md"]  # fmt: skip
+                    "auto_examples/*.py", "sg_execution_times.rst", "README.md",
+                    "auto_examples/sg_execution_times.rst"]  # fmt: skip
 templates_path = ["_templates"]
 nitpicky = False
 
 # -- MyST and the notebook ------------------------------------------------------------------
-myst_enable_extensions = ["colon_fence", "dollarmath", "deflist", "attrs_inline"]
+myst_enable_extensions = ["colon_fence", "dollarmath", "amsmath", "deflist", "attrs_inline"]
 myst_heading_anchors = 3
 nb_execution_mode = os.environ.get("SIGMAPI_DOCS_EXECUTE", "force")
 nb_execution_timeout = 600
@@ -104,6 +106,7 @@ sphinx_gallery_conf = {
     "within_subsection_order": "FileNameSortKey",
     "show_memory": False,
     "min_reported_time": 10**9,  # the times of a shared machine are no result
+    "write_computation_times": False,  # its page loads scripts from the network
 }
 
 # -- HTML ------------------------------------------------------------------------------------
