@@ -337,6 +337,13 @@ def train_seed(job: SeedJob) -> tuple[SeedRun, dict[str, Any], dict[str, Any]]:
     return run, header, arrays
 
 
+FLAG_NOTE = (
+    ", flagged by the fold detector (a sign of a fold or of a coarse map; order R^2 decides)"
+)
+"""What a console line adds for a map the z-free fold detector flags: the flag is no verdict
+that the map is folded (a short run's coarse map raises it too); ``ordered`` is order R^2."""
+
+
 def _train_all(
     runs_of: Sequence[tuple[str, SOMConfig]],
     opts: ReproduceOptions,
@@ -355,7 +362,7 @@ def _train_all(
         before = f" (before refinement {run.unrefined.order_r2:.3f})" if run.unrefined else ""
         compiled = f"; compile {run.compile_seconds:.0f} s apart" if run.compile_seconds else ""
         return (f"{key}: training {run.train_seconds:.0f} s{refine}{compiled}, order R^2 "
-                f"{m.order_r2:.3f}{before}{', FOLDED' if m.folded else ''}")  # fmt: skip
+                f"{m.order_r2:.3f}{before}{FLAG_NOTE if m.folded else ''}")  # fmt: skip
 
     done = run_all(train_seed, jobs, executor=executor, per_job=per_job, progress=progress,
                    desc="reproduce", describe=describe,

@@ -1,0 +1,82 @@
+"""What a newcomer meets first says what is true: the estimator's default, the console's
+words beside the report's, every experiment's ``--quick``, and no debris from a failed run."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import pytest
+
+import sigmapi
+from sigmapi import SigmaPiSOM, SOMConfig
+from sigmapi.cli import main
+from sigmapi.experiments import REGISTRY
+from sigmapi.experiments.results import (
+    PresetResult,
+    ReproduceOptions,
+    ReproduceResult,
+    SeedRun,
+)
+
+
+def test_the_default_config_is_what_the_docstrings_say():
+    default = SOMConfig()
+    authors = sigmapi.load_preset("paper-1d-authors")
+    paper = sigmapi.load_preset("paper-1d")
+    # the authors' sizes and schedule with sigmapi's ordered start ...
+    assert dataclasses.replace(authors, ordering="crossview") == default
+    assert authors.ordering == "none" and default.ordering == "crossview"
+    # ... and no refinement, which paper-1d adds
+    assert default.refine_rounds == 0 and paper.refine_rounds > 0
+    assert dataclasses.replace(paper, refine_rounds=0, refine_pairs=default.refine_pairs) == default
+    for doc in (SigmaPiSOM.__doc__, SOMConfig.__doc__):
+        assert "ordered start" in doc and "no refinement" in doc
+        assert "paper-1d-authors" in doc
+
+
+def test_the_console_says_what_a_fold_flag_means_beside_ordered():
+    som = SigmaPiSOM(map_shape=(5,), x_shape=(5,), y_shape=(5,), iterations=300, seed=0).fit()
+    flagged = dataclasses.replace(sigmapi.evaluate(som, n_test=100), order_r2=0.99, folded=True)
+    run = SeedRun(seed=3, train_seconds=0.0, backend=som.backend, metrics=flagged, curve={})
+    preset = PresetResult(som.config, [run], reference={}, z_error_floor=None, shown_seed=3)
+    result = ReproduceResult(ReproduceOptions(seeds=(3,), progress=False), {"tiny": preset})
+    text = result.table()
+    assert "tiny: 1 of 1 ordered (order R^2 >= 0.95); the fold detector flags seed 3 " in text
+    assert "also mark a coarse map" in text
+    clean = dataclasses.replace(run, metrics=dataclasses.replace(flagged, folded=False))
+    result.presets["tiny"] = dataclasses.replace(preset, runs=[clean])
+    assert "fold detector" not in result.table()
+
+
+def test_every_experiment_with_seeds_takes_quick():
+    missing = sorted(name for name, e in REGISTRY.items() if e.quick is None)
+    assert "chain" not in missing
+    from sigmapi.experiments.chain import QUICK
+
+    assert QUICK.som_config.iterations < sigmapi.load_preset("paper-1d").iterations
+
+
+def test_a_command_that_fails_for_a_missing_extra_leaves_no_empty_folder(
+    tmp_path, monkeypatch, capsys
+):
+    from sigmapi.experiments import compare
+
+    monkeypatch.setattr(compare, "installed", lambda: set())
+    out = tmp_path / "new" / "report"
+    assert main(["compare", "--quick", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "pip install 'sigmapi[baselines]'" in err and len(err.strip().splitlines()) == 1
+    assert not out.exists() and not (tmp_path / "new").exists()
+    # a folder that was there before stays
+    keep = tmp_path / "keep"
+    keep.mkdir()
+    assert main(["compare", "--quick", "--out", str(keep)]) == 2
+    assert keep.is_dir() and list(keep.iterdir()) == []
+
+
+@pytest.mark.parametrize("argv", [["chain", "--quick", "--help"]])
+def test_chain_help_shows_quick(argv, capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(argv)
+    assert exc.value.code == 0
+    assert "--quick" in capsys.readouterr().out
