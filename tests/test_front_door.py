@@ -80,3 +80,26 @@ def test_chain_help_shows_quick(argv, capsys):
         main(argv)
     assert exc.value.code == 0
     assert "--quick" in capsys.readouterr().out
+
+
+def test_the_curves_title_fits_the_figure_and_the_caption_states_the_gap(model_1d, curves):
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    from sigmapi.viz import figures
+
+    label = "paper-1d, seeds 0, 1, 2, 3, 4, 5, 6, 7, 8, 9"
+    fig, facts = figures._draw_curves(model_1d, figures.DrawInputs(curves * 10, label=label))
+    FigureCanvasAgg(fig)
+    renderer = fig.canvas.get_renderer()
+    texts = [*fig.texts, *(ax.title for ax in fig.axes)]
+    titles = [t for t in texts if "Learning curves" in t.get_text()]
+    assert titles, "no title drawn"
+    width, height = fig.bbox.width, fig.bbox.height
+    for t in titles:
+        box = t.get_window_extent(renderer)
+        assert box.x0 >= 0 and box.x1 <= width and box.y1 <= height, (t.get_text(), box)
+    run = figures.RunInfo("paper-1d", model_1d.config, (0, 1), 0, curve_test=1000)
+    gap = {"z_error": 0.05, "view_consistency": -0.01, "n_test": 10_000}
+    text = figures.caption("curves", run, {**facts, "table_gap": gap})
+    assert "last points lie +0.050 in z error and -0.010 in view consistency" in text
+    assert "10,000 test and calibration z's" in text and "differ from it by sampling" not in text
