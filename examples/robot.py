@@ -3,11 +3,12 @@
 
 A body: the simulated robot records its own views, learns the map, then docks on it.
 
-The robot (MuJoCo, ``pip install 'sigmapi[robot]'``) keeps its base still while its head makes
-saccades: two views of one ball, the retinal position (head camera) and the neck angles, coded
-as population codes. The Sigma-Pi map learns the body-centred direction from those pairs
-without being told it; then the authors' actor-critic learns to dock the base at the table on
-the map's response, beside the true direction as a code (the upper bound)::
+Needs the extra: ``pip install 'sigmapi[robot]'`` (MuJoCo). The robot keeps its base still
+while its head makes saccades: two views of one ball, the retinal position (head camera) and
+the neck angles, coded as population codes. The Sigma-Pi map learns the body-centred
+direction from those pairs without being told it; then the authors' actor-critic learns to
+dock the base at the table on the map's response, beside the true direction as a code (the
+upper bound)::
 
     python examples/robot.py [--out robot.png]   # the experiment's map, 300 episodes per state
     python examples/robot.py --small              # seconds

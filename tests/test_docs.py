@@ -100,6 +100,15 @@ def test_the_site_builds_with_warnings_as_errors(tmp_path):
     ceiling = sigmapi_results.load("ceiling-1d")["presets"]["paper-1d"]["summary"]
     cell = sigmapi_results.mw(ceiling["view_consistency"]).replace(" / ", "\u00a0/\u00a0")
     assert cell in (out / "results" / "reproduction.html").read_text("utf-8")
+    # the equations are typeset by a MathJax the site serves itself: no page loads a script
+    # from the network (a build here cannot rely on one, nor a reader offline)
+    assert (out / "_static" / "mathjax" / "tex-chtml.js").is_file()
+    algorithm = (out / "algorithm.html").read_text("utf-8")
+    assert 'src="_static/mathjax/tex-chtml.js"' in algorithm
+    assert algorithm.count('class="math') > 50  # the page's formulas are math, not code
+    remote = re.compile(r"<(?:script|link|img|iframe)\b[^>]*\b(?:src|href)=\"(?:https?:)?//")
+    for page in out.rglob("*.html"):
+        assert not remote.search(page.read_text("utf-8")), f"{page} loads from the network"
     # the API page of the estimator documents its methods, inherited ones included
     api = (out / "generated" / "sigmapi.SigmaPiSOM.html").read_text("utf-8")
     for method in ("fit", "partial_fit", "winner", "respond", "encode_views", "save"):

@@ -1,12 +1,9 @@
-"""The package version, read from the installed distribution's metadata (pyproject.toml)."""
+"""The package version: written here once; ``pyproject.toml`` reads it (``dynamic =
+["version"]``, ``[tool.setuptools.dynamic]``), so that the source tree, an editable install
+and a built wheel all say the same."""
 
 from __future__ import annotations
 
-from importlib import metadata
-
 __all__ = ["__version__"]
 
-try:
-    __version__ = metadata.version("sigmapi")
-except metadata.PackageNotFoundError:  # running from a source tree that is not installed
-    __version__ = "0+unknown"
+__version__ = "0.1.0"

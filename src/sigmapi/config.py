@@ -84,7 +84,10 @@ def check_extra(extra: Any) -> dict[str, Any]:
 
 @dataclass(frozen=True)
 class SOMConfig:
-    """Hyperparameters of a Sigma-Pi SOM run. Defaults are the authors' 1-D script."""
+    """Hyperparameters of a Sigma-Pi SOM run. Defaults: the authors' 1-D sizes and schedule
+    with sigmapi's ordered start (``ordering="crossview"``) and no refinement; the preset
+    ``paper-1d-authors`` is the authors' script (``ordering="none"``), ``paper-1d`` adds three
+    refinement rounds."""
 
     map_shape: tuple[int, ...] = (15,)
     """Grid of map units, e.g. (15,) or (15, 15); the paper's Fig. 8 uses 15x15."""

@@ -58,7 +58,9 @@ class SigmaPiSOM(GridsMixin, CostMixin, ParamsMixin, PersistMixin, RefineMixin, 
     Parameters
     ----------
     config : SOMConfig, optional
-        All hyperparameters (default: the authors' 1-D run).
+        All hyperparameters (default ``SOMConfig()``: the authors' 1-D sizes and schedule with
+        sigmapi's ordered start and no refinement; the preset ``paper-1d`` adds the
+        refinement, ``paper-1d-authors`` is the paper's random start).
     **overrides
         Fields of :class:`SOMConfig` to change, e.g. ``iterations=20000, seed=0``.
 

@@ -4,10 +4,11 @@ Sub-commands: one per experiment of :data:`sigmapi.experiments.REGISTRY` (``chai
 ``compare``, ``reproduce``, ``sweep``, ...), generated with its options from the experiment's
 config dataclass (:mod:`sigmapi.cli.experiment`); and the commands that are no experiment:
 ``train``, ``evaluate``, ``presets`` (:mod:`sigmapi.cli.train`, whose ``register(subparsers)``
-adds their parsers) and ``figure`` (:mod:`sigmapi.cli.figure`). Every parser's ``func`` is a
-handler ``handler(args) -> int``. A command's options are added, and its modules imported,
-only when it runs or its help is shown: ``sigmapi --help``, ``--version`` and ``presets``
-import no experiment, nor numba, matplotlib, scikit-learn, MuJoCo or Dask.
+adds their parsers), ``figure`` (:mod:`sigmapi.cli.figure`) and ``export``
+(:mod:`sigmapi.cli.export`). Every parser's ``func`` is a handler ``handler(args) -> int``. A
+command's options are added, and its modules imported, only when it runs or its help is shown:
+``sigmapi --help``, ``--version`` and ``presets`` import no experiment, nor numba, matplotlib,
+scikit-learn, MuJoCo or Dask.
 
 A user mistake (unknown preset, bad value, missing file) prints one line to stderr and exits
 with status 2; no traceback: every :class:`~sigmapi.errors.SigmapiError` is printed the same
@@ -22,7 +23,7 @@ import sys
 import threading
 from collections.abc import Sequence
 
-from sigmapi.cli import train
+from sigmapi.cli import export, train
 from sigmapi.cli._common import LazyParser, Parser, check_output, resolve_config
 from sigmapi.cli.experiment import add_experiment
 from sigmapi.errors import SigmapiError
@@ -50,6 +51,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True, parser_class=LazyParser)
     train.register(sub)
     sub.add_parser("figure", help="draw one figure of a trained model", fill=_figure_options)
+    export.register(sub)
     for name in sorted(REGISTRY):
         add_experiment(sub, name, REGISTRY.entries[name].summary)
     for action in sub._choices_actions:  # `sigmapi CMD --help` opens with its one-line summary

@@ -23,6 +23,7 @@ that have a second, shorter spelling on every command are in :data:`SPELLINGS`.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import dataclasses
 import json
 import os
@@ -136,6 +137,17 @@ def add_experiment_options(p: Parser, experiment: Experiment[Any]) -> None:
     p.set_defaults(func=partial(run_experiment, experiment))
 
 
+def _missing_folders(out: Path) -> list[Path]:
+    """The folders ``out`` and its parents that do not exist yet, innermost first (the ones
+    :func:`_make_folder` creates)."""
+    made = []
+    for folder in (out, *out.parents):
+        if folder.exists() or str(folder) in ("", "."):
+            break
+        made.append(folder)
+    return made
+
+
 def _make_folder(path: str) -> Path:
     out = Path(path)
     if out.exists() and not out.is_dir():
@@ -221,14 +233,21 @@ def run_experiment(experiment: Experiment[Any], args: argparse.Namespace) -> int
     if args.out is None:
         result = _run(experiment, config, seeds, None, executor, args.quiet)
     else:
+        made = _missing_folders(Path(args.out))
         out = _make_folder(args.out)
-        with output_lock(out, f"--out folder {str(out)!r}"):
-            _check_folder(out, args.force, experiment)
-            check = getattr(experiment, "before_writing", None)
-            if check is not None:  # what its figures and files outside --out need
-                check(config, force=args.force)
-            result = _run(experiment, config, seeds, out, executor, args.quiet)
-            files = [*result.figure(out), write_result(result, out)]
+        try:
+            with output_lock(out, f"--out folder {str(out)!r}"):
+                _check_folder(out, args.force, experiment)
+                check = getattr(experiment, "before_writing", None)
+                if check is not None:  # what its figures and files outside --out need
+                    check(config, force=args.force)
+                result = _run(experiment, config, seeds, out, executor, args.quiet)
+                files = [*result.figure(out), write_result(result, out)]
+        except BaseException:  # a run that fails (a missing extra) leaves no empty folder
+            for folder in made:
+                with contextlib.suppress(OSError):
+                    folder.rmdir()  # only an empty one
+            raise
     print(json.dumps(result.to_dict()) if args.json else result.table())
     if args.out is not None:
         print(f"sigmapi {experiment.name}: wrote {', '.join(map(str, files))}", file=sys.stderr)

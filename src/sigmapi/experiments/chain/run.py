@@ -432,6 +432,11 @@ def run_chain(
     return _run(cfg, seeds, train_pairs, n_test, code, executor, progress).to_dict()
 
 
+QUICK = ChainConfig(overrides=("iterations=60000",), train_pairs=5000, n_test=2000)
+"""The quick chain (``sigmapi chain --quick``): every map at paper-1d's quick length (as in
+``sigmapi reproduce --quick``), less data; a first look, not the measured setting."""
+
+
 class Chain(Experiment[ChainConfig]):
     """Train map A (retina + eye -> head-centred) on its task, map B (A's response + head ->
     body-centred) and one third-order map on the whole transformation on the same triples, and
@@ -441,6 +446,8 @@ class Chain(Experiment[ChainConfig]):
     summary = "a chain of two maps (retina -> head -> body) against one map on the whole task"
     config_type = ChainConfig
     seeds = (0, 1, 2)
+    quick = QUICK
+    quick_seeds = (0,)
 
     def run(
         self,

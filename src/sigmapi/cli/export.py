@@ -1,0 +1,42 @@
+"""``sigmapi export MODEL --format onnx --out FILE``: a trained map for callers outside Python
+(:mod:`sigmapi.export`; docs/guide/export.md)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import Any
+
+from sigmapi.cli._common import check_output
+from sigmapi.errors import UsageError
+
+__all__ = ["cmd_export", "register"]
+
+FORMATS = ("onnx",)
+
+
+def cmd_export(args: argparse.Namespace) -> int:
+    if args.format not in FORMATS:  # argparse's choices say the same; kept for direct calls
+        raise UsageError(f"--format must be one of {list(FORMATS)}, got {args.format!r}")
+    if not Path(args.model).is_file():
+        raise UsageError(f"model {args.model!r} does not exist or is not a file; give a model "
+                         "file written by `sigmapi train` or `sigmapi reproduce`")  # fmt: skip
+    out = check_output(args.out, args.force, "--out")
+    from sigmapi.export import OPSET, export_onnx
+
+    opset = OPSET if args.opset is None else args.opset
+    export_onnx(args.model, out, opset=opset, force=True)
+    print(f"wrote {out} ({out.stat().st_size:,} bytes)", file=sys.stderr)
+    return 0
+
+
+def register(sub: Any) -> None:
+    """Add ``sigmapi export`` to the sub-parsers ``sub``."""
+    p = sub.add_parser("export", help="write a trained map as an ONNX graph (response, winner)")
+    p.add_argument("model", help="model file written by `sigmapi train` or `sigmapi reproduce`")
+    p.add_argument("--format", required=True, choices=FORMATS, help="file format (onnx)")
+    p.add_argument("--out", required=True, help="file to write, e.g. map.onnx")
+    p.add_argument("--opset", type=int, help="ONNX opset of the graph (default 21; 18 or later)")
+    p.add_argument("--force", action="store_true", help="overwrite --out if it exists")
+    p.set_defaults(func=cmd_export)

@@ -1,0 +1,243 @@
+"""A trained map as an ONNX graph, for callers outside Python (a controller in C++, a robot's
+computer): :func:`export_onnx`, ``sigmapi export MODEL --format onnx --out FILE``.
+
+The graph takes the two codes and gives what the model gives in Python:
+
+- inputs ``x`` ``(B, n_x)`` and ``y`` ``(B, n_y)``, float64: the population codes of the
+  retinal positions and gaze directions, flattened in C order, exactly as
+  ``model.x_code.encode(p)`` and ``model.y_code.encode(p)`` make them (the codes' parameters
+  are in the file's metadata, key ``sigmapi.x_code`` and ``sigmapi.y_code``; the formula is
+  in docs/guide/export.md);
+- outputs ``response`` ``(B, n_units)`` float64, ``h[b, k] = x_b^T W_k y_b``
+  (:meth:`~sigmapi.SigmaPiSOM.respond`), and ``winner`` ``(B,)`` int64, the flat index of the
+  winning unit as :meth:`~sigmapi.SigmaPiSOM.winner` computes it: the model's winner rule at
+  its current sigma (the soft rule's smoothing over the map, bounded or periodic, is a fixed
+  ``(n_units, n_units)`` matrix at that sigma), ties to the lowest index.
+
+The fast kernel skips the code pairs with ``|x_i y_j| <= kernel_tol max|x| max|y|``; the graph
+skips the same pairs, so that its winners are the kernel's. Weights stay in the precision
+the model file holds them (the fast kernel's float32 columns and float64 scales; dense float64
+otherwise) and are summed in float64.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from sigmapi import _validate
+from sigmapi._version import __version__
+from sigmapi.errors import ConfigError, ResourceError, UsageError
+from sigmapi.io import atomic_write_bytes
+from sigmapi.rules.winners import Scoring
+from sigmapi.som import SigmaPiSOM, load_model
+
+__all__ = ["FORMATS", "OPSET", "export_onnx", "onnx_model", "score_matrix"]
+
+FORMATS = ("onnx",)
+"""The formats :func:`export_onnx` writes (``sigmapi export --format``)."""
+
+OPSET = 21
+"""Default ONNX opset of the graph. Every operator the graph uses is the same from opset 18
+(where ``ReduceMax`` took its axes as an input) to the newest; 21 loads in onnxruntime 1.18
+and later."""
+
+MIN_OPSET = 18
+
+_MAX_BYTES = 2_000_000_000
+"""A single ONNX file (protobuf) holds less than 2 GiB."""
+
+_NEEDS = "the onnx extra: pip install 'sigmapi[onnx]'"
+
+
+def _onnx() -> Any:
+    try:
+        import onnx
+    except ImportError:
+        raise UsageError(f"exporting to ONNX needs the onnx package; install {_NEEDS}") from None
+    return onnx
+
+
+def score_matrix(model: SigmaPiSOM) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """``(A, b)`` with ``scores = response @ A + b``: the model's winner rule at its current
+    sigma as one affine map ``(n_units, n_units)``, ``(n_units,)``.
+
+    Every rule of :mod:`sigmapi.rules.winners` is affine in the response (the soft rules
+    smooth it linearly, ``min_distance`` subtracts the squared norms); a rule that is not
+    raises :class:`~sigmapi.errors.ConfigError` (checked on random responses).
+    """
+    rule = model.winner_rule_
+    c = model.config
+    k = model.n_units
+    sq = model.unit_sqnorms() if rule.needs_norms else None
+    at = Scoring(model.map_shape, float(model.sigma_), c.soft_cut, c.map_periodic, sq)
+    b = np.asarray(rule.scores(np.zeros((1, k)), at), dtype=np.float64)[0]
+    a = np.asarray(rule.scores(np.eye(k), at), dtype=np.float64) - b[None, :]
+    probe = np.random.default_rng(0).standard_normal((4, k))
+    want = np.asarray(rule.scores(probe, at), dtype=np.float64)
+    got = probe @ a + b
+    if not np.allclose(got, want, rtol=1e-9, atol=1e-9 * max(1.0, float(np.abs(want).max()))):
+        raise ConfigError(
+            f"winner rule {rule.name!r} is not an affine map of the response; ONNX export "
+            "supports the rules of sigmapi.rules.WINNER_RULES"
+        )
+    return a, b
+
+
+def _columns(model: SigmaPiSOM) -> tuple[NDArray[np.floating], NDArray[np.float64]]:
+    """Weights as ``raw`` ``(n_x * n_y, K)`` and ``scale`` ``(K,)``, ``W[k] = scale[k] *
+    raw[:, k]``: the fast kernel's own columns where the model holds them, else dense."""
+    _, arrays = model.to_arrays()
+    if "state_raw" in arrays and "state_scale" in arrays:
+        return np.asarray(arrays["state_raw"]), np.asarray(arrays["state_scale"], np.float64)
+    w = model.weights_
+    return np.ascontiguousarray(w.reshape(w.shape[0], -1).T), np.ones(w.shape[0])
+
+
+def _truncation(model: SigmaPiSOM) -> float:
+    """The share of ``max|x| max|y|`` below which the model's kernel skips a code pair."""
+    return float(model.config.kernel_tol) if model.backend == "fast" else 0.0
+
+
+def _code_meta(code: Any) -> str:
+    d = {f.name: getattr(code, f.name) for f in dataclasses.fields(code) if f.init}
+    return json.dumps({**d, "shape": list(code.shape)})
+
+
+def onnx_model(model: SigmaPiSOM, opset: int = OPSET) -> Any:
+    """The ONNX graph (an ``onnx.ModelProto``) of a fitted model's response and winner.
+
+    See the module's description for its inputs and outputs. Raises
+    :class:`~sigmapi.errors.UsageError` without the onnx package,
+    :class:`~sigmapi.errors.NotFittedError` for a model that has not been trained.
+    """
+    onnx = _onnx()
+    from onnx import TensorProto, helper, numpy_helper
+
+    top = int(onnx.defs.onnx_opset_version())
+    opset = _validate.integer("opset", opset, MIN_OPSET, top, fix=f"the default is {OPSET}",
+                              error=UsageError)  # fmt: skip
+    raw, scale = _columns(model)  # raises NotFittedError before training
+    nbytes = raw.nbytes + scale.nbytes
+    if nbytes >= _MAX_BYTES:
+        raise ResourceError(
+            f"the model's weights take {nbytes / 1e9:.2f} GB; one ONNX file holds less than "
+            "2 GB; export a smaller map"
+        )
+    a, b = score_matrix(model)
+    k = model.n_units
+    nx, ny = int(np.prod(model.x_shape)), int(np.prod(model.y_shape))
+    tol = _truncation(model)
+    init = [
+        numpy_helper.from_array(raw, "w_raw"),
+        numpy_helper.from_array(scale.astype(np.float64), "w_scale"),
+        numpy_helper.from_array(np.array([1], np.int64), "axis1"),
+        numpy_helper.from_array(np.array([2], np.int64), "axis2"),
+        numpy_helper.from_array(np.array([0, nx * ny], np.int64), "flat_shape"),
+    ]
+    nodes = [
+        helper.make_node("Unsqueeze", ["x", "axis2"], ["x3"]),
+        helper.make_node("Unsqueeze", ["y", "axis1"], ["y3"]),
+        helper.make_node("Mul", ["x3", "y3"], ["outer"]),
+    ]
+    pairs = "outer"
+    if tol > 0:  # the fast kernel's skipped pairs
+        init.append(numpy_helper.from_array(np.array(tol, np.float64), "tol"))
+        init.append(numpy_helper.from_array(np.array(0.0, np.float64), "zero"))
+        nodes += [
+            helper.make_node("Abs", ["x"], ["abs_x"]),
+            helper.make_node("Abs", ["y"], ["abs_y"]),
+            helper.make_node("ReduceMax", ["abs_x", "axis1"], ["max_x"], keepdims=1),
+            helper.make_node("ReduceMax", ["abs_y", "axis1"], ["max_y"], keepdims=1),
+            helper.make_node("Mul", ["max_x", "tol"], ["thr_x"]),
+            helper.make_node("Mul", ["thr_x", "max_y"], ["thr"]),
+            helper.make_node("Unsqueeze", ["thr", "axis2"], ["thr3"]),
+            helper.make_node("Abs", ["outer"], ["abs_outer"]),
+            helper.make_node("Greater", ["abs_outer", "thr3"], ["kept"]),
+            helper.make_node("Where", ["kept", "outer", "zero"], ["outer_kept"]),
+        ]
+        pairs = "outer_kept"
+    w = "w_raw"
+    if raw.dtype != np.float64:
+        nodes.append(helper.make_node("Cast", ["w_raw"], ["w64"], to=TensorProto.DOUBLE))
+        w = "w64"
+    nodes += [
+        helper.make_node("Reshape", [pairs, "flat_shape"], ["pairs"]),
+        helper.make_node("MatMul", ["pairs", w], ["sums"]),
+        helper.make_node("Mul", ["sums", "w_scale"], ["response"]),
+    ]
+    scores = "response"
+    if not np.array_equal(a, np.eye(k)):
+        init.append(numpy_helper.from_array(a, "score_matrix"))
+        nodes.append(helper.make_node("MatMul", ["response", "score_matrix"], ["smoothed"]))
+        scores = "smoothed"
+    if np.any(b != 0):
+        init.append(numpy_helper.from_array(b, "score_offset"))
+        nodes.append(helper.make_node("Add", [scores, "score_offset"], ["scores"]))
+        scores = "scores"
+    nodes.append(helper.make_node("ArgMax", [scores], ["winner"], axis=1, keepdims=0,
+                                  select_last_index=0))  # fmt: skip
+    f64 = TensorProto.DOUBLE
+    graph = helper.make_graph(
+        nodes,
+        "sigmapi_map",
+        [helper.make_tensor_value_info("x", f64, ["B", nx]),
+         helper.make_tensor_value_info("y", f64, ["B", ny])],
+        [helper.make_tensor_value_info("response", f64, ["B", k]),
+         helper.make_tensor_value_info("winner", TensorProto.INT64, ["B"])],
+        init,
+        doc_string=(
+            "Sigma-Pi map: inputs x (B, n_x) and y (B, n_y), float64 population codes "
+            "(metadata sigmapi.x_code, sigmapi.y_code); outputs response (B, n_units) and "
+            "winner (B,), the flat index of the winning unit (map_shape in C order)."
+        ),
+    )  # fmt: skip
+    proto = helper.make_model(
+        graph,
+        opset_imports=[helper.make_opsetid("", opset)],
+        producer_name="sigmapi",
+        producer_version=__version__,
+    )
+    proto.ir_version = min(proto.ir_version, 10)  # what opsets 18-23 need; older runtimes load it
+    rule = model.winner_rule_
+    meta = {
+        "sigmapi.map_shape": json.dumps(list(model.map_shape)),
+        "sigmapi.map_periodic": json.dumps(bool(model.config.map_periodic)),
+        "sigmapi.x_code": _code_meta(model.x_code),
+        "sigmapi.y_code": _code_meta(model.y_code),
+        "sigmapi.winner_rule": rule.name,
+        "sigmapi.sigma": repr(float(model.sigma_)),
+        "sigmapi.kernel_tol": repr(tol),
+        "sigmapi.iterations": str(model.t_),
+    }
+    helper.set_model_props(proto, meta)
+    onnx.checker.check_model(proto)
+    return proto
+
+
+def export_onnx(
+    model: SigmaPiSOM | str | Path,
+    out: str | Path,
+    *,
+    opset: int = OPSET,
+    force: bool = False,
+) -> Path:
+    """Write the ONNX graph of ``model`` (a fitted model or a model file) to ``out``,
+    atomically; returns the path.
+
+    Refuses an existing ``out`` unless ``force`` (:class:`~sigmapi.errors.UsageError`); a
+    model file is read as :func:`sigmapi.load` reads it (a damaged or hostile file raises
+    :class:`~sigmapi.errors.ModelFileError`; nothing is unpickled).
+    """
+    target = Path(out)
+    if target.exists() and not force:
+        raise UsageError(f"out {str(target)!r} exists; pass force=True (--force) to overwrite it")
+    _onnx()  # before reading a large model
+    som = model if isinstance(model, SigmaPiSOM) else load_model(model)
+    proto = onnx_model(som, opset)
+    return atomic_write_bytes(target, proto.SerializeToString())
