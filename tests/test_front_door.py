@@ -11,7 +11,7 @@ import sigmapi
 from sigmapi import SigmaPiSOM, SOMConfig
 from sigmapi.cli import main
 from sigmapi.experiments import REGISTRY
-from sigmapi.experiments.results import (
+from sigmapi.experiments.reproduce.results import (
     PresetResult,
     ReproduceOptions,
     ReproduceResult,
@@ -51,7 +51,7 @@ def test_the_console_says_what_a_fold_flag_means_beside_ordered():
 def test_every_experiment_takes_quick_but_the_sweep_whose_spec_sets_its_size():
     missing = sorted(name for name, e in REGISTRY.items() if e.quick is None)
     assert missing == ["sweep"]
-    from sigmapi.experiments.chain import QUICK
+    from sigmapi.experiments.chain.run import QUICK
 
     assert QUICK.som_config.iterations < sigmapi.load_preset("paper-1d").iterations
 
