@@ -142,3 +142,36 @@ def test_an_unfitted_model_and_an_existing_file_are_refused(map_1d, tmp_path):
     before = out.stat().st_size
     export_onnx(map_1d, out, force=True)
     assert out.stat().st_size == before
+
+
+def test_a_reference_backend_model_exports_its_dense_weights_exactly(small_1d, tmp_path):
+    som = SigmaPiSOM(small_1d).fit()  # the reference kernel: dense float64, no skipped pairs
+    out = export_onnx(som, tmp_path / "r.onnx")
+    proto = onnx.load(str(out))
+    meta = {p.key: p.value for p in proto.metadata_props}
+    assert som.backend == "reference" and float(meta["sigmapi.kernel_tol"]) == 0.0
+    rng = np.random.default_rng(4)
+    x, y = som.x_code.encode(rng.random((N_PAIRS, 1))), som.y_code.encode(rng.random((N_PAIRS, 1)))
+    session = ort.InferenceSession(str(out), providers=["CPUExecutionProvider"])
+    response, winner = session.run(["response", "winner"], {"x": x, "y": y})
+    np.testing.assert_array_equal(winner, som.winner(x, y))
+    np.testing.assert_allclose(response, som.respond(x, y), rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("which", ["map_1d", "map_2d", "torus"])
+def test_a_graph_that_takes_positions_encodes_them_as_the_model_does(which, request, tmp_path):
+    model_file = request.getfixturevalue(which)
+    out = tmp_path / "p.onnx"
+    argv = ["export", model_file, "--format", "onnx", "--inputs", "positions", "--out", str(out)]
+    assert main(argv) == 0
+    m = sigmapi.load(model_file)
+    rng = np.random.default_rng(1)
+    px, py = rng.random((N_PAIRS, len(m.x_shape))), rng.random((N_PAIRS, len(m.y_shape)))
+    px[:3], py[:3] = 0.0, 1.0  # the ends of the axes (the same place on a ring)
+    session = ort.InferenceSession(str(out), providers=["CPUExecutionProvider"])
+    assert [i.name for i in session.get_inputs()] == ["x_position", "y_position"]
+    response, winner = session.run(["response", "winner"], {"x_position": px, "y_position": py})
+    x, y = m.x_code.encode(px), m.y_code.encode(py)
+    np.testing.assert_array_equal(winner, m.winner(x, y))
+    want = m.respond(x, y)
+    np.testing.assert_allclose(response, want, rtol=0, atol=1e-12 * np.abs(want).max())

@@ -99,7 +99,14 @@ def test_the_curves_title_fits_the_figure_and_the_caption_states_the_gap(model_1
         box = t.get_window_extent(renderer)
         assert box.x0 >= 0 and box.x1 <= width and box.y1 <= height, (t.get_text(), box)
     run = figures.RunInfo("paper-1d", model_1d.config, (0, 1), 0, curve_test=1000)
-    gap = {"z_error": 0.05, "view_consistency": -0.01, "n_test": 10_000}
+    decoding = {"seed": 0, "z_error_curve_table": 0.34, "z_error_table": 0.30,
+                "z_error_curve": 0.35}  # fmt: skip
+    gap = {"z_error": 0.05, "view_consistency": -0.01, "n_test": 10_000, "decoding": decoding}
     text = figures.caption("curves", run, {**facts, "table_gap": gap})
     assert "last points lie +0.050 in z error and -0.010 in view consistency" in text
     assert "10,000 test and calibration z's" in text and "differ from it by sampling" not in text
+    assert "scores z error 0.340 against the table's 0.300 (its curve ends at 0.350)" in text
+    assert "the smaller decoding table makes 80% of that seed's gap" in text
+    close = {**decoding, "z_error_curve": 0.31}
+    text = figures.caption("curves", run, {**facts, "table_gap": {**gap, "decoding": close}})
+    assert "within 0.02 of the table" in text and "decoding table makes" not in text

@@ -7,7 +7,8 @@ The graph takes the two codes and gives what the model gives in Python:
   retinal positions and gaze directions, flattened in C order, exactly as
   ``model.x_code.encode(p)`` and ``model.y_code.encode(p)`` make them (the codes' parameters
   are in the file's metadata, key ``sigmapi.x_code`` and ``sigmapi.y_code``; the formula is
-  in docs/guide/export.md);
+  in docs/guide/export.md); or, with ``inputs="positions"``, ``x_position`` ``(B, d_x)``
+  and ``y_position`` ``(B, d_y)`` in [0, 1], which the graph encodes itself;
 - outputs ``response`` ``(B, n_units)`` float64, ``h[b, k] = x_b^T W_k y_b``
   (:meth:`~sigmapi.SigmaPiSOM.respond`), and ``winner`` ``(B,)`` int64, the flat index of the
   winning unit as :meth:`~sigmapi.SigmaPiSOM.winner` computes it: the model's winner rule at
@@ -32,15 +33,19 @@ from numpy.typing import NDArray
 
 from sigmapi import _validate
 from sigmapi._version import __version__
+from sigmapi.codes import PopulationCode
 from sigmapi.errors import ConfigError, ResourceError, UsageError
 from sigmapi.io import atomic_write_bytes
 from sigmapi.rules.winners import Scoring
 from sigmapi.som import SigmaPiSOM, load_model
 
-__all__ = ["FORMATS", "OPSET", "export_onnx", "onnx_model", "score_matrix"]
+__all__ = ["FORMATS", "INPUTS", "OPSET", "export_onnx", "onnx_model", "score_matrix"]
 
 FORMATS = ("onnx",)
 """The formats :func:`export_onnx` writes (``sigmapi export --format``)."""
+
+INPUTS = ("codes", "positions")
+"""What the graph takes: the population codes, or the positions it encodes itself."""
 
 OPSET = 21
 """Default ONNX opset of the graph. Every operator the graph uses is the same from opset 18
@@ -109,10 +114,69 @@ def _code_meta(code: Any) -> str:
     return json.dumps({**d, "shape": list(code.shape)})
 
 
-def onnx_model(model: SigmaPiSOM, opset: int = OPSET) -> Any:
+def _encoder(code: PopulationCode, pos: str, out: str, init: list[Any]) -> list[Any]:
+    """Nodes that turn positions ``pos`` ``(B, d)`` into ``code``'s codes ``out`` ``(B, n)``,
+    the arithmetic of :meth:`sigmapi.PopulationCode.encode` (one Gaussian hill per axis,
+    their C-order outer product, the height, the L2 normalisation)."""
+    from onnx import helper, numpy_helper
+
+    def const(name: str, value: Any) -> str:
+        init.append(numpy_helper.from_array(np.asarray(value), name))
+        return name
+
+    nodes: list[Any] = []
+    code_so_far = ""
+    for a, n in enumerate(code.shape):
+        p = f"{out}_axis{a}"
+        d = f"{p}_diff"
+        nodes += [
+            helper.make_node("Gather", [pos, const(f"{p}_i", np.array([a], np.int64))],
+                             [f"{p}_p"], axis=1),
+            helper.make_node("Mul", [f"{p}_p", const(f"{p}_scale", float(code.scale[a]))],
+                             [f"{p}_g"]),
+            helper.make_node("Sub", [f"{p}_g", const(f"{p}_units", np.arange(n, dtype=float))],
+                             [d]),
+        ]  # fmt: skip
+        if code.periodic:  # the shorter way round: d - n round(d / n), half to even as NumPy
+            size = const(f"{p}_n", float(n))
+            nodes += [helper.make_node("Div", [d, size], [f"{p}_turns"]),
+                      helper.make_node("Round", [f"{p}_turns"], [f"{p}_whole"]),
+                      helper.make_node("Mul", [f"{p}_whole", size], [f"{p}_wrap"]),
+                      helper.make_node("Sub", [d, f"{p}_wrap"], [f"{p}_wrapped"])]  # fmt: skip
+            d = f"{p}_wrapped"
+        two_w2 = const(f"{p}_two_w2", 2.0 * code.width**2)
+        nodes += [helper.make_node("Mul", [d, d], [f"{p}_sq"]),
+                  helper.make_node("Neg", [f"{p}_sq"], [f"{p}_neg"]),
+                  helper.make_node("Div", [f"{p}_neg", two_w2], [f"{p}_arg"]),
+                  helper.make_node("Exp", [f"{p}_arg"], [f"{p}_hill"])]  # fmt: skip
+        if not code_so_far:
+            code_so_far = f"{p}_hill"
+            continue
+        nodes += [
+            helper.make_node("Unsqueeze", [code_so_far, "axis2"], [f"{p}_left"]),
+            helper.make_node("Unsqueeze", [f"{p}_hill", "axis1"], [f"{p}_right"]),
+            helper.make_node("Mul", [f"{p}_left", f"{p}_right"], [f"{p}_outer"]),
+            helper.make_node("Reshape", [f"{p}_outer", const(f"{p}_flat", np.array([0, -1]))],
+                             [f"{p}_code"]),
+        ]  # fmt: skip
+        code_so_far = f"{p}_code"
+    height = const(f"{out}_height", float(code.height))
+    if not code.normalize:
+        return [*nodes, helper.make_node("Mul", [code_so_far, height], [out])]
+    return [*nodes, helper.make_node("Mul", [code_so_far, height], [f"{out}_tall"]),
+            helper.make_node("ReduceSumSquare", [f"{out}_tall", "axis1"], [f"{out}_sq"],
+                             keepdims=1),
+            helper.make_node("Sqrt", [f"{out}_sq"], [f"{out}_norm"]),
+            helper.make_node("Div", [f"{out}_tall", f"{out}_norm"], [out])]  # fmt: skip
+
+
+def onnx_model(model: SigmaPiSOM, opset: int = OPSET, inputs: str = "codes") -> Any:
     """The ONNX graph (an ``onnx.ModelProto``) of a fitted model's response and winner.
 
-    See the module's description for its inputs and outputs. Raises
+    ``inputs``: ``"codes"`` (inputs ``x`` and ``y``, the population codes) or
+    ``"positions"`` (inputs ``x_position`` ``(B, d_x)`` and ``y_position`` ``(B, d_y)`` in
+    [0, 1], encoded in the graph as ``model.x_code.encode`` does; values outside [0, 1] are
+    not refused there). See the module's description for the outputs. Raises
     :class:`~sigmapi.errors.UsageError` without the onnx package,
     :class:`~sigmapi.errors.NotFittedError` for a model that has not been trained.
     """
@@ -122,6 +186,7 @@ def onnx_model(model: SigmaPiSOM, opset: int = OPSET) -> Any:
     top = int(onnx.defs.onnx_opset_version())
     opset = _validate.integer("opset", opset, MIN_OPSET, top, fix=f"the default is {OPSET}",
                               error=UsageError)  # fmt: skip
+    _validate.choice("inputs", inputs, INPUTS, error=UsageError)
     raw, scale = _columns(model)  # raises NotFittedError before training
     nbytes = raw.nbytes + scale.nbytes
     if nbytes >= _MAX_BYTES:
@@ -140,7 +205,19 @@ def onnx_model(model: SigmaPiSOM, opset: int = OPSET) -> Any:
         numpy_helper.from_array(np.array([2], np.int64), "axis2"),
         numpy_helper.from_array(np.array([0, nx * ny], np.int64), "flat_shape"),
     ]
-    nodes = [
+    f64 = TensorProto.DOUBLE
+    if inputs == "positions":
+        nodes = [*_encoder(model.x_code, "x_position", "x", init),
+                 *_encoder(model.y_code, "y_position", "y", init)]  # fmt: skip
+        graph_inputs = [
+            helper.make_tensor_value_info("x_position", f64, ["B", len(model.x_shape)]),
+            helper.make_tensor_value_info("y_position", f64, ["B", len(model.y_shape)]),
+        ]
+    else:
+        nodes = []
+        graph_inputs = [helper.make_tensor_value_info("x", f64, ["B", nx]),
+                        helper.make_tensor_value_info("y", f64, ["B", ny])]  # fmt: skip
+    nodes += [
         helper.make_node("Unsqueeze", ["x", "axis2"], ["x3"]),
         helper.make_node("Unsqueeze", ["y", "axis1"], ["y3"]),
         helper.make_node("Mul", ["x3", "y3"], ["outer"]),
@@ -182,19 +259,20 @@ def onnx_model(model: SigmaPiSOM, opset: int = OPSET) -> Any:
         scores = "scores"
     nodes.append(helper.make_node("ArgMax", [scores], ["winner"], axis=1, keepdims=0,
                                   select_last_index=0))  # fmt: skip
-    f64 = TensorProto.DOUBLE
     graph = helper.make_graph(
         nodes,
         "sigmapi_map",
-        [helper.make_tensor_value_info("x", f64, ["B", nx]),
-         helper.make_tensor_value_info("y", f64, ["B", ny])],
+        graph_inputs,
         [helper.make_tensor_value_info("response", f64, ["B", k]),
          helper.make_tensor_value_info("winner", TensorProto.INT64, ["B"])],
         init,
         doc_string=(
-            "Sigma-Pi map: inputs x (B, n_x) and y (B, n_y), float64 population codes "
-            "(metadata sigmapi.x_code, sigmapi.y_code); outputs response (B, n_units) and "
-            "winner (B,), the flat index of the winning unit (map_shape in C order)."
+            ("Sigma-Pi map: inputs x (B, n_x) and y (B, n_y), float64 population codes "
+             "(metadata sigmapi.x_code, sigmapi.y_code)" if inputs == "codes" else
+             "Sigma-Pi map: inputs x_position (B, d_x) and y_position (B, d_y), float64 "
+             "positions in [0, 1], encoded as sigmapi.x_code and sigmapi.y_code")
+            + "; outputs response (B, n_units) and winner (B,), the flat index of the winning "
+            "unit (map_shape in C order)."
         ),
     )  # fmt: skip
     proto = helper.make_model(
@@ -214,6 +292,7 @@ def onnx_model(model: SigmaPiSOM, opset: int = OPSET) -> Any:
         "sigmapi.sigma": repr(float(model.sigma_)),
         "sigmapi.kernel_tol": repr(tol),
         "sigmapi.iterations": str(model.t_),
+        "sigmapi.inputs": inputs,
     }
     helper.set_model_props(proto, meta)
     onnx.checker.check_model(proto)
@@ -225,6 +304,7 @@ def export_onnx(
     out: str | Path,
     *,
     opset: int = OPSET,
+    inputs: str = "codes",
     force: bool = False,
 ) -> Path:
     """Write the ONNX graph of ``model`` (a fitted model or a model file) to ``out``,
@@ -239,5 +319,5 @@ def export_onnx(
         raise UsageError(f"out {str(target)!r} exists; pass force=True (--force) to overwrite it")
     _onnx()  # before reading a large model
     som = model if isinstance(model, SigmaPiSOM) else load_model(model)
-    proto = onnx_model(som, opset)
+    proto = onnx_model(som, opset, inputs)
     return atomic_write_bytes(target, proto.SerializeToString())

@@ -26,7 +26,7 @@ def cmd_export(args: argparse.Namespace) -> int:
     from sigmapi.export import OPSET, export_onnx
 
     opset = OPSET if args.opset is None else args.opset
-    export_onnx(args.model, out, opset=opset, force=True)
+    export_onnx(args.model, out, opset=opset, inputs=args.inputs, force=True)
     print(f"wrote {out} ({out.stat().st_size:,} bytes)", file=sys.stderr)
     return 0
 
@@ -38,5 +38,8 @@ def register(sub: Any) -> None:
     p.add_argument("--format", required=True, choices=FORMATS, help="file format (onnx)")
     p.add_argument("--out", required=True, help="file to write, e.g. map.onnx")
     p.add_argument("--opset", type=int, help="ONNX opset of the graph (default 21; 18 or later)")
+    p.add_argument("--inputs", choices=("codes", "positions"), default="codes",
+                   help="what the graph takes: the population codes x and y (default), or "
+                   "positions in [0, 1] that it encodes as the model does")  # fmt: skip
     p.add_argument("--force", action="store_true", help="overwrite --out if it exists")
     p.set_defaults(func=cmd_export)

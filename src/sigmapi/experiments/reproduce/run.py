@@ -353,6 +353,21 @@ def _table_gap(runs: Sequence[SeedRun], n_test: int) -> dict[str, float]:
     return {**gap, "n_test": n_test}
 
 
+def _decoding_cause(model: SigmaPiSOM, run: SeedRun, opts: ReproduceOptions) -> dict[str, Any]:
+    """The shown map's z error on the table's test z's but with the curves' decoding table
+    (their calibration z's): beside the table's and the curve's last point, how much of the
+    curve's gap the decoding table's size makes."""
+    from sigmapi.metrics import evaluation_sets
+    from sigmapi.viz.curves import LearningCurve
+
+    calibration, _ = evaluation_sets(model, opts.curve_test, LearningCurve.seed)
+    _, test = evaluation_sets(model, opts.test_size)
+    small = evaluate(model, test=test, calibration=calibration).z_error
+    return {"seed": run.seed, "z_error_curve_table": float(small),
+            "z_error_table": float(run.metrics.z_error),
+            "z_error_curve": float(run.curve["z_error"][-1])}  # fmt: skip
+
+
 def _train_all(
     runs_of: Sequence[tuple[str, SOMConfig]],
     opts: ReproduceOptions,
@@ -473,6 +488,7 @@ def _draw(
                                  ceiling=entry.ceiling)  # fmt: skip
         if fig_name == "curves":
             facts["table_gap"] = _table_gap(entry.runs, opts.test_size)
+            facts["table_gap"]["decoding"] = _decoding_cause(model, entry.runs[run.shown], opts)
         entry.figures[fig_name] = {"file": file, **facts}
         drawn.append((file, figs.caption(fig_name, run, facts)))
     return drawn
