@@ -426,3 +426,10 @@ def test_a_table_of_a_million_rows_is_refused_before_parsing(tmp_path):
     with pytest.raises(ConfigError, match="over 200,000 rows"):
         read_table(p)
     assert time.process_time() - t0 < 2.0
+
+
+def test_sampler_sizes_are_checked_before_allocating():
+    sampler = SigmaPiSOM(_small()).sampler
+    for draw in (sampler.sample, sampler.sample_z):
+        with pytest.raises(ResourceError, match="n=1,000,000,000,000"):
+            draw(10**12, np.random.default_rng(0))

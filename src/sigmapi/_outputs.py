@@ -150,7 +150,8 @@ def claim_folder(
     where = f"--out folder {str(out)!r}"
     if owner is not None and owner != experiment:
         raise UsageError(f"{where} holds a run of the experiment {owner!r} (its marker "
-                         f"{MARKER}), not of {experiment!r}; give another --out")  # fmt: skip
+                         f"{MARKER}), not of {experiment!r}; give another --out (or move that "
+                         "run away, marker included)")  # fmt: skip
     if owner is None:
         pattern = temp_pattern()
         foreign = sorted(

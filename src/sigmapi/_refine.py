@@ -5,7 +5,9 @@ Round ``r`` on the built-in task draws ``config.refine_pairs`` pairs from the ru
 streams ``(4, r, block)``; with ``fit(views)`` a round is one pass over the rows. A round's
 winners use the weights of its start, which stay unchanged until the round ends, so a model
 saved within a round (``refined_`` is in the model file) replays that round's pairs so far
-and continues to the same weights, bit for bit.
+and continues to the same weights, bit for bit. A refinement in progress continues only on
+what it started on (the built-in task, or the same rows: ``refine_rows`` is in the model file
+too); other views, or none where it ran on rows, raise a DataError naming what to pass.
 """
 
 from __future__ import annotations

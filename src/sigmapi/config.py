@@ -169,9 +169,9 @@ class SOMConfig:
                 f"{self.x_shape} and {self.y_shape}"
             )
         weights = math.prod(self.map_shape) * math.prod(self.x_shape) * math.prod(self.y_shape)
-        if weights > 2**48:  # past any memory; int64 sizes downstream stay exact
+        if weights > 2**56:  # past any memory; int64 byte counts downstream stay exact
             raise ConfigError(
-                f"map_shape x x_shape x y_shape must hold at most 2**48 weights, got {weights:,} "
+                f"map_shape x x_shape x y_shape must hold at most 2**56 weights, got {weights:,} "
                 f"({self.map_shape} x {self.x_shape} x {self.y_shape}); use smaller shapes"
             )
         cw = _validate.width("code_width", self.code_width, MIN_WIDTH, fix=_WIDTH_FIX)

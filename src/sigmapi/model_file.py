@@ -7,7 +7,9 @@ never imports the estimator.
 
 The header holds the resolved ``config``, the iteration count ``t``, the ``seed_entropy`` of
 the random streams (a decimal string), the ``backend`` that wrote the file and, for a run
-with refinement, ``refined`` (its pairs done; absent: 0). The arrays
+with refinement, ``refined`` (its pairs done; absent: 0) and, for one refined on given rows
+(``fit(views)``, a stream) rather than the built-in task, ``refine_rows`` (the rows of a
+round, which a resumed refinement must be given again). The arrays
 are the backend's own (:meth:`sigmapi.kernels.base.Kernel.file_arrays`: dense ``weights``
 or ``state_<name>`` arrays of its layout), stored once in the backend's precision. The
 backend that wrote a file reads its state back bit for bit, so that the run continues
@@ -55,6 +57,8 @@ class ModelParts:
         Dense float64 weights for the backend to prepare (set where ``state`` is None).
     refined : int
         Refinement pairs done (header ``refined``; absent in files without refinement: 0).
+    refine_rows : int or None
+        Rows a refinement round runs on (header ``refine_rows``; None: the built-in task).
     """
 
     config: SOMConfig
@@ -64,7 +68,6 @@ class ModelParts:
     weights: NDArray[np.float64] | None = None
     refined: int = 0
     refine_rows: int | None = None
-    """Rows a refinement round runs on (header ``refine_rows``; None: the built-in task)."""
 
 
 def write_parts(

@@ -150,6 +150,13 @@ _REJECTION_ROUNDS = 8
 _MAX_ROUNDS = 1_000_000
 
 
+def _check_rows(n: int, each: int, fix: str) -> None:
+    """The memory check of ``n`` rows of ``each`` bytes (:func:`sigmapi._memory.check_count`),
+    skipped below 64 MiB: a training block's draw costs no read of the system's memory."""
+    if n * each > 1 << 26:
+        _memory.check_count("n", n, each, fix)
+
+
 class TwoViewSampler:
     """Draws batches of two views (x0, y0), (x1, y1) of the same z.
 
@@ -184,6 +191,7 @@ class TwoViewSampler:
         self.ndim = x_code.ndim
 
     def sample_z(self, n: int, rng: np.random.Generator) -> Array:
+        _check_rows(n, 8 * self.ndim, "draw fewer positions")
         lo, hi = self.relation.z_range
         return rng.uniform(lo, hi, size=(n, self.ndim))
 
@@ -278,7 +286,7 @@ class TwoViewSampler:
         n = _validate.integer("n", n, 0)
         dwell = _validate.integer("dwell", dwell, 1, fix="saccades per object position")
         each = 8 * (2 * (self.x_code.size + self.y_code.size) + 3 * len(self.x_code.shape) + 1)
-        _memory.check_count("n", n, each, "fewer frames")  # codes, views, z and the encoding
+        _check_rows(n, each, "fewer frames")  # codes, views, z and the encoding
         segments = self.sample_z(-(-n // dwell), rng)
         z = np.repeat(segments, min(dwell, n), axis=0)[:n]  # a dwell past n: one position
         px, py = self.sample_view(z, rng)
@@ -287,6 +295,8 @@ class TwoViewSampler:
 
     def sample(self, n: int, rng: np.random.Generator, z: Array | None = None) -> Batch:
         """``n`` pairs of views of ``n`` body-centred positions (drawn unless ``z`` is given)."""
+        each = 8 * (2 * (self.x_code.size + self.y_code.size) + 5 * self.ndim)
+        _check_rows(len(z) if z is not None else n, each, "draw fewer pairs")
         if z is None:
             z = self.sample_z(n, rng)
         px0, py0 = self.sample_view(z, rng)

@@ -6,11 +6,16 @@
 - ``--seeds S [S ...]``: the seeds themselves (not a count), distinct ints >= 0; default the
   experiment's (:meth:`~sigmapi.experiments.Experiment.default_seeds`);
 - ``--out DIR``: the folder for ``result.json`` (``to_dict()``) and the figures (default the
-  experiment's, or nothing written); a folder that is not empty needs ``--force``, unless the
-  experiment resumes a run there (a sweep: it owns its table, figure and ``result.json``, and
-  refuses a table it did not write, ``--force`` or not); the folder is locked while the
-  command runs (:mod:`sigmapi._lock`: a second command on it stops at once) and checked to
-  take files before any work;
+  experiment's, or nothing written). It holds one experiment, marked by the file
+  ``.sigmapi-experiment`` (:func:`sigmapi._outputs.claim_folder`): a folder marked for
+  another experiment is refused, ``--force`` or not; a folder that is not empty needs
+  ``--force``, unless it is marked for this experiment and the experiment resumes a run there
+  (a sweep: it owns its table, figure and ``result.json``, and refuses a table it did not
+  write, ``--force`` or not); the folder is locked while the command runs
+  (:mod:`sigmapi._lock`: a second command on it stops at once) and checked to take files
+  before any work, as are the files the experiment writes elsewhere and what its figures
+  need (its optional ``before_writing(config, force=...)``: ``robot --render``, the
+  renderer) and its fixed file names (its optional ``writes``);
 - ``--json``: print ``to_dict()`` as one JSON object on stdout (else the table);
 - ``--quick``: start from the experiment's quick config and seeds (where it has one);
 - ``--workers``, ``--engine``, ``--address``, ``--memory-budget``: the executor;

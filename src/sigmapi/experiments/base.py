@@ -346,8 +346,9 @@ def run_all(
     ``RuntimeError``), naming the job.
     """
     ex = executor if executor is not None else Executor(workers=1)
-    _memory.check(per_job, f"one {desc} job", "use smaller settings (a smaller map, grid or "
-                  "fewer pairs, episodes or test points)")  # fmt: skip
+    if ex.engine == "local":  # a job must fit on this machine (a cluster's are its own)
+        _memory.check(per_job, f"one {desc} job", "use smaller settings (a smaller map, grid "
+                      "or fewer pairs, episodes or test points)")  # fmt: skip
     show = Progress.of(progress)
     plan = ex.plan(per_job, len(jobs))
     in_process = plan.workers == 1 and ex.engine == "local"

@@ -486,7 +486,9 @@ def draw_figure(
     inputs = DrawInputs(curves, reference, label, seed, centres, ceiling)
     fig, facts = spec.draw(model, inputs)
     tight = "tight" if spec.tight else None
-    fig.savefig(Path(path), dpi=dpi, bbox_inches=tight, facecolor="white")
+    from sigmapi._outputs import save_figure  # atomic, never through a link
+
+    save_figure(fig, Path(path), dpi=dpi, bbox_inches=tight, facecolor="white")
     return facts
 
 

@@ -45,6 +45,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sigmapi import _memory, _validate
+from sigmapi._outputs import save_figure
 from sigmapi.baselines.kohonen import KohonenSOM, MiniSomMap
 from sigmapi.baselines.readout import GainFieldNetwork, RBMFeatures
 from sigmapi.baselines.scoring import score_readout, score_units
@@ -284,7 +285,7 @@ class CompareResult:
         from sigmapi.viz.compare import compare_figure  # matplotlib: only when drawing
 
         out = Path(out_dir) / FIGURE
-        compare_figure(self.to_dict()).savefig(out, dpi=120)
+        save_figure(compare_figure(self.to_dict()), out, dpi=120)
         atomic_write_bytes(out.with_suffix(".txt"), (self.caption() + "\n").encode("utf-8"))
         return [out]
 

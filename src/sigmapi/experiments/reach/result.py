@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from sigmapi._outputs import save_figure
 from sigmapi.experiments.kit.episodes import block_ends, block_rates, final_rates
 from sigmapi.experiments.reach.config import ReachConfig
 
@@ -201,7 +202,7 @@ class ReachResult:
         from sigmapi.experiments.reach.figures import reach_figure  # matplotlib: only to draw
 
         out = Path(path)
-        reach_figure(self).savefig(out, dpi=dpi, facecolor="white")
+        save_figure(reach_figure(self), out, dpi=dpi, facecolor="white")
         return out
 
     def figure(self, out_dir: str | Path) -> list[Path]:

@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from sigmapi._outputs import save_figure
 from sigmapi.experiments.kit.episodes import block_ends, block_rates, final_rates
 from sigmapi.experiments.reward.config import RewardConfig
 
@@ -174,7 +175,7 @@ class RewardResult:
         from sigmapi.experiments.reward.figures import reward_figure  # matplotlib: only to draw
 
         out = Path(path)
-        reward_figure(self).savefig(out, dpi=dpi, facecolor="white")
+        save_figure(reward_figure(self), out, dpi=dpi, facecolor="white")
         return out
 
     def figure(self, out_dir: str | Path) -> list[Path]:

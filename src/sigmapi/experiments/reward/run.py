@@ -202,6 +202,14 @@ def _seed_runs(job: _SeedJob, progress: Tick | None) -> dict[str, Any]:
     return out
 
 
+def _per_job(config: RewardConfig, world: World) -> int:
+    """One job's memory: the map's (:func:`~sigmapi.executor.job_memory`), its recorded
+    views' positions (64 bytes an iteration) and the episodes' records (64 bytes each)."""
+    som = config.som_config(0, world)
+    views = 64 * som.iterations + 64 * config.run.episodes
+    return job_memory(som, n_test=config.run.n_test) + views
+
+
 class RewardExperiment(Experiment[RewardConfig]):
     """The frozen map, the reward-gated map and the shuffled-reward control, over seeds."""
 
@@ -237,7 +245,7 @@ class RewardExperiment(Experiment[RewardConfig]):
         jobs = [(str(s), _SeedJob(config, self.world, s)) for s in seeds]
         values = run_all(
             _run_seed, jobs, executor=executor,
-            per_job=job_memory(config.som_config(0, self.world), n_test=config.run.n_test),
+            per_job=_per_job(config, self.world),
             progress=progress, desc="reward",
             verbose=lambda job: dataclasses.replace(job, show=progress),
             describe=lambda key, _: f"seed {key}",

@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from sigmapi._outputs import save_figure, write_file
 from sigmapi.envs.robot.frames import Frames
 from sigmapi.envs.robot.scene import Scene
 from sigmapi.experiments.robot.config import PLAN
@@ -87,8 +88,6 @@ def write_gif(frames: list[NDArray[np.uint8]], path: Path, fps: int = 6) -> Path
     """Save ``frames`` as an animated GIF at ``path``."""
     from PIL import Image
 
-    from sigmapi._outputs import write_file
-
     images = [Image.fromarray(f) for f in frames]
 
     def write(fh: Any) -> None:  # into a temp file, renamed over path: atomic, never a link
@@ -108,11 +107,11 @@ def robot_figures(
     if result.unit_z:
         ax = plot_unit_positions(result.unit_z[0], result.config.map_shape)
         paths.append(out_dir / "map-on-table.png")
-        ax.figure.savefig(paths[-1], dpi=120, bbox_inches="tight")
+        save_figure(ax.figure, paths[-1], dpi=120, bbox_inches="tight")
         plt.close(ax.figure)
     ax = plot_curves(result.curves())
     paths.append(out_dir / "learning-curves.png")
-    ax.figure.savefig(paths[-1], dpi=120, bbox_inches="tight")
+    save_figure(ax.figure, paths[-1], dpi=120, bbox_inches="tight")
     plt.close(ax.figure)
     if film:
         pick = np.linspace(0, len(film) - 1, min(6, len(film))).round().astype(int)
@@ -122,6 +121,6 @@ def robot_figures(
             a.set_axis_off()
             a.set_title(f"step {i}", fontsize=9)
         paths.append(out_dir / "film.png")
-        fig.savefig(paths[-1], dpi=90, bbox_inches="tight")
+        save_figure(fig, paths[-1], dpi=90, bbox_inches="tight")
         plt.close(fig)
     return paths

@@ -106,12 +106,14 @@ def _learner(job: _Job, tick: Tick | None) -> dict[str, Any]:
 
 def job_memory(config: RobotConfig) -> int:
     """Peak bytes of one job (an upper estimate): the map's training and scoring
-    (:func:`sigmapi.executor.job_memory`) and its recorded and evaluation views."""
+    (:func:`sigmapi.executor.job_memory`), its recorded and evaluation views and the
+    episodes' records."""
     n = config.grid**2
     som = robot_som_config(PopulationCode((config.grid,) * 2, width=config.code_width),
                            config.map_shape, config.iterations, 0, config.backend)  # fmt: skip
     views = (config.train_pairs + 2 * config.eval_pairs) * 4 * n * 8
-    return _som_job_memory(som, n_test=config.eval_pairs) + views
+    episodes = 64 * config.episodes  # start seeds and each episode's records
+    return _som_job_memory(som, n_test=config.eval_pairs) + views + episodes
 
 
 class RobotExperiment(Experiment[RobotConfig]):
@@ -159,9 +161,10 @@ class RobotExperiment(Experiment[RobotConfig]):
         if config.retina == "pixels":
             check_rendering()
         per_job = job_memory(config)  # the main process records views too: checked first
-        _memory.check(per_job, f"a robot run of grid={config.grid}, eval_pairs="
-                      f"{config.eval_pairs:,}, map_pairs={config.map_pairs:,}",
-                      "use a smaller grid, map or fewer pairs")  # fmt: skip
+        _memory.check(per_job, f"a robot job of grid={config.grid}, eval_pairs="
+                      f"{config.eval_pairs:,}, map_pairs={config.map_pairs:,}, episodes="
+                      f"{config.episodes:,}", "use a smaller grid or map, or fewer pairs or "
+                      "episodes")  # fmt: skip
         t0 = time.perf_counter()
         evaluation = None
         if "map" in config.states:

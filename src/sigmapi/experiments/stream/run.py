@@ -28,6 +28,7 @@ from typing import Any
 import numpy as np
 
 from sigmapi import _validate
+from sigmapi._outputs import save_figure
 from sigmapi.config import SOMConfig
 from sigmapi.errors import ConfigError
 from sigmapi.executor import Executor, job_memory
@@ -294,7 +295,7 @@ class StreamResult:
         from sigmapi.viz.stream import stream_figure  # matplotlib: only when drawing
 
         out = Path(out_dir) / FIGURE
-        stream_figure(self.to_dict()).savefig(out, dpi=120)
+        save_figure(stream_figure(self.to_dict()), out, dpi=120)
         atomic_write_bytes(out.with_suffix(".txt"), (self.caption() + "\n").encode("utf-8"))
         return [out]
 
