@@ -19,7 +19,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("cli",),
     ("experiments",),
     ("envs", "agents", "baselines", "viz"),
-    ("metrics", "checkpoints", "executor"),
+    ("analysis", "metrics", "checkpoints", "executor"),
     ("circular",),
     ("som",),
     ("_grids", "_cost", "_params", "_persist", "_refine", "_stream"),

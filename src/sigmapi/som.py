@@ -1,3 +1,6 @@
+# Over 500 lines: the estimator's public surface (fit, partial_fit, respond, winner, transform,
+# save and load) in one place; its parts live in the _grids, _cost, _params, _persist, _refine
+# and _stream mixins.
 """SigmaPiSOM: a self-organizing map of Sigma-Pi units (Weber & Wermter 2007).
 
 The estimator holds the state (weights, iteration count, random streams) and delegates the

@@ -144,15 +144,19 @@ def chain_config(config: SOMConfig | None = None, iterations: int | None = None)
     )
     if not isinstance(cfg, SOMConfig):
         raise _validate.fail(
-            "config", "a sigmapi.SOMConfig or None", type(cfg).__name__,
+            "config",
+            "a sigmapi.SOMConfig or None",
+            type(cfg).__name__,
             "load a preset with sigmapi.load_preset(name)",
-        )  # fmt: skip
+        )
     for name in ("map_shape", "x_shape", "y_shape"):
         if len(getattr(cfg, name)) != 1:
             raise _validate.fail(
-                f"config.{name}", "1-D (one axis)", getattr(cfg, name),
+                f"config.{name}",
+                "1-D (one axis)",
+                getattr(cfg, name),
                 "the chain of frames is built on 1-D positions, e.g. (15,)",
-            )  # fmt: skip
+            )
     if cfg.periodic or cfg.relation != "mean":
         raise ConfigError(
             f"config must be non-periodic with relation 'mean', got periodic={cfg.periodic}, "
@@ -207,8 +211,13 @@ def chain_seed(job: ChainJob) -> dict[str, Any]:
     """Train map A, map B and the single map on seed ``job.seed``'s triples and score both
     routes on the shared calibration and test triples (one entry of ``"seeds"``)."""
     seed, cfg, train_pairs, code, cal, test = (
-        job.seed, job.cfg, job.train_pairs, job.code, job.cal, job.test,
-    )  # fmt: skip
+        job.seed,
+        job.cfg,
+        job.train_pairs,
+        job.code,
+        job.cal,
+        job.test,
+    )
     rng = PLAN.rng(seed, "triples")
     train = sample_triples(train_pairs, rng)
     spacing = float(cfg.y_shape[0] - 1)
@@ -230,8 +239,9 @@ def chain_seed(job: ChainJob) -> dict[str, Any]:
 
     # the single map on the whole transformation: same triples, same config but the grids
     start = time.perf_counter()
-    s = SigmaPiSOM(cfg.replace(x_shape=(cfg.x_shape[0], 1), y_shape=(*cfg.y_shape, *cfg.y_shape)),
-                   seed=seed)  # fmt: skip
+    s = SigmaPiSOM(
+        cfg.replace(x_shape=(cfg.x_shape[0], 1), y_shape=(*cfg.y_shape, *cfg.y_shape)), seed=seed
+    )
     s.fit((*_single_inputs(s, train, 0), *_single_inputs(s, train, 1)))
     single_seconds = time.perf_counter() - start
 
@@ -246,9 +256,14 @@ def chain_seed(job: ChainJob) -> dict[str, Any]:
         ("single", s, single_winners, s.weights_.size, single_seconds),
     ):
         scores = winner_metrics(
-            winners(cal, 0), cal.z, winners(test, 0), winners(test, 1), test.z,
-            model.map_coords, spacing,
-        )  # fmt: skip
+            winners(cal, 0),
+            cal.z,
+            winners(test, 0),
+            winners(test, 1),
+            test.z,
+            model.map_coords,
+            spacing,
+        )
         out[name] = {**scores, "weights": int(weights), "train_seconds": secs}
     out["ratio"] = out["chain"]["z_error"] / out["single"]["z_error"]
     return out
@@ -268,17 +283,18 @@ class ChainConfig:
     docs/results/chain.md measures; an override can turn it on)."""
     overrides: tuple[str, ...] = field(default=(), metadata=KEY_VALUES)
     """``key=value`` changes to the preset, e.g. ``iterations=50000`` (one per change)."""
-    train_pairs: int = 20_000
+    train_pairs: int = field(
+        default=20_000, metadata=_validate.bounded("int", 10, fix="e.g. 20000")
+    )
     """View pairs of triples that map B and the single map are trained on."""
-    n_test: int = 10_000
+    n_test: int = field(default=10_000, metadata=_validate.bounded("int", 10, fix="e.g. 10000"))
     """Calibration and test triples (each), from the fixed evaluation seed."""
     code: Code = "response"
     """What map A hands to map B: its normalised response, or a code of its winner's position."""
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "overrides", tuple(self.overrides))
-        _validate.integer("train_pairs", self.train_pairs, 10, fix="e.g. 20000")
-        _validate.integer("n_test", self.n_test, 10, fix="e.g. 10000")
+        _validate.check_fields(self)
         _validate.choice("code", self.code, CODES)
         self.som_config  # noqa: B018 (an unknown preset or a bad override fails here, not later)
 
@@ -313,18 +329,24 @@ class ChainResult:
             route: {k: med(route, k) for k in SUMMARY_KEYS} for route in ("chain", "single")
         }
         out.update(
-            ratio_median=float(np.median(ratios)), ratio_worst=float(max(ratios)),
-            met=int(sum(r <= TARGET_RATIO for r in ratios)), n_seeds=len(per_seed),
+            ratio_median=float(np.median(ratios)),
+            ratio_worst=float(max(ratios)),
+            met=int(sum(r <= TARGET_RATIO for r in ratios)),
+            n_seeds=len(per_seed),
             target_ratio=TARGET_RATIO,
             map_a_order_r2_min=min(r["map_a"]["order_r2"] for r in per_seed),
-        )  # fmt: skip
+        )
         return out
 
     def to_dict(self) -> dict[str, Any]:
         """``"settings"``, ``"seeds"`` (one dict per seed) and ``"summary"``."""
-        settings = {"config": self.config.to_dict(), "train_pairs": self.train_pairs,
-                    "n_test": self.n_test, "code": self.code,
-                    "seeds": [r["seed"] for r in self.per_seed]}  # fmt: skip
+        settings = {
+            "config": self.config.to_dict(),
+            "train_pairs": self.train_pairs,
+            "n_test": self.n_test,
+            "code": self.code,
+            "seeds": [r["seed"] for r in self.per_seed],
+        }
         return {"settings": settings, "seeds": self.per_seed, "summary": self.summary()}
 
     def table(self) -> str:
@@ -372,11 +394,19 @@ def _run(
     per_job = 2 * job_memory(cfg, n_test) + job_memory(single, n_test)
 
     def describe(key: str, r: dict[str, Any]) -> str:
-        return (f"{key}: chain z error {r['chain']['z_error']:.3f}, single "
-                f"{r['single']['z_error']:.3f}")  # fmt: skip
+        return (
+            f"{key}: chain z error {r['chain']['z_error']:.3f}, single {r['single']['z_error']:.3f}"
+        )
 
-    done = run_all(chain_seed, jobs, executor=executor, per_job=per_job, progress=progress,
-                   desc="chain", describe=describe)  # fmt: skip
+    done = run_all(
+        chain_seed,
+        jobs,
+        executor=executor,
+        per_job=per_job,
+        progress=progress,
+        desc="chain",
+        describe=describe,
+    )
     return ChainResult(cfg, train_pairs, n_test, code, list(done.values()))
 
 
@@ -451,8 +481,15 @@ class Chain(Experiment[ChainConfig]):
         executor: Executor | None = None,
         progress: Progress | None = None,
     ) -> ChainResult:
-        return _run(config.som_config, seeds, config.train_pairs, config.n_test, config.code,
-                    executor, progress)  # fmt: skip
+        return _run(
+            config.som_config,
+            seeds,
+            config.train_pairs,
+            config.n_test,
+            config.code,
+            executor,
+            progress,
+        )
 
 
 CHAIN = register(Chain())

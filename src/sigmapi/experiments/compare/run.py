@@ -117,22 +117,25 @@ class CompareConfig:
     """The task and the Sigma-Pi map's settings (a preset name; ``sigmapi presets``)."""
     overrides: tuple[str, ...] = field(default=(), metadata=KEY_VALUES)
     """``key=value`` changes to the preset, e.g. ``iterations=50000`` (one per change)."""
-    train_pairs: int = 20_000
+    train_pairs: int = field(
+        default=20_000, metadata=_validate.bounded("int", 100, fix="e.g. 20000")
+    )
     """View pairs recorded per seed (every method trains on these rows)."""
-    baseline_iterations: int = 100_000
+    baseline_iterations: int = field(
+        default=100_000, metadata=_validate.bounded("int", 1, fix="e.g. 100000")
+    )
     """Online updates of the first-order maps (sigmapi's and MiniSom)."""
-    rbm_epochs: int = 10
+    rbm_epochs: int = field(default=10, metadata=_validate.bounded("int", 1, fix="e.g. 10"))
     """Training passes of the RBM over the data."""
-    n_test: int = 10_000
+    n_test: int = field(
+        default=10_000, metadata=_validate.bounded("int", LABELS[0], fix="e.g. 10000")
+    )
     """Test z's (and calibration z's, the pool the labels are drawn from)."""
     methods: tuple[str, ...] = tuple(METHODS)
     """Methods to run (default: all of them); "sigma-pi" always runs."""
 
     def __post_init__(self) -> None:
-        _validate.integer("train_pairs", self.train_pairs, 100, fix="e.g. 20000")
-        _validate.integer("baseline_iterations", self.baseline_iterations, 1, fix="e.g. 100000")
-        _validate.integer("rbm_epochs", self.rbm_epochs, 1, fix="e.g. 10")
-        _validate.integer("n_test", self.n_test, LABELS[0], fix="e.g. 10000")
+        _validate.check_fields(self)
         for m in self.methods:
             _validate.choice("methods", m, tuple(METHODS))
         object.__setattr__(
@@ -230,23 +233,25 @@ class CompareResult:
         methods = []
         for name, s in self.scores.items():
             curve = s.median_curve()
-            methods.append({
-                "name": name,
-                "description": METHODS[name],
-                "view_consistency": float(np.median(s.view_consistency)),
-                "unit_consistency": float(np.median(s.unit_consistency)),
-                "z_error": s.z_error,
-                "labels_used": labels_used,
-                "labels_needed": s.labels_needed(),
-                "labels_to_match_sigma_pi": s.labels_to_match(target),
-                "z_error_by_labels": {str(n): e for n, e in curve.items()},
-                "per_seed": {
-                    "view_consistency": s.view_consistency,
-                    "unit_consistency": s.unit_consistency,
-                    "z_error": [c[labels_used] for c in s.z_error_by_labels],
-                    "seconds": s.seconds,
-                },
-            })  # fmt: skip
+            methods.append(
+                {
+                    "name": name,
+                    "description": METHODS[name],
+                    "view_consistency": float(np.median(s.view_consistency)),
+                    "unit_consistency": float(np.median(s.unit_consistency)),
+                    "z_error": s.z_error,
+                    "labels_used": labels_used,
+                    "labels_needed": s.labels_needed(),
+                    "labels_to_match_sigma_pi": s.labels_to_match(target),
+                    "z_error_by_labels": {str(n): e for n, e in curve.items()},
+                    "per_seed": {
+                        "view_consistency": s.view_consistency,
+                        "unit_consistency": s.unit_consistency,
+                        "z_error": [c[labels_used] for c in s.z_error_by_labels],
+                        "seconds": s.seconds,
+                    },
+                }
+            )
         cfg = dataclasses.asdict(self.config)
         head = {"preset": cfg.pop("preset"), "overrides": cfg.pop("overrides")}
         config = {**head, "seeds": list(self.seeds), **cfg, "labels": list(self.config.labels)}
@@ -420,9 +425,15 @@ def run_compare(
     _memory.check_count("n_test", cfg.n_test, 4 * width + 32 * som.n_units, "e.g. --n-test 10000")
     cal, test = evaluation_sets(som, cfg.n_test)
     jobs = [(f"seed {seed}", CompareJob(seed, cfg, cal, test)) for seed in seeds]
-    done = run_all(compare_seed, jobs, executor=executor,
-                   per_job=job_memory(cfg.som_config, cfg.n_test), progress=progress,
-                   desc="compare", verbose=_verbose)  # fmt: skip
+    done = run_all(
+        compare_seed,
+        jobs,
+        executor=executor,
+        per_job=job_memory(cfg.som_config, cfg.n_test),
+        progress=progress,
+        desc="compare",
+        verbose=_verbose,
+    )
     scores = {name: MethodScore(name) for name in cfg.methods}
     for per_method in done.values():
         for name, (vc, uc, curve, seconds) in per_method.items():

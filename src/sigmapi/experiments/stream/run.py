@@ -84,26 +84,37 @@ class StreamConfig:
     """Dwell times: saccades (frames) per object position."""
     traces: tuple[float, ...] = (0.0, 0.5)
     """Trace constants of the trace rule (0: the two-view rule on consecutive frames)."""
-    n_test: int = 10_000
+    n_test: int = field(default=10_000, metadata=_validate.bounded("int", 10, fix="e.g. 10000"))
     """Test z's (and calibration z's) of the evaluation."""
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
         set_(self, "overrides", tuple(self.overrides))
         if not self.dwells:
-            raise _validate.fail("dwells", "at least one dwell time", list(self.dwells),
-                                 "e.g. --dwells 1,2,4,8,16")  # fmt: skip
-        dwells = [_validate.integer("dwells", d, 1, fix="saccades per position") for d in
-                  self.dwells]  # fmt: skip
+            raise _validate.fail(
+                "dwells", "at least one dwell time", list(self.dwells), "e.g. --dwells 1,2,4,8,16"
+            )
+        dwells = [
+            _validate.integer("dwells", d, 1, fix="saccades per position") for d in self.dwells
+        ]
         set_(self, "dwells", tuple(sorted(set(dwells))))
         if not self.traces:
-            raise _validate.fail("traces", "at least one trace constant", list(self.traces),
-                                 "e.g. --traces 0,0.5")  # fmt: skip
-        traces = {_validate.number("traces", t, 0.0, 1.0, hi_open=True,
-                                   fix="trace constants in [0, 1), e.g. --traces 0,0.5")
-                  for t in self.traces}  # fmt: skip
+            raise _validate.fail(
+                "traces", "at least one trace constant", list(self.traces), "e.g. --traces 0,0.5"
+            )
+        traces = {
+            _validate.number(
+                "traces",
+                t,
+                0.0,
+                1.0,
+                hi_open=True,
+                fix="trace constants in [0, 1), e.g. --traces 0,0.5",
+            )
+            for t in self.traces
+        }
         set_(self, "traces", tuple(sorted(traces)))
-        _validate.integer("n_test", self.n_test, 10, fix="e.g. 10000")
+        _validate.check_fields(self)
         self.som_config  # noqa: B018 (an unknown preset or a bad override fails here, not later)
 
     @property
@@ -112,8 +123,12 @@ class StreamConfig:
         return MapSpec(self.preset, self.overrides).config()
 
 
-QUICK = StreamConfig(overrides=("iterations=20000", "refine_pairs=20000"), dwells=(1, 4, 16),
-                     traces=(0.0, 0.5), n_test=2000)  # fmt: skip
+QUICK = StreamConfig(
+    overrides=("iterations=20000", "refine_pairs=20000"),
+    dwells=(1, 4, 16),
+    traces=(0.0, 0.5),
+    n_test=2000,
+)
 """The quick look: a short run of the 1-D map, three dwell times, one seed."""
 
 
@@ -171,15 +186,24 @@ class StreamResult:
     def from_dict(cls, data: dict[str, Any]) -> StreamResult:
         """The result a :meth:`to_dict` wrote (e.g. read back from ``result.json``)."""
         st = data["settings"]
-        config = StreamConfig(preset=st["preset"], overrides=tuple(st["overrides"]),
-                              dwells=tuple(st["dwells"]), traces=tuple(st["traces"]),
-                              n_test=st["n_test"])  # fmt: skip
+        config = StreamConfig(
+            preset=st["preset"],
+            overrides=tuple(st["overrides"]),
+            dwells=tuple(st["dwells"]),
+            traces=tuple(st["traces"]),
+            n_test=st["n_test"],
+        )
         seeds = tuple(st["seeds"])
         runs = [
-            {"seed": seed, "dwell": m["dwell"], "trace": m["trace"],
-             **{k: m["per_seed"][k][i] for k in (*METRICS, "folded", "seconds")}}
-            for m in data["methods"] for i, seed in enumerate(seeds)
-        ]  # fmt: skip
+            {
+                "seed": seed,
+                "dwell": m["dwell"],
+                "trace": m["trace"],
+                **{k: m["per_seed"][k][i] for k in (*METRICS, "folded", "seconds")},
+            }
+            for m in data["methods"]
+            for i, seed in enumerate(seeds)
+        ]
         return cls(config, seeds, runs, float(data["seconds"]))
 
     @classmethod
@@ -189,8 +213,12 @@ class StreamResult:
         if not parts or any(p.config != parts[0].config for p in parts):
             raise ConfigError("results to combine must share one config (and be at least one)")
         seeds = check_seeds([s for p in parts for s in p.seeds], "seeds of the results")
-        return cls(parts[0].config, seeds, [r for p in parts for r in p.runs],
-                   sum(p.seconds for p in parts))  # fmt: skip
+        return cls(
+            parts[0].config,
+            seeds,
+            [r for p in parts for r in p.runs],
+            sum(p.seconds for p in parts),
+        )
 
     def _rows(self, trace: float | None, dwell: int | None) -> list[dict[str, Any]]:
         rows = [r for r in self.runs if r["trace"] == trace and r["dwell"] == dwell]
@@ -212,10 +240,11 @@ class StreamResult:
                 entry.update({k: float(np.median(vals)), f"{k}_worst": float(worst)})
             folded = [r["folded"] for r in rows]
             entry.update(
-                fold_rate=float(np.mean(folded)), ordered=int(len(rows) - sum(folded)),
+                fold_rate=float(np.mean(folded)),
+                ordered=int(len(rows) - sum(folded)),
                 n_seeds=len(rows),
                 per_seed={k: [r[k] for r in rows] for k in (*METRICS, "folded", "seconds")},
-            )  # fmt: skip
+            )
             out.append(entry)
         return out
 
@@ -230,27 +259,45 @@ class StreamResult:
                 rows = self._rows(trace, dwell)
                 gap = [r["view_consistency"] - pairs[r["seed"]]["view_consistency"] for r in rows]
                 met = [g >= -VC_MARGIN and not r["folded"] for g, r in zip(gap, rows, strict=True)]
-                out["cases"].append({
-                    "trace": trace, "dwell": dwell, "vc_gap_median": float(np.median(gap)),
-                    "vc_gap_worst": float(min(gap)), "met": int(sum(met)),
-                    "n_seeds": len(rows), "all_met": bool(all(met)),
-                })  # fmt: skip
+                out["cases"].append(
+                    {
+                        "trace": trace,
+                        "dwell": dwell,
+                        "vc_gap_median": float(np.median(gap)),
+                        "vc_gap_worst": float(min(gap)),
+                        "met": int(sum(met)),
+                        "n_seeds": len(rows),
+                        "all_met": bool(all(met)),
+                    }
+                )
         return out
 
     def to_dict(self) -> dict[str, Any]:
         """``"methods"`` (:meth:`methods`), ``"acceptance"``, ``"settings"`` (the config,
         the resolved map config, the seeds) and ``"seconds"`` (the whole run's wall time)."""
         c = self.config
-        settings = {"preset": c.preset, "overrides": list(c.overrides), "dwells": list(c.dwells),
-                    "traces": list(c.traces), "n_test": c.n_test, "seeds": list(self.seeds),
-                    "config": c.som_config.to_dict()}  # fmt: skip
-        return {"methods": self.methods(), "acceptance": self.acceptance(),
-                "settings": settings, "seconds": self.seconds}  # fmt: skip
+        settings = {
+            "preset": c.preset,
+            "overrides": list(c.overrides),
+            "dwells": list(c.dwells),
+            "traces": list(c.traces),
+            "n_test": c.n_test,
+            "seeds": list(self.seeds),
+            "config": c.som_config.to_dict(),
+        }
+        return {
+            "methods": self.methods(),
+            "acceptance": self.acceptance(),
+            "settings": settings,
+            "seconds": self.seconds,
+        }
 
     def table(self) -> str:
         """Medians per method and dwell time, then the acceptance lines."""
-        rows = [f"{'method':20s} {'dwell':>5s} {'same unit':>9s} {'worst':>6s} {'z error':>8s} "
-                f"{'order R^2':>9s} {'worst':>6s} {'folded':>7s}"]  # fmt: skip
+        rows = [
+            f"{'method':20s} {'dwell':>5s} {'same unit':>9s} {'worst':>6s} {'z error':>8s} "
+            f"{'order R^2':>9s} {'worst':>6s} {'folded':>7s}"
+        ]
         for m in self.methods():
             d = "-" if m["dwell"] is None else str(m["dwell"])
             rows.append(
@@ -271,8 +318,9 @@ class StreamResult:
         """The figure's caption, computed from the result."""
         pairs = self.methods()[0]
         n = len(self.seeds)
-        best = max(self.acceptance()["cases"], key=lambda c: (c["met"], c["vc_gap_median"]),
-                   default=None)  # fmt: skip
+        best = max(
+            self.acceptance()["cases"], key=lambda c: (c["met"], c["vc_gap_median"]), default=None
+        )
         text = (
             f"{self.config.preset}, {n} seed{'s' * (n > 1)} ({', '.join(map(str, self.seeds))}): "
             f"view consistency and fold rate of maps learned from a stream in which the object "
@@ -311,16 +359,25 @@ def run_stream(
     cfg = config.som_config
     start = time.perf_counter()
     jobs = [(f"seed {s} pairs", StreamJob(s, cfg, None, (), config.n_test)) for s in seeds]
-    jobs += [(f"seed {s} dwell {d}", StreamJob(s, cfg, d, config.traces, config.n_test))
-             for s in seeds for d in config.dwells]  # fmt: skip
+    jobs += [
+        (f"seed {s} dwell {d}", StreamJob(s, cfg, d, config.traces, config.n_test))
+        for s in seeds
+        for d in config.dwells
+    ]
     frames = 8 * (cfg.iterations + 1) * 2 * (int(np.prod(cfg.x_shape)) + int(np.prod(cfg.y_shape)))
 
     def describe(key: str, rows: list[dict[str, Any]]) -> str:
         return f"{key}: same unit " + ", ".join(f"{r['view_consistency']:.3f}" for r in rows)
 
-    done = run_all(stream_job, jobs, executor=executor,
-                   per_job=job_memory(cfg, config.n_test) + frames, progress=progress,
-                   desc="stream", describe=describe)  # fmt: skip
+    done = run_all(
+        stream_job,
+        jobs,
+        executor=executor,
+        per_job=job_memory(cfg, config.n_test) + frames,
+        progress=progress,
+        desc="stream",
+        describe=describe,
+    )
     runs = [r for rows in done.values() for r in rows]
     return StreamResult(config, seeds, runs, time.perf_counter() - start)
 
