@@ -18,7 +18,7 @@ PACKAGE = SRC / "sigmapi"
 LAYERS: tuple[tuple[str, ...], ...] = (
     ("cli",),
     ("experiments",),
-    ("envs", "agents", "baselines", "viz"),
+    ("envs", "agents", "baselines", "neurons", "viz"),
     ("analysis", "metrics", "checkpoints", "executor"),
     ("circular",),
     ("som",),
