@@ -57,7 +57,7 @@ def run_seed(
 ) -> dict[str, Any]:
     """One seed of ``preset`` (with ``key=value`` ``overrides``): metrics and times; for a map
     of angles also the circular metrics and ``seamless``. ``ceiling``: also the metrics of
-    the rule's fixed point reached from the map (:func:`sigmapi.viz.ceiling.fixed_point`,
+    the rule's fixed point reached from the map (:func:`sigmapi.analysis.fixed_point.fixed_point`,
     after the times are taken)."""
     cfg = apply_overrides(sigmapi.load_preset(preset), overrides or []).replace(seed=seed)
     model = SigmaPiSOM(cfg)
@@ -76,7 +76,7 @@ def run_seed(
     if "seamless" in r:
         circular["seamless"] = bool(r["seamless"])
     if ceiling:
-        from sigmapi.viz.ceiling import fixed_point
+        from sigmapi.analysis.fixed_point import fixed_point
 
         fp = fixed_point(model)
         fm = fp.metrics.to_dict()
@@ -156,7 +156,8 @@ def main() -> None:
     parser.add_argument("--label", default="", help="the result's name (default: the preset's)")
     parser.add_argument(
         "--ceiling", action="store_true",
-        help="also score each map's fixed point of Eq. 7 (sigmapi.viz.ceiling; 2-D: ~70 CPU s)",
+        help="also score each map's fixed point of Eq. 7 (sigmapi.analysis.fixed_point; "
+        "2-D: ~70 CPU s)",
     )  # fmt: skip
     parser.add_argument("--out", default=str(ROOT / "results" / "ceiling.json"))
     args = parser.parse_args()

@@ -6,7 +6,8 @@ Usage (from the repository root)::
     python benchmarks/bench_z_floor.py --seeds 700 701 --out floor.json
 
 Per seed: trains the preset (its whole procedure), moves the map to its fixed point of Eq. 7
-(:func:`sigmapi.viz.ceiling.fixed_point`), and counts which unit wins view 0 of 200,000 pairs.
+(:func:`sigmapi.analysis.fixed_point.fixed_point`), and counts which unit wins view 0 of
+200,000 pairs.
 z is uniform, so a unit's share of the wins is the share of the z range it covers (its bin).
 Two quantisation floors follow, in input grid spacings like ``z_error``: that of equal bins
 (the range over the number of units, over sqrt(12)), and that of the bins the map has (each
@@ -26,8 +27,8 @@ import numpy as np
 import sigmapi
 from _common import machine, write_result
 from sigmapi import SigmaPiSOM, evaluate
+from sigmapi.analysis.fixed_point import fixed_point
 from sigmapi.metrics import grid_spacing
-from sigmapi.viz.ceiling import fixed_point
 
 ROOT = Path(__file__).resolve().parent
 PAIRS = 200_000

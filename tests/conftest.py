@@ -13,7 +13,7 @@ os.environ.setdefault("MPLBACKEND", "Agg")
 
 import sigmapi
 from sigmapi import SigmaPiSOM, SOMConfig
-from sigmapi.viz.curves import LearningCurve, checkpoints
+from sigmapi.analysis.curves import LearningCurve, checkpoints
 
 # command lines run by the tests (subprocesses, other working folders) import the sigmapi
 # under test, not whichever one is installed

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from sigmapi import SigmaPiSOM
-from sigmapi.viz import analysis
-from sigmapi.viz.curves import checkpoints, costs
+from sigmapi.analysis import map_data as analysis
+from sigmapi.analysis.curves import checkpoints, costs
 
 
 def test_fig8_data_views_share_z(model_2d):

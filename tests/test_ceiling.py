@@ -1,4 +1,5 @@
-"""The rule's ceiling (sigmapi.viz.ceiling): the quadrature grid and the fixed point of Eq. 7."""
+"""The rule's ceiling (sigmapi.analysis.fixed_point): the quadrature grid and the fixed point of
+Eq. 7."""
 
 from __future__ import annotations
 
@@ -8,9 +9,9 @@ import numpy as np
 import pytest
 
 from sigmapi import SigmaPiSOM
+from sigmapi.analysis import fixed_point as ceiling
 from sigmapi.errors import ConfigError
 from sigmapi.tasks import Relation
-from sigmapi.viz import ceiling
 
 
 @pytest.fixture(scope="module")

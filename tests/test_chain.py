@@ -11,6 +11,7 @@ import pytest
 import sigmapi
 import sigmapi.experiments
 from sigmapi.cli import main
+from sigmapi.experiments.chain.result import ChainResult
 from sigmapi.experiments.chain.run import (
     TARGET_RATIO,
     chain_config,
@@ -139,6 +140,7 @@ def test_command_line_json_is_run_chains_result(capsys, small_run, tmp_path):
         assert got["ratio"] == want["ratio"] and got["map_a"] == want["map_a"]
     assert out["settings"]["config"]["ordering"] == "crossview"
     assert sigmapi.experiments.read_result(tmp_path) == out
+    assert ChainResult.from_dict(out).to_dict() == out  # result.json reads back
 
 
 def test_command_line_table_and_user_mistakes(capsys, tmp_path, monkeypatch):

@@ -126,3 +126,32 @@ def test_worlds_map_specs_and_seed_plans_travel_to_other_processes():
 
     for value in (GAZE_REACH, ROBOT_WORLD, PLAN, MapSpec("paper-1d", changes={"eps": 0.1})):
         assert pickle.loads(pickle.dumps(value)) == value
+
+
+def test_declared_bounds_are_checked_by_one_validator_and_shown_by_help():
+    from dataclasses import dataclass, field
+
+    from sigmapi import _validate
+    from sigmapi.cli import build_parser
+
+    @dataclass(frozen=True)
+    class Cfg:
+        n: int = field(default=3, metadata=_validate.bounded("int", 1, fix="e.g. 3"))
+        share: float = field(default=0.5, metadata=_validate.bounded("number", 0, 1, lo_open=True))
+
+        def __post_init__(self):
+            _validate.check_fields(self)
+
+    assert Cfg(n=np.int64(4)).n == 4 and type(Cfg(n=np.int64(4)).n) is int
+    with pytest.raises(ConfigError, match=r"^n must be an int >= 1, got 0; e.g. 3$"):
+        Cfg(n=0)
+    with pytest.raises(ConfigError, match=r"share must be a number in \(0, 1\], got 0"):
+        Cfg(share=0)
+    with pytest.raises(ConfigError, match="episodes must be an int >= 1"):
+        ReachConfig().replace(episodes=0)
+    sub = next(a for a in build_parser()._actions if a.dest == "command")
+    text = " ".join(sub.choices["reach"].format_help().split())
+    assert "(an int >= 1; default 600)" in text  # --episodes
+    assert "(a number in (0, 1]; default 0.05)" in text  # --plateau-rise
+    robot = " ".join(sub.choices["robot"].format_help().split())
+    assert "(a number in [0, 1]; default 0.0)" in robot  # --moved-share

@@ -18,8 +18,8 @@ PACKAGE = SRC / "sigmapi"
 LAYERS: tuple[tuple[str, ...], ...] = (
     ("cli",),
     ("experiments",),
-    ("envs", "agents", "baselines", "viz"),
-    ("metrics", "checkpoints", "executor", "export"),
+    ("envs", "agents", "baselines", "neurons", "viz"),
+    ("analysis", "metrics", "checkpoints", "executor", "export"),
     ("circular",),
     ("som",),
     ("_grids", "_cost", "_params", "_persist", "_refine", "_stream", "_outputs"),

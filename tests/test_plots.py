@@ -12,7 +12,8 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pytest
 
-from sigmapi.viz import analysis, plots
+from sigmapi.analysis import map_data as analysis
+from sigmapi.viz import plots
 from sigmapi.viz.figures import FIGURES, draw_figure
 
 PNG = b"\x89PNG\r\n\x1a\n"

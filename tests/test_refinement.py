@@ -152,7 +152,7 @@ def test_over_seeds_the_refinement_lowers_the_cost_and_raises_consistency():
 
 
 def test_the_learning_curve_records_every_round():
-    from sigmapi.viz.curves import LearningCurve
+    from sigmapi.analysis.curves import LearningCurve
 
     cfg = SMALL.replace(backend="reference", refine_pairs=1000)
     curve = LearningCurve(at=[1000, 3000], n_test=300)

@@ -21,7 +21,7 @@ def _close_figures():
 
 def test_learning_curves_draw_the_refinement_on_its_own_axis_and_the_ceiling(model_1d):
     from sigmapi import SigmaPiSOM
-    from sigmapi.viz.curves import LearningCurve, checkpoints
+    from sigmapi.analysis.curves import LearningCurve, checkpoints
 
     som = SigmaPiSOM(model_1d.config.replace(refine_rounds=2, refine_pairs=1000))
     curve = LearningCurve(at=checkpoints(2000, 3), n_test=100)

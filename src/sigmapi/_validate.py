@@ -9,8 +9,9 @@ the paper runs 300000"``. Each check returns the value in its canonical type (``
 
 from __future__ import annotations
 
+import dataclasses
 import math
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from typing import Any, TypeVar
 
 import numpy as np
@@ -19,7 +20,10 @@ from sigmapi.errors import ConfigError
 
 __all__ = [
     "MAX_WIDTH",
+    "Bounds",
     "boolean",
+    "bounded",
+    "check_fields",
     "choice",
     "fail",
     "integer",
@@ -186,3 +190,62 @@ def shape(
         raise fail(name, f"a shape of at most {MAX_UNITS:,} units (2**32) in all", value, fix,
                    error)  # fmt: skip
     return tuple(int(s) for s in out)
+
+
+# ------------------------------------------------------------------ declarative bounds
+
+
+@dataclasses.dataclass(frozen=True)
+class Bounds:
+    """The bounds of a numeric config field, declared beside it (:func:`bounded`), checked by
+    :func:`check_fields` and shown by ``--help`` (:meth:`describe`)."""
+
+    kind: str
+    """``"int"`` or ``"number"`` (a finite float)."""
+    lo: float | None = None
+    hi: float | None = None
+    lo_open: bool = False
+    hi_open: bool = False
+    fix: str = ""
+    """The fix the error names (e.g. ``"e.g. 600"``)."""
+
+    def describe(self) -> str:
+        """``"an int >= 1"``, ``"a number in (0, 1]"``, ..."""
+        if self.kind == "int":
+            return _range("an int", self.lo, self.hi)
+        return _range("a number", self.lo, self.hi, self.lo_open, self.hi_open)
+
+    def check(self, name: str, value: Any) -> int | float:
+        """``value`` checked (:func:`integer` or :func:`number`), in its canonical type."""
+        if self.kind == "int":
+            lo = None if self.lo is None else int(self.lo)
+            hi = None if self.hi is None else int(self.hi)
+            return integer(name, value, lo, hi, fix=self.fix)
+        return number(
+            name, value, self.lo, self.hi, lo_open=self.lo_open, hi_open=self.hi_open, fix=self.fix
+        )
+
+
+def bounded(
+    kind: str,
+    lo: float | None = None,
+    hi: float | None = None,
+    *,
+    lo_open: bool = False,
+    hi_open: bool = False,
+    fix: str = "",
+) -> Mapping[str, Bounds]:
+    """Field metadata declaring :class:`Bounds`: ``episodes: int = field(default=600,
+    metadata=bounded("int", 1))``."""
+    if kind not in ("int", "number"):
+        raise ValueError(f"bounds are of kind 'int' or 'number', got {kind!r}")
+    return {"bounds": Bounds(kind, lo, hi, lo_open, hi_open, fix)}
+
+
+def check_fields(obj: Any) -> None:
+    """Check every field of the frozen dataclass ``obj`` that declares :class:`Bounds` (in the
+    order of the fields) and store its canonical value: the one validator of declared bounds."""
+    for f in dataclasses.fields(obj):
+        b = f.metadata.get("bounds")
+        if b is not None:
+            object.__setattr__(obj, f.name, b.check(f.name, getattr(obj, f.name)))

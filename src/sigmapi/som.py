@@ -1,3 +1,6 @@
+# Over 500 lines: the estimator's public surface (fit, partial_fit, respond, winner, transform,
+# save and load) in one place; its parts live in the _grids, _cost, _params, _persist, _refine
+# and _stream mixins.
 """SigmaPiSOM: a self-organizing map of Sigma-Pi units (Weber & Wermter 2007).
 
 The estimator holds the state (weights, iteration count, random streams) and delegates the
@@ -430,8 +433,10 @@ class SigmaPiSOM(GridsMixin, CostMixin, ParamsMixin, PersistMixin, RefineMixin, 
         with self._lock:
             data = fit_views(views, self.x_shape, self.y_shape, "learn_gated")
             if data is None:
-                raise DataError("learn_gated needs views (x0, y0, x1, y1), one row per gated "
-                                "iteration, got None; pass the views the gates belong to")  # fmt: skip
+                raise DataError(
+                    "learn_gated needs views (x0, y0, x1, y1), one row per gated iteration, "
+                    "got None; pass the views the gates belong to"
+                )
             n = data[0].shape[0]
             try:
                 g = np.asarray(gates, dtype=np.float64)

@@ -4,11 +4,12 @@ Sub-commands: one per experiment of :data:`sigmapi.experiments.REGISTRY` (``chai
 ``compare``, ``reproduce``, ``sweep``, ...), generated with its options from the experiment's
 config dataclass (:mod:`sigmapi.cli.experiment`); and the commands that are no experiment:
 ``train``, ``evaluate``, ``presets`` (:mod:`sigmapi.cli.train`, whose ``register(subparsers)``
-adds their parsers), ``figure`` (:mod:`sigmapi.cli.figure`) and ``export``
-(:mod:`sigmapi.cli.export`). Every parser's ``func`` is a handler ``handler(args) -> int``. A
-command's options are added, and its modules imported, only when it runs or its help is shown:
-``sigmapi --help``, ``--version`` and ``presets`` import no experiment, nor numba, matplotlib,
-scikit-learn, MuJoCo or Dask.
+adds their parsers) and those of :data:`COMMANDS` (``figure``: :mod:`sigmapi.cli.figure`;
+``export``: :mod:`sigmapi.cli.export`), each a name, its one-line help and the
+``"module:function"`` that adds its options. Every parser's
+``func`` is a handler ``handler(args) -> int``. A command's options are added, and its modules
+imported, only when it runs or its help is shown: ``sigmapi --help``, ``--version`` and
+``presets`` import no experiment, nor numba, matplotlib, scikit-learn, MuJoCo or Dask.
 
 A user mistake (unknown preset, bad value, missing file) prints one line to stderr and exits
 with status 2; no traceback: every :class:`~sigmapi.errors.SigmapiError` is printed the same
@@ -18,24 +19,37 @@ way.
 from __future__ import annotations
 
 import argparse
+import importlib
 import signal
 import sys
 import threading
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
-from sigmapi.cli import export, train
+from sigmapi.cli import train
 from sigmapi.cli._common import LazyParser, Parser, check_output, resolve_config
 from sigmapi.cli.experiment import add_experiment
 from sigmapi.errors import SigmapiError
 from sigmapi.experiments import REGISTRY
 
-__all__ = ["build_parser", "check_output", "main", "resolve_config"]
+__all__ = ["COMMANDS", "build_parser", "check_output", "main", "resolve_config"]
 
 
-def _figure_options(p: Parser) -> None:
-    from sigmapi.cli import figure  # matplotlib: only for this command
+COMMANDS = (
+    ("figure", "draw one figure of a trained model", "sigmapi.cli.figure:add_arguments"),
+    ("export", "write a trained map as an ONNX graph (response, winner)",
+     "sigmapi.cli.export:add_arguments"),
+)  # fmt: skip
+"""The commands that are no experiment, besides train / evaluate / presets: name, one line of
+help, and ``"module:function"``, ``function(parser)`` adding the options and the handler; the
+module is imported only when the command is used (a new command is one line here)."""
 
-    figure.add_arguments(p)
+
+def _options(target: str) -> Callable[[Parser], None]:
+    def fill(p: Parser) -> None:
+        module, _, function = target.partition(":")
+        getattr(importlib.import_module(module), function)(p)
+
+    return fill
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -50,8 +64,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"sigmapi {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=LazyParser)
     train.register(sub)
-    sub.add_parser("figure", help="draw one figure of a trained model", fill=_figure_options)
-    export.register(sub)
+    for name, text, target in COMMANDS:
+        sub.add_parser(name, help=text, fill=_options(target))
     for name in sorted(REGISTRY):
         add_experiment(sub, name, REGISTRY.entries[name].summary)
     for action in sub._choices_actions:  # `sigmapi CMD --help` opens with its one-line summary

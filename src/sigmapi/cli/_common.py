@@ -357,7 +357,8 @@ def add_dataclass_flags(
     own default applies); a bool field is an on-switch; a ``Literal`` field offers its values;
     ``tuple[int, ...]`` is written ``8x8`` (``1,2,4`` with metadata ``{"sep": ","}``),
     ``tuple[float, ...]`` ``0,0.5`` and ``tuple[str, ...]`` ``a,b``; a field with
-    metadata ``{"repeat": True}`` is given once per value. ``aliases`` adds a second spelling
+    metadata ``{"repeat": True}`` is given once per value; a field with declared bounds
+    (:func:`sigmapi._validate.bounded`) shows them. ``aliases`` adds a second spelling
     for a field (e.g. ``{"model_path": "--model"}``); fields in ``skip`` get no option. Values
     are not checked here: ``cls`` checks them when it is built (:func:`dataclass_values`).
     """
@@ -375,8 +376,13 @@ def add_dataclass_flags(
         flags = [f"--{f.name.replace('_', '-')}"]
         if aliases and f.name in aliases:
             flags.append(aliases[f.name])
+        notes = []
+        if "bounds" in f.metadata:  # declared beside the field (sigmapi._validate.bounded)
+            notes.append(f.metadata["bounds"].describe())
         if f.default is not None:  # a None default is explained by the docstring
-            text = f"{text.removesuffix('.')} (default {shown})"
+            notes.append(f"default {shown}")
+        if notes:
+            text = f"{text.removesuffix('.')} ({'; '.join(notes)})"
         p.add_argument(*flags, dest=f.name, default=None, help=text, **kwargs)
 
 

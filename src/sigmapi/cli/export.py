@@ -11,7 +11,7 @@ from typing import Any
 from sigmapi.cli._common import check_output
 from sigmapi.errors import UsageError
 
-__all__ = ["cmd_export", "register"]
+__all__ = ["add_arguments", "cmd_export"]
 
 FORMATS = ("onnx",)
 
@@ -31,9 +31,9 @@ def cmd_export(args: argparse.Namespace) -> int:
     return 0
 
 
-def register(sub: Any) -> None:
-    """Add ``sigmapi export`` to the sub-parsers ``sub``."""
-    p = sub.add_parser("export", help="write a trained map as an ONNX graph (response, winner)")
+def add_arguments(p: Any) -> None:
+    """Add ``sigmapi export``'s options and handler to its parser ``p`` (the command's line in
+    :data:`sigmapi.cli.COMMANDS`)."""
     p.add_argument("model", help="model file written by `sigmapi train` or `sigmapi reproduce`")
     p.add_argument("--format", required=True, choices=FORMATS, help="file format (onnx)")
     p.add_argument("--out", required=True, help="file to write, e.g. map.onnx")

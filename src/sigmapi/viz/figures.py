@@ -57,7 +57,7 @@ class DrawInputs:
     ``curves``: learning-curve columns, one mapping per seed (the curves figure);
     ``reference``: reference lines for it; ``label``: how titles name the model; ``seed``:
     seed of sampled inputs; ``centres``: receptive-field centres (computed when needed);
-    ``ceiling``: the rule's ceiling (metrics of :func:`sigmapi.viz.ceiling.fixed_point`),
+    ``ceiling``: the rule's ceiling (metrics of :func:`sigmapi.analysis.fixed_point.fixed_point`),
     drawn as lines in the curves.
     """
 
@@ -131,7 +131,8 @@ def sigma_schedule(model: SigmaPiSOM, n: int = 400) -> tuple[list[float], list[f
 
 
 def _draw_fig8(model: SigmaPiSOM, inp: DrawInputs) -> tuple[Figure, Facts]:
-    from sigmapi.viz import analysis, plots
+    from sigmapi.analysis import map_data as analysis
+    from sigmapi.viz import plots
 
     d = len(model.x_shape)
     data = analysis.fig8_data(model, inp.seed, centres=inp.centres)
@@ -145,11 +146,12 @@ def _draw_fig8(model: SigmaPiSOM, inp: DrawInputs) -> tuple[Figure, Facts]:
     zs = ", ".join(f"{v:.2f}" for v in data.z)
     which = "refined map" if model.refined_ else "map"
     plots.plot_fig8(
-        data, ax=ax,
+        data,
+        ax=ax,
         title=f"Fig. 8 of the {which}{inp.tag}\nleft: map response h to {data.n_pairs} (x, y) "
         f"pairs with the same z = ({zs}), the same winner in {int(count.max())} of "
         f"{data.n_pairs}; right: to patterns\nmap polarity: {data.polarity.name}",
-    )  # fmt: skip
+    )
     return fig, {
         "z": data.z.tolist(),
         "polarity": data.polarity.name,
@@ -209,34 +211,43 @@ def _caption_fig8(run: RunInfo, facts: Facts) -> str:
 
 
 def _draw_weights(model: SigmaPiSOM, inp: DrawInputs) -> tuple[Figure, Facts]:
-    from sigmapi.viz import analysis, plots
+    from sigmapi.analysis import map_data as analysis
+    from sigmapi.viz import plots
 
     if len(model.x_shape) == 1:
         tiles = analysis.weight_tiles(model)
         k = tiles.shape[0]
         fig = _figure((max(6.0, 1.1 * np.ceil(k / np.ceil(np.sqrt(k / 2.0))) + 2.0), 4.8))
         plots.plot_weight_tiles(
-            tiles, model.map_shape, ax=fig.add_subplot(),
+            tiles,
+            model.map_shape,
+            ax=fig.add_subplot(),
             title=f"Sigma-Pi weights w_kij of each map unit k{inp.tag} (Fig. 6a):\nan invariant "
             "unit has its weight on an anti-diagonal i + j = const",
-        )  # fmt: skip
+        )
     else:
         fig = _figure((16.0, 7.6))
         axes = fig.subplots(1, 2, gridspec_kw={"wspace": 0.3})
         for a, ax in enumerate(axes):
             other = 1 - a
             plots.plot_weight_tiles(
-                analysis.weight_tiles(model, axis=a), model.map_shape, ax=ax,
+                analysis.weight_tiles(model, axis=a),
+                model.map_shape,
+                ax=ax,
                 title=f"weights of every unit{inp.tag}, summed over axis {other} of x and y:\n"
                 f"x{a} against y{a}; anti-diagonals = invariance along axis {a}",
-                x_label=f"x{a} unit", y_label=f"y{a} unit",
-            )  # fmt: skip
+                x_label=f"x{a} unit",
+                y_label=f"y{a} unit",
+            )
     return fig, {"weight_abs_max": float(np.abs(model.weights_).max())}
 
 
 def _caption_weights(run: RunInfo, facts: Facts) -> str:
-    tiles = "each unit's full 15x15 matrix" if len(run.config.x_shape) == 1 else (
-        "for each unit, its weights summed over the other axis of x and of y")  # fmt: skip
+    tiles = (
+        "each unit's full 15x15 matrix"
+        if len(run.config.x_shape) == 1
+        else ("for each unit, its weights summed over the other axis of x and of y")
+    )
     return (
         f"Sigma-Pi weights in the style of Fig. 6a, {run.what}: {tiles}, x on rows and y on "
         "columns. A unit that responds to one z = (x + y) / 2 holds its weight on an "
@@ -249,14 +260,17 @@ def _caption_weights(run: RunInfo, facts: Facts) -> str:
 
 
 def _draw_net(model: SigmaPiSOM, inp: DrawInputs) -> tuple[Figure, Facts]:
-    from sigmapi.viz import analysis, plots
+    from sigmapi.analysis import map_data as analysis
+    from sigmapi.viz import plots
 
     fig = _figure((6.4, 4.4) if len(model.x_shape) == 1 else (7.4, 6.0))
     plots.plot_net(
-        np.asarray(inp.centres), model.map_shape, ax=fig.add_subplot(),
+        np.asarray(inp.centres),
+        model.map_shape,
+        ax=fig.add_subplot(),
         z_range=model.sampler.relation.z_range,
         title=f"The map in input space{inp.tag}:\neach unit at the z it responds to",
-    )  # fmt: skip
+    )
     pol = analysis.map_polarity(model, centres=inp.centres)
     return fig, {"polarity": pol.name, "order_r2_centres": pol.r2}
 
@@ -282,7 +296,8 @@ def _caption_net(run: RunInfo, facts: Facts) -> str:
 
 
 def _draw_invariance(model: SigmaPiSOM, inp: DrawInputs) -> tuple[Figure, Facts]:
-    from sigmapi.viz import analysis, plots
+    from sigmapi.analysis import map_data as analysis
+    from sigmapi.viz import plots
 
     if len(model.x_shape) == 1:
         inv = analysis.invariance_matrix(model)
@@ -295,10 +310,11 @@ def _draw_invariance(model: SigmaPiSOM, inp: DrawInputs) -> tuple[Figure, Facts]
     for a, ax in enumerate(axes):
         inv = analysis.invariance_matrix(model, axis=a, centres=inp.centres)
         plots.plot_invariance(
-            inv, ax=ax,
+            inv,
+            ax=ax,
             title=f"Winner as a function of x{a} and y{a} (x{1 - a}, y{1 - a} at 0.5)"
             f"\n{100 * inv.constancy:.1f} % of cells agree with their anti-diagonal",
-        )  # fmt: skip
+        )
         facts[f"constancy_axis{a}"] = inv.constancy
     return fig, facts
 
@@ -380,7 +396,7 @@ def _caption_curves(run: RunInfo, facts: Facts) -> str:
         f"{ceiling['view_consistency']:.3f}"
         + (f", z error {ceiling['z_error']:.3f}" if "z_error" in ceiling else "")
         + "; each unit the mean of x' y'^T over the views it wins, computed on a grid, "
-        "sigmapi.viz.ceiling)."
+        "sigmapi.analysis.fixed_point)."
         if "view_consistency" in ceiling
         else ""
     )
@@ -475,12 +491,12 @@ def draw_figure(
     ``reference`` adds reference lines to it; ``label`` names the model in titles; ``seed``
     draws the Fig. 8 inputs and the receptive-field sampling; ``centres`` reuses computed
     receptive-field centres; ``ceiling`` (metrics of the rule's fixed point,
-    :func:`sigmapi.viz.ceiling.fixed_point`, with its ``preset`` and ``seed``) adds the
+    :func:`sigmapi.analysis.fixed_point.fixed_point`, with its ``preset`` and ``seed``) adds the
     ceiling lines to ``"curves"``. Returns the facts the caption states (JSON-able).
     """
     spec = _spec(name)
     if centres is None and spec.needs_centres(len(model.x_shape)):
-        from sigmapi.viz.analysis import receptive_field_centres
+        from sigmapi.analysis.map_data import receptive_field_centres
 
         centres = receptive_field_centres(model, seed)
     inputs = DrawInputs(curves, reference, label, seed, centres, ceiling)

@@ -1,4 +1,7 @@
-"""Figures of the reproduction: thin drawing functions over the arrays of :mod:`~.analysis`.
+# Over 500 lines: the report's drawing functions (Fig. 8, tiles, net, curves, invariance, sweep)
+# beside the helpers they share (axes, insets, code images, colour maps), each written once.
+"""Figures of the reproduction: thin drawing functions over the arrays of
+:mod:`sigmapi.analysis.map_data`.
 
 Every function takes ``ax=None`` and returns the Axes it drew into; with ``ax=None`` it opens a
 new pyplot figure. Figures made of several panels (Fig. 8, the learning curves) draw their
@@ -24,7 +27,7 @@ from numpy.typing import NDArray
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
 
-    from sigmapi.viz.analysis import Fig8Data, InvarianceMatrix
+    from sigmapi.analysis.map_data import Fig8Data, InvarianceMatrix
 
 __all__ = [
     "has_refinement",
@@ -185,13 +188,20 @@ def plot_weight_tiles(
     signed = float(np.nanmin(mosaic)) < -1e-3 * vmax  # negligible negatives: a trained map
     name = WEIGHT_CMAP if signed else WEIGHT_CMAP_POSITIVE
     cmap = mpl.colormaps[name].with_extremes(bad="white")
-    img = ax.imshow(mosaic, cmap=cmap, vmin=-vmax if signed else 0.0, vmax=vmax,
-                    interpolation="nearest")  # fmt: skip
+    img = ax.imshow(
+        mosaic, cmap=cmap, vmin=-vmax if signed else 0.0, vmax=vmax, interpolation="nearest"
+    )
     if one_d:
         for u in range(k):
             r, c = divmod(u, m1)
-            ax.text(c * (b + 1) + (b - 1) / 2, top + r * (a + gap) - 0.7, f"k={u}",
-                    ha="center", va="bottom", fontsize=8)  # fmt: skip
+            ax.text(
+                c * (b + 1) + (b - 1) / 2,
+                top + r * (a + gap) - 0.7,
+                f"k={u}",
+                ha="center",
+                va="bottom",
+                fontsize=8,
+            )
         ax.set_xticks([])
         ax.set_yticks([])
         ax.set_xlabel(f"one tile per map unit k; within a tile: {y_label} left to right")
@@ -240,8 +250,10 @@ def plot_net(
         ax.grid(alpha=0.3)
         return ax
     if len(map_shape) != 2 or d != 2:
-        raise ValueError(f"plot_net draws 1-D maps of 1-D z or 2-D maps of 2-D z, got map "
-                         f"{map_shape} and z of {d} dimensions")  # fmt: skip
+        raise ValueError(
+            f"plot_net draws 1-D maps of 1-D z or 2-D maps of 2-D z, got map "
+            f"{map_shape} and z of {d} dimensions"
+        )
     g = centres.reshape(map_shape[0], map_shape[1], 2)
     for r in range(map_shape[0]):
         ax.plot(g[r, :, 0], g[r, :, 1], "-", color="C0", lw=1)
@@ -294,13 +306,13 @@ def plot_learning_curves(
 
     ``curves``: one mapping per seed with columns ``t``, ``refined``, ``view_consistency``,
     ``view_within_one``, ``z_error``, ``cost``, ``cost_winner``, ``sigma`` (as written by
-    :meth:`sigmapi.viz.curves.LearningCurve.to_dict`); thin lines per seed, a thick line for
+    :meth:`sigmapi.analysis.curves.LearningCurve.to_dict`); thin lines per seed, a thick line for
     the mean. Records of the training (``refined`` 0) go on a log axis of iterations; those
     of the refinement rounds after it (``refined`` > 0) on a linear axis of refinement pairs
     to its right, starting from the last training record. ``reference``: dashed horizontal
     lines for ``view_consistency``, ``view_within_one``, ``z_error`` and ``z_error_floor``.
     ``ceiling``: dash-dot lines of the learning rule's ceiling for the same metrics
-    (:func:`sigmapi.viz.ceiling.fixed_point`), across both axes. ``schedule``: ``(t,
+    (:func:`sigmapi.analysis.fixed_point.fixed_point`), across both axes. ``schedule``: ``(t,
     sigma)`` of the full sigma schedule, drawn under the checkpoints.
     """
     from matplotlib.ticker import FuncFormatter, LogLocator, MaxNLocator, NullFormatter
@@ -313,13 +325,18 @@ def plot_learning_curves(
     ref, top_line = dict(reference or {}), dict(ceiling or {})
     refine = has_refinement(curves)
     panels = [
-        ("view consistency,\nunit usage", [("view_consistency", "view consistency"),
-                              ("view_within_one", "view within one"),
-                              ("usage", "usage")]),
+        (
+            "view consistency,\nunit usage",
+            [
+                ("view_consistency", "view consistency"),
+                ("view_within_one", "view within one"),
+                ("usage", "usage"),
+            ],
+        ),
         ("z error (grid spacings)", [("z_error", "z error")]),
         ("cost E (sec. 6.3)", [("cost", "at the current sigma"), ("cost_winner", "winner only")]),
         ("sigma (map units)", [("sigma", "at checkpoints")]),
-    ]  # fmt: skip
+    ]
     n = len(panels)
     left, right, bottom, top, gap = 0.10, 0.70, 0.06, 0.93, 0.035
     main_right = right - 0.17 if refine else right
@@ -340,10 +357,14 @@ def plot_learning_curves(
             for part, target in ((0, pa), (1, ra)):
                 if target is None:
                     continue
-                xs = [np.asarray(c["t" if part == 0 else "refined"], dtype=float)[m[part]]
-                      for c, m in zip(have, parts, strict=True)]  # fmt: skip
-                vs = [np.asarray(c[key], dtype=float)[m[part]]
-                      for c, m in zip(have, parts, strict=True)]  # fmt: skip
+                xs = [
+                    np.asarray(c["t" if part == 0 else "refined"], dtype=float)[m[part]]
+                    for c, m in zip(have, parts, strict=True)
+                ]
+                vs = [
+                    np.asarray(c[key], dtype=float)[m[part]]
+                    for c, m in zip(have, parts, strict=True)
+                ]
                 if key == "sigma":  # log axis: sigma 0 (the refinement's winner alone) left out
                     pos = [v > 0 for v in vs]
                     xs = [x[k] for x, k in zip(xs, pos, strict=True)]
@@ -355,26 +376,51 @@ def plot_learning_curves(
                 )
                 if same:
                     many = len(vs) > 1
-                    target.plot(xs[0], np.mean(vs, axis=0), "-o", color=colour, lw=1.8, ms=3,
-                                label=(f"{name} (mean of {len(vs)})" if many else name)
-                                if part == 0 else None)  # fmt: skip
+                    target.plot(
+                        xs[0],
+                        np.mean(vs, axis=0),
+                        "-o",
+                        color=colour,
+                        lw=1.8,
+                        ms=3,
+                        label=(f"{name} (mean of {len(vs)})" if many else name)
+                        if part == 0
+                        else None,
+                    )
             for target in (pa, ra):
                 if target is None:
                     continue
                 first = target is pa
                 if key in ref:
-                    target.axhline(ref[key], color=colour, ls="--", lw=1,
-                                   label=f"reference {ref[key]:g}" if first else None)  # fmt: skip
+                    target.axhline(
+                        ref[key],
+                        color=colour,
+                        ls="--",
+                        lw=1,
+                        label=f"reference {ref[key]:g}" if first else None,
+                    )
                 if key in top_line:
-                    target.axhline(top_line[key], color=colour, ls="-.", lw=1.2,
-                                   label=f"the rule's ceiling (fixed point) {top_line[key]:.3f}"
-                                   if first else None)  # fmt: skip
+                    target.axhline(
+                        top_line[key],
+                        color=colour,
+                        ls="-.",
+                        lw=1.2,
+                        label=f"the rule's ceiling (fixed point) {top_line[key]:.3f}"
+                        if first
+                        else None,
+                    )
         if label.startswith("z error") and "z_error_floor" in ref:
             for target in (pa, ra):
                 if target is not None:
-                    target.axhline(ref["z_error_floor"], color="0.4", ls=":", lw=1,
-                                   label=f"quantisation floor {ref['z_error_floor']:g}"
-                                   if target is pa else None)  # fmt: skip
+                    target.axhline(
+                        ref["z_error_floor"],
+                        color="0.4",
+                        ls=":",
+                        lw=1,
+                        label=f"quantisation floor {ref['z_error_floor']:g}"
+                        if target is pa
+                        else None,
+                    )
         if label.startswith("sigma") and schedule is not None:
             st, sv = (np.asarray(v, dtype=float) for v in schedule)
             keep = st > 0
@@ -483,8 +529,9 @@ def plot_sweep(
         label = ", ".join(f"{g} {v}" for g, v in zip(group_by, key, strict=True)) or None
         xs, med, lo, hi = [], [], [], []
         for v in raw:
-            sel = [r for r in ok if str(r[param]) == v
-                   and tuple(str(r[g]) for g in group_by) == key]  # fmt: skip
+            sel = [
+                r for r in ok if str(r[param]) == v and tuple(str(r[g]) for g in group_by) == key
+            ]
             vals = np.array([float(r[metric]) for r in sel])
             if vals.size == 0:
                 continue
@@ -494,11 +541,24 @@ def plot_sweep(
             lo.append(float(vals.min()))
             hi.append(float(vals.max()))
             folded = np.array([_truthy(r.get("folded", False)) for r in sel])
-            ax.scatter(np.full(int((~folded).sum()), x), vals[~folded], s=14, color=color,
-                       alpha=0.6, zorder=3)  # fmt: skip
+            ax.scatter(
+                np.full(int((~folded).sum()), x),
+                vals[~folded],
+                s=14,
+                color=color,
+                alpha=0.6,
+                zorder=3,
+            )
             if folded.any():
-                ax.scatter(np.full(int(folded.sum()), x), vals[folded], s=40, marker="x",
-                           color="crimson", zorder=4, label=folded_label)  # fmt: skip
+                ax.scatter(
+                    np.full(int(folded.sum()), x),
+                    vals[folded],
+                    s=40,
+                    marker="x",
+                    color="crimson",
+                    zorder=4,
+                    label=folded_label,
+                )
                 folded_label = None
         ax.plot(xs, med, "-o", color=color, label=label, zorder=2)
         ax.fill_between(xs, lo, hi, color=color, alpha=0.15, lw=0)

@@ -64,8 +64,14 @@ def plot_view_consistency(
     ax.set_ylabel("view consistency (same winner)")
     if margin is not None:
         mid = pairs["view_consistency"]
-        ax.axhspan(mid - margin, mid + margin, color="g", alpha=0.08, lw=0,
-                   label=f"explicit pairs +- {margin:g}")  # fmt: skip
+        ax.axhspan(
+            mid - margin,
+            mid + margin,
+            color="g",
+            alpha=0.08,
+            lw=0,
+            label=f"explicit pairs +- {margin:g}",
+        )
         ax.set_ylim(mid - 3 * margin, mid + 3 * margin)
         ax.set_title("near explicit pairs", fontsize=10)
     ax.legend(fontsize=8, loc="lower right")
@@ -102,6 +108,7 @@ def stream_figure(result: Mapping[str, Any]) -> Figure:
     plot_view_consistency(result, mid, margin=result["acceptance"]["margin"])
     plot_fold_rate(result, right)
     n = len(result["settings"]["seeds"])
-    fig.suptitle(f"Learning from a stream ({result['settings']['preset']}, {n} seed"
-                 f"{'s' * (n > 1)})")  # fmt: skip
+    fig.suptitle(
+        f"Learning from a stream ({result['settings']['preset']}, {n} seed{'s' * (n > 1)})"
+    )
     return fig

@@ -3,5 +3,6 @@ one map.
 
 Guide: docs/guide/chain.md; results: docs/results/chain.md.
 
-Modules (``run`` holds the experiment object, ``REGISTRY``'s entry): ``run``.
+Modules (``run`` holds the experiment object, ``REGISTRY``'s entry): ``config``, ``result``,
+``run``.
 """

@@ -38,9 +38,9 @@ from __future__ import annotations
 
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Literal, NamedTuple, get_args
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -48,10 +48,17 @@ from numpy.typing import NDArray
 from sigmapi import _memory, _validate
 from sigmapi.codes import PopulationCode
 from sigmapi.config import SOMConfig
-from sigmapi.errors import ConfigError
 from sigmapi.executor import Executor, job_memory
-from sigmapi.experiments.base import KEY_VALUES, Experiment, check_seeds, register, run_all
-from sigmapi.experiments.kit.maps import MapSpec
+from sigmapi.experiments.base import Experiment, check_seeds, register, run_all
+from sigmapi.experiments.chain.config import (
+    CODES,
+    ChainConfig,
+    chain_config,
+)
+from sigmapi.experiments.chain.result import (
+    TARGET_RATIO,
+    ChainResult,
+)
 from sigmapi.experiments.kit.seeds import SeedPlan
 from sigmapi.metrics import EVAL_SEED, evaluate, winner_metrics
 from sigmapi.progress import Progress
@@ -76,13 +83,6 @@ __all__ = [
 
 Array = NDArray[np.float64]
 
-Code = Literal["response", "winner"]
-CODES: tuple[str, ...] = get_args(Code)
-"""What map A hands to map B: its normalised response, or a code of its winner's position."""
-
-TARGET_RATIO = 2.0
-"""The acceptance bound of the chain of frames: the chain's z error at most this many times
-the single map's."""
 
 PLAN = SeedPlan({"triples": 16})
 """The streams of a seed (:class:`~sigmapi.experiments.kit.seeds.SeedPlan`): the training
@@ -133,37 +133,6 @@ def sample_triples(n: int, rng: np.random.Generator) -> Triples:
     return Triples(x0, e0, u0, x1, e1, u1, z)
 
 
-def chain_config(config: SOMConfig | None = None, iterations: int | None = None) -> SOMConfig:
-    """The config every map of the comparison starts from (default: paper-1d, unrefined).
-
-    It must be 1-D (``map_shape``, ``x_shape`` and ``y_shape`` of one axis), non-periodic,
-    with the ``mean`` relation; map A uses it as it is.
-    """
-    cfg = (
-        config if config is not None else MapSpec("paper-1d", changes={"refine_rounds": 0}).config()
-    )
-    if not isinstance(cfg, SOMConfig):
-        raise _validate.fail(
-            "config", "a sigmapi.SOMConfig or None", type(cfg).__name__,
-            "load a preset with sigmapi.load_preset(name)",
-        )  # fmt: skip
-    for name in ("map_shape", "x_shape", "y_shape"):
-        if len(getattr(cfg, name)) != 1:
-            raise _validate.fail(
-                f"config.{name}", "1-D (one axis)", getattr(cfg, name),
-                "the chain of frames is built on 1-D positions, e.g. (15,)",
-            )  # fmt: skip
-    if cfg.periodic or cfg.relation != "mean":
-        raise ConfigError(
-            f"config must be non-periodic with relation 'mean', got periodic={cfg.periodic}, "
-            f"relation={cfg.relation!r}; the chain composes two means: a = (x + e) / 2, "
-            "z = (a + u) / 2"
-        )
-    if iterations is not None:
-        cfg = cfg.replace(iterations=_validate.integer("iterations", iterations, 1))
-    return cfg
-
-
 def head_code(model_a: SigmaPiSOM, x: Array, e: Array, code: str = "response") -> Array:
     """Map A's output for retinal positions ``x`` and eye angles ``e`` ``(B, 1)``: ``(B, n_a)``.
 
@@ -207,8 +176,13 @@ def chain_seed(job: ChainJob) -> dict[str, Any]:
     """Train map A, map B and the single map on seed ``job.seed``'s triples and score both
     routes on the shared calibration and test triples (one entry of ``"seeds"``)."""
     seed, cfg, train_pairs, code, cal, test = (
-        job.seed, job.cfg, job.train_pairs, job.code, job.cal, job.test,
-    )  # fmt: skip
+        job.seed,
+        job.cfg,
+        job.train_pairs,
+        job.code,
+        job.cal,
+        job.test,
+    )
     rng = PLAN.rng(seed, "triples")
     train = sample_triples(train_pairs, rng)
     spacing = float(cfg.y_shape[0] - 1)
@@ -230,8 +204,9 @@ def chain_seed(job: ChainJob) -> dict[str, Any]:
 
     # the single map on the whole transformation: same triples, same config but the grids
     start = time.perf_counter()
-    s = SigmaPiSOM(cfg.replace(x_shape=(cfg.x_shape[0], 1), y_shape=(*cfg.y_shape, *cfg.y_shape)),
-                   seed=seed)  # fmt: skip
+    s = SigmaPiSOM(
+        cfg.replace(x_shape=(cfg.x_shape[0], 1), y_shape=(*cfg.y_shape, *cfg.y_shape)), seed=seed
+    )
     s.fit((*_single_inputs(s, train, 0), *_single_inputs(s, train, 1)))
     single_seconds = time.perf_counter() - start
 
@@ -246,108 +221,17 @@ def chain_seed(job: ChainJob) -> dict[str, Any]:
         ("single", s, single_winners, s.weights_.size, single_seconds),
     ):
         scores = winner_metrics(
-            winners(cal, 0), cal.z, winners(test, 0), winners(test, 1), test.z,
-            model.map_coords, spacing,
-        )  # fmt: skip
+            winners(cal, 0),
+            cal.z,
+            winners(test, 0),
+            winners(test, 1),
+            test.z,
+            model.map_coords,
+            spacing,
+        )
         out[name] = {**scores, "weights": int(weights), "train_seconds": secs}
     out["ratio"] = out["chain"]["z_error"] / out["single"]["z_error"]
     return out
-
-
-SUMMARY_KEYS = ("z_error", "view_consistency", "order_r2", "usage", "weights", "train_seconds")
-"""The scores summarised per route (medians over seeds)."""
-
-
-@dataclass(frozen=True)
-class ChainConfig:
-    """What ``sigmapi chain`` trains: the preset of every map and the data of maps B and single."""
-
-    preset: str = "paper-1d"
-    """The 1-D preset every map starts from (``sigmapi presets``), with sigmapi's ordering
-    procedure (``crossview``) and no refinement (``refine_rounds=0``, the setting
-    docs/results/chain.md measures; an override can turn it on)."""
-    overrides: tuple[str, ...] = field(default=(), metadata=KEY_VALUES)
-    """``key=value`` changes to the preset, e.g. ``iterations=50000`` (one per change)."""
-    train_pairs: int = 20_000
-    """View pairs of triples that map B and the single map are trained on."""
-    n_test: int = 10_000
-    """Calibration and test triples (each), from the fixed evaluation seed."""
-    code: Code = "response"
-    """What map A hands to map B: its normalised response, or a code of its winner's position."""
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "overrides", tuple(self.overrides))
-        _validate.integer("train_pairs", self.train_pairs, 10, fix="e.g. 20000")
-        _validate.integer("n_test", self.n_test, 10, fix="e.g. 10000")
-        _validate.choice("code", self.code, CODES)
-        self.som_config  # noqa: B018 (an unknown preset or a bad override fails here, not later)
-
-    @property
-    def som_config(self) -> SOMConfig:
-        """The preset with ``ordering="crossview"``, ``refine_rounds=0`` and the overrides
-        (:func:`chain_config`)."""
-        spec = MapSpec(self.preset, self.overrides, {"ordering": "crossview", "refine_rounds": 0})
-        return chain_config(spec.config())
-
-
-@dataclass
-class ChainResult:
-    """Both routes per seed (:func:`chain_seed`) and the settings they ran with."""
-
-    config: SOMConfig
-    train_pairs: int
-    n_test: int
-    code: str
-    per_seed: list[dict[str, Any]]
-
-    def summary(self) -> dict[str, Any]:
-        """The medians of both routes, the median and worst ratio and how many seeds meet
-        ``ratio <= TARGET_RATIO``."""
-        per_seed = self.per_seed
-
-        def med(route: str, key: str) -> float:
-            return float(np.median([r[route][key] for r in per_seed]))
-
-        ratios = [r["ratio"] for r in per_seed]
-        out: dict[str, Any] = {
-            route: {k: med(route, k) for k in SUMMARY_KEYS} for route in ("chain", "single")
-        }
-        out.update(
-            ratio_median=float(np.median(ratios)), ratio_worst=float(max(ratios)),
-            met=int(sum(r <= TARGET_RATIO for r in ratios)), n_seeds=len(per_seed),
-            target_ratio=TARGET_RATIO,
-            map_a_order_r2_min=min(r["map_a"]["order_r2"] for r in per_seed),
-        )  # fmt: skip
-        return out
-
-    def to_dict(self) -> dict[str, Any]:
-        """``"settings"``, ``"seeds"`` (one dict per seed) and ``"summary"``."""
-        settings = {"config": self.config.to_dict(), "train_pairs": self.train_pairs,
-                    "n_test": self.n_test, "code": self.code,
-                    "seeds": [r["seed"] for r in self.per_seed]}  # fmt: skip
-        return {"settings": settings, "seeds": self.per_seed, "summary": self.summary()}
-
-    def table(self) -> str:
-        """Both routes per seed, then the summary line."""
-        rows = ["seed  route   z error  same winner  order R^2  usage  weights  seconds"]
-        for r in self.per_seed:
-            for route in ("chain", "single"):
-                m = r[route]
-                rows.append(
-                    f"{r['seed']:<5d} {route:7s} {m['z_error']:7.3f}  "
-                    f"{m['view_consistency']:11.3f}  {m['order_r2']:9.3f}  {m['usage']:5.2f}  "
-                    f"{m['weights']:7d}  {m['train_seconds']:7.1f}"
-                )
-        s = self.summary()
-        rows.append(
-            f"{s['met']} of {s['n_seeds']} seeds: chain z error <= {s['target_ratio']:g} x the "
-            f"single map's (median ratio {s['ratio_median']:.2f}, worst {s['ratio_worst']:.2f})"
-        )
-        return "\n".join(rows)
-
-    def figure(self, out_dir: Path) -> list[Path]:
-        """The comparison has no figure: nothing is written."""
-        return []
 
 
 def _run(
@@ -372,11 +256,19 @@ def _run(
     per_job = 2 * job_memory(cfg, n_test) + job_memory(single, n_test)
 
     def describe(key: str, r: dict[str, Any]) -> str:
-        return (f"{key}: chain z error {r['chain']['z_error']:.3f}, single "
-                f"{r['single']['z_error']:.3f}")  # fmt: skip
+        return (
+            f"{key}: chain z error {r['chain']['z_error']:.3f}, single {r['single']['z_error']:.3f}"
+        )
 
-    done = run_all(chain_seed, jobs, executor=executor, per_job=per_job, progress=progress,
-                   desc="chain", describe=describe)  # fmt: skip
+    done = run_all(
+        chain_seed,
+        jobs,
+        executor=executor,
+        per_job=per_job,
+        progress=progress,
+        desc="chain",
+        describe=describe,
+    )
     return ChainResult(cfg, train_pairs, n_test, code, list(done.values()))
 
 
@@ -458,8 +350,15 @@ class Chain(Experiment[ChainConfig]):
         executor: Executor | None = None,
         progress: Progress | None = None,
     ) -> ChainResult:
-        return _run(config.som_config, seeds, config.train_pairs, config.n_test, config.code,
-                    executor, progress)  # fmt: skip
+        return _run(
+            config.som_config,
+            seeds,
+            config.train_pairs,
+            config.n_test,
+            config.code,
+            executor,
+            progress,
+        )
 
 
 CHAIN = register(Chain())

@@ -3,5 +3,6 @@ pick instead.
 
 Guide: docs/guide/compare.md; results: docs/results/baselines.md.
 
-Modules (``run`` holds the experiment object, ``REGISTRY``'s entry): ``run``.
+Modules (``run`` holds the experiment object, ``REGISTRY``'s entry): ``config``, ``result``,
+``run``.
 """

@@ -37,25 +37,35 @@ import importlib.util
 import sys
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from sigmapi import _memory, _validate
-from sigmapi._outputs import save_figure
+from sigmapi import _memory
 from sigmapi.baselines.kohonen import KohonenSOM, MiniSomMap
 from sigmapi.baselines.readout import GainFieldNetwork, RBMFeatures
 from sigmapi.baselines.scoring import score_readout, score_units
 from sigmapi.config import SOMConfig
 from sigmapi.errors import ConfigError
 from sigmapi.executor import Executor, job_memory
-from sigmapi.experiments.base import KEY_VALUES, Experiment, check_seeds, register, run_all
-from sigmapi.experiments.kit.maps import MapSpec
+from sigmapi.experiments.base import Experiment, check_seeds, register, run_all
+from sigmapi.experiments.compare.config import (
+    LABELS,
+    METHODS,
+    QUICK,
+    QUICK_SEEDS,
+    SEEDS,
+    CompareConfig,
+)
+from sigmapi.experiments.compare.result import (
+    FIGURE,
+    CompareResult,
+    MethodScore,
+)
 from sigmapi.experiments.kit.seeds import SeedPlan
-from sigmapi.io import atomic_write_bytes
 from sigmapi.metrics import evaluation_sets, grid_spacing
 from sigmapi.progress import Progress
 from sigmapi.som import SigmaPiSOM
@@ -80,20 +90,6 @@ __all__ = [
 Array = NDArray[np.float64]
 Views = tuple[Array, Array, Array, Array]
 
-LABELS = (10, 20, 50, 100, 200, 500, 1000, 2000, 5000, 10_000)
-"""Numbers of labelled samples the read-outs are scored with (those <= ``n_test``)."""
-
-METHODS: dict[str, str] = {
-    "sigma-pi": "Sigma-Pi map (sigmapi's ordering procedure, crossview)",
-    "sigma-pi same view": "Sigma-Pi map, learns the view it saw (ablation)",
-    "sigma-pi ordering none": "Sigma-Pi map, the paper's random start (ordering none)",
-    "kohonen": "first-order SOM on [x; y] (sigmapi's)",
-    "kohonen two-view": "first-order SOM, the two-view rule",
-    "minisom": "MiniSom on [x; y] (reference)",
-    "basis functions": "gain-field products + linear read-out",
-    "rbm": "RBM on [x; y] + linear read-out",
-}
-"""Method names (the JSON's ``name``) and what each is."""
 
 SIGMA_PI_CHANGES: dict[str, dict[str, Any]] = {
     "sigma-pi": {"ordering": "crossview"},
@@ -103,218 +99,12 @@ SIGMA_PI_CHANGES: dict[str, dict[str, Any]] = {
 """The Sigma-Pi map (sigmapi's ordering procedure, whatever the preset says) and its two
 ablations: learning from the view it saw, and the paper's random start."""
 
-FIGURE = "compare.png"
-"""The comparison's figure in its output folder (its caption beside it, ``compare.txt``)."""
-
-MATCH_SHARE = 1.1
-"""labels needed: the z error within this factor of the error with all labels."""
-
-
-@dataclass(frozen=True)
-class CompareConfig:
-    """What ``sigmapi compare`` trains and scores."""
-
-    preset: str = "paper-1d"
-    """The task and the Sigma-Pi map's settings (a preset name; ``sigmapi presets``)."""
-    overrides: tuple[str, ...] = field(default=(), metadata=KEY_VALUES)
-    """``key=value`` changes to the preset, e.g. ``iterations=50000`` (one per change)."""
-    train_pairs: int = 20_000
-    """View pairs recorded per seed (every method trains on these rows)."""
-    baseline_iterations: int = 100_000
-    """Online updates of the first-order maps (sigmapi's and MiniSom)."""
-    rbm_epochs: int = 10
-    """Training passes of the RBM over the data."""
-    n_test: int = 10_000
-    """Test z's (and calibration z's, the pool the labels are drawn from)."""
-    methods: tuple[str, ...] = tuple(METHODS)
-    """Methods to run (default: all of them); "sigma-pi" always runs."""
-
-    def __post_init__(self) -> None:
-        _validate.integer("train_pairs", self.train_pairs, 100, fix="e.g. 20000")
-        _validate.integer("baseline_iterations", self.baseline_iterations, 1, fix="e.g. 100000")
-        _validate.integer("rbm_epochs", self.rbm_epochs, 1, fix="e.g. 10")
-        _validate.integer("n_test", self.n_test, LABELS[0], fix="e.g. 10000")
-        for m in self.methods:
-            _validate.choice("methods", m, tuple(METHODS))
-        object.__setattr__(
-            self, "methods", tuple(m for m in METHODS if m in self.methods or m == "sigma-pi")
-        )
-        object.__setattr__(self, "overrides", tuple(self.overrides))
-        self.som_config  # noqa: B018 (an unknown preset or a bad override fails here, not later)
-
-    @property
-    def labels(self) -> tuple[int, ...]:
-        return tuple(n for n in LABELS if n <= self.n_test)
-
-    @property
-    def som_config(self) -> SOMConfig:
-        """The preset with the overrides: the task and the Sigma-Pi map's settings."""
-        return MapSpec(self.preset, self.overrides).config()
-
-
-QUICK = CompareConfig(train_pairs=10_000, baseline_iterations=20_000, rbm_epochs=5, n_test=5000)
-"""The quick comparison: less data, shorter baselines (with :data:`QUICK_SEEDS`)."""
-
-SEEDS = (0, 1, 2, 3, 4)
-"""The default seeds: each draws its own training data and trains every method on it."""
-
-QUICK_SEEDS = (0, 1)
-"""The seeds of the quick comparison."""
 
 NEEDS = {"minisom": "minisom", "basis functions": "sklearn", "rbm": "sklearn"}
 """Methods that need an optional module (the extra ``sigmapi[baselines]``)."""
 
 PACKAGES = {"minisom": "minisom", "sklearn": "scikit-learn"}
 """The package that installs each optional module."""
-
-
-@dataclass
-class MethodScore:
-    """One method's scores over seeds (lists in the order of the seeds)."""
-
-    name: str
-    view_consistency: list[float] = field(default_factory=list)
-    unit_consistency: list[float] = field(default_factory=list)
-    z_error_by_labels: list[dict[int, float]] = field(default_factory=list)
-    seconds: list[float] = field(default_factory=list)
-
-    def median_curve(self) -> dict[int, float]:
-        """Median z error over seeds per number of labels."""
-        keys = self.z_error_by_labels[0]
-        return {n: float(np.median([c[n] for c in self.z_error_by_labels])) for n in keys}
-
-    @property
-    def z_error(self) -> float:
-        curve = self.median_curve()
-        return curve[max(curve)]
-
-    def labels_needed(self) -> int:
-        curve = self.median_curve()
-        return min(n for n, e in curve.items() if e <= MATCH_SHARE * self.z_error)
-
-    def labels_to_match(self, target: float) -> int | None:
-        hits = [n for n, e in self.median_curve().items() if e <= MATCH_SHARE * target]
-        return min(hits) if hits else None
-
-
-@dataclass
-class CompareResult:
-    """Scores of every method (:class:`MethodScore`) and the run's settings."""
-
-    config: CompareConfig
-    scores: dict[str, MethodScore]
-    seconds: float = 0.0
-    seeds: tuple[int, ...] = SEEDS
-    """The seeds, in the order of the scores' lists."""
-
-    @property
-    def reference(self) -> MethodScore:
-        return self.scores["sigma-pi"]
-
-    @property
-    def floor(self) -> float:
-        """z error of the best decoder that sees only the winner of a map of this size.
-
-        z uniform over the relation's range, cut into ``map_shape`` equal cells per axis: the
-        error of the cell's centre is ``cell width / sqrt(12)`` per axis (in grid spacings).
-        """
-        som_cfg = self.config.som_config
-        lo, hi = SigmaPiSOM(som_cfg).sampler.relation.z_range
-        spacing = grid_spacing(som_cfg.x_shape, som_cfg.periodic)
-        width = (hi - lo) / np.asarray(som_cfg.map_shape, dtype=np.float64)
-        return float(np.sqrt(np.sum((width * spacing) ** 2 / 12.0)))
-
-    def to_dict(self) -> dict[str, Any]:
-        """``{"methods": [{name, view_consistency, z_error, labels_used, ...}], ...}``."""
-        target = self.reference.z_error
-        labels_used = max(self.config.labels)
-        methods = []
-        for name, s in self.scores.items():
-            curve = s.median_curve()
-            methods.append({
-                "name": name,
-                "description": METHODS[name],
-                "view_consistency": float(np.median(s.view_consistency)),
-                "unit_consistency": float(np.median(s.unit_consistency)),
-                "z_error": s.z_error,
-                "labels_used": labels_used,
-                "labels_needed": s.labels_needed(),
-                "labels_to_match_sigma_pi": s.labels_to_match(target),
-                "z_error_by_labels": {str(n): e for n, e in curve.items()},
-                "per_seed": {
-                    "view_consistency": s.view_consistency,
-                    "unit_consistency": s.unit_consistency,
-                    "z_error": [c[labels_used] for c in s.z_error_by_labels],
-                    "seconds": s.seconds,
-                },
-            })  # fmt: skip
-        cfg = dataclasses.asdict(self.config)
-        head = {"preset": cfg.pop("preset"), "overrides": cfg.pop("overrides")}
-        config = {**head, "seeds": list(self.seeds), **cfg, "labels": list(self.config.labels)}
-        return {
-            "methods": methods,
-            "config": config,
-            "z_error_unit": "input grid spacings",
-            "quantisation_floor": self.floor,
-            "seconds": self.seconds,
-        }
-
-    def table(self) -> str:
-        """The comparison as a plain-text table (medians over seeds)."""
-        d = self.to_dict()
-        rows = [
-            f"{'method':24s} {'same place':>10s} {'same unit':>9s} {'z error':>8s} "
-            f"{'labels':>7s} {'needed':>7s} {'to match':>8s}"
-        ]
-        for m in d["methods"]:
-            match = m["labels_to_match_sigma_pi"]
-            rows.append(
-                f"{m['name']:24s} {m['view_consistency']:10.3f} {m['unit_consistency']:9.3f} "
-                f"{m['z_error']:8.3f} {m['labels_used']:7d} {m['labels_needed']:7d} "
-                f"{'-' if match is None else str(match):>8s}"
-            )
-        rows.append(
-            f"z error in grid spacings; a map's winner alone cannot beat {self.floor:.3f} "
-            f"(z cut into {'x'.join(map(str, self.config.som_config.map_shape))} cells)"
-        )
-        return "\n".join(rows)
-
-    def figure(self, out_dir: Path) -> list[Path]:
-        """``compare.png`` (:func:`~sigmapi.viz.compare.compare_figure`) and its caption
-        beside it, ``compare.txt``; returns the figure's path."""
-        from sigmapi.viz.compare import compare_figure  # matplotlib: only when drawing
-
-        out = Path(out_dir) / FIGURE
-        save_figure(compare_figure(self.to_dict()), out, dpi=120)
-        atomic_write_bytes(out.with_suffix(".txt"), (self.caption() + "\n").encode("utf-8"))
-        return [out]
-
-    def caption(self) -> str:
-        """A caption computed from the result."""
-        cfg, ref = self.config, self.reference
-        n = len(self.seeds)
-        parts = [
-            f"{cfg.preset} task, {cfg.train_pairs:,} recorded view pairs per seed, median of {n} "
-            f"seed{'s' * (n > 1)}. The Sigma-Pi map puts both views of one z on the same unit "
-            f"in {np.median(ref.view_consistency):.2f} of test cases, z error "
-            f"{ref.z_error:.2f} grid spacings (a winner alone cannot beat {self.floor:.2f}) with "
-            f"its units named by {ref.labels_needed()} labels (within 10 % of its error with "
-            "all of them)."
-        ]
-        for name, s in self.scores.items():
-            if name == "sigma-pi":
-                continue
-            match = s.labels_to_match(ref.z_error)
-            reach = (
-                f"comes within 10 % of the map's z error with {match:,} labels"
-                if match is not None
-                else f"not within 10 % of the map's z error with {max(cfg.labels):,} labels"
-            )
-            parts.append(
-                f"{name}: same place {np.median(s.view_consistency):.2f}, z error "
-                f"{s.z_error:.2f}, {reach}."
-            )
-        return " ".join(parts)
 
 
 # ------------------------------------------------------------------ the run
@@ -421,9 +211,15 @@ def run_compare(
     _memory.check_count("n_test", cfg.n_test, 4 * width + 32 * som.n_units, "e.g. --n-test 10000")
     cal, test = evaluation_sets(som, cfg.n_test)
     jobs = [(f"seed {seed}", CompareJob(seed, cfg, cal, test)) for seed in seeds]
-    done = run_all(compare_seed, jobs, executor=executor,
-                   per_job=job_memory(cfg.som_config, cfg.n_test), progress=progress,
-                   desc="compare", verbose=_verbose)  # fmt: skip
+    done = run_all(
+        compare_seed,
+        jobs,
+        executor=executor,
+        per_job=job_memory(cfg.som_config, cfg.n_test),
+        progress=progress,
+        desc="compare",
+        verbose=_verbose,
+    )
     scores = {name: MethodScore(name) for name in cfg.methods}
     for per_method in done.values():
         for name, (vc, uc, curve, seconds) in per_method.items():

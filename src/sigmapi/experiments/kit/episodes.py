@@ -4,10 +4,15 @@ and rates over the final episodes (what the tables report)."""
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["block_ends", "block_rates", "final_rates"]
+from sigmapi.envs import STATES
+from sigmapi.errors import ConfigError
+
+__all__ = ["block_ends", "block_rates", "check_episode_run", "final_rates"]
 
 
 def block_rates(outcomes: NDArray[np.bool_], block: int) -> NDArray[np.float64]:
@@ -32,3 +37,21 @@ def block_ends(n_blocks: int, block: int) -> NDArray[np.float64]:
 def final_rates(outcomes: NDArray[np.bool_], final: int) -> NDArray[np.float64]:
     """Each seed's rate over its last ``final`` episodes, ``(seeds,)``."""
     return np.asarray(outcomes[:, -final:].mean(axis=1), dtype=np.float64)
+
+
+def check_episode_run(config: Any) -> None:
+    """The rules of a frozen config of an episode run (``episodes``, ``block``,
+    ``final_episodes`` and ``states`` fields): the final window and one block fit in the
+    episodes, the states are distinct names
+    of :data:`~sigmapi.envs.STATES` (stored as a tuple)."""
+    if config.final_episodes > config.episodes:
+        raise ConfigError(
+            f"final_episodes must be <= episodes ({config.episodes}), got {config.final_episodes}"
+        )
+    if config.block > config.episodes:
+        raise ConfigError(f"block must be <= episodes ({config.episodes}), got {config.block}; "
+                          "a learning curve needs at least one full block")  # fmt: skip
+    states = tuple(config.states)
+    if not states or any(s not in STATES for s in states) or len(set(states)) != len(states):
+        raise ConfigError(f"states must be distinct names from {STATES}, got {states!r}")
+    object.__setattr__(config, "states", states)

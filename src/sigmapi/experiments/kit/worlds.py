@@ -52,8 +52,9 @@ class World:
         """The environment of ``settings`` through ``gymnasium.make`` (its time limit
         included, without Gymnasium's checker); ``kwargs`` go to it too (``render_mode``)."""
         if not isinstance(settings, self.settings):
-            raise _validate.fail(f"settings of world {self.name!r}",
-                                 f"a {self.settings.__name__}", settings)  # fmt: skip
+            raise _validate.fail(
+                f"settings of world {self.name!r}", f"a {self.settings.__name__}", settings
+            )
         return gym.make(self.env_id, **self.kwargs(settings), disable_env_checker=True, **kwargs)
 
 
@@ -64,8 +65,10 @@ WORLDS: dict[str, World] = {}
 def register_world(world: World) -> World:
     """Add ``world`` to :data:`WORLDS` (its id must be registered with Gymnasium); returns it."""
     if world.env_id not in gym.registry:
-        raise ConfigError(f"world {world.name!r}: Gymnasium id {world.env_id!r} is not "
-                          "registered; gymnasium.register it first")  # fmt: skip
+        raise ConfigError(
+            f"world {world.name!r}: Gymnasium id {world.env_id!r} is not "
+            "registered; gymnasium.register it first"
+        )
     if WORLDS.get(world.name, world) != world:
         raise ConfigError(f"world name {world.name!r} is taken; choose another")
     WORLDS[world.name] = world

@@ -26,6 +26,7 @@ from sigmapi.codes import PopulationCode
 from sigmapi.config import BACKEND_NAMES, SOMConfig, list_presets
 from sigmapi.envs import FEATURES, STATES, GazeReachConfig
 from sigmapi.errors import ConfigError
+from sigmapi.experiments.kit.episodes import check_episode_run
 from sigmapi.experiments.kit.maps import MapSpec
 from sigmapi.experiments.kit.parts import check_part_types, parts_dict, replaced_parts
 from sigmapi.experiments.kit.worlds import GAZE_REACH, World
@@ -69,7 +70,9 @@ class MapConfig:
     map_shape: tuple[int, ...] = (15, 15)
     """Grid of the Sigma-Pi map learned in the environment (a 1-D task given without one
     gets a map of 12 units)."""
-    iterations: int = 100_000
+    iterations: int = field(
+        default=100_000, metadata=_validate.bounded("int", 1, fix="paper-2d runs 100000")
+    )
     """Iterations of the map, one per saccade view pair it learns from (paper-2d's length)."""
     preset: str = "paper-2d"
     """The SOM preset the map learns with: its winner rule, schedules, ordering procedure and
@@ -83,21 +86,20 @@ class MapConfig:
     features: str = "response"
     """Map features: "response" (activations clipped at 0, L2-normalised) or "bump" (Gaussian
     around the winner on the map grid)."""
-    feature_width: float = 1.0
+    feature_width: float = field(
+        default=1.0,
+        metadata=_validate.bounded("number", 0, _validate.MAX_WIDTH, lo_open=True, fix="e.g. 1.0"),
+    )
     """Width of the bump features (map and true-z codes), in grid units."""
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "map_shape", _validate.shape("map_shape", self.map_shape))
-        its = _validate.integer("iterations", self.iterations, 1, fix="paper-2d runs 100000")
-        object.__setattr__(self, "iterations", its)
+        _validate.check_fields(self)
         _validate.choice("preset", self.preset, ("none", *list_presets()))
         _validate.choice("backend", self.backend, BACKEND_NAMES)
         if self.model_path is not None and not isinstance(self.model_path, str):
             raise _validate.fail("model_path", "a file name or None", self.model_path)
         _validate.choice("features", self.features, FEATURES)
-        width = _validate.width("feature_width", self.feature_width, 0.0,
-                                 lo_open=True, fix="e.g. 1.0")  # fmt: skip
-        object.__setattr__(self, "feature_width", width)
 
     def in_world(self, world: World, settings: Any, seed: int) -> SOMConfig:
         """The map's config on the codes of ``world`` as ``settings`` make it
@@ -119,18 +121,27 @@ class MapConfig:
         (docs/guide/reach.md, the small-map setting).
         """
         if x_code.width != y_code.width or (x_code.height, x_code.normalize, x_code.periodic) != (
-            y_code.height, y_code.normalize, y_code.periodic,
-        ):  # fmt: skip
+            y_code.height,
+            y_code.normalize,
+            y_code.periodic,
+        ):
             raise ConfigError(
                 f"a map's x and y codes differ only in shape, got {x_code} and {y_code}"
             )
         codes: dict[str, Any] = {
-            "x_shape": x_code.shape, "y_shape": y_code.shape, "code_width": x_code.width,
-            "code_height": x_code.height, "code_normalize": x_code.normalize,
+            "x_shape": x_code.shape,
+            "y_shape": y_code.shape,
+            "code_width": x_code.width,
+            "code_height": x_code.height,
+            "code_normalize": x_code.normalize,
             "periodic": x_code.periodic,
-        }  # fmt: skip
-        run: dict[str, Any] = {"map_shape": self.map_shape, "iterations": self.iterations,
-               "backend": self.backend, "seed": seed}  # fmt: skip
+        }
+        run: dict[str, Any] = {
+            "map_shape": self.map_shape,
+            "iterations": self.iterations,
+            "backend": self.backend,
+            "seed": seed,
+        }
         if self.preset != "none":
             return MapSpec(self.preset).config(**codes, **run)
         m = float(max(self.map_shape))
@@ -143,35 +154,25 @@ class ReachRunConfig:
 
     states: tuple[str, ...] = STATES
     """State representations to compare."""
-    episodes: int = 600
+    episodes: int = field(default=600, metadata=_validate.bounded("int", 1))
     """Episodes of reinforcement learning per seed and state."""
-    block: int = 50
+    block: int = field(default=50, metadata=_validate.bounded("int", 1))
     """Episodes per point of the learning curves."""
-    final_episodes: int = 200
+    final_episodes: int = field(default=200, metadata=_validate.bounded("int", 1))
     """The final success rate is measured over this many last episodes."""
-    plateau_rise: float = 0.05
+    plateau_rise: float = field(
+        default=0.05,
+        metadata=_validate.bounded(
+            "number", 0, 1, lo_open=True, fix="a share of success rate, e.g. 0.05"
+        ),
+    )
     """A learner has levelled off when its success rate rises by less than this over the last
     final_episodes episodes (a line fitted to each seed's episodes there, mean over seeds);
     the figure and the table name every learner that has not."""
 
     def __post_init__(self) -> None:
-        for name in ("episodes", "block", "final_episodes"):
-            object.__setattr__(self, name, _validate.integer(name, getattr(self, name), 1))
-        if self.final_episodes > self.episodes:
-            raise ConfigError(
-                f"final_episodes must be <= episodes ({self.episodes}), got {self.final_episodes}"
-            )
-        if self.block > self.episodes:
-            raise ConfigError(f"block must be <= episodes ({self.episodes}), got {self.block}; "
-                              "a learning curve needs at least one full block")  # fmt: skip
-        rise = _validate.number("plateau_rise", self.plateau_rise, 0.0, 1.0, lo_open=True,
-                                fix="a share of success rate, e.g. 0.05")  # fmt: skip
-        object.__setattr__(self, "plateau_rise", rise)
-        states = tuple(self.states)
-        bad = [s for s in states if s not in STATES]
-        if not states or bad or len(set(states)) != len(states):
-            raise ConfigError(f"states must be distinct names from {STATES}, got {states!r}")
-        object.__setattr__(self, "states", states)
+        _validate.check_fields(self)
+        check_episode_run(self)
 
 
 @dataclass(frozen=True)
@@ -189,9 +190,11 @@ class ReachConfig:
     """The states, episodes and curves."""
 
     PARTS: ClassVar[dict[str, type]] = {
-        "env": GazeReachConfig, "map": MapConfig, "agent": ActorCriticConfig,
+        "env": GazeReachConfig,
+        "map": MapConfig,
+        "agent": ActorCriticConfig,
         "run": ReachRunConfig,
-    }  # fmt: skip
+    }
     """Each part's name and class."""
 
     def __post_init__(self) -> None:
@@ -214,8 +217,12 @@ class ReachConfig:
 
 
 SMALL_MAP: dict[str, Any] = {
-    "grid": 7, "code_width": 0.5, "map_shape": (7, 7), "iterations": 10_000, "preset": "none",
-}  # fmt: skip
+    "grid": 7,
+    "code_width": 0.5,
+    "map_shape": (7, 7),
+    "iterations": 10_000,
+    "preset": "none",
+}
 """The 7x7 setting, the experiment's default before the paper-scale map: 7x7 codes of width
 0.5, a 7x7 map on 10,000 views with the small-map schedule (``ReachConfig().replace(**SMALL_MAP)``;
 ``sigmapi reach --grid 7 --code-width 0.5 --map-shape 7x7 --iterations 10000 --preset none``)."""

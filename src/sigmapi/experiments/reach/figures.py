@@ -137,8 +137,10 @@ def reach_figure(result: ReachData) -> Figure:
         str, float
     ] = {}  # one colour scale for every state's value map, so that they compare
     if values and values[0].ndim == 2:
-        shared = {"vmin": min(float(v.min()) for v in values),
-                  "vmax": max(float(v.max()) for v in values)}  # fmt: skip
+        shared = {
+            "vmin": min(float(v.min()) for v in values),
+            "vmax": max(float(v.max()) for v in values),
+        }
     for i, s in enumerate(states):
         plot_value_function(result, s, fig.add_subplot(grid[1, i]), **shared)
     env, agent = result.config.env, result.config.agent

@@ -174,14 +174,18 @@ class ReachResult:
         for s, v in self.final_success().items():
             seeds = " ".join(f"{x:.3f}" for x in per_seed[s])
             spread = "" if se[s] is None else f" +- {se[s]:.3f}"
-            lines.append(f"  {s:12s} {v:.3f}   per seed: {seeds}   (lost {lost[s]:.3f}, "
-                         f"rise {rise[s]:+.3f}{spread})")  # fmt: skip
+            lines.append(
+                f"  {s:12s} {v:.3f}   per seed: {seeds}   (lost {lost[s]:.3f}, "
+                f"rise {rise[s]:+.3f}{spread})"
+            )
         ratio = self.ratio_map_to_true_z()
         if ratio is not None:
             lines.append(f"  map / true_z = {ratio:.3f}")
-        lines.append(f"  rise: the change of the success rate across those episodes (a line "
-                     "fitted per seed; +- its standard error over seeds); "
-                     f"{self.levelling_note()}")  # fmt: skip
+        lines.append(
+            f"  rise: the change of the success rate across those episodes (a line "
+            "fitted per seed; +- its standard error over seeds); "
+            f"{self.levelling_note()}"
+        )
         return "\n".join(lines)
 
     def levelling_note(self) -> str:

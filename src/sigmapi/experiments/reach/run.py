@@ -141,12 +141,16 @@ def _run_seed(job: _SeedJob) -> dict[str, Any]:
 def _seed_runs(job: _SeedJob, progress: Tick | None) -> dict[str, Any]:
     cfg, seed, world = job.config, job.seed, job.world
     model = _map_for_seed(cfg, world, seed, progress) if "map" in cfg.run.states else None
-    out: dict[str, Any] = {"map_metrics": _map_quality(model) if model is not None else None,
-                           "runs": {}, "values": {}}  # fmt: skip
+    out: dict[str, Any] = {
+        "map_metrics": _map_quality(model) if model is not None else None,
+        "runs": {},
+        "values": {},
+    }
     starts = PLAN.rng(seed, "starts").integers(0, 2**31 - 1, size=cfg.run.episodes)
     for s in cfg.run.states:
-        env = make_state_env(world.make_env(cfg.env), s, model, cfg.map.features,
-                             cfg.map.feature_width)  # fmt: skip
+        env = make_state_env(
+            world.make_env(cfg.env), s, model, cfg.map.features, cfg.map.feature_width
+        )
         agent = actor_critic_for(env, cfg.agent, seed=PLAN.rng(seed, "agent"))
         done = None if progress is None else functools.partial(progress, 1, s)
         ep = run_episodes(env, agent, starts, on_episode=done)
@@ -206,9 +210,11 @@ class ReachExperiment(Experiment[ReachConfig]):
 
     def __init__(self, world: World = GAZE_REACH) -> None:
         if not issubclass(world.settings, GazeReachConfig):
-            raise _validate.fail(f"settings of world {world.name!r}",
-                                 "a GazeReachConfig (the reach config's env part)",
-                                 world.settings.__name__)  # fmt: skip
+            raise _validate.fail(
+                f"settings of world {world.name!r}",
+                "a GazeReachConfig (the reach config's env part)",
+                world.settings.__name__,
+            )
         self.world = world
         self.seeds = world.seeds
 
@@ -243,11 +249,15 @@ class ReachExperiment(Experiment[ReachConfig]):
             res.lost[s] = np.zeros(shape, dtype=bool)
         jobs = [(str(s), _SeedJob(config, self.world, i == 0, s)) for i, s in enumerate(seeds)]
         values = run_all(
-            _run_seed, jobs, executor=executor,
-            per_job=job_memory(config.som_config(0, self.world), n_test=2000), progress=progress,
-            desc="reach", verbose=lambda job: dataclasses.replace(job, show=progress),
+            _run_seed,
+            jobs,
+            executor=executor,
+            per_job=job_memory(config.som_config(0, self.world), n_test=2000),
+            progress=progress,
+            desc="reach",
+            verbose=lambda job: dataclasses.replace(job, show=progress),
             describe=lambda key, _: f"seed {key}",
-        )  # fmt: skip
+        )
         for i, (key, _) in enumerate(jobs):
             got = values[key]
             if got["map_metrics"] is not None:
@@ -274,5 +284,9 @@ def run_with_progress(
 ) -> ReachResult:
     """:meth:`REACH.run <ReachExperiment.run>` with progress on stderr and the seeds as jobs
     of a local process pool (``workers=None``: one per core, as memory allows)."""
-    return REACH.run(config, seeds=list(seeds), executor=Executor(workers=workers),
-                     progress=Progress(disable=disable))  # fmt: skip
+    return REACH.run(
+        config,
+        seeds=list(seeds),
+        executor=Executor(workers=workers),
+        progress=Progress(disable=disable),
+    )

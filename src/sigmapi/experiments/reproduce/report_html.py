@@ -49,10 +49,13 @@ _QUICK_NOTE = (
 
 
 _LABEL = {
-    "view_consistency": "view consistency", "view_within_one": "view within one",
-    "z_error": "z error (grid spacings)", "order_r2": "order R²", "usage": "usage",
+    "view_consistency": "view consistency",
+    "view_within_one": "view within one",
+    "z_error": "z error (grid spacings)",
+    "order_r2": "order R²",
+    "usage": "usage",
     "fold_score": "fold score",
-}  # fmt: skip
+}
 
 
 def _groups(result: ReproduceResult) -> list[list[str]]:
@@ -82,17 +85,21 @@ def _summary(result: ReproduceResult) -> str:
             res = result.presets[name]
             n = len(res.runs)
             what = "refined" if res.refines else "final map"
-            cols.append((f"{html.escape(name)}<br>{what}, {n} seed{'s' * (n != 1)}", res,
-                         "refined"))  # fmt: skip
+            cols.append(
+                (f"{html.escape(name)}<br>{what}, {n} seed{'s' * (n != 1)}", res, "refined")
+            )
             if res.refines:
-                cols.append((f"{html.escape(name)}<br>before refinement (same runs)", res,
-                             "unrefined"))  # fmt: skip
+                cols.append(
+                    (f"{html.escape(name)}<br>before refinement (same runs)", res, "unrefined")
+                )
         first = result.presets[group[0]]
         ceiling, ref = first.ceiling, first.reference
         head = "".join(f"<th>{c}</th>" for c, _, _ in cols)
         if ceiling is not None:
-            head += (f"<th>the rule's ceiling<br>fixed point from {html.escape(ceiling['preset'])}"
-                     f" seed {ceiling['seed']}</th>")  # fmt: skip
+            head += (
+                f"<th>the rule's ceiling<br>fixed point from {html.escape(ceiling['preset'])}"
+                f" seed {ceiling['seed']}</th>"
+            )
         head += "<th>reference<br>(docs/algorithm.md)</th>" if ref else ""
         rows = []
         for key in METRIC_KEYS:
@@ -107,14 +114,18 @@ def _summary(result: ReproduceResult) -> str:
             rows.append(f"<tr><td>{_LABEL[key]}</td>{cells}</tr>")
         ordered = "".join(
             f"<td>{res.ordered_count(stage)} of {len(res.runs)}"
-            f"{_flagged(res.folded_seeds(stage))}</td>" for _, res, stage in cols
-        )  # fmt: skip
+            f"{_flagged(res.folded_seeds(stage))}</td>"
+            for _, res, stage in cols
+        )
         pad = "<td></td>" * ((ceiling is not None) + bool(ref))
         rows.append(f"<tr><td>seeds ordered (R² &ge; {ORDERED_R2})</td>{ordered}{pad}</tr>")
         out.append(
-            "<table><tr><th>median <small>(worst seed)</small></th>" + head + "</tr>"
-            + "".join(rows) + "</table>"
-        )  # fmt: skip
+            "<table><tr><th>median <small>(worst seed)</small></th>"
+            + head
+            + "</tr>"
+            + "".join(rows)
+            + "</table>"
+        )
     return "".join(out)
 
 
@@ -278,7 +289,8 @@ def render(
         "end of the training, evaluated there, before the batch refinement of section 6.3. "
         "<i>The rule's ceiling</i>: the fixed point of Eq. 7 (each unit the mean of x' y'^T "
         "over the views it wins, with the winners of those weights) reached from one map of "
-        "the task, computed on a grid of z and views without sampling (sigmapi.viz.ceiling): "
+        "the task, computed on a grid of z and views without sampling "
+        "(sigmapi.analysis.fixed_point): "
         "where the rule's weights go from that map when no noise of a learning rate or of "
         "finitely many pairs is left.</p>",
         _summary(result),
@@ -286,7 +298,7 @@ def render(
         _table(result),
         "<p>All numbers, per seed, and the learning curves: <a href='metrics.json'>metrics.json"
         "</a>.</p>",
-    ]  # fmt: skip
+    ]
     for name, figs in figures.items():
         body.append(f"<h2>Figures: {html.escape(name)}</h2>")
         body.extend(_figure_html(f, c) for f, c in figs)

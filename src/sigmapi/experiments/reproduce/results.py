@@ -38,8 +38,13 @@ __all__ = [
 ]
 
 METRIC_KEYS = (
-    "view_consistency", "view_within_one", "z_error", "order_r2", "usage", "fold_score",
-)  # fmt: skip
+    "view_consistency",
+    "view_within_one",
+    "z_error",
+    "order_r2",
+    "usage",
+    "fold_score",
+)
 
 """The metrics the report tabulates (median, worst seed, mean and sd over seeds)."""
 
@@ -198,13 +203,19 @@ class SeedRun:
         return float(getattr(m, key))
 
     def to_dict(self) -> dict[str, Any]:
-        return {"seed": self.seed, "train_seconds": self.train_seconds,
-                "refine_seconds": self.refine_seconds, "compile_seconds": self.compile_seconds,
-                "measure_seconds": self.measure_seconds, "cpu_seconds": self.cpu_seconds,
-                "compile_cpu_seconds": self.compile_cpu_seconds,
-                "backend": self.backend, **self.metrics.to_dict(),
-                "unrefined": None if self.unrefined is None else self.unrefined.to_dict(),
-                "curve": self.curve}  # fmt: skip
+        return {
+            "seed": self.seed,
+            "train_seconds": self.train_seconds,
+            "refine_seconds": self.refine_seconds,
+            "compile_seconds": self.compile_seconds,
+            "measure_seconds": self.measure_seconds,
+            "cpu_seconds": self.cpu_seconds,
+            "compile_cpu_seconds": self.compile_cpu_seconds,
+            "backend": self.backend,
+            **self.metrics.to_dict(),
+            "unrefined": None if self.unrefined is None else self.unrefined.to_dict(),
+            "curve": self.curve,
+        }
 
 
 @dataclass
@@ -221,7 +232,7 @@ class PresetResult:
     """Why the figures show ``shown_seed`` (computed from the data)."""
     ceiling: dict[str, Any] | None = None
     """The fixed point of Eq. 7 reached from one map of the task
-    (:func:`sigmapi.viz.ceiling.fixed_point`; its metrics, the seed and preset of the map
+    (:func:`sigmapi.analysis.fixed_point.fixed_point`; its metrics, the seed and preset of the map
     it started from, rounds); None when not computed."""
     figures: dict[str, dict[str, Any]] = field(default_factory=dict)
     """Per figure: its file and the facts its caption states."""
@@ -255,34 +266,51 @@ class PresetResult:
     def folded_seeds(self, stage: Stage = "refined") -> list[int]:
         """Seeds the z-free fold detector flags."""
         unrefined = stage == "unrefined"
-        return [r.seed for r in self.runs
-                if (r.unrefined if unrefined and r.unrefined else r.metrics).folded]  # fmt: skip
+        return [
+            r.seed
+            for r in self.runs
+            if (r.unrefined if unrefined and r.unrefined else r.metrics).folded
+        ]
 
     def seconds(self, key: str) -> float:
         """Median over seeds of a time of :class:`SeedRun` (e.g. ``"train_seconds"``)."""
         return statistics.median(float(getattr(r, key)) for r in self.runs)
 
     def _stage(self, stage: Stage) -> dict[str, Any]:
-        return {"median": self.median(stage), "worst": self.worst(stage),
-                "mean": self.mean(stage), "sd": self.sd(stage),
-                "ordered": self.ordered_count(stage),
-                "folded_seeds": self.folded_seeds(stage)}  # fmt: skip
+        return {
+            "median": self.median(stage),
+            "worst": self.worst(stage),
+            "mean": self.mean(stage),
+            "sd": self.sd(stage),
+            "ordered": self.ordered_count(stage),
+            "folded_seeds": self.folded_seeds(stage),
+        }
 
     def to_dict(self) -> dict[str, Any]:
         return {
-            "config": self.config.to_dict(), "seeds": [r.seed for r in self.runs],
+            "config": self.config.to_dict(),
+            "seeds": [r.seed for r in self.runs],
             "runs": [r.to_dict() for r in self.runs],
             **self._stage("refined"),
             "unrefined": self._stage("unrefined") if self.refines else None,
-            "ceiling": self.ceiling, "reference": self.reference,
-            "z_error_floor": self.z_error_floor, "figures": self.figures,
-            "shown_seed": self.shown_seed, "shown_reason": self.shown_reason,
+            "ceiling": self.ceiling,
+            "reference": self.reference,
+            "z_error_floor": self.z_error_floor,
+            "figures": self.figures,
+            "shown_seed": self.shown_seed,
+            "shown_reason": self.shown_reason,
             "seconds": {k: self.seconds(k) for k in SECONDS},
-        }  # fmt: skip
+        }
 
 
-SECONDS = ("train_seconds", "refine_seconds", "compile_seconds", "measure_seconds", "cpu_seconds",
-           "compile_cpu_seconds")  # fmt: skip
+SECONDS = (
+    "train_seconds",
+    "refine_seconds",
+    "compile_seconds",
+    "measure_seconds",
+    "cpu_seconds",
+    "compile_cpu_seconds",
+)
 """The times of a :class:`SeedRun`, whose medians over seeds :meth:`PresetResult.to_dict`
 stores (``seconds``)."""
 
@@ -304,12 +332,15 @@ class ReproduceResult:
     def to_dict(self) -> dict[str, Any]:
         o = self.options
         return {
-            "quick": o.quick, "seeds": list(o.seeds), "seeds_2d": o.seeds_2d,
+            "quick": o.quick,
+            "seeds": list(o.seeds),
+            "seeds_2d": o.seeds_2d,
             "n_test": o.test_size,
             "curve_test": o.curve_test,
             "presets": {name: p.to_dict() for name, p in self.presets.items()},
-            "sections": self.sections, "total_seconds": self.total_seconds,
-        }  # fmt: skip
+            "sections": self.sections,
+            "total_seconds": self.total_seconds,
+        }
 
     def table(self) -> str:
         """Per preset the median metrics over its seeds, labelled (after and before the
@@ -333,9 +364,11 @@ class ReproduceResult:
                          f"view_consistency {res.worst()['view_consistency']:.3f}, "
                          f"order_r2 {res.worst()['order_r2']:.3f}")  # fmt: skip
             if res.ceiling is not None:
-                lines.append(f"{name}: the rule's ceiling (fixed point of Eq. 7 from seed "
-                             f"{res.ceiling['seed']} of {res.ceiling['preset']}): "
-                             f"view_consistency {res.ceiling['view_consistency']:.3f}")  # fmt: skip
+                lines.append(
+                    f"{name}: the rule's ceiling (fixed point of Eq. 7 from seed "
+                    f"{res.ceiling['seed']} of {res.ceiling['preset']}): "
+                    f"view_consistency {res.ceiling['view_consistency']:.3f}"
+                )
         if self.out is not None:
             lines.append(f"report: {self.out / REPORT}")
         return "\n".join(lines)

@@ -6,7 +6,7 @@ on the seeds (the 2-D presets on the first ``seeds_2d`` of them: a 2-D run costs
 1-D runs), recording learning curves at checkpoints. Each run's map is evaluated twice at no
 extra training: at the end of the training, before the refinement (the unrefined map of the
 same run), and at the end. The rule's ceiling, the fixed point of Eq. 7 reached from the map
-the figures show (:mod:`sigmapi.viz.ceiling`), is computed once per task and drawn in the
+the figures show (:mod:`sigmapi.analysis.fixed_point`), is computed once per task and drawn in the
 learning curves. numba's one-time compile runs before each worker's first job and is timed
 apart (:func:`compile_once`). The run draws the figures of the paper and writes into ``DIR``:
 
@@ -49,7 +49,6 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import statistics
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
@@ -61,6 +60,7 @@ from sigmapi.errors import ConfigError
 from sigmapi.executor import Executor, job_memory
 from sigmapi.experiments.base import Experiment, register, run_all
 from sigmapi.experiments.reach.section import reach_section
+from sigmapi.experiments.reproduce.figures import draw_preset, figure_seed
 from sigmapi.experiments.reproduce.report_html import linked_files, render
 from sigmapi.experiments.reproduce.results import (
     OTHER_PROCEDURE,
@@ -74,15 +74,25 @@ from sigmapi.experiments.reproduce.results import (
     SeedRun,
 )
 from sigmapi.io import atomic_write_bytes
-from sigmapi.metrics import ORDERED_R2, evaluate
+from sigmapi.metrics import evaluate
 from sigmapi.progress import Progress
 from sigmapi.som import SigmaPiSOM
 from sigmapi.viz import figures as figs
 
 __all__ = [
-    "OTHER_PROCEDURE", "QUICK_ITERATIONS", "REFERENCE", "REPRODUCE", "SECTIONS", "Reproduce",
-    "SeedJob", "compile_once", "figure_seed", "paper_presets", "reproduce", "train_seed",
-]  # fmt: skip
+    "OTHER_PROCEDURE",
+    "QUICK_ITERATIONS",
+    "REFERENCE",
+    "REPRODUCE",
+    "SECTIONS",
+    "Reproduce",
+    "SeedJob",
+    "compile_once",
+    "figure_seed",
+    "paper_presets",
+    "reproduce",
+    "train_seed",
+]
 
 REFERENCE: dict[str, dict[str, float]] = {
     "paper-1d": {"view_consistency": 0.87, "view_within_one": 0.988, "z_error": 0.32},
@@ -182,15 +192,20 @@ def reproduce(
         runs, models[name] = trained[name]
         shown, why = figure_seed(runs, cfg)
         seeds = opts.seeds_of(cfg)
-        entry = PresetResult(cfg, runs, REFERENCE.get(name, {}), Z_ERROR_FLOOR.get(name),
-                             seeds[shown], why)  # fmt: skip
+        entry = PresetResult(
+            cfg, runs, REFERENCE.get(name, {}), Z_ERROR_FLOOR.get(name), seeds[shown], why
+        )
         entry.ceiling = _ceiling(name, result, models[name][shown], seeds[shown], opts, progress)
         result.presets[name] = entry
         for i, seed in enumerate(seeds):
             if opts.save_models == "all" or (opts.save_models == "shown" and i == shown):
                 models[name][i].save(out / f"{name}-seed{seed}.npz")
         run = figs.RunInfo(name, cfg, seeds, shown, opts.curve_test, why)
-        figures[name] = _draw(run, models[name][shown], entry, out, opts, progress)
+        reference = _reference(name)
+        figures[name] = draw_preset(
+            run, models[name][shown], entry, out, opts.dpi, reference, progress,
+            test_size=opts.test_size, curve_test=opts.curve_test,
+        )  # fmt: skip
         result.figure_files += [out / file for file, _ in figures[name]]
     ctx = ReportContext(out, opts, models)
     added = [s for s in (fn(ctx) for fn in (SECTIONS if sections is None else sections)) if s]
@@ -234,9 +249,9 @@ class Reproduce(Experiment[ReproduceConfig]):
             raise ConfigError("out must be the report's folder, got None; e.g. Path('report')")
         ex = executor if executor is not None else Executor(workers=1)
         fields = {f.name: getattr(config, f.name) for f in dataclasses.fields(ReproduceConfig)}
-        opts = ReproduceOptions(**fields, seeds=tuple(seeds),
-                                progress=Progress.of(progress).enabled,
-                                workers=ex.workers)  # fmt: skip
+        opts = ReproduceOptions(
+            **fields, seeds=tuple(seeds), progress=Progress.of(progress).enabled, workers=ex.workers
+        )
         return reproduce(out, opts, executor=ex)
 
 
@@ -269,18 +284,33 @@ def compile_once(cfg: SOMConfig) -> float:
     dimensions calls the same compiled code as the preset: the training times of
     :func:`train_seed` then hold no compile time, which is reported apart.
     """
-    from sigmapi.viz.curves import LearningCurve
+    from sigmapi.analysis.curves import LearningCurve
 
-    key = (cfg.backend, cfg.winner_rule, cfg.ordering, cfg.refine_rounds > 0, cfg.refine_sigma,
-           len(cfg.map_shape), len(cfg.x_shape), cfg.periodic, cfg.map_periodic, cfg.same_view,
-           cfg.threads)  # fmt: skip
+    key = (
+        cfg.backend,
+        cfg.winner_rule,
+        cfg.ordering,
+        cfg.refine_rounds > 0,
+        cfg.refine_sigma,
+        len(cfg.map_shape),
+        len(cfg.x_shape),
+        cfg.periodic,
+        cfg.map_periodic,
+        cfg.same_view,
+        cfg.threads,
+    )
     if key in _COMPILED:
         return 0.0
     t0 = time.perf_counter()
-    small = cfg.replace(map_shape=(3,) * len(cfg.map_shape), x_shape=(4,) * len(cfg.x_shape),
-                        y_shape=(4,) * len(cfg.y_shape), iterations=2000, seed=0,
-                        refine_rounds=min(cfg.refine_rounds, 1),
-                        refine_pairs=min(cfg.refine_pairs, 500))  # fmt: skip
+    small = cfg.replace(
+        map_shape=(3,) * len(cfg.map_shape),
+        x_shape=(4,) * len(cfg.x_shape),
+        y_shape=(4,) * len(cfg.y_shape),
+        iterations=2000,
+        seed=0,
+        refine_rounds=min(cfg.refine_rounds, 1),
+        refine_pairs=min(cfg.refine_pairs, 500),
+    )
     model = SigmaPiSOM(small).fit(callback=LearningCurve(at=[small.iterations], n_test=50))
     evaluate(model, n_test=50)
     _COMPILED.add(key)
@@ -295,7 +325,7 @@ def train_seed(job: SeedJob) -> tuple[SeedRun, dict[str, Any], dict[str, Any]]:
     unrefined map of the same run, at no extra training); the times of the training, the
     refinement, the measurements and the one-time compile are taken apart (:class:`SeedRun`).
     """
-    from sigmapi.viz.curves import LearningCurve, checkpoints
+    from sigmapi.analysis.curves import LearningCurve, checkpoints
 
     cfg = job.cfg
     compile_c0 = time.process_time()
@@ -306,8 +336,9 @@ def train_seed(job: SeedJob) -> tuple[SeedRun, dict[str, Any], dict[str, Any]]:
     callback, bar = Progress(disable=not job.progress or None).training(
         cfg.iterations, f"{job.name} seed {job.seed}"
     )
-    curve = LearningCurve(at=checkpoints(cfg.iterations, job.n_checkpoints),
-                          n_test=job.curve_test, then=callback)  # fmt: skip
+    curve = LearningCurve(
+        at=checkpoints(cfg.iterations, job.n_checkpoints), n_test=job.curve_test, then=callback
+    )
     marks: dict[str, Any] = {}
 
     def step(m: SigmaPiSOM) -> None:
@@ -330,11 +361,19 @@ def train_seed(job: SeedJob) -> tuple[SeedRun, dict[str, Any], dict[str, Any]]:
     train_s = trained - t0 - marks.get("curve_s", curve.seconds)
     refine_s = end - trained - marks.get("eval_s", 0.0) - (curve.seconds - marks.get("curve_s", 0))
     header, arrays = model.to_arrays()
-    run = SeedRun(job.seed, train_s, model.backend, metrics, curve.to_dict(),
-                  unrefined=marks.get("unrefined"), refine_seconds=max(refine_s, 0.0),
-                  compile_seconds=compile_s, compile_cpu_seconds=compile_cpu,
-                  measure_seconds=curve.seconds + marks.get("eval_s", 0.0) + final_eval,
-                  cpu_seconds=time.process_time() - c0)  # fmt: skip
+    run = SeedRun(
+        job.seed,
+        train_s,
+        model.backend,
+        metrics,
+        curve.to_dict(),
+        unrefined=marks.get("unrefined"),
+        refine_seconds=max(refine_s, 0.0),
+        compile_seconds=compile_s,
+        compile_cpu_seconds=compile_cpu,
+        measure_seconds=curve.seconds + marks.get("eval_s", 0.0) + final_eval,
+        cpu_seconds=time.process_time() - c0,
+    )
     return run, header, arrays
 
 
@@ -345,29 +384,6 @@ FLAG_NOTE = (
 that the map is folded (a short run's coarse map raises it too); ``ordered`` is order R^2."""
 
 
-def _table_gap(runs: Sequence[SeedRun], n_test: int) -> dict[str, float]:
-    """Median over seeds of each curve's last point minus the table's value (the same map,
-    measured on the curves' smaller sets): what the curves caption states."""
-    gap = {k: statistics.median(r.curve[k][-1] - getattr(r.metrics, k) for r in runs)
-           for k in ("z_error", "view_consistency")}  # fmt: skip
-    return {**gap, "n_test": n_test}
-
-
-def _decoding_cause(model: SigmaPiSOM, run: SeedRun, opts: ReproduceOptions) -> dict[str, Any]:
-    """The shown map's z error on the table's test z's but with the curves' decoding table
-    (their calibration z's): beside the table's and the curve's last point, how much of the
-    curve's gap the decoding table's size makes."""
-    from sigmapi.metrics import evaluation_sets
-    from sigmapi.viz.curves import LearningCurve
-
-    calibration, _ = evaluation_sets(model, opts.curve_test, LearningCurve.seed)
-    _, test = evaluation_sets(model, opts.test_size)
-    small = evaluate(model, test=test, calibration=calibration).z_error
-    return {"seed": run.seed, "z_error_curve_table": float(small),
-            "z_error_table": float(run.metrics.z_error),
-            "z_error_curve": float(run.curve["z_error"][-1])}  # fmt: skip
-
-
 def _train_all(
     runs_of: Sequence[tuple[str, SOMConfig]],
     opts: ReproduceOptions,
@@ -375,9 +391,14 @@ def _train_all(
     progress: Progress | None,
 ) -> dict[str, tuple[list[SeedRun], list[SigmaPiSOM]]]:
     """Train every (preset, seed), in parallel where cores and memory allow."""
-    jobs = [(f"{name} seed {seed}", SeedJob(name, cfg, seed, opts.n_checkpoints,
-                                            opts.curve_test, opts.test_size))
-            for name, cfg in runs_of for seed in opts.seeds_of(cfg)]  # fmt: skip
+    jobs = [
+        (
+            f"{name} seed {seed}",
+            SeedJob(name, cfg, seed, opts.n_checkpoints, opts.curve_test, opts.test_size),
+        )
+        for name, cfg in runs_of
+        for seed in opts.seeds_of(cfg)
+    ]
     per_job = max(job_memory(cfg, opts.test_size) for _, cfg in runs_of)
 
     def describe(key: str, value: tuple[SeedRun, Any, Any]) -> str:
@@ -388,9 +409,16 @@ def _train_all(
         return (f"{key}: training {run.train_seconds:.0f} s{refine}{compiled}, order R^2 "
                 f"{m.order_r2:.3f}{before}{FLAG_NOTE if m.folded else ''}")  # fmt: skip
 
-    done = run_all(train_seed, jobs, executor=executor, per_job=per_job, progress=progress,
-                   desc="reproduce", describe=describe,
-                   verbose=lambda job: replace(job, progress=True))  # fmt: skip
+    done = run_all(
+        train_seed,
+        jobs,
+        executor=executor,
+        per_job=per_job,
+        progress=progress,
+        desc="reproduce",
+        describe=describe,
+        verbose=lambda job: replace(job, progress=True),
+    )
     out: dict[str, tuple[list[SeedRun], list[SigmaPiSOM]]] = {}
     for name, cfg in runs_of:
         runs, models = [], []
@@ -403,35 +431,6 @@ def _train_all(
     return out
 
 
-def figure_seed(runs: Sequence[SeedRun], cfg: SOMConfig) -> tuple[int, str]:
-    """The run the figures show, and why: the worst-ordered seed (lowest order R^2 of the
-    final map, the first on ties).
-
-    For the authors' procedure (random start) the comparison is about twisted maps, so its
-    worst-ordered map is the one to see; for sigmapi's, the worst-ordered map is the case a
-    reader would doubt (the others are at least as ordered). The reason names the seeds
-    and the values it was chosen from.
-    """
-    i = min(range(len(runs)), key=lambda j: (runs[j].metrics.order_r2, j))
-    r2 = runs[i].metrics.order_r2
-    if len(runs) == 1:
-        return i, f"its only seed (order R² {r2:.3f})"
-    n_twisted = sum(r.metrics.order_r2 < ORDERED_R2 for r in runs)
-    authors = cfg.ordering == "none"
-    if r2 < ORDERED_R2:
-        state = (f"twisted (order R² {r2:.3f} < {ORDERED_R2}; {n_twisted} of {len(runs)} seeds "
-                 "twisted)")  # fmt: skip
-        what = "the comparison is about twisting" if authors else "the map to doubt"
-    else:
-        state = f"still ordered (order R² {r2:.3f}; every seed ≥ {ORDERED_R2})"
-        what = (
-            "no seed twisted here; the comparison is about twisting, so the least ordered"
-            if authors
-            else "the others are at least as ordered"
-        )
-    return i, f"the worst-ordered of its {len(runs)} seeds, {state}: {what}"
-
-
 def _ceiling(
     name: str,
     result: ReproduceResult,
@@ -441,8 +440,9 @@ def _ceiling(
     progress: Progress | None,
 ) -> dict[str, Any]:
     """The rule's ceiling for preset ``name``: its twin's (same task) when the twin ran
-    first, else the fixed point reached from ``model`` (:func:`sigmapi.viz.ceiling.fixed_point`)."""
-    from sigmapi.viz.ceiling import fixed_point
+    first, else the fixed point reached from ``model``
+    (:func:`sigmapi.analysis.fixed_point.fixed_point`)."""
+    from sigmapi.analysis.fixed_point import fixed_point
 
     for twin, other in OTHER_PROCEDURE.items():
         done = result.presets.get(twin)
@@ -450,45 +450,9 @@ def _ceiling(
             return done.ceiling
     t0 = time.perf_counter()
     for _ in Progress.of(progress).each([name], f"{name} ceiling (fixed point of Eq. 7)"):
-        found = fixed_point(model, n_test=opts.test_size, max_rounds=QUICK_CEILING_ROUNDS
-                            if opts.quick else CEILING_ROUNDS)  # fmt: skip
-    return {**found.to_dict(), "preset": name, "seed": seed,
-            "seconds": time.perf_counter() - t0}  # fmt: skip
-
-
-def _draw(
-    run: figs.RunInfo,
-    model: SigmaPiSOM,
-    entry: PresetResult,
-    out: Path,
-    opts: ReproduceOptions,
-    progress: Progress | None,
-) -> list[tuple[str, str]]:
-    """Draw every figure of one preset into ``out``; ``(file, caption)`` per figure.
-
-    The facts each caption states are stored in ``entry.figures``.
-    """
-    from sigmapi.viz.analysis import receptive_field_centres
-
-    centres = receptive_field_centres(model, seed=0)
-    curves = [r.curve for r in entry.runs]
-    seeds = run.seeds
-    drawn = []
-    bar = Progress.of(progress).each(figs.FIGURES, f"{run.preset} figures")
-    for fig_name in bar:
-        file = f"{fig_name}-{run.preset}.png"
-        label = f"{run.preset}, seed {seeds[run.shown]}"
-        if fig_name == "curves":
-            label = (
-                f"{run.preset}, seed{'s' if len(seeds) > 1 else ''} {', '.join(map(str, seeds))}"
-            )
-        facts = figs.draw_figure(fig_name, model, out / file, curves=curves,
-                                 reference=_reference(run.preset), label=label,
-                                 centres=centres, dpi=opts.dpi,
-                                 ceiling=entry.ceiling)  # fmt: skip
-        if fig_name == "curves":
-            facts["table_gap"] = _table_gap(entry.runs, opts.test_size)
-            facts["table_gap"]["decoding"] = _decoding_cause(model, entry.runs[run.shown], opts)
-        entry.figures[fig_name] = {"file": file, **facts}
-        drawn.append((file, figs.caption(fig_name, run, facts)))
-    return drawn
+        found = fixed_point(
+            model,
+            n_test=opts.test_size,
+            max_rounds=QUICK_CEILING_ROUNDS if opts.quick else CEILING_ROUNDS,
+        )
+    return {**found.to_dict(), "preset": name, "seed": seed, "seconds": time.perf_counter() - t0}

@@ -70,8 +70,14 @@ class GateConfig:
 
     def gating(self) -> Gating:
         """The loop's settings (:class:`~sigmapi.agents.gated.Gating`)."""
-        return Gating(self.surprise, self.feedback, self.gate_scale, self.gate_eps,
-                      self.gate_sigma, self.gate_view)  # fmt: skip
+        return Gating(
+            self.surprise,
+            self.feedback,
+            self.gate_scale,
+            self.gate_eps,
+            self.gate_sigma,
+            self.gate_view,
+        )
 
 
 @dataclass(frozen=True)
@@ -80,32 +86,30 @@ class RewardRunConfig:
 
     methods: tuple[str, ...] = METHODS
     """Maps to compare ("frozen", "gated", "shuffled"; "shuffled" needs "gated")."""
-    episodes: int = 300
+    episodes: int = field(default=300, metadata=_validate.bounded("int", 1))
     """Episodes of reinforcement learning per seed and method."""
-    block: int = 20
+    block: int = field(default=20, metadata=_validate.bounded("int", 1))
     """Episodes per point of the learning curves (and the window of the 80 % criterion)."""
-    final_episodes: int = 100
+    final_episodes: int = field(default=100, metadata=_validate.bounded("int", 1))
     """The final success rate is measured over this many last episodes."""
-    target: float = 0.8
+    target: float = field(
+        default=0.8, metadata=_validate.bounded("number", 0, 1, lo_open=True, fix="e.g. 0.8")
+    )
     """Success rate over a block that counts as learned (episodes to reach it)."""
-    near_radius: float = 0.2
+    near_radius: float = field(
+        default=0.2, metadata=_validate.bounded("number", 0, 0.5, lo_open=True, fix="e.g. 0.2")
+    )
     """Chebyshev radius around the goal of the region "near the goal" (the magnification)."""
-    n_test: int = 4000
+    n_test: int = field(default=4000, metadata=_validate.bounded("int", 1))
     """Test objects (views at random z) that score the maps."""
 
     def __post_init__(self) -> None:
-        for name in ("episodes", "block", "final_episodes", "n_test"):
-            object.__setattr__(self, name, _validate.integer(name, getattr(self, name), 1))
+        _validate.check_fields(self)
         if self.final_episodes > self.episodes or self.block > self.episodes:
             raise ConfigError(
                 f"final_episodes and block must be <= episodes ({self.episodes}), got "
                 f"{self.final_episodes} and {self.block}"
             )
-        target = _validate.number("target", self.target, 0.0, 1.0, lo_open=True, fix="e.g. 0.8")
-        near = _validate.number("near_radius", self.near_radius, 0.0, 0.5, lo_open=True,
-                                fix="e.g. 0.2")  # fmt: skip
-        object.__setattr__(self, "target", target)
-        object.__setattr__(self, "near_radius", near)
         methods = tuple(self.methods)
         bad = [m for m in methods if m not in METHODS]
         if not methods or bad or len(set(methods)) != len(methods):
@@ -145,9 +149,12 @@ class RewardConfig:
     """The methods, episodes and scores."""
 
     PARTS: ClassVar[dict[str, type]] = {
-        "env": GazeReachConfig, "map": MapConfig, "agent": ActorCriticConfig,
-        "gate": GateConfig, "run": RewardRunConfig,
-    }  # fmt: skip
+        "env": GazeReachConfig,
+        "map": MapConfig,
+        "agent": ActorCriticConfig,
+        "gate": GateConfig,
+        "run": RewardRunConfig,
+    }
     """Each part's name and class."""
 
     def __post_init__(self) -> None:

@@ -33,8 +33,12 @@ class RewardData(Protocol):
     def curves(self) -> dict[str, dict[str, NDArray[np.float64]]]: ...
 
 
-LABELS = {"frozen": "frozen map", "gated": "reward-gated map", "shuffled": "shuffled reward",
-          "initial": "learned map (before)"}  # fmt: skip
+LABELS = {
+    "frozen": "frozen map",
+    "gated": "reward-gated map",
+    "shuffled": "shuffled reward",
+    "initial": "learned map (before)",
+}
 COLORS = {"frozen": "C0", "gated": "C2", "shuffled": "C3", "initial": "C0"}
 
 
@@ -49,8 +53,14 @@ def plot_reward_curves(result: RewardData, ax: Axes | None = None) -> Axes:
     ax = _ax(ax)
     for m, c in result.curves().items():
         ax.plot(c["episode"], c["success"], color=COLORS.get(m), label=LABELS.get(m, m))
-        ax.fill_between(c["episode"], c["success_min"], c["success_max"], color=COLORS.get(m),
-                        alpha=0.15, linewidth=0)  # fmt: skip
+        ax.fill_between(
+            c["episode"],
+            c["success_min"],
+            c["success_max"],
+            color=COLORS.get(m),
+            alpha=0.15,
+            linewidth=0,
+        )
     ax.axhline(result.config.run.target, color="0.5", linestyle=":", linewidth=1)
     ax.set_xlabel(f"episode (blocks of {result.config.run.block})")
     ax.set_ylabel("success rate")
@@ -78,12 +88,22 @@ def plot_units(result: RewardData, method: str, ax: Axes | None = None) -> Axes:
     goal = np.asarray(GAZE_REACH.source(cfg.env).goal)
     r, rn = cfg.env.goal_radius, cfg.run.near_radius
     ax.add_patch(Rectangle(tuple(goal - r), 2 * r, 2 * r, color="0.85", zorder=0))
-    ax.add_patch(Rectangle(tuple(goal - rn), 2 * rn, 2 * rn, fill=False, linestyle="--",
-                           edgecolor="k", linewidth=0.8))  # fmt: skip
+    ax.add_patch(
+        Rectangle(
+            tuple(goal - rn),
+            2 * rn,
+            2 * rn,
+            fill=False,
+            linestyle="--",
+            edgecolor="k",
+            linewidth=0.8,
+        )
+    )
     mag = result.scores[method]["magnification"]
     near = result.scores[method]["units_near"]
-    ax.set_title(f"{LABELS.get(method, method)}: {int(near[0])} units near, x{mag[0]:.2f}",
-                 fontsize=9)  # fmt: skip
+    ax.set_title(
+        f"{LABELS.get(method, method)}: {int(near[0])} units near, x{mag[0]:.2f}", fontsize=9
+    )
     ax.set_xlim(0, 1)
     ax.set_ylim(0, 1)
     ax.set_aspect("equal")
@@ -103,6 +123,9 @@ def reward_figure(result: RewardData) -> Figure:
     plot_reward_curves(result, axes[0])
     for ax, m in zip(axes[1:], methods, strict=True):
         plot_units(result, m, ax)
-    fig.suptitle(f"seed {result.seeds[0]} maps: magnification = units per area near the goal "
-                 "over units per area overall", fontsize=9)  # fmt: skip
+    fig.suptitle(
+        f"seed {result.seeds[0]} maps: magnification = units per area near the goal "
+        "over units per area overall",
+        fontsize=9,
+    )
     return fig

@@ -43,11 +43,15 @@ def _summary(values: list[float | None], higher: bool = True) -> dict[str, Any]:
         worst = None
     else:
         worst = float(min(known) if higher else max(known))
-    filled = [v if v is not None and np.isfinite(v) else (-np.inf if higher else np.inf)
-              for v in values]  # fmt: skip
+    filled = [
+        v if v is not None and np.isfinite(v) else (-np.inf if higher else np.inf) for v in values
+    ]
     med = float(np.median(filled)) if filled else float("nan")
-    return {"median": med if np.isfinite(med) else None, "worst": worst,
-            "per_seed": [None if v is None else float(v) for v in values]}  # fmt: skip
+    return {
+        "median": med if np.isfinite(med) else None,
+        "worst": worst,
+        "per_seed": [None if v is None else float(v) for v in values],
+    }
 
 
 @dataclass
@@ -96,9 +100,13 @@ class RewardResult:
         out: dict[str, dict[str, NDArray[np.float64]]] = {}
         for m, succ in self.success.items():
             rate = block_rates(succ, b)
-            out[m] = {"episode": block_ends(rate.shape[1], b), "success": rate.mean(axis=0),
-                      "success_sd": rate.std(axis=0), "success_min": rate.min(axis=0),
-                      "success_max": rate.max(axis=0)}  # fmt: skip
+            out[m] = {
+                "episode": block_ends(rate.shape[1], b),
+                "success": rate.mean(axis=0),
+                "success_sd": rate.std(axis=0),
+                "success_min": rate.min(axis=0),
+                "success_max": rate.max(axis=0),
+            }
         return out
 
     def to_dict(self) -> dict[str, Any]:
@@ -157,8 +165,10 @@ class RewardResult:
     def table(self) -> str:
         """Per method: final success, episodes to the target, magnification, away quality."""
         d = self.to_dict()
-        lines = [f"{len(self.seeds)} seeds; median (worst) over seeds; target success "
-                 f"{d['target']:.0%} per block of {self.config.run.block}"]  # fmt: skip
+        lines = [
+            f"{len(self.seeds)} seeds; median (worst) over seeds; target success "
+            f"{d['target']:.0%} per block of {self.config.run.block}"
+        ]
         for e in d["methods"]:
             et = e["episodes_to_target"]
             lines.append(

@@ -171,13 +171,17 @@ def _seed_runs(job: _SeedJob, progress: Tick | None) -> dict[str, Any]:
     objects = probe_objects(place, run.n_test, PLAN.rng(seed, "probes"))
     goal = np.asarray(place.goal, dtype=np.float64)
     starts = PLAN.rng(seed, "starts").integers(0, 2**31 - 1, size=run.episodes)
-    out: dict[str, Any] = {"initial": map_scores(learned, objects, goal, run.near_radius),
-                           "initial_units": preferred_z(learned, objects), "runs": {}}  # fmt: skip
+    out: dict[str, Any] = {
+        "initial": map_scores(learned, objects, goal, run.near_radius),
+        "initial_units": preferred_z(learned, objects),
+        "runs": {},
+    }
     factors: NDArray[np.float64] | None = None
     for m in sorted(run.methods, key=("frozen", "gated", "shuffled").index):
         model = copy.copy(learned)
-        env = MapObservation(world.make_env(cfg.env), model, cfg.map.features,
-                             cfg.map.feature_width)  # fmt: skip
+        env = MapObservation(
+            world.make_env(cfg.env), model, cfg.map.features, cfg.map.feature_width
+        )
         agent = actor_critic_for(env, cfg.agent, seed=PLAN.rng(seed, "agent"))
         done = None if progress is None else functools.partial(progress, 1, m)
         updates = 0
@@ -188,17 +192,26 @@ def _seed_runs(job: _SeedJob, progress: Tick | None) -> dict[str, Any]:
             if m == "shuffled":
                 assert factors is not None  # the gated run came first
                 replay = PLAN.rng(seed, "shuffle").permutation(factors)
-            got = run_gated_episodes(env, agent, starts, cfg.gate.gating(),
-                                     PLAN.rng(seed, "fixations"),
-                                     surprises=replay, on_episode=done)  # fmt: skip
+            got = run_gated_episodes(
+                env,
+                agent,
+                starts,
+                cfg.gate.gating(),
+                PLAN.rng(seed, "fixations"),
+                surprises=replay,
+                on_episode=done,
+            )
             ep, updates = got.episodes, got.updates
             if m == "gated":
                 factors = got.surprises
         out["runs"][m] = {
-            "success": ep.success, "steps": ep.steps, "lost": ep.failed, "updates": updates,
+            "success": ep.success,
+            "steps": ep.steps,
+            "lost": ep.failed,
+            "updates": updates,
             "scores": map_scores(model, objects, goal, run.near_radius),
             "units": preferred_z(model, objects),
-        }  # fmt: skip
+        }
     return out
 
 
@@ -216,8 +229,9 @@ class RewardExperiment(Experiment[RewardConfig]):
     name = "reward"
     summary = "a map whose plasticity is gated by reward vs. the frozen map and a shuffled control"
     config_type = RewardConfig
-    quick = RewardConfig().replace(episodes=100, block=25, final_episodes=25, iterations=4000,
-                                   n_test=1000)  # fmt: skip
+    quick = RewardConfig().replace(
+        episodes=100, block=25, final_episodes=25, iterations=4000, n_test=1000
+    )
     seeds = (900, 901, 902, 903, 904, 905, 906, 907, 908, 909)
     """The seeds of the acceptance run (not the world's: none of them was tuned on)."""
     quick_seeds = (0,)
@@ -244,12 +258,15 @@ class RewardExperiment(Experiment[RewardConfig]):
         t0 = time.perf_counter()
         jobs = [(str(s), _SeedJob(config, self.world, s)) for s in seeds]
         values = run_all(
-            _run_seed, jobs, executor=executor,
+            _run_seed,
+            jobs,
+            executor=executor,
             per_job=_per_job(config, self.world),
-            progress=progress, desc="reward",
+            progress=progress,
+            desc="reward",
             verbose=lambda job: dataclasses.replace(job, show=progress),
             describe=lambda key, _: f"seed {key}",
-        )  # fmt: skip
+        )
         res = RewardResult.collect(config, seeds, [values[k] for k, _ in jobs])
         res.seconds = time.perf_counter() - t0
         return res

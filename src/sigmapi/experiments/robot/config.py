@@ -10,7 +10,7 @@ state sees it.
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import gymnasium as gym
@@ -23,6 +23,7 @@ from sigmapi.envs.robot.env import ENV_ID
 from sigmapi.envs.robot.frames import RETINA_SOURCES
 from sigmapi.envs.robot.views import RobotViews
 from sigmapi.errors import ConfigError
+from sigmapi.experiments.kit.episodes import check_episode_run
 from sigmapi.experiments.kit.maps import MapSpec
 from sigmapi.experiments.kit.seeds import SeedPlan
 from sigmapi.experiments.kit.worlds import World, register_world
@@ -39,37 +40,40 @@ PLAN = SeedPlan({"map": 0, "starts": 1, "agent": 2, "film": 3})
 class RobotConfig:
     """Everything one robot run depends on but its seeds (the CLI's options are its fields)."""
 
-    grid: int = 12
+    grid: int = field(default=12, metadata=_validate.bounded(
+        "int", 2, 1024, fix="units per axis of the codes (grid**2 a view); e.g. 12"))  # fmt: skip
     """Units per axis of the retina and gaze codes."""
     code_width: float = 1.0
     """Width of the codes' hills, grid units."""
     map_shape: tuple[int, ...] = (8, 8)
     """Grid of the Sigma-Pi map."""
-    train_pairs: int = 10_000
+    train_pairs: int = field(default=10_000, metadata=_validate.bounded("int", 1))
     """View pairs recorded from saccades for the map (body and ball still)."""
-    iterations: int = 40_000
+    iterations: int = field(default=40_000, metadata=_validate.bounded("int", 1))
     """Learning iterations of the map (the recorded pairs are used in passes)."""
-    moved_share: float = 0.0
+    moved_share: float = field(default=0.0, metadata=_validate.bounded("number", 0, 1))
     """Share of recorded pairs in which the ball moved between the two views (a nuisance)."""
-    eval_pairs: int = 3000
+    eval_pairs: int = field(default=3000, metadata=_validate.bounded("int", 1))
     """Calibration and test pairs (each) that score the map against the true z."""
     backend: str = "auto"
     """Kernel that learns and reads the map ("auto": the fast one when it is installed)."""
     retina: str = "projection"
     """Retinal position in the docking episodes: "projection" or "pixels" (rendered, slower)."""
-    saccade_rate: float = 1.0
+    saccade_rate: float = field(default=1.0, metadata=_validate.bounded("number", 0, 1))
     """Probability of a saccade per docking step (1: the head looks around every step)."""
-    max_steps: int = 100
+    max_steps: int = field(default=100, metadata=_validate.bounded("int", 1))
     """Time limit of a docking episode (Gymnasium's TimeLimit)."""
-    episodes: int = 400
+    episodes: int = field(default=400, metadata=_validate.bounded("int", 1))
     """Docking episodes per seed and state."""
-    final_episodes: int = 100
+    final_episodes: int = field(default=100, metadata=_validate.bounded("int", 1))
     """Final success is measured over this many last episodes."""
-    block: int = 50
+    block: int = field(default=50, metadata=_validate.bounded("int", 1))
     """Episodes per point of the learning curves."""
     features: str = "response"
     """Map features: "response" (activations clipped at 0, L2-normalised) or "bump"."""
-    feature_width: float = 1.0
+    feature_width: float = field(
+        default=1.0, metadata=_validate.bounded("number", 0, _validate.MAX_WIDTH, lo_open=True)
+    )
     """Width of the bump features (map and true-z codes), in grid units."""
     gamma: float = ActorCriticConfig.gamma
     """Discount of the actor-critic (the authors' docking: 0.9)."""
@@ -86,41 +90,20 @@ class RobotConfig:
     and head cameras) to this file."""
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "grid", _validate.integer("grid", self.grid, 2, 1024, fix=(
-            "units per axis of the codes (grid**2 a view); e.g. 12")))  # fmt: skip
-        for name in ("train_pairs", "iterations", "eval_pairs", "episodes",
-                     "final_episodes", "block", "max_steps"):  # fmt: skip
-            object.__setattr__(self, name, _validate.integer(name, getattr(self, name), 1))
-        if self.final_episodes > self.episodes:
-            raise ConfigError(
-                f"final_episodes must be <= episodes ({self.episodes}), got {self.final_episodes}"
-            )
-        states = tuple(self.states)
-        if not states or any(s not in STATES for s in states) or len(set(states)) != len(states):
-            raise ConfigError(f"states must be distinct names from {STATES}, got {states!r}")
-        object.__setattr__(self, "states", states)
+        _validate.check_fields(self)
+        check_episode_run(self)
         object.__setattr__(self, "map_shape", _validate.shape("map_shape", self.map_shape))
         if len(self.map_shape) != 2:
             raise _validate.fail("map_shape", "2 axes (z is 2-D)", self.map_shape, "e.g. 8x8")
-        for name, lo, hi in (("moved_share", 0.0, 1.0), ("saccade_rate", 0.0, 1.0)):
-            object.__setattr__(self, name, _validate.number(name, getattr(self, name), lo, hi))
         _validate.choice("retina", self.retina, RETINA_SOURCES)
         _validate.choice("backend", self.backend, BACKEND_NAMES)
         _validate.choice("features", self.features, FEATURES)
-        object.__setattr__(
-            self,
-            "feature_width",
-            _validate.width("feature_width", self.feature_width, 0.0, lo_open=True),
-        )
         self.agent()  # checks the learner's fields
         if self.render is not None and not str(self.render).lower().endswith(".gif"):
             raise _validate.fail("render", "a file name ending in .gif", self.render)
-        if self.render is not None and "map" not in states:
-            raise ConfigError(f"render films the map learner, but states {states!r} has no "
+        if self.render is not None and "map" not in self.states:
+            raise ConfigError(f"render films the map learner, but states {self.states!r} has no "
                               "'map'; add map to --states, or drop --render")  # fmt: skip
-        if self.block > self.episodes:
-            raise ConfigError(f"block must be <= episodes ({self.episodes}), got {self.block}; "
-                              "a learning curve needs at least one full block")  # fmt: skip
 
     def agent(self) -> ActorCriticConfig:
         """The learner's settings."""
@@ -128,8 +111,13 @@ class RobotConfig:
 
     def env_kwargs(self) -> dict[str, Any]:
         """The docking world's keyword arguments (``gymnasium.make``'s, time limit included)."""
-        return {"grid": self.grid, "code_width": self.code_width, "retina": self.retina,
-                "saccade_rate": self.saccade_rate, "max_episode_steps": self.max_steps}  # fmt: skip
+        return {
+            "grid": self.grid,
+            "code_width": self.code_width,
+            "retina": self.retina,
+            "saccade_rate": self.saccade_rate,
+            "max_episode_steps": self.max_steps,
+        }
 
     def make_env(self, **kwargs: Any) -> gym.Env[Any, Any]:
         """The docking world through ``gymnasium.make`` (:data:`ROBOT_WORLD`; its TimeLimit
@@ -152,12 +140,14 @@ class RobotConfig:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-able (tuples as lists)."""
-        return {k: list(v) if isinstance(v, tuple) else v
-                for k, v in dataclasses.asdict(self).items()}  # fmt: skip
+        return {
+            k: list(v) if isinstance(v, tuple) else v for k, v in dataclasses.asdict(self).items()
+        }
 
 
-QUICK = RobotConfig(train_pairs=3000, iterations=12_000, eval_pairs=1000, episodes=150,
-                    final_episodes=50, block=25)  # fmt: skip
+QUICK = RobotConfig(
+    train_pairs=3000, iterations=12_000, eval_pairs=1000, episodes=150, final_episodes=50, block=25
+)
 """``sigmapi robot --quick``: a smaller map run and fewer episodes (minutes, not tens)."""
 
 

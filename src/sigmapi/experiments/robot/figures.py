@@ -45,9 +45,14 @@ def plot_unit_positions(
     for line in (*grid, *grid.transpose(1, 0, 2)):
         ax.plot(-line[:, 1], line[:, 0], color="tab:blue", lw=0.8)
     ax.plot(-p[:, 1], p[:, 0], "o", color="tab:red", ms=3)
-    ax.set(xlim=(-1.0, 1.0), ylim=(-0.2, 1.45), aspect="equal",
-           xlabel="right of the robot (m)", ylabel="ahead of the robot (m)",
-           title="each unit's preferred ball position")  # fmt: skip
+    ax.set(
+        xlim=(-1.0, 1.0),
+        ylim=(-0.2, 1.45),
+        aspect="equal",
+        xlabel="right of the robot (m)",
+        ylabel="ahead of the robot (m)",
+        title="each unit's preferred ball position",
+    )
     return ax
 
 

@@ -57,9 +57,14 @@ def robot_som_config(
     """:data:`ROBOT_MAP` on the robot's codes (``code``, retina and gaze alike), a
     ``map_shape`` map, ``iterations`` long."""
     return ROBOT_MAP.config(
-        map_shape=tuple(map_shape), x_shape=code.shape, y_shape=code.shape,
-        code_width=code.width, iterations=iterations, seed=seed, backend=backend,
-    )  # fmt: skip
+        map_shape=tuple(map_shape),
+        x_shape=code.shape,
+        y_shape=code.shape,
+        code_width=code.width,
+        iterations=iterations,
+        seed=seed,
+        backend=backend,
+    )
 
 
 def learn_map(config: RobotConfig, rng: np.random.Generator) -> SigmaPiSOM:
@@ -69,8 +74,9 @@ def learn_map(config: RobotConfig, rng: np.random.Generator) -> SigmaPiSOM:
     source = ROBOT_WORLD.source(config)
     views_seed, som_seed = (int(v) for v in rng.integers(0, 2**31 - 1, size=2))
     views = collect_saccade_views(source, config.train_pairs, seed=views_seed)
-    cfg = robot_som_config(source.x_code, config.map_shape, config.iterations, som_seed,
-                           config.backend)  # fmt: skip
+    cfg = robot_som_config(
+        source.x_code, config.map_shape, config.iterations, som_seed, config.backend
+    )
     return SigmaPiSOM(cfg).fit(views)
 
 
@@ -79,8 +85,10 @@ def evaluation_pairs(config: RobotConfig) -> tuple[RobotViewBatch, RobotViewBatc
     the same for every seed and run."""
     source = RobotViews(config.grid, config.code_width)
     cal, test = (np.random.default_rng(s) for s in np.random.SeedSequence(EVAL_SEED).spawn(2))
-    return (source.sample_views_with_z(config.eval_pairs, cal),
-            source.sample_views_with_z(config.eval_pairs, test))  # fmt: skip
+    return (
+        source.sample_views_with_z(config.eval_pairs, cal),
+        source.sample_views_with_z(config.eval_pairs, test),
+    )
 
 
 def unit_positions(model: SigmaPiSOM, calibration: RobotViewBatch) -> NDArray[np.float64]:
@@ -114,7 +122,11 @@ def score_map(
     m = winner_metrics(wc, calibration.z, w0, w1, test.z, model.map_coords, spacing)
     starved, te, score = fold_indicators(model, _batch(test), w0, w1, scores)
     return {
-        **m, "n_test": int(test.z.shape[0]), "fold_score": score,
-        "fold_threshold": FOLD_THRESHOLD, "folded": bool(score >= FOLD_THRESHOLD),
-        "starved_units": starved, "topographic_error": te,
-    }  # fmt: skip
+        **m,
+        "n_test": int(test.z.shape[0]),
+        "fold_score": score,
+        "fold_threshold": FOLD_THRESHOLD,
+        "folded": bool(score >= FOLD_THRESHOLD),
+        "starved_units": starved,
+        "topographic_error": te,
+    }

@@ -19,8 +19,11 @@ __all__ = ["RobotResult"]
 
 
 def _summary(values: NDArray[np.float64]) -> dict[str, float]:
-    return {"mean": float(np.mean(values)), "median": float(np.median(values)),
-            "min": float(np.min(values))}  # fmt: skip
+    return {
+        "mean": float(np.mean(values)),
+        "median": float(np.median(values)),
+        "min": float(np.min(values)),
+    }
 
 
 def _nan_stat(fn: Any, values: NDArray[np.float64]) -> float | None:
@@ -136,8 +139,10 @@ class RobotResult:
                 f"(min {d['order_r2_min']:.3f}), within one {d['view_within_one']:.3f}, "
                 f"fold score {d['fold_score']:.2f}, folded {d['folded_seeds']}"
             )
-        lines.append(f"final success over the last {self.config.final_episodes} of "
-                     f"{self.config.episodes} episodes:")  # fmt: skip
+        lines.append(
+            f"final success over the last {self.config.final_episodes} of "
+            f"{self.config.episodes} episodes:"
+        )
         for s, v in d["success"].items():
             seeds = " ".join(f"{x:.2f}" for x in d["success_per_seed"][s])
             reach = d["reach_given_docked"][s]

@@ -109,8 +109,13 @@ def job_memory(config: RobotConfig) -> int:
     (:func:`sigmapi.executor.job_memory`), its recorded and evaluation views and the
     episodes' records."""
     n = config.grid**2
-    som = robot_som_config(PopulationCode((config.grid,) * 2, width=config.code_width),
-                           config.map_shape, config.iterations, 0, config.backend)  # fmt: skip
+    som = robot_som_config(
+        PopulationCode((config.grid,) * 2, width=config.code_width),
+        config.map_shape,
+        config.iterations,
+        0,
+        config.backend,
+    )
     views = (config.train_pairs + 2 * config.eval_pairs) * 4 * n * 8
     episodes = 64 * config.episodes  # start seeds and each episode's records
     return _som_job_memory(som, n_test=config.eval_pairs) + views + episodes
@@ -170,14 +175,21 @@ class RobotExperiment(Experiment[RobotConfig]):
         if "map" in config.states:
             Progress.of(progress).note("robot: recording the evaluation views")
             evaluation = evaluation_pairs(config)
-        jobs = [(f"{seed}/{state}", _Job(config, seed, state, evaluation if state == "map"
-                                          else None))
-                for seed in seeds for state in config.states]  # fmt: skip
+        jobs = [
+            (f"{seed}/{state}", _Job(config, seed, state, evaluation if state == "map" else None))
+            for seed in seeds
+            for state in config.states
+        ]
         values = run_all(
-            _run_job, jobs, executor=executor, per_job=per_job, progress=progress,
-            desc="robot", verbose=lambda job: dataclasses.replace(job, show=progress),
+            _run_job,
+            jobs,
+            executor=executor,
+            per_job=per_job,
+            progress=progress,
+            desc="robot",
+            verbose=lambda job: dataclasses.replace(job, show=progress),
             describe=lambda key, _: f"seed {key}",
-        )  # fmt: skip
+        )
         res = RobotResult(config, seeds)
         for state in config.states:
             eps = [values[f"{seed}/{state}"]["episodes"] for seed in seeds]

@@ -3,5 +3,6 @@ rule) against explicit view pairs.
 
 Guide: docs/guide/stream.md; results: none published yet.
 
-Modules (``run`` holds the experiment object, ``REGISTRY``'s entry): ``run``.
+Modules (``run`` holds the experiment object, ``REGISTRY``'s entry): ``config``, ``result``,
+``run``.
 """

@@ -2,5 +2,6 @@
 
 Guide: docs/guide/sweeps.md; results: docs/results/angles.md.
 
-Modules (``run`` holds the experiment object, ``REGISTRY``'s entry): ``run``, ``table``.
+Modules (``run`` holds the experiment object, ``REGISTRY``'s entry): ``figures``, ``run``,
+``table``.
 """

@@ -43,12 +43,13 @@ from typing import Any
 
 from sigmapi import _validate
 from sigmapi._lock import output_lock
-from sigmapi._outputs import claim_folder, save_figure
+from sigmapi._outputs import claim_folder
 from sigmapi.circular import CIRCULAR_KEYS
 from sigmapi.config import SOMConfig, check_map_fits_task, load_preset
 from sigmapi.errors import ConfigError
 from sigmapi.executor import Executor, Outcome, job_memory
 from sigmapi.experiments.base import RESULT_FILE, Experiment, check_seeds, register
+from sigmapi.experiments.sweep.figures import METRICS, draw_summary
 from sigmapi.experiments.sweep.table import (
     METRIC_COLUMNS,
     RESULTS,
@@ -345,39 +346,7 @@ def _sweep(
         return [rows[r.run_key] for r in runs if r.run_key in rows]
 
 
-def draw_summary(
-    spec: SweepSpec, rows: list[dict[str, Any]], path: str | Path, metric: str = "order_r2"
-) -> Path:
-    """``metric`` against the first grid parameter (lines: the other parameters' values),
-    median and spread over seeds, folded runs marked; written to ``path``."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from sigmapi.viz.plots import plot_sweep
-
-    _validate.choice("metric", metric, METRICS)
-    keys = sorted(spec.grid)
-    fig, ax = plt.subplots(figsize=(6.4, 4.2))
-    if keys:
-        plot_sweep(rows, keys[0], metric, group_by=keys[1:], ax=ax)
-    else:
-        plot_sweep([{**r, "preset": spec.preset} for r in rows], "preset", metric, ax=ax)
-    ok = sum(str(r.get("status")) == "ok" for r in rows)
-    folded = sum(str(r.get("folded")).lower() in ("true", "1") for r in rows)
-    ax.set_title(f"sweep of {spec.preset}: {ok} runs ok, {len(rows) - ok} failed, "
-                 f"{folded} folded; seeds {list(spec.seeds)}", fontsize=9)  # fmt: skip
-    p = Path(path)
-    save_figure(fig, p, dpi=120, bbox_inches="tight", facecolor="white")
-    plt.close(fig)
-    return p
-
-
 # ------------------------------------------------------------------ the experiment
-
-METRICS = (*METRIC_COLUMNS, *CIRCULAR_KEYS)
-"""What the summary figure may show."""
 
 
 @dataclass(frozen=True)

@@ -99,8 +99,12 @@ def _axis_nodes(
     ):  # both branches give the same views (the mean relation): keep one
         return px[:, :n], py[:, :n], np.full((z.size, n), 1.0 / n)
     total = np.maximum(lx + ly, 1e-300)
-    w = np.concatenate([np.repeat((lx / total)[:, None], n, 1),
-                        np.repeat((ly / total)[:, None], n, 1)], axis=1) / n  # fmt: skip
+    w = (
+        np.concatenate(
+            [np.repeat((lx / total)[:, None], n, 1), np.repeat((ly / total)[:, None], n, 1)], axis=1
+        )
+        / n
+    )
     return px, py, w
 
 
@@ -152,10 +156,13 @@ class Ceiling:
 
     def to_dict(self) -> dict[str, Any]:
         return {
-            **self.metrics.to_dict(), "rounds": self.rounds, "changed": self.changed,
-            "converged": self.converged, "z_points": self.z_points,
+            **self.metrics.to_dict(),
+            "rounds": self.rounds,
+            "changed": self.changed,
+            "converged": self.converged,
+            "z_points": self.z_points,
             "view_points": self.view_points,
-        }  # fmt: skip
+        }
 
 
 def _winners(model: SigmaPiSOM, grid: ViewGrid) -> NDArray[np.int64]:
@@ -258,5 +265,12 @@ def fixed_point(
         winners = new
         if changed[-1] <= tol:
             break
-    return Ceiling(evaluate(current, n_test=n_test), len(changed), changed,
-                   bool(changed) and changed[-1] <= tol, zp, vp, current)  # fmt: skip
+    return Ceiling(
+        evaluate(current, n_test=n_test),
+        len(changed),
+        changed,
+        bool(changed) and changed[-1] <= tol,
+        zp,
+        vp,
+        current,
+    )
