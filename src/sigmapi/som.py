@@ -41,7 +41,7 @@ from sigmapi.kernels import KernelState, get_backend
 from sigmapi.kernels.base import MAX_WEIGHT
 from sigmapi.rules import WinnerRule, ordering, winner_rule
 from sigmapi.tasks import Batch
-from sigmapi.views import CodeViews, Views, check_pairs, fit_views
+from sigmapi.views import CodeViews, Views, check_gates, check_pairs, fit_views
 
 __all__ = ["BLOCK", "SigmaPiSOM", "load_model"]
 
@@ -434,29 +434,11 @@ class SigmaPiSOM(GridsMixin, CostMixin, ParamsMixin, PersistMixin, RefineMixin, 
             data = fit_views(views, self.x_shape, self.y_shape, "learn_gated")
             if data is None:
                 raise DataError(
-                    "learn_gated needs views (x0, y0, x1, y1), one row per gated iteration, "
-                    "got None; pass the views the gates belong to"
+                    "learn_gated needs views (x0, y0, x1, y1), one row per "
+                    "iteration, got None; pass the views the gates belong to"
                 )
             n = data[0].shape[0]
-            try:
-                g = np.asarray(gates, dtype=np.float64)
-            except (TypeError, ValueError) as exc:  # ragged rows, None, text
-                raise DataError(
-                    f"gates must be a ({n}, {self.n_units}) array of numbers in [0, 1], got "
-                    f"{type(gates).__name__} that numpy cannot make one of ({str(exc)[:80]}); "
-                    "give every row one gate per unit"
-                ) from None
-            if g.shape != (n, self.n_units):
-                raise DataError(
-                    f"gates must have shape ({n}, {self.n_units}) (one row per view pair, one "
-                    f"column per unit), got {g.shape}; give one gate per unit and pair"
-                )
-            if not np.all(np.isfinite(g)) or g.min(initial=0.0) < 0 or g.max(initial=0.0) > 1:
-                raise DataError(
-                    f"gates must be finite numbers in [0, 1], got values in "
-                    f"[{g.min():.3g}, {g.max():.3g}]; clip them (0: no change, 1: the full "
-                    "update)"
-                )
+            g = check_gates(gates, n, self.n_units)
             kernel: Any = self._kernel
             if not hasattr(kernel, "train_gated_block"):
                 raise ConfigError(

@@ -40,6 +40,7 @@ __all__ = [
     "Views",
     "check_codes",
     "check_frames",
+    "check_gates",
     "check_pairs",
     "check_views",
     "encode_views",
@@ -243,3 +244,27 @@ def encode_views(
     out = [code.encode(c) for code, c in zip((x_code, y_code, x_code, y_code), checked,
                                              strict=True)]  # fmt: skip
     return out[0], out[1], out[2], out[3]
+
+
+def check_gates(gates: Any, n: int, n_units: int) -> NDArray[np.float64]:
+    """``gates`` as a float ``(n, n_units)`` array of numbers in ``[0, 1]`` (one row per view
+    pair, one column per unit); a DataError naming the problem otherwise (ragged rows too)."""
+    try:
+        g = np.asarray(gates, dtype=np.float64)
+    except (TypeError, ValueError) as exc:  # ragged rows, None, text
+        raise DataError(
+            f"gates must be a ({n}, {n_units}) array of numbers in [0, 1], got "
+            f"{type(gates).__name__} that numpy cannot make one of ({str(exc)[:80]}); give "
+            "every row one gate per unit"
+        ) from None
+    if g.shape != (n, n_units):
+        raise DataError(
+            f"gates must have shape ({n}, {n_units}) (one row per view pair, one column per "
+            f"unit), got {g.shape}; give one gate per unit and pair"
+        )
+    if not np.all(np.isfinite(g)) or g.min(initial=0.0) < 0 or g.max(initial=0.0) > 1:
+        raise DataError(
+            f"gates must be finite numbers in [0, 1], got values in [{g.min():.3g}, "
+            f"{g.max():.3g}]; clip them (0: no change, 1: the full update)"
+        )
+    return g
