@@ -59,7 +59,7 @@ def test_every_experiment_takes_quick_but_the_sweep_whose_spec_sets_its_size():
 def test_a_command_that_fails_for_a_missing_extra_leaves_no_empty_folder(
     tmp_path, monkeypatch, capsys
 ):
-    from sigmapi.experiments import compare
+    from sigmapi.experiments.compare import run as compare
 
     monkeypatch.setattr(compare, "installed", lambda: set())
     out = tmp_path / "new" / "report"

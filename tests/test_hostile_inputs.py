@@ -290,7 +290,7 @@ def test_run_all_raises_the_jobs_own_error(workers):
 
 
 def test_an_error_in_an_experiments_job_is_one_line_and_exit_2(tmp_path, capsys, monkeypatch):
-    from sigmapi.experiments import stream
+    from sigmapi.experiments.stream import run as stream
 
     def boom(job):
         raise ResourceError("the job's own mistake")
@@ -356,7 +356,7 @@ def test_train_out_naming_a_folder_writes_no_file_named_like_it(tmp_path, capsys
 
 def test_a_byte_order_mark_in_a_spec_or_config_is_read(tmp_path):
     from sigmapi.config import load_config_file
-    from sigmapi.experiments.sweep import SweepSpec
+    from sigmapi.experiments.sweep.run import SweepSpec
 
     spec = tmp_path / "s.toml"
     spec.write_bytes(b'\xef\xbb\xbfpreset = "tiny-1d"\nseeds = [0]\n')

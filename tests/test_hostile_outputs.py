@@ -79,7 +79,7 @@ def test_sweep_resumes_its_own_marked_folder_and_force_adopts_a_users(tmp_path, 
 
 
 def test_the_library_sweep_claims_its_folder_too(tmp_path):
-    from sigmapi.experiments.sweep import SweepSpec, run_sweep
+    from sigmapi.experiments.sweep.run import SweepSpec, run_sweep
 
     out = tmp_path / "o"
     out.mkdir()
@@ -136,7 +136,7 @@ def test_a_read_only_table_is_refused_before_the_runs(tmp_path, capsys):
 
 
 def test_a_huge_table_is_refused_from_its_size(tmp_path, monkeypatch):
-    from sigmapi.experiments import sweep_table
+    from sigmapi.experiments.sweep import table as sweep_table
 
     p = tmp_path / "results.csv"
     p.write_bytes(b"x" * 2000)

@@ -240,6 +240,7 @@ def run_experiment(experiment: Experiment[Any], args: argparse.Namespace) -> int
     else:
         made = _missing_folders(Path(args.out))
         out = _make_folder(args.out)
+        was_marked = marked_as(out) is not None
         try:
             with output_lock(out, f"--out folder {str(out)!r}"):
                 _check_folder(out, args.force, experiment)
@@ -249,6 +250,8 @@ def run_experiment(experiment: Experiment[Any], args: argparse.Namespace) -> int
                 result = _run(experiment, config, seeds, out, executor, args.quiet)
                 files = [*result.figure(out), write_result(result, out)]
         except BaseException:  # a run that fails (a missing extra) leaves no empty folder
+            if not was_marked and [p.name for p in out.iterdir()] == [MARKER]:
+                (out / MARKER).unlink()  # the marker this run wrote, alone: nothing to resume
             for folder in made:
                 with contextlib.suppress(OSError):
                     folder.rmdir()  # only an empty one
