@@ -32,6 +32,7 @@ from sigmapi.experiments.base import (
 )
 from sigmapi.experiments.chain import run_chain
 from sigmapi.experiments.compare import CompareConfig, CompareResult, run_compare
+from sigmapi.experiments.icub import ICUB  # noqa: F401  (registers ``sigmapi icub``)
 from sigmapi.experiments.reach import REACH, ReachExperiment
 from sigmapi.experiments.reproduce import REFERENCE, SECTIONS, paper_presets, reproduce
 from sigmapi.experiments.results import ReportContext, ReproduceOptions, ReproduceResult, Section

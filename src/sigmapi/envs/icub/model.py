@@ -52,6 +52,7 @@ __all__ = [
     "HOME_ARM",
     "NECK",
     "ROBOT",
+    "REST_ARM",
     "ROOT_HEIGHT",
     "TABLE_HEIGHT",
     "TORSO",
@@ -63,7 +64,7 @@ __all__ = [
 
 ROBOT = "iCubGazeboV2_7"
 """The ``icub-models`` robot that is converted."""
-BUILD = 4
+BUILD = 5
 """Version of the conversion in this module: part of the cache key (raise it on any change)."""
 ROOT_HEIGHT = 0.63
 """Height of the robot's root link above the floor, metres."""
@@ -82,6 +83,8 @@ ARM = ("r_shoulder_pitch", "r_shoulder_roll", "r_shoulder_yaw", "r_elbow",
 """The right arm's joints, shoulder to wrist."""
 HOME_ARM = (-0.52, 0.52, 0.0, 0.785, 0.0, 0.0, 0.0)
 """The Gazebo model's home pose of an arm, radians (``ARM``'s order)."""
+REST_ARM = (0.17, 0.35, 0.0, 0.27, 0.0, 0.0, 0.0)
+"""The right arm's rest pose, radians: hanging at the side, out of the eyes' view of the table."""
 _LEFT = tuple("l" + name[1:] for name in ARM)
 _TILT_AHEAD, _TILT_ABOVE, _EYE_HALF = 0.0509, 0.08205, 0.034
 _KP = {"torso": 200.0, "neck": 60.0, "arm": 50.0, "wrist": 10.0, "eyes_tilt": 20.0,
@@ -215,8 +218,8 @@ def _add_world(spec: Any) -> None:
     world.add_geom(name="floor", type=geom.mjGEOM_PLANE, size=[3, 3, 0.1],
                    rgba=[0.75, 0.78, 0.8, 1], group=0, contype=0, conaffinity=0)  # fmt: skip
     top = 0.02
-    world.add_geom(name="table", type=geom.mjGEOM_BOX, size=[0.26, 0.4, top / 2],
-                   pos=[0.32, -0.1, TABLE_HEIGHT - top / 2], rgba=[0.55, 0.42, 0.3, 1],
+    world.add_geom(name="table", type=geom.mjGEOM_BOX, size=[0.25, 0.4, top / 2],
+                   pos=[0.34, -0.1, TABLE_HEIGHT - top / 2], rgba=[0.55, 0.42, 0.3, 1],
                    group=0, contype=1, conaffinity=3)  # fmt: skip
     spec.add_material(name="ball", rgba=[1, 0, 0, 1], emission=1.0)
     ball = world.add_body(name="ball", pos=[0.3, -0.1, TABLE_HEIGHT + BALL_RADIUS])

@@ -4,7 +4,10 @@
   reaches are compared with); kinematics only, the world is left as it was.
 - :func:`physical_reach`: the actuators move the arm to a posture in the physics, approaching
   from above (first the posture with the elbow bent by :data:`LIFT` more, which raises the
-  hand, then the posture), and report whether the hand touched the ball.
+  hand, then the posture), and report whether the hand touched the ball. A reach starts with
+  the arm at :data:`~sigmapi.envs.icub.model.HOME_ARM` (the hand above the table; the rest
+  pose the eyes see the table from holds it below the table's edge, and the physics would
+  drag the forearm along the edge's underside).
 """
 
 from __future__ import annotations
@@ -14,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from sigmapi.envs.icub.model import ARM, BALL_RADIUS
+from sigmapi.envs.icub.model import ARM, BALL_RADIUS, HOME_ARM
 from sigmapi.envs.icub.scene import ICubScene
 
 __all__ = ["AIM", "LIFT", "ReachOutcome", "arm_ik", "physical_reach"]
@@ -69,7 +72,7 @@ class ReachOutcome:
     """What one physical reach did."""
 
     touched: bool
-    """Whether the right hand or forearm touched the ball."""
+    """Whether the right hand touched the ball (the forearm does not count)."""
     distance: float
     """Closest distance of the palm to the ball's centre during the reach, metres."""
     frames: tuple[NDArray[np.uint8], ...] = ()
@@ -79,9 +82,10 @@ class ReachOutcome:
 def physical_reach(
     scene: ICubScene, q: ArrayLike, *, seconds: float = 0.6, film: int = 0
 ) -> ReachOutcome:
-    """Move the right arm from where it is to posture ``q`` in the physics, through the
+    """Move the right arm from its home pose to posture ``q`` in the physics, through the
     approach posture (``q`` with the elbow bent by :data:`LIFT`), ``seconds`` for each leg;
     ``film`` > 0 keeps that many third-person frames per leg."""
+    scene.set_arm(HOME_ARM)
     target = np.asarray(q, dtype=np.float64)
     above = target.copy()
     above[_ELBOW] += LIFT

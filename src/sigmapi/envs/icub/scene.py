@@ -37,6 +37,7 @@ from sigmapi.envs.icub.model import (
     EYE_GROUPS,
     HOME_ARM,
     NECK,
+    REST_ARM,
     TABLE_HEIGHT,
     load_model,
 )
@@ -93,7 +94,7 @@ class ICubScene:
         self._ball_body = m.body("ball").id
         self._ball_geom = m.geom("ball").id
         self._table_geom = m.geom("table").id
-        self._hand = np.asarray(m.geom_group == 1)
+        self._hand = np.asarray(m.geom_bodyid == m.body("r_hand").id)
         self._palm = m.site("palm").id
         self._chest = m.body("chest").id
         self._head = m.body("head").id
@@ -113,11 +114,12 @@ class ICubScene:
 
     # ------------------------------------------------------------------ poses
     def reset(self) -> None:
-        """Home pose: torso, neck and eyes at zero, both arms at :data:`HOME_ARM`, the ball at
-        rest on the table; actuator targets where the joints are."""
+        """Home pose: torso, neck and eyes at zero, the left arm at :data:`HOME_ARM`, the
+        right at :data:`REST_ARM`, the ball at rest on the table; actuator targets where the
+        joints are."""
         self._mj.mj_resetData(self.model, self.data)
-        for side in ("r", "l"):
-            for name, q in zip(ARM, HOME_ARM, strict=True):
+        for side, pose in (("r", REST_ARM), ("l", HOME_ARM)):
+            for name, q in zip(ARM, pose, strict=True):
                 self.data.qpos[self._qadr[side + name[1:]]] = q
         self.set_ball((0.3, -0.1))
         self.hold()
@@ -219,6 +221,17 @@ class ICubScene:
         c, r = self.head_frame()
         return direction_angles((np.asarray(p) - c) @ r)
 
+    def table_point(self, direction: ArrayLike) -> Array:
+        """World points ``(B, 3)`` at the ball's centre height seen from the torso-centred
+        origin in torso-centred directions ``(B, 2)`` (azimuth, elevation; elevation < 0)."""
+        d = np.atleast_2d(np.asarray(direction, dtype=np.float64))
+        c, r = self.torso_frame()
+        origin = c + r @ self._torso_origin
+        az, el = d[:, 0], d[:, 1]
+        ray = np.column_stack([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)]) @ r.T
+        t = (TABLE_HEIGHT + BALL_RADIUS - origin[2]) / ray[:, 2]
+        return origin + t[:, None] * ray
+
     def look_at(self, p: ArrayLike, vergence: float = 0.0) -> None:
         """Turn the eyes (not the neck) so that the right eye fixates world point ``p`` (the
         tilt is the outer gimbal: tilt in the head's x-z plane, then the pan out of it)."""
@@ -274,7 +287,7 @@ class ICubScene:
 
     # ------------------------------------------------------------------ contacts
     def hand_touches_ball(self) -> bool:
-        """Whether the right hand or forearm is in contact with the ball."""
+        """Whether the right hand (the palm's link, not the forearm) touches the ball."""
         n = self.data.ncon
         g1, g2 = self.data.contact.geom1[:n], self.data.contact.geom2[:n]
         b, h = self._ball_geom, self._hand
