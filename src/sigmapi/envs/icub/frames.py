@@ -32,17 +32,17 @@ from sigmapi.errors import ConfigError
 __all__ = [
     "GAZE_HIGH",
     "GAZE_LOW",
+    "HEAD_BOX",
     "MOVE",
     "REACH_REGION",
-    "HEAD_BOX",
     "TORSO_BOX",
     "ViewBatch",
     "direction_ball",
-    "neck_for",
-    "random_neck",
     "measure",
+    "neck_for",
     "random_ball",
     "random_gaze",
+    "random_neck",
     "view_pairs",
 ]
 
@@ -115,7 +115,9 @@ def random_gaze(
     )
 
 
-def neck_for(scene: ICubScene, point: ArrayLike, head: ArrayLike, iterations: int = 6) -> Array | None:
+def neck_for(
+    scene: ICubScene, point: ArrayLike, head: ArrayLike, iterations: int = 6
+) -> Array | None:
     """Neck angles (pitch, roll 0, yaw) that put world ``point`` at head-centred direction
     ``head`` (azimuth, elevation), by Newton steps on a finite-difference Jacobian (the eyes
     as they are); None when they fall outside the neck's random range."""
@@ -203,7 +205,7 @@ def view_pairs(
                 neck = random_neck(scene, ball, rng)
                 if neck is None:
                     continue
-                g = random_gaze(scene, ball, rng, neck=neck)
+                random_gaze(scene, ball, rng, neck=neck)
                 view = measure(scene, ball)
                 if moved[i]:
                     scene.set_ball(balls[i] + rng.uniform(-MOVE, MOVE, 2))

@@ -12,9 +12,11 @@ from typing import Any
 
 from sigmapi import _validate
 from sigmapi.config import BACKEND_NAMES
-from sigmapi.experiments.chain import CODES
 
-__all__ = ["QUICK", "ICubConfig"]
+__all__ = ["HEAD_CODES", "QUICK", "ICubConfig"]
+
+HEAD_CODES = ("winner", "centroid", "response")
+"""What map 1 can hand to map 2 (:meth:`~sigmapi.experiments.icub.maps.ChainMaps.head`)."""
 
 
 @dataclass(frozen=True)
@@ -34,7 +36,8 @@ class ICubConfig:
     moved_share: float = 0.1
     """Share of the view pairs in which the ball moved between the two views."""
     head_code: str = "winner"
-    """What map 1 hands to map 2: "winner" (a code of its winner's place) or "response"."""
+    """What map 1 hands to map 2: "winner" (a code of its winner's place), "centroid" (of its
+    response's centre of mass near the winner) or "response"."""
     eval_pairs: int = 1000
     """Calibration and test pairs (each, per map) that score the maps against the true
     directions."""
@@ -44,7 +47,7 @@ class ICubConfig:
     """Babbles (random arm postures, the eyes on the hand) the associations learn from."""
     epochs: int = 8
     """Passes of the associations' delta rule over the babbles."""
-    feature_width: float = 1.0
+    feature_width: float = 1.5
     """Width of the bump a map's winner gives the association, map units."""
     reaches: int = 60
     """Reaches per seed and method (random reachable balls, random gazes)."""
@@ -69,7 +72,7 @@ class ICubConfig:
                            _validate.number("moved_share", self.moved_share, 0.0, 1.0))  # fmt: skip
         for name in ("code_width", "feature_width"):
             object.__setattr__(self, name, _validate.positive(name, getattr(self, name)))
-        _validate.choice("head_code", self.head_code, CODES)
+        _validate.choice("head_code", self.head_code, HEAD_CODES)
         _validate.choice("backend", self.backend, BACKEND_NAMES)
         if self.render is not None and not str(self.render).lower().endswith(".gif"):
             raise _validate.fail("render", "a file name ending in .gif", self.render)

@@ -62,8 +62,8 @@ __all__ = [
 
 Array = NDArray[np.float64]
 
-SIGMA = ((0.0, 3.0), (0.5, 1.0), (1.0, 0.5))
-"""The maps' neighbourhood width (map units) over a run: 3 -> 1 at half-way -> 0.5."""
+SIGMA = ((0.0, 3.0), (0.5, 1.0), (1.0, 1.0))
+"""The maps' neighbourhood width (map units) over a run: 3 -> 1 at half-way, then 1."""
 
 _EYE_LO = np.array([GAZE_LOW[0], GAZE_LOW[1] - 0.5 * GAZE_HIGH[2]])
 _EYE_HI = np.array([GAZE_HIGH[0], GAZE_HIGH[1] - 0.5 * GAZE_LOW[2]])
@@ -129,12 +129,22 @@ class ChainMaps:
 
     def head(self, v: ViewBatch) -> Array:
         """What map 1 hands to map 2 for views ``v``: its response (rectified, unit length),
-        or (``code="winner"``) a population code of its winner's place on its grid."""
+        or a population code on its grid of its winner's place (``code="winner"``) or of
+        the centre of mass of its rectified response over the winner and its neighbours
+        (``code="centroid"``)."""
         if self.code == "response":
             return head_code(self.map1, retina_position(v, self.eye_size), eye_position(v))
         m = self.map1
-        k = m.winner(*self.inputs1(v), hard=True)
-        pos = m.map_coords[k] / (np.asarray(m.map_shape) - 1.0)
+        x, y = self.inputs1(v)
+        k = m.winner(x, y, hard=True)
+        place = m.map_coords[k]
+        if self.code == "centroid":  # the response's centre of mass near the winner
+            h = np.maximum(m.respond(x, y), 0.0)
+            near = np.max(np.abs(m.map_coords[None, :, :] - place[:, None, :]), axis=2) <= 1.0
+            h = np.where(near, h, 0.0)
+            total = h.sum(axis=1, keepdims=True)
+            place = np.where(total > 0, (h @ m.map_coords) / np.where(total > 0, total, 1), place)
+        pos = place / (np.asarray(m.map_shape) - 1.0)
         return PopulationCode(m.map_shape, m.config.code_width).encode(pos)
 
     def inputs1(self, v: ViewBatch) -> tuple[Array, Array]:

@@ -78,8 +78,8 @@ def plot_success_gaze(gaze: NDArray[np.float64], success: dict[str, NDArray[np.b
     if ax is None:
         ax = plt.figure(figsize=(6, 4)).add_subplot()
     look = np.degrees(gaze[:, 5] - gaze[:, 1])
-    edges = np.quantile(look, np.linspace(0, 1, bins + 1))
-    which = np.clip(np.searchsorted(edges, look, side="right") - 1, 0, bins - 1)
+    bins = max(1, min(bins, look.size // 2))
+    which = np.argsort(np.argsort(look)) * bins // look.size  # equal-count bins
     centres = [float(np.mean(look[which == b])) for b in range(bins)]
     for m, ok in success.items():
         ax.plot(centres, [ok[which == b].mean() for b in range(bins)], "o-", label=m)
