@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import os
+from typing import Any
 
 import numpy as np
 import pytest
@@ -104,9 +105,11 @@ def test_check_env_and_eye_frames(rendering):
     env = gym.make("sigmapi/ICubReach-v0", render_mode="rgb_array")
     check_env(env.unwrapped, skip_render_check=True)
     env.reset(seed=3)
-    left, right = env.unwrapped.render_eyes()
+    inner: Any = env.unwrapped
+    left, right = inner.render_eyes()
     assert left.shape == right.shape == (64, 64, 3) and left.dtype == np.uint8
-    assert env.render().shape == (240, 320, 3)
+    frame = env.render()
+    assert isinstance(frame, np.ndarray) and frame.shape == (240, 320, 3)
     env.close()
 
 
