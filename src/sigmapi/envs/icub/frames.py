@@ -15,7 +15,8 @@ torso-centred directions ``(azimuth, elevation)`` (radians;
   (the neck turns too: the pair shares the torso-centred direction); a ``moved_share`` of the
   pairs see the ball moved between the views (a nuisance the learner must live with).
 - :func:`direction_ball` draws balls on the table whose torso-centred directions are uniform
-  in :data:`TORSO_BOX` (the maps' views); :func:`random_ball` uniform in a table area
+  in :data:`TORSO_BOX` (the maps' views; a ball for which no gaze gives a pair of views is
+  drawn again); :func:`random_ball` uniform in a table area
   (the reaches, in :data:`REACH_REGION`).
 """
 
@@ -198,7 +199,9 @@ def view_pairs(
     balls = direction_ball(scene, rng, n)
     moved = rng.random(n) < moved_share
     for i in range(n):
-        for _ in range(50):  # no gaze sees both views (a neck the eyes cannot make up for)
+        for attempt in range(500):  # no gaze sees both views: draw again, a new ball per 50
+            if attempt and attempt % 50 == 0:
+                balls[i] = direction_ball(scene, rng, 1)[0]
             scene.set_ball(balls[i])
             ball = scene.ball_position()
             try:
