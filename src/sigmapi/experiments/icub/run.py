@@ -167,7 +167,7 @@ class ICubExperiment(Experiment[ICubConfig]):
     config_type = ICubConfig
     quick = QUICK
     seeds = (100, 101, 102, 103, 104)
-    """The seeds of the acceptance run: none of them was tuned on (tuning used 0-4)."""
+    """The seeds of the acceptance run: none of them was tuned on (tuning used seeds 0 and 1)."""
     quick_seeds = (0,)
     """The seed of ``--quick``: a tuning seed."""
     default_out = "icub"
