@@ -3,8 +3,9 @@
 Weber & Wermter, "A self-organizing map of Sigma-Pi units", Neurocomputing 70 (2007) 2552-2560.
 
 Importing the package registers the Gymnasium environments ``sigmapi/GazeReach-v0``
-(:class:`sigmapi.envs.GazeReachEnv`) and ``sigmapi/RobotDock-v0``
-(:class:`sigmapi.envs.robot.RobotDockEnv`, with ``sigmapi[robot]``) by their entry-point
+(:class:`sigmapi.envs.GazeReachEnv`), ``sigmapi/RobotDock-v0``
+(:class:`sigmapi.envs.robot.RobotDockEnv`, with ``sigmapi[robot]``) and
+``sigmapi/ICubReach-v0`` (:class:`sigmapi.envs.icub.env.ICubReachEnv`, idem) by their entry-point
 strings, with their time limits: ``gymnasium.make`` loads the environment's module when it is
 first made and wraps it in ``TimeLimit``.
 """
@@ -62,3 +63,7 @@ if "sigmapi/RobotDock-v0" not in _gymnasium.registry:
         entry_point="sigmapi.envs.robot.env:RobotDockEnv",
         max_episode_steps=100,
     )
+if "sigmapi/ICubReach-v0" not in _gymnasium.registry:
+    # the iCub humanoid (sigmapi.envs.icub); making it needs the robot extra (MuJoCo and
+    # icub-models); no time limit: every episode ends with its one reach (terminated)
+    _gymnasium.register(id="sigmapi/ICubReach-v0", entry_point="sigmapi.envs.icub.env:ICubReachEnv")

@@ -9,7 +9,8 @@
   and ``report_html``), :mod:`~sigmapi.experiments.sweep`, :mod:`~sigmapi.experiments.compare`,
   :mod:`~sigmapi.experiments.chain`, :mod:`~sigmapi.experiments.stream`,
   :mod:`~sigmapi.experiments.reach` (also ``section``, its part of the report),
-  :mod:`~sigmapi.experiments.robot` (also ``map``) and :mod:`~sigmapi.experiments.reward`.
+  :mod:`~sigmapi.experiments.robot` (also ``map``), :mod:`~sigmapi.experiments.reward` and
+  :mod:`~sigmapi.experiments.icub`.
 
 A new experiment is one package and one line in :data:`ENTRIES`; nothing here imports an
 experiment until it is used (``sigmapi --help`` lists them from :data:`ENTRIES`).
@@ -35,6 +36,8 @@ from sigmapi.experiments.base import (
 ENTRIES = (
     ("chain", "sigmapi.experiments.chain.run:CHAIN",
      "a chain of two maps (retina -> head -> body) against one map on the whole task"),
+    ("icub", "sigmapi.experiments.icub.run:ICUB",
+     "the iCub learns a chain of maps from its eyes and neck, then learns to reach"),
     ("compare", "sigmapi.experiments.compare.run:COMPARE",
      "the Sigma-Pi map beside the baselines a user would pick instead"),
     ("reach", "sigmapi.experiments.reach.run:REACH",

@@ -1,0 +1,92 @@
+"""The settings of one iCub run: the frames check, the two maps, babbling and the reaches.
+
+One flat frozen dataclass (:class:`ICubConfig`), a docstring under each field, so that the
+command-line options of ``sigmapi icub`` are its fields.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from typing import Any
+
+from sigmapi import _validate
+from sigmapi.config import BACKEND_NAMES
+
+__all__ = ["HEAD_CODES", "QUICK", "ICubConfig"]
+
+HEAD_CODES = ("winner", "centroid", "response")
+"""What map 1 can hand to map 2 (:meth:`~sigmapi.experiments.icub.maps.ChainMaps.head`)."""
+
+
+@dataclass(frozen=True)
+class ICubConfig:
+    """Everything one iCub run depends on but its seeds (the CLI's options are its fields)."""
+
+    grid: int = 12
+    """Units per axis of the population codes (retina, eye angles, neck angles)."""
+    code_width: float = 1.0
+    """Width of the codes' hills, grid units."""
+    map_shape: tuple[int, ...] = (8, 8)
+    """Grid of each Sigma-Pi map (map 1 and map 2)."""
+    map_pairs: int = 6000
+    """View pairs per map (saccades of the eyes for map 1, turns of the head for map 2)."""
+    map_iterations: int = 40_000
+    """Learning iterations of each map."""
+    moved_share: float = 0.1
+    """Share of the view pairs in which the ball moved between the two views."""
+    head_code: str = "winner"
+    """What map 1 hands to map 2: "winner" (a code of its winner's place), "centroid" (of its
+    response's centre of mass near the winner) or "response"."""
+    eval_pairs: int = 1000
+    """Calibration and test pairs (each, per map) that score the maps against the true
+    directions."""
+    frame_scenes: int = 1000
+    """Random scenes in which the rendered retina is compared with the exact projection."""
+    babbles: int = 2000
+    """Babbles (random arm postures, the eyes on the hand) the associations learn from."""
+    epochs: int = 8
+    """Passes of the associations' delta rule over the babbles."""
+    feature_width: float = 1.5
+    """Width of the bump a map's winner gives the association, map units."""
+    reaches: int = 60
+    """Reaches per seed and method (random reachable balls, random gazes)."""
+    backend: str = "auto"
+    """Kernel that learns and reads the maps ("auto": the fast one when it is installed)."""
+    render: str | None = None
+    """Also write an animated GIF of the first seed's first learned reach to this file."""
+
+    def __post_init__(self) -> None:
+        for name in ("grid", "map_pairs", "map_iterations", "eval_pairs", "frame_scenes",
+                     "babbles", "epochs", "reaches"):  # fmt: skip
+            object.__setattr__(self, name, _validate.integer(name, getattr(self, name), 1))
+        object.__setattr__(self, "map_shape", _validate.shape("map_shape", self.map_shape))
+        if len(self.map_shape) != 2:
+            raise _validate.fail("map_shape", "2 axes (a direction is 2-D)", self.map_shape,
+                                 "e.g. 8x8")  # fmt: skip
+        if self.grid < 3:
+            raise _validate.fail("grid", ">= 3", self.grid, "e.g. 12")
+        if self.babbles < 50:
+            raise _validate.fail("babbles", ">= 50", self.babbles, "e.g. 2000")
+        object.__setattr__(self, "moved_share",
+                           _validate.number("moved_share", self.moved_share, 0.0, 1.0))  # fmt: skip
+        for name in ("code_width", "feature_width"):
+            object.__setattr__(self, name, _validate.positive(name, getattr(self, name)))
+        _validate.choice("head_code", self.head_code, HEAD_CODES)
+        _validate.choice("backend", self.backend, BACKEND_NAMES)
+        if self.render is not None and not str(self.render).lower().endswith(".gif"):
+            raise _validate.fail("render", "a file name ending in .gif", self.render)
+
+    def replace(self, **changes: Any) -> ICubConfig:
+        """A copy with ``changes``."""
+        return dataclasses.replace(self, **changes)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-able (tuples as lists)."""
+        return {k: list(v) if isinstance(v, tuple) else v
+                for k, v in dataclasses.asdict(self).items()}  # fmt: skip
+
+
+QUICK = ICubConfig(map_pairs=2500, map_iterations=15_000, eval_pairs=500, frame_scenes=200,
+                   babbles=800, epochs=6, reaches=30)  # fmt: skip
+"""``sigmapi icub --quick``: smaller maps' data, fewer babbles and reaches (minutes)."""

@@ -1,0 +1,271 @@
+"""The iCub's chain of two maps, learned from its own eye and head movements, and its scores.
+
+- **Map 1** (eyes first): a Sigma-Pi map on the right eye's retina code and the code of its
+  eye angles (tilt and the right eye's pan), trained on view pairs from saccades of the eyes
+  with the head still (:func:`~sigmapi.envs.icub.view_pairs`, ``stage="eyes"``): the pair
+  shares the ball's head-centred direction.
+- **Map 2** (then the head): a Sigma-Pi map on map 1's response (rectified, unit length:
+  :func:`sigmapi.experiments.chain.run.head_code`) and the code of the neck's pitch and yaw,
+  trained on view pairs in which the neck turns too (``stage="head"``): the pair shares the
+  ball's torso-centred direction.
+
+Population codes read measured angles, each scaled to [0, 1] over the range the random gazes
+are drawn from (:data:`~sigmapi.envs.icub.GAZE_LOW`.. :data:`~sigmapi.envs.icub.GAZE_HIGH`).
+Both maps use the ``paper-2d`` preset (min-distance winner, the cross-view ordered start) with
+a neighbourhood that ends at 0.5 map units and no refinement rounds.
+
+Each map is scored on unmoved pairs from the fixed evaluation seed against the true direction
+it should code (head-centred for map 1, torso-centred for map 2): the metrics of
+:func:`sigmapi.metrics.winner_metrics` (``order_r2``...), the fold score and
+``direction_error_deg`` (RMS angle between a test view's true direction and the mean true
+direction of the calibration views its winner won). Beside them: a same-size Kohonen map
+trained on the true directions themselves (the quantisation floor) and a cubic least-squares
+fit from the measured angles (the information bound).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from sigmapi.baselines import KohonenSOM
+from sigmapi.codes import PopulationCode
+from sigmapi.config import SOMConfig, load_preset
+from sigmapi.envs.icub import GAZE_HIGH, GAZE_LOW, ICubScene, ViewBatch, view_pairs
+from sigmapi.experiments.chain.run import head_code
+from sigmapi.metrics import (
+    EVAL_SEED,
+    FOLD_THRESHOLD,
+    fold_indicators,
+    hard_scores,
+    winner_metrics,
+    z_decoder,
+)
+from sigmapi.som import SigmaPiSOM
+from sigmapi.tasks import Batch
+
+__all__ = [
+    "SIGMA",
+    "ChainMaps",
+    "MapData",
+    "angle_error_deg",
+    "eye_position",
+    "learn_chain",
+    "neck_position",
+    "retina_position",
+    "score",
+    "som_config",
+]
+
+Array = NDArray[np.float64]
+
+SIGMA = ((0.0, 3.0), (0.5, 1.0), (1.0, 1.0))
+"""The maps' neighbourhood width (map units) over a run: 3 -> 1 at half-way, then 1."""
+
+_EYE_LO = np.array([GAZE_LOW[0], GAZE_LOW[1] - 0.5 * GAZE_HIGH[2]])
+_EYE_HI = np.array([GAZE_HIGH[0], GAZE_HIGH[1] - 0.5 * GAZE_LOW[2]])
+_NECK = [3, 5]  # pitch and yaw (the roll is held at zero)
+
+
+def retina_position(v: ViewBatch, eye_size: int) -> Array:
+    """The retina as positions in [0, 1]^2: ``(u, v) / eye_size``."""
+    return np.clip(v.retina / eye_size, 0.0, 1.0)
+
+
+def eye_position(v: ViewBatch) -> Array:
+    """The right eye's tilt and pan (``version - vergence / 2``) scaled to [0, 1]."""
+    eye = np.column_stack([v.gaze[:, 0], v.gaze[:, 1] - 0.5 * v.gaze[:, 2]])
+    return np.clip((eye - _EYE_LO) / (_EYE_HI - _EYE_LO), 0.0, 1.0)
+
+
+def neck_position(v: ViewBatch) -> Array:
+    """The neck's pitch and yaw scaled to [0, 1]."""
+    lo, hi = GAZE_LOW[_NECK], GAZE_HIGH[_NECK]
+    return np.clip((v.gaze[:, _NECK] - lo) / (hi - lo), 0.0, 1.0)
+
+
+def som_config(x_shape: tuple[int, ...], y_shape: tuple[int, ...], map_shape: tuple[int, ...],
+               width: float, iterations: int, seed: int, backend: str) -> SOMConfig:  # fmt: skip
+    """The ``paper-2d`` preset on these grids with :data:`SIGMA` and no refinement rounds."""
+    return load_preset("paper-2d").replace(
+        map_shape=tuple(map_shape), x_shape=tuple(x_shape), y_shape=tuple(y_shape),
+        code_width=width, iterations=iterations, sigma=SIGMA, seed=seed, backend=backend,
+        refine_rounds=0,
+    )  # fmt: skip
+
+
+@dataclass(frozen=True)
+class MapData:
+    """Pairs of views for one map: ``(first, second)`` view batches."""
+
+    eyes: tuple[ViewBatch, ViewBatch]
+    """Saccades of the eyes, the head still (map 1)."""
+    head: tuple[ViewBatch, ViewBatch]
+    """Turns of the neck and eyes (map 2)."""
+
+    @classmethod
+    def record(cls, scene: ICubScene, n: int, rng: np.random.Generator,
+               moved_share: float = 0.0) -> MapData:  # fmt: skip
+        """``n`` pairs of each kind from ``rng``, ``moved_share`` of them with a moved ball."""
+        return cls(view_pairs(scene, n, rng, stage="eyes", moved_share=moved_share),
+                   view_pairs(scene, n, rng, stage="head", moved_share=moved_share))  # fmt: skip
+
+    @classmethod
+    def evaluation(cls, scene: ICubScene, n: int) -> tuple[MapData, MapData]:
+        """Calibration and test pairs (unmoved) from the fixed evaluation seed."""
+        cal, test = (np.random.default_rng(s) for s in np.random.SeedSequence(EVAL_SEED).spawn(2))
+        return cls.record(scene, n, cal), cls.record(scene, n, test)
+
+
+class ChainMaps:
+    """Map 1 and map 2 of one seed, and the codes that feed them."""
+
+    def __init__(self, map1: SigmaPiSOM, map2: SigmaPiSOM, eye_size: int,
+                 code: str = "winner") -> None:  # fmt: skip
+        self.map1, self.map2, self.eye_size, self.code = map1, map2, eye_size, code
+
+    def head(self, v: ViewBatch) -> Array:
+        """What map 1 hands to map 2 for views ``v``: its response (rectified, unit length),
+        or a population code on its grid of its winner's place (``code="winner"``) or of
+        the centre of mass of its rectified response over the winner and its neighbours
+        (``code="centroid"``)."""
+        if self.code == "response":
+            return head_code(self.map1, retina_position(v, self.eye_size), eye_position(v))
+        m = self.map1
+        x, y = self.inputs1(v)
+        k = m.winner(x, y, hard=True)
+        place = m.map_coords[k]
+        if self.code == "centroid":  # the response's centre of mass near the winner
+            h = np.maximum(m.respond(x, y), 0.0)
+            near = np.max(np.abs(m.map_coords[None, :, :] - place[:, None, :]), axis=2) <= 1.0
+            h = np.where(near, h, 0.0)
+            total = h.sum(axis=1, keepdims=True)
+            place = np.where(total > 0, (h @ m.map_coords) / np.where(total > 0, total, 1), place)
+        pos = place / (np.asarray(m.map_shape) - 1.0)
+        return PopulationCode(m.map_shape, m.config.code_width).encode(pos)
+
+    def inputs1(self, v: ViewBatch) -> tuple[Array, Array]:
+        """Map 1's codes of views ``v``: retina, eye angles."""
+        m = self.map1
+        return m.x_code.encode(retina_position(v, self.eye_size)), m.y_code.encode(eye_position(v))
+
+    def inputs2(self, v: ViewBatch) -> tuple[Array, Array]:
+        """Map 2's codes of views ``v``: map 1's response, neck angles."""
+        return self.head(v), self.map2.y_code.encode(neck_position(v))
+
+    def winner(self, v: ViewBatch, stage: int = 2) -> NDArray[np.int64]:
+        """Hard winners of map ``stage`` (1 or 2) for views ``v``."""
+        if stage == 1:
+            return self.map1.winner(*self.inputs1(v), hard=True)
+        return self.map2.winner(*self.inputs2(v), hard=True)
+
+
+def learn_chain(data: MapData, *, grid: int, width: float, map_shape: tuple[int, ...],
+                iterations: int, seed: int, eye_size: int, backend: str = "auto",
+                code: str = "winner") -> ChainMaps:  # fmt: skip
+    """Map 1 on ``data.eyes``, then map 2 on map 1's code of ``data.head``."""
+    g = (grid, grid)
+    s1, s2 = (int(s) for s in np.random.default_rng(seed).integers(0, 2**31 - 1, 2))
+    map1 = SigmaPiSOM(som_config(g, g, map_shape, width, iterations, s1, backend))
+    chain = ChainMaps(map1, map1, eye_size, code)
+    a, b = data.eyes
+    map1.fit((*chain.inputs1(a), *chain.inputs1(b)))
+    cfg2 = som_config(map1.map_shape, g, map_shape, width, iterations, s2, backend)
+    chain.map2 = SigmaPiSOM(cfg2)
+    a, b = data.head
+    chain.map2.fit((*chain.inputs2(a), *chain.inputs2(b)))
+    return chain
+
+
+def _unit(d: Array) -> Array:
+    az, el = d[:, 0], d[:, 1]
+    return np.column_stack([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)])
+
+
+def angle_error_deg(decoded: Array, true: Array) -> float:
+    """RMS angle (degrees) between directions ``(azimuth, elevation)`` ``(N, 2)``."""
+    cos = np.clip(np.sum(_unit(decoded) * _unit(true), axis=1), -1.0, 1.0)
+    return float(np.degrees(np.sqrt(np.mean(np.arccos(cos) ** 2))))
+
+
+def _scores(wc: NDArray[np.int64], zc: Array, w0: NDArray[np.int64], w1: NDArray[np.int64],
+            zt: Array, coords: Array) -> dict[str, Any]:  # fmt: skip
+    m = winner_metrics(wc, zc, w0, w1, zt, coords, 1.0)
+    m.pop("z_error")
+    m["direction_error_deg"] = angle_error_deg(z_decoder(wc, zc, coords)[w0], zt)
+    return m
+
+
+def score(chain: ChainMaps, stage: int, cal: MapData, test: MapData) -> dict[str, Any]:
+    """Map ``stage``'s metrics against the true directions (head-centred for map 1,
+    torso-centred for map 2) on the evaluation pairs, with its fold score."""
+    model = chain.map1 if stage == 1 else chain.map2
+    pick = (lambda d: d.eyes) if stage == 1 else (lambda d: d.head)
+    truth = (lambda v: v.head) if stage == 1 else (lambda v: v.torso)
+    (c0, _), (t0, t1) = pick(cal), pick(test)
+    inputs = chain.inputs1 if stage == 1 else chain.inputs2
+    x0, y0 = inputs(t0)
+    x1, y1 = inputs(t1)
+    scores = hard_scores(model, x0, y0)
+    w0 = np.argmax(scores, axis=1)
+    w1 = model.winner(x1, y1, hard=True)
+    wc = model.winner(*inputs(c0), hard=True)
+    out = _scores(wc, truth(c0), w0, w1, truth(t0), model.map_coords)
+    batch = Batch(x0, y0, x1, y1, truth(t0), t0.retina, t0.gaze, t1.retina, t1.gaze)
+    starved, te, fold = fold_indicators(model, batch, w0, w1, scores)
+    out.update(fold_score=fold, fold_threshold=FOLD_THRESHOLD, folded=bool(fold >= FOLD_THRESHOLD),
+               starved_units=starved, topographic_error=te)  # fmt: skip
+    return out
+
+
+def true_direction_map(
+    train: MapData, cal: MapData, test: MapData, stage: int, map_shape: tuple[int, ...],
+    iterations: int, seed: int,
+) -> dict[str, Any]:  # fmt: skip
+    """A same-size Kohonen map trained on the true directions (radians) of the training views:
+    the quantisation floor of a map of this many units."""
+    pick = (lambda d: d.eyes) if stage == 1 else (lambda d: d.head)
+    truth = (lambda v: v.head) if stage == 1 else (lambda v: v.torso)
+    a, b = pick(train)
+    empty = np.zeros((a.head.shape[0], 0))
+    som = KohonenSOM(map_shape, iterations=iterations, seed=seed)
+    som.fit((truth(a), empty, truth(b), empty))
+    (c0, _), (t0, t1) = pick(cal), pick(test)
+
+    def win(v: ViewBatch) -> NDArray[np.int64]:
+        return som.winner(truth(v), np.zeros((truth(v).shape[0], 0)))
+
+    return _scores(win(c0), truth(c0), win(t0), win(t1), truth(t0), som.coords)
+
+
+def _cubic(x: Array) -> Array:
+    """Monomials of the columns of ``x`` up to degree 3 (a constant included)."""
+    cols = [np.ones(x.shape[0])]
+    n = x.shape[1]
+    for i in range(n):
+        cols.append(x[:, i])
+        for j in range(i, n):
+            cols.append(x[:, i] * x[:, j])
+            cols.extend(x[:, i] * x[:, j] * x[:, k] for k in range(j, n))
+    return np.column_stack(cols)
+
+
+def supervised_fit(train: MapData, test: MapData, stage: int, eye_size: int) -> dict[str, Any]:
+    """A cubic least-squares fit from the measured positions (retina, eye angles and, for map
+    2, neck angles) to the true direction: the information those measurements hold."""
+    pick = (lambda d: d.eyes) if stage == 1 else (lambda d: d.head)
+    truth = (lambda v: v.head) if stage == 1 else (lambda v: v.torso)
+
+    def feats(v: ViewBatch) -> Array:
+        parts = [retina_position(v, eye_size), eye_position(v)]
+        if stage == 2:
+            parts.append(neck_position(v))
+        return _cubic(np.hstack(parts))
+
+    a, _ = pick(train)
+    t0, _ = pick(test)
+    beta, *_ = np.linalg.lstsq(feats(a), truth(a), rcond=None)
+    return {"direction_error_deg": angle_error_deg(feats(t0) @ beta, truth(t0))}

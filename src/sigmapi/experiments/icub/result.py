@@ -1,0 +1,187 @@
+"""The outcome of an iCub run: per-seed records, the summaries computed from them, its JSON
+form, its table and its figures (:mod:`~sigmapi.experiments.icub.plots`)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from sigmapi.experiments.icub.config import ICubConfig
+from sigmapi.experiments.icub.reaching import METHODS
+from sigmapi.metrics import ORDERED_R2
+
+__all__ = ["TARGETS", "ICubResult"]
+
+TARGETS: dict[str, float] = {
+    "pixel_rms_px": 0.5,
+    "eye_frame_ms_median": 10.0,
+    "order_r2": ORDERED_R2,
+    "chain_error_ratio": 1.5,
+    "learned_success": 0.9,
+    "learned_over_true": 0.95,
+    "learned_minus_retina": 0.3,
+}
+"""The acceptance bounds the result is checked against (``targets`` in the JSON)."""
+
+_MAP_KEYS = (
+    "order_r2",
+    "direction_error_deg",
+    "view_consistency",
+    "view_within_one",
+    "usage",
+    "fold_score",
+    "folded",
+    "starved_units",
+    "topographic_error",
+)
+
+
+def _plain(v: Any) -> Any:
+    if isinstance(v, (np.floating, np.integer, np.bool_)):
+        return v.item()
+    return v
+
+
+@dataclass
+class ICubResult:
+    """Outcome of :meth:`~sigmapi.experiments.icub.run.ICubExperiment.run`: the frames check
+    and one record per seed (maps' metrics, babbling curves, reaches)."""
+
+    config: ICubConfig
+    seeds: tuple[int, ...]
+    frames: dict[str, Any]
+    per_seed: list[dict[str, Any]]
+    seconds: float = 0.0
+    _summary: dict[str, Any] = field(default_factory=dict, repr=False)
+
+    def maps(self) -> dict[str, dict[str, Any]]:
+        """Per map: the medians over seeds, the per-seed values, the references."""
+        out: dict[str, dict[str, Any]] = {}
+        for name in ("map1", "map2"):
+            rows = [s["maps"][name] for s in self.per_seed]
+            true = [r["true_direction_map"] for r in rows]
+            ratio = [
+                r["direction_error_deg"] / t["direction_error_deg"]
+                for r, t in zip(rows, true, strict=True)
+            ]
+            out[name] = {
+                "order_r2": float(np.median([r["order_r2"] for r in rows])),
+                "direction_error_deg": float(np.median([r["direction_error_deg"] for r in rows])),
+                "order_r2_worst": float(min(r["order_r2"] for r in rows)),
+                "ordered_seeds": int(sum(r["order_r2"] >= ORDERED_R2 for r in rows)),
+                "folded_seeds": int(sum(bool(r["folded"]) for r in rows)),
+                "error_ratio_to_true_direction": float(np.median(ratio)),
+                "error_ratio_worst": float(max(ratio)),
+                "true_direction_map": {
+                    "order_r2": float(np.median([t["order_r2"] for t in true])),
+                    "direction_error_deg": float(
+                        np.median([t["direction_error_deg"] for t in true])
+                    ),
+                },
+                "supervised": {
+                    "direction_error_deg": float(
+                        np.median([r["supervised"]["direction_error_deg"] for r in rows])
+                    )
+                },
+                "per_seed": [{k: _plain(r[k]) for k in _MAP_KEYS} for r in rows],
+            }
+        return out
+
+    def success(self) -> dict[str, float]:
+        """Per method, the share of all reaches (every seed) that touched the ball."""
+        return {
+            m: float(np.mean(np.concatenate([s["success"][m] for s in self.per_seed])))
+            for m in METHODS
+        }
+
+    def success_per_seed(self) -> dict[str, list[float]]:
+        """Per method, the share of each seed's reaches that touched the ball."""
+        return {m: [float(np.mean(s["success"][m])) for s in self.per_seed] for m in METHODS}
+
+    def curves(self) -> dict[str, list[list[float]]]:
+        """Per associated method, the babbling curve (babbles, median palm error in cm),
+        the median over seeds."""
+        out: dict[str, list[list[float]]] = {}
+        for m in self.per_seed[0]["curves"]:
+            pts = np.array([[e for _, e in s["curves"][m]] for s in self.per_seed])
+            ns = [n for n, _ in self.per_seed[0]["curves"][m]]
+            out[m] = [
+                [float(n), 100.0 * float(e)]
+                for n, e in zip(ns, np.median(pts, axis=0), strict=True)
+            ]
+        return out
+
+    def targets(self) -> dict[str, Any]:
+        """Each acceptance bound and whether it is met."""
+        maps, succ = self.maps(), self.success()
+        n = len(self.seeds)
+        return {
+            "pixel_rms_px": self.frames["pixel_rms_px"] <= TARGETS["pixel_rms_px"],
+            "eye_frame_ms_median": (
+                self.frames["eye_frame_ms_median"] <= TARGETS["eye_frame_ms_median"]
+            ),
+            "maps_ordered_all_seeds": all(
+                maps[k]["ordered_seeds"] == n and maps[k]["folded_seeds"] == 0 for k in maps
+            ),
+            "chain_error_ratio": (
+                maps["map2"]["error_ratio_to_true_direction"] <= TARGETS["chain_error_ratio"]
+            ),
+            "learned_success": succ["learned"] >= TARGETS["learned_success"],
+            "learned_over_true": (
+                succ["learned"] >= TARGETS["learned_over_true"] * succ["true_direction"]
+            ),
+            "learned_minus_retina": (
+                succ["learned"] - succ["retina"] >= TARGETS["learned_minus_retina"]
+            ),
+            "bounds": TARGETS,
+        }
+
+    def to_dict(self) -> dict[str, Any]:
+        """Everything the result states, JSON-able."""
+        return {
+            "experiment": "icub",
+            "config": self.config.to_dict(),
+            "seeds": list(self.seeds),
+            "frames": self.frames,
+            "maps": self.maps(),
+            "success": self.success(),
+            "success_per_seed": self.success_per_seed(),
+            "babbling_cm": self.curves(),
+            "targets": self.targets(),
+            "cpu_seconds_per_seed": [float(s["cpu_s"]) for s in self.per_seed],
+            "seconds": self.seconds,
+        }
+
+    def table(self) -> str:
+        """Console text: frames, maps, reaching."""
+        f, maps, succ = self.frames, self.maps(), self.success()
+        lines = [
+            f"icub: seeds {list(self.seeds)}, {self.seconds:.0f} s",
+            f"frames: rendered vs projected retina {f['pixel_rms_px']:.2f} px RMS "
+            f"(max {f['pixel_max_px']:.2f}) over {f['scenes']} scenes; 64x64 eye frame "
+            f"{f['eye_frame_ms_median']:.2f} ms median",
+            f"{'map':<6}{'order R2':>10}{'worst':>8}{'dir err':>9}{'true map':>10}"
+            f"{'cubic fit':>11}{'folded':>8}",
+        ]
+        for name, m in maps.items():
+            lines.append(
+                f"{name:<6}{m['order_r2']:>10.3f}{m['order_r2_worst']:>8.3f}"
+                f"{m['direction_error_deg']:>8.2f}d{m['true_direction_map']['direction_error_deg']:>9.2f}d"
+                f"{m['supervised']['direction_error_deg']:>10.2f}d{m['folded_seeds']:>8d}"
+            )
+        lines.append("reach success: " + ", ".join(f"{k} {v:.2f}" for k, v in succ.items()))
+        return "\n".join(lines)
+
+    def figure(self, out_dir: Path) -> list[Path]:
+        """The figures (:func:`~sigmapi.experiments.icub.plots.icub_figures`) and, with
+        ``config.render``, the filmed reach as an animated GIF."""
+        from sigmapi.experiments.icub.plots import icub_figures, write_gif
+
+        paths = icub_figures(self, Path(out_dir))
+        film = self.per_seed[0].get("film")
+        if self.config.render is not None and film:
+            paths.append(write_gif(film, Path(self.config.render)))
+        return paths

@@ -1,0 +1,220 @@
+"""The iCub experiment: the frames checked, the chain of maps learned, reaching learned.
+
+:data:`ICUB` (an :class:`ICubExperiment`) runs an
+:class:`~sigmapi.experiments.icub.config.ICubConfig` on a list of seeds:
+
+1. **Frames** (once, from :data:`~sigmapi.metrics.EVAL_SEED`): in ``frame_scenes`` random
+   scenes (a ball on the table, a random gaze that keeps it in view) the red blob's centroid in
+   the rendered right-eye frame against the exact projection, and the eye frame's render time.
+   The maps and associations then read the retina from the projection.
+2. **Per seed** (one job of the executor; everything random from ``SeedSequence(seed)``):
+   map 1 and map 2 (:mod:`~sigmapi.experiments.icub.maps`), scored on evaluation pairs drawn
+   once from the evaluation seed, beside a same-size map on the true directions and a cubic
+   fit; babbling and the associations, their babbling curves; the reaches of every method
+   (:mod:`~sigmapi.experiments.icub.reaching`).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from sigmapi import _validate
+from sigmapi.envs.icub import ICubScene, ViewBatch, measure, random_gaze
+from sigmapi.envs.icub.frames import direction_ball
+from sigmapi.envs.icub.model import icub_models_module
+from sigmapi.envs.robot.scene import blob_centroid, mujoco_module
+from sigmapi.executor import Executor
+from sigmapi.experiments.base import Experiment, check_seeds, register, run_all
+from sigmapi.experiments.icub.config import QUICK, ICubConfig
+from sigmapi.experiments.icub.maps import (
+    MapData,
+    learn_chain,
+    score,
+    supervised_fit,
+    true_direction_map,
+)
+from sigmapi.experiments.icub.reaching import babble, features, learn_reaching, reach_tests
+from sigmapi.experiments.icub.result import ICubResult
+from sigmapi.metrics import EVAL_SEED, z_decoder
+from sigmapi.progress import Progress
+
+__all__ = ["ICUB", "ICubExperiment", "check_frames"]
+
+
+def _child(seed: int, k: int) -> np.random.Generator:
+    return np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(k,)))
+
+
+def check_frames(scene: ICubScene, n: int, rng: np.random.Generator) -> dict[str, Any]:
+    """Rendered retina against the exact projection over ``n`` random scenes, and the right
+    eye frame's render time (wall and CPU milliseconds, medians)."""
+    err, wall, cpu, hidden = [], [], [], 0
+    scene.reset()
+    for b in direction_ball(scene, rng, n):
+        scene.set_ball(b)
+        random_gaze(scene, scene.ball_position(), rng)
+        t0, c0 = time.perf_counter(), time.process_time()
+        img = scene.render("r_eye")
+        wall.append(time.perf_counter() - t0)
+        cpu.append(time.process_time() - c0)
+        px = blob_centroid(img)
+        if px is None:
+            hidden += 1
+            continue
+        err.append(np.linalg.norm(px - scene.project(scene.ball_position())[0]))
+    e = np.array(err)
+    return {"scenes": n, "hidden": hidden, "pixel_rms_px": float(np.sqrt(np.mean(e**2))),
+            "pixel_max_px": float(e.max()), "eye_size": scene.eye_size,
+            "eye_frame_ms_median": 1e3 * float(np.median(wall)),
+            "eye_frame_cpu_ms_median": 1e3 * float(np.median(cpu))}  # fmt: skip
+
+
+@dataclass(frozen=True)
+class _Job:
+    config: ICubConfig
+    seed: int
+    cal: MapData
+    test: MapData
+    figures: bool
+
+
+def _run_seed(job: _Job) -> dict[str, Any]:
+    """Maps, babbling and reaches of one seed."""
+    cfg, seed = job.config, job.seed
+    scene = ICubScene()
+    t0 = time.process_time()
+    train = MapData.record(scene, cfg.map_pairs, _child(seed, 0), cfg.moved_share)
+    chain = learn_chain(
+        train, grid=cfg.grid, width=cfg.code_width, map_shape=cfg.map_shape,
+        iterations=cfg.map_iterations, seed=int(_child(seed, 1).integers(2**31)),
+        eye_size=scene.eye_size, backend=cfg.backend, code=cfg.head_code,
+    )  # fmt: skip
+    out: dict[str, Any] = {"seed": seed, "maps": {}}
+    for stage in (1, 2):
+        m = score(chain, stage, job.cal, job.test)
+        m["true_direction_map"] = true_direction_map(
+            train, job.cal, job.test, stage, cfg.map_shape, cfg.map_iterations, seed
+        )
+        m["supervised"] = supervised_fit(train, job.test, stage, scene.eye_size)
+        out["maps"][f"map{stage}"] = m
+    out["map_cpu_s"] = time.process_time() - t0
+    rng = _child(seed, 2)
+    babbles, held_out = babble(scene, cfg.babbles, rng), babble(scene, 200, rng)
+
+    def feats(method: str, v: Any) -> NDArray[np.float64]:
+        return features(method, v, chain, cfg.grid, cfg.code_width, cfg.feature_width)
+
+    layers, curves = learn_reaching(scene, babbles, held_out, feats, epochs=cfg.epochs)
+    film = None
+    if job.figures:
+
+        def film(i: int, method: str) -> int:
+            return 8 if i == 0 and method == "learned" else 0
+
+    tests, frames = reach_tests(scene, layers, feats, cfg.reaches, _child(seed, 3), film)
+    out.update(curves=curves, ball=tests.ball, gaze=tests.gaze, success=tests.success,
+               distance=tests.distance, cpu_s=time.process_time() - t0)  # fmt: skip
+    if job.figures:
+        c0 = job.cal.head[0]
+        zc = z_decoder(chain.winner(c0, 2), c0.torso, chain.map2.map_coords)
+        out["unit_table"] = scene.table_point(zc)[:, :2]
+        out["film"] = frames
+        ball, gaze = tests.ball[0], tests.gaze[0]
+        posture = layers["learned"].predict(feats("learned", _view(scene, ball, gaze)))[0]
+        out["eyes"] = _eye_views(scene, ball, gaze, posture)
+    scene.close()
+    return out
+
+
+def _view(scene: ICubScene, ball: NDArray[np.float64], gaze: NDArray[np.float64]) -> ViewBatch:
+    scene.reset()
+    scene.set_ball(ball)
+    scene.set_gaze(gaze)
+    cols = [np.array([c]) for c in measure(scene, scene.ball_position())]
+    return ViewBatch(*cols)
+
+
+def _eye_views(scene: ICubScene, ball: NDArray[np.float64], gaze: NDArray[np.float64],
+               posture: NDArray[np.float64]) -> dict[str, Any]:  # fmt: skip
+    """Both eyes' frames with the arm at the learned posture for the ball, and where the ball
+    and the palm project."""
+    scene.reset()
+    scene.set_ball(ball)
+    scene.set_gaze(gaze)
+    scene.set_arm(posture)
+    out: dict[str, Any] = {}
+    for eye in ("l_eye", "r_eye"):
+        out[eye] = scene.render(eye)
+        out[f"{eye}_ball"] = scene.project(scene.ball_position(), eye)[0]
+        out[f"{eye}_palm"] = scene.project(scene.palm_position(), eye)[0]
+    scene.reset()
+    return out
+
+
+class ICubExperiment(Experiment[ICubConfig]):
+    """The iCub learns where things are from its own eyes and neck (a chain of two Sigma-Pi
+    maps), and learns to reach from babbling; every reaching method side by side."""
+
+    name = "icub"
+    summary = "the iCub learns a chain of maps from its eyes and neck, then learns to reach"
+    config_type = ICubConfig
+    quick = QUICK
+    seeds = (100, 101, 102, 103, 104)
+    """The seeds of the acceptance run: none of them was tuned on (tuning used seeds 0 and 1)."""
+    quick_seeds = (0,)
+    """The seed of ``--quick``: a tuning seed."""
+    default_out = "icub"
+
+    def run(
+        self,
+        config: ICubConfig,
+        *,
+        seeds: Sequence[int],
+        out: Path | None = None,
+        executor: Executor | None = None,
+        progress: Progress | None = None,
+    ) -> ICubResult:
+        """The frames check, then one job per seed (see the module's account)."""
+        if not isinstance(config, ICubConfig):
+            raise _validate.fail("config", "an ICubConfig", config)
+        seeds = check_seeds(seeds)
+        mujoco_module()
+        icub_models_module()  # before any work: both say which extra to install
+        t0 = time.perf_counter()
+        show = Progress.of(progress)
+        show.note("icub: checking the frames and recording the evaluation views")
+        scene = ICubScene()
+        frames = check_frames(scene, config.frame_scenes, np.random.default_rng(EVAL_SEED))
+        cal, test = MapData.evaluation(scene, config.eval_pairs)
+        scene.close()
+        jobs = [(str(seed), _Job(config, seed, cal, test, i == 0))
+                for i, seed in enumerate(seeds)]  # fmt: skip
+        values = run_all(
+            _run_seed, jobs, executor=executor, per_job=_job_memory(config), progress=progress,
+            desc="icub", describe=lambda key, v: f"seed {key} ({v['cpu_s']:.0f} CPU s)",
+        )  # fmt: skip
+        res = ICubResult(config, seeds, frames, [values[str(s)] for s in seeds])
+        res.seconds = time.perf_counter() - t0
+        return res
+
+
+def _job_memory(config: ICubConfig) -> int:
+    """Bytes of one job (an upper estimate): the maps' weights and trainer state, the views,
+    the renderer."""
+    n = config.grid**2
+    units = int(np.prod(config.map_shape))
+    weights = units * n * (n + units) * 8 * 6
+    views = config.map_pairs * 4 * 2 * (2 * n) * 8
+    return weights + views + 400 * 2**20
+
+
+ICUB = ICubExperiment()
+register(ICUB)
+"""The iCub experiment."""
