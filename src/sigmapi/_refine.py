@@ -120,6 +120,7 @@ class RefineMixin:
             if self._refine_acc is None or self._refine_acc[0] != r:
                 # a round's winners use the weights of its start: replay its pairs so far
                 self._refine_acc = (r, kernel.refine_start(self._state))
+                self._refine_acc[1].code_shapes = (self.x_shape, self.y_shape)
             acc = self._refine_acc[1]
             while acc.pairs < per:
                 lo = acc.pairs
