@@ -73,6 +73,7 @@ def test_result_values_follow_the_json(tmp_path, monkeypatch):
         sigmapi_results.TABLES["files"]()
 
 
+@pytest.mark.slow  # about 100 s: .ci/run's second step runs it
 def test_the_site_builds_with_warnings_as_errors(tmp_path):
     out = tmp_path / "html"
     env = {**os.environ, "SIGMAPI_DOCS_GALLERY": "False", "MPLBACKEND": "Agg"}
