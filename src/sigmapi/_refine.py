@@ -31,6 +31,11 @@ __all__ = ["RefineMixin"]
 BLOCK = 1000
 """Pairs per block of a refinement round (one random child stream per block)."""
 
+GROUP = 10
+"""Blocks per call of the kernel (at most ``GROUP * BLOCK`` pairs): the fast kernel sorts a
+call's pairs by the units they need, so larger calls read the same weights and sums more
+often from cache (the sums do not depend on how the stream is cut)."""
+
 
 class RefineMixin:
     """``refine`` and its progress, for a model with a kernel, random streams and a lock."""
@@ -87,7 +92,8 @@ class RefineMixin:
         refinement (:attr:`refined_` is in the model file) continues to the same weights,
         bit for bit. With ``views`` each round is one pass over the rows in the given order
         (give the same rows to continue). ``fit`` calls this after the training.
-        ``callback(model)`` is called after every block of at most ``BLOCK`` pairs.
+        ``callback(model)`` is called after every ``GROUP`` blocks of ``BLOCK`` pairs (or
+        fewer, at the end of a round).
         """
         with self._lock:
             self._check_fitted()
@@ -126,11 +132,15 @@ class RefineMixin:
                 lo = acc.pairs
                 if data is None:
                     b, off = divmod(lo, BLOCK)
-                    stop = min(BLOCK, per - b * BLOCK)
-                    batch = self.sampler.sample(BLOCK, self._seq(4, r, b))
-                    views = tuple(v[off:stop] for v in (batch.x0, batch.y0, batch.x1, batch.y1))
+                    last = min(b + GROUP, -(-per // BLOCK))  # blocks b .. last - 1
+                    drawn = [self.sampler.sample(BLOCK, self._seq(4, r, i)) for i in range(b, last)]
+                    stop = min(per, last * BLOCK) - b * BLOCK
+                    views = tuple(
+                        np.concatenate([getattr(d, f) for d in drawn])[off:stop]
+                        for f in ("x0", "y0", "x1", "y1")
+                    )
                 else:
-                    views = tuple(v[lo : lo + BLOCK] for v in data)
+                    views = tuple(v[lo : lo + GROUP * BLOCK] for v in data)
                 x0, y0, x1, y1 = views
                 if c.same_view:
                     x1, y1 = x0, y0
