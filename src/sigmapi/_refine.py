@@ -92,8 +92,7 @@ class RefineMixin:
         refinement (:attr:`refined_` is in the model file) continues to the same weights,
         bit for bit. With ``views`` each round is one pass over the rows in the given order
         (give the same rows to continue). ``fit`` calls this after the training.
-        ``callback(model)`` is called after every ``GROUP`` blocks of ``BLOCK`` pairs (or
-        fewer, at the end of a round).
+        ``callback(model)`` is called after every block of at most ``BLOCK`` pairs.
         """
         with self._lock:
             self._check_fitted()
@@ -131,16 +130,21 @@ class RefineMixin:
             while acc.pairs < per:
                 lo = acc.pairs
                 if data is None:
-                    b, off = divmod(lo, BLOCK)
+                    b = lo // BLOCK
                     last = min(b + GROUP, -(-per // BLOCK))  # blocks b .. last - 1
                     drawn = [self.sampler.sample(BLOCK, self._seq(4, r, i)) for i in range(b, last)]
-                    stop = min(per, last * BLOCK) - b * BLOCK
+                    hi = min(per, last * BLOCK)
                     views = tuple(
-                        np.concatenate([getattr(d, f) for d in drawn])[off:stop]
+                        np.concatenate([getattr(d, f) for d in drawn])[
+                            lo - b * BLOCK : hi - b * BLOCK
+                        ]
                         for f in ("x0", "y0", "x1", "y1")
                     )
+                    ends = [min(per, (i + 1) * BLOCK) for i in range(b, last)]
                 else:
-                    views = tuple(v[lo : lo + GROUP * BLOCK] for v in data)
+                    hi = min(per, lo + GROUP * BLOCK)
+                    views = tuple(v[lo:hi] for v in data)
+                    ends = [*range(lo + BLOCK, hi, BLOCK), hi]
                 x0, y0, x1, y1 = views
                 if c.same_view:
                     x1, y1 = x0, y0
@@ -149,14 +153,22 @@ class RefineMixin:
                     winner_rule=rule, soft_cut=c.soft_cut, sigma=c.refine_sigma,
                     map_periodic=c.map_periodic,
                 )  # fmt: skip
+                for end in ends[:-1]:  # the round's weights stay those of its start until its end
+                    self._block_done(r * per + end, done < end, callback)
                 if acc.pairs >= per:
                     self._state = kernel.refine_finish(self._state, acc)
                     self._weights_cache = None
                     self._refine_acc = None
-                if lo + len(x0) > done:
-                    self._refined = r * per + lo + len(x0)
-                    if callback is not None:
-                        callback(self)
+                self._block_done(r * per + hi, done < hi, callback)
                 if self._refine_acc is None:
                     break
         return self
+
+    def _block_done(self, refined: int, new: bool, callback: Callable[[Any], None] | None) -> None:
+        """A block of pairs is in the sums: if it was not before (``new``; a round replayed
+        after loading repeats its first blocks), count it and call ``callback``. A model saved
+        then replays the round's pairs so far, whatever the kernel already added."""
+        if new:
+            self._refined = refined
+            if callback is not None:
+                callback(self)
