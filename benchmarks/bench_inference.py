@@ -106,8 +106,9 @@ def floors(model: Any, x: Any, y: Any, calls: int, pair: Callable[[int], Any]) -
     """The floors of the fast kernel's calls on this machine, in this process.
 
     ``read_one_random_us``: a compiled loop that only reads (sums) the weight rows of a pair's
-    kept input pairs, all units, for the same pairs as ``respond_one_random_us`` (the bytes a
-    one-pair call must read, in its order, with nothing else); ``bytes_one_mean``: those bytes;
+    kept input pairs, all units, prefetching 8 rows ahead as the kernel does, for the same pairs
+    as ``respond_one_random_us`` (the bytes a one-pair call must read, in its order, with
+    nothing else); ``bytes_one_mean``: those bytes;
     ``triad_one_thread_gb_s``: a STREAM-like triad over 3 x 256 MiB (one thread);
     ``bandwidth_one_us``: the bytes over the triad; ``bandwidth_1000_ms``: a batch's floor if
     every weight row its pairs need were read once (the union of their kept rows) at the
@@ -116,7 +117,7 @@ def floors(model: Any, x: Any, y: Any, calls: int, pair: Callable[[int], Any]) -
     import numpy as np
     from numba import njit
 
-    from sigmapi.kernels._rows import _pairs
+    from sigmapi.kernels._rows import _pairs, prefetch_row
 
     st = model._state
     raw, tol = st.raw, st.tol
@@ -126,7 +127,11 @@ def floors(model: Any, x: Any, y: Any, calls: int, pair: Callable[[int], Any]) -
         n = _pairs(xv, yv, tol, jb, pi, pv)
         for k in range(acc.shape[0]):
             acc[k] = 0.0
+        for q in range(min(n, 8)):
+            prefetch_row(raw, pi[q])
         for q in range(n):
+            if q + 8 < n:
+                prefetch_row(raw, pi[q + 8])  # as the kernel's calls prefetch
             row = raw[pi[q]]
             for k in range(acc.shape[0]):
                 acc[k] += row[k]

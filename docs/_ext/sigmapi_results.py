@@ -477,6 +477,10 @@ INFERENCE = {
     "respond_1000_ms": ("`respond`, 1,000 pairs", "ms"),
     "winner_1000_ms": ("`winner`, 1,000 pairs", "ms"),
     "evaluate_s": ("`evaluate` (10,000 test and calibration pairs, their data given)", "s"),
+    "read_one_random_us": ("floor: only reading one pair's weight rows (same pairs)", "us"),
+    "bandwidth_one_us": ("floor: one pair's bytes at the triad's rate", "us"),
+    "bandwidth_1000_ms": ("floor: 1,000 pairs' weight rows, each read once, at the triad", "ms"),
+    "triad_one_thread_gb_s": ("the triad measured in the same run (one thread)", "GB/s"),
 }
 
 
@@ -487,7 +491,7 @@ def _inference() -> Table:
     cols = [c for c in ("fast", "baseline", "reference") if c in med]
     rows = []
     for key, (label, unit) in INFERENCE.items():
-        fmt = ",.0f" if unit == "us" else ".2f" if unit == "s" else ",.0f"
+        fmt = ".2f" if unit == "s" else ".1f" if unit == "GB/s" else ",.0f"
         cells = [f"{num(med[c][key], fmt)} {unit}" if key in med[c] else "" for c in cols]
         rows.append([label, *cells])
     heads = {"fast": "**fast kernel**", "baseline": "baseline (before the vectorised loops)",

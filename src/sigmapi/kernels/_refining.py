@@ -35,7 +35,7 @@ import numpy as np
 from numba import njit, prange
 from numpy.typing import NDArray
 
-from sigmapi.kernels._rows import ARGMAX, MIN_DISTANCE, _pairs, prefetch
+from sigmapi.kernels._rows import ARGMAX, MIN_DISTANCE
 
 __all__ = ["RULES", "TILE", "SearchIndex", "build", "finish", "hard_sums", "search"]
 
@@ -51,9 +51,6 @@ the best exact score (the float64 sums of about 1,000 terms round by about 1e-13
 
 ROWS = 16
 """Pairs per parallel work item."""
-
-AHEAD = 48
-"""The sums prefetch the entry of the kept pair this many pairs ahead."""
 
 
 @dataclass
@@ -337,23 +334,29 @@ def _hard_sums(sums, mass, order, starts, x1, y1, tol):  # pragma: no cover - co
     """``sums[k, p] += v_p`` over the kept pairs ``p`` of view 1 of every pair that unit
     ``k`` won and ``mass[k] += 1`` per such pair; ``order[starts[k]:starts[k + 1]]``: those
     pairs in their order. Parallel over units (each unit's sums on one thread, its pairs in
-    order)."""
-    k_units, n_pairs = sums.shape
+    order). Runs over the prefiltered grid of :func:`_kept` and adds a zero where
+    ``_rows._pairs`` drops a pair (a sum that started at +0 is unchanged by it), without a
+    branch or a list."""
+    k_units = sums.shape[0]
+    ny = y1.shape[1]
     for c in prange((k_units + 15) // 16):
-        jb = np.empty(y1.shape[1], dtype=np.int64)
-        pi = np.empty(n_pairs, dtype=np.int64)
-        pv = np.empty(n_pairs)
+        ib = np.empty(x1.shape[1], dtype=np.int64)
+        jb = np.empty(ny, dtype=np.int64)
         for k in range(c * 16, min(k_units, c * 16 + 16)):
             row = sums[k]
             for r in range(starts[k], starts[k + 1]):
                 b = order[r]
-                n = _pairs(x1[b], y1[b], tol, jb, pi, pv)
-                for q in range(min(n, AHEAD)):
-                    prefetch(sums, k, pi[q], pi[q] + 1)
-                for q in range(n):
-                    if q + AHEAD < n:
-                        prefetch(sums, k, pi[q + AHEAD], pi[q + AHEAD] + 1)
-                    row[pi[q]] += pv[q]
+                x = x1[b]
+                y = y1[b]
+                ni, nj, thr = _kept(x, y, tol, ib, jb)
+                for u in range(ni):
+                    i = ib[u]
+                    xi = x[i]
+                    base = i * ny
+                    for w in range(nj):
+                        j = jb[w]
+                        v = xi * y[j]
+                        row[base + j] += v if abs(v) > thr else 0.0
                 mass[k] += 1.0
 
 
