@@ -132,18 +132,12 @@ class RefineMixin:
                 if data is None:
                     b = lo // BLOCK
                     last = min(b + GROUP, -(-per // BLOCK))  # blocks b .. last - 1
-                    drawn = [self.sampler.sample(BLOCK, self._seq(4, r, i)) for i in range(b, last)]
                     hi = min(per, last * BLOCK)
-                    views = tuple(
-                        np.concatenate([getattr(d, f) for d in drawn])[
-                            lo - b * BLOCK : hi - b * BLOCK
-                        ]
-                        for f in ("x0", "y0", "x1", "y1")
-                    )
+                    views = self._draw(r, b, last, lo - b * BLOCK, hi - b * BLOCK)
                     ends = [min(per, (i + 1) * BLOCK) for i in range(b, last)]
                 else:
                     hi = min(per, lo + GROUP * BLOCK)
-                    views = tuple(v[lo:hi] for v in data)
+                    views = (data[0][lo:hi], data[1][lo:hi], data[2][lo:hi], data[3][lo:hi])
                     ends = [*range(lo + BLOCK, hi, BLOCK), hi]
                 x0, y0, x1, y1 = views
                 if c.same_view:
@@ -172,3 +166,16 @@ class RefineMixin:
             self._refined = refined
             if callback is not None:
                 callback(self)
+
+    def _draw(self, r: int, first: int, last: int, lo: int, hi: int) -> CodeViews:
+        """Pairs ``lo .. hi - 1`` of blocks ``first .. last - 1`` of round ``r`` (counted from
+        the first block's start), each block from its own stream, filled in place one block
+        at a time (so that a group's codes are held once)."""
+        n = (last - first) * BLOCK
+        out = [np.empty((n, int(np.prod(s)))) for s in (self.x_shape, self.y_shape) * 2]
+        for i in range(first, last):
+            d = self.sampler.sample(BLOCK, self._seq(4, r, i))
+            at = slice((i - first) * BLOCK, (i - first + 1) * BLOCK)
+            for dest, v in zip(out, (d.x0, d.y0, d.x1, d.y1), strict=True):
+                dest[at] = v
+        return out[0][lo:hi], out[1][lo:hi], out[2][lo:hi], out[3][lo:hi]
