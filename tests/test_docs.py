@@ -33,11 +33,11 @@ def test_readme_is_a_front_page():
     assert "python -m sphinx -W --keep-going -b html docs docs/_build/html" in README
 
 
-def test_ci_runs_exactly_the_readme_test_command():
+def test_ci_runs_the_readme_test_command_then_the_slow_tests():
     command = "pip install -e '.[test]' && python -m pytest"
-    assert command in README
+    assert command in README and "python -m pytest -m slow" in README
     ci = [ln for ln in (ROOT / ".ci" / "run").read_text("utf-8").splitlines() if ln.strip()]
-    assert ci[-1].strip() == command
+    assert [ln.strip() for ln in ci[-2:]] == [command, "python -m pytest -m slow"]
 
 
 def test_readme_headline_table_is_the_rendered_one():
