@@ -477,10 +477,6 @@ INFERENCE = {
     "respond_1000_ms": ("`respond`, 1,000 pairs", "ms"),
     "winner_1000_ms": ("`winner`, 1,000 pairs", "ms"),
     "evaluate_s": ("`evaluate` (10,000 test and calibration pairs, their data given)", "s"),
-    "read_one_random_us": ("floor: only reading one pair's weight rows (same pairs)", "us"),
-    "bandwidth_one_us": ("floor: one pair's bytes at the triad's rate", "us"),
-    "bandwidth_1000_ms": ("floor: 1,000 pairs' weight rows, each read once, at the triad", "ms"),
-    "triad_one_thread_gb_s": ("the triad measured in the same run (one thread)", "GB/s"),
 }
 
 
@@ -491,13 +487,47 @@ def _inference() -> Table:
     cols = [c for c in ("fast", "baseline", "reference") if c in med]
     rows = []
     for key, (label, unit) in INFERENCE.items():
-        fmt = ".2f" if unit == "s" else ".1f" if unit == "GB/s" else ",.0f"
+        fmt = ",.0f" if unit == "us" else ".2f" if unit == "s" else ",.0f"
         cells = [f"{num(med[c][key], fmt)} {unit}" if key in med[c] else "" for c in cols]
         rows.append([label, *cells])
     heads = {"fast": "**fast kernel**", "baseline": "baseline (before the vectorised loops)",
              "reference": "dense reference"}  # fmt: skip
     return Table(["call", *(heads[c] for c in cols)], rows, [_rel("inference")],
                  f"Model: {data['model']['note']}.", _command(data))  # fmt: skip
+
+
+FLOORS = {
+    "respond_one_random_us": (
+        "`respond`, one pair",
+        "us",
+        "read_one_random_us",
+        "bandwidth_one_us",
+    ),
+    "winner_one_random_us": ("`winner`, one pair", "us", "read_one_random_us", "bandwidth_one_us"),
+    "respond_1000_ms": ("`respond`, 1,000 pairs", "ms", None, "bandwidth_1000_ms"),
+    "winner_1000_ms": ("`winner`, 1,000 pairs", "ms", None, "bandwidth_1000_ms"),
+}
+
+
+@table("inference-floors")
+def _inference_floors() -> Table:
+    data = load("inference-floors")
+    med = data["medians"]["fast"]
+    rows = []
+    for key, (label, unit, read, band) in FLOORS.items():
+        cells = [f"{num(med[key], ',.1f')} {unit}"]
+        cells.append(f"{num(med[read], ',.1f')} {unit}" if read else "")
+        cells.append(f"{num(med[band], ',.1f')} {unit}")
+        cells.append(num(data["fast_over_floors"][f"{key}_over_{band}"], ".2f"))
+        rows.append([label, *cells])
+    note = (
+        f"The fast kernel on a {data['model']['note']}; floors measured in the same processes: "
+        f"a triad of {num(data['triad_one_thread_gb_s'], '.1f')} GB/s (one thread, median), "
+        f"{num(med['bytes_one_mean'] / 1e6, '.2f')} MB of weight rows per pair."
+    )
+    return Table(["call", "measured", "reading its rows only", "its bytes at the triad's rate",
+                  "measured / bytes at the triad"], rows, [_rel("inference-floors")], note,
+                 _command(data))  # fmt: skip
 
 
 @table("files")
