@@ -13,8 +13,9 @@ search it replaces (``fast.winners_of``), whether the two find the same winners 
 pair, the share of the reference kernel's winners kept (2,000 pairs), the hard assignment's
 sums of view 1, the round's new weights and the round's search index. With ``--seed`` also
 the training's CPU seconds (``refine_rounds = 0``, after the ordered start); ``--whole``:
-then the whole round as ``fit`` runs it, and its ratio to the training in the same process.
-Writes ``benchmarks/results/refine-profile.json``.
+then the whole round as ``fit`` runs it, and its ratio to the training in the same process;
+beside them the machine's triad bandwidth (one thread, ``bench_bandwidth.py``'s), measured at
+the end of the run. Writes ``benchmarks/results/refine-profile.json``.
 """
 
 from __future__ import annotations
@@ -32,6 +33,7 @@ from typing import Any
 
 import numpy as np
 
+import _common
 import sigmapi
 from sigmapi import SigmaPiSOM
 from sigmapi._refine import GROUP
@@ -148,6 +150,8 @@ def main() -> None:
             result["refinement_over_training"] = round(
                 result["whole_round"]["cpu_s"] / result["training_cpu_s"], 3
             )
+    triad = _common.run_child(ROOT / "bench_bandwidth.py", ["triad", "256"])
+    result["triad_one_thread_gb_s"] = round(float(triad["one_thread_gb_s"]), 2)
     result["load_avg_1min_end"] = round(os.getloadavg()[0], 2)
     out = Path(args.out)
     tmp = out.with_name(out.name + ".tmp")  # written whole, then renamed over the result
