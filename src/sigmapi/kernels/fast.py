@@ -867,8 +867,9 @@ def _refine_winners(
 ) -> NDArray[np.int64]:
     """The winners of :func:`winners_of` (at sigma 0), by the round's bounds
     (:mod:`sigmapi.kernels._refining`) where the rule allows: the index is made from the
-    round's fixed weights on first use and kept in ``acc``. The exact mode (``tol = 0``)
-    and the smoothing rules search in full."""
+    round's fixed weights on first use and kept in ``acc`` (it holds a transposed copy of the
+    weights, so a round holds the weights twice, beside its float64 sums). The exact mode
+    (``tol = 0``) and the smoothing rules search in full."""
     _, code = _rule_code(winner_rule)
     if state.tol == 0 or code not in _refining.RULES:
         return winners_of(state, x0, y0, map_shape, winner_rule, 0.0, soft_cut, map_periodic)
