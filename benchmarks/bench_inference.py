@@ -20,7 +20,10 @@ changes) measured the same way.
 - ``evaluate_s``: ``sigmapi.evaluate(model)`` (10,000 test pairs and as many calibration pairs,
   their sets precomputed);
 - ``winners_checksum``: the sum of the winners of the first 1,000 test pairs (equal for every
-  code base that computes the same winners).
+  code base that computes the same winners);
+- floors, measured in the same process on the fast kernel (:func:`floors`): a loop that only
+  reads a pair's weight rows, the triad bandwidth (one thread) and the bytes a call needs over
+  it; ``fast_over_floors`` holds each call's median ratio to them, beside the triad's GB/s.
 """
 
 from __future__ import annotations
@@ -86,6 +89,8 @@ def child(model_path: str, backend: str, calls: int, batches: int, with_eval: bo
         _median_us(lambda i: model.winner(x[batch(i)], y[batch(i)]), batches, 1) / 1e3
     )
     out["winners_checksum"] = int(np.sum(model.winner(x[:1000], y[:1000])))
+    if backend == "fast":
+        out.update(floors(model, x, y, calls, pair))
     if with_eval:
         sigmapi.evaluate(model, test=test, calibration=cal)
         times = []
@@ -94,6 +99,71 @@ def child(model_path: str, backend: str, calls: int, batches: int, with_eval: bo
             sigmapi.evaluate(model, test=test, calibration=cal)
             times.append(time.perf_counter() - t0)
         out["evaluate_s"] = statistics.median(times)
+    return out
+
+
+def floors(model: Any, x: Any, y: Any, calls: int, pair: Callable[[int], Any]) -> dict:
+    """The floors of the fast kernel's calls on this machine, in this process.
+
+    ``read_one_random_us``: a compiled loop that only reads (sums) the weight rows of a pair's
+    kept input pairs, all units, prefetching 8 rows ahead as the kernel does, for the same pairs
+    as ``respond_one_random_us`` (the bytes a one-pair call must read, in its order, with
+    nothing else); ``bytes_one_mean``: those bytes;
+    ``triad_one_thread_gb_s``: a STREAM-like triad over 3 x 256 MiB (one thread);
+    ``bandwidth_one_us``: the bytes over the triad; ``bandwidth_1000_ms``: a batch's floor if
+    every weight row its pairs need were read once (the union of their kept rows) at the
+    triad's rate.
+    """
+    import numpy as np
+    from numba import njit
+
+    from sigmapi.kernels._rows import _pairs, prefetch_row
+
+    st = model._state
+    raw, tol = st.raw, st.tol
+
+    @njit(cache=False)
+    def read_rows(raw, xv, yv, tol, jb, pi, pv, acc):  # type: ignore[no-untyped-def]
+        n = _pairs(xv, yv, tol, jb, pi, pv)
+        for k in range(acc.shape[0]):
+            acc[k] = 0.0
+        for q in range(min(n, 8)):
+            prefetch_row(raw, pi[q])
+        for q in range(n):
+            if q + 8 < n:
+                prefetch_row(raw, pi[q + 8])  # as the kernel's calls prefetch
+            row = raw[pi[q]]
+            for k in range(acc.shape[0]):
+                acc[k] += row[k]
+        return n
+
+    @njit(cache=False)
+    def triad(a, b, c, s):  # type: ignore[no-untyped-def]
+        for i in range(a.shape[0]):
+            a[i] = b[i] + s * c[i]
+
+    jb, pi, pv = st.scratch()[:3]
+    acc = np.empty(raw.shape[1], dtype=raw.dtype)
+    row_bytes = raw.shape[1] * raw.itemsize
+    kept = [read_rows(raw, *(a[0] for a in pair(0)), tol, jb, pi, pv, acc)]
+    out: dict[str, Any] = {}
+    out["read_one_random_us"] = _median_us(
+        lambda i: kept.append(read_rows(raw, *(a[0] for a in pair(i)), tol, jb, pi, pv, acc)),
+        calls, 1,
+    )  # fmt: skip
+    out["bytes_one_mean"] = float(np.mean(kept[1:])) * row_bytes
+    n = 256 * 2**20 // 8
+    a, b, c = np.zeros(n), np.ones(n), np.full(n, 2.0)
+    triad(a, b, c, 3.0)
+    best = min(_median_us(lambda i: triad(a, b, c, 3.0), 1, 0) for _ in range(5))
+    gb_s = 24 * n / best / 1e3
+    out["triad_one_thread_gb_s"] = gb_s
+    out["bandwidth_one_us"] = out["bytes_one_mean"] / gb_s / 1e3
+    rows = set()
+    for i in range(1000):
+        m = _pairs(x[i], y[i], tol, jb, pi, pv)
+        rows.update(pi[:m].tolist())
+    out["bandwidth_1000_ms"] = len(rows) * row_bytes / gb_s / 1e6
     return out
 
 
@@ -122,10 +192,22 @@ def main() -> None:
             rounds[name].append(res)
             print(f"round {r} {name}: {json.dumps(res)}", flush=True)
 
-    keys = [k for k in rounds["fast"][0] if k.endswith(("_us", "_ms", "_s"))]
+    keys = [k for k in rounds["fast"][0] if k.endswith(("_us", "_ms", "_s", "_mean"))]
     medians = {
         name: {k: statistics.median(r[k] for r in runs if k in r) for k in keys if k in runs[0]}
         for name, runs in rounds.items()
+    }
+    floor_pairs = {
+        "respond_one_random_us": ("read_one_random_us", "bandwidth_one_us"),
+        "winner_one_random_us": ("read_one_random_us", "bandwidth_one_us"),
+        "respond_1000_ms": (None, "bandwidth_1000_ms"),
+        "winner_1000_ms": (None, "bandwidth_1000_ms"),
+    }
+    over_floor = {
+        f"{call}_over_{floor}": statistics.median(r[call] / r[floor] for r in rounds["fast"])
+        for call, pair_floors in floor_pairs.items()
+        for floor in pair_floors
+        if floor is not None
     }
     ratios = {
         f"{other}_over_fast": {
@@ -142,6 +224,8 @@ def main() -> None:
         "machine": machine(),
         "medians": medians,
         "ratios": ratios,
+        "fast_over_floors": over_floor,
+        "triad_one_thread_gb_s": medians["fast"]["triad_one_thread_gb_s"],
         "winners_checksums": {
             name: sorted({r["winners_checksum"] for r in runs}) for name, runs in rounds.items()
         },

@@ -6,12 +6,16 @@ Usage (from the repository root)::
     python benchmarks/bench_refine_profile.py --model m.npz         # a trained paper-2d map
 
 Measures, in CPU seconds of this process (all threads) per 1,000 refinement pairs, on the
-fast kernel: drawing the pairs (the task's sampler), the winner search of view 0 (blocks of
-1,000 pairs as the refinement runs it, and all blocks in one call, sorted together by the
-codes' peaks), the accumulation of view 1's outer products and the round's division; and the
-winner search at larger ``kernel_tol`` with the share of the reference kernel's winners it
-keeps. With ``--seed`` also the training's CPU seconds (``refine_rounds = 0``). Writes
-``benchmarks/results/refine-profile.json``.
+fast kernel: drawing the pairs (the task's sampler), the refinement's winner search of view 0
+(``sigmapi.kernels._refining``: bounds per tile, then exact sums for the units that can win;
+``GROUP`` blocks of 1,000 pairs per call, as the refinement calls the kernel) beside the full
+search it replaces (``fast.winners_of``), whether the two find the same winners on every timed
+pair, the share of the reference kernel's winners kept (2,000 pairs), the hard assignment's
+sums of view 1, the round's new weights and the round's search index. With ``--seed`` also
+the training's CPU seconds (``refine_rounds = 0``, after the ordered start); ``--whole``:
+then the whole round as ``fit`` runs it, and its ratio to the training in the same process;
+beside them the machine's triad bandwidth (one thread, ``bench_bandwidth.py``'s), measured at
+the end of the run. Writes ``benchmarks/results/refine-profile.json``.
 """
 
 from __future__ import annotations
@@ -24,14 +28,16 @@ import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
 
+import _common
 import sigmapi
 from sigmapi import SigmaPiSOM
-from sigmapi.kernels import fast, reference
-from sigmapi.rules.refinement import assignment
+from sigmapi._refine import GROUP
+from sigmapi.kernels import _refining, fast, reference
 
 ROOT = Path(__file__).resolve().parent
 
@@ -50,51 +56,69 @@ def profile(model: SigmaPiSOM, blocks: int) -> dict[str, Any]:
     n = 1000
     t_sample, batches = cpu(lambda: [model.sampler.sample(n, model._seq(4, 0, b))
                                      for b in range(blocks + 1)])  # fmt: skip
-    warm = batches.pop(0)  # compiles what the timed calls use
-    fast.winners_of(st, warm.x0[:32], warm.y0[:32], shape, rule, 0.0, cut)
-
-    def search(s: Any) -> list[np.ndarray]:
-        return [fast.winners_of(s, b.x0, b.y0, shape, rule, 0.0, cut) for b in batches]
-
-    t_win, winners = cpu(lambda: search(st))
-    x0 = np.concatenate([b.x0 for b in batches])
-    y0 = np.concatenate([b.y0 for b in batches])
-    t_group, grouped = cpu(lambda: fast.winners_of(st, x0, y0, shape, rule, 0.0, cut))
-    assert np.array_equal(grouped, np.concatenate(winners))
+    warm = batches.pop(0)  # compiles (or loads) what the timed calls use
     acc = fast.refine_start(st)
-    jb, pi, pv = st.scratch()[:3]
+    acc.code_shapes = (model.x_shape, model.y_shape)
+    t_index, _ = cpu(lambda: fast._refine_winners(st, acc, warm.x0[:32], warm.y0[:32], shape,
+                                                  rule, cut, False))  # fmt: skip
+    fast.winners_of(st, warm.x0[:32], warm.y0[:32], shape, rule, 0.0, cut)
+    _refining.hard_sums(np.zeros_like(acc.sums), np.zeros_like(acc.mass),
+                        np.zeros(4, dtype=np.int64), warm.x1[:4], warm.y1[:4], st.tol)  # fmt: skip
+
+    # as the refinement calls the kernel: GROUP blocks at a time
+    batches = [
+        SimpleNamespace(**{f: np.concatenate([getattr(b, f) for b in batches[i : i + GROUP]])
+                           for f in ("x0", "y0", "x1", "y1")})
+        for i in range(0, len(batches), GROUP)
+    ]  # fmt: skip
+
+    def search() -> list[np.ndarray]:
+        return [fast._refine_winners(st, acc, b.x0, b.y0, shape, rule, cut, False)
+                for b in batches]  # fmt: skip
+
+    def full() -> list[np.ndarray]:
+        return [fast.winners_of(st, b.x0, b.y0, shape, rule, 0.0, cut) for b in batches]
+
+    t_win, winners = cpu(search)
+    t_full, every = cpu(full)
+    same = all(np.array_equal(a, b) for a, b in zip(winners, every, strict=True))
 
     def sums() -> None:
         for b, k in zip(batches, winners, strict=True):
-            a = np.ascontiguousarray(assignment(k, shape, 0.0, False))
-            fast._refine_sums(acc.sums, acc.mass, a, np.ascontiguousarray(b.x1),
-                              np.ascontiguousarray(b.y1), st.tol, jb, pi, pv)  # fmt: skip
+            _refining.hard_sums(acc.sums, acc.mass, k, np.ascontiguousarray(b.x1),
+                                np.ascontiguousarray(b.y1), st.tol)  # fmt: skip
 
     t_sums, _ = cpu(sums)
     t_finish, _ = cpu(lambda: fast.refine_finish(st, acc))
     dense = fast.export(st)
-    check = batches[:2]
+    check = [SimpleNamespace(x0=batches[0].x0[:2000], y0=batches[0].y0[:2000])]
     ref = np.concatenate([reference.winners_of(dense, b.x0, b.y0, shape, rule, 0.0, cut)
                           for b in check])  # fmt: skip
-    tols = {}
-    for tol in (st.tol, 3e-4, 1e-3):
-        s = fast.prepare(dense, tol=tol)
-        fast.winners_of(s, warm.x0[:32], warm.y0[:32], shape, rule, 0.0, cut)
-        t, got = cpu(lambda s=s: search(s))
-        kept = float(np.mean(np.concatenate(got[: len(check)]) == ref))
-        tols[f"{tol:g}"] = {"winners_cpu_s_per_1000": t / blocks, "reference_winners_kept": kept}
     per = {
         "sample": t_sample / (blocks + 1),
         "winners": t_win / blocks,
-        "winners_all_blocks_in_one_call": t_group / blocks,
+        "winners_full_search": t_full / blocks,
         "sums": t_sums / blocks,
         "finish_per_round": t_finish,
+        "search_index_per_round": t_index,
     }
     return {
         "cpu_s_per_1000_pairs": per,
-        "kernel_tol": tols,
+        "winners_equal_to_full_search": same,
+        "winners_compared": int(blocks * n),
+        "reference_winners_kept": float(np.mean(winners[0][:2000] == ref)),
         "reference_check_pairs": int(sum(len(b.x0) for b in check)),
     }
+
+
+def whole(model: SigmaPiSOM) -> dict[str, Any]:
+    """CPU and wall seconds of the configured refinement on ``model`` (one round of the
+    preset's pairs), as ``fit`` runs it."""
+    model.config = model.config.replace(refine_rounds=max(model.config.refine_rounds, 1))
+    c, w = time.process_time(), time.perf_counter()
+    model.refine()
+    return {"cpu_s": time.process_time() - c, "wall_s": time.perf_counter() - w,
+            "pairs": model.refined_}  # fmt: skip
 
 
 def main() -> None:
@@ -102,6 +126,7 @@ def main() -> None:
     parser.add_argument("--model", help="a trained paper-2d model file (else --seed trains one)")
     parser.add_argument("--seed", type=int, default=509)
     parser.add_argument("--blocks", type=int, default=20, help="blocks of 1,000 pairs timed")
+    parser.add_argument("--whole", action="store_true", help="also run the whole round")
     parser.add_argument("--out", default=str(ROOT / "results" / "refine-profile.json"))
     args = parser.parse_args()
     result: dict[str, Any] = {
@@ -113,10 +138,20 @@ def main() -> None:
         model = sigmapi.load(args.model)
     else:
         cfg = sigmapi.load_preset("paper-2d").replace(seed=args.seed, refine_rounds=0)
-        t, model = cpu(lambda: SigmaPiSOM(cfg).fit())
+        model = SigmaPiSOM(cfg)
+        model.partial_fit(iterations=0)  # the ordered start (and the kernel's numba loads)
+        t, _ = cpu(lambda: model.partial_fit(iterations=cfg.iterations))
         result["training_cpu_s"] = round(t, 2)
     result["iterations"] = model.t_
     result.update(profile(model, args.blocks))
+    if args.whole:
+        result["whole_round"] = whole(model)
+        if "training_cpu_s" in result:
+            result["refinement_over_training"] = round(
+                result["whole_round"]["cpu_s"] / result["training_cpu_s"], 3
+            )
+    triad = _common.run_child(ROOT / "bench_bandwidth.py", ["triad", "256"])
+    result["triad_one_thread_gb_s"] = round(float(triad["one_thread_gb_s"]), 2)
     result["load_avg_1min_end"] = round(os.getloadavg()[0], 2)
     out = Path(args.out)
     tmp = out.with_name(out.name + ".tmp")  # written whole, then renamed over the result

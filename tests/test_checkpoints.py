@@ -38,6 +38,7 @@ def _train(out, *extra):
         return subprocess.Popen([*cmd, *extra], stdout=log, stderr=log)
 
 
+@pytest.mark.slow  # 80-160 s of killed and resumed runs: .ci/run's second step runs it
 @pytest.mark.skipif(not hasattr(signal, "SIGKILL"), reason="needs POSIX signals")
 def test_sigkill_at_random_moments_then_resume_equals_uninterrupted(tmp_path):
     out = tmp_path / "m.npz"

@@ -33,11 +33,11 @@ def test_readme_is_a_front_page():
     assert "python -m sphinx -W --keep-going -b html docs docs/_build/html" in README
 
 
-def test_ci_runs_exactly_the_readme_test_command():
+def test_ci_runs_the_readme_test_command_then_the_slow_tests():
     command = "pip install -e '.[test]' && python -m pytest"
-    assert command in README
+    assert command in README and "python -m pytest -m slow" in README
     ci = [ln for ln in (ROOT / ".ci" / "run").read_text("utf-8").splitlines() if ln.strip()]
-    assert ci[-1].strip() == command
+    assert [ln.strip() for ln in ci[-2:]] == [command, "python -m pytest -m slow"]
 
 
 def test_readme_headline_table_is_the_rendered_one():
@@ -73,6 +73,7 @@ def test_result_values_follow_the_json(tmp_path, monkeypatch):
         sigmapi_results.TABLES["files"]()
 
 
+@pytest.mark.slow  # about 100 s: .ci/run's second step runs it
 def test_the_site_builds_with_warnings_as_errors(tmp_path):
     out = tmp_path / "html"
     env = {**os.environ, "SIGMAPI_DOCS_GALLERY": "False", "MPLBACKEND": "Agg"}

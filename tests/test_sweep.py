@@ -51,6 +51,7 @@ def test_spec_lists_the_cross_product_and_checks_every_point():
         SweepSpec.from_toml(SPEC.replace("[grid]", "[grids]"))
 
 
+@pytest.mark.slow  # starts a Dask cluster: 20-30 s on a loaded machine
 def test_local_pool_and_dask_cluster_give_the_same_table(tmp_path):
     pytest.importorskip("distributed")
     spec = SweepSpec.from_toml(SPEC)
@@ -102,6 +103,7 @@ def test_bad_spec_is_one_line_and_exit_2(tmp_path):
     assert r.stderr.count("\n") == 1 and "unknown preset 'tiny-9d'" in r.stderr
 
 
+@pytest.mark.slow  # starts a Dask cluster: 20-30 s on a loaded machine
 def test_sweep_runs_on_an_existing_dask_cluster_by_address(tmp_path):
     distributed = pytest.importorskip("distributed")
     spec_file = tmp_path / "spec.toml"

@@ -528,6 +528,40 @@ def _inference() -> Table:
                  f"Model: {data['model']['note']}.", _command(data))  # fmt: skip
 
 
+FLOORS = {
+    "respond_one_random_us": (
+        "`respond`, one pair",
+        "us",
+        "read_one_random_us",
+        "bandwidth_one_us",
+    ),
+    "winner_one_random_us": ("`winner`, one pair", "us", "read_one_random_us", "bandwidth_one_us"),
+    "respond_1000_ms": ("`respond`, 1,000 pairs", "ms", None, "bandwidth_1000_ms"),
+    "winner_1000_ms": ("`winner`, 1,000 pairs", "ms", None, "bandwidth_1000_ms"),
+}
+
+
+@table("inference-floors")
+def _inference_floors() -> Table:
+    data = load("inference-floors")
+    med = data["medians"]["fast"]
+    rows = []
+    for key, (label, unit, read, band) in FLOORS.items():
+        cells = [f"{num(med[key], ',.1f')} {unit}"]
+        cells.append(f"{num(med[read], ',.1f')} {unit}" if read else "")
+        cells.append(f"{num(med[band], ',.1f')} {unit}")
+        cells.append(num(data["fast_over_floors"][f"{key}_over_{band}"], ".2f"))
+        rows.append([label, *cells])
+    note = (
+        f"The fast kernel on a {data['model']['note']}; floors measured in the same processes: "
+        f"a triad of {num(data['triad_one_thread_gb_s'], '.1f')} GB/s (one thread, median), "
+        f"{num(med['bytes_one_mean'] / 1e6, '.2f')} MB of weight rows per pair."
+    )
+    return Table(["call", "measured", "reading its rows only", "its bytes at the triad's rate",
+                  "measured / bytes at the triad"], rows, [_rel("inference-floors")], note,
+                 _command(data))  # fmt: skip
+
+
 @table("files")
 def _files() -> Table:
     data = load("files")

@@ -33,6 +33,11 @@ __all__ = ["RefineMixin"]
 BLOCK = 1000
 """Pairs per block of a refinement round (one random child stream per block)."""
 
+GROUP = 10
+"""Blocks per call of the kernel (at most ``GROUP * BLOCK`` pairs): the fast kernel sorts a
+call's pairs by the units they need, so larger calls read the same weights and sums more
+often from cache (the sums do not depend on how the stream is cut)."""
+
 
 class RefineMixin:
     """``refine`` and its progress, for a model with a kernel, random streams and a lock."""
@@ -148,16 +153,20 @@ class RefineMixin:
             if self._refine_acc is None or self._refine_acc[0] != r:
                 # a round's winners use the weights of its start: replay its pairs so far
                 self._refine_acc = (r, kernel.refine_start(self._state))
+                self._refine_acc[1].code_shapes = (self.x_shape, self.y_shape)
             acc = self._refine_acc[1]
             while acc.pairs < per:
                 lo = acc.pairs
                 if data is None:
-                    b, off = divmod(lo, BLOCK)
-                    stop = min(BLOCK, per - b * BLOCK)
-                    batch = self.sampler.sample(BLOCK, self._seq(4, r, b))
-                    views = tuple(v[off:stop] for v in (batch.x0, batch.y0, batch.x1, batch.y1))
+                    b = lo // BLOCK
+                    last = min(b + GROUP, -(-per // BLOCK))  # blocks b .. last - 1
+                    hi = min(per, last * BLOCK)
+                    views = self._draw(r, b, last, lo - b * BLOCK, hi - b * BLOCK)
+                    ends = [min(per, (i + 1) * BLOCK) for i in range(b, last)]
                 else:
-                    views = tuple(v[lo : lo + BLOCK] for v in data)
+                    hi = min(per, lo + GROUP * BLOCK)
+                    views = (data[0][lo:hi], data[1][lo:hi], data[2][lo:hi], data[3][lo:hi])
+                    ends = [*range(lo + BLOCK, hi, BLOCK), hi]
                 x0, y0, x1, y1 = views
                 if c.same_view:
                     x1, y1 = x0, y0
@@ -166,14 +175,35 @@ class RefineMixin:
                     winner_rule=rule, soft_cut=c.soft_cut, sigma=c.refine_sigma,
                     map_periodic=c.map_periodic,
                 )  # fmt: skip
+                for end in ends[:-1]:  # the round's weights stay those of its start until its end
+                    self._block_done(r * per + end, done < end, callback)
                 if acc.pairs >= per:
                     self._state = kernel.refine_finish(self._state, acc)
                     self._weights_cache = None
                     self._refine_acc = None
-                if lo + len(x0) > done:
-                    self._refined = r * per + lo + len(x0)
-                    if callback is not None:
-                        callback(self)
+                self._block_done(r * per + hi, done < hi, callback)
                 if self._refine_acc is None:
                     break
         return self
+
+    def _block_done(self, refined: int, new: bool, callback: Callable[[Any], None] | None) -> None:
+        """A block of pairs is in the sums: if it was not before (``new``; a round replayed
+        after loading repeats its first blocks), count it and call ``callback``. A model saved
+        then replays the round's pairs so far, whatever the kernel already added."""
+        if new:
+            self._refined = refined
+            if callback is not None:
+                callback(self)
+
+    def _draw(self, r: int, first: int, last: int, lo: int, hi: int) -> CodeViews:
+        """Pairs ``lo .. hi - 1`` of blocks ``first .. last - 1`` of round ``r`` (counted from
+        the first block's start), each block from its own stream, filled in place one block
+        at a time (so that a group's codes are held once)."""
+        n = (last - first) * BLOCK
+        out = [np.empty((n, int(np.prod(s)))) for s in (self.x_shape, self.y_shape) * 2]
+        for i in range(first, last):
+            d = self.sampler.sample(BLOCK, self._seq(4, r, i))
+            at = slice((i - first) * BLOCK, (i - first + 1) * BLOCK)
+            for dest, v in zip(out, (d.x0, d.y0, d.x1, d.y1), strict=True):
+                dest[at] = v
+        return out[0][lo:hi], out[1][lo:hi], out[2][lo:hi], out[3][lo:hi]

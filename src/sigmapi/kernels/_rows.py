@@ -124,12 +124,14 @@ def _pairs(x, y, tol, jbuf, pidx, pval):
             continue
         base = i * ny
         for q in range(nj):
+            # written without a branch (a pair is stored, and kept by counting it): whether
+            # a pair passes the cut is hard to predict, and mispredictions cost more than
+            # the stores; pidx and pval hold n_x n_y entries, so the store at n fits
             j = jbuf[q]
             v = xi * y[j]
-            if abs(v) > thr:
-                pidx[n] = base + j
-                pval[n] = v
-                n += 1
+            pidx[n] = base + j
+            pval[n] = v
+            n += abs(v) > thr
     return n
 
 

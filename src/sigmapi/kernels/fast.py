@@ -55,10 +55,10 @@ from numpy.typing import NDArray
 
 from sigmapi import _validate
 from sigmapi.errors import ConfigError
-from sigmapi.kernels import _rows, columns
+from sigmapi.kernels import _refining, _rows, columns
 from sigmapi.kernels._rows import _pairs, _winner, activate, axis_distance, gaussian, prefetch
 from sigmapi.kernels.base import FileArrays, rule_scores
-from sigmapi.rules import BATCH_MEAN, WinnerRule, winner_rule
+from sigmapi.rules import WinnerRule, winner_rule
 from sigmapi.rules import trace as trace_rule
 from sigmapi.rules.neighbourhood import neighbourhood
 from sigmapi.rules.refinement import Sums, assignment
@@ -855,6 +855,36 @@ def refine_start(state: FastState) -> Sums:
     return Sums(np.zeros((k, nx * ny)), np.zeros(k))
 
 
+def _refine_winners(
+    state: FastState,
+    acc: Sums,
+    x0: NDArray[np.floating],
+    y0: NDArray[np.floating],
+    map_shape: tuple[int, ...],
+    winner_rule: WinnerRule | str,
+    soft_cut: int,
+    map_periodic: bool,
+) -> NDArray[np.int64]:
+    """The winners of :func:`winners_of` (at sigma 0), by the round's bounds
+    (:mod:`sigmapi.kernels._refining`) where the rule allows: the index is made from the
+    round's fixed weights on first use and kept in ``acc`` (it holds a transposed copy of the
+    weights, so a round holds the weights twice, beside its float64 sums). The exact mode
+    (``tol = 0``) and the smoothing rules search in full."""
+    _, code = _rule_code(winner_rule)
+    if state.tol == 0 or code not in _refining.RULES:
+        return winners_of(state, x0, y0, map_shape, winner_rule, 0.0, soft_cut, map_periodic)
+    xa, ya = _rows_of(state, x0, y0)
+    _grid(tuple(map_shape), state.shape[0])  # checks the map holds the state's units
+    state.refresh_norms()
+    index = acc.index
+    if not (isinstance(index, _refining.SearchIndex) and index.fits(state.raw, state.scale)):
+        _, nx, ny = state.shape
+        index = acc.index = _refining.build(
+            state.raw, state.scale, acc.code_shapes or ((nx,), (ny,))
+        )
+    return _refining.search(index, state.sqnorm, xa, ya, state.tol, code)
+
+
 def refine_block(
     state: FastState,
     acc: Sums,
@@ -874,19 +904,22 @@ def refine_block(
     then the sparse outer products of view 1 (pairs and units below ``tol`` of their peak
     skipped) added one pair after another, on one thread (the same sums for any blocks)."""
     _, nx, ny = state.shape
-    k = winners_of(state, x0, y0, map_shape, winner_rule, 0.0, soft_cut, map_periodic)
-    a = np.ascontiguousarray(assignment(k, map_shape, float(sigma), map_periodic))
+    k = _refine_winners(state, acc, x0, y0, map_shape, winner_rule, soft_cut, map_periodic)
     x1a, y1a = _codes(x1, nx, "x1"), _codes(y1, ny, "y1")
-    jb, pi, pv = state.scratch()[:3]
-    driver: Any = _refine_sums  # a numba dispatcher
-    driver(acc.sums, acc.mass, a, x1a, y1a, state.tol, jb, pi, pv)
+    if sigma == 0:
+        _refining.hard_sums(acc.sums, acc.mass, k, x1a, y1a, state.tol)
+    else:
+        a = np.ascontiguousarray(assignment(k, map_shape, float(sigma), map_periodic))
+        jb, pi, pv = state.scratch()[:3]
+        driver: Any = _refine_sums  # a numba dispatcher
+        driver(acc.sums, acc.mass, a, x1a, y1a, state.tol, jb, pi, pv)
     acc.pairs += int(x1a.shape[0])
     return k
 
 
 def refine_finish(state: FastState, acc: Sums) -> FastState:
-    """The state of the new weights (:meth:`sigmapi.rules.BatchMean.finish` on the dense
-    sums), stored as :func:`prepare` stores weights."""
-    k, nx, ny = state.shape
-    dense = Sums(acc.sums.reshape(k, nx, ny), acc.mass, acc.pairs)
-    return prepare(BATCH_MEAN.finish(export(state), dense), tol=state.tol)
+    """The state of the new weights (:meth:`sigmapi.rules.BatchMean.finish`: ``sums /
+    mass`` per unit that won, the weights kept elsewhere), stored as :func:`prepare` stores
+    weights (scales 1), computed in the kernel's layout."""
+    raw = _refining.finish(state.raw, state.scale, acc.sums, acc.mass)
+    return FastState(raw, np.ones(state.shape[0]), columns.sqnorms(raw), state.tol, state.shape)

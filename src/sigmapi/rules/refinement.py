@@ -24,6 +24,7 @@ the sparse pairs of ``kernel_tol``).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -36,11 +37,17 @@ __all__ = ["BATCH_MEAN", "REFINEMENTS", "BatchMean", "Sums", "assignment"]
 @dataclass
 class Sums:
     """Accumulators of one round: ``sums`` (a kernel's layout; the reference's
-    ``(K, n_x, n_y)``) and ``mass`` ``(K,)``, float64; ``pairs``: how many pairs they hold."""
+    ``(K, n_x, n_y)``) and ``mass`` ``(K,)``, float64; ``pairs``: how many pairs they hold.
+
+    ``code_shapes``: the grids of the codes ``(x_shape, y_shape)`` if known (a kernel may use
+    their geometry to search faster; None: each code a line); ``index``: what a kernel
+    prepared from the round's fixed weights for its searches (None until it does)."""
 
     sums: NDArray[np.float64]
     mass: NDArray[np.float64]
     pairs: int = 0
+    code_shapes: tuple[tuple[int, ...], tuple[int, ...]] | None = None
+    index: Any = None
 
 
 def assignment(
