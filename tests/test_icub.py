@@ -203,7 +203,7 @@ def test_a_tiny_run_writes_every_key(rendering, tmp_path):
     from sigmapi.experiments.icub.config import ICubConfig
     from sigmapi.experiments.icub.run import ICUB
 
-    cfg = ICubConfig(map_pairs=300, map_iterations=600, map_shape=(4, 4), grid=6,
+    cfg = ICubConfig(train_pairs=300, iterations=600, map_shape=(4, 4), grid=6,
                      eval_pairs=100, frame_scenes=10, babbles=60, epochs=2, reaches=3)  # fmt: skip
     res = ICUB.run(cfg, seeds=[0])
     d = json.loads(write_result(res, tmp_path).read_text())

@@ -29,9 +29,9 @@ class ICubConfig:
     """Width of the codes' hills, grid units."""
     map_shape: tuple[int, ...] = (8, 8)
     """Grid of each Sigma-Pi map (map 1 and map 2)."""
-    map_pairs: int = 6000
+    train_pairs: int = 6000
     """View pairs per map (saccades of the eyes for map 1, turns of the head for map 2)."""
-    map_iterations: int = 40_000
+    iterations: int = 40_000
     """Learning iterations of each map."""
     moved_share: float = 0.1
     """Share of the view pairs in which the ball moved between the two views."""
@@ -57,7 +57,7 @@ class ICubConfig:
     """Also write an animated GIF of the first seed's first learned reach to this file."""
 
     def __post_init__(self) -> None:
-        for name in ("grid", "map_pairs", "map_iterations", "eval_pairs", "frame_scenes",
+        for name in ("grid", "train_pairs", "iterations", "eval_pairs", "frame_scenes",
                      "babbles", "epochs", "reaches"):  # fmt: skip
             object.__setattr__(self, name, _validate.integer(name, getattr(self, name), 1))
         object.__setattr__(self, "map_shape", _validate.shape("map_shape", self.map_shape))
@@ -87,6 +87,6 @@ class ICubConfig:
                 for k, v in dataclasses.asdict(self).items()}  # fmt: skip
 
 
-QUICK = ICubConfig(map_pairs=2500, map_iterations=15_000, eval_pairs=500, frame_scenes=200,
+QUICK = ICubConfig(train_pairs=2500, iterations=15_000, eval_pairs=500, frame_scenes=200,
                    babbles=800, epochs=6, reaches=30)  # fmt: skip
 """``sigmapi icub --quick``: smaller maps' data, fewer babbles and reaches (minutes)."""

@@ -42,14 +42,16 @@ from sigmapi.experiments.icub.maps import (
 )
 from sigmapi.experiments.icub.reaching import babble, features, learn_reaching, reach_tests
 from sigmapi.experiments.icub.result import ICubResult
+from sigmapi.experiments.kit.seeds import SeedPlan
 from sigmapi.metrics import EVAL_SEED, z_decoder
 from sigmapi.progress import Progress
 
 __all__ = ["ICUB", "ICubExperiment", "check_frames"]
 
 
-def _child(seed: int, k: int) -> np.random.Generator:
-    return np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(k,)))
+PLAN = SeedPlan({"views": 0, "map": 1, "babbling": 2, "reaches": 3})
+"""The random streams of one seed (the seed as entropy: ``SeedSequence(seed, spawn_key=(k,))``);
+the maps are built from an int drawn from ``"map"``, so no stream meets a model's own keys."""
 
 
 def check_frames(scene: ICubScene, n: int, rng: np.random.Generator) -> dict[str, Any]:
@@ -90,22 +92,22 @@ def _run_seed(job: _Job) -> dict[str, Any]:
     cfg, seed = job.config, job.seed
     scene = ICubScene()
     t0 = time.process_time()
-    train = MapData.record(scene, cfg.map_pairs, _child(seed, 0), cfg.moved_share)
+    train = MapData.record(scene, cfg.train_pairs, PLAN.rng(seed, "views"), cfg.moved_share)
     chain = learn_chain(
         train, grid=cfg.grid, width=cfg.code_width, map_shape=cfg.map_shape,
-        iterations=cfg.map_iterations, seed=int(_child(seed, 1).integers(2**31)),
+        iterations=cfg.iterations, seed=int(PLAN.rng(seed, "map").integers(2**31)),
         eye_size=scene.eye_size, backend=cfg.backend, code=cfg.head_code,
     )  # fmt: skip
     out: dict[str, Any] = {"seed": seed, "maps": {}}
     for stage in (1, 2):
         m = score(chain, stage, job.cal, job.test)
         m["true_direction_map"] = true_direction_map(
-            train, job.cal, job.test, stage, cfg.map_shape, cfg.map_iterations, seed
+            train, job.cal, job.test, stage, cfg.map_shape, cfg.iterations, seed
         )
         m["supervised"] = supervised_fit(train, job.test, stage, scene.eye_size)
         out["maps"][f"map{stage}"] = m
     out["map_cpu_s"] = time.process_time() - t0
-    rng = _child(seed, 2)
+    rng = PLAN.rng(seed, "babbling")
     babbles, held_out = babble(scene, cfg.babbles, rng), babble(scene, 200, rng)
 
     def feats(method: str, v: Any) -> NDArray[np.float64]:
@@ -118,7 +120,7 @@ def _run_seed(job: _Job) -> dict[str, Any]:
         def film(i: int, method: str) -> int:
             return 8 if i == 0 and method == "learned" else 0
 
-    tests, frames = reach_tests(scene, layers, feats, cfg.reaches, _child(seed, 3), film)
+    tests, frames = reach_tests(scene, layers, feats, cfg.reaches, PLAN.rng(seed, "reaches"), film)
     out.update(curves=curves, ball=tests.ball, gaze=tests.gaze, success=tests.success,
                distance=tests.distance, cpu_s=time.process_time() - t0)  # fmt: skip
     if job.figures:
@@ -211,7 +213,7 @@ def _job_memory(config: ICubConfig) -> int:
     n = config.grid**2
     units = int(np.prod(config.map_shape))
     weights = units * n * (n + units) * 8 * 6
-    views = config.map_pairs * 4 * 2 * (2 * n) * 8
+    views = config.train_pairs * 4 * 2 * (2 * n) * 8
     return weights + views + 400 * 2**20
 
 
