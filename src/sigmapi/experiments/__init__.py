@@ -18,7 +18,10 @@
 - :mod:`~sigmapi.experiments.chain`: a chain of two maps (retina -> head -> body) against one;
 - :mod:`~sigmapi.experiments.compare`: the Sigma-Pi map beside the baselines;
 - :mod:`~sigmapi.experiments.stream`: maps learned from a stream of frames (the trace rule)
-  against explicit pairs (``sigmapi stream``).
+  against explicit pairs (``sigmapi stream``);
+- :mod:`~sigmapi.experiments.neurons`: dendritic, basis-function and spiking neurons against
+  the Sigma-Pi map (``sigmapi neurons``); :mod:`~sigmapi.experiments.physiology`: a model file
+  read as an electrophysiologist reads a brain area (``sigmapi physiology``).
 """
 
 from sigmapi.experiments.base import (
@@ -32,6 +35,8 @@ from sigmapi.experiments.base import (
 )
 from sigmapi.experiments.chain import run_chain
 from sigmapi.experiments.compare import CompareConfig, CompareResult, run_compare
+from sigmapi.experiments.neurons import NEURONS, NeuronsExperiment
+from sigmapi.experiments.physiology import PHYSIOLOGY, PhysiologyExperiment
 from sigmapi.experiments.reach import REACH, ReachExperiment
 from sigmapi.experiments.reproduce import REFERENCE, SECTIONS, paper_presets, reproduce
 from sigmapi.experiments.results import ReportContext, ReproduceOptions, ReproduceResult, Section
@@ -41,6 +46,8 @@ from sigmapi.experiments.stream import STREAM, StreamExperiment
 from sigmapi.experiments.sweep import SweepSpec, run_sweep
 
 __all__ = [
+    "NEURONS",
+    "PHYSIOLOGY",
     "REACH",
     "REFERENCE",
     "REGISTRY",
@@ -51,6 +58,8 @@ __all__ = [
     "CompareConfig",
     "CompareResult",
     "Experiment",
+    "NeuronsExperiment",
+    "PhysiologyExperiment",
     "ReachExperiment",
     "ReportContext",
     "ReproduceOptions",
