@@ -18,8 +18,8 @@ PACKAGE = SRC / "sigmapi"
 LAYERS: tuple[tuple[str, ...], ...] = (
     ("cli",),
     ("experiments",),
-    ("envs", "agents", "baselines", "viz"),
-    ("metrics", "checkpoints", "executor"),
+    ("envs", "agents", "baselines", "viz", "neurons"),
+    ("metrics", "checkpoints", "executor", "analysis"),
     ("circular",),
     ("som",),
     ("_grids", "_cost", "_params", "_persist", "_refine", "_stream"),

@@ -54,7 +54,17 @@ GAZES = (0.2, 0.35, 0.5, 0.65, 0.8)
 
 VALID_SHARE = 0.5
 """A receptive field counts at a gaze where the unit's best response there is at least this
-share of its best response at any gaze, and its peak is not at the retina's edge."""
+share of its best response at any gaze, and its peak is not near the retina's edge."""
+
+N_PROBE = 61
+"""Probe positions along the swept retinal axis."""
+
+COARSE = 15
+"""Probe positions along each other retinal axis (2-D maps)."""
+
+CENTRE_RADIUS = 0.1
+"""Receptive-field centres are measured within this distance of the peak (fraction of the
+retinal axis)."""
 
 
 class Recordable(Protocol):
@@ -81,10 +91,12 @@ def body_slope(model: Recordable) -> float:
     return float((hi - lo)[0] / (2 * h))
 
 
-def _retina(model: Recordable, n: int) -> Array:
-    """Probe positions on the retina ``(P, d)``: ``n`` per axis, C order."""
+def _retina(model: Recordable, axis: int, n: int) -> Array:
+    """Probe positions on the retina ``(P, d)``, C order: ``n`` along ``axis``, and
+    :data:`COARSE` along every other axis (where the field does not move)."""
     d = model.x_code.ndim
-    axes = np.meshgrid(*([np.linspace(0.0, 1.0, n)] * d), indexing="ij")
+    counts = [n if a == axis else COARSE for a in range(d)]
+    axes = np.meshgrid(*(np.linspace(0.0, 1.0, c) for c in counts), indexing="ij")
     return np.stack([a.ravel() for a in axes], axis=1)
 
 
@@ -92,12 +104,11 @@ def tuning_curves(
     model: Recordable, gazes: Sequence[float] = GAZES, axis: int = 0, n_probe: int | None = None
 ) -> tuple[Array, Array]:
     """Responses ``(G, P, K)`` to probes at ``P`` retinal positions ``(P, d)`` while the gaze
-    sits at each of ``gazes`` along ``axis`` (its other axes at 0.5); returns
-    ``(responses, positions)``."""
+    sits at each of ``gazes`` along ``axis`` (its other axes at 0.5); ``n_probe`` probes along
+    ``axis`` (default :data:`N_PROBE`); returns ``(responses, positions)``."""
     d = model.x_code.ndim
     _validate.integer("axis", axis, 0, d - 1, fix=f"an axis of the gaze grid (0..{d - 1})")
-    n = n_probe if n_probe is not None else (61 if d == 1 else 21)
-    probes = _retina(model, n)
+    probes = _retina(model, axis, n_probe if n_probe is not None else N_PROBE)
     out = []
     for g in gazes:
         gaze = np.full((1, d), 0.5)
@@ -107,16 +118,20 @@ def tuning_curves(
     return np.asarray(out), probes
 
 
-def _centres(resp: Array, probes: Array, n: int) -> tuple[Array, NDArray[np.bool_]]:
-    """Receptive-field centre of each unit at each gaze ``(G, K, d)`` (centre of mass of the
-    response above half its peak) and where it counts ``(G, K)`` (:data:`VALID_SHARE`)."""
-    g_, p_, k_ = resp.shape
+def _centres(resp: Array, probes: Array) -> tuple[Array, NDArray[np.bool_]]:
+    """Receptive-field centre of each unit at each gaze ``(G, K, d)``: the centre of mass of
+    the response above half its peak within :data:`CENTRE_RADIUS` of the peak (a second
+    field elsewhere, or a tail, does not pull it); and where it counts ``(G, K)``: the unit's
+    best response there at least :data:`VALID_SHARE` of its best at any gaze, and the peak
+    at least :data:`CENTRE_RADIUS` / 2 from the retina's edge."""
     peak = resp.max(axis=1)  # (G, K)
-    above = np.maximum(resp - 0.5 * peak[:, None, :], 0.0)
+    best = probes[np.argmax(resp, axis=1)]  # (G, K, d)
+    near = np.sum((probes[None, :, None, :] - best[:, None, :, :]) ** 2, axis=3) <= CENTRE_RADIUS**2
+    above = np.maximum(resp - 0.5 * peak[:, None, :], 0.0) * near
     total = np.maximum(above.sum(axis=1), 1e-300)
     centre = np.einsum("gpk,pd->gkd", above, probes) / total[:, :, None]
-    best = probes[np.argmax(resp, axis=1)]  # (G, K, d)
-    inside = np.all((best > 0.5 / n) & (best < 1.0 - 0.5 / n), axis=2)
+    margin = 0.5 * CENTRE_RADIUS
+    inside = np.all((best >= margin) & (best <= 1.0 - margin), axis=2)
     strong = peak >= VALID_SHARE * peak.max(axis=0, keepdims=True)
     return centre, inside & strong & (peak > 0)
 
@@ -133,8 +148,7 @@ def reference_frame_index(
     per_axis, valid = [], []
     for axis in range(d):
         resp, probes = tuning_curves(model, gazes, axis, n_probe)
-        n = int(round(probes.shape[0] ** (1.0 / d)))
-        centre, ok = _centres(resp, probes, n)
+        centre, ok = _centres(resp, probes)
         idx = np.full(resp.shape[2], np.nan)
         for k in range(resp.shape[2]):
             m = ok[:, k]
@@ -161,8 +175,7 @@ def gain_fields(
         resp, probes = tuning_curves(model, gazes, axis, n_probe)
         best = np.argmax(resp[mid], axis=0)  # (K,) probe index at the middle gaze
         fixed.append(resp[:, best, np.arange(resp.shape[2])])  # (G, K)
-        n = int(round(probes.shape[0] ** (1.0 / d)))
-        peaks.append(np.where(_centres(resp, probes, n)[1], resp.max(axis=1), np.nan))
+        peaks.append(np.where(_centres(resp, probes)[1], resp.max(axis=1), np.nan))
         gaze = np.full((g.size, d), 0.5)
         gaze[:, axis] = g
         rows.append(gaze)

@@ -88,7 +88,7 @@ class BasisFunctionMap(FirstOrderMap):
     @property
     def synapses(self) -> int:
         """Per map unit: ``M`` readout synapses plus its share of the hidden layer's ``2 M``."""
-        return int(round(self.n_hidden * (1.0 + 2.0 / self.n_units)))
+        return round(self.n_hidden * (1.0 + 2.0 / self.n_units))
 
     def start(self, a: Array, x1: Array, y1: Array, rng: np.random.Generator) -> None:
         """Each unit the neighbourhood mean of the hidden responses to the pairs placed near it."""

@@ -75,8 +75,9 @@ class DendriticMap(FirstOrderMap):
     >>> from sigmapi.config import load_preset
     >>> from sigmapi.neurons.training import TrainingConfig
     >>> cfg = load_preset("tiny-1d")
-    >>> m = DendriticMap(cfg, branches=3).fit(TrainingConfig(pairs=2000, refine_pairs=2000), seed=0)
-    >>> m.u_.shape == (m.n_units, 3, m.x_code.size), m.synapses == 3 * (m.x_code.size + m.y_code.size)
+    >>> short = TrainingConfig(pairs=2000, refine_pairs=2000)
+    >>> m = DendriticMap(cfg, branches=3).fit(short, seed=0)
+    >>> m.u_.shape == (m.n_units, 3, 9), m.synapses == 3 * (9 + 9)
     (True, True)
     """
 

@@ -139,7 +139,10 @@ def simulate_conjunction(
     w = (cfg.gain * w / max(float(w.max()), 1e-300)).T  # (n_x n_y, K)
     steps = _steps(cfg)
     dt_s = cfg.dt_ms / 1000.0
-    rx, ry = cfg.peak_rate * cfg.pool * np.maximum(x, 0.0), cfg.peak_rate * cfg.pool * np.maximum(y, 0.0)
+    rx, ry = (
+        cfg.peak_rate * cfg.pool * np.maximum(x, 0.0),
+        cfg.peak_rate * cfg.pool * np.maximum(y, 0.0),
+    )
     decay = np.exp(-cfg.dt_ms / cfg.tau_c_ms)
     ax, ay = np.zeros((b, nx, ny)), np.zeros((b, nx, ny))
     soma = _Soma(b, k, cfg, steps)

@@ -82,8 +82,12 @@ class TrainingConfig:
             for v in pair:
                 _validate.number(name, v, lo, lo_open=name == "eps", fix="a positive number")
         if self.batch * self.eps[0] > 1.0:
-            raise _validate.fail("batch * eps", "<= 1 (an update overshoots beyond it)",
-                                 self.batch * self.eps[0], "use a smaller batch or eps")  # fmt: skip
+            raise _validate.fail(
+                "batch * eps",
+                "<= 1 (an update overshoots beyond it)",
+                self.batch * self.eps[0],
+                "use a smaller batch or eps",
+            )
         _validate.number("hold", self.hold, 0.0, 1.0, hi_open=True, fix="e.g. 0.3")
         _validate.number("start_sigma", self.start_sigma, 1e-3, fix="e.g. 3.0")
         _validate.integer("refine_rounds", self.refine_rounds, 0, fix="e.g. 2")

@@ -4,12 +4,9 @@ from __future__ import annotations
 
 from typing import Any
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from matplotlib.figure import Figure  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.figure import Figure
 
 __all__ = ["neurons_figure", "physiology_figure"]
 
@@ -25,9 +22,9 @@ def neurons_figure(result: dict[str, Any]) -> Figure:
                label="within 0.02 of Sigma-Pi")  # fmt: skip
     dend = [m for m in rate if m["name"].startswith("dendritic")]
     xs = [m["synapses"] for m in dend]
-    ax.errorbar(xs, [m["view_consistency"] for m in dend],
-                yerr=[[m["view_consistency"] - m["view_consistency_worst"] for m in dend],
-                      [0.0] * len(dend)], marker="o", capsize=3, label="dendritic (median, worst)")  # fmt: skip
+    low = [m["view_consistency"] - m["view_consistency_worst"] for m in dend]
+    ax.errorbar(xs, [m["view_consistency"] for m in dend], yerr=[low, [0.0] * len(dend)],
+                marker="o", capsize=3, label="dendritic (median, worst)")  # fmt: skip
     for m in dend:
         ax.annotate(f"D={m['branches']}", (m["synapses"], m["view_consistency"]),
                     textcoords="offset points", xytext=(4, -12), fontsize=8)  # fmt: skip
@@ -85,8 +82,8 @@ def physiology_figure(result: dict[str, Any]) -> Figure:
     for key, label in (("trained", "trained map"), ("random_start", "random start")):
         vals = [v for v in result[key]["reference_frame_index"] if v is not None]
         med = result[key]["median_reference_frame_index"]
-        ax.hist(np.clip(vals, bins[0], bins[-1]), bins=bins, alpha=0.6,
-                label=f"{label} (median {med:.2f}, n={len(vals)})")  # fmt: skip
+        text = "no unit measured" if med is None else f"median {med:.2f}, n={len(vals)}"
+        ax.hist(np.clip(vals, bins[0], bins[-1]), bins=bins, alpha=0.6, label=f"{label} ({text})")
     ax.axvline(0.0, color="0.4", ls=":")
     ax.axvline(1.0, color="0.4", ls=":")
     ax.set_xlabel("reference-frame index (0 eye-centred, 1 body-centred)")
@@ -109,10 +106,14 @@ def physiology_figure(result: dict[str, Any]) -> Figure:
     ax = axes[2]
     for key, label in (("trained", "trained map"), ("random_start", "random start")):
         mod = [v for v in result[key]["peak_modulation"] if v is not None]
-        pairs = [(a, b) for a, b in zip(result[key]["gain_r2"], result[key]["gain_slope"],
-                                        strict=True) if a is not None and b is not None]
-        ax.scatter([a for a, _ in pairs], [b for _, b in pairs], s=10, alpha=0.6, label=f"{label}: peak modulation median "
-                   f"{np.median(mod) if mod else float('nan'):.2f}")  # fmt: skip
+        pairs = [
+            (a, b)
+            for a, b in zip(result[key]["gain_r2"], result[key]["gain_slope"], strict=True)
+            if a is not None and b is not None
+        ]
+        text = f"{np.median(mod):.2f}" if mod else "-"
+        ax.scatter([a for a, _ in pairs], [b for _, b in pairs], s=10, alpha=0.6,
+                   label=f"{label}: peak modulation median {text}")  # fmt: skip
     ax.set_xlabel("planar gain-field fit R^2 (response at fixed retinal position)")
     ax.set_ylabel("gain slope (|b| / mean response)")
     ax.legend(fontsize=8)

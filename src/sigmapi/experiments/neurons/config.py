@@ -31,14 +31,17 @@ class NeuronsConfig:
     """How many of the seeds also run the 2-D task (the first ones)."""
     pairs: int = 100_000
     """View pairs of the dendritic and basis-function maps' online phase."""
-    pairs_2d: int = 50_000
+    pairs_2d: int = 30_000
     """The same, 2-D."""
     windows_ms: tuple[int, ...] = field(default=(10, 20, 50, 100, 200, 500), metadata={"sep": ","})
     """Decision windows of the spiking networks (ms)."""
-    peak_rates: tuple[int, ...] = field(default=(25, 50, 100, 200), metadata={"sep": ","})
+    peak_rates: tuple[int, ...] = field(default=(50, 100, 200), metadata={"sep": ","})
     """Input peak rates of the spiking networks (Hz); 100 is the acceptance's."""
-    spike_test: int = 300
+    spike_test: int = 200
     """Test z's of the spiking networks (each shown as two views)."""
+    basis_stride_2d: int = 2
+    """The 2-D basis-function layer's stride (every 2nd retinal and gaze unit per axis: 8^4
+    hidden units instead of 15^4)."""
     spiking_branches: int = 10
     """The dendritic map (1-D, branches per unit) deployed in spiking neurons (0: none)."""
     n_test: int = 5000
@@ -59,6 +62,7 @@ class NeuronsConfig:
         _validate.integer("pairs", self.pairs, 0, fix="e.g. 100000")
         _validate.integer("pairs_2d", self.pairs_2d, 0, fix="e.g. 50000")
         _validate.integer("spike_test", self.spike_test, 10, fix="e.g. 300")
+        _validate.integer("basis_stride_2d", self.basis_stride_2d, 1, fix="e.g. 2")
         _validate.integer("spiking_branches", self.spiking_branches, 0, fix="0: none")
         _validate.integer("n_test", self.n_test, 100, fix="e.g. 5000")
         self.som_config  # noqa: B018 (a bad preset or override fails here)
@@ -78,7 +82,7 @@ class NeuronsConfig:
     def training(self, two_d: bool) -> TrainingConfig:
         """The schedule of the first-order maps."""
         if two_d:
-            return TrainingConfig(pairs=self.pairs_2d, refine_pairs=20_000)
+            return TrainingConfig(pairs=self.pairs_2d, refine_pairs=20_000, refine_rounds=1)
         return TrainingConfig(pairs=self.pairs)
 
     def spiking(self, peak_rate: float) -> SpikingConfig:

@@ -55,8 +55,8 @@ class NeuronsResult:
         """The result a :meth:`to_dict` wrote (e.g. read back from ``result.json``)."""
         st = dict(data["settings"])
         seeds = tuple(st.pop("seeds"))
-        config = NeuronsConfig(**{k: tuple(v) if isinstance(v, list) else v
-                                  for k, v in st.items()})  # fmt: skip
+        given: dict[str, Any] = {k: tuple(v) if isinstance(v, list) else v for k, v in st.items()}
+        config = NeuronsConfig(**given)
         runs = data["runs"]
         jobs = [{"maps": [r for r in runs["maps"] if (r["seed"], r["task"]) == key],
                  "spiking": [r for r in runs["spiking"] if (r["seed"], r["task"]) == key],
@@ -140,8 +140,10 @@ class NeuronsResult:
                      and c["branches"] and c["all_met"] and c["fewer_synapses"]]  # fmt: skip
             out[f"smallest_branches_fewer_synapses_{task}"] = min(cheap) if cheap else None
         for m in self.methods():
-            if m["kind"] == "spiking" and m["peak_rate"] == REFERENCE_RATE and (
-                m["window_ms"] <= MAX_WINDOW_MS
+            if (
+                m["kind"] == "spiking"
+                and m["peak_rate"] == REFERENCE_RATE
+                and (m["window_ms"] <= MAX_WINDOW_MS)
             ):
                 out["spiking"].append({
                     "name": m["name"], "window_ms": m["window_ms"],

@@ -123,9 +123,10 @@ def neurons_job(job: NeuronsJob) -> dict[str, Any]:
         maps.append((f"dendritic-D{d}", dm, {"synapses": dm.synapses, "branches": d,
                      "active_synapses": dm.active_synapses(), "start": start}))  # fmt: skip
     start = time.perf_counter()
-    bf = BasisFunctionMap(cfg).fit(training, seed=job.seed)
-    maps.append(("basis-function", bf, {"synapses": bf.synapses, "hidden": bf.n_hidden,
-                                        "start": start}))  # fmt: skip
+    bf = BasisFunctionMap(cfg, stride=c.basis_stride_2d if two_d else 1).fit(
+        training, seed=job.seed
+    )
+    maps.append(("basis-function", bf, {"synapses": bf.synapses, "start": start}))
     rows = []
     for name, model, extra in maps:
         begin = extra.pop("start")

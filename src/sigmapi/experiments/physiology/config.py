@@ -19,7 +19,7 @@ class PhysiologyConfig:
     gazes: tuple[float, ...] = field(default=GAZES, metadata={"sep": ","})
     """Gaze directions (fractions of the gaze axis) the units are recorded at."""
     n_probe: int = 0
-    """Probe positions per retinal axis (0: 61 in 1-D, 21 in 2-D)."""
+    """Probe positions along the swept retinal axis (0: 61; 15 along any other)."""
     tuning_units: int = 3
     """Units whose tuning curves the figure shows."""
 

@@ -20,7 +20,7 @@ BODY_CENTRED = 0.9
 
 @dataclass
 class PhysiologyResult:
-    """The recording of one model file (:func:`~sigmapi.experiments.physiology.run.record_model`)."""
+    """The recording of one model file (:func:`.run.record_model`)."""
 
     config: PhysiologyConfig
     data: dict[str, Any]
