@@ -125,7 +125,7 @@ def test_coincidence_units_need_both_inputs_and_the_map_picks_the_driven_unit():
 def test_dendritic_spiking_neurons_follow_the_rate_map():
     d = DendriticMap(TINY, branches=4).fit(SHORT, seed=0)
     b = d.sampler.sample(60, np.random.default_rng(3))
-    cfg = SpikingConfig(windows_ms=(200.0,), gain=0.15)
+    cfg = SpikingConfig(windows_ms=(200.0,))
     run = simulate_dendritic(d.u_, d.v_, d.gain, d.threshold, b.x0, b.y0, cfg,
                              np.random.default_rng(1))  # fmt: skip
     assert np.mean(run.winners[0] == d.winner(b.x0, b.y0)) > 0.7

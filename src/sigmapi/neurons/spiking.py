@@ -20,7 +20,7 @@ with ``D`` dendritic compartments and a spiking soma. Compartment ``d`` filters 
 input with time constant ``tau_s`` (weights ``u_kd``, ``v_kd``); its drive is the filtered
 input in units of the rate code (``u . x`` when the pools fire at their mean rates) less the
 branch threshold, and it passes ``sigmoid(g (drive - theta))`` to the soma as a current
-(a dendritic plateau, scaled by ``gain``). The somata are the same LIF neurons with the same
+(a dendritic plateau, scaled by ``plateau``). The somata are the same LIF neurons with the same
 lateral inhibition.
 
 The decision after a window of ``T`` ms is the map unit with the most spikes in it (ties: the
@@ -61,14 +61,17 @@ class SpikingConfig:
     """Dendritic compartments: synaptic time constant (ms)."""
     tau_m_ms: float = 10.0
     """Map somata: membrane time constant (ms)."""
-    gain: float = 0.05
-    """Map somata: the largest synaptic weight (conjunction) or the plateau current per ms
-    (dendritic), in units of the threshold."""
+    gain: float = 0.6
+    """Conjunction network: the largest synaptic weight onto a map soma, in units of its
+    threshold."""
+    plateau: float = 0.3
+    """Dendritic network: the current per ms a branch in full plateau drives into its soma,
+    in units of the threshold."""
     inhibition: float = 0.5
     """Lateral inhibition per map spike, in units of the threshold."""
 
     def __post_init__(self) -> None:
-        for name in ("peak_rate", "dt_ms", "tau_c_ms", "tau_s_ms", "tau_m_ms", "gain"):
+        for name in ("peak_rate", "dt_ms", "tau_c_ms", "tau_s_ms", "tau_m_ms", "gain", "plateau"):
             _validate.positive(name, getattr(self, name), fix="a positive number")
         _validate.integer("pool", self.pool, 1, fix="e.g. 10")
         _validate.number("inhibition", self.inhibition, 0.0, fix="e.g. 0.5")
@@ -196,7 +199,7 @@ def simulate_dendritic(
         current = current * decay + sx @ uf.T + sy @ vf.T
         z = np.clip(gain * (current * scale - bias - threshold), -60.0, 60.0)
         plateau = (1.0 / (1.0 + np.exp(-z))).reshape(b, k, d).sum(axis=2)
-        soma.step(t, cfg.gain * cfg.dt_ms * plateau)
+        soma.step(t, cfg.plateau * cfg.dt_ms * plateau)
         n_in += sx.sum(axis=1) + sy.sum(axis=1)
         if t in soma.at:
             ins[soma.at[t]] = n_in

@@ -11,7 +11,7 @@ import numpy as np
 from sigmapi.io import atomic_write_bytes
 
 from .config import NeuronsConfig
-from .run import METRICS
+from .run import METRICS, REFERENCE_RATE
 
 __all__ = ["FIGURE", "VC_MARGIN", "NeuronsResult"]
 
@@ -22,9 +22,6 @@ VC_MARGIN = 0.02
 
 MAX_WINDOW_MS = 200
 """Acceptance: the spiking network's windows up to this one count."""
-
-REFERENCE_RATE = 100
-"""Acceptance: the peak rate (Hz) of the spiking check."""
 
 _WORST_HIGH = ("z_error", "fold_score")
 

@@ -5,7 +5,8 @@ a dendritic map per branch count (:class:`~sigmapi.neurons.dendritic.DendriticMa
 basis-function map (:class:`~sigmapi.neurons.basis.BasisFunctionMap`), all on the same task
 and seed, scored by :func:`sigmapi.evaluate`; in 1-D also the physiology of each map
 (:func:`sigmapi.analysis.physiology.record`) and the spiking deployments
-(:mod:`sigmapi.neurons.spiking`) on ``spike_test`` test z's of the evaluation set.
+(:mod:`sigmapi.neurons.spiking`) on ``spike_test`` test z's of the evaluation set: the
+conjunction network at every peak rate, the dendritic one at 100 Hz.
 """
 
 from __future__ import annotations
@@ -31,6 +32,10 @@ __all__ = ["METRICS", "NeuronsJob", "neurons_job"]
 
 METRICS = ("view_consistency", "view_within_one", "z_error", "order_r2", "usage", "fold_score")
 """The scores of each rate map (:func:`sigmapi.evaluate`), besides ``folded``."""
+
+REFERENCE_RATE = 100
+"""The peak rate (Hz) the dendritic spiking network runs at (the conjunction network: every
+rate of the config)."""
 
 SPIKE_KEY = 11
 """Spike trains of seed s: ``SeedSequence(s, spawn_key=(SPIKE_KEY, rate))``."""
@@ -66,9 +71,9 @@ def _z_table(model: Any, n: int) -> np.ndarray:
 
 
 def _spiking_rows(
-    job: NeuronsJob, name: str, model: Any, simulate: Any, rate_winner: Any
+    job: NeuronsJob, name: str, model: Any, simulate: Any, rate_winner: Any, rates: Any
 ) -> list[dict[str, Any]]:
-    """One row per window and peak rate of a spiking deployment of ``model``."""
+    """One row per window and peak rate (of ``rates``) of a spiking deployment of ``model``."""
     c = job.config
     cal, test = evaluation_sets(model, c.n_test)
     n = min(c.spike_test, test.z.shape[0])
@@ -78,7 +83,7 @@ def _spiking_rows(
     wc = rate_winner(cal.x0, cal.y0)
     spacing = grid_spacing(model.x_shape, model.config.periodic)
     rows = []
-    for rate in c.peak_rates:
+    for rate in rates:
         rng = np.random.default_rng(np.random.SeedSequence(job.seed, spawn_key=(SPIKE_KEY, rate)))
         start = time.perf_counter()
         run: SpikingRun = simulate(x, y, c.spiking(rate), rng)
@@ -147,7 +152,7 @@ def neurons_job(job: NeuronsJob) -> dict[str, Any]:
         def conj(x: Any, y: Any, cfg_s: Any, rng: Any) -> SpikingRun:
             return simulate_conjunction(weights, x, y, cfg_s, rng)
 
-        spiking += _spiking_rows(job, "spiking-conjunction", sp, conj, sp.winner)
+        spiking += _spiking_rows(job, "spiking-conjunction", sp, conj, sp.winner, c.peak_rates)
         if c.spiking_branches:
             dm = dendritic.get(c.spiking_branches) or DendriticMap(cfg, c.spiking_branches).fit(
                 training, seed=job.seed)  # fmt: skip
@@ -155,7 +160,8 @@ def neurons_job(job: NeuronsJob) -> dict[str, Any]:
             def dend(x: Any, y: Any, cfg_s: Any, rng: Any) -> SpikingRun:
                 return simulate_dendritic(dm.u_, dm.v_, dm.gain, dm.threshold, x, y, cfg_s, rng)
 
-            dend_rows = _spiking_rows(job, "spiking-dendritic", dm, dend, dm.winner)
+            ref = REFERENCE_RATE if REFERENCE_RATE in c.peak_rates else c.peak_rates[0]
+            dend_rows = _spiking_rows(job, "spiking-dendritic", dm, dend, dm.winner, (ref,))
             for r in dend_rows:
                 r["branches"] = c.spiking_branches
             spiking += dend_rows
