@@ -32,7 +32,8 @@ def _neurons() -> Table:
             "-" if rfi is None else num(rfi, ".2f"),
         ])  # fmt: skip
     st = data["settings"]
-    note = (f"Seeds {seeds_label(st['seeds'])} (2-D: the first {st['seeds_2d']}); no setting was "
+    two_d = f"2-D: the first {st['seeds_2d']}" if st["preset_2d"] else "no 2-D task"
+    note = (f"Seeds {seeds_label(st['seeds'])} ({two_d}); no setting was "
             f"chosen on them (tuning seeds 0-2). Cells: median / worst seed. Gap: view "
             f"consistency minus the Sigma-Pi map's on the same seed (seeds within 0.02 and "
             f"ordered). Synapses per map unit (the basis-function map: its readout plus its "
