@@ -68,7 +68,7 @@ def neurons_figure(result: dict[str, Any]) -> Figure:
     ax.set_ylim(-0.5, n)
     ax.set_xlabel("retinal centre of a branch's synapses (grid units, axis 0)")
     ax.set_ylabel("gaze centre (grid units, axis 0)")
-    ax.set_title(f"branches of D={b['branches']} map (colour: unit; grey: constant z)")
+    ax.set_title(f"branches of the D={b['branches']} map (colour: unit)")
     fig.tight_layout()
     return fig
 

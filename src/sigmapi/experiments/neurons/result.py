@@ -26,6 +26,11 @@ MAX_WINDOW_MS = 200
 _WORST_HIGH = ("z_error", "fold_score")
 
 
+def _scalars(summary: dict[str, Any]) -> dict[str, Any]:
+    """A branch summary without its per-branch lists."""
+    return {k: v for k, v in summary.items() if not isinstance(v, list)}
+
+
 def _median_worst(rows: list[dict[str, Any]], keys: tuple[str, ...]) -> dict[str, Any]:
     out: dict[str, Any] = {}
     for k in keys:
@@ -152,13 +157,15 @@ class NeuronsResult:
 
     def to_dict(self) -> dict[str, Any]:
         """``"methods"``, ``"acceptance"``, ``"branches"`` (what the branches of one dendritic
-        map per seed and task learned), ``"settings"``, ``"runs"`` (every map's and spiking
-        network's row per seed) and ``"seconds"``."""
+        map per seed and task learned: branch by branch for the first, the summary for the
+        others), ``"settings"``, ``"runs"`` (every map's and spiking network's row per seed)
+        and ``"seconds"``."""
         c = self.config
         settings = {k: (list(v) if isinstance(v, tuple) else v) for k, v in vars(c).items()}
         settings["seeds"] = list(self.seeds)
         return {"methods": self.methods(), "acceptance": self.acceptance(),
-                "branches": [j["branches"] for j in self.jobs], "settings": settings,
+                "branches": [_scalars(j["branches"]) if i else j["branches"]
+                             for i, j in enumerate(self.jobs)], "settings": settings,
                 "runs": {"maps": self._rows("maps"), "spiking": self._rows("spiking")},
                 "seconds": self.seconds}  # fmt: skip
 
