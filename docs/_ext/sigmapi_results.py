@@ -903,3 +903,6 @@ def setup(app: Sphinx) -> dict[str, Any]:
     app.add_directive("results-table", ResultsTable)
     app.add_role("result", ResultRole())
     return {"version": "1", "parallel_read_safe": True, "parallel_write_safe": True}
+
+
+import sigmapi_results_neurons  # noqa: E402, F401  (its tables register themselves)

@@ -9,8 +9,9 @@
   and ``report_html``), :mod:`~sigmapi.experiments.sweep`, :mod:`~sigmapi.experiments.compare`,
   :mod:`~sigmapi.experiments.chain`, :mod:`~sigmapi.experiments.stream`,
   :mod:`~sigmapi.experiments.reach` (also ``section``, its part of the report),
-  :mod:`~sigmapi.experiments.robot` (also ``map``), :mod:`~sigmapi.experiments.reward` and
-  :mod:`~sigmapi.experiments.icub`.
+  :mod:`~sigmapi.experiments.robot` (also ``map``), :mod:`~sigmapi.experiments.reward`,
+  :mod:`~sigmapi.experiments.icub`, :mod:`~sigmapi.experiments.neurons` and
+  :mod:`~sigmapi.experiments.physiology`.
 
 A new experiment is one package and one line in :data:`ENTRIES`; nothing here imports an
 experiment until it is used (``sigmapi --help`` lists them from :data:`ENTRIES`).
@@ -40,6 +41,10 @@ ENTRIES = (
      "the iCub learns a chain of maps from its eyes and neck, then learns to reach"),
     ("compare", "sigmapi.experiments.compare.run:COMPARE",
      "the Sigma-Pi map beside the baselines a user would pick instead"),
+    ("neurons", "sigmapi.experiments.neurons.run:NEURONS",
+     "the transformation in dendritic, basis-function and spiking neurons"),
+    ("physiology", "sigmapi.experiments.physiology.run:PHYSIOLOGY",
+     "read a model file's units as an electrophysiologist: reference frame, gain fields"),
     ("reach", "sigmapi.experiments.reach.run:REACH",
      "learn to reach with an actor-critic on the learned map vs. other states"),
     ("reproduce", "sigmapi.experiments.reproduce.run:REPRODUCE",
@@ -67,6 +72,10 @@ _LAZY = {
     "REWARD": "reward.run",
     "RewardExperiment": "reward.run",
     "ROBOT": "robot.run",
+    "NEURONS": "neurons.run",
+    "NeuronsExperiment": "neurons.run",
+    "PHYSIOLOGY": "physiology.run",
+    "PhysiologyExperiment": "physiology.run",
     "RobotExperiment": "robot.run",
     "STREAM": "stream.run",
     "StreamExperiment": "stream.run",
@@ -94,6 +103,8 @@ def __getattr__(name: str) -> Any:
 
 __all__ = [
     "ENTRIES",
+    "NEURONS",
+    "PHYSIOLOGY",
     "REACH",
     "REFERENCE",
     "REGISTRY",
@@ -104,6 +115,8 @@ __all__ = [
     "CompareConfig",
     "CompareResult",
     "Experiment",
+    "NeuronsExperiment",
+    "PhysiologyExperiment",
     "ReachExperiment",
     "ReportContext",
     "ReproduceOptions",

@@ -1,0 +1,53 @@
+"""The reference-frame index of trained maps and of their random starts, over model files.
+
+Each model file is recorded as ``sigmapi physiology MODEL`` records it
+(``sigmapi.experiments.physiology.run.record_model``): per unit the reference-frame index
+(0 eye-centred, 1 body-centred), gain-field fits, and the same for the model's random start;
+this keeps the medians, the share of units measured and the Kolmogorov-Smirnov comparison:
+
+    for s in 100 101 102 103 104; do
+        sigmapi train --preset paper-1d --seed $s --out models/p1d_$s.npz; done
+    for s in 100 101; do sigmapi train --preset paper-2d --seed $s --out models/p2d_$s.npz; done
+    python benchmarks/bench_physiology.py models/*.npz
+
+writes ``benchmarks/results/physiology.json``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+from _common import machine, write_result
+from sigmapi.experiments.physiology.config import PhysiologyConfig
+from sigmapi.experiments.physiology.run import record_model
+
+OUT = Path(__file__).resolve().parent / "results" / "physiology.json"
+
+KEEP = ("median_reference_frame_index", "measured", "body_centred_share", "median_gain_r2",
+        "median_peak_modulation")  # fmt: skip
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("models", nargs="+", type=Path)
+    args = p.parse_args()
+    start, cpu = time.perf_counter(), time.process_time()
+    rows = []
+    for path in args.models:
+        data = record_model(PhysiologyConfig(model=str(path)))
+        rows.append({
+            "model": path.name, "map_shape": data["map_shape"],
+            "trained": {k: data["trained"][k] for k in KEEP},
+            "random_start": {k: data["random_start"][k] for k in KEEP},
+            "ks": data["comparison"]["ks"], "p_value": data["comparison"]["p_value"],
+        })  # fmt: skip
+        print(rows[-1], flush=True)
+    command = "python benchmarks/bench_physiology.py " + " ".join(m.name for m in args.models)
+    write_result(OUT, {"command": command, "rows": rows, "wall_s": time.perf_counter() - start,
+                       "cpu_s": time.process_time() - cpu, "machine": machine()})  # fmt: skip
+
+
+if __name__ == "__main__":
+    main()

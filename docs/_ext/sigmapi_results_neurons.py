@@ -1,0 +1,90 @@
+"""The tables of the neurons results page (``docs/results/neurons.md``), registered with the
+``results-table`` directive of :mod:`sigmapi_results` (which imports this module)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from sigmapi_results import Table, _command, _rel, load, num, seeds_label, table
+
+
+def _mw(m: dict[str, Any], key: str, fmt: str = ".3f") -> str:
+    return f"{num(m[key], fmt)} / {num(m[key + '_worst'], fmt)}"
+
+
+@table("neurons")
+def _neurons() -> Table:
+    """The rate maps of ``sigmapi neurons``: medians / worst seeds per map and task."""
+    data = load("neurons")
+    acc = {(c["name"], c["task"]): c for c in data["acceptance"]["dendritic"]}
+    rows = []
+    for m in data["methods"]:
+        if m["kind"] != "rate":
+            continue
+        c = acc.get((m["name"], m["task"]))
+        gap = "-" if c is None else (f"{num(c['vc_gap_median'], '+.3f')} / "
+                                     f"{num(c['vc_gap_worst'], '+.3f')} ({c['met']} of "
+                                     f"{c['n_seeds']})")  # fmt: skip
+        rfi = m.get("reference_frame_index")
+        rows.append([
+            f"`{m['name']}`", m["task"], f"{m['synapses']:,}", _mw(m, "view_consistency"), gap,
+            _mw(m, "z_error"), _mw(m, "order_r2"), f"{m['ordered']} of {m['n_seeds']}",
+            "-" if rfi is None else num(rfi, ".2f"),
+        ])  # fmt: skip
+    st = data["settings"]
+    two_d = f"2-D: the first {st['seeds_2d']}" if st["preset_2d"] else "no 2-D task"
+    note = (f"Seeds {seeds_label(st['seeds'])} ({two_d}); no setting was "
+            f"chosen on them (tuning seeds 0-2). Cells: median / worst seed. Gap: view "
+            f"consistency minus the Sigma-Pi map's on the same seed (seeds within 0.02 and "
+            f"ordered). Synapses per map unit (the basis-function map: its readout plus its "
+            f"share of the hidden layer's). RF index: median reference-frame index of the "
+            f"units (1-D).")  # fmt: skip
+    return Table(["map", "task", "synapses", "view consistency", "gap to Sigma-Pi", "z error",
+                  "order R²", "ordered", "RF index"], rows, [_rel("neurons")], note,
+                 _command(data))  # fmt: skip
+
+
+@table("neurons-spiking")
+def _spiking() -> Table:
+    """The spiking networks of ``sigmapi neurons`` per window and peak rate."""
+    data = load("neurons")
+    rows = []
+    for m in data["methods"]:
+        if m["kind"] != "spiking":
+            continue
+        rows.append([
+            f"`{m['name']}`", f"{m['peak_rate']:g} Hz", f"{m['window_ms']:g} ms",
+            _mw(m, "agreement"), _mw(m, "view_consistency"),
+            f"{num(m['vc_gap'], '+.3f')} / {num(m['vc_gap_worst'], '+.3f')}",
+            _mw(m, "z_error"), num(m["spikes_per_decision"], ",.0f"),
+        ])  # fmt: skip
+    n = next((m["n_trials"] for m in data["methods"] if m["kind"] == "spiking"), 0)
+    note = (f"{n} trials per seed (both views of {n // 2} test z's); median / worst seed. Gap: "
+            f"view consistency minus the rate map's on the same trials. Spikes per decision: "
+            f"input, coincidence and map spikes in the window.")  # fmt: skip
+    return Table(["network", "peak rate", "window", "agreement with the rate map",
+                  "view consistency", "gap to the rate map", "z error", "spikes per decision"],
+                 rows, [_rel("neurons")], note, _command(data))  # fmt: skip
+
+
+@table("physiology")
+def _physiology() -> Table:
+    """``benchmarks/bench_physiology.py``: trained maps against their random starts."""
+    data = load("physiology")
+    rows = []
+    for r in data["rows"]:
+        t, s = r["trained"], r["random_start"]
+        rows.append([
+            f"`{r['model']}`", "x".join(map(str, r["map_shape"])),
+            num(t["median_reference_frame_index"], ".2f"), num(t["measured"], ".2f"),
+            num(t["body_centred_share"], ".2f"), num(s["median_reference_frame_index"], ".2f"),
+            num(s["measured"], ".2f"), f"{num(r['ks'], '.2f')} (p = {num(r['p_value'], '.1e')})",
+            num(t["median_peak_modulation"], ".2f"), num(s["median_peak_modulation"], ".2f"),
+        ])  # fmt: skip
+    note = ("Reference-frame index: 0 eye-centred, 1 body-centred (median over the units "
+            "measured: a field at 3 or more of the 5 gazes). Body-centred share: units with "
+            "index >= 0.8. Peak modulation: (max - min) / (max + min) of a unit's best response "
+            "over the gazes.")  # fmt: skip
+    return Table(["model", "map", "trained: RF index", "measured", "body-centred share",
+                  "random start: RF index", "measured", "KS (p)", "peak modulation, trained",
+                  "random"], rows, [_rel("physiology")], note, _command(data))  # fmt: skip

@@ -1,0 +1,99 @@
+"""The settings of ``sigmapi neurons`` (:class:`NeuronsConfig`) and its quick look."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from sigmapi import _validate
+from sigmapi.config import SOMConfig, apply_overrides, load_preset
+from sigmapi.experiments.base import KEY_VALUES
+from sigmapi.neurons.spiking import SpikingConfig
+from sigmapi.neurons.training import TrainingConfig
+
+__all__ = ["QUICK", "NeuronsConfig"]
+
+
+@dataclass(frozen=True)
+class NeuronsConfig:
+    """What ``sigmapi neurons`` trains, deploys and scores."""
+
+    preset: str = "paper-1d"
+    """The 1-D task and the Sigma-Pi map's settings (a preset name)."""
+    preset_2d: str = "paper-2d"
+    """The 2-D task ("" for none)."""
+    overrides: tuple[str, ...] = field(default=(), metadata=KEY_VALUES)
+    """``key=value`` changes to both presets' Sigma-Pi maps, e.g. ``iterations=50000``."""
+    branches: tuple[int, ...] = field(default=(2, 4, 7, 10, 15), metadata={"sep": ","})
+    """Dendritic branches per unit, 1-D (one map per value)."""
+    branches_2d: tuple[int, ...] = field(default=(7,), metadata={"sep": ","})
+    """Dendritic branches per unit, 2-D."""
+    seeds_2d: int = 2
+    """How many of the seeds also run the 2-D task (the first ones)."""
+    pairs: int = 100_000
+    """View pairs of the dendritic and basis-function maps' online phase."""
+    pairs_2d: int = 30_000
+    """The same, 2-D."""
+    windows_ms: tuple[int, ...] = field(default=(10, 20, 50, 100, 200, 500), metadata={"sep": ","})
+    """Decision windows of the spiking networks (ms)."""
+    peak_rates: tuple[int, ...] = field(default=(50, 100, 200), metadata={"sep": ","})
+    """Input peak rates of the spiking networks (Hz); 100 is the acceptance's."""
+    spike_test: int = 200
+    """Test z's of the spiking networks (each shown as two views)."""
+    basis_stride_2d: int = 2
+    """The 2-D basis-function layer's stride (every 2nd retinal and gaze unit per axis: 8^4
+    hidden units instead of 15^4)."""
+    spiking_branches: int = 10
+    """The dendritic map (1-D, branches per unit) deployed in spiking neurons (0: none)."""
+    n_test: int = 5000
+    """Test z's (and calibration z's) of the rate maps' evaluation."""
+
+    def __post_init__(self) -> None:
+        set_ = object.__setattr__
+        set_(self, "overrides", tuple(self.overrides))
+        for name in ("branches", "branches_2d", "windows_ms", "peak_rates"):
+            vals = [_validate.integer(name, v, 1, fix="positive ints, e.g. 2,4,7")
+                    for v in getattr(self, name)]  # fmt: skip
+            set_(self, name, tuple(sorted(set(vals))))
+        if not self.branches or not self.windows_ms or not self.peak_rates:
+            raise _validate.fail("branches, windows_ms and peak_rates", "non-empty",
+                                 (self.branches, self.windows_ms, self.peak_rates),
+                                 "give at least one value each")  # fmt: skip
+        _validate.integer("seeds_2d", self.seeds_2d, 0, fix="0 runs no 2-D task")
+        _validate.integer("pairs", self.pairs, 0, fix="e.g. 100000")
+        _validate.integer("pairs_2d", self.pairs_2d, 0, fix="e.g. 50000")
+        _validate.integer("spike_test", self.spike_test, 10, fix="e.g. 300")
+        _validate.integer("basis_stride_2d", self.basis_stride_2d, 1, fix="e.g. 2")
+        _validate.integer("spiking_branches", self.spiking_branches, 0, fix="0: none")
+        _validate.integer("n_test", self.n_test, 100, fix="e.g. 5000")
+        self.som_config  # noqa: B018 (a bad preset or override fails here)
+        if self.preset_2d:
+            self.som_config_2d  # noqa: B018
+
+    @property
+    def som_config(self) -> SOMConfig:
+        """The 1-D task with the overrides."""
+        return apply_overrides(load_preset(self.preset), list(self.overrides))
+
+    @property
+    def som_config_2d(self) -> SOMConfig:
+        """The 2-D task with the overrides."""
+        return apply_overrides(load_preset(self.preset_2d), list(self.overrides))
+
+    def training(self, two_d: bool) -> TrainingConfig:
+        """The schedule of the first-order maps."""
+        if two_d:
+            return TrainingConfig(pairs=self.pairs_2d, refine_pairs=20_000, refine_rounds=1)
+        return TrainingConfig(pairs=self.pairs)
+
+    def spiking(self, peak_rate: float) -> SpikingConfig:
+        """The spiking deployment at ``peak_rate``."""
+        return SpikingConfig(peak_rate=float(peak_rate),
+                             windows_ms=tuple(float(w) for w in self.windows_ms))  # fmt: skip
+
+
+QUICK = NeuronsConfig(
+    preset_2d="", overrides=("iterations=60000", "refine_pairs=30000"), branches=(4, 10),
+    pairs=40_000, windows_ms=(20, 100, 200), peak_rates=(100,), spike_test=150,
+    spiking_branches=10, n_test=2000,
+)  # fmt: skip
+"""The quick look: a short 1-D run, two branch counts, one peak rate."""

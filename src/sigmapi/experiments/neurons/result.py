@@ -1,0 +1,253 @@
+"""The result of ``sigmapi neurons``: medians over seeds, the acceptance checks, the figure."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from sigmapi.io import atomic_write_bytes
+
+from .config import NeuronsConfig
+from .run import METRICS, REFERENCE_RATE
+
+__all__ = ["FIGURE", "VC_MARGIN", "NeuronsResult"]
+
+FIGURE = "neurons.png"
+
+VC_MARGIN = 0.02
+"""Acceptance: within this much view consistency of the reference (Sigma-Pi or rate map)."""
+
+MAX_WINDOW_MS = 200
+"""Acceptance: the spiking network's windows up to this one count."""
+
+_WORST_HIGH = ("z_error", "fold_score")
+
+
+def _scalars(summary: dict[str, Any]) -> dict[str, Any]:
+    """A branch summary without its per-branch lists."""
+    return {k: v for k, v in summary.items() if not isinstance(v, list)}
+
+
+def _median_worst(rows: list[dict[str, Any]], keys: tuple[str, ...]) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for k in keys:
+        vals = [r[k] for r in rows if r.get(k) is not None]
+        if not vals:
+            out[k] = out[f"{k}_worst"] = None
+            continue
+        worst = max(vals) if k in _WORST_HIGH else min(vals)
+        out.update({k: float(np.median(vals)), f"{k}_worst": float(worst)})
+    return out
+
+
+@dataclass
+class NeuronsResult:
+    """Every job's rows (:func:`~sigmapi.experiments.neurons.run.neurons_job`)."""
+
+    config: NeuronsConfig
+    seeds: tuple[int, ...]
+    jobs: list[dict[str, Any]]
+    seconds: float
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> NeuronsResult:
+        """The result a :meth:`to_dict` wrote (e.g. read back from ``result.json``)."""
+        st = dict(data["settings"])
+        seeds = tuple(st.pop("seeds"))
+        given: dict[str, Any] = {k: tuple(v) if isinstance(v, list) else v for k, v in st.items()}
+        config = NeuronsConfig(**given)
+        runs = data["runs"]
+        jobs = [{"maps": [r for r in runs["maps"] if (r["seed"], r["task"]) == key],
+                 "spiking": [r for r in runs["spiking"] if (r["seed"], r["task"]) == key],
+                 "branches": b}
+                for b in data["branches"] for key in [(b["seed"], b["task"])]]  # fmt: skip
+        return cls(config, seeds, jobs, float(data["seconds"]))
+
+    def _rows(self, kind: str) -> list[dict[str, Any]]:
+        return [r for j in self.jobs for r in j[kind]]
+
+    def methods(self) -> list[dict[str, Any]]:
+        """One entry per map (and task) and per spiking network, window and peak rate:
+        ``name``, ``task``, medians and worst seeds of the metrics, ``ordered``, ``n_seeds``,
+        ``synapses`` and ``per_seed``."""
+        out = []
+        maps = self._rows("maps")
+        for task in ("1d", "2d"):
+            names = dict.fromkeys(r["name"] for r in maps if r["task"] == task)
+            for name in names:
+                rows = [r for r in maps if r["task"] == task and r["name"] == name]
+                extra = ("reference_frame_index", "gain_r2", "peak_modulation",
+                         "active_synapses")  # fmt: skip
+                entry: dict[str, Any] = {"name": name, "task": task, "kind": "rate"}
+                entry.update(_median_worst(rows, METRICS + extra))
+                entry.update(
+                    synapses=rows[0]["synapses"], branches=rows[0].get("branches"),
+                    ordered=int(sum(not r["folded"] for r in rows)), n_seeds=len(rows),
+                    per_seed={k: [r.get(k) for r in rows]
+                              for k in ("seed", *METRICS, "folded", "seconds")},
+                )  # fmt: skip
+                out.append(entry)
+        spk = self._rows("spiking")
+        keys = dict.fromkeys((r["name"], r["peak_rate"]) for r in spk)
+        for name, rate in keys:
+            rows = [r for r in spk if r["name"] == name and r["peak_rate"] == rate]
+            label = name if rate == REFERENCE_RATE else f"{name}-{rate}hz"
+            entry = {"name": label, "task": "1d", "kind": "spiking",
+                     "window_ms": rows[0]["window_ms"], "peak_rate": rate}  # fmt: skip
+            entry.update(_median_worst(rows, ("agreement", "view_consistency",
+                                              "rate_view_consistency", "view_within_one",
+                                              "z_error", "order_r2", "spikes_per_decision",
+                                              "map_spikes")))  # fmt: skip
+            gap = [r["view_consistency"] - r["rate_view_consistency"] for r in rows]
+            entry.update(vc_gap=float(np.median(gap)), vc_gap_worst=float(min(gap)),
+                         n_seeds=len(rows), n_trials=rows[0]["n_trials"],
+                         per_seed={k: [r[k] for r in rows] for k in
+                                   ("seed", "agreement", "view_consistency",
+                                    "rate_view_consistency")})  # fmt: skip
+            out.append(entry)
+        return out
+
+    def acceptance(self) -> dict[str, Any]:
+        """Dendritic: per branch count, seed by seed the view consistency minus the Sigma-Pi
+        map's, seeds within :data:`VC_MARGIN` and ordered, and whether it has fewer synapses
+        than ``n_x n_y``; ``smallest_branches``: the fewest branches every seed meets it with.
+        Spiking: per window up to :data:`MAX_WINDOW_MS` at :data:`REFERENCE_RATE`, the gap to
+        the rate map's view consistency and the agreement."""
+        maps = self._rows("maps")
+        out: dict[str, Any] = {"margin": VC_MARGIN, "dendritic": [], "spiking": []}
+        for task in ("1d", "2d"):
+            ref = {r["seed"]: r for r in maps if r["task"] == task and r["name"] == "sigma-pi"}
+            names = dict.fromkeys(r["name"] for r in maps if r["task"] == task
+                                  and r["name"] != "sigma-pi")  # fmt: skip
+            for name in names:
+                rows = [r for r in maps if r["task"] == task and r["name"] == name]
+                gap = [r["view_consistency"] - ref[r["seed"]]["view_consistency"] for r in rows]
+                met = [g >= -VC_MARGIN and not r["folded"] for g, r in zip(gap, rows, strict=True)]
+                out["dendritic"].append({
+                    "name": name, "task": task, "branches": rows[0].get("branches"),
+                    "synapses": rows[0]["synapses"], "sigma_pi_synapses": ref[rows[0]["seed"]][
+                        "synapses"],
+                    "fewer_synapses": rows[0]["synapses"] < ref[rows[0]["seed"]]["synapses"],
+                    "vc_gap_median": float(np.median(gap)), "vc_gap_worst": float(min(gap)),
+                    "met": int(sum(met)), "n_seeds": len(rows), "all_met": bool(all(met)),
+                })  # fmt: skip
+        for task in ("1d", "2d"):
+            ok = [c["branches"] for c in out["dendritic"] if c["task"] == task
+                  and c["branches"] and c["all_met"]]  # fmt: skip
+            out[f"smallest_branches_{task}"] = min(ok) if ok else None
+            cheap = [c["branches"] for c in out["dendritic"] if c["task"] == task
+                     and c["branches"] and c["all_met"] and c["fewer_synapses"]]  # fmt: skip
+            out[f"smallest_branches_fewer_synapses_{task}"] = min(cheap) if cheap else None
+        for m in self.methods():
+            if (
+                m["kind"] == "spiking"
+                and m["peak_rate"] == REFERENCE_RATE
+                and (m["window_ms"] <= MAX_WINDOW_MS)
+            ):
+                out["spiking"].append({
+                    "name": m["name"], "window_ms": m["window_ms"],
+                    "vc_gap_median": m["vc_gap"], "vc_gap_worst": m["vc_gap_worst"],
+                    "agreement_median": m["agreement"], "agreement_worst": m["agreement_worst"],
+                    "met": bool(m["vc_gap_worst"] >= -VC_MARGIN),
+                })  # fmt: skip
+        return out
+
+    def to_dict(self) -> dict[str, Any]:
+        """``"methods"``, ``"acceptance"``, ``"branches"`` (what the branches of one dendritic
+        map per seed and task learned: branch by branch for the first, the summary for the
+        others), ``"settings"``, ``"runs"`` (every map's and spiking network's row per seed)
+        and ``"seconds"``."""
+        c = self.config
+        settings = {k: (list(v) if isinstance(v, tuple) else v) for k, v in vars(c).items()}
+        settings["seeds"] = list(self.seeds)
+        return {"methods": self.methods(), "acceptance": self.acceptance(),
+                "branches": [_scalars(j["branches"]) if i else j["branches"]
+                             for i, j in enumerate(self.jobs)], "settings": settings,
+                "runs": {"maps": self._rows("maps"), "spiking": self._rows("spiking")},
+                "seconds": self.seconds}  # fmt: skip
+
+    def table(self) -> str:
+        """Medians per map, then the spiking networks at the reference rate, then acceptance."""
+        rows = [f"{'method':28s} {'task':4s} {'synapses':>8s} {'same unit':>9s} {'worst':>6s} "
+                f"{'z error':>7s} {'order':>6s} {'ordered':>7s} {'RF index':>8s}"]  # fmt: skip
+        for m in self.methods():
+            if m["kind"] != "rate":
+                continue
+            rfi = m.get("reference_frame_index")
+            rows.append(
+                f"{m['name']:28s} {m['task']:4s} {m['synapses']:8d} {m['view_consistency']:9.3f} "
+                f"{m['view_consistency_worst']:6.3f} {m['z_error']:7.3f} {m['order_r2']:6.3f} "
+                f"{m['ordered']:3d}/{m['n_seeds']:<3d} "
+                + (f"{rfi:8.2f}" if rfi is not None else f"{'-':>8s}")
+            )
+        rows.append(f"{'spiking (peak rate)':28s} {'agree':>6s} {'same unit':>9s} "
+                    f"{'rate map':>8s} {'z error':>7s} {'spikes':>7s}")  # fmt: skip
+        for m in self.methods():
+            if m["kind"] == "spiking":
+                rows.append(
+                    f"{m['name'] + ' (' + str(m['peak_rate']) + ' Hz)':28s} "
+                    f"{m['agreement']:6.3f} {m['view_consistency']:9.3f} "
+                    f"{m['rate_view_consistency']:8.3f} {m['z_error']:7.3f} "
+                    f"{m['spikes_per_decision']:7.0f}"
+                )
+        acc = self.acceptance()
+        for c in acc["dendritic"]:
+            rows.append(
+                f"{c['name']} ({c['task']}): {c['met']} of {c['n_seeds']} seeds within "
+                f"{VC_MARGIN} of sigma-pi and ordered (gap median {c['vc_gap_median']:+.3f}, "
+                f"worst {c['vc_gap_worst']:+.3f}); {c['synapses']} synapses per unit against "
+                f"{c['sigma_pi_synapses']}"
+            )
+        return "\n".join(rows)
+
+    def caption(self) -> str:
+        """The figure's caption, computed from the result."""
+        acc = self.acceptance()
+        sp = next(m for m in self.methods() if m["name"] == "sigma-pi" and m["task"] == "1d")
+        dend = [c for c in acc["dendritic"] if c["task"] == "1d" and c["branches"]]
+        best = max(dend, key=lambda c: c["vc_gap_median"])
+        n = len(self.seeds)
+        text = (
+            f"{self.config.preset}, seeds {', '.join(map(str, self.seeds))}. Left: view "
+            f"consistency of dendritic maps against branches per unit (median, worst seed); "
+            f"Sigma-Pi map {sp['view_consistency']:.3f} ({sp['synapses']} synapses per unit). "
+            f"Closest: {best['name']} (median gap {best['vc_gap_median']:+.3f}, "
+            f"{best['met']} of {n} seeds within {VC_MARGIN} and ordered, {best['synapses']} "
+            f"synapses). "
+        )
+        small = acc["smallest_branches_fewer_synapses_1d"]
+        text += ("No branch count with fewer synapses than the Sigma-Pi unit comes within "
+                 f"{VC_MARGIN} on every seed. " if small is None else
+                 f"Fewest branches within {VC_MARGIN} on every seed with fewer synapses: "
+                 f"{small}. ")  # fmt: skip
+        spk = acc["spiking"]
+        if spk:
+            met = [s for s in spk if s["met"]]
+            text += (
+                f"Middle: spiking networks at {REFERENCE_RATE} Hz against the decision window "
+                f"(view consistency minus the rate map's, and agreement with its winners). "
+                + (f"Shortest window within {VC_MARGIN} of the rate map on every seed: "
+                   f"{min(s['window_ms'] for s in met):g} ms ({met[0]['name']}). " if met else
+                   f"No window up to {MAX_WINDOW_MS} ms within {VC_MARGIN} on every seed. ")
+            )  # fmt: skip
+        b = self.jobs[0]["branches"]
+        text += (
+            f"Right: the branches of the D={b['branches']} map, seed {b['seed']}, as retinal "
+            f"against gaze centre, one colour per unit; {100 * b['conjunction_share']:.0f} % "
+            f"hold >= 80 % of their retinal and of their gaze weight in one region (a "
+            f"conjunction), median distance of a branch's conjunction from its unit's z "
+            f"{b['z_gap_median']:.2f} grid units."
+        )
+        return text
+
+    def figure(self, out_dir: Path) -> list[Path]:
+        """``neurons.png`` and its caption ``neurons.txt``."""
+        from sigmapi.viz.neurons import neurons_figure  # matplotlib: only when drawing
+
+        out = Path(out_dir) / FIGURE
+        neurons_figure(self.to_dict()).savefig(out, dpi=110)
+        atomic_write_bytes(out.with_suffix(".txt"), (self.caption() + "\n").encode("utf-8"))
+        return [out]

@@ -1,0 +1,232 @@
+"""The jobs of ``sigmapi neurons``: per seed and task, every map trained, deployed and scored.
+
+One job per ``(seed, task)``: the Sigma-Pi map of the preset (:class:`~sigmapi.SigmaPiSOM`),
+a dendritic map per branch count (:class:`~sigmapi.neurons.dendritic.DendriticMap`) and the
+basis-function map (:class:`~sigmapi.neurons.basis.BasisFunctionMap`), all on the same task
+and seed, scored by :func:`sigmapi.evaluate`; in 1-D also the physiology of each map
+(:func:`sigmapi.analysis.physiology.record`) and the spiking deployments
+(:mod:`sigmapi.neurons.spiking`) on ``spike_test`` test z's of the evaluation set: the
+conjunction network at every peak rate, the dendritic one at 100 Hz.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from sigmapi.analysis.physiology import record
+from sigmapi.config import SOMConfig
+from sigmapi.executor import Executor, job_memory
+from sigmapi.experiments.base import Experiment, check_seeds, register, run_all
+from sigmapi.metrics import evaluate, evaluation_sets, grid_spacing, winner_metrics
+from sigmapi.neurons.basis import BasisFunctionMap
+from sigmapi.neurons.dendritic import DendriticMap, branch_summary
+from sigmapi.neurons.spiking import SpikingRun, simulate_conjunction, simulate_dendritic
+from sigmapi.neurons.training import FirstOrderMap
+from sigmapi.progress import Progress
+from sigmapi.som import SigmaPiSOM
+
+from .config import QUICK, NeuronsConfig
+from .result import NeuronsResult
+
+__all__ = ["METRICS", "NEURONS", "NeuronsExperiment", "NeuronsJob", "neurons_job", "run_neurons"]
+
+METRICS = ("view_consistency", "view_within_one", "z_error", "order_r2", "usage", "fold_score")
+"""The scores of each rate map (:func:`sigmapi.evaluate`), besides ``folded``."""
+
+REFERENCE_RATE = 100
+"""The peak rate (Hz) the dendritic spiking network runs at (the conjunction network: every
+rate of the config)."""
+
+SPIKE_KEY = 11
+"""Spike trains of seed s: ``SeedSequence(s, spawn_key=(SPIKE_KEY, rate))``."""
+
+
+@dataclass(frozen=True)
+class NeuronsJob:
+    """One seed and task of the experiment."""
+
+    seed: int
+    task: str  # "1d" or "2d"
+    config: NeuronsConfig
+
+    @property
+    def som_config(self) -> SOMConfig:
+        c = self.config
+        return c.som_config if self.task == "1d" else c.som_config_2d
+
+
+def _scored(model: Any, n_test: int, start: float, **extra: Any) -> dict[str, Any]:
+    m = evaluate(model, n_test=n_test)
+    row = {k: float(getattr(m, k)) for k in METRICS}
+    row.update(folded=bool(m.folded), seconds=time.perf_counter() - start, **extra)
+    return row
+
+
+def _z_table(model: Any, n: int) -> np.ndarray:
+    """Each unit's decoded z ``(K, d)`` on the calibration set (for the branch summary)."""
+    from sigmapi.metrics import z_decoder
+
+    cal, _ = evaluation_sets(model, n)
+    return z_decoder(model.winner(cal.x0, cal.y0, hard=True), cal.z, model.map_coords)
+
+
+def _spiking_rows(
+    job: NeuronsJob, name: str, model: Any, simulate: Any, rate_winner: Any, rates: Any
+) -> list[dict[str, Any]]:
+    """One row per window and peak rate (of ``rates``) of a spiking deployment of ``model``."""
+    c = job.config
+    cal, test = evaluation_sets(model, c.n_test)
+    n = min(c.spike_test, test.z.shape[0])
+    x = np.vstack([test.x0[:n], test.x1[:n]])
+    y = np.vstack([test.y0[:n], test.y1[:n]])
+    r = rate_winner(x, y)
+    wc = rate_winner(cal.x0, cal.y0)
+    spacing = grid_spacing(model.x_shape, model.config.periodic)
+    rows = []
+    for rate in rates:
+        rng = np.random.default_rng(np.random.SeedSequence(job.seed, spawn_key=(SPIKE_KEY, rate)))
+        start = time.perf_counter()
+        run: SpikingRun = simulate(x, y, c.spiking(rate), rng)
+        secs = time.perf_counter() - start
+        for i, window in enumerate(run.windows_ms):
+            w = run.winners[i]
+            m = winner_metrics(wc, cal.z, w[:n], w[n:], test.z[:n], model.map_coords, spacing)
+            rows.append({
+                "name": f"{name}-{window:g}ms", "window_ms": window, "peak_rate": rate,
+                "agreement": float(np.mean(w == r)),
+                "rate_view_consistency": float(np.mean(r[:n] == r[n:])),
+                "view_consistency": m["view_consistency"],
+                "view_within_one": m["view_within_one"], "z_error": m["z_error"],
+                "order_r2": m["order_r2"],
+                "input_spikes": float(run.input_spikes[i].mean()),
+                "hidden_spikes": float(run.hidden_spikes[i].mean()),
+                "map_spikes": float(run.map_spikes[i].mean()),
+                "spikes_per_decision": float((run.input_spikes[i] + run.hidden_spikes[i]
+                                              + run.map_spikes[i]).mean()),
+                "n_trials": int(x.shape[0]), "seconds": secs,
+            })  # fmt: skip
+    return rows
+
+
+def neurons_job(job: NeuronsJob) -> dict[str, Any]:
+    """Every map of one seed and task: ``{"maps": [rows], "spiking": [rows], "branches":
+    summary of the middle dendritic map's branches}`` (rows: ``name``, ``task``, the
+    :data:`METRICS`, ``folded``, ``synapses``, physiology medians in 1-D)."""
+    c, cfg = job.config, job.som_config
+    two_d = job.task == "2d"
+    n_x, n_y = int(np.prod(cfg.x_shape)), int(np.prod(cfg.y_shape))
+    maps: list[tuple[str, Any, dict[str, Any]]] = []
+    start = time.perf_counter()
+    sp = SigmaPiSOM(cfg, seed=job.seed).fit()
+    maps.append(("sigma-pi", sp, {"synapses": n_x * n_y, "start": start}))
+    training = c.training(two_d)
+    dendritic: dict[int, DendriticMap] = {}
+    for d in c.branches_2d if two_d else c.branches:
+        start = time.perf_counter()
+        dm = DendriticMap(cfg, d).fit(training, seed=job.seed)
+        dendritic[d] = dm
+        maps.append((f"dendritic-D{d}", dm, {"synapses": dm.synapses, "branches": d,
+                     "active_synapses": dm.active_synapses(), "start": start}))  # fmt: skip
+    start = time.perf_counter()
+    bf = BasisFunctionMap(cfg, stride=c.basis_stride_2d if two_d else 1).fit(
+        training, seed=job.seed
+    )
+    maps.append(("basis-function", bf, {"synapses": bf.synapses, "start": start}))
+    rows = []
+    for name, model, extra in maps:
+        begin = extra.pop("start")
+        row = _scored(model, c.n_test, begin, name=name, task=job.task, seed=job.seed, **extra)
+        if not two_d:
+            phys = record(model)
+            row.update(reference_frame_index=phys["median_reference_frame_index"],
+                       gain_r2=phys["median_gain_r2"],
+                       peak_modulation=phys["median_peak_modulation"])  # fmt: skip
+        rows.append(row)
+    mid = sorted(dendritic)[len(dendritic) // 2]
+    summary = branch_summary(dendritic[mid], _z_table(dendritic[mid], c.n_test))
+    summary.update(branches=mid, task=job.task, seed=job.seed)
+    spiking: list[dict[str, Any]] = []
+    if not two_d:
+        weights = sp.weights_
+
+        def conj(x: Any, y: Any, cfg_s: Any, rng: Any) -> SpikingRun:
+            return simulate_conjunction(weights, x, y, cfg_s, rng)
+
+        spiking += _spiking_rows(job, "spiking-conjunction", sp, conj, sp.winner, c.peak_rates)
+        if c.spiking_branches:
+            dm = dendritic.get(c.spiking_branches) or DendriticMap(cfg, c.spiking_branches).fit(
+                training, seed=job.seed)  # fmt: skip
+
+            def dend(x: Any, y: Any, cfg_s: Any, rng: Any) -> SpikingRun:
+                return simulate_dendritic(dm.u_, dm.v_, dm.gain, dm.threshold, x, y, cfg_s, rng)
+
+            ref = REFERENCE_RATE if REFERENCE_RATE in c.peak_rates else c.peak_rates[0]
+            dend_rows = _spiking_rows(job, "spiking-dendritic", dm, dend, dm.winner, (ref,))
+            for r in dend_rows:
+                r["branches"] = c.spiking_branches
+            spiking += dend_rows
+    for r in spiking:
+        r.update(task=job.task, seed=job.seed)
+    return {"maps": rows, "spiking": spiking, "branches": summary}
+
+
+def is_first_order(model: Any) -> bool:
+    """Whether ``model`` is a map of this package's first-order neurons."""
+    return isinstance(model, FirstOrderMap)
+
+
+def run_neurons(
+    config: NeuronsConfig,
+    seeds: Sequence[int],
+    executor: Executor | None = None,
+    progress: Progress | None = None,
+) -> NeuronsResult:
+    """Every job of ``config`` on ``seeds`` (2-D on the first ``seeds_2d``); the result."""
+    seeds = check_seeds(seeds)
+    start = time.perf_counter()
+    jobs = [(f"seed {s} 1d", NeuronsJob(s, "1d", config)) for s in seeds]
+    if config.preset_2d:
+        jobs += [(f"seed {s} 2d", NeuronsJob(s, "2d", config)) for s in seeds[: config.seeds_2d]]
+    per_job = job_memory(config.som_config_2d if config.preset_2d else config.som_config,
+                         config.n_test)  # fmt: skip
+
+    def describe(key: str, value: dict[str, Any]) -> str:
+        return f"{key}: " + ", ".join(f"{r['name']} {r['view_consistency']:.3f}"
+                                      for r in value["maps"])  # fmt: skip
+
+    done = run_all(neurons_job, jobs, executor=executor, per_job=per_job, progress=progress,
+                   desc="neurons", describe=describe)  # fmt: skip
+    return NeuronsResult(config, seeds, [done[k] for k, _ in jobs], time.perf_counter() - start)
+
+
+class NeuronsExperiment(Experiment[NeuronsConfig]):
+    """Dendritic neurons with first-order synapses, a basis-function network and spiking
+    networks against the Sigma-Pi map, on the same seeds (the chapter's section 7.1)."""
+
+    name = "neurons"
+    summary = "the transformation in dendritic, basis-function and spiking neurons"
+    config_type = NeuronsConfig
+    quick = QUICK
+    seeds = (100, 101, 102, 103, 104)
+    quick_seeds = (100,)
+    default_out = "neurons"
+
+    def run(
+        self,
+        config: NeuronsConfig,
+        *,
+        seeds: Sequence[int],
+        out: Path | None = None,
+        executor: Executor | None = None,
+        progress: Progress | None = None,
+    ) -> NeuronsResult:
+        return run_neurons(config, seeds, executor, progress)
+
+
+NEURONS = register(NeuronsExperiment())

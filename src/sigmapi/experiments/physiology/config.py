@@ -1,0 +1,39 @@
+"""The settings of ``sigmapi physiology`` (:class:`PhysiologyConfig`)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from sigmapi import _validate
+from sigmapi.analysis.physiology import GAZES
+
+__all__ = ["PhysiologyConfig"]
+
+
+@dataclass(frozen=True)
+class PhysiologyConfig:
+    """What ``sigmapi physiology`` records."""
+
+    model: str
+    """The model file to record from (``sigmapi train --out FILE``)."""
+    gazes: tuple[float, ...] = field(default=GAZES, metadata={"sep": ","})
+    """Gaze directions (fractions of the gaze axis) the units are recorded at."""
+    n_probe: int = 0
+    """Probe positions along the swept retinal axis (0: 61; 15 along any other)."""
+    tuning_units: int = 3
+    """Units whose tuning curves the figure shows."""
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.model, str) or not self.model:
+            raise _validate.fail("model", "a model file path", self.model,
+                                 "e.g. sigmapi physiology model.npz")  # fmt: skip
+        gazes = [_validate.number("gazes", g, 0.0, 1.0, fix="fractions of the gaze axis")
+                 for g in self.gazes]  # fmt: skip
+        if len(set(gazes)) < 3:
+            raise _validate.fail("gazes", "at least 3 distinct gazes", list(self.gazes),
+                                 "e.g. --gazes 0.2,0.35,0.5,0.65,0.8")  # fmt: skip
+        object.__setattr__(self, "gazes", tuple(sorted(set(gazes))))
+        _validate.integer("n_probe", self.n_probe, 0, 1001, fix="0 for the default, e.g. 61")
+        if 0 < self.n_probe < 5:
+            raise _validate.fail("n_probe", "0 or at least 5", self.n_probe, "e.g. 61")
+        _validate.integer("tuning_units", self.tuning_units, 1, 10, fix="e.g. 3")

@@ -1,0 +1,97 @@
+"""The result of ``sigmapi physiology``: the per-unit indices, their distributions, the figure."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from sigmapi.io import atomic_write_bytes
+
+from .config import PhysiologyConfig
+
+__all__ = ["BODY_CENTRED", "FIGURE", "PhysiologyResult"]
+
+FIGURE = "physiology.png"
+
+BODY_CENTRED = 0.9
+"""A map whose median reference-frame index is at least this reads as body-centred."""
+
+
+@dataclass
+class PhysiologyResult:
+    """The recording of one model file (:func:`.run.record_model`)."""
+
+    config: PhysiologyConfig
+    data: dict[str, Any]
+    seconds: float
+
+    def to_dict(self) -> dict[str, Any]:
+        """``reference_frame_index`` (per unit, the trained map), ``trained`` and
+        ``random_start`` (every index per unit, medians), ``comparison`` (Kolmogorov-Smirnov
+        between the two index distributions), ``body_centred`` (median >= 0.9),
+        ``tuning``, ``settings``, ``seconds``."""
+        med = self.data["trained"]["median_reference_frame_index"]
+        return {**self.data, "body_centred": med is not None and med >= BODY_CENTRED,
+                "settings": {"model": self.config.model, "gazes": list(self.config.gazes),
+                             "n_probe": self.config.n_probe},
+                "seconds": self.seconds}  # fmt: skip
+
+    def table(self) -> str:
+        """The medians of both maps and the comparison."""
+        rows = [f"{'map':14s} {'RF index':>9s} {'measured':>8s} {'body-centred':>12s} "
+                f"{'gain R^2':>8s} {'peak mod.':>9s}"]  # fmt: skip
+        for key in ("trained", "random_start"):
+            r = self.data[key]
+            med = r["median_reference_frame_index"]
+            share = r["body_centred_share"]
+            rows.append(
+                f"{key:14s} " + (f"{med:9.3f}" if med is not None else f"{'-':>9s}")
+                + f" {r['measured']:8.2f} " + (f"{share:12.2f}" if share is not None else
+                                               f"{'-':>12s}")
+                + f" {r['median_gain_r2']:8.3f} {r['median_peak_modulation']:9.3f}"
+            )  # fmt: skip
+        c = self.data["comparison"]
+        if c["ks"] is not None:
+            rows.append(f"trained vs random start: KS {c['ks']:.3f}, p = {c['p_value']:.2g} "
+                        f"(n = {c['n'][0]}, {c['n'][1]})")  # fmt: skip
+        return "\n".join(rows)
+
+    def caption(self) -> str:
+        """The figure's caption, computed from the data."""
+        t, s, c = self.data["trained"], self.data["random_start"], self.data["comparison"]
+
+        def med(r: dict[str, Any]) -> str:
+            v = r["median_reference_frame_index"]
+            return "no unit measured" if v is None else f"median {v:.2f}"
+
+        verdict = ("body-centred" if self.to_dict()["body_centred"] else
+                   f"not body-centred by the {BODY_CENTRED} criterion")  # fmt: skip
+        text = (
+            f"{self.data['model']} (map {'x'.join(map(str, self.data['map_shape']))}): "
+            f"reference-frame index (receptive-field shift with gaze over a body-centred "
+            f"field's; 0 eye-centred, 1 body-centred) of the trained map, {med(t)} over "
+            f"{100 * t['measured']:.0f} % of units with a field at >= 3 gazes: {verdict}; "
+            f"its random start, {med(s)}."
+        )
+        if c["ks"] is not None:
+            text += (f" The two distributions differ by KS {c['ks']:.2f} (p = "
+                     f"{c['p_value']:.2g}).")  # fmt: skip
+        text += (
+            f" Middle: tuning curves over retinal position at gazes "
+            f"{', '.join(f'{g:g}' for g in self.config.gazes)}. Right: planar gain-field fits "
+            f"of the response at a fixed retinal position (median R^2 trained "
+            f"{t['median_gain_r2']:.2f}, random {s['median_gain_r2']:.2f}); the best response's "
+            f"modulation over gazes, median trained {t['median_peak_modulation']:.2f}, random "
+            f"{s['median_peak_modulation']:.2f}."
+        )
+        return text
+
+    def figure(self, out_dir: Path) -> list[Path]:
+        """``physiology.png`` and its caption ``physiology.txt``."""
+        from sigmapi.viz.neurons import physiology_figure  # matplotlib: only when drawing
+
+        out = Path(out_dir) / FIGURE
+        physiology_figure(self.to_dict()).savefig(out, dpi=110)
+        atomic_write_bytes(out.with_suffix(".txt"), (self.caption() + "\n").encode("utf-8"))
+        return [out]

@@ -1,0 +1,122 @@
+"""What ``sigmapi physiology`` records: the model file's map and its random start."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from sigmapi.analysis.physiology import compare_distributions, record, tuning_curves
+from sigmapi.codes import PopulationCode
+from sigmapi.errors import DataError
+from sigmapi.executor import Executor
+from sigmapi.experiments.base import Experiment, register
+from sigmapi.progress import Progress
+from sigmapi.som import SigmaPiSOM, load_model
+from sigmapi.tasks import TwoViewSampler
+
+from .config import PhysiologyConfig
+from .result import PhysiologyResult
+
+__all__ = ["PHYSIOLOGY", "PhysiologyExperiment", "RandomStart", "record_model"]
+
+
+class RandomStart:
+    """The map a model file's config starts from with the paper's random weights (uniform in
+    ``[-init_scale, init_scale]``, ``ordering = "none"``), for the model's own seed."""
+
+    def __init__(self, model: SigmaPiSOM) -> None:
+        self.model = SigmaPiSOM(model.config.replace(ordering="none"), seed=model.seed_entropy)
+        self.weights = self.model.initial_weights()
+
+    @property
+    def x_code(self) -> PopulationCode:
+        return self.model.x_code
+
+    @property
+    def y_code(self) -> PopulationCode:
+        return self.model.y_code
+
+    @property
+    def map_shape(self) -> tuple[int, ...]:
+        return self.model.map_shape
+
+    @property
+    def sampler(self) -> TwoViewSampler:
+        return self.model.sampler
+
+    def respond(self, x: Any, y: Any) -> NDArray[np.float64]:
+        """``h_k = x^T W_k y`` ``(B, K)``."""
+        k, nx, ny = self.weights.shape
+        t = (self.weights.reshape(k * nx, ny) @ np.asarray(y).T).reshape(k, nx, -1)
+        return np.asarray(np.einsum("bi,kib->bk", np.asarray(x), t))
+
+
+def _tuning(model: Any, cfg: PhysiologyConfig, n_probe: int | None) -> dict[str, Any]:
+    """Tuning curves along retinal axis 0 of ``tuning_units`` units spread over the map (in
+    2-D on the probe row through each unit's peak at the middle gaze)."""
+    resp, probes = tuning_curves(model, cfg.gazes, 0, n_probe)
+    k = resp.shape[2]
+    units = np.unique(np.linspace(0, k - 1, cfg.tuning_units + 2)[1:-1].round().astype(int))
+    mid = len(cfg.gazes) // 2
+    out: dict[str, Any] = {"units": units.tolist(), "gazes": list(cfg.gazes), "responses": []}
+    for u in units:
+        line = np.arange(probes.shape[0])
+        if probes.shape[1] > 1:
+            best = probes[np.argmax(resp[mid, :, u])]
+            line = np.nonzero(np.all(probes[:, 1:] == best[1:], axis=1))[0]
+        out["responses"].append(resp[:, line, u].tolist())
+        out["positions"] = probes[line, 0].tolist()
+    return out
+
+
+def record_model(cfg: PhysiologyConfig) -> dict[str, Any]:
+    """The trained map's and its random start's per-unit indices, their comparison and the
+    tuning curves the figure draws."""
+    path = Path(cfg.model)
+    if not path.is_file():
+        raise DataError(f"model {str(path)!r} is not a file; give a model file written by "
+                        "sigmapi train --out FILE")  # fmt: skip
+    model = load_model(path)
+    n_probe = cfg.n_probe or None
+    trained = record(model, cfg.gazes, n_probe)
+    start = record(RandomStart(model), cfg.gazes, n_probe)
+    return {
+        "model": str(path), "map_shape": list(model.map_shape),
+        "relation": model.sampler.relation.name, "trained": trained, "random_start": start,
+        "reference_frame_index": trained["reference_frame_index"],
+        "comparison": compare_distributions(trained["reference_frame_index"],
+                                            start["reference_frame_index"]),
+        "tuning": _tuning(model, cfg, n_probe),
+    }  # fmt: skip
+
+
+class PhysiologyExperiment(Experiment[PhysiologyConfig]):
+    """Tuning curves, reference-frame indices and gain fields of every unit of a model file,
+    against the same map's random start. The seeds are not used (the model file holds its
+    own)."""
+
+    name = "physiology"
+    summary = "read a model file's units as an electrophysiologist: reference frame, gain fields"
+    config_type = PhysiologyConfig
+    seeds = (0,)
+    default_out = None
+
+    def run(
+        self,
+        config: PhysiologyConfig,
+        *,
+        seeds: Sequence[int],
+        out: Path | None = None,
+        executor: Executor | None = None,
+        progress: Progress | None = None,
+    ) -> PhysiologyResult:
+        start = time.perf_counter()
+        return PhysiologyResult(config, record_model(config), time.perf_counter() - start)
+
+
+PHYSIOLOGY = register(PhysiologyExperiment())

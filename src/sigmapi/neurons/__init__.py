@@ -1,0 +1,17 @@
+"""The transformation in neuron models other than the Sigma-Pi unit (docs/guide/neurons.md).
+
+- :mod:`~sigmapi.neurons.training`: the chapter's two-view rule for maps of first-order
+  neurons (:class:`FirstOrderMap`, :class:`TrainingConfig`);
+- :mod:`~sigmapi.neurons.dendritic`: units with dendritic branches, each a conjunction of a
+  retinal and a gaze region (:class:`DendriticMap`);
+- :mod:`~sigmapi.neurons.basis`: a basis-function network, a fixed conjunctive layer and a
+  learned readout (:class:`BasisFunctionMap`);
+- :mod:`~sigmapi.neurons.spiking`: a trained map deployed in spiking neurons (NumPy only).
+"""
+
+from sigmapi.neurons.basis import BasisFunctionMap
+from sigmapi.neurons.dendritic import DendriticMap
+from sigmapi.neurons.spiking import SpikingConfig
+from sigmapi.neurons.training import FirstOrderMap, TrainingConfig
+
+__all__ = ["BasisFunctionMap", "DendriticMap", "FirstOrderMap", "SpikingConfig", "TrainingConfig"]

@@ -1,0 +1,211 @@
+"""A trained map deployed in spiking neurons (docs/guide/neurons.md).
+
+Every input unit of the retinal and the gaze code is a pool of ``pool`` Poisson neurons, each
+firing at ``peak_rate`` times the unit's code value (a code of length 1, whose peak is near
+1). Two networks read them, each simulated for many trials at once with a fixed time step
+``dt`` (exact exponential decay between steps):
+
+**conjunction** (a Sigma-Pi map, :class:`~sigmapi.SigmaPiSOM`): one coincidence unit per
+input pair ``(i, j)`` holds two synaptic traces, one driven by the pool of ``x_i``, one by the
+pool of ``y_j`` (each spike adds 1, decay ``tau_c``), and fires when both exceed 1/2: a
+retinal and a gaze spike within about ``tau_c ln 2`` of each other (an NMDA-like AND). Both
+traces reset at its spike. Its rate is about ``r_x r_y 2 tau_c ln 2``, the product the
+Sigma-Pi unit needs. The map units are leaky integrate-and-fire neurons (time constant
+``tau_m``, threshold 1, reset 0): unit ``k`` receives coincidence unit ``(i, j)`` with weight
+``gain w_kij / max w``, and every map spike inhibits every other map unit of the trial by
+``inhibition`` (a soft winner-take-all by lateral inhibition).
+
+**dendritic** (a :class:`~sigmapi.neurons.dendritic.DendriticMap`): each map unit is a neuron
+with ``D`` dendritic compartments and a spiking soma. Compartment ``d`` filters its synaptic
+input with time constant ``tau_s`` (weights ``u_kd``, ``v_kd``); its drive is the filtered
+input in units of the rate code (``u . x`` when the pools fire at their mean rates) less the
+branch threshold, and it passes ``sigmoid(g (drive - theta))`` to the soma as a current
+(a dendritic plateau, scaled by ``plateau``). The somata are the same LIF neurons with the same
+lateral inhibition.
+
+The decision after a window of ``T`` ms is the map unit with the most spikes in it (ties: the
+higher membrane potential at ``T``). One simulation of the longest window gives every shorter
+window. The module needs numpy only.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from sigmapi import _validate
+
+__all__ = ["SpikingConfig", "SpikingRun", "simulate_conjunction", "simulate_dendritic"]
+
+Array = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class SpikingConfig:
+    """The spiking deployment's settings (module docstring)."""
+
+    peak_rate: float = 100.0
+    """Firing rate (Hz) of an input neuron at code value 1."""
+    pool: int = 10
+    """Poisson neurons per input unit."""
+    windows_ms: tuple[float, ...] = (10.0, 20.0, 50.0, 100.0, 200.0, 500.0)
+    """Decision windows (ms)."""
+    dt_ms: float = 0.25
+    """Time step (ms)."""
+    tau_c_ms: float = 1.0
+    """Coincidence units: trace time constant (ms)."""
+    tau_s_ms: float = 5.0
+    """Dendritic compartments: synaptic time constant (ms)."""
+    tau_m_ms: float = 10.0
+    """Map somata: membrane time constant (ms)."""
+    gain: float = 0.6
+    """Conjunction network: the largest synaptic weight onto a map soma, in units of its
+    threshold."""
+    plateau: float = 0.3
+    """Dendritic network: the current per ms a branch in full plateau drives into its soma,
+    in units of the threshold."""
+    inhibition: float = 0.5
+    """Lateral inhibition per map spike, in units of the threshold."""
+
+    def __post_init__(self) -> None:
+        for name in ("peak_rate", "dt_ms", "tau_c_ms", "tau_s_ms", "tau_m_ms", "gain", "plateau"):
+            _validate.positive(name, getattr(self, name), fix="a positive number")
+        _validate.integer("pool", self.pool, 1, fix="e.g. 10")
+        _validate.number("inhibition", self.inhibition, 0.0, fix="e.g. 0.5")
+        if not self.windows_ms or min(self.windows_ms) < self.dt_ms:
+            raise _validate.fail("windows_ms", f"windows of at least dt_ms={self.dt_ms}",
+                                 list(self.windows_ms), "e.g. 10,50,200")  # fmt: skip
+        if self.pool * self.peak_rate * self.dt_ms / 1000.0 > 0.5:
+            raise _validate.fail("pool * peak_rate * dt", "<= 0.5 spikes per step",
+                                 self.pool * self.peak_rate * self.dt_ms / 1000.0,
+                                 "use a smaller dt_ms")  # fmt: skip
+
+
+@dataclass
+class SpikingRun:
+    """One simulation's decisions: ``winners`` ``(W, B)`` per window, spikes per trial in
+    each window by layer (``input``, ``hidden``: coincidence units or dendritic plateaus
+    counted as none, ``map``), each ``(W, B)``."""
+
+    windows_ms: tuple[float, ...]
+    winners: NDArray[np.int64]
+    input_spikes: Array
+    hidden_spikes: Array
+    map_spikes: Array
+
+
+class _Soma:
+    """The map's LIF somata of ``B`` trials with lateral inhibition; counts per window."""
+
+    def __init__(self, b: int, k: int, cfg: SpikingConfig, steps: NDArray[np.int64]) -> None:
+        self.v = np.zeros((b, k))
+        self.count = np.zeros((b, k))
+        self.decay = np.exp(-cfg.dt_ms / cfg.tau_m_ms)
+        self.inh = cfg.inhibition
+        self.at = {int(s): i for i, s in enumerate(steps)}
+        self.winners = np.zeros((len(steps), b), dtype=np.int64)
+        self.spikes = np.zeros((len(steps), b))
+
+    def step(self, t: int, current: Array) -> None:
+        v = self.v * self.decay + current
+        fire = v >= 1.0
+        n = fire.sum(axis=1, keepdims=True)
+        v = np.where(fire, 0.0, v - self.inh * (n - fire))
+        self.v = np.maximum(v, -1.0)  # inhibition cannot hyperpolarise without bound
+        self.count += fire
+        if t in self.at:
+            i = self.at[t]
+            self.winners[i] = np.argmax(self.count + np.clip(self.v, 0.0, 0.999), axis=1)
+            self.spikes[i] = self.count.sum(axis=1)
+
+
+def _steps(cfg: SpikingConfig) -> NDArray[np.int64]:
+    return np.asarray(np.round(np.asarray(cfg.windows_ms) / cfg.dt_ms), dtype=np.int64) - 1
+
+
+def _poisson(rng: np.random.Generator, rates: Array, dt_s: float) -> Array:
+    """Spikes of the pools in one step ``(B, n)`` (a pool's spikes: one Poisson count)."""
+    return np.asarray(rng.poisson(rates * dt_s), dtype=np.float64)
+
+
+def simulate_conjunction(
+    weights: Array, x: Array, y: Array, cfg: SpikingConfig, rng: np.random.Generator
+) -> SpikingRun:
+    """Coincidence units into LIF map units (module docstring) for ``B`` trials, codes ``x``
+    ``(B, n_x)`` and ``y`` ``(B, n_y)``; ``weights`` the Sigma-Pi map's ``(K, n_x, n_y)``."""
+    k, nx, ny = weights.shape
+    b = x.shape[0]
+    w = np.maximum(weights, 0.0).reshape(k, nx * ny)
+    w = (cfg.gain * w / max(float(w.max()), 1e-300)).T  # (n_x n_y, K)
+    steps = _steps(cfg)
+    dt_s = cfg.dt_ms / 1000.0
+    rx, ry = (
+        cfg.peak_rate * cfg.pool * np.maximum(x, 0.0),
+        cfg.peak_rate * cfg.pool * np.maximum(y, 0.0),
+    )
+    decay = np.exp(-cfg.dt_ms / cfg.tau_c_ms)
+    ax, ay = np.zeros((b, nx, ny)), np.zeros((b, nx, ny))
+    soma = _Soma(b, k, cfg, steps)
+    n_in, n_c = np.zeros(b), np.zeros(b)
+    ins, hid = np.zeros((len(steps), b)), np.zeros((len(steps), b))
+    for t in range(int(steps[-1]) + 1):
+        sx, sy = _poisson(rng, rx, dt_s), _poisson(rng, ry, dt_s)
+        ax = ax * decay + sx[:, :, None]
+        ay = ay * decay + sy[:, None, :]
+        fire = (ax > 0.5) & (ay > 0.5)
+        ax[fire] = 0.0
+        ay[fire] = 0.0
+        f = fire.reshape(b, -1).astype(np.float64)
+        soma.step(t, f @ w)
+        n_in += sx.sum(axis=1) + sy.sum(axis=1)
+        n_c += f.sum(axis=1)
+        if t in soma.at:
+            ins[soma.at[t]], hid[soma.at[t]] = n_in, n_c
+    return SpikingRun(tuple(cfg.windows_ms), soma.winners, ins, hid, soma.spikes)
+
+
+def simulate_dendritic(
+    u: Array,
+    v: Array,
+    gain: float,
+    threshold: float,
+    x: Array,
+    y: Array,
+    cfg: SpikingConfig,
+    rng: np.random.Generator,
+) -> SpikingRun:
+    """Dendritic compartments into LIF somata (module docstring); ``u`` ``(K, D, n_x)``,
+    ``v`` ``(K, D, n_y)``, ``gain`` and ``threshold`` the branch sigmoid's of a trained
+    :class:`~sigmapi.neurons.dendritic.DendriticMap`."""
+    k, d, _ = u.shape
+    b = x.shape[0]
+    uf, vf = u.reshape(k * d, -1), v.reshape(k * d, -1)
+    bias = 0.5 * ((uf**2).sum(axis=1) + (vf**2).sum(axis=1))
+    steps = _steps(cfg)
+    dt_s = cfg.dt_ms / 1000.0
+    rate = cfg.peak_rate * cfg.pool
+    rx, ry = rate * np.maximum(x, 0.0), rate * np.maximum(y, 0.0)
+    decay = np.exp(-cfg.dt_ms / cfg.tau_s_ms)
+    scale = 1.0 / (rate * cfg.tau_s_ms / 1000.0)  # filtered spikes -> code units
+    current = np.zeros((b, k * d))
+    soma = _Soma(b, k, cfg, steps)
+    n_in = np.zeros(b)
+    ins = np.zeros((len(steps), b))
+    for t in range(int(steps[-1]) + 1):
+        sx, sy = _poisson(rng, rx, dt_s), _poisson(rng, ry, dt_s)
+        current = current * decay + sx @ uf.T + sy @ vf.T
+        z = np.clip(gain * (current * scale - bias - threshold), -60.0, 60.0)
+        plateau = (1.0 / (1.0 + np.exp(-z))).reshape(b, k, d).sum(axis=2)
+        soma.step(t, cfg.plateau * cfg.dt_ms * plateau)
+        n_in += sx.sum(axis=1) + sy.sum(axis=1)
+        if t in soma.at:
+            ins[soma.at[t]] = n_in
+    return SpikingRun(tuple(cfg.windows_ms), soma.winners, ins, np.zeros_like(ins), soma.spikes)
+
+
+def windows_of(values: Sequence[float]) -> tuple[float, ...]:
+    """Sorted distinct windows (ms)."""
+    return tuple(sorted({float(v) for v in values}))

@@ -1,0 +1,121 @@
+"""Figures of ``sigmapi neurons`` and ``sigmapi physiology``, drawn from their result dicts."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.figure import Figure
+
+__all__ = ["neurons_figure", "physiology_figure"]
+
+
+def neurons_figure(result: dict[str, Any]) -> Figure:
+    """Three panels: view consistency against synapses per unit (1-D maps), the spiking
+    networks against the decision window at the reference rate, the branches of one map."""
+    fig, axes = plt.subplots(1, 3, figsize=(15, 4.4))
+    ax = axes[0]
+    rate = [m for m in result["methods"] if m["kind"] == "rate" and m["task"] == "1d"]
+    sp = next(m for m in rate if m["name"] == "sigma-pi")
+    ax.axhspan(sp["view_consistency"] - 0.02, sp["view_consistency"], color="0.85",
+               label="within 0.02 of Sigma-Pi")  # fmt: skip
+    dend = [m for m in rate if m["name"].startswith("dendritic")]
+    xs = [m["synapses"] for m in dend]
+    low = [m["view_consistency"] - m["view_consistency_worst"] for m in dend]
+    ax.errorbar(xs, [m["view_consistency"] for m in dend], yerr=[low, [0.0] * len(dend)],
+                marker="o", capsize=3, label="dendritic (median, worst)")  # fmt: skip
+    for m in dend:
+        ax.annotate(f"D={m['branches']}", (m["synapses"], m["view_consistency"]),
+                    textcoords="offset points", xytext=(4, -12), fontsize=8)  # fmt: skip
+    for m, mk in ((sp, "s"), (next(m for m in rate if m["name"] == "basis-function"), "^")):
+        ax.errorbar([m["synapses"]], [m["view_consistency"]],
+                    yerr=[[m["view_consistency"] - m["view_consistency_worst"]], [0.0]],
+                    marker=mk, capsize=3, linestyle="none", label=m["name"])  # fmt: skip
+    ax.set_xlabel("synapses per map unit")
+    ax.set_ylabel("view consistency (same winner)")
+    ax.set_title("1-D maps of first-order neurons")
+    ax.legend(fontsize=8, loc="lower right")
+
+    ax = axes[1]
+    spk = [m for m in result["methods"] if m["kind"] == "spiking" and m["peak_rate"] == 100]
+    for base, colour in (("spiking-conjunction", "C0"), ("spiking-dendritic", "C1")):
+        rows = sorted((m for m in spk if m["name"].startswith(base + "-")),
+                      key=lambda m: m["window_ms"])  # fmt: skip
+        if not rows:
+            continue
+        w = [m["window_ms"] for m in rows]
+        ax.plot(w, [m["vc_gap"] for m in rows], "o-", color=colour,
+                label=f"{base}: view consistency - rate map's")  # fmt: skip
+        ax.plot(w, [m["agreement"] - 1.0 for m in rows], "s--", color=colour,
+                label=f"{base}: agreement - 1")  # fmt: skip
+    ax.axhline(-0.02, color="0.5", lw=0.8, ls=":")
+    ax.set_xscale("log")
+    ax.set_xlabel("decision window (ms)")
+    ax.set_ylabel("difference (median over seeds)")
+    ax.set_title("spiking networks, 100 Hz peak rate")
+    ax.legend(fontsize=7)
+
+    ax = axes[2]
+    b = result["branches"][0]
+    unit = np.asarray(b["unit"])
+    xc, yc = np.asarray(b["x_centre"])[:, 0], np.asarray(b["y_centre"])[:, 0]
+    ax.scatter(xc, yc, c=unit, cmap="viridis", s=18)
+    n = float(max(xc.max(), yc.max())) + 1.0
+    for s in np.arange(0, 2 * n, 2.0):
+        ax.plot([0, s], [s, 0], color="0.88", lw=0.6, zorder=0)
+    ax.set_xlim(-0.5, n)
+    ax.set_ylim(-0.5, n)
+    ax.set_xlabel("retinal centre of a branch's synapses (grid units, axis 0)")
+    ax.set_ylabel("gaze centre (grid units, axis 0)")
+    ax.set_title(f"branches of the D={b['branches']} map (colour: unit)")
+    fig.tight_layout()
+    return fig
+
+
+def physiology_figure(result: dict[str, Any]) -> Figure:
+    """Reference-frame index distributions (trained map against its random start), tuning
+    curves of three units at every gaze, and the gain-field fits."""
+    fig, axes = plt.subplots(1, 3, figsize=(15, 4.4))
+    ax = axes[0]
+    bins = np.linspace(-1.5, 2.0, 36)
+    for key, label in (("trained", "trained map"), ("random_start", "random start")):
+        vals = [v for v in result[key]["reference_frame_index"] if v is not None]
+        med = result[key]["median_reference_frame_index"]
+        text = "no unit measured" if med is None else f"median {med:.2f}, n={len(vals)}"
+        ax.hist(np.clip(vals, bins[0], bins[-1]), bins=bins, alpha=0.6, label=f"{label} ({text})")
+    ax.axvline(0.0, color="0.4", ls=":")
+    ax.axvline(1.0, color="0.4", ls=":")
+    ax.set_xlabel("reference-frame index (0 eye-centred, 1 body-centred)")
+    ax.set_ylabel("units")
+    ax.legend(fontsize=8)
+
+    ax = axes[1]
+    curves = result["tuning"]
+    probes = np.asarray(curves["positions"])
+    for c, unit in enumerate(curves["units"]):
+        for g, resp in zip(curves["gazes"], curves["responses"][c], strict=True):
+            ax.plot(probes, resp, color=f"C{c}", alpha=0.35 + 0.65 * g)
+        ax.plot([], [], color=f"C{c}", label=f"unit {unit}")
+    ax.set_xlabel("retinal position (fraction of the axis)")
+    ax.set_ylabel("response")
+    ax.set_title("tuning curves at gazes " + ", ".join(f"{g:g}" for g in curves["gazes"])
+                 + " (darker: larger)")  # fmt: skip
+    ax.legend(fontsize=8)
+
+    ax = axes[2]
+    for key, label in (("trained", "trained map"), ("random_start", "random start")):
+        mod = [v for v in result[key]["peak_modulation"] if v is not None]
+        pairs = [
+            (a, b)
+            for a, b in zip(result[key]["gain_r2"], result[key]["gain_slope"], strict=True)
+            if a is not None and b is not None
+        ]
+        text = f"{np.median(mod):.2f}" if mod else "-"
+        ax.scatter([a for a, _ in pairs], [b for _, b in pairs], s=10, alpha=0.6,
+                   label=f"{label}: peak modulation median {text}")  # fmt: skip
+    ax.set_xlabel("planar gain-field fit R^2 (response at fixed retinal position)")
+    ax.set_ylabel("gain slope (|b| / mean response)")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    return fig
