@@ -10,7 +10,14 @@ from sigmapi.experiments.base import KEY_VALUES
 from sigmapi.neurons.spiking import SpikingConfig
 from sigmapi.neurons.training import TrainingConfig
 
-__all__ = ["QUICK", "NeuronsConfig"]
+METRICS = ("view_consistency", "view_within_one", "z_error", "order_r2", "usage", "fold_score")
+"""The scores of each rate map (:func:`sigmapi.evaluate`), besides ``folded``."""
+
+REFERENCE_RATE = 100
+"""The peak rate (Hz) the dendritic spiking network runs at (the conjunction network: every
+rate of the config)."""
+
+__all__ = ["METRICS", "QUICK", "REFERENCE_RATE", "NeuronsConfig"]
 
 
 @dataclass(frozen=True)

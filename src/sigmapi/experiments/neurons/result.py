@@ -10,8 +10,7 @@ import numpy as np
 
 from sigmapi.io import atomic_write_bytes
 
-from .config import NeuronsConfig
-from .run import METRICS, REFERENCE_RATE
+from .config import METRICS, REFERENCE_RATE, NeuronsConfig
 
 __all__ = ["FIGURE", "VC_MARGIN", "NeuronsResult"]
 

@@ -31,17 +31,11 @@ from sigmapi.neurons.training import FirstOrderMap
 from sigmapi.progress import Progress
 from sigmapi.som import SigmaPiSOM
 
-from .config import QUICK, NeuronsConfig
+from .config import METRICS, QUICK, REFERENCE_RATE, NeuronsConfig
 from .result import NeuronsResult
 
 __all__ = ["METRICS", "NEURONS", "NeuronsExperiment", "NeuronsJob", "neurons_job", "run_neurons"]
 
-METRICS = ("view_consistency", "view_within_one", "z_error", "order_r2", "usage", "fold_score")
-"""The scores of each rate map (:func:`sigmapi.evaluate`), besides ``folded``."""
-
-REFERENCE_RATE = 100
-"""The peak rate (Hz) the dendritic spiking network runs at (the conjunction network: every
-rate of the config)."""
 
 SPIKE_KEY = 11
 """Spike trains of seed s: ``SeedSequence(s, spawn_key=(SPIKE_KEY, rate))``."""
