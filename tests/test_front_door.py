@@ -48,9 +48,9 @@ def test_the_console_says_what_a_fold_flag_means_beside_ordered():
     assert "fold detector" not in result.table()
 
 
-def test_every_experiment_takes_quick_but_the_sweep_whose_spec_sets_its_size():
+def test_every_experiment_takes_quick_but_those_whose_input_sets_their_size():
     missing = sorted(name for name, e in REGISTRY.items() if e.quick is None)
-    assert missing == ["sweep"]
+    assert missing == ["physiology", "sweep"]  # the model file; the spec
     from sigmapi.experiments.chain.run import QUICK
 
     assert QUICK.som_config.iterations < sigmapi.load_preset("paper-1d").iterations
