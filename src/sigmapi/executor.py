@@ -45,7 +45,7 @@ from typing import Any
 from sigmapi import _memory, _validate
 from sigmapi.config import SOMConfig
 from sigmapi.errors import ConfigError
-from sigmapi.som import SigmaPiSOM
+from sigmapi.model.som import SigmaPiSOM
 
 __all__ = [
     "ENGINES",

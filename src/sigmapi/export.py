@@ -36,8 +36,8 @@ from sigmapi._version import __version__
 from sigmapi.codes import PopulationCode
 from sigmapi.errors import ConfigError, ResourceError, UsageError
 from sigmapi.io import atomic_write_bytes
+from sigmapi.model.som import SigmaPiSOM, load_model
 from sigmapi.rules.winners import Scoring
-from sigmapi.som import SigmaPiSOM, load_model
 
 __all__ = ["FORMATS", "INPUTS", "OPSET", "export_onnx", "onnx_model", "score_matrix"]
 

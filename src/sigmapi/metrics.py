@@ -45,11 +45,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sigmapi import _memory, _validate
-from sigmapi.circular import circular_metrics, map_distance
+from sigmapi.analysis.circular import circular_metrics, map_distance
 from sigmapi.rules import Scoring
 
 if TYPE_CHECKING:
-    from sigmapi.som import SigmaPiSOM
+    from sigmapi.model.som import SigmaPiSOM
     from sigmapi.tasks import Batch
 
 __all__ = [
@@ -107,7 +107,7 @@ class Metrics:
     topographic_error: float = 0.0
     circular: dict[str, float | bool] | None = None
     """Maps of angles only (a relation with circular z): ``order_circular``, ``seam_jump``,
-    ``seam_gap``, ``seam_units_win`` and ``seamless`` (:mod:`sigmapi.circular`); their
+    ``seam_gap``, ``seam_units_win`` and ``seamless`` (:mod:`sigmapi.analysis.circular`); their
     ``z_error`` is then the circular one. None for every other relation."""
 
     def to_dict(self) -> dict[str, float | int | bool]:

@@ -14,8 +14,8 @@ from sigmapi.analysis.curves import LearningCurve, checkpoints
 from sigmapi.cli._common import check_output
 from sigmapi.errors import UsageError
 from sigmapi.experiments.reproduce.results import CURVE_TEST, N_CHECKPOINTS
+from sigmapi.model.som import load_model
 from sigmapi.progress import progress_callback
-from sigmapi.som import load_model
 from sigmapi.viz.figures import DPI, FIGURES, draw_figure
 
 __all__ = ["add_arguments", "cmd_figure"]

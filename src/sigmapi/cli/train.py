@@ -28,8 +28,8 @@ from sigmapi.metrics import (
     evaluation_sets,
     fold_indicators,
 )
+from sigmapi.model.som import SigmaPiSOM, load_model
 from sigmapi.progress import progress_callback
-from sigmapi.som import SigmaPiSOM, load_model
 
 __all__ = ["cmd_evaluate", "cmd_presets", "cmd_train", "register"]
 

@@ -32,7 +32,7 @@ from sigmapi import _validate
 from sigmapi.codes import PopulationCode, grid_coordinates
 from sigmapi.envs.protocols import Obs, PlacedViewSource, ViewSource, check_view_space
 from sigmapi.errors import ConfigError
-from sigmapi.som import SigmaPiSOM
+from sigmapi.model.som import SigmaPiSOM
 
 __all__ = [
     "FEATURES",

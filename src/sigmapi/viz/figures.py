@@ -21,7 +21,7 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
     from sigmapi.config import SOMConfig
-    from sigmapi.som import SigmaPiSOM
+    from sigmapi.model.som import SigmaPiSOM
 
 __all__ = [
     "DPI",

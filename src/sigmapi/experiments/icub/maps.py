@@ -44,7 +44,7 @@ from sigmapi.metrics import (
     winner_metrics,
     z_decoder,
 )
-from sigmapi.som import SigmaPiSOM
+from sigmapi.model.som import SigmaPiSOM
 from sigmapi.tasks import Batch
 
 __all__ = [

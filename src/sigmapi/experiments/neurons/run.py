@@ -24,12 +24,12 @@ from sigmapi.config import SOMConfig
 from sigmapi.executor import Executor, job_memory
 from sigmapi.experiments.base import Experiment, check_seeds, register, run_all
 from sigmapi.metrics import evaluate, evaluation_sets, grid_spacing, winner_metrics
+from sigmapi.model.som import SigmaPiSOM
 from sigmapi.neurons.basis import BasisFunctionMap
 from sigmapi.neurons.dendritic import DendriticMap, branch_summary
 from sigmapi.neurons.spiking import SpikingRun, simulate_conjunction, simulate_dendritic
 from sigmapi.neurons.training import FirstOrderMap
 from sigmapi.progress import Progress
-from sigmapi.som import SigmaPiSOM
 
 from .config import METRICS, QUICK, REFERENCE_RATE, NeuronsConfig
 from .result import NeuronsResult

@@ -15,8 +15,8 @@ from sigmapi.codes import PopulationCode
 from sigmapi.errors import DataError
 from sigmapi.executor import Executor
 from sigmapi.experiments.base import Experiment, register
+from sigmapi.model.som import SigmaPiSOM, load_model
 from sigmapi.progress import Progress
-from sigmapi.som import SigmaPiSOM, load_model
 from sigmapi.tasks import TwoViewSampler
 
 from .config import PhysiologyConfig

@@ -11,8 +11,8 @@ from typing import Any
 from sigmapi.config import SOMConfig
 from sigmapi.experiments.reproduce.results import PresetResult, SeedRun
 from sigmapi.metrics import ORDERED_R2, evaluate
+from sigmapi.model.som import SigmaPiSOM
 from sigmapi.progress import Progress
-from sigmapi.som import SigmaPiSOM
 from sigmapi.viz import figures as figs
 
 __all__ = ["draw_preset", "figure_seed"]

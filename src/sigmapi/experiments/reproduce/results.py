@@ -22,7 +22,7 @@ from sigmapi.metrics import ORDERED_R2
 if TYPE_CHECKING:
     from sigmapi.config import SOMConfig
     from sigmapi.metrics import Metrics
-    from sigmapi.som import SigmaPiSOM
+    from sigmapi.model.som import SigmaPiSOM
 
 __all__ = [
     "METRIC_KEYS",

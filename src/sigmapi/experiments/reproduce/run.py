@@ -75,8 +75,8 @@ from sigmapi.experiments.reproduce.results import (
 )
 from sigmapi.io import atomic_write_bytes
 from sigmapi.metrics import evaluate
+from sigmapi.model.som import SigmaPiSOM
 from sigmapi.progress import Progress
-from sigmapi.som import SigmaPiSOM
 from sigmapi.viz import figures as figs
 
 __all__ = [

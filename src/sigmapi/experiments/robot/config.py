@@ -27,7 +27,7 @@ from sigmapi.experiments.kit.episodes import check_episode_run
 from sigmapi.experiments.kit.maps import MapSpec
 from sigmapi.experiments.kit.seeds import SeedPlan
 from sigmapi.experiments.kit.worlds import World, register_world
-from sigmapi.som import SigmaPiSOM
+from sigmapi.model.som import SigmaPiSOM
 
 __all__ = ["PLAN", "QUICK", "ROBOT_WORLD", "RobotConfig"]
 

@@ -8,7 +8,7 @@ from typing import Any, Protocol
 
 from sigmapi import _validate
 from sigmapi._outputs import save_figure
-from sigmapi.circular import CIRCULAR_KEYS
+from sigmapi.analysis.circular import CIRCULAR_KEYS
 from sigmapi.experiments.sweep.table import METRIC_COLUMNS
 
 __all__ = ["METRICS", "draw_summary"]

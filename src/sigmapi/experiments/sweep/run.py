@@ -44,7 +44,7 @@ from typing import Any
 from sigmapi import _validate
 from sigmapi._lock import output_lock
 from sigmapi._outputs import claim_folder
-from sigmapi.circular import CIRCULAR_KEYS
+from sigmapi.analysis.circular import CIRCULAR_KEYS
 from sigmapi.config import SOMConfig, check_map_fits_task, load_preset
 from sigmapi.errors import ConfigError
 from sigmapi.executor import Executor, Outcome, job_memory
@@ -59,8 +59,8 @@ from sigmapi.experiments.sweep.table import (
     run_key,
 )
 from sigmapi.metrics import evaluate
+from sigmapi.model.som import SigmaPiSOM
 from sigmapi.progress import Progress
-from sigmapi.som import SigmaPiSOM
 from sigmapi.tasks import get_relation
 
 __all__ = [

@@ -5,17 +5,17 @@
 
 The estimator holds the state (weights, iteration count, random streams) and delegates the
 arithmetic to a kernel (:mod:`sigmapi.kernels`) and its rules (:mod:`sigmapi.rules`). Its
-other jobs live beside it: grids and codes (:mod:`sigmapi._grids`), the cost
-(:mod:`sigmapi._cost`), scikit-learn's parameters (:mod:`sigmapi._params`), arrays, files and
-pickles (:mod:`sigmapi._persist`), view checks (:mod:`sigmapi.views`), learning from a stream
-of frames (:mod:`sigmapi._stream`).
+other jobs live beside it: grids and codes (:mod:`sigmapi.model._grids`), the cost
+(:mod:`sigmapi.model._cost`), scikit-learn's parameters (:mod:`sigmapi.model._params`),
+arrays, files and pickles (:mod:`sigmapi.model._persist`), view checks
+(:mod:`sigmapi.model.views`), learning from a stream of frames (:mod:`sigmapi.model._stream`).
 
 Random streams: one :class:`numpy.random.SeedSequence` per run. The initial weights come from
 its child ``spawn_key=(0,)``; the training data of iterations ``[b * BLOCK, (b + 1) * BLOCK)``
 from child ``(1, b)``; the refinement's pairs of round ``r``, block ``b`` from child
-``(4, r, b)`` (:mod:`sigmapi._refine`). The data of any iteration is therefore a pure function
-of the seed and the iteration number: stopping, saving, loading and continuing gives the same
-run, bit for bit, wherever the run was cut.
+``(4, r, b)`` (:mod:`sigmapi.model._refine`). The data of any iteration is therefore a pure
+function of the seed and the iteration number: stopping, saving, loading and continuing gives
+the same run, bit for bit, wherever the run was cut.
 """
 
 from __future__ import annotations
@@ -29,19 +29,19 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from sigmapi import _memory, _validate
-from sigmapi._cost import CostMixin
-from sigmapi._grids import GridsMixin
-from sigmapi._params import ParamsMixin, entropy_of, stored_overrides
-from sigmapi._persist import PersistMixin
-from sigmapi._refine import RefineMixin
-from sigmapi._stream import StreamMixin
 from sigmapi.config import SOMConfig
 from sigmapi.errors import ConfigError, DataError, NotFittedError, NumericalError
 from sigmapi.kernels import KernelState, get_backend
 from sigmapi.kernels.base import MAX_WEIGHT
+from sigmapi.model._cost import CostMixin
+from sigmapi.model._grids import GridsMixin
+from sigmapi.model._params import ParamsMixin, entropy_of, stored_overrides
+from sigmapi.model._persist import PersistMixin
+from sigmapi.model._refine import RefineMixin
+from sigmapi.model._stream import StreamMixin
+from sigmapi.model.views import CodeViews, Views, check_gates, check_pairs, fit_views
 from sigmapi.rules import WinnerRule, ordering, winner_rule
 from sigmapi.tasks import Batch
-from sigmapi.views import CodeViews, Views, check_gates, check_pairs, fit_views
 
 __all__ = ["BLOCK", "SigmaPiSOM", "load_model"]
 

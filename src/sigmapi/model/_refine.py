@@ -21,8 +21,8 @@ import numpy as np
 from sigmapi.config import SOMConfig
 from sigmapi.errors import ConfigError, DataError
 from sigmapi.kernels.base import REFINER
+from sigmapi.model.views import CodeViews, Views, fit_views
 from sigmapi.rules.refinement import Sums
-from sigmapi.views import CodeViews, Views, fit_views
 
 if TYPE_CHECKING:
     from sigmapi.rules import WinnerRule

@@ -28,8 +28,8 @@ from sigmapi import _validate
 from sigmapi.config import SOMConfig
 from sigmapi.errors import ConfigError
 from sigmapi.kernels.base import STREAMER
+from sigmapi.model.views import CodeViews, StreamFrames, check_frames
 from sigmapi.rules.trace import check_trace
-from sigmapi.views import CodeViews, StreamFrames, check_frames
 
 if TYPE_CHECKING:
     from sigmapi.rules import WinnerRule
