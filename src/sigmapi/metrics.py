@@ -208,16 +208,31 @@ def evaluate(
     starved, te, score = fold_indicators(model, test, w0, w1, scores)
     circ = None
     if model.sampler.relation.circular:  # angles: z error the shorter way round, seam
-        circ = circular_metrics(wc, calibration.z, w0, test.z, coords, model.map_shape,
-                                model.config.map_periodic, spacing,
-                                starved_mask(w0, w1, model.n_units))  # fmt: skip
+        circ = circular_metrics(
+            wc,
+            calibration.z,
+            w0,
+            test.z,
+            coords,
+            model.map_shape,
+            model.config.map_periodic,
+            spacing,
+            starved_mask(w0, w1, model.n_units),
+        )
         z_error = float(circ.pop("z_error"))
     return Metrics(
-        m["view_consistency"], m["view_within_one"], z_error, m["order_r2"], m["usage"],
+        m["view_consistency"],
+        m["view_within_one"],
+        z_error,
+        m["order_r2"],
+        m["usage"],
         int(test.z.shape[0]),
-        fold_score=score, folded=score >= FOLD_THRESHOLD, starved_units=starved,
-        topographic_error=te, circular=circ,
-    )  # fmt: skip
+        fold_score=score,
+        folded=score >= FOLD_THRESHOLD,
+        starved_units=starved,
+        topographic_error=te,
+        circular=circ,
+    )
 
 
 def winner_metrics(

@@ -64,8 +64,10 @@ def _train(args: argparse.Namespace, cfg: Any, out: Path, every: int | None) -> 
         elif out.exists() and not args.force:
             model = _finished_run(out, cfg)
             if model.t_ >= cfg.iterations and model.refined_ >= model.refine_total:
-                print(f"{out} is this run, complete ({model.t_} iterations); nothing to do",
-                      file=sys.stderr)  # fmt: skip
+                print(
+                    f"{out} is this run, complete ({model.t_} iterations); nothing to do",
+                    file=sys.stderr,
+                )
                 return 0
             print(f"resuming from {out} (iteration {model.t_})", file=sys.stderr)
     if model is None:

@@ -398,10 +398,19 @@ class SigmaPiSOM(GridsMixin, CostMixin, ParamsMixin, PersistMixin, RefineMixin, 
         x1, y1 = (x0, y0) if c.same_view else (x1, y1)
         t = np.arange(self.t_, self.t_ + x0.shape[0])
         self._kernel.train_block(
-            self._state, x0, y0, x1, y1, self.sigma_at(t), self.eps_at(t),
-            map_shape=self.map_shape, winner_rule=self.winner_rule_, soft_cut=c.soft_cut,
-            threads=c.threads, map_periodic=c.map_periodic,
-        )  # fmt: skip
+            self._state,
+            x0,
+            y0,
+            x1,
+            y1,
+            self.sigma_at(t),
+            self.eps_at(t),
+            map_shape=self.map_shape,
+            winner_rule=self.winner_rule_,
+            soft_cut=c.soft_cut,
+            threads=c.threads,
+            map_periodic=c.map_periodic,
+        )
         self.t_ += x0.shape[0]
         self._weights_cache = None
 
@@ -445,10 +454,17 @@ class SigmaPiSOM(GridsMixin, CostMixin, ParamsMixin, PersistMixin, RefineMixin, 
                     f"backend {self.backend!r} has no gated update (train_gated_block); use "
                     "backend 'reference' or 'fast'"
                 )
-            s = self.sigma_ if sigma is None else _validate.width(
-                "sigma", sigma, 0.0, lo_open=True,
-                fix="map units; e.g. 1e-5 moves the winner alone",
-            )  # fmt: skip
+            s = (
+                self.sigma_
+                if sigma is None
+                else _validate.width(
+                    "sigma",
+                    sigma,
+                    0.0,
+                    lo_open=True,
+                    fix="map units; e.g. 1e-5 moves the winner alone",
+                )
+            )
             e = (
                 float(self.eps_at(self.t_))
                 if eps is None
@@ -456,10 +472,16 @@ class SigmaPiSOM(GridsMixin, CostMixin, ParamsMixin, PersistMixin, RefineMixin, 
             )
             c = self.config
             kernel.train_gated_block(
-                self._state, *data, np.full(n, s), np.full(n, e), g,
-                map_shape=self.map_shape, winner_rule=self.winner_rule_, soft_cut=c.soft_cut,
+                self._state,
+                *data,
+                np.full(n, s),
+                np.full(n, e),
+                g,
+                map_shape=self.map_shape,
+                winner_rule=self.winner_rule_,
+                soft_cut=c.soft_cut,
                 map_periodic=c.map_periodic,
-            )  # fmt: skip
+            )
             self._weights_cache = None
         return self
 

@@ -79,20 +79,26 @@ def record_model(cfg: PhysiologyConfig) -> dict[str, Any]:
     tuning curves the figure draws."""
     path = Path(cfg.model)
     if not path.is_file():
-        raise DataError(f"model {str(path)!r} is not a file; give a model file written by "
-                        "sigmapi train --out FILE")  # fmt: skip
+        raise DataError(
+            f"model {str(path)!r} is not a file; give a model file written by "
+            "sigmapi train --out FILE"
+        )
     model = load_model(path)
     n_probe = cfg.n_probe or None
     trained = record(model, cfg.gazes, n_probe)
     start = record(RandomStart(model), cfg.gazes, n_probe)
     return {
-        "model": str(path), "map_shape": list(model.map_shape),
-        "relation": model.sampler.relation.name, "trained": trained, "random_start": start,
+        "model": str(path),
+        "map_shape": list(model.map_shape),
+        "relation": model.sampler.relation.name,
+        "trained": trained,
+        "random_start": start,
         "reference_frame_index": trained["reference_frame_index"],
-        "comparison": compare_distributions(trained["reference_frame_index"],
-                                            start["reference_frame_index"]),
+        "comparison": compare_distributions(
+            trained["reference_frame_index"], start["reference_frame_index"]
+        ),
         "tuning": _tuning(model, cfg, n_probe),
-    }  # fmt: skip
+    }
 
 
 class PhysiologyExperiment(Experiment[PhysiologyConfig]):

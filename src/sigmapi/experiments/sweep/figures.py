@@ -49,8 +49,11 @@ def draw_summary(
         plot_sweep([{**r, "preset": spec.preset} for r in rows], "preset", metric, ax=ax)
     ok = sum(str(r.get("status")) == "ok" for r in rows)
     folded = sum(str(r.get("folded")).lower() in ("true", "1") for r in rows)
-    ax.set_title(f"sweep of {spec.preset}: {ok} runs ok, {len(rows) - ok} failed, "
-                 f"{folded} folded; seeds {list(spec.seeds)}", fontsize=9)  # fmt: skip
+    ax.set_title(
+        f"sweep of {spec.preset}: {ok} runs ok, {len(rows) - ok} failed, "
+        f"{folded} folded; seeds {list(spec.seeds)}",
+        fontsize=9,
+    )
     p = Path(path)
     save_figure(fig, p, dpi=120, bbox_inches="tight", facecolor="white")
     plt.close(fig)
