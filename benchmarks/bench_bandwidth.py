@@ -90,7 +90,7 @@ def child_windows(preset: str, variant: str, windows: int, window: int) -> dict[
     """Speed and traffic of the fast kernel at ``windows`` points of ``preset``'s schedule."""
     from sigmapi import SigmaPiSOM, load_preset
     from sigmapi.kernels import fast
-    from sigmapi.som import BLOCK
+    from sigmapi.model.som import BLOCK
 
     if variant == "fast-noprefetch":
         fast.TRAIN_PREFETCH_AHEAD = 0

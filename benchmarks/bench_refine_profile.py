@@ -36,8 +36,8 @@ import numpy as np
 import _common
 import sigmapi
 from sigmapi import SigmaPiSOM
-from sigmapi._refine import GROUP
 from sigmapi.kernels import _refining, fast, reference
+from sigmapi.model._refine import GROUP
 
 ROOT = Path(__file__).resolve().parent
 

@@ -62,7 +62,7 @@ def child(preset: str, seed: int) -> dict[str, Any]:
     from sigmapi.cli._common import DEFAULT_PRESET  # noqa: F401  (the command's imports)
     from sigmapi.cli.train import _warn_if_folded
     from sigmapi.config import load_preset
-    from sigmapi.som import SigmaPiSOM
+    from sigmapi.model.som import SigmaPiSOM
 
     cfg = load_preset(preset).replace(seed=seed)
     out: dict[str, Any] = {"startup": _self_cpu()}

@@ -7,7 +7,7 @@ import pytest
 from sigmapi.config import SOMConfig
 from sigmapi.errors import ConfigError
 from sigmapi.executor import Executor, job_memory, plan_workers, run_jobs
-from sigmapi.som import SigmaPiSOM
+from sigmapi.model.som import SigmaPiSOM
 
 
 def _square_or_fail(v: int) -> int:

@@ -94,7 +94,7 @@ def test_the_built_wheel_installs_alone_and_runs_the_quickstart(tmp_path):
     sdist = next((repo / "dist").glob("sigmapi-*.tar.gz"))
     listing = subprocess.run(["tar", "tzf", str(sdist)], capture_output=True, text=True,
                              check=True).stdout  # fmt: skip
-    assert "/tests/" not in listing and "/src/sigmapi/som.py" in listing
+    assert "/tests/" not in listing and "/src/sigmapi/model/som.py" in listing
     env = _venv(tmp_path / "venv")
     _run(f"pip install -q '{wheel}'", tmp_path, env, 1200)
     quickstart = re.search(r"## Quickstart\n\n```python\n(.*?)```", README, re.S)

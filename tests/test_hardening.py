@@ -583,7 +583,7 @@ def test_empty_and_ragged_views_are_data_errors():
 
 def test_views_repeated_by_stride_0_are_checked_at_the_cost_of_their_data():
     from sigmapi.errors import DataError
-    from sigmapi.views import check_views
+    from sigmapi.model.views import check_views
 
     row = np.float32([0.1, 0.2, 0.3, 0.4, 0.5])
     big = np.broadcast_to(row, (10**12, 5))

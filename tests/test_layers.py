@@ -20,10 +20,8 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("experiments",),
     ("envs", "agents", "baselines", "neurons", "viz"),
     ("analysis", "metrics", "checkpoints", "executor", "export"),
-    ("circular",),
-    ("som",),
-    ("_grids", "_cost", "_params", "_persist", "_refine", "_stream", "_outputs"),
-    ("io", "config", "kernels", "tasks", "rules", "views", "model_file"),
+    ("model", "_outputs"),
+    ("io", "config", "kernels", "tasks", "rules"),
     ("codes", "schedules"),
     ("errors", "_validate", "_memory", "_lock", "_startup", "progress", "_version"),
 )

@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 
 from sigmapi import SigmaPiSOM
-from sigmapi._stream import consecutive_pairs
 from sigmapi.errors import ConfigError, DataError
 from sigmapi.kernels import fast, reference
+from sigmapi.model._stream import consecutive_pairs
 from sigmapi.rules.trace import trace_step
 
 SMALL = {"map_shape": (6,), "x_shape": (7,), "y_shape": (7,), "iterations": 600, "seed": 3}

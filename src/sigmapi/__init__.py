@@ -21,9 +21,9 @@ from sigmapi.config import SOMConfig, list_presets, load_preset
 from sigmapi.errors import ConfigError, DataError, ModelFileError, NotFittedError, SigmapiError
 from sigmapi.kernels import register_backend
 from sigmapi.metrics import Metrics, evaluate
+from sigmapi.model.som import SigmaPiSOM
+from sigmapi.model.som import load_model as load
 from sigmapi.schedules import PiecewiseLinear
-from sigmapi.som import SigmaPiSOM
-from sigmapi.som import load_model as load
 from sigmapi.tasks import Batch, Relation, TwoViewSampler
 
 __all__ = [

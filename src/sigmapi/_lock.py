@@ -51,11 +51,14 @@ def _open(lock: Path, what: str) -> int:
     try:
         fd = os.open(lock, flags, 0o644)
     except OSError as exc:
-        hint = ("it is a symbolic link, which sigmapi never follows: remove it"
-                if os.path.islink(lock) else "check the folder's permissions, or choose "
-                "another output")  # fmt: skip
-        raise UsageError(f"cannot open the lock file {str(lock)!r} of {what}: "
-                         f"{exc.strerror or exc}; {hint}") from None  # fmt: skip
+        hint = (
+            "it is a symbolic link, which sigmapi never follows: remove it"
+            if os.path.islink(lock)
+            else "check the folder's permissions, or choose another output"
+        )
+        raise UsageError(
+            f"cannot open the lock file {str(lock)!r} of {what}: {exc.strerror or exc}; {hint}"
+        ) from None
     st = os.fstat(fd)
     problem = None
     if not stat.S_ISREG(st.st_mode):
@@ -64,8 +67,9 @@ def _open(lock: Path, what: str) -> int:
         problem = f"belongs to another user (uid {st.st_uid})"
     if problem is not None:
         os.close(fd)
-        raise UsageError(f"the lock file {str(lock)!r} of {what} {problem}; remove it, or "
-                         "choose another output")  # fmt: skip
+        raise UsageError(
+            f"the lock file {str(lock)!r} of {what} {problem}; remove it, or choose another output"
+        )
     return fd
 
 
@@ -97,9 +101,11 @@ def _acquire(lock: Path, what: str) -> int:
                 with contextlib.suppress(OSError):
                     os.unlink(lock)
                 os.close(fd)
-                raise UsageError(f"cannot write the lock file {str(lock)!r} of {what}: "
-                                 f"{exc.strerror or exc}; free space or choose another "
-                                 "output") from None  # fmt: skip
+                raise UsageError(
+                    f"cannot write the lock file {str(lock)!r} of {what}: "
+                    f"{exc.strerror or exc}; free space or choose another "
+                    "output"
+                ) from None
             return fd
         os.close(fd)
 

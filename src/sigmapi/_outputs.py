@@ -44,8 +44,9 @@ def _lstat(p: Path) -> os.stat_result | None:
     except FileNotFoundError:
         return None
     except OSError as exc:
-        raise UsageError(f"cannot access {str(p)!r}: {exc.strerror or exc}; choose another "
-                         "path") from None  # fmt: skip
+        raise UsageError(
+            f"cannot access {str(p)!r}: {exc.strerror or exc}; choose another path"
+        ) from None
 
 
 def check_file(path: str | Path, *, force: bool, what: str = "output file") -> Path:
@@ -58,8 +59,10 @@ def check_file(path: str | Path, *, force: bool, what: str = "output file") -> P
     st = _lstat(p)
     if st is not None:
         if stat.S_ISLNK(st.st_mode) and not force:
-            raise UsageError(f"{name} is a symbolic link; sigmapi never writes through one: "
-                             "remove it, or pass --force to replace the link itself")  # fmt: skip
+            raise UsageError(
+                f"{name} is a symbolic link; sigmapi never writes through one: "
+                "remove it, or pass --force to replace the link itself"
+            )
         if stat.S_ISDIR(st.st_mode):
             raise UsageError(f"{name} is a folder; give a file name")
         if not (stat.S_ISREG(st.st_mode) or stat.S_ISLNK(st.st_mode)):
@@ -74,8 +77,10 @@ def check_file(path: str | Path, *, force: bool, what: str = "output file") -> P
         os.close(fd)
         os.unlink(probe)
     except OSError as exc:
-        raise UsageError(f"cannot write {name} into {str(parent)!r}: {exc.strerror or exc}; "
-                         "choose another folder") from None  # fmt: skip
+        raise UsageError(
+            f"cannot write {name} into {str(parent)!r}: {exc.strerror or exc}; "
+            "choose another folder"
+        ) from None
     return p
 
 
@@ -122,8 +127,9 @@ def marked_as(folder: str | Path) -> str | None:
     st = _lstat(p)
     if st is None:
         return None
-    bad = UsageError(f"{str(p)!r} is not a sigmapi marker file; move it away or give another "
-                     "output folder")  # fmt: skip
+    bad = UsageError(
+        f"{str(p)!r} is not a sigmapi marker file; move it away or give another output folder"
+    )
     if not stat.S_ISREG(st.st_mode) or st.st_size > _MAX_MARKER:
         raise bad
     try:
@@ -149,9 +155,11 @@ def claim_folder(
     owner = marked_as(out)
     where = f"--out folder {str(out)!r}"
     if owner is not None and owner != experiment:
-        raise UsageError(f"{where} holds a run of the experiment {owner!r} (its marker "
-                         f"{MARKER}), not of {experiment!r}; give another --out (or move that "
-                         "run away, marker included)")  # fmt: skip
+        raise UsageError(
+            f"{where} holds a run of the experiment {owner!r} (its marker "
+            f"{MARKER}), not of {experiment!r}; give another --out (or move that "
+            "run away, marker included)"
+        )
     if owner is None:
         pattern = temp_pattern()
         foreign = sorted(
@@ -160,8 +168,9 @@ def claim_folder(
             if e.name not in (LOCK_NAME, *owns) and not re.fullmatch(pattern, e.name)
         )
         if foreign and not force:
-            shown = ", ".join(foreign[:5]) + (f" and {len(foreign) - 5} more" if foreign[5:]
-                                               else "")  # fmt: skip
+            shown = ", ".join(foreign[:5]) + (
+                f" and {len(foreign) - 5} more" if foreign[5:] else ""
+            )
             raise UsageError(
                 f"{where} is not empty; pass --force to write into it, or give another --out "
                 f"(it holds no sigmapi {experiment} run, but {shown}: left as they are)"

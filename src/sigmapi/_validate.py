@@ -132,15 +132,21 @@ overflow."""
 
 
 def width(
-    name: str, value: Any, lo: float = 0.0, *, lo_open: bool = False, fix: str = "",
+    name: str,
+    value: Any,
+    lo: float = 0.0,
+    *,
+    lo_open: bool = False,
+    fix: str = "",
     error: type[Exception] = ConfigError,
-) -> float:  # fmt: skip
+) -> float:
     """``value`` as a finite float above ``lo`` (as :func:`number` says it) and at most
     :data:`MAX_WIDTH`."""
     v = number(name, value, lo, lo_open=lo_open, fix=fix, error=error)
     if v > MAX_WIDTH:
-        raise fail(name, f"<= {MAX_WIDTH:g} (a width past any grid: flat already)", value, fix,
-                   error)  # fmt: skip
+        raise fail(
+            name, f"<= {MAX_WIDTH:g} (a width past any grid: flat already)", value, fix, error
+        )
     return v
 
 
@@ -187,8 +193,9 @@ def shape(
     if not out or not all(is_int(s) and s >= 1 for s in out):
         raise fail(name, constraint, value, fix, error)
     if math.prod(int(s) for s in out) > MAX_UNITS:
-        raise fail(name, f"a shape of at most {MAX_UNITS:,} units (2**32) in all", value, fix,
-                   error)  # fmt: skip
+        raise fail(
+            name, f"a shape of at most {MAX_UNITS:,} units (2**32) in all", value, fix, error
+        )
     return tuple(int(s) for s in out)
 
 

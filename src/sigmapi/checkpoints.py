@@ -28,7 +28,7 @@ from sigmapi.io import stale_temps
 
 if TYPE_CHECKING:
     from sigmapi.config import SOMConfig
-    from sigmapi.som import SigmaPiSOM
+    from sigmapi.model.som import SigmaPiSOM
 
 __all__ = [
     "Resumed",
@@ -116,7 +116,7 @@ class Resumed:
 
 def find_resumable(folder: Path, config: SOMConfig) -> Resumed:
     """The newest checkpoint in ``folder`` that loads cleanly and matches ``config``."""
-    from sigmapi.som import load_model
+    from sigmapi.model.som import load_model
 
     skipped: list[str] = []
     for _, path in list_checkpoints(folder):

@@ -195,8 +195,7 @@ class SOMConfig:
             ),
         )
         set_(self, "refine_pairs", _validate.integer("refine_pairs", self.refine_pairs, 1))
-        rs = _validate.width("refine_sigma", self.refine_sigma, 0.0,
-                              fix="0 is the winner alone")  # fmt: skip
+        rs = _validate.width("refine_sigma", self.refine_sigma, 0.0, fix="0 is the winner alone")
         set_(self, "refine_sigma", rs)
         set_(self, "iterations", its)
         cut = _validate.integer(
@@ -235,8 +234,14 @@ class SOMConfig:
                 "use a small value such as 1e-5 for a winner-only update"
             )
         set_(self, "sigma", sig.knots)
-        tol = _validate.number("kernel_tol", self.kernel_tol, 0.0, 1.0, hi_open=True,
-                               fix="0 is exact; the default is 1e-6")  # fmt: skip
+        tol = _validate.number(
+            "kernel_tol",
+            self.kernel_tol,
+            0.0,
+            1.0,
+            hi_open=True,
+            fix="0 is exact; the default is 1e-6",
+        )
         set_(self, "kernel_tol", tol)
         set_(self, "extra", check_extra(self.extra))
         if self.seed is not None:

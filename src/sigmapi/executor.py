@@ -45,7 +45,7 @@ from typing import Any
 from sigmapi import _memory, _validate
 from sigmapi.config import SOMConfig
 from sigmapi.errors import ConfigError
-from sigmapi.som import SigmaPiSOM
+from sigmapi.model.som import SigmaPiSOM
 
 __all__ = [
     "ENGINES",
@@ -110,13 +110,17 @@ def probe_scheduler(address: str, timeout: float = CONNECT_TIMEOUT_S) -> None:
                     break
                 head += chunk
     except TimeoutError:
-        raise ConfigError(f"the Dask scheduler at {address!r} did not answer within "
-                          f"{timeout:g} s; check the address and that the scheduler runs "
-                          "(dask scheduler prints its address)") from None  # fmt: skip
+        raise ConfigError(
+            f"the Dask scheduler at {address!r} did not answer within "
+            f"{timeout:g} s; check the address and that the scheduler runs "
+            "(dask scheduler prints its address)"
+        ) from None
     except OSError as exc:
-        raise ConfigError(f"cannot connect to a Dask scheduler at {address!r}: "
-                          f"{exc.strerror or exc}; check the address and that the scheduler "
-                          "runs") from None  # fmt: skip
+        raise ConfigError(
+            f"cannot connect to a Dask scheduler at {address!r}: "
+            f"{exc.strerror or exc}; check the address and that the scheduler "
+            "runs"
+        ) from None
     size = struct.unpack("<Q", head)[0] if len(head) == 8 else 0
     if not 0 < size < _MIB:
         raise ConfigError(
@@ -271,8 +275,10 @@ def job_error(where: str, error: str) -> Exception:
     if sep and isinstance(cls, type) and issubclass(cls, errors.SigmapiError):
         return cls(f"{where}: {message}")
     if sep and cls_name.endswith("MemoryError"):
-        return errors.ResourceError(f"{where}: out of memory ({message}); use a smaller "
-                                    "setting or fewer jobs at once (--workers)")  # fmt: skip
+        return errors.ResourceError(
+            f"{where}: out of memory ({message}); use a smaller "
+            "setting or fewer jobs at once (--workers)"
+        )
     return RuntimeError(f"{where} failed: {error}")
 
 
@@ -300,8 +306,9 @@ def run_jobs(
             yield Outcome(key, value, error, sec)
         return
     ctx = multiprocessing.get_context("spawn")
-    pool = ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=die_with_parent,
-                               initargs=(os.getpid(),))  # fmt: skip
+    pool = ProcessPoolExecutor(
+        max_workers=workers, mp_context=ctx, initializer=die_with_parent, initargs=(os.getpid(),)
+    )
     pending: dict[Future[Any], str] = {}
     try:
         pending = {pool.submit(_call, fn, arg): key for key, arg in jobs}
@@ -365,13 +372,16 @@ def _run_dask(
     if address is not None:
         probe_scheduler(address)
     if address is None:
-        cluster = LocalCluster(n_workers=max(1, workers), threads_per_worker=1, processes=True,
-                               dashboard_address=":0")  # fmt: skip
+        cluster = LocalCluster(
+            n_workers=max(1, workers), threads_per_worker=1, processes=True, dashboard_address=":0"
+        )
     try:
         target = address if address is not None else cluster
         with Client(target, timeout=f"{CONNECT_TIMEOUT_S * 2:g}s") as client:
-            futures = {client.submit(_call, fn, arg, key=f"sigmapi-{key}", pure=False): key
-                       for key, arg in jobs}  # fmt: skip
+            futures = {
+                client.submit(_call, fn, arg, key=f"sigmapi-{key}", pure=False): key
+                for key, arg in jobs
+            }
             for fut in as_completed(futures):
                 value, error, sec = fut.result()
                 yield Outcome(futures[fut], value, error, sec)

@@ -36,8 +36,8 @@ from sigmapi._version import __version__
 from sigmapi.codes import PopulationCode
 from sigmapi.errors import ConfigError, ResourceError, UsageError
 from sigmapi.io import atomic_write_bytes
+from sigmapi.model.som import SigmaPiSOM, load_model
 from sigmapi.rules.winners import Scoring
-from sigmapi.som import SigmaPiSOM, load_model
 
 __all__ = ["FORMATS", "INPUTS", "OPSET", "export_onnx", "onnx_model", "score_matrix"]
 
@@ -130,25 +130,32 @@ def _encoder(code: PopulationCode, pos: str, out: str, init: list[Any]) -> list[
         p = f"{out}_axis{a}"
         d = f"{p}_diff"
         nodes += [
-            helper.make_node("Gather", [pos, const(f"{p}_i", np.array([a], np.int64))],
-                             [f"{p}_p"], axis=1),
-            helper.make_node("Mul", [f"{p}_p", const(f"{p}_scale", float(code.scale[a]))],
-                             [f"{p}_g"]),
-            helper.make_node("Sub", [f"{p}_g", const(f"{p}_units", np.arange(n, dtype=float))],
-                             [d]),
-        ]  # fmt: skip
+            helper.make_node(
+                "Gather", [pos, const(f"{p}_i", np.array([a], np.int64))], [f"{p}_p"], axis=1
+            ),
+            helper.make_node(
+                "Mul", [f"{p}_p", const(f"{p}_scale", float(code.scale[a]))], [f"{p}_g"]
+            ),
+            helper.make_node(
+                "Sub", [f"{p}_g", const(f"{p}_units", np.arange(n, dtype=float))], [d]
+            ),
+        ]
         if code.periodic:  # the shorter way round: d - n round(d / n), half to even as NumPy
             size = const(f"{p}_n", float(n))
-            nodes += [helper.make_node("Div", [d, size], [f"{p}_turns"]),
-                      helper.make_node("Round", [f"{p}_turns"], [f"{p}_whole"]),
-                      helper.make_node("Mul", [f"{p}_whole", size], [f"{p}_wrap"]),
-                      helper.make_node("Sub", [d, f"{p}_wrap"], [f"{p}_wrapped"])]  # fmt: skip
+            nodes += [
+                helper.make_node("Div", [d, size], [f"{p}_turns"]),
+                helper.make_node("Round", [f"{p}_turns"], [f"{p}_whole"]),
+                helper.make_node("Mul", [f"{p}_whole", size], [f"{p}_wrap"]),
+                helper.make_node("Sub", [d, f"{p}_wrap"], [f"{p}_wrapped"]),
+            ]
             d = f"{p}_wrapped"
         two_w2 = const(f"{p}_two_w2", 2.0 * code.width**2)
-        nodes += [helper.make_node("Mul", [d, d], [f"{p}_sq"]),
-                  helper.make_node("Neg", [f"{p}_sq"], [f"{p}_neg"]),
-                  helper.make_node("Div", [f"{p}_neg", two_w2], [f"{p}_arg"]),
-                  helper.make_node("Exp", [f"{p}_arg"], [f"{p}_hill"])]  # fmt: skip
+        nodes += [
+            helper.make_node("Mul", [d, d], [f"{p}_sq"]),
+            helper.make_node("Neg", [f"{p}_sq"], [f"{p}_neg"]),
+            helper.make_node("Div", [f"{p}_neg", two_w2], [f"{p}_arg"]),
+            helper.make_node("Exp", [f"{p}_arg"], [f"{p}_hill"]),
+        ]
         if not code_so_far:
             code_so_far = f"{p}_hill"
             continue
@@ -156,18 +163,21 @@ def _encoder(code: PopulationCode, pos: str, out: str, init: list[Any]) -> list[
             helper.make_node("Unsqueeze", [code_so_far, "axis2"], [f"{p}_left"]),
             helper.make_node("Unsqueeze", [f"{p}_hill", "axis1"], [f"{p}_right"]),
             helper.make_node("Mul", [f"{p}_left", f"{p}_right"], [f"{p}_outer"]),
-            helper.make_node("Reshape", [f"{p}_outer", const(f"{p}_flat", np.array([0, -1]))],
-                             [f"{p}_code"]),
-        ]  # fmt: skip
+            helper.make_node(
+                "Reshape", [f"{p}_outer", const(f"{p}_flat", np.array([0, -1]))], [f"{p}_code"]
+            ),
+        ]
         code_so_far = f"{p}_code"
     height = const(f"{out}_height", float(code.height))
     if not code.normalize:
         return [*nodes, helper.make_node("Mul", [code_so_far, height], [out])]
-    return [*nodes, helper.make_node("Mul", [code_so_far, height], [f"{out}_tall"]),
-            helper.make_node("ReduceSumSquare", [f"{out}_tall", "axis1"], [f"{out}_sq"],
-                             keepdims=1),
-            helper.make_node("Sqrt", [f"{out}_sq"], [f"{out}_norm"]),
-            helper.make_node("Div", [f"{out}_tall", f"{out}_norm"], [out])]  # fmt: skip
+    return [
+        *nodes,
+        helper.make_node("Mul", [code_so_far, height], [f"{out}_tall"]),
+        helper.make_node("ReduceSumSquare", [f"{out}_tall", "axis1"], [f"{out}_sq"], keepdims=1),
+        helper.make_node("Sqrt", [f"{out}_sq"], [f"{out}_norm"]),
+        helper.make_node("Div", [f"{out}_tall", f"{out}_norm"], [out]),
+    ]
 
 
 def onnx_model(model: SigmaPiSOM, opset: int = OPSET, inputs: str = "codes") -> Any:
@@ -184,8 +194,9 @@ def onnx_model(model: SigmaPiSOM, opset: int = OPSET, inputs: str = "codes") -> 
     from onnx import TensorProto, helper, numpy_helper
 
     top = int(onnx.defs.onnx_opset_version())
-    opset = _validate.integer("opset", opset, MIN_OPSET, top, fix=f"the default is {OPSET}",
-                              error=UsageError)  # fmt: skip
+    opset = _validate.integer(
+        "opset", opset, MIN_OPSET, top, fix=f"the default is {OPSET}", error=UsageError
+    )
     _validate.choice("inputs", inputs, INPUTS, error=UsageError)
     raw, scale = _columns(model)  # raises NotFittedError before training
     nbytes = raw.nbytes + scale.nbytes
@@ -207,16 +218,20 @@ def onnx_model(model: SigmaPiSOM, opset: int = OPSET, inputs: str = "codes") -> 
     ]
     f64 = TensorProto.DOUBLE
     if inputs == "positions":
-        nodes = [*_encoder(model.x_code, "x_position", "x", init),
-                 *_encoder(model.y_code, "y_position", "y", init)]  # fmt: skip
+        nodes = [
+            *_encoder(model.x_code, "x_position", "x", init),
+            *_encoder(model.y_code, "y_position", "y", init),
+        ]
         graph_inputs = [
             helper.make_tensor_value_info("x_position", f64, ["B", len(model.x_shape)]),
             helper.make_tensor_value_info("y_position", f64, ["B", len(model.y_shape)]),
         ]
     else:
         nodes = []
-        graph_inputs = [helper.make_tensor_value_info("x", f64, ["B", nx]),
-                        helper.make_tensor_value_info("y", f64, ["B", ny])]  # fmt: skip
+        graph_inputs = [
+            helper.make_tensor_value_info("x", f64, ["B", nx]),
+            helper.make_tensor_value_info("y", f64, ["B", ny]),
+        ]
     nodes += [
         helper.make_node("Unsqueeze", ["x", "axis2"], ["x3"]),
         helper.make_node("Unsqueeze", ["y", "axis1"], ["y3"]),
@@ -257,24 +272,30 @@ def onnx_model(model: SigmaPiSOM, opset: int = OPSET, inputs: str = "codes") -> 
         init.append(numpy_helper.from_array(b, "score_offset"))
         nodes.append(helper.make_node("Add", [scores, "score_offset"], ["scores"]))
         scores = "scores"
-    nodes.append(helper.make_node("ArgMax", [scores], ["winner"], axis=1, keepdims=0,
-                                  select_last_index=0))  # fmt: skip
+    nodes.append(
+        helper.make_node("ArgMax", [scores], ["winner"], axis=1, keepdims=0, select_last_index=0)
+    )
     graph = helper.make_graph(
         nodes,
         "sigmapi_map",
         graph_inputs,
-        [helper.make_tensor_value_info("response", f64, ["B", k]),
-         helper.make_tensor_value_info("winner", TensorProto.INT64, ["B"])],
+        [
+            helper.make_tensor_value_info("response", f64, ["B", k]),
+            helper.make_tensor_value_info("winner", TensorProto.INT64, ["B"]),
+        ],
         init,
         doc_string=(
-            ("Sigma-Pi map: inputs x (B, n_x) and y (B, n_y), float64 population codes "
-             "(metadata sigmapi.x_code, sigmapi.y_code)" if inputs == "codes" else
-             "Sigma-Pi map: inputs x_position (B, d_x) and y_position (B, d_y), float64 "
-             "positions in [0, 1], encoded as sigmapi.x_code and sigmapi.y_code")
+            (
+                "Sigma-Pi map: inputs x (B, n_x) and y (B, n_y), float64 population codes "
+                "(metadata sigmapi.x_code, sigmapi.y_code)"
+                if inputs == "codes"
+                else "Sigma-Pi map: inputs x_position (B, d_x) and y_position (B, d_y), float64 "
+                "positions in [0, 1], encoded as sigmapi.x_code and sigmapi.y_code"
+            )
             + "; outputs response (B, n_units) and winner (B,), the flat index of the winning "
             "unit (map_shape in C order)."
         ),
-    )  # fmt: skip
+    )
     proto = helper.make_model(
         graph,
         opset_imports=[helper.make_opsetid("", opset)],

@@ -87,10 +87,25 @@ _CHUNK = 1 << 22
 _STALE_S = 60.0
 # what a damaged zip, deflate or LZMA stream or npy header can raise inside zipfile and numpy
 _DAMAGE = (
-    OSError, EOFError, zipfile.BadZipFile, zipfile.LargeZipFile, zlib.error, lzma.LZMAError,
-    struct.error, ValueError, KeyError, IndexError, TypeError, OverflowError, RuntimeError,
-    NotImplementedError, UnicodeError, SyntaxError, RecursionError, MemoryError,
-)  # fmt: skip
+    OSError,
+    EOFError,
+    zipfile.BadZipFile,
+    zipfile.LargeZipFile,
+    zlib.error,
+    lzma.LZMAError,
+    struct.error,
+    ValueError,
+    KeyError,
+    IndexError,
+    TypeError,
+    OverflowError,
+    RuntimeError,
+    NotImplementedError,
+    UnicodeError,
+    SyntaxError,
+    RecursionError,
+    MemoryError,
+)
 
 
 # ---------------------------------------------------------------------------- writing
@@ -437,8 +452,9 @@ def read_archive(
                     int(np.prod(s, dtype=object)) * np.dtype(_DESCR[d[0]]).itemsize
                     for d, s in declared.values()
                 )
-                _memory.check(need, f"loading {name!r}", "load it on a larger machine",
-                              error=ModelFileError)  # fmt: skip
+                _memory.check(
+                    need, f"loading {name!r}", "load it on a larger machine", error=ModelFileError
+                )
                 arrays = {
                     n: _read_member(zf, infos[n], *declared[n], name) for n in sorted(declared)
                 }
@@ -464,8 +480,10 @@ def _members(zf: zipfile.ZipFile, name: str) -> dict[str, zipfile.ZipInfo]:
                 f"{name!r}: member {i.filename!r} is not one a sigmapi model file holds"
             )
         if i.flag_bits & 0x1 or i.compress_type not in (
-            zipfile.ZIP_STORED, zipfile.ZIP_DEFLATED, zipfile.ZIP_LZMA,
-        ):  # fmt: skip
+            zipfile.ZIP_STORED,
+            zipfile.ZIP_DEFLATED,
+            zipfile.ZIP_LZMA,
+        ):
             raise ModelFileError(
                 f"{name!r}: member {i.filename!r} is encrypted or compressed with method "
                 f"{i.compress_type} (sigmapi reads stored, deflated or LZMA members)"
@@ -510,9 +528,10 @@ def read_model(path: str | Path) -> tuple[dict[str, Any], dict[str, NDArray[Any]
     header, arrays = read_archive(path)
     name = str(path)
     if header["version"] == 1:
-        sums = {"weights": header.get("sha256"), **{
-            f"state_{k}": v for k, v in header["state_sha256"].items()
-        }}  # fmt: skip
+        sums = {
+            "weights": header.get("sha256"),
+            **{f"state_{k}": v for k, v in header["state_sha256"].items()},
+        }
         header["arrays"] = {
             k: {"dtype": a.dtype.str, "shape": list(a.shape), "sha256": sums[k]}
             for k, a in arrays.items()

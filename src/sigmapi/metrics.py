@@ -45,11 +45,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sigmapi import _memory, _validate
-from sigmapi.circular import circular_metrics, map_distance
+from sigmapi.analysis.circular import circular_metrics, map_distance
 from sigmapi.rules import Scoring
 
 if TYPE_CHECKING:
-    from sigmapi.som import SigmaPiSOM
+    from sigmapi.model.som import SigmaPiSOM
     from sigmapi.tasks import Batch
 
 __all__ = [
@@ -107,7 +107,7 @@ class Metrics:
     topographic_error: float = 0.0
     circular: dict[str, float | bool] | None = None
     """Maps of angles only (a relation with circular z): ``order_circular``, ``seam_jump``,
-    ``seam_gap``, ``seam_units_win`` and ``seamless`` (:mod:`sigmapi.circular`); their
+    ``seam_gap``, ``seam_units_win`` and ``seamless`` (:mod:`sigmapi.analysis.circular`); their
     ``z_error`` is then the circular one. None for every other relation."""
 
     def to_dict(self) -> dict[str, float | int | bool]:
@@ -208,16 +208,31 @@ def evaluate(
     starved, te, score = fold_indicators(model, test, w0, w1, scores)
     circ = None
     if model.sampler.relation.circular:  # angles: z error the shorter way round, seam
-        circ = circular_metrics(wc, calibration.z, w0, test.z, coords, model.map_shape,
-                                model.config.map_periodic, spacing,
-                                starved_mask(w0, w1, model.n_units))  # fmt: skip
+        circ = circular_metrics(
+            wc,
+            calibration.z,
+            w0,
+            test.z,
+            coords,
+            model.map_shape,
+            model.config.map_periodic,
+            spacing,
+            starved_mask(w0, w1, model.n_units),
+        )
         z_error = float(circ.pop("z_error"))
     return Metrics(
-        m["view_consistency"], m["view_within_one"], z_error, m["order_r2"], m["usage"],
+        m["view_consistency"],
+        m["view_within_one"],
+        z_error,
+        m["order_r2"],
+        m["usage"],
         int(test.z.shape[0]),
-        fold_score=score, folded=score >= FOLD_THRESHOLD, starved_units=starved,
-        topographic_error=te, circular=circ,
-    )  # fmt: skip
+        fold_score=score,
+        folded=score >= FOLD_THRESHOLD,
+        starved_units=starved,
+        topographic_error=te,
+        circular=circ,
+    )
 
 
 def winner_metrics(

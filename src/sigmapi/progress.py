@@ -59,8 +59,11 @@ class Lines:
         shown = f"{per_s:,.0f}" if per_s >= 10 else f"{per_s:.2g}"
         rate = f" ({shown} {self.unit}/s)" if dt > 0 and done > 0 and self.unit else ""
         unit = f" {self.unit}" if self.unit else ""
-        print(f"{self.desc}: {done:,} of {self.total:,}{unit} in {dt:.1f} s{rate}",
-              file=sys.stderr, flush=True)  # fmt: skip
+        print(
+            f"{self.desc}: {done:,} of {self.total:,}{unit} in {dt:.1f} s{rate}",
+            file=sys.stderr,
+            flush=True,
+        )
 
     def __enter__(self) -> Lines:
         return self
@@ -79,8 +82,17 @@ def _bar(total: int, desc: str, unit: str, start: int, disable: bool | None) -> 
     if _lines(disable):
         return Lines(total, desc, unit, start)
 
-    return tqdm(total=total, initial=start, desc=desc, unit=unit, unit_scale=unit == "it",
-                dynamic_ncols=True, file=sys.stderr, disable=disable, mininterval=0.5)  # fmt: skip
+    return tqdm(
+        total=total,
+        initial=start,
+        desc=desc,
+        unit=unit,
+        unit_scale=unit == "it",
+        dynamic_ncols=True,
+        file=sys.stderr,
+        disable=disable,
+        mininterval=0.5,
+    )
 
 
 def progress_callback(

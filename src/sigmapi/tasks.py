@@ -79,22 +79,43 @@ def _whole_turn(z: Array) -> tuple[Array, Array]:
 
 RELATIONS: dict[str, Relation] = {
     "mean": Relation(
-        "mean", lambda x, y: (x + y) / 2, lambda z, x: 2 * z - x, lambda z, y: 2 * z - y,
-        (0.0, 1.0), lambda z: _clip01(2 * z - 1, 2 * z), lambda z: _clip01(2 * z - 1, 2 * z),
+        "mean",
+        lambda x, y: (x + y) / 2,
+        lambda z, x: 2 * z - x,
+        lambda z, y: 2 * z - y,
+        (0.0, 1.0),
+        lambda z: _clip01(2 * z - 1, 2 * z),
+        lambda z: _clip01(2 * z - 1, 2 * z),
     ),
     "sum": Relation(
-        "sum", lambda x, y: x + y, lambda z, x: z - x, lambda z, y: z - y,
-        (0.0, 2.0), lambda z: _clip01(z - 1, z), lambda z: _clip01(z - 1, z),
+        "sum",
+        lambda x, y: x + y,
+        lambda z, x: z - x,
+        lambda z, y: z - y,
+        (0.0, 2.0),
+        lambda z: _clip01(z - 1, z),
+        lambda z: _clip01(z - 1, z),
     ),
     "difference": Relation(
-        "difference", lambda x, y: x - y, lambda z, x: x - z, lambda z, y: z + y,
-        (-1.0, 1.0), lambda z: _clip01(z, 1 + z), lambda z: _clip01(-z, 1 - z),
+        "difference",
+        lambda x, y: x - y,
+        lambda z, x: x - z,
+        lambda z, y: z + y,
+        (-1.0, 1.0),
+        lambda z: _clip01(z, 1 + z),
+        lambda z: _clip01(-z, 1 - z),
     ),
     "sum_mod": Relation(
-        "sum_mod", lambda x, y: (x + y) % 1.0, lambda z, x: (z - x) % 1.0,
-        lambda z, y: (z - y) % 1.0, (0.0, 1.0), _whole_turn, _whole_turn, circular=True,
+        "sum_mod",
+        lambda x, y: (x + y) % 1.0,
+        lambda z, x: (z - x) % 1.0,
+        lambda z, y: (z - y) % 1.0,
+        (0.0, 1.0),
+        _whole_turn,
+        _whole_turn,
+        circular=True,
     ),
-}  # fmt: skip
+}
 """Built-in relations: the paper's ``mean``, the plain ``sum``, the ``difference`` x - y, and
 ``sum_mod``, z = (x + y) mod 1, for angles as fractions of a turn (a head direction from the
 body's direction and the head-on-body angle; needs periodic codes): every x goes with every

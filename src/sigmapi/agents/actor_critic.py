@@ -119,8 +119,15 @@ class ActorCritic:
         seed: int | np.random.Generator | None = None,
     ) -> ActorCritic:
         """A learner with ``config``'s settings for ``n_features`` features and ``n_actions``."""
-        return cls(n_features, n_actions, config.gamma, config.critic_lr, config.actor_lr,
-                   config.beta, seed=seed)  # fmt: skip
+        return cls(
+            n_features,
+            n_actions,
+            config.gamma,
+            config.critic_lr,
+            config.actor_lr,
+            config.beta,
+            seed=seed,
+        )
 
     def _phi(self, phi: ArrayLike) -> NDArray[np.float64]:
         arr = np.asarray(phi, dtype=np.float64).ravel()

@@ -61,8 +61,9 @@ class Association:
         Passes over the babbles in :meth:`fit`.
     """
 
-    def __init__(self, n_features: int, n_out: int, lr: float = 0.5, lr_end: float = 0.02,
-                 epochs: int = 8) -> None:  # fmt: skip
+    def __init__(
+        self, n_features: int, n_out: int, lr: float = 0.5, lr_end: float = 0.02, epochs: int = 8
+    ) -> None:
         self.n_features = _validate.integer("n_features", n_features, 1)
         self.n_out = _validate.integer("n_out", n_out, 1)
         self.lr = _validate.number("lr", lr, 1e-9, 1.999)

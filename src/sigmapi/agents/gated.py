@@ -65,11 +65,13 @@ class Gating:
         _validate.choice("view", self.view, VIEWS)
         _validate.choice("surprise", self.surprise, SURPRISE)
         _validate.choice("feedback", self.feedback, FEEDBACK)
-        object.__setattr__(self, "scale", _validate.positive(
-            "scale", self.scale, fix="a TD error of this size opens the gate"))  # fmt: skip
+        object.__setattr__(
+            self,
+            "scale",
+            _validate.positive("scale", self.scale, fix="a TD error of this size opens the gate"),
+        )
         object.__setattr__(self, "eps", _validate.number("eps", self.eps, 0.0, 1.0))
-        object.__setattr__(self, "sigma", _validate.width("sigma", self.sigma, 0.0,
-                                                          lo_open=True))  # fmt: skip
+        object.__setattr__(self, "sigma", _validate.width("sigma", self.sigma, 0.0, lo_open=True))
 
 
 @dataclass(frozen=True)
@@ -136,8 +138,9 @@ def run_gated_episodes(
                 x1, y1 = world.views_of(z, rng)
                 x0 = np.asarray(seen_obs["retina"], dtype=np.float64)[None, :]
                 y0 = np.asarray(seen_obs["gaze"], dtype=np.float64)[None, :]
-                model.learn_gated((x0, y0, x1, y1), gate[None, :], sigma=gating.sigma,
-                                  eps=gating.eps)  # fmt: skip
+                model.learn_gated(
+                    (x0, y0, x1, y1), gate[None, :], sigma=gating.sigma, eps=gating.eps
+                )
                 phi2 = env.observation(obs2)  # the next state as the changed map reads it
                 updates += 1
             phi, obs, info = phi2, obs2, info2

@@ -17,7 +17,7 @@ import numpy as np
 from sigmapi.metrics import evaluate, evaluation_sets
 
 if TYPE_CHECKING:
-    from sigmapi.som import SigmaPiSOM
+    from sigmapi.model.som import SigmaPiSOM
     from sigmapi.tasks import Batch
 
 __all__ = ["LearningCurve", "checkpoints", "costs"]

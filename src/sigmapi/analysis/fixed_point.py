@@ -49,7 +49,7 @@ from sigmapi.metrics import evaluate
 
 if TYPE_CHECKING:
     from sigmapi.metrics import Metrics
-    from sigmapi.som import SigmaPiSOM
+    from sigmapi.model.som import SigmaPiSOM
 
 __all__ = ["Ceiling", "fixed_point", "view_grid"]
 
@@ -241,7 +241,7 @@ def fixed_point(
     >>> 0.0 <= c.metrics.view_consistency <= 1.0 and c.rounds >= 1
     True
     """
-    from sigmapi.som import SigmaPiSOM
+    from sigmapi.model.som import SigmaPiSOM
 
     d = model.sampler.ndim
     zp = Z_POINTS.get(d, 8) if z_points is None else int(z_points)

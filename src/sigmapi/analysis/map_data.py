@@ -1,8 +1,8 @@
 """What a trained map learned, as arrays: the computations behind the figures.
 
-Everything here is numerics on a fitted :class:`~sigmapi.som.SigmaPiSOM`; :mod:`sigmapi.viz.plots`
-draws the results. Functions take a ``numpy.random.Generator`` or an int seed wherever they
-draw data, so a figure is a pure function of the model and the seed.
+Everything here is numerics on a fitted :class:`~sigmapi.model.som.SigmaPiSOM`;
+:mod:`sigmapi.viz.plots` draws the results. Functions take a ``numpy.random.Generator`` or an
+int seed wherever they draw data, so a figure is a pure function of the model and the seed.
 
 - :func:`fig8_data`: the inputs and map responses of Fig. 8 of the chapter (four views of one
   z; an "L" on one input with a single hill on the other).
@@ -29,7 +29,7 @@ from numpy.typing import NDArray
 from sigmapi.metrics import affine_fit
 
 if TYPE_CHECKING:
-    from sigmapi.som import SigmaPiSOM
+    from sigmapi.model.som import SigmaPiSOM
 
 __all__ = [
     "Fig8Data",

@@ -157,8 +157,11 @@ def reference_frame_index(
         per_axis.append(idx)
         valid.append(ok.sum(axis=0))
     rfi = np.mean(per_axis, axis=0)
-    return {"reference_frame_index": rfi, "per_axis": np.asarray(per_axis),
-            "valid_gazes": np.asarray(valid)}  # fmt: skip
+    return {
+        "reference_frame_index": rfi,
+        "per_axis": np.asarray(per_axis),
+        "valid_gazes": np.asarray(valid),
+    }
 
 
 def gain_fields(
@@ -230,8 +233,12 @@ def compare_distributions(a: Sequence[float | None], b: Sequence[float | None]) 
     xa = np.sort(np.asarray([v for v in a if v is not None and np.isfinite(v)], dtype=float))
     xb = np.sort(np.asarray([v for v in b if v is not None and np.isfinite(v)], dtype=float))
     if xa.size == 0 or xb.size == 0:
-        return {"ks": None, "p_value": None, "n": [int(xa.size), int(xb.size)],
-                "medians": [None, None]}  # fmt: skip
+        return {
+            "ks": None,
+            "p_value": None,
+            "n": [int(xa.size), int(xb.size)],
+            "medians": [None, None],
+        }
     grid = np.concatenate([xa, xb])
     cdf_a = np.searchsorted(xa, grid, side="right") / xa.size
     cdf_b = np.searchsorted(xb, grid, side="right") / xb.size
@@ -240,5 +247,9 @@ def compare_distributions(a: Sequence[float | None], b: Sequence[float | None]) 
     lam = (np.sqrt(ne) + 0.12 + 0.11 / np.sqrt(ne)) * ks
     j = np.arange(1, 101)
     p = float(np.clip(2.0 * np.sum((-1.0) ** (j - 1) * np.exp(-2.0 * (j * lam) ** 2)), 0.0, 1.0))
-    return {"ks": ks, "p_value": p if lam > 0 else 1.0, "n": [int(xa.size), int(xb.size)],
-            "medians": [float(np.median(xa)), float(np.median(xb))]}  # fmt: skip
+    return {
+        "ks": ks,
+        "p_value": p if lam > 0 else 1.0,
+        "n": [int(xa.size), int(xb.size)],
+        "medians": [float(np.median(xa)), float(np.median(xb))],
+    }

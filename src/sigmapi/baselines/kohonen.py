@@ -189,10 +189,15 @@ class MiniSomMap(KohonenSOM):
         data = np.vstack([concat_views(x0, y0), concat_views(x1, y1)])
         rows, cols = (1, *self.map_shape) if len(self.map_shape) == 1 else self.map_shape
         som: Any = MiniSom(
-            rows, cols, data.shape[1], sigma=self.sigma0, learning_rate=self.eps0,
-            decay_function="linear_decay_to_zero", sigma_decay_function="linear_decay_to_one",
+            rows,
+            cols,
+            data.shape[1],
+            sigma=self.sigma0,
+            learning_rate=self.eps0,
+            decay_function="linear_decay_to_zero",
+            sigma_decay_function="linear_decay_to_one",
             random_seed=self.seed,
-        )  # fmt: skip
+        )
         som.random_weights_init(data)
         som.train(data, self.iterations, random_order=True)
         self.weights_ = np.asarray(som.get_weights(), dtype=np.float64).reshape(rows * cols, -1)

@@ -105,9 +105,12 @@ class RBMFeatures:
         x0, y0, x1, y1 = views
         data = np.vstack([concat_views(x0, y0), concat_views(x1, y1)])
         self.rbm_ = BernoulliRBM(
-            n_components=self.n_hidden, learning_rate=self.learning_rate, batch_size=20,
-            n_iter=self.epochs, random_state=self.seed,
-        ).fit(data)  # fmt: skip
+            n_components=self.n_hidden,
+            learning_rate=self.learning_rate,
+            batch_size=20,
+            n_iter=self.epochs,
+            random_state=self.seed,
+        ).fit(data)
         return self
 
     def features(self, x: ArrayLike, y: ArrayLike) -> Array:

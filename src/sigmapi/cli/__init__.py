@@ -34,6 +34,7 @@ from sigmapi.experiments import REGISTRY
 __all__ = ["COMMANDS", "build_parser", "check_output", "main", "resolve_config"]
 
 
+# left unformatted: a table, one row per command
 COMMANDS = (
     ("figure", "draw one figure of a trained model", "sigmapi.cli.figure:add_arguments"),
     ("export", "write a trained map as an ONNX graph (response, winner)",
@@ -103,8 +104,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     except OSError as exc:  # unwritable folder, disk full, ...: the user's environment
         where = f" {exc.filename!r}" if exc.filename else ""
-        print(f"sigmapi {args.command}: error: cannot access{where}: {exc.strerror or exc}",
-              file=sys.stderr)  # fmt: skip
+        print(
+            f"sigmapi {args.command}: error: cannot access{where}: {exc.strerror or exc}",
+            file=sys.stderr,
+        )
         return 2
     except KeyboardInterrupt:
         print(f"sigmapi {args.command}: interrupted", file=sys.stderr)

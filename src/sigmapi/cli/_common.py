@@ -56,8 +56,10 @@ class Parser(argparse.ArgumentParser):
             if flag == "--":
                 break
             if flag in flags and "=" not in key and not value.startswith("-"):
-                self.error(f"{flag} takes KEY=VALUE as one word, got {flag} {key} {value}; "
-                           f"write {flag} {key}={value}")  # fmt: skip
+                self.error(
+                    f"{flag} takes KEY=VALUE as one word, got {flag} {key} {value}; "
+                    f"write {flag} {key}={value}"
+                )
         return super().parse_known_args(argv, namespace)
 
 
@@ -125,9 +127,13 @@ def key_value(text: str) -> str:
 
 def add_workers_flag(p: argparse.ArgumentParser | argparse._ArgumentGroup, what: str) -> None:
     """``--workers N``: how many ``what`` run at once (:func:`sigmapi.executor.plan_workers`)."""
-    p.add_argument("--workers", type=_positive_int, default=None,
-                   help=f"{what} at once (default: one per core, as many as fit in the memory "
-                   "budget, half the available memory; results do not depend on it)")  # fmt: skip
+    p.add_argument(
+        "--workers",
+        type=_positive_int,
+        default=None,
+        help=f"{what} at once (default: one per core, as many as fit in the memory "
+        "budget, half the available memory; results do not depend on it)",
+    )
 
 
 DEFAULT_PRESET = "paper-1d"
@@ -151,8 +157,11 @@ def add_config_flags(p: argparse.ArgumentParser) -> None:
         help="override one config key, e.g. --set iterations=50000 (repeatable)",
     )
     p.add_argument("--seed", type=int, help="seed of all random streams (default: the config's)")
-    p.add_argument("--backend", choices=["auto", *BACKENDS],
-                   help="kernel backend (default: the config's, 'auto')")  # fmt: skip
+    p.add_argument(
+        "--backend",
+        choices=["auto", *BACKENDS],
+        help="kernel backend (default: the config's, 'auto')",
+    )
 
 
 def resolve_config(args: argparse.Namespace) -> SOMConfig:
@@ -186,11 +195,14 @@ def check_output(path: str | Path, force: bool, what: str = "output file") -> Pa
     """Refuse to overwrite an existing ``path`` without ``--force``; the folder must exist."""
     p = Path(path)
     if str(path).endswith(("/", os.sep)) or p.is_dir():
-        raise UsageError(f"{what} {str(path)!r} names a folder; give a file name, e.g. "
-                         f"{str(p / 'model.npz')!r}")  # fmt: skip
+        raise UsageError(
+            f"{what} {str(path)!r} names a folder; give a file name, e.g. {str(p / 'model.npz')!r}"
+        )
     if p.is_symlink():
-        raise UsageError(f"{what} {str(p)!r} is a symbolic link; sigmapi never writes through "
-                         "one: remove it, or give another file name")  # fmt: skip
+        raise UsageError(
+            f"{what} {str(p)!r} is a symbolic link; sigmapi never writes through "
+            "one: remove it, or give another file name"
+        )
     if p.exists() and not force:
         raise UsageError(f"{what} {str(p)!r} exists; pass --force to overwrite it")
     if p.exists() and p.is_dir():

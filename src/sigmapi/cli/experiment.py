@@ -111,28 +111,47 @@ def add_experiment_options(p: Parser, experiment: Experiment[Any]) -> None:
     """Give ``p`` the options of ``experiment`` (its config's fields and the common ones)."""
     p.description = plain(type(experiment).__doc__ or experiment.summary)
     common = p.add_argument_group("common to every experiment")
-    common.add_argument("--seeds", type=int, nargs="+", metavar="S",
-                        help=f"the seeds (not a count), distinct ints >= 0 "
-                        f"(default: {_seeds_default(experiment)})")  # fmt: skip
+    common.add_argument(
+        "--seeds",
+        type=int,
+        nargs="+",
+        metavar="S",
+        help=f"the seeds (not a count), distinct ints >= 0 (default: {_seeds_default(experiment)})",
+    )
     out = experiment.default_out
-    common.add_argument("--out", metavar="DIR", default=out,
-                        help="folder for result.json and the figures (default: "
-                        + (f"./{out})" if out else "none: nothing is written)"))  # fmt: skip
-    common.add_argument("--force", action="store_true",
-                        help="write into an --out folder that is not empty")  # fmt: skip
-    common.add_argument("--json", action="store_true",
-                        help="print the result as one JSON object on stdout")  # fmt: skip
+    common.add_argument(
+        "--out",
+        metavar="DIR",
+        default=out,
+        help="folder for result.json and the figures (default: "
+        + (f"./{out})" if out else "none: nothing is written)"),
+    )
+    common.add_argument(
+        "--force", action="store_true", help="write into an --out folder that is not empty"
+    )
+    common.add_argument(
+        "--json", action="store_true", help="print the result as one JSON object on stdout"
+    )
     if experiment.quick is not None:
-        common.add_argument("--quick", action="store_true",
-                            help="a first look: shorter settings, fewer seeds")  # fmt: skip
+        common.add_argument(
+            "--quick", action="store_true", help="a first look: shorter settings, fewer seeds"
+        )
     add_workers_flag(common, "jobs")
-    common.add_argument("--engine", choices=ENGINES, default="local",
-                        help="local: a process pool on this machine (default); dask: a Dask "
-                        "cluster (--address, or a local one)")  # fmt: skip
+    common.add_argument(
+        "--engine",
+        choices=ENGINES,
+        default="local",
+        help="local: a process pool on this machine (default); dask: a Dask "
+        "cluster (--address, or a local one)",
+    )
     common.add_argument("--address", help="Dask scheduler address, e.g. tcp://10.0.0.5:8786")
-    common.add_argument("--memory-budget", type=_gib, default=None, metavar="GIB",
-                        help="memory the parallel jobs may use together (default: half of the "
-                        "available memory)")  # fmt: skip
+    common.add_argument(
+        "--memory-budget",
+        type=_gib,
+        default=None,
+        metavar="GIB",
+        help="memory the parallel jobs may use together (default: half of the available memory)",
+    )
     common.add_argument("--quiet", action="store_true", help="no progress on stderr")
     taken = {a.dest for a in p._actions}
     for group, cls in _parts(experiment).items():
@@ -175,8 +194,10 @@ def _check_folder(out: Path, force: bool, experiment: Experiment[Any]) -> None:
     that does not resume needs ``--force`` to write over a run of its own there."""
     for name in (RESULT_FILE, *getattr(experiment, "writes", ())):
         if (out / name).is_symlink() or ((out / name).exists() and not (out / name).is_file()):
-            raise UsageError(f"{str(out / name)!r} is a folder or a link; the command writes a "
-                             "file there: move it away or give another --out")  # fmt: skip
+            raise UsageError(
+                f"{str(out / name)!r} is a folder or a link; the command writes a "
+                "file there: move it away or give another --out"
+            )
     try:  # find out now, not after a long run, that the folder takes no files
         fd, probe = tempfile.mkstemp(prefix=".sigmapi.", suffix=".tmp", dir=out)
         os.close(fd)

@@ -20,8 +20,10 @@ def cmd_export(args: argparse.Namespace) -> int:
     if args.format not in FORMATS:  # argparse's choices say the same; kept for direct calls
         raise UsageError(f"--format must be one of {list(FORMATS)}, got {args.format!r}")
     if not Path(args.model).is_file():
-        raise UsageError(f"model {args.model!r} does not exist or is not a file; give a model "
-                         "file written by `sigmapi train` or `sigmapi reproduce`")  # fmt: skip
+        raise UsageError(
+            f"model {args.model!r} does not exist or is not a file; give a model "
+            "file written by `sigmapi train` or `sigmapi reproduce`"
+        )
     out = check_output(args.out, args.force, "--out")
     from sigmapi.export import OPSET, export_onnx
 
@@ -38,8 +40,12 @@ def add_arguments(p: Any) -> None:
     p.add_argument("--format", required=True, choices=FORMATS, help="file format (onnx)")
     p.add_argument("--out", required=True, help="file to write, e.g. map.onnx")
     p.add_argument("--opset", type=int, help="ONNX opset of the graph (default 21; 18 or later)")
-    p.add_argument("--inputs", choices=("codes", "positions"), default="codes",
-                   help="what the graph takes: the population codes x and y (default), or "
-                   "positions in [0, 1] that it encodes as the model does")  # fmt: skip
+    p.add_argument(
+        "--inputs",
+        choices=("codes", "positions"),
+        default="codes",
+        help="what the graph takes: the population codes x and y (default), or "
+        "positions in [0, 1] that it encodes as the model does",
+    )
     p.add_argument("--force", action="store_true", help="overwrite --out if it exists")
     p.set_defaults(func=cmd_export)

@@ -14,8 +14,8 @@ from sigmapi.analysis.curves import LearningCurve, checkpoints
 from sigmapi.cli._common import check_output
 from sigmapi.errors import UsageError
 from sigmapi.experiments.reproduce.results import CURVE_TEST, N_CHECKPOINTS
+from sigmapi.model.som import load_model
 from sigmapi.progress import progress_callback
-from sigmapi.som import load_model
 from sigmapi.viz.figures import DPI, FIGURES, draw_figure
 
 __all__ = ["add_arguments", "cmd_figure"]
@@ -51,8 +51,11 @@ def cmd_figure(args: argparse.Namespace) -> int:
         with bar:
             twin.fit(iterations=model.t_, callback=curve)
         if not np.allclose(twin.weights_, model.weights_, rtol=1e-6, atol=1e-9):
-            print("note: the replayed run ended with weights that differ from the file's "
-                  "(another backend?); curves show the replay", file=sys.stderr)  # fmt: skip
+            print(
+                "note: the replayed run ended with weights that differ from the file's "
+                "(another backend?); curves show the replay",
+                file=sys.stderr,
+            )
         curves = [curve.to_dict()]
     label = args.label if args.label is not None else Path(args.model).name
     draw_figure(args.name, model, out, curves=curves, label=label, seed=args.seed, dpi=dpi)
@@ -67,9 +70,13 @@ def add_arguments(p: Any) -> None:
     p.add_argument("--out", required=True, help="image file to write (.png, .pdf or .svg)")
     p.add_argument("--seed", type=int, default=0, help="seed of the figure's sampled inputs")
     p.add_argument("--label", help="how titles name the model (default: the file name)")
-    p.add_argument("--dpi", type=int, default=DPI,
-                   help=f"resolution of .png figures (default {DPI}; 300 for print; .pdf and "
-                   ".svg are vector graphics)")  # fmt: skip
+    p.add_argument(
+        "--dpi",
+        type=int,
+        default=DPI,
+        help=f"resolution of .png figures (default {DPI}; 300 for print; .pdf and "
+        ".svg are vector graphics)",
+    )
     p.add_argument("--force", action="store_true", help="overwrite --out if it exists")
     p.add_argument("--quiet", action="store_true", help="no progress bar (curves replay the run)")
     p.set_defaults(func=cmd_figure)

@@ -28,8 +28,8 @@ from sigmapi.metrics import (
     evaluation_sets,
     fold_indicators,
 )
+from sigmapi.model.som import SigmaPiSOM, load_model
 from sigmapi.progress import progress_callback
-from sigmapi.som import SigmaPiSOM, load_model
 
 __all__ = ["cmd_evaluate", "cmd_presets", "cmd_train", "register"]
 
@@ -64,8 +64,10 @@ def _train(args: argparse.Namespace, cfg: Any, out: Path, every: int | None) -> 
         elif out.exists() and not args.force:
             model = _finished_run(out, cfg)
             if model.t_ >= cfg.iterations and model.refined_ >= model.refine_total:
-                print(f"{out} is this run, complete ({model.t_} iterations); nothing to do",
-                      file=sys.stderr)  # fmt: skip
+                print(
+                    f"{out} is this run, complete ({model.t_} iterations); nothing to do",
+                    file=sys.stderr,
+                )
                 return 0
             print(f"resuming from {out} (iteration {model.t_})", file=sys.stderr)
     if model is None:

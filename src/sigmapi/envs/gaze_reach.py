@@ -108,8 +108,11 @@ def _check_world(
     dim = int(dim)
     grid = _validate.integer("grid", grid, 2, fix="use e.g. grid=15 (the paper's 2-D network)")
     n = grid**dim  # the code's (n, n) float64 table of hills, and one copy of it
-    _memory.check(16 * n * n, f"a world of grid={grid}, dim={dim} ({n:,} units a view)",
-                  "use a smaller grid (the paper's 2-D network: grid=15)")  # fmt: skip
+    _memory.check(
+        16 * n * n,
+        f"a world of grid={grid}, dim={dim} ({n:,} units a view)",
+        "use a smaller grid (the paper's 2-D network: grid=15)",
+    )
     code_width = _validate.width("code_width", code_width, MIN_WIDTH, fix=_WIDTH_FIX)
     step_size = _validate.number(
         "step_size", step_size, 0.0, 0.5, lo_open=True, fix="use e.g. 0.05"
@@ -126,9 +129,11 @@ def _check_world(
     free = 1.0 - float(np.prod(np.minimum(g + goal_radius, 1.0) - np.maximum(g - goal_radius, 0)))
     if free < 0.05:
         raise _validate.fail(
-            "goal_radius", "small enough to leave 5 % of the workspace outside the goal box",
-            goal_radius, f"the box covers {100 * (1 - free):.0f} %; use e.g. 0.1",
-        )  # fmt: skip
+            "goal_radius",
+            "small enough to leave 5 % of the workspace outside the goal box",
+            goal_radius,
+            f"the box covers {100 * (1 - free):.0f} %; use e.g. 0.1",
+        )
     saccade_rate = _validate.number(
         "saccade_rate", saccade_rate, 0.0, 1.0, fix="a probability per step"
     )
@@ -158,12 +163,22 @@ class GazeReachConfig:
 
     def __post_init__(self) -> None:
         dim, grid, width, step, _, radius, rate = _check_world(
-            self.dim, self.grid, self.code_width, self.step_size, 0.5, self.goal_radius,
+            self.dim,
+            self.grid,
+            self.code_width,
+            self.step_size,
+            0.5,
+            self.goal_radius,
             self.saccade_rate,
-        )  # fmt: skip
-        for name, value in (("dim", dim), ("grid", grid), ("code_width", width),
-                            ("step_size", step), ("goal_radius", radius),
-                            ("saccade_rate", rate)):  # fmt: skip
+        )
+        for name, value in (
+            ("dim", dim),
+            ("grid", grid),
+            ("code_width", width),
+            ("step_size", step),
+            ("goal_radius", radius),
+            ("saccade_rate", rate),
+        ):
             object.__setattr__(self, name, value)
         steps = _validate.integer("max_episode_steps", self.max_episode_steps, 1, fix="e.g. 50")
         object.__setattr__(self, "max_episode_steps", steps)
@@ -171,10 +186,13 @@ class GazeReachConfig:
     def env_kwargs(self) -> dict[str, Any]:
         """Keyword arguments of :class:`GazeReachEnv` (also of ``gymnasium.make``)."""
         return {
-            "dim": self.dim, "grid": self.grid, "code_width": self.code_width,
-            "step_size": self.step_size, "goal_radius": self.goal_radius,
+            "dim": self.dim,
+            "grid": self.grid,
+            "code_width": self.code_width,
+            "step_size": self.step_size,
+            "goal_radius": self.goal_radius,
             "saccade_rate": self.saccade_rate,
-        }  # fmt: skip
+        }
 
     def make_env(self, render_mode: str | None = None) -> TimeLimit[Obs, np.int64]:
         """The environment under its time limit, as ``gymnasium.make`` builds it (without
@@ -253,10 +271,15 @@ class GazeReachEnv(gym.Env[Obs, np.int64]):
         diagonal: bool = False,
         render_mode: str | None = None,
     ) -> None:
-        (self.dim, self.grid, self.code_width, self.step_size, self.goal, self.goal_radius,
-         self.saccade_rate) = _check_world(
-            dim, grid, code_width, step_size, goal, goal_radius, saccade_rate
-        )  # fmt: skip
+        (
+            self.dim,
+            self.grid,
+            self.code_width,
+            self.step_size,
+            self.goal,
+            self.goal_radius,
+            self.saccade_rate,
+        ) = _check_world(dim, grid, code_width, step_size, goal, goal_radius, saccade_rate)
         self.render_mode = _validate.choice(
             "render_mode", render_mode, (None, *self.metadata["render_modes"])
         )

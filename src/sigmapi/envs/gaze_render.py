@@ -8,9 +8,11 @@ from numpy.typing import NDArray
 __all__ = ["COLOURS", "draw_workspace"]
 
 COLOURS = {
-    "workspace": (225, 225, 225), "goal": (150, 220, 150), "gaze": (40, 90, 220),
+    "workspace": (225, 225, 225),
+    "goal": (150, 220, 150),
+    "gaze": (40, 90, 220),
     "object": (220, 40, 40),
-}  # fmt: skip
+}
 """RGB of each part of the picture (the background is white)."""
 
 

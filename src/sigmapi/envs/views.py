@@ -19,7 +19,7 @@ from sigmapi import _validate
 from sigmapi.config import SOMConfig
 from sigmapi.envs.protocols import PlacedViewSource, Views, ViewSource
 from sigmapi.errors import ConfigError
-from sigmapi.som import SigmaPiSOM
+from sigmapi.model.som import SigmaPiSOM
 
 __all__ = ["collect_saccade_views", "collect_stream", "learn_map_in_env", "view_source"]
 

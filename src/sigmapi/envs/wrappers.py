@@ -32,7 +32,7 @@ from sigmapi import _validate
 from sigmapi.codes import PopulationCode, grid_coordinates
 from sigmapi.envs.protocols import Obs, PlacedViewSource, ViewSource, check_view_space
 from sigmapi.errors import ConfigError
-from sigmapi.som import SigmaPiSOM
+from sigmapi.model.som import SigmaPiSOM
 
 __all__ = [
     "FEATURES",
@@ -133,8 +133,9 @@ class MapObservation(gym.ObservationWrapper[Features, Any, Obs]):
                     )
         self.model = model
         self.features = features
-        self.width = _validate.width("width", width, 0.0, lo_open=True,
-                                      fix="in map grid units, e.g. 1.0")  # fmt: skip
+        self.width = _validate.width(
+            "width", width, 0.0, lo_open=True, fix="in map grid units, e.g. 1.0"
+        )
         self._coords = grid_coordinates(tuple(model.map_shape))
         self.observation_space = spaces.Box(0.0, 1.0, (model.n_units,), dtype=np.float32)
 
@@ -209,8 +210,9 @@ class TrueZObservation(gym.Wrapper[Features, Any, Any, Any]):
             raise ConfigError(
                 f"shape must have {base.z_dim} axes for a {base.z_dim}-D z, got {shape!r}"
             )
-        self.width = _validate.width("width", width, 0.0, lo_open=True,
-                                      fix="in grid units, e.g. 1.0")  # fmt: skip
+        self.width = _validate.width(
+            "width", width, 0.0, lo_open=True, fix="in grid units, e.g. 1.0"
+        )
         self.observation_space = spaces.Box(0.0, 1.0, (self.code.size,), dtype=np.float32)
 
     def encode(self, z: NDArray[np.float64]) -> Features:

@@ -34,6 +34,7 @@ from sigmapi.experiments.base import (
 
 # name, "module:object", one line for ``sigmapi --help``: the command line lists these
 # without importing them; ``REGISTRY[name]`` imports the module when the command runs
+# left unformatted: a table, one entry per experiment
 ENTRIES = (
     ("chain", "sigmapi.experiments.chain.run:CHAIN",
      "a chain of two maps (retina -> head -> body) against one map on the whole task"),

@@ -173,8 +173,10 @@ class Entry:
         module, _, attr = self.target.partition(":")
         experiment = getattr(importlib.import_module(module), attr)
         if getattr(experiment, "name", None) != self.name:
-            raise ConfigError(f"experiment entry {self.name!r} ({self.target}) loaded one named "
-                              f"{getattr(experiment, 'name', None)!r}; fix the entry")  # fmt: skip
+            raise ConfigError(
+                f"experiment entry {self.name!r} ({self.target}) loaded one named "
+                f"{getattr(experiment, 'name', None)!r}; fix the entry"
+            )
         return experiment
 
     def importing(self, experiment: object) -> bool:
@@ -227,17 +229,26 @@ class Registry(MutableMapping[str, "Experiment[Any]"]):
     def add(self, name: str, target: str, summary: str) -> None:
         """Register experiment ``name`` by its ``"module:object"`` without importing it."""
         if not isinstance(name, str) or not _NAME.fullmatch(name):
-            raise _validate.fail("experiment name", "lower-case words joined by '-'", name,
-                                 'e.g. "reproduce" or "chain"')  # fmt: skip
+            raise _validate.fail(
+                "experiment name",
+                "lower-case words joined by '-'",
+                name,
+                'e.g. "reproduce" or "chain"',
+            )
         if not re.fullmatch(r"[\w.]+:\w+", target):
-            raise _validate.fail(f"target of experiment {name!r}", "'module:object'", target,
-                                 'e.g. "sigmapi.experiments.chain.run:CHAIN"')  # fmt: skip
+            raise _validate.fail(
+                f"target of experiment {name!r}",
+                "'module:object'",
+                target,
+                'e.g. "sigmapi.experiments.chain.run:CHAIN"',
+            )
         if not summary:
             raise ConfigError(f"experiment {name!r} has no summary; give it one line")
         known = self.entries.get(name)
         if known is not None and known.target != target:
-            raise ConfigError(f"experiment name {name!r} is taken by {known.target}; "
-                              "choose another")  # fmt: skip
+            raise ConfigError(
+                f"experiment name {name!r} is taken by {known.target}; choose another"
+            )
         self.entries[name] = Entry(name, target, summary)
 
 
@@ -257,13 +268,19 @@ def register(experiment: Experiment[C]) -> Experiment[C]:
     """
     name = getattr(experiment, "name", None)
     if not isinstance(name, str) or not _NAME.fullmatch(name):
-        raise _validate.fail("experiment name", "lower-case words joined by '-'", name,
-                             'e.g. "reproduce" or "chain"')  # fmt: skip
+        raise _validate.fail(
+            "experiment name", "lower-case words joined by '-'", name, 'e.g. "reproduce" or "chain"'
+        )
     cls = getattr(experiment, "config_type", None)
-    if not (isinstance(cls, type) and dataclasses.is_dataclass(cls)
-            and cls.__dataclass_params__.frozen):  # type: ignore[attr-defined]  # fmt: skip
-        raise _validate.fail(f"config_type of experiment {name!r}", "a frozen dataclass", cls,
-                             "decorate it with @dataclass(frozen=True)")  # fmt: skip
+    if not (
+        isinstance(cls, type) and dataclasses.is_dataclass(cls) and cls.__dataclass_params__.frozen  # type: ignore[attr-defined]
+    ):
+        raise _validate.fail(
+            f"config_type of experiment {name!r}",
+            "a frozen dataclass",
+            cls,
+            "decorate it with @dataclass(frozen=True)",
+        )
     if not getattr(experiment, "summary", ""):
         raise ConfigError(
             f"experiment {name!r} has no summary; give it one line saying what it does"
@@ -347,8 +364,11 @@ def run_all(
     """
     ex = executor if executor is not None else Executor(workers=1)
     if ex.engine == "local":  # a job must fit on this machine (a cluster's are its own)
-        _memory.check(per_job, f"one {desc} job", "use smaller settings (a smaller map, grid "
-                      "or fewer pairs, episodes or test points)")  # fmt: skip
+        _memory.check(
+            per_job,
+            f"one {desc} job",
+            "use smaller settings (a smaller map, grid or fewer pairs, episodes or test points)",
+        )
     show = Progress.of(progress)
     plan = ex.plan(per_job, len(jobs))
     in_process = plan.workers == 1 and ex.engine == "local"

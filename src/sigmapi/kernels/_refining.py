@@ -138,7 +138,7 @@ def _code_tiles(x, tile_x, n_tiles, sq, top):  # pragma: no cover - compiled
 @njit(cache=True, nogil=True)
 def _bound_row(
     norms, scale, sqnorm, tile_x, tile_y, x, y, tol, rule, xs, xt, ys, yt, s, ub
-):  # fmt: skip  # pragma: no cover - compiled
+):  # pragma: no cover - compiled
     """``ub[k]``: an upper bound of unit ``k``'s score for the pair ``(x, y)``.
 
     The kept input pairs of ``_rows._pairs`` lie in the tiles whose largest ``|x_i| |y_j|``
@@ -185,8 +185,9 @@ def _bound_rows(norms, scale, sqnorm, tile_x, tile_y, n_tx, n_ty, x, y, tol, rul
         s = np.empty(k_units)
         for b in range(c * ROWS, min(n_rows, (c + 1) * ROWS)):
             u = ub[b]
-            _bound_row(norms, scale, sqnorm, tile_x, tile_y, x[b], y[b], tol, rule,
-                       xs, xt, ys, yt, s, u)  # fmt: skip
+            _bound_row(
+                norms, scale, sqnorm, tile_x, tile_y, x[b], y[b], tol, rule, xs, xt, ys, yt, s, u
+            )
             g = 0
             for k in range(1, k_units):
                 if u[k] > u[g]:
@@ -299,8 +300,9 @@ def _settle_rows(raw_t, scale, sqnorm, x, y, tol, rule, ub, order, out):
         score = np.empty(4)
         for r in range(c * ROWS, min(n_rows, (c + 1) * ROWS)):
             b = order[r]
-            out[b] = _settle_row(raw_t, scale, sqnorm, x[b], y[b], tol, rule, ub[b],
-                                 ib, jb, cand, score)  # fmt: skip
+            out[b] = _settle_row(
+                raw_t, scale, sqnorm, x[b], y[b], tol, rule, ub[b], ib, jb, cand, score
+            )
 
 
 def search(
@@ -321,6 +323,7 @@ def search(
     guess = np.empty(n_rows, dtype=np.int64)
     bound: Any = _bound_rows  # numba dispatchers
     settle: Any = _settle_rows
+    # left unformatted: the arguments in the rows of the kernel's signature
     bound(index.norms, index.scale, sqnorm, index.tile_x, index.tile_y, n_tx, n_ty, x, y,
           float(tol), int(rule), ub, guess)  # fmt: skip
     out = np.empty(n_rows, dtype=np.int64)

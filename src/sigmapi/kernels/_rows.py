@@ -278,6 +278,7 @@ def respond_rows_parallel(raw, scale, x, y, tol, ahead, order, h):
             _respond_row(raw, scale, x[b], y[b], tol, ahead, jb, pi, pv, acc, h[b])
 
 
+# left unformatted: its arguments in rows, as its calls pass them
 @njit(cache=True)
 def winners_rows(
     raw, scale, sqnorm, x, y, tol, ahead, rule, sigma, cut, dims, strides, map_periodic,
@@ -289,6 +290,7 @@ def winners_rows(
         out[b] = _winner(h, scale, sqnorm, rule, sigma, cut, dims, strides, map_periodic, t1, t2)
 
 
+# left unformatted: its arguments in rows, as its calls pass them
 @njit(cache=True, parallel=True)
 def winners_rows_parallel(
     raw, scale, sqnorm, x, y, tol, ahead, rule, sigma, cut, dims, strides, map_periodic, order,

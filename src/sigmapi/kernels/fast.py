@@ -199,9 +199,11 @@ class FastState:
             k, nx, ny = self.shape
             n = nx * ny
             self._scratch = (
-                np.empty(ny, dtype=np.int64), np.empty(n, dtype=np.int64), np.empty(n),
+                np.empty(ny, dtype=np.int64),
+                np.empty(n, dtype=np.int64),
+                np.empty(n),
                 *(np.empty(k) for _ in range(4)),
-            )  # fmt: skip
+            )
         return self._scratch
 
     def refresh_norms(self) -> None:
@@ -341,6 +343,7 @@ def _neighbourhood(winner, sigma, eps, tol, dims, strides, map_periodic, ea):
     return lo, hi
 
 
+# left unformatted: its arguments in rows, as its calls pass them
 @njit(cache=True, nogil=True)
 def _unit_chunk(
     raw, scale, sqnorm, k0, k1, ea, thr, lo, hi,
@@ -424,6 +427,7 @@ def _buffers(k_units, n_pairs, ny):
     )
 
 
+# left unformatted: its arguments in rows, as its calls pass them
 @njit(cache=True, parallel=True)
 def _train(
     raw, scale, sqnorm, x0, y0, x1, y1, sigmas, eps, gates, dims, strides, map_periodic, rule,
@@ -446,10 +450,12 @@ def _train(
     n0 = _pairs(x0[0], y0[0], tol, jb, pi0, pv0)
     if threads:
         for c in prange(n_chunks):
+            # left unformatted: the arguments in the rows of the kernel's signature
             _unit_chunk(raw, scale, sqnorm, c * CHUNK, min(k_units, (c + 1) * CHUNK), ea, 1.0,
                         0, 0, pi1, pv1, 0, pi0, pv0, n0, True, track, h, gain, acc,
                         ahead)  # fmt: skip
     else:
+        # left unformatted: the arguments in the rows of the kernel's signature
         _unit_chunk(raw, scale, sqnorm, 0, k_units, ea, 1.0, 0, 0,
                     pi1, pv1, 0, pi0, pv0, n0, True, track, h, gain, acc, ahead)  # fmt: skip
     for t in range(n_iter):
@@ -466,10 +472,12 @@ def _train(
             n0 = _pairs(x0[t + 1], y0[t + 1], tol, jb, pi0, pv0)
         if threads:
             for c in prange(n_chunks):
+                # left unformatted: the arguments in the rows of the kernel's signature
                 _unit_chunk(raw, scale, sqnorm, c * CHUNK, min(k_units, (c + 1) * CHUNK), ea,
                             thr, lo, hi, pi1, pv1, n1, pi0, pv0, n0, more, track, h, gain,
                             acc, ahead)  # fmt: skip
         else:
+            # left unformatted: the arguments in the rows of the kernel's signature
             _unit_chunk(raw, scale, sqnorm, 0, k_units, ea, thr, lo, hi,
                         pi1, pv1, n1, pi0, pv0, n0, more, track, h, gain, acc, ahead)  # fmt: skip
 
@@ -536,11 +544,11 @@ def activation(
     ahead = _ahead(state, PREFETCH_AHEAD)
     if xa.shape[0] <= SERIAL_ROWS:
         jb, pi, pv, acc, *_ = state.scratch()
-        _rows.respond_rows(state.raw, state.scale, xa, ya, state.tol, ahead,
-                           jb, pi, pv, acc, h)  # fmt: skip
+        _rows.respond_rows(state.raw, state.scale, xa, ya, state.tol, ahead, jb, pi, pv, acc, h)
     else:
-        _rows.respond_rows_parallel(state.raw, state.scale, xa, ya, state.tol, ahead,
-                                    _peak_order(xa, ya), h)  # fmt: skip
+        _rows.respond_rows_parallel(
+            state.raw, state.scale, xa, ya, state.tol, ahead, _peak_order(xa, ya), h
+        )
     return h
 
 
@@ -599,6 +607,7 @@ def winners_of(
     if r.needs_norms:
         state.refresh_norms()
     out = np.empty(xa.shape[0], dtype=np.int64)
+    # left unformatted: the arguments in the rows of the kernel's signature
     args = (state.raw, state.scale, state.sqnorm, xa, ya, state.tol,
             _ahead(state, PREFETCH_AHEAD), code,
             float(sigma), int(cut), dims, strides, bool(map_periodic))  # fmt: skip
@@ -655,6 +664,7 @@ def train_block(
         state.norms_valid = False
     parallel = threads and k_units * nx * ny >= PARALLEL_MIN_WORK and numba.get_num_threads() > 1
     driver: Any = _train  # a numba dispatcher (its stubs do not know the signature)
+    # left unformatted: the arguments in the rows of the kernel's signature
     driver(state.raw, state.scale, state.sqnorm, *xs, sg, ep, NO_GATES, dims, strides,
            bool(map_periodic), code, int(soft_cut), state.tol, out, track, bool(parallel),
            _ahead(state, TRAIN_PREFETCH_AHEAD))  # fmt: skip
@@ -702,6 +712,7 @@ def train_gated_block(
     elif n_iter > 0:
         state.norms_valid = False
     driver: Any = _train  # a numba dispatcher
+    # left unformatted: the arguments in the rows of the kernel's signature
     driver(state.raw, state.scale, state.sqnorm, *xs, sg, ep, gt, dims, strides,
            bool(map_periodic), code, int(soft_cut), state.tol, out, track, False,
            _ahead(state, TRAIN_PREFETCH_AHEAD))  # fmt: skip
@@ -714,6 +725,7 @@ _trace_step: Any = njit(cache=True, nogil=True)(trace_rule.trace_step)
 """The trace rule's step, compiled from :func:`sigmapi.rules.trace.trace_step`."""
 
 
+# left unformatted: its arguments in rows, as its calls pass them
 @njit(cache=True, parallel=True)
 def _train_stream(
     raw, scale, sqnorm, x, y, trace, primed, sigmas, eps, lam, dims, strides, map_periodic,
@@ -750,10 +762,12 @@ def _train_stream(
                 ea[k] = 0.0
         if threads:
             for c in prange(n_chunks):
+                # left unformatted: the arguments in the rows of the kernel's signature
                 _unit_chunk(raw, scale, sqnorm, c * CHUNK, min(k_units, (c + 1) * CHUNK), ea,
                             thr, lo, hi, pi, pv, n1, pi, pv, n, True, track, h, gain, acc,
                             ahead)  # fmt: skip
         else:
+            # left unformatted: the arguments in the rows of the kernel's signature
             _unit_chunk(raw, scale, sqnorm, 0, k_units, ea, thr, lo, hi,
                         pi, pv, n1, pi, pv, n, True, track, h, gain, acc, ahead)  # fmt: skip
         w = _winner(h, scale, sqnorm, rule, sigmas[t], cut, dims, strides, map_periodic, t1, t2)
@@ -810,6 +824,7 @@ def train_stream(
         state.norms_valid = False
     parallel = threads and k_units * nx * ny >= PARALLEL_MIN_WORK and numba.get_num_threads() > 1
     driver: Any = _train_stream  # a numba dispatcher
+    # left unformatted: the arguments in the rows of the kernel's signature
     primed = driver(state.raw, state.scale, state.sqnorm, xa, ya, tr, trace is not None, sg, ep,
                     float(lam), dims, strides, bool(map_periodic), code, int(soft_cut),
                     state.tol, out, track, bool(parallel),

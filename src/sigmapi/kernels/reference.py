@@ -198,8 +198,9 @@ def train_block(
     axis wraps around (a ring in 1-D, a torus in 2-D), in the winner's smoothing and in the
     neighbourhood.
     """
-    return _learn(W, x0, y0, x1, y1, sigmas, eps, None, map_shape, winner_rule, soft_cut,
-                  map_periodic)  # fmt: skip
+    return _learn(
+        W, x0, y0, x1, y1, sigmas, eps, None, map_shape, winner_rule, soft_cut, map_periodic
+    )
 
 
 def _learn(
@@ -254,8 +255,7 @@ def train_gated_block(
     :func:`train_block`. Returns the winners ``(T,)``.
     """
     g = np.asarray(gates, dtype=np.float64)
-    return _learn(W, x0, y0, x1, y1, sigmas, eps, g, map_shape, winner_rule, soft_cut,
-                  map_periodic)  # fmt: skip
+    return _learn(W, x0, y0, x1, y1, sigmas, eps, g, map_shape, winner_rule, soft_cut, map_periodic)
 
 
 def train_stream(

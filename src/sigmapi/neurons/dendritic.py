@@ -123,8 +123,10 @@ class DendriticMap(FirstOrderMap):
     def active_synapses(self, fraction: float = 0.01) -> float:
         """Synapses per unit whose weight is at least ``fraction`` of the largest weight of
         its branch on its input (the rest could be pruned: :meth:`pruned`)."""
-        return float(sum(np.sum(w >= fraction * w.max(axis=2, keepdims=True))
-                         for w in (self.u_, self.v_)) / self.n_units)  # fmt: skip
+        return float(
+            sum(np.sum(w >= fraction * w.max(axis=2, keepdims=True)) for w in (self.u_, self.v_))
+            / self.n_units
+        )
 
     def pruned(self, fraction: float = 0.01) -> DendriticMap:
         """A copy without the synapses below ``fraction`` of their branch's largest weight."""
@@ -206,10 +208,15 @@ def branch_summary(model: DendriticMap, z_of_unit: Array, min_use: float = 0.0) 
     z_gap = np.sqrt(np.sum(((zb - z_of_unit[unit]) * model.x_code.scale) ** 2, axis=1))
     conj = (one_x >= 0.8) & (one_y >= 0.8)
     return {
-        "unit": unit.tolist(), "x_centre": cx.tolist(), "y_centre": cy.tolist(),
-        "x_spread": sx.tolist(), "y_spread": sy.tolist(), "x_one_region": one_x.tolist(),
-        "y_one_region": one_y.tolist(), "z_gap": z_gap.tolist(),
+        "unit": unit.tolist(),
+        "x_centre": cx.tolist(),
+        "y_centre": cy.tolist(),
+        "x_spread": sx.tolist(),
+        "y_spread": sy.tolist(),
+        "x_one_region": one_x.tolist(),
+        "y_one_region": one_y.tolist(),
+        "z_gap": z_gap.tolist(),
         "conjunction_share": float(np.mean(conj)),
         "z_gap_median": float(np.median(z_gap)),
         "spread_median": float(np.median(np.concatenate([sx, sy]))),
-    }  # fmt: skip
+    }

@@ -76,12 +76,19 @@ class SpikingConfig:
         _validate.integer("pool", self.pool, 1, fix="e.g. 10")
         _validate.number("inhibition", self.inhibition, 0.0, fix="e.g. 0.5")
         if not self.windows_ms or min(self.windows_ms) < self.dt_ms:
-            raise _validate.fail("windows_ms", f"windows of at least dt_ms={self.dt_ms}",
-                                 list(self.windows_ms), "e.g. 10,50,200")  # fmt: skip
+            raise _validate.fail(
+                "windows_ms",
+                f"windows of at least dt_ms={self.dt_ms}",
+                list(self.windows_ms),
+                "e.g. 10,50,200",
+            )
         if self.pool * self.peak_rate * self.dt_ms / 1000.0 > 0.5:
-            raise _validate.fail("pool * peak_rate * dt", "<= 0.5 spikes per step",
-                                 self.pool * self.peak_rate * self.dt_ms / 1000.0,
-                                 "use a smaller dt_ms")  # fmt: skip
+            raise _validate.fail(
+                "pool * peak_rate * dt",
+                "<= 0.5 spikes per step",
+                self.pool * self.peak_rate * self.dt_ms / 1000.0,
+                "use a smaller dt_ms",
+            )
 
 
 @dataclass

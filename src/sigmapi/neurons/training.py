@@ -35,9 +35,9 @@ from numpy.typing import NDArray
 from threadpoolctl import threadpool_limits
 
 from sigmapi import _validate
-from sigmapi._grids import GridsMixin
 from sigmapi.codes import grid_coordinates
 from sigmapi.config import SOMConfig
+from sigmapi.model._grids import GridsMixin
 from sigmapi.rules.neighbourhood import gaussian, neighbourhood
 from sigmapi.rules.ordering import INIT_PAIRS, crossview_scores
 from sigmapi.rules.winners import ARGMAX, SOFT_MEAN, Scoring, WinnerRule

@@ -376,8 +376,11 @@ class NoOrdering(Ordering):
 
     def initial_weights(self, settings: OrderingSettings, rng: Generator, views: Views) -> Weights:
         s = settings.init_scale
-        shape = (math.prod(settings.map_shape), math.prod(settings.x_shape),
-                 math.prod(settings.y_shape))  # fmt: skip
+        shape = (
+            math.prod(settings.map_shape),
+            math.prod(settings.x_shape),
+            math.prod(settings.y_shape),
+        )
         return rng.uniform(-s, s, size=shape)
 
 
@@ -408,10 +411,14 @@ class Crossview(Ordering):
         if settings.same_view:
             views = (views[0], views[1], views[0], views[1])
         return crossview_init(
-            views, settings.x_shape, settings.y_shape, settings.map_shape,
-            settings.ordering_sigma / 2.0, periodic=settings.periodic,
+            views,
+            settings.x_shape,
+            settings.y_shape,
+            settings.map_shape,
+            settings.ordering_sigma / 2.0,
+            periodic=settings.periodic,
             map_periodic=settings.map_periodic,
-        )  # fmt: skip
+        )
 
     def cap_sigma(self, sigma: NDArray[np.float64], ordering_sigma: float) -> NDArray[np.float64]:
         return np.minimum(sigma, ordering_sigma)

@@ -42,6 +42,10 @@ def trace_step(trace: Any, a: Any, lam: float) -> Any:
 def check_trace(lam: Any) -> float:
     """``lam`` as a float in [0, 1), else a ConfigError naming ``trace``."""
     return _validate.number(
-        "trace", lam, 0.0, 1.0, hi_open=True,
+        "trace",
+        lam,
+        0.0,
+        1.0,
+        hi_open=True,
         fix="0 is the two-view rule on consecutive frames; the share of the trace kept per frame",
-    )  # fmt: skip
+    )

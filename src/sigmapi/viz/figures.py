@@ -21,7 +21,7 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
     from sigmapi.config import SOMConfig
-    from sigmapi.som import SigmaPiSOM
+    from sigmapi.model.som import SigmaPiSOM
 
 __all__ = [
     "DPI",
@@ -344,18 +344,23 @@ def _draw_curves(model: SigmaPiSOM, inp: DrawInputs) -> tuple[Figure, Facts]:
         raise ValueError("the curves figure needs learning curves (curves=...)")
     ceiling = {k: float(v) for k, v in (inp.ceiling or {}).items() if k in CURVE_CEILING}
     trained = [int(sum(1 for r in c.get("refined", []) if r == 0) or len(c["t"])) for c in curves]
-    title = _wrap(f"Learning curves{inp.tag}, measured at {trained[0]} training checkpoints"
-                  + (" and after every refinement round" if plots.has_refinement(curves)
-                     else ""))  # fmt: skip
+    title = _wrap(
+        f"Learning curves{inp.tag}, measured at {trained[0]} training checkpoints"
+        + (" and after every refinement round" if plots.has_refinement(curves) else "")
+    )
     extra = 0.2 * title.count("\n")  # inches above the panels for each further title line
     fig = _figure((10.5, 9.0 + extra))
     top = 9.0 / (9.0 + extra)
     if extra:  # the title above the panels' box, so that its lines clear their labels
         fig.suptitle(title, fontsize=12, y=1.0 - 0.05 / (9.0 + extra), va="top")
     plots.plot_learning_curves(
-        curves, ax=fig.add_axes((0.0, 0.0, 1.0, top)), reference=inp.reference,
-        schedule=sigma_schedule(model), ceiling=ceiling, title=" " if extra else title,
-    )  # fmt: skip
+        curves,
+        ax=fig.add_axes((0.0, 0.0, 1.0, top)),
+        reference=inp.reference,
+        schedule=sigma_schedule(model),
+        ceiling=ceiling,
+        title=" " if extra else title,
+    )
     rounds = [int(sum(1 for r in c.get("refined", []) if r > 0)) for c in curves]
     return fig, {
         "checkpoints": trained[0],
@@ -425,8 +430,10 @@ def _table_gap(run: RunInfo, facts: Facts) -> str:
     ``table_gap`` fact, medians over the seeds of last point minus table)."""
     gap = facts.get("table_gap")
     if not gap:
-        return (" The table's metrics use a larger test set and decoding table than the curves;"
-                " their last points are not the table's values.")  # fmt: skip
+        return (
+            " The table's metrics use a larger test set and decoding table than the curves;"
+            " their last points are not the table's values."
+        )
     per_unit = run.curve_test / max(1, int(np.prod(run.config.map_shape)))
     text = (
         f" The curves' last points lie {gap['z_error']:+.3f} in z error and "

@@ -18,20 +18,41 @@ def neurons_figure(result: dict[str, Any]) -> Figure:
     ax = axes[0]
     rate = [m for m in result["methods"] if m["kind"] == "rate" and m["task"] == "1d"]
     sp = next(m for m in rate if m["name"] == "sigma-pi")
-    ax.axhspan(sp["view_consistency"] - 0.02, sp["view_consistency"], color="0.85",
-               label="within 0.02 of Sigma-Pi")  # fmt: skip
+    ax.axhspan(
+        sp["view_consistency"] - 0.02,
+        sp["view_consistency"],
+        color="0.85",
+        label="within 0.02 of Sigma-Pi",
+    )
     dend = [m for m in rate if m["name"].startswith("dendritic")]
     xs = [m["synapses"] for m in dend]
     low = [m["view_consistency"] - m["view_consistency_worst"] for m in dend]
-    ax.errorbar(xs, [m["view_consistency"] for m in dend], yerr=[low, [0.0] * len(dend)],
-                marker="o", capsize=3, label="dendritic (median, worst)")  # fmt: skip
+    ax.errorbar(
+        xs,
+        [m["view_consistency"] for m in dend],
+        yerr=[low, [0.0] * len(dend)],
+        marker="o",
+        capsize=3,
+        label="dendritic (median, worst)",
+    )
     for m in dend:
-        ax.annotate(f"D={m['branches']}", (m["synapses"], m["view_consistency"]),
-                    textcoords="offset points", xytext=(4, -12), fontsize=8)  # fmt: skip
+        ax.annotate(
+            f"D={m['branches']}",
+            (m["synapses"], m["view_consistency"]),
+            textcoords="offset points",
+            xytext=(4, -12),
+            fontsize=8,
+        )
     for m, mk in ((sp, "s"), (next(m for m in rate if m["name"] == "basis-function"), "^")):
-        ax.errorbar([m["synapses"]], [m["view_consistency"]],
-                    yerr=[[m["view_consistency"] - m["view_consistency_worst"]], [0.0]],
-                    marker=mk, capsize=3, linestyle="none", label=m["name"])  # fmt: skip
+        ax.errorbar(
+            [m["synapses"]],
+            [m["view_consistency"]],
+            yerr=[[m["view_consistency"] - m["view_consistency_worst"]], [0.0]],
+            marker=mk,
+            capsize=3,
+            linestyle="none",
+            label=m["name"],
+        )
     ax.set_xlabel("synapses per map unit")
     ax.set_ylabel("view consistency (same winner)")
     ax.set_title("1-D maps of first-order neurons")
@@ -40,15 +61,26 @@ def neurons_figure(result: dict[str, Any]) -> Figure:
     ax = axes[1]
     spk = [m for m in result["methods"] if m["kind"] == "spiking" and m["peak_rate"] == 100]
     for base, colour in (("spiking-conjunction", "C0"), ("spiking-dendritic", "C1")):
-        rows = sorted((m for m in spk if m["name"].startswith(base + "-")),
-                      key=lambda m: m["window_ms"])  # fmt: skip
+        rows = sorted(
+            (m for m in spk if m["name"].startswith(base + "-")), key=lambda m: m["window_ms"]
+        )
         if not rows:
             continue
         w = [m["window_ms"] for m in rows]
-        ax.plot(w, [m["vc_gap"] for m in rows], "o-", color=colour,
-                label=f"{base}: view consistency - rate map's")  # fmt: skip
-        ax.plot(w, [m["agreement"] - 1.0 for m in rows], "s--", color=colour,
-                label=f"{base}: agreement - 1")  # fmt: skip
+        ax.plot(
+            w,
+            [m["vc_gap"] for m in rows],
+            "o-",
+            color=colour,
+            label=f"{base}: view consistency - rate map's",
+        )
+        ax.plot(
+            w,
+            [m["agreement"] - 1.0 for m in rows],
+            "s--",
+            color=colour,
+            label=f"{base}: agreement - 1",
+        )
     ax.axhline(-0.02, color="0.5", lw=0.8, ls=":")
     ax.set_xscale("log")
     ax.set_xlabel("decision window (ms)")
@@ -99,8 +131,11 @@ def physiology_figure(result: dict[str, Any]) -> Figure:
         ax.plot([], [], color=f"C{c}", label=f"unit {unit}")
     ax.set_xlabel("retinal position (fraction of the axis)")
     ax.set_ylabel("response")
-    ax.set_title("tuning curves at gazes " + ", ".join(f"{g:g}" for g in curves["gazes"])
-                 + " (darker: larger)")  # fmt: skip
+    ax.set_title(
+        "tuning curves at gazes "
+        + ", ".join(f"{g:g}" for g in curves["gazes"])
+        + " (darker: larger)"
+    )
     ax.legend(fontsize=8)
 
     ax = axes[2]
@@ -112,8 +147,13 @@ def physiology_figure(result: dict[str, Any]) -> Figure:
             if a is not None and b is not None
         ]
         text = f"{np.median(mod):.2f}" if mod else "-"
-        ax.scatter([a for a, _ in pairs], [b for _, b in pairs], s=10, alpha=0.6,
-                   label=f"{label}: peak modulation median {text}")  # fmt: skip
+        ax.scatter(
+            [a for a, _ in pairs],
+            [b for _, b in pairs],
+            s=10,
+            alpha=0.6,
+            label=f"{label}: peak modulation median {text}",
+        )
     ax.set_xlabel("planar gain-field fit R^2 (response at fixed retinal position)")
     ax.set_ylabel("gain slope (|b| / mean response)")
     ax.legend(fontsize=8)

@@ -55,8 +55,9 @@ class ICubReachEnv(gym.Env[Obs, NDArray[np.float32]]):
 
     metadata: dict[str, Any] = {"render_modes": ["rgb_array"], "render_fps": 10}  # noqa: RUF012
 
-    def __init__(self, retina: str = "projection", eye_size: int = EYE_SIZE,
-                 render_mode: str | None = None) -> None:  # fmt: skip
+    def __init__(
+        self, retina: str = "projection", eye_size: int = EYE_SIZE, render_mode: str | None = None
+    ) -> None:
         if retina not in RETINA_SOURCES:
             raise ConfigError(f"retina must be one of {RETINA_SOURCES}, got {retina!r}")
         if render_mode not in (None, "rgb_array"):
@@ -64,11 +65,13 @@ class ICubReachEnv(gym.Env[Obs, NDArray[np.float32]]):
         self.retina_source, self.render_mode = retina, render_mode
         self.scene = ICubScene(eye_size)
         lim = np.float32(np.pi)
-        self.observation_space = spaces.Dict({  # type: ignore[assignment]
-            "retina": spaces.Box(0.0, 1.0, (2,), np.float32),
-            "gaze": spaces.Box(-lim, lim, (6,), np.float32),
-            "arm": spaces.Box(-lim, lim, (7,), np.float32),
-        })  # fmt: skip
+        self.observation_space = spaces.Dict(
+            {  # type: ignore[assignment]
+                "retina": spaces.Box(0.0, 1.0, (2,), np.float32),
+                "gaze": spaces.Box(-lim, lim, (6,), np.float32),
+                "arm": spaces.Box(-lim, lim, (7,), np.float32),
+            }
+        )
         self.action_space = spaces.Box(-1.0, 1.0, (7,), np.float32)
         self._lo, self._hi = self.scene.arm_range.T
 
@@ -91,8 +94,11 @@ class ICubReachEnv(gym.Env[Obs, NDArray[np.float32]]):
 
     def _obs(self) -> Obs:
         s = self.scene
-        return {"retina": np.clip(self._retina(), 0, 1).astype(np.float32),
-                "gaze": s.gaze().astype(np.float32), "arm": s.arm().astype(np.float32)}  # fmt: skip
+        return {
+            "retina": np.clip(self._retina(), 0, 1).astype(np.float32),
+            "gaze": s.gaze().astype(np.float32),
+            "arm": s.arm().astype(np.float32),
+        }
 
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None

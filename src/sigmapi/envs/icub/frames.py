@@ -174,8 +174,12 @@ class ViewBatch:
 def measure(scene: ICubScene, point: ArrayLike) -> tuple[Array, Array, Array, Array]:
     """One view of world ``point`` at the scene's gaze: retina, gaze, head and torso
     directions."""
-    return (scene.project(point)[0], scene.gaze(), scene.head_direction(point),
-            scene.torso_direction(point))  # fmt: skip
+    return (
+        scene.project(point)[0],
+        scene.gaze(),
+        scene.head_direction(point),
+        scene.torso_direction(point),
+    )
 
 
 def _batch(rows: list[tuple[Array, Array, Array, Array]]) -> ViewBatch:

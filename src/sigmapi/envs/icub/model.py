@@ -78,8 +78,15 @@ EYE_GROUPS = (1, 1, 0, 0, 0, 0)
 """Geom groups drawn in the eye renders: the world and the right hand, not the body."""
 TORSO = ("torso_pitch", "torso_roll", "torso_yaw")
 NECK = ("neck_pitch", "neck_roll", "neck_yaw")
-ARM = ("r_shoulder_pitch", "r_shoulder_roll", "r_shoulder_yaw", "r_elbow",
-       "r_wrist_prosup", "r_wrist_pitch", "r_wrist_yaw")  # fmt: skip
+ARM = (
+    "r_shoulder_pitch",
+    "r_shoulder_roll",
+    "r_shoulder_yaw",
+    "r_elbow",
+    "r_wrist_prosup",
+    "r_wrist_pitch",
+    "r_wrist_yaw",
+)
 """The right arm's joints, shoulder to wrist."""
 HOME_ARM = (-0.52, 0.52, 0.0, 0.785, 0.0, 0.0, 0.0)
 """The Gazebo model's home pose of an arm, radians (``ARM``'s order)."""
@@ -87,10 +94,21 @@ REST_ARM = (0.17, 0.35, 0.0, 0.27, 0.0, 0.0, 0.0)
 """The right arm's rest pose, radians: hanging at the side, out of the eyes' view of the table."""
 _LEFT = tuple("l" + name[1:] for name in ARM)
 _TILT_AHEAD, _TILT_ABOVE, _EYE_HALF = 0.0509, 0.08205, 0.034
-_KP = {"torso": 200.0, "neck": 60.0, "arm": 50.0, "wrist": 10.0, "eyes_tilt": 20.0,
-       "eyes_version": 40.0, "eyes_vergence": 20.0}  # fmt: skip
-_EYE_RANGE = {"eyes_tilt": (-35.0, 15.0), "pan": (-50.0, 50.0), "eyes_version": (-50.0, 50.0),
-              "eyes_vergence": (0.0, 90.0)}  # fmt: skip
+_KP = {
+    "torso": 200.0,
+    "neck": 60.0,
+    "arm": 50.0,
+    "wrist": 10.0,
+    "eyes_tilt": 20.0,
+    "eyes_version": 40.0,
+    "eyes_vergence": 20.0,
+}
+_EYE_RANGE = {
+    "eyes_tilt": (-35.0, 15.0),
+    "pan": (-50.0, 50.0),
+    "eyes_version": (-50.0, 50.0),
+    "eyes_vergence": (0.0, 90.0),
+}
 _REACHING = ("r_forearm", "r_wrist_1", "r_hand")
 """The links whose geoms touch the ball and the table (group 1)."""
 
@@ -119,8 +137,9 @@ def _urdf_text() -> tuple[str, Path]:
     share = path.parents[2]  # share/iCub/robots/<robot>/model.urdf
     text = path.read_text("utf-8").replace("package://iCub/", "")
     head = text.index(">", text.index("<robot")) + 1
-    compiler = ('<mujoco><compiler strippath="false" discardvisual="true" '
-                'fusestatic="false"/></mujoco>')  # fmt: skip
+    compiler = (
+        '<mujoco><compiler strippath="false" discardvisual="true" fusestatic="false"/></mujoco>'
+    )
     return text[:head] + compiler + text[head:], share
 
 
@@ -175,29 +194,48 @@ def build_spec() -> mujoco.MjSpec:
     return spec
 
 
-def _add_eyes(spec: Any, head_pos: np.ndarray, head_rot: np.ndarray, yaw_x: float,
-              roll_z: float) -> None:  # fmt: skip
+def _add_eyes(
+    spec: Any, head_pos: np.ndarray, head_rot: np.ndarray, yaw_x: float, roll_z: float
+) -> None:
     """The eye-tilt link on the head, a panning eye either side with a camera at its centre."""
     # the root frame points x backward, y right, z up: "ahead" is -x
     tilt_world = np.array([yaw_x - _TILT_AHEAD, 0.0, roll_z + _TILT_ABOVE])
     forward_left_up = np.array([[-1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0]]).T
     tilt = spec.body("head").add_body(
-        name="eyes_tilt_link", pos=head_rot.T @ (tilt_world - head_pos),
-        quat=_quat(head_rot.T @ forward_left_up), mass=0.02, inertia=[1e-5, 1e-5, 1e-5],
-    )  # fmt: skip
+        name="eyes_tilt_link",
+        pos=head_rot.T @ (tilt_world - head_pos),
+        quat=_quat(head_rot.T @ forward_left_up),
+        mass=0.02,
+        inertia=[1e-5, 1e-5, 1e-5],
+    )
     # in the tilt link: x forward, y left, z up; positive tilt looks up, positive pan right
-    tilt.add_joint(name="eyes_tilt", axis=[0, -1, 0],
-                   range=np.radians(_EYE_RANGE["eyes_tilt"]), damping=[0.05, 0, 0],
-                   armature=0.01)  # fmt: skip
+    tilt.add_joint(
+        name="eyes_tilt",
+        axis=[0, -1, 0],
+        range=np.radians(_EYE_RANGE["eyes_tilt"]),
+        damping=[0.05, 0, 0],
+        armature=0.01,
+    )
     cam_quat = _quat(np.array([[0.0, -1.0, 0.0], [0.0, 0.0, 1.0], [-1.0, 0.0, 0.0]]).T)
     for side, y in (("l", _EYE_HALF), ("r", -_EYE_HALF)):
-        eye = tilt.add_body(name=f"{side}_eye", pos=[0.0, y, 0.0], mass=0.01,
-                            inertia=[1e-6, 1e-6, 1e-6])  # fmt: skip
-        eye.add_joint(name=f"{side}_eye_pan", axis=[0, 0, -1],
-                      range=np.radians(_EYE_RANGE["pan"]), damping=[0.05, 0, 0],
-                      armature=0.01)  # fmt: skip
-        eye.add_geom(type=mujoco_module().mjtGeom.mjGEOM_SPHERE, size=[0.012, 0, 0],
-                     group=2, contype=0, conaffinity=0, rgba=[0.95, 0.95, 0.95, 1])  # fmt: skip
+        eye = tilt.add_body(
+            name=f"{side}_eye", pos=[0.0, y, 0.0], mass=0.01, inertia=[1e-6, 1e-6, 1e-6]
+        )
+        eye.add_joint(
+            name=f"{side}_eye_pan",
+            axis=[0, 0, -1],
+            range=np.radians(_EYE_RANGE["pan"]),
+            damping=[0.05, 0, 0],
+            armature=0.01,
+        )
+        eye.add_geom(
+            type=mujoco_module().mjtGeom.mjGEOM_SPHERE,
+            size=[0.012, 0, 0],
+            group=2,
+            contype=0,
+            conaffinity=0,
+            rgba=[0.95, 0.95, 0.95, 1],
+        )
         eye.add_camera(name=f"{side}_eye", quat=cam_quat, fovy=FOVY)
         eye.gravcomp = 1.0
     tilt.gravcomp = 1.0
@@ -211,30 +249,61 @@ def _add_world(spec: Any) -> None:
     """Floor, light, table, the red ball and a third-person camera."""
     geom = mujoco_module().mjtGeom
     world = spec.worldbody
-    world.add_light(pos=[0.6, 0.3, 2.5], dir=[-0.2, -0.1, -1.0], diffuse=[0.8, 0.8, 0.8],
-                    castshadow=False)  # fmt: skip
-    world.add_light(pos=[1.5, -1.0, 2.0], dir=[-0.6, 0.4, -0.6], diffuse=[0.4, 0.4, 0.4],
-                    castshadow=False)  # fmt: skip
-    world.add_geom(name="floor", type=geom.mjGEOM_PLANE, size=[3, 3, 0.1],
-                   rgba=[0.75, 0.78, 0.8, 1], group=0, contype=0, conaffinity=0)  # fmt: skip
+    world.add_light(
+        pos=[0.6, 0.3, 2.5], dir=[-0.2, -0.1, -1.0], diffuse=[0.8, 0.8, 0.8], castshadow=False
+    )
+    world.add_light(
+        pos=[1.5, -1.0, 2.0], dir=[-0.6, 0.4, -0.6], diffuse=[0.4, 0.4, 0.4], castshadow=False
+    )
+    world.add_geom(
+        name="floor",
+        type=geom.mjGEOM_PLANE,
+        size=[3, 3, 0.1],
+        rgba=[0.75, 0.78, 0.8, 1],
+        group=0,
+        contype=0,
+        conaffinity=0,
+    )
     top = 0.02
-    world.add_geom(name="table", type=geom.mjGEOM_BOX, size=[0.25, 0.4, top / 2],
-                   pos=[0.34, -0.1, TABLE_HEIGHT - top / 2], rgba=[0.55, 0.42, 0.3, 1],
-                   group=0, contype=1, conaffinity=3)  # fmt: skip
+    world.add_geom(
+        name="table",
+        type=geom.mjGEOM_BOX,
+        size=[0.25, 0.4, top / 2],
+        pos=[0.34, -0.1, TABLE_HEIGHT - top / 2],
+        rgba=[0.55, 0.42, 0.3, 1],
+        group=0,
+        contype=1,
+        conaffinity=3,
+    )
     spec.add_material(name="ball", rgba=[1, 0, 0, 1], emission=1.0)
     ball = world.add_body(name="ball", pos=[0.3, -0.1, TABLE_HEIGHT + BALL_RADIUS])
     ball.add_freejoint(name="ball")
-    ball.add_geom(name="ball", type=geom.mjGEOM_SPHERE, size=[BALL_RADIUS, 0, 0],
-                  material="ball", mass=0.05, group=0, contype=1,
-                  conaffinity=3, condim=3)  # fmt: skip
-    world.add_camera(name="third", pos=[1.45, -1.05, 1.45], xyaxes=[0.6, 0.8, 0, -0.35, 0.26, 0.9],
-                     fovy=45)  # fmt: skip
+    ball.add_geom(
+        name="ball",
+        type=geom.mjGEOM_SPHERE,
+        size=[BALL_RADIUS, 0, 0],
+        material="ball",
+        mass=0.05,
+        group=0,
+        contype=1,
+        conaffinity=3,
+        condim=3,
+    )
+    world.add_camera(
+        name="third", pos=[1.45, -1.05, 1.45], xyaxes=[0.6, 0.8, 0, -0.35, 0.26, 0.9], fovy=45
+    )
 
 
 def _add_actuators(spec: Any) -> None:
     """Position actuators (kv = kp / 10) on the torso, neck, arms and eyes."""
-    groups = [(TORSO, "torso"), (NECK, "neck"), (ARM[:4], "arm"), (ARM[4:], "wrist"),
-              (_LEFT[:4], "arm"), (_LEFT[4:], "wrist")]  # fmt: skip
+    groups = [
+        (TORSO, "torso"),
+        (NECK, "neck"),
+        (ARM[:4], "arm"),
+        (ARM[4:], "wrist"),
+        (_LEFT[:4], "arm"),
+        (_LEFT[4:], "wrist"),
+    ]
     trn = mujoco_module().mjtTrn
     for names, kind in groups:
         for name in names:
@@ -242,8 +311,11 @@ def _add_actuators(spec: Any) -> None:
             act.set_to_position(kp=_KP[kind], kv=0.1 * _KP[kind])
             lo, hi = spec.joint(name).range
             act.ctrlrange, act.ctrllimited = [lo, hi], 1
-    for name, kind in (("eyes_tilt", trn.mjTRN_JOINT), ("eyes_version", trn.mjTRN_TENDON),
-                       ("eyes_vergence", trn.mjTRN_TENDON)):  # fmt: skip
+    for name, kind in (
+        ("eyes_tilt", trn.mjTRN_JOINT),
+        ("eyes_version", trn.mjTRN_TENDON),
+        ("eyes_vergence", trn.mjTRN_TENDON),
+    ):
         act = spec.add_actuator(name=name, target=name, trntype=kind)
         act.set_to_position(kp=_KP[name], kv=0.1 * _KP[name])
         act.ctrlrange, act.ctrllimited = np.radians(_EYE_RANGE[name]), 1

@@ -58,8 +58,10 @@ def direction_angles(v: ArrayLike) -> Array:
     """``(azimuth, elevation)`` radians of vectors ``v`` ``(..., 3)`` (x forward, y left, z
     up): ``(..., 2)``."""
     a = np.asarray(v, dtype=np.float64)
-    return np.stack([np.arctan2(a[..., 1], a[..., 0]),
-                     np.arctan2(a[..., 2], np.hypot(a[..., 0], a[..., 1]))], axis=-1)  # fmt: skip
+    return np.stack(
+        [np.arctan2(a[..., 1], a[..., 0]), np.arctan2(a[..., 2], np.hypot(a[..., 0], a[..., 1]))],
+        axis=-1,
+    )
 
 
 class ICubScene:

@@ -143,14 +143,20 @@ class RobotDockEnv(FramesCodes, gym.Env[Obs, np.int64]):
         lo, hi = self.goal_radius, 1.0 - self.goal_radius
         if isinstance(goal, (str, bytes)) or not hasattr(goal, "__len__") or len(goal) != 2:
             raise _validate.fail("goal", "2 numbers (x, y) in [0, 1]^2", goal, "e.g. (0.5, 0.4)")
-        fix = (f"with goal_radius={self.goal_radius:g} the goal box must lie inside [0, 1]^2: "
-               f"each number in [{lo:.3g}, {hi:.3g}]")  # fmt: skip
+        fix = (
+            f"with goal_radius={self.goal_radius:g} the goal box must lie inside [0, 1]^2: "
+            f"each number in [{lo:.3g}, {hi:.3g}]"
+        )
         pair = tuple(_validate.number("goal", g, lo, hi, fix=fix) if given else g for g in goal)
         if not given and not all(lo <= g <= hi for g in pair):
-            raise _validate.fail("goal_radius", "small enough for the default goal's box to lie "
-                                 f"inside [0, 1]^2 (the default goal is {pair[0]:.3g}, "
-                                 f"{pair[1]:.3g})", self.goal_radius,
-                                 "give a smaller goal_radius, or a goal of your own")  # fmt: skip
+            raise _validate.fail(
+                "goal_radius",
+                "small enough for the default goal's box to lie "
+                f"inside [0, 1]^2 (the default goal is {pair[0]:.3g}, "
+                f"{pair[1]:.3g})",
+                self.goal_radius,
+                "give a smaller goal_radius, or a goal of your own",
+            )
         self.goal = np.asarray(pair, dtype=np.float64)
         n = self.frames.code.size
         self.observation_space = view_space(n, n)
@@ -171,8 +177,9 @@ class RobotDockEnv(FramesCodes, gym.Env[Obs, np.int64]):
     def view_source(self) -> RobotViews:
         """The saccade views of this robot's codes (built on first use, on its own scene)."""
         if self._views is None:
-            self._views = RobotViews(self.grid, self.frames.code.width, retina=self.retina,
-                                     margin=self.frames.margin)  # fmt: skip
+            self._views = RobotViews(
+                self.grid, self.frames.code.width, retina=self.retina, margin=self.frames.margin
+            )
         return self._views
 
     def sample_views(self, n: int, rng: np.random.Generator) -> Views:
@@ -237,11 +244,15 @@ class RobotDockEnv(FramesCodes, gym.Env[Obs, np.int64]):
     ) -> dict[str, Any]:
         x, y = self._seen if self._seen is not None else (np.full(2, np.nan),) * 2
         return {
-            "z": self.frames.z(direction[None, :])[0], "direction": direction,
-            "x": x.copy(), "y": y.copy(),
-            "event": event, "docked": event == "docked", "touched": touched,
+            "z": self.frames.z(direction[None, :])[0],
+            "direction": direction,
+            "x": x.copy(),
+            "y": y.copy(),
+            "event": event,
+            "docked": event == "docked",
+            "touched": touched,
             "is_success": event == "docked" and (touched or not self.reach),
-        }  # fmt: skip
+        }
 
     # ------------------------------------------------------------------ Gymnasium API
     def reset(
@@ -254,8 +265,13 @@ class RobotDockEnv(FramesCodes, gym.Env[Obs, np.int64]):
             raise ConfigError(f"RobotDock takes no reset options, got {sorted(options)}")
         rng = self.np_random
         for _ in range(1000):
-            ball = np.array([_TABLE_EDGE + rng.uniform(*BALL_BEYOND_EDGE), rng.uniform(-0.5, 0.5),
-                             TABLE_HEIGHT + OBJECT_RADIUS])  # fmt: skip
+            ball = np.array(
+                [
+                    _TABLE_EDGE + rng.uniform(*BALL_BEYOND_EDGE),
+                    rng.uniform(-0.5, 0.5),
+                    TABLE_HEIGHT + OBJECT_RADIUS,
+                ]
+            )
             z = rng.random(2)
             if self.in_goal(z):
                 continue

@@ -92,8 +92,11 @@ class Frames:
         self.scene = scene
         self.grid = _validate.integer("grid", grid, 2, fix="e.g. grid=9")
         n = self.grid**2  # the code's (n, n) float64 table of hills, and one copy of it
-        _memory.check(16 * n * n, f"a robot world of grid={self.grid} ({n:,} units a view)",
-                      "use a smaller grid, e.g. grid=12")  # fmt: skip
+        _memory.check(
+            16 * n * n,
+            f"a robot world of grid={self.grid} ({n:,} units a view)",
+            "use a smaller grid, e.g. grid=12",
+        )
         self.code = PopulationCode((self.grid, self.grid), width=code_width)
         w = scene.head_size
         self.margin = _validate.number("margin", margin, 0.0, w / 4, fix="pixels, e.g. 6")
@@ -137,8 +140,9 @@ class Frames:
         """Direction ``(azimuth, elevation)`` (radians) of world points ``(B, 3)`` from the
         neck point in the torso's frame; ``(B, 2)``."""
         p = self.scene.in_torso_frame(p_world)
-        return np.stack([np.arctan2(p[:, 1], p[:, 0]),
-                         np.arctan2(p[:, 2], np.hypot(p[:, 0], p[:, 1]))], axis=1)  # fmt: skip
+        return np.stack(
+            [np.arctan2(p[:, 1], p[:, 0]), np.arctan2(p[:, 2], np.hypot(p[:, 0], p[:, 1]))], axis=1
+        )
 
     def z(self, direction: F64) -> F64:
         """Directions ``(B, 2)`` as positions in the workspace, ``[0, 1]^2`` inside it."""

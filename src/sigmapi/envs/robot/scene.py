@@ -154,8 +154,10 @@ class Scene:
         self.fovy = float(np.deg2rad(m.cam_fovy[self._cam]))
         self.focal = 0.5 * head_size / np.tan(0.5 * self.fovy)
         """Focal length of the head camera in pixels (MuJoCo's ``fovy`` is vertical)."""
-        self._q = {n: int(m.joint(n).qposadr[0]) for n in ("base_x", "base_y", "base_yaw",
-                   "neck_pan", "neck_tilt", *_ARM)}  # fmt: skip
+        self._q = {
+            n: int(m.joint(n).qposadr[0])
+            for n in ("base_x", "base_y", "base_yaw", "neck_pan", "neck_tilt", *_ARM)
+        }
         self._obj_q = int(m.joint("object").qposadr[0])
         self._obj_v = int(m.joint("object").dofadr[0])
         self._act = {m.actuator(i).name: i for i in range(m.nu)}
@@ -173,8 +175,9 @@ class Scene:
         self._is_robot = np.zeros(m.ngeom, dtype=bool)
         self._is_robot[[m.geom(n).id for n in ("base", "torso")]] = True
         self._is_table = np.zeros(m.ngeom, dtype=bool)
-        self._is_table[[m.geom(n).id for n in ("table_top", "leg_a", "leg_b", "leg_c",
-                        "leg_d")]] = True  # fmt: skip
+        self._is_table[
+            [m.geom(n).id for n in ("table_top", "leg_a", "leg_b", "leg_c", "leg_d")]
+        ] = True
         self._chain = {
             "neck": _offset(m.body_pos[m.body("neck").id], m.body_quat[m.body("neck").id]),
             "head": _offset(m.body_pos[self._head], m.body_quat[self._head]),

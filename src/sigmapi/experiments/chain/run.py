@@ -4,7 +4,7 @@ Three 1-D positions in [0, 1]: the retinal position x, the eye-in-head angle e a
 head-on-body angle u. The head-centred position is ``a = (x + e) / 2`` and the body-centred
 position ``z = (a + u) / 2`` (the paper's ``mean`` relation at both stages).
 
-- **The chain.** Map A (retina + eye -> head) is a :class:`~sigmapi.som.SigmaPiSOM` trained
+- **The chain.** Map A (retina + eye -> head) is a :class:`~sigmapi.model.som.SigmaPiSOM` trained
   on its built-in task (two views of the same a). Its output code for B is its response to
   (x, e), rectified and scaled to unit length like the input codes (``code="response"``), or
   a population code of its hard winner's position on the map (``code="winner"``, the width of
@@ -61,8 +61,8 @@ from sigmapi.experiments.chain.result import (
 )
 from sigmapi.experiments.kit.seeds import SeedPlan
 from sigmapi.metrics import EVAL_SEED, evaluate, winner_metrics
+from sigmapi.model.som import SigmaPiSOM
 from sigmapi.progress import Progress
-from sigmapi.som import SigmaPiSOM
 from sigmapi.tasks import TwoViewSampler
 
 __all__ = [

@@ -17,7 +17,7 @@ from sigmapi.experiments.compare.config import (
 )
 from sigmapi.io import atomic_write_bytes
 from sigmapi.metrics import grid_spacing
-from sigmapi.som import SigmaPiSOM
+from sigmapi.model.som import SigmaPiSOM
 
 __all__ = ["FIGURE", "MATCH_SHARE", "CompareResult", "MethodScore"]
 

@@ -67,8 +67,8 @@ from sigmapi.experiments.compare.result import (
 )
 from sigmapi.experiments.kit.seeds import SeedPlan
 from sigmapi.metrics import evaluation_sets, grid_spacing
+from sigmapi.model.som import SigmaPiSOM
 from sigmapi.progress import Progress
-from sigmapi.som import SigmaPiSOM
 from sigmapi.tasks import Batch
 
 __all__ = [

@@ -57,19 +57,29 @@ class ICubConfig:
     """Also write an animated GIF of the first seed's first learned reach to this file."""
 
     def __post_init__(self) -> None:
-        for name in ("grid", "train_pairs", "iterations", "eval_pairs", "frame_scenes",
-                     "babbles", "epochs", "reaches"):  # fmt: skip
+        for name in (
+            "grid",
+            "train_pairs",
+            "iterations",
+            "eval_pairs",
+            "frame_scenes",
+            "babbles",
+            "epochs",
+            "reaches",
+        ):
             object.__setattr__(self, name, _validate.integer(name, getattr(self, name), 1))
         object.__setattr__(self, "map_shape", _validate.shape("map_shape", self.map_shape))
         if len(self.map_shape) != 2:
-            raise _validate.fail("map_shape", "2 axes (a direction is 2-D)", self.map_shape,
-                                 "e.g. 8x8")  # fmt: skip
+            raise _validate.fail(
+                "map_shape", "2 axes (a direction is 2-D)", self.map_shape, "e.g. 8x8"
+            )
         if self.grid < 3:
             raise _validate.fail("grid", ">= 3", self.grid, "e.g. 12")
         if self.babbles < 50:
             raise _validate.fail("babbles", ">= 50", self.babbles, "e.g. 2000")
-        object.__setattr__(self, "moved_share",
-                           _validate.number("moved_share", self.moved_share, 0.0, 1.0))  # fmt: skip
+        object.__setattr__(
+            self, "moved_share", _validate.number("moved_share", self.moved_share, 0.0, 1.0)
+        )
         for name in ("code_width", "feature_width"):
             object.__setattr__(self, name, _validate.positive(name, getattr(self, name)))
         _validate.choice("head_code", self.head_code, HEAD_CODES)
@@ -83,10 +93,18 @@ class ICubConfig:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-able (tuples as lists)."""
-        return {k: list(v) if isinstance(v, tuple) else v
-                for k, v in dataclasses.asdict(self).items()}  # fmt: skip
+        return {
+            k: list(v) if isinstance(v, tuple) else v for k, v in dataclasses.asdict(self).items()
+        }
 
 
-QUICK = ICubConfig(train_pairs=2500, iterations=15_000, eval_pairs=500, frame_scenes=200,
-                   babbles=800, epochs=6, reaches=30)  # fmt: skip
+QUICK = ICubConfig(
+    train_pairs=2500,
+    iterations=15_000,
+    eval_pairs=500,
+    frame_scenes=200,
+    babbles=800,
+    epochs=6,
+    reaches=30,
+)
 """``sigmapi icub --quick``: smaller maps' data, fewer babbles and reaches (minutes)."""

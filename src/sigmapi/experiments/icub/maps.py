@@ -44,7 +44,7 @@ from sigmapi.metrics import (
     winner_metrics,
     z_decoder,
 )
-from sigmapi.som import SigmaPiSOM
+from sigmapi.model.som import SigmaPiSOM
 from sigmapi.tasks import Batch
 
 __all__ = [
@@ -87,14 +87,27 @@ def neck_position(v: ViewBatch) -> Array:
     return np.clip((v.gaze[:, _NECK] - lo) / (hi - lo), 0.0, 1.0)
 
 
-def som_config(x_shape: tuple[int, ...], y_shape: tuple[int, ...], map_shape: tuple[int, ...],
-               width: float, iterations: int, seed: int, backend: str) -> SOMConfig:  # fmt: skip
+def som_config(
+    x_shape: tuple[int, ...],
+    y_shape: tuple[int, ...],
+    map_shape: tuple[int, ...],
+    width: float,
+    iterations: int,
+    seed: int,
+    backend: str,
+) -> SOMConfig:
     """The ``paper-2d`` preset on these grids with :data:`SIGMA` and no refinement rounds."""
     return load_preset("paper-2d").replace(
-        map_shape=tuple(map_shape), x_shape=tuple(x_shape), y_shape=tuple(y_shape),
-        code_width=width, iterations=iterations, sigma=SIGMA, seed=seed, backend=backend,
+        map_shape=tuple(map_shape),
+        x_shape=tuple(x_shape),
+        y_shape=tuple(y_shape),
+        code_width=width,
+        iterations=iterations,
+        sigma=SIGMA,
+        seed=seed,
+        backend=backend,
         refine_rounds=0,
-    )  # fmt: skip
+    )
 
 
 @dataclass(frozen=True)
@@ -107,11 +120,14 @@ class MapData:
     """Turns of the neck and eyes (map 2)."""
 
     @classmethod
-    def record(cls, scene: ICubScene, n: int, rng: np.random.Generator,
-               moved_share: float = 0.0) -> MapData:  # fmt: skip
+    def record(
+        cls, scene: ICubScene, n: int, rng: np.random.Generator, moved_share: float = 0.0
+    ) -> MapData:
         """``n`` pairs of each kind from ``rng``, ``moved_share`` of them with a moved ball."""
-        return cls(view_pairs(scene, n, rng, stage="eyes", moved_share=moved_share),
-                   view_pairs(scene, n, rng, stage="head", moved_share=moved_share))  # fmt: skip
+        return cls(
+            view_pairs(scene, n, rng, stage="eyes", moved_share=moved_share),
+            view_pairs(scene, n, rng, stage="head", moved_share=moved_share),
+        )
 
     @classmethod
     def evaluation(cls, scene: ICubScene, n: int) -> tuple[MapData, MapData]:
@@ -123,8 +139,9 @@ class MapData:
 class ChainMaps:
     """Map 1 and map 2 of one seed, and the codes that feed them."""
 
-    def __init__(self, map1: SigmaPiSOM, map2: SigmaPiSOM, eye_size: int,
-                 code: str = "winner") -> None:  # fmt: skip
+    def __init__(
+        self, map1: SigmaPiSOM, map2: SigmaPiSOM, eye_size: int, code: str = "winner"
+    ) -> None:
         self.map1, self.map2, self.eye_size, self.code = map1, map2, eye_size, code
 
     def head(self, v: ViewBatch) -> Array:
@@ -163,9 +180,18 @@ class ChainMaps:
         return self.map2.winner(*self.inputs2(v), hard=True)
 
 
-def learn_chain(data: MapData, *, grid: int, width: float, map_shape: tuple[int, ...],
-                iterations: int, seed: int, eye_size: int, backend: str = "auto",
-                code: str = "winner") -> ChainMaps:  # fmt: skip
+def learn_chain(
+    data: MapData,
+    *,
+    grid: int,
+    width: float,
+    map_shape: tuple[int, ...],
+    iterations: int,
+    seed: int,
+    eye_size: int,
+    backend: str = "auto",
+    code: str = "winner",
+) -> ChainMaps:
     """Map 1 on ``data.eyes``, then map 2 on map 1's code of ``data.head``."""
     g = (grid, grid)
     s1, s2 = (int(s) for s in np.random.default_rng(seed).integers(0, 2**31 - 1, 2))
@@ -191,8 +217,14 @@ def angle_error_deg(decoded: Array, true: Array) -> float:
     return float(np.degrees(np.sqrt(np.mean(np.arccos(cos) ** 2))))
 
 
-def _scores(wc: NDArray[np.int64], zc: Array, w0: NDArray[np.int64], w1: NDArray[np.int64],
-            zt: Array, coords: Array) -> dict[str, Any]:  # fmt: skip
+def _scores(
+    wc: NDArray[np.int64],
+    zc: Array,
+    w0: NDArray[np.int64],
+    w1: NDArray[np.int64],
+    zt: Array,
+    coords: Array,
+) -> dict[str, Any]:
     m = winner_metrics(wc, zc, w0, w1, zt, coords, 1.0)
     m.pop("z_error")
     m["direction_error_deg"] = angle_error_deg(z_decoder(wc, zc, coords)[w0], zt)
@@ -216,15 +248,25 @@ def score(chain: ChainMaps, stage: int, cal: MapData, test: MapData) -> dict[str
     out = _scores(wc, truth(c0), w0, w1, truth(t0), model.map_coords)
     batch = Batch(x0, y0, x1, y1, truth(t0), t0.retina, t0.gaze, t1.retina, t1.gaze)
     starved, te, fold = fold_indicators(model, batch, w0, w1, scores)
-    out.update(fold_score=fold, fold_threshold=FOLD_THRESHOLD, folded=bool(fold >= FOLD_THRESHOLD),
-               starved_units=starved, topographic_error=te)  # fmt: skip
+    out.update(
+        fold_score=fold,
+        fold_threshold=FOLD_THRESHOLD,
+        folded=bool(fold >= FOLD_THRESHOLD),
+        starved_units=starved,
+        topographic_error=te,
+    )
     return out
 
 
 def true_direction_map(
-    train: MapData, cal: MapData, test: MapData, stage: int, map_shape: tuple[int, ...],
-    iterations: int, seed: int,
-) -> dict[str, Any]:  # fmt: skip
+    train: MapData,
+    cal: MapData,
+    test: MapData,
+    stage: int,
+    map_shape: tuple[int, ...],
+    iterations: int,
+    seed: int,
+) -> dict[str, Any]:
     """A same-size Kohonen map trained on the true directions (radians) of the training views:
     the quantisation floor of a map of this many units."""
     pick = (lambda d: d.eyes) if stage == 1 else (lambda d: d.head)

@@ -16,8 +16,14 @@ from numpy.typing import NDArray
 from sigmapi.envs.icub import REACH_REGION
 from sigmapi.experiments.icub.reaching import METHODS
 
-__all__ = ["icub_figures", "plot_eyes", "plot_success_gaze", "plot_success_table",
-           "plot_units_on_table", "write_gif"]  # fmt: skip
+__all__ = [
+    "icub_figures",
+    "plot_eyes",
+    "plot_success_gaze",
+    "plot_success_table",
+    "plot_units_on_table",
+    "write_gif",
+]
 
 _TABLE = (0.09, 0.59, -0.5, 0.3)  # near and far edge, right and left side (world x, y)
 
@@ -28,15 +34,22 @@ def _table(ax: Any) -> None:
     x0, x1, y0, y1 = _TABLE
     ax.add_patch(plt.Rectangle((-y1, x0), y1 - y0, x1 - x0, color=(0.85, 0.75, 0.6)))
     (rx0, rx1), (ry0, ry1) = REACH_REGION
-    ax.add_patch(plt.Rectangle((-ry1, rx0), ry1 - ry0, rx1 - rx0, fill=False, ls="--",
-                               color="0.3", lw=0.8))  # fmt: skip
+    ax.add_patch(
+        plt.Rectangle((-ry1, rx0), ry1 - ry0, rx1 - rx0, fill=False, ls="--", color="0.3", lw=0.8)
+    )
     ax.add_patch(plt.Circle((0.0, 0.0), 0.07, color="0.5"))
-    ax.set(xlim=(-0.35, 0.55), ylim=(-0.1, 0.62), aspect="equal",
-           xlabel="right of the robot (m)", ylabel="ahead of the robot (m)")  # fmt: skip
+    ax.set(
+        xlim=(-0.35, 0.55),
+        ylim=(-0.1, 0.62),
+        aspect="equal",
+        xlabel="right of the robot (m)",
+        ylabel="ahead of the robot (m)",
+    )
 
 
-def plot_units_on_table(points: NDArray[np.float64], map_shape: tuple[int, ...],
-                        ax: Any = None) -> Any:  # fmt: skip
+def plot_units_on_table(
+    points: NDArray[np.float64], map_shape: tuple[int, ...], ax: Any = None
+) -> Any:
     """Top view of the table with map 2's units at the table point of their preferred
     torso-centred direction, joined along the map's rows and columns (dashed: the region of
     the reaches; grey disc: the robot)."""
@@ -53,8 +66,11 @@ def plot_units_on_table(points: NDArray[np.float64], map_shape: tuple[int, ...],
     return ax
 
 
-def plot_success_table(ball: NDArray[np.float64], success: dict[str, NDArray[np.bool_]],
-                       methods: tuple[str, ...] = METHODS) -> Any:  # fmt: skip
+def plot_success_table(
+    ball: NDArray[np.float64],
+    success: dict[str, NDArray[np.bool_]],
+    methods: tuple[str, ...] = METHODS,
+) -> Any:
     """One top view per method: each reach's ball, filled green when touched, red otherwise."""
     import matplotlib.pyplot as plt
 
@@ -69,8 +85,9 @@ def plot_success_table(ball: NDArray[np.float64], success: dict[str, NDArray[np.
     return fig
 
 
-def plot_success_gaze(gaze: NDArray[np.float64], success: dict[str, NDArray[np.bool_]],
-                      bins: int = 4, ax: Any = None) -> Any:  # fmt: skip
+def plot_success_gaze(
+    gaze: NDArray[np.float64], success: dict[str, NDArray[np.bool_]], bins: int = 4, ax: Any = None
+) -> Any:
     """Success per method over the gaze's horizontal direction (neck yaw + eye version,
     degrees; positive: to the robot's left), in ``bins`` equal-count bins."""
     import matplotlib.pyplot as plt
@@ -83,8 +100,12 @@ def plot_success_gaze(gaze: NDArray[np.float64], success: dict[str, NDArray[np.b
     centres = [float(np.mean(look[which == b])) for b in range(bins)]
     for m, ok in success.items():
         ax.plot(centres, [ok[which == b].mean() for b in range(bins)], "o-", label=m)
-    ax.set(xlabel="gaze direction: neck yaw - eye version (deg, + left)", ylabel="success",
-           ylim=(-0.02, 1.02), title="reach success over the gaze")  # fmt: skip
+    ax.set(
+        xlabel="gaze direction: neck yaw - eye version (deg, + left)",
+        ylabel="success",
+        ylim=(-0.02, 1.02),
+        title="reach success over the gaze",
+    )
     ax.legend(fontsize=8)
     return ax
 
@@ -132,8 +153,10 @@ def icub_figures(result: Any, out_dir: Path) -> list[Path]:
     if "eyes" in first:
         save(plot_eyes(first["eyes"]), "eyes.png")
     if "unit_table" in first:
-        save(plot_units_on_table(first["unit_table"], result.config.map_shape).figure,
-             "map-on-table.png")  # fmt: skip
+        save(
+            plot_units_on_table(first["unit_table"], result.config.map_shape).figure,
+            "map-on-table.png",
+        )
     ball = np.concatenate([s["ball"] for s in result.per_seed])
     gaze = np.concatenate([s["gaze"] for s in result.per_seed])
     succ = {m: np.concatenate([s["success"][m] for s in result.per_seed]) for m in METHODS}
@@ -143,8 +166,12 @@ def icub_figures(result: Any, out_dir: Path) -> list[Path]:
     for m, pts in result.curves().items():
         n, e = np.array(pts).T
         ax.plot(n, e, "o-", label=m)
-    ax.set(xscale="log", xlabel="babbles learned from", ylabel="palm error, median (cm)",
-           title="babbling: reach error on held-out babbles")  # fmt: skip
+    ax.set(
+        xscale="log",
+        xlabel="babbles learned from",
+        ylabel="palm error, median (cm)",
+        title="babbling: reach error on held-out babbles",
+    )
     ax.legend(fontsize=8)
     save(ax.figure, "babbling.png")
     film = first.get("film") or []

@@ -52,8 +52,17 @@ from sigmapi.envs.icub import (
 from sigmapi.envs.icub.reach import AIM
 from sigmapi.experiments.icub.maps import ChainMaps, eye_position, neck_position, retina_position
 
-__all__ = ["ASSOCIATED", "METHODS", "Babbles", "ReachTests", "babble", "features",
-           "learn_reaching", "reach_tests", "reachable_balls"]  # fmt: skip
+__all__ = [
+    "ASSOCIATED",
+    "METHODS",
+    "Babbles",
+    "ReachTests",
+    "babble",
+    "features",
+    "learn_reaching",
+    "reach_tests",
+    "reachable_balls",
+]
 
 Array = NDArray[np.float64]
 
@@ -105,8 +114,9 @@ def _neck(scene: ICubScene, p: Array, rng: np.random.Generator) -> Array | None:
     return random_neck(scene, p, rng)
 
 
-def features(method: str, v: ViewBatch, chain: ChainMaps, grid: int, width: float,
-             feature_width: float) -> Array:  # fmt: skip
+def features(
+    method: str, v: ViewBatch, chain: ChainMaps, grid: int, width: float, feature_width: float
+) -> Array:
     """The state ``(B, n_features)`` of views ``v`` for an associated ``method``."""
     code = PopulationCode((grid, grid), width)
     if method == "learned":

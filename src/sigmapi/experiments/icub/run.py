@@ -72,10 +72,15 @@ def check_frames(scene: ICubScene, n: int, rng: np.random.Generator) -> dict[str
             continue
         err.append(np.linalg.norm(px - scene.project(scene.ball_position())[0]))
     e = np.array(err)
-    return {"scenes": n, "hidden": hidden, "pixel_rms_px": float(np.sqrt(np.mean(e**2))),
-            "pixel_max_px": float(e.max()), "eye_size": scene.eye_size,
-            "eye_frame_ms_median": 1e3 * float(np.median(wall)),
-            "eye_frame_cpu_ms_median": 1e3 * float(np.median(cpu))}  # fmt: skip
+    return {
+        "scenes": n,
+        "hidden": hidden,
+        "pixel_rms_px": float(np.sqrt(np.mean(e**2))),
+        "pixel_max_px": float(e.max()),
+        "eye_size": scene.eye_size,
+        "eye_frame_ms_median": 1e3 * float(np.median(wall)),
+        "eye_frame_cpu_ms_median": 1e3 * float(np.median(cpu)),
+    }
 
 
 @dataclass(frozen=True)
@@ -94,10 +99,16 @@ def _run_seed(job: _Job) -> dict[str, Any]:
     t0 = time.process_time()
     train = MapData.record(scene, cfg.train_pairs, PLAN.rng(seed, "views"), cfg.moved_share)
     chain = learn_chain(
-        train, grid=cfg.grid, width=cfg.code_width, map_shape=cfg.map_shape,
-        iterations=cfg.iterations, seed=int(PLAN.rng(seed, "map").integers(2**31)),
-        eye_size=scene.eye_size, backend=cfg.backend, code=cfg.head_code,
-    )  # fmt: skip
+        train,
+        grid=cfg.grid,
+        width=cfg.code_width,
+        map_shape=cfg.map_shape,
+        iterations=cfg.iterations,
+        seed=int(PLAN.rng(seed, "map").integers(2**31)),
+        eye_size=scene.eye_size,
+        backend=cfg.backend,
+        code=cfg.head_code,
+    )
     out: dict[str, Any] = {"seed": seed, "maps": {}}
     for stage in (1, 2):
         m = score(chain, stage, job.cal, job.test)
@@ -121,8 +132,14 @@ def _run_seed(job: _Job) -> dict[str, Any]:
             return 8 if i == 0 and method == "learned" else 0
 
     tests, frames = reach_tests(scene, layers, feats, cfg.reaches, PLAN.rng(seed, "reaches"), film)
-    out.update(curves=curves, ball=tests.ball, gaze=tests.gaze, success=tests.success,
-               distance=tests.distance, cpu_s=time.process_time() - t0)  # fmt: skip
+    out.update(
+        curves=curves,
+        ball=tests.ball,
+        gaze=tests.gaze,
+        success=tests.success,
+        distance=tests.distance,
+        cpu_s=time.process_time() - t0,
+    )
     if job.figures:
         c0 = job.cal.head[0]
         zc = z_decoder(chain.winner(c0, 2), c0.torso, chain.map2.map_coords)
@@ -143,8 +160,12 @@ def _view(scene: ICubScene, ball: NDArray[np.float64], gaze: NDArray[np.float64]
     return ViewBatch(*cols)
 
 
-def _eye_views(scene: ICubScene, ball: NDArray[np.float64], gaze: NDArray[np.float64],
-               posture: NDArray[np.float64]) -> dict[str, Any]:  # fmt: skip
+def _eye_views(
+    scene: ICubScene,
+    ball: NDArray[np.float64],
+    gaze: NDArray[np.float64],
+    posture: NDArray[np.float64],
+) -> dict[str, Any]:
     """Both eyes' frames with the arm at the learned posture for the ball, and where the ball
     and the palm project."""
     scene.reset()
@@ -196,12 +217,16 @@ class ICubExperiment(Experiment[ICubConfig]):
         frames = check_frames(scene, config.frame_scenes, np.random.default_rng(EVAL_SEED))
         cal, test = MapData.evaluation(scene, config.eval_pairs)
         scene.close()
-        jobs = [(str(seed), _Job(config, seed, cal, test, i == 0))
-                for i, seed in enumerate(seeds)]  # fmt: skip
+        jobs = [(str(seed), _Job(config, seed, cal, test, i == 0)) for i, seed in enumerate(seeds)]
         values = run_all(
-            _run_seed, jobs, executor=executor, per_job=_job_memory(config), progress=progress,
-            desc="icub", describe=lambda key, v: f"seed {key} ({v['cpu_s']:.0f} CPU s)",
-        )  # fmt: skip
+            _run_seed,
+            jobs,
+            executor=executor,
+            per_job=_job_memory(config),
+            progress=progress,
+            desc="icub",
+            describe=lambda key, v: f"seed {key} ({v['cpu_s']:.0f} CPU s)",
+        )
         res = ICubResult(config, seeds, frames, [values[str(s)] for s in seeds])
         res.seconds = time.perf_counter() - t0
         return res

@@ -49,8 +49,10 @@ def check_episode_run(config: Any) -> None:
             f"final_episodes must be <= episodes ({config.episodes}), got {config.final_episodes}"
         )
     if config.block > config.episodes:
-        raise ConfigError(f"block must be <= episodes ({config.episodes}), got {config.block}; "
-                          "a learning curve needs at least one full block")  # fmt: skip
+        raise ConfigError(
+            f"block must be <= episodes ({config.episodes}), got {config.block}; "
+            "a learning curve needs at least one full block"
+        )
     states = tuple(config.states)
     if not states or any(s not in STATES for s in states) or len(set(states)) != len(states):
         raise ConfigError(f"states must be distinct names from {STATES}, got {states!r}")

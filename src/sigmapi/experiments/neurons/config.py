@@ -58,13 +58,18 @@ class NeuronsConfig:
         set_ = object.__setattr__
         set_(self, "overrides", tuple(self.overrides))
         for name in ("branches", "branches_2d", "windows_ms", "peak_rates"):
-            vals = [_validate.integer(name, v, 1, fix="positive ints, e.g. 2,4,7")
-                    for v in getattr(self, name)]  # fmt: skip
+            vals = [
+                _validate.integer(name, v, 1, fix="positive ints, e.g. 2,4,7")
+                for v in getattr(self, name)
+            ]
             set_(self, name, tuple(sorted(set(vals))))
         if not self.branches or not self.windows_ms or not self.peak_rates:
-            raise _validate.fail("branches, windows_ms and peak_rates", "non-empty",
-                                 (self.branches, self.windows_ms, self.peak_rates),
-                                 "give at least one value each")  # fmt: skip
+            raise _validate.fail(
+                "branches, windows_ms and peak_rates",
+                "non-empty",
+                (self.branches, self.windows_ms, self.peak_rates),
+                "give at least one value each",
+            )
         _validate.integer("seeds_2d", self.seeds_2d, 0, fix="0 runs no 2-D task")
         _validate.integer("pairs", self.pairs, 0, fix="e.g. 100000")
         _validate.integer("pairs_2d", self.pairs_2d, 0, fix="e.g. 50000")
@@ -94,13 +99,20 @@ class NeuronsConfig:
 
     def spiking(self, peak_rate: float) -> SpikingConfig:
         """The spiking deployment at ``peak_rate``."""
-        return SpikingConfig(peak_rate=float(peak_rate),
-                             windows_ms=tuple(float(w) for w in self.windows_ms))  # fmt: skip
+        return SpikingConfig(
+            peak_rate=float(peak_rate), windows_ms=tuple(float(w) for w in self.windows_ms)
+        )
 
 
 QUICK = NeuronsConfig(
-    preset_2d="", overrides=("iterations=60000", "refine_pairs=30000"), branches=(4, 10),
-    pairs=40_000, windows_ms=(20, 100, 200), peak_rates=(100,), spike_test=150,
-    spiking_branches=10, n_test=2000,
-)  # fmt: skip
+    preset_2d="",
+    overrides=("iterations=60000", "refine_pairs=30000"),
+    branches=(4, 10),
+    pairs=40_000,
+    windows_ms=(20, 100, 200),
+    peak_rates=(100,),
+    spike_test=150,
+    spiking_branches=10,
+    n_test=2000,
+)
 """The quick look: a short 1-D run, two branch counts, one peak rate."""

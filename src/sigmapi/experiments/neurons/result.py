@@ -59,10 +59,15 @@ class NeuronsResult:
         given: dict[str, Any] = {k: tuple(v) if isinstance(v, list) else v for k, v in st.items()}
         config = NeuronsConfig(**given)
         runs = data["runs"]
-        jobs = [{"maps": [r for r in runs["maps"] if (r["seed"], r["task"]) == key],
-                 "spiking": [r for r in runs["spiking"] if (r["seed"], r["task"]) == key],
-                 "branches": b}
-                for b in data["branches"] for key in [(b["seed"], b["task"])]]  # fmt: skip
+        jobs = [
+            {
+                "maps": [r for r in runs["maps"] if (r["seed"], r["task"]) == key],
+                "spiking": [r for r in runs["spiking"] if (r["seed"], r["task"]) == key],
+                "branches": b,
+            }
+            for b in data["branches"]
+            for key in [(b["seed"], b["task"])]
+        ]
         return cls(config, seeds, jobs, float(data["seconds"]))
 
     def _rows(self, kind: str) -> list[dict[str, Any]]:
@@ -78,34 +83,57 @@ class NeuronsResult:
             names = dict.fromkeys(r["name"] for r in maps if r["task"] == task)
             for name in names:
                 rows = [r for r in maps if r["task"] == task and r["name"] == name]
-                extra = ("reference_frame_index", "gain_r2", "peak_modulation",
-                         "active_synapses")  # fmt: skip
+                extra = ("reference_frame_index", "gain_r2", "peak_modulation", "active_synapses")
                 entry: dict[str, Any] = {"name": name, "task": task, "kind": "rate"}
                 entry.update(_median_worst(rows, METRICS + extra))
                 entry.update(
-                    synapses=rows[0]["synapses"], branches=rows[0].get("branches"),
-                    ordered=int(sum(not r["folded"] for r in rows)), n_seeds=len(rows),
-                    per_seed={k: [r.get(k) for r in rows]
-                              for k in ("seed", *METRICS, "folded", "seconds")},
-                )  # fmt: skip
+                    synapses=rows[0]["synapses"],
+                    branches=rows[0].get("branches"),
+                    ordered=int(sum(not r["folded"] for r in rows)),
+                    n_seeds=len(rows),
+                    per_seed={
+                        k: [r.get(k) for r in rows] for k in ("seed", *METRICS, "folded", "seconds")
+                    },
+                )
                 out.append(entry)
         spk = self._rows("spiking")
         keys = dict.fromkeys((r["name"], r["peak_rate"]) for r in spk)
         for name, rate in keys:
             rows = [r for r in spk if r["name"] == name and r["peak_rate"] == rate]
             label = name if rate == REFERENCE_RATE else f"{name}-{rate}hz"
-            entry = {"name": label, "task": "1d", "kind": "spiking",
-                     "window_ms": rows[0]["window_ms"], "peak_rate": rate}  # fmt: skip
-            entry.update(_median_worst(rows, ("agreement", "view_consistency",
-                                              "rate_view_consistency", "view_within_one",
-                                              "z_error", "order_r2", "spikes_per_decision",
-                                              "map_spikes")))  # fmt: skip
+            entry = {
+                "name": label,
+                "task": "1d",
+                "kind": "spiking",
+                "window_ms": rows[0]["window_ms"],
+                "peak_rate": rate,
+            }
+            entry.update(
+                _median_worst(
+                    rows,
+                    (
+                        "agreement",
+                        "view_consistency",
+                        "rate_view_consistency",
+                        "view_within_one",
+                        "z_error",
+                        "order_r2",
+                        "spikes_per_decision",
+                        "map_spikes",
+                    ),
+                )
+            )
             gap = [r["view_consistency"] - r["rate_view_consistency"] for r in rows]
-            entry.update(vc_gap=float(np.median(gap)), vc_gap_worst=float(min(gap)),
-                         n_seeds=len(rows), n_trials=rows[0]["n_trials"],
-                         per_seed={k: [r[k] for r in rows] for k in
-                                   ("seed", "agreement", "view_consistency",
-                                    "rate_view_consistency")})  # fmt: skip
+            entry.update(
+                vc_gap=float(np.median(gap)),
+                vc_gap_worst=float(min(gap)),
+                n_seeds=len(rows),
+                n_trials=rows[0]["n_trials"],
+                per_seed={
+                    k: [r[k] for r in rows]
+                    for k in ("seed", "agreement", "view_consistency", "rate_view_consistency")
+                },
+            )
             out.append(entry)
         return out
 
@@ -119,26 +147,40 @@ class NeuronsResult:
         out: dict[str, Any] = {"margin": VC_MARGIN, "dendritic": [], "spiking": []}
         for task in ("1d", "2d"):
             ref = {r["seed"]: r for r in maps if r["task"] == task and r["name"] == "sigma-pi"}
-            names = dict.fromkeys(r["name"] for r in maps if r["task"] == task
-                                  and r["name"] != "sigma-pi")  # fmt: skip
+            names = dict.fromkeys(
+                r["name"] for r in maps if r["task"] == task and r["name"] != "sigma-pi"
+            )
             for name in names:
                 rows = [r for r in maps if r["task"] == task and r["name"] == name]
                 gap = [r["view_consistency"] - ref[r["seed"]]["view_consistency"] for r in rows]
                 met = [g >= -VC_MARGIN and not r["folded"] for g, r in zip(gap, rows, strict=True)]
-                out["dendritic"].append({
-                    "name": name, "task": task, "branches": rows[0].get("branches"),
-                    "synapses": rows[0]["synapses"], "sigma_pi_synapses": ref[rows[0]["seed"]][
-                        "synapses"],
-                    "fewer_synapses": rows[0]["synapses"] < ref[rows[0]["seed"]]["synapses"],
-                    "vc_gap_median": float(np.median(gap)), "vc_gap_worst": float(min(gap)),
-                    "met": int(sum(met)), "n_seeds": len(rows), "all_met": bool(all(met)),
-                })  # fmt: skip
+                out["dendritic"].append(
+                    {
+                        "name": name,
+                        "task": task,
+                        "branches": rows[0].get("branches"),
+                        "synapses": rows[0]["synapses"],
+                        "sigma_pi_synapses": ref[rows[0]["seed"]]["synapses"],
+                        "fewer_synapses": rows[0]["synapses"] < ref[rows[0]["seed"]]["synapses"],
+                        "vc_gap_median": float(np.median(gap)),
+                        "vc_gap_worst": float(min(gap)),
+                        "met": int(sum(met)),
+                        "n_seeds": len(rows),
+                        "all_met": bool(all(met)),
+                    }
+                )
         for task in ("1d", "2d"):
-            ok = [c["branches"] for c in out["dendritic"] if c["task"] == task
-                  and c["branches"] and c["all_met"]]  # fmt: skip
+            ok = [
+                c["branches"]
+                for c in out["dendritic"]
+                if c["task"] == task and c["branches"] and c["all_met"]
+            ]
             out[f"smallest_branches_{task}"] = min(ok) if ok else None
-            cheap = [c["branches"] for c in out["dendritic"] if c["task"] == task
-                     and c["branches"] and c["all_met"] and c["fewer_synapses"]]  # fmt: skip
+            cheap = [
+                c["branches"]
+                for c in out["dendritic"]
+                if c["task"] == task and c["branches"] and c["all_met"] and c["fewer_synapses"]
+            ]
             out[f"smallest_branches_fewer_synapses_{task}"] = min(cheap) if cheap else None
         for m in self.methods():
             if (
@@ -146,12 +188,17 @@ class NeuronsResult:
                 and m["peak_rate"] == REFERENCE_RATE
                 and (m["window_ms"] <= MAX_WINDOW_MS)
             ):
-                out["spiking"].append({
-                    "name": m["name"], "window_ms": m["window_ms"],
-                    "vc_gap_median": m["vc_gap"], "vc_gap_worst": m["vc_gap_worst"],
-                    "agreement_median": m["agreement"], "agreement_worst": m["agreement_worst"],
-                    "met": bool(m["vc_gap_worst"] >= -VC_MARGIN),
-                })  # fmt: skip
+                out["spiking"].append(
+                    {
+                        "name": m["name"],
+                        "window_ms": m["window_ms"],
+                        "vc_gap_median": m["vc_gap"],
+                        "vc_gap_worst": m["vc_gap_worst"],
+                        "agreement_median": m["agreement"],
+                        "agreement_worst": m["agreement_worst"],
+                        "met": bool(m["vc_gap_worst"] >= -VC_MARGIN),
+                    }
+                )
         return out
 
     def to_dict(self) -> dict[str, Any]:
@@ -162,16 +209,23 @@ class NeuronsResult:
         c = self.config
         settings = {k: (list(v) if isinstance(v, tuple) else v) for k, v in vars(c).items()}
         settings["seeds"] = list(self.seeds)
-        return {"methods": self.methods(), "acceptance": self.acceptance(),
-                "branches": [_scalars(j["branches"]) if i else j["branches"]
-                             for i, j in enumerate(self.jobs)], "settings": settings,
-                "runs": {"maps": self._rows("maps"), "spiking": self._rows("spiking")},
-                "seconds": self.seconds}  # fmt: skip
+        return {
+            "methods": self.methods(),
+            "acceptance": self.acceptance(),
+            "branches": [
+                _scalars(j["branches"]) if i else j["branches"] for i, j in enumerate(self.jobs)
+            ],
+            "settings": settings,
+            "runs": {"maps": self._rows("maps"), "spiking": self._rows("spiking")},
+            "seconds": self.seconds,
+        }
 
     def table(self) -> str:
         """Medians per map, then the spiking networks at the reference rate, then acceptance."""
-        rows = [f"{'method':28s} {'task':4s} {'synapses':>8s} {'same unit':>9s} {'worst':>6s} "
-                f"{'z error':>7s} {'order':>6s} {'ordered':>7s} {'RF index':>8s}"]  # fmt: skip
+        rows = [
+            f"{'method':28s} {'task':4s} {'synapses':>8s} {'same unit':>9s} {'worst':>6s} "
+            f"{'z error':>7s} {'order':>6s} {'ordered':>7s} {'RF index':>8s}"
+        ]
         for m in self.methods():
             if m["kind"] != "rate":
                 continue
@@ -182,8 +236,10 @@ class NeuronsResult:
                 f"{m['ordered']:3d}/{m['n_seeds']:<3d} "
                 + (f"{rfi:8.2f}" if rfi is not None else f"{'-':>8s}")
             )
-        rows.append(f"{'spiking (peak rate)':28s} {'agree':>6s} {'same unit':>9s} "
-                    f"{'rate map':>8s} {'z error':>7s} {'spikes':>7s}")  # fmt: skip
+        rows.append(
+            f"{'spiking (peak rate)':28s} {'agree':>6s} {'same unit':>9s} "
+            f"{'rate map':>8s} {'z error':>7s} {'spikes':>7s}"
+        )
         for m in self.methods():
             if m["kind"] == "spiking":
                 rows.append(
@@ -218,20 +274,25 @@ class NeuronsResult:
             f"synapses). "
         )
         small = acc["smallest_branches_fewer_synapses_1d"]
-        text += ("No branch count with fewer synapses than the Sigma-Pi unit comes within "
-                 f"{VC_MARGIN} on every seed. " if small is None else
-                 f"Fewest branches within {VC_MARGIN} on every seed with fewer synapses: "
-                 f"{small}. ")  # fmt: skip
+        text += (
+            "No branch count with fewer synapses than the Sigma-Pi unit comes within "
+            f"{VC_MARGIN} on every seed. "
+            if small is None
+            else f"Fewest branches within {VC_MARGIN} on every seed with fewer synapses: {small}. "
+        )
         spk = acc["spiking"]
         if spk:
             met = [s for s in spk if s["met"]]
             text += (
                 f"Middle: spiking networks at {REFERENCE_RATE} Hz against the decision window "
                 f"(view consistency minus the rate map's, and agreement with its winners). "
-                + (f"Shortest window within {VC_MARGIN} of the rate map on every seed: "
-                   f"{min(s['window_ms'] for s in met):g} ms ({met[0]['name']}). " if met else
-                   f"No window up to {MAX_WINDOW_MS} ms within {VC_MARGIN} on every seed. ")
-            )  # fmt: skip
+                + (
+                    f"Shortest window within {VC_MARGIN} of the rate map on every seed: "
+                    f"{min(s['window_ms'] for s in met):g} ms ({met[0]['name']}). "
+                    if met
+                    else f"No window up to {MAX_WINDOW_MS} ms within {VC_MARGIN} on every seed. "
+                )
+            )
         b = self.jobs[0]["branches"]
         text += (
             f"Right: the branches of the D={b['branches']} map, seed {b['seed']}, as retinal "

@@ -24,12 +24,12 @@ from sigmapi.config import SOMConfig
 from sigmapi.executor import Executor, job_memory
 from sigmapi.experiments.base import Experiment, check_seeds, register, run_all
 from sigmapi.metrics import evaluate, evaluation_sets, grid_spacing, winner_metrics
+from sigmapi.model.som import SigmaPiSOM
 from sigmapi.neurons.basis import BasisFunctionMap
 from sigmapi.neurons.dendritic import DendriticMap, branch_summary
 from sigmapi.neurons.spiking import SpikingRun, simulate_conjunction, simulate_dendritic
 from sigmapi.neurons.training import FirstOrderMap
 from sigmapi.progress import Progress
-from sigmapi.som import SigmaPiSOM
 
 from .config import METRICS, QUICK, REFERENCE_RATE, NeuronsConfig
 from .result import NeuronsResult
@@ -91,20 +91,27 @@ def _spiking_rows(
         for i, window in enumerate(run.windows_ms):
             w = run.winners[i]
             m = winner_metrics(wc, cal.z, w[:n], w[n:], test.z[:n], model.map_coords, spacing)
-            rows.append({
-                "name": f"{name}-{window:g}ms", "window_ms": window, "peak_rate": rate,
-                "agreement": float(np.mean(w == r)),
-                "rate_view_consistency": float(np.mean(r[:n] == r[n:])),
-                "view_consistency": m["view_consistency"],
-                "view_within_one": m["view_within_one"], "z_error": m["z_error"],
-                "order_r2": m["order_r2"],
-                "input_spikes": float(run.input_spikes[i].mean()),
-                "hidden_spikes": float(run.hidden_spikes[i].mean()),
-                "map_spikes": float(run.map_spikes[i].mean()),
-                "spikes_per_decision": float((run.input_spikes[i] + run.hidden_spikes[i]
-                                              + run.map_spikes[i]).mean()),
-                "n_trials": int(x.shape[0]), "seconds": secs,
-            })  # fmt: skip
+            rows.append(
+                {
+                    "name": f"{name}-{window:g}ms",
+                    "window_ms": window,
+                    "peak_rate": rate,
+                    "agreement": float(np.mean(w == r)),
+                    "rate_view_consistency": float(np.mean(r[:n] == r[n:])),
+                    "view_consistency": m["view_consistency"],
+                    "view_within_one": m["view_within_one"],
+                    "z_error": m["z_error"],
+                    "order_r2": m["order_r2"],
+                    "input_spikes": float(run.input_spikes[i].mean()),
+                    "hidden_spikes": float(run.hidden_spikes[i].mean()),
+                    "map_spikes": float(run.map_spikes[i].mean()),
+                    "spikes_per_decision": float(
+                        (run.input_spikes[i] + run.hidden_spikes[i] + run.map_spikes[i]).mean()
+                    ),
+                    "n_trials": int(x.shape[0]),
+                    "seconds": secs,
+                }
+            )
     return rows
 
 
@@ -125,8 +132,18 @@ def neurons_job(job: NeuronsJob) -> dict[str, Any]:
         start = time.perf_counter()
         dm = DendriticMap(cfg, d).fit(training, seed=job.seed)
         dendritic[d] = dm
-        maps.append((f"dendritic-D{d}", dm, {"synapses": dm.synapses, "branches": d,
-                     "active_synapses": dm.active_synapses(), "start": start}))  # fmt: skip
+        maps.append(
+            (
+                f"dendritic-D{d}",
+                dm,
+                {
+                    "synapses": dm.synapses,
+                    "branches": d,
+                    "active_synapses": dm.active_synapses(),
+                    "start": start,
+                },
+            )
+        )
     start = time.perf_counter()
     bf = BasisFunctionMap(cfg, stride=c.basis_stride_2d if two_d else 1).fit(
         training, seed=job.seed
@@ -138,9 +155,11 @@ def neurons_job(job: NeuronsJob) -> dict[str, Any]:
         row = _scored(model, c.n_test, begin, name=name, task=job.task, seed=job.seed, **extra)
         if not two_d:
             phys = record(model)
-            row.update(reference_frame_index=phys["median_reference_frame_index"],
-                       gain_r2=phys["median_gain_r2"],
-                       peak_modulation=phys["median_peak_modulation"])  # fmt: skip
+            row.update(
+                reference_frame_index=phys["median_reference_frame_index"],
+                gain_r2=phys["median_gain_r2"],
+                peak_modulation=phys["median_peak_modulation"],
+            )
         rows.append(row)
     mid = sorted(dendritic)[len(dendritic) // 2]
     summary = branch_summary(dendritic[mid], _z_table(dendritic[mid], c.n_test))
@@ -155,7 +174,8 @@ def neurons_job(job: NeuronsJob) -> dict[str, Any]:
         spiking += _spiking_rows(job, "spiking-conjunction", sp, conj, sp.winner, c.peak_rates)
         if c.spiking_branches:
             dm = dendritic.get(c.spiking_branches) or DendriticMap(cfg, c.spiking_branches).fit(
-                training, seed=job.seed)  # fmt: skip
+                training, seed=job.seed
+            )
 
             def dend(x: Any, y: Any, cfg_s: Any, rng: Any) -> SpikingRun:
                 return simulate_dendritic(dm.u_, dm.v_, dm.gain, dm.threshold, x, y, cfg_s, rng)
@@ -187,15 +207,24 @@ def run_neurons(
     jobs = [(f"seed {s} 1d", NeuronsJob(s, "1d", config)) for s in seeds]
     if config.preset_2d:
         jobs += [(f"seed {s} 2d", NeuronsJob(s, "2d", config)) for s in seeds[: config.seeds_2d]]
-    per_job = job_memory(config.som_config_2d if config.preset_2d else config.som_config,
-                         config.n_test)  # fmt: skip
+    per_job = job_memory(
+        config.som_config_2d if config.preset_2d else config.som_config, config.n_test
+    )
 
     def describe(key: str, value: dict[str, Any]) -> str:
-        return f"{key}: " + ", ".join(f"{r['name']} {r['view_consistency']:.3f}"
-                                      for r in value["maps"])  # fmt: skip
+        return f"{key}: " + ", ".join(
+            f"{r['name']} {r['view_consistency']:.3f}" for r in value["maps"]
+        )
 
-    done = run_all(neurons_job, jobs, executor=executor, per_job=per_job, progress=progress,
-                   desc="neurons", describe=describe)  # fmt: skip
+    done = run_all(
+        neurons_job,
+        jobs,
+        executor=executor,
+        per_job=per_job,
+        progress=progress,
+        desc="neurons",
+        describe=describe,
+    )
     return NeuronsResult(config, seeds, [done[k] for k, _ in jobs], time.perf_counter() - start)
 
 

@@ -25,13 +25,20 @@ class PhysiologyConfig:
 
     def __post_init__(self) -> None:
         if not isinstance(self.model, str) or not self.model:
-            raise _validate.fail("model", "a model file path", self.model,
-                                 "e.g. sigmapi physiology model.npz")  # fmt: skip
-        gazes = [_validate.number("gazes", g, 0.0, 1.0, fix="fractions of the gaze axis")
-                 for g in self.gazes]  # fmt: skip
+            raise _validate.fail(
+                "model", "a model file path", self.model, "e.g. sigmapi physiology model.npz"
+            )
+        gazes = [
+            _validate.number("gazes", g, 0.0, 1.0, fix="fractions of the gaze axis")
+            for g in self.gazes
+        ]
         if len(set(gazes)) < 3:
-            raise _validate.fail("gazes", "at least 3 distinct gazes", list(self.gazes),
-                                 "e.g. --gazes 0.2,0.35,0.5,0.65,0.8")  # fmt: skip
+            raise _validate.fail(
+                "gazes",
+                "at least 3 distinct gazes",
+                list(self.gazes),
+                "e.g. --gazes 0.2,0.35,0.5,0.65,0.8",
+            )
         object.__setattr__(self, "gazes", tuple(sorted(set(gazes))))
         _validate.integer("n_probe", self.n_probe, 0, 1001, fix="0 for the default, e.g. 61")
         if 0 < self.n_probe < 5:

@@ -32,29 +32,40 @@ class PhysiologyResult:
         between the two index distributions), ``body_centred`` (median >= 0.9),
         ``tuning``, ``settings``, ``seconds``."""
         med = self.data["trained"]["median_reference_frame_index"]
-        return {**self.data, "body_centred": med is not None and med >= BODY_CENTRED,
-                "settings": {"model": self.config.model, "gazes": list(self.config.gazes),
-                             "n_probe": self.config.n_probe},
-                "seconds": self.seconds}  # fmt: skip
+        return {
+            **self.data,
+            "body_centred": med is not None and med >= BODY_CENTRED,
+            "settings": {
+                "model": self.config.model,
+                "gazes": list(self.config.gazes),
+                "n_probe": self.config.n_probe,
+            },
+            "seconds": self.seconds,
+        }
 
     def table(self) -> str:
         """The medians of both maps and the comparison."""
-        rows = [f"{'map':14s} {'RF index':>9s} {'measured':>8s} {'body-centred':>12s} "
-                f"{'gain R^2':>8s} {'peak mod.':>9s}"]  # fmt: skip
+        rows = [
+            f"{'map':14s} {'RF index':>9s} {'measured':>8s} {'body-centred':>12s} "
+            f"{'gain R^2':>8s} {'peak mod.':>9s}"
+        ]
         for key in ("trained", "random_start"):
             r = self.data[key]
             med = r["median_reference_frame_index"]
             share = r["body_centred_share"]
             rows.append(
-                f"{key:14s} " + (f"{med:9.3f}" if med is not None else f"{'-':>9s}")
-                + f" {r['measured']:8.2f} " + (f"{share:12.2f}" if share is not None else
-                                               f"{'-':>12s}")
+                f"{key:14s} "
+                + (f"{med:9.3f}" if med is not None else f"{'-':>9s}")
+                + f" {r['measured']:8.2f} "
+                + (f"{share:12.2f}" if share is not None else f"{'-':>12s}")
                 + f" {r['median_gain_r2']:8.3f} {r['median_peak_modulation']:9.3f}"
-            )  # fmt: skip
+            )
         c = self.data["comparison"]
         if c["ks"] is not None:
-            rows.append(f"trained vs random start: KS {c['ks']:.3f}, p = {c['p_value']:.2g} "
-                        f"(n = {c['n'][0]}, {c['n'][1]})")  # fmt: skip
+            rows.append(
+                f"trained vs random start: KS {c['ks']:.3f}, p = {c['p_value']:.2g} "
+                f"(n = {c['n'][0]}, {c['n'][1]})"
+            )
         return "\n".join(rows)
 
     def caption(self) -> str:
@@ -65,8 +76,11 @@ class PhysiologyResult:
             v = r["median_reference_frame_index"]
             return "no unit measured" if v is None else f"median {v:.2f}"
 
-        verdict = ("body-centred" if self.to_dict()["body_centred"] else
-                   f"not body-centred by the {BODY_CENTRED} criterion")  # fmt: skip
+        verdict = (
+            "body-centred"
+            if self.to_dict()["body_centred"]
+            else f"not body-centred by the {BODY_CENTRED} criterion"
+        )
         text = (
             f"{self.data['model']} (map {'x'.join(map(str, self.data['map_shape']))}): "
             f"reference-frame index (receptive-field shift with gaze over a body-centred "
@@ -75,8 +89,7 @@ class PhysiologyResult:
             f"its random start, {med(s)}."
         )
         if c["ks"] is not None:
-            text += (f" The two distributions differ by KS {c['ks']:.2f} (p = "
-                     f"{c['p_value']:.2g}).")  # fmt: skip
+            text += f" The two distributions differ by KS {c['ks']:.2f} (p = {c['p_value']:.2g})."
         text += (
             f" Middle: tuning curves over retinal position at gazes "
             f"{', '.join(f'{g:g}' for g in self.config.gazes)}. Right: planar gain-field fits "

@@ -15,8 +15,8 @@ from sigmapi.codes import PopulationCode
 from sigmapi.errors import DataError
 from sigmapi.executor import Executor
 from sigmapi.experiments.base import Experiment, register
+from sigmapi.model.som import SigmaPiSOM, load_model
 from sigmapi.progress import Progress
-from sigmapi.som import SigmaPiSOM, load_model
 from sigmapi.tasks import TwoViewSampler
 
 from .config import PhysiologyConfig
@@ -79,20 +79,26 @@ def record_model(cfg: PhysiologyConfig) -> dict[str, Any]:
     tuning curves the figure draws."""
     path = Path(cfg.model)
     if not path.is_file():
-        raise DataError(f"model {str(path)!r} is not a file; give a model file written by "
-                        "sigmapi train --out FILE")  # fmt: skip
+        raise DataError(
+            f"model {str(path)!r} is not a file; give a model file written by "
+            "sigmapi train --out FILE"
+        )
     model = load_model(path)
     n_probe = cfg.n_probe or None
     trained = record(model, cfg.gazes, n_probe)
     start = record(RandomStart(model), cfg.gazes, n_probe)
     return {
-        "model": str(path), "map_shape": list(model.map_shape),
-        "relation": model.sampler.relation.name, "trained": trained, "random_start": start,
+        "model": str(path),
+        "map_shape": list(model.map_shape),
+        "relation": model.sampler.relation.name,
+        "trained": trained,
+        "random_start": start,
         "reference_frame_index": trained["reference_frame_index"],
-        "comparison": compare_distributions(trained["reference_frame_index"],
-                                            start["reference_frame_index"]),
+        "comparison": compare_distributions(
+            trained["reference_frame_index"], start["reference_frame_index"]
+        ),
         "tuning": _tuning(model, cfg, n_probe),
-    }  # fmt: skip
+    }
 
 
 class PhysiologyExperiment(Experiment[PhysiologyConfig]):

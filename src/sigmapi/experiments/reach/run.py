@@ -50,8 +50,8 @@ from sigmapi.experiments.kit.worlds import GAZE_REACH, World
 from sigmapi.experiments.reach.config import SMALL_MAP, ReachConfig
 from sigmapi.experiments.reach.result import ReachResult
 from sigmapi.metrics import evaluate
+from sigmapi.model.som import SigmaPiSOM, load_model
 from sigmapi.progress import Progress
-from sigmapi.som import SigmaPiSOM, load_model
 
 __all__ = [
     "PLAN",

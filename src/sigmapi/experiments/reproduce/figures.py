@@ -11,8 +11,8 @@ from typing import Any
 from sigmapi.config import SOMConfig
 from sigmapi.experiments.reproduce.results import PresetResult, SeedRun
 from sigmapi.metrics import ORDERED_R2, evaluate
+from sigmapi.model.som import SigmaPiSOM
 from sigmapi.progress import Progress
-from sigmapi.som import SigmaPiSOM
 from sigmapi.viz import figures as figs
 
 __all__ = ["draw_preset", "figure_seed"]
@@ -51,8 +51,10 @@ def figure_seed(runs: Sequence[SeedRun], cfg: SOMConfig) -> tuple[int, str]:
 def _table_gap(runs: Sequence[SeedRun], n_test: int) -> dict[str, float]:
     """Median over seeds of each curve's last point minus the table's value (the same map,
     measured on the curves' smaller sets): what the curves caption states."""
-    gap = {k: statistics.median(r.curve[k][-1] - getattr(r.metrics, k) for r in runs)
-           for k in ("z_error", "view_consistency")}  # fmt: skip
+    gap = {
+        k: statistics.median(r.curve[k][-1] - getattr(r.metrics, k) for r in runs)
+        for k in ("z_error", "view_consistency")
+    }
     return {**gap, "n_test": n_test}
 
 
@@ -68,9 +70,12 @@ def _decoding_cause(
     calibration, _ = evaluation_sets(model, curve_test, LearningCurve.seed)
     _, test = evaluation_sets(model, test_size)
     small = evaluate(model, test=test, calibration=calibration).z_error
-    return {"seed": run.seed, "z_error_curve_table": float(small),
-            "z_error_table": float(run.metrics.z_error),
-            "z_error_curve": float(run.curve["z_error"][-1])}  # fmt: skip
+    return {
+        "seed": run.seed,
+        "z_error_curve_table": float(small),
+        "z_error_table": float(run.metrics.z_error),
+        "z_error_curve": float(run.curve["z_error"][-1]),
+    }
 
 
 def draw_preset(

@@ -22,7 +22,7 @@ from sigmapi.metrics import ORDERED_R2
 if TYPE_CHECKING:
     from sigmapi.config import SOMConfig
     from sigmapi.metrics import Metrics
-    from sigmapi.som import SigmaPiSOM
+    from sigmapi.model.som import SigmaPiSOM
 
 __all__ = [
     "METRIC_KEYS",
@@ -356,13 +356,19 @@ class ReproduceResult:
                 text = ", ".join(f"{k} {v:.3f}" for k, v in values.items())
                 lines.append(f"{name}: {label} of {n} seed{'s' if n != 1 else ''}: {text}")
             flagged = res.folded_seeds()
-            flags = (f"; the fold detector flags seed{'s' if len(flagged) != 1 else ''} "
-                     f"{', '.join(map(str, flagged))} (its signs, views of one z won by distant "
-                     "units, also mark a coarse map)" if flagged else "")  # fmt: skip
-            lines.append(f"{name}: {res.ordered_count()} of {n} ordered (order R^2 >= "
-                         f"{ORDERED_R2}){flags}; worst seed: "
-                         f"view_consistency {res.worst()['view_consistency']:.3f}, "
-                         f"order_r2 {res.worst()['order_r2']:.3f}")  # fmt: skip
+            flags = (
+                f"; the fold detector flags seed{'s' if len(flagged) != 1 else ''} "
+                f"{', '.join(map(str, flagged))} (its signs, views of one z won by distant "
+                "units, also mark a coarse map)"
+                if flagged
+                else ""
+            )
+            lines.append(
+                f"{name}: {res.ordered_count()} of {n} ordered (order R^2 >= "
+                f"{ORDERED_R2}){flags}; worst seed: "
+                f"view_consistency {res.worst()['view_consistency']:.3f}, "
+                f"order_r2 {res.worst()['order_r2']:.3f}"
+            )
             if res.ceiling is not None:
                 lines.append(
                     f"{name}: the rule's ceiling (fixed point of Eq. 7 from seed "

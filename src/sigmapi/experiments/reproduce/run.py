@@ -75,8 +75,8 @@ from sigmapi.experiments.reproduce.results import (
 )
 from sigmapi.io import atomic_write_bytes
 from sigmapi.metrics import evaluate
+from sigmapi.model.som import SigmaPiSOM
 from sigmapi.progress import Progress
-from sigmapi.som import SigmaPiSOM
 from sigmapi.viz import figures as figs
 
 __all__ = [
@@ -203,9 +203,16 @@ def reproduce(
         run = figs.RunInfo(name, cfg, seeds, shown, opts.curve_test, why)
         reference = _reference(name)
         figures[name] = draw_preset(
-            run, models[name][shown], entry, out, opts.dpi, reference, progress,
-            test_size=opts.test_size, curve_test=opts.curve_test,
-        )  # fmt: skip
+            run,
+            models[name][shown],
+            entry,
+            out,
+            opts.dpi,
+            reference,
+            progress,
+            test_size=opts.test_size,
+            curve_test=opts.curve_test,
+        )
         result.figure_files += [out / file for file, _ in figures[name]]
     ctx = ReportContext(out, opts, models)
     added = [s for s in (fn(ctx) for fn in (SECTIONS if sections is None else sections)) if s]
@@ -406,8 +413,10 @@ def _train_all(
         refine = f" + refinement {run.refine_seconds:.0f} s" if run.unrefined else ""
         before = f" (before refinement {run.unrefined.order_r2:.3f})" if run.unrefined else ""
         compiled = f"; compile {run.compile_seconds:.0f} s apart" if run.compile_seconds else ""
-        return (f"{key}: training {run.train_seconds:.0f} s{refine}{compiled}, order R^2 "
-                f"{m.order_r2:.3f}{before}{FLAG_NOTE if m.folded else ''}")  # fmt: skip
+        return (
+            f"{key}: training {run.train_seconds:.0f} s{refine}{compiled}, order R^2 "
+            f"{m.order_r2:.3f}{before}{FLAG_NOTE if m.folded else ''}"
+        )
 
     done = run_all(
         train_seed,

@@ -63,8 +63,14 @@ class GateConfig:
         _validate.choice("gate_view", self.gate_view, VIEWS)
         scale = _validate.positive("gate_scale", self.gate_scale, fix="e.g. 0.5")
         eps = _validate.number("gate_eps", self.gate_eps, 0.0, 1.0, lo_open=True, fix="e.g. 0.3")
-        sigma = _validate.number("gate_sigma", self.gate_sigma, 0.0, 1e3, lo_open=True,
-                                 fix="e.g. 1.0; 1e-5 moves the winner alone")  # fmt: skip
+        sigma = _validate.number(
+            "gate_sigma",
+            self.gate_sigma,
+            0.0,
+            1e3,
+            lo_open=True,
+            fix="e.g. 1.0; 1e-5 moves the winner alone",
+        )
         for name, value in (("gate_scale", scale), ("gate_eps", eps), ("gate_sigma", sigma)):
             object.__setattr__(self, name, value)
 

@@ -60,8 +60,8 @@ from sigmapi.experiments.kit.worlds import GAZE_REACH, World
 from sigmapi.experiments.reward.config import RewardConfig
 from sigmapi.experiments.reward.result import RewardResult
 from sigmapi.metrics import winner_metrics
+from sigmapi.model.som import SigmaPiSOM
 from sigmapi.progress import Progress
-from sigmapi.som import SigmaPiSOM
 
 __all__ = [
     "PLAN",

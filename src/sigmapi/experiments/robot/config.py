@@ -27,7 +27,7 @@ from sigmapi.experiments.kit.episodes import check_episode_run
 from sigmapi.experiments.kit.maps import MapSpec
 from sigmapi.experiments.kit.seeds import SeedPlan
 from sigmapi.experiments.kit.worlds import World, register_world
-from sigmapi.som import SigmaPiSOM
+from sigmapi.model.som import SigmaPiSOM
 
 __all__ = ["PLAN", "QUICK", "ROBOT_WORLD", "RobotConfig"]
 
@@ -40,8 +40,12 @@ PLAN = SeedPlan({"map": 0, "starts": 1, "agent": 2, "film": 3})
 class RobotConfig:
     """Everything one robot run depends on but its seeds (the CLI's options are its fields)."""
 
-    grid: int = field(default=12, metadata=_validate.bounded(
-        "int", 2, 1024, fix="units per axis of the codes (grid**2 a view); e.g. 12"))  # fmt: skip
+    grid: int = field(
+        default=12,
+        metadata=_validate.bounded(
+            "int", 2, 1024, fix="units per axis of the codes (grid**2 a view); e.g. 12"
+        ),
+    )
     """Units per axis of the retina and gaze codes."""
     code_width: float = 1.0
     """Width of the codes' hills, grid units."""
@@ -102,8 +106,10 @@ class RobotConfig:
         if self.render is not None and not str(self.render).lower().endswith(".gif"):
             raise _validate.fail("render", "a file name ending in .gif", self.render)
         if self.render is not None and "map" not in self.states:
-            raise ConfigError(f"render films the map learner, but states {self.states!r} has no "
-                              "'map'; add map to --states, or drop --render")  # fmt: skip
+            raise ConfigError(
+                f"render films the map learner, but states {self.states!r} has no "
+                "'map'; add map to --states, or drop --render"
+            )
 
     def agent(self) -> ActorCriticConfig:
         """The learner's settings."""

@@ -96,8 +96,9 @@ def write_gif(frames: list[NDArray[np.uint8]], path: Path, fps: int = 6) -> Path
     images = [Image.fromarray(f) for f in frames]
 
     def write(fh: Any) -> None:  # into a temp file, renamed over path: atomic, never a link
-        images[0].save(fh, format="GIF", save_all=True, append_images=images[1:],
-                       duration=1000 // fps, loop=0)  # fmt: skip
+        images[0].save(
+            fh, format="GIF", save_all=True, append_images=images[1:], duration=1000 // fps, loop=0
+        )
 
     return write_file(path, write, what="--render file")
 

@@ -29,7 +29,7 @@ from sigmapi.metrics import (
     hard_scores,
     winner_metrics,
 )
-from sigmapi.som import SigmaPiSOM
+from sigmapi.model.som import SigmaPiSOM
 from sigmapi.tasks import Batch
 
 __all__ = [

@@ -13,7 +13,7 @@ from numpy.typing import NDArray
 from sigmapi.agents import ActorCritic
 from sigmapi.experiments.kit.episodes import block_ends, block_rates, final_rates
 from sigmapi.experiments.robot.config import RobotConfig
-from sigmapi.som import SigmaPiSOM
+from sigmapi.model.som import SigmaPiSOM
 
 __all__ = ["RobotResult"]
 

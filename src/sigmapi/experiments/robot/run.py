@@ -166,10 +166,13 @@ class RobotExperiment(Experiment[RobotConfig]):
         if config.retina == "pixels":
             check_rendering()
         per_job = job_memory(config)  # the main process records views too: checked first
-        _memory.check(per_job, f"a robot job of grid={config.grid}, eval_pairs="
-                      f"{config.eval_pairs:,}, train_pairs={config.train_pairs:,}, episodes="
-                      f"{config.episodes:,}", "use a smaller grid or map, or fewer pairs or "
-                      "episodes")  # fmt: skip
+        _memory.check(
+            per_job,
+            f"a robot job of grid={config.grid}, eval_pairs="
+            f"{config.eval_pairs:,}, train_pairs={config.train_pairs:,}, episodes="
+            f"{config.episodes:,}",
+            "use a smaller grid or map, or fewer pairs or episodes",
+        )
         t0 = time.perf_counter()
         evaluation = None
         if "map" in config.states:

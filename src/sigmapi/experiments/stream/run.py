@@ -42,8 +42,8 @@ from sigmapi.experiments.stream.result import (
     StreamResult,
 )
 from sigmapi.metrics import evaluate
+from sigmapi.model.som import SigmaPiSOM
 from sigmapi.progress import Progress
-from sigmapi.som import SigmaPiSOM
 
 __all__ = [
     "FIGURE",
@@ -60,7 +60,7 @@ __all__ = [
 
 STREAM_KEY = 7
 """Frames of seed s and dwell d: ``SeedSequence(s, spawn_key=(STREAM_KEY, d))``, apart from the
-model's own streams (:mod:`sigmapi.som`)."""
+model's own streams (:mod:`sigmapi.model.som`)."""
 
 PLAN = SeedPlan({"frames": STREAM_KEY})
 """The streams of a seed (:class:`~sigmapi.experiments.kit.seeds.SeedPlan`): the frames,

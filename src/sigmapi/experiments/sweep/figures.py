@@ -8,7 +8,7 @@ from typing import Any, Protocol
 
 from sigmapi import _validate
 from sigmapi._outputs import save_figure
-from sigmapi.circular import CIRCULAR_KEYS
+from sigmapi.analysis.circular import CIRCULAR_KEYS
 from sigmapi.experiments.sweep.table import METRIC_COLUMNS
 
 __all__ = ["METRICS", "draw_summary"]
@@ -49,8 +49,11 @@ def draw_summary(
         plot_sweep([{**r, "preset": spec.preset} for r in rows], "preset", metric, ax=ax)
     ok = sum(str(r.get("status")) == "ok" for r in rows)
     folded = sum(str(r.get("folded")).lower() in ("true", "1") for r in rows)
-    ax.set_title(f"sweep of {spec.preset}: {ok} runs ok, {len(rows) - ok} failed, "
-                 f"{folded} folded; seeds {list(spec.seeds)}", fontsize=9)  # fmt: skip
+    ax.set_title(
+        f"sweep of {spec.preset}: {ok} runs ok, {len(rows) - ok} failed, "
+        f"{folded} folded; seeds {list(spec.seeds)}",
+        fontsize=9,
+    )
     p = Path(path)
     save_figure(fig, p, dpi=120, bbox_inches="tight", facecolor="white")
     plt.close(fig)

@@ -1,3 +1,4 @@
+# Over 500 lines: the spec, its runs and the resumable results file, read as one.
 """Parameter and seed sweeps: ``sigmapi sweep SPEC.toml --out DIR``.
 
 A spec names a preset, the seeds, fields fixed for every run (``[set]``) and a grid of values
@@ -44,7 +45,7 @@ from typing import Any
 from sigmapi import _validate
 from sigmapi._lock import output_lock
 from sigmapi._outputs import claim_folder
-from sigmapi.circular import CIRCULAR_KEYS
+from sigmapi.analysis.circular import CIRCULAR_KEYS
 from sigmapi.config import SOMConfig, check_map_fits_task, load_preset
 from sigmapi.errors import ConfigError
 from sigmapi.executor import Executor, Outcome, job_memory
@@ -59,8 +60,8 @@ from sigmapi.experiments.sweep.table import (
     run_key,
 )
 from sigmapi.metrics import evaluate
+from sigmapi.model.som import SigmaPiSOM
 from sigmapi.progress import Progress
-from sigmapi.som import SigmaPiSOM
 from sigmapi.tasks import get_relation
 
 __all__ = [
@@ -132,12 +133,16 @@ class SweepSpec:
             raise ConfigError(f"{source} is not valid TOML: {exc}") from None
         unknown = sorted(set(data) - {"preset", "seeds", "set", "grid", "n_test"})
         if unknown:
-            raise ConfigError(f"{source}: unknown key {unknown[0][:60]!r}; a spec has preset, "
-                              "seeds, n_test, [set] and [grid]")  # fmt: skip
+            raise ConfigError(
+                f"{source}: unknown key {unknown[0][:60]!r}; a spec has preset, "
+                "seeds, n_test, [set] and [grid]"
+            )
         preset = data.get("preset")
         if not isinstance(preset, str):
-            raise ConfigError(f"{source}: preset must be a preset name, got {preset!r:.60}; "
-                              'e.g. preset = "tiny-1d"')  # fmt: skip
+            raise ConfigError(
+                f"{source}: preset must be a preset name, got {preset!r:.60}; "
+                'e.g. preset = "tiny-1d"'
+            )
         seeds = check_seeds(data.get("seeds", [0]), f"{source}: seeds")
         grid = data.get("grid", {})
         if not isinstance(grid, dict) or not all(isinstance(v, list) and v for v in grid.values()):
@@ -155,8 +160,9 @@ class SweepSpec:
             raise ConfigError(f"{source}: give seeds with seeds = [...], not as a field")
         n_test = data.get("n_test", 2000)
         if not isinstance(n_test, int) or isinstance(n_test, bool) or not 2 <= n_test <= 10**7:
-            raise ConfigError(f"{source}: n_test must be an int in [2, 10000000], got "
-                              f"{n_test!r:.60}")  # fmt: skip
+            raise ConfigError(
+                f"{source}: n_test must be an int in [2, 10000000], got {n_test!r:.60}"
+            )
         base = _base(preset, fixed, source)
         resolved = {}
         for key in sorted(grid):  # each value once, as the config resolves it
@@ -176,22 +182,31 @@ class SweepSpec:
     def read(cls, path: str | Path) -> SweepSpec:
         p = Path(path)
         if not p.is_file():
-            raise ConfigError(f"sweep spec {str(p)!r} does not exist or is not a file; check "
-                              "the path")  # fmt: skip
+            raise ConfigError(
+                f"sweep spec {str(p)!r} does not exist or is not a file; check the path"
+            )
         if p.stat().st_size > 1 << 20:
-            raise ConfigError(f"sweep spec {str(p)!r} is over 1 MB; a spec is a short TOML "
-                              "file (module sigmapi.experiments.sweep.run)")  # fmt: skip
+            raise ConfigError(
+                f"sweep spec {str(p)!r} is over 1 MB; a spec is a short TOML "
+                "file (module sigmapi.experiments.sweep.run)"
+            )
         try:
             text = p.read_bytes().decode("utf-8-sig")  # a byte order mark is no key
         except UnicodeDecodeError as exc:
-            raise ConfigError(f"sweep spec {str(p)!r} is not UTF-8 text (byte {exc.start}); "
-                              "save it as UTF-8") from None  # fmt: skip
+            raise ConfigError(
+                f"sweep spec {str(p)!r} is not UTF-8 text (byte {exc.start}); save it as UTF-8"
+            ) from None
         return cls.from_toml(text, f"sweep spec {str(p)!r}")
 
     def to_dict(self) -> dict[str, Any]:
         """The spec as its TOML file holds it (``set`` for :attr:`fixed`)."""
-        return {"preset": self.preset, "seeds": list(self.seeds), "n_test": self.n_test,
-                "set": self.fixed, "grid": self.grid}  # fmt: skip
+        return {
+            "preset": self.preset,
+            "seeds": list(self.seeds),
+            "n_test": self.n_test,
+            "set": self.fixed,
+            "grid": self.grid,
+        }
 
     def count(self) -> int:
         """The number of runs (grid points x seeds); over :data:`MAX_RUNS` raises ConfigError."""
@@ -251,8 +266,12 @@ def read_results(path: str | Path) -> list[dict[str, str]]:
 
 
 def _row(run: SweepRun, outcome: Outcome) -> dict[str, Any]:
-    row: dict[str, Any] = {"run_id": run.run_id, "run_key": run.run_key, **run.params,
-                           "seed": run.seed}  # fmt: skip
+    row: dict[str, Any] = {
+        "run_id": run.run_id,
+        "run_key": run.run_key,
+        **run.params,
+        "seed": run.seed,
+    }
     if outcome.ok:
         return {**row, **outcome.value, "status": "ok", "error": ""}
     error = " ".join(str(outcome.error).split())[:2000]  # one line, bounded
@@ -315,8 +334,17 @@ def _sweep(
         runs = spec.runs()
         angles = any(get_relation(r.point.relation).circular for r in runs)
         metrics = (*METRIC_COLUMNS, *(CIRCULAR_KEYS if angles else ()))
-        columns = ["run_id", "run_key", *sorted(spec.grid), "seed", *metrics, "train_seconds",
-                   "total_seconds", "status", "error"]  # fmt: skip
+        columns = [
+            "run_id",
+            "run_key",
+            *sorted(spec.grid),
+            "seed",
+            *metrics,
+            "train_seconds",
+            "total_seconds",
+            "status",
+            "error",
+        ]
         for name in (FIGURE, RESULT_FILE):  # what is written after the runs: checked before them
             if (out / name).exists() and not (out / name).is_file():
                 raise ConfigError(
@@ -340,8 +368,11 @@ def _sweep(
             rows[run.run_key] = {c: row.get(c, "") for c in columns}
             if on_done is not None:
                 what = ", ".join(f"{k} {v}" for k, v in run.params.items())
-                text = (f"order R^2 {row['order_r2']:.3f}{', FOLDED' if row['folded'] else ''}"
-                        if outcome.ok else f"FAILED: {outcome.error}")  # fmt: skip
+                text = (
+                    f"order R^2 {row['order_r2']:.3f}{', FOLDED' if row['folded'] else ''}"
+                    if outcome.ok
+                    else f"FAILED: {outcome.error}"
+                )
                 on_done(outcome.ok, f"{what}, seed {run.seed}: {text} ({outcome.seconds:.0f} s)")
         return [rows[r.run_key] for r in runs if r.run_key in rows]
 
@@ -399,8 +430,13 @@ class SweepResult:
         """``spec``, ``table`` (the file), counts, and ``rows`` (the table's rows, typed)."""
         rows = [{k: _typed(v) for k, v in r.items()} for r in self.rows]
         failed = sum(r.get("status") != "ok" for r in rows)
-        return {"spec": self.spec.to_dict(), "table": RESULTS, "runs": len(rows),
-                "failed": failed, "rows": rows}  # fmt: skip
+        return {
+            "spec": self.spec.to_dict(),
+            "table": RESULTS,
+            "runs": len(rows),
+            "failed": failed,
+            "rows": rows,
+        }
 
     def table(self) -> str:
         """Per grid point: the runs that finished and the median of :attr:`metric` over them."""
@@ -454,16 +490,20 @@ class Sweep(Experiment[SweepConfig]):
     ) -> SweepResult:
         """Run the missing runs of the spec (with ``seeds``) into ``out`` (required)."""
         if out is None:
-            raise ConfigError("out must be a folder for the sweep's table, got None; the table "
-                              "is written there after every run")  # fmt: skip
+            raise ConfigError(
+                "out must be a folder for the sweep's table, got None; the table "
+                "is written there after every run"
+            )
         spec = dataclasses.replace(config.read_spec(), seeds=check_seeds(seeds))
         ex = executor if executor is not None else Executor(workers=1)
         show = Progress.of(progress)
         state: dict[str, Any] = {}
 
         def on_plan(n_run: int, n_skip: int, reason: str) -> None:
-            show.note(f"sweep: {n_run + n_skip} runs, {n_skip} finished already, {n_run} to "
-                      f"run; engine {ex.engine}, {reason}")  # fmt: skip
+            show.note(
+                f"sweep: {n_run + n_skip} runs, {n_skip} finished already, {n_run} to "
+                f"run; engine {ex.engine}, {reason}"
+            )
             state["done"], state["bar"] = show.jobs(n_run, "sweep")
 
         def on_done(ok: bool, line: str) -> None:

@@ -72,18 +72,25 @@ def _check_plain(p: Path) -> os.stat_result | None:
     except FileNotFoundError:
         return None
     if stat.S_ISLNK(st.st_mode):
-        raise ConfigError(f"sweep table {str(p)!r} is a symbolic link; sigmapi never writes "
-                          "through one: put the file there, or give a new --out")  # fmt: skip
+        raise ConfigError(
+            f"sweep table {str(p)!r} is a symbolic link; sigmapi never writes "
+            "through one: put the file there, or give a new --out"
+        )
     if not stat.S_ISREG(st.st_mode):
-        raise ConfigError(f"sweep table {str(p)!r} is not a file (a folder?); move it away or "
-                          "give a new --out")  # fmt: skip
+        raise ConfigError(
+            f"sweep table {str(p)!r} is not a file (a folder?); move it away or give a new --out"
+        )
     if st.st_nlink > 1:
-        raise ConfigError(f"sweep table {str(p)!r} has {st.st_nlink} names (hard links), so "
-                          "two sweeps could append to it at once; copy it to a file of its own, "
-                          "or give a new --out")  # fmt: skip
+        raise ConfigError(
+            f"sweep table {str(p)!r} has {st.st_nlink} names (hard links), so "
+            "two sweeps could append to it at once; copy it to a file of its own, "
+            "or give a new --out"
+        )
     if st.st_size > MAX_TABLE:
-        raise ConfigError(f"sweep table {str(p)!r} holds {st.st_size:,} bytes, over the "
-                          f"{MAX_TABLE:,} a sweep reads; give a new --out")  # fmt: skip
+        raise ConfigError(
+            f"sweep table {str(p)!r} holds {st.st_size:,} bytes, over the "
+            f"{MAX_TABLE:,} a sweep reads; give a new --out"
+        )
     return st
 
 
@@ -91,8 +98,12 @@ def run_key(config: dict[str, Any], seed: int, n_test: int) -> str:
     """The identity of one run: 16 hex digits of a SHA-256 over the resolved ``config`` (a
     :meth:`~sigmapi.SOMConfig.to_dict`, its seed left out), ``seed``, ``n_test`` and the model
     format (name and version) of this sigmapi."""
-    data = {"config": {k: v for k, v in config.items() if k != "seed"}, "seed": int(seed),
-            "n_test": int(n_test), "format": [FORMAT, VERSION]}  # fmt: skip
+    data = {
+        "config": {k: v for k, v in config.items() if k != "seed"},
+        "seed": int(seed),
+        "n_test": int(n_test),
+        "format": [FORMAT, VERSION],
+    }
     text = json.dumps(data, sort_keys=True, separators=(",", ":"), default=repr)
     return hashlib.sha256(text.encode("utf-8")).hexdigest()[:16]
 
@@ -129,8 +140,9 @@ def _check_row(path: Path, line: int, row: dict[str, str], metrics: Sequence[str
             try:
                 float(value)
             except ValueError:
-                raise _damaged(path, f"line {line}: an ok run's {name} must be a number, "
-                               f"got {value[:40]!r}") from None  # fmt: skip
+                raise _damaged(
+                    path, f"line {line}: an ok run's {name} must be a number, got {value[:40]!r}"
+                ) from None
 
 
 def read_table(path: str | Path) -> Table | None:
@@ -143,8 +155,10 @@ def read_table(path: str | Path) -> Table | None:
     with os.fdopen(fd, "rb") as fh:
         data = fh.read(MAX_TABLE + 1)
     if data.count(b"\n") > MAX_ROWS + 1:  # counted before any row is parsed: cheap
-        raise ConfigError(f"sweep table {str(p)!r} holds over {MAX_ROWS:,} rows, more than a "
-                          "sweep writes; give a new --out")  # fmt: skip
+        raise ConfigError(
+            f"sweep table {str(p)!r} holds over {MAX_ROWS:,} rows, more than a "
+            "sweep writes; give a new --out"
+        )
     end = data.rfind(b"\n") + 1
     torn = len(data) - end
     try:
@@ -155,14 +169,20 @@ def read_table(path: str | Path) -> Table | None:
     try:
         header = next(reader, None)
         if header is None:
-            raise ConfigError(f"{str(p)!r} is empty, not a sigmapi sweep table; remove it or "
-                              "give a new --out")  # fmt: skip
+            raise ConfigError(
+                f"{str(p)!r} is empty, not a sigmapi sweep table; remove it or give a new --out"
+            )
         missing = [c for c in REQUIRED if c not in header]
         if missing:
-            what = "an older sigmapi's sweep table (no run identity)" if "run_id" in header \
-                else "not a sigmapi sweep table"  # fmt: skip
-            raise ConfigError(f"{str(p)!r} is {what}: its header lacks {missing[0]!r}; it is "
-                              "left as it is: give a new --out, or move it away")  # fmt: skip
+            what = (
+                "an older sigmapi's sweep table (no run identity)"
+                if "run_id" in header
+                else "not a sigmapi sweep table"
+            )
+            raise ConfigError(
+                f"{str(p)!r} is {what}: its header lacks {missing[0]!r}; it is "
+                "left as it is: give a new --out, or move it away"
+            )
         if len(set(header)) != len(header) or any(len(c) > 200 for c in header):
             raise _damaged(p, "line 1: a column named twice or a name too long")
         metrics = [c for c in header if c in METRIC_COLUMNS]
@@ -170,8 +190,9 @@ def read_table(path: str | Path) -> Table | None:
         for fields in reader:
             line = reader.line_num
             if len(fields) != len(header):
-                raise _damaged(p, f"line {line}: {len(fields)} fields, the header has "
-                               f"{len(header)}")  # fmt: skip
+                raise _damaged(
+                    p, f"line {line}: {len(fields)} fields, the header has {len(header)}"
+                )
             if any(len(f) > MAX_FIELD for f in fields):
                 raise _damaged(p, f"line {line}: a field of over {MAX_FIELD} characters")
             row = dict(zip(header, fields, strict=True))
@@ -226,8 +247,10 @@ def open_table(
     try:  # find out now, not after the runs, that the table takes rows
         fd = os.open(p, os.O_WRONLY | os.O_APPEND | _NOFOLLOW)
     except OSError as exc:
-        raise ConfigError(f"cannot append to sweep table {str(p)!r}: {exc.strerror or exc}; "
-                          "make it writable, or give a new --out") from None  # fmt: skip
+        raise ConfigError(
+            f"cannot append to sweep table {str(p)!r}: {exc.strerror or exc}; "
+            "make it writable, or give a new --out"
+        ) from None
     try:
         if table.torn:
             os.ftruncate(fd, os.fstat(fd).st_size - table.torn)

@@ -5,17 +5,17 @@
 
 The estimator holds the state (weights, iteration count, random streams) and delegates the
 arithmetic to a kernel (:mod:`sigmapi.kernels`) and its rules (:mod:`sigmapi.rules`). Its
-other jobs live beside it: grids and codes (:mod:`sigmapi._grids`), the cost
-(:mod:`sigmapi._cost`), scikit-learn's parameters (:mod:`sigmapi._params`), arrays, files and
-pickles (:mod:`sigmapi._persist`), view checks (:mod:`sigmapi.views`), learning from a stream
-of frames (:mod:`sigmapi._stream`).
+other jobs live beside it: grids and codes (:mod:`sigmapi.model._grids`), the cost
+(:mod:`sigmapi.model._cost`), scikit-learn's parameters (:mod:`sigmapi.model._params`),
+arrays, files and pickles (:mod:`sigmapi.model._persist`), view checks
+(:mod:`sigmapi.model.views`), learning from a stream of frames (:mod:`sigmapi.model._stream`).
 
 Random streams: one :class:`numpy.random.SeedSequence` per run. The initial weights come from
 its child ``spawn_key=(0,)``; the training data of iterations ``[b * BLOCK, (b + 1) * BLOCK)``
 from child ``(1, b)``; the refinement's pairs of round ``r``, block ``b`` from child
-``(4, r, b)`` (:mod:`sigmapi._refine`). The data of any iteration is therefore a pure function
-of the seed and the iteration number: stopping, saving, loading and continuing gives the same
-run, bit for bit, wherever the run was cut.
+``(4, r, b)`` (:mod:`sigmapi.model._refine`). The data of any iteration is therefore a pure
+function of the seed and the iteration number: stopping, saving, loading and continuing gives
+the same run, bit for bit, wherever the run was cut.
 """
 
 from __future__ import annotations
@@ -29,19 +29,19 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from sigmapi import _memory, _validate
-from sigmapi._cost import CostMixin
-from sigmapi._grids import GridsMixin
-from sigmapi._params import ParamsMixin, entropy_of, stored_overrides
-from sigmapi._persist import PersistMixin
-from sigmapi._refine import RefineMixin
-from sigmapi._stream import StreamMixin
 from sigmapi.config import SOMConfig
 from sigmapi.errors import ConfigError, DataError, NotFittedError, NumericalError
 from sigmapi.kernels import KernelState, get_backend
 from sigmapi.kernels.base import MAX_WEIGHT
+from sigmapi.model._cost import CostMixin
+from sigmapi.model._grids import GridsMixin
+from sigmapi.model._params import ParamsMixin, entropy_of, stored_overrides
+from sigmapi.model._persist import PersistMixin
+from sigmapi.model._refine import RefineMixin
+from sigmapi.model._stream import StreamMixin
+from sigmapi.model.views import CodeViews, Views, check_gates, check_pairs, fit_views
 from sigmapi.rules import WinnerRule, ordering, winner_rule
 from sigmapi.tasks import Batch
-from sigmapi.views import CodeViews, Views, check_gates, check_pairs, fit_views
 
 __all__ = ["BLOCK", "SigmaPiSOM", "load_model"]
 
@@ -398,10 +398,19 @@ class SigmaPiSOM(GridsMixin, CostMixin, ParamsMixin, PersistMixin, RefineMixin, 
         x1, y1 = (x0, y0) if c.same_view else (x1, y1)
         t = np.arange(self.t_, self.t_ + x0.shape[0])
         self._kernel.train_block(
-            self._state, x0, y0, x1, y1, self.sigma_at(t), self.eps_at(t),
-            map_shape=self.map_shape, winner_rule=self.winner_rule_, soft_cut=c.soft_cut,
-            threads=c.threads, map_periodic=c.map_periodic,
-        )  # fmt: skip
+            self._state,
+            x0,
+            y0,
+            x1,
+            y1,
+            self.sigma_at(t),
+            self.eps_at(t),
+            map_shape=self.map_shape,
+            winner_rule=self.winner_rule_,
+            soft_cut=c.soft_cut,
+            threads=c.threads,
+            map_periodic=c.map_periodic,
+        )
         self.t_ += x0.shape[0]
         self._weights_cache = None
 
@@ -445,10 +454,17 @@ class SigmaPiSOM(GridsMixin, CostMixin, ParamsMixin, PersistMixin, RefineMixin, 
                     f"backend {self.backend!r} has no gated update (train_gated_block); use "
                     "backend 'reference' or 'fast'"
                 )
-            s = self.sigma_ if sigma is None else _validate.width(
-                "sigma", sigma, 0.0, lo_open=True,
-                fix="map units; e.g. 1e-5 moves the winner alone",
-            )  # fmt: skip
+            s = (
+                self.sigma_
+                if sigma is None
+                else _validate.width(
+                    "sigma",
+                    sigma,
+                    0.0,
+                    lo_open=True,
+                    fix="map units; e.g. 1e-5 moves the winner alone",
+                )
+            )
             e = (
                 float(self.eps_at(self.t_))
                 if eps is None
@@ -456,10 +472,16 @@ class SigmaPiSOM(GridsMixin, CostMixin, ParamsMixin, PersistMixin, RefineMixin, 
             )
             c = self.config
             kernel.train_gated_block(
-                self._state, *data, np.full(n, s), np.full(n, e), g,
-                map_shape=self.map_shape, winner_rule=self.winner_rule_, soft_cut=c.soft_cut,
+                self._state,
+                *data,
+                np.full(n, s),
+                np.full(n, e),
+                g,
+                map_shape=self.map_shape,
+                winner_rule=self.winner_rule_,
+                soft_cut=c.soft_cut,
                 map_periodic=c.map_periodic,
-            )  # fmt: skip
+            )
             self._weights_cache = None
         return self
 

@@ -12,8 +12,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from sigmapi.codes import PopulationCode, grid_coordinates
 from sigmapi.config import SOMConfig
+from sigmapi.model.views import CodeViews, encode_views
 from sigmapi.tasks import TwoViewSampler
-from sigmapi.views import CodeViews, encode_views
 
 __all__ = ["GridsMixin"]
 

@@ -21,8 +21,8 @@ import numpy as np
 from sigmapi.config import SOMConfig
 from sigmapi.errors import ConfigError, DataError
 from sigmapi.kernels.base import REFINER
+from sigmapi.model.views import CodeViews, Views, fit_views
 from sigmapi.rules.refinement import Sums
-from sigmapi.views import CodeViews, Views, fit_views
 
 if TYPE_CHECKING:
     from sigmapi.rules import WinnerRule
@@ -132,14 +132,18 @@ class RefineMixin:
             return
         done = f"its refinement ran {self._refined:,} pairs on"
         if was is None:
-            raise DataError(f"this model's refinement continues on the built-in task ({done} "
-                            f"it), got views of {rows:,} rows; call refine() without views, "
-                            "or fit() again to refine on your rows")  # fmt: skip
-        raise DataError(f"this model's refinement continues on the {was:,} view pairs it "
-                        f"started on ({done} them), got "
-                        f"{'no views' if rows is None else f'{rows:,} rows'}; pass the same "
-                        f"{was:,} rows to refine() (for a stream: its consecutive pairs "
-                        "x[:-1], y[:-1], x[1:], y[1:])")  # fmt: skip
+            raise DataError(
+                f"this model's refinement continues on the built-in task ({done} "
+                f"it), got views of {rows:,} rows; call refine() without views, "
+                "or fit() again to refine on your rows"
+            )
+        raise DataError(
+            f"this model's refinement continues on the {was:,} view pairs it "
+            f"started on ({done} them), got "
+            f"{'no views' if rows is None else f'{rows:,} rows'}; pass the same "
+            f"{was:,} rows to refine() (for a stream: its consecutive pairs "
+            "x[:-1], y[:-1], x[1:], y[1:])"
+        )
 
     def _refine(self, data: CodeViews | None, callback: Callable[[Any], None] | None) -> Any:
         c = self.config
@@ -171,10 +175,18 @@ class RefineMixin:
                 if c.same_view:
                     x1, y1 = x0, y0
                 kernel.refine_block(
-                    self._state, acc, x0, y0, x1, y1, map_shape=self.map_shape,
-                    winner_rule=rule, soft_cut=c.soft_cut, sigma=c.refine_sigma,
+                    self._state,
+                    acc,
+                    x0,
+                    y0,
+                    x1,
+                    y1,
+                    map_shape=self.map_shape,
+                    winner_rule=rule,
+                    soft_cut=c.soft_cut,
+                    sigma=c.refine_sigma,
                     map_periodic=c.map_periodic,
-                )  # fmt: skip
+                )
                 for end in ends[:-1]:  # the round's weights stay those of its start until its end
                     self._block_done(r * per + end, done < end, callback)
                 if acc.pairs >= per:

@@ -134,8 +134,10 @@ def read_parts(
     except (ConfigError, TypeError, KeyError) as exc:
         raise ModelFileError(f"{name!r}: stored config is invalid ({exc})") from None
     shape = (
-        int(np.prod(cfg.map_shape)), int(np.prod(cfg.x_shape)), int(np.prod(cfg.y_shape)),
-    )  # fmt: skip
+        int(np.prod(cfg.map_shape)),
+        int(np.prod(cfg.x_shape)),
+        int(np.prod(cfg.y_shape)),
+    )
     if not arrays:
         raise ModelFileError(f"{name!r}: holds neither weights nor a backend state")
     bad = (
@@ -171,6 +173,7 @@ def read_parts(
     )
     rows = header.get("refine_rows")
     if rows is not None:
-        rows = _validate.integer(f"{name!r}: refinement rows a round", rows, 1,
-                                 error=ModelFileError)  # fmt: skip
+        rows = _validate.integer(
+            f"{name!r}: refinement rows a round", rows, 1, error=ModelFileError
+        )
     return ModelParts(cfg, t, entropy, state, weights, refined, rows)

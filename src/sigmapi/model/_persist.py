@@ -1,6 +1,6 @@
 """The estimator as arrays, files and pickles: :class:`PersistMixin`.
 
-What a model file holds is decided by :mod:`sigmapi.model_file` (it validates the parts and
+What a model file holds is decided by :mod:`sigmapi.model.file` (it validates the parts and
 never imports the estimator) and how it is written by :mod:`sigmapi.io` (atomic, verified,
 never pickled); this mixin gives :class:`sigmapi.SigmaPiSOM` its ``to_arrays`` /
 ``from_arrays``, ``save`` / ``load`` and the pickle hooks, which store the same arrays.
@@ -18,7 +18,7 @@ from numpy.typing import NDArray
 from sigmapi import _validate
 from sigmapi.config import BACKEND_NAMES, SOMConfig
 from sigmapi.kernels import KernelState
-from sigmapi.model_file import read_parts, write_parts
+from sigmapi.model.file import read_parts, write_parts
 
 __all__ = ["PersistMixin"]
 
@@ -58,7 +58,7 @@ class PersistMixin:
         The header holds the resolved ``config``, the iteration count ``t``, the
         ``seed_entropy`` of the random streams (a decimal string) and the ``backend``; the
         arrays are the backend's own, in its precision, with which the model continues bit
-        for bit on that backend (:mod:`sigmapi.model_file`).
+        for bit on that backend (:mod:`sigmapi.model.file`).
 
         Raises :class:`~sigmapi.errors.NumericalError` if the weights hold NaN or inf, so
         that no file is written that :func:`sigmapi.load` would refuse.
@@ -87,7 +87,7 @@ class PersistMixin:
         ``backend`` runs the model on another kernel (which starts from the weights; the
         kernel state is used only by the backend that wrote it). Raises
         :class:`~sigmapi.errors.ModelFileError`, its message starting with ``source``, if
-        the header and arrays do not make a model (:func:`sigmapi.model_file.read_parts`).
+        the header and arrays do not make a model (:func:`sigmapi.model.file.read_parts`).
         """
         if backend is not None:  # the caller's mistake, not the file's: said before reading
             _validate.choice("backend", backend, BACKEND_NAMES, fix=_BACKEND_FIX)

@@ -28,8 +28,8 @@ from sigmapi import _validate
 from sigmapi.config import SOMConfig
 from sigmapi.errors import ConfigError
 from sigmapi.kernels.base import STREAMER
+from sigmapi.model.views import CodeViews, StreamFrames, check_frames
 from sigmapi.rules.trace import check_trace
-from sigmapi.views import CodeViews, StreamFrames, check_frames
 
 if TYPE_CHECKING:
     from sigmapi.rules import WinnerRule
@@ -201,11 +201,19 @@ class StreamMixin:
             first = self._t - (0 if primed else 1)  # the iteration that learns frame s
             it = first + np.arange(xs.shape[0])
             self._trace = self._kernel.train_stream(
-                self._state, xs, ys, self._trace, self.sigma_at(it + 1),
-                self.eps_at(np.maximum(it, 0)), lam=lam, map_shape=self.map_shape,
-                winner_rule=self.winner_rule_, soft_cut=c.soft_cut, threads=c.threads,
+                self._state,
+                xs,
+                ys,
+                self._trace,
+                self.sigma_at(it + 1),
+                self.eps_at(np.maximum(it, 0)),
+                lam=lam,
+                map_shape=self.map_shape,
+                winner_rule=self.winner_rule_,
+                soft_cut=c.soft_cut,
+                threads=c.threads,
                 map_periodic=c.map_periodic,
-            )[1]  # fmt: skip
+            )[1]
             self._t = first + xs.shape[0]
             self._weights_cache = None
             if callback is not None:

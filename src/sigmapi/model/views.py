@@ -231,18 +231,23 @@ def encode_views(
     pos = {"px0": px0, "py0": py0, "px1": px1, "py1": py1}
     for name, p in pos.items():
         if _asarray(p, name, "positions").size == 0:
-            raise DataError(f"{name} holds no positions, got an empty array; give at least "
-                            "one row (one position per row)")  # fmt: skip
+            raise DataError(
+                f"{name} holds no positions, got an empty array; give at least "
+                "one row (one position per row)"
+            )
     checked = [
         code.check_positions(p, name)
         for code, (name, p) in zip((x_code, y_code, x_code, y_code), pos.items(), strict=True)
     ]
     rows = {name: len(c) for name, c in zip(pos, checked, strict=True)}
     if len(set(rows.values())) > 1:  # row b of the four shows one position twice
-        raise DataError(f"px0, py0, px1 and py1 must have the same number of rows (one per "
-                        f"pair of views), got {rows}; give one row per pair in each")  # fmt: skip
-    out = [code.encode(c) for code, c in zip((x_code, y_code, x_code, y_code), checked,
-                                             strict=True)]  # fmt: skip
+        raise DataError(
+            f"px0, py0, px1 and py1 must have the same number of rows (one per "
+            f"pair of views), got {rows}; give one row per pair in each"
+        )
+    out = [
+        code.encode(c) for code, c in zip((x_code, y_code, x_code, y_code), checked, strict=True)
+    ]
     return out[0], out[1], out[2], out[3]
 
 
