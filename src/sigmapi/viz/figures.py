@@ -1,3 +1,5 @@
+# Over 500 lines: the registry of the report's figures, each a draw function and the caption
+# computed from its facts, kept beside one another so a figure and its words change together.
 """The figures of the report: a registry from figure name to a draw function and a caption.
 
 :data:`REGISTRY` maps each name of :data:`FIGURES` to a :class:`FigureSpec`: ``draw(model,
