@@ -215,3 +215,20 @@ def test_a_tiny_run_writes_every_key(rendering, tmp_path):
     paths = res.figure(tmp_path)
     assert {p.name for p in paths} >= {"eyes.png", "map-on-table.png", "success-table.png",
                                        "success-gaze.png", "babbling.png", "film.png"}  # fmt: skip
+
+
+def test_render_over_an_existing_file_or_link_is_refused_before_the_run(tmp_path):
+    from sigmapi.errors import UsageError
+    from sigmapi.experiments.icub.config import ICubConfig
+    from sigmapi.experiments.icub.run import ICUB
+
+    old = tmp_path / "old.gif"
+    old.write_bytes(b"GIF89a kept")
+    with pytest.raises(UsageError, match="--render file"):
+        ICUB.before_writing(ICubConfig(render=str(old)), force=False)
+    link = tmp_path / "link.gif"
+    link.symlink_to(old)
+    with pytest.raises(UsageError, match="symbolic link"):  # --force replaces the link itself
+        ICUB.before_writing(ICubConfig(render=str(link)), force=False)
+    assert old.read_bytes() == b"GIF89a kept"
+    ICUB.before_writing(ICubConfig(render=str(tmp_path / "new.gif")), force=False)

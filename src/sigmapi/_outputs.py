@@ -22,7 +22,7 @@ import os
 import re
 import stat
 import tempfile
-from collections.abc import Callable, Collection
+from collections.abc import Callable, Collection, Sequence
 from pathlib import Path
 from typing import IO, Any
 
@@ -30,7 +30,15 @@ from sigmapi._lock import LOCK_NAME
 from sigmapi.errors import UsageError
 from sigmapi.io import atomic_write, temp_pattern
 
-__all__ = ["MARKER", "check_file", "claim_folder", "marked_as", "save_figure", "write_file"]
+__all__ = [
+    "MARKER",
+    "check_file",
+    "claim_folder",
+    "marked_as",
+    "save_figure",
+    "save_gif",
+    "write_file",
+]
 
 MARKER = ".sigmapi-experiment"
 """The file that marks a folder as one experiment's output (JSON: ``{"experiment": NAME}``)."""
@@ -177,3 +185,18 @@ def claim_folder(
             )
         write_file(out / MARKER, (json.dumps({"experiment": experiment}) + "\n").encode())
     return out
+
+
+def save_gif(frames: Sequence[Any], path: str | Path, *, fps: int, force: bool = True) -> Path:
+    """Save ``frames`` (``(H, W, 3)`` uint8 arrays) as an animated GIF at ``path`` through
+    :func:`write_file` (atomic, never through a link); Pillow comes with matplotlib."""
+    from PIL import Image
+
+    images = [Image.fromarray(f) for f in frames]
+
+    def write(fh: IO[bytes]) -> None:
+        images[0].save(
+            fh, format="GIF", save_all=True, append_images=images[1:], duration=1000 // fps, loop=0
+        )
+
+    return write_file(path, write, force=force, what="--render file")

@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from sigmapi._outputs import save_figure, save_gif
 from sigmapi.envs.icub import REACH_REGION
 from sigmapi.experiments.icub.reaching import METHODS
 
@@ -127,12 +128,8 @@ def plot_eyes(eyes: dict[str, Any]) -> Any:
 
 
 def write_gif(frames: list[NDArray[np.uint8]], path: Path, fps: int = 8) -> Path:
-    """Save ``frames`` as an animated GIF at ``path``."""
-    from PIL import Image
-
-    images = [Image.fromarray(f) for f in frames]
-    images[0].save(path, save_all=True, append_images=images[1:], duration=1000 // fps, loop=0)
-    return path
+    """Save ``frames`` as an animated GIF at ``path`` (:func:`~sigmapi._outputs.save_gif`)."""
+    return save_gif(frames, path, fps=fps)
 
 
 def icub_figures(result: Any, out_dir: Path) -> list[Path]:
@@ -147,7 +144,7 @@ def icub_figures(result: Any, out_dir: Path) -> list[Path]:
 
     def save(fig: Any, name: str) -> None:
         paths.append(out_dir / name)
-        fig.savefig(paths[-1], dpi=110, bbox_inches="tight")
+        save_figure(fig, paths[-1], dpi=110, bbox_inches="tight")
         plt.close(fig)
 
     if "eyes" in first:

@@ -26,6 +26,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sigmapi import _validate
+from sigmapi._outputs import check_file
 from sigmapi.envs.icub import ICubScene, ViewBatch, measure, random_gaze
 from sigmapi.envs.icub.frames import direction_ball
 from sigmapi.envs.icub.model import icub_models_module
@@ -194,6 +195,13 @@ class ICubExperiment(Experiment[ICubConfig]):
     quick_seeds = (0,)
     """The seed of ``--quick``: a tuning seed."""
     default_out = "icub"
+
+    def before_writing(self, config: ICubConfig, *, force: bool) -> None:
+        """The ``--render`` file, checked before the work
+        (:func:`~sigmapi._outputs.check_file`: its folder exists, no link, no file replaced
+        without ``--force``)."""
+        if config.render is not None:
+            check_file(config.render, force=force, what="--render file")
 
     def run(
         self,

@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 
+from sigmapi._outputs import save_figure
 from sigmapi.io import atomic_write_bytes
 
 from .config import METRICS, REFERENCE_RATE, NeuronsConfig
@@ -308,6 +309,6 @@ class NeuronsResult:
         from sigmapi.viz.neurons import neurons_figure  # matplotlib: only when drawing
 
         out = Path(out_dir) / FIGURE
-        neurons_figure(self.to_dict()).savefig(out, dpi=110)
+        save_figure(neurons_figure(self.to_dict()), out, dpi=110)
         atomic_write_bytes(out.with_suffix(".txt"), (self.caption() + "\n").encode("utf-8"))
         return [out]

@@ -6,6 +6,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from sigmapi._outputs import save_figure
 from sigmapi.io import atomic_write_bytes
 
 from .config import PhysiologyConfig
@@ -105,6 +106,6 @@ class PhysiologyResult:
         from sigmapi.viz.neurons import physiology_figure  # matplotlib: only when drawing
 
         out = Path(out_dir) / FIGURE
-        physiology_figure(self.to_dict()).savefig(out, dpi=110)
+        save_figure(physiology_figure(self.to_dict()), out, dpi=110)
         atomic_write_bytes(out.with_suffix(".txt"), (self.caption() + "\n").encode("utf-8"))
         return [out]

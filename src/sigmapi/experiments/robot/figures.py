@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from sigmapi._outputs import save_figure, write_file
+from sigmapi._outputs import save_figure, save_gif
 from sigmapi.envs.robot.frames import Frames
 from sigmapi.envs.robot.scene import Scene
 from sigmapi.experiments.robot.config import PLAN
@@ -90,17 +90,8 @@ def film_episode(result: Any, max_frames: int = 60) -> list[NDArray[np.uint8]]:
 
 
 def write_gif(frames: list[NDArray[np.uint8]], path: Path, fps: int = 6) -> Path:
-    """Save ``frames`` as an animated GIF at ``path``."""
-    from PIL import Image
-
-    images = [Image.fromarray(f) for f in frames]
-
-    def write(fh: Any) -> None:  # into a temp file, renamed over path: atomic, never a link
-        images[0].save(
-            fh, format="GIF", save_all=True, append_images=images[1:], duration=1000 // fps, loop=0
-        )
-
-    return write_file(path, write, what="--render file")
+    """Save ``frames`` as an animated GIF at ``path`` (:func:`~sigmapi._outputs.save_gif`)."""
+    return save_gif(frames, path, fps=fps)
 
 
 def robot_figures(
