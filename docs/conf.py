@@ -1,6 +1,6 @@
 """Sphinx configuration of sigmapi's documentation site.
 
-Build (warnings are errors; the tests run the same build, tests/test_docs.py):
+Build (warnings are errors; the tests run the same build, tests/docs/test_docs.py):
 
     pip install -e '.[docs]'
     python -m sphinx -W --keep-going -b html docs docs/_build/html

@@ -9,10 +9,10 @@ Each figure is written into docs/ and recorded in docs/figures.json: the command
 its inputs and the PNG's sha256. The inputs are what decides the picture: for a map's figure
 the preset's resolved config, the seed and what the figure shows of the trained map (its
 polarity and the winners of the four pairs); for a figure drawn from a results file that
-file's sha256; for an environment's picture its id and reset seed. ``tests/test_doc_figures.py``
-fails when a committed figure no longer matches its record (a preset or results file changed,
-the PNG was replaced by hand) and, for the 1-D map (the 2-D ones in the slow tests), when
-today's code trains a map that the figure does not show.
+file's sha256; for an environment's picture its id and reset seed.
+``tests/docs/test_doc_figures.py`` fails when a committed figure no longer matches its record (a
+preset or results file changed, the PNG was replaced by hand) and, for the 1-D map (the 2-D ones
+in the slow tests), when today's code trains a map that the figure does not show.
 """
 
 from __future__ import annotations

@@ -6,7 +6,7 @@ to its neighbourhood value. :meth:`Kohonen.update` is its reference form (NumPy,
 fast kernel computes the same update in compiled form with lazy decay (``W_k = s_k V_k``:
 the decay ``(1 - eps a_k)`` goes into the per-unit scale ``s_k``, the sparse additive part
 into ``V_k``; ``sigmapi.kernels.fast._unit_chunk``). The two agree to float64 rounding:
-``tests/test_fast_kernel.py`` checks it in the fast kernel's exact mode.
+``tests/kernels/test_fast_kernel.py`` checks it in the fast kernel's exact mode.
 """
 
 from __future__ import annotations

@@ -278,7 +278,7 @@ class Scene:
         offsets and axes read from the compiled model) in NumPy, walked down from the point:
         into the neck body's frame once, then per candidate back through the pan rotation, the
         head's offset, the tilt rotation and the camera's offset (rotations of vectors, no
-        matrices built). ``tests/test_robot.py`` checks it against MuJoCo's camera pose.
+        matrices built). ``tests/envs/test_robot.py`` checks it against MuJoCo's camera pose.
         """
         q = np.atleast_2d(np.asarray(neck, dtype=np.float64))
         o, r = self.torso_frame()

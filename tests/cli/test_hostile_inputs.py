@@ -1,6 +1,6 @@
 """Hostile inputs, round four: no silent wrong result, every check before the work, bounded
 sizes and widths, one line for a mistake wherever it is raised (a worker too). (Outputs and
-locks: test_hostile_outputs.py; rounds two and three: test_hardening.py, test_hostile.py.)"""
+locks: test_hostile_outputs.py; rounds two and three: test_hardening_*.py, test_hostile.py.)"""
 
 from __future__ import annotations
 
@@ -11,13 +11,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from test_hardening_sweep import _main, _one_line_2
 
 import sigmapi
 from sigmapi import SigmaPiSOM, SOMConfig
 from sigmapi.errors import ConfigError, DataError, ResourceError
-from test_hardening import _main, _one_line_2
 
-SRC = Path(__file__).resolve().parents[1] / "src"
+SRC = Path(__file__).resolve().parents[2] / "src"
 os.environ.setdefault("MUJOCO_GL", "egl")  # before mujoco is imported: headless rendering
 
 
@@ -389,7 +389,7 @@ def test_a_fixed_output_name_taken_by_a_folder_is_found_before_the_run(tmp_path,
     _one_line_2(rc, err, "compare.txt", "is a folder")
 
 
-DOCS_EXT = Path(__file__).resolve().parents[1] / "docs" / "_ext"
+DOCS_EXT = Path(__file__).resolve().parents[2] / "docs" / "_ext"
 
 
 @pytest.mark.parametrize(

@@ -3,7 +3,7 @@
 The build is the README's documented command (``python -m sphinx -W --keep-going -b html docs
 OUT``) into a temporary folder: the tutorial notebook executes, the results pages render their
 tables from ``benchmarks/results/*.json``. The gallery's examples are run by
-``tests/test_examples.py`` already, so this build skips running them a second time
+``tests/docs/test_examples.py`` already, so this build skips running them a second time
 (``SIGMAPI_DOCS_GALLERY=False``); the documented command runs them.
 """
 
@@ -17,7 +17,7 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 DOCS = ROOT / "docs"
 README = (ROOT / "README.md").read_text("utf-8")
 

@@ -1,6 +1,6 @@
 """Hostile outputs: nothing a command writes replaces a file it does not own, follows a link,
 or is left half written; the output lock never follows a link. (Round four of the hostile
-user; rounds two and three: test_hardening.py, test_hostile.py.)"""
+user; rounds two and three: test_hardening_*.py, test_hostile.py.)"""
 
 from __future__ import annotations
 
@@ -15,11 +15,11 @@ import textwrap
 from pathlib import Path
 
 import pytest
+from test_hardening_sweep import SPEC3, _main, _one_line_2
 
 from sigmapi._lock import lock_path, output_lock
 from sigmapi._outputs import MARKER, check_file, claim_folder, write_file
 from sigmapi.errors import ConfigError, UsageError
-from test_hardening import SPEC3, _main, _one_line_2
 
 os.environ.setdefault("MUJOCO_GL", "egl")  # before mujoco is imported: headless rendering
 
@@ -331,7 +331,7 @@ def test_a_planted_lock_link_as_a_non_root_user_in_a_shared_folder():
         theirs = shared / ".theirs.npz.sigmapi.lock"
         theirs.write_text("")  # a lock file root owns
         theirs.chmod(0o666)
-        src = Path(__file__).resolve().parents[1] / "src"
+        src = Path(__file__).resolve().parents[2] / "src"
         env = {**os.environ, "PYTHONPATH": str(src)}
         run = subprocess.run([sys.executable, "-c", _AS_NOBODY, str(shared), str(victim)],
                              capture_output=True, text=True, env=env, timeout=120)  # fmt: skip

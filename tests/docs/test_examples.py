@@ -12,7 +12,7 @@ import pytest
 
 import sigmapi
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 EXAMPLES = sorted((ROOT / "examples").glob("*.py"))
 NEEDS = {"compare_baselines.py": ("sklearn", "minisom"), "robot.py": ("mujoco",)}
 FIGURES = {"compare_baselines.py": "sigma-pi", "noise.py": "caption: noise in every code",

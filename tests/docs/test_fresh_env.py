@@ -1,6 +1,6 @@
 """On a fresh machine: the README's documentation command in a virtual environment with only
 the docs extra, and the built wheel in one with nothing but itself (slow: each installs its
-dependencies from the package index; ``python -m pytest -m slow tests/test_fresh_env.py``).
+dependencies from the package index; ``python -m pytest -m slow tests/docs/test_fresh_env.py``).
 
 The packaging itself (one version, SPDX licence, an sdist without tests) is checked fast.
 """
@@ -17,7 +17,7 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 README = (ROOT / "README.md").read_text("utf-8")
 DOCS_COMMAND = (
     "pip install -e '.[docs]' && python -m sphinx -W --keep-going -b html docs docs/_build/html"

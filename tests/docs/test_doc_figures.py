@@ -12,7 +12,7 @@ import pytest
 
 import sigmapi
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 DOCS = ROOT / "docs"
 sys.path.insert(0, str(DOCS))
 import make_figures  # noqa: E402

@@ -24,7 +24,7 @@ from sigmapi.errors import NumericalError
 from sigmapi.io import header_digest, read_archive, write_model
 from sigmapi.kernels import BACKENDS
 
-DATA = Path(__file__).parent / "data"
+DATA = Path(__file__).resolve().parents[1] / "data"
 V1_CFG = dict(map_shape=(3,), x_shape=(4,), y_shape=(5,), iterations=400, seed=7, ordering="none")
 """The config of tests/data/v1-*.npz: written by sigmapi before format version 2 (commit
 'tests/data: two model files in format version 1'), after fit(iterations=250)."""
