@@ -35,6 +35,7 @@ __all__ = [
     "check_file",
     "claim_folder",
     "marked_as",
+    "save_captioned",
     "save_figure",
     "save_gif",
     "write_file",
@@ -184,6 +185,14 @@ def claim_folder(
                 f"(it holds no sigmapi {experiment} run, but {shown}: left as they are)"
             )
         write_file(out / MARKER, (json.dumps({"experiment": experiment}) + "\n").encode())
+    return out
+
+
+def save_captioned(fig: Any, path: str | Path, caption: str, **kwargs: Any) -> Path:
+    """Save ``fig`` to ``path`` (:func:`save_figure`) and its caption beside it, ``path`` with
+    the suffix ``.txt`` (one line of text); returns the figure's path."""
+    out = save_figure(fig, path, **kwargs)
+    write_file(Path(path).with_suffix(".txt"), (caption + "\n").encode("utf-8"))
     return out
 
 

@@ -9,13 +9,12 @@ from typing import Any
 
 import numpy as np
 
-from sigmapi._outputs import save_figure
+from sigmapi._outputs import save_captioned
 from sigmapi.experiments.compare.config import (
     METHODS,
     SEEDS,
     CompareConfig,
 )
-from sigmapi.io import atomic_write_bytes
 from sigmapi.metrics import grid_spacing
 from sigmapi.model.som import SigmaPiSOM
 
@@ -149,9 +148,7 @@ class CompareResult:
         from sigmapi.viz.compare import compare_figure  # matplotlib: only when drawing
 
         out = Path(out_dir) / FIGURE
-        save_figure(compare_figure(self.to_dict()), out, dpi=120)
-        atomic_write_bytes(out.with_suffix(".txt"), (self.caption() + "\n").encode("utf-8"))
-        return [out]
+        return [save_captioned(compare_figure(self.to_dict()), out, self.caption(), dpi=120)]
 
     def caption(self) -> str:
         """A caption computed from the result."""

@@ -8,8 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from sigmapi._outputs import save_figure
-from sigmapi.io import atomic_write_bytes
+from sigmapi._outputs import save_captioned
 
 from .config import METRICS, REFERENCE_RATE, NeuronsConfig
 
@@ -309,6 +308,4 @@ class NeuronsResult:
         from sigmapi.viz.neurons import neurons_figure  # matplotlib: only when drawing
 
         out = Path(out_dir) / FIGURE
-        save_figure(neurons_figure(self.to_dict()), out, dpi=110)
-        atomic_write_bytes(out.with_suffix(".txt"), (self.caption() + "\n").encode("utf-8"))
-        return [out]
+        return [save_captioned(neurons_figure(self.to_dict()), out, self.caption(), dpi=110)]

@@ -6,8 +6,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from sigmapi._outputs import save_figure
-from sigmapi.io import atomic_write_bytes
+from sigmapi._outputs import save_captioned
 
 from .config import PhysiologyConfig
 
@@ -106,6 +105,4 @@ class PhysiologyResult:
         from sigmapi.viz.neurons import physiology_figure  # matplotlib: only when drawing
 
         out = Path(out_dir) / FIGURE
-        save_figure(physiology_figure(self.to_dict()), out, dpi=110)
-        atomic_write_bytes(out.with_suffix(".txt"), (self.caption() + "\n").encode("utf-8"))
-        return [out]
+        return [save_captioned(physiology_figure(self.to_dict()), out, self.caption(), dpi=110)]

@@ -10,13 +10,12 @@ from typing import Any
 
 import numpy as np
 
-from sigmapi._outputs import save_figure
+from sigmapi._outputs import save_captioned
 from sigmapi.errors import ConfigError
 from sigmapi.experiments.base import check_seeds
 from sigmapi.experiments.stream.config import (
     StreamConfig,
 )
-from sigmapi.io import atomic_write_bytes
 
 __all__ = ["FIGURE", "METRICS", "MIN_DWELL", "VC_MARGIN", "StreamResult"]
 
@@ -209,6 +208,4 @@ class StreamResult:
         from sigmapi.viz.stream import stream_figure  # matplotlib: only when drawing
 
         out = Path(out_dir) / FIGURE
-        save_figure(stream_figure(self.to_dict()), out, dpi=120)
-        atomic_write_bytes(out.with_suffix(".txt"), (self.caption() + "\n").encode("utf-8"))
-        return [out]
+        return [save_captioned(stream_figure(self.to_dict()), out, self.caption(), dpi=120)]
