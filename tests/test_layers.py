@@ -162,3 +162,61 @@ def test_the_kit_imports_no_experiment_and_experiments_only_the_kit_and_their_ow
             if mine is not None and theirs not in (mine, None) and (mine, theirs) not in BORROWS:
                 bad.append(f"{m} imports {t}, another experiment's module")
     assert not bad, "\n".join(bad)
+
+
+FACADE = "sigmapi.model.som"
+MODES = ("sigmapi.model._train", "sigmapi.model._refine", "sigmapi.model._stream")
+"""The estimator's room: its public face (``som``) over one run state (``model/_run.py``) and
+the training modes, functions on it."""
+
+
+def test_the_estimators_parts_sit_below_its_face():
+    """No module of ``model/`` imports the face, and only the face and the modes themselves
+    call a training mode: the run state and the modes never see the estimator."""
+    bad = []
+    for m, targets in GRAPH.items():
+        if m.startswith("sigmapi.model") and FACADE in targets:
+            bad.append(f"{m} imports the estimator's face {FACADE}")
+        for t in sorted(targets & set(MODES)):
+            if m != FACADE and m not in MODES:
+                bad.append(f"{m} imports the training mode {t}; call it through SigmaPiSOM")
+    assert not bad, "\n".join(bad)
+
+
+def _written(module: str) -> list[ast.Attribute]:
+    """The attributes ``module`` assigns to (``a.b = ...``, ``a.b += ...``, in tuples too)."""
+    tree = ast.parse(MODULES[module].read_text("utf-8"))
+    found = []
+    for node in ast.walk(tree):
+        targets = (
+            node.targets
+            if isinstance(node, ast.Assign)
+            else [node.target]
+            if isinstance(node, ast.AugAssign | ast.AnnAssign)
+            else []
+        )
+        for t in targets:
+            for leaf in ast.walk(t):
+                if isinstance(leaf, ast.Attribute) and isinstance(leaf.ctx, ast.Store):
+                    found.append(leaf)
+    return found
+
+
+def test_only_the_run_state_and_the_training_modes_write_the_run():
+    """The estimator's private state is its one run state: no part of ``model/`` writes a
+    private attribute but the core's ``self._run``, and a run's fields (``run.t``,
+    ``self._run.trace``, ...) are written by ``_run.py`` and the training modes alone (and the
+    public ``t_`` setter of ``_core.py``)."""
+    writers = {"sigmapi.model._run", *MODES}
+    bad = []
+    for m in sorted(n for n in MODULES if n.startswith("sigmapi.model.")):
+        for a in _written(m):
+            v = a.value
+            on_run = (isinstance(v, ast.Name) and v.id == "run") or (
+                isinstance(v, ast.Attribute) and v.attr == "_run"
+            )
+            if on_run and m not in writers and not (m.endswith("_core") and a.attr == "t"):
+                bad.append(f"{m}:{a.lineno} writes the run's {a.attr}")
+            if a.attr.startswith("_") and not (m.endswith("_core") and a.attr == "_run"):
+                bad.append(f"{m}:{a.lineno} writes the private attribute {a.attr}")
+    assert not bad, "\n".join(bad)

@@ -106,7 +106,7 @@ def test_a_registered_backend_trains_like_the_arithmetic_it_wraps(toy):
     assert "toy" in BACKENDS
     model = SigmaPiSOM(CFG, backend=toy).fit()
     ref = SigmaPiSOM(CFG, backend="reference").fit()
-    assert model.backend == "toy" and isinstance(model._state, ToyState)
+    assert model.backend == "toy" and isinstance(model._run.state, ToyState)
     np.testing.assert_array_equal(model.weights_, ref.weights_)
     b = model.sampler.sample(50, np.random.default_rng(1))
     np.testing.assert_array_equal(model.winner(b.x0, b.y0), ref.winner(b.x0, b.y0))

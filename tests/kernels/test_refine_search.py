@@ -46,7 +46,7 @@ def _both(state, x, y, rule, shapes):
 @pytest.mark.parametrize("shapes", [(XS, XS), None])
 def test_the_bounds_find_the_full_searchs_winners(trained, rule, shapes):
     x, y = _pairs(trained, 3000, 1)
-    got, want, acc = _both(trained._state, x, y, rule, shapes)
+    got, want, acc = _both(trained._run.state, x, y, rule, shapes)
     assert isinstance(acc.index, _refining.SearchIndex)
     np.testing.assert_array_equal(got, want)
     assert len(np.unique(want)) > 10  # many units win: the test compares real searches
@@ -55,7 +55,7 @@ def test_the_bounds_find_the_full_searchs_winners(trained, rule, shapes):
 def test_untrained_weights_and_ties_go_to_the_lowest_unit(trained):
     x, y = _pairs(trained, 600, 2)
     rng = np.random.default_rng(0)
-    k, nx, ny = trained._state.shape
+    k, nx, ny = trained._run.state.shape
     w = rng.normal(0.0, 0.1, (k, nx, ny))  # a random start: loose bounds, many candidates
     for rule in ("min_distance", "argmax"):
         got, want, _ = _both(fast.prepare(w, tol=1e-4), x, y, rule, (XS, XS))
@@ -64,9 +64,9 @@ def test_untrained_weights_and_ties_go_to_the_lowest_unit(trained):
     got, want, _ = _both(fast.prepare(same, tol=1e-4), x, y, "min_distance", (XS, XS))
     np.testing.assert_array_equal(got, want)
     assert not got.any()
-    twins = fast.export(trained._state)
+    twins = fast.export(trained._run.state)
     winner = int(
-        np.bincount(fast.winners_of(trained._state, x, y, MAP, "argmax", 0.0, 15)).argmax()
+        np.bincount(fast.winners_of(trained._run.state, x, y, MAP, "argmax", 0.0, 15)).argmax()
     )
     twins[[3, 20]] = twins[winner]  # two copies of a winning unit: ties to the lowest index
     got, want, _ = _both(fast.prepare(twins, tol=1e-4), x, y, "argmax", (XS, XS))
@@ -77,17 +77,17 @@ def test_untrained_weights_and_ties_go_to_the_lowest_unit(trained):
 def test_a_changed_state_gets_a_new_index(trained):
     model = SigmaPiSOM(trained.config).fit(iterations=500)
     x, y = _pairs(model, 300, 3)
-    got, want, acc = _both(model._state, x, y, "min_distance", (XS, XS))
+    got, want, acc = _both(model._run.state, x, y, "min_distance", (XS, XS))
     np.testing.assert_array_equal(got, want)
     model.partial_fit(iterations=200)
-    assert not acc.index.fits(model._state.raw, model._state.scale)
-    got = fast._refine_winners(model._state, acc, x, y, MAP, "min_distance", 15, False)
-    np.testing.assert_array_equal(got, fast.winners_of(model._state, x, y, MAP,
+    assert not acc.index.fits(model._run.state.raw, model._run.state.scale)
+    got = fast._refine_winners(model._run.state, acc, x, y, MAP, "min_distance", 15, False)
+    np.testing.assert_array_equal(got, fast.winners_of(model._run.state, x, y, MAP,
                                                        "min_distance", 0.0, 15))  # fmt: skip
 
 
 def test_the_hard_sums_and_the_new_weights_are_the_general_codes(trained):
-    st = trained._state
+    st = trained._run.state
     batch = trained.sampler.sample(800, np.random.default_rng(4))
     k = fast.winners_of(st, batch.x0, batch.y0, MAP, "min_distance", 0.0, 15)
     k[k == 7] = 8  # unit 7 wins nothing: it keeps its weights

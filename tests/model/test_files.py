@@ -310,10 +310,10 @@ def test_raw_times_scale_overflow_is_refused(tmp_path):
 
 def test_a_model_never_saves_a_file_load_would_refuse(tmp_path):
     som = _small("fast")
-    som._state.raw[0, 0] = np.inf  # what an overflow in training would leave
+    som._run.state.raw[0, 0] = np.inf  # what an overflow in training would leave
     with pytest.raises(NumericalError, match="state_raw hold NaN or inf"):
         som.save(tmp_path / "m.npz")
-    som._state.raw[0, 0] = 3e38  # finite float32, but weights load refuses
+    som._run.state.raw[0, 0] = 3e38  # finite float32, but weights load refuses
     with pytest.raises(NumericalError, match=r"beyond 1e\+30"):
         som.save(tmp_path / "m.npz")
     assert not any(tmp_path.iterdir())

@@ -93,7 +93,7 @@ def test_refinement_on_your_own_rows():
     assert som.refined_ == 1600  # two passes over the 800 rows
     twin = SigmaPiSOM(SMALL, backend="reference", refine_rounds=0).fit(views)
     twin.config = twin.config.replace(refine_rounds=2)
-    twin._refined = 0
+    twin._run.refined = 0
     np.testing.assert_array_equal(twin.refine(views).weights_, som.weights_)
 
 

@@ -60,7 +60,7 @@ def test_pinned_fast_kernel_values(rule, raw_sum, scale_sum, raw_100_7):
         winner_rule=rule, kernel_tol=1e-4, backend="fast", seed=0,
         sigma=((0.0, 3.0), (0.5, 1e-5)), eps=((0.0, 0.1), (1.0, 0.01)),
     )  # fmt: skip
-    state = SigmaPiSOM(cfg).fit()._state
+    state = SigmaPiSOM(cfg).fit()._run.state
     raw = state.raw.astype(np.float64)
     # relative 1e-9: room for another CPU's summation order in numpy's sum and libm's exp,
     # none for a change of the kernel's arithmetic (rounding differences grow over 2,000 steps)

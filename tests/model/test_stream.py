@@ -74,7 +74,7 @@ def test_a_stream_cut_in_two_calls_learns_what_one_call_learns(backend, tol):
     cut.partial_fit_stream((x[251:], y[251:]), trace=0.6)
     assert one.t_ == cut.t_ == 600
     np.testing.assert_array_equal(one.weights_, cut.weights_)
-    np.testing.assert_array_equal(one._trace, cut._trace)
+    np.testing.assert_array_equal(one._run.trace, cut._run.trace)
 
 
 def test_fit_stream_replays_a_short_stream_in_passes():

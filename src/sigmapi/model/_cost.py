@@ -7,38 +7,17 @@ unit norms, neighbourhood) without forming an outer product.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
-
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import NDArray
 
-from sigmapi.config import SOMConfig
+from sigmapi.model._core import MapCore
 from sigmapi.tasks import Batch
 
 __all__ = ["CostMixin"]
 
 
-class CostMixin:
-    """``cost`` and its terms, for a model with a kernel, winners and responses."""
-
-    config: SOMConfig
-    _kernel: Any
-
-    if TYPE_CHECKING:
-
-        @property
-        def map_shape(self) -> tuple[int, ...]: ...
-
-        @property
-        def sigma_(self) -> float: ...
-
-        def winner(
-            self, x: ArrayLike, y: ArrayLike, rule: Any = None, *, hard: bool = False
-        ) -> NDArray[np.int64]: ...
-
-        def respond(self, x: ArrayLike, y: ArrayLike) -> NDArray[np.float64]: ...
-
-        def unit_sqnorms(self) -> NDArray[np.float64]: ...
+class CostMixin(MapCore):
+    """``cost`` and its terms, from the model's kernel, winners and responses."""
 
     def cost_terms(
         self, batch: Batch, sigma: float | None = None
@@ -55,7 +34,7 @@ class CostMixin:
         wn = self.unit_sqnorms()
         dn = (batch.x1**2).sum(1) * (batch.y1**2).sum(1)
         s = self.sigma_ if sigma is None else float(sigma)
-        a = self._kernel.neighbourhood(k, self.map_shape, s, self.config.map_periodic)
+        a = self._run.kernel.neighbourhood(k, self.map_shape, s, self.config.map_periodic)
         return k, dn[:, None] - 2.0 * h1 + wn[None, :], a
 
     def cost(self, batch: Batch, sigma: float | None = None) -> float:

@@ -15,7 +15,17 @@ from sigmapi.config import SOMConfig
 from sigmapi.model.views import CodeViews, encode_views
 from sigmapi.tasks import TwoViewSampler
 
-__all__ = ["GridsMixin"]
+__all__ = ["GridsMixin", "code_of", "sampler_of"]
+
+
+def code_of(c: SOMConfig, shape: tuple[int, ...]) -> PopulationCode:
+    """The population code of config ``c`` on a grid of ``shape`` (its x or y code)."""
+    return PopulationCode(shape, c.code_width, c.code_height, c.code_normalize, c.periodic)
+
+
+def sampler_of(c: SOMConfig) -> TwoViewSampler:
+    """The two-view sampler of the built-in task of config ``c``: its relation and codes."""
+    return TwoViewSampler(c.relation, code_of(c, c.x_shape), code_of(c, c.y_shape))
 
 
 class GridsMixin:
@@ -39,24 +49,20 @@ class GridsMixin:
     def n_units(self) -> int:
         return int(np.prod(self.map_shape))
 
-    def _code(self, shape: tuple[int, ...]) -> PopulationCode:
-        c = self.config
-        return PopulationCode(shape, c.code_width, c.code_height, c.code_normalize, c.periodic)
-
     @property
     def x_code(self) -> PopulationCode:
         """The code of x the model was trained with: ``x_code.encode(p)`` for positions p."""
-        return self._code(self.x_shape)
+        return code_of(self.config, self.x_shape)
 
     @property
     def y_code(self) -> PopulationCode:
         """The code of y the model was trained with."""
-        return self._code(self.y_shape)
+        return code_of(self.config, self.y_shape)
 
     @property
     def sampler(self) -> TwoViewSampler:
         """The two-view sampler of the model's relation and codes."""
-        return TwoViewSampler(self.config.relation, self.x_code, self.y_code)
+        return sampler_of(self.config)
 
     @property
     def map_coords(self) -> NDArray[np.float64]:

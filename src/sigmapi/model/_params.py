@@ -8,63 +8,17 @@ its own functions asks.
 
 from __future__ import annotations
 
-import dataclasses
-from typing import TYPE_CHECKING, Any, Self
-
-import numpy as np
-from numpy.typing import NDArray
+from typing import Any, Self
 
 from sigmapi.config import SOMConfig
 from sigmapi.errors import ConfigError
-from sigmapi.kernels import KernelState, get_backend
+from sigmapi.model._core import FIELDS, MapCore, entropy_of
 
-__all__ = ["FIELDS", "ParamsMixin", "stored_overrides"]
-
-FIELDS = tuple(f.name for f in dataclasses.fields(SOMConfig) if f.name != "extra")
-"""The hyperparameters ``get_params`` lists (``extra`` holds notes, no parameter)."""
-
-_SHAPE_FIELDS = ("map_shape", "x_shape", "y_shape")
+__all__ = ["ParamsMixin"]
 
 
-def entropy_of(seed: int | None) -> int:
-    """The entropy of the random streams of ``seed``: ``seed`` itself, or fresh for None."""
-    return int(np.random.SeedSequence(seed).entropy)  # type: ignore[arg-type]
-
-
-def stored_overrides(cfg: SOMConfig, overrides: dict[str, Any]) -> SOMConfig:
-    """``cfg`` with ``overrides`` applied, keeping the caller's objects where validation only
-    rebuilt an identical value (scikit-learn's ``clone`` checks that ``__init__`` kept every
-    parameter as given)."""
-    cfg = cfg.replace(**overrides)
-    for k, v in overrides.items():
-        if k in FIELDS and _identical(v, getattr(cfg, k)):
-            object.__setattr__(cfg, k, v)
-    return cfg
-
-
-class ParamsMixin:
+class ParamsMixin(MapCore):
     """scikit-learn's parameter protocol over a ``config`` (a :class:`SOMConfig`)."""
-
-    config: SOMConfig
-    seed_entropy: int
-    _kernel: Any
-    _state: KernelState | None
-    _t: int
-    _block_cache: Any
-    _unit_positions: NDArray[np.float64] | None
-    _weights_cache: NDArray[np.float64] | None
-
-    if TYPE_CHECKING:
-
-        def __init__(self, config: SOMConfig | None = None, **overrides: Any) -> None: ...
-
-        @property
-        def is_fitted(self) -> bool: ...
-
-        @property
-        def weights_(self) -> NDArray[np.float64]: ...
-
-        def _set_weights(self, weights: NDArray[np.float64]) -> None: ...
 
     def __sklearn_is_fitted__(self) -> bool:
         """What ``sklearn.utils.validation.check_is_fitted`` asks: whether there are weights."""
@@ -108,18 +62,10 @@ class ParamsMixin:
                 "or pass single hyperparameters, e.g. set_params(iterations=50000)"
             )
         old, new = self.config, cfg.replace(**params) if params else cfg
-        weights = self.weights_ if self.is_fitted else None
+        self._run.reconfigure(old, new)
         self.config = new
-        self._block_cache = None
-        self._unit_positions = None  # transform()'s table follows map_shape and map_periodic
         if new.seed != old.seed:
             self.seed_entropy = entropy_of(new.seed)
-        if new.backend != old.backend:
-            self._kernel = get_backend(new.backend)
-        if any(getattr(new, k) != getattr(old, k) for k in _SHAPE_FIELDS):
-            self._state, self._weights_cache, self._t = None, None, 0
-        elif new.backend != old.backend and weights is not None:
-            self._set_weights(np.array(weights))
         return self
 
     def replay_twin(self) -> Self:
@@ -133,12 +79,3 @@ class ParamsMixin:
         twin = type(self)(self.config)
         twin.seed_entropy = self.seed_entropy
         return twin
-
-
-def _identical(given: Any, stored: Any) -> bool:
-    """Whether ``given`` equals ``stored`` with the same types all the way down."""
-    if type(given) is not type(stored):
-        return False
-    if isinstance(given, tuple):
-        return len(given) == len(stored) and all(map(_identical, given, stored))
-    return bool(given == stored)

@@ -10,14 +10,14 @@ from __future__ import annotations
 
 import copy
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Self
+from typing import Any, Self
 
 import numpy as np
 from numpy.typing import NDArray
 
 from sigmapi import _validate
 from sigmapi.config import BACKEND_NAMES, SOMConfig
-from sigmapi.kernels import KernelState
+from sigmapi.model._core import MapCore
 from sigmapi.model.file import read_parts, write_parts
 
 __all__ = ["PersistMixin"]
@@ -25,32 +25,8 @@ __all__ = ["PersistMixin"]
 _BACKEND_FIX = "the backend to load the model onto, or None for the one that wrote it"
 
 
-class PersistMixin:
+class PersistMixin(MapCore):
     """Arrays, files and pickles of an estimator with ``config``, ``t_`` and a kernel state."""
-
-    config: SOMConfig
-    seed_entropy: int
-    _kernel: Any
-    _state: KernelState | None
-    _refined: int
-    _refine_rows: int | None
-
-    if TYPE_CHECKING:
-
-        def __init__(self, config: SOMConfig | None = None, **overrides: Any) -> None: ...
-
-        @property
-        def is_fitted(self) -> bool: ...
-
-        @property
-        def t_(self) -> int: ...
-
-        @t_.setter
-        def t_(self, value: int) -> None: ...
-
-        def _check_fitted(self) -> None: ...
-
-        def _set_weights(self, weights: NDArray[np.float64]) -> None: ...
 
     def to_arrays(self) -> tuple[dict[str, Any], dict[str, NDArray[Any]]]:
         """The model as a JSON-able header and arrays (what a model file holds).
@@ -63,15 +39,15 @@ class PersistMixin:
         Raises :class:`~sigmapi.errors.NumericalError` if the weights hold NaN or inf, so
         that no file is written that :func:`sigmapi.load` would refuse.
         """
-        self._check_fitted()
+        run = self._run
         return write_parts(
             self.config,
             self.t_,
             self.seed_entropy,
-            self._kernel,
-            self._state,
-            self._refined,
-            getattr(self, "_refine_rows", None),
+            run.kernel,
+            run.fitted(),
+            run.refined,
+            run.refine_rows,
         )
 
     @classmethod
@@ -94,13 +70,11 @@ class PersistMixin:
         parts = read_parts(header, arrays, backend, source)
         model = cls(parts.config)
         model.seed_entropy = parts.seed_entropy
-        if parts.state is not None:
-            model._state = parts.state
-        else:
-            model._set_weights(np.asarray(parts.weights))
-        model.t_ = parts.t
-        model._refined = parts.refined
-        model._refine_rows = parts.refine_rows
+        run = model._run
+        state = parts.state
+        if state is None:
+            state = run.prepared(np.asarray(parts.weights), model.config.kernel_tol)
+        run.restore(state, parts.t, parts.refined, parts.refine_rows)
         return model
 
     def save(self, path: str | Path, *, compress: bool = False) -> Path:

@@ -1,57 +1,42 @@
-# Over 500 lines: the estimator's public surface (fit, partial_fit, respond, winner, transform,
-# save and load) in one place; its parts live in the _grids, _cost, _params, _persist, _refine
-# and _stream mixins.
 """SigmaPiSOM: a self-organizing map of Sigma-Pi units (Weber & Wermter 2007).
 
-The estimator holds the state (weights, iteration count, random streams) and delegates the
-arithmetic to a kernel (:mod:`sigmapi.kernels`) and its rules (:mod:`sigmapi.rules`). Its
-other jobs live beside it: grids and codes (:mod:`sigmapi.model._grids`), the cost
-(:mod:`sigmapi.model._cost`), scikit-learn's parameters (:mod:`sigmapi.model._params`),
-arrays, files and pickles (:mod:`sigmapi.model._persist`), view checks
-(:mod:`sigmapi.model.views`), learning from a stream of frames (:mod:`sigmapi.model._stream`).
-
-Random streams: one :class:`numpy.random.SeedSequence` per run. The initial weights come from
-its child ``spawn_key=(0,)``; the training data of iterations ``[b * BLOCK, (b + 1) * BLOCK)``
-from child ``(1, b)``; the refinement's pairs of round ``r``, block ``b`` from child
-``(4, r, b)`` (:mod:`sigmapi.model._refine`). The data of any iteration is therefore a pure
-function of the seed and the iteration number: stopping, saving, loading and continuing gives
-the same run, bit for bit, wherever the run was cut.
+The estimator holds its config, the entropy of its random streams and one private run state
+(:mod:`sigmapi.model._run`: the kernel state, counters, caches, the refinement's sums, a
+stream's trace; one reset). The arithmetic is the kernel's (:mod:`sigmapi.kernels`) and its
+rules' (:mod:`sigmapi.rules`); the training modes are functions on the run state: view pairs
+and reward-gated iterations (:mod:`sigmapi.model._train`), the refinement
+(:mod:`sigmapi.model._refine`), streams of frames (:mod:`sigmapi.model._stream`). This class
+is their public face; the map's queries (:mod:`sigmapi.model._core`), the cost
+(:mod:`sigmapi.model._cost`), scikit-learn's parameters (:mod:`sigmapi.model._params`) and
+arrays, files and pickles (:mod:`sigmapi.model._persist`) are its bases, and the random
+streams are described in :mod:`sigmapi.model._run`.
 """
 
 from __future__ import annotations
 
-import threading
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
 
-import numpy as np
-from numpy.typing import ArrayLike, NDArray
+import numpy as np  # noqa: F401  (the examples' np)
+from numpy.typing import ArrayLike
 
 from sigmapi import _memory, _validate
-from sigmapi.config import SOMConfig
-from sigmapi.errors import ConfigError, DataError, NotFittedError, NumericalError
-from sigmapi.kernels import KernelState, get_backend
-from sigmapi.kernels.base import MAX_WEIGHT
+from sigmapi.errors import ConfigError, DataError
+from sigmapi.model import _refine, _stream, _train
 from sigmapi.model._cost import CostMixin
-from sigmapi.model._grids import GridsMixin
-from sigmapi.model._params import ParamsMixin, entropy_of, stored_overrides
+from sigmapi.model._params import ParamsMixin
 from sigmapi.model._persist import PersistMixin
-from sigmapi.model._refine import RefineMixin
-from sigmapi.model._stream import StreamMixin
-from sigmapi.model.views import CodeViews, Views, check_gates, check_pairs, fit_views
-from sigmapi.rules import WinnerRule, ordering, winner_rule
+from sigmapi.model._run import BLOCK, Notify
+from sigmapi.model.views import StreamFrames, Views, check_frames, check_gates, fit_views
+from sigmapi.rules.trace import check_trace
 from sigmapi.tasks import Batch
 
 __all__ = ["BLOCK", "SigmaPiSOM", "load_model"]
 
-BLOCK = 1000
-"""Iterations per block of training data (one random child stream per block)."""
-
 Callback = Callable[["SigmaPiSOM"], None]
 
 
-class SigmaPiSOM(GridsMixin, CostMixin, ParamsMixin, PersistMixin, RefineMixin, StreamMixin):
+class SigmaPiSOM(CostMixin, ParamsMixin, PersistMixin):
     """Self-organizing map of Sigma-Pi units, ``h_k = sum_ij w_kij x_i y_j``.
 
     Trained without a teacher on two views of the same body-centred position z: the winner is
@@ -94,145 +79,14 @@ class SigmaPiSOM(GridsMixin, CostMixin, ParamsMixin, PersistMixin, RefineMixin, 
     (2,)
     """
 
-    def __init__(self, config: SOMConfig | None = None, **overrides: Any) -> None:
-        if config is not None and not isinstance(config, SOMConfig):
-            raise ConfigError(
-                f"config must be a sigmapi.SOMConfig or None, got {type(config).__name__}; "
-                "pass hyperparameters as keywords instead"
-            )
-        cfg = config or SOMConfig()
-        self.config = stored_overrides(cfg, overrides) if overrides else cfg
-        self._t = 0
-        self._state: KernelState | None = None
-        self._kernel = get_backend(self.config.backend)
-        self.seed_entropy = entropy_of(self.config.seed)
-        self._block_cache: tuple[int, Batch] | None = None
-        self._weights_cache: NDArray[np.float64] | None = None
-        self._lock = threading.RLock()
-        self._unit_positions: NDArray[np.float64] | None = None  # transform()'s table
-        self._sigma_cache: tuple[int, float] | None = None  # (t_, sigma at t_)
-        self._refined = 0  # refinement pairs done (all rounds)
-        self._refine_rows: int | None = None  # rows a round of it (None: the built-in task)
-        self._refine_acc = None  # (round, its sums so far)
-        self._trace: NDArray[np.float64] | None = None  # a stream's trace (_stream.py)
+    def _notify(self, callback: Callback | None) -> Notify:
+        """What a training mode calls after each block: ``callback(self)``."""
+        return None if callback is None else lambda: callback(self)
 
-    @property
-    def t_(self) -> int:
-        """Learning iterations done so far; raises :class:`NotFittedError` before fitting."""
-        self._check_fitted()
-        return self._t
-
-    @t_.setter
-    def t_(self, value: int) -> None:
-        self._t = int(value)
-
-    @property
-    def backend(self) -> str:
-        """Name of the kernel in use (one of :data:`sigmapi.kernels.BACKENDS`)."""
-        return str(self._kernel.NAME)
-
-    # ------------------------------------------------------------------ state
-    def _seq(self, *key: int) -> np.random.Generator:
-        ss = np.random.SeedSequence(self.seed_entropy, spawn_key=key)
-        return np.random.Generator(np.random.PCG64(ss))
-
-    def initial_weights(
-        self, views: tuple[NDArray[np.float64], ...] | None = None
-    ) -> NDArray[np.float64]:
-        """The run's initial weights ``(n_units, n_x, n_y)``, from the ordering procedure
-        (:mod:`sigmapi.rules.ordering`).
-
-        ``ordering="none"``: uniform in ``[-init_scale, init_scale]`` (the paper), from the
-        run's child stream ``spawn_key=(0,)``. ``ordering="crossview"``: an ordered start
-        computed from view pairs alone: the first pairs of ``views`` when given (your own
-        data), else as many pairs of the built-in task from the run's own random stream
-        (child ``spawn_key=(2,)``).
-        """
-        procedure = ordering(self.config.ordering)
-        self.check_memory()
-        if views is None and procedure.init_pairs:
-            b = self.sampler.sample(procedure.init_pairs, self._seq(2))
-            views = (b.x0, b.y0, b.x1, b.y1)
-        return procedure.initial_weights(self.config, self._seq(0), views)
-
-    def memory_estimate(self) -> int:
-        """Bytes this model needs at its peak: the float64 start and the ordered start's
-        working memory, the backend's state (its own estimate, ``kernel.memory_bytes``) and
-        the float64 ``weights_``."""
-        shape = (self.n_units, int(np.prod(self.x_shape)), int(np.prod(self.y_shape)))
-        n = shape[0] * shape[1] * shape[2]
-        sums = 8 * n if self.config.refine_rounds > 0 else 0  # the refinement's accumulators
-        start = ordering(self.config.ordering).start_bytes(self.config.map_shape)
-        return 16 * n + sums + start + self._kernel.memory_bytes(shape, self.config.kernel_tol)
-
-    def check_memory(self) -> None:
-        """Raise :class:`~sigmapi.errors.ResourceError` (a MemoryError) before allocating if
-        the machine's available memory cannot hold :meth:`memory_estimate`."""
-        n = self.n_units * int(np.prod(self.x_shape)) * int(np.prod(self.y_shape))
-        _memory.check(
-            self.memory_estimate(),
-            f"a model of {self.n_units} units x {int(np.prod(self.x_shape))} x "
-            f"{int(np.prod(self.y_shape))} inputs ({n:,} weights)",
-            "use a smaller map_shape, x_shape or y_shape",
-        )
-
-    def _set_weights(self, weights: NDArray[np.float64]) -> None:
-        top = float(np.abs(weights).max(initial=0.0))
-        if not top <= MAX_WEIGHT:  # also NaN
-            raise NumericalError(
-                f"weights must be finite and at most {MAX_WEIGHT:g} in magnitude (a backend "
-                f"may store float32 and scale lazily), got {top:.3g}; rescale them"
-            )
-        self._state = self._kernel.prepare(weights, tol=self.config.kernel_tol)
-        self._weights_cache = None
-
-    @property
-    def is_fitted(self) -> bool:
-        return self._state is not None
-
-    def _check_fitted(self) -> None:
-        if self._state is None:
-            raise NotFittedError(
-                "this SigmaPiSOM is not fitted yet; call fit() or partial_fit() first, "
-                "or load a trained model with sigmapi.load(path)"
-            )
-
-    @property
-    def weights_(self) -> NDArray[np.float64]:
-        self._check_fitted()
-        if self._weights_cache is None:
-            w = np.array(self._kernel.export(self._state), dtype=np.float64)
-            w.flags.writeable = False
-            self._weights_cache = w
-        return self._weights_cache
-
-    def sigma_at(self, t: int | NDArray[np.int64]) -> NDArray[np.float64]:
-        """Neighbourhood width at iteration(s) t of this run's schedule, as the ordering
-        procedure caps it (``crossview``: at ``ordering_sigma``)."""
-        c = self.config
-        return ordering(c.ordering).cap_sigma(
-            c.sigma_schedule.at(t, c.iterations), c.ordering_sigma
-        )
-
-    def eps_at(self, t: int | NDArray[np.int64]) -> NDArray[np.float64]:
-        """Learning rate at iteration(s) t."""
-        return self.config.eps_schedule.at(t, self.config.iterations)
-
-    @property
-    def sigma_(self) -> float:
-        """Neighbourhood width at the current iteration (used by the soft winner)."""
-        if self._sigma_cache is None or self._sigma_cache[0] != self.t_:
-            self._sigma_cache = (self.t_, float(self.sigma_at(self.t_)))
-        return self._sigma_cache[1]
-
-    # ------------------------------------------------------------------ training
+    # ------------------------------------------------------------------ training on pairs
     def training_block(self, b: int) -> Batch:
         """The training data of block ``b`` (iterations ``b*BLOCK`` to ``(b+1)*BLOCK - 1``)."""
-        if self._block_cache is not None and self._block_cache[0] == b:
-            return self._block_cache[1]
-        batch = self.sampler.sample(BLOCK, self._seq(1, b))
-        self._block_cache = (b, batch)
-        return batch
+        return _train.training_block(self.config, self._run, self.seed_entropy, b)
 
     def fit(
         self,
@@ -276,7 +130,7 @@ class SigmaPiSOM(GridsMixin, CostMixin, ParamsMixin, PersistMixin, RefineMixin, 
         >>> som.fit(views).t_
         3000
         """
-        with self._lock:
+        with self._run.lock:
             data = fit_views(views, self.x_shape, self.y_shape, "fit")
             total = self.config.iterations if iterations is None else iterations
             total = _validate.integer("iterations", total, 0)
@@ -286,22 +140,8 @@ class SigmaPiSOM(GridsMixin, CostMixin, ParamsMixin, PersistMixin, RefineMixin, 
             if rows:  # each pass permutes every row: the int64 order, before any work
                 fix = "pass fewer rows (a random subset), or partial_fit(views): each row once"
                 _memory.check_count("views rows", rows, 8, fix)
-            self._check_refiner()
-            self._set_weights(self.initial_weights(data))
-            self._t = 0
-            self._refined = 0
-            self._refine_acc = None
-            self._trace = None
-            if data is None:
-                self._partial_fit(None, total, callback)
-            else:
-                npass = 0
-                while self._t < total:
-                    order = self._seq(3, npass).permutation(rows)[: total - self._t]
-                    self._train_rows(data, order, callback)
-                    npass += 1
-            if self._t >= self.config.iterations:
-                self._refine(data, callback)
+            notify = self._notify(callback)
+            _train.fit(self.config, self._run, self.seed_entropy, data, total, notify)
             return self
 
     def partial_fit(
@@ -331,7 +171,7 @@ class SigmaPiSOM(GridsMixin, CostMixin, ParamsMixin, PersistMixin, RefineMixin, 
         Calls from several threads on one model run one after the other (a lock), so no
         iteration is lost; the order in which they run is the threads'.
         """
-        with self._lock:
+        with self._run.lock:
             data = fit_views(views, self.x_shape, self.y_shape, "partial_fit")
             if data is not None and iterations is not None:
                 raise ConfigError(
@@ -340,79 +180,9 @@ class SigmaPiSOM(GridsMixin, CostMixin, ParamsMixin, PersistMixin, RefineMixin, 
                     "fit(views, iterations=n) for passes over them"
                 )
             n = None if iterations is None else _validate.integer("iterations", iterations, 0)
-            return self._partial_fit(data, n, callback)
-
-    def _partial_fit(
-        self, data: CodeViews | None, iterations: int | None, callback: Callback | None
-    ) -> SigmaPiSOM:
-        if self._state is None:
-            self._set_weights(self.initial_weights(data))
-        if data is not None:
-            self._train_rows(data, None, callback)
+            notify = self._notify(callback)
+            _train.partial_fit(self.config, self._run, self.seed_entropy, data, n, notify)
             return self
-        rest = iterations is None  # the rest of the configured run, refinement included
-        if iterations is None:
-            iterations = self.config.iterations - self._t
-            if iterations <= 0 and self._refined < self.refine_total:
-                self._check_refiner()
-                self._refine(None, callback)  # the configured run continues
-                return self
-            if iterations <= 0:
-                raise ConfigError(
-                    f"the configured run of {self.config.iterations} iterations is complete "
-                    f"(t_ = {self._t}); pass iterations to train further, e.g. "
-                    "partial_fit(iterations=1000)"
-                )
-        end = self._t + iterations
-        while self._t < end:
-            b, off = divmod(self._t, BLOCK)
-            stop = min(BLOCK, off + end - self._t)
-            batch = self.training_block(b)
-            sl = slice(off, stop)
-            self._run_views(batch.x0[sl], batch.y0[sl], batch.x1[sl], batch.y1[sl])
-            if callback is not None:
-                callback(self)
-        if rest and self._refined < self.refine_total:
-            self._check_refiner()
-            self._refine(None, callback)
-        return self
-
-    def _train_rows(
-        self, data: CodeViews, order: NDArray[np.intp] | None, callback: Callback | None
-    ) -> None:
-        """Iterations on the rows ``order`` of ``data`` (None: all, as given), in chunks of at
-        most ``BLOCK`` rows, calling ``callback`` after each."""
-        n = data[0].shape[0] if order is None else order.size
-        for s in range(0, n, BLOCK):
-            rows = slice(s, s + BLOCK) if order is None else order[s : s + BLOCK]
-            x0, y0, x1, y1 = (v[rows] for v in data)
-            self._run_views(x0, y0, x1, y1)
-            if callback is not None:
-                callback(self)
-
-    def _run_views(
-        self, x0: NDArray[Any], y0: NDArray[Any], x1: NDArray[Any], y1: NDArray[Any]
-    ) -> None:
-        """One stretch of iterations on view pairs; the ablation ``same_view`` learns view 0."""
-        c = self.config
-        x1, y1 = (x0, y0) if c.same_view else (x1, y1)
-        t = np.arange(self.t_, self.t_ + x0.shape[0])
-        self._kernel.train_block(
-            self._state,
-            x0,
-            y0,
-            x1,
-            y1,
-            self.sigma_at(t),
-            self.eps_at(t),
-            map_shape=self.map_shape,
-            winner_rule=self.winner_rule_,
-            soft_cut=c.soft_cut,
-            threads=c.threads,
-            map_periodic=c.map_periodic,
-        )
-        self.t_ += x0.shape[0]
-        self._weights_cache = None
 
     def learn_gated(
         self,
@@ -438,126 +208,135 @@ class SigmaPiSOM(GridsMixin, CostMixin, ParamsMixin, PersistMixin, RefineMixin, 
         sigma, eps : float, optional
             Neighbourhood width and learning rate (default: the schedule's at ``t_``).
         """
-        self._check_fitted()
-        with self._lock:
+        self._run.fitted()
+        with self._run.lock:
             data = fit_views(views, self.x_shape, self.y_shape, "learn_gated")
             if data is None:
                 raise DataError(
                     "learn_gated needs views (x0, y0, x1, y1), one row per "
                     "iteration, got None; pass the views the gates belong to"
                 )
-            n = data[0].shape[0]
-            g = check_gates(gates, n, self.n_units)
-            kernel: Any = self._kernel
-            if not hasattr(kernel, "train_gated_block"):
-                raise ConfigError(
-                    f"backend {self.backend!r} has no gated update (train_gated_block); use "
-                    "backend 'reference' or 'fast'"
-                )
-            s = (
-                self.sigma_
-                if sigma is None
-                else _validate.width(
-                    "sigma",
-                    sigma,
-                    0.0,
-                    lo_open=True,
-                    fix="map units; e.g. 1e-5 moves the winner alone",
-                )
-            )
-            e = (
-                float(self.eps_at(self.t_))
-                if eps is None
-                else _validate.number("eps", eps, 0.0, 1.0, fix="a learning rate, e.g. 0.01")
-            )
-            c = self.config
-            kernel.train_gated_block(
-                self._state,
-                *data,
-                np.full(n, s),
-                np.full(n, e),
-                g,
-                map_shape=self.map_shape,
-                winner_rule=self.winner_rule_,
-                soft_cut=c.soft_cut,
-                map_periodic=c.map_periodic,
-            )
-            self._weights_cache = None
+            g = check_gates(gates, data[0].shape[0], self.n_units)
+            _train.learn_gated(self.config, self._run, data, g, sigma, eps)
         return self
 
-    # ------------------------------------------------------------------ using the map
-    def respond(self, x: ArrayLike, y: ArrayLike) -> NDArray[np.float64]:
-        """Activations ``h[b, k] = x_b^T W_k y_b`` of every unit; ``(B, n_units)``.
-
-        ``x`` ``(B, n_x)`` and ``y`` ``(B, n_y)`` are codes (``x_code.encode``), flattened in
-        C order. Computed by the model's kernel on its own state
-        (:meth:`sigmapi.kernels.base.Kernel.activation`).
-        """
-        xa, ya = self._pairs_of(x, y)
-        return np.asarray(self._kernel.activation(self._state, xa, ya), dtype=np.float64)
-
-    def _pairs_of(self, x: ArrayLike, y: ArrayLike) -> tuple[NDArray[np.float64], ...]:
-        """Checked codes ``(B, n_x)`` and ``(B, n_y)`` of a fitted model's input pairs."""
-        self._check_fitted()
-        return check_pairs(x, y, self.x_shape, self.y_shape)
+    # ------------------------------------------------------------------ the refinement
+    @property
+    def refined_(self) -> int:
+        """Refinement pairs done so far, all rounds (:meth:`refine`); 0 before or without."""
+        self._run.fitted()
+        return self._run.refined
 
     @property
-    def winner_rule_(self) -> WinnerRule:
-        """The rule training uses (a :class:`~sigmapi.rules.WinnerRule`): the one named by
-        ``config.winner_rule``, as the ordering procedure trains it (``crossview``: the soft
-        rule border-normalised)."""
-        c = self.config
-        return ordering(c.ordering).training_rule(winner_rule(c.winner_rule))
+    def refine_total(self) -> int:
+        """Refinement pairs of the configured run: rounds x pairs a round (the built-in
+        task's ``refine_pairs``, or the rows the refinement in progress runs on)."""
+        return _refine.refine_total(self.config, self._run)
 
-    def winner(
+    @property
+    def refine_rounds_done_(self) -> int:
+        """Refinement rounds complete (:attr:`refined_` // pairs a round)."""
+        return self.refined_ // _refine.per_round(self.config, self._run)
+
+    def refine(self, views: Views | None = None, *, callback: Callback | None = None) -> SigmaPiSOM:
+        """Run the rest of the configured refinement (``config.refine_rounds`` rounds,
+        :mod:`sigmapi.rules.refinement`) on the trained map; returns ``self``.
+
+        Without ``views`` round ``r`` draws ``config.refine_pairs`` fresh pairs of the
+        built-in task from the run's child streams ``(4, r, b)``, so a model saved during the
+        refinement (:attr:`refined_` is in the model file) continues to the same weights,
+        bit for bit. With ``views`` each round is one pass over the rows in the given order
+        (give the same rows to continue). ``fit`` calls this after the training.
+        ``callback(model)`` is called after every block of at most ``BLOCK`` pairs.
+        """
+        with self._run.lock:
+            self._run.fitted()
+            _refine.check_refiner(self.config, self._run.kernel)
+            data = fit_views(views, self.x_shape, self.y_shape, "refine")
+            if data is not None and data[0].shape[0] == 0:
+                raise DataError("views must hold at least one row (pair of views), got 0 rows")
+            notify = self._notify(callback)
+            _refine.refine(self.config, self._run, self.seed_entropy, data, notify)
+            return self
+
+    # ------------------------------------------------------------------ streams
+    def fit_stream(
         self,
-        x: ArrayLike,
-        y: ArrayLike,
-        rule: WinnerRule | str | None = None,
+        frames: StreamFrames,
         *,
-        hard: bool = False,
-    ) -> NDArray[np.int64]:
-        """Flat index of the winning unit per pair; ``(B,)``.
+        trace: float = 0.0,
+        iterations: int | None = None,
+        callback: Callback | None = None,
+    ) -> SigmaPiSOM:
+        """Train from fresh initial weights on a stream of frames; returns ``self``.
 
-        Uses the model's winner rule (default: :attr:`winner_rule_`) or ``rule`` (a rule or
-        its name), at the current sigma. ``hard=True`` takes the rule's limit at sigma -> 0
-        (:attr:`~sigmapi.rules.WinnerRule.hard`): the soft winner becomes the argmax of the
-        response (the metrics use this, so that mid-run maps are not smoothed).
+        Parameters
+        ----------
+        frames : (x, y)
+            Codes of shape ``(T, n_x)`` and ``(T, n_y)``, ``T >= 2``: row t is the view of
+            frame t, in time order (e.g. :meth:`sigmapi.tasks.TwoViewSampler.stream`). No
+            pair labels: when the object moved is not given.
+        trace : float
+            The trace constant ``lam`` in [0, 1) (:mod:`sigmapi.rules.trace`): the share of
+            the winners' neighbourhood trace carried from one frame to the next. 0 (the
+            default) learns each frame under the previous frame's winner alone: the two-view
+            rule on consecutive frames.
+        iterations : int, optional
+            Iterations to run (default ``config.iterations``); each learns one frame. A
+            stream shorter than that is replayed in order, in passes; the jump from its last
+            frame back to its first is one more unmarked move.
+        callback : callable, optional
+            ``callback(model)``, called at least once per ``BLOCK`` frames.
+
+        Notes
+        -----
+        The ordered start (``ordering="crossview"``) and the refinement (``refine_rounds``)
+        learn from the stream's consecutive frames as their pairs,
+        ``(x[:-1], y[:-1], x[1:], y[1:])``, each refinement round one pass over them in
+        order; pairs that straddle a move are wrong pairs there as in training.
+
+        Examples
+        --------
+        >>> import sigmapi
+        >>> som = sigmapi.SigmaPiSOM(map_shape=(6,), x_shape=(6,), y_shape=(6,),
+        ...                          iterations=2000, seed=0)
+        >>> f = som.sampler.stream(2001, 4, np.random.default_rng(0))
+        >>> som.fit_stream((f.x, f.y), trace=0.5).t_
+        2000
         """
-        xa, ya = self._pairs_of(x, y)
-        chosen = self.winner_rule_ if rule is None else winner_rule(rule, "rule")
-        if hard:
-            chosen = chosen.hard
-        c = self.config
-        k = self._kernel.winners_of(
-            self._state, xa, ya, self.map_shape, chosen, self.sigma_, c.soft_cut, c.map_periodic
-        )
-        return np.asarray(k, dtype=np.int64)
+        with self._run.lock:
+            x, y = check_frames(frames, self.x_shape, self.y_shape, least=2)
+            lam = check_trace(trace)
+            total = self.config.iterations if iterations is None else iterations
+            total = _validate.integer("iterations", total, 0)
+            notify = self._notify(callback)
+            _stream.fit_stream(self.config, self._run, self.seed_entropy, x, y, lam, total, notify)
+            return self
 
-    def transform(self, x: ArrayLike, y: ArrayLike) -> NDArray[np.float64]:
-        """Map coordinates of the winner as fractions of each map axis, ``(B, d_map)`` in [0, 1]
-        (on a periodic map, fractions of the turn in [0, 1): unit ``k`` of ``n`` at ``k / n``)."""
-        k = self.winner(x, y)
-        if self._unit_positions is None:
-            n = np.asarray(self.map_shape, dtype=np.float64)
-            scale = n if self.config.map_periodic else np.maximum(n - 1.0, 1.0)
-            self._unit_positions = self.map_coords / scale
-        return self._unit_positions[k]
+    def partial_fit_stream(
+        self,
+        frames: StreamFrames,
+        *,
+        trace: float = 0.0,
+        callback: Callback | None = None,
+    ) -> SigmaPiSOM:
+        """Continue learning from the next frames of a stream; returns ``self``.
 
-    def unit_sqnorms(self) -> NDArray[np.float64]:
-        """``|w_k|^2``, the squared length of every unit's weights; ``(n_units,)``.
-
-        From the kernel's state (a kernel may track them), without forming ``weights_``.
+        ``frames`` ``(x, y)``: codes ``(T, n_x)``, ``(T, n_y)`` that follow the frames of
+        the calls before (the trace carries over, so a stream cut anywhere into several
+        calls learns what one call learns). Each frame is one iteration, but the very first
+        frame of a model, which only starts the trace; an unfitted model starts from the
+        initial weights of its config (the ordered start from this call's consecutive
+        frames, which must then be at least 2). ``trace``: as in :meth:`fit_stream`. No
+        refinement (:meth:`refine` runs it on pairs).
         """
-        self._check_fitted()
-        return np.asarray(self._kernel.sqnorms(self._state), dtype=np.float64)
-
-    def __repr__(self) -> str:
-        fitted = f"t_={self.t_}" if self.is_fitted else "not fitted"
-        return (
-            f"SigmaPiSOM(map_shape={self.map_shape}, x_shape={self.x_shape}, "
-            f"y_shape={self.y_shape}, backend={self.backend!r}, {fitted})"
-        )
+        with self._run.lock:
+            least = 2 if self._run.state is None else 1
+            x, y = check_frames(frames, self.x_shape, self.y_shape, least=least)
+            lam = check_trace(trace)
+            notify = self._notify(callback)
+            _stream.partial_fit_stream(self.config, self._run, self.seed_entropy, x, y, lam, notify)
+            return self
 
 
 def load_model(path: str | Path, backend: str | None = None) -> SigmaPiSOM:

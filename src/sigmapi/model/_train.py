@@ -1,0 +1,212 @@
+"""Training on view pairs, and reward-gated iterations: functions on a
+:class:`~sigmapi.model._run.RunState`.
+
+Iteration ``t`` finds the winner from view 0 and learns view 1 at the schedule's width and
+rate at ``t`` (the kernel's ``train_block``). The built-in task's data of block ``b`` comes
+from the run's child stream ``(1, b)``; your own rows come in passes, each in a fresh random
+order from child ``(3, pass)`` (:func:`fit`), or once in the given order (:func:`partial_fit`).
+A run that reaches the configured length goes on to the refinement
+(:mod:`sigmapi.model._refine`).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from sigmapi import _validate
+from sigmapi.config import SOMConfig
+from sigmapi.errors import ConfigError
+from sigmapi.model._grids import sampler_of
+from sigmapi.model._refine import check_refiner, refine, refine_total
+from sigmapi.model._run import (
+    BLOCK,
+    Notify,
+    RunState,
+    eps_at,
+    initial_weights,
+    rng,
+    sigma_at,
+    training_rule,
+)
+from sigmapi.model.views import CodeViews
+from sigmapi.tasks import Batch
+
+__all__ = ["fit", "learn_gated", "partial_fit", "start", "training_block"]
+
+
+def start(c: SOMConfig, run: RunState, entropy: int, views: CodeViews | None) -> None:
+    """A fresh run from the initial weights (the ordered start from ``views`` when given)."""
+    run.reset(run.prepared(initial_weights(c, run.kernel, entropy, views), c.kernel_tol))
+
+
+def training_block(c: SOMConfig, run: RunState, entropy: int, b: int) -> Batch:
+    """The built-in task's data of block ``b`` (iterations ``b*BLOCK`` to ``(b+1)*BLOCK - 1``),
+    from child stream ``(1, b)``; the last block drawn is kept."""
+    if run.block is not None and run.block[0] == b:
+        return run.block[1]
+    batch = sampler_of(c).sample(BLOCK, rng(entropy, 1, b))
+    run.block = (b, batch)
+    return batch
+
+
+def fit(
+    c: SOMConfig, run: RunState, entropy: int, data: CodeViews | None, total: int, notify: Notify
+) -> None:
+    """A whole run from fresh initial weights: ``total`` iterations on the built-in task
+    (``data`` None) or in passes over the rows of ``data``, then the refinement if the run
+    reached the configured length."""
+    check_refiner(c, run.kernel)
+    start(c, run, entropy, data)
+    if data is None:
+        _task(c, run, entropy, total, notify)
+    else:
+        rows = data[0].shape[0]
+        npass = 0
+        while run.t < total:
+            order = rng(entropy, 3, npass).permutation(rows)[: total - run.t]
+            _rows(c, run, data, order, notify)
+            npass += 1
+    if run.t >= c.iterations:
+        refine(c, run, entropy, data, notify)
+
+
+def partial_fit(
+    c: SOMConfig,
+    run: RunState,
+    entropy: int,
+    data: CodeViews | None,
+    iterations: int | None,
+    notify: Notify,
+) -> None:
+    """Continue the run: every row of ``data`` once, in order; or ``iterations`` on the
+    built-in task (None: the rest of the configured run, its refinement included). An
+    unfitted run starts from the initial weights."""
+    if run.state is None:
+        start(c, run, entropy, data)
+    if data is not None:
+        _rows(c, run, data, None, notify)
+        return
+    rest = iterations is None  # the rest of the configured run, refinement included
+    if iterations is None:
+        iterations = c.iterations - run.t
+        if iterations <= 0 and run.refined < refine_total(c, run):
+            check_refiner(c, run.kernel)
+            refine(c, run, entropy, None, notify)  # the configured run continues
+            return
+        if iterations <= 0:
+            raise ConfigError(
+                f"the configured run of {c.iterations} iterations is complete "
+                f"(t_ = {run.t}); pass iterations to train further, e.g. "
+                "partial_fit(iterations=1000)"
+            )
+    _task(c, run, entropy, iterations, notify)
+    if rest and run.refined < refine_total(c, run):
+        check_refiner(c, run.kernel)
+        refine(c, run, entropy, None, notify)
+
+
+def _task(c: SOMConfig, run: RunState, entropy: int, iterations: int, notify: Notify) -> None:
+    """``iterations`` on the built-in task from ``run.t`` on, block by block."""
+    end = run.t + iterations
+    while run.t < end:
+        b, off = divmod(run.t, BLOCK)
+        stop = min(BLOCK, off + end - run.t)
+        batch = training_block(c, run, entropy, b)
+        sl = slice(off, stop)
+        _views(c, run, batch.x0[sl], batch.y0[sl], batch.x1[sl], batch.y1[sl])
+        if notify is not None:
+            notify()
+
+
+def _rows(
+    c: SOMConfig, run: RunState, data: CodeViews, order: NDArray[np.intp] | None, notify: Notify
+) -> None:
+    """Iterations on the rows ``order`` of ``data`` (None: all, as given), in chunks of at
+    most ``BLOCK`` rows, calling ``notify`` after each."""
+    n = data[0].shape[0] if order is None else order.size
+    for s in range(0, n, BLOCK):
+        rows = slice(s, s + BLOCK) if order is None else order[s : s + BLOCK]
+        x0, y0, x1, y1 = (v[rows] for v in data)
+        _views(c, run, x0, y0, x1, y1)
+        if notify is not None:
+            notify()
+
+
+def _views(
+    c: SOMConfig,
+    run: RunState,
+    x0: NDArray[Any],
+    y0: NDArray[Any],
+    x1: NDArray[Any],
+    y1: NDArray[Any],
+) -> None:
+    """One stretch of iterations on view pairs; the ablation ``same_view`` learns view 0."""
+    x1, y1 = (x0, y0) if c.same_view else (x1, y1)
+    t = np.arange(run.t, run.t + x0.shape[0])
+    run.kernel.train_block(
+        run.state,
+        x0,
+        y0,
+        x1,
+        y1,
+        sigma_at(c, t),
+        eps_at(c, t),
+        map_shape=c.map_shape,
+        winner_rule=training_rule(c),
+        soft_cut=c.soft_cut,
+        threads=c.threads,
+        map_periodic=c.map_periodic,
+    )
+    run.t += x0.shape[0]
+    run.weights = None
+
+
+def learn_gated(
+    c: SOMConfig,
+    run: RunState,
+    data: CodeViews,
+    g: NDArray[np.float64],
+    sigma: float | None,
+    eps: float | None,
+) -> None:
+    """Reward-gated iterations outside the schedule (``run.t`` stays): the winner of view 0,
+    unit ``k`` moved towards view 1 by ``eps g[t, k] a_k``, at ``sigma`` and ``eps`` (None:
+    the schedule's at ``run.t``)."""
+    n = data[0].shape[0]
+    kernel: Any = run.kernel
+    if not hasattr(kernel, "train_gated_block"):
+        raise ConfigError(
+            f"backend {str(kernel.NAME)!r} has no gated update (train_gated_block); use "
+            "backend 'reference' or 'fast'"
+        )
+    s = (
+        run.sigma_now(c)
+        if sigma is None
+        else _validate.width(
+            "sigma",
+            sigma,
+            0.0,
+            lo_open=True,
+            fix="map units; e.g. 1e-5 moves the winner alone",
+        )
+    )
+    e = (
+        float(eps_at(c, run.t))
+        if eps is None
+        else _validate.number("eps", eps, 0.0, 1.0, fix="a learning rate, e.g. 0.01")
+    )
+    kernel.train_gated_block(
+        run.state,
+        *data,
+        np.full(n, s),
+        np.full(n, e),
+        g,
+        map_shape=c.map_shape,
+        winner_rule=training_rule(c),
+        soft_cut=c.soft_cut,
+        map_periodic=c.map_periodic,
+    )
+    run.weights = None
