@@ -100,7 +100,9 @@ def child_windows(preset: str, variant: str, windows: int, window: int) -> dict[
         model.fit(iterations=20)
     except TypeError:  # --baseline-src: a checkout from before fit(views, *, iterations)
         model.fit(20)
-    state: Any = model._state  # the kernel's own state: the benchmark reads its scales
+    # the kernel's own state: the benchmark reads its scales (a --baseline-src of before the
+    # run state held it in model._state)
+    state: Any = model._run.state if hasattr(model, "_run") else model._state
     out = []
     for w in range(windows):
         t = int((w + 0.5) / windows * cfg.iterations) // BLOCK * BLOCK

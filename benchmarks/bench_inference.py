@@ -119,7 +119,7 @@ def floors(model: Any, x: Any, y: Any, calls: int, pair: Callable[[int], Any]) -
 
     from sigmapi.kernels._rows import _pairs, prefetch_row
 
-    st = model._state
+    st = model._run.state if hasattr(model, "_run") else model._state  # older --baseline-src
     raw, tol = st.raw, st.tol
 
     @njit(cache=False)

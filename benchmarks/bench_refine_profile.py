@@ -38,6 +38,7 @@ import sigmapi
 from sigmapi import SigmaPiSOM
 from sigmapi.kernels import _refining, fast, reference
 from sigmapi.model._refine import GROUP
+from sigmapi.model._run import rng
 
 ROOT = Path(__file__).resolve().parent
 
@@ -51,10 +52,10 @@ def cpu(fn: Callable[[], Any]) -> tuple[float, Any]:
 
 def profile(model: SigmaPiSOM, blocks: int) -> dict[str, Any]:
     """The phases of one refinement round's first ``blocks`` blocks on ``model``'s map."""
-    st, shape, rule = model._state, model.map_shape, model.winner_rule_.hard
+    st, shape, rule = model._run.state, model.map_shape, model.winner_rule_.hard
     cut = model.config.soft_cut
     n = 1000
-    t_sample, batches = cpu(lambda: [model.sampler.sample(n, model._seq(4, 0, b))
+    t_sample, batches = cpu(lambda: [model.sampler.sample(n, rng(model.seed_entropy, 4, 0, b))
                                      for b in range(blocks + 1)])  # fmt: skip
     warm = batches.pop(0)  # compiles (or loads) what the timed calls use
     acc = fast.refine_start(st)
