@@ -2,14 +2,14 @@
 
 The estimator holds its config, the entropy of its random streams and one private run state
 (:mod:`sigmapi.model._run`: the kernel state, counters, caches, the refinement's sums, a
-stream's trace; one reset). The arithmetic is the kernel's (:mod:`sigmapi.kernels`) and its
-rules' (:mod:`sigmapi.rules`); the training modes are functions on the run state: view pairs
-and reward-gated iterations (:mod:`sigmapi.model._train`), the refinement
-(:mod:`sigmapi.model._refine`), streams of frames (:mod:`sigmapi.model._stream`). This class
-is their public face; the map's queries (:mod:`sigmapi.model._core`), the cost
-(:mod:`sigmapi.model._cost`), scikit-learn's parameters (:mod:`sigmapi.model._params`) and
-arrays, files and pickles (:mod:`sigmapi.model._persist`) are its bases, and the random
-streams are described in :mod:`sigmapi.model._run`.
+stream's trace, one reset; and how the random streams are cut). The arithmetic is the
+kernel's (:mod:`sigmapi.kernels`) and its rules' (:mod:`sigmapi.rules`); the training modes
+are functions on the run state: view pairs and reward-gated iterations
+(:mod:`sigmapi.model._train`), the refinement (:mod:`sigmapi.model._refine`), streams of
+frames (:mod:`sigmapi.model._stream`). This class is their public face; the map's queries
+(:mod:`sigmapi.model._core`), the cost (:mod:`sigmapi.model._cost`), scikit-learn's
+parameters (:mod:`sigmapi.model._params`) and arrays, files and pickles
+(:mod:`sigmapi.model._persist`) are its bases.
 """
 
 from __future__ import annotations
