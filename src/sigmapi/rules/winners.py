@@ -21,6 +21,7 @@ from typing import ClassVar
 import numpy as np
 from numpy.typing import NDArray
 
+from sigmapi.rules.geometry import MapGeometry
 from sigmapi.rules.neighbourhood import smooth
 
 __all__ = [
@@ -64,6 +65,14 @@ class Scoring:
     cut: int
     map_periodic: bool = False
     sqnorms: NDArray[np.float64] | None = None
+
+    @classmethod
+    def on(
+        cls, geometry: MapGeometry, sigma: float, sqnorms: NDArray[np.float64] | None = None
+    ) -> Scoring:
+        """What a rule reads on the map ``geometry`` (its grid, periodic axes and window
+        ``soft_cut``) at width ``sigma``."""
+        return cls(geometry.shape, sigma, geometry.soft_cut, geometry.periodic, sqnorms)
 
 
 class WinnerRule(ABC):
