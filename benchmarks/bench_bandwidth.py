@@ -111,10 +111,15 @@ def child_windows(preset: str, variant: str, windows: int, window: int) -> dict[
         sig, eps = model.sigma_at(ts), model.eps_at(ts)
         scale0 = state.scale.copy()
         t0 = time.perf_counter()
-        won = fast.train_block(
-            state, *data, sig, eps, map_shape=cfg.map_shape, winner_rule=cfg.winner_rule,
-            soft_cut=cfg.soft_cut, threads=cfg.threads,
-        )  # fmt: skip
+        won = fast.KERNEL.train_block(
+            state,
+            *data,
+            sig,
+            eps,
+            geometry=cfg.geometry,
+            winner_rule=cfg.winner_rule,
+            threads=cfg.threads,
+        )
         dt = time.perf_counter() - t0
         moved = traffic(state, cfg, data, won, sig, eps, scale0)
         out.append({"t": t, "iterations": n, "seconds": dt, "it_per_s": n / dt, **moved})

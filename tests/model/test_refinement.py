@@ -106,15 +106,15 @@ def registry(monkeypatch):
 
 def test_a_backend_without_the_methods_is_refused(registry):
     from sigmapi.kernels import reference, register_backend
+    from sigmapi.kernels.base import CONTRACT
 
     class NoRefine:
         NAME = "norefine"
 
     kernel = NoRefine()
-    for name in ("supports", "memory_bytes", "prepare", "export", "max_abs", "file_arrays",
-                 "from_file_arrays", "file_weights", "sqnorms", "activation", "scores",
-                 "winners", "winners_of", "neighbourhood", "train_block"):  # fmt: skip
-        setattr(kernel, name, getattr(reference, name))
+    for name in CONTRACT:  # the contract, not the optional refinement methods
+        if name != "NAME":
+            setattr(kernel, name, getattr(reference.KERNEL, name))
     register_backend("norefine", kernel)
     SigmaPiSOM(SMALL, backend="norefine", refine_rounds=0).fit()  # trains as before
     with pytest.raises(ConfigError, match=r"'norefine' does not refine .*fast, reference"):

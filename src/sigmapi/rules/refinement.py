@@ -17,8 +17,8 @@ view pairs (never z):
 :class:`BatchMean` is the reference arithmetic: :meth:`~BatchMean.start` makes float64
 accumulators, :meth:`~BatchMean.accumulate` adds pairs one after another (so the sums do
 not depend on how the stream is cut into blocks), :meth:`~BatchMean.finish` divides. The
-fast kernel computes the same sums on its own layout (``sigmapi.kernels.fast.refine_block``,
-the sparse pairs of ``kernel_tol``).
+fast kernel computes the same sums on its own layout
+(``sigmapi.kernels.fast.FastKernel.refine_block``, the sparse pairs of ``kernel_tol``).
 """
 
 from __future__ import annotations
