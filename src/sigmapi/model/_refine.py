@@ -181,11 +181,9 @@ class RefineMixin:
                     y0,
                     x1,
                     y1,
-                    map_shape=self.map_shape,
+                    geometry=c.geometry,
                     winner_rule=rule,
-                    soft_cut=c.soft_cut,
                     sigma=c.refine_sigma,
-                    map_periodic=c.map_periodic,
                 )
                 for end in ends[:-1]:  # the round's weights stay those of its start until its end
                     self._block_done(r * per + end, done < end, callback)

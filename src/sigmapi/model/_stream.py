@@ -208,11 +208,9 @@ class StreamMixin:
                 self.sigma_at(it + 1),
                 self.eps_at(np.maximum(it, 0)),
                 lam=lam,
-                map_shape=self.map_shape,
+                geometry=c.geometry,
                 winner_rule=self.winner_rule_,
-                soft_cut=c.soft_cut,
                 threads=c.threads,
-                map_periodic=c.map_periodic,
             )[1]
             self._t = first + xs.shape[0]
             self._weights_cache = None

@@ -405,11 +405,9 @@ class SigmaPiSOM(GridsMixin, CostMixin, ParamsMixin, PersistMixin, RefineMixin, 
             y1,
             self.sigma_at(t),
             self.eps_at(t),
-            map_shape=self.map_shape,
+            geometry=c.geometry,
             winner_rule=self.winner_rule_,
-            soft_cut=c.soft_cut,
             threads=c.threads,
-            map_periodic=c.map_periodic,
         )
         self.t_ += x0.shape[0]
         self._weights_cache = None
@@ -426,8 +424,9 @@ class SigmaPiSOM(GridsMixin, CostMixin, ParamsMixin, PersistMixin, RefineMixin, 
 
         Iteration ``t`` finds the winner of ``(x0[t], y0[t])`` and moves unit ``k`` towards
         ``x1[t] y1[t]^T`` by ``eps gates[t, k] a_k`` (docs/algorithm.md, "Reward-gated
-        plasticity"; :func:`sigmapi.kernels.reference.train_gated_block`). The schedule's clock
-        ``t_`` does not move: these iterations come after (or between) its runs.
+        plasticity"; the ``gates`` of :meth:`sigmapi.kernels.base.Kernel.train_block`). The
+        schedule's clock ``t_`` does not move: these iterations come after (or between) its
+        runs.
 
         Parameters
         ----------
@@ -448,12 +447,6 @@ class SigmaPiSOM(GridsMixin, CostMixin, ParamsMixin, PersistMixin, RefineMixin, 
                 )
             n = data[0].shape[0]
             g = check_gates(gates, n, self.n_units)
-            kernel: Any = self._kernel
-            if not hasattr(kernel, "train_gated_block"):
-                raise ConfigError(
-                    f"backend {self.backend!r} has no gated update (train_gated_block); use "
-                    "backend 'reference' or 'fast'"
-                )
             s = (
                 self.sigma_
                 if sigma is None
@@ -471,16 +464,14 @@ class SigmaPiSOM(GridsMixin, CostMixin, ParamsMixin, PersistMixin, RefineMixin, 
                 else _validate.number("eps", eps, 0.0, 1.0, fix="a learning rate, e.g. 0.01")
             )
             c = self.config
-            kernel.train_gated_block(
+            self._kernel.train_block(
                 self._state,
                 *data,
                 np.full(n, s),
                 np.full(n, e),
-                g,
-                map_shape=self.map_shape,
+                geometry=c.geometry,
                 winner_rule=self.winner_rule_,
-                soft_cut=c.soft_cut,
-                map_periodic=c.map_periodic,
+                gates=g,
             )
             self._weights_cache = None
         return self
@@ -528,10 +519,8 @@ class SigmaPiSOM(GridsMixin, CostMixin, ParamsMixin, PersistMixin, RefineMixin, 
         chosen = self.winner_rule_ if rule is None else winner_rule(rule, "rule")
         if hard:
             chosen = chosen.hard
-        c = self.config
-        k = self._kernel.winners_of(
-            self._state, xa, ya, self.map_shape, chosen, self.sigma_, c.soft_cut, c.map_periodic
-        )
+        geometry = self.config.geometry
+        k = self._kernel.winners_of(self._state, xa, ya, geometry, chosen, self.sigma_)
         return np.asarray(k, dtype=np.int64)
 
     def transform(self, x: ArrayLike, y: ArrayLike) -> NDArray[np.float64]:
