@@ -261,6 +261,9 @@ def test_bad_input_is_a_value_error(kernel):
         kernel.train_block(state, x0, y0, x1, y1, sigmas[:5], eps, **kw)
     with pytest.raises(ValueError, match=r"gates must have shape \(10, 6\)"):
         kernel.train_block(state, x0, y0, x1, y1, sigmas, eps, gates=np.ones((10, 5)), **kw)
+    if isinstance(kernel, Streamer):
+        with pytest.raises(ValueError, match=r"trace must have shape \(6,\)"):
+            kernel.train_stream(state, x0, y0, np.ones(5), sigmas, eps, lam=0.5, **kw)
     with pytest.raises(ValueError, match="rule must be one of"):
         kernel.winners_of(state, x0, y0, geometry, "nearest", 1.0)
     np.testing.assert_array_equal(kernel.export(state), kernel.export(kernel.prepare(w, 0.0)))

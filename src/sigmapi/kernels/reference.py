@@ -162,8 +162,8 @@ class ReferenceKernel(KernelBase[NDArray[np.float64]]):
         n = check_codes(W.shape, x=x, y=y)
         check_map(geometry, W.shape[0])
         check_steps(n, W.shape[0], sigmas=sigmas, eps=eps)
-        if trace is not None:
-            check_steps(W.shape[0], 1, trace=trace)
+        if trace is not None and np.shape(trace) != (W.shape[0],):
+            raise ValueError(f"trace must have shape ({W.shape[0]},), got {np.shape(trace)}")
         rule = rules.winner_rule(winner_rule, "winner_rule")
         out = np.empty(x.shape[0], dtype=np.int64)
         tr = None if trace is None else np.array(trace, dtype=np.float64)
