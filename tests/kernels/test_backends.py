@@ -171,7 +171,7 @@ def test_every_backend_keeps_the_contract(registry, backend):
     k = np.array([0, 5])
     np.testing.assert_array_equal(
         kernel.neighbourhood(k, MapGeometry(CFG.map_shape, True), 1.2),
-        neighbourhood(k, CFG.map_shape, 1.2, True),
+        neighbourhood(k, MapGeometry(CFG.map_shape, True), 1.2),
     )
 
 

@@ -123,7 +123,7 @@ def test_inference_agrees_with_the_reference(kernel, geometry):
     k = np.array([0, geometry.units - 1])
     np.testing.assert_array_equal(
         kernel.neighbourhood(k, geometry, 1.2),
-        neighbourhood(k, geometry.shape, 1.2, geometry.periodic),
+        neighbourhood(k, geometry, 1.2),
     )
 
 

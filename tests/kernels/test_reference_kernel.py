@@ -60,9 +60,11 @@ def test_winner_rules_hand_computed():
 def test_soft_winner_window_cut():
     # with cut 0 the smoothing is the identity
     h = np.array([[1.0, 0.0, 0.9, 0.9, 0.0]])
-    np.testing.assert_allclose(smooth(h, (5,), 1.0, 0), h)
+    np.testing.assert_allclose(smooth(h, MapGeometry((5,), soft_cut=0), 1.0), h)
     g1 = np.exp(-0.5)
-    np.testing.assert_allclose(smooth(h, (5,), 1.0, 1)[0, 1], g1 * 1.0 + 0.0 + g1 * 0.9)
+    np.testing.assert_allclose(
+        smooth(h, MapGeometry((5,), soft_cut=1), 1.0)[0, 1], g1 * 1.0 + 0.0 + g1 * 0.9
+    )
 
 
 def test_smoothing_2d_equals_plain_loop():
@@ -80,7 +82,7 @@ def test_smoothing_2d_equals_plain_loop():
                         if abs(rr - r) <= cut and abs(cc - c) <= cut:
                             w = np.exp(-((rr - r) ** 2 + (cc - c) ** 2) / (2 * sigma**2))
                             loop[b, r * 4 + c] += w * g[rr, cc]
-    np.testing.assert_allclose(smooth(h, shape, sigma, cut), loop, rtol=1e-12)
+    np.testing.assert_allclose(smooth(h, MapGeometry(shape, soft_cut=cut), sigma), loop, rtol=1e-12)
 
 
 def test_neighbourhood_hand_computed():
@@ -176,11 +178,11 @@ def test_wrapped_smoothing_hand_computed():
     at its distance the shorter way round; the window cut applies to that distance. On a ring
     "soft" and "soft_mean" pick the same unit (the window weight is the same everywhere)."""
     h = np.array([[1.0, 0.0, 0.0, 0.0, 0.0]])
-    g = smooth(h, (5,), 1.0, 15, map_periodic=True)
+    g = smooth(h, MapGeometry((5,), True), 1.0)
     np.testing.assert_allclose(g[0], np.exp(-np.array([0.0, 1.0, 4.0, 4.0, 1.0]) / 2.0))
-    g1 = smooth(h, (5,), 1.0, 1, map_periodic=True)
+    g1 = smooth(h, MapGeometry((5,), True, 1), 1.0)
     np.testing.assert_allclose(g1[0], [1.0, np.exp(-0.5), 0.0, 0.0, np.exp(-0.5)])
-    bounded = smooth(h, (5,), 1.0, 15)
+    bounded = smooth(h, MapGeometry((5,)), 1.0)
     assert bounded[0, 4] == pytest.approx(np.exp(-8.0))  # the bounded map: 4 units away
     rng = np.random.default_rng(1)
     hs = rng.random((50, 6))

@@ -98,7 +98,7 @@ def test_the_hard_sums_and_the_new_weights_are_the_general_codes(trained):
     mine, general = fast.KERNEL.refine_start(st), fast.KERNEL.refine_start(st)
     _refining.hard_sums(mine.sums, mine.mass, k, batch.x1, batch.y1, st.tol)
     jb, pi, pv = st.scratch()[:3]
-    a = np.ascontiguousarray(assignment(k, MAP, 0.0, False))
+    a = np.ascontiguousarray(assignment(k, MapGeometry(MAP), 0.0))
     fast._refine_sums(general.sums, general.mass, a, batch.x1, batch.y1, st.tol, jb, pi, pv)
     np.testing.assert_array_equal(mine.sums, general.sums)
     np.testing.assert_array_equal(mine.mass, general.mass)

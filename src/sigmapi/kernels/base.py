@@ -470,7 +470,7 @@ class KernelBase(ABC, Generic[S]):
         if np.ndim(h) != 2 or np.shape(h)[1] != k:
             raise ValueError(f"h must have shape (B, {k}), got {np.shape(h)}")
         norms = self.sqnorms(state) if r.needs_norms else None
-        return r.scores(h, Scoring.on(geometry, sigma, norms))
+        return r.scores(h, Scoring(geometry, sigma, norms))
 
     def winners(
         self, state: S, h: Array, geometry: MapGeometry, rule: WinnerRule | str, sigma: float
@@ -495,4 +495,4 @@ class KernelBase(ABC, Generic[S]):
         self, winner: NDArray[np.int64], geometry: MapGeometry, sigma: float
     ) -> NDArray[np.float64]:
         """The rules' Gaussian neighbourhood (:func:`sigmapi.rules.neighbourhood.neighbourhood`)."""
-        return neighbourhood(winner, geometry.shape, sigma, geometry.periodic)
+        return neighbourhood(winner, geometry, sigma)

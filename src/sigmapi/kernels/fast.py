@@ -836,7 +836,7 @@ class FastKernel(KernelBase[FastState]):
         if sigma == 0:
             _refining.hard_sums(acc.sums, acc.mass, k, x1a, y1a, state.tol)
         else:
-            a = assignment(k, geometry.shape, float(sigma), geometry.periodic)
+            a = assignment(k, geometry, float(sigma))
             jb, pi, pv = state.scratch()[:3]
             driver: Any = _refine_sums  # a numba dispatcher
             driver(acc.sums, acc.mass, np.ascontiguousarray(a), x1a, y1a, state.tol, jb, pi, pv)

@@ -199,7 +199,7 @@ class ReferenceKernel(KernelBase[NDArray[np.float64]]):
         winners of view 0 on the fixed weights, view 1's outer products weighted by
         :func:`~sigmapi.rules.refinement.assignment` at ``sigma``. Returns the winners."""
         k = self.winners_of(state, x0, y0, geometry, winner_rule, 0.0)
-        a = assignment(k, geometry.shape, float(sigma), geometry.periodic)
+        a = assignment(k, geometry, float(sigma))
         BATCH_MEAN.accumulate(acc, a, x1, y1)
         return k
 

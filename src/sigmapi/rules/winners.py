@@ -48,31 +48,19 @@ class Scoring:
 
     Attributes
     ----------
-    map_shape : tuple of int
-        The map's grid (``K`` units, flattened in C order).
+    geometry : MapGeometry
+        The map (:class:`~sigmapi.rules.geometry.MapGeometry`): its grid (``K`` units,
+        flattened in C order), whether its axes wrap around, and the half-width
+        ``soft_cut`` of the smoothing window, in map units along every axis.
     sigma : float
         Width of the smoothing over the map (the rules that smooth), in map units.
-    cut : int
-        Half-width of the smoothing window, in map units along every axis.
-    map_periodic : bool
-        The map's axes wrap around.
     sqnorms : ndarray, shape (K,), optional
         The units' squared norms ``|w_k|^2``, for the rules that need them.
     """
 
-    map_shape: tuple[int, ...]
+    geometry: MapGeometry
     sigma: float
-    cut: int
-    map_periodic: bool = False
     sqnorms: NDArray[np.float64] | None = None
-
-    @classmethod
-    def on(
-        cls, geometry: MapGeometry, sigma: float, sqnorms: NDArray[np.float64] | None = None
-    ) -> Scoring:
-        """What a rule reads on the map ``geometry`` (its grid, periodic axes and window
-        ``soft_cut``) at width ``sigma``."""
-        return cls(geometry.shape, sigma, geometry.soft_cut, geometry.periodic, sqnorms)
 
 
 class WinnerRule(ABC):
@@ -109,12 +97,12 @@ class WinnerRule(ABC):
 
 class Soft(WinnerRule):
     """``"soft"``, the paper's rule: argmax of the activations smoothed over the map with a
-    Gaussian of width sigma, summed over a window of ``cut`` units each way."""
+    Gaussian of width sigma, summed over a window of ``soft_cut`` units each way."""
 
     name = "soft"
 
     def scores(self, h: Array, at: Scoring) -> Scores:
-        return smooth(h, at.map_shape, at.sigma, at.cut, at.map_periodic)
+        return smooth(h, at.geometry, at.sigma)
 
     @property
     def hard(self) -> WinnerRule:
@@ -133,9 +121,9 @@ class SoftMean(WinnerRule):
     name = "soft_mean"
 
     def scores(self, h: Array, at: Scoring) -> Scores:
-        ones = np.ones((1, int(np.prod(at.map_shape))))
-        inside = smooth(ones, at.map_shape, at.sigma, at.cut, at.map_periodic)
-        return smooth(h, at.map_shape, at.sigma, at.cut, at.map_periodic) / inside
+        ones = np.ones((1, at.geometry.units))
+        inside = smooth(ones, at.geometry, at.sigma)
+        return smooth(h, at.geometry, at.sigma) / inside
 
     @property
     def hard(self) -> WinnerRule:
