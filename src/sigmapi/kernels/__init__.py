@@ -9,7 +9,8 @@
   without numba: :mod:`~sigmapi.kernels.columns`).
 
 Kernels compute on the map as one value, :class:`~sigmapi.rules.geometry.MapGeometry`
-(grid, periodic axes, the soft winner's window; ``SOMConfig.geometry``).
+(grid, periodic axes, the soft winner's window; ``SOMConfig.geometry``; also importable from
+here, with everything else a backend needs).
 
 :data:`REGISTRY` maps names to kernels (instances); :data:`BACKENDS` lists the names;
 :func:`get_backend` returns one (``"auto"``: the fast kernel, or the reference where numba
@@ -50,6 +51,7 @@ from sigmapi.kernels.base import (
     KernelState,
     dense_file_weights,
 )
+from sigmapi.rules.geometry import MapGeometry
 
 __all__ = [
     "BACKENDS",
@@ -60,6 +62,7 @@ __all__ = [
     "Kernel",
     "KernelBase",
     "KernelState",
+    "MapGeometry",
     "file_weights",
     "get_backend",
     "register_backend",
