@@ -1,6 +1,7 @@
 """The kernel contract, one suite that every registered backend runs (parametrized over
 :data:`sigmapi.kernels.BACKENDS`: a new backend, registered or found through its entry point,
-is collected here with no edit).
+is collected here with no edit); also ``Minimal``, a backend written here with only its
+arithmetic, the rest from :class:`~sigmapi.kernels.base.KernelBase`.
 
 What a backend must do, against the reference kernel (the definition): its state round-trips
 (dense weights, model file arrays bit for bit); activations, scores and winners agree; the
@@ -16,12 +17,21 @@ import itertools
 
 import numpy as np
 import pytest
+from numpy.typing import NDArray
 
-from sigmapi import SigmaPiSOM, SOMConfig
+from sigmapi import SigmaPiSOM, SOMConfig, kernels
 from sigmapi.errors import ConfigError
-from sigmapi.kernels import BACKENDS, BackendOptions, get_backend, reference
-from sigmapi.kernels.base import CONTRACT, Kernel, Refiner, Streamer
-from sigmapi.rules import WINNER_RULES
+from sigmapi.kernels import BACKENDS, BackendOptions, get_backend, reference, register_backend
+from sigmapi.kernels.base import (
+    CONTRACT,
+    KernelBase,
+    Refiner,
+    Streamer,
+    check_codes,
+    check_map,
+    check_steps,
+)
+from sigmapi.rules import KOHONEN, WINNER_RULES
 from sigmapi.rules.geometry import MapGeometry
 from sigmapi.rules.neighbourhood import neighbourhood
 
@@ -39,16 +49,60 @@ MAPS = [
 """Bounded and periodic maps of one and two dimensions, a narrow smoothing window."""
 
 
-def _kernel(name: str) -> Kernel:
+class Minimal(KernelBase[NDArray[np.float64]]):
+    """A backend written here with only its arithmetic (dense weights, one iteration after
+    another); everything else is the base's. It neither refines nor learns from streams."""
+
+    NAME = "minimal"
+
+    def prepare(self, weights, tol=0.0):
+        return np.array(weights, dtype=np.float64)
+
+    def export(self, state):
+        return state
+
+    def activation(self, state, x, y):
+        check_codes(state.shape, x=x, y=y)
+        return np.einsum("kij,bi,bj->bk", state, x, y)
+
+    def train_block(
+        self,
+        state,
+        x0,
+        y0,
+        x1,
+        y1,
+        sigmas,
+        eps,
+        *,
+        geometry,
+        winner_rule,
+        gates=None,
+        threads=False,
+    ):
+        n = check_codes(state.shape, x0=x0, y0=y0, x1=x1, y1=y1)
+        check_map(geometry, state.shape[0])
+        check_steps(n, state.shape[0], sigmas=sigmas, eps=eps, gates=gates)
+        won = np.empty(n, dtype=np.int64)
+        for t in range(n):
+            k = self.winners_of(
+                state, x0[t : t + 1], y0[t : t + 1], geometry, winner_rule, sigmas[t]
+            )
+            a = self.neighbourhood(k, geometry, sigmas[t])[0]
+            KOHONEN.update(state, a if gates is None else a * gates[t], x1[t], y1[t], eps[t])
+            won[t] = k[0]
+        return won
+
+
+@pytest.fixture(params=[*BACKENDS, "minimal"])
+def kernel(request, monkeypatch):
+    if request.param == "minimal":  # registered for this test alone
+        monkeypatch.setattr(kernels, "REGISTRY", dict(kernels.REGISTRY))
+        register_backend("minimal", Minimal())
     try:
-        return get_backend(name)
+        return get_backend(request.param)
     except ConfigError as e:  # a registered backend that does not import here
         pytest.skip(str(e))
-
-
-@pytest.fixture(params=list(BACKENDS))
-def kernel(request):
-    return _kernel(request.param)
 
 
 def _problem(geometry: MapGeometry, n: int = 120, seed: int = 0):
