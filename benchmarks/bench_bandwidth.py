@@ -35,6 +35,7 @@ variants alternating (``--repeats`` rounds, medians), so all see the same machin
 from __future__ import annotations
 
 import argparse
+import functools
 import statistics
 import sys
 import time
@@ -103,6 +104,13 @@ def child_windows(preset: str, variant: str, windows: int, window: int) -> dict[
     # the kernel's own state: the benchmark reads its scales (a --baseline-src of before the
     # run state held it in model._state)
     state: Any = model._run.state if hasattr(model, "_run") else model._state
+    rule = {"winner_rule": cfg.winner_rule, "threads": cfg.threads}
+    if hasattr(fast, "KERNEL"):
+        train = functools.partial(fast.KERNEL.train_block, geometry=cfg.geometry, **rule)
+    else:  # --baseline-src: a checkout from before the kernel classes (the map as loose args)
+        train = functools.partial(
+            fast.train_block, map_shape=cfg.map_shape, soft_cut=cfg.soft_cut, **rule
+        )
     out = []
     for w in range(windows):
         t = int((w + 0.5) / windows * cfg.iterations) // BLOCK * BLOCK
@@ -113,10 +121,7 @@ def child_windows(preset: str, variant: str, windows: int, window: int) -> dict[
         sig, eps = model.sigma_at(ts), model.eps_at(ts)
         scale0 = state.scale.copy()
         t0 = time.perf_counter()
-        won = fast.train_block(
-            state, *data, sig, eps, map_shape=cfg.map_shape, winner_rule=cfg.winner_rule,
-            soft_cut=cfg.soft_cut, threads=cfg.threads,
-        )  # fmt: skip
+        won = train(state, *data, sig, eps)
         dt = time.perf_counter() - t0
         moved = traffic(state, cfg, data, won, sig, eps, scale0)
         out.append({"t": t, "iterations": n, "seconds": dt, "it_per_s": n / dt, **moved})

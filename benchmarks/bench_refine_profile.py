@@ -52,17 +52,18 @@ def cpu(fn: Callable[[], Any]) -> tuple[float, Any]:
 
 def profile(model: SigmaPiSOM, blocks: int) -> dict[str, Any]:
     """The phases of one refinement round's first ``blocks`` blocks on ``model``'s map."""
-    st, shape, rule = model._run.state, model.map_shape, model.winner_rule_.hard
-    cut = model.config.soft_cut
+    st, rule = model._run.state, model.winner_rule_.hard
+    geometry = model.config.geometry
     n = 1000
     t_sample, batches = cpu(lambda: [model.sampler.sample(n, rng(model.seed_entropy, 4, 0, b))
                                      for b in range(blocks + 1)])  # fmt: skip
     warm = batches.pop(0)  # compiles (or loads) what the timed calls use
-    acc = fast.refine_start(st)
+    acc = fast.KERNEL.refine_start(st)
     acc.code_shapes = (model.x_shape, model.y_shape)
-    t_index, _ = cpu(lambda: fast._refine_winners(st, acc, warm.x0[:32], warm.y0[:32], shape,
-                                                  rule, cut, False))  # fmt: skip
-    fast.winners_of(st, warm.x0[:32], warm.y0[:32], shape, rule, 0.0, cut)
+    t_index, _ = cpu(
+        lambda: fast.KERNEL._refine_winners(st, acc, warm.x0[:32], warm.y0[:32], geometry, rule)
+    )
+    fast.KERNEL.winners_of(st, warm.x0[:32], warm.y0[:32], geometry, rule, 0.0)
     _refining.hard_sums(np.zeros_like(acc.sums), np.zeros_like(acc.mass),
                         np.zeros(4, dtype=np.int64), warm.x1[:4], warm.y1[:4], st.tol)  # fmt: skip
 
@@ -74,11 +75,10 @@ def profile(model: SigmaPiSOM, blocks: int) -> dict[str, Any]:
     ]  # fmt: skip
 
     def search() -> list[np.ndarray]:
-        return [fast._refine_winners(st, acc, b.x0, b.y0, shape, rule, cut, False)
-                for b in batches]  # fmt: skip
+        return [fast.KERNEL._refine_winners(st, acc, b.x0, b.y0, geometry, rule) for b in batches]
 
     def full() -> list[np.ndarray]:
-        return [fast.winners_of(st, b.x0, b.y0, shape, rule, 0.0, cut) for b in batches]
+        return [fast.KERNEL.winners_of(st, b.x0, b.y0, geometry, rule, 0.0) for b in batches]
 
     t_win, winners = cpu(search)
     t_full, every = cpu(full)
@@ -90,11 +90,12 @@ def profile(model: SigmaPiSOM, blocks: int) -> dict[str, Any]:
                                 np.ascontiguousarray(b.y1), st.tol)  # fmt: skip
 
     t_sums, _ = cpu(sums)
-    t_finish, _ = cpu(lambda: fast.refine_finish(st, acc))
-    dense = fast.export(st)
+    t_finish, _ = cpu(lambda: fast.KERNEL.refine_finish(st, acc))
+    dense = fast.KERNEL.export(st)
     check = [SimpleNamespace(x0=batches[0].x0[:2000], y0=batches[0].y0[:2000])]
-    ref = np.concatenate([reference.winners_of(dense, b.x0, b.y0, shape, rule, 0.0, cut)
-                          for b in check])  # fmt: skip
+    ref = np.concatenate(
+        [reference.KERNEL.winners_of(dense, b.x0, b.y0, geometry, rule, 0.0) for b in check]
+    )
     per = {
         "sample": t_sample / (blocks + 1),
         "winners": t_win / blocks,

@@ -8,6 +8,7 @@ scales the paper's schedule rather than cutting it.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import json
 import math
 import re
@@ -22,9 +23,12 @@ from sigmapi.codes import _WIDTH_FIX, MAX_WIDTH, MIN_WIDTH
 from sigmapi.errors import ConfigError
 from sigmapi.kernels import BACKEND_CHOICES
 from sigmapi.rules import ORDERINGS, WINNER_RULES
+from sigmapi.rules.geometry import MapGeometry
 from sigmapi.rules.ordering import check_periodic_map
 from sigmapi.schedules import PAPER_SIGMA, PiecewiseLinear
 from sigmapi.tasks import RELATIONS
+
+_geometry = functools.lru_cache(maxsize=64)(MapGeometry)
 
 __all__ = [
     "MAX_EXTRA",
@@ -258,6 +262,13 @@ class SOMConfig:
     @property
     def eps_schedule(self) -> PiecewiseLinear:
         return PiecewiseLinear.coerce(self.eps, "eps")
+
+    @property
+    def geometry(self) -> MapGeometry:
+        """The map as the kernels compute on it, one value: ``map_shape``, ``map_periodic``
+        and ``soft_cut`` (:class:`~sigmapi.rules.geometry.MapGeometry`, made once per
+        config)."""
+        return _geometry(self.map_shape, self.map_periodic, self.soft_cut)
 
     def replace(self, **changes: Any) -> SOMConfig:
         """A copy with ``changes``; unknown names raise a ConfigError listing the valid ones."""

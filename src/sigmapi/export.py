@@ -80,7 +80,7 @@ def score_matrix(model: SigmaPiSOM) -> tuple[NDArray[np.float64], NDArray[np.flo
     c = model.config
     k = model.n_units
     sq = model.unit_sqnorms() if rule.needs_norms else None
-    at = Scoring(model.map_shape, float(model.sigma_), c.soft_cut, c.map_periodic, sq)
+    at = Scoring(c.geometry, float(model.sigma_), sq)
     b = np.asarray(rule.scores(np.zeros((1, k)), at), dtype=np.float64)[0]
     a = np.asarray(rule.scores(np.eye(k), at), dtype=np.float64) - b[None, :]
     probe = np.random.default_rng(0).standard_normal((4, k))

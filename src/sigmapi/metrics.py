@@ -315,7 +315,7 @@ def hard_scores(
     under ``min_distance``) on the model's response."""
     rule, c = model.winner_rule_.hard, model.config
     norms = model.unit_sqnorms() if rule.needs_norms else None
-    at = Scoring(model.map_shape, model.sigma_, c.soft_cut, c.map_periodic, norms)
+    at = Scoring(c.geometry, model.sigma_, norms)
     return rule.scores(model.respond(x, y), at)
 
 

@@ -19,6 +19,7 @@ from sigmapi.experiments.reward.result import episodes_to_target
 from sigmapi.experiments.reward.run import REWARD, map_scores, probe_objects
 from sigmapi.kernels import fast, reference
 from sigmapi.rules.gating import action_feedback, reward_gate, surprise
+from sigmapi.rules.geometry import MapGeometry
 
 MAP = (4, 5)
 CODE = (5, 5)
@@ -65,11 +66,18 @@ def _problem(n: int = 300, seed: int = 3):
 
 
 def _gated(kernel, w, data, gates, sigma=1.5, eps=0.05, tol=None):
-    state = kernel.prepare(w) if tol is None else kernel.prepare(w, tol)
+    state = kernel.KERNEL.prepare(w) if tol is None else kernel.KERNEL.prepare(w, tol)
     n = data[0].shape[0]
-    won = kernel.train_gated_block(state, *data, np.full(n, sigma), np.full(n, eps), gates,
-                                   map_shape=MAP, winner_rule="soft", soft_cut=15)  # fmt: skip
-    return kernel.export(state), won
+    won = kernel.KERNEL.train_block(
+        state,
+        *data,
+        np.full(n, sigma),
+        np.full(n, eps),
+        geometry=MapGeometry(MAP),
+        winner_rule="soft",
+        gates=gates,
+    )
+    return kernel.KERNEL.export(state), won
 
 
 @pytest.mark.parametrize("kernel", [reference, fast], ids=["reference", "fast"])
@@ -84,8 +92,14 @@ def test_open_gates_are_the_ungated_rule():
     n = data[0].shape[0]
     gated, won = _gated(reference, w, data, np.ones((n, K)))
     plain = w.copy()
-    won_plain = reference.train_block(plain, *data, np.full(n, 1.5), np.full(n, 0.05),
-                                      map_shape=MAP, winner_rule="soft", soft_cut=15)  # fmt: skip
+    won_plain = reference.KERNEL.train_block(
+        plain,
+        *data,
+        np.full(n, 1.5),
+        np.full(n, 0.05),
+        geometry=MapGeometry(MAP),
+        winner_rule="soft",
+    )
     assert np.array_equal(won, won_plain)
     assert np.array_equal(gated, plain)
 

@@ -14,8 +14,9 @@ from numpy.typing import NDArray
 import sigmapi
 from sigmapi import ConfigError, ModelFileError, SigmaPiSOM, SOMConfig, kernels
 from sigmapi.kernels import BACKENDS, get_backend, reference, register_backend
-from sigmapi.kernels.base import CONTRACT
+from sigmapi.kernels.base import CONTRACT, KernelBase
 from sigmapi.rules import WINNER_RULES, Scoring, WinnerRule
+from sigmapi.rules.geometry import MapGeometry
 from sigmapi.rules.neighbourhood import neighbourhood
 
 CFG = SOMConfig(map_shape=(3, 2), x_shape=(4,), y_shape=(5,), iterations=900, seed=5,
@@ -36,25 +37,23 @@ class ToyState:
         return tuple(self.w.shape)
 
 
-class ToyKernel:
-    """A third backend: the reference arithmetic on its own state and file array."""
+class ToyKernel(KernelBase[ToyState]):
+    """A third backend: the reference arithmetic on its own state and file array; the rest is
+    the base's generic defaults."""
 
     NAME = "toy"
 
-    def supports(self, rule):
-        return reference.supports(rule)
-
-    def memory_bytes(self, shape, tol):
-        return reference.memory_bytes(shape, tol)
-
     def prepare(self, weights, tol=0.0):
-        return ToyState(reference.prepare(weights))
+        return ToyState(np.array(weights, dtype=np.float64))
 
     def export(self, state):
-        return reference.export(state.w)
+        return state.w
 
-    def max_abs(self, state):
-        return reference.max_abs(state.w)
+    def activation(self, state, x, y):
+        return reference.activation(state.w, x, y)
+
+    def train_block(self, state, x0, y0, x1, y1, sigmas, eps, **kw):
+        return reference.KERNEL.train_block(state.w, x0, y0, x1, y1, sigmas, eps, **kw)
 
     def file_arrays(self, state):
         return {"state_toy": state.w.copy()}
@@ -66,27 +65,6 @@ class ToyKernel:
 
     def file_weights(self, shape, arrays):
         return self.from_file_arrays(shape, arrays).w
-
-    def sqnorms(self, state):
-        return reference.sqnorms(state.w)
-
-    def activation(self, state, x, y):
-        return reference.activation(state.w, x, y)
-
-    def scores(self, state, h, map_shape, rule, sigma, cut, map_periodic=False):
-        return reference.scores(state.w, h, map_shape, rule, sigma, cut, map_periodic)
-
-    def winners(self, state, h, map_shape, rule, sigma, cut, map_periodic=False):
-        return reference.winners(state.w, h, map_shape, rule, sigma, cut, map_periodic)
-
-    def winners_of(self, state, x, y, map_shape, rule, sigma, cut, map_periodic=False):
-        return reference.winners_of(state.w, x, y, map_shape, rule, sigma, cut, map_periodic)
-
-    def neighbourhood(self, winner, map_shape, sigma, map_periodic=False):
-        return reference.neighbourhood(winner, map_shape, sigma, map_periodic)
-
-    def train_block(self, state, x0, y0, x1, y1, sigmas, eps, **kw):
-        return reference.train_block(state.w, x0, y0, x1, y1, sigmas, eps, **kw)
 
 
 @pytest.fixture
@@ -184,16 +162,16 @@ def test_every_backend_keeps_the_contract(registry, backend):
     h = kernel.activation(state, b.x0, b.y0)
     for name, rule in WINNER_RULES.items():
         assert kernel.supports(rule) and kernel.supports(name)
-        s = kernel.scores(state, h, CFG.map_shape, rule, 0.8, 15)
-        win = kernel.winners(state, h, CFG.map_shape, name, 0.8, 15)
+        s = kernel.scores(state, h, CFG.geometry, rule, 0.8)
+        win = kernel.winners(state, h, CFG.geometry, name, 0.8)
         np.testing.assert_array_equal(win, np.argmax(s, axis=1))
         np.testing.assert_array_equal(
-            kernel.winners_of(state, b.x0, b.y0, CFG.map_shape, rule, 0.8, 15), win
+            kernel.winners_of(state, b.x0, b.y0, CFG.geometry, rule, 0.8), win
         )
     k = np.array([0, 5])
     np.testing.assert_array_equal(
-        kernel.neighbourhood(k, CFG.map_shape, 1.2, True),
-        neighbourhood(k, CFG.map_shape, 1.2, True),
+        kernel.neighbourhood(k, MapGeometry(CFG.map_shape, True), 1.2),
+        neighbourhood(k, MapGeometry(CFG.map_shape, True), 1.2),
     )
 
 
@@ -252,7 +230,7 @@ def test_without_numba_auto_is_the_reference_and_fast_files_still_load(registry,
         raise ImportError("No module named 'numba'")
 
     registry["fast"] = kernels._Lazy(no_numba, "numba")
-    assert get_backend("auto") is reference
+    assert get_backend("auto") is reference.KERNEL
     with pytest.raises(ConfigError, match="backend 'fast' needs numba, which does not import"):
         get_backend("fast")
     moved = sigmapi.load(path, backend="reference")  # the fast layout reads without numba

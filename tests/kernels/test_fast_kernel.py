@@ -17,6 +17,7 @@ import pytest
 from sigmapi import SigmaPiSOM
 from sigmapi.kernels import fast, get_backend, reference
 from sigmapi.rules import WINNER_RULES
+from sigmapi.rules.geometry import MapGeometry
 
 WEIGHT_ATOL = 1e-5
 MAP = (4, 5)
@@ -35,7 +36,8 @@ def _problem(n_iter: int = 2000, seed: int = 3, width: float = 1.0, eps: float =
     return som.initial_weights(), (x0, y0, x1, y1, som.sigma_at(t), np.full(n_iter, eps))
 
 
-def _train(kernel, w, data, rule="soft", tol=None, chunks=(1000,), periodic=False):
+def _train(module, w, data, rule="soft", tol=None, chunks=(1000,), periodic=False):
+    kernel = module.KERNEL
     state = kernel.prepare(w) if tol is None else kernel.prepare(w, tol)
     out, s = [], 0
     n = data[0].shape[0]
@@ -46,10 +48,8 @@ def _train(kernel, w, data, rule="soft", tol=None, chunks=(1000,), periodic=Fals
                 kernel.train_block(
                     state,
                     *(a[sl] for a in data),
-                    map_shape=MAP,
+                    geometry=MapGeometry(MAP, periodic),
                     winner_rule=rule,
-                    soft_cut=15,
-                    map_periodic=periodic,
                 )
             )
             s = sl.stop
@@ -60,11 +60,11 @@ def _train(kernel, w, data, rule="soft", tol=None, chunks=(1000,), periodic=Fals
 def ref_run():
     w, data = _problem()
     state, win = _train(reference, w, data)
-    return w, data, reference.export(state), win
+    return w, data, reference.KERNEL.export(state), win
 
 
 def test_auto_backend_is_fast():
-    assert get_backend("auto") is fast
+    assert get_backend("auto") is fast.KERNEL
     assert SigmaPiSOM(map_shape=(3,), x_shape=(3,), y_shape=(3,)).backend == "fast"
 
 
@@ -73,7 +73,7 @@ def test_exact_mode_matches_reference(ref_run):
     state, win = _train(fast, w, data, tol=0.0)
     assert state.raw.dtype == np.float64
     np.testing.assert_array_equal(win, win_ref)
-    np.testing.assert_allclose(fast.export(state), w_ref, rtol=0, atol=1e-10)
+    np.testing.assert_allclose(fast.KERNEL.export(state), w_ref, rtol=0, atol=1e-10)
 
 
 def test_default_mode_matches_reference(ref_run):
@@ -81,7 +81,7 @@ def test_default_mode_matches_reference(ref_run):
     state, win = _train(fast, w, data, tol=1e-6)
     assert state.raw.dtype == np.float32
     assert np.mean(win == win_ref) >= 0.999
-    np.testing.assert_allclose(fast.export(state), w_ref, rtol=0, atol=WEIGHT_ATOL)
+    np.testing.assert_allclose(fast.KERNEL.export(state), w_ref, rtol=0, atol=WEIGHT_ATOL)
 
 
 @pytest.mark.parametrize("rule", ["argmax", "min_distance"])
@@ -90,7 +90,9 @@ def test_other_rules_match_reference(rule):
     ref_state, win_ref = _train(reference, w, data, rule)
     state, win = _train(fast, w, data, rule, tol=0.0)
     np.testing.assert_array_equal(win, win_ref)
-    np.testing.assert_allclose(fast.export(state), reference.export(ref_state), atol=1e-10)
+    np.testing.assert_allclose(
+        fast.KERNEL.export(state), reference.KERNEL.export(ref_state), atol=1e-10
+    )
 
 
 @pytest.mark.parametrize("rule", WINNER_RULES)
@@ -101,7 +103,9 @@ def test_periodic_map_matches_reference(rule):
     ref_state, win_ref = _train(reference, w, data, rule, periodic=True)
     state, win = _train(fast, w, data, rule, tol=0.0, periodic=True)
     np.testing.assert_array_equal(win, win_ref)
-    np.testing.assert_allclose(fast.export(state), reference.export(ref_state), atol=1e-10)
+    np.testing.assert_allclose(
+        fast.KERNEL.export(state), reference.KERNEL.export(ref_state), atol=1e-10
+    )
     _, win32 = _train(fast, w, data, rule, tol=1e-6, periodic=True)
     assert np.mean(win32 == win_ref) >= 0.999
     _, win_bounded = _train(reference, w, data, rule)
@@ -110,18 +114,21 @@ def test_periodic_map_matches_reference(rule):
 
 def test_periodic_winners_of_match_reference():
     w, data = _problem(n_iter=40, seed=2)
-    state = fast.prepare(w, 0.0)
+    state = fast.KERNEL.prepare(w, 0.0)
     x, y = data[0], data[1]
     for rule in WINNER_RULES:
         for sigma in (0.7, 2.5):
-            want = reference.winners_of(w, x, y, MAP, rule, sigma, 15, True)
+            want = reference.KERNEL.winners_of(w, x, y, MapGeometry(MAP, True), rule, sigma)
             h = reference.activation(w, x, y)
             np.testing.assert_array_equal(
-                fast.winners_of(state, x, y, MAP, rule, sigma, 15, True), want
+                fast.KERNEL.winners_of(state, x, y, MapGeometry(MAP, True), rule, sigma), want
             )
-            np.testing.assert_array_equal(fast.winners(state, h, MAP, rule, sigma, 15, True), want)
             np.testing.assert_array_equal(
-                fast.winners_of(state, x[:1], y[:1], MAP, rule, sigma, 15, True), want[:1]
+                fast.KERNEL.winners(state, h, MapGeometry(MAP, True), rule, sigma), want
+            )
+            np.testing.assert_array_equal(
+                fast.KERNEL.winners_of(state, x[:1], y[:1], MapGeometry(MAP, True), rule, sigma),
+                want[:1],
             )
 
 
@@ -133,8 +140,10 @@ def test_renormalisation_of_scale_is_exact():
         ref_state, win_ref = _train(reference, w, data, "min_distance")
         state, win = _train(fast, w, data, "min_distance", tol=0.0)
         np.testing.assert_array_equal(win, win_ref)
-        np.testing.assert_allclose(fast.export(state), reference.export(ref_state), atol=1e-10)
-        wr = reference.export(ref_state)
+        np.testing.assert_allclose(
+            fast.KERNEL.export(state), reference.KERNEL.export(ref_state), atol=1e-10
+        )
+        wr = reference.KERNEL.export(ref_state)
         np.testing.assert_allclose(
             state.scale**2 * state.sqnorm, np.einsum("kij,kij->k", wr, wr), rtol=1e-9
         )
@@ -157,15 +166,15 @@ def test_same_result_for_any_thread_count():
     assert som.n_units * 64 * 64 >= fast.PARALLEL_MIN_WORK
     b, t = som.training_block(0), np.arange(300)
     data = (b.x0[:300], b.y0[:300], b.x1[:300], b.y1[:300], som.sigma_at(t), som.eps_at(t))
-    kw = {"map_shape": (8, 8), "winner_rule": "soft", "soft_cut": 15}
-    serial = fast.prepare(som.initial_weights())
-    win_serial = fast.train_block(serial, *data, **kw, threads=False)
+    kw = {"geometry": MapGeometry((8, 8)), "winner_rule": "soft"}
+    serial = fast.KERNEL.prepare(som.initial_weights())
+    win_serial = fast.KERNEL.train_block(serial, *data, **kw, threads=False)
     before = numba.get_num_threads()
     try:
         for n in sorted({1, getattr(numba.config, "NUMBA_NUM_THREADS", 1)}):
             numba.set_num_threads(n)
-            par = fast.prepare(som.initial_weights())
-            win_par = fast.train_block(par, *data, **kw, threads=True)
+            par = fast.KERNEL.prepare(som.initial_weights())
+            win_par = fast.KERNEL.train_block(par, *data, **kw, threads=True)
             np.testing.assert_array_equal(win_par, win_serial)
             np.testing.assert_array_equal(par.raw, serial.raw)
             np.testing.assert_array_equal(par.scale, serial.scale)
@@ -176,16 +185,16 @@ def test_same_result_for_any_thread_count():
 @pytest.mark.parametrize("tol", [0.0, 1e-6])
 def test_batched_activation_and_winners(tol):
     w, data = _problem(n_iter=10)
-    state = fast.prepare(w, tol)
+    state = fast.KERNEL.prepare(w, tol)
     x, y = data[0], data[1]
     h_ref = reference.activation(w, x, y)
-    h = fast.activation(state, x, y)
+    h = fast.KERNEL.activation(state, x, y)
     assert h.shape == (x.shape[0], np.prod(MAP))
     np.testing.assert_allclose(h, h_ref, rtol=0, atol=1e-12 if tol == 0 else 1e-6)
     for rule in WINNER_RULES:
         np.testing.assert_array_equal(
-            fast.winners(state, h_ref, MAP, rule, 1.5, 15),
-            reference.winners(w, h_ref, MAP, rule, 1.5, 15),
+            fast.KERNEL.winners(state, h_ref, MapGeometry(MAP), rule, 1.5),
+            reference.KERNEL.winners(w, h_ref, MapGeometry(MAP), rule, 1.5),
         )
 
 
@@ -205,30 +214,36 @@ def test_sparse_pairs_keep_exactly_the_large_products():
 def test_state_round_trip_and_validation():
     w, _ = _problem(n_iter=1)
     for tol in (0.0, 1e-6):
-        s = fast.prepare(w, tol)
-        s2 = fast.from_file_arrays(w.shape, fast.file_arrays(s), tol)
-        np.testing.assert_array_equal(fast.export(s2), fast.export(s))
+        s = fast.KERNEL.prepare(w, tol)
+        s2 = fast.KERNEL.from_file_arrays(w.shape, fast.KERNEL.file_arrays(s), tol)
+        np.testing.assert_array_equal(fast.KERNEL.export(s2), fast.KERNEL.export(s))
         np.testing.assert_array_equal(
-            fast.file_weights(w.shape, fast.file_arrays(s)), fast.export(s)
+            fast.KERNEL.file_weights(w.shape, fast.KERNEL.file_arrays(s)), fast.KERNEL.export(s)
         )
-        np.testing.assert_allclose(fast.export(s), w, rtol=1e-7 if tol else 0)
-    arrays = fast.file_arrays(fast.prepare(w, 1e-6))
+        np.testing.assert_allclose(fast.KERNEL.export(s), w, rtol=1e-7 if tol else 0)
+    arrays = fast.KERNEL.file_arrays(fast.KERNEL.prepare(w, 1e-6))
     assert sorted(arrays) == ["state_raw", "state_scale", "state_sqnorm"]
     with pytest.raises(ValueError, match="raw must be float64"):
-        fast.from_file_arrays(w.shape, arrays, 0.0)
+        fast.KERNEL.from_file_arrays(w.shape, arrays, 0.0)
     with pytest.raises(ValueError, match="state_raw, state_scale"):
-        fast.from_file_arrays(w.shape, {"state_raw": arrays["state_raw"]}, 1e-6)
+        fast.KERNEL.from_file_arrays(w.shape, {"state_raw": arrays["state_raw"]}, 1e-6)
     with pytest.raises(ValueError, match="sqnorm disagrees"):
         bad = {**arrays, "state_sqnorm": arrays["state_sqnorm"] * 1.01}
-        fast.from_file_arrays(w.shape, bad, 1e-6)
+        fast.KERNEL.from_file_arrays(w.shape, bad, 1e-6)
     with pytest.raises(ValueError, match="scale must be finite"):
-        fast.from_file_arrays(w.shape, {**arrays, "state_scale": arrays["state_scale"] * np.inf})
+        fast.KERNEL.from_file_arrays(
+            w.shape, {**arrays, "state_scale": arrays["state_scale"] * np.inf}
+        )
     with pytest.raises(ValueError, match="tol must be"):
-        fast.prepare(w, 1.5)
+        fast.KERNEL.prepare(w, 1.5)
     with pytest.raises(ValueError, match="rule must be"):
-        fast.winners(fast.prepare(w), np.zeros((1, 20)), MAP, "max", 1.0, 15)
-    assert fast.memory_bytes(w.shape, 1e-6) == 4 * w.size
-    assert fast.memory_bytes(w.shape, 0.0) == 8 * w.size == reference.memory_bytes(w.shape, 1e-6)
+        fast.KERNEL.winners(fast.KERNEL.prepare(w), np.zeros((1, 20)), MapGeometry(MAP), "max", 1.0)
+    assert fast.KERNEL.memory_bytes(w.shape, 1e-6) == 4 * w.size
+    assert (
+        fast.KERNEL.memory_bytes(w.shape, 0.0)
+        == 8 * w.size
+        == reference.KERNEL.memory_bytes(w.shape, 1e-6)
+    )
 
 
 @pytest.mark.parametrize("rule", ["soft", "min_distance", "soft_mean"])
@@ -284,22 +299,31 @@ def test_single_pairs_and_batches_give_the_same_numbers(tol):
     # one pair at a time (serial, scratch kept in the state) and the whole batch (parallel
     # over rows) run the same arithmetic per row: equal bit for bit
     w, data = _problem(n_iter=3 * fast.SERIAL_ROWS)
-    state = fast.prepare(w, tol)
+    state = fast.KERNEL.prepare(w, tol)
     x, y = data[0], data[1]
     assert x.shape[0] > fast.SERIAL_ROWS
-    h = fast.activation(state, x, y)
+    h = fast.KERNEL.activation(state, x, y)
     one = np.concatenate(
-        [fast.activation(state, x[b : b + 1], y[b : b + 1]) for b in range(len(x))]
+        [fast.KERNEL.activation(state, x[b : b + 1], y[b : b + 1]) for b in range(len(x))]
     )
     np.testing.assert_array_equal(one, h)
     for rule in WINNER_RULES:
-        batch = fast.winners_of(state, x, y, MAP, rule, 1.5, 15)
-        single = [fast.winners_of(state, x[b : b + 1], y[b : b + 1], MAP, rule, 1.5, 15)[0]
-                  for b in range(len(x))]  # fmt: skip
+        batch = fast.KERNEL.winners_of(state, x, y, MapGeometry(MAP), rule, 1.5)
+        single = [
+            fast.KERNEL.winners_of(state, x[b : b + 1], y[b : b + 1], MapGeometry(MAP), rule, 1.5)[
+                0
+            ]
+            for b in range(len(x))
+        ]
         np.testing.assert_array_equal(batch, single)
-        np.testing.assert_array_equal(batch, fast.winners(state, h, MAP, rule, 1.5, 15))
         np.testing.assert_array_equal(
-            batch, reference.winners_of(fast.export(state), x, y, MAP, rule, 1.5, 15)
+            batch, fast.KERNEL.winners(state, h, MapGeometry(MAP), rule, 1.5)
+        )
+        np.testing.assert_array_equal(
+            batch,
+            reference.KERNEL.winners_of(
+                fast.KERNEL.export(state), x, y, MapGeometry(MAP), rule, 1.5
+            ),
         )
 
 
@@ -313,8 +337,8 @@ def test_prefetching_changes_no_value(monkeypatch):
         monkeypatch.setattr(fast, "TRAIN_PREFETCH_AHEAD", ahead)
         for rule in ("soft", "min_distance"):
             state, win = _train(fast, w, data, rule, tol=1e-6)
-            h = fast.activation(state, data[0], data[1])
-            one = fast.activation(state, data[0][:1], data[1][:1])
+            h = fast.KERNEL.activation(state, data[0], data[1])
+            one = fast.KERNEL.activation(state, data[0][:1], data[1][:1])
             results.append((win, state.raw, state.scale, h, one))
     for a, b in zip(results[:2], results[2:], strict=True):
         for x, y in zip(a, b, strict=True):

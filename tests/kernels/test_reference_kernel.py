@@ -8,6 +8,7 @@ import pytest
 
 from sigmapi.kernels import reference as ref
 from sigmapi.rules import KOHONEN
+from sigmapi.rules.geometry import MapGeometry
 from sigmapi.rules.neighbourhood import smooth
 
 
@@ -40,28 +41,30 @@ def test_winner_rules_hand_computed():
     h = np.array([[1.0, 0.0, 0.9, 0.9, 0.0]])
     W = np.zeros((5, 1, 1))
     # plain argmax takes unit 0; smoothing with sigma 1 favours the pair 2, 3 (ties: lowest)
-    assert ref.winners(W, h, (5,), "argmax", 1.0, 15)[0] == 0
-    assert ref.winners(W, h, (5,), "soft", 1.0, 15)[0] == 2
+    assert ref.KERNEL.winners(W, h, MapGeometry((5,)), "argmax", 1.0)[0] == 0
+    assert ref.KERNEL.winners(W, h, MapGeometry((5,)), "soft", 1.0)[0] == 2
     # sigma -> 0: soft is argmax
-    assert ref.winners(W, h, (5,), "soft", 1e-5, 15)[0] == 0
+    assert ref.KERNEL.winners(W, h, MapGeometry((5,)), "soft", 1e-5)[0] == 0
     # at the border the summed rule hands the end unit's input to its neighbour; the
     # border-normalised rule does not: sums 1.587 vs 1.689, means 0.905 vs 0.716
     hb = np.array([[1.0, 0.9, 0.3, 0.0, 0.0]])
-    assert ref.winners(W, hb, (5,), "soft", 1.0, 15)[0] == 1
-    assert ref.winners(W, hb, (5,), "soft_mean", 1.0, 15)[0] == 0
+    assert ref.KERNEL.winners(W, hb, MapGeometry((5,)), "soft", 1.0)[0] == 1
+    assert ref.KERNEL.winners(W, hb, MapGeometry((5,)), "soft_mean", 1.0)[0] == 0
     # min distance: argmax(2h - |w|^2); make unit 0 expensive
     W[0, 0, 0] = 1.5
-    assert ref.winners(W, h, (5,), "min_distance", 1.0, 15)[0] == 2
+    assert ref.KERNEL.winners(W, h, MapGeometry((5,)), "min_distance", 1.0)[0] == 2
     with pytest.raises(ValueError, match="rule must be"):
-        ref.winners(W, h, (5,), "nearest", 1.0, 15)
+        ref.KERNEL.winners(W, h, MapGeometry((5,)), "nearest", 1.0)
 
 
 def test_soft_winner_window_cut():
     # with cut 0 the smoothing is the identity
     h = np.array([[1.0, 0.0, 0.9, 0.9, 0.0]])
-    np.testing.assert_allclose(smooth(h, (5,), 1.0, 0), h)
+    np.testing.assert_allclose(smooth(h, MapGeometry((5,), soft_cut=0), 1.0), h)
     g1 = np.exp(-0.5)
-    np.testing.assert_allclose(smooth(h, (5,), 1.0, 1)[0, 1], g1 * 1.0 + 0.0 + g1 * 0.9)
+    np.testing.assert_allclose(
+        smooth(h, MapGeometry((5,), soft_cut=1), 1.0)[0, 1], g1 * 1.0 + 0.0 + g1 * 0.9
+    )
 
 
 def test_smoothing_2d_equals_plain_loop():
@@ -79,18 +82,20 @@ def test_smoothing_2d_equals_plain_loop():
                         if abs(rr - r) <= cut and abs(cc - c) <= cut:
                             w = np.exp(-((rr - r) ** 2 + (cc - c) ** 2) / (2 * sigma**2))
                             loop[b, r * 4 + c] += w * g[rr, cc]
-    np.testing.assert_allclose(smooth(h, shape, sigma, cut), loop, rtol=1e-12)
+    np.testing.assert_allclose(smooth(h, MapGeometry(shape, soft_cut=cut), sigma), loop, rtol=1e-12)
 
 
 def test_neighbourhood_hand_computed():
-    a = ref.neighbourhood(np.array([1]), (3,), 1.0)[0]
+    a = ref.KERNEL.neighbourhood(np.array([1]), MapGeometry((3,)), 1.0)[0]
     raw = np.exp(-np.array([1.0, 0.0, 1.0]) / 2.0)
     np.testing.assert_allclose(a, raw / np.linalg.norm(raw))
-    a2 = ref.neighbourhood(np.array([0]), (2, 2), 1.0)[0]
+    a2 = ref.KERNEL.neighbourhood(np.array([0]), MapGeometry((2, 2)), 1.0)[0]
     raw2 = np.exp(-np.array([0.0, 1.0, 1.0, 2.0]) / 2.0)
     np.testing.assert_allclose(a2, raw2 / np.linalg.norm(raw2))
     # tiny sigma: only the winner learns
-    np.testing.assert_allclose(ref.neighbourhood(np.array([2]), (4,), 1e-5)[0], [0, 0, 1, 0])
+    np.testing.assert_allclose(
+        ref.KERNEL.neighbourhood(np.array([2]), MapGeometry((4,)), 1e-5)[0], [0, 0, 1, 0]
+    )
 
 
 def test_one_update_hand_computed():
@@ -139,8 +144,8 @@ def test_train_block_equals_plain_loop():
                 for j in range(ny):
                     W_loop[k, i, j] += eps[t] * a[k] * (x1[t, i] * y1[t, j] - W_loop[k, i, j])
         win_loop.append(kw)
-    win = ref.train_block(
-        W, x0, y0, x1, y1, sig, eps, map_shape=(K,), winner_rule="soft", soft_cut=15
+    win = ref.KERNEL.train_block(
+        W, x0, y0, x1, y1, sig, eps, geometry=MapGeometry((K,)), winner_rule="soft"
     )
     np.testing.assert_array_equal(win, win_loop)
     np.testing.assert_allclose(W, W_loop, rtol=1e-12, atol=1e-15)
@@ -149,10 +154,10 @@ def test_train_block_equals_plain_loop():
 def test_wrapped_neighbourhood_hand_computed():
     """On a ring of 5 the winner 0 has the units 1 and 4 at distance 1, 2 and 3 at distance 2;
     on a 3 x 4 torus unit (0, 0) has (2, 3) as a diagonal neighbour (distance^2 = 2)."""
-    a = ref.neighbourhood(np.array([0]), (5,), 1.0, map_periodic=True)[0]
+    a = ref.KERNEL.neighbourhood(np.array([0]), MapGeometry((5,), True), 1.0)[0]
     raw = np.exp(-np.array([0.0, 1.0, 4.0, 4.0, 1.0]) / 2.0)
     np.testing.assert_allclose(a, raw / np.linalg.norm(raw))
-    t = ref.neighbourhood(np.array([0]), (3, 4), 1.0, map_periodic=True)[0].reshape(3, 4)
+    t = ref.KERNEL.neighbourhood(np.array([0]), MapGeometry((3, 4), True), 1.0)[0].reshape(3, 4)
     d2 = np.array([[0, 1, 4, 1], [1, 2, 5, 2], [1, 2, 5, 2]], dtype=float)
     raw2 = np.exp(-d2 / 2.0)
     np.testing.assert_allclose(t, raw2 / np.linalg.norm(raw2))
@@ -173,15 +178,16 @@ def test_wrapped_smoothing_hand_computed():
     at its distance the shorter way round; the window cut applies to that distance. On a ring
     "soft" and "soft_mean" pick the same unit (the window weight is the same everywhere)."""
     h = np.array([[1.0, 0.0, 0.0, 0.0, 0.0]])
-    g = smooth(h, (5,), 1.0, 15, map_periodic=True)
+    g = smooth(h, MapGeometry((5,), True), 1.0)
     np.testing.assert_allclose(g[0], np.exp(-np.array([0.0, 1.0, 4.0, 4.0, 1.0]) / 2.0))
-    g1 = smooth(h, (5,), 1.0, 1, map_periodic=True)
+    g1 = smooth(h, MapGeometry((5,), True, 1), 1.0)
     np.testing.assert_allclose(g1[0], [1.0, np.exp(-0.5), 0.0, 0.0, np.exp(-0.5)])
-    bounded = smooth(h, (5,), 1.0, 15)
+    bounded = smooth(h, MapGeometry((5,)), 1.0)
     assert bounded[0, 4] == pytest.approx(np.exp(-8.0))  # the bounded map: 4 units away
     rng = np.random.default_rng(1)
     hs = rng.random((50, 6))
+    w = np.zeros((6, 1, 1))  # six units (the rules below do not read the weights)
     for shape in ((6,), (2, 3)):
-        soft = ref.winners(np.empty(0), hs, shape, "soft", 1.3, 15, map_periodic=True)
-        mean = ref.winners(np.empty(0), hs, shape, "soft_mean", 1.3, 15, map_periodic=True)
+        soft = ref.KERNEL.winners(w, hs, MapGeometry(shape, True), "soft", 1.3)
+        mean = ref.KERNEL.winners(w, hs, MapGeometry(shape, True), "soft_mean", 1.3)
         np.testing.assert_array_equal(soft, mean)

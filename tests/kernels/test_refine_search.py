@@ -16,6 +16,7 @@ if "fast" not in BACKENDS:
 
 from sigmapi.kernels import _refining, fast
 from sigmapi.rules import BATCH_MEAN
+from sigmapi.rules.geometry import MapGeometry
 from sigmapi.rules.refinement import Sums, assignment
 
 MAP, XS = (5, 5), (6, 6)
@@ -35,10 +36,10 @@ def _pairs(model: SigmaPiSOM, n: int, seed: int) -> tuple[np.ndarray, np.ndarray
 
 
 def _both(state, x, y, rule, shapes):
-    acc = fast.refine_start(state)
+    acc = fast.KERNEL.refine_start(state)
     acc.code_shapes = shapes
-    got = fast._refine_winners(state, acc, x, y, MAP, rule, 15, False)
-    want = fast.winners_of(state, x, y, MAP, rule, 0.0, 15)
+    got = fast.KERNEL._refine_winners(state, acc, x, y, MapGeometry(MAP), rule)
+    want = fast.KERNEL.winners_of(state, x, y, MapGeometry(MAP), rule, 0.0)
     return got, want, acc
 
 
@@ -58,18 +59,20 @@ def test_untrained_weights_and_ties_go_to_the_lowest_unit(trained):
     k, nx, ny = trained._run.state.shape
     w = rng.normal(0.0, 0.1, (k, nx, ny))  # a random start: loose bounds, many candidates
     for rule in ("min_distance", "argmax"):
-        got, want, _ = _both(fast.prepare(w, tol=1e-4), x, y, rule, (XS, XS))
+        got, want, _ = _both(fast.KERNEL.prepare(w, tol=1e-4), x, y, rule, (XS, XS))
         np.testing.assert_array_equal(got, want)
     same = np.broadcast_to(w[:1], w.shape).copy()  # every unit alike: unit 0 wins every pair
-    got, want, _ = _both(fast.prepare(same, tol=1e-4), x, y, "min_distance", (XS, XS))
+    got, want, _ = _both(fast.KERNEL.prepare(same, tol=1e-4), x, y, "min_distance", (XS, XS))
     np.testing.assert_array_equal(got, want)
     assert not got.any()
-    twins = fast.export(trained._run.state)
+    twins = fast.KERNEL.export(trained._run.state)
     winner = int(
-        np.bincount(fast.winners_of(trained._run.state, x, y, MAP, "argmax", 0.0, 15)).argmax()
+        np.bincount(
+            fast.KERNEL.winners_of(trained._run.state, x, y, MapGeometry(MAP), "argmax", 0.0)
+        ).argmax()
     )
     twins[[3, 20]] = twins[winner]  # two copies of a winning unit: ties to the lowest index
-    got, want, _ = _both(fast.prepare(twins, tol=1e-4), x, y, "argmax", (XS, XS))
+    got, want, _ = _both(fast.KERNEL.prepare(twins, tol=1e-4), x, y, "argmax", (XS, XS))
     np.testing.assert_array_equal(got, want)
     assert (got == min(3, winner)).any()
 
@@ -81,28 +84,29 @@ def test_a_changed_state_gets_a_new_index(trained):
     np.testing.assert_array_equal(got, want)
     model.partial_fit(iterations=200)
     assert not acc.index.fits(model._run.state.raw, model._run.state.scale)
-    got = fast._refine_winners(model._run.state, acc, x, y, MAP, "min_distance", 15, False)
-    np.testing.assert_array_equal(got, fast.winners_of(model._run.state, x, y, MAP,
-                                                       "min_distance", 0.0, 15))  # fmt: skip
+    got = fast.KERNEL._refine_winners(model._run.state, acc, x, y, MapGeometry(MAP), "min_distance")
+    np.testing.assert_array_equal(
+        got, fast.KERNEL.winners_of(model._run.state, x, y, MapGeometry(MAP), "min_distance", 0.0)
+    )
 
 
 def test_the_hard_sums_and_the_new_weights_are_the_general_codes(trained):
     st = trained._run.state
     batch = trained.sampler.sample(800, np.random.default_rng(4))
-    k = fast.winners_of(st, batch.x0, batch.y0, MAP, "min_distance", 0.0, 15)
+    k = fast.KERNEL.winners_of(st, batch.x0, batch.y0, MapGeometry(MAP), "min_distance", 0.0)
     k[k == 7] = 8  # unit 7 wins nothing: it keeps its weights
-    mine, general = fast.refine_start(st), fast.refine_start(st)
+    mine, general = fast.KERNEL.refine_start(st), fast.KERNEL.refine_start(st)
     _refining.hard_sums(mine.sums, mine.mass, k, batch.x1, batch.y1, st.tol)
     jb, pi, pv = st.scratch()[:3]
-    a = np.ascontiguousarray(assignment(k, MAP, 0.0, False))
+    a = np.ascontiguousarray(assignment(k, MapGeometry(MAP), 0.0))
     fast._refine_sums(general.sums, general.mass, a, batch.x1, batch.y1, st.tol, jb, pi, pv)
     np.testing.assert_array_equal(mine.sums, general.sums)
     np.testing.assert_array_equal(mine.mass, general.mass)
     mine.pairs = general.pairs = 800
-    new = fast.refine_finish(st, mine)
+    new = fast.KERNEL.refine_finish(st, mine)
     n, nx, ny = st.shape
     dense = Sums(general.sums.reshape(n, nx, ny), general.mass, 800)
-    want = fast.prepare(BATCH_MEAN.finish(fast.export(st), dense), tol=st.tol)
+    want = fast.KERNEL.prepare(BATCH_MEAN.finish(fast.KERNEL.export(st), dense), tol=st.tol)
     np.testing.assert_array_equal(new.raw, want.raw)
     np.testing.assert_array_equal(new.scale, want.scale)
     np.testing.assert_array_equal(new.sqnorm, want.sqnorm)

@@ -36,7 +36,7 @@ def test_fit_views_orders_from_the_users_views():
     som = SigmaPiSOM(SMALL)
     views = _views(som, 500, 3)
     start = SigmaPiSOM(SMALL).fit(views, iterations=0).weights_
-    want = crossview_init(views, (7,), (7,), (7,), SMALL.ordering_sigma / 2.0)
+    want = crossview_init(views, (7,), (7,), SMALL.geometry, SMALL.ordering_sigma / 2.0)
     np.testing.assert_allclose(start, want, rtol=0, atol=1e-12)
     assert not np.allclose(start, SigmaPiSOM(SMALL).fit(iterations=0).weights_)
 

@@ -13,6 +13,7 @@ from sigmapi import ConfigError, SigmaPiSOM, SOMConfig, kernels
 from sigmapi.kernels import BACKENDS
 from sigmapi.metrics import evaluate
 from sigmapi.rules import BATCH_MEAN
+from sigmapi.rules.geometry import MapGeometry
 from sigmapi.rules.refinement import assignment
 
 SMALL = SOMConfig(map_shape=(6,), x_shape=(7,), y_shape=(7,), iterations=3000, seed=1,
@@ -25,7 +26,7 @@ def test_the_rule_is_the_mean_of_each_units_pairs():
     k = rng.integers(0, 4, 40)
     k[k == 2] = 1  # unit 2 wins nothing: it keeps its weights
     acc = BATCH_MEAN.start((5, 3, 4))
-    BATCH_MEAN.accumulate(acc, assignment(k, (5,), 0.0, False), x1, y1)
+    BATCH_MEAN.accumulate(acc, assignment(k, MapGeometry((5,)), 0.0), x1, y1)
     old = rng.random((5, 3, 4))
     new = BATCH_MEAN.finish(old, acc)
     for u in range(5):
@@ -33,7 +34,7 @@ def test_the_rule_is_the_mean_of_each_units_pairs():
         want = np.einsum("bi,bj->ij", x1[mine], y1[mine]) / mine.sum() if mine.any() else old[u]
         np.testing.assert_allclose(new[u], want, rtol=1e-12)
     # with a neighbourhood the weights are the a-weighted means, a = the cost's Gaussian
-    a = assignment(k, (5,), 0.8, False)
+    a = assignment(k, MapGeometry((5,)), 0.8)
     acc = BATCH_MEAN.start((5, 3, 4))
     BATCH_MEAN.accumulate(acc, a, x1, y1)
     want = np.einsum("bk,bi,bj->kij", a, x1, y1) / a.sum(0)[:, None, None]
@@ -106,15 +107,15 @@ def registry(monkeypatch):
 
 def test_a_backend_without_the_methods_is_refused(registry):
     from sigmapi.kernels import reference, register_backend
+    from sigmapi.kernels.base import CONTRACT
 
     class NoRefine:
         NAME = "norefine"
 
     kernel = NoRefine()
-    for name in ("supports", "memory_bytes", "prepare", "export", "max_abs", "file_arrays",
-                 "from_file_arrays", "file_weights", "sqnorms", "activation", "scores",
-                 "winners", "winners_of", "neighbourhood", "train_block"):  # fmt: skip
-        setattr(kernel, name, getattr(reference, name))
+    for name in CONTRACT:  # the contract, not the optional refinement methods
+        if name != "NAME":
+            setattr(kernel, name, getattr(reference.KERNEL, name))
     register_backend("norefine", kernel)
     SigmaPiSOM(SMALL, backend="norefine", refine_rounds=0).fit()  # trains as before
     with pytest.raises(ConfigError, match=r"'norefine' does not refine .*fast, reference"):

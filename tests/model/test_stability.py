@@ -13,6 +13,7 @@ import pytest
 import sigmapi
 from sigmapi import SigmaPiSOM, SOMConfig
 from sigmapi.kernels import BACKENDS
+from sigmapi.rules.geometry import MapGeometry
 
 fast = pytest.importorskip("sigmapi.kernels.fast")
 
@@ -21,20 +22,27 @@ def _long_run(cfg: SOMConfig, n_iter: int, sigma: float, eps: float) -> fast.Fas
     """``n_iter`` kernel iterations on one block of data repeated (the data's variety is not
     what is under test; the accumulation of float32 rounding and of the scales is)."""
     som = SigmaPiSOM(cfg)
-    state = fast.prepare(som.initial_weights(), tol=cfg.kernel_tol)
+    state = fast.KERNEL.prepare(som.initial_weights(), tol=cfg.kernel_tol)
     b = som.training_block(0)
     sig = np.full(b.x0.shape[0], sigma)
     ep = np.full(b.x0.shape[0], eps)
     for _ in range(n_iter // b.x0.shape[0]):
-        fast.train_block(
-            state, b.x0, b.y0, b.x1, b.y1, sig, ep,
-            map_shape=cfg.map_shape, winner_rule="soft", soft_cut=15,
-        )  # fmt: skip
+        fast.KERNEL.train_block(
+            state,
+            b.x0,
+            b.y0,
+            b.x1,
+            b.y1,
+            sig,
+            ep,
+            geometry=MapGeometry(cfg.map_shape),
+            winner_rule="soft",
+        )
     return state
 
 
 def _check_bounded(state: fast.FastState, init_scale: float) -> None:
-    w = fast.export(state)
+    w = fast.KERNEL.export(state)
     assert np.all(np.isfinite(w)) and np.all(np.isfinite(state.raw))
     assert w.min() >= -init_scale - 1e-6 and w.max() <= 1.0 + 1e-6
     assert np.all(state.scale > fast.RENORM) and np.all(state.scale <= 1.0)
@@ -46,7 +54,7 @@ def test_ten_times_the_papers_length_stays_finite_and_bounded():
     state = _long_run(cfg, 3_000_000, sigma=1.0, eps=0.01)
     _check_bounded(state, cfg.init_scale)
     # the weights converged to a mean of data products: the run did not drift away
-    assert fast.export(state).max() > 0.05
+    assert fast.KERNEL.export(state).max() > 0.05
 
 
 @pytest.mark.slow

@@ -15,6 +15,7 @@ from sigmapi import SigmaPiSOM
 from sigmapi.errors import ConfigError, DataError
 from sigmapi.kernels import fast, reference
 from sigmapi.model._stream import consecutive_pairs
+from sigmapi.rules.geometry import MapGeometry
 from sigmapi.rules.trace import trace_step
 
 SMALL = {"map_shape": (6,), "x_shape": (7,), "y_shape": (7,), "iterations": 600, "seed": 3}
@@ -110,16 +111,19 @@ def test_kernels_agree_on_winners_and_trace():
     x, y = _frames(som, 400)
     t = np.arange(400)
     args = (som.sigma_at(t + 1), som.eps_at(t))
-    kw = {"lam": 0.8, "map_shape": (6,), "winner_rule": "soft", "soft_cut": 15}
+    kw = {"lam": 0.8, "geometry": MapGeometry((6,)), "winner_rule": "soft"}
     w = som.initial_weights()
     wr = w.copy()
-    kr, tr = reference.train_stream(wr, x, y, None, *args, **kw)
-    st = fast.prepare(w, 0.0)
-    kf, tf = fast.train_stream(st, x, y, None, *args, **kw)
+    kr, tr = reference.KERNEL.train_stream(wr, x, y, None, *args, **kw)
+    st = fast.KERNEL.prepare(w, 0.0)
+    kf, tf = fast.KERNEL.train_stream(st, x, y, None, *args, **kw)
     np.testing.assert_array_equal(kr, kf)
     np.testing.assert_allclose(tf, tr, atol=1e-14)
-    np.testing.assert_allclose(fast.export(st), wr, atol=1e-12)
-    assert reference.train_stream(wr, x[:0], y[:0], None, *(a[:0] for a in args), **kw)[1] is None
+    np.testing.assert_allclose(fast.KERNEL.export(st), wr, atol=1e-12)
+    assert (
+        reference.KERNEL.train_stream(wr, x[:0], y[:0], None, *(a[:0] for a in args), **kw)[1]
+        is None
+    )
 
 
 def test_same_stream_result_for_any_thread_count():
@@ -129,15 +133,15 @@ def test_same_stream_result_for_any_thread_count():
     x, y = _frames(som, 200, dwell=4)
     t = np.arange(200)
     args = (som.sigma_at(t + 1), som.eps_at(t))
-    kw = {"lam": 0.5, "map_shape": (8, 8), "winner_rule": "soft", "soft_cut": 15}
-    serial = fast.prepare(som.initial_weights())
-    k_serial, tr_serial = fast.train_stream(serial, x, y, None, *args, **kw, threads=False)
+    kw = {"lam": 0.5, "geometry": MapGeometry((8, 8)), "winner_rule": "soft"}
+    serial = fast.KERNEL.prepare(som.initial_weights())
+    k_serial, tr_serial = fast.KERNEL.train_stream(serial, x, y, None, *args, **kw, threads=False)
     before = numba.get_num_threads()
     try:
         for n in sorted({1, getattr(numba.config, "NUMBA_NUM_THREADS", 1)}):
             numba.set_num_threads(n)
-            par = fast.prepare(som.initial_weights())
-            k_par, tr_par = fast.train_stream(par, x, y, None, *args, **kw, threads=True)
+            par = fast.KERNEL.prepare(som.initial_weights())
+            k_par, tr_par = fast.KERNEL.train_stream(par, x, y, None, *args, **kw, threads=True)
             np.testing.assert_array_equal(k_par, k_serial)
             np.testing.assert_array_equal(tr_par, tr_serial)
             np.testing.assert_array_equal(par.raw, serial.raw)

@@ -8,6 +8,7 @@ import pytest
 import sigmapi
 from sigmapi import SigmaPiSOM, SOMConfig
 from sigmapi.metrics import evaluation_sets, fold_indicators
+from sigmapi.rules.geometry import MapGeometry
 from sigmapi.rules.ordering import crossview_init, crossview_scores
 
 SMALL_2D = SOMConfig(
@@ -42,7 +43,9 @@ def test_crossview_start_is_ordered_and_oriented_like_the_retina():
     # before any training the winner already follows z, in the retina's direction
     assert _rank_corr(k.astype(float), b.z[:, 0]) > 0.9
     with pytest.raises(sigmapi.ConfigError, match="at least 4 view pairs"):
-        crossview_init((b.x0[:2], b.y0[:2], b.x1[:2], b.y1[:2]), (15,), (15,), (15,), 1.0)
+        crossview_init(
+            (b.x0[:2], b.y0[:2], b.x1[:2], b.y1[:2]), (15,), (15,), MapGeometry((15,)), 1.0
+        )
 
 
 def test_ordering_none_keeps_the_paper_procedure():

@@ -1,20 +1,27 @@
 """The arithmetic of the Sigma-Pi SOM behind one contract, and the registry of backends.
 
 - :mod:`~sigmapi.kernels.base`: the contract, :class:`Kernel` (what every backend offers:
-  its state, memory, model file arrays, activations, winners, neighbourhood, training);
+  its state, memory, model file arrays, activations, winners, neighbourhood, training, plain
+  and gated), and :class:`KernelBase`, the generic defaults a backend subclasses so that it
+  implements only its arithmetic; :class:`BackendOptions` (device, dtype);
 - :mod:`~sigmapi.kernels.reference`: dense NumPy, written to be read (the definition);
 - :mod:`~sigmapi.kernels.fast`: numba, sparse codes and lazy decay (its file layout, readable
   without numba: :mod:`~sigmapi.kernels.columns`).
 
-:data:`REGISTRY` maps names to kernels; :data:`BACKENDS` lists the names; :func:`get_backend`
-returns one (``"auto"``: the fast kernel, or the reference where numba does not import);
-:func:`register_backend` adds one. Other packages add backends through the entry-point group
-``sigmapi.kernels`` (:data:`ENTRY_POINT_GROUP`): an entry point named ``NAME`` that loads a
-kernel (a module or an object satisfying :class:`Kernel`, whose ``NAME`` is the entry
-point's name), e.g. in the plugin's ``pyproject.toml``::
+Kernels compute on the map as one value, :class:`~sigmapi.rules.geometry.MapGeometry`
+(grid, periodic axes, the soft winner's window; ``SOMConfig.geometry``; also importable from
+here, with everything else a backend needs).
+
+:data:`REGISTRY` maps names to kernels (instances); :data:`BACKENDS` lists the names;
+:func:`get_backend` returns one (``"auto"``: the fast kernel, or the reference where numba
+does not import), with options if given; :func:`register_backend` adds one. Other packages
+add backends through the entry-point group ``sigmapi.kernels`` (:data:`ENTRY_POINT_GROUP`):
+an entry point named ``NAME`` that loads a kernel (an object satisfying :class:`Kernel`,
+usually an instance of a :class:`KernelBase` subclass, whose ``NAME`` is the entry point's
+name), e.g. in the plugin's ``pyproject.toml``::
 
     [project.entry-points."sigmapi.kernels"]
-    torch = "sigmapi_torch.kernel"
+    torch = "sigmapi_torch.kernel:KERNEL"
 
 Entry points are read once, the first time the names are needed; a backend's module is
 imported only when the backend is first used.
@@ -35,15 +42,27 @@ from numpy.typing import NDArray
 from sigmapi import _validate
 from sigmapi.errors import ConfigError
 from sigmapi.kernels import columns, reference
-from sigmapi.kernels.base import CONTRACT, FileArrays, Kernel, KernelState, dense_file_weights
+from sigmapi.kernels.base import (
+    CONTRACT,
+    BackendOptions,
+    FileArrays,
+    Kernel,
+    KernelBase,
+    KernelState,
+    dense_file_weights,
+)
+from sigmapi.rules.geometry import MapGeometry
 
 __all__ = [
     "BACKENDS",
     "BACKEND_CHOICES",
     "ENTRY_POINT_GROUP",
     "REGISTRY",
+    "BackendOptions",
     "Kernel",
+    "KernelBase",
     "KernelState",
+    "MapGeometry",
     "file_weights",
     "get_backend",
     "register_backend",
@@ -64,11 +83,11 @@ class _Lazy:
 def _import_fast() -> Kernel[Any]:
     from sigmapi.kernels import fast
 
-    return fast
+    return fast.KERNEL
 
 
 REGISTRY: dict[str, Kernel[Any] | _Lazy] = {
-    "reference": reference,
+    "reference": reference.KERNEL,
     "fast": _Lazy(_import_fast, "numba"),
 }
 """The backends by name: kernels, or loaders of those not imported yet (the fast kernel until
@@ -141,7 +160,8 @@ def _check(name: str, kernel: Any) -> Kernel[Any]:
 
 
 def register_backend(name: str, kernel: Kernel[Any]) -> None:
-    """Add ``kernel`` (a module or object satisfying :class:`Kernel`) as backend ``name``.
+    """Add ``kernel`` (an object satisfying :class:`Kernel`, e.g. an instance of a
+    :class:`KernelBase` subclass) as backend ``name``.
 
     ``name`` must be a lower-case identifier not taken (``"auto"`` never is free) and equal
     to ``kernel.NAME``, which model files record. Raises :class:`~sigmapi.errors.ConfigError`
@@ -168,9 +188,17 @@ def _load(name: str) -> Kernel[Any]:
     return entry
 
 
-def get_backend(name: str) -> Kernel[Any]:
+def get_backend(name: str, options: BackendOptions | None = None) -> Kernel[Any]:
     """The kernel called ``name``: ``"auto"`` (the first of :data:`AUTO` that imports here) or
-    one of :data:`BACKENDS`; a ConfigError if it is none of them or does not import here."""
+    one of :data:`BACKENDS`; a ConfigError if it is none of them or does not import here.
+
+    ``options``: its settings (:class:`BackendOptions`; None: its defaults), checked by the
+    kernel (a ConfigError names what it takes)."""
+    kernel = _find(name)
+    return kernel if options is None else kernel.with_options(options)
+
+
+def _find(name: str) -> Kernel[Any]:
     _discover()
     _validate.choice("backend", name, BACKEND_CHOICES)
     if name == "auto":

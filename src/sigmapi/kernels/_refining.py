@@ -21,9 +21,9 @@ first, a few at a time, until no bound left reaches the best exact score. A unit
 lies below that score cannot win (the bounds carry a relative margin of 1e-9, far above the
 rounding of the sums), and a unit that is summed gets the very arithmetic of
 ``_rows.activate`` and ``_rows._winner`` (the kept pairs in their order, float64): the
-winners are those of :func:`sigmapi.kernels.fast.winners_of`, bit for bit, ties to the lowest
-index. For the rules whose score is a unit's own activation (``argmax``, ``min_distance``:
-the hard rules); the smoothing rules keep the full search.
+winners are those of :meth:`sigmapi.kernels.fast.FastKernel.winners_of`, bit for bit, ties
+to the lowest index. For the rules whose score is a unit's own activation (``argmax``,
+``min_distance``: the hard rules); the smoothing rules keep the full search.
 """
 
 from __future__ import annotations

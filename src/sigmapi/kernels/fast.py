@@ -1,4 +1,4 @@
-# Over 400 lines: one kernel (its compiled helpers, three training drivers, public functions).
+# Over 400 lines: one kernel (its compiled helpers, three training drivers, its class).
 """Fast CPU kernel: numba, sparse codes, lazy decay, parallel over map units.
 
 Computes the same learning iteration as :mod:`sigmapi.kernels.reference` (the definition),
@@ -30,8 +30,8 @@ measured in ``benchmarks/README.md`` (kernel tolerance table).
 State (:class:`FastState`): ``raw`` ``(n_x * n_y, K)`` (float32, or float64 when exact),
 ``scale`` ``(K,)`` and ``sqnorm`` ``(K,)`` = ``sum_p raw[p, k]**2`` (tracked incrementally for
 the ``min_distance`` rule; ``|w_k|^2 = scale_k^2 sqnorm_k``). A model file stores all three
-(:func:`file_arrays`, the layout of :mod:`sigmapi.kernels.columns`, which reads without
-numba), so a saved model continues bit for bit on this backend. The rules are those of
+(:meth:`FastKernel.file_arrays`, the layout of :mod:`sigmapi.kernels.columns`, which reads
+without numba), so a saved model continues bit for bit on this backend. The rules are those of
 :mod:`sigmapi.rules`; their compiled forms are :func:`_neighbourhood` (the neighbourhood),
 :func:`_unit_chunk` (the Kohonen update as lazy decay) and ``_rows._winner`` (the winner
 rules of :data:`COMPILED`).
@@ -57,37 +57,13 @@ from sigmapi import _validate
 from sigmapi.errors import ConfigError
 from sigmapi.kernels import _refining, _rows, columns
 from sigmapi.kernels._rows import _pairs, _winner, activate, axis_distance, gaussian, prefetch
-from sigmapi.kernels.base import FileArrays, rule_scores
+from sigmapi.kernels.base import FileArrays, KernelBase
 from sigmapi.rules import WinnerRule, winner_rule
 from sigmapi.rules import trace as trace_rule
-from sigmapi.rules.neighbourhood import neighbourhood
+from sigmapi.rules.geometry import MapGeometry
 from sigmapi.rules.refinement import Sums, assignment
 
-__all__ = [
-    "COMPILED",
-    "NAME",
-    "FastState",
-    "activation",
-    "export",
-    "file_arrays",
-    "file_weights",
-    "from_file_arrays",
-    "max_abs",
-    "memory_bytes",
-    "neighbourhood",
-    "prepare",
-    "refine_block",
-    "refine_finish",
-    "refine_start",
-    "scores",
-    "sqnorms",
-    "supports",
-    "train_block",
-    "train_gated_block",
-    "train_stream",
-    "winners",
-    "winners_of",
-]
+__all__ = ["COMPILED", "KERNEL", "NAME", "FastKernel", "FastState"]
 
 NAME = "fast"
 
@@ -103,7 +79,7 @@ is at least this; below it, synchronising the threads costs more than it saves.
 
 Off by default: one learning step is little work between two synchronisations, so on a
 busy machine a descheduled worker thread stalls every step (the ``fast-threads`` variant of
-``benchmarks/bench_bandwidth.py`` measures it). The batched :func:`activation` (one
+``benchmarks/bench_bandwidth.py`` measures it). The batched :meth:`FastKernel.activation` (one
 synchronisation per call) always uses all threads.
 """
 
@@ -111,9 +87,9 @@ NO_GATES = np.empty((0, 0))
 """The gates of an ungated training block: :func:`_train` learns with the plain neighbourhood."""
 
 SERIAL_ROWS = 16
-"""Inference calls (:func:`activation`, :func:`winners_of`) with at most this many rows run in
-the caller's thread on scratch memory kept in the state (no thread start-up, no allocation
-but the result); larger batches run in parallel over blocks of rows."""
+"""Inference calls (:meth:`~FastKernel.activation`, :meth:`~FastKernel.winners_of`) with at
+most this many rows run in the caller's thread on scratch memory kept in the state (no thread
+start-up, no allocation but the result); larger batches run in parallel over blocks of rows."""
 
 PREFETCH_AHEAD = 8
 """Inference prefetches the weight row of the input pair this many pairs ahead (0: off)."""
@@ -144,12 +120,6 @@ COMPILED = {
 :func:`sigmapi.kernels._rows._winner`: the one place where rule objects become codes."""
 
 
-def supports(rule: WinnerRule | str) -> bool:
-    """Whether this kernel has the compiled form of winner rule ``rule`` (an object or name)."""
-    name = rule.name if isinstance(rule, WinnerRule) else rule
-    return name in COMPILED
-
-
 def _rule_code(rule: WinnerRule | str, field: str = "rule") -> tuple[WinnerRule, int]:
     """The rule object and its compiled code; a ConfigError if it has no compiled form."""
     r = winner_rule(rule, field)
@@ -172,8 +142,8 @@ class FastState:
     scale : ndarray, shape (K,)
         Per-unit scale factors (float64).
     sqnorm : ndarray, shape (K,)
-        ``sum_p raw[p, k]**2`` (float64): exact after :func:`prepare`, tracked through updates
-        while training with the ``min_distance`` rule (the only rule that needs it).
+        ``sum_p raw[p, k]**2`` (float64): exact after :meth:`FastKernel.prepare`, tracked
+        through updates while training with the ``min_distance`` rule (the only rule that needs it).
     norms_valid : bool
         Whether ``sqnorm`` is current; if not, it is recomputed when needed.
     tol : float
@@ -222,83 +192,6 @@ def _storage_dtype(tol: float) -> type[np.floating]:
 
 def _check_tol(tol: float) -> float:
     return _validate.number("tol", tol, 0.0, 1.0, hi_open=True, fix="0 is the exact mode")
-
-
-def prepare(weights: NDArray[np.float64], tol: float = 1e-6) -> FastState:
-    """Backend state from dense weights ``(K, n_x, n_y)``.
-
-    Parameters
-    ----------
-    weights : ndarray, shape (K, n_x, n_y)
-        Sigma-Pi weights.
-    tol : float
-        Relative truncation tolerance in [0, 1); 0 is the exact mode (float64 storage).
-    """
-    tol = _check_tol(tol)
-    w = np.asarray(weights, dtype=np.float64)
-    if w.ndim != 3:
-        raise ValueError(f"weights must have shape (K, n_x, n_y), got {w.shape}")
-    k, nx, ny = w.shape
-    raw = np.ascontiguousarray(w.reshape(k, nx * ny).T, dtype=_storage_dtype(tol))
-    return FastState(raw, np.ones(k), columns.sqnorms(raw), tol, (k, nx, ny))
-
-
-def memory_bytes(shape: tuple[int, int, int], tol: float = 1e-6) -> int:
-    """Bytes of the state of weights of ``shape``: ``raw`` in float32 (float64 when exact)."""
-    itemsize = np.dtype(_storage_dtype(_check_tol(tol))).itemsize
-    return itemsize * int(np.prod(shape, dtype=np.int64))
-
-
-def export(state: FastState) -> NDArray[np.float64]:
-    """Dense float64 weights ``(K, n_x, n_y)``: ``scale[k] * raw[:, k]``."""
-    return columns.columns_to_dense(state.raw, state.scale, state.shape)
-
-
-def max_abs(state: FastState) -> float:
-    """Largest ``|w_kij| = scale_k |raw[p, k]|``, without forming the dense weights."""
-    return columns.columns_top(state.raw, state.scale, state.shape)
-
-
-def file_arrays(state: FastState) -> FileArrays:
-    """What a model file stores: ``state_raw``, ``state_scale`` and, if current,
-    ``state_sqnorm`` (:mod:`sigmapi.kernels.columns`), so that a saved model continues bit
-    for bit on this backend."""
-    return columns.to_file(state.raw, state.scale, state.sqnorm if state.norms_valid else None)
-
-
-def file_weights(shape: tuple[int, int, int], arrays: FileArrays) -> NDArray[np.float64]:
-    """Dense float64 weights of what :func:`file_arrays` wrote (``raw x scale``)."""
-    return columns.file_weights(shape, arrays)
-
-
-def from_file_arrays(
-    shape: tuple[int, int, int], arrays: FileArrays, tol: float = 1e-6
-) -> FastState:
-    """The state :func:`file_arrays` wrote, for weights of ``shape`` ``(K, n_x, n_y)`` (also
-    from a version-1 file, whose ``weights`` must agree with ``raw x scale``).
-
-    Raises ``ValueError`` if the arrays are missing, do not fit ``shape`` and ``tol``, or are
-    not finite (scales must be > 0; ``sqnorm`` must agree with ``raw`` to 1e-6 relative).
-    """
-    tol = _check_tol(tol)
-    raw, scale, sq = columns.read_file(shape, arrays)
-    dtype = _storage_dtype(tol)
-    if raw.dtype != dtype:
-        raise ValueError(f"raw must be {np.dtype(dtype).name} for tol={tol}, got {raw.dtype}")
-    exact = columns.sqnorms(raw)
-    if sq is None:
-        sq = exact
-    elif not np.allclose(sq, exact, rtol=1e-6, atol=1e-12 * float(exact.max(initial=0.0))):
-        raise ValueError("sqnorm disagrees with raw")
-    k, nx, ny = shape
-    return FastState(
-        np.ascontiguousarray(raw, dtype=dtype),
-        np.ascontiguousarray(scale, dtype=np.float64),
-        np.ascontiguousarray(sq, dtype=np.float64),
-        tol,
-        (int(k), int(nx), int(ny)),
-        True,
-    )
 
 
 # ---------------------------------------------------------------------------- numba helpers
@@ -490,7 +383,9 @@ def _grid(map_shape: tuple[int, ...], k_units: int) -> tuple[NDArray[np.int64], 
     """Sizes and flat-index strides of the map's axes (read-only; cached: every call needs them)."""
     dims = np.asarray(map_shape, dtype=np.int64)
     if int(np.prod(dims)) != k_units:
-        raise ValueError(f"map_shape {map_shape} does not hold the state's {k_units} units")
+        raise ValueError(
+            f"the map {map_shape} holds {int(np.prod(dims))} units, the state {k_units}"
+        )
     strides = np.ones_like(dims)
     for ax in range(len(map_shape) - 2, -1, -1):
         strides[ax] = strides[ax + 1] * dims[ax + 1]
@@ -499,17 +394,32 @@ def _grid(map_shape: tuple[int, ...], k_units: int) -> tuple[NDArray[np.int64], 
     return dims, strides
 
 
+def _run(
+    state: FastState, rule: WinnerRule, steps: int, threads: bool
+) -> tuple[NDArray[np.int64], bool, bool]:
+    """What a training driver needs besides the data: the winners' array, whether it tracks
+    the norms (the only rule that reads them keeps them current; the others leave them stale)
+    and whether it uses threads (``threads`` asked, the map large enough,
+    :data:`PARALLEL_MIN_WORK`, and numba has more than one)."""
+    track = rule.needs_norms
+    if track:
+        state.refresh_norms()
+    elif steps > 0:
+        state.norms_valid = False
+    k_units, nx, ny = state.shape
+    big = k_units * nx * ny >= PARALLEL_MIN_WORK
+    return (
+        np.empty(steps, dtype=np.int64),
+        track,
+        bool(threads and big and numba.get_num_threads() > 1),
+    )
+
+
 def _codes(a: NDArray[np.floating], n: int, name: str) -> NDArray[np.float64]:
     arr = np.ascontiguousarray(a, dtype=np.float64)
     if arr.ndim != 2 or arr.shape[1] != n:
         raise ValueError(f"{name} must have shape (B, {n}), got {arr.shape}")
     return arr
-
-
-def sqnorms(state: FastState) -> NDArray[np.float64]:
-    """``|w_k|^2 = scale_k^2 sqnorm_k`` of every unit, ``(K,)``, from the tracked norms."""
-    state.refresh_norms()
-    return np.asarray(state.scale**2 * state.sqnorm)
 
 
 def _rows_of(
@@ -530,195 +440,6 @@ def _peak_order(x: NDArray[np.float64], y: NDArray[np.float64]) -> NDArray[np.in
     return np.lexsort((np.argmax(np.abs(y), axis=1), np.argmax(np.abs(x), axis=1)))
 
 
-def activation(
-    state: FastState, x: NDArray[np.floating], y: NDArray[np.floating]
-) -> NDArray[np.float64]:
-    """Sigma-Pi activations ``h[b, k] = x_b^T W_k y_b`` of a batch; ``(B, K)``.
-
-    Sparse equivalent of the matrix product ``vec(x_b y_b^T) @ W^T``: each row costs
-    ``K x (number of kept pairs)`` multiply-adds. Up to :data:`SERIAL_ROWS` rows run in the
-    caller's thread; larger batches in parallel over rows (the same numbers either way).
-    """
-    xa, ya = _rows_of(state, x, y)
-    h = np.empty((xa.shape[0], state.shape[0]))
-    ahead = _ahead(state, PREFETCH_AHEAD)
-    if xa.shape[0] <= SERIAL_ROWS:
-        jb, pi, pv, acc, *_ = state.scratch()
-        _rows.respond_rows(state.raw, state.scale, xa, ya, state.tol, ahead, jb, pi, pv, acc, h)
-    else:
-        _rows.respond_rows_parallel(
-            state.raw, state.scale, xa, ya, state.tol, ahead, _peak_order(xa, ya), h
-        )
-    return h
-
-
-def scores(
-    state: FastState,
-    h: NDArray[np.floating],
-    map_shape: tuple[int, ...],
-    rule: WinnerRule | str,
-    sigma: float,
-    cut: int,
-    map_periodic: bool = False,
-) -> NDArray[np.float64]:
-    """Per-unit scores ``(B, K)`` of activations ``h``: the rule object's own arithmetic
-    (vectorised over the batch, as in the reference kernel), with the tracked norms
-    ``|w_k|^2 = scale_k^2 sqnorm_k`` where the rule needs them."""
-    return rule_scores(rule, h, map_shape, sigma, cut, map_periodic, lambda: sqnorms(state))
-
-
-def winners(
-    state: FastState,
-    h: NDArray[np.floating],
-    map_shape: tuple[int, ...],
-    rule: WinnerRule | str,
-    sigma: float,
-    cut: int,
-    map_periodic: bool = False,
-) -> NDArray[np.int64]:
-    """Winning unit per row of activations ``h`` ``(B, K)``; ``(B,)``, ties to the lowest index.
-
-    The argmax of :func:`scores` (the compiled rules give the same units, see
-    :func:`winners_of`).
-    """
-    s = scores(state, h, map_shape, rule, sigma, cut, map_periodic)
-    return np.asarray(np.argmax(s, axis=1), dtype=np.int64)
-
-
-def winners_of(
-    state: FastState,
-    x: NDArray[np.floating],
-    y: NDArray[np.floating],
-    map_shape: tuple[int, ...],
-    rule: WinnerRule | str,
-    sigma: float,
-    cut: int,
-    map_periodic: bool = False,
-) -> NDArray[np.int64]:
-    """Winning unit of each pair ``(x_b, y_b)``; ``(B,)``: activation and winner in one pass.
-
-    The same winners as ``winners(state, activation(state, x, y), ...)`` (the compiled
-    winner rule of training), without forming the ``(B, K)`` activations; serial up to
-    :data:`SERIAL_ROWS` rows, else parallel over rows.
-    """
-    xa, ya = _rows_of(state, x, y)
-    dims, strides = _grid(tuple(map_shape), state.shape[0])
-    r, code = _rule_code(rule)
-    if r.needs_norms:
-        state.refresh_norms()
-    out = np.empty(xa.shape[0], dtype=np.int64)
-    # left unformatted: the arguments in the rows of the kernel's signature
-    args = (state.raw, state.scale, state.sqnorm, xa, ya, state.tol,
-            _ahead(state, PREFETCH_AHEAD), code,
-            float(sigma), int(cut), dims, strides, bool(map_periodic))  # fmt: skip
-    if xa.shape[0] <= SERIAL_ROWS:
-        jb, pi, pv, acc, h, t1, t2 = state.scratch()
-        _rows.winners_rows(*args, jb, pi, pv, acc, h, t1, t2, out)
-    else:
-        _rows.winners_rows_parallel(*args, _peak_order(xa, ya), out)
-    return out
-
-
-def train_block(
-    state: FastState,
-    x0: NDArray[np.floating],
-    y0: NDArray[np.floating],
-    x1: NDArray[np.floating],
-    y1: NDArray[np.floating],
-    sigmas: NDArray[np.floating],
-    eps: NDArray[np.floating],
-    *,
-    map_shape: tuple[int, ...],
-    winner_rule: WinnerRule | str,
-    soft_cut: int,
-    threads: bool = False,
-    map_periodic: bool = False,
-) -> NDArray[np.int64]:
-    """Run ``len(x0)`` learning iterations in order, updating ``state`` in place.
-
-    Iteration ``t`` finds the winner of view ``(x0[t], y0[t])`` at width ``sigmas[t]`` and
-    learns view ``(x1[t], y1[t])`` with rate ``eps[t]`` (as
-    :func:`sigmapi.kernels.reference.train_block`). Returns the winners ``(T,)``.
-
-    ``threads``: update the units on numba's threads (the same result) when the map is large
-    enough (:data:`PARALLEL_MIN_WORK`) and numba has more than one thread. ``map_periodic``:
-    every map axis wraps around (a ring, a torus).
-    """
-    k_units, nx, ny = state.shape
-    dims, strides = _grid(tuple(map_shape), k_units)
-    rule, code = _rule_code(winner_rule, "winner_rule")
-    xs = [
-        _codes(a, n, nm)
-        for a, n, nm in ((x0, nx, "x0"), (y0, ny, "y0"), (x1, nx, "x1"), (y1, ny, "y1"))
-    ]
-    n_iter = xs[0].shape[0]
-    sg = np.ascontiguousarray(sigmas, dtype=np.float64)
-    ep = np.ascontiguousarray(eps, dtype=np.float64)
-    if any(a.shape[0] != n_iter for a in xs) or sg.shape != (n_iter,) or ep.shape != (n_iter,):
-        raise ValueError("x0, y0, x1, y1, sigmas and eps must have the same length")
-    out = np.empty(n_iter, dtype=np.int64)
-    track = rule.needs_norms  # the only rule that reads the norms keeps them current
-    if track:
-        state.refresh_norms()
-    elif n_iter > 0:
-        state.norms_valid = False
-    parallel = threads and k_units * nx * ny >= PARALLEL_MIN_WORK and numba.get_num_threads() > 1
-    driver: Any = _train  # a numba dispatcher (its stubs do not know the signature)
-    # left unformatted: the arguments in the rows of the kernel's signature
-    driver(state.raw, state.scale, state.sqnorm, *xs, sg, ep, NO_GATES, dims, strides,
-           bool(map_periodic), code, int(soft_cut), state.tol, out, track, bool(parallel),
-           _ahead(state, TRAIN_PREFETCH_AHEAD))  # fmt: skip
-    return out
-
-
-def train_gated_block(
-    state: FastState,
-    x0: NDArray[np.floating],
-    y0: NDArray[np.floating],
-    x1: NDArray[np.floating],
-    y1: NDArray[np.floating],
-    sigmas: NDArray[np.floating],
-    eps: NDArray[np.floating],
-    gates: NDArray[np.floating],
-    *,
-    map_shape: tuple[int, ...],
-    winner_rule: WinnerRule | str,
-    soft_cut: int,
-    map_periodic: bool = False,
-) -> NDArray[np.int64]:
-    """:func:`train_block` with the gates ``(T, K)`` of
-    :func:`sigmapi.kernels.reference.train_gated_block` (reward-gated plasticity): iteration
-    ``t`` updates unit ``k`` with ``eps[t] gates[t, k] a_k``. On one thread (a step of a task
-    is one iteration: too little work to share). Returns the winners ``(T,)``."""
-    k_units, nx, ny = state.shape
-    dims, strides = _grid(tuple(map_shape), k_units)
-    rule, code = _rule_code(winner_rule, "winner_rule")
-    xs = [
-        _codes(a, n, nm)
-        for a, n, nm in ((x0, nx, "x0"), (y0, ny, "y0"), (x1, nx, "x1"), (y1, ny, "y1"))
-    ]
-    n_iter = xs[0].shape[0]
-    sg = np.ascontiguousarray(sigmas, dtype=np.float64)
-    ep = np.ascontiguousarray(eps, dtype=np.float64)
-    gt = np.ascontiguousarray(gates, dtype=np.float64)
-    if any(a.shape[0] != n_iter for a in xs) or sg.shape != (n_iter,) or ep.shape != (n_iter,):
-        raise ValueError("x0, y0, x1, y1, sigmas and eps must have the same length")
-    if gt.shape != (n_iter, k_units):
-        raise ValueError(f"gates must have shape ({n_iter}, {k_units}), got {gt.shape}")
-    out = np.empty(n_iter, dtype=np.int64)
-    track = rule.needs_norms
-    if track:
-        state.refresh_norms()
-    elif n_iter > 0:
-        state.norms_valid = False
-    driver: Any = _train  # a numba dispatcher
-    # left unformatted: the arguments in the rows of the kernel's signature
-    driver(state.raw, state.scale, state.sqnorm, *xs, sg, ep, gt, dims, strides,
-           bool(map_periodic), code, int(soft_cut), state.tol, out, track, False,
-           _ahead(state, TRAIN_PREFETCH_AHEAD))  # fmt: skip
-    return out
-
-
 # ---------------------------------------------------------------------------- stream learning
 
 _trace_step: Any = njit(cache=True, nogil=True)(trace_rule.trace_step)
@@ -731,11 +452,12 @@ def _train_stream(
     raw, scale, sqnorm, x, y, trace, primed, sigmas, eps, lam, dims, strides, map_periodic,
     rule, cut, tol, out, track, threads, ahead,
 ):  # fmt: skip
-    """The stream driver (:func:`sigmapi.kernels.reference.train_stream`): per frame, the
-    Kohonen update with ``eps[t] * trace`` towards the frame (if ``primed``), the frame's
-    activation on the updated weights (one pass over the units, :func:`_unit_chunk`), its
-    winner and neighbourhood, then the trace in place. Units with ``eps trace_k`` at most
-    ``tol`` of the largest get no additive update. Returns whether the trace now exists."""
+    """The stream driver (:meth:`~sigmapi.kernels.reference.ReferenceKernel.train_stream`):
+    per frame, the Kohonen update with ``eps[t] * trace`` towards the frame (if ``primed``),
+    the frame's activation on the updated weights (one pass over the units,
+    :func:`_unit_chunk`), its winner and neighbourhood, then the trace in place. Units with
+    ``eps trace_k`` at most ``tol`` of the largest get no additive update. Returns whether the
+    trace now exists."""
     k_units = raw.shape[1]
     jb, pi, pv, _, _, h, ea, gain, acc, t1, t2 = _buffers(k_units, raw.shape[0], y.shape[1])
     a = np.empty(k_units)
@@ -783,55 +505,6 @@ def _train_stream(
     return primed
 
 
-def train_stream(
-    state: FastState,
-    x: NDArray[np.floating],
-    y: NDArray[np.floating],
-    trace: NDArray[np.floating] | None,
-    sigmas: NDArray[np.floating],
-    eps: NDArray[np.floating],
-    *,
-    lam: float,
-    map_shape: tuple[int, ...],
-    winner_rule: WinnerRule | str,
-    soft_cut: int,
-    threads: bool = False,
-    map_periodic: bool = False,
-) -> tuple[NDArray[np.int64], NDArray[np.float64] | None]:
-    """Learn the frames of a stream in order under the trace rule, updating ``state`` in
-    place (as :func:`sigmapi.kernels.reference.train_stream`). Returns the winners ``(T,)``
-    and the trace ``(K,)`` after the last frame (None if there is none yet).
-
-    ``threads``: as :func:`train_block` (the same result on any number of threads).
-    """
-    k_units, nx, ny = state.shape
-    dims, strides = _grid(tuple(map_shape), k_units)
-    rule, code = _rule_code(winner_rule, "winner_rule")
-    xa, ya = _codes(x, nx, "x"), _codes(y, ny, "y")
-    n_frames = xa.shape[0]
-    sg = np.ascontiguousarray(sigmas, dtype=np.float64)
-    ep = np.ascontiguousarray(eps, dtype=np.float64)
-    if ya.shape[0] != n_frames or sg.shape != (n_frames,) or ep.shape != (n_frames,):
-        raise ValueError("x, y, sigmas and eps must have the same length")
-    tr = np.zeros(k_units) if trace is None else np.array(trace, dtype=np.float64)
-    if tr.shape != (k_units,):
-        raise ValueError(f"trace must have shape ({k_units},), got {tr.shape}")
-    out = np.empty(n_frames, dtype=np.int64)
-    track = rule.needs_norms
-    if track:
-        state.refresh_norms()
-    elif n_frames > 0:
-        state.norms_valid = False
-    parallel = threads and k_units * nx * ny >= PARALLEL_MIN_WORK and numba.get_num_threads() > 1
-    driver: Any = _train_stream  # a numba dispatcher
-    # left unformatted: the arguments in the rows of the kernel's signature
-    primed = driver(state.raw, state.scale, state.sqnorm, xa, ya, tr, trace is not None, sg, ep,
-                    float(lam), dims, strides, bool(map_periodic), code, int(soft_cut),
-                    state.tol, out, track, bool(parallel),
-                    _ahead(state, TRAIN_PREFETCH_AHEAD))  # fmt: skip
-    return out, (tr if primed else None)
-
-
 # ---------------------------------------------------------------------------- refinement
 
 
@@ -863,78 +536,320 @@ def _refine_sums(sums, mass, a, x1, y1, tol, jb, pi, pv):  # pragma: no cover - 
             mass[k] += a[b, k]
 
 
-def refine_start(state: FastState) -> Sums:
-    """Empty accumulators: sums ``(K, n_x * n_y)`` (a unit's pairs contiguous, unlike the
-    weights' layout: a pair adds to few units), mass ``(K,)``."""
-    k, nx, ny = state.shape
-    return Sums(np.zeros((k, nx * ny)), np.zeros(k))
+# ---------------------------------------------------------------------------- the kernel
 
 
-def _refine_winners(
-    state: FastState,
-    acc: Sums,
-    x0: NDArray[np.floating],
-    y0: NDArray[np.floating],
-    map_shape: tuple[int, ...],
-    winner_rule: WinnerRule | str,
-    soft_cut: int,
-    map_periodic: bool,
-) -> NDArray[np.int64]:
-    """The winners of :func:`winners_of` (at sigma 0), by the round's bounds
-    (:mod:`sigmapi.kernels._refining`) where the rule allows: the index is made from the
-    round's fixed weights on first use and kept in ``acc`` (it holds a transposed copy of the
-    weights, so a round holds the weights twice, beside its float64 sums). The exact mode
-    (``tol = 0``) and the smoothing rules search in full."""
-    _, code = _rule_code(winner_rule)
-    if state.tol == 0 or code not in _refining.RULES:
-        return winners_of(state, x0, y0, map_shape, winner_rule, 0.0, soft_cut, map_periodic)
-    xa, ya = _rows_of(state, x0, y0)
-    _grid(tuple(map_shape), state.shape[0])  # checks the map holds the state's units
-    state.refresh_norms()
-    index = acc.index
-    if not (isinstance(index, _refining.SearchIndex) and index.fits(state.raw, state.scale)):
-        _, nx, ny = state.shape
-        index = acc.index = _refining.build(
-            state.raw, state.scale, acc.code_shapes or ((nx,), (ny,))
+class FastKernel(KernelBase[FastState]):
+    """The fast CPU kernel: a :class:`FastState` per map, the compiled drivers above, the
+    generic scores of :class:`~sigmapi.kernels.base.KernelBase` (vectorised over a batch, as
+    in the reference kernel) for :meth:`scores` and :meth:`winners`.
+
+    Options: ``device="cpu"``; ``dtype`` None only (the storage follows ``tol``: float32,
+    float64 in the exact mode ``tol = 0``).
+    """
+
+    NAME = NAME
+    DTYPES = ()
+
+    def supports(self, rule: WinnerRule | str) -> bool:
+        """Whether this kernel has the compiled form of winner rule ``rule`` (an object or
+        name, :data:`COMPILED`)."""
+        name = rule.name if isinstance(rule, WinnerRule) else rule
+        return name in COMPILED
+
+    # ------------------------------------------------------------------ state
+
+    def prepare(self, weights: NDArray[np.float64], tol: float = 1e-6) -> FastState:
+        """Backend state from dense weights ``(K, n_x, n_y)``; ``tol``: the relative
+        truncation tolerance in [0, 1), 0 the exact mode (float64 storage)."""
+        tol = _check_tol(tol)
+        w = np.asarray(weights, dtype=np.float64)
+        if w.ndim != 3:
+            raise ValueError(f"weights must have shape (K, n_x, n_y), got {w.shape}")
+        k, nx, ny = w.shape
+        raw = np.ascontiguousarray(w.reshape(k, nx * ny).T, dtype=_storage_dtype(tol))
+        return FastState(raw, np.ones(k), columns.sqnorms(raw), tol, (k, nx, ny))
+
+    def memory_bytes(self, shape: tuple[int, int, int], tol: float = 1e-6) -> int:
+        """Bytes of the state of weights of ``shape``: ``raw`` in float32 (float64 when
+        exact)."""
+        itemsize = np.dtype(_storage_dtype(_check_tol(tol))).itemsize
+        return itemsize * int(np.prod(shape, dtype=np.int64))
+
+    def export(self, state: FastState) -> NDArray[np.float64]:
+        """Dense float64 weights ``(K, n_x, n_y)``: ``scale[k] * raw[:, k]``."""
+        return columns.columns_to_dense(state.raw, state.scale, state.shape)
+
+    def max_abs(self, state: FastState) -> float:
+        """Largest ``|w_kij| = scale_k |raw[p, k]|``, without forming the dense weights."""
+        return columns.columns_top(state.raw, state.scale, state.shape)
+
+    def file_arrays(self, state: FastState) -> FileArrays:
+        """What a model file stores: ``state_raw``, ``state_scale`` and, if current,
+        ``state_sqnorm`` (:mod:`sigmapi.kernels.columns`), so that a saved model continues
+        bit for bit on this backend."""
+        sq = state.sqnorm if state.norms_valid else None
+        return columns.to_file(state.raw, state.scale, sq)
+
+    def file_weights(self, shape: tuple[int, int, int], arrays: FileArrays) -> NDArray[np.float64]:
+        """Dense float64 weights of what :meth:`file_arrays` wrote (``raw x scale``)."""
+        return columns.file_weights(shape, arrays)
+
+    def from_file_arrays(
+        self, shape: tuple[int, int, int], arrays: FileArrays, tol: float = 1e-6
+    ) -> FastState:
+        """The state :meth:`file_arrays` wrote, for weights of ``shape`` ``(K, n_x, n_y)``
+        (also from a version-1 file, whose ``weights`` must agree with ``raw x scale``).
+
+        Raises ``ValueError`` if the arrays are missing, do not fit ``shape`` and ``tol``, or
+        are not finite (scales must be > 0; ``sqnorm`` must agree with ``raw`` to 1e-6
+        relative).
+        """
+        tol = _check_tol(tol)
+        raw, scale, sq = columns.read_file(shape, arrays)
+        dtype = _storage_dtype(tol)
+        if raw.dtype != dtype:
+            raise ValueError(f"raw must be {np.dtype(dtype).name} for tol={tol}, got {raw.dtype}")
+        exact = columns.sqnorms(raw)
+        if sq is None:
+            sq = exact
+        elif not np.allclose(sq, exact, rtol=1e-6, atol=1e-12 * float(exact.max(initial=0.0))):
+            raise ValueError("sqnorm disagrees with raw")
+        k, nx, ny = shape
+        return FastState(
+            np.ascontiguousarray(raw, dtype=dtype),
+            np.ascontiguousarray(scale, dtype=np.float64),
+            np.ascontiguousarray(sq, dtype=np.float64),
+            tol,
+            (int(k), int(nx), int(ny)),
+            True,
         )
-    return _refining.search(index, state.sqnorm, xa, ya, state.tol, code)
+
+    def sqnorms(self, state: FastState) -> NDArray[np.float64]:
+        """``|w_k|^2 = scale_k^2 sqnorm_k`` of every unit, ``(K,)``, from the tracked norms."""
+        state.refresh_norms()
+        return np.asarray(state.scale**2 * state.sqnorm)
+
+    # ------------------------------------------------------------------ inference
+
+    def activation(
+        self, state: FastState, x: NDArray[np.floating], y: NDArray[np.floating]
+    ) -> NDArray[np.float64]:
+        """Sigma-Pi activations ``h[b, k] = x_b^T W_k y_b`` of a batch; ``(B, K)``.
+
+        Sparse equivalent of the matrix product ``vec(x_b y_b^T) @ W^T``: each row costs
+        ``K x (number of kept pairs)`` multiply-adds. Up to :data:`SERIAL_ROWS` rows run in
+        the caller's thread; larger batches in parallel over rows (the same numbers either
+        way).
+        """
+        xa, ya = _rows_of(state, x, y)
+        h = np.empty((xa.shape[0], state.shape[0]))
+        ahead = _ahead(state, PREFETCH_AHEAD)
+        if xa.shape[0] <= SERIAL_ROWS:
+            jb, pi, pv, acc, *_ = state.scratch()
+            _rows.respond_rows(state.raw, state.scale, xa, ya, state.tol, ahead, jb, pi, pv, acc, h)
+        else:
+            _rows.respond_rows_parallel(
+                state.raw, state.scale, xa, ya, state.tol, ahead, _peak_order(xa, ya), h
+            )
+        return h
+
+    def winners_of(
+        self,
+        state: FastState,
+        x: NDArray[np.floating],
+        y: NDArray[np.floating],
+        geometry: MapGeometry,
+        rule: WinnerRule | str,
+        sigma: float,
+    ) -> NDArray[np.int64]:
+        """Winning unit of each pair ``(x_b, y_b)``; ``(B,)``: activation and winner in one
+        pass.
+
+        The same winners as ``winners(state, activation(state, x, y), ...)`` (the compiled
+        winner rule of training), without forming the ``(B, K)`` activations; serial up to
+        :data:`SERIAL_ROWS` rows, else parallel over rows.
+        """
+        xa, ya = _rows_of(state, x, y)
+        dims, strides = _grid(geometry.shape, state.shape[0])
+        r, code = _rule_code(rule)
+        if r.needs_norms:
+            state.refresh_norms()
+        out = np.empty(xa.shape[0], dtype=np.int64)
+        # left unformatted: the arguments in the rows of the kernel's signature
+        args = (state.raw, state.scale, state.sqnorm, xa, ya, state.tol,
+                _ahead(state, PREFETCH_AHEAD), code,
+                float(sigma), geometry.soft_cut, dims, strides, geometry.periodic)  # fmt: skip
+        if xa.shape[0] <= SERIAL_ROWS:
+            jb, pi, pv, acc, h, t1, t2 = state.scratch()
+            _rows.winners_rows(*args, jb, pi, pv, acc, h, t1, t2, out)
+        else:
+            _rows.winners_rows_parallel(*args, _peak_order(xa, ya), out)
+        return out
+
+    # ------------------------------------------------------------------ learning
+
+    def train_block(
+        self,
+        state: FastState,
+        x0: NDArray[np.floating],
+        y0: NDArray[np.floating],
+        x1: NDArray[np.floating],
+        y1: NDArray[np.floating],
+        sigmas: NDArray[np.floating],
+        eps: NDArray[np.floating],
+        *,
+        geometry: MapGeometry,
+        winner_rule: WinnerRule | str,
+        gates: NDArray[np.floating] | None = None,
+        threads: bool = False,
+    ) -> NDArray[np.int64]:
+        """Run ``len(x0)`` learning iterations in order, updating ``state`` in place (as
+        :meth:`sigmapi.kernels.reference.ReferenceKernel.train_block`, gates included:
+        iteration ``t`` updates unit ``k`` with ``eps[t] gates[t, k] a_k``). Returns the
+        winners ``(T,)``.
+
+        ``threads``: update the units on numba's threads (the same result) when the map is
+        large enough (:data:`PARALLEL_MIN_WORK`) and numba has more than one thread.
+        """
+        k_units, nx, ny = state.shape
+        dims, strides = _grid(geometry.shape, k_units)
+        rule, code = _rule_code(winner_rule, "winner_rule")
+        xs = [
+            _codes(a, n, nm)
+            for a, n, nm in ((x0, nx, "x0"), (y0, ny, "y0"), (x1, nx, "x1"), (y1, ny, "y1"))
+        ]
+        n_iter = xs[0].shape[0]
+        sg = np.ascontiguousarray(sigmas, dtype=np.float64)
+        ep = np.ascontiguousarray(eps, dtype=np.float64)
+        if any(a.shape[0] != n_iter for a in xs) or sg.shape != (n_iter,) or ep.shape != (n_iter,):
+            raise ValueError("x0, y0, x1, y1, sigmas and eps must have the same length")
+        gt = NO_GATES if gates is None else np.ascontiguousarray(gates, dtype=np.float64)
+        if gates is not None and gt.shape != (n_iter, k_units):
+            raise ValueError(f"gates must have shape ({n_iter}, {k_units}), got {gt.shape}")
+        out, track, parallel = _run(state, rule, n_iter, threads)
+        driver: Any = _train  # a numba dispatcher (its stubs do not know the signature)
+        # left unformatted: the arguments in the rows of the kernel's signature
+        driver(state.raw, state.scale, state.sqnorm, *xs, sg, ep, gt, dims, strides,
+               geometry.periodic, code, geometry.soft_cut, state.tol, out, track,
+               bool(parallel), _ahead(state, TRAIN_PREFETCH_AHEAD))  # fmt: skip
+        return out
+
+    def train_stream(
+        self,
+        state: FastState,
+        x: NDArray[np.floating],
+        y: NDArray[np.floating],
+        trace: NDArray[np.floating] | None,
+        sigmas: NDArray[np.floating],
+        eps: NDArray[np.floating],
+        *,
+        lam: float,
+        geometry: MapGeometry,
+        winner_rule: WinnerRule | str,
+        threads: bool = False,
+    ) -> tuple[NDArray[np.int64], NDArray[np.float64] | None]:
+        """Learn the frames of a stream in order under the trace rule, updating ``state`` in
+        place (as :meth:`sigmapi.kernels.reference.ReferenceKernel.train_stream`). Returns
+        the winners ``(T,)`` and the trace ``(K,)`` after the last frame (None if there is
+        none yet). ``threads``: as :meth:`train_block` (the same result on any number of
+        threads).
+        """
+        k_units, nx, ny = state.shape
+        dims, strides = _grid(geometry.shape, k_units)
+        rule, code = _rule_code(winner_rule, "winner_rule")
+        xa, ya = _codes(x, nx, "x"), _codes(y, ny, "y")
+        n_frames = xa.shape[0]
+        sg = np.ascontiguousarray(sigmas, dtype=np.float64)
+        ep = np.ascontiguousarray(eps, dtype=np.float64)
+        if ya.shape[0] != n_frames or sg.shape != (n_frames,) or ep.shape != (n_frames,):
+            raise ValueError("x, y, sigmas and eps must have the same length")
+        tr = np.zeros(k_units) if trace is None else np.array(trace, dtype=np.float64)
+        if tr.shape != (k_units,):
+            raise ValueError(f"trace must have shape ({k_units},), got {tr.shape}")
+        out, track, parallel = _run(state, rule, n_frames, threads)
+        driver: Any = _train_stream  # a numba dispatcher
+        # left unformatted: the arguments in the rows of the kernel's signature
+        primed = driver(state.raw, state.scale, state.sqnorm, xa, ya, tr, trace is not None,
+                        sg, ep, float(lam), dims, strides, geometry.periodic, code,
+                        geometry.soft_cut, state.tol, out, track, bool(parallel),
+                        _ahead(state, TRAIN_PREFETCH_AHEAD))  # fmt: skip
+        return out, (tr if primed else None)
+
+    # ------------------------------------------------------------------ refinement
+
+    def refine_start(self, state: FastState) -> Sums:
+        """Empty accumulators: sums ``(K, n_x * n_y)`` (a unit's pairs contiguous, unlike the
+        weights' layout: a pair adds to few units), mass ``(K,)``."""
+        k, nx, ny = state.shape
+        return Sums(np.zeros((k, nx * ny)), np.zeros(k))
+
+    def _refine_winners(
+        self,
+        state: FastState,
+        acc: Sums,
+        x0: NDArray[np.floating],
+        y0: NDArray[np.floating],
+        geometry: MapGeometry,
+        winner_rule: WinnerRule | str,
+    ) -> NDArray[np.int64]:
+        """The winners of :meth:`winners_of` (at sigma 0), by the round's bounds
+        (:mod:`sigmapi.kernels._refining`) where the rule allows: the index is made from the
+        round's fixed weights on first use and kept in ``acc`` (it holds a transposed copy of
+        the weights, so a round holds the weights twice, beside its float64 sums). The exact
+        mode (``tol = 0``) and the smoothing rules search in full."""
+        _, code = _rule_code(winner_rule)
+        if state.tol == 0 or code not in _refining.RULES:
+            return self.winners_of(state, x0, y0, geometry, winner_rule, 0.0)
+        xa, ya = _rows_of(state, x0, y0)
+        _grid(geometry.shape, state.shape[0])  # checks the map holds the state's units
+        state.refresh_norms()
+        index = acc.index
+        if not (isinstance(index, _refining.SearchIndex) and index.fits(state.raw, state.scale)):
+            _, nx, ny = state.shape
+            index = acc.index = _refining.build(
+                state.raw, state.scale, acc.code_shapes or ((nx,), (ny,))
+            )
+        return _refining.search(index, state.sqnorm, xa, ya, state.tol, code)
+
+    def refine_block(
+        self,
+        state: FastState,
+        acc: Sums,
+        x0: NDArray[np.floating],
+        y0: NDArray[np.floating],
+        x1: NDArray[np.floating],
+        y1: NDArray[np.floating],
+        *,
+        geometry: MapGeometry,
+        winner_rule: WinnerRule | str,
+        sigma: float,
+    ) -> NDArray[np.int64]:
+        """Add ``len(x0)`` pairs to ``acc`` in order (as
+        :meth:`sigmapi.kernels.reference.ReferenceKernel.refine_block`): winners of view 0 on
+        the fixed state, then the sparse outer products of view 1 (pairs and units below
+        ``tol`` of their peak skipped) added one pair after another, on one thread (the same
+        sums for any blocks)."""
+        _, nx, ny = state.shape
+        k = self._refine_winners(state, acc, x0, y0, geometry, winner_rule)
+        x1a, y1a = _codes(x1, nx, "x1"), _codes(y1, ny, "y1")
+        if sigma == 0:
+            _refining.hard_sums(acc.sums, acc.mass, k, x1a, y1a, state.tol)
+        else:
+            a = assignment(k, geometry, float(sigma))
+            jb, pi, pv = state.scratch()[:3]
+            driver: Any = _refine_sums  # a numba dispatcher
+            driver(acc.sums, acc.mass, np.ascontiguousarray(a), x1a, y1a, state.tol, jb, pi, pv)
+        acc.pairs += int(x1a.shape[0])
+        return k
+
+    def refine_finish(self, state: FastState, acc: Sums) -> FastState:
+        """The state of the new weights (:meth:`sigmapi.rules.BatchMean.finish`: ``sums /
+        mass`` per unit that won, the weights kept elsewhere), stored as :meth:`prepare`
+        stores weights (scales 1), computed in the kernel's layout."""
+        raw = _refining.finish(state.raw, state.scale, acc.sums, acc.mass)
+        return FastState(raw, np.ones(state.shape[0]), columns.sqnorms(raw), state.tol, state.shape)
 
 
-def refine_block(
-    state: FastState,
-    acc: Sums,
-    x0: NDArray[np.floating],
-    y0: NDArray[np.floating],
-    x1: NDArray[np.floating],
-    y1: NDArray[np.floating],
-    *,
-    map_shape: tuple[int, ...],
-    winner_rule: WinnerRule | str,
-    soft_cut: int,
-    sigma: float,
-    map_periodic: bool = False,
-) -> NDArray[np.int64]:
-    """Add ``len(x0)`` pairs to ``acc`` in order (as
-    :func:`sigmapi.kernels.reference.refine_block`): winners of view 0 on the fixed state,
-    then the sparse outer products of view 1 (pairs and units below ``tol`` of their peak
-    skipped) added one pair after another, on one thread (the same sums for any blocks)."""
-    _, nx, ny = state.shape
-    k = _refine_winners(state, acc, x0, y0, map_shape, winner_rule, soft_cut, map_periodic)
-    x1a, y1a = _codes(x1, nx, "x1"), _codes(y1, ny, "y1")
-    if sigma == 0:
-        _refining.hard_sums(acc.sums, acc.mass, k, x1a, y1a, state.tol)
-    else:
-        a = np.ascontiguousarray(assignment(k, map_shape, float(sigma), map_periodic))
-        jb, pi, pv = state.scratch()[:3]
-        driver: Any = _refine_sums  # a numba dispatcher
-        driver(acc.sums, acc.mass, a, x1a, y1a, state.tol, jb, pi, pv)
-    acc.pairs += int(x1a.shape[0])
-    return k
-
-
-def refine_finish(state: FastState, acc: Sums) -> FastState:
-    """The state of the new weights (:meth:`sigmapi.rules.BatchMean.finish`: ``sums /
-    mass`` per unit that won, the weights kept elsewhere), stored as :func:`prepare` stores
-    weights (scales 1), computed in the kernel's layout."""
-    raw = _refining.finish(state.raw, state.scale, acc.sums, acc.mass)
-    return FastState(raw, np.ones(state.shape[0]), columns.sqnorms(raw), state.tol, state.shape)
+KERNEL = FastKernel()
+"""The fast kernel (what :data:`sigmapi.kernels.REGISTRY` holds as ``"fast"``)."""

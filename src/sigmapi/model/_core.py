@@ -176,9 +176,7 @@ class MapCore(GridsMixin):
         if hard:
             chosen = chosen.hard
         c, run = self.config, self._run
-        k = run.kernel.winners_of(
-            run.state, xa, ya, self.map_shape, chosen, self.sigma_, c.soft_cut, c.map_periodic
-        )
+        k = run.kernel.winners_of(run.state, xa, ya, c.geometry, chosen, self.sigma_)
         return np.asarray(k, dtype=np.int64)
 
     def transform(self, x: ArrayLike, y: ArrayLike) -> NDArray[np.float64]:

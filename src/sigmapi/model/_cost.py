@@ -34,7 +34,7 @@ class CostMixin(MapCore):
         wn = self.unit_sqnorms()
         dn = (batch.x1**2).sum(1) * (batch.y1**2).sum(1)
         s = self.sigma_ if sigma is None else float(sigma)
-        a = self._run.kernel.neighbourhood(k, self.map_shape, s, self.config.map_periodic)
+        a = self._run.kernel.neighbourhood(k, self.config.geometry, s)
         return k, dn[:, None] - 2.0 * h1 + wn[None, :], a
 
     def cost(self, batch: Batch, sigma: float | None = None) -> float:

@@ -118,11 +118,9 @@ def refine(
                 y0,
                 x1,
                 y1,
-                map_shape=c.map_shape,
+                geometry=c.geometry,
                 winner_rule=rule,
-                soft_cut=c.soft_cut,
                 sigma=c.refine_sigma,
-                map_periodic=c.map_periodic,
             )
             for end in ends[:-1]:  # the round's weights stay those of its start until its end
                 _block_done(run, r * per + end, done < end, notify)

@@ -107,11 +107,9 @@ def _frames(c: SOMConfig, run: RunState, x: Array, y: Array, lam: float, notify:
             sigma_at(c, it + 1),
             eps_at(c, np.maximum(it, 0)),
             lam=lam,
-            map_shape=c.map_shape,
+            geometry=c.geometry,
             winner_rule=training_rule(c),
-            soft_cut=c.soft_cut,
             threads=c.threads,
-            map_periodic=c.map_periodic,
         )[1]
         run.t = first + xs.shape[0]
         run.weights = None

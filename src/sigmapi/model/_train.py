@@ -154,11 +154,9 @@ def _views(
         y1,
         sigma_at(c, t),
         eps_at(c, t),
-        map_shape=c.map_shape,
+        geometry=c.geometry,
         winner_rule=training_rule(c),
-        soft_cut=c.soft_cut,
         threads=c.threads,
-        map_periodic=c.map_periodic,
     )
     run.t += x0.shape[0]
     run.weights = None
@@ -177,11 +175,6 @@ def learn_gated(
     the schedule's at ``run.t``)."""
     n = data[0].shape[0]
     kernel: Any = run.kernel
-    if not hasattr(kernel, "train_gated_block"):
-        raise ConfigError(
-            f"backend {str(kernel.NAME)!r} has no gated update (train_gated_block); use "
-            "backend 'reference' or 'fast'"
-        )
     s = (
         run.sigma_now(c)
         if sigma is None
@@ -198,15 +191,13 @@ def learn_gated(
         if eps is None
         else _validate.number("eps", eps, 0.0, 1.0, fix="a learning rate, e.g. 0.01")
     )
-    kernel.train_gated_block(
+    kernel.train_block(
         run.state,
         *data,
         np.full(n, s),
         np.full(n, e),
-        g,
-        map_shape=c.map_shape,
+        geometry=c.geometry,
         winner_rule=training_rule(c),
-        soft_cut=c.soft_cut,
-        map_periodic=c.map_periodic,
+        gates=g,
     )
     run.weights = None

@@ -196,8 +196,9 @@ class SigmaPiSOM(CostMixin, ParamsMixin, PersistMixin):
 
         Iteration ``t`` finds the winner of ``(x0[t], y0[t])`` and moves unit ``k`` towards
         ``x1[t] y1[t]^T`` by ``eps gates[t, k] a_k`` (docs/algorithm.md, "Reward-gated
-        plasticity"; :func:`sigmapi.kernels.reference.train_gated_block`). The schedule's clock
-        ``t_`` does not move: these iterations come after (or between) its runs.
+        plasticity"; the ``gates`` of :meth:`sigmapi.kernels.base.Kernel.train_block`). The
+        schedule's clock ``t_`` does not move: these iterations come after (or between) its
+        runs.
 
         Parameters
         ----------

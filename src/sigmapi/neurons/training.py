@@ -38,6 +38,7 @@ from sigmapi import _validate
 from sigmapi.codes import grid_coordinates
 from sigmapi.config import SOMConfig
 from sigmapi.model._grids import GridsMixin
+from sigmapi.rules.geometry import MapGeometry
 from sigmapi.rules.neighbourhood import gaussian, neighbourhood
 from sigmapi.rules.ordering import INIT_PAIRS, crossview_scores
 from sigmapi.rules.winners import ARGMAX, SOFT_MEAN, Scoring, WinnerRule
@@ -172,7 +173,10 @@ def train(model: FirstOrderMap, config: TrainingConfig, rng: np.random.Generator
     steps = config.pairs // config.batch
     s0, s1 = config.sigma
     e0, e1 = config.eps
-    cut = max(model.map_shape)
+    # the winner's smoothing over the whole map (the window as wide as the map); the update's
+    # neighbourhood on the bounded grid
+    smoothing = MapGeometry(model.map_shape, model.config.map_periodic, max(model.map_shape))
+    grid = MapGeometry(model.map_shape)
     pool: tuple[Array, ...] = ()
     used = CHUNK
     for step in range(steps):
@@ -182,9 +186,8 @@ def train(model: FirstOrderMap, config: TrainingConfig, rng: np.random.Generator
         used += config.batch
         f = step / max(steps - 1, 1)
         sigma = s0 * (s1 / s0) ** max(0.0, (f - config.hold) / (1.0 - config.hold))
-        at = Scoring(model.map_shape, sigma, cut, model.config.map_periodic)
-        w = SOFT_MEAN.winners(model.respond(x0, y0), at)
-        model.learn(neighbourhood(w, model.map_shape, sigma), x1, y1, e0 + (e1 - e0) * f)
+        w = SOFT_MEAN.winners(model.respond(x0, y0), Scoring(smoothing, sigma))
+        model.learn(neighbourhood(w, grid, sigma), x1, y1, e0 + (e1 - e0) * f)
     for _ in range(config.refine_rounds):
         chunks = []
         for s in range(0, config.refine_pairs, CHUNK):

@@ -1,5 +1,7 @@
 """The rules of the Sigma-Pi SOM, each defined once, with its reference arithmetic (NumPy).
 
+- :mod:`~sigmapi.rules.geometry`: the map's geometry as one value (grid, periodic axes, the
+  soft winner's window), what the winner rules and the kernels compute on;
 - :mod:`~sigmapi.rules.winners`: winner rules (``soft``, ``argmax``, ``min_distance``,
   ``soft_mean``): scores, norms needed, hard limit, border-normalised variant;
 - :mod:`~sigmapi.rules.neighbourhood`: the Gaussian over the map, bounded or periodic (the
@@ -28,6 +30,7 @@ from collections.abc import Mapping
 from typing import TypeVar
 
 from sigmapi import _validate
+from sigmapi.rules.geometry import MapGeometry
 from sigmapi.rules.learning import KOHONEN, LEARNING_RULES, Kohonen
 from sigmapi.rules.neighbourhood import GAUSSIAN, NEIGHBOURHOODS, Gaussian
 from sigmapi.rules.ordering import ORDERINGS, Ordering, OrderingSettings
@@ -46,6 +49,7 @@ __all__ = [
     "BatchMean",
     "Gaussian",
     "Kohonen",
+    "MapGeometry",
     "Ordering",
     "OrderingSettings",
     "Scoring",

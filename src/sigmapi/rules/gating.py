@@ -9,9 +9,9 @@ the map's own Kohonen update of unit ``k`` is scaled by a gate
 a global factor ``f`` of the critic's TD error ``delta`` times ``b_k``, the feedback from the
 chosen action onto unit ``k``: the action's actor weight from unit ``k``, positive part,
 relative to the largest (units that did not vote for the chosen action are not changed). The
-gated update is then ``w_k += eps g_k a_k (x1 y1^T - w_k)``
-(:func:`sigmapi.kernels.reference.train_gated_block`): a gate of 0 leaves ``w_k`` as it was,
-a gate of 1 is the ungated rule.
+gated update is then ``w_k += eps g_k a_k (x1 y1^T - w_k)`` (the ``gates`` of
+:meth:`sigmapi.kernels.base.Kernel.train_block`): a gate of 0 leaves ``w_k`` as it was, a
+gate of 1 is the ungated rule.
 
 The surprise factors ``f`` (:data:`SURPRISE`), each clipped to ``[0, 1]`` after dividing by
 ``scale``:

@@ -5,8 +5,9 @@ Written once: :func:`gaussian` and :func:`axis_distance` are plain functions of 
 arrays that the reference arithmetic below calls with NumPy arrays and the fast kernel
 compiles with numba (:mod:`sigmapi.kernels._rows`), so that every backend evaluates the same
 expression. Shapes: winners ``(B,)``, activations and neighbourhoods ``(B, K)`` over ``K``
-units on the grid ``map_shape``, flattened in C order. ``map_periodic``: every map axis wraps
-around (a ring in 1-D, a torus in 2-D); distances go the shorter way round.
+units on the grid ``geometry.shape`` (:class:`~sigmapi.rules.geometry.MapGeometry`),
+flattened in C order. ``geometry.periodic``: every map axis wraps around (a ring in 1-D, a
+torus in 2-D); distances go the shorter way round.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sigmapi.codes import grid_coordinates
+from sigmapi.rules.geometry import MapGeometry
 
 __all__ = [
     "GAUSSIAN",
@@ -55,7 +57,7 @@ def _coords(map_shape: tuple[int, ...]) -> NDArray[np.float64]:
 
 
 def neighbourhood(
-    winner: NDArray[np.int64], map_shape: tuple[int, ...], sigma: float, map_periodic: bool = False
+    winner: NDArray[np.int64], geometry: MapGeometry, sigma: float
 ) -> NDArray[np.float64]:
     """Gaussian neighbourhood around each winner, L2-normalised; ``(B,)`` -> ``(B, K)``.
 
@@ -64,13 +66,13 @@ def neighbourhood(
 
     Examples
     --------
-    >>> a = neighbourhood(np.array([0]), (3,), 1.0)
+    >>> a = neighbourhood(np.array([0]), MapGeometry((3,)), 1.0)
     >>> a.shape, bool(a[0, 0] > a[0, 1] > a[0, 2])
     ((1, 3), True)
     """
-    coords = _coords(tuple(map_shape))
+    coords = _coords(geometry.shape)
     diff = np.abs(coords[None, :, :] - coords[np.asarray(winner)][:, None, :])
-    diff = axis_distance(diff, np.asarray(map_shape, dtype=np.float64), map_periodic)
+    diff = axis_distance(diff, np.asarray(geometry.shape, dtype=np.float64), geometry.periodic)
     d2 = (diff**2).sum(axis=2)
     a = gaussian(d2, sigma)
     return np.asarray(a / np.linalg.norm(a, axis=1, keepdims=True))
@@ -85,24 +87,18 @@ def smoothing_matrix(n: int, sigma: float, cut: int, map_periodic: bool) -> NDAr
     return np.asarray(g)
 
 
-def smooth(
-    h: NDArray[np.floating],
-    map_shape: tuple[int, ...],
-    sigma: float,
-    cut: int,
-    map_periodic: bool = False,
-) -> NDArray[np.float64]:
+def smooth(h: NDArray[np.floating], geometry: MapGeometry, sigma: float) -> NDArray[np.float64]:
     """Convolve activations ``(B, K)`` over the map grid with a Gaussian of width ``sigma``.
 
-    Summed over a window of ``cut`` units each way along every axis (the authors' script:
-    cut = 15). On a bounded map (the paper) the window stops at the border; on a periodic
-    map it wraps around, and every unit of the window counts once, at its distance the
-    shorter way round. Separable: one matrix product per map axis.
+    Summed over a window of ``geometry.soft_cut`` units each way along every axis (the
+    authors' script: 15). On a bounded map (the paper) the window stops at the border; on a
+    periodic map it wraps around, and every unit of the window counts once, at its distance
+    the shorter way round. Separable: one matrix product per map axis.
     """
     b = h.shape[0]
-    g = np.asarray(h, dtype=np.float64).reshape((b, *map_shape))
-    for axis, n in enumerate(map_shape):
-        m = smoothing_matrix(n, sigma, cut, map_periodic)
+    g = np.asarray(h, dtype=np.float64).reshape((b, *geometry.shape))
+    for axis, n in enumerate(geometry.shape):
+        m = smoothing_matrix(n, sigma, geometry.soft_cut, geometry.periodic)
         g = np.moveaxis(np.tensordot(g, m, axes=([axis + 1], [1])), -1, axis + 1)
     return g.reshape(b, -1)
 
@@ -117,13 +113,9 @@ class Gaussian:
     name = "gaussian"
 
     def __call__(
-        self,
-        winner: NDArray[np.int64],
-        map_shape: tuple[int, ...],
-        sigma: float,
-        map_periodic: bool = False,
+        self, winner: NDArray[np.int64], geometry: MapGeometry, sigma: float
     ) -> NDArray[np.float64]:
-        return neighbourhood(winner, map_shape, sigma, map_periodic)
+        return neighbourhood(winner, geometry, sigma)
 
     def __repr__(self) -> str:
         return f"<neighbourhood {self.name!r}>"

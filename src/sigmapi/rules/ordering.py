@@ -62,6 +62,7 @@ from threadpoolctl import threadpool_limits
 
 from sigmapi.codes import grid_coordinates
 from sigmapi.errors import ConfigError
+from sigmapi.rules.geometry import MapGeometry
 from sigmapi.rules.neighbourhood import axis_distance, gaussian
 from sigmapi.rules.winners import WinnerRule
 
@@ -198,18 +199,18 @@ def crossview_init(
     views: tuple[NDArray[np.float64], ...],
     x_shape: tuple[int, ...],
     y_shape: tuple[int, ...],
-    map_shape: tuple[int, ...],
+    geometry: MapGeometry,
     sigma: float,
     periodic: bool = False,
-    map_periodic: bool = False,
 ) -> NDArray[np.float64]:
-    """Ordered initial weights ``(n_units, n_x, n_y)`` from view pairs (module docstring).
+    """Ordered initial weights ``(n_units, n_x, n_y)`` from view pairs (module docstring) on
+    the map ``geometry`` (periodic: a ring or a torus, a periodic map of one or two
+    dimensions, step 5 of the module docstring).
 
     ``sigma`` is the width (map units) of the neighbourhood that averages the outer products
     ``x1 y1^T`` of the pairs placed near each unit. ``periodic``: the codes' axes are rings.
-    ``map_periodic``: the map is a ring or a torus, a periodic map of one or two dimensions
-    (step 5 of the module docstring).
     """
+    map_shape, map_periodic = geometry.shape, geometry.periodic
     n, d = views[0].shape[0], len(map_shape)
     if n < 4 * d:
         raise ConfigError(
@@ -336,7 +337,7 @@ class OrderingSettings(Protocol):
     @property
     def periodic(self) -> bool: ...
     @property
-    def map_periodic(self) -> bool: ...
+    def geometry(self) -> MapGeometry: ...
 
 
 class Ordering(ABC):
@@ -414,10 +415,9 @@ class Crossview(Ordering):
             views,
             settings.x_shape,
             settings.y_shape,
-            settings.map_shape,
+            settings.geometry,
             settings.ordering_sigma / 2.0,
             periodic=settings.periodic,
-            map_periodic=settings.map_periodic,
         )
 
     def cap_sigma(self, sigma: NDArray[np.float64], ordering_sigma: float) -> NDArray[np.float64]:

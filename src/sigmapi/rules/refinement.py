@@ -17,8 +17,8 @@ view pairs (never z):
 :class:`BatchMean` is the reference arithmetic: :meth:`~BatchMean.start` makes float64
 accumulators, :meth:`~BatchMean.accumulate` adds pairs one after another (so the sums do
 not depend on how the stream is cut into blocks), :meth:`~BatchMean.finish` divides. The
-fast kernel computes the same sums on its own layout (``sigmapi.kernels.fast.refine_block``,
-the sparse pairs of ``kernel_tol``).
+fast kernel computes the same sums on its own layout
+(``sigmapi.kernels.fast.FastKernel.refine_block``, the sparse pairs of ``kernel_tol``).
 """
 
 from __future__ import annotations
@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from sigmapi.rules.geometry import MapGeometry
 from sigmapi.rules.neighbourhood import neighbourhood
 
 __all__ = ["BATCH_MEAN", "REFINEMENTS", "BatchMean", "Sums", "assignment"]
@@ -51,16 +52,16 @@ class Sums:
 
 
 def assignment(
-    winners: NDArray[np.int64], map_shape: tuple[int, ...], sigma: float, map_periodic: bool
+    winners: NDArray[np.int64], geometry: MapGeometry, sigma: float
 ) -> NDArray[np.float64]:
     """The weight ``a[b, k]`` of pair ``b`` in unit ``k``'s mean, ``(B, K)``: the winner alone
-    at ``sigma = 0``, else the L2-normalised Gaussian around the winner (the cost's)."""
-    k = int(np.prod(map_shape))
+    at ``sigma = 0``, else the L2-normalised Gaussian around the winner (the cost's) on the
+    map ``geometry``."""
     if sigma == 0:
-        a = np.zeros((winners.size, k))
+        a = np.zeros((winners.size, geometry.units))
         a[np.arange(winners.size), winners] = 1.0
         return a
-    return np.asarray(neighbourhood(winners, map_shape, sigma, map_periodic), dtype=np.float64)
+    return np.asarray(neighbourhood(winners, geometry, sigma), dtype=np.float64)
 
 
 class BatchMean:

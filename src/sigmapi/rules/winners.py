@@ -21,6 +21,7 @@ from typing import ClassVar
 import numpy as np
 from numpy.typing import NDArray
 
+from sigmapi.rules.geometry import MapGeometry
 from sigmapi.rules.neighbourhood import smooth
 
 __all__ = [
@@ -47,22 +48,18 @@ class Scoring:
 
     Attributes
     ----------
-    map_shape : tuple of int
-        The map's grid (``K`` units, flattened in C order).
+    geometry : MapGeometry
+        The map (:class:`~sigmapi.rules.geometry.MapGeometry`): its grid (``K`` units,
+        flattened in C order), whether its axes wrap around, and the half-width
+        ``soft_cut`` of the smoothing window, in map units along every axis.
     sigma : float
         Width of the smoothing over the map (the rules that smooth), in map units.
-    cut : int
-        Half-width of the smoothing window, in map units along every axis.
-    map_periodic : bool
-        The map's axes wrap around.
     sqnorms : ndarray, shape (K,), optional
         The units' squared norms ``|w_k|^2``, for the rules that need them.
     """
 
-    map_shape: tuple[int, ...]
+    geometry: MapGeometry
     sigma: float
-    cut: int
-    map_periodic: bool = False
     sqnorms: NDArray[np.float64] | None = None
 
 
@@ -100,12 +97,12 @@ class WinnerRule(ABC):
 
 class Soft(WinnerRule):
     """``"soft"``, the paper's rule: argmax of the activations smoothed over the map with a
-    Gaussian of width sigma, summed over a window of ``cut`` units each way."""
+    Gaussian of width sigma, summed over a window of ``soft_cut`` units each way."""
 
     name = "soft"
 
     def scores(self, h: Array, at: Scoring) -> Scores:
-        return smooth(h, at.map_shape, at.sigma, at.cut, at.map_periodic)
+        return smooth(h, at.geometry, at.sigma)
 
     @property
     def hard(self) -> WinnerRule:
@@ -124,9 +121,9 @@ class SoftMean(WinnerRule):
     name = "soft_mean"
 
     def scores(self, h: Array, at: Scoring) -> Scores:
-        ones = np.ones((1, int(np.prod(at.map_shape))))
-        inside = smooth(ones, at.map_shape, at.sigma, at.cut, at.map_periodic)
-        return smooth(h, at.map_shape, at.sigma, at.cut, at.map_periodic) / inside
+        ones = np.ones((1, at.geometry.units))
+        inside = smooth(ones, at.geometry, at.sigma)
+        return smooth(h, at.geometry, at.sigma) / inside
 
     @property
     def hard(self) -> WinnerRule:
