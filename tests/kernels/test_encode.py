@@ -54,16 +54,31 @@ def test_no_positions_give_no_codes():
     assert _codes.encode(code, np.zeros((0, 2))).shape == (0, 16)
 
 
-def test_the_sampler_draws_the_same_batches_with_numpys_encoder(monkeypatch):
-    sampler = tasks.TwoViewSampler(
-        "mean", PopulationCode((15, 15), 1.0), PopulationCode((15, 15), 1.0)
-    )
-    fast = sampler.sample(1000, np.random.default_rng(3))
-    frames = sampler.stream(500, 4, np.random.default_rng(4))
+def test_codes_go_into_out_and_a_wrong_out_is_refused():
+    code = PopulationCode((6, 5), 0.8)
+    p = np.random.default_rng(2).random((30, 2))
+    out = np.full((40, 30), np.nan)
+    assert _codes.encode(code, p, out[5:35]) is not None
+    np.testing.assert_array_equal(out[5:35], code.encode(p))
+    assert np.isnan(out[:5]).all() and np.isnan(out[35:]).all()
+    with pytest.raises(ValueError, match="out must be C-contiguous float64 of shape"):
+        _codes.encode(code, p, np.empty((30, 31)))
+
+
+@pytest.mark.parametrize("into", [False, True])
+def test_the_sampler_draws_the_same_batches_with_numpys_encoder(monkeypatch, into):
+    code = PopulationCode((15, 15), 1.0)
+    sampler = tasks.TwoViewSampler("mean", code, code)
+
+    def draw() -> tuple[np.ndarray, ...]:
+        out = tuple(np.empty((1000, 225)) for _ in range(4)) if into else None
+        batch = sampler.sample(1000, np.random.default_rng(3), out=out)
+        if out is not None:
+            assert all(a is b for a, b in zip(batch[:4], out, strict=True))
+        return (*batch, *sampler.stream(500, 4, np.random.default_rng(4)))
+
+    fast = draw()
     assert tasks._encoder() is _codes.encode
-    monkeypatch.setattr(tasks, "_encoder", lambda: PopulationCode.encode)
-    slow = sampler.sample(1000, np.random.default_rng(3))
-    for a, b in zip(fast, slow, strict=True):
-        np.testing.assert_array_equal(a, b)
-    for a, b in zip(frames, sampler.stream(500, 4, np.random.default_rng(4)), strict=True):
+    monkeypatch.setattr(tasks, "_encoder", lambda: tasks._numpy_encode)
+    for a, b in zip(fast, draw(), strict=True):
         np.testing.assert_array_equal(a, b)

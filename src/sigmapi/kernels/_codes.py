@@ -118,8 +118,12 @@ def _outer(a, h, height, normalize, out):  # pragma: no cover - compiled
                 row[u] = row[u] / norm
 
 
-def encode(code: PopulationCode, p: ArrayLike) -> NDArray[np.float64]:
-    """``code.encode(p)``, bit for bit, compiled (module docstring)."""
+def encode(
+    code: PopulationCode, p: ArrayLike, out: NDArray[np.float64] | None = None
+) -> NDArray[np.float64]:
+    """``code.encode(p)``, bit for bit, compiled (module docstring); written into ``out``
+    (C-contiguous float64 ``(B, n)``) when given, so that a caller drawing many batches
+    reuses its memory instead of asking the system for fresh pages every time."""
     hills = code.hills(p)
     a = np.ones((hills[0].shape[0], 1))
     driver: Any = _outer  # a numba dispatcher
@@ -127,6 +131,10 @@ def encode(code: PopulationCode, p: ArrayLike) -> NDArray[np.float64]:
         nxt = np.empty((a.shape[0], a.shape[1] * hill.shape[1]))
         driver(a, hill, 1.0, False, nxt)
         a = nxt
-    out = np.empty((a.shape[0], a.shape[1] * hills[-1].shape[1]))
+    shape = (a.shape[0], a.shape[1] * hills[-1].shape[1])
+    if out is None:
+        out = np.empty(shape)
+    elif out.shape != shape or out.dtype != np.float64 or not out.flags.c_contiguous:
+        raise ValueError(f"out must be C-contiguous float64 of shape {shape}, got {out.shape}")
     driver(a, hills[-1], float(code.height), bool(code.normalize), out)
     return out

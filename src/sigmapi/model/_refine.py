@@ -152,6 +152,7 @@ class RefineMixin:
         per = c.refine_pairs if data is None else data[0].shape[0]
         kernel = self._kernel
         rule = self.winner_rule_.hard
+        drawn: list[np.ndarray] = []  # the groups' codes, drawn into the same memory
         while self._refined < c.refine_rounds * per:
             r, done = divmod(self._refined, per)
             if self._refine_acc is None or self._refine_acc[0] != r:
@@ -165,7 +166,7 @@ class RefineMixin:
                     b = lo // BLOCK
                     last = min(b + GROUP, -(-per // BLOCK))  # blocks b .. last - 1
                     hi = min(per, last * BLOCK)
-                    views = self._draw(r, b, last, lo - b * BLOCK, hi - b * BLOCK)
+                    views = self._draw(r, b, last, lo - b * BLOCK, hi - b * BLOCK, drawn)
                     ends = [min(per, (i + 1) * BLOCK) for i in range(b, last)]
                 else:
                     hi = min(per, lo + GROUP * BLOCK)
@@ -207,15 +208,18 @@ class RefineMixin:
             if callback is not None:
                 callback(self)
 
-    def _draw(self, r: int, first: int, last: int, lo: int, hi: int) -> CodeViews:
+    def _draw(
+        self, r: int, first: int, last: int, lo: int, hi: int, out: list[np.ndarray]
+    ) -> CodeViews:
         """Pairs ``lo .. hi - 1`` of blocks ``first .. last - 1`` of round ``r`` (counted from
-        the first block's start), each block from its own stream, filled in place one block
-        at a time (so that a group's codes are held once)."""
+        the first block's start), each block from its own stream, drawn in place one block at
+        a time into ``out`` (the four codes of a group; made on first use, then reused)."""
         n = (last - first) * BLOCK
-        out = [np.empty((n, int(np.prod(s)))) for s in (self.x_shape, self.y_shape) * 2]
+        if not out or out[0].shape[0] < n:
+            out[:] = [np.empty((n, int(np.prod(s)))) for s in (self.x_shape, self.y_shape) * 2]
         for i in range(first, last):
-            d = self.sampler.sample(BLOCK, self._seq(4, r, i))
             at = slice((i - first) * BLOCK, (i - first + 1) * BLOCK)
-            for dest, v in zip(out, (d.x0, d.y0, d.x1, d.y1), strict=True):
-                dest[at] = v
+            self.sampler.sample(
+                BLOCK, self._seq(4, r, i), out=(out[0][at], out[1][at], out[2][at], out[3][at])
+            )
         return out[0][lo:hi], out[1][lo:hi], out[2][lo:hi], out[3][lo:hi]
