@@ -157,15 +157,24 @@ class PopulationCode:
         The Gaussian is separable, so the code is the C-order outer product of one 1-D hill
         per axis.
         """
+        hills = self.hills(p)
+        out = np.ones((hills[0].shape[0], 1))
+        for hill in hills:
+            out = (out[:, :, None] * hill[:, None, :]).reshape(hill.shape[0], -1)
+        return self._finish(out)
+
+    def hills(self, p: ArrayLike) -> list[NDArray[np.float64]]:
+        """The 1-D hills of positions ``p`` (shape ``(B, d)``, in [0, 1]), one ``(B, n_a)``
+        array per axis of ``n_a`` units, unscaled: :meth:`encode` is their C-order outer
+        product, times ``height``, normalised."""
         arr = self.check_positions(p) * self.scale
-        out = np.ones((arr.shape[0], 1))
+        out = []
         for axis, n in enumerate(self.shape):
             diff = arr[:, axis, None] - np.arange(n, dtype=np.float64)[None, :]
             if self.periodic:
                 diff = diff - n * np.round(diff / n)
-            hill = np.exp(-(diff**2) / (2.0 * self.width**2))
-            out = (out[:, :, None] * hill[:, None, :]).reshape(arr.shape[0], -1)
-        return self._finish(out)
+            out.append(np.exp(-(diff**2) / (2.0 * self.width**2)))
+        return out
 
     def pattern(self, points: ArrayLike) -> NDArray[np.float64]:
         """One code holding a hill at each of ``points`` (shape ``(m, d)``); returns ``(n,)``.

@@ -28,7 +28,7 @@ to the lowest index. For the rules whose score is a unit's own activation (``arg
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -66,6 +66,16 @@ class SearchIndex:
     norms: NDArray[np.float32]
     raw_t: NDArray[np.floating]
     scale: NDArray[np.float64]
+    scratch: dict[str, NDArray[Any]] = field(default_factory=dict, repr=False)
+    """Work arrays of the searches, kept for the next one (a round searches its pairs in
+    calls of the same size: the same memory, not fresh pages every call)."""
+
+    def work(self, name: str, rows: int, cols: int, dtype: type) -> NDArray[Any]:
+        """A work array ``(rows, cols)`` (``cols = 0``: ``(rows,)``) of ``dtype``, reused."""
+        have = self.scratch.get(name)
+        if have is None or have.shape[0] < rows:
+            have = self.scratch[name] = np.empty((rows, cols) if cols else rows, dtype=dtype)
+        return have[:rows]
 
     def fits(self, raw: NDArray[np.floating], scale: NDArray[np.float64]) -> bool:
         """Whether this index was made from weights of this shape and these scales."""
@@ -319,8 +329,8 @@ def search(
     that pairs summing the same units come together)."""
     n_rows, k_units = x.shape[0], index.norms.shape[1]
     n_tx, n_ty = int(index.tile_x.max()) + 1, int(index.tile_y.max()) + 1
-    ub = np.empty((n_rows, k_units))
-    guess = np.empty(n_rows, dtype=np.int64)
+    ub = index.work("ub", n_rows, k_units, np.float64)
+    guess = index.work("guess", n_rows, 0, np.int64)
     bound: Any = _bound_rows  # numba dispatchers
     settle: Any = _settle_rows
     # left unformatted: the arguments in the rows of the kernel's signature

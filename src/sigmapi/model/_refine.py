@@ -15,6 +15,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from sigmapi.config import SOMConfig
 from sigmapi.errors import ConfigError, DataError
@@ -89,6 +90,7 @@ def refine(
     per = c.refine_pairs if data is None else data[0].shape[0]
     kernel: Any = run.kernel
     rule = training_rule(c).hard
+    drawn: list[NDArray[np.float64]] = []  # the groups' codes, drawn into the same memory
     while run.refined < c.refine_rounds * per:
         r, done = divmod(run.refined, per)
         if run.refine_acc is None or run.refine_acc[0] != r:
@@ -102,7 +104,7 @@ def refine(
                 b = lo // BLOCK
                 last = min(b + GROUP, -(-per // BLOCK))  # blocks b .. last - 1
                 hi = min(per, last * BLOCK)
-                views = _draw(c, entropy, r, b, last, lo - b * BLOCK, hi - b * BLOCK)
+                views = _draw(c, entropy, r, b, last, lo - b * BLOCK, hi - b * BLOCK, drawn)
                 ends = [min(per, (i + 1) * BLOCK) for i in range(b, last)]
             else:
                 hi = min(per, lo + GROUP * BLOCK)
@@ -142,16 +144,26 @@ def _block_done(run: RunState, refined: int, new: bool, notify: Notify) -> None:
             notify()
 
 
-def _draw(c: SOMConfig, entropy: int, r: int, first: int, last: int, lo: int, hi: int) -> CodeViews:
+def _draw(
+    c: SOMConfig,
+    entropy: int,
+    r: int,
+    first: int,
+    last: int,
+    lo: int,
+    hi: int,
+    out: list[NDArray[np.float64]],
+) -> CodeViews:
     """Pairs ``lo .. hi - 1`` of blocks ``first .. last - 1`` of round ``r`` (counted from
-    the first block's start), each block from its own stream, filled in place one block
-    at a time (so that a group's codes are held once)."""
+    the first block's start), each block from its own stream, drawn in place one block at
+    a time into ``out`` (the four codes of a group; made on first use, then reused)."""
     n = (last - first) * BLOCK
-    out = [np.empty((n, int(np.prod(s)))) for s in (c.x_shape, c.y_shape) * 2]
+    if not out or out[0].shape[0] < n:
+        out[:] = [np.empty((n, int(np.prod(s)))) for s in (c.x_shape, c.y_shape) * 2]
     sampler = sampler_of(c)
     for i in range(first, last):
-        d = sampler.sample(BLOCK, rng(entropy, 4, r, i))
         at = slice((i - first) * BLOCK, (i - first + 1) * BLOCK)
-        for dest, v in zip(out, (d.x0, d.y0, d.x1, d.y1), strict=True):
-            dest[at] = v
+        sampler.sample(
+            BLOCK, rng(entropy, 4, r, i), out=(out[0][at], out[1][at], out[2][at], out[3][at])
+        )
     return out[0][lo:hi], out[1][lo:hi], out[2][lo:hi], out[3][lo:hi]
