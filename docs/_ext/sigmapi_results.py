@@ -83,6 +83,14 @@ def load(name: str) -> Any:
     return _load_cached(path, path.stat().st_mtime)
 
 
+def result(name: str, cls: Any, key: str = "") -> Any:
+    """The experiment result a results file holds (under ``key`` where the script that kept it
+    wrapped it), read by its class's ``from_dict``: a result's keys are read in one place,
+    its experiment's ``result`` module."""
+    data = load(name)
+    return cls.from_dict(get(data, key, name) if key else data)
+
+
 def get(data: Any, key: str, name: str = "?") -> Any:
     """``data`` dotted into by ``key`` (``a.b.0.c``); an error naming file and key."""
     cur = data
@@ -366,8 +374,12 @@ def _column(runs: Sequence[dict[str, Any]], key: str) -> list[float]:
 
 
 def _sweep_rows(name: str) -> list[dict[str, Any]]:
-    data = load(name)
-    rows = data["rows"] if isinstance(data, dict) else data
+    if name.endswith(".csv"):  # a sweep's table itself
+        rows = load(name)
+    else:
+        from sigmapi.experiments.sweep.run import SweepResult
+
+        rows = result(name, SweepResult).rows
     bad = [r for r in rows if r.get("status", "ok") != "ok"]
     if bad:
         raise ExtensionError(f"{name}: {len(bad)} failed runs in the table; rerun them")
@@ -382,8 +394,10 @@ def _group(rows: list[dict[str, Any]], keys: Sequence[str]) -> dict[tuple[str, .
 
 
 def _procedures(name: str, labels: dict[str, str], fold_list: bool) -> Table:
-    rows_in = _sweep_rows(name)
-    keys = list(get(load(name), "spec.grid", name))
+    from sigmapi.experiments.sweep.run import SweepResult
+
+    sweep = result(name, SweepResult)
+    rows_in, keys = _sweep_rows(name), list(sweep.spec.grid)
     out = []
     for group, runs in _group(rows_in, keys).items():
         label = labels.get("/".join(group), "/".join(group))
@@ -609,7 +623,10 @@ COMPARE_NAMES = {"sigma-pi": '**Sigma-Pi map** (`ordering = "crossview"`)'}
 
 @table("compare")
 def _compare() -> Table:
-    data = load("compare")
+    from sigmapi.experiments.compare.result import CompareResult
+
+    res = result("compare", CompareResult)
+    data = res.to_dict()
     rows = []
     for m in data["methods"]:
         match = m["labels_to_match_sigma_pi"]
@@ -619,9 +636,9 @@ def _compare() -> Table:
             num(m["unit_consistency"]), f"{num(m['z_error'])} (worst {num(max(per))})",
             f"{m['labels_needed']:,}", "never" if match is None else f"{match:,}",
         ])  # fmt: skip
-    cfg = data["config"]
-    note = (f"`{cfg['preset']}` task, {cfg['train_pairs']:,} recorded view pairs per seed, seeds "
-            f"{seeds_label(cfg['seeds'])}, medians; z error with {m['labels_used']:,} labels, in "
+    cfg = res.config
+    note = (f"`{cfg.preset}` task, {cfg.train_pairs:,} recorded view pairs per seed, seeds "
+            f"{seeds_label(res.seeds)}, medians; z error with {m['labels_used']:,} labels, in "
             f"{data['z_error_unit']} (a map's winner alone cannot beat "
             f"{num(data['quantisation_floor'])}).")  # fmt: skip
     return Table(
@@ -636,32 +653,32 @@ def _compare() -> Table:
         rows,
         [_rel("compare")],
         note,
-        _command(data),
+        _command(load("compare")),
     )
 
 
 @table("chain")
 def _chain() -> Table:
-    data = load("chain")
-    tables = [("chain", "**chain** (A's response -> B)", data)]
-    try:
-        winner = load("chain-winner")
+    from sigmapi.experiments.chain.result import ChainResult
+
+    res = result("chain", ChainResult)
+    tables = [("chain", "**chain** (A's response -> B)", res)]
+    if _path("chain-winner").is_file():
+        winner = result("chain-winner", ChainResult)
         tables.append(("chain", "chain, A's winner as a population code", winner))
-    except ExtensionError:
-        pass
-    tables.append(("single", "single map, third-order units", data))
+    tables.append(("single", "single map, third-order units", res))
     rows = []
-    for route, label, d in tables:
-        seeds = d["seeds"]
-        col = functools.partial(_column, [r[route] for r in seeds])
+    for route, label, r in tables:
+        seeds = r.per_seed
+        col = functools.partial(_column, [s[route] for s in seeds])
         rows.append([
             label, mw_of(col("z_error"), higher_is_better=False), mw_of(col("view_consistency")),
             mw_of(col("view_within_one")), mw_of(col("order_r2")), mw_of(col("usage"), ".2f"),
             f"{int(seeds[0][route]['weights']):,}",
             f"{num(statistics.median(col('train_seconds')), '.1f')} s",
         ])  # fmt: skip
-    s = data["summary"]
-    note = (f"Seeds {seeds_label(data['settings']['seeds'])}, {data['settings']['train_pairs']:,} "
+    s = res.summary()
+    note = (f"Seeds {seeds_label([r['seed'] for r in res.per_seed])}, {res.train_pairs:,} "
             f"view pairs of triples per seed; median / worst seed. The chain's z error over the "
             f"single map's: median {num(s['ratio_median'], '.2f')}, worst "
             f"{num(s['ratio_worst'], '.2f')}; {s['met']} of {s['n_seeds']} seeds within "
@@ -670,7 +687,7 @@ def _chain() -> Table:
     return Table(["route", "z error", "same winner", "within one", "order R²", "usage",
                   "Sigma-Pi weights", "training (median)"], rows,
                  [_rel(n) for n in ("chain", "chain-winner") if _path(n).is_file()], note,
-                 [c for d in (data,) for c in _command(d)])  # fmt: skip
+                 _command(load("chain")))  # fmt: skip
 
 
 REACH_STATES = {
@@ -683,7 +700,10 @@ REACH_STATES = {
 
 @table("reach")
 def _reach() -> Table:
-    data = load("reach")
+    from sigmapi.experiments.reach.result import ReachResult
+
+    res = result("reach", ReachResult)
+    data = res.to_dict()
     rows = []
     for state, mean in data["success"].items():
         per = data["success_per_seed"][state]
@@ -691,30 +711,28 @@ def _reach() -> Table:
         rows.append([REACH_STATES.get(state, state), shown,
                      " ".join(num(v) for v in per), num(data["lost"][state]),
                      num(data["timed_out"][state])])  # fmt: skip
-    cfg = data["config"]
-    run = cfg.get("run", cfg)
-    note = (f"Seeds {seeds_label(cfg['seeds'])}; final success: the last "
-            f"{run['final_episodes']} of {run['episodes']} episodes, mean over seeds; map / true z "
+    run = res.config.run
+    note = (f"Seeds {seeds_label(res.seeds)}; final success: the last "
+            f"{run.final_episodes} of {run.episodes} episodes, mean over seeds; map / true z "
             f"{num(data['ratio_map_to_true_z'])}.")  # fmt: skip
     return Table(
         ["state the learner sees", "final success", "per seed", "lost the object", "timed out"],
         rows,
         [_rel("reach")],
         note,
-        _command(data),
+        _command(load("reach")),
     )
 
 
 @table("reach-maps")
 def _reach_maps() -> Table:
-    data = load("reach")
-    ms = data["map_metrics"]
+    from sigmapi.experiments.reach.result import ReachResult
+
+    res = result("reach", ReachResult)
+    ms = res.map_metrics
     keys = [k for k in ("order_r2", "view_within_one", "z_error", "usage", "fold_score")
             if all(k in m for m in ms)]  # fmt: skip
-    rows = [
-        [str(seed)] + [num(m[k]) for k in keys]
-        for seed, m in zip(data["config"]["seeds"], ms, strict=True)
-    ]
+    rows = [[str(seed)] + [num(m[k]) for k in keys] for seed, m in zip(res.seeds, ms, strict=True)]
     return Table(["seed", *keys], rows, [_rel("reach")], "The map each seed's learner sees.")
 
 
@@ -734,16 +752,19 @@ def _robot_docking_tuning() -> Table:
 
 
 def _docking(name: str) -> Table:
+    from sigmapi.experiments.robot.result import RobotResult
+
     data = load(name)
-    res = data["result"]
+    robot = result(name, RobotResult, "result")
+    res = robot.to_dict()
     rows = []
     for state, per_seed in res["success_per_seed"].items():
         med, worst = median_worst(per_seed)
         rows.append([STATES.get(state, state), f"{num(med, '.2f')} ({num(worst, '.2f')})",
                      " ".join(num(v, ".2f") for v in per_seed),
                      num(res["reach_given_docked"][state], ".2f")])  # fmt: skip
-    note = (f"Seeds {seeds_label(res['seeds'])}; final success over the last "
-            f"{res['config']['final_episodes']} of {res['config']['episodes']} episodes; "
+    note = (f"Seeds {seeds_label(robot.seeds)}; final success over the last "
+            f"{robot.config.final_episodes} of {robot.config.episodes} episodes; "
             f"{num(data['cpu_s'] / 60, '.1f')} CPU minutes.")  # fmt: skip
     return Table(["state the learner sees", "success, median (worst seed)", "per seed",
                   "reach touching the ball, of docked"], rows, [_rel(name)], note,

@@ -6,6 +6,7 @@ are skipped, except under ``CI=true``, where a missing renderer fails them: CI m
 
 from __future__ import annotations
 
+import json
 import os
 
 import numpy as np
@@ -222,6 +223,7 @@ def test_the_command_line_starts_without_mujoco():
 
 
 def test_tiny_learn_and_dock_run():
+    from sigmapi.experiments.robot.result import RobotResult
     from sigmapi.experiments.robot.run import QUICK, ROBOT
 
     cfg = QUICK.replace(
@@ -231,6 +233,8 @@ def test_tiny_learn_and_dock_run():
     res = ROBOT.run(cfg, seeds=[0])
     d = res.to_dict()
     assert set(d["success"]) == {"map", "retina", "retina_gaze", "true_z"}
+    back = json.loads(json.dumps(d))
+    assert RobotResult.from_dict(back).to_dict() == back  # result.json reads back
     for key in ("order_r2", "fold_score", "folded", "view_within_one", "z_error"):
         assert key in d
     again = ROBOT.run(cfg.replace(states=("retina",)), seeds=[0])

@@ -136,7 +136,8 @@ def test_experiment_is_deterministic_and_shapes_are_right(tmp_path) -> None:
     c = a.curves()["true_z"]
     assert c["success"].shape == (2,)
     d = a.to_dict()
-    json.dumps(d)
+    back = json.loads(json.dumps(d))
+    assert ReachResult.from_dict(back).to_dict() == back  # result.json reads back
     assert set(d) == {"success", "success_per_seed", "lost", "timed_out", "ratio_map_to_true_z",
                       "final_rise", "final_rise_se", "levelled_off", "curves", "map_metrics",
                       "config", "seconds"}  # fmt: skip

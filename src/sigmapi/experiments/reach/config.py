@@ -28,7 +28,12 @@ from sigmapi.envs import FEATURES, STATES, GazeReachConfig
 from sigmapi.errors import ConfigError
 from sigmapi.experiments.kit.episodes import check_episode_run
 from sigmapi.experiments.kit.maps import MapSpec
-from sigmapi.experiments.kit.parts import check_part_types, parts_dict, replaced_parts
+from sigmapi.experiments.kit.parts import (
+    check_part_types,
+    parts_dict,
+    parts_from_dict,
+    replaced_parts,
+)
 from sigmapi.experiments.kit.worlds import GAZE_REACH, World
 
 __all__ = [
@@ -209,6 +214,11 @@ class ReachConfig:
     def to_dict(self) -> dict[str, dict[str, Any]]:
         """The parts as JSON-able tables (tuples as lists): ``{"env": {...}, "map": ...}``."""
         return parts_dict(self, self.PARTS)
+
+    @classmethod
+    def from_dict(cls, data: Any) -> ReachConfig:
+        """The config a :meth:`to_dict` wrote."""
+        return cls(**parts_from_dict(data, cls.PARTS, "reach"))
 
     def som_config(self, seed: int, world: World = GAZE_REACH) -> SOMConfig:
         """The config of the map of seed ``seed``, on the codes of ``world``

@@ -24,7 +24,7 @@ from sigmapi.agents.gated import VIEWS
 from sigmapi.config import SOMConfig
 from sigmapi.envs import GazeReachConfig
 from sigmapi.errors import ConfigError
-from sigmapi.experiments.kit.parts import parts_dict, replaced_parts
+from sigmapi.experiments.kit.parts import parts_dict, parts_from_dict, replaced_parts
 from sigmapi.experiments.kit.worlds import GAZE_REACH, World
 from sigmapi.experiments.reach.config import SMALL_MAP, MapConfig, check_parts
 from sigmapi.rules.gating import FEEDBACK, SURPRISE
@@ -178,6 +178,11 @@ class RewardConfig:
     def to_dict(self) -> dict[str, dict[str, Any]]:
         """The parts as JSON-able tables (tuples as lists)."""
         return parts_dict(self, self.PARTS)
+
+    @classmethod
+    def from_dict(cls, data: Any) -> RewardConfig:
+        """The config a :meth:`to_dict` wrote."""
+        return cls(**parts_from_dict(data, cls.PARTS, "reward"))
 
     def som_config(self, seed: int, world: World = GAZE_REACH) -> SOMConfig:
         """The config of the map of seed ``seed``, on the codes of ``world``."""

@@ -11,11 +11,18 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sigmapi.agents import ActorCritic
+from sigmapi.experiments.base import check_seeds
 from sigmapi.experiments.kit.episodes import block_ends, block_rates, final_rates
+from sigmapi.experiments.kit.written import as_object, summaries, tuples
 from sigmapi.experiments.robot.config import RobotConfig
 from sigmapi.model.som import SigmaPiSOM
 
 __all__ = ["RobotResult"]
+
+SUMMARIES = ("success", "success_per_seed", "success_summary", "docked", "reach_given_docked",
+             "reach_given_docked_min", "ratio_map_to_true_z", "margins", "curves")  # fmt: skip
+"""The keys of the JSON form computed from the episode records (beside the maps' summary,
+:meth:`RobotResult.map_summary`)."""
 
 
 def _summary(values: NDArray[np.float64]) -> dict[str, float]:
@@ -38,7 +45,8 @@ class RobotResult:
     episodes)``, a row per seed in the order of ``seeds``: whether the hand touched the ball
     (``info["is_success"]``), whether the base docked, and the steps taken. ``map_metrics``
     and ``unit_z`` (each unit's preferred z) per seed; ``model`` and ``agent``: the first
-    seed's map and its learner (for the figures).
+    seed's map and its learner (for the figures). A result read back from its JSON form
+    (:meth:`from_dict`) holds no records: its summaries are ``written``, as the file has them.
     """
 
     config: RobotConfig
@@ -52,6 +60,25 @@ class RobotResult:
     agent: ActorCritic | None = None
     seconds: float = 0.0
     _film: list[NDArray[np.uint8]] | None = field(default=None, repr=False)
+    written: dict[str, Any] | None = field(default=None, repr=False)
+    """The summaries of a result read back (:meth:`from_dict`); None for a run's result."""
+
+    @classmethod
+    def from_dict(cls, data: Any) -> RobotResult:
+        """The result a :meth:`to_dict` wrote (``result.json``): its config, seeds, maps'
+        metrics and time, and its summaries as written (the file holds no episode records)."""
+        obj = as_object(data)
+        cfg = as_object(obj["config"], "config")
+        config = RobotConfig(**tuples(cfg))
+        metrics = [dict(as_object(m, "map_metrics entry")) for m in obj["map_metrics"]]
+        mapped = (*metrics[0], "order_r2_min", "folded_seeds") if metrics else ()
+        return cls(
+            config,
+            check_seeds(obj["seeds"], "seeds"),
+            map_metrics=metrics,
+            seconds=float(obj["seconds"]),
+            written=summaries(obj, (*mapped, *SUMMARIES)),
+        )
 
     def final(self, key: str = "success") -> dict[str, NDArray[np.float64]]:
         """Per state, the rate of ``key`` (``"success"`` or ``"docked"``) over the last
@@ -101,6 +128,14 @@ class RobotResult:
         """JSON-able: the map's metrics (keys of ``sigmapi evaluate``), ``success`` per state
         (final, mean over seeds) with its median and worst seed, docking, the reach given
         docking, the map's margins over the other states, the curves and the config."""
+        tail = {
+            "map_metrics": self.map_metrics,
+            "config": self.config.to_dict(),
+            "seeds": list(self.seeds),
+            "seconds": self.seconds,
+        }
+        if self.written is not None:
+            return {**self.written, **tail}
         final, docked, reach = self.final(), self.final("docked"), self.reach_given_docked()
         success = {s: float(v.mean()) for s, v in final.items()}
         margins = {}
@@ -122,11 +157,8 @@ class RobotResult:
             "reach_given_docked_min": {s: _nan_stat(np.nanmin, v) for s, v in reach.items()},
             "ratio_map_to_true_z": ratio,
             "margins": margins,
-            "map_metrics": self.map_metrics,
             "curves": self.curves(),
-            "config": self.config.to_dict(),
-            "seeds": list(self.seeds),
-            "seconds": self.seconds,
+            **tail,
         }
 
     def table(self) -> str:
