@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import csv
 import functools
+import importlib
 import json
 import re
 import shutil
@@ -83,12 +84,47 @@ def load(name: str) -> Any:
     return _load_cached(path, path.stat().st_mtime)
 
 
-def result(name: str, cls: Any, key: str = "") -> Any:
-    """The experiment result a results file holds (under ``key`` where the script that kept it
-    wrapped it), read by its class's ``from_dict``: a result's keys are read in one place,
-    its experiment's ``result`` module."""
+_EXPERIMENTS = "sigmapi.experiments"
+READERS: dict[str, tuple[str, str]] = {
+    "chain": ("chain.result:ChainResult", ""),
+    "chain-winner": ("chain.result:ChainResult", ""),
+    "compare": ("compare.result:CompareResult", ""),
+    "icub": ("icub.result:ICubResult", ""),
+    "neurons": ("neurons.result:NeuronsResult", ""),
+    "paper-1d-procedures": ("sweep.run:SweepResult", ""),
+    "paper-2d-procedures": ("sweep.run:SweepResult", ""),
+    "reach": ("reach.result:ReachResult", ""),
+    "reproduce": ("reproduce.results:ReproduceResult", "metrics"),
+    "robot-docking": ("robot.result:RobotResult", "result"),
+    "robot-docking-quick": ("robot.result:RobotResult", "result"),
+    "robot-docking-tuning": ("robot.result:RobotResult", "result"),
+    "stream": ("stream.result:StreamResult", ""),
+}
+"""The results files an experiment wrote: the class (under :mod:`sigmapi.experiments`) whose
+``from_dict`` reads each, and the key the result sits under where the script that kept it
+wrapped it ("": the file is the result, with the keeper's keys beside its own)."""
+
+
+def result(name: str) -> Any:
+    """The experiment result of the results file ``name`` (:data:`READERS`), read by its
+    class's ``from_dict``: a result's keys are read in one place, its experiment's
+    ``result`` module."""
+    target, key = READERS[name]
+    module, _, cls = target.partition(":")
+    reader = getattr(importlib.import_module(f"{_EXPERIMENTS}.{module}"), cls)
     data = load(name)
-    return cls.from_dict(get(data, key, name) if key else data)
+    return reader.from_dict(get(data, key, name) if key else data)
+
+
+def read(name: str) -> Any:
+    """What the ``result`` role quotes from: a file of :data:`READERS` as its result's JSON
+    form (the keeper's keys beside it), any other file as it is."""
+    data = load(name)
+    if name not in READERS:
+        return data
+    form = json.loads(json.dumps(result(name).to_dict()))
+    key = READERS[name][1]
+    return {**data, key: form} if key else {**data, **form}
 
 
 def get(data: Any, key: str, name: str = "?") -> Any:
@@ -297,21 +333,21 @@ def _reproduce() -> Table:
     same runs at the end of their training) and at the rule's ceiling."""
     data = load("reproduce")
     rows = []
-    for preset, p in get(data, "metrics.presets", "reproduce").items():
-        med, worst, unref = p["median"], p["worst"], p.get("unrefined")
-        ceiling = p.get("ceiling") or {}
+    for preset, p in result("reproduce").presets.items():
+        med, worst, unref = p.median(), p.worst(), p.median("unrefined") if p.refines else None
+        ceiling = p.ceiling or {}
 
         def before(key: str, unref: Any = unref) -> str:
-            return num(unref["median"][key]) if unref else "-"
+            return num(unref[key]) if unref else "-"
 
         rows.append([
-            f"`{preset}`", seeds_label(p["seeds"]),
+            f"`{preset}`", seeds_label([r.seed for r in p.runs]),
             f"{num(med['view_consistency'])} / {num(worst['view_consistency'])}",
             before("view_consistency"),
             num(ceiling["view_consistency"]) if "view_consistency" in ceiling else "-",
             f"{num(med['z_error'])} / {num(worst['z_error'])}", before("z_error"),
             f"{num(med['order_r2'])} / {num(worst['order_r2'])}",
-            f"{p['ordered']} of {len(p['seeds'])}",
+            f"{p.ordered_count()} of {len(p.runs)}",
         ])  # fmt: skip
     note = (
         f"Median / worst seed; 'before' is the median of the same runs at the end of their "
@@ -377,9 +413,7 @@ def _sweep_rows(name: str) -> list[dict[str, Any]]:
     if name.endswith(".csv"):  # a sweep's table itself
         rows = load(name)
     else:
-        from sigmapi.experiments.sweep.run import SweepResult
-
-        rows = result(name, SweepResult).rows
+        rows = result(name).rows
     bad = [r for r in rows if r.get("status", "ok") != "ok"]
     if bad:
         raise ExtensionError(f"{name}: {len(bad)} failed runs in the table; rerun them")
@@ -394,9 +428,7 @@ def _group(rows: list[dict[str, Any]], keys: Sequence[str]) -> dict[tuple[str, .
 
 
 def _procedures(name: str, labels: dict[str, str], fold_list: bool) -> Table:
-    from sigmapi.experiments.sweep.run import SweepResult
-
-    sweep = result(name, SweepResult)
+    sweep = result(name)
     rows_in, keys = _sweep_rows(name), list(sweep.spec.grid)
     out = []
     for group, runs in _group(rows_in, keys).items():
@@ -623,9 +655,7 @@ COMPARE_NAMES = {"sigma-pi": '**Sigma-Pi map** (`ordering = "crossview"`)'}
 
 @table("compare")
 def _compare() -> Table:
-    from sigmapi.experiments.compare.result import CompareResult
-
-    res = result("compare", CompareResult)
+    res = result("compare")
     data = res.to_dict()
     rows = []
     for m in data["methods"]:
@@ -659,12 +689,10 @@ def _compare() -> Table:
 
 @table("chain")
 def _chain() -> Table:
-    from sigmapi.experiments.chain.result import ChainResult
-
-    res = result("chain", ChainResult)
+    res = result("chain")
     tables = [("chain", "**chain** (A's response -> B)", res)]
     if _path("chain-winner").is_file():
-        winner = result("chain-winner", ChainResult)
+        winner = result("chain-winner")
         tables.append(("chain", "chain, A's winner as a population code", winner))
     tables.append(("single", "single map, third-order units", res))
     rows = []
@@ -700,9 +728,7 @@ REACH_STATES = {
 
 @table("reach")
 def _reach() -> Table:
-    from sigmapi.experiments.reach.result import ReachResult
-
-    res = result("reach", ReachResult)
+    res = result("reach")
     data = res.to_dict()
     rows = []
     for state, mean in data["success"].items():
@@ -726,9 +752,7 @@ def _reach() -> Table:
 
 @table("reach-maps")
 def _reach_maps() -> Table:
-    from sigmapi.experiments.reach.result import ReachResult
-
-    res = result("reach", ReachResult)
+    res = result("reach")
     ms = res.map_metrics
     keys = [k for k in ("order_r2", "view_within_one", "z_error", "usage", "fold_score")
             if all(k in m for m in ms)]  # fmt: skip
@@ -752,10 +776,8 @@ def _robot_docking_tuning() -> Table:
 
 
 def _docking(name: str) -> Table:
-    from sigmapi.experiments.robot.result import RobotResult
-
     data = load(name)
-    robot = result(name, RobotResult, "result")
+    robot = result(name)
     res = robot.to_dict()
     rows = []
     for state, per_seed in res["success_per_seed"].items():
@@ -881,10 +903,11 @@ class ResultRole(SphinxRole):
         spec, _, fmt = self.text.partition("|")
         name, _, key = spec.partition(":")
         try:
-            value = get(load(name.strip()), key.strip(), name)
+            value = get(read(name.strip()), key.strip(), name)
             text = _quote(value, fmt or ".3g")
-        except (ExtensionError, ValueError, TypeError, RecursionError) as e:
-            msg = self.inliner.reporter.error(f"result {self.text!r}: {e}", line=self.lineno)
+        except (ExtensionError, *_DATA_ERRORS) as e:
+            what = f"no key {e}" if isinstance(e, KeyError) else str(e)
+            msg = self.inliner.reporter.error(f"result {self.text!r}: {what}", line=self.lineno)
             return [self.inliner.problematic(self.rawtext, self.rawtext, msg)], [msg]
         self.env.note_dependency(str(_path(name.strip())))
         return [nodes.Text(text)], []

@@ -10,9 +10,7 @@ from sigmapi_results import Table, _command, _rel, load, num, result, seeds_labe
 
 def _neurons_result() -> dict[str, Any]:
     """``benchmarks/results/neurons.json`` read by :class:`NeuronsResult`, as its JSON form."""
-    from sigmapi.experiments.neurons.result import NeuronsResult
-
-    return dict(result("neurons", NeuronsResult).to_dict())
+    return dict(result("neurons").to_dict())
 
 
 def _mw(m: dict[str, Any], key: str, fmt: str = ".3f") -> str:

@@ -14,8 +14,10 @@ import pytest
 from sigmapi.errors import ConfigError
 from sigmapi.experiments.chain.result import ChainResult
 from sigmapi.experiments.compare.result import CompareResult
+from sigmapi.experiments.icub.result import ICubResult
 from sigmapi.experiments.neurons.result import NeuronsResult
 from sigmapi.experiments.reach.result import ReachResult
+from sigmapi.experiments.reproduce.results import ReproduceResult
 from sigmapi.experiments.reward.result import RewardResult
 from sigmapi.experiments.robot.result import RobotResult
 from sigmapi.experiments.stream.result import StreamResult
@@ -26,8 +28,10 @@ RESULTS = Path(__file__).resolve().parents[2] / "benchmarks" / "results"
 KEPT: list[tuple[str, Any, str]] = [
     ("chain", ChainResult, ""),
     ("compare", CompareResult, ""),
+    ("icub", ICubResult, ""),
     ("neurons", NeuronsResult, ""),
     ("reach", ReachResult, ""),
+    ("reproduce", ReproduceResult, "metrics"),
     ("reward", RewardResult, "result"),
     ("reward-eps0.5", RewardResult, "result"),
     ("robot-docking", RobotResult, "result"),

@@ -19,8 +19,17 @@ from sigmapi.model.som import SigmaPiSOM
 
 __all__ = ["RobotResult"]
 
-SUMMARIES = ("success", "success_per_seed", "success_summary", "docked", "reach_given_docked",
-             "reach_given_docked_min", "ratio_map_to_true_z", "margins", "curves")  # fmt: skip
+SUMMARIES = (
+    "success",
+    "success_per_seed",
+    "success_summary",
+    "docked",
+    "reach_given_docked",
+    "reach_given_docked_min",
+    "ratio_map_to_true_z",
+    "margins",
+    "curves",
+)
 """The keys of the JSON form computed from the episode records (beside the maps' summary,
 :meth:`RobotResult.map_summary`)."""
 
