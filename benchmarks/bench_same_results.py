@@ -39,13 +39,14 @@ tiny = dict(block=10, final_episodes=10, backend="reference")
 cfg = R.config_type().replace(dim=1, grid=7, map_shape=(6,), iterations=500, episodes=20,
                               max_episode_steps=30, **tiny)
 out["reach 1-D"] = R.run(cfg, seeds=[0, 3]).to_dict()
-cfg = R.config_type().replace(grid=5, map_shape=(4, 4), iterations=400, episodes=10, block=5,
-                              final_episodes=5, backend="reference", preset="none",
+from sigmapi.config import list_presets
+small = "small-2d" if "small-2d" in list_presets() else "none"  # the 7x7 schedule, as named
+cfg = R.config_type().replace(grid=7, map_shape=(7, 7), iterations=400, episodes=10, block=5,
+                              final_episodes=5, backend="reference", preset=small,
                               code_width=0.5)
 out["reach 2-D"] = R.run(cfg, seeds=[1]).to_dict()
 W = REGISTRY["reward"]
-cfg = W.config_type().replace(grid=5, map_shape=(5, 5), iterations=400, episodes=8, block=4,
-                              final_episodes=4, n_test=200)
+cfg = W.config_type().replace(iterations=400, episodes=8, block=4, final_episodes=4, n_test=200)
 out["reward"] = W.run(cfg, seeds=[0, 2]).to_dict()
 S = REGISTRY["stream"]
 small = ("map_shape=[7]", "x_shape=[7]", "y_shape=[7]")

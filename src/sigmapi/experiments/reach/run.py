@@ -47,7 +47,7 @@ from sigmapi.experiments.base import Experiment, check_seeds, register, run_all
 from sigmapi.experiments.kit.jobs import Tick, counted
 from sigmapi.experiments.kit.seeds import SeedPlan
 from sigmapi.experiments.kit.worlds import GAZE_REACH, World
-from sigmapi.experiments.reach.config import SMALL_MAP, ReachConfig
+from sigmapi.experiments.reach.config import SMALL_PRESET, ReachConfig, preset_setting
 from sigmapi.experiments.reach.result import ReachResult
 from sigmapi.metrics import evaluate
 from sigmapi.model.som import SigmaPiSOM, load_model
@@ -204,7 +204,7 @@ class ReachExperiment(Experiment[ReachConfig]):
     name = "reach"
     summary = "learn to reach with an actor-critic on the learned map vs. other states"
     config_type = ReachConfig
-    quick = ReachConfig().replace(episodes=150, final_episodes=50, **SMALL_MAP)
+    quick = ReachConfig().replace(episodes=150, final_episodes=50, **preset_setting(SMALL_PRESET))
     quick_seeds = (0,)
     default_out = "reach"
 
