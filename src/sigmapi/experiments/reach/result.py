@@ -11,7 +11,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sigmapi._outputs import save_figure
-from sigmapi.experiments.kit.episodes import block_ends, block_rates, final_rates
+from sigmapi.experiments.kit.episodes import final_rates, success_curve
 from sigmapi.experiments.kit.written import as_object, config_and_seeds, summaries
 from sigmapi.experiments.reach.config import ReachConfig
 
@@ -141,7 +141,6 @@ class ReachResult:
             nb = succ.shape[1] // b
             sb = succ[:, : nb * b].reshape(succ.shape[0], nb, b)
             tb = steps[:, : nb * b].reshape(succ.shape[0], nb, b)
-            rate = block_rates(succ, b)
             with np.errstate(invalid="ignore", divide="ignore"):
                 reach_steps = np.where(sb, tb, 0.0).sum(axis=2) / sb.sum(axis=2)
             ok = np.isfinite(reach_steps)
@@ -154,9 +153,7 @@ class ReachResult:
                 if ok[:, j].any():
                     quartiles[:, j] = np.percentile(reach_steps[ok[:, j], j], (25, 75))
             out[s] = {
-                "episode": block_ends(nb, b),
-                "success": rate.mean(axis=0),
-                "success_sd": rate.std(axis=0),
+                **success_curve(succ, b),
                 "steps_to_reach": mean_steps,
                 "steps_q25": quartiles[0],
                 "steps_q75": quartiles[1],

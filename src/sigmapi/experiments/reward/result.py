@@ -12,7 +12,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sigmapi._outputs import save_figure
-from sigmapi.experiments.kit.episodes import block_ends, block_rates, final_rates
+from sigmapi.experiments.kit.episodes import block_rates, final_rates, success_curve
 from sigmapi.experiments.kit.written import as_object, config_and_seeds, summaries
 from sigmapi.experiments.reward.config import RewardConfig
 
@@ -118,17 +118,7 @@ class RewardResult:
         """Per method: ``episode`` (block ends), ``success`` (rate per block, mean over
         seeds), ``success_sd``, ``success_min`` and ``success_max`` over seeds."""
         b = self.config.run.block
-        out: dict[str, dict[str, NDArray[np.float64]]] = {}
-        for m, succ in self.success.items():
-            rate = block_rates(succ, b)
-            out[m] = {
-                "episode": block_ends(rate.shape[1], b),
-                "success": rate.mean(axis=0),
-                "success_sd": rate.std(axis=0),
-                "success_min": rate.min(axis=0),
-                "success_max": rate.max(axis=0),
-            }
-        return out
+        return {m: success_curve(succ, b, extremes=True) for m, succ in self.success.items()}
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-able: ``methods`` (per method its name, final success, episodes to the target

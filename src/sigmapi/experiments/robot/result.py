@@ -12,7 +12,7 @@ from numpy.typing import NDArray
 
 from sigmapi.agents import ActorCritic
 from sigmapi.experiments.base import check_seeds
-from sigmapi.experiments.kit.episodes import block_ends, block_rates, final_rates
+from sigmapi.experiments.kit.episodes import final_rates, success_curve
 from sigmapi.experiments.kit.written import as_object, summaries, tuples
 from sigmapi.experiments.robot.config import RobotConfig
 from sigmapi.model.som import SigmaPiSOM
@@ -110,15 +110,10 @@ class RobotResult:
     def curves(self) -> dict[str, dict[str, list[float]]]:
         """Per state: block ends, success per block (mean and sd over seeds)."""
         b = self.config.block
-        out = {}
-        for s, r in self.success.items():
-            rate = block_rates(r, b)
-            out[s] = {
-                "episode": block_ends(rate.shape[1], b).tolist(),
-                "success": rate.mean(axis=0).tolist(),
-                "success_sd": rate.std(axis=0).tolist(),
-            }
-        return out
+        return {
+            s: {k: v.tolist() for k, v in success_curve(r, b).items()}
+            for s, r in self.success.items()
+        }
 
     def map_summary(self) -> dict[str, Any]:
         """The maps' metrics with the keys of ``sigmapi evaluate`` (means over seeds;
