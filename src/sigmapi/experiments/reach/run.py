@@ -32,7 +32,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sigmapi import _memory, _validate
-from sigmapi.agents import ActorCritic, actor_critic_for, run_episodes
+from sigmapi.agents import ActorCritic
 from sigmapi.envs import (
     Features,
     GazeReachConfig,
@@ -44,7 +44,7 @@ from sigmapi.envs import (
 from sigmapi.errors import ConfigError
 from sigmapi.executor import Executor, job_memory
 from sigmapi.experiments.base import Experiment, check_seeds, register, run_all
-from sigmapi.experiments.kit.jobs import Tick, counted
+from sigmapi.experiments.kit.jobs import Tick, counted, learn_on_state
 from sigmapi.experiments.kit.seeds import SeedPlan
 from sigmapi.experiments.kit.worlds import GAZE_REACH, World
 from sigmapi.experiments.reach.config import SMALL_PRESET, ReachConfig, preset_setting
@@ -146,14 +146,12 @@ def _seed_runs(job: _SeedJob, progress: Tick | None) -> dict[str, Any]:
         "runs": {},
         "values": {},
     }
-    starts = PLAN.rng(seed, "starts").integers(0, 2**31 - 1, size=cfg.run.episodes)
     for s in cfg.run.states:
         env = make_state_env(
             world.make_env(cfg.env), s, model, cfg.map.features, cfg.map.feature_width
         )
-        agent = actor_critic_for(env, cfg.agent, seed=PLAN.rng(seed, "agent"))
         done = None if progress is None else functools.partial(progress, 1, s)
-        ep = run_episodes(env, agent, starts, on_episode=done)
+        ep, agent = learn_on_state(env, cfg.agent, PLAN, seed, cfg.run.episodes, on_episode=done)
         out["runs"][s] = (ep.success, ep.failed, ep.steps)
         if job.first:
             out["values"][s] = value_over_z(agent, env, n=21 if cfg.env.dim == 2 else 51)

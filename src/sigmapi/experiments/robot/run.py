@@ -40,14 +40,13 @@ import numpy as np
 
 from sigmapi import _memory, _validate
 from sigmapi._outputs import check_file
-from sigmapi.agents import actor_critic_for, run_episodes
 from sigmapi.codes import PopulationCode
 from sigmapi.envs.robot.scene import check_rendering, mujoco_module
 from sigmapi.envs.robot.views import RobotViewBatch
 from sigmapi.executor import Executor
 from sigmapi.executor import job_memory as _som_job_memory
 from sigmapi.experiments.base import Experiment, check_seeds, register, run_all
-from sigmapi.experiments.kit.jobs import Tick, counted
+from sigmapi.experiments.kit.jobs import Tick, counted, learn_on_state
 from sigmapi.experiments.robot.config import PLAN, QUICK, ROBOT_WORLD, RobotConfig
 from sigmapi.experiments.robot.map import (
     evaluation_pairs,
@@ -95,11 +94,10 @@ def _learner(job: _Job, tick: Tick | None) -> dict[str, Any]:
         out["unit_z"] = unit_positions(model, cal)
         out["model"] = model
     env = cfg.state_env(job.state, model)
-    agent = actor_critic_for(env, cfg.agent(), seed=PLAN.rng(job.seed, "agent"))
-    starts = PLAN.rng(job.seed, "starts").integers(0, 2**31 - 1, size=cfg.episodes)
     done = None if tick is None else functools.partial(tick, 1, "docking")
-    out["episodes"] = run_episodes(env, agent, starts, on_episode=done, info_keys=INFO_KEYS)
-    out["agent"] = agent
+    out["episodes"], out["agent"] = learn_on_state(
+        env, cfg.agent(), PLAN, job.seed, cfg.episodes, on_episode=done, info_keys=INFO_KEYS
+    )
     env.close()
     return out
 
