@@ -1,10 +1,13 @@
 """The per-seed job of an experiment and its progress: one function, run where the executor
 puts it, that shows a bar of its episodes only where it runs in the caller's process; and the
-one learner of the embodied experiments (:func:`learn_on_state`)."""
+one protocol of the embodied experiments: a seed's map, then the same learner on every state
+the experiment compares (:func:`seed_episodes`, each state by :func:`learn_on_state`)."""
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
 from typing import Any, TypeVar
 
 import gymnasium as gym
@@ -13,7 +16,7 @@ from sigmapi.agents import ActorCritic, ActorCriticConfig, Episodes, actor_criti
 from sigmapi.experiments.kit.seeds import SeedPlan
 from sigmapi.progress import Progress
 
-__all__ = ["Tick", "counted", "learn_on_state"]
+__all__ = ["SeedEpisodes", "Tick", "counted", "learn_on_state", "seed_episodes"]
 
 T = TypeVar("T")
 
@@ -50,3 +53,47 @@ def learn_on_state(
     starts = plan.rng(seed, "starts").integers(0, 2**31 - 1, size=episodes)
     records = run_episodes(env, learner, starts, on_episode=on_episode, info_keys=info_keys)
     return records, learner
+
+
+@dataclass
+class SeedEpisodes:
+    """What :func:`seed_episodes` gives of one seed: its map (None when no state reads one)
+    and what the map's maker added (its scores), each state's episode records and what
+    ``keep`` kept of each state's learner."""
+
+    model: Any
+    extras: dict[str, Any]
+    runs: dict[str, Episodes] = field(default_factory=dict)
+    kept: dict[str, Any] = field(default_factory=dict)
+
+
+def seed_episodes(
+    seed: int,
+    states: Sequence[str],
+    make_map: Callable[[int, Tick | None], tuple[Any, dict[str, Any]]],
+    state_env: Callable[[str, Any], gym.Env[Any, Any]],
+    agent: ActorCriticConfig,
+    plan: SeedPlan,
+    episodes: int,
+    *,
+    tick: Tick | None = None,
+    info_keys: Sequence[str] = (),
+    keep: Callable[[str, gym.Env[Any, Any], ActorCritic], Any] | None = None,
+) -> SeedEpisodes:
+    """The protocol of one seed of an embodied experiment (reach, robot): the map, learned by
+    ``make_map(seed, tick)`` (``(model, extras)``) where a state reads it (``"map"`` in
+    ``states``); then per state, the world as that state sees it (``state_env(state,
+    model)``) and the same learner on the same episodes (:func:`learn_on_state`), ``tick(1,
+    state)`` after each; ``keep(state, env, learner)``, where given, what to keep of it."""
+    model, extras = make_map(seed, tick) if "map" in states else (None, {})
+    out = SeedEpisodes(model, extras)
+    for state in states:
+        env = state_env(state, model)
+        done = None if tick is None else functools.partial(tick, 1, state)
+        out.runs[state], learner = learn_on_state(
+            env, agent, plan, seed, episodes, on_episode=done, info_keys=info_keys
+        )
+        if keep is not None:
+            out.kept[state] = keep(state, env, learner)
+        env.close()
+    return out

@@ -20,7 +20,6 @@ Examples
 from __future__ import annotations
 
 import dataclasses
-import functools
 import time
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
@@ -44,7 +43,7 @@ from sigmapi.envs import (
 from sigmapi.errors import ConfigError
 from sigmapi.executor import Executor, job_memory
 from sigmapi.experiments.base import Experiment, check_seeds, register, run_all
-from sigmapi.experiments.kit.jobs import Tick, counted, learn_on_state
+from sigmapi.experiments.kit.jobs import SeedEpisodes, Tick, counted, seed_episodes
 from sigmapi.experiments.kit.seeds import SeedPlan
 from sigmapi.experiments.kit.worlds import GAZE_REACH, World
 from sigmapi.experiments.reach.config import SMALL_PRESET, ReachConfig, preset_setting
@@ -132,30 +131,40 @@ class _SeedJob:
     """A bar of this seed's episodes (set only where the job runs in the caller's process)."""
 
 
-def _run_seed(job: _SeedJob) -> dict[str, Any]:
+def _run_seed(job: _SeedJob) -> SeedEpisodes:
     """Everything of one seed: its map, then every state's learner on the same episodes."""
     total = len(job.config.run.states) * job.config.run.episodes
     return counted(job.show, total, f"reach seed {job.seed}", lambda tick: _seed_runs(job, tick))
 
 
-def _seed_runs(job: _SeedJob, progress: Tick | None) -> dict[str, Any]:
-    cfg, seed, world = job.config, job.seed, job.world
-    model = _map_for_seed(cfg, world, seed, progress) if "map" in cfg.run.states else None
-    out: dict[str, Any] = {
-        "map_metrics": _map_quality(model) if model is not None else None,
-        "runs": {},
-        "values": {},
-    }
-    for s in cfg.run.states:
-        env = make_state_env(
-            world.make_env(cfg.env), s, model, cfg.map.features, cfg.map.feature_width
-        )
-        done = None if progress is None else functools.partial(progress, 1, s)
-        ep, agent = learn_on_state(env, cfg.agent, PLAN, seed, cfg.run.episodes, on_episode=done)
-        out["runs"][s] = (ep.success, ep.failed, ep.steps)
-        if job.first:
-            out["values"][s] = value_over_z(agent, env, n=21 if cfg.env.dim == 2 else 51)
-    return out
+def _seed_runs(job: _SeedJob, progress: Tick | None) -> SeedEpisodes:
+    cfg, world = job.config, job.world
+
+    def make_map(seed: int, tick: Tick | None) -> tuple[SigmaPiSOM, dict[str, Any]]:
+        model = _map_for_seed(cfg, world, seed, tick)
+        return model, {"map_metrics": _map_quality(model)}
+
+    def state_env(state: str, model: SigmaPiSOM | None) -> gym.Env[Features, Any]:
+        env = world.make_env(cfg.env)
+        return make_state_env(env, state, model, cfg.map.features, cfg.map.feature_width)
+
+    def values(state: str, env: gym.Env[Features, Any], agent: ActorCritic) -> Any:
+        return value_over_z(agent, env, n=21 if cfg.env.dim == 2 else 51)
+
+    run, keep = cfg.run, values if job.first else None
+    got = seed_episodes(
+        job.seed,
+        run.states,
+        make_map,
+        state_env,
+        cfg.agent,
+        PLAN,
+        run.episodes,
+        tick=progress,
+        keep=keep,
+    )
+    got.model = None  # its scores travel back, not its weights
+    return got
 
 
 def _map_quality(model: SigmaPiSOM) -> dict[str, float | int]:
@@ -258,11 +267,11 @@ class ReachExperiment(Experiment[ReachConfig]):
         )
         for i, (key, _) in enumerate(jobs):
             got = values[key]
-            if got["map_metrics"] is not None:
-                res.map_metrics.append(got["map_metrics"])
-            for s, (succ, lost, steps) in got["runs"].items():
-                res.success[s][i], res.lost[s][i], res.steps[s][i] = succ, lost, steps
-            for s, (axis, vals) in got["values"].items():
+            if "map_metrics" in got.extras:
+                res.map_metrics.append(got.extras["map_metrics"])
+            for s, ep in got.runs.items():
+                res.success[s][i], res.lost[s][i], res.steps[s][i] = ep.success, ep.failed, ep.steps
+            for s, (axis, vals) in got.kept.items():
                 res.values[s] = vals
                 res.z_axis = axis
         res.seconds = time.perf_counter() - t0

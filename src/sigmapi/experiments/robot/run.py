@@ -11,12 +11,13 @@ the filmed episode. The map is scored on evaluation pairs drawn from
 the authors' docking model then learns on each state (:data:`~sigmapi.envs.STATES`) through
 ``gymnasium.make("sigmapi/RobotDock-v0")`` and the state wrappers
 (:meth:`RobotConfig.state_env <sigmapi.experiments.robot.config.RobotConfig.state_env>`), and
-:func:`~sigmapi.agents.run_episodes`.
+:func:`~sigmapi.agents.run_episodes`: the reach experiment's protocol
+(:func:`~sigmapi.experiments.kit.jobs.seed_episodes`), in the robot's world.
 
-Each (seed, state) is one job of the :class:`~sigmapi.executor.Executor`, the map state's job
-learning that seed's map first, so that the learners spread over the workers; the result does
-not depend on how they ran. ``sigmapi robot`` is generated from :data:`ROBOT` and
-:class:`~sigmapi.experiments.robot.config.RobotConfig` (the experiment registry).
+Each seed is one job of the :class:`~sigmapi.executor.Executor` (its map, then every state's
+learner); the result does not depend on how the jobs ran. ``sigmapi robot`` is generated from
+:data:`ROBOT` and :class:`~sigmapi.experiments.robot.config.RobotConfig` (the experiment
+registry).
 
 Examples
 --------
@@ -29,7 +30,6 @@ Examples
 from __future__ import annotations
 
 import dataclasses
-import functools
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -40,13 +40,14 @@ import numpy as np
 
 from sigmapi import _memory, _validate
 from sigmapi._outputs import check_file
+from sigmapi.agents import ActorCritic
 from sigmapi.codes import PopulationCode
 from sigmapi.envs.robot.scene import check_rendering, mujoco_module
 from sigmapi.envs.robot.views import RobotViewBatch
 from sigmapi.executor import Executor
 from sigmapi.executor import job_memory as _som_job_memory
 from sigmapi.experiments.base import Experiment, check_seeds, register, run_all
-from sigmapi.experiments.kit.jobs import Tick, counted, learn_on_state
+from sigmapi.experiments.kit.jobs import SeedEpisodes, Tick, counted, seed_episodes
 from sigmapi.experiments.robot.config import PLAN, QUICK, ROBOT_WORLD, RobotConfig
 from sigmapi.experiments.robot.map import (
     evaluation_pairs,
@@ -56,6 +57,7 @@ from sigmapi.experiments.robot.map import (
     unit_positions,
 )
 from sigmapi.experiments.robot.result import RobotResult
+from sigmapi.model.som import SigmaPiSOM
 from sigmapi.progress import Progress
 
 __all__ = ["INFO_KEYS", "PLAN", "QUICK", "ROBOT", "RobotExperiment", "job_memory"]
@@ -68,38 +70,47 @@ INFO_KEYS = ("docked", "event")
 class _Job:
     config: RobotConfig
     seed: int
-    state: str
     evaluation: tuple[RobotViewBatch, RobotViewBatch] | None
     show: Progress | None = None
     """A bar of this job's episodes (set only where the job runs in the caller's process)."""
 
 
-def _run_job(job: _Job) -> dict[str, Any]:
-    """One learner on one state of one seed (the map's job learns and scores the map first)."""
-    desc = f"robot seed {job.seed} {job.state}"
-    return counted(job.show, job.config.episodes, desc, lambda tick: _learner(job, tick))
+def _run_job(job: _Job) -> SeedEpisodes:
+    """Everything of one seed: its map (learned and scored), then every state's learner on the
+    same episodes (:func:`~sigmapi.experiments.kit.jobs.seed_episodes`, as reach runs)."""
+    total = len(job.config.states) * job.config.episodes
+    return counted(job.show, total, f"robot seed {job.seed}", lambda tick: _learners(job, tick))
 
 
-def _learner(job: _Job, tick: Tick | None) -> dict[str, Any]:
+def _learners(job: _Job, tick: Tick | None) -> SeedEpisodes:
     cfg = job.config
-    out: dict[str, Any] = {}
-    model = None
-    if job.state == "map":
+
+    def make_map(seed: int, tick: Tick | None) -> tuple[SigmaPiSOM, dict[str, Any]]:
         if tick is not None:
             tick(0, "learning the map")
-        model = learn_map(cfg, PLAN.rng(job.seed, "map"))
+        model = learn_map(cfg, PLAN.rng(seed, "map"))
         assert job.evaluation is not None
         cal, test = job.evaluation
-        out["map_metrics"] = score_map(model, cal, test)
-        out["unit_z"] = unit_positions(model, cal)
-        out["model"] = model
-    env = cfg.state_env(job.state, model)
-    done = None if tick is None else functools.partial(tick, 1, "docking")
-    out["episodes"], out["agent"] = learn_on_state(
-        env, cfg.agent(), PLAN, job.seed, cfg.episodes, on_episode=done, info_keys=INFO_KEYS
+        return model, {
+            "map_metrics": score_map(model, cal, test),
+            "unit_z": unit_positions(model, cal),
+        }
+
+    def keep(state: str, env: Any, agent: ActorCritic) -> ActorCritic | None:
+        return agent if state == "map" else None  # the figures film the map's learner
+
+    return seed_episodes(
+        job.seed,
+        cfg.states,
+        make_map,
+        cfg.state_env,
+        cfg.agent(),
+        PLAN,
+        cfg.episodes,
+        tick=tick,
+        info_keys=INFO_KEYS,
+        keep=keep,
     )
-    env.close()
-    return out
 
 
 def job_memory(config: RobotConfig) -> int:
@@ -153,8 +164,8 @@ class RobotExperiment(Experiment[RobotConfig]):
     ) -> RobotResult:
         """Learn the map and dock on every state of ``config.states`` for every seed.
 
-        Each (seed, state) is one job of ``executor``; run one by one in this process, a job
-        shows a bar of its episodes. ``out`` is not used: the run writes nothing while it
+        Each seed is one job of ``executor``; run one by one in this process, a job shows a
+        bar of its episodes. ``out`` is not used: the run writes nothing while it
         runs. Returns a :class:`~sigmapi.experiments.robot.result.RobotResult`.
         """
         if not isinstance(config, RobotConfig):
@@ -176,11 +187,7 @@ class RobotExperiment(Experiment[RobotConfig]):
         if "map" in config.states:
             Progress.of(progress).note("robot: recording the evaluation views")
             evaluation = evaluation_pairs(config)
-        jobs = [
-            (f"{seed}/{state}", _Job(config, seed, state, evaluation if state == "map" else None))
-            for seed in seeds
-            for state in config.states
-        ]
+        jobs = [(str(seed), _Job(config, seed, evaluation)) for seed in seeds]
         values = run_all(
             _run_job,
             jobs,
@@ -193,16 +200,16 @@ class RobotExperiment(Experiment[RobotConfig]):
         )
         res = RobotResult(config, seeds)
         for state in config.states:
-            eps = [values[f"{seed}/{state}"]["episodes"] for seed in seeds]
+            eps = [values[str(seed)].runs[state] for seed in seeds]
             res.success[state] = np.stack([e.success for e in eps])
             res.docked[state] = np.stack([e.info["docked"].astype(bool) for e in eps])
             res.steps[state] = np.stack([e.steps for e in eps])
         if "map" in config.states:
             for seed in seeds:
-                res.map_metrics.append(values[f"{seed}/map"]["map_metrics"])
-                res.unit_z.append(values[f"{seed}/map"]["unit_z"])
-            first = values[f"{seeds[0]}/map"]
-            res.model, res.agent = first["model"], first["agent"]
+                res.map_metrics.append(values[str(seed)].extras["map_metrics"])
+                res.unit_z.append(values[str(seed)].extras["unit_z"])
+            first = values[str(seeds[0])]
+            res.model, res.agent = first.model, first.kept["map"]
         res.seconds = time.perf_counter() - t0
         return res
 
