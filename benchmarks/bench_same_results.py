@@ -76,7 +76,9 @@ print(json.dumps(clean(out), default=str))
 def _results(src: Path, robot: bool) -> dict[str, Any]:
     env = {**os.environ, "PYTHONPATH": str(src)}
     argv = [sys.executable, "-c", CHILD, *(["--robot"] if robot else [])]
-    r = subprocess.run(argv, env=env, capture_output=True, text=True, check=True, cwd="/")
+    r = subprocess.run(argv, env=env, capture_output=True, text=True, check=False, cwd="/")
+    if r.returncode != 0:
+        sys.exit(f"the run of {src} failed:\n{r.stderr}")
     return json.loads(r.stdout.splitlines()[-1])
 
 
@@ -97,10 +99,11 @@ def _diff(a: Any, b: Any, path: str, out: list[str]) -> None:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--baseline-src", type=Path, required=True)
+    ap.add_argument("--src", type=Path, default=SRC, help="the checkout's src (default: this one)")
     ap.add_argument("--no-robot", action="store_true", help="leave the robot out (no MuJoCo)")
     args = ap.parse_args()
     old = _results(args.baseline_src, not args.no_robot)
-    new = _results(SRC, not args.no_robot)
+    new = _results(args.src, not args.no_robot)
     found: list[str] = []
     _diff(old, new, "", found)
     print("\n".join(found) if found else "no difference")

@@ -786,7 +786,7 @@ def _docking(name: str) -> Table:
                      " ".join(num(v, ".2f") for v in per_seed),
                      num(res["reach_given_docked"][state], ".2f")])  # fmt: skip
     note = (f"Seeds {seeds_label(robot.seeds)}; final success over the last "
-            f"{robot.config.final_episodes} of {robot.config.episodes} episodes; "
+            f"{robot.config.run.final_episodes} of {robot.config.run.episodes} episodes; "
             f"{num(data['cpu_s'] / 60, '.1f')} CPU minutes.")  # fmt: skip
     return Table(["state the learner sees", "success, median (worst seed)", "per seed",
                   "reach touching the ball, of docked"], rows, [_rel(name)], note,

@@ -274,6 +274,6 @@ def test_render_takes_a_gif_file_name():
     import sigmapi
     from sigmapi.experiments.robot.config import RobotConfig
 
-    assert RobotConfig(render="episode.gif").render == "episode.gif"
+    assert RobotConfig().replace(render="episode.gif").run.render == "episode.gif"
     with pytest.raises(sigmapi.ConfigError, match=r"render must be a file name ending in \.gif"):
-        RobotConfig(render="episode.mp4")
+        RobotConfig().replace(render="episode.mp4")

@@ -68,14 +68,14 @@ def robot_som_config(
 
 
 def learn_map(config: RobotConfig, rng: np.random.Generator) -> SigmaPiSOM:
-    """The map of one run: ``config.train_pairs`` view pairs recorded from the still robot's
-    saccades (``config.moved_share`` of them spoiled), then ``fit(views)``; the views' and the
+    """The map of one run: ``config.map.train_pairs`` view pairs recorded from the still robot's
+    saccades (``config.env.moved_share`` of them spoiled), then ``fit(views)``; the views' and the
     weights' seeds drawn from ``rng``."""
-    source = ROBOT_WORLD.source(config)
+    source = ROBOT_WORLD.source(config.env)
     views_seed, som_seed = (int(v) for v in rng.integers(0, 2**31 - 1, size=2))
-    views = collect_saccade_views(source, config.train_pairs, seed=views_seed)
+    views = collect_saccade_views(source, config.map.train_pairs, seed=views_seed)
     cfg = robot_som_config(
-        source.x_code, config.map_shape, config.iterations, som_seed, config.backend
+        source.x_code, config.map.map_shape, config.map.iterations, som_seed, config.map.backend
     )
     return SigmaPiSOM(cfg).fit(views)
 
@@ -83,11 +83,11 @@ def learn_map(config: RobotConfig, rng: np.random.Generator) -> SigmaPiSOM:
 def evaluation_pairs(config: RobotConfig) -> tuple[RobotViewBatch, RobotViewBatch]:
     """Calibration and test pairs (unmoved) drawn from :data:`~sigmapi.metrics.EVAL_SEED`:
     the same for every seed and run."""
-    source = RobotViews(config.grid, config.code_width)
+    source = RobotViews(config.env.grid, config.env.code_width)
     cal, test = (np.random.default_rng(s) for s in np.random.SeedSequence(EVAL_SEED).spawn(2))
     return (
-        source.sample_views_with_z(config.eval_pairs, cal),
-        source.sample_views_with_z(config.eval_pairs, test),
+        source.sample_views_with_z(config.map.eval_pairs, cal),
+        source.sample_views_with_z(config.map.eval_pairs, test),
     )
 
 

@@ -13,7 +13,7 @@ from numpy.typing import NDArray
 from sigmapi.agents import ActorCritic
 from sigmapi.experiments.base import check_seeds
 from sigmapi.experiments.kit.episodes import final_rates, success_curve
-from sigmapi.experiments.kit.written import as_object, summaries, tuples
+from sigmapi.experiments.kit.written import as_object, summaries
 from sigmapi.experiments.robot.config import RobotConfig
 from sigmapi.model.som import SigmaPiSOM
 
@@ -78,7 +78,7 @@ class RobotResult:
         metrics and time, and its summaries as written (the file holds no episode records)."""
         obj = as_object(data)
         cfg = as_object(obj["config"], "config")
-        config = RobotConfig(**tuples(cfg))
+        config = RobotConfig.from_dict(cfg)
         metrics = [dict(as_object(m, "map_metrics entry")) for m in obj["map_metrics"]]
         mapped = (*metrics[0], "order_r2_min", "folded_seeds") if metrics else ()
         return cls(
@@ -92,14 +92,14 @@ class RobotResult:
     def final(self, key: str = "success") -> dict[str, NDArray[np.float64]]:
         """Per state, the rate of ``key`` (``"success"`` or ``"docked"``) over the last
         ``final_episodes`` episodes, one per seed."""
-        f = self.config.final_episodes
+        f = self.config.run.final_episodes
         table = self.success if key == "success" else self.docked
         return {s: final_rates(r, f) for s, r in table.items()}
 
     def reach_given_docked(self) -> dict[str, NDArray[np.float64]]:
         """Per state and seed, the share of the last ``final_episodes`` docked episodes in
         which the hand touched the ball (NaN for a seed that docked in none)."""
-        f = self.config.final_episodes
+        f = self.config.run.final_episodes
         out = {}
         for s, d in self.docked.items():
             n = d[:, -f:].sum(axis=1)
@@ -109,7 +109,7 @@ class RobotResult:
 
     def curves(self) -> dict[str, dict[str, list[float]]]:
         """Per state: block ends, success per block (mean and sd over seeds)."""
-        b = self.config.block
+        b = self.config.run.block
         return {
             s: {k: v.tolist() for k, v in success_curve(r, b).items()}
             for s, r in self.success.items()
@@ -176,8 +176,8 @@ class RobotResult:
                 f"fold score {d['fold_score']:.2f}, folded {d['folded_seeds']}"
             )
         lines.append(
-            f"final success over the last {self.config.final_episodes} of "
-            f"{self.config.episodes} episodes:"
+            f"final success over the last {self.config.run.final_episodes} of "
+            f"{self.config.run.episodes} episodes:"
         )
         for s, v in d["success"].items():
             seeds = " ".join(f"{x:.2f}" for x in d["success_per_seed"][s])
@@ -202,12 +202,12 @@ class RobotResult:
     def figure(self, out_dir: str | Path) -> list[Path]:
         """Write the figures into ``out_dir`` (:func:`~sigmapi.experiments.robot.figures.
         robot_figures`: the map on the table, the learning curves, a film strip) and, with
-        ``config.render``, the filmed episode as an animated GIF at that path."""
+        ``config.run.render``, the filmed episode as an animated GIF at that path."""
         from sigmapi.experiments.robot.figures import robot_figures, write_gif
 
         folder = Path(out_dir)
         folder.mkdir(parents=True, exist_ok=True)
         paths = robot_figures(self, folder, self.film())
-        if self.config.render is not None and self.film():
-            paths.append(write_gif(self.film(), Path(self.config.render)))
+        if self.config.run.render is not None and self.film():
+            paths.append(write_gif(self.film(), Path(self.config.run.render)))
         return paths

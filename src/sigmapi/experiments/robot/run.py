@@ -78,7 +78,7 @@ class _Job:
 def _run_job(job: _Job) -> SeedEpisodes:
     """Everything of one seed: its map (learned and scored), then every state's learner on the
     same episodes (:func:`~sigmapi.experiments.kit.jobs.seed_episodes`, as reach runs)."""
-    total = len(job.config.states) * job.config.episodes
+    total = len(job.config.run.states) * job.config.run.episodes
     return counted(job.show, total, f"robot seed {job.seed}", lambda tick: _learners(job, tick))
 
 
@@ -101,12 +101,12 @@ def _learners(job: _Job, tick: Tick | None) -> SeedEpisodes:
 
     return seed_episodes(
         job.seed,
-        cfg.states,
+        cfg.run.states,
         make_map,
         cfg.state_env,
-        cfg.agent(),
+        cfg.agent,
         PLAN,
-        cfg.episodes,
+        cfg.run.episodes,
         tick=tick,
         info_keys=INFO_KEYS,
         keep=keep,
@@ -117,17 +117,17 @@ def job_memory(config: RobotConfig) -> int:
     """Peak bytes of one job (an upper estimate): the map's training and scoring
     (:func:`sigmapi.executor.job_memory`), its recorded and evaluation views and the
     episodes' records."""
-    n = config.grid**2
+    n = config.env.grid**2
     som = robot_som_config(
-        PopulationCode((config.grid,) * 2, width=config.code_width),
-        config.map_shape,
-        config.iterations,
+        PopulationCode((config.env.grid,) * 2, width=config.env.code_width),
+        config.map.map_shape,
+        config.map.iterations,
         0,
-        config.backend,
+        config.map.backend,
     )
-    views = (config.train_pairs + 2 * config.eval_pairs) * 4 * n * 8
-    episodes = 64 * config.episodes  # start seeds and each episode's records
-    return _som_job_memory(som, n_test=config.eval_pairs) + views + episodes
+    views = (config.map.train_pairs + 2 * config.map.eval_pairs) * 4 * n * 8
+    episodes = 64 * config.run.episodes  # start seeds and each episode's records
+    return _som_job_memory(som, n_test=config.map.eval_pairs) + views + episodes
 
 
 class RobotExperiment(Experiment[RobotConfig]):
@@ -149,8 +149,8 @@ class RobotExperiment(Experiment[RobotConfig]):
     def before_writing(self, config: RobotConfig, *, force: bool) -> None:
         """What writing the figures needs, checked before the work: the ``--render`` file
         (:func:`~sigmapi._outputs.check_file`) and an offscreen renderer (``MUJOCO_GL``)."""
-        if config.render is not None:
-            check_file(config.render, force=force, what="--render file")
+        if config.run.render is not None:
+            check_file(config.run.render, force=force, what="--render file")
         check_rendering()
 
     def run(
@@ -162,7 +162,7 @@ class RobotExperiment(Experiment[RobotConfig]):
         executor: Executor | None = None,
         progress: Progress | None = None,
     ) -> RobotResult:
-        """Learn the map and dock on every state of ``config.states`` for every seed.
+        """Learn the map and dock on every state of ``config.run.states`` for every seed.
 
         Each seed is one job of ``executor``; run one by one in this process, a job shows a
         bar of its episodes. ``out`` is not used: the run writes nothing while it
@@ -172,19 +172,19 @@ class RobotExperiment(Experiment[RobotConfig]):
             raise _validate.fail("config", "a RobotConfig", config)
         seeds = check_seeds(seeds)
         mujoco_module()  # before any work: says which extra to install
-        if config.retina == "pixels":
+        if config.env.retina == "pixels":
             check_rendering()
         per_job = job_memory(config)  # the main process records views too: checked first
         _memory.check(
             per_job,
-            f"a robot job of grid={config.grid}, eval_pairs="
-            f"{config.eval_pairs:,}, train_pairs={config.train_pairs:,}, episodes="
-            f"{config.episodes:,}",
+            f"a robot job of grid={config.env.grid}, eval_pairs="
+            f"{config.map.eval_pairs:,}, train_pairs={config.map.train_pairs:,}, episodes="
+            f"{config.run.episodes:,}",
             "use a smaller grid or map, or fewer pairs or episodes",
         )
         t0 = time.perf_counter()
         evaluation = None
-        if "map" in config.states:
+        if "map" in config.run.states:
             Progress.of(progress).note("robot: recording the evaluation views")
             evaluation = evaluation_pairs(config)
         jobs = [(str(seed), _Job(config, seed, evaluation)) for seed in seeds]
@@ -199,12 +199,12 @@ class RobotExperiment(Experiment[RobotConfig]):
             describe=lambda key, _: f"seed {key}",
         )
         res = RobotResult(config, seeds)
-        for state in config.states:
+        for state in config.run.states:
             eps = [values[str(seed)].runs[state] for seed in seeds]
             res.success[state] = np.stack([e.success for e in eps])
             res.docked[state] = np.stack([e.info["docked"].astype(bool) for e in eps])
             res.steps[state] = np.stack([e.steps for e in eps])
-        if "map" in config.states:
+        if "map" in config.run.states:
             for seed in seeds:
                 res.map_metrics.append(values[str(seed)].extras["map_metrics"])
                 res.unit_z.append(values[str(seed)].extras["unit_z"])
