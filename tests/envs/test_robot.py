@@ -224,7 +224,7 @@ def test_the_command_line_starts_without_mujoco():
 
 def test_tiny_learn_and_dock_run():
     from sigmapi.experiments.robot.result import RobotResult
-    from sigmapi.experiments.robot.run import QUICK, ROBOT
+    from sigmapi.experiments.robot.variant import QUICK, ROBOT
 
     cfg = QUICK.replace(
         train_pairs=300, iterations=600, eval_pairs=200, episodes=6, final_episodes=3,
@@ -239,6 +239,38 @@ def test_tiny_learn_and_dock_run():
         assert key in d
     again = ROBOT.run(cfg.replace(states=("retina",)), seeds=[0])
     np.testing.assert_array_equal(again.success["retina"], res.success["retina"])
+
+
+def test_robot_is_reach_in_the_robot_world():
+    """``sigmapi robot`` is a registered variant of the reach experiment: reach's run and
+    per-seed job in the robot's world, with the robot's config, seeds and result."""
+    from sigmapi.experiments import REGISTRY
+    from sigmapi.experiments.reach.run import ReachExperiment
+    from sigmapi.experiments.robot.config import ROBOT_WORLD, RobotConfig
+
+    robot = REGISTRY["robot"]
+    assert isinstance(robot, ReachExperiment) and robot.world is ROBOT_WORLD
+    assert type(robot).run is ReachExperiment.run
+    assert robot.config_type is RobotConfig and robot.seeds == ROBOT_WORLD.seeds
+
+
+def test_robot_config_is_made_of_parts_and_written_flat():
+    import sigmapi
+    from sigmapi.agents import ActorCriticConfig
+    from sigmapi.experiments.robot.config import RobotConfig
+
+    cfg = RobotConfig().replace(
+        grid=8, map_shape=(5, 5), gamma=0.8, episodes=60, final_episodes=30, block=20
+    )
+    assert (cfg.env.grid, cfg.map.map_shape, cfg.run.episodes) == (8, (5, 5), 60)
+    assert cfg.agent == ActorCriticConfig(gamma=0.8)
+    flat = cfg.to_dict()
+    assert flat["grid"] == 8 and flat["map_shape"] == [5, 5] and flat["gamma"] == 0.8
+    assert RobotConfig.from_dict(json.loads(json.dumps(flat))) == cfg
+    with pytest.raises(sigmapi.ConfigError, match="unknown robot config field 'map_pairs'"):
+        RobotConfig.from_dict({**flat, "map_pairs": 10})
+    with pytest.raises(sigmapi.ConfigError, match="map_shape must be 2 axes"):
+        RobotConfig().replace(map_shape=(5,))
 
 
 def test_projection_at_many_necks_matches_mujoco(scene: Scene):

@@ -173,17 +173,23 @@ class RobotConfig:
     def __post_init__(self) -> None:
         check_part_types(self, self.PARTS)
 
-    def make_env(self, **kwargs: Any) -> gym.Env[Any, Any]:
-        """The docking world through ``gymnasium.make`` (:data:`ROBOT_WORLD`; its TimeLimit
-        included); ``kwargs`` go to it too (e.g. ``render_mode="rgb_array"``)."""
-        return ROBOT_WORLD.make_env(self.env, **kwargs)
+    def make_env(self, world: World | None = None, **kwargs: Any) -> gym.Env[Any, Any]:
+        """The docking world through ``gymnasium.make`` (``world``, default
+        :data:`ROBOT_WORLD`; its TimeLimit included); ``kwargs`` go to it too (e.g.
+        ``render_mode="rgb_array"``)."""
+        return (world or ROBOT_WORLD).make_env(self.env, **kwargs)
 
     def state_env(
-        self, state: str, model: SigmaPiSOM | None = None, **kwargs: Any
+        self,
+        state: str,
+        model: SigmaPiSOM | None = None,
+        world: World | None = None,
+        **kwargs: Any,
     ) -> gym.Env[Features, Any]:
-        """The docking world as ``state`` sees it (:mod:`sigmapi.envs.wrappers`); ``"true_z"``
-        codes z on the map's grid (like for like), ``"map"`` needs ``model``."""
-        env, m = self.make_env(**kwargs), self.map
+        """The docking world (:meth:`make_env`) as ``state`` sees it
+        (:mod:`sigmapi.envs.wrappers`); ``"true_z"`` codes z on the map's grid (like for
+        like), ``"map"`` needs ``model``."""
+        env, m = self.make_env(world, **kwargs), self.map
         if state == "true_z":
             return TrueZObservation(env, shape=m.map_shape, width=m.feature_width)
         return make_state_env(env, state, model, m.features, m.feature_width)

@@ -48,7 +48,7 @@ def _nan_stat(fn: Any, values: NDArray[np.float64]) -> float | None:
 
 @dataclass
 class RobotResult:
-    """Outcome of :meth:`~sigmapi.experiments.robot.run.RobotExperiment.run`.
+    """Outcome of :meth:`~sigmapi.experiments.robot.variant.RobotExperiment.run`.
 
     ``success[state]``, ``docked[state]`` and ``steps[state]`` have shape ``(len(seeds),
     episodes)``, a row per seed in the order of ``seeds``: whether the hand touched the ball
