@@ -40,6 +40,7 @@ from sigmapi.envs.robot.views import RobotViewBatch
 from sigmapi.executor import job_memory as _som_job_memory
 from sigmapi.experiments.base import register
 from sigmapi.experiments.kit.jobs import SeedEpisodes, Tick
+from sigmapi.experiments.kit.worlds import World
 from sigmapi.experiments.reach.run import ReachExperiment
 from sigmapi.experiments.robot.config import PLAN, QUICK, ROBOT_WORLD, RobotConfig
 from sigmapi.experiments.robot.map import (
@@ -89,8 +90,12 @@ class RobotExperiment(ReachExperiment):
     info_keys = INFO_KEYS
     returns_map = True
 
-    def __init__(self) -> None:
-        super().__init__(ROBOT_WORLD)  # its default seeds: the acceptance run's (untuned)
+    def __init__(self, world: World = ROBOT_WORLD) -> None:
+        """The robot's protocol in ``world`` (default :data:`~sigmapi.experiments.robot.
+        config.ROBOT_WORLD`, whose default seeds are the acceptance run's, none tuned on):
+        a world whose settings are a :class:`~sigmapi.experiments.robot.config.RobotEnvConfig`,
+        its view pairs recorded from its view source, its map from its map spec."""
+        super().__init__(world)
 
     def before_writing(self, config: RobotConfig, *, force: bool) -> None:
         """What writing the figures needs, checked before the work: the ``--render`` file
@@ -131,7 +136,7 @@ class RobotExperiment(ReachExperiment):
         preferred z on the evaluation views (``shared``)."""
         if tick is not None:
             tick(0, "learning the map")
-        model = learn_map(config, self.plan.rng(seed, "map"))
+        model = learn_map(config, self.plan.rng(seed, "map"), self.world)
         cal, test = shared
         return model, {
             "map_metrics": score_map(model, cal, test),
