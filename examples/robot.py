@@ -51,7 +51,7 @@ def main() -> None:
     cfg = robot_som_config(world.x_code, shape, iterations, seed=0)
     model = sigmapi.SigmaPiSOM(cfg).fit(views)
     calibration, test = evaluation_pairs(
-        RobotConfig(grid=grid, eval_pairs=500 if args.small else 3000)
+        RobotConfig().replace(grid=grid, eval_pairs=500 if args.small else 3000)
     )
     m = score_map(model, calibration, test)
     print(f"map {shape[0]}x{shape[1]} from {pairs} view pairs: order R^2 {m['order_r2']:.3f}, "

@@ -134,10 +134,17 @@ KIT = "sigmapi.experiments.kit"
 SHARED = ("sigmapi.experiments", "sigmapi.experiments.base", KIT)
 """What every experiment package may import from ``experiments/``: the registry and the kit."""
 
-BORROWS = {("reproduce", "reach"), ("reach", "reproduce"), ("reward", "reach"), ("icub", "chain")}
+BORROWS = {
+    ("reproduce", "reach"),
+    ("reach", "reproduce"),
+    ("reward", "reach"),
+    ("robot", "reach"),
+    ("icub", "chain"),
+}
 """An experiment package that uses another's parts: the report adds the reach section, written
 against the report's section type; the reward experiment's world and map are the reach
-experiment's config parts; the iCub's head map reads its eye map through the chain
+experiment's config parts; the robot is the reach experiment in the robot's world (its run,
+its per-seed job); the iCub's head map reads its eye map through the chain
 experiment's code of map A (``head_code``)."""
 
 

@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import csv
 import functools
+import importlib
 import json
 import re
 import shutil
@@ -81,6 +82,49 @@ def load(name: str) -> Any:
         )
     _read.append(_rel(name))
     return _load_cached(path, path.stat().st_mtime)
+
+
+_EXPERIMENTS = "sigmapi.experiments"
+READERS: dict[str, tuple[str, str]] = {
+    "chain": ("chain.result:ChainResult", ""),
+    "chain-winner": ("chain.result:ChainResult", ""),
+    "compare": ("compare.result:CompareResult", ""),
+    "icub": ("icub.result:ICubResult", ""),
+    "neurons": ("neurons.result:NeuronsResult", ""),
+    "paper-1d-procedures": ("sweep.run:SweepResult", ""),
+    "paper-2d-procedures": ("sweep.run:SweepResult", ""),
+    "reach": ("reach.result:ReachResult", ""),
+    "reproduce": ("reproduce.results:ReproduceResult", "metrics"),
+    "robot-docking": ("robot.result:RobotResult", "result"),
+    "robot-docking-quick": ("robot.result:RobotResult", "result"),
+    "robot-docking-tuning": ("robot.result:RobotResult", "result"),
+    "stream": ("stream.result:StreamResult", ""),
+}
+"""The results files an experiment wrote: the class (under :mod:`sigmapi.experiments`) whose
+``from_dict`` reads each, and the key the result sits under where the script that kept it
+wrapped it ("": the file is the result, with the keeper's keys beside its own)."""
+
+
+def result(name: str) -> Any:
+    """The experiment result of the results file ``name`` (:data:`READERS`), read by its
+    class's ``from_dict``: a result's keys are read in one place, its experiment's
+    ``result`` module."""
+    target, key = READERS[name]
+    module, _, cls = target.partition(":")
+    reader = getattr(importlib.import_module(f"{_EXPERIMENTS}.{module}"), cls)
+    data = load(name)
+    return reader.from_dict(get(data, key, name) if key else data)
+
+
+def read(name: str) -> Any:
+    """What the ``result`` role quotes from: a file of :data:`READERS` as its result's JSON
+    form (the keeper's keys beside it), any other file as it is."""
+    data = load(name)
+    if name not in READERS:
+        return data
+    form = json.loads(json.dumps(result(name).to_dict()))
+    key = READERS[name][1]
+    return {**data, key: form} if key else {**data, **form}
 
 
 def get(data: Any, key: str, name: str = "?") -> Any:
@@ -289,21 +333,21 @@ def _reproduce() -> Table:
     same runs at the end of their training) and at the rule's ceiling."""
     data = load("reproduce")
     rows = []
-    for preset, p in get(data, "metrics.presets", "reproduce").items():
-        med, worst, unref = p["median"], p["worst"], p.get("unrefined")
-        ceiling = p.get("ceiling") or {}
+    for preset, p in result("reproduce").presets.items():
+        med, worst, unref = p.median(), p.worst(), p.median("unrefined") if p.refines else None
+        ceiling = p.ceiling or {}
 
         def before(key: str, unref: Any = unref) -> str:
-            return num(unref["median"][key]) if unref else "-"
+            return num(unref[key]) if unref else "-"
 
         rows.append([
-            f"`{preset}`", seeds_label(p["seeds"]),
+            f"`{preset}`", seeds_label([r.seed for r in p.runs]),
             f"{num(med['view_consistency'])} / {num(worst['view_consistency'])}",
             before("view_consistency"),
             num(ceiling["view_consistency"]) if "view_consistency" in ceiling else "-",
             f"{num(med['z_error'])} / {num(worst['z_error'])}", before("z_error"),
             f"{num(med['order_r2'])} / {num(worst['order_r2'])}",
-            f"{p['ordered']} of {len(p['seeds'])}",
+            f"{p.ordered_count()} of {len(p.runs)}",
         ])  # fmt: skip
     note = (
         f"Median / worst seed; 'before' is the median of the same runs at the end of their "
@@ -366,8 +410,10 @@ def _column(runs: Sequence[dict[str, Any]], key: str) -> list[float]:
 
 
 def _sweep_rows(name: str) -> list[dict[str, Any]]:
-    data = load(name)
-    rows = data["rows"] if isinstance(data, dict) else data
+    if name.endswith(".csv"):  # a sweep's table itself
+        rows = load(name)
+    else:
+        rows = result(name).rows
     bad = [r for r in rows if r.get("status", "ok") != "ok"]
     if bad:
         raise ExtensionError(f"{name}: {len(bad)} failed runs in the table; rerun them")
@@ -382,8 +428,8 @@ def _group(rows: list[dict[str, Any]], keys: Sequence[str]) -> dict[tuple[str, .
 
 
 def _procedures(name: str, labels: dict[str, str], fold_list: bool) -> Table:
-    rows_in = _sweep_rows(name)
-    keys = list(get(load(name), "spec.grid", name))
+    sweep = result(name)
+    rows_in, keys = _sweep_rows(name), list(sweep.spec.grid)
     out = []
     for group, runs in _group(rows_in, keys).items():
         label = labels.get("/".join(group), "/".join(group))
@@ -609,7 +655,8 @@ COMPARE_NAMES = {"sigma-pi": '**Sigma-Pi map** (`ordering = "crossview"`)'}
 
 @table("compare")
 def _compare() -> Table:
-    data = load("compare")
+    res = result("compare")
+    data = res.to_dict()
     rows = []
     for m in data["methods"]:
         match = m["labels_to_match_sigma_pi"]
@@ -619,9 +666,9 @@ def _compare() -> Table:
             num(m["unit_consistency"]), f"{num(m['z_error'])} (worst {num(max(per))})",
             f"{m['labels_needed']:,}", "never" if match is None else f"{match:,}",
         ])  # fmt: skip
-    cfg = data["config"]
-    note = (f"`{cfg['preset']}` task, {cfg['train_pairs']:,} recorded view pairs per seed, seeds "
-            f"{seeds_label(cfg['seeds'])}, medians; z error with {m['labels_used']:,} labels, in "
+    cfg = res.config
+    note = (f"`{cfg.preset}` task, {cfg.train_pairs:,} recorded view pairs per seed, seeds "
+            f"{seeds_label(res.seeds)}, medians; z error with {m['labels_used']:,} labels, in "
             f"{data['z_error_unit']} (a map's winner alone cannot beat "
             f"{num(data['quantisation_floor'])}).")  # fmt: skip
     return Table(
@@ -636,32 +683,30 @@ def _compare() -> Table:
         rows,
         [_rel("compare")],
         note,
-        _command(data),
+        _command(load("compare")),
     )
 
 
 @table("chain")
 def _chain() -> Table:
-    data = load("chain")
-    tables = [("chain", "**chain** (A's response -> B)", data)]
-    try:
-        winner = load("chain-winner")
+    res = result("chain")
+    tables = [("chain", "**chain** (A's response -> B)", res)]
+    if _path("chain-winner").is_file():
+        winner = result("chain-winner")
         tables.append(("chain", "chain, A's winner as a population code", winner))
-    except ExtensionError:
-        pass
-    tables.append(("single", "single map, third-order units", data))
+    tables.append(("single", "single map, third-order units", res))
     rows = []
-    for route, label, d in tables:
-        seeds = d["seeds"]
-        col = functools.partial(_column, [r[route] for r in seeds])
+    for route, label, r in tables:
+        seeds = r.per_seed
+        col = functools.partial(_column, [s[route] for s in seeds])
         rows.append([
             label, mw_of(col("z_error"), higher_is_better=False), mw_of(col("view_consistency")),
             mw_of(col("view_within_one")), mw_of(col("order_r2")), mw_of(col("usage"), ".2f"),
             f"{int(seeds[0][route]['weights']):,}",
             f"{num(statistics.median(col('train_seconds')), '.1f')} s",
         ])  # fmt: skip
-    s = data["summary"]
-    note = (f"Seeds {seeds_label(data['settings']['seeds'])}, {data['settings']['train_pairs']:,} "
+    s = res.summary()
+    note = (f"Seeds {seeds_label([r['seed'] for r in res.per_seed])}, {res.train_pairs:,} "
             f"view pairs of triples per seed; median / worst seed. The chain's z error over the "
             f"single map's: median {num(s['ratio_median'], '.2f')}, worst "
             f"{num(s['ratio_worst'], '.2f')}; {s['met']} of {s['n_seeds']} seeds within "
@@ -670,7 +715,7 @@ def _chain() -> Table:
     return Table(["route", "z error", "same winner", "within one", "order R²", "usage",
                   "Sigma-Pi weights", "training (median)"], rows,
                  [_rel(n) for n in ("chain", "chain-winner") if _path(n).is_file()], note,
-                 [c for d in (data,) for c in _command(d)])  # fmt: skip
+                 _command(load("chain")))  # fmt: skip
 
 
 REACH_STATES = {
@@ -683,7 +728,8 @@ REACH_STATES = {
 
 @table("reach")
 def _reach() -> Table:
-    data = load("reach")
+    res = result("reach")
+    data = res.to_dict()
     rows = []
     for state, mean in data["success"].items():
         per = data["success_per_seed"][state]
@@ -691,30 +737,26 @@ def _reach() -> Table:
         rows.append([REACH_STATES.get(state, state), shown,
                      " ".join(num(v) for v in per), num(data["lost"][state]),
                      num(data["timed_out"][state])])  # fmt: skip
-    cfg = data["config"]
-    run = cfg.get("run", cfg)
-    note = (f"Seeds {seeds_label(cfg['seeds'])}; final success: the last "
-            f"{run['final_episodes']} of {run['episodes']} episodes, mean over seeds; map / true z "
+    run = res.config.run
+    note = (f"Seeds {seeds_label(res.seeds)}; final success: the last "
+            f"{run.final_episodes} of {run.episodes} episodes, mean over seeds; map / true z "
             f"{num(data['ratio_map_to_true_z'])}.")  # fmt: skip
     return Table(
         ["state the learner sees", "final success", "per seed", "lost the object", "timed out"],
         rows,
         [_rel("reach")],
         note,
-        _command(data),
+        _command(load("reach")),
     )
 
 
 @table("reach-maps")
 def _reach_maps() -> Table:
-    data = load("reach")
-    ms = data["map_metrics"]
+    res = result("reach")
+    ms = res.map_metrics
     keys = [k for k in ("order_r2", "view_within_one", "z_error", "usage", "fold_score")
             if all(k in m for m in ms)]  # fmt: skip
-    rows = [
-        [str(seed)] + [num(m[k]) for k in keys]
-        for seed, m in zip(data["config"]["seeds"], ms, strict=True)
-    ]
+    rows = [[str(seed)] + [num(m[k]) for k in keys] for seed, m in zip(res.seeds, ms, strict=True)]
     return Table(["seed", *keys], rows, [_rel("reach")], "The map each seed's learner sees.")
 
 
@@ -735,15 +777,16 @@ def _robot_docking_tuning() -> Table:
 
 def _docking(name: str) -> Table:
     data = load(name)
-    res = data["result"]
+    robot = result(name)
+    res = robot.to_dict()
     rows = []
     for state, per_seed in res["success_per_seed"].items():
         med, worst = median_worst(per_seed)
         rows.append([STATES.get(state, state), f"{num(med, '.2f')} ({num(worst, '.2f')})",
                      " ".join(num(v, ".2f") for v in per_seed),
                      num(res["reach_given_docked"][state], ".2f")])  # fmt: skip
-    note = (f"Seeds {seeds_label(res['seeds'])}; final success over the last "
-            f"{res['config']['final_episodes']} of {res['config']['episodes']} episodes; "
+    note = (f"Seeds {seeds_label(robot.seeds)}; final success over the last "
+            f"{robot.config.run.final_episodes} of {robot.config.run.episodes} episodes; "
             f"{num(data['cpu_s'] / 60, '.1f')} CPU minutes.")  # fmt: skip
     return Table(["state the learner sees", "success, median (worst seed)", "per seed",
                   "reach touching the ball, of docked"], rows, [_rel(name)], note,
@@ -860,10 +903,11 @@ class ResultRole(SphinxRole):
         spec, _, fmt = self.text.partition("|")
         name, _, key = spec.partition(":")
         try:
-            value = get(load(name.strip()), key.strip(), name)
+            value = get(read(name.strip()), key.strip(), name)
             text = _quote(value, fmt or ".3g")
-        except (ExtensionError, ValueError, TypeError, RecursionError) as e:
-            msg = self.inliner.reporter.error(f"result {self.text!r}: {e}", line=self.lineno)
+        except (ExtensionError, *_DATA_ERRORS) as e:
+            what = f"no key {e}" if isinstance(e, KeyError) else str(e)
+            msg = self.inliner.reporter.error(f"result {self.text!r}: {what}", line=self.lineno)
             return [self.inliner.problematic(self.rawtext, self.rawtext, msg)], [msg]
         self.env.note_dependency(str(_path(name.strip())))
         return [nodes.Text(text)], []

@@ -5,7 +5,12 @@ from __future__ import annotations
 
 from typing import Any
 
-from sigmapi_results import Table, _command, _rel, load, num, seeds_label, table
+from sigmapi_results import Table, _command, _rel, load, num, result, seeds_label, table
+
+
+def _neurons_result() -> dict[str, Any]:
+    """``benchmarks/results/neurons.json`` read by :class:`NeuronsResult`, as its JSON form."""
+    return dict(result("neurons").to_dict())
 
 
 def _mw(m: dict[str, Any], key: str, fmt: str = ".3f") -> str:
@@ -15,7 +20,7 @@ def _mw(m: dict[str, Any], key: str, fmt: str = ".3f") -> str:
 @table("neurons")
 def _neurons() -> Table:
     """The rate maps of ``sigmapi neurons``: medians / worst seeds per map and task."""
-    data = load("neurons")
+    data = _neurons_result()
     acc = {(c["name"], c["task"]): c for c in data["acceptance"]["dendritic"]}
     rows = []
     for m in data["methods"]:
@@ -41,13 +46,13 @@ def _neurons() -> Table:
             f"units (1-D).")  # fmt: skip
     return Table(["map", "task", "synapses", "view consistency", "gap to Sigma-Pi", "z error",
                   "order R²", "ordered", "RF index"], rows, [_rel("neurons")], note,
-                 _command(data))  # fmt: skip
+                 _command(load("neurons")))  # fmt: skip
 
 
 @table("neurons-spiking")
 def _spiking() -> Table:
     """The spiking networks of ``sigmapi neurons`` per window and peak rate."""
-    data = load("neurons")
+    data = _neurons_result()
     rows = []
     for m in data["methods"]:
         if m["kind"] != "spiking":
@@ -64,7 +69,7 @@ def _spiking() -> Table:
             f"input, coincidence and map spikes in the window.")  # fmt: skip
     return Table(["network", "peak rate", "window", "agreement with the rate map",
                   "view consistency", "gap to the rate map", "z error", "spikes per decision"],
-                 rows, [_rel("neurons")], note, _command(data))  # fmt: skip
+                 rows, [_rel("neurons")], note, _command(load("neurons")))  # fmt: skip
 
 
 @table("physiology")

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Iterable, Mapping
+from collections.abc import Collection, Iterable, Mapping
 from typing import Any, TypeVar
 
 import numpy as np
@@ -19,6 +19,7 @@ import numpy as np
 from sigmapi.errors import ConfigError
 
 __all__ = [
+    "KINDS",
     "MAX_WIDTH",
     "Bounds",
     "boolean",
@@ -202,32 +203,58 @@ def shape(
 # ------------------------------------------------------------------ declarative bounds
 
 
+KINDS = ("int", "number", "width", "bool", "choice")
+"""The kinds of :class:`Bounds`: an int, a finite float, a width (:func:`width`), a bool
+(:func:`boolean`), one of given options (:func:`choice`)."""
+
+
 @dataclasses.dataclass(frozen=True)
 class Bounds:
-    """The bounds of a numeric config field, declared beside it (:func:`bounded`), checked by
+    """The bounds of a config field, declared beside it (:func:`bounded`), checked by
     :func:`check_fields` and shown by ``--help`` (:meth:`describe`)."""
 
     kind: str
-    """``"int"`` or ``"number"`` (a finite float)."""
+    """One of :data:`KINDS`."""
     lo: float | None = None
     hi: float | None = None
     lo_open: bool = False
     hi_open: bool = False
     fix: str = ""
     """The fix the error names (e.g. ``"e.g. 600"``)."""
+    options: Collection[Any] = ()
+    """The values a ``"choice"`` field takes (read when checked: a registry may grow)."""
+    none: bool = False
+    """Whether None is a value too (e.g. a seed: None draws fresh entropy)."""
 
     def describe(self) -> str:
-        """``"an int >= 1"``, ``"a number in (0, 1]"``, ..."""
+        """``"an int >= 1"``, ``"a number in (0, 1]"``, ``"one of 'a', 'b'"``, ..."""
         if self.kind == "int":
-            return _range("an int", self.lo, self.hi)
-        return _range("a number", self.lo, self.hi, self.lo_open, self.hi_open)
+            text = _range("an int", self.lo, self.hi)
+        elif self.kind == "number":
+            text = _range("a number", self.lo, self.hi, self.lo_open, self.hi_open)
+        elif self.kind == "width":
+            text = f"{_range('a number', self.lo, None, self.lo_open)}, <= {MAX_WIDTH:g}"
+        elif self.kind == "bool":
+            text = "true or false"
+        else:
+            text = "one of " + ", ".join(repr(o) for o in self.options)
+        return f"{text}, or None" if self.none else text
 
-    def check(self, name: str, value: Any) -> int | float:
-        """``value`` checked (:func:`integer` or :func:`number`), in its canonical type."""
+    def check(self, name: str, value: Any) -> Any:
+        """``value`` checked (:func:`integer`, :func:`number`, :func:`width`,
+        :func:`boolean` or :func:`choice`), in its canonical type."""
+        if value is None and self.none:
+            return None
         if self.kind == "int":
             lo = None if self.lo is None else int(self.lo)
             hi = None if self.hi is None else int(self.hi)
             return integer(name, value, lo, hi, fix=self.fix)
+        if self.kind == "width":
+            return width(name, value, self.lo or 0.0, lo_open=self.lo_open, fix=self.fix)
+        if self.kind == "bool":
+            return boolean(name, value, fix=self.fix)
+        if self.kind == "choice":
+            return choice(name, value, self.options, fix=self.fix)
         return number(
             name, value, self.lo, self.hi, lo_open=self.lo_open, hi_open=self.hi_open, fix=self.fix
         )
@@ -241,12 +268,15 @@ def bounded(
     lo_open: bool = False,
     hi_open: bool = False,
     fix: str = "",
+    options: Collection[Any] = (),
+    none: bool = False,
 ) -> Mapping[str, Bounds]:
     """Field metadata declaring :class:`Bounds`: ``episodes: int = field(default=600,
-    metadata=bounded("int", 1))``."""
-    if kind not in ("int", "number"):
-        raise ValueError(f"bounds are of kind 'int' or 'number', got {kind!r}")
-    return {"bounds": Bounds(kind, lo, hi, lo_open, hi_open, fix)}
+    metadata=bounded("int", 1))``, ``relation: str = field(default="mean",
+    metadata=bounded("choice", options=RELATIONS))``."""
+    if kind not in KINDS:
+        raise ValueError(f"bounds are of a kind in {KINDS}, got {kind!r}")
+    return {"bounds": Bounds(kind, lo, hi, lo_open, hi_open, fix, options, none)}
 
 
 def check_fields(obj: Any) -> None:

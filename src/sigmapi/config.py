@@ -99,71 +99,104 @@ class SOMConfig:
     """Grid of the x input (retinal position) code."""
     y_shape: tuple[int, ...] = (15,)
     """Grid of the y input (gaze direction) code; same number of dimensions as x."""
-    code_width: float = 0.5
+    code_width: float = field(
+        default=0.5, metadata=_validate.bounded("width", MIN_WIDTH, fix=_WIDTH_FIX)
+    )
     """Standard deviation of the input hills in grid units (1-D script: 0.5)."""
-    code_height: float = 1.0
+    code_height: float = field(
+        default=1.0,
+        metadata=_validate.bounded("number", 0, MAX_CODE_HEIGHT, lo_open=True, fix=_RANGE_FIX),
+    )
     """Peak of the input hills before normalisation."""
-    code_normalize: bool = True
+    code_normalize: bool = field(default=True, metadata=_validate.bounded("bool"))
     """L2-normalise input codes to length 1 (the script does)."""
-    periodic: bool = False
+    periodic: bool = field(default=False, metadata=_validate.bounded("bool"))
     """Periodic input axes (rings); the paper's are bounded."""
-    map_periodic: bool = False
+    map_periodic: bool = field(default=False, metadata=_validate.bounded("bool"))
     """Periodic map: every map axis wraps around (a ring in 1-D, a torus in 2-D), in the
     neighbourhood and the soft winner's smoothing; the paper's map is bounded. For angles,
     with ``periodic`` codes and the relation "sum_mod"."""
-    relation: str = "mean"
+    relation: str = field(default="mean", metadata=_validate.bounded("choice", options=RELATIONS))
     """z = f(x, y): "mean" (the paper, z = (x + y) / 2), "sum", "difference", or "sum_mod"
     (angles: z = (x + y) mod 1, needs ``periodic`` codes)."""
-    iterations: int = 300_000
+    iterations: int = field(
+        default=300_000, metadata=_validate.bounded("int", 1, fix="the paper runs 300000")
+    )
     """Length of the run; schedule milestones are fractions of it."""
     eps: float | tuple[tuple[float, float], ...] = 0.01
     """Learning rate: a constant, or [fraction, value] knots of a piecewise-linear schedule."""
     sigma: tuple[tuple[float, float], ...] = PAPER_SIGMA.knots
     """Neighbourhood width on the map (grid units): [fraction, value] knots (8 -> 3.5 -> 1e-5)."""
-    winner_rule: str = "soft"
+    winner_rule: str = field(
+        default="soft", metadata=_validate.bounded("choice", options=WINNER_RULES)
+    )
     """"soft" (Gaussian-smoothed argmax, the paper; border-normalised under an ordering
     procedure, see ``ordering``), "soft_mean" (always border-normalised), "argmax", or
     "min_distance"."""
-    soft_cut: int = 15
+    soft_cut: int = field(
+        default=15, metadata=_validate.bounded("int", 0, fix="in map units; the script uses 15")
+    )
     """Half-width of the smoothing window of the soft winner, in map units (script: 15)."""
-    init_scale: float = 0.1
+    init_scale: float = field(
+        default=0.1,
+        metadata=_validate.bounded("number", 0, MAX_INIT_SCALE, lo_open=True, fix=_RANGE_FIX),
+    )
     """Initial weights are uniform in [-init_scale, init_scale] (paper: 0.1)."""
-    ordering: str = "crossview"
+    ordering: str = field(
+        default="crossview", metadata=_validate.bounded("choice", options=ORDERINGS)
+    )
     """How the map comes to be ordered: "crossview" (sigmapi's: an ordered start computed from
     the views alone, the neighbourhood capped at ``ordering_sigma`` and the soft winner
     normalised at the map border; see :mod:`sigmapi.rules.ordering`) or "none" (the paper's
     random start and schedule, bit for bit)."""
-    ordering_sigma: float = 3.0
+    ordering_sigma: float = field(default=3.0, metadata=_validate.bounded("width", 0, lo_open=True))
     """With an ordering procedure: the largest neighbourhood width used (map units); the
     configured sigma schedule is cut off at this value. Ignored with ordering = "none"."""
-    refine_rounds: int = 0
+    refine_rounds: int = field(
+        default=0, metadata=_validate.bounded("int", 0, fix="0 turns the refinement off")
+    )
     """Rounds of the batch refinement after training (:mod:`sigmapi.rules.refinement`, section
     6.3): hard winners of view 0 with the weights fixed, then every unit's weights to the
     mean of view 1's outer products over the pairs it won. 0 = off (the run as before)."""
-    refine_pairs: int = 200_000
+    refine_pairs: int = field(default=200_000, metadata=_validate.bounded("int", 1))
     """View pairs per refinement round on the built-in task (fresh pairs from the run's own
     stream); with ``fit(views)`` a round is one pass over your rows instead."""
-    refine_sigma: float = 0.0
+    refine_sigma: float = field(
+        default=0.0, metadata=_validate.bounded("width", 0, fix="0 is the winner alone")
+    )
     """Neighbourhood width of the refinement's weighted mean (map units); 0 = each unit the
     mean of the pairs it won alone."""
-    same_view: bool = False
+    same_view: bool = field(default=False, metadata=_validate.bounded("bool"))
     """Ablation: learn from the view that chose the winner (the paper learns from the other)."""
-    backend: str = "auto"
+    backend: str = field(
+        default="auto", metadata=_validate.bounded("choice", options=BACKEND_NAMES)
+    )
     """Kernel: "auto" (the fast kernel where numba imports, else the reference kernel) or a
     backend's name (:data:`sigmapi.kernels.BACKENDS`)."""
-    kernel_tol: float = 1e-6
+    kernel_tol: float = field(
+        default=1e-6,
+        metadata=_validate.bounded(
+            "number", 0, 1, hi_open=True, fix="0 is exact; the default is 1e-6"
+        ),
+    )
     """Fast kernel: code and neighbourhood values below kernel_tol x their maximum are skipped
     (0 = exact). The reference kernel is always exact."""
-    threads: bool = False
+    threads: bool = field(default=False, metadata=_validate.bounded("bool"))
     """Fast kernel: train on numba's threads (the same result) when the map is large enough
     (``K * n_x * n_y >= 2**18``, e.g. paper-2d); pays off on an otherwise idle machine."""
-    seed: int | None = None
+    seed: int | None = field(
+        default=None,
+        metadata=_validate.bounded("int", 0, fix="or None for fresh entropy", none=True),
+    )
     """Seed of every random stream of the run (weights and data); None draws fresh entropy."""
 
     extra: dict[str, Any] = field(default_factory=dict, compare=False, repr=False)
     """Unused by the SOM: free-form notes carried from the preset (e.g. its source)."""
 
     def __post_init__(self) -> None:
+        """The shapes, then every field's declared bounds (:func:`sigmapi._validate.
+        check_fields`, the one validator of declared bounds), then the rules between fields
+        and the schedules."""
         set_ = object.__setattr__
         for name in ("map_shape", "x_shape", "y_shape"):
             set_(self, name, _validate.shape(name, getattr(self, name)))
@@ -178,35 +211,7 @@ class SOMConfig:
                 f"map_shape x x_shape x y_shape must hold at most 2**56 weights, got {weights:,} "
                 f"({self.map_shape} x {self.x_shape} x {self.y_shape}); use smaller shapes"
             )
-        cw = _validate.width("code_width", self.code_width, MIN_WIDTH, fix=_WIDTH_FIX)
-        set_(self, "code_width", cw)
-        for name, hi in (("code_height", MAX_CODE_HEIGHT), ("init_scale", MAX_INIT_SCALE)):
-            v = _validate.number(name, getattr(self, name), 0.0, hi, lo_open=True, fix=_RANGE_FIX)
-            set_(self, name, v)
-        set_(
-            self,
-            "ordering_sigma",
-            _validate.width("ordering_sigma", self.ordering_sigma, lo_open=True),
-        )
-        for name in ("code_normalize", "periodic", "map_periodic", "same_view", "threads"):
-            _validate.boolean(name, getattr(self, name))
-        its = _validate.integer("iterations", self.iterations, 1, fix="the paper runs 300000")
-        set_(
-            self,
-            "refine_rounds",
-            _validate.integer(
-                "refine_rounds", self.refine_rounds, 0, fix="0 turns the refinement off"
-            ),
-        )
-        set_(self, "refine_pairs", _validate.integer("refine_pairs", self.refine_pairs, 1))
-        rs = _validate.width("refine_sigma", self.refine_sigma, 0.0, fix="0 is the winner alone")
-        set_(self, "refine_sigma", rs)
-        set_(self, "iterations", its)
-        cut = _validate.integer(
-            "soft_cut", self.soft_cut, 0, fix="in map units; the script uses 15"
-        )
-        set_(self, "soft_cut", cut)
-        _validate.choice("relation", self.relation, tuple(RELATIONS))
+        _validate.check_fields(self)
         if self.ordering == "crossview":
             check_periodic_map(self.map_shape, self.map_periodic)
         if RELATIONS[self.relation].circular and not self.periodic:
@@ -214,9 +219,6 @@ class SOMConfig:
                 f"relation {self.relation!r} relates angles (0 and 1 are the same place), so "
                 "it needs periodic codes, got periodic = false; set periodic = true"
             )
-        _validate.choice("ordering", self.ordering, ORDERINGS)
-        _validate.choice("winner_rule", self.winner_rule, WINNER_RULES)
-        _validate.choice("backend", self.backend, BACKEND_NAMES)
         eps = PiecewiseLinear.coerce(self.eps, "eps")
         vals = [v for _, v in eps.knots]
         if min(vals) <= 0 or max(vals) > 1:
@@ -238,22 +240,7 @@ class SOMConfig:
                 "use a small value such as 1e-5 for a winner-only update"
             )
         set_(self, "sigma", sig.knots)
-        tol = _validate.number(
-            "kernel_tol",
-            self.kernel_tol,
-            0.0,
-            1.0,
-            hi_open=True,
-            fix="0 is exact; the default is 1e-6",
-        )
-        set_(self, "kernel_tol", tol)
         set_(self, "extra", check_extra(self.extra))
-        if self.seed is not None:
-            set_(
-                self,
-                "seed",
-                _validate.integer("seed", self.seed, 0, fix="or None for fresh entropy"),
-            )
 
     @property
     def sigma_schedule(self) -> PiecewiseLinear:

@@ -266,7 +266,7 @@ def job_error(where: str, error: str) -> Exception:
     raise in the caller: a sigmapi error as its own class, so that the command line says it in
     one line as it would in this process; a ``MemoryError`` as a
     :class:`~sigmapi.errors.ResourceError`; anything else (a bug) as ``RuntimeError``.
-    ``where`` names the job (e.g. ``"robot job 0/map"``) and leads the message."""
+    ``where`` names the job (e.g. ``"robot job 0"``) and leads the message."""
     from sigmapi import errors
 
     name, sep, message = error.partition(": ")

@@ -38,8 +38,9 @@ so that two models are measured on the same test set.
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
-from typing import TYPE_CHECKING
+from collections.abc import Mapping
+from dataclasses import asdict, dataclass, fields
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -115,6 +116,13 @@ class Metrics:
         out = asdict(self)
         out.update(out.pop("circular") or {})
         return out
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> Metrics:
+        """The metrics a :meth:`to_dict` wrote (keys that are no field are the circular ones)."""
+        names = {f.name for f in fields(cls)} - {"circular"}
+        circular = {k: v for k, v in data.items() if k not in names}
+        return cls(**{k: v for k, v in data.items() if k in names}, circular=circular or None)
 
 
 def affine_fit(coords: NDArray[np.float64], z: NDArray[np.float64]) -> NDArray[np.float64]:

@@ -217,3 +217,23 @@ def test_train_help_states_the_presets_lengths_as_they_are():
     text = " ".join(_helps()["train"].split())
     assert f"paper-1d: the paper's 1-D task, {load_preset('paper-1d').iterations:,} iter" in text
     assert f"({load_preset('tiny-1d').iterations:,} iterations)" in text
+
+
+def test_train_help_shows_the_bounds_declared_on_the_config_fields(capsys):
+    """``sigmapi train --help`` lists each config key with the bounds its field declares: the
+    same bounds the one validator checks."""
+    import dataclasses
+
+    from sigmapi import SOMConfig
+    from sigmapi.cli import main
+    from sigmapi.errors import ConfigError
+
+    with pytest.raises(SystemExit):
+        main(["train", "--help"])
+    out = capsys.readouterr().out
+    for f in dataclasses.fields(SOMConfig):
+        if "bounds" in f.metadata:
+            assert f"  {f.name}" in out and f.metadata["bounds"].describe() in out, f.name
+    assert "iterations      an int >= 1" in out and "kernel_tol      a number in [0, 1)" in out
+    with pytest.raises(ConfigError, match=r"^iterations must be an int >= 1, got 0; the paper"):
+        SOMConfig(iterations=0)

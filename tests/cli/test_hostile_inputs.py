@@ -239,7 +239,7 @@ def test_environment_widths_are_bounded():
     from sigmapi.experiments.robot.config import RobotConfig
 
     with pytest.raises(ConfigError, match="feature_width"):
-        RobotConfig(feature_width=1e200)
+        RobotConfig().replace(feature_width=1e200)
 
 
 # ---------------------------------------------------------------- learn_gated

@@ -234,9 +234,9 @@ def test_render_without_the_map_state_is_refused():
     from sigmapi.experiments.robot.config import RobotConfig
 
     with pytest.raises(ConfigError, match="add map to --states"):
-        RobotConfig(states=("retina",), render="f.gif")
+        RobotConfig().replace(states=("retina",), render="f.gif")
     with pytest.raises(ConfigError, match="block must be <= episodes"):
-        RobotConfig(episodes=10, final_episodes=5, block=50)
+        RobotConfig().replace(episodes=10, final_episodes=5, block=50)
 
 
 # ---------------------------------------------------------------- the lock

@@ -6,6 +6,7 @@ are skipped, except under ``CI=true``, where a missing renderer fails them: CI m
 
 from __future__ import annotations
 
+import json
 import os
 
 import numpy as np
@@ -222,7 +223,8 @@ def test_the_command_line_starts_without_mujoco():
 
 
 def test_tiny_learn_and_dock_run():
-    from sigmapi.experiments.robot.run import QUICK, ROBOT
+    from sigmapi.experiments.robot.result import RobotResult
+    from sigmapi.experiments.robot.variant import QUICK, ROBOT
 
     cfg = QUICK.replace(
         train_pairs=300, iterations=600, eval_pairs=200, episodes=6, final_episodes=3,
@@ -231,10 +233,44 @@ def test_tiny_learn_and_dock_run():
     res = ROBOT.run(cfg, seeds=[0])
     d = res.to_dict()
     assert set(d["success"]) == {"map", "retina", "retina_gaze", "true_z"}
+    back = json.loads(json.dumps(d))
+    assert RobotResult.from_dict(back).to_dict() == back  # result.json reads back
     for key in ("order_r2", "fold_score", "folded", "view_within_one", "z_error"):
         assert key in d
     again = ROBOT.run(cfg.replace(states=("retina",)), seeds=[0])
     np.testing.assert_array_equal(again.success["retina"], res.success["retina"])
+
+
+def test_robot_is_reach_in_the_robot_world():
+    """``sigmapi robot`` is a registered variant of the reach experiment: reach's run and
+    per-seed job in the robot's world, with the robot's config, seeds and result."""
+    from sigmapi.experiments import REGISTRY
+    from sigmapi.experiments.reach.run import ReachExperiment
+    from sigmapi.experiments.robot.config import ROBOT_WORLD, RobotConfig
+
+    robot = REGISTRY["robot"]
+    assert isinstance(robot, ReachExperiment) and robot.world is ROBOT_WORLD
+    assert type(robot).run is ReachExperiment.run
+    assert robot.config_type is RobotConfig and robot.seeds == ROBOT_WORLD.seeds
+
+
+def test_robot_config_is_made_of_parts_and_written_flat():
+    import sigmapi
+    from sigmapi.agents import ActorCriticConfig
+    from sigmapi.experiments.robot.config import RobotConfig
+
+    cfg = RobotConfig().replace(
+        grid=8, map_shape=(5, 5), gamma=0.8, episodes=60, final_episodes=30, block=20
+    )
+    assert (cfg.env.grid, cfg.map.map_shape, cfg.run.episodes) == (8, (5, 5), 60)
+    assert cfg.agent == ActorCriticConfig(gamma=0.8)
+    flat = cfg.to_dict()
+    assert flat["grid"] == 8 and flat["map_shape"] == [5, 5] and flat["gamma"] == 0.8
+    assert RobotConfig.from_dict(json.loads(json.dumps(flat))) == cfg
+    with pytest.raises(sigmapi.ConfigError, match="unknown robot config field 'map_pairs'"):
+        RobotConfig.from_dict({**flat, "map_pairs": 10})
+    with pytest.raises(sigmapi.ConfigError, match="map_shape must be 2 axes"):
+        RobotConfig().replace(map_shape=(5,))
 
 
 def test_projection_at_many_necks_matches_mujoco(scene: Scene):
@@ -270,6 +306,6 @@ def test_render_takes_a_gif_file_name():
     import sigmapi
     from sigmapi.experiments.robot.config import RobotConfig
 
-    assert RobotConfig(render="episode.gif").render == "episode.gif"
+    assert RobotConfig().replace(render="episode.gif").run.render == "episode.gif"
     with pytest.raises(sigmapi.ConfigError, match=r"render must be a file name ending in \.gif"):
-        RobotConfig(render="episode.mp4")
+        RobotConfig().replace(render="episode.mp4")

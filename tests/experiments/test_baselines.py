@@ -23,6 +23,7 @@ from sigmapi.baselines import (
 from sigmapi.baselines.kohonen import _train, nearest_unit
 from sigmapi.cli import main
 from sigmapi.experiments.compare import run as compare
+from sigmapi.experiments.compare.result import CompareResult
 from sigmapi.experiments.compare.run import CompareConfig, run_compare
 from sigmapi.metrics import evaluation_sets, grid_spacing
 
@@ -143,7 +144,8 @@ def test_compare_ranks_the_sigma_pi_map_above_first_order_maps():
         train_pairs=3000, baseline_iterations=20_000, n_test=1000,
         methods=("kohonen", "minisom", "kohonen two-view"),
     )  # fmt: skip
-    d = run_compare(cfg, seeds=(0, 1, 2)).to_dict()
+    d = json.loads(json.dumps(run_compare(cfg, seeds=(0, 1, 2)).to_dict()))
+    assert json.loads(json.dumps(CompareResult.from_dict(d).to_dict())) == d  # reads back
     by = {m["name"]: m for m in d["methods"]}
     assert list(by) == ["sigma-pi", "kohonen", "kohonen two-view", "minisom"]
     ref = by["sigma-pi"]

@@ -8,7 +8,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-from sigmapi import SigmaPiSOM
+from sigmapi import SigmaPiSOM, SOMConfig
 from sigmapi.agents import ActorCritic, ActorCriticConfig, actor_critic_for, run_episodes
 from sigmapi.cli import main
 from sigmapi.envs import (
@@ -20,7 +20,13 @@ from sigmapi.envs import (
 )
 from sigmapi.errors import ConfigError
 from sigmapi.executor import Executor
-from sigmapi.experiments.reach.config import SMALL_MAP, MapConfig, ReachConfig, ReachRunConfig
+from sigmapi.experiments.reach.config import (
+    SMALL_PRESET,
+    MapConfig,
+    ReachConfig,
+    ReachRunConfig,
+    preset_setting,
+)
 from sigmapi.experiments.reach.figures import plot_reach_curves, plot_value_function, reach_figure
 from sigmapi.experiments.reach.result import ReachResult
 from sigmapi.experiments.reach.run import PLAN, REACH
@@ -136,7 +142,8 @@ def test_experiment_is_deterministic_and_shapes_are_right(tmp_path) -> None:
     c = a.curves()["true_z"]
     assert c["success"].shape == (2,)
     d = a.to_dict()
-    json.dumps(d)
+    back = json.loads(json.dumps(d))
+    assert ReachResult.from_dict(back).to_dict() == back  # result.json reads back
     assert set(d) == {"success", "success_per_seed", "lost", "timed_out", "ratio_map_to_true_z",
                       "final_rise", "final_rise_se", "levelled_off", "curves", "map_metrics",
                       "config", "seconds"}  # fmt: skip
@@ -203,9 +210,25 @@ def test_the_map_learns_with_the_paper_2d_preset_or_the_small_map_schedule() -> 
     for name in ("winner_rule", "ordering", "ordering_sigma", "kernel_tol", "eps", "sigma"):
         assert getattr(som, name) == getattr(p2, name), name
     assert (som.iterations, som.seed, som.backend) == (cfg.map.iterations, 3, "auto")
-    small = ReachConfig().replace(**SMALL_MAP).som_config(seed=3)
+    small = ReachConfig().replace(**preset_setting(SMALL_PRESET)).som_config(seed=3)
     assert small.map_shape == (7, 7) and small.x_shape == (7, 7) and small.code_width == 0.5
     assert small.winner_rule == "soft" and small.iterations == 10_000
+
+
+def test_the_small_preset_is_the_small_map_schedule_it_replaced():
+    """What ``preset="none"`` built for the 7x7 setting before its schedule became the preset
+    small-2d: the default config on the world's codes, with sigma 7 -> 2 at 30 % -> 0.7 at
+    80 % (the neighbourhood from the map's size to 30 % of it, then to 0.7 units)."""
+    cfg = ReachConfig().replace(**preset_setting(SMALL_PRESET))
+    assert (cfg.env.grid, cfg.env.code_width, cfg.map.map_shape) == (7, 0.5, (7, 7))
+    codes = {"x_shape": (7, 7), "y_shape": (7, 7), "code_width": 0.5, "seed": 3}
+    before = SOMConfig(map_shape=(7, 7), iterations=10_000, **codes,
+                       sigma=((0.0, 7.0), (0.3, 2.0), (0.8, 0.7)))  # fmt: skip
+    got, want = cfg.som_config(seed=3).to_dict(), before.to_dict()
+    got.pop("extra"), want.pop("extra")
+    assert got == want
+    with pytest.raises(ConfigError, match="preset must be one of"):
+        MapConfig(preset="none")
 
 
 def test_cli_reach_json_and_figure(tmp_path, capsys) -> None:

@@ -15,7 +15,7 @@ from sigmapi.agents import ActorCritic, Gating, run_gated_episodes
 from sigmapi.envs import GazeReachConfig, MapObservation, learn_map_in_env
 from sigmapi.errors import ConfigError, DataError
 from sigmapi.experiments.reward.config import RewardConfig
-from sigmapi.experiments.reward.result import episodes_to_target
+from sigmapi.experiments.reward.result import RewardResult, episodes_to_target
 from sigmapi.experiments.reward.run import REWARD, map_scores, probe_objects
 from sigmapi.kernels import fast, reference
 from sigmapi.rules.gating import action_feedback, reward_gate, surprise
@@ -218,4 +218,5 @@ def test_reward_quick_via_the_command_line(tmp_path):
     assert data["methods"][0]["magnification_ratio"]["median"] == pytest.approx(1.0)
     assert (out / "reward.png").stat().st_size > 10_000
     assert json.loads((out / "result.json").read_text()) == data
+    assert json.loads(json.dumps(RewardResult.from_dict(data).to_dict())) == data  # reads back
     assert REWARD.quick is not None and data["config"]["seeds"] == list(REWARD.quick_seeds)

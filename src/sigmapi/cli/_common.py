@@ -34,6 +34,7 @@ __all__ = [
     "add_dataclass_flags",
     "apply_set_flags",
     "check_output",
+    "config_keys_help",
     "dataclass_values",
     "field_docs",
     "plain",
@@ -138,6 +139,27 @@ def add_workers_flag(p: argparse.ArgumentParser | argparse._ArgumentGroup, what:
 
 DEFAULT_PRESET = "paper-1d"
 """The preset of ``sigmapi train`` without ``--preset``."""
+
+
+def config_keys_help() -> str:
+    """The config keys ``--set`` and ``--config`` take, each with the bounds declared on its
+    :class:`~sigmapi.SOMConfig` field (:func:`sigmapi._validate.bounded`), as lines for a
+    command's help."""
+    fields = dataclasses.fields(SOMConfig)
+    bounded = [(f.name, f.metadata["bounds"].describe()) for f in fields if "bounds" in f.metadata]
+    others = [f.name for f in fields if "bounds" not in f.metadata]
+    width = max(len(name) for name, _ in bounded)
+    lines = ["config keys (--set KEY=VALUE, --config FILE) and their bounds:"]
+    lines += [f"  {name:<{width}}  {text}" for name, text in bounded]
+    rest = ", ".join(others)
+    lines += textwrap.wrap(
+        f"and {rest}: shapes (15 or 15x15), schedules (a value or [[fraction, value], ...]: eps "
+        "in (0, 1], sigma in (0, 1e+06]) and a table of notes",
+        width=78,
+        initial_indent="  ",
+        subsequent_indent="  ",
+    )
+    return "\n".join(lines)
 
 
 def add_config_flags(p: argparse.ArgumentParser) -> None:

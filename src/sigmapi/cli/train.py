@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import textwrap
 from pathlib import Path
 from typing import Any
 
@@ -18,7 +19,13 @@ from sigmapi.checkpoints import (
     remove_checkpoints,
     write_checkpoint,
 )
-from sigmapi.cli._common import DEFAULT_PRESET, add_config_flags, check_output, resolve_config
+from sigmapi.cli._common import (
+    DEFAULT_PRESET,
+    add_config_flags,
+    check_output,
+    config_keys_help,
+    resolve_config,
+)
 from sigmapi.config import list_presets, load_preset
 from sigmapi.errors import ModelFileError, UsageError
 from sigmapi.metrics import (
@@ -166,14 +173,19 @@ def cmd_presets(args: argparse.Namespace) -> int:
 def register(sub: Any) -> None:
     """Add ``train``, ``evaluate`` and ``presets`` to the sub-parsers ``sub``."""
     default = load_preset(DEFAULT_PRESET)
-    p = sub.add_parser(
-        "train",
-        help="train a map and write a model file",
-        description="Train a Sigma-Pi map and write it to a model file (.npz). Without "
+    description = (
+        "Train a Sigma-Pi map and write it to a model file (.npz). Without "
         f"--preset this is preset {DEFAULT_PRESET}: the paper's "
         f"{len(default.x_shape)}-D task, {default.iterations:,} iterations by "
         f"sigmapi's procedure ({DEFAULT_PRESET}-authors: the authors' run); try --preset "
-        f"tiny-1d for a short run ({load_preset('tiny-1d').iterations:,} iterations).",
+        f"tiny-1d for a short run ({load_preset('tiny-1d').iterations:,} iterations)."
+    )
+    p = sub.add_parser(
+        "train",
+        help="train a map and write a model file",
+        description=textwrap.fill(description, width=78),
+        epilog=config_keys_help(),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     add_config_flags(p)
     p.add_argument("--out", required=True, help="model file to write (.npz)")

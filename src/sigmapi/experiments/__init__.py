@@ -9,7 +9,8 @@
   and ``report_html``), :mod:`~sigmapi.experiments.sweep`, :mod:`~sigmapi.experiments.compare`,
   :mod:`~sigmapi.experiments.chain`, :mod:`~sigmapi.experiments.stream`,
   :mod:`~sigmapi.experiments.reach` (also ``section``, its part of the report),
-  :mod:`~sigmapi.experiments.robot` (also ``map``), :mod:`~sigmapi.experiments.reward`,
+  :mod:`~sigmapi.experiments.robot` (reach in the robot's world: ``variant``, ``map``),
+  :mod:`~sigmapi.experiments.reward`,
   :mod:`~sigmapi.experiments.icub`, :mod:`~sigmapi.experiments.neurons` and
   :mod:`~sigmapi.experiments.physiology`.
 
@@ -52,7 +53,7 @@ ENTRIES = (
      "train the paper presets and write the report"),
     ("reward", "sigmapi.experiments.reward.run:REWARD",
      "a map whose plasticity is gated by reward vs. the frozen map and a shuffled control"),
-    ("robot", "sigmapi.experiments.robot.run:ROBOT",
+    ("robot", "sigmapi.experiments.robot.variant:ROBOT",
      "a simulated robot learns the map from its own saccades, then docks on it"),
     ("stream", "sigmapi.experiments.stream.run:STREAM",
      "learning from a stream of frames (trace rule) against explicit view pairs"),
@@ -72,12 +73,12 @@ _LAZY = {
     "paper_presets": "reproduce.run",
     "REWARD": "reward.run",
     "RewardExperiment": "reward.run",
-    "ROBOT": "robot.run",
+    "ROBOT": "robot.variant",
     "NEURONS": "neurons.run",
     "NeuronsExperiment": "neurons.run",
     "PHYSIOLOGY": "physiology.run",
     "PhysiologyExperiment": "physiology.run",
-    "RobotExperiment": "robot.run",
+    "RobotExperiment": "robot.variant",
     "STREAM": "stream.run",
     "StreamExperiment": "stream.run",
     "SweepSpec": "sweep.run",

@@ -6,7 +6,9 @@ field: the command-line options are generated from those fields (:mod:`sigmapi.c
 field added there is an option too. ``run(config, seeds=..., out=..., executor=...,
 progress=...)`` returns a :class:`Result`: ``to_dict()`` (JSON-able: what ``--json`` prints
 and :func:`write_result` stores as ``result.json``, the data that documents are rendered from),
-``table()`` (the console text) and ``figure(out_dir)`` (the figures it writes).
+``table()`` (the console text) and ``figure(out_dir)`` (the figures it writes); a result the
+docs render reads back from its JSON form with ``from_dict`` (:mod:`~sigmapi.experiments.kit.
+written`).
 
 Seeds are not part of a config: every experiment takes them as ``seeds``, a list of distinct
 non-negative ints checked by :func:`check_seeds`, and says its default ones

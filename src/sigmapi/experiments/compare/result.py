@@ -15,6 +15,7 @@ from sigmapi.experiments.compare.config import (
     SEEDS,
     CompareConfig,
 )
+from sigmapi.experiments.kit.written import as_object, config_and_seeds, summaries, tuples
 from sigmapi.metrics import grid_spacing
 from sigmapi.model.som import SigmaPiSOM
 
@@ -27,6 +28,9 @@ FIGURE = "compare.png"
 
 MATCH_SHARE = 1.1
 """labels needed: the z error within this factor of the error with all labels."""
+
+SUMMARIES = ("methods", "z_error_unit", "quantisation_floor")
+"""The keys of the JSON form computed from the scores."""
 
 
 @dataclass
@@ -58,15 +62,36 @@ class MethodScore:
         return min(hits) if hits else None
 
 
+def _config(table: dict[str, Any]) -> CompareConfig:
+    """The config of a result's JSON form (its ``labels`` are the config's own, from
+    ``n_test``)."""
+    table.pop("labels")
+    return CompareConfig(**tuples(table))
+
+
 @dataclass
 class CompareResult:
-    """Scores of every method (:class:`MethodScore`) and the run's settings."""
+    """Scores of every method (:class:`MethodScore`) and the run's settings. A result read
+    back from its JSON form (:meth:`from_dict`) holds no scores per seed and number of
+    labels: its summaries are ``written``, as the file has them."""
 
     config: CompareConfig
     scores: dict[str, MethodScore]
     seconds: float = 0.0
     seeds: tuple[int, ...] = SEEDS
     """The seeds, in the order of the scores' lists."""
+    written: dict[str, Any] | None = field(default=None, repr=False)
+    """The summaries of a result read back (:meth:`from_dict`); None for a run's result."""
+
+    @classmethod
+    def from_dict(cls, data: Any) -> CompareResult:
+        """The result a :meth:`to_dict` wrote (``result.json``): its config, seeds and time,
+        and its summaries as written (the file holds each method's medians, not its scores
+        per seed and number of labels)."""
+        obj = as_object(data)
+        config, seeds = config_and_seeds(obj, _config)
+        written = summaries(obj, SUMMARIES)
+        return cls(config, {}, float(obj["seconds"]), seeds, written)
 
     @property
     def reference(self) -> MethodScore:
@@ -87,6 +112,11 @@ class CompareResult:
 
     def to_dict(self) -> dict[str, Any]:
         """``{"methods": [{name, view_consistency, z_error, labels_used, ...}], ...}``."""
+        cfg = dataclasses.asdict(self.config)
+        head = {"preset": cfg.pop("preset"), "overrides": cfg.pop("overrides")}
+        config = {**head, "seeds": list(self.seeds), **cfg, "labels": list(self.config.labels)}
+        if self.written is not None:
+            return {**self.written, "config": config, "seconds": self.seconds}
         target = self.reference.z_error
         labels_used = max(self.config.labels)
         methods = []
@@ -111,9 +141,6 @@ class CompareResult:
                     },
                 }
             )
-        cfg = dataclasses.asdict(self.config)
-        head = {"preset": cfg.pop("preset"), "overrides": cfg.pop("overrides")}
-        config = {**head, "seeds": list(self.seeds), **cfg, "labels": list(self.config.labels)}
         return {
             "methods": methods,
             "config": config,

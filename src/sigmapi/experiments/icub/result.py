@@ -9,8 +9,10 @@ from typing import Any
 
 import numpy as np
 
+from sigmapi.experiments.base import check_seeds
 from sigmapi.experiments.icub.config import ICubConfig
 from sigmapi.experiments.icub.reaching import METHODS
+from sigmapi.experiments.kit.written import as_object, summaries, tuples
 from sigmapi.metrics import ORDERED_R2
 
 __all__ = ["TARGETS", "ICubResult"]
@@ -25,6 +27,16 @@ TARGETS: dict[str, float] = {
     "learned_minus_retina": 0.3,
 }
 """The acceptance bounds the result is checked against (``targets`` in the JSON)."""
+
+SUMMARIES = (
+    "maps",
+    "success",
+    "success_per_seed",
+    "babbling_cm",
+    "targets",
+    "cpu_seconds_per_seed",
+)
+"""The keys of the JSON form computed from the per-seed records."""
 
 _MAP_KEYS = (
     "order_r2",
@@ -56,6 +68,23 @@ class ICubResult:
     per_seed: list[dict[str, Any]]
     seconds: float = 0.0
     _summary: dict[str, Any] = field(default_factory=dict, repr=False)
+    written: dict[str, Any] | None = field(default=None, repr=False)
+    """The summaries of a result read back (:meth:`from_dict`: the file holds them, not the
+    per-seed records); None for a run's result."""
+
+    @classmethod
+    def from_dict(cls, data: Any) -> ICubResult:
+        """The result a :meth:`to_dict` wrote (``result.json``): its config, seeds, frames
+        check and time, and its summaries as written."""
+        obj = as_object(data)
+        return cls(
+            ICubConfig(**tuples(as_object(obj["config"], "config"))),
+            check_seeds(obj["seeds"], "seeds"),
+            dict(obj["frames"]),
+            [],
+            float(obj["seconds"]),
+            written=summaries(obj, SUMMARIES),
+        )
 
     def maps(self) -> dict[str, dict[str, Any]]:
         """Per map: the medians over seeds, the per-seed values, the references."""
@@ -141,11 +170,16 @@ class ICubResult:
 
     def to_dict(self) -> dict[str, Any]:
         """Everything the result states, JSON-able."""
-        return {
+        head = {
             "experiment": "icub",
             "config": self.config.to_dict(),
             "seeds": list(self.seeds),
             "frames": self.frames,
+        }
+        if self.written is not None:
+            return {**head, **self.written, "seconds": self.seconds}
+        return {
+            **head,
             "maps": self.maps(),
             "success": self.success(),
             "success_per_seed": self.success_per_seed(),

@@ -1,6 +1,7 @@
 """The arithmetic of episode records, once: outcomes per seed and episode (a ``(seeds,
-episodes)`` array of bools, one row per seed) turned into block rates (the learning curves)
-and rates over the final episodes (what the tables report)."""
+episodes)`` array of bools, one row per seed) turned into block rates and the learning curves
+of the reach, robot and reward experiments (:func:`success_curve`), and rates over the final
+episodes (what the tables report)."""
 
 from __future__ import annotations
 
@@ -12,7 +13,7 @@ from numpy.typing import NDArray
 from sigmapi.envs import STATES
 from sigmapi.errors import ConfigError
 
-__all__ = ["block_ends", "block_rates", "check_episode_run", "final_rates"]
+__all__ = ["block_ends", "block_rates", "check_episode_run", "final_rates", "success_curve"]
 
 
 def block_rates(outcomes: NDArray[np.bool_], block: int) -> NDArray[np.float64]:
@@ -32,6 +33,29 @@ def block_rates(outcomes: NDArray[np.bool_], block: int) -> NDArray[np.float64]:
 def block_ends(n_blocks: int, block: int) -> NDArray[np.float64]:
     """The episode that ends each block: ``block, 2 block, ...`` as floats."""
     return np.asarray((np.arange(n_blocks) + 1.0) * block, dtype=np.float64)
+
+
+def success_curve(
+    outcomes: NDArray[np.bool_], block: int, extremes: bool = False
+) -> dict[str, NDArray[np.float64]]:
+    """The learning curve of ``outcomes`` ``(seeds, episodes)``: ``episode`` (the block ends),
+    ``success`` (each block's rate, mean over seeds) and ``success_sd`` (its standard
+    deviation over seeds); with ``extremes``, ``success_min`` and ``success_max`` too.
+
+    Examples
+    --------
+    >>> success_curve(np.array([[True, False, True, True], [False, False, True, True]]), 2)
+    {'episode': array([2., 4.]), 'success': array([0.25, 1.  ]), 'success_sd': array([0.25, 0.  ])}
+    """
+    rate = block_rates(outcomes, block)
+    out = {
+        "episode": block_ends(rate.shape[1], block),
+        "success": rate.mean(axis=0),
+        "success_sd": rate.std(axis=0),
+    }
+    if extremes:
+        out.update(success_min=rate.min(axis=0), success_max=rate.max(axis=0))
+    return out
 
 
 def final_rates(outcomes: NDArray[np.bool_], final: int) -> NDArray[np.float64]:

@@ -1,14 +1,22 @@
 """The per-seed job of an experiment and its progress: one function, run where the executor
-puts it, that shows a bar of its episodes only where it runs in the caller's process."""
+puts it, that shows a bar of its episodes only where it runs in the caller's process; and the
+one protocol of the embodied experiments: a seed's map, then the same learner on every state
+the experiment compares (:func:`seed_episodes`, each state by :func:`learn_on_state`)."""
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from typing import TypeVar
+import functools
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any, TypeVar
 
+import gymnasium as gym
+
+from sigmapi.agents import ActorCritic, ActorCriticConfig, Episodes, actor_critic_for, run_episodes
+from sigmapi.experiments.kit.seeds import SeedPlan
 from sigmapi.progress import Progress
 
-__all__ = ["Tick", "counted"]
+__all__ = ["SeedEpisodes", "Tick", "counted", "learn_on_state", "seed_episodes"]
 
 T = TypeVar("T")
 
@@ -25,3 +33,67 @@ def counted(show: Progress | None, total: int, desc: str, work: Callable[[Tick |
     tick, bar = show.counter(total, desc, "ep")
     with bar:
         return work(tick)
+
+
+def learn_on_state(
+    env: gym.Env[Any, Any],
+    agent: ActorCriticConfig,
+    plan: SeedPlan,
+    seed: int,
+    episodes: int,
+    *,
+    on_episode: Callable[[], None] | None = None,
+    info_keys: Sequence[str] = (),
+) -> tuple[Episodes, ActorCritic]:
+    """The actor-critic of ``agent`` learning over ``episodes`` episodes of ``env`` (a state
+    the learner sees): its action choices from stream ``"agent"`` of ``seed``'s ``plan``, the
+    episodes' starts from stream ``"starts"`` (so every state of a seed meets the same
+    episodes). The episodes' records (:func:`~sigmapi.agents.run_episodes`) and the learner."""
+    learner = actor_critic_for(env, agent, seed=plan.rng(seed, "agent"))
+    starts = plan.rng(seed, "starts").integers(0, 2**31 - 1, size=episodes)
+    records = run_episodes(env, learner, starts, on_episode=on_episode, info_keys=info_keys)
+    return records, learner
+
+
+@dataclass
+class SeedEpisodes:
+    """What :func:`seed_episodes` gives of one seed: its map (None when no state reads one)
+    and what the map's maker added (its scores), each state's episode records and what
+    ``keep`` kept of each state's learner."""
+
+    model: Any
+    extras: dict[str, Any]
+    runs: dict[str, Episodes] = field(default_factory=dict)
+    kept: dict[str, Any] = field(default_factory=dict)
+
+
+def seed_episodes(
+    seed: int,
+    states: Sequence[str],
+    make_map: Callable[[int, Tick | None], tuple[Any, dict[str, Any]]],
+    state_env: Callable[[str, Any], gym.Env[Any, Any]],
+    agent: ActorCriticConfig,
+    plan: SeedPlan,
+    episodes: int,
+    *,
+    tick: Tick | None = None,
+    info_keys: Sequence[str] = (),
+    keep: Callable[[str, gym.Env[Any, Any], ActorCritic], Any] | None = None,
+) -> SeedEpisodes:
+    """The protocol of one seed of an embodied experiment (reach, robot): the map, learned by
+    ``make_map(seed, tick)`` (``(model, extras)``) where a state reads it (``"map"`` in
+    ``states``); then per state, the world as that state sees it (``state_env(state,
+    model)``) and the same learner on the same episodes (:func:`learn_on_state`), ``tick(1,
+    state)`` after each; ``keep(state, env, learner)``, where given, what to keep of it."""
+    model, extras = make_map(seed, tick) if "map" in states else (None, {})
+    out = SeedEpisodes(model, extras)
+    for state in states:
+        env = state_env(state, model)
+        done = None if tick is None else functools.partial(tick, 1, state)
+        out.runs[state], learner = learn_on_state(
+            env, agent, plan, seed, episodes, on_episode=done, info_keys=info_keys
+        )
+        if keep is not None:
+            out.kept[state] = keep(state, env, learner)
+        env.close()
+    return out

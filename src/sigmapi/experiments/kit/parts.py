@@ -6,12 +6,14 @@ command line gives every part's fields as options (:mod:`sigmapi.cli.experiment`
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Mapping
 from typing import Any
 
 from sigmapi import _validate
 from sigmapi.errors import ConfigError
+from sigmapi.experiments.kit.written import tuples
 
-__all__ = ["check_part_types", "parts_dict", "replaced_parts"]
+__all__ = ["check_part_types", "parts_dict", "parts_from_dict", "replaced_parts"]
 
 
 def check_part_types(config: Any, parts: dict[str, type]) -> None:
@@ -49,3 +51,25 @@ def parts_dict(config: Any, parts: dict[str, type]) -> dict[str, dict[str, Any]]
         }
         for part in parts
     }
+
+
+def parts_from_dict(data: Any, parts: dict[str, type], kind: str) -> dict[str, Any]:
+    """The parts a :func:`parts_dict` wrote, built again (lists as tuples): each part's
+    table must hold only its class's fields (a ConfigError naming the first that is not one;
+    a KeyError naming a missing part)."""
+    if not isinstance(data, Mapping):
+        raise _validate.fail(f"{kind} config", "a JSON object of parts", type(data).__name__)
+    out = {}
+    for part, cls in parts.items():
+        table = data[part]
+        if not isinstance(table, Mapping):
+            raise _validate.fail(f"{kind} config part {part!r}", "a JSON object", table)
+        names = {f.name for f in dataclasses.fields(cls)}
+        bad = sorted(set(table) - names)
+        if bad:
+            raise ConfigError(
+                f"unknown {kind} config field {bad[0]!r} in part {part!r}; valid: "
+                f"{', '.join(sorted(names))}"
+            )
+        out[part] = cls(**tuples(table))
+    return out

@@ -1,7 +1,7 @@
 """The worlds an embodied experiment learns its map in and acts in, by name (:data:`WORLDS`).
 
 A :class:`World` is what an experiment needs of one: its Gymnasium id and how its settings (a
-frozen dataclass: the reach experiment's ``env`` part, the robot's config) give
+frozen dataclass: the ``env`` part of the reach and robot configs) give
 ``gymnasium.make``'s keyword arguments, time limit included; the world itself as a view source
 (:class:`~sigmapi.envs.ViewSource`: its codes, the saccade view pairs a map's data are
 recorded from); the map spec its map starts from; its default seeds. A new world (a humanoid)

@@ -28,16 +28,22 @@ from sigmapi.envs import FEATURES, STATES, GazeReachConfig
 from sigmapi.errors import ConfigError
 from sigmapi.experiments.kit.episodes import check_episode_run
 from sigmapi.experiments.kit.maps import MapSpec
-from sigmapi.experiments.kit.parts import check_part_types, parts_dict, replaced_parts
+from sigmapi.experiments.kit.parts import (
+    check_part_types,
+    parts_dict,
+    parts_from_dict,
+    replaced_parts,
+)
 from sigmapi.experiments.kit.worlds import GAZE_REACH, World
 
 __all__ = [
-    "SMALL_MAP",
+    "SMALL_PRESET",
     "MapConfig",
     "ReachConfig",
     "ReachRunConfig",
     "check_parts",
     "default_map_shape",
+    "preset_setting",
 ]
 
 
@@ -76,9 +82,8 @@ class MapConfig:
     """Iterations of the map, one per saccade view pair it learns from (paper-2d's length)."""
     preset: str = "paper-2d"
     """The SOM preset the map learns with: its winner rule, schedules, ordering procedure and
-    kernel tolerance (the codes come from the world, the size, length and seed from here).
-    "none": the small-map schedule (the paper's soft winner and random start, a longer
-    ordering phase)."""
+    kernel tolerance (the codes come from the world, the size, length and seed from here;
+    "small-2d": the 7x7 map of the quick run)."""
     backend: str = "auto"
     """Kernel that learns and reads the map ("auto": the fast one when it is installed)."""
     model_path: str | None = None
@@ -95,7 +100,7 @@ class MapConfig:
     def __post_init__(self) -> None:
         object.__setattr__(self, "map_shape", _validate.shape("map_shape", self.map_shape))
         _validate.check_fields(self)
-        _validate.choice("preset", self.preset, ("none", *list_presets()))
+        _validate.choice("preset", self.preset, list_presets())
         _validate.choice("backend", self.backend, BACKEND_NAMES)
         if self.model_path is not None and not isinstance(self.model_path, str):
             raise _validate.fail("model_path", "a file name or None", self.model_path)
@@ -110,15 +115,10 @@ class MapConfig:
     def som_config(self, x_code: PopulationCode, y_code: PopulationCode, seed: int) -> SOMConfig:
         """The map's config for views coded by ``x_code`` and ``y_code`` (the world's codes).
 
-        With a ``preset`` (default ``paper-2d``): that preset, on the world's codes, this
-        map's shape, length (``iterations``) and backend. Its ordering procedure
-        (``crossview``) is what orders a 15x15 map from saccade views (docs/guide/reach.md).
-
-        ``preset="none"``, the small-map schedule: the neighbourhood shrinks from the map's
-        size to 30 % of it over the first 30 % of the run, then to 0.7 units at 80 %: a longer
-        ordering phase and a wider final neighbourhood than the paper's 1-D schedule, because
-        a 2-D map trained on only ~10^4 views twists under the paper's schedule shape
-        (docs/guide/reach.md, the small-map setting).
+        The ``preset`` (default ``paper-2d``, :class:`~sigmapi.experiments.kit.maps.MapSpec`)
+        on the world's codes, with this map's shape, length (``iterations``) and backend. Its
+        ordering procedure (``crossview``) is what orders a 15x15 map from saccade views
+        (docs/guide/reach.md); ``small-2d`` is the schedule of a 7x7 map.
         """
         if x_code.width != y_code.width or (x_code.height, x_code.normalize, x_code.periodic) != (
             y_code.height,
@@ -142,10 +142,7 @@ class MapConfig:
             "backend": self.backend,
             "seed": seed,
         }
-        if self.preset != "none":
-            return MapSpec(self.preset).config(**codes, **run)
-        m = float(max(self.map_shape))
-        return SOMConfig(**codes, **run, sigma=((0.0, m), (0.3, max(m / 3.5, 1.0)), (0.8, 0.7)))
+        return MapSpec(self.preset).config(**codes, **run)
 
 
 @dataclass(frozen=True)
@@ -210,19 +207,38 @@ class ReachConfig:
         """The parts as JSON-able tables (tuples as lists): ``{"env": {...}, "map": ...}``."""
         return parts_dict(self, self.PARTS)
 
+    @classmethod
+    def from_dict(cls, data: Any) -> ReachConfig:
+        """The config a :meth:`to_dict` wrote."""
+        return cls(**parts_from_dict(data, cls.PARTS, "reach"))
+
     def som_config(self, seed: int, world: World = GAZE_REACH) -> SOMConfig:
         """The config of the map of seed ``seed``, on the codes of ``world``
         (:meth:`MapConfig.in_world`)."""
         return self.map.in_world(world, self.env, seed)
 
 
-SMALL_MAP: dict[str, Any] = {
-    "grid": 7,
-    "code_width": 0.5,
-    "map_shape": (7, 7),
-    "iterations": 10_000,
-    "preset": "none",
-}
-"""The 7x7 setting, the experiment's default before the paper-scale map: 7x7 codes of width
-0.5, a 7x7 map on 10,000 views with the small-map schedule (``ReachConfig().replace(**SMALL_MAP)``;
-``sigmapi reach --grid 7 --code-width 0.5 --map-shape 7x7 --iterations 10000 --preset none``)."""
+SMALL_PRESET = "small-2d"
+"""The preset of the 7x7 setting (the quick run's and the reward experiment's): 7x7 codes of
+width 0.5, a 7x7 map on 10,000 views with the small-map schedule (:func:`preset_setting`)."""
+
+
+def preset_setting(name: str) -> dict[str, Any]:
+    """The fields of a reach config that the 2-D preset ``name`` fixes: the world's grid and
+    code width (the preset's square ``x_shape`` and ``code_width``), the map's shape and
+    length, and the preset itself. ``ReachConfig().replace(**preset_setting("small-2d"))``
+    is ``sigmapi reach --grid 7 --code-width 0.5 --map-shape 7x7 --iterations 10000 --preset
+    small-2d``."""
+    cfg = MapSpec(name).config()
+    if len(cfg.x_shape) != 2 or cfg.x_shape[0] != cfg.x_shape[1] or cfg.x_shape != cfg.y_shape:
+        raise ConfigError(
+            f"preset {name!r} has x_shape {cfg.x_shape} and y_shape {cfg.y_shape}; a reach "
+            "setting needs square 2-D codes of one grid, e.g. small-2d"
+        )
+    return {
+        "grid": cfg.x_shape[0],
+        "code_width": cfg.code_width,
+        "map_shape": cfg.map_shape,
+        "iterations": cfg.iterations,
+        "preset": name,
+    }

@@ -11,13 +11,20 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sigmapi._outputs import save_figure
-from sigmapi.experiments.kit.episodes import block_ends, block_rates, final_rates
+from sigmapi.experiments.kit.episodes import final_rates, success_curve
+from sigmapi.experiments.kit.written import as_object, config_and_seeds, summaries
 from sigmapi.experiments.reach.config import ReachConfig
 
 __all__ = ["FIGURE", "ReachResult"]
 
 FIGURE = "reach.png"
 """The file name :meth:`ReachResult.figure` writes in its folder."""
+
+SUMMARIES = ("success", "success_per_seed", "lost", "timed_out", "ratio_map_to_true_z", "curves")
+"""The keys of the JSON form computed from the episode records."""
+
+LATER = ("final_rise", "final_rise_se", "levelled_off")
+"""Keys computed from the records that results written before them lack."""
 
 
 @dataclass
@@ -28,7 +35,8 @@ class ReachResult:
     episodes)``, one row per seed in the order of ``seeds``: whether each episode reached the
     goal, whether it lost the object (the world ended it without success; the rest timed out)
     and how many steps it took; ``values[state]`` is the critic's value over z (the first
-    seed), on ``z_axis``.
+    seed), on ``z_axis``. A result read back from its JSON form (:meth:`from_dict`) holds no
+    records: its summaries are ``written``, as the file has them.
     """
 
     config: ReachConfig
@@ -40,6 +48,22 @@ class ReachResult:
     z_axis: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
     map_metrics: list[dict[str, float | int]] = field(default_factory=list)
     seconds: float = 0.0
+    written: dict[str, Any] | None = field(default=None, repr=False)
+    """The summaries of a result read back (:meth:`from_dict`); None for a run's result."""
+
+    @classmethod
+    def from_dict(cls, data: Any) -> ReachResult:
+        """The result a :meth:`to_dict` wrote (``result.json``): its config, seeds, maps'
+        metrics and time, and its summaries as written (the file holds no episode records)."""
+        obj = as_object(data)
+        config, seeds = config_and_seeds(obj, ReachConfig.from_dict)
+        return cls(
+            config,
+            seeds,
+            map_metrics=list(obj["map_metrics"]),
+            seconds=float(obj["seconds"]),
+            written=summaries(obj, SUMMARIES, LATER),
+        )
 
     def final_success(self) -> dict[str, float]:
         """Success rate over the last ``final_episodes`` episodes, mean over seeds."""
@@ -117,7 +141,6 @@ class ReachResult:
             nb = succ.shape[1] // b
             sb = succ[:, : nb * b].reshape(succ.shape[0], nb, b)
             tb = steps[:, : nb * b].reshape(succ.shape[0], nb, b)
-            rate = block_rates(succ, b)
             with np.errstate(invalid="ignore", divide="ignore"):
                 reach_steps = np.where(sb, tb, 0.0).sum(axis=2) / sb.sum(axis=2)
             ok = np.isfinite(reach_steps)
@@ -130,9 +153,7 @@ class ReachResult:
                 if ok[:, j].any():
                     quartiles[:, j] = np.percentile(reach_steps[ok[:, j], j], (25, 75))
             out[s] = {
-                "episode": block_ends(nb, b),
-                "success": rate.mean(axis=0),
-                "success_sd": rate.std(axis=0),
+                **success_curve(succ, b),
                 "steps_to_reach": mean_steps,
                 "steps_q25": quartiles[0],
                 "steps_q75": quartiles[1],
@@ -143,6 +164,13 @@ class ReachResult:
         """JSON-able summary: final success (mean and per seed), lost and timed-out shares,
         the rise over the final episodes and whether each learner levelled off, the curves,
         the maps' metrics, the config (its parts and the seeds) and the time."""
+        tail = {
+            "map_metrics": self.map_metrics,
+            "config": {**self.config.to_dict(), "seeds": list(self.seeds)},
+            "seconds": self.seconds,
+        }
+        if self.written is not None:
+            return {**self.written, **tail}
         curves = self.curves()
         return {
             "success": self.final_success(),
@@ -157,9 +185,7 @@ class ReachResult:
                 s: {k: [None if not np.isfinite(x) else float(x) for x in v] for k, v in c.items()}
                 for s, c in curves.items()
             },
-            "map_metrics": self.map_metrics,
-            "config": {**self.config.to_dict(), "seeds": list(self.seeds)},
-            "seconds": self.seconds,
+            **tail,
         }
 
     def table(self) -> str:

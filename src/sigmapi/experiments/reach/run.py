@@ -32,10 +32,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sigmapi import _memory, _validate
-from sigmapi.agents import ActorCritic, actor_critic_for, run_episodes
+from sigmapi.agents import ActorCritic
 from sigmapi.envs import (
     Features,
-    GazeReachConfig,
     PlacedViewSource,
     TrueZObservation,
     learn_map_in_env,
@@ -44,10 +43,10 @@ from sigmapi.envs import (
 from sigmapi.errors import ConfigError
 from sigmapi.executor import Executor, job_memory
 from sigmapi.experiments.base import Experiment, check_seeds, register, run_all
-from sigmapi.experiments.kit.jobs import Tick, counted
+from sigmapi.experiments.kit.jobs import SeedEpisodes, Tick, counted, seed_episodes
 from sigmapi.experiments.kit.seeds import SeedPlan
 from sigmapi.experiments.kit.worlds import GAZE_REACH, World
-from sigmapi.experiments.reach.config import SMALL_MAP, ReachConfig
+from sigmapi.experiments.reach.config import SMALL_PRESET, ReachConfig, preset_setting
 from sigmapi.experiments.reach.result import ReachResult
 from sigmapi.metrics import evaluate
 from sigmapi.model.som import SigmaPiSOM, load_model
@@ -124,40 +123,42 @@ def _map_for_seed(
 
 @dataclass(frozen=True)
 class _SeedJob:
-    config: ReachConfig
-    world: World
+    experiment: ReachExperiment
+    config: Any
     first: bool
     seed: int
+    shared: Any = None
+    """What every seed's job reads and the run made once (:meth:`ReachExperiment.prepare`)."""
     show: Progress | None = None
     """A bar of this seed's episodes (set only where the job runs in the caller's process)."""
 
 
-def _run_seed(job: _SeedJob) -> dict[str, Any]:
+def _run_seed(job: _SeedJob) -> SeedEpisodes:
     """Everything of one seed: its map, then every state's learner on the same episodes."""
     total = len(job.config.run.states) * job.config.run.episodes
-    return counted(job.show, total, f"reach seed {job.seed}", lambda tick: _seed_runs(job, tick))
+    desc = f"{job.experiment.name} seed {job.seed}"
+    return counted(job.show, total, desc, lambda tick: _seed_runs(job, tick))
 
 
-def _seed_runs(job: _SeedJob, progress: Tick | None) -> dict[str, Any]:
-    cfg, seed, world = job.config, job.seed, job.world
-    model = _map_for_seed(cfg, world, seed, progress) if "map" in cfg.run.states else None
-    out: dict[str, Any] = {
-        "map_metrics": _map_quality(model) if model is not None else None,
-        "runs": {},
-        "values": {},
-    }
-    starts = PLAN.rng(seed, "starts").integers(0, 2**31 - 1, size=cfg.run.episodes)
-    for s in cfg.run.states:
-        env = make_state_env(
-            world.make_env(cfg.env), s, model, cfg.map.features, cfg.map.feature_width
-        )
-        agent = actor_critic_for(env, cfg.agent, seed=PLAN.rng(seed, "agent"))
-        done = None if progress is None else functools.partial(progress, 1, s)
-        ep = run_episodes(env, agent, starts, on_episode=done)
-        out["runs"][s] = (ep.success, ep.failed, ep.steps)
-        if job.first:
-            out["values"][s] = value_over_z(agent, env, n=21 if cfg.env.dim == 2 else 51)
-    return out
+def _seed_runs(job: _SeedJob, tick: Tick | None) -> SeedEpisodes:
+    """The protocol (:func:`~sigmapi.experiments.kit.jobs.seed_episodes`) with the variant's
+    map, state worlds and what it keeps of the first seed's learners."""
+    exp, cfg = job.experiment, job.config
+    got = seed_episodes(
+        job.seed,
+        cfg.run.states,
+        functools.partial(exp.make_map, cfg, job.shared),
+        functools.partial(exp.state_env, cfg),
+        cfg.agent,
+        exp.plan,
+        cfg.run.episodes,
+        tick=tick,
+        info_keys=exp.info_keys,
+        keep=functools.partial(exp.keep, cfg) if job.first else None,
+    )
+    if not (job.first and exp.returns_map):
+        got.model = None  # its scores travel back, not its weights
+    return got
 
 
 def _map_quality(model: SigmaPiSOM) -> dict[str, float | int]:
@@ -191,55 +192,75 @@ def _check_model(config: ReachConfig) -> None:
         )
 
 
-class ReachExperiment(Experiment[ReachConfig]):
+class ReachExperiment(Experiment[Any]):
     """Gaze-and-reach task: the same actor-critic on the learned Sigma-Pi map, the retina
     code, retina and gaze codes, and the true z (the upper bound), over seeds.
 
     ``ReachExperiment(world)`` runs it in another registered world
-    (:data:`~sigmapi.experiments.kit.worlds.WORLDS`) whose settings are a
-    :class:`~sigmapi.envs.GazeReachConfig` (the config's ``env`` part); its default seeds are
-    the world's.
+    (:data:`~sigmapi.experiments.kit.worlds.WORLDS`) whose settings are the config's ``env``
+    part (:class:`~sigmapi.envs.GazeReachConfig`); its default seeds are the world's. A world
+    variant with a protocol of its own (the robot: its map learned from recorded view pairs
+    and scored on the true z, its own result) is a subclass that overrides the hooks
+    :meth:`check`, :meth:`prepare`, :meth:`make_map`, :meth:`state_env`, :meth:`keep` and
+    :meth:`collect`; :meth:`run` and the per-seed job are written once, here.
     """
 
     name = "reach"
     summary = "learn to reach with an actor-critic on the learned map vs. other states"
-    config_type = ReachConfig
-    quick = ReachConfig().replace(episodes=150, final_episodes=50, **SMALL_MAP)
+    config_type: type[Any] = ReachConfig
+    quick: Any = ReachConfig().replace(
+        episodes=150, final_episodes=50, **preset_setting(SMALL_PRESET)
+    )
     quick_seeds = (0,)
     default_out = "reach"
+    plan: SeedPlan = PLAN
+    """The streams of a seed."""
+    info_keys: tuple[str, ...] = ()
+    """What is kept of each episode's last ``info`` besides ``is_success``."""
+    returns_map = False
+    """Whether the first seed's map travels back from its job (for the result's figures)."""
 
     def __init__(self, world: World = GAZE_REACH) -> None:
-        if not issubclass(world.settings, GazeReachConfig):
+        env = self.config_type.PARTS["env"]
+        if not issubclass(world.settings, env):
             raise _validate.fail(
                 f"settings of world {world.name!r}",
-                "a GazeReachConfig (the reach config's env part)",
+                f"a {env.__name__} (the {self.name} config's env part)",
                 world.settings.__name__,
             )
         self.world = world
         self.seeds = world.seeds
 
-    def run(
-        self,
-        config: ReachConfig,
-        *,
-        seeds: Sequence[int],
-        out: Path | None = None,
-        executor: Executor | None = None,
-        progress: Progress | None = None,
-    ) -> ReachResult:
-        """Train the actor-critic on every state of ``config.run.states`` for every seed.
-
-        Each seed is one job of ``executor`` (the result does not depend on where it runs);
-        run one by one in this process, a seed shows a bar of its episodes. ``out`` is not
-        used: the run writes nothing while it runs. Returns a
-        :class:`~sigmapi.experiments.reach.result.ReachResult`.
-        """
-        if not isinstance(config, ReachConfig):
-            raise _validate.fail("config", "a ReachConfig", config)
-        seeds = check_seeds(seeds)
+    def check(self, config: Any) -> int:
+        """Refuse a run that cannot go (a missing model file, a map this machine cannot
+        hold) before any work; returns the peak bytes of one seed's job."""
         _check_model(config)
         _check_memory(config, self.world)
-        t0 = time.perf_counter()
+        return job_memory(config.som_config(0, self.world), n_test=2000)
+
+    def prepare(self, config: Any, progress: Progress | None) -> Any:
+        """What every seed's job reads and the run makes once (here: nothing)."""
+        return None
+
+    def make_map(
+        self, config: Any, shared: Any, seed: int, tick: Tick | None
+    ) -> tuple[SigmaPiSOM, dict[str, Any]]:
+        """Seed ``seed``'s map (learned in the world, or the config's model file) and its
+        scores for the record (``extras``)."""
+        model = _map_for_seed(config, self.world, seed, tick)
+        return model, {"map_metrics": _map_quality(model)}
+
+    def state_env(self, config: Any, state: str, model: SigmaPiSOM | None) -> gym.Env[Any, Any]:
+        """The world as ``state`` sees it (:func:`~sigmapi.envs.make_state_env`)."""
+        env = self.world.make_env(config.env)
+        return make_state_env(env, state, model, config.map.features, config.map.feature_width)
+
+    def keep(self, config: Any, state: str, env: gym.Env[Any, Any], agent: ActorCritic) -> Any:
+        """What is kept of the first seed's learner on ``state``: its critic's value over z."""
+        return value_over_z(agent, env, n=21 if config.env.dim == 2 else 51)
+
+    def collect(self, config: Any, seeds: tuple[int, ...], got: list[SeedEpisodes]) -> Any:
+        """The result of the seeds' jobs (``got``, in the order of ``seeds``)."""
         run = config.run
         shape = (len(seeds), run.episodes)
         res = ReachResult(config, seeds)
@@ -247,26 +268,50 @@ class ReachExperiment(Experiment[ReachConfig]):
             res.success[s] = np.zeros(shape, dtype=bool)
             res.steps[s] = np.zeros(shape, dtype=np.int64)
             res.lost[s] = np.zeros(shape, dtype=bool)
-        jobs = [(str(s), _SeedJob(config, self.world, i == 0, s)) for i, s in enumerate(seeds)]
+        for i, one in enumerate(got):
+            if "map_metrics" in one.extras:
+                res.map_metrics.append(one.extras["map_metrics"])
+            for s, ep in one.runs.items():
+                res.success[s][i], res.lost[s][i], res.steps[s][i] = ep.success, ep.failed, ep.steps
+            for s, (axis, vals) in one.kept.items():
+                res.values[s] = vals
+                res.z_axis = axis
+        return res
+
+    def run(
+        self,
+        config: Any,
+        *,
+        seeds: Sequence[int],
+        out: Path | None = None,
+        executor: Executor | None = None,
+        progress: Progress | None = None,
+    ) -> Any:
+        """Train the actor-critic on every state of ``config.run.states`` for every seed.
+
+        Each seed is one job of ``executor`` (the result does not depend on where it runs);
+        run one by one in this process, a seed shows a bar of its episodes. ``out`` is not
+        used: the run writes nothing while it runs. Returns the variant's result (here a
+        :class:`~sigmapi.experiments.reach.result.ReachResult`).
+        """
+        if not isinstance(config, self.config_type):
+            raise _validate.fail("config", f"a {self.config_type.__name__}", config)
+        seeds = check_seeds(seeds)
+        per_job = self.check(config)
+        t0 = time.perf_counter()
+        shared = self.prepare(config, progress)
+        jobs = [(str(s), _SeedJob(self, config, i == 0, s, shared)) for i, s in enumerate(seeds)]
         values = run_all(
             _run_seed,
             jobs,
             executor=executor,
-            per_job=job_memory(config.som_config(0, self.world), n_test=2000),
+            per_job=per_job,
             progress=progress,
-            desc="reach",
+            desc=self.name,
             verbose=lambda job: dataclasses.replace(job, show=progress),
             describe=lambda key, _: f"seed {key}",
         )
-        for i, (key, _) in enumerate(jobs):
-            got = values[key]
-            if got["map_metrics"] is not None:
-                res.map_metrics.append(got["map_metrics"])
-            for s, (succ, lost, steps) in got["runs"].items():
-                res.success[s][i], res.lost[s][i], res.steps[s][i] = succ, lost, steps
-            for s, (axis, vals) in got["values"].items():
-                res.values[s] = vals
-                res.z_axis = axis
+        res = self.collect(config, seeds, [values[key] for key, _ in jobs])
         res.seconds = time.perf_counter() - t0
         return res
 

@@ -11,17 +11,17 @@ from __future__ import annotations
 
 import shutil
 import statistics
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal, get_args
 
 from sigmapi import _validate
+from sigmapi.config import SOMConfig
 from sigmapi.experiments.base import check_seeds
-from sigmapi.metrics import ORDERED_R2
+from sigmapi.metrics import ORDERED_R2, Metrics
 
 if TYPE_CHECKING:
-    from sigmapi.config import SOMConfig
-    from sigmapi.metrics import Metrics
     from sigmapi.model.som import SigmaPiSOM
 
 __all__ = [
@@ -202,6 +202,21 @@ class SeedRun:
         m = self.unrefined if stage == "unrefined" and self.unrefined is not None else self.metrics
         return float(getattr(m, key))
 
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> SeedRun:
+        """The run a :meth:`to_dict` wrote."""
+        times = {k: float(data[k]) for k in SECONDS}
+        rest = set(data) - {*SECONDS, "seed", "backend", "unrefined", "curve"}
+        unrefined = data["unrefined"]
+        return cls(
+            seed=int(data["seed"]),
+            backend=str(data["backend"]),
+            metrics=Metrics.from_dict({k: data[k] for k in rest}),
+            curve=dict(data["curve"]),
+            unrefined=None if unrefined is None else Metrics.from_dict(unrefined),
+            **times,
+        )
+
     def to_dict(self) -> dict[str, Any]:
         return {
             "seed": self.seed,
@@ -286,6 +301,20 @@ class PresetResult:
             "folded_seeds": self.folded_seeds(stage),
         }
 
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> PresetResult:
+        """The preset's runs a :meth:`to_dict` wrote (its medians and counts are theirs)."""
+        return cls(
+            config=SOMConfig.from_dict(data["config"]),
+            runs=[SeedRun.from_dict(r) for r in data["runs"]],
+            reference=dict(data["reference"]),
+            z_error_floor=data["z_error_floor"],
+            shown_seed=int(data["shown_seed"]),
+            shown_reason=str(data["shown_reason"]),
+            ceiling=data["ceiling"],
+            figures=dict(data["figures"]),
+        )
+
     def to_dict(self) -> dict[str, Any]:
         return {
             "config": self.config.to_dict(),
@@ -328,6 +357,20 @@ class ReproduceResult:
     """The report folder."""
     figure_files: list[Path] = field(default_factory=list)
     """The figures of the report, in its folder."""
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> ReproduceResult:
+        """The result a :meth:`to_dict` wrote (``metrics.json``): its options (those it
+        states), presets and sections; no report folder."""
+        options = ReproduceOptions(
+            quick=data["quick"],
+            seeds=tuple(data["seeds"]),
+            seeds_2d=data["seeds_2d"],
+            n_test=data["n_test"],
+            progress=False,
+        )
+        presets = {name: PresetResult.from_dict(p) for name, p in data["presets"].items()}
+        return cls(options, presets, dict(data["sections"]), float(data["total_seconds"]))
 
     def to_dict(self) -> dict[str, Any]:
         o = self.options

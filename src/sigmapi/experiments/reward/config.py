@@ -24,9 +24,14 @@ from sigmapi.agents.gated import VIEWS
 from sigmapi.config import SOMConfig
 from sigmapi.envs import GazeReachConfig
 from sigmapi.errors import ConfigError
-from sigmapi.experiments.kit.parts import parts_dict, replaced_parts
+from sigmapi.experiments.kit.parts import parts_dict, parts_from_dict, replaced_parts
 from sigmapi.experiments.kit.worlds import GAZE_REACH, World
-from sigmapi.experiments.reach.config import SMALL_MAP, MapConfig, check_parts
+from sigmapi.experiments.reach.config import (
+    SMALL_PRESET,
+    MapConfig,
+    check_parts,
+    preset_setting,
+)
 from sigmapi.rules.gating import FEEDBACK, SURPRISE
 
 __all__ = ["METHODS", "GateConfig", "RewardConfig", "RewardRunConfig"]
@@ -128,24 +133,24 @@ class RewardRunConfig:
         object.__setattr__(self, "methods", methods)
 
 
+def _small(part: str) -> Any:
+    """The world (``"env"``) or the map (``"map"``) of the 7x7 setting (:data:`SMALL_PRESET`)."""
+    setting = preset_setting(SMALL_PRESET)
+    if part == "env":
+        return GazeReachConfig(grid=setting["grid"], code_width=setting["code_width"])
+    return MapConfig(
+        map_shape=setting["map_shape"], iterations=setting["iterations"], preset=SMALL_PRESET
+    )
+
+
 @dataclass(frozen=True)
 class RewardConfig:
     """Everything one reward-gating comparison depends on, but its seeds. Defaults: the 7x7
     world and map of the reach experiment's small setting, the authors' actor-critic."""
 
-    env: GazeReachConfig = field(
-        default_factory=lambda: GazeReachConfig(
-            grid=SMALL_MAP["grid"], code_width=SMALL_MAP["code_width"]
-        )
-    )
+    env: GazeReachConfig = field(default_factory=lambda: _small("env"))
     """The world and its time limit."""
-    map: MapConfig = field(
-        default_factory=lambda: MapConfig(
-            map_shape=SMALL_MAP["map_shape"],
-            iterations=SMALL_MAP["iterations"],
-            preset=SMALL_MAP["preset"],
-        )
-    )
+    map: MapConfig = field(default_factory=lambda: _small("map"))
     """The map learned without a teacher before the episodes."""
     agent: ActorCriticConfig = field(default_factory=ActorCriticConfig)
     """The learner."""
@@ -178,6 +183,11 @@ class RewardConfig:
     def to_dict(self) -> dict[str, dict[str, Any]]:
         """The parts as JSON-able tables (tuples as lists)."""
         return parts_dict(self, self.PARTS)
+
+    @classmethod
+    def from_dict(cls, data: Any) -> RewardConfig:
+        """The config a :meth:`to_dict` wrote."""
+        return cls(**parts_from_dict(data, cls.PARTS, "reward"))
 
     def som_config(self, seed: int, world: World = GAZE_REACH) -> SOMConfig:
         """The config of the map of seed ``seed``, on the codes of ``world``."""

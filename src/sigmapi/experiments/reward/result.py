@@ -12,7 +12,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sigmapi._outputs import save_figure
-from sigmapi.experiments.kit.episodes import block_ends, block_rates, final_rates
+from sigmapi.experiments.kit.episodes import block_rates, final_rates, success_curve
+from sigmapi.experiments.kit.written import as_object, config_and_seeds, summaries
 from sigmapi.experiments.reward.config import RewardConfig
 
 __all__ = ["FIGURE", "MAGNIFICATION_TARGET", "RewardResult", "episodes_to_target"]
@@ -25,6 +26,9 @@ MAGNIFICATION_TARGET = 1.5
 
 SCORES = ("magnification", "units_near", "units_used", "view_consistency_away", "order_r2_away")
 """The map scores of :func:`~sigmapi.experiments.reward.run.map_scores`, per method and seed."""
+
+SUMMARIES = ("methods", "initial_map", "n_seeds", "target", "magnification_target", "curves")
+"""The keys of the JSON form computed from the records and scores."""
 
 
 def episodes_to_target(success: NDArray[np.bool_], block: int, target: float) -> int | None:
@@ -61,7 +65,9 @@ class RewardResult:
     ``success[m]``, ``lost[m]``, ``steps[m]``: ``(len(seeds), episodes)`` per method ``m``, one
     row per seed in the order of ``seeds``; ``scores[m][name]``: ``(len(seeds),)`` map scores
     after the episodes (``initial``: the learned map before them); ``units[m]``: the preferred
-    z of each unit of the first seed's map ``(n_units, d)`` (NaN: wins nothing).
+    z of each unit of the first seed's map ``(n_units, d)`` (NaN: wins nothing). A result
+    read back from its JSON form (:meth:`from_dict`) holds no records: its summaries are
+    ``written``, as the file has them.
     """
 
     config: RewardConfig
@@ -73,6 +79,21 @@ class RewardResult:
     scores: dict[str, dict[str, NDArray[np.float64]]] = field(default_factory=dict)
     units: dict[str, NDArray[np.float64]] = field(default_factory=dict)
     seconds: float = 0.0
+    written: dict[str, Any] | None = field(default=None, repr=False)
+    """The summaries of a result read back (:meth:`from_dict`); None for a run's result."""
+
+    @classmethod
+    def from_dict(cls, data: Any) -> RewardResult:
+        """The result a :meth:`to_dict` wrote (``result.json``): its config, seeds and time,
+        and its summaries as written (the file holds no episode records)."""
+        obj = as_object(data)
+        config, seeds = config_and_seeds(obj, RewardConfig.from_dict)
+        return cls(
+            config,
+            seeds,
+            seconds=float(obj["seconds"]),
+            written=summaries(obj, SUMMARIES),
+        )
 
     @classmethod
     def collect(
@@ -97,23 +118,19 @@ class RewardResult:
         """Per method: ``episode`` (block ends), ``success`` (rate per block, mean over
         seeds), ``success_sd``, ``success_min`` and ``success_max`` over seeds."""
         b = self.config.run.block
-        out: dict[str, dict[str, NDArray[np.float64]]] = {}
-        for m, succ in self.success.items():
-            rate = block_rates(succ, b)
-            out[m] = {
-                "episode": block_ends(rate.shape[1], b),
-                "success": rate.mean(axis=0),
-                "success_sd": rate.std(axis=0),
-                "success_min": rate.min(axis=0),
-                "success_max": rate.max(axis=0),
-            }
-        return out
+        return {m: success_curve(succ, b, extremes=True) for m, succ in self.success.items()}
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-able: ``methods`` (per method its name, final success, episodes to the target
         rate, magnification near the goal and its ratio to the frozen map, the quality away
         from the goal; median, worst and per seed over the seeds), the map before the
         episodes (``initial_map``), the acceptance counts, the config and the time."""
+        tail = {
+            "config": {**self.config.to_dict(), "seeds": list(self.seeds)},
+            "seconds": self.seconds,
+        }
+        if self.written is not None:
+            return {**self.written, **tail}
         run = self.config.run
         f = run.final_episodes
         n = len(self.seeds)
@@ -154,8 +171,7 @@ class RewardResult:
             "target": run.target,
             "magnification_target": MAGNIFICATION_TARGET,
             "curves": {m: {k: v.tolist() for k, v in cm.items()} for m, cm in c.items()},
-            "config": {**self.config.to_dict(), "seeds": list(self.seeds)},
-            "seconds": self.seconds,
+            **tail,
         }
 
     def _episodes(self, m: str) -> list[int | None]:

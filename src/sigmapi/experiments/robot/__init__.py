@@ -3,6 +3,7 @@ saccades, then docks on it.
 
 Guide: docs/guide/robot.md; results: docs/results/robot.md.
 
-Modules (``run`` holds the experiment object, ``REGISTRY``'s entry): ``config``, ``figures``,
-``map``, ``result``, ``run``.
+The reach experiment's run in the robot's world: ``variant`` holds the experiment object
+(``REGISTRY``'s entry, a :class:`~sigmapi.experiments.reach.run.ReachExperiment`); also
+``config``, ``figures``, ``map``, ``result``.
 """

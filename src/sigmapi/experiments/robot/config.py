@@ -1,17 +1,23 @@
-"""The settings of one robot run: the recorded views, the map, the docking world, the learner.
+"""The settings of one robot run, in four frozen parts, like the reach experiment's: the
+world, the map, the learner and the run.
 
-One flat frozen dataclass (:class:`RobotConfig`), a docstring under each field, so that the
-command-line options are its fields; :meth:`RobotConfig.agent` gives the learner's part as the
-:class:`~sigmapi.agents.ActorCriticConfig` the agents take, :meth:`RobotConfig.make_env` and
-:meth:`RobotConfig.state_env` the docking world as ``gymnasium.make`` builds it and as each
-state sees it.
+- :class:`RobotEnvConfig` (``env``): the docking world, its time limit and how the map's view
+  pairs are recorded in it (the settings of :data:`ROBOT_WORLD`);
+- :class:`RobotMapConfig` (``map``): the Sigma-Pi map learned from the recorded pairs, how it
+  is scored and how the learner reads it;
+- :class:`~sigmapi.agents.ActorCriticConfig` (``agent``): the actor-critic;
+- :class:`RobotRunConfig` (``run``): which states are compared, for how many episodes.
+
+:class:`RobotConfig` holds one of each (``RobotConfig().replace(grid=8, episodes=150)`` finds
+each field's part; the ``sigmapi robot`` options are the parts' fields). Its JSON form is
+flat (one table of every part's fields, as the robot's results have always been written):
+:meth:`RobotConfig.to_dict` and :meth:`RobotConfig.from_dict`.
 """
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, ClassVar
 
 import gymnasium as gym
 
@@ -25,11 +31,21 @@ from sigmapi.envs.robot.views import RobotViews
 from sigmapi.errors import ConfigError
 from sigmapi.experiments.kit.episodes import check_episode_run
 from sigmapi.experiments.kit.maps import MapSpec
+from sigmapi.experiments.kit.parts import check_part_types, parts_dict, replaced_parts
 from sigmapi.experiments.kit.seeds import SeedPlan
 from sigmapi.experiments.kit.worlds import World, register_world
+from sigmapi.experiments.kit.written import as_object, tuples
 from sigmapi.model.som import SigmaPiSOM
 
-__all__ = ["PLAN", "QUICK", "ROBOT_WORLD", "RobotConfig"]
+__all__ = [
+    "PLAN",
+    "QUICK",
+    "ROBOT_WORLD",
+    "RobotConfig",
+    "RobotEnvConfig",
+    "RobotMapConfig",
+    "RobotRunConfig",
+]
 
 PLAN = SeedPlan({"map": 0, "starts": 1, "agent": 2, "film": 3})
 """The streams of a seed (:class:`~sigmapi.experiments.kit.seeds.SeedPlan`): children of
@@ -37,8 +53,9 @@ PLAN = SeedPlan({"map": 0, "starts": 1, "agent": 2, "film": 3})
 
 
 @dataclass(frozen=True)
-class RobotConfig:
-    """Everything one robot run depends on but its seeds (the CLI's options are its fields)."""
+class RobotEnvConfig:
+    """The docking world (:class:`~sigmapi.envs.robot.RobotDockEnv`) and how the map's view
+    pairs are recorded in it."""
 
     grid: int = field(
         default=12,
@@ -49,71 +66,18 @@ class RobotConfig:
     """Units per axis of the retina and gaze codes."""
     code_width: float = 1.0
     """Width of the codes' hills, grid units."""
-    map_shape: tuple[int, ...] = (8, 8)
-    """Grid of the Sigma-Pi map."""
-    train_pairs: int = field(default=10_000, metadata=_validate.bounded("int", 1))
-    """View pairs recorded from saccades for the map (body and ball still)."""
-    iterations: int = field(default=40_000, metadata=_validate.bounded("int", 1))
-    """Learning iterations of the map (the recorded pairs are used in passes)."""
     moved_share: float = field(default=0.0, metadata=_validate.bounded("number", 0, 1))
     """Share of recorded pairs in which the ball moved between the two views (a nuisance)."""
-    eval_pairs: int = field(default=3000, metadata=_validate.bounded("int", 1))
-    """Calibration and test pairs (each) that score the map against the true z."""
-    backend: str = "auto"
-    """Kernel that learns and reads the map ("auto": the fast one when it is installed)."""
     retina: str = "projection"
     """Retinal position in the docking episodes: "projection" or "pixels" (rendered, slower)."""
     saccade_rate: float = field(default=1.0, metadata=_validate.bounded("number", 0, 1))
     """Probability of a saccade per docking step (1: the head looks around every step)."""
     max_steps: int = field(default=100, metadata=_validate.bounded("int", 1))
     """Time limit of a docking episode (Gymnasium's TimeLimit)."""
-    episodes: int = field(default=400, metadata=_validate.bounded("int", 1))
-    """Docking episodes per seed and state."""
-    final_episodes: int = field(default=100, metadata=_validate.bounded("int", 1))
-    """Final success is measured over this many last episodes."""
-    block: int = field(default=50, metadata=_validate.bounded("int", 1))
-    """Episodes per point of the learning curves."""
-    features: str = "response"
-    """Map features: "response" (activations clipped at 0, L2-normalised) or "bump"."""
-    feature_width: float = field(
-        default=1.0, metadata=_validate.bounded("number", 0, _validate.MAX_WIDTH, lo_open=True)
-    )
-    """Width of the bump features (map and true-z codes), in grid units."""
-    gamma: float = ActorCriticConfig.gamma
-    """Discount of the actor-critic (the authors' docking: 0.9)."""
-    critic_lr: float = ActorCriticConfig.critic_lr
-    """Learning rate of the critic (the authors: 0.1), per unit of |phi|^2."""
-    actor_lr: float = ActorCriticConfig.actor_lr
-    """Learning rate of the actor (the authors: 0.1), per unit of |phi|^2."""
-    beta: float = ActorCriticConfig.beta
-    """Inverse temperature of the softmax policy (the authors: 2)."""
-    states: tuple[str, ...] = STATES
-    """States compared: map, retina, retina_gaze, true_z."""
-    render: str | None = None
-    """Also write an animated GIF of one episode of the first seed's map learner (third-person
-    and head cameras) to this file."""
 
     def __post_init__(self) -> None:
         _validate.check_fields(self)
-        check_episode_run(self)
-        object.__setattr__(self, "map_shape", _validate.shape("map_shape", self.map_shape))
-        if len(self.map_shape) != 2:
-            raise _validate.fail("map_shape", "2 axes (z is 2-D)", self.map_shape, "e.g. 8x8")
         _validate.choice("retina", self.retina, RETINA_SOURCES)
-        _validate.choice("backend", self.backend, BACKEND_NAMES)
-        _validate.choice("features", self.features, FEATURES)
-        self.agent()  # checks the learner's fields
-        if self.render is not None and not str(self.render).lower().endswith(".gif"):
-            raise _validate.fail("render", "a file name ending in .gif", self.render)
-        if self.render is not None and "map" not in self.states:
-            raise ConfigError(
-                f"render films the map learner, but states {self.states!r} has no "
-                "'map'; add map to --states, or drop --render"
-            )
-
-    def agent(self) -> ActorCriticConfig:
-        """The learner's settings."""
-        return ActorCriticConfig(self.gamma, self.critic_lr, self.actor_lr, self.beta)
 
     def env_kwargs(self) -> dict[str, Any]:
         """The docking world's keyword arguments (``gymnasium.make``'s, time limit included)."""
@@ -125,51 +89,145 @@ class RobotConfig:
             "max_episode_steps": self.max_steps,
         }
 
-    def make_env(self, **kwargs: Any) -> gym.Env[Any, Any]:
-        """The docking world through ``gymnasium.make`` (:data:`ROBOT_WORLD`; its TimeLimit
-        included); ``kwargs`` go to it too (e.g. ``render_mode="rgb_array"``)."""
-        return ROBOT_WORLD.make_env(self, **kwargs)
+
+@dataclass(frozen=True)
+class RobotMapConfig:
+    """The map learned from the recorded view pairs, its scoring and how the learner reads it."""
+
+    map_shape: tuple[int, ...] = (8, 8)
+    """Grid of the Sigma-Pi map."""
+    train_pairs: int = field(default=10_000, metadata=_validate.bounded("int", 1))
+    """View pairs recorded from saccades for the map (body and ball still)."""
+    iterations: int = field(default=40_000, metadata=_validate.bounded("int", 1))
+    """Learning iterations of the map (the recorded pairs are used in passes)."""
+    eval_pairs: int = field(default=3000, metadata=_validate.bounded("int", 1))
+    """Calibration and test pairs (each) that score the map against the true z."""
+    backend: str = "auto"
+    """Kernel that learns and reads the map ("auto": the fast one when it is installed)."""
+    features: str = "response"
+    """Map features: "response" (activations clipped at 0, L2-normalised) or "bump"."""
+    feature_width: float = field(
+        default=1.0, metadata=_validate.bounded("number", 0, _validate.MAX_WIDTH, lo_open=True)
+    )
+    """Width of the bump features (map and true-z codes), in grid units."""
+
+    def __post_init__(self) -> None:
+        _validate.check_fields(self)
+        object.__setattr__(self, "map_shape", _validate.shape("map_shape", self.map_shape))
+        if len(self.map_shape) != 2:
+            raise _validate.fail("map_shape", "2 axes (z is 2-D)", self.map_shape, "e.g. 8x8")
+        _validate.choice("backend", self.backend, BACKEND_NAMES)
+        _validate.choice("features", self.features, FEATURES)
+
+
+@dataclass(frozen=True)
+class RobotRunConfig:
+    """What is compared and for how long: the states, the episodes, the curves' blocks."""
+
+    episodes: int = field(default=400, metadata=_validate.bounded("int", 1))
+    """Docking episodes per seed and state."""
+    final_episodes: int = field(default=100, metadata=_validate.bounded("int", 1))
+    """Final success is measured over this many last episodes."""
+    block: int = field(default=50, metadata=_validate.bounded("int", 1))
+    """Episodes per point of the learning curves."""
+    states: tuple[str, ...] = STATES
+    """States compared: map, retina, retina_gaze, true_z."""
+    render: str | None = None
+    """Also write an animated GIF of one episode of the first seed's map learner (third-person
+    and head cameras) to this file."""
+
+    def __post_init__(self) -> None:
+        _validate.check_fields(self)
+        check_episode_run(self)
+        if self.render is not None and not str(self.render).lower().endswith(".gif"):
+            raise _validate.fail("render", "a file name ending in .gif", self.render)
+        if self.render is not None and "map" not in self.states:
+            raise ConfigError(
+                f"render films the map learner, but states {self.states!r} has no "
+                "'map'; add map to --states, or drop --render"
+            )
+
+
+@dataclass(frozen=True)
+class RobotConfig:
+    """Everything one robot run depends on but its seeds (the CLI's options are its parts'
+    fields)."""
+
+    env: RobotEnvConfig = field(default_factory=RobotEnvConfig)
+    """The docking world, its time limit and how view pairs are recorded."""
+    map: RobotMapConfig = field(default_factory=RobotMapConfig)
+    """The map learned from the recorded pairs."""
+    agent: ActorCriticConfig = field(default_factory=ActorCriticConfig)
+    """The learner (the authors' docking: gamma 0.9, learning rates 0.1, beta 2)."""
+    run: RobotRunConfig = field(default_factory=RobotRunConfig)
+    """The states, episodes and curves."""
+
+    PARTS: ClassVar[dict[str, type]] = {
+        "env": RobotEnvConfig,
+        "map": RobotMapConfig,
+        "agent": ActorCriticConfig,
+        "run": RobotRunConfig,
+    }
+    """Each part's name and class."""
+
+    def __post_init__(self) -> None:
+        check_part_types(self, self.PARTS)
+
+    def make_env(self, world: World | None = None, **kwargs: Any) -> gym.Env[Any, Any]:
+        """The docking world through ``gymnasium.make`` (``world``, default
+        :data:`ROBOT_WORLD`; its TimeLimit included); ``kwargs`` go to it too (e.g.
+        ``render_mode="rgb_array"``)."""
+        return (world or ROBOT_WORLD).make_env(self.env, **kwargs)
 
     def state_env(
-        self, state: str, model: SigmaPiSOM | None = None, **kwargs: Any
+        self,
+        state: str,
+        model: SigmaPiSOM | None = None,
+        world: World | None = None,
+        **kwargs: Any,
     ) -> gym.Env[Features, Any]:
-        """The docking world as ``state`` sees it (:mod:`sigmapi.envs.wrappers`); ``"true_z"``
-        codes z on the map's grid (like for like), ``"map"`` needs ``model``."""
-        env = self.make_env(**kwargs)
+        """The docking world (:meth:`make_env`) as ``state`` sees it
+        (:mod:`sigmapi.envs.wrappers`); ``"true_z"`` codes z on the map's grid (like for
+        like), ``"map"`` needs ``model``."""
+        env, m = self.make_env(world, **kwargs), self.map
         if state == "true_z":
-            return TrueZObservation(env, shape=self.map_shape, width=self.feature_width)
-        return make_state_env(env, state, model, self.features, self.feature_width)
+            return TrueZObservation(env, shape=m.map_shape, width=m.feature_width)
+        return make_state_env(env, state, model, m.features, m.feature_width)
 
     def replace(self, **changes: Any) -> RobotConfig:
-        """A copy with ``changes``."""
-        return dataclasses.replace(self, **changes)
+        """A copy with ``changes``, fields of any part by name (``grid=8, episodes=150``)."""
+        return RobotConfig(**replaced_parts(self, self.PARTS, changes, "robot"))
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-able (tuples as lists)."""
-        return {
-            k: list(v) if isinstance(v, tuple) else v for k, v in dataclasses.asdict(self).items()
-        }
+        """JSON-able and flat: every part's fields in one table (tuples as lists)."""
+        return {k: v for table in parts_dict(self, self.PARTS).values() for k, v in table.items()}
+
+    @classmethod
+    def from_dict(cls, data: Any) -> RobotConfig:
+        """The config a :meth:`to_dict` wrote (an unknown field is a ConfigError naming the
+        valid ones)."""
+        return cls().replace(**tuples(as_object(data, "robot config")))
 
 
-QUICK = RobotConfig(
+QUICK = RobotConfig().replace(
     train_pairs=3000, iterations=12_000, eval_pairs=1000, episodes=150, final_episodes=50, block=25
 )
 """``sigmapi robot --quick``: a smaller map run and fewer episodes (minutes, not tens)."""
 
 
-def _robot_kwargs(config: RobotConfig) -> dict[str, Any]:
-    return config.env_kwargs()
+def _robot_kwargs(settings: RobotEnvConfig) -> dict[str, Any]:
+    return settings.env_kwargs()
 
 
-def _robot_source(config: RobotConfig) -> RobotViews:
-    return RobotViews(config.grid, config.code_width, moved_share=config.moved_share)
+def _robot_source(settings: RobotEnvConfig) -> RobotViews:
+    return RobotViews(settings.grid, settings.code_width, moved_share=settings.moved_share)
 
 
 ROBOT_WORLD = register_world(
     World(
         name="robot",
         env_id=ENV_ID,
-        settings=RobotConfig,
+        settings=RobotEnvConfig,
         kwargs=_robot_kwargs,
         source=_robot_source,
         map=MapSpec("robot-2d"),

@@ -102,7 +102,7 @@ def robot_figures(
 
     paths = []
     if result.unit_z:
-        ax = plot_unit_positions(result.unit_z[0], result.config.map_shape)
+        ax = plot_unit_positions(result.unit_z[0], result.config.map.map_shape)
         paths.append(out_dir / "map-on-table.png")
         save_figure(ax.figure, paths[-1], dpi=120, bbox_inches="tight")
         plt.close(ax.figure)

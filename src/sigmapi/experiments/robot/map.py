@@ -20,6 +20,8 @@ from sigmapi.codes import PopulationCode
 from sigmapi.config import SOMConfig
 from sigmapi.envs import collect_saccade_views
 from sigmapi.envs.robot.views import RobotViewBatch, RobotViews
+from sigmapi.experiments.kit.maps import MapSpec
+from sigmapi.experiments.kit.worlds import World
 from sigmapi.experiments.robot.config import ROBOT_WORLD, RobotConfig
 from sigmapi.metrics import (
     EVAL_SEED,
@@ -53,10 +55,11 @@ def robot_som_config(
     iterations: int,
     seed: int,
     backend: str = "auto",
+    spec: MapSpec = ROBOT_MAP,
 ) -> SOMConfig:
-    """:data:`ROBOT_MAP` on the robot's codes (``code``, retina and gaze alike), a
-    ``map_shape`` map, ``iterations`` long."""
-    return ROBOT_MAP.config(
+    """``spec`` (default :data:`ROBOT_MAP`) on the robot's codes (``code``, retina and gaze
+    alike), a ``map_shape`` map, ``iterations`` long."""
+    return spec.config(
         map_shape=tuple(map_shape),
         x_shape=code.shape,
         y_shape=code.shape,
@@ -67,15 +70,19 @@ def robot_som_config(
     )
 
 
-def learn_map(config: RobotConfig, rng: np.random.Generator) -> SigmaPiSOM:
-    """The map of one run: ``config.train_pairs`` view pairs recorded from the still robot's
-    saccades (``config.moved_share`` of them spoiled), then ``fit(views)``; the views' and the
-    weights' seeds drawn from ``rng``."""
-    source = ROBOT_WORLD.source(config)
+def learn_map(
+    config: RobotConfig, rng: np.random.Generator, world: World = ROBOT_WORLD
+) -> SigmaPiSOM:
+    """The map of one run: ``config.map.train_pairs`` view pairs recorded from the still
+    body's saccades in ``world`` (its view source; ``config.env.moved_share`` of them
+    spoiled), then ``fit(views)`` with the world's map spec; the views' and the weights'
+    seeds drawn from ``rng``."""
+    source = world.source(config.env)
     views_seed, som_seed = (int(v) for v in rng.integers(0, 2**31 - 1, size=2))
-    views = collect_saccade_views(source, config.train_pairs, seed=views_seed)
+    views = collect_saccade_views(source, config.map.train_pairs, seed=views_seed)
+    m = config.map
     cfg = robot_som_config(
-        source.x_code, config.map_shape, config.iterations, som_seed, config.backend
+        source.x_code, m.map_shape, m.iterations, som_seed, m.backend, spec=world.map
     )
     return SigmaPiSOM(cfg).fit(views)
 
@@ -83,11 +90,11 @@ def learn_map(config: RobotConfig, rng: np.random.Generator) -> SigmaPiSOM:
 def evaluation_pairs(config: RobotConfig) -> tuple[RobotViewBatch, RobotViewBatch]:
     """Calibration and test pairs (unmoved) drawn from :data:`~sigmapi.metrics.EVAL_SEED`:
     the same for every seed and run."""
-    source = RobotViews(config.grid, config.code_width)
+    source = RobotViews(config.env.grid, config.env.code_width)
     cal, test = (np.random.default_rng(s) for s in np.random.SeedSequence(EVAL_SEED).spawn(2))
     return (
-        source.sample_views_with_z(config.eval_pairs, cal),
-        source.sample_views_with_z(config.eval_pairs, test),
+        source.sample_views_with_z(config.map.eval_pairs, cal),
+        source.sample_views_with_z(config.map.eval_pairs, test),
     )
 
 

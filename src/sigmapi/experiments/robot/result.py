@@ -11,11 +11,27 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sigmapi.agents import ActorCritic
-from sigmapi.experiments.kit.episodes import block_ends, block_rates, final_rates
+from sigmapi.experiments.base import check_seeds
+from sigmapi.experiments.kit.episodes import final_rates, success_curve
+from sigmapi.experiments.kit.written import as_object, summaries
 from sigmapi.experiments.robot.config import RobotConfig
 from sigmapi.model.som import SigmaPiSOM
 
 __all__ = ["RobotResult"]
+
+SUMMARIES = (
+    "success",
+    "success_per_seed",
+    "success_summary",
+    "docked",
+    "reach_given_docked",
+    "reach_given_docked_min",
+    "ratio_map_to_true_z",
+    "margins",
+    "curves",
+)
+"""The keys of the JSON form computed from the episode records (beside the maps' summary,
+:meth:`RobotResult.map_summary`)."""
 
 
 def _summary(values: NDArray[np.float64]) -> dict[str, float]:
@@ -32,13 +48,14 @@ def _nan_stat(fn: Any, values: NDArray[np.float64]) -> float | None:
 
 @dataclass
 class RobotResult:
-    """Outcome of :meth:`~sigmapi.experiments.robot.run.RobotExperiment.run`.
+    """Outcome of :meth:`~sigmapi.experiments.robot.variant.RobotExperiment.run`.
 
     ``success[state]``, ``docked[state]`` and ``steps[state]`` have shape ``(len(seeds),
     episodes)``, a row per seed in the order of ``seeds``: whether the hand touched the ball
     (``info["is_success"]``), whether the base docked, and the steps taken. ``map_metrics``
     and ``unit_z`` (each unit's preferred z) per seed; ``model`` and ``agent``: the first
-    seed's map and its learner (for the figures).
+    seed's map and its learner (for the figures). A result read back from its JSON form
+    (:meth:`from_dict`) holds no records: its summaries are ``written``, as the file has them.
     """
 
     config: RobotConfig
@@ -52,18 +69,37 @@ class RobotResult:
     agent: ActorCritic | None = None
     seconds: float = 0.0
     _film: list[NDArray[np.uint8]] | None = field(default=None, repr=False)
+    written: dict[str, Any] | None = field(default=None, repr=False)
+    """The summaries of a result read back (:meth:`from_dict`); None for a run's result."""
+
+    @classmethod
+    def from_dict(cls, data: Any) -> RobotResult:
+        """The result a :meth:`to_dict` wrote (``result.json``): its config, seeds, maps'
+        metrics and time, and its summaries as written (the file holds no episode records)."""
+        obj = as_object(data)
+        cfg = as_object(obj["config"], "config")
+        config = RobotConfig.from_dict(cfg)
+        metrics = [dict(as_object(m, "map_metrics entry")) for m in obj["map_metrics"]]
+        mapped = (*metrics[0], "order_r2_min", "folded_seeds") if metrics else ()
+        return cls(
+            config,
+            check_seeds(obj["seeds"], "seeds"),
+            map_metrics=metrics,
+            seconds=float(obj["seconds"]),
+            written=summaries(obj, (*mapped, *SUMMARIES)),
+        )
 
     def final(self, key: str = "success") -> dict[str, NDArray[np.float64]]:
         """Per state, the rate of ``key`` (``"success"`` or ``"docked"``) over the last
         ``final_episodes`` episodes, one per seed."""
-        f = self.config.final_episodes
+        f = self.config.run.final_episodes
         table = self.success if key == "success" else self.docked
         return {s: final_rates(r, f) for s, r in table.items()}
 
     def reach_given_docked(self) -> dict[str, NDArray[np.float64]]:
         """Per state and seed, the share of the last ``final_episodes`` docked episodes in
         which the hand touched the ball (NaN for a seed that docked in none)."""
-        f = self.config.final_episodes
+        f = self.config.run.final_episodes
         out = {}
         for s, d in self.docked.items():
             n = d[:, -f:].sum(axis=1)
@@ -73,16 +109,11 @@ class RobotResult:
 
     def curves(self) -> dict[str, dict[str, list[float]]]:
         """Per state: block ends, success per block (mean and sd over seeds)."""
-        b = self.config.block
-        out = {}
-        for s, r in self.success.items():
-            rate = block_rates(r, b)
-            out[s] = {
-                "episode": block_ends(rate.shape[1], b).tolist(),
-                "success": rate.mean(axis=0).tolist(),
-                "success_sd": rate.std(axis=0).tolist(),
-            }
-        return out
+        b = self.config.run.block
+        return {
+            s: {k: v.tolist() for k, v in success_curve(r, b).items()}
+            for s, r in self.success.items()
+        }
 
     def map_summary(self) -> dict[str, Any]:
         """The maps' metrics with the keys of ``sigmapi evaluate`` (means over seeds;
@@ -101,6 +132,14 @@ class RobotResult:
         """JSON-able: the map's metrics (keys of ``sigmapi evaluate``), ``success`` per state
         (final, mean over seeds) with its median and worst seed, docking, the reach given
         docking, the map's margins over the other states, the curves and the config."""
+        tail = {
+            "map_metrics": self.map_metrics,
+            "config": self.config.to_dict(),
+            "seeds": list(self.seeds),
+            "seconds": self.seconds,
+        }
+        if self.written is not None:
+            return {**self.written, **tail}
         final, docked, reach = self.final(), self.final("docked"), self.reach_given_docked()
         success = {s: float(v.mean()) for s, v in final.items()}
         margins = {}
@@ -122,11 +161,8 @@ class RobotResult:
             "reach_given_docked_min": {s: _nan_stat(np.nanmin, v) for s, v in reach.items()},
             "ratio_map_to_true_z": ratio,
             "margins": margins,
-            "map_metrics": self.map_metrics,
             "curves": self.curves(),
-            "config": self.config.to_dict(),
-            "seeds": list(self.seeds),
-            "seconds": self.seconds,
+            **tail,
         }
 
     def table(self) -> str:
@@ -140,8 +176,8 @@ class RobotResult:
                 f"fold score {d['fold_score']:.2f}, folded {d['folded_seeds']}"
             )
         lines.append(
-            f"final success over the last {self.config.final_episodes} of "
-            f"{self.config.episodes} episodes:"
+            f"final success over the last {self.config.run.final_episodes} of "
+            f"{self.config.run.episodes} episodes:"
         )
         for s, v in d["success"].items():
             seeds = " ".join(f"{x:.2f}" for x in d["success_per_seed"][s])
@@ -166,12 +202,12 @@ class RobotResult:
     def figure(self, out_dir: str | Path) -> list[Path]:
         """Write the figures into ``out_dir`` (:func:`~sigmapi.experiments.robot.figures.
         robot_figures`: the map on the table, the learning curves, a film strip) and, with
-        ``config.render``, the filmed episode as an animated GIF at that path."""
+        ``config.run.render``, the filmed episode as an animated GIF at that path."""
         from sigmapi.experiments.robot.figures import robot_figures, write_gif
 
         folder = Path(out_dir)
         folder.mkdir(parents=True, exist_ok=True)
         paths = robot_figures(self, folder, self.film())
-        if self.config.render is not None and self.film():
-            paths.append(write_gif(self.film(), Path(self.config.render)))
+        if self.config.run.render is not None and self.film():
+            paths.append(write_gif(self.film(), Path(self.config.run.render)))
         return paths

@@ -131,6 +131,13 @@ class SweepSpec:
             data = tomllib.loads(text)
         except tomllib.TOMLDecodeError as exc:
             raise ConfigError(f"{source} is not valid TOML: {exc}") from None
+        return cls.from_dict(data, source)
+
+    @classmethod
+    def from_dict(cls, data: Any, source: str = "sweep spec") -> SweepSpec:
+        """Check a spec given as its TOML file's table (what :meth:`to_dict` writes)."""
+        if not isinstance(data, dict):
+            raise ConfigError(f"{source} must be a table of keys, got {type(data).__name__}")
         unknown = sorted(set(data) - {"preset", "seeds", "set", "grid", "n_test"})
         if unknown:
             raise ConfigError(
@@ -425,6 +432,13 @@ class SweepResult:
     spec: SweepSpec
     rows: list[dict[str, Any]]
     metric: str = "order_r2"
+
+    @classmethod
+    def from_dict(cls, data: Any) -> SweepResult:
+        """The result a :meth:`to_dict` wrote (``result.json``): its spec and rows."""
+        if not isinstance(data, dict) or not isinstance(data["rows"], list):
+            raise TypeError("a sweep's result must be a JSON object with a list of rows")
+        return cls(SweepSpec.from_dict(data["spec"], "the result's spec"), list(data["rows"]))
 
     def to_dict(self) -> dict[str, Any]:
         """``spec``, ``table`` (the file), counts, and ``rows`` (the table's rows, typed)."""

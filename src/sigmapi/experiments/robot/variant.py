@@ -1,0 +1,173 @@
+"""The robot experiment: the reach experiment (:class:`~sigmapi.experiments.reach.run.
+ReachExperiment`: its run and per-seed job) in the robot's world, with the robot's map.
+
+:data:`ROBOT` (a :class:`RobotExperiment`) runs a
+:class:`~sigmapi.experiments.robot.config.RobotConfig` on a list of seeds and returns a
+:class:`~sigmapi.experiments.robot.result.RobotResult`. Per seed, everything random comes from
+the streams of :data:`~sigmapi.experiments.robot.config.PLAN`, children of
+``SeedSequence(seed)``: ``"map"`` seeds the map's recorded views and weights, ``"starts"`` the
+episodes' start states (the same for every state: same learner, same episodes), ``"agent"``
+the learner's action choices, ``"film"`` the start of the filmed episode. What the robot does
+its own way is its map: view pairs recorded from the still robot's saccades and learned in
+passes (:func:`~sigmapi.experiments.robot.map.learn_map`), scored on evaluation pairs drawn
+from :data:`~sigmapi.metrics.EVAL_SEED` (the same for every seed, never moved); the
+actor-critic of the authors' docking model then learns on each state
+(:data:`~sigmapi.envs.STATES`) through ``gymnasium.make("sigmapi/RobotDock-v0")`` and the
+state wrappers, as in every world. ``sigmapi robot`` is generated from :data:`ROBOT` (the
+experiment registry): its command, options and result file keep their names.
+
+Examples
+--------
+>>> cfg = QUICK.replace(train_pairs=300, iterations=600, eval_pairs=200, episodes=4,
+...                     final_episodes=2, block=2, grid=6, map_shape=(4, 4), max_steps=20)
+>>> sorted(ROBOT.run(cfg, seeds=[0]).to_dict()["success"])
+['map', 'retina', 'retina_gaze', 'true_z']
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+from sigmapi import _memory
+from sigmapi._outputs import check_file
+from sigmapi.agents import ActorCritic
+from sigmapi.codes import PopulationCode
+from sigmapi.envs.robot.scene import check_rendering, mujoco_module
+from sigmapi.envs.robot.views import RobotViewBatch
+from sigmapi.executor import job_memory as _som_job_memory
+from sigmapi.experiments.base import register
+from sigmapi.experiments.kit.jobs import SeedEpisodes, Tick
+from sigmapi.experiments.kit.worlds import World
+from sigmapi.experiments.reach.run import ReachExperiment
+from sigmapi.experiments.robot.config import PLAN, QUICK, ROBOT_WORLD, RobotConfig
+from sigmapi.experiments.robot.map import (
+    evaluation_pairs,
+    learn_map,
+    robot_som_config,
+    score_map,
+    unit_positions,
+)
+from sigmapi.experiments.robot.result import RobotResult
+from sigmapi.model.som import SigmaPiSOM
+from sigmapi.progress import Progress
+
+__all__ = ["INFO_KEYS", "PLAN", "QUICK", "ROBOT", "RobotExperiment", "job_memory"]
+
+INFO_KEYS = ("docked", "event")
+"""What the experiment keeps of each episode's last ``info`` besides ``is_success``."""
+
+
+def job_memory(config: RobotConfig) -> int:
+    """Peak bytes of one job (an upper estimate): the map's training and scoring
+    (:func:`sigmapi.executor.job_memory`), its recorded and evaluation views and the
+    episodes' records."""
+    env, m = config.env, config.map
+    n = env.grid**2
+    code = PopulationCode((env.grid,) * 2, width=env.code_width)
+    som = robot_som_config(code, m.map_shape, m.iterations, 0, m.backend)
+    views = (m.train_pairs + 2 * m.eval_pairs) * 4 * n * 8
+    episodes = 64 * config.run.episodes  # start seeds and each episode's records
+    return _som_job_memory(som, n_test=m.eval_pairs) + views + episodes
+
+
+class RobotExperiment(ReachExperiment):
+    """A simulated robot (MuJoCo) records view pairs from its saccades and learns the
+    Sigma-Pi map; then an actor-critic docks on the map, the retina code, retina and gaze
+    codes and the true z (the upper bound), over seeds."""
+
+    name = "robot"
+    summary = "a simulated robot learns the map from its own saccades, then docks on it"
+    config_type = RobotConfig
+    quick = QUICK
+    quick_seeds = (0,)
+    """The seed of ``--quick``: a tuning seed (a first look does not peek at the reported
+    ones)."""
+    default_out = "robot"
+    plan = PLAN
+    info_keys = INFO_KEYS
+    returns_map = True
+
+    def __init__(self, world: World = ROBOT_WORLD) -> None:
+        """The robot's protocol in ``world`` (default :data:`~sigmapi.experiments.robot.
+        config.ROBOT_WORLD`, whose default seeds are the acceptance run's, none tuned on):
+        a world whose settings are a :class:`~sigmapi.experiments.robot.config.RobotEnvConfig`,
+        its view pairs recorded from its view source, its map from its map spec."""
+        super().__init__(world)
+
+    def before_writing(self, config: RobotConfig, *, force: bool) -> None:
+        """What writing the figures needs, checked before the work: the ``--render`` file
+        (:func:`~sigmapi._outputs.check_file`) and an offscreen renderer (``MUJOCO_GL``)."""
+        if config.run.render is not None:
+            check_file(config.run.render, force=force, what="--render file")
+        check_rendering()
+
+    def check(self, config: Any) -> int:
+        """MuJoCo (and a renderer for the pixel retina) before any work, and the memory of
+        one job (the main process records views too: checked first)."""
+        mujoco_module()  # says which extra to install
+        if config.env.retina == "pixels":
+            check_rendering()
+        per_job = job_memory(config)
+        _memory.check(
+            per_job,
+            f"a robot job of grid={config.env.grid}, eval_pairs="
+            f"{config.map.eval_pairs:,}, train_pairs={config.map.train_pairs:,}, episodes="
+            f"{config.run.episodes:,}",
+            "use a smaller grid or map, or fewer pairs or episodes",
+        )
+        return per_job
+
+    def prepare(
+        self, config: Any, progress: Progress | None
+    ) -> tuple[RobotViewBatch, RobotViewBatch] | None:
+        """The evaluation views every seed's map is scored on (where a state reads a map)."""
+        if "map" not in config.run.states:
+            return None
+        Progress.of(progress).note("robot: recording the evaluation views")
+        return evaluation_pairs(config)
+
+    def make_map(
+        self, config: Any, shared: Any, seed: int, tick: Tick | None
+    ) -> tuple[SigmaPiSOM, dict[str, Any]]:
+        """Seed ``seed``'s map from recorded view pairs, its scores and each unit's
+        preferred z on the evaluation views (``shared``)."""
+        if tick is not None:
+            tick(0, "learning the map")
+        model = learn_map(config, self.plan.rng(seed, "map"), self.world)
+        cal, test = shared
+        return model, {
+            "map_metrics": score_map(model, cal, test),
+            "unit_z": unit_positions(model, cal),
+        }
+
+    def state_env(self, config: Any, state: str, model: SigmaPiSOM | None) -> gym.Env[Any, Any]:
+        """The docking world as ``state`` sees it (:meth:`RobotConfig.state_env
+        <sigmapi.experiments.robot.config.RobotConfig.state_env>`)."""
+        return config.state_env(state, model, self.world)
+
+    def keep(self, config: Any, state: str, env: gym.Env[Any, Any], agent: ActorCritic) -> Any:
+        """The first seed's map learner (the figures film it)."""
+        return agent if state == "map" else None
+
+    def collect(self, config: Any, seeds: tuple[int, ...], got: list[SeedEpisodes]) -> RobotResult:
+        """The result of the seeds' jobs (``got``, in the order of ``seeds``)."""
+        res = RobotResult(config, seeds)
+        for state in config.run.states:
+            eps = [one.runs[state] for one in got]
+            res.success[state] = np.stack([e.success for e in eps])
+            res.docked[state] = np.stack([e.info["docked"].astype(bool) for e in eps])
+            res.steps[state] = np.stack([e.steps for e in eps])
+        if "map" in config.run.states:
+            for one in got:
+                res.map_metrics.append(one.extras["map_metrics"])
+                res.unit_z.append(one.extras["unit_z"])
+            res.model, res.agent = got[0].model, got[0].kept["map"]
+        return res
+
+
+ROBOT = RobotExperiment()
+register(ROBOT)
+"""The robot experiment."""
