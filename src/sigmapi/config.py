@@ -23,7 +23,7 @@ from sigmapi.codes import _WIDTH_FIX, MAX_WIDTH, MIN_WIDTH
 from sigmapi.errors import ConfigError
 from sigmapi.kernels import BACKEND_CHOICES
 from sigmapi.rules import ORDERINGS, WINNER_RULES
-from sigmapi.rules.geometry import MapGeometry
+from sigmapi.rules.geometry import DEFAULT_SOFT_CUT, MapGeometry
 from sigmapi.rules.ordering import check_periodic_map
 from sigmapi.schedules import PAPER_SIGMA, PiecewiseLinear
 from sigmapi.tasks import RELATIONS
@@ -134,7 +134,8 @@ class SOMConfig:
     procedure, see ``ordering``), "soft_mean" (always border-normalised), "argmax", or
     "min_distance"."""
     soft_cut: int = field(
-        default=15, metadata=_validate.bounded("int", 0, fix="in map units; the script uses 15")
+        default=DEFAULT_SOFT_CUT,
+        metadata=_validate.bounded("int", 0, fix="in map units; the script uses 15"),
     )
     """Half-width of the smoothing window of the soft winner, in map units (script: 15)."""
     init_scale: float = field(
