@@ -47,7 +47,7 @@ class ICubConfig:
     """Babbles (random arm postures, the eyes on the hand) the associations learn from."""
     epochs: int = 8
     """Passes of the associations' delta rule over the babbles."""
-    feature_width: float = 1.5
+    feature_width: float = 2.5
     """Width of the bump a map's winner gives the association, map units."""
     reaches: int = 60
     """Reaches per seed and method (random reachable balls, random gazes)."""
