@@ -26,6 +26,8 @@ from sigmapi.agents import Association
 from sigmapi.envs.icub import (
     ARM,
     GAZE,
+    HEAD_BOX,
+    TORSO_BOX,
     ICubScene,
     arm_ik,
     cache_dir,
@@ -134,11 +136,33 @@ def test_view_pairs_share_the_direction_they_should(scene: ICubScene):
     a, b = view_pairs(scene, 20, rng, stage="eyes")
     np.testing.assert_allclose(a.gaze[:, 3:], b.gaze[:, 3:])  # the head still
     np.testing.assert_allclose(a.head, b.head, atol=1e-9)
+    assert np.all((a.head >= HEAD_BOX[:, 0] - 1e-4) & (a.head <= HEAD_BOX[:, 1] + 1e-4))
     assert np.all(np.abs(a.gaze[:, :2] - b.gaze[:, :2]).max(axis=1) > 0)  # the eyes moved
     a, b = view_pairs(scene, 20, rng, stage="head")
     np.testing.assert_allclose(a.torso, b.torso, atol=1e-9)
     assert np.all(np.abs(a.head - b.head).max(axis=1) > 1e-3)  # the head turned
     assert np.all((a.retina >= 4) & (a.retina <= 60))
+
+
+def test_directions_are_the_gimbal_angles_that_point_the_eye(scene: ICubScene):
+    from sigmapi.envs.icub import direction_angles, direction_vectors
+
+    rng = np.random.default_rng(4)
+    d = rng.uniform([-1.2, -1.4], [1.2, 1.4], (50, 2))
+    v = direction_vectors(d) * rng.uniform(0.1, 2.0, (50, 1))
+    np.testing.assert_allclose(direction_angles(v), d, atol=1e-12)
+    scene.reset()
+    for xy in ((0.3, -0.1), (0.2, -0.3), (0.15, 0.05)):
+        scene.set_ball(xy)
+        scene.look_at(scene.ball_position())  # vergence 0: the right eye's pan is the version
+        tilt, pan = scene.gaze()[:2]
+        np.testing.assert_allclose(scene.head_direction(scene.ball_position()), [-pan, tilt])
+    # the table under the maps' box of torso-centred directions is near a rectangle
+    corners = np.array(np.meshgrid(*TORSO_BOX, indexing="ij")).reshape(2, -1).T
+    xy = scene.table_point(corners)[:, :2]
+    np.testing.assert_allclose(scene.torso_direction(scene.table_point(corners)), corners)
+    near, far = xy[[0, 2], 0], xy[[1, 3], 0]  # x of the corners at the low and high elevation
+    assert np.ptp(near) < 0.02 and np.ptp(far) < 0.03
 
 
 def test_scripted_reach_touches_the_ball_and_a_wrong_one_does_not(scene: ICubScene):
@@ -176,6 +200,27 @@ def test_babbling_teaches_an_association(scene: ICubScene):
     spread = np.median(np.linalg.norm(test.palm - test.palm.mean(axis=0), axis=1))
     assert np.median(errs) < 0.5 * spread  # far better than one posture for every place
 
+    # the learned servo: hand and ball seen in one glance, the posture moved by the
+    # association's difference; from postures 0.25 rad off in the shoulder's yaw it comes back
+    from sigmapi.experiments.icub.reaching import glance, servo
+
+    rng = np.random.default_rng(5)
+    before, after = [], []
+    for q, p in zip(layer.predict(key(test.views.torso))[:6], test.palm[:6], strict=True):
+        scene.reset()
+        scene.set_ball(p[:2])
+        ball = scene.ball_position()
+        assert glance(scene, np.stack([ball, p]), rng)
+        assert np.all((scene.project(np.stack([ball, p])) >= 4) & (scene.project(ball) <= 60))
+        start = q + np.array([0.0, 0.0, 0.25, 0.0, 0.0, 0.0, 0.0])
+        scene.set_arm(start)
+        before.append(np.linalg.norm(scene.palm_position()[:2] - p[:2]))
+        out = servo(scene, layer, lambda v: key(v.torso), start, rng, 3)
+        scene.set_arm(out)
+        after.append(np.linalg.norm(scene.palm_position()[:2] - p[:2]))
+    scene.reset()
+    assert np.median(after) < 0.5 * np.median(before)
+
 
 def test_association_checks_its_input():
     a = Association(3, 2)
@@ -196,6 +241,8 @@ def test_config_rejects_bad_values():
         ICubConfig(head_code="mean")
     with pytest.raises(ConfigError, match="render"):
         ICubConfig(render="film.mp4")
+    with pytest.raises(ConfigError, match="servo_steps"):
+        ICubConfig(servo_steps=-1)
 
 
 def test_a_tiny_run_writes_every_key(rendering, tmp_path):
@@ -211,6 +258,7 @@ def test_a_tiny_run_writes_every_key(rendering, tmp_path):
         assert {"order_r2", "direction_error_deg"} <= set(d["maps"][name])
     assert set(d["success"]) == {"learned", "true_direction", "retina", "retina_gaze",
                                  "scripted_ik"}  # fmt: skip
+    assert set(d["success_servo"]) == {"learned", "true_direction", "retina", "retina_gaze"}
     assert d["frames"]["pixel_rms_px"] < 0.5
     paths = res.figure(tmp_path)
     assert {p.name for p in paths} >= {"eyes.png", "map-on-table.png", "success-table.png",

@@ -31,7 +31,13 @@ from sigmapi.envs.icub.frames import (
 )
 from sigmapi.envs.icub.model import ARM, BALL_RADIUS, HOME_ARM, TABLE_HEIGHT, cache_dir, load_model
 from sigmapi.envs.icub.reach import ReachOutcome, arm_ik, physical_reach
-from sigmapi.envs.icub.scene import EYE_SIZE, GAZE, ICubScene, direction_angles
+from sigmapi.envs.icub.scene import (
+    EYE_SIZE,
+    GAZE,
+    ICubScene,
+    direction_angles,
+    direction_vectors,
+)
 
 __all__ = [
     "ARM",
@@ -55,6 +61,7 @@ __all__ = [
     "cache_dir",
     "direction_angles",
     "direction_ball",
+    "direction_vectors",
     "load_model",
     "measure",
     "physical_reach",

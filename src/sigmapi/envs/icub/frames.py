@@ -11,7 +11,8 @@ torso-centred directions ``(azimuth, elevation)`` (radians;
   :data:`GAZE_LOW`..:data:`GAZE_HIGH`, redrawn until the point lies at least ``margin`` pixels
   inside the image); ``neck=`` keeps the neck where it is (a saccade of the eyes only).
 - :func:`view_pairs` records pairs of views of one still point: ``stage="eyes"`` (the head
-  still: the pair shares the neck angles and thus the head-centred direction) or ``"head"``
+  still: the pair shares the neck angles and thus the head-centred direction, drawn first and
+  uniform in :data:`HEAD_BOX`) or ``"head"``
   (the neck turns too: the pair shares the torso-centred direction); a ``moved_share`` of the
   pairs see the ball moved between the views (a nuisance the learner must live with).
 - :func:`direction_ball` draws balls on the table whose torso-centred directions are uniform
@@ -54,10 +55,11 @@ GAZE_LOW = np.radians([-35.0, -30.0, 0.0, -40.0, 0.0, -40.0])
 radians: within the joints' ranges; the neck's roll is held at zero."""
 GAZE_HIGH = np.radians([10.0, 30.0, 20.0, 0.0, 0.0, 40.0])
 """Upper bounds of the random gazes, radians."""
-TORSO_BOX = np.radians([[-75.0, 30.0], [-72.0, -40.0]])
+TORSO_BOX = np.radians([[-50.0, 20.0], [-82.0, -48.0]])
 """The torso-centred directions (azimuth, elevation rows; radians) the balls of the maps'
-views are drawn from, uniformly: a part of the table around the arm's reach."""
-HEAD_BOX = np.radians([[-35.0, 35.0], [-48.0, -15.0]])
+views are drawn from, uniformly: a part of the table around the arm's reach (in these
+coordinates a near rectangle on the table: 0.1-0.4 m ahead, 0.45 m right to 0.15 m left)."""
+HEAD_BOX = np.radians([[-30.0, 30.0], [-50.0, -15.0]])
 """The head-centred directions (azimuth, elevation rows) the views' necks put the ball at,
 uniformly (:func:`neck_for`): the head turns so that the ball lies anywhere in this part of
 its field; a neck outside the neck's range is drawn again."""
@@ -117,11 +119,12 @@ def random_gaze(
 
 
 def neck_for(
-    scene: ICubScene, point: ArrayLike, head: ArrayLike, iterations: int = 6
+    scene: ICubScene, point: ArrayLike, head: ArrayLike, iterations: int = 10
 ) -> Array | None:
     """Neck angles (pitch, roll 0, yaw) that put world ``point`` at head-centred direction
     ``head`` (azimuth, elevation), by Newton steps on a finite-difference Jacobian (the eyes
-    as they are); None when they fall outside the neck's random range."""
+    as they are); None when they fall outside the neck's random range or miss ``head`` by
+    more than 1e-4 rad."""
     p, goal = np.asarray(point, dtype=np.float64), np.asarray(head, dtype=np.float64)
     g = scene.gaze()
     g[3], g[4], g[5] = 0.0, 0.0, 0.0
@@ -142,8 +145,11 @@ def neck_for(
         step = np.linalg.solve(jac, err)
         g[3] -= step[0]
         g[5] -= step[1]
+    scene.set_gaze(g)
     neck = g[3:]
     if np.any(neck < GAZE_LOW[3:] - 1e-9) or np.any(neck > GAZE_HIGH[3:] + 1e-9):
+        return None
+    if np.max(np.abs(scene.head_direction(p) - goal)) > 1e-4:
         return None
     return np.array(neck)
 
@@ -203,13 +209,18 @@ def view_pairs(
     balls = direction_ball(scene, rng, n)
     moved = rng.random(n) < moved_share
     for i in range(n):
-        for attempt in range(500):  # no gaze sees both views: draw again, a new ball per 50
-            if attempt and attempt % 50 == 0:
+        # the eyes' pairs draw the head-centred direction first, then balls until a neck in
+        # range puts one there: their head-centred directions are uniform in HEAD_BOX
+        head = rng.uniform(HEAD_BOX[:, 0], HEAD_BOX[:, 1]) if stage == "eyes" else None
+        for attempt in range(500):  # no gaze sees both views: draw again (a new ball)
+            if attempt and (head is not None or attempt % 50 == 0):
                 balls[i] = direction_ball(scene, rng, 1)[0]
             scene.set_ball(balls[i])
             ball = scene.ball_position()
             try:
-                neck = random_neck(scene, ball, rng)
+                neck = (
+                    random_neck(scene, ball, rng) if head is None else neck_for(scene, ball, head)
+                )
                 if neck is None:
                     continue
                 random_gaze(scene, ball, rng, neck=neck)

@@ -20,8 +20,14 @@ Frames (all measured on the model, never assumed):
 - **torso-centred**: a point's direction in the chest's frame (x forward, y left, z up), from
   the point between the eyes when the neck is at zero (fixed in the chest).
 
-A direction is given as ``(azimuth, elevation)`` in radians (:func:`direction_angles`):
-``atan2(y, x)`` and ``atan2(z, hypot(x, y))``.
+A direction is given as ``(azimuth, elevation)`` in radians (:func:`direction_angles`) in the
+coordinates of the gimbals that point the eyes and the head (tilt or pitch outside, pan or yaw
+inside: Helmholtz coordinates): the elevation ``atan2(z, x)`` is the rotation about the left-right
+axis, the azimuth ``asin(y / |v|)`` the sideways angle out of the x-z plane. They are the tilt
+and pan that would turn an eye (or the pitch and yaw that would turn the head) to the point, and
+they stay regular over the table below the chest, where longitude and latitude (``atan2(y, x)``
+about the vertical) crowd together near the downward pole: a box of longitude and latitude there
+is a fan on the table.
 """
 
 from __future__ import annotations
@@ -44,7 +50,7 @@ from sigmapi.envs.icub.model import (
 from sigmapi.envs.robot.scene import blob_centroid, mujoco_module
 from sigmapi.errors import ConfigError
 
-__all__ = ["EYE_SIZE", "GAZE", "ICubScene", "direction_angles"]
+__all__ = ["EYE_SIZE", "GAZE", "ICubScene", "direction_angles", "direction_vectors"]
 
 EYE_SIZE = 64
 """Side of an eye's square image, pixels."""
@@ -56,12 +62,20 @@ Array = NDArray[np.float64]
 
 def direction_angles(v: ArrayLike) -> Array:
     """``(azimuth, elevation)`` radians of vectors ``v`` ``(..., 3)`` (x forward, y left, z
-    up): ``(..., 2)``."""
+    up): ``(..., 2)``, ``asin(y / |v|)`` and ``atan2(z, x)`` (the module's account)."""
     a = np.asarray(v, dtype=np.float64)
+    n = np.linalg.norm(a, axis=-1)
     return np.stack(
-        [np.arctan2(a[..., 1], a[..., 0]), np.arctan2(a[..., 2], np.hypot(a[..., 0], a[..., 1]))],
-        axis=-1,
+        [np.arcsin(np.clip(a[..., 1] / n, -1.0, 1.0)), np.arctan2(a[..., 2], a[..., 0])], axis=-1
     )
+
+
+def direction_vectors(d: ArrayLike) -> Array:
+    """Unit vectors ``(..., 3)`` of directions ``(azimuth, elevation)`` ``(..., 2)`` (the inverse
+    of :func:`direction_angles`)."""
+    a = np.asarray(d, dtype=np.float64)
+    az, el = a[..., 0], a[..., 1]
+    return np.stack([np.cos(az) * np.cos(el), np.sin(az), np.cos(az) * np.sin(el)], axis=-1)
 
 
 class ICubScene:
@@ -225,12 +239,11 @@ class ICubScene:
 
     def table_point(self, direction: ArrayLike) -> Array:
         """World points ``(B, 3)`` at the ball's centre height seen from the torso-centred
-        origin in torso-centred directions ``(B, 2)`` (azimuth, elevation; elevation < 0)."""
+        origin in torso-centred directions ``(B, 2)`` (azimuth, elevation < 0)."""
         d = np.atleast_2d(np.asarray(direction, dtype=np.float64))
         c, r = self.torso_frame()
         origin = c + r @ self._torso_origin
-        az, el = d[:, 0], d[:, 1]
-        ray = np.column_stack([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)]) @ r.T
+        ray = direction_vectors(d) @ r.T
         t = (TABLE_HEIGHT + BALL_RADIUS - origin[2]) / ray[:, 2]
         return origin + t[:, None] * ray
 

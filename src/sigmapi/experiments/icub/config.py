@@ -23,7 +23,7 @@ HEAD_CODES = ("winner", "centroid", "response")
 class ICubConfig:
     """Everything one iCub run depends on but its seeds (the CLI's options are its fields)."""
 
-    grid: int = 12
+    grid: int = 16
     """Units per axis of the population codes (retina, eye angles, neck angles)."""
     code_width: float = 1.0
     """Width of the codes' hills, grid units."""
@@ -47,10 +47,13 @@ class ICubConfig:
     """Babbles (random arm postures, the eyes on the hand) the associations learn from."""
     epochs: int = 8
     """Passes of the associations' delta rule over the babbles."""
-    feature_width: float = 1.5
+    feature_width: float = 2.5
     """Width of the bump a map's winner gives the association, map units."""
     reaches: int = 60
     """Reaches per seed and method (random reachable balls, random gazes)."""
+    servo_steps: int = 3
+    """Glances of the learned servo that correct each associated method's posture, reached
+    again beside the posture of the first view alone (0: no servo)."""
     backend: str = "auto"
     """Kernel that learns and reads the maps ("auto": the fast one when it is installed)."""
     render: str | None = None
@@ -68,13 +71,16 @@ class ICubConfig:
             "reaches",
         ):
             object.__setattr__(self, name, _validate.integer(name, getattr(self, name), 1))
+        object.__setattr__(
+            self, "servo_steps", _validate.integer("servo_steps", self.servo_steps, 0)
+        )
         object.__setattr__(self, "map_shape", _validate.shape("map_shape", self.map_shape))
         if len(self.map_shape) != 2:
             raise _validate.fail(
                 "map_shape", "2 axes (a direction is 2-D)", self.map_shape, "e.g. 8x8"
             )
         if self.grid < 3:
-            raise _validate.fail("grid", ">= 3", self.grid, "e.g. 12")
+            raise _validate.fail("grid", ">= 3", self.grid, "e.g. 16")
         if self.babbles < 50:
             raise _validate.fail("babbles", ">= 50", self.babbles, "e.g. 2000")
         object.__setattr__(

@@ -34,7 +34,14 @@ from numpy.typing import NDArray
 from sigmapi.baselines import KohonenSOM
 from sigmapi.codes import PopulationCode
 from sigmapi.config import SOMConfig, load_preset
-from sigmapi.envs.icub import GAZE_HIGH, GAZE_LOW, ICubScene, ViewBatch, view_pairs
+from sigmapi.envs.icub import (
+    GAZE_HIGH,
+    GAZE_LOW,
+    ICubScene,
+    ViewBatch,
+    direction_vectors,
+    view_pairs,
+)
 from sigmapi.experiments.chain.run import head_code
 from sigmapi.metrics import (
     EVAL_SEED,
@@ -206,14 +213,9 @@ def learn_chain(
     return chain
 
 
-def _unit(d: Array) -> Array:
-    az, el = d[:, 0], d[:, 1]
-    return np.column_stack([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)])
-
-
 def angle_error_deg(decoded: Array, true: Array) -> float:
     """RMS angle (degrees) between directions ``(azimuth, elevation)`` ``(N, 2)``."""
-    cos = np.clip(np.sum(_unit(decoded) * _unit(true), axis=1), -1.0, 1.0)
+    cos = np.clip(np.sum(direction_vectors(decoded) * direction_vectors(true), axis=1), -1.0, 1.0)
     return float(np.degrees(np.sqrt(np.mean(np.arccos(cos) ** 2))))
 
 

@@ -20,6 +20,7 @@ from sigmapi.experiments.icub.reaching import METHODS
 __all__ = [
     "icub_figures",
     "plot_eyes",
+    "plot_servo",
     "plot_success_gaze",
     "plot_success_table",
     "plot_units_on_table",
@@ -111,6 +112,27 @@ def plot_success_gaze(
     return ax
 
 
+def plot_servo(
+    first_view: dict[str, float], servo: dict[str, float], upper: float, ax: Any = None
+) -> Any:
+    """Success per associated method: the posture of the first view alone and after the
+    learned servo, side by side; ``upper`` (scripted IK) as a dashed line."""
+    import matplotlib.pyplot as plt
+
+    if ax is None:
+        ax = plt.figure(figsize=(6, 4)).add_subplot()
+    names = list(servo)
+    at = np.arange(len(names))
+    for shift, values, label in ((-0.2, first_view, "first view"), (0.2, servo, "after servo")):
+        bars = ax.bar(at + shift, [values[m] for m in names], 0.4, label=label)
+        ax.bar_label(bars, fmt="%.2f", fontsize=8)
+    ax.axhline(upper, ls="--", color="0.3", lw=0.8, label=f"scripted IK {upper:.2f}")
+    ax.set_xticks(at, names)
+    ax.set(ylabel="success", ylim=(0, 1.1), title="reaches: first view alone, then the servo")
+    ax.legend(fontsize=8, loc="lower right")
+    return ax
+
+
 def plot_eyes(eyes: dict[str, Any]) -> Any:
     """Both eyes' frames, the ball's (red circle) and the palm's (cyan cross) projections."""
     import matplotlib.pyplot as plt
@@ -134,8 +156,8 @@ def write_gif(frames: list[NDArray[np.uint8]], path: Path, fps: int = 8) -> Path
 
 def icub_figures(result: Any, out_dir: Path) -> list[Path]:
     """Write ``eyes.png``, ``map-on-table.png``, ``success-table.png``, ``success-gaze.png``,
-    ``babbling.png`` and ``film.png`` (from the first seed; the success figures pool every
-    seed's reaches)."""
+    ``babbling.png``, ``film.png`` and, with the servo, ``servo.png`` (from the first seed; the
+    success figures pool every seed's reaches)."""
     import matplotlib.pyplot as plt
 
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -159,6 +181,10 @@ def icub_figures(result: Any, out_dir: Path) -> list[Path]:
     succ = {m: np.concatenate([s["success"][m] for s in result.per_seed]) for m in METHODS}
     save(plot_success_table(ball, succ), "success-table.png")
     save(plot_success_gaze(gaze, succ).figure, "success-gaze.png")
+    served = result.servo()
+    if served:
+        total = result.success()
+        save(plot_servo(total, served, total["scripted_ik"]).figure, "servo.png")
     ax = plt.figure(figsize=(6, 4)).add_subplot()
     for m, pts in result.curves().items():
         n, e = np.array(pts).T

@@ -22,6 +22,16 @@ kinematics reaches (:data:`~sigmapi.envs.icub.REACH_REGION`, kept when it reache
 1 cm), each seen from a random gaze; every method's posture goes to the physics
 (:func:`~sigmapi.envs.icub.physical_reach`), beside ``scripted_ik`` (damped least squares on
 the true ball position: the upper bound). Success: the hand touched the ball.
+
+**The learned servo** (:func:`servo`, every associated method alike): before the physical
+reach the arm holds the posture its association gave, the eyes and neck look where they see
+both the hand and the ball in one glance, and the posture moves by ``A(ball) - A(hand)`` (the
+association's postures for the two views, from the same gaze); a few such glances. It uses only
+what was learned (the maps, the association) and the measured views, never the true
+kinematics: seen in the same glance, the two views share the gaze, so errors the method makes
+alike for both (a map's unit off by some degrees, a posture that misses its place) cancel in
+the difference. ``success`` holds the reaches to the posture of the first view alone (the
+method as such); ``servo`` those after the servo's glances.
 """
 
 from __future__ import annotations
@@ -50,6 +60,7 @@ from sigmapi.envs.icub import (
     random_neck,
 )
 from sigmapi.envs.icub.reach import AIM
+from sigmapi.errors import ConfigError
 from sigmapi.experiments.icub.maps import ChainMaps, eye_position, neck_position, retina_position
 
 __all__ = [
@@ -59,9 +70,11 @@ __all__ = [
     "ReachTests",
     "babble",
     "features",
+    "glance",
     "learn_reaching",
     "reach_tests",
     "reachable_balls",
+    "servo",
 ]
 
 Array = NDArray[np.float64]
@@ -107,11 +120,6 @@ def babble(scene: ICubScene, n: int, rng: np.random.Generator, tolerance: float 
     scene.reset()
     cols = [np.array(c) for c in zip(*rows, strict=True)]
     return Babbles(np.array(postures), np.array(palms), ViewBatch(*cols))
-
-
-def _neck(scene: ICubScene, p: Array, rng: np.random.Generator) -> Array | None:
-
-    return random_neck(scene, p, rng)
 
 
 def features(
@@ -185,6 +193,8 @@ class ReachTests:
     gaze: Array
     success: dict[str, NDArray[np.bool_]] = field(default_factory=dict)
     distance: dict[str, Array] = field(default_factory=dict)
+    servo: dict[str, NDArray[np.bool_]] = field(default_factory=dict)
+    """Per associated method, success after the learned servo (:func:`servo`; empty without)."""
 
 
 def reachable_balls(scene: ICubScene, n: int, rng: np.random.Generator) -> Array:
@@ -199,6 +209,51 @@ def reachable_balls(scene: ICubScene, n: int, rng: np.random.Generator) -> Array
     return np.array(out)
 
 
+def glance(scene: ICubScene, points: Array, rng: np.random.Generator, tries: int = 50) -> bool:
+    """Set a random gaze (neck and eyes, as the maps' views draw them) that keeps every point of
+    ``points`` ``(k, 3)`` in the right eye's view (aimed at their mean); False when none of
+    ``tries`` does (the gaze is then unchanged)."""
+    saved, mid = scene.gaze(), points.mean(axis=0)
+    for _ in range(tries):
+        neck = random_neck(scene, mid, rng)
+        if neck is None:
+            continue
+        try:
+            random_gaze(scene, mid, rng, neck=neck)
+        except ConfigError:
+            continue
+        uv = scene.project(points)
+        if np.all(np.isfinite(uv)) and np.all((uv >= 4.0) & (uv <= scene.eye_size - 4.0)):
+            return True
+    scene.set_gaze(saved)
+    return False
+
+
+def servo(
+    scene: ICubScene,
+    layer: Association,
+    feats: Callable[[ViewBatch], Array],
+    q: Array,
+    rng: np.random.Generator,
+    steps: int,
+) -> Array:
+    """The posture after ``steps`` glances of the learned servo (the module's account), from
+    posture ``q``; the scene's arm and gaze are left where the last glance put them."""
+    q = np.array(q, dtype=np.float64)
+    ball = scene.ball_position()
+    for _ in range(steps):
+        scene.set_arm(q)
+        palm = scene.palm_position()
+        if not glance(scene, np.stack([ball, palm]), rng):
+            break
+        rows = [measure(scene, ball), measure(scene, palm)]
+        a_ball, a_palm = layer.predict(
+            feats(ViewBatch(*(np.array(c) for c in zip(*rows, strict=True))))
+        )
+        q = np.clip(q + a_ball - a_palm, *scene.arm_range.T)
+    return q
+
+
 def reach_tests(
     scene: ICubScene,
     layers: dict[str, Association],
@@ -206,9 +261,14 @@ def reach_tests(
     n: int,
     rng: np.random.Generator,
     film: Callable[[int, str], int] | None = None,
+    *,
+    servo_steps: int = 0,
+    servo_rng: np.random.Generator | None = None,
 ) -> tuple[ReachTests, list[NDArray[np.uint8]]]:
-    """``n`` reaches per method (see the module's account); ``film(i, method)`` > 0 films that
-    many frames per leg of reach ``i`` by ``method``; the frames filmed, in order."""
+    """``n`` reaches per method (see the module's account), each associated method's also
+    after ``servo_steps`` glances of :func:`servo` (gazes from ``servo_rng``) when > 0;
+    ``film(i, method)`` > 0 films that many frames per leg of reach ``i`` by ``method``; the
+    frames filmed, in order."""
     balls = reachable_balls(scene, n, rng)
     gazes, views = [], []
     for b in balls:
@@ -223,20 +283,39 @@ def reach_tests(
     postures = {m: layers[m].predict(feats(m, vb)) for m in ASSOCIATED}
     res = ReachTests(balls, np.array(gazes))
     frames: list[NDArray[np.uint8]] = []
+    s_rng = servo_rng if servo_rng is not None else np.random.default_rng(0)
+
+    def touch(i: int, q: Array, k: int = 0) -> tuple[bool, float]:
+        scene.reset()
+        scene.set_ball(balls[i])
+        scene.set_gaze(gazes[i])
+        out = physical_reach(scene, q, film=k)
+        frames.extend(out.frames)
+        return out.touched, out.distance
+
     for method in METHODS:
         ok, dist = np.zeros(n, dtype=bool), np.zeros(n)
+        served = np.zeros(n, dtype=bool)
+        serve = servo_steps > 0 and method in ASSOCIATED
+
+        def key(v: ViewBatch, m: str = method) -> Array:
+            return feats(m, v)
+
         for i, b in enumerate(balls):
-            scene.reset()
-            scene.set_ball(b)
-            scene.set_gaze(gazes[i])
             if method == "scripted_ik":
+                scene.reset()
+                scene.set_ball(b)
                 q = arm_ik(scene, scene.ball_position() + np.array([0.0, 0.0, AIM]))[0]
             else:
                 q = postures[method][i]
-            k = film(i, method) if film is not None else 0
-            out = physical_reach(scene, q, film=k)
-            ok[i], dist[i] = out.touched, out.distance
-            frames.extend(out.frames)
+            ok[i], dist[i] = touch(i, q, film(i, method) if film is not None else 0)
+            if serve:
+                scene.reset()
+                scene.set_ball(b)
+                q = servo(scene, layers[method], key, q, s_rng, servo_steps)
+                served[i] = touch(i, q)[0]
         res.success[method], res.distance[method] = ok, dist
+        if serve:
+            res.servo[method] = served
     scene.reset()
     return res, frames

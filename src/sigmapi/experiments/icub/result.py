@@ -126,6 +126,12 @@ class ICubResult:
             for m in METHODS
         }
 
+    def servo(self) -> dict[str, float]:
+        """Per associated method, the share of all reaches that touched the ball after the
+        learned servo (empty without it)."""
+        rows = [s.get("servo", {}) for s in self.per_seed]
+        return {m: float(np.mean(np.concatenate([r[m] for r in rows]))) for m in rows[0]}
+
     def success_per_seed(self) -> dict[str, list[float]]:
         """Per method, the share of each seed's reaches that touched the ball."""
         return {m: [float(np.mean(s["success"][m])) for s in self.per_seed] for m in METHODS}
@@ -183,6 +189,7 @@ class ICubResult:
             "maps": self.maps(),
             "success": self.success(),
             "success_per_seed": self.success_per_seed(),
+            "success_servo": self.servo(),
             "babbling_cm": self.curves(),
             "targets": self.targets(),
             "cpu_seconds_per_seed": [float(s["cpu_s"]) for s in self.per_seed],
@@ -207,6 +214,9 @@ class ICubResult:
                 f"{m['supervised']['direction_error_deg']:>10.2f}d{m['folded_seeds']:>8d}"
             )
         lines.append("reach success: " + ", ".join(f"{k} {v:.2f}" for k, v in succ.items()))
+        if self.servo():
+            loop = ", ".join(f"{k} {v:.2f}" for k, v in self.servo().items())
+            lines.append(f"after the learned servo: {loop}")
         return "\n".join(lines)
 
     def figure(self, out_dir: Path) -> list[Path]:

@@ -50,7 +50,7 @@ from sigmapi.progress import Progress
 __all__ = ["ICUB", "ICubExperiment", "check_frames"]
 
 
-PLAN = SeedPlan({"views": 0, "map": 1, "babbling": 2, "reaches": 3})
+PLAN = SeedPlan({"views": 0, "map": 1, "babbling": 2, "reaches": 3, "servo": 4})
 """The random streams of one seed (the seed as entropy: ``SeedSequence(seed, spawn_key=(k,))``);
 the maps are built from an int drawn from ``"map"``, so no stream meets a model's own keys."""
 
@@ -132,12 +132,22 @@ def _run_seed(job: _Job) -> dict[str, Any]:
         def film(i: int, method: str) -> int:
             return 8 if i == 0 and method == "learned" else 0
 
-    tests, frames = reach_tests(scene, layers, feats, cfg.reaches, PLAN.rng(seed, "reaches"), film)
+    tests, frames = reach_tests(
+        scene,
+        layers,
+        feats,
+        cfg.reaches,
+        PLAN.rng(seed, "reaches"),
+        film,
+        servo_steps=cfg.servo_steps,
+        servo_rng=PLAN.rng(seed, "servo"),
+    )
     out.update(
         curves=curves,
         ball=tests.ball,
         gaze=tests.gaze,
         success=tests.success,
+        servo=tests.servo,
         distance=tests.distance,
         cpu_s=time.process_time() - t0,
     )
