@@ -83,7 +83,7 @@ class ICubResult:
             dict(obj["frames"]),
             [],
             float(obj["seconds"]),
-            written=summaries(obj, SUMMARIES),
+            written=summaries(obj, SUMMARIES, ("success_servo",)),
         )
 
     def maps(self) -> dict[str, dict[str, Any]]:
