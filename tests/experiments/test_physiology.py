@@ -23,7 +23,7 @@ from sigmapi.tasks import TwoViewSampler
 
 
 class Constructed:
-    """Three units with Gaussian fields of width 0.06 centred at 0.3, 0.5, 0.7: of the retinal
+    """Three units with Gaussian fields of width 0.06 centred at 0.35, 0.5, 0.65: of the retinal
     position (``frame="eye"``) or of ``z = (x + y) / 2`` (``frame="body"``); ``gain``: a
     planar gain over the gaze, ``1 + gain * y``."""
 
@@ -37,7 +37,7 @@ class Constructed:
     def respond(self, x, y):
         px, py = self.x_code.decode(x), self.y_code.decode(y)
         pos = px if self.frame == "eye" else (px + py) / 2.0
-        centres = np.array([0.3, 0.5, 0.7])
+        centres = np.array([0.35, 0.5, 0.65])  # fully mapped at >= 3 gazes
         d2 = ((pos[:, None, :] - centres[None, :, None]) ** 2).sum(axis=2)
         return np.exp(-d2 / (2 * 0.06**2)) * (1.0 + self.gain * py.sum(axis=1))[:, None]
 

@@ -10,7 +10,8 @@ is flashed at positions across the retina:
   would move: the least-squares slope of the receptive-field centre against the gaze, over
   the slope the relation gives at fixed z (``-1`` for ``z = (x + y) / 2``). 0: the field stays
   put on the retina (eye-centred); 1: it stays put in the body (body-centred). In 2-D the
-  mean of the two axes (each swept with the other gaze axis at its middle);
+  mean over the axes along which it could be measured (each swept with the other gaze axis
+  at its middle), as a recording tests whichever fixation shifts leave the field mapped;
 - **gain field** (Andersen et al. 1985, area 7a): the response at the unit's best retinal
   position at the middle gaze, as the gaze moves, fitted by a plane ``a + b . gaze``: its
   ``gain_r2`` and its slope ``gain_slope`` (``|b|`` over the mean response); and the
@@ -54,7 +55,7 @@ GAZES = (0.2, 0.35, 0.5, 0.65, 0.8)
 
 VALID_SHARE = 0.5
 """A receptive field counts at a gaze where the unit's best response there is at least this
-share of its best response at any gaze, and its peak is not near the retina's edge."""
+share of its best response at any gaze, and the retina's edge does not cut it off."""
 
 N_PROBE = 61
 """Probe positions along the swept retinal axis."""
@@ -118,29 +119,32 @@ def tuning_curves(
     return np.asarray(out), probes
 
 
-def _centres(resp: Array, probes: Array) -> tuple[Array, NDArray[np.bool_]]:
+def _centres(resp: Array, probes: Array, axis: int) -> tuple[Array, NDArray[np.bool_]]:
     """Receptive-field centre of each unit at each gaze ``(G, K, d)``: the centre of mass of
     the response above half its peak within :data:`CENTRE_RADIUS` of the peak (a second
     field elsewhere, or a tail, does not pull it); and where it counts ``(G, K)``: the unit's
-    best response there at least :data:`VALID_SHARE` of its best at any gaze, and the peak
-    at least :data:`CENTRE_RADIUS` / 2 from the retina's edge."""
+    best response there at least :data:`VALID_SHARE` of its best at any gaze, and the field
+    fully mapped along the swept ``axis``: no probe of that half-maximum region lies on the
+    retina's edge along it (a field the edge cuts off has its centre of mass pulled inwards,
+    and its shift measured short)."""
     peak = resp.max(axis=1)  # (G, K)
     best = probes[np.argmax(resp, axis=1)]  # (G, K, d)
     near = np.sum((probes[None, :, None, :] - best[:, None, :, :]) ** 2, axis=3) <= CENTRE_RADIUS**2
     above = np.maximum(resp - 0.5 * peak[:, None, :], 0.0) * near
     total = np.maximum(above.sum(axis=1), 1e-300)
     centre = np.einsum("gpk,pd->gkd", above, probes) / total[:, :, None]
-    margin = 0.5 * CENTRE_RADIUS
-    inside = np.all((best >= margin) & (best <= 1.0 - margin), axis=2)
+    edge = (probes[:, axis] <= 0.0) | (probes[:, axis] >= 1.0)  # (P,)
+    cut = np.any((above > 0) & edge[None, :, None], axis=1)  # (G, K)
     strong = peak >= VALID_SHARE * peak.max(axis=0, keepdims=True)
-    return centre, inside & strong & (peak > 0)
+    return centre, ~cut & strong & (peak > 0)
 
 
 def reference_frame_index(
     model: Recordable, gazes: Sequence[float] = GAZES, n_probe: int | None = None
 ) -> dict[str, Any]:
     """Per unit: ``reference_frame_index`` (the mean over gaze axes of the receptive field's
-    shift with gaze over a body-centred field's, NaN where fewer than 3 gazes count),
+    shift with gaze over a body-centred field's; an axis counts where at least 3 gazes count,
+    NaN where no axis does),
     ``per_axis`` (``(d, K)``) and ``valid_gazes`` (gazes that counted, per axis)."""
     d = model.x_code.ndim
     slope = body_slope(model)
@@ -148,7 +152,7 @@ def reference_frame_index(
     per_axis, valid = [], []
     for axis in range(d):
         resp, probes = tuning_curves(model, gazes, axis, n_probe)
-        centre, ok = _centres(resp, probes)
+        centre, ok = _centres(resp, probes, axis)
         idx = np.full(resp.shape[2], np.nan)
         for k in range(resp.shape[2]):
             m = ok[:, k]
@@ -156,7 +160,13 @@ def reference_frame_index(
                 idx[k] = np.polyfit(g[m], centre[m, k, axis], 1)[0] / slope
         per_axis.append(idx)
         valid.append(ok.sum(axis=0))
-    rfi = np.mean(per_axis, axis=0)
+    pa = np.asarray(per_axis)
+    seen = np.isfinite(pa)
+    rfi = np.where(
+        seen.any(axis=0),
+        np.where(seen, pa, 0.0).sum(axis=0) / np.maximum(seen.sum(axis=0), 1),
+        np.nan,
+    )
     return {
         "reference_frame_index": rfi,
         "per_axis": np.asarray(per_axis),
@@ -178,7 +188,7 @@ def gain_fields(
         resp, probes = tuning_curves(model, gazes, axis, n_probe)
         best = np.argmax(resp[mid], axis=0)  # (K,) probe index at the middle gaze
         fixed.append(resp[:, best, np.arange(resp.shape[2])])  # (G, K)
-        peaks.append(np.where(_centres(resp, probes)[1], resp.max(axis=1), np.nan))
+        peaks.append(np.where(_centres(resp, probes, axis)[1], resp.max(axis=1), np.nan))
         gaze = np.full((g.size, d), 0.5)
         gaze[:, axis] = g
         rows.append(gaze)

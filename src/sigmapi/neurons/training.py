@@ -138,6 +138,10 @@ class FirstOrderMap(GridsMixin):
         """One batch step at ``sigma = 0``: every unit to the fixed point of its rule over
         the pairs it won (``winners`` from view 0); units that won none keep their weights."""
 
+    def restructure(self, progress: float) -> None:
+        """Structural plasticity after each online update, ``progress`` the share of the
+        online phase done (1 after it); none here."""
+
     @property
     @abstractmethod
     def synapses(self) -> int:
@@ -185,6 +189,8 @@ def train(model: FirstOrderMap, config: TrainingConfig, rng: np.random.Generator
         at = Scoring(model.map_shape, sigma, cut, model.config.map_periodic)
         w = SOFT_MEAN.winners(model.respond(x0, y0), at)
         model.learn(neighbourhood(w, model.map_shape, sigma), x1, y1, e0 + (e1 - e0) * f)
+        model.restructure(f)
+    model.restructure(1.0)
     for _ in range(config.refine_rounds):
         chunks = []
         for s in range(0, config.refine_pairs, CHUNK):
