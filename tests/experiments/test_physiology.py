@@ -51,6 +51,13 @@ def test_an_eye_centred_unit_scores_0_and_a_body_centred_unit_1(ndim):
     assert np.all(np.abs(body - 1.0) < 0.05), body
 
 
+def test_a_field_the_retinas_edge_cuts_off_does_not_count():
+    # body-centred unit at z = 0.35: field at x = 0.7 - gaze, half-maximum radius 0.14;
+    # at gazes 0.65 and 0.8 (x = 0.05, -0.1) the edge cuts it, at 0.2-0.5 it is fully mapped
+    r = reference_frame_index(Constructed("body"))
+    assert r["valid_gazes"][0][0] == 3 and abs(r["reference_frame_index"][0] - 1.0) < 0.05
+
+
 def test_gain_fields_see_a_planar_gain_on_a_fixed_field_and_none_on_a_moving_one():
     gf = gain_fields(Constructed("eye", gain=1.0))
     assert np.all(gf["gain_r2"] > 0.99)

@@ -68,7 +68,11 @@ def neurons_figure(result: dict[str, Any]) -> Figure:
 
     ax = axes[1]
     spk = [m for m in result["methods"] if m["kind"] == "spiking" and m["peak_rate"] == 100]
-    for base, colour in (("spiking-conjunction", "C0"), ("spiking-dendritic", "C1")):
+    for base, colour in (
+        ("spiking-conjunction", "C0"),
+        ("spiking-dendritic", "C1"),
+        ("spiking-sparse-dendritic", "C2"),
+    ):
         rows = sorted(
             (m for m in spk if m["name"].startswith(base + "-") and "-pool" not in m["name"]),
             key=lambda m: m["window_ms"],
@@ -92,6 +96,9 @@ def neurons_figure(result: dict[str, Any]) -> Figure:
         )
     ax.axhline(-0.02, color="0.5", lw=0.8, ls=":")
     ax.set_xscale("log")
+    ticks = sorted({m["window_ms"] for m in spk})
+    ax.set_xticks(ticks, [f"{t:g}" for t in ticks])
+    ax.minorticks_off()
     ax.set_xlabel("decision window (ms)")
     ax.set_ylabel("difference (median over seeds)")
     ax.set_title("spiking networks, 100 Hz peak rate")
