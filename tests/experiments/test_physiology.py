@@ -19,6 +19,8 @@ from sigmapi.analysis.physiology import (
     reference_frame_index,
 )
 from sigmapi.codes import PopulationCode
+from sigmapi.errors import ConfigError
+from sigmapi.experiments.physiology.config import PhysiologyConfig
 from sigmapi.tasks import TwoViewSampler
 
 
@@ -56,6 +58,17 @@ def test_a_field_the_retinas_edge_cuts_off_does_not_count():
     # at gazes 0.65 and 0.8 (x = 0.05, -0.1) the edge cuts it, at 0.2-0.5 it is fully mapped
     r = reference_frame_index(Constructed("body"))
     assert r["valid_gazes"][0][0] == 3 and abs(r["reference_frame_index"][0] - 1.0) < 0.05
+
+
+def test_a_world_of_its_own_geometry_passes_its_body_slope():
+    body = Constructed("body")
+    twice = reference_frame_index(body, slope=[-2.0])["reference_frame_index"]
+    assert np.allclose(twice, 0.5, atol=0.03)  # the field moves half as far as such a body's
+    assert record(body, slope=[-2.0])["body_slope"] == [-2.0]
+    with pytest.raises(ConfigError, match="body_slope"):
+        reference_frame_index(body, slope=[0.0])
+    with pytest.raises(ConfigError, match="body_slope"):
+        PhysiologyConfig(model="m.npz", body_slope=(0.0,))
 
 
 def test_gain_fields_see_a_planar_gain_on_a_fixed_field_and_none_on_a_moving_one():

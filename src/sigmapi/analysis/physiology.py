@@ -8,7 +8,9 @@ is flashed at positions across the retina:
 - **reference-frame index** (Duhamel et al. 1997, area VIP): how far the receptive field
   moves on the retina when the gaze moves, divided by how far a body-centred receptive field
   would move: the least-squares slope of the receptive-field centre against the gaze, over
-  the slope the relation gives at fixed z (``-1`` for ``z = (x + y) / 2``). 0: the field stays
+  the slope the relation gives at fixed z (``-1`` for ``z = (x + y) / 2``; a map learned
+  from a world whose geometry is not the config's relation, such as the robot's, passes its
+  own per gaze axis as ``slope``). 0: the field stays
   put on the retina (eye-centred); 1: it stays put in the body (body-centred). In 2-D the
   mean over the axes along which it could be measured (each swept with the other gaze axis
   at its middle), as a recording tests whichever fixation shifts leave the field mapped;
@@ -139,15 +141,35 @@ def _centres(resp: Array, probes: Array, axis: int) -> tuple[Array, NDArray[np.b
     return centre, ~cut & strong & (peak > 0)
 
 
+def _slopes(model: Recordable, slope: Sequence[float] | None) -> Array:
+    """The body-centred slope per gaze axis: ``slope`` (one value, or one per axis) or the
+    relation's (:func:`body_slope`)."""
+    d = model.x_code.ndim
+    if slope is None or len(slope) == 0:
+        return np.full(d, body_slope(model))
+    vals = np.asarray([float(v) for v in slope], dtype=np.float64)
+    if vals.size not in (1, d) or not np.all(np.isfinite(vals)) or np.any(vals == 0.0):
+        raise _validate.fail(
+            "body_slope",
+            f"1 or {d} finite nonzero numbers (one per gaze axis)",
+            list(slope),
+            "e.g. -1 for z = (x + y) / 2",
+        )
+    return np.broadcast_to(vals, (d,)).copy()
+
+
 def reference_frame_index(
-    model: Recordable, gazes: Sequence[float] = GAZES, n_probe: int | None = None
+    model: Recordable,
+    gazes: Sequence[float] = GAZES,
+    n_probe: int | None = None,
+    slope: Sequence[float] | None = None,
 ) -> dict[str, Any]:
     """Per unit: ``reference_frame_index`` (the mean over gaze axes of the receptive field's
     shift with gaze over a body-centred field's; an axis counts where at least 3 gazes count,
     NaN where no axis does),
     ``per_axis`` (``(d, K)``) and ``valid_gazes`` (gazes that counted, per axis)."""
     d = model.x_code.ndim
-    slope = body_slope(model)
+    slopes = _slopes(model, slope)
     g = np.asarray(gazes, dtype=np.float64)
     per_axis, valid = [], []
     for axis in range(d):
@@ -157,7 +179,7 @@ def reference_frame_index(
         for k in range(resp.shape[2]):
             m = ok[:, k]
             if m.sum() >= 3:
-                idx[k] = np.polyfit(g[m], centre[m, k, axis], 1)[0] / slope
+                idx[k] = np.polyfit(g[m], centre[m, k, axis], 1)[0] / slopes[axis]
         per_axis.append(idx)
         valid.append(ok.sum(axis=0))
     pa = np.asarray(per_axis)
@@ -209,11 +231,14 @@ def gain_fields(
 
 
 def record(
-    model: Recordable, gazes: Sequence[float] = GAZES, n_probe: int | None = None
+    model: Recordable,
+    gazes: Sequence[float] = GAZES,
+    n_probe: int | None = None,
+    slope: Sequence[float] | None = None,
 ) -> dict[str, Any]:
     """Every per-unit index of the module as lists (NaN as None), with their medians, the
     share of units with an index (``measured``) and the body-centred share (index >= 0.8)."""
-    rfi = reference_frame_index(model, gazes, n_probe)
+    rfi = reference_frame_index(model, gazes, n_probe, slope)
     gf = gain_fields(model, gazes, n_probe)
     idx = rfi["reference_frame_index"]
     ok = np.isfinite(idx)
@@ -232,7 +257,7 @@ def record(
         "median_gain_r2": float(np.nanmedian(gf["gain_r2"])),
         "median_peak_modulation": float(np.nanmedian(gf["peak_modulation"])),
         "gazes": [float(v) for v in gazes],
-        "body_slope": body_slope(model),
+        "body_slope": _slopes(model, slope).tolist(),
     }
 
 
