@@ -184,3 +184,15 @@ def test_sparse_dendritic_map_learns_the_transformation_with_few_synapses(seed):
     assert m.mean_synapses == 60 < sp_weights
     s = sparse_summary(m, np.linspace(0, 1, m.n_units)[:, None])
     assert len(s["unit"]) == 30 * m.n_units and sum(s["branches_per_unit"]) == 30 * m.n_units
+
+
+def test_the_spiking_time_step_shrinks_for_a_large_pool_at_a_high_rate():
+    from sigmapi.experiments.neurons.config import NeuronsConfig
+
+    c = NeuronsConfig(preset_2d="")
+    assert c.spiking(100).dt_ms == 0.25 and c.spiking(100).pool == 20
+    fast = c.spiking(200)  # 20 neurons at 200 Hz: 1 spike per 0.25 ms step, so 0.125 ms
+    assert fast.dt_ms == 0.125 and fast.pool * fast.peak_rate * fast.dt_ms / 1000 <= 0.5
+    assert c.spiking(100, pool=5).pool == 5
+    with pytest.raises(ConfigError, match="spike_gain"):
+        NeuronsConfig(preset_2d="", spike_gain=0.0)
