@@ -42,7 +42,8 @@ def _neurons() -> Table:
             f"chosen on them (tuning seeds 0-2). Cells: median / worst seed. Gap: view "
             f"consistency minus the Sigma-Pi map's on the same seed (seeds within 0.02 and "
             f"ordered). Synapses per map unit (the basis-function map: its readout plus its "
-            f"share of the hidden layer's). RF index: median reference-frame index of the "
+            f"share of the hidden layer's; sparse dendritic maps: the most in any unit, two "
+            f"per branch). RF index: median reference-frame index of the "
             f"units (1-D).")  # fmt: skip
     return Table(["map", "task", "synapses", "view consistency", "gap to Sigma-Pi", "z error",
                   "order R²", "ordered", "RF index"], rows, [_rel("neurons")], note,
@@ -87,9 +88,34 @@ def _physiology() -> Table:
             num(t["median_peak_modulation"], ".2f"), num(s["median_peak_modulation"], ".2f"),
         ])  # fmt: skip
     note = ("Reference-frame index: 0 eye-centred, 1 body-centred (median over the units "
-            "measured: a field at 3 or more of the 5 gazes). Body-centred share: units with "
+            "measured: a strong field that the retina's edge does not cut off, at 3 or more "
+            "of the 5 gazes). Body-centred share: units with "
             "index >= 0.8. Peak modulation: (max - min) / (max + min) of a unit's best response "
             "over the gazes.")  # fmt: skip
     return Table(["model", "map", "trained: RF index", "measured", "body-centred share",
                   "random start: RF index", "measured", "KS (p)", "peak modulation, trained",
                   "random"], rows, [_rel("physiology")], note, _command(data))  # fmt: skip
+
+
+@table("neurons-sparse")
+def _sparse() -> Table:
+    """``benchmarks/bench_neurons_sparse.py``: sparse dendritic maps, capacity and learning."""
+    data = load("neurons-sparse")
+    kinds = {"capacity": "branches set from the Sigma-Pi weights",
+             "learned-map": "learned, pruning budget over the map",
+             "learned-unit": "learned, D branches in every unit"}  # fmt: skip
+    rows = [
+        [kinds[s["kind"]], str(s["branches"]), num(s["synapses_mean"], ".0f"),
+         str(s["synapses_max"]),
+         f"{num(s['vc_gap_median'], '+.3f')} / {num(s['vc_gap_worst'], '+.3f')}",
+         f"{s['ordered']} of {s['n_seeds']}", f"{s['met']} of {s['n_seeds']}"]
+        for s in data["summary"]
+    ]  # fmt: skip
+    note = (f"Seeds {seeds_label(data['seeds'])}, {data['preset']}; settings chosen on seeds "
+            f"0-2. Two synapses per branch; synapses per unit: mean over units and the most in "
+            f"any unit (a Sigma-Pi unit has 225 weights). Gap: view consistency minus the "
+            f"Sigma-Pi map's on the same seed, median / worst. Met: within 0.02 and "
+            f"ordered.")  # fmt: skip
+    return Table(["map", "branches D", "synapses (mean)", "synapses (most)",
+                  "gap to Sigma-Pi", "ordered", "met"], rows, [_rel("neurons-sparse")], note,
+                 _command(data))  # fmt: skip

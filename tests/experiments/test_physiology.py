@@ -19,11 +19,13 @@ from sigmapi.analysis.physiology import (
     reference_frame_index,
 )
 from sigmapi.codes import PopulationCode
+from sigmapi.errors import ConfigError
+from sigmapi.experiments.physiology.config import PhysiologyConfig
 from sigmapi.tasks import TwoViewSampler
 
 
 class Constructed:
-    """Three units with Gaussian fields of width 0.06 centred at 0.3, 0.5, 0.7: of the retinal
+    """Three units with Gaussian fields of width 0.06 centred at 0.35, 0.5, 0.65: of the retinal
     position (``frame="eye"``) or of ``z = (x + y) / 2`` (``frame="body"``); ``gain``: a
     planar gain over the gaze, ``1 + gain * y``."""
 
@@ -37,7 +39,7 @@ class Constructed:
     def respond(self, x, y):
         px, py = self.x_code.decode(x), self.y_code.decode(y)
         pos = px if self.frame == "eye" else (px + py) / 2.0
-        centres = np.array([0.3, 0.5, 0.7])
+        centres = np.array([0.35, 0.5, 0.65])  # fully mapped at >= 3 gazes
         d2 = ((pos[:, None, :] - centres[None, :, None]) ** 2).sum(axis=2)
         return np.exp(-d2 / (2 * 0.06**2)) * (1.0 + self.gain * py.sum(axis=1))[:, None]
 
@@ -49,6 +51,24 @@ def test_an_eye_centred_unit_scores_0_and_a_body_centred_unit_1(ndim):
     assert body_slope(Constructed("body")) == pytest.approx(-1.0)
     assert np.all(np.abs(eye) < 0.05), eye
     assert np.all(np.abs(body - 1.0) < 0.05), body
+
+
+def test_a_field_the_retinas_edge_cuts_off_does_not_count():
+    # body-centred unit at z = 0.35: field at x = 0.7 - gaze, half-maximum radius 0.14;
+    # at gazes 0.65 and 0.8 (x = 0.05, -0.1) the edge cuts it, at 0.2-0.5 it is fully mapped
+    r = reference_frame_index(Constructed("body"))
+    assert r["valid_gazes"][0][0] == 3 and abs(r["reference_frame_index"][0] - 1.0) < 0.05
+
+
+def test_a_world_of_its_own_geometry_passes_its_body_slope():
+    body = Constructed("body")
+    twice = reference_frame_index(body, slope=[-2.0])["reference_frame_index"]
+    assert np.allclose(twice, 0.5, atol=0.03)  # the field moves half as far as such a body's
+    assert record(body, slope=[-2.0])["body_slope"] == [-2.0]
+    with pytest.raises(ConfigError, match="body_slope"):
+        reference_frame_index(body, slope=[0.0])
+    with pytest.raises(ConfigError, match="body_slope"):
+        PhysiologyConfig(model="m.npz", body_slope=(0.0,))
 
 
 def test_gain_fields_see_a_planar_gain_on_a_fixed_field_and_none_on_a_moving_one():

@@ -8,9 +8,12 @@ is flashed at positions across the retina:
 - **reference-frame index** (Duhamel et al. 1997, area VIP): how far the receptive field
   moves on the retina when the gaze moves, divided by how far a body-centred receptive field
   would move: the least-squares slope of the receptive-field centre against the gaze, over
-  the slope the relation gives at fixed z (``-1`` for ``z = (x + y) / 2``). 0: the field stays
+  the slope the relation gives at fixed z (``-1`` for ``z = (x + y) / 2``; a map learned
+  from a world whose geometry is not the config's relation, such as the robot's, passes its
+  own per gaze axis as ``slope``). 0: the field stays
   put on the retina (eye-centred); 1: it stays put in the body (body-centred). In 2-D the
-  mean of the two axes (each swept with the other gaze axis at its middle);
+  mean over the axes along which it could be measured (each swept with the other gaze axis
+  at its middle), as a recording tests whichever fixation shifts leave the field mapped;
 - **gain field** (Andersen et al. 1985, area 7a): the response at the unit's best retinal
   position at the middle gaze, as the gaze moves, fitted by a plane ``a + b . gaze``: its
   ``gain_r2`` and its slope ``gain_slope`` (``|b|`` over the mean response); and the
@@ -54,7 +57,7 @@ GAZES = (0.2, 0.35, 0.5, 0.65, 0.8)
 
 VALID_SHARE = 0.5
 """A receptive field counts at a gaze where the unit's best response there is at least this
-share of its best response at any gaze, and its peak is not near the retina's edge."""
+share of its best response at any gaze, and the retina's edge does not cut it off."""
 
 N_PROBE = 61
 """Probe positions along the swept retinal axis."""
@@ -118,45 +121,74 @@ def tuning_curves(
     return np.asarray(out), probes
 
 
-def _centres(resp: Array, probes: Array) -> tuple[Array, NDArray[np.bool_]]:
+def _centres(resp: Array, probes: Array, axis: int) -> tuple[Array, NDArray[np.bool_]]:
     """Receptive-field centre of each unit at each gaze ``(G, K, d)``: the centre of mass of
     the response above half its peak within :data:`CENTRE_RADIUS` of the peak (a second
     field elsewhere, or a tail, does not pull it); and where it counts ``(G, K)``: the unit's
-    best response there at least :data:`VALID_SHARE` of its best at any gaze, and the peak
-    at least :data:`CENTRE_RADIUS` / 2 from the retina's edge."""
+    best response there at least :data:`VALID_SHARE` of its best at any gaze, and the field
+    fully mapped along the swept ``axis``: no probe of that half-maximum region lies on the
+    retina's edge along it (a field the edge cuts off has its centre of mass pulled inwards,
+    and its shift measured short)."""
     peak = resp.max(axis=1)  # (G, K)
     best = probes[np.argmax(resp, axis=1)]  # (G, K, d)
     near = np.sum((probes[None, :, None, :] - best[:, None, :, :]) ** 2, axis=3) <= CENTRE_RADIUS**2
     above = np.maximum(resp - 0.5 * peak[:, None, :], 0.0) * near
     total = np.maximum(above.sum(axis=1), 1e-300)
     centre = np.einsum("gpk,pd->gkd", above, probes) / total[:, :, None]
-    margin = 0.5 * CENTRE_RADIUS
-    inside = np.all((best >= margin) & (best <= 1.0 - margin), axis=2)
+    edge = (probes[:, axis] <= 0.0) | (probes[:, axis] >= 1.0)  # (P,)
+    cut = np.any((above > 0) & edge[None, :, None], axis=1)  # (G, K)
     strong = peak >= VALID_SHARE * peak.max(axis=0, keepdims=True)
-    return centre, inside & strong & (peak > 0)
+    return centre, ~cut & strong & (peak > 0)
+
+
+def _slopes(model: Recordable, slope: Sequence[float] | None) -> Array:
+    """The body-centred slope per gaze axis: ``slope`` (one value, or one per axis) or the
+    relation's (:func:`body_slope`)."""
+    d = model.x_code.ndim
+    if slope is None or len(slope) == 0:
+        return np.full(d, body_slope(model))
+    vals = np.asarray([float(v) for v in slope], dtype=np.float64)
+    if vals.size not in (1, d) or not np.all(np.isfinite(vals)) or np.any(vals == 0.0):
+        raise _validate.fail(
+            "body_slope",
+            f"1 or {d} finite nonzero numbers (one per gaze axis)",
+            list(slope),
+            "e.g. -1 for z = (x + y) / 2",
+        )
+    return np.broadcast_to(vals, (d,)).copy()
 
 
 def reference_frame_index(
-    model: Recordable, gazes: Sequence[float] = GAZES, n_probe: int | None = None
+    model: Recordable,
+    gazes: Sequence[float] = GAZES,
+    n_probe: int | None = None,
+    slope: Sequence[float] | None = None,
 ) -> dict[str, Any]:
     """Per unit: ``reference_frame_index`` (the mean over gaze axes of the receptive field's
-    shift with gaze over a body-centred field's, NaN where fewer than 3 gazes count),
+    shift with gaze over a body-centred field's; an axis counts where at least 3 gazes count,
+    NaN where no axis does),
     ``per_axis`` (``(d, K)``) and ``valid_gazes`` (gazes that counted, per axis)."""
     d = model.x_code.ndim
-    slope = body_slope(model)
+    slopes = _slopes(model, slope)
     g = np.asarray(gazes, dtype=np.float64)
     per_axis, valid = [], []
     for axis in range(d):
         resp, probes = tuning_curves(model, gazes, axis, n_probe)
-        centre, ok = _centres(resp, probes)
+        centre, ok = _centres(resp, probes, axis)
         idx = np.full(resp.shape[2], np.nan)
         for k in range(resp.shape[2]):
             m = ok[:, k]
             if m.sum() >= 3:
-                idx[k] = np.polyfit(g[m], centre[m, k, axis], 1)[0] / slope
+                idx[k] = np.polyfit(g[m], centre[m, k, axis], 1)[0] / slopes[axis]
         per_axis.append(idx)
         valid.append(ok.sum(axis=0))
-    rfi = np.mean(per_axis, axis=0)
+    pa = np.asarray(per_axis)
+    seen = np.isfinite(pa)
+    rfi = np.where(
+        seen.any(axis=0),
+        np.where(seen, pa, 0.0).sum(axis=0) / np.maximum(seen.sum(axis=0), 1),
+        np.nan,
+    )
     return {
         "reference_frame_index": rfi,
         "per_axis": np.asarray(per_axis),
@@ -178,7 +210,7 @@ def gain_fields(
         resp, probes = tuning_curves(model, gazes, axis, n_probe)
         best = np.argmax(resp[mid], axis=0)  # (K,) probe index at the middle gaze
         fixed.append(resp[:, best, np.arange(resp.shape[2])])  # (G, K)
-        peaks.append(np.where(_centres(resp, probes)[1], resp.max(axis=1), np.nan))
+        peaks.append(np.where(_centres(resp, probes, axis)[1], resp.max(axis=1), np.nan))
         gaze = np.full((g.size, d), 0.5)
         gaze[:, axis] = g
         rows.append(gaze)
@@ -199,11 +231,14 @@ def gain_fields(
 
 
 def record(
-    model: Recordable, gazes: Sequence[float] = GAZES, n_probe: int | None = None
+    model: Recordable,
+    gazes: Sequence[float] = GAZES,
+    n_probe: int | None = None,
+    slope: Sequence[float] | None = None,
 ) -> dict[str, Any]:
     """Every per-unit index of the module as lists (NaN as None), with their medians, the
     share of units with an index (``measured``) and the body-centred share (index >= 0.8)."""
-    rfi = reference_frame_index(model, gazes, n_probe)
+    rfi = reference_frame_index(model, gazes, n_probe, slope)
     gf = gain_fields(model, gazes, n_probe)
     idx = rfi["reference_frame_index"]
     ok = np.isfinite(idx)
@@ -222,7 +257,7 @@ def record(
         "median_gain_r2": float(np.nanmedian(gf["gain_r2"])),
         "median_peak_modulation": float(np.nanmedian(gf["peak_modulation"])),
         "gazes": [float(v) for v in gazes],
-        "body_slope": body_slope(model),
+        "body_slope": _slopes(model, slope).tolist(),
     }
 
 

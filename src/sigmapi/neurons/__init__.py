@@ -4,6 +4,8 @@
   neurons (:class:`FirstOrderMap`, :class:`TrainingConfig`);
 - :mod:`~sigmapi.neurons.dendritic`: units with dendritic branches, each a conjunction of a
   retinal and a gaze region (:class:`DendriticMap`);
+- :mod:`~sigmapi.neurons.sparse`: units whose branches hold two clustered synapses each, an
+  AND of one retinal and one gaze input, pruned to a budget (:class:`SparseDendriticMap`);
 - :mod:`~sigmapi.neurons.basis`: a basis-function network, a fixed conjunctive layer and a
   learned readout (:class:`BasisFunctionMap`);
 - :mod:`~sigmapi.neurons.spiking`: a trained map deployed in spiking neurons (NumPy only).
@@ -11,7 +13,15 @@
 
 from sigmapi.neurons.basis import BasisFunctionMap
 from sigmapi.neurons.dendritic import DendriticMap
+from sigmapi.neurons.sparse import SparseDendriticMap
 from sigmapi.neurons.spiking import SpikingConfig
 from sigmapi.neurons.training import FirstOrderMap, TrainingConfig
 
-__all__ = ["BasisFunctionMap", "DendriticMap", "FirstOrderMap", "SpikingConfig", "TrainingConfig"]
+__all__ = [
+    "BasisFunctionMap",
+    "DendriticMap",
+    "FirstOrderMap",
+    "SparseDendriticMap",
+    "SpikingConfig",
+    "TrainingConfig",
+]

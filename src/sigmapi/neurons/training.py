@@ -139,6 +139,10 @@ class FirstOrderMap(GridsMixin):
         """One batch step at ``sigma = 0``: every unit to the fixed point of its rule over
         the pairs it won (``winners`` from view 0); units that won none keep their weights."""
 
+    def restructure(self, progress: float) -> None:
+        """Structural plasticity after each online update, ``progress`` the share of the
+        online phase done (1 after it); none here."""
+
     @property
     @abstractmethod
     def synapses(self) -> int:
@@ -188,6 +192,8 @@ def train(model: FirstOrderMap, config: TrainingConfig, rng: np.random.Generator
         sigma = s0 * (s1 / s0) ** max(0.0, (f - config.hold) / (1.0 - config.hold))
         w = SOFT_MEAN.winners(model.respond(x0, y0), Scoring(smoothing, sigma))
         model.learn(neighbourhood(w, grid, sigma), x1, y1, e0 + (e1 - e0) * f)
+        model.restructure(f)
+    model.restructure(1.0)
     for _ in range(config.refine_rounds):
         chunks = []
         for s in range(0, config.refine_pairs, CHUNK):

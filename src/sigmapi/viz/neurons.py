@@ -24,25 +24,33 @@ def neurons_figure(result: dict[str, Any]) -> Figure:
         color="0.85",
         label="within 0.02 of Sigma-Pi",
     )
-    dend = [m for m in rate if m["name"].startswith("dendritic")]
-    xs = [m["synapses"] for m in dend]
-    low = [m["view_consistency"] - m["view_consistency_worst"] for m in dend]
-    ax.errorbar(
-        xs,
-        [m["view_consistency"] for m in dend],
-        yerr=[low, [0.0] * len(dend)],
-        marker="o",
-        capsize=3,
-        label="dendritic (median, worst)",
+    groups = (
+        ("dendritic-D", "dense dendritic (median, worst)", "o"),
+        ("dendritic-sparse-D", "sparse dendritic, 2 synapses per branch", "D"),
     )
-    for m in dend:
-        ax.annotate(
-            f"D={m['branches']}",
-            (m["synapses"], m["view_consistency"]),
-            textcoords="offset points",
-            xytext=(4, -12),
-            fontsize=8,
+    for prefix, label, marker in groups:
+        dend = [m for m in rate if m["name"].startswith(prefix)]
+        if not dend:
+            continue
+        ax.errorbar(
+            [m["synapses"] for m in dend],
+            [m["view_consistency"] for m in dend],
+            yerr=[
+                [m["view_consistency"] - m["view_consistency_worst"] for m in dend],
+                [0.0] * len(dend),
+            ],
+            marker=marker,
+            capsize=3,
+            label=label,
         )
+        for m in dend:
+            ax.annotate(
+                f"D={m['branches']}",
+                (m["synapses"], m["view_consistency"]),
+                textcoords="offset points",
+                xytext=(4, -12),
+                fontsize=8,
+            )
     for m, mk in ((sp, "s"), (next(m for m in rate if m["name"] == "basis-function"), "^")):
         ax.errorbar(
             [m["synapses"]],
@@ -53,16 +61,21 @@ def neurons_figure(result: dict[str, Any]) -> Figure:
             linestyle="none",
             label=m["name"],
         )
-    ax.set_xlabel("synapses per map unit")
+    ax.set_xlabel("synapses per map unit (the most in any unit)")
     ax.set_ylabel("view consistency (same winner)")
     ax.set_title("1-D maps of first-order neurons")
     ax.legend(fontsize=8, loc="lower right")
 
     ax = axes[1]
     spk = [m for m in result["methods"] if m["kind"] == "spiking" and m["peak_rate"] == 100]
-    for base, colour in (("spiking-conjunction", "C0"), ("spiking-dendritic", "C1")):
+    for base, colour in (
+        ("spiking-conjunction", "C0"),
+        ("spiking-dendritic", "C1"),
+        ("spiking-sparse-dendritic", "C2"),
+    ):
         rows = sorted(
-            (m for m in spk if m["name"].startswith(base + "-")), key=lambda m: m["window_ms"]
+            (m for m in spk if m["name"].startswith(base + "-") and "-pool" not in m["name"]),
+            key=lambda m: m["window_ms"],
         )
         if not rows:
             continue
@@ -83,6 +96,9 @@ def neurons_figure(result: dict[str, Any]) -> Figure:
         )
     ax.axhline(-0.02, color="0.5", lw=0.8, ls=":")
     ax.set_xscale("log")
+    ticks = sorted({m["window_ms"] for m in spk})
+    ax.set_xticks(ticks, [f"{t:g}" for t in ticks])
+    ax.minorticks_off()
     ax.set_xlabel("decision window (ms)")
     ax.set_ylabel("difference (median over seeds)")
     ax.set_title("spiking networks, 100 Hz peak rate")

@@ -17,6 +17,9 @@ REFERENCE_RATE = 100
 """The peak rate (Hz) the dendritic spiking network runs at (the conjunction network: every
 rate of the config)."""
 
+DT_MS = 0.25
+"""The spiking networks' time step (ms), unless the pool's rate needs a shorter one."""
+
 __all__ = ["METRICS", "QUICK", "REFERENCE_RATE", "NeuronsConfig"]
 
 
@@ -34,6 +37,11 @@ class NeuronsConfig:
     """Dendritic branches per unit, 1-D (one map per value)."""
     branches_2d: tuple[int, ...] = field(default=(7,), metadata={"sep": ","})
     """Dendritic branches per unit, 2-D."""
+    sparse_branches: tuple[int, ...] = field(default=(15, 30, 45), metadata={"sep": ","})
+    """Branches per unit (mean over the map) of the sparse dendritic maps, two clustered
+    synapses each (:class:`~sigmapi.neurons.sparse.SparseDendriticMap`), 1-D."""
+    sparse_branches_2d: tuple[int, ...] = field(default=(200,), metadata={"sep": ","})
+    """The same, 2-D (candidate conjunctions at ``basis_stride_2d``)."""
     seeds_2d: int = 2
     """How many of the seeds also run the 2-D task (the first ones)."""
     pairs: int = 100_000
@@ -44,20 +52,42 @@ class NeuronsConfig:
     """Decision windows of the spiking networks (ms)."""
     peak_rates: tuple[int, ...] = field(default=(50, 100, 200), metadata={"sep": ","})
     """Input peak rates of the spiking networks (Hz); 100 is the acceptance's."""
-    spike_test: int = 200
+    spike_test: int = 300
     """Test z's of the spiking networks (each shown as two views)."""
+    pool: int = 20
+    """Poisson neurons per input unit of the spiking networks (chosen on seeds 0-2 among 10
+    and 20, with :attr:`spike_gain`)."""
+    spike_gain: float = 1.2
+    """The conjunction networks' largest synaptic weight onto a map soma (threshold units;
+    chosen on seeds 0-2 with the pool: 1.2 doubles the map's spikes of 0.6 and was within
+    0.010 of the rate map at 200 ms, 0.013 at 100 ms, on all three)."""
+    pools_compared: tuple[int, ...] = field(default=(5, 10), metadata={"sep": ","})
+    """Other pool sizes the conjunction network runs at the reference rate (what a smaller
+    pool costs in accuracy and saves in spikes)."""
     basis_stride_2d: int = 2
     """The 2-D basis-function layer's stride (every 2nd retinal and gaze unit per axis: 8^4
     hidden units instead of 15^4)."""
     spiking_branches: int = 10
     """The dendritic map (1-D, branches per unit) deployed in spiking neurons (0: none)."""
+    spiking_sparse_branches: int = 30
+    """The sparse dendritic map (1-D, branches per unit) deployed in spiking neurons (0: none):
+    each branch a coincidence detector of its retinal and its gaze pool, coupled to a LIF soma
+    by its coupling."""
     n_test: int = 5000
     """Test z's (and calibration z's) of the rate maps' evaluation."""
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
         set_(self, "overrides", tuple(self.overrides))
-        for name in ("branches", "branches_2d", "windows_ms", "peak_rates"):
+        for name in (
+            "branches",
+            "branches_2d",
+            "sparse_branches",
+            "sparse_branches_2d",
+            "windows_ms",
+            "peak_rates",
+            "pools_compared",
+        ):
             vals = [
                 _validate.integer(name, v, 1, fix="positive ints, e.g. 2,4,7")
                 for v in getattr(self, name)
@@ -74,8 +104,11 @@ class NeuronsConfig:
         _validate.integer("pairs", self.pairs, 0, fix="e.g. 100000")
         _validate.integer("pairs_2d", self.pairs_2d, 0, fix="e.g. 50000")
         _validate.integer("spike_test", self.spike_test, 10, fix="e.g. 300")
+        _validate.integer("pool", self.pool, 1, 1000, fix="e.g. 20")
+        _validate.positive("spike_gain", self.spike_gain, fix="e.g. 1.2")
         _validate.integer("basis_stride_2d", self.basis_stride_2d, 1, fix="e.g. 2")
         _validate.integer("spiking_branches", self.spiking_branches, 0, fix="0: none")
+        _validate.integer("spiking_sparse_branches", self.spiking_sparse_branches, 0, fix="0: none")
         _validate.integer("n_test", self.n_test, 100, fix="e.g. 5000")
         self.som_config  # noqa: B018 (a bad preset or override fails here)
         if self.preset_2d:
@@ -97,10 +130,17 @@ class NeuronsConfig:
             return TrainingConfig(pairs=self.pairs_2d, refine_pairs=20_000, refine_rounds=1)
         return TrainingConfig(pairs=self.pairs)
 
-    def spiking(self, peak_rate: float) -> SpikingConfig:
-        """The spiking deployment at ``peak_rate``."""
+    def spiking(self, peak_rate: float, pool: int | None = None) -> SpikingConfig:
+        """The spiking deployment at ``peak_rate`` with ``pool`` (default :attr:`pool`)
+        Poisson neurons per input unit; the time step 0.25 ms, or shorter where a pool's
+        peak rate would give more than 0.5 spikes per step."""
+        pool = self.pool if pool is None else pool
         return SpikingConfig(
-            peak_rate=float(peak_rate), windows_ms=tuple(float(w) for w in self.windows_ms)
+            peak_rate=float(peak_rate),
+            pool=pool,
+            dt_ms=min(DT_MS, 500.0 / (pool * peak_rate)),  # <= 0.5 input spikes per step
+            gain=self.spike_gain,
+            windows_ms=tuple(float(w) for w in self.windows_ms),
         )
 
 
@@ -108,10 +148,12 @@ QUICK = NeuronsConfig(
     preset_2d="",
     overrides=("iterations=60000", "refine_pairs=30000"),
     branches=(4, 10),
+    sparse_branches=(30,),
     pairs=40_000,
     windows_ms=(20, 100, 200),
     peak_rates=(100,),
     spike_test=150,
+    pools_compared=(),
     spiking_branches=10,
     n_test=2000,
 )

@@ -22,7 +22,10 @@ VC_MARGIN = 0.02
 MAX_WINDOW_MS = 200
 """Acceptance: the spiking network's windows up to this one count."""
 
-_WORST_HIGH = ("z_error", "fold_score")
+_WORST_HIGH = ("z_error", "fold_score", "mean_synapses", "branch_z_gap")
+
+SPARSE = "dendritic-sparse"
+"""Name prefix of the sparse dendritic maps."""
 
 
 def _scalars(summary: dict[str, Any]) -> dict[str, Any]:
@@ -83,11 +86,18 @@ class NeuronsResult:
             names = dict.fromkeys(r["name"] for r in maps if r["task"] == task)
             for name in names:
                 rows = [r for r in maps if r["task"] == task and r["name"] == name]
-                extra = ("reference_frame_index", "gain_r2", "peak_modulation", "active_synapses")
+                extra = (
+                    "reference_frame_index",
+                    "gain_r2",
+                    "peak_modulation",
+                    "active_synapses",
+                    "mean_synapses",
+                    "branch_z_gap",
+                )
                 entry: dict[str, Any] = {"name": name, "task": task, "kind": "rate"}
                 entry.update(_median_worst(rows, METRICS + extra))
                 entry.update(
-                    synapses=rows[0]["synapses"],
+                    synapses=max(r["synapses"] for r in rows),
                     branches=rows[0].get("branches"),
                     ordered=int(sum(not r["folded"] for r in rows)),
                     n_seeds=len(rows),
@@ -107,6 +117,7 @@ class NeuronsResult:
                 "kind": "spiking",
                 "window_ms": rows[0]["window_ms"],
                 "peak_rate": rate,
+                "pool": rows[0].get("pool"),
             }
             entry.update(
                 _median_worst(
@@ -154,14 +165,15 @@ class NeuronsResult:
                 rows = [r for r in maps if r["task"] == task and r["name"] == name]
                 gap = [r["view_consistency"] - ref[r["seed"]]["view_consistency"] for r in rows]
                 met = [g >= -VC_MARGIN and not r["folded"] for g, r in zip(gap, rows, strict=True)]
+                most = max(r["synapses"] for r in rows)
                 out["dendritic"].append(
                     {
                         "name": name,
                         "task": task,
                         "branches": rows[0].get("branches"),
-                        "synapses": rows[0]["synapses"],
+                        "synapses": most,
                         "sigma_pi_synapses": ref[rows[0]["seed"]]["synapses"],
-                        "fewer_synapses": rows[0]["synapses"] < ref[rows[0]["seed"]]["synapses"],
+                        "fewer_synapses": most < ref[rows[0]["seed"]]["synapses"],
                         "vc_gap_median": float(np.median(gap)),
                         "vc_gap_worst": float(min(gap)),
                         "met": int(sum(met)),
@@ -182,10 +194,20 @@ class NeuronsResult:
                 if c["task"] == task and c["branches"] and c["all_met"] and c["fewer_synapses"]
             ]
             out[f"smallest_branches_fewer_synapses_{task}"] = min(cheap) if cheap else None
+            sparse = [
+                c["branches"]
+                for c in out["dendritic"]
+                if c["task"] == task
+                and c["name"].startswith(SPARSE)
+                and c["all_met"]
+                and c["fewer_synapses"]
+            ]
+            out[f"smallest_sparse_branches_{task}"] = min(sparse) if sparse else None
         for m in self.methods():
             if (
                 m["kind"] == "spiking"
                 and m["peak_rate"] == REFERENCE_RATE
+                and m["pool"] in (None, self.config.pool)
                 and (m["window_ms"] <= MAX_WINDOW_MS)
             ):
                 out["spiking"].append(
@@ -262,24 +284,37 @@ class NeuronsResult:
         """The figure's caption, computed from the result."""
         acc = self.acceptance()
         sp = next(m for m in self.methods() if m["name"] == "sigma-pi" and m["task"] == "1d")
-        dend = [c for c in acc["dendritic"] if c["task"] == "1d" and c["branches"]]
+        dend = [
+            c
+            for c in acc["dendritic"]
+            if c["task"] == "1d" and c["branches"] and not c["name"].startswith(SPARSE)
+        ]
         best = max(dend, key=lambda c: c["vc_gap_median"])
         n = len(self.seeds)
         text = (
             f"{self.config.preset}, seeds {', '.join(map(str, self.seeds))}. Left: view "
-            f"consistency of dendritic maps against branches per unit (median, worst seed); "
-            f"Sigma-Pi map {sp['view_consistency']:.3f} ({sp['synapses']} synapses per unit). "
-            f"Closest: {best['name']} (median gap {best['vc_gap_median']:+.3f}, "
-            f"{best['met']} of {n} seeds within {VC_MARGIN} and ordered, {best['synapses']} "
-            f"synapses). "
+            f"consistency of dendritic maps against synapses per unit (median, worst seed); "
+            f"Sigma-Pi map {sp['view_consistency']:.3f} ({sp['synapses']} weights per unit). "
+            f"Dense branches (every branch synapses with every input), closest: {best['name']} "
+            f"(median gap {best['vc_gap_median']:+.3f}, {best['met']} of {n} seeds within "
+            f"{VC_MARGIN} and ordered, {best['synapses']} synapses). "
         )
-        small = acc["smallest_branches_fewer_synapses_1d"]
-        text += (
-            "No branch count with fewer synapses than the Sigma-Pi unit comes within "
-            f"{VC_MARGIN} on every seed. "
-            if small is None
-            else f"Fewest branches within {VC_MARGIN} on every seed with fewer synapses: {small}. "
-        )
+        sparse = [c for c in acc["dendritic"] if c["task"] == "1d" and c["name"].startswith(SPARSE)]
+        small = acc.get("smallest_sparse_branches_1d")
+        if sparse and small is None:
+            text += (
+                f"No sparse map (two clustered synapses per branch) comes within {VC_MARGIN} "
+                f"ordered on every seed with fewer synapses than the Sigma-Pi unit. "
+            )
+        elif sparse:
+            c = next(c for c in sparse if c["branches"] == small)
+            text += (
+                f"Sparse branches (two clustered synapses each, an AND of one retinal and one "
+                f"gaze input): {small} branches per unit on average come within {VC_MARGIN} "
+                f"and ordered on {c['met']} of {n} seeds (median gap {c['vc_gap_median']:+.3f}, "
+                f"worst {c['vc_gap_worst']:+.3f}) with at most {c['synapses']} synapses in any "
+                f"unit. "
+            )
         spk = acc["spiking"]
         if spk:
             met = [s for s in spk if s["met"]]
@@ -288,7 +323,8 @@ class NeuronsResult:
                 f"(view consistency minus the rate map's, and agreement with its winners). "
                 + (
                     f"Shortest window within {VC_MARGIN} of the rate map on every seed: "
-                    f"{min(s['window_ms'] for s in met):g} ms ({met[0]['name']}). "
+                    f"{min(s['window_ms'] for s in met):g} ms "
+                    f"({min(met, key=lambda s: s['window_ms'])['name']}). "
                     if met
                     else f"No window up to {MAX_WINDOW_MS} ms within {VC_MARGIN} on every seed. "
                 )

@@ -27,6 +27,7 @@ from sigmapi.metrics import evaluate, evaluation_sets, grid_spacing, winner_metr
 from sigmapi.model.som import SigmaPiSOM
 from sigmapi.neurons.basis import BasisFunctionMap
 from sigmapi.neurons.dendritic import DendriticMap, branch_summary
+from sigmapi.neurons.sparse import SparseDendriticMap, sparse_summary
 from sigmapi.neurons.spiking import SpikingRun, simulate_conjunction, simulate_dendritic
 from sigmapi.neurons.training import FirstOrderMap
 from sigmapi.progress import Progress
@@ -73,7 +74,8 @@ def _z_table(model: Any, n: int) -> np.ndarray:
 def _spiking_rows(
     job: NeuronsJob, name: str, model: Any, simulate: Any, rate_winner: Any, rates: Any
 ) -> list[dict[str, Any]]:
-    """One row per window and peak rate (of ``rates``) of a spiking deployment of ``model``."""
+    """One row per window and ``(peak rate, pool)`` of ``rates`` of a spiking deployment of
+    ``model`` (a pool other than the config's tags the name ``-pool<n>``)."""
     c = job.config
     cal, test = evaluation_sets(model, c.n_test)
     n = min(c.spike_test, test.z.shape[0])
@@ -83,19 +85,22 @@ def _spiking_rows(
     wc = rate_winner(cal.x0, cal.y0)
     spacing = grid_spacing(model.x_shape, model.config.periodic)
     rows = []
-    for rate in rates:
-        rng = np.random.default_rng(np.random.SeedSequence(job.seed, spawn_key=(SPIKE_KEY, rate)))
+    for rate, pool in rates:
+        key = (SPIKE_KEY, rate) if pool == c.pool else (SPIKE_KEY, rate, pool)
+        rng = np.random.default_rng(np.random.SeedSequence(job.seed, spawn_key=key))
         start = time.perf_counter()
-        run: SpikingRun = simulate(x, y, c.spiking(rate), rng)
+        run: SpikingRun = simulate(x, y, c.spiking(rate, pool), rng)
         secs = time.perf_counter() - start
+        tag = "" if pool == c.pool else f"-pool{pool}"
         for i, window in enumerate(run.windows_ms):
             w = run.winners[i]
             m = winner_metrics(wc, cal.z, w[:n], w[n:], test.z[:n], model.map_coords, spacing)
             rows.append(
                 {
-                    "name": f"{name}-{window:g}ms",
+                    "name": f"{name}{tag}-{window:g}ms",
                     "window_ms": window,
                     "peak_rate": rate,
+                    "pool": pool,
                     "agreement": float(np.mean(w == r)),
                     "rate_view_consistency": float(np.mean(r[:n] == r[n:])),
                     "view_consistency": m["view_consistency"],
@@ -144,10 +149,28 @@ def neurons_job(job: NeuronsJob) -> dict[str, Any]:
                 },
             )
         )
+    stride = c.basis_stride_2d if two_d else 1
+    sparse: dict[int, SparseDendriticMap] = {}
+    for d in c.sparse_branches_2d if two_d else c.sparse_branches:
+        start = time.perf_counter()
+        sm = SparseDendriticMap(cfg, d, stride=stride).fit(training, seed=job.seed)
+        sparse[d] = sm
+        info = sparse_summary(sm, _z_table(sm, c.n_test))
+        maps.append(
+            (
+                f"dendritic-sparse-D{d}",
+                sm,
+                {
+                    "synapses": sm.synapses,
+                    "mean_synapses": sm.mean_synapses,
+                    "branches": d,
+                    "branch_z_gap": info["z_gap_median"],
+                    "start": start,
+                },
+            )
+        )
     start = time.perf_counter()
-    bf = BasisFunctionMap(cfg, stride=c.basis_stride_2d if two_d else 1).fit(
-        training, seed=job.seed
-    )
+    bf = BasisFunctionMap(cfg, stride=stride).fit(training, seed=job.seed)
     maps.append(("basis-function", bf, {"synapses": bf.synapses, "start": start}))
     rows = []
     for name, model, extra in maps:
@@ -171,7 +194,10 @@ def neurons_job(job: NeuronsJob) -> dict[str, Any]:
         def conj(x: Any, y: Any, cfg_s: Any, rng: Any) -> SpikingRun:
             return simulate_conjunction(weights, x, y, cfg_s, rng)
 
-        spiking += _spiking_rows(job, "spiking-conjunction", sp, conj, sp.winner, c.peak_rates)
+        ref = REFERENCE_RATE if REFERENCE_RATE in c.peak_rates else c.peak_rates[0]
+        runs = [(rate, c.pool) for rate in c.peak_rates]
+        runs += [(ref, p) for p in c.pools_compared if p != c.pool]
+        spiking += _spiking_rows(job, "spiking-conjunction", sp, conj, sp.winner, runs)
         if c.spiking_branches:
             dm = dendritic.get(c.spiking_branches) or DendriticMap(cfg, c.spiking_branches).fit(
                 training, seed=job.seed
@@ -180,11 +206,27 @@ def neurons_job(job: NeuronsJob) -> dict[str, Any]:
             def dend(x: Any, y: Any, cfg_s: Any, rng: Any) -> SpikingRun:
                 return simulate_dendritic(dm.u_, dm.v_, dm.gain, dm.threshold, x, y, cfg_s, rng)
 
-            ref = REFERENCE_RATE if REFERENCE_RATE in c.peak_rates else c.peak_rates[0]
-            dend_rows = _spiking_rows(job, "spiking-dendritic", dm, dend, dm.winner, (ref,))
+            dend_rows = _spiking_rows(
+                job, "spiking-dendritic", dm, dend, dm.winner, [(ref, c.pool)]
+            )
             for r in dend_rows:
                 r["branches"] = c.spiking_branches
             spiking += dend_rows
+        if c.spiking_sparse_branches:
+            sm = sparse.get(c.spiking_sparse_branches) or SparseDendriticMap(
+                cfg, c.spiking_sparse_branches
+            ).fit(training, seed=job.seed)
+            branch_weights = (sm.c_ * sm.mask_).reshape(sm.n_units, n_x, n_y)
+
+            def sparse_net(x: Any, y: Any, cfg_s: Any, rng: Any) -> SpikingRun:
+                return simulate_conjunction(branch_weights, x, y, cfg_s, rng)
+
+            sparse_rows = _spiking_rows(
+                job, "spiking-sparse-dendritic", sm, sparse_net, sm.winner, [(ref, c.pool)]
+            )
+            for r in sparse_rows:
+                r["branches"] = c.spiking_sparse_branches
+            spiking += sparse_rows
     for r in spiking:
         r.update(task=job.task, seed=job.seed)
     return {"maps": rows, "spiking": spiking, "branches": summary}

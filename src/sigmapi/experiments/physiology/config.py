@@ -22,6 +22,11 @@ class PhysiologyConfig:
     """Probe positions along the swept retinal axis (0: 61; 15 along any other)."""
     tuning_units: int = 3
     """Units whose tuning curves the figure shows."""
+    body_slope: tuple[float, ...] = field(default=(), metadata={"sep": ","})
+    """How far a body-centred receptive field moves on the retina per unit of gaze, one value
+    or one per gaze axis (empty: from the model's relation, -1 for z = (x + y) / 2). A map
+    learned from a world of its own geometry needs that world's: the robot's is measured by
+    ``benchmarks/bench_physiology.py --robot``."""
 
     def __post_init__(self) -> None:
         if not isinstance(self.model, str) or not self.model:
@@ -44,3 +49,9 @@ class PhysiologyConfig:
         if 0 < self.n_probe < 5:
             raise _validate.fail("n_probe", "0 or at least 5", self.n_probe, "e.g. 61")
         _validate.integer("tuning_units", self.tuning_units, 1, 10, fix="e.g. 3")
+        slopes = tuple(
+            _validate.number("body_slope", v, -100.0, 100.0, fix="e.g. -1") for v in self.body_slope
+        )
+        if any(v == 0.0 for v in slopes):
+            raise _validate.fail("body_slope", "nonzero", list(slopes), "e.g. -1")
+        object.__setattr__(self, "body_slope", slopes)

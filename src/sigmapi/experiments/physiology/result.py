@@ -39,6 +39,7 @@ class PhysiologyResult:
                 "model": self.config.model,
                 "gazes": list(self.config.gazes),
                 "n_probe": self.config.n_probe,
+                "body_slope": list(self.config.body_slope),
             },
             "seconds": self.seconds,
         }

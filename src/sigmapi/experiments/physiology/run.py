@@ -85,8 +85,9 @@ def record_model(cfg: PhysiologyConfig) -> dict[str, Any]:
         )
     model = load_model(path)
     n_probe = cfg.n_probe or None
-    trained = record(model, cfg.gazes, n_probe)
-    start = record(RandomStart(model), cfg.gazes, n_probe)
+    slope = cfg.body_slope or None
+    trained = record(model, cfg.gazes, n_probe, slope)
+    start = record(RandomStart(model), cfg.gazes, n_probe, slope)
     return {
         "model": str(path),
         "map_shape": list(model.map_shape),
