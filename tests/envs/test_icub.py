@@ -265,6 +265,20 @@ def test_a_tiny_run_writes_every_key(rendering, tmp_path):
                                        "success-gaze.png", "babbling.png", "film.png"}  # fmt: skip
 
 
+def test_the_map_on_the_table_says_whether_it_is_folded():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from sigmapi.experiments.icub.plots import plot_units_on_table
+
+    points = np.random.default_rng(0).uniform(0.1, 0.4, (9, 2))
+    for folded, word in ((True, "flagged folded"), (False, "not flagged folded")):
+        ax = plot_units_on_table(points, (3, 3), record={"order_r2": 0.9, "folded": folded})
+        assert word in ax.get_title() and "0.900" in ax.get_title()
+        if folded:
+            assert "not" not in ax.get_title()
+
+
 def test_render_over_an_existing_file_or_link_is_refused_before_the_run(tmp_path):
     from sigmapi.errors import UsageError
     from sigmapi.experiments.icub.config import ICubConfig

@@ -50,11 +50,15 @@ def _table(ax: Any) -> None:
 
 
 def plot_units_on_table(
-    points: NDArray[np.float64], map_shape: tuple[int, ...], ax: Any = None
+    points: NDArray[np.float64],
+    map_shape: tuple[int, ...],
+    ax: Any = None,
+    record: dict[str, Any] | None = None,
 ) -> Any:
     """Top view of the table with map 2's units at the table point of their preferred
     torso-centred direction, joined along the map's rows and columns (dashed: the region of
-    the reaches; grey disc: the robot)."""
+    the reaches; grey disc: the robot). ``record`` (the map's metrics: ``order_r2``,
+    ``folded``) puts its verdict in the title, so a folded map is called folded."""
     import matplotlib.pyplot as plt
 
     if ax is None:
@@ -64,7 +68,11 @@ def plot_units_on_table(
     for line in (*grid, *grid.transpose(1, 0, 2)):
         ax.plot(-line[:, 1], line[:, 0], color="tab:blue", lw=0.8)
     ax.plot(-points[:, 1], points[:, 0], "o", color="tab:red", ms=3)
-    ax.set_title("map 2: each unit's preferred direction, on the table")
+    title = "map 2: each unit's preferred direction, on the table"
+    if record is not None:
+        verdict = "flagged folded" if record["folded"] else "not flagged folded"
+        title += f"\norder R$^2$ {record['order_r2']:.3f}, {verdict} by the fold detector"
+    ax.set_title(title)
     return ax
 
 
@@ -173,7 +181,9 @@ def icub_figures(result: Any, out_dir: Path) -> list[Path]:
         save(plot_eyes(first["eyes"]), "eyes.png")
     if "unit_table" in first:
         save(
-            plot_units_on_table(first["unit_table"], result.config.map_shape).figure,
+            plot_units_on_table(
+                first["unit_table"], result.config.map_shape, record=first["maps"]["map2"]
+            ).figure,
             "map-on-table.png",
         )
     ball = np.concatenate([s["ball"] for s in result.per_seed])
