@@ -57,7 +57,7 @@ from sigmapi import _validate
 from sigmapi.errors import ConfigError
 from sigmapi.kernels import _refining, _rows, columns
 from sigmapi.kernels._rows import _pairs, _winner, activate, axis_distance, gaussian, prefetch
-from sigmapi.kernels.base import FileArrays, KernelBase
+from sigmapi.kernels.base import FileArrays, KernelBase, check_codes, check_steps
 from sigmapi.rules import WinnerRule, winner_rule
 from sigmapi.rules import trace as trace_rule
 from sigmapi.rules.geometry import MapGeometry
@@ -715,18 +715,15 @@ class FastKernel(KernelBase[FastState]):
         k_units, nx, ny = state.shape
         dims, strides = _grid(geometry.shape, k_units)
         rule, code = _rule_code(winner_rule, "winner_rule")
+        n_iter = check_codes(state.shape, x0=x0, y0=y0, x1=x1, y1=y1)
+        check_steps(n_iter, k_units, sigmas=sigmas, eps=eps, gates=gates)
         xs = [
             _codes(a, n, nm)
             for a, n, nm in ((x0, nx, "x0"), (y0, ny, "y0"), (x1, nx, "x1"), (y1, ny, "y1"))
         ]
-        n_iter = xs[0].shape[0]
         sg = np.ascontiguousarray(sigmas, dtype=np.float64)
         ep = np.ascontiguousarray(eps, dtype=np.float64)
-        if any(a.shape[0] != n_iter for a in xs) or sg.shape != (n_iter,) or ep.shape != (n_iter,):
-            raise ValueError("x0, y0, x1, y1, sigmas and eps must have the same length")
         gt = NO_GATES if gates is None else np.ascontiguousarray(gates, dtype=np.float64)
-        if gates is not None and gt.shape != (n_iter, k_units):
-            raise ValueError(f"gates must have shape ({n_iter}, {k_units}), got {gt.shape}")
         out, track, parallel = _run(state, rule, n_iter, threads)
         driver: Any = _train  # a numba dispatcher (its stubs do not know the signature)
         # left unformatted: the arguments in the rows of the kernel's signature
@@ -758,12 +755,11 @@ class FastKernel(KernelBase[FastState]):
         k_units, nx, ny = state.shape
         dims, strides = _grid(geometry.shape, k_units)
         rule, code = _rule_code(winner_rule, "winner_rule")
+        n_frames = check_codes(state.shape, x=x, y=y)
+        check_steps(n_frames, k_units, sigmas=sigmas, eps=eps)
         xa, ya = _codes(x, nx, "x"), _codes(y, ny, "y")
-        n_frames = xa.shape[0]
         sg = np.ascontiguousarray(sigmas, dtype=np.float64)
         ep = np.ascontiguousarray(eps, dtype=np.float64)
-        if ya.shape[0] != n_frames or sg.shape != (n_frames,) or ep.shape != (n_frames,):
-            raise ValueError("x, y, sigmas and eps must have the same length")
         tr = np.zeros(k_units) if trace is None else np.array(trace, dtype=np.float64)
         if tr.shape != (k_units,):
             raise ValueError(f"trace must have shape ({k_units},), got {tr.shape}")
