@@ -29,15 +29,17 @@ class Constructed:
     position (``frame="eye"``) or of ``z = (x + y) / 2`` (``frame="body"``); ``gain``: a
     planar gain over the gaze, ``1 + gain * y``."""
 
-    def __init__(self, frame: str, gain: float = 0.0, ndim: int = 1) -> None:
+    def __init__(self, frame: str, gain: float = 0.0, ndim: int = 1, crossed: bool = False) -> None:
         shape = (15,) * ndim
         self.x_code, self.y_code = PopulationCode(shape), PopulationCode(shape)
         self.map_shape = (3,)
         self.sampler = TwoViewSampler("mean", self.x_code, self.y_code)
-        self.frame, self.gain = frame, gain
+        self.frame, self.gain, self.crossed = frame, gain, crossed
 
     def respond(self, x, y):
         px, py = self.x_code.decode(x), self.y_code.decode(y)
+        if self.crossed:  # gaze axis 1 moves the fields along retinal axis 0 and vice versa
+            py = py[:, ::-1]
         pos = px if self.frame == "eye" else (px + py) / 2.0
         centres = np.array([0.35, 0.5, 0.65])  # fully mapped at >= 3 gazes
         d2 = ((pos[:, None, :] - centres[None, :, None]) ** 2).sum(axis=2)
@@ -69,6 +71,21 @@ def test_a_world_of_its_own_geometry_passes_its_body_slope():
         reference_frame_index(body, slope=[0.0])
     with pytest.raises(ConfigError, match="body_slope"):
         PhysiologyConfig(model="m.npz", body_slope=(0.0,))
+
+
+def test_a_body_whose_gaze_axes_come_crosswise_names_them():
+    crossed = Constructed("body", ndim=2, crossed=True)
+    wrong = reference_frame_index(crossed)["reference_frame_index"]
+    right = reference_frame_index(crossed, gaze_axes=[1, 0])
+    assert np.all(np.abs(wrong) < 0.05), wrong  # the same axis never moves the field
+    assert np.all(np.abs(right["reference_frame_index"] - 1.0) < 0.05), right
+    assert record(crossed, gaze_axes=[1, 0])["gaze_axes"] == [1, 0]
+    assert record(Constructed("body", ndim=2))["gaze_axes"] == [0, 1]
+    for bad in ([0, 0], [1], [0, 2]):
+        with pytest.raises(ConfigError, match="gaze_axes"):
+            reference_frame_index(crossed, gaze_axes=bad)
+    with pytest.raises(ConfigError, match="gaze_axes"):
+        PhysiologyConfig(model="m.npz", gaze_axes=(1, 1))
 
 
 def test_gain_fields_see_a_planar_gain_on_a_fixed_field_and_none_on_a_moving_one():

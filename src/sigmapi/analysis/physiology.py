@@ -104,18 +104,25 @@ def _retina(model: Recordable, axis: int, n: int) -> Array:
 
 
 def tuning_curves(
-    model: Recordable, gazes: Sequence[float] = GAZES, axis: int = 0, n_probe: int | None = None
+    model: Recordable,
+    gazes: Sequence[float] = GAZES,
+    axis: int = 0,
+    n_probe: int | None = None,
+    gaze_axis: int | None = None,
 ) -> tuple[Array, Array]:
     """Responses ``(G, P, K)`` to probes at ``P`` retinal positions ``(P, d)`` while the gaze
-    sits at each of ``gazes`` along ``axis`` (its other axes at 0.5); ``n_probe`` probes along
-    ``axis`` (default :data:`N_PROBE`); returns ``(responses, positions)``."""
+    sits at each of ``gazes`` along ``gaze_axis`` (default ``axis``; its other axes at 0.5);
+    ``n_probe`` probes along the retinal ``axis`` (default :data:`N_PROBE`); returns
+    ``(responses, positions)``."""
     d = model.x_code.ndim
-    _validate.integer("axis", axis, 0, d - 1, fix=f"an axis of the gaze grid (0..{d - 1})")
+    _validate.integer("axis", axis, 0, d - 1, fix=f"an axis of the retina grid (0..{d - 1})")
+    moved = axis if gaze_axis is None else gaze_axis
+    _validate.integer("gaze_axis", moved, 0, d - 1, fix=f"an axis of the gaze grid (0..{d - 1})")
     probes = _retina(model, axis, n_probe if n_probe is not None else N_PROBE)
     out = []
     for g in gazes:
         gaze = np.full((1, d), 0.5)
-        gaze[0, axis] = g
+        gaze[0, moved] = g
         y = model.y_code.encode(np.repeat(gaze, probes.shape[0], axis=0))
         out.append(model.respond(model.x_code.encode(probes), y))
     return np.asarray(out), probes
@@ -141,9 +148,28 @@ def _centres(resp: Array, probes: Array, axis: int) -> tuple[Array, NDArray[np.b
     return centre, ~cut & strong & (peak > 0)
 
 
+def _pairing(model: Recordable, gaze_axes: Sequence[int] | None) -> list[int]:
+    """The gaze axis that moves the fields along each retinal axis: ``gaze_axes`` (a
+    permutation of the axes) or the identity (the paper's relation pairs axis ``a`` of x with
+    axis ``a`` of y; a body whose eye pan moves the image horizontally but comes second in its
+    gaze code, like the iCub's, pairs them crosswise)."""
+    d = model.x_code.ndim
+    if gaze_axes is None or len(gaze_axes) == 0:
+        return list(range(d))
+    vals = list(gaze_axes)
+    if sorted(vals) != list(range(d)) or not all(isinstance(v, int) for v in vals):
+        raise _validate.fail(
+            "gaze_axes",
+            f"a permutation of the gaze axes 0..{d - 1}, one per retinal axis",
+            vals,
+            "e.g. 1,0 where the second gaze axis moves the fields along the first retinal axis",
+        )
+    return [int(v) for v in vals]
+
+
 def _slopes(model: Recordable, slope: Sequence[float] | None) -> Array:
-    """The body-centred slope per gaze axis: ``slope`` (one value, or one per axis) or the
-    relation's (:func:`body_slope`)."""
+    """The body-centred slope per retinal axis (against the gaze axis that moves it): ``slope``
+    (one value, or one per axis) or the relation's (:func:`body_slope`)."""
     d = model.x_code.ndim
     if slope is None or len(slope) == 0:
         return np.full(d, body_slope(model))
@@ -163,17 +189,20 @@ def reference_frame_index(
     gazes: Sequence[float] = GAZES,
     n_probe: int | None = None,
     slope: Sequence[float] | None = None,
+    gaze_axes: Sequence[int] | None = None,
 ) -> dict[str, Any]:
-    """Per unit: ``reference_frame_index`` (the mean over gaze axes of the receptive field's
-    shift with gaze over a body-centred field's; an axis counts where at least 3 gazes count,
-    NaN where no axis does),
-    ``per_axis`` (``(d, K)``) and ``valid_gazes`` (gazes that counted, per axis)."""
+    """Per unit: ``reference_frame_index`` (the mean over retinal axes of the receptive
+    field's shift along it with the gaze axis that moves it (``gaze_axes``, default the same
+    axis) over a body-centred field's; an axis counts where at least 3 gazes count, NaN where
+    no axis does), ``per_axis`` (``(d, K)``) and ``valid_gazes`` (gazes that counted, per
+    axis)."""
     d = model.x_code.ndim
     slopes = _slopes(model, slope)
+    pairing = _pairing(model, gaze_axes)
     g = np.asarray(gazes, dtype=np.float64)
     per_axis, valid = [], []
     for axis in range(d):
-        resp, probes = tuning_curves(model, gazes, axis, n_probe)
+        resp, probes = tuning_curves(model, gazes, axis, n_probe, pairing[axis])
         centre, ok = _centres(resp, probes, axis)
         idx = np.full(resp.shape[2], np.nan)
         for k in range(resp.shape[2]):
@@ -197,7 +226,10 @@ def reference_frame_index(
 
 
 def gain_fields(
-    model: Recordable, gazes: Sequence[float] = GAZES, n_probe: int | None = None
+    model: Recordable,
+    gazes: Sequence[float] = GAZES,
+    n_probe: int | None = None,
+    gaze_axes: Sequence[int] | None = None,
 ) -> dict[str, Array]:
     """Per unit ``(K,)``: ``gain_r2`` and ``gain_slope`` of the planar fit of the response at
     the unit's best retinal position at the middle gaze against the gaze (every gaze axis
@@ -206,13 +238,14 @@ def gain_fields(
     g = np.asarray(gazes, dtype=np.float64)
     rows, fixed, peaks = [], [], []
     mid = int(np.argmin(np.abs(g - 0.5)))
+    pairing = _pairing(model, gaze_axes)
     for axis in range(d):
-        resp, probes = tuning_curves(model, gazes, axis, n_probe)
+        resp, probes = tuning_curves(model, gazes, axis, n_probe, pairing[axis])
         best = np.argmax(resp[mid], axis=0)  # (K,) probe index at the middle gaze
         fixed.append(resp[:, best, np.arange(resp.shape[2])])  # (G, K)
         peaks.append(np.where(_centres(resp, probes, axis)[1], resp.max(axis=1), np.nan))
         gaze = np.full((g.size, d), 0.5)
-        gaze[:, axis] = g
+        gaze[:, pairing[axis]] = g
         rows.append(gaze)
     design = np.hstack([np.vstack(rows), np.ones((g.size * d, 1))])
     h = np.vstack(fixed)  # (G d, K)
@@ -235,11 +268,13 @@ def record(
     gazes: Sequence[float] = GAZES,
     n_probe: int | None = None,
     slope: Sequence[float] | None = None,
+    gaze_axes: Sequence[int] | None = None,
 ) -> dict[str, Any]:
     """Every per-unit index of the module as lists (NaN as None), with their medians, the
-    share of units with an index (``measured``) and the body-centred share (index >= 0.8)."""
-    rfi = reference_frame_index(model, gazes, n_probe, slope)
-    gf = gain_fields(model, gazes, n_probe)
+    share of units with an index (``measured``) and the body-centred share (index >= 0.8);
+    ``gaze_axes``: the gaze axis that moves the fields along each retinal axis."""
+    rfi = reference_frame_index(model, gazes, n_probe, slope, gaze_axes)
+    gf = gain_fields(model, gazes, n_probe, gaze_axes)
     idx = rfi["reference_frame_index"]
     ok = np.isfinite(idx)
 
@@ -258,6 +293,7 @@ def record(
         "median_peak_modulation": float(np.nanmedian(gf["peak_modulation"])),
         "gazes": [float(v) for v in gazes],
         "body_slope": _slopes(model, slope).tolist(),
+        "gaze_axes": _pairing(model, gaze_axes),
     }
 
 

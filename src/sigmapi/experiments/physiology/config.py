@@ -25,8 +25,12 @@ class PhysiologyConfig:
     body_slope: tuple[float, ...] = field(default=(), metadata={"sep": ","})
     """How far a body-centred receptive field moves on the retina per unit of gaze, one value
     or one per gaze axis (empty: from the model's relation, -1 for z = (x + y) / 2). A map
-    learned from a world of its own geometry needs that world's: the robot's is measured by
-    ``benchmarks/bench_physiology.py --robot``."""
+    learned from a world of its own geometry needs that world's: the robot's and the iCub's
+    are measured by ``benchmarks/bench_physiology.py --robot`` and ``--icub``."""
+    gaze_axes: tuple[int, ...] = field(default=(), metadata={"sep": ","})
+    """For each retinal axis, the gaze axis that moves the receptive fields along it (empty:
+    the same axis). The iCub's retina is (horizontal, vertical) and its gaze codes (tilt,
+    pan): ``1,0``."""
 
     def __post_init__(self) -> None:
         if not isinstance(self.model, str) or not self.model:
@@ -55,3 +59,15 @@ class PhysiologyConfig:
         if any(v == 0.0 for v in slopes):
             raise _validate.fail("body_slope", "nonzero", list(slopes), "e.g. -1")
         object.__setattr__(self, "body_slope", slopes)
+        axes = tuple(self.gaze_axes)
+        if axes and (
+            not all(isinstance(a, int) and not isinstance(a, bool) for a in axes)
+            or sorted(axes) != list(range(len(axes)))
+        ):
+            raise _validate.fail(
+                "gaze_axes",
+                "a permutation of the gaze axes (0, 1, ...), one per retinal axis",
+                list(axes),
+                "e.g. --gaze-axes 1,0",
+            )
+        object.__setattr__(self, "gaze_axes", axes)

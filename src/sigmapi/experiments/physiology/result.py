@@ -40,6 +40,7 @@ class PhysiologyResult:
                 "gazes": list(self.config.gazes),
                 "n_probe": self.config.n_probe,
                 "body_slope": list(self.config.body_slope),
+                "gaze_axes": list(self.config.gaze_axes),
             },
             "seconds": self.seconds,
         }

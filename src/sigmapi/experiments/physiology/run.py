@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from sigmapi import _validate
 from sigmapi.analysis.physiology import compare_distributions, record, tuning_curves
 from sigmapi.codes import PopulationCode
 from sigmapi.errors import DataError
@@ -59,7 +60,7 @@ class RandomStart:
 def _tuning(model: Any, cfg: PhysiologyConfig, n_probe: int | None) -> dict[str, Any]:
     """Tuning curves along retinal axis 0 of ``tuning_units`` units spread over the map (in
     2-D on the probe row through each unit's peak at the middle gaze)."""
-    resp, probes = tuning_curves(model, cfg.gazes, 0, n_probe)
+    resp, probes = tuning_curves(model, cfg.gazes, 0, n_probe, (cfg.gaze_axes or (0,))[0])
     k = resp.shape[2]
     units = np.unique(np.linspace(0, k - 1, cfg.tuning_units + 2)[1:-1].round().astype(int))
     mid = len(cfg.gazes) // 2
@@ -86,8 +87,16 @@ def record_model(cfg: PhysiologyConfig) -> dict[str, Any]:
     model = load_model(path)
     n_probe = cfg.n_probe or None
     slope = cfg.body_slope or None
-    trained = record(model, cfg.gazes, n_probe, slope)
-    start = record(RandomStart(model), cfg.gazes, n_probe, slope)
+    axes = cfg.gaze_axes or None
+    if axes is not None and len(axes) != model.x_code.ndim:
+        raise _validate.fail(
+            "gaze_axes",
+            f"one gaze axis per retinal axis of the model ({model.x_code.ndim})",
+            list(axes),
+            "e.g. --gaze-axes 1,0 for a 2-D model",
+        )
+    trained = record(model, cfg.gazes, n_probe, slope, axes)
+    start = record(RandomStart(model), cfg.gazes, n_probe, slope, axes)
     return {
         "model": str(path),
         "map_shape": list(model.map_shape),
