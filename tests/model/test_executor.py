@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import os
+
 import pytest
 
 from sigmapi.config import SOMConfig
 from sigmapi.errors import ConfigError
-from sigmapi.executor import Executor, job_memory, plan_workers, run_jobs
+from sigmapi.executor import Executor, job_memory, plan_workers, run_jobs, worker_threads
 from sigmapi.model.som import SigmaPiSOM
 
 
@@ -33,6 +35,21 @@ def test_one_worker_runs_in_order_and_records_failures():
 
 def test_process_pool_gives_the_same_outcomes():
     assert _collect(workers=2) == _collect(workers=1)
+
+
+def _numba_threads(_: int) -> int:
+    import numba
+
+    return int(numba.get_num_threads())
+
+
+def test_pool_workers_share_the_cores_among_their_numba_threads(monkeypatch):
+    monkeypatch.delenv("NUMBA_NUM_THREADS", raising=False)
+    got = {o.value for o in run_jobs(_numba_threads, [("a", 0), ("b", 1)], workers=2)}
+    assert got == {worker_threads(2)}
+    cores = len(os.sched_getaffinity(0))
+    assert worker_threads(2) == max(1, cores // 2) and worker_threads(1) == cores
+    assert worker_threads(10 * cores) == 1
 
 
 def test_dask_local_cluster_gives_the_same_outcomes():
