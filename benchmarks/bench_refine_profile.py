@@ -16,7 +16,8 @@ sums of view 1, the round's new weights and the round's search index. With ``--s
 the training's CPU seconds (``refine_rounds = 0``, after the ordered start); ``--whole``:
 then the whole round as ``fit`` runs it, and its ratio to the training in the same process;
 beside them the machine's triad bandwidth (one thread, ``bench_bandwidth.py``'s), measured at
-the end of the run. Writes ``benchmarks/results/refine-profile.json``.
+the end of the run. ``--floors``: what the same arithmetic costs with its weights in cache
+(:func:`floors`), beside the stream. Writes ``benchmarks/results/refine-profile.json``.
 """
 
 from __future__ import annotations
@@ -33,11 +34,13 @@ from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
+from numba import njit
 
 import _common
 import sigmapi
 from sigmapi import SigmaPiSOM
 from sigmapi.kernels import _refining, fast, reference
+from sigmapi.kernels._rows import MIN_DISTANCE
 from sigmapi.model._refine import GROUP
 from sigmapi.model._run import rng
 
@@ -51,8 +54,9 @@ def cpu(fn: Callable[[], Any]) -> tuple[float, Any]:
     return time.process_time() - c, out
 
 
-def profile(model: SigmaPiSOM, blocks: int) -> dict[str, Any]:
-    """The phases of one refinement round's first ``blocks`` blocks on ``model``'s map."""
+def profile(model: SigmaPiSOM, blocks: int, with_floors: bool = False) -> dict[str, Any]:
+    """The phases of one refinement round's first ``blocks`` blocks on ``model``'s map (and,
+    ``with_floors``, :func:`floors` on the first group of them)."""
     st, rule = model._run.state, model.winner_rule_.hard
     geometry = model.config.geometry
     n = 1000
@@ -84,6 +88,11 @@ def profile(model: SigmaPiSOM, blocks: int) -> dict[str, Any]:
                            for f in ("x0", "y0", "x1", "y1")})
         for i in range(0, len(batches), GROUP)
     ]  # fmt: skip
+    # the search's work arrays touched, as after a round's first call (a round makes 30 calls
+    # into the same memory; two timed calls would count its first page faults 15 times over)
+    rows = max(len(b.x0) for b in batches)
+    acc.index.work("ub", rows, st.shape[0], np.float64).fill(0.0)
+    acc.index.work("guess", rows, 0, np.int64).fill(0)
 
     def search() -> list[np.ndarray]:
         return [fast.KERNEL._refine_winners(st, acc, b.x0, b.y0, geometry, rule) for b in batches]
@@ -115,13 +124,133 @@ def profile(model: SigmaPiSOM, blocks: int) -> dict[str, Any]:
         "finish_per_round": t_finish,
         "search_index_per_round": t_index,
     }
-    return {
+    out = {
         "cpu_s_per_1000_pairs": per,
         "winners_equal_to_full_search": same,
         "winners_compared": int(blocks * n),
         "reference_winners_kept": float(np.mean(winners[0][:2000] == ref)),
         "reference_check_pairs": int(sum(len(b.x0) for b in check)),
     }
+    if with_floors:
+        out["floors"] = floors(model, acc, batches[0], winners[0])
+    return out
+
+
+HOT = 16
+"""Copies of every pair searched (or added) one after another for the in-cache cost: the first
+copy reads the pair's weights from the stream, the other 15 find them in cache."""
+
+
+@njit(cache=True)
+def _passes(raw_t, scale, sqnorm, rule, x, y, tol, repeats):  # pragma: no cover - compiled
+    """CPU work of ``repeats`` exact passes of four units (``_refining._exact``) on one pair,
+    its weights in cache after the first; returns the pair's prefiltered grid size."""
+    ib = np.empty(x.shape[0], dtype=np.int64)
+    jb = np.empty(y.shape[0], dtype=np.int64)
+    cand = np.arange(4)
+    score = np.empty(4)
+    ni, nj, thr = _refining._kept(x, y, tol, ib, jb)
+    for _ in range(repeats):
+        _refining._exact(raw_t, scale, sqnorm, rule, cand, 4, x, y, ib, ni, jb, nj, thr, score)
+    return ni * nj
+
+
+def _summed(model: SigmaPiSOM, index: Any, x: np.ndarray, y: np.ndarray, rule: int) -> Any:
+    """Per pair of ``x, y``, means: the units whose bound reaches the winner's exact score (the
+    fewest any bound-first search must sum), the units the search sums (best bound first, four
+    a pass, until no bound left reaches the best), its passes, the kept input pairs and the
+    prefilter's grid (what a pass runs over); the exact scores in NumPy (float64, any order:
+    enough to count)."""
+    st = model._run.state
+    k = st.shape[0]
+    ub, _ = _bounds(model, index, x, y, rule)
+    w = np.asarray(st.raw, dtype=np.float64) * st.scale[None, :]
+    need, summed, passes, kept, grid = [], [], [], [], []
+    for b in range(x.shape[0]):
+        v = np.outer(x[b], y[b]).ravel()
+        mx, my = np.abs(x[b]).max(), np.abs(y[b]).max()
+        cut = st.tol * mx * my
+        keep = np.abs(v) > cut
+        grid.append(int(np.sum(np.abs(x[b]) * my > cut) * np.sum(np.abs(y[b]) * mx > cut)))
+        h = v[keep] @ w[keep]
+        score = 2.0 * h - st.scale**2 * st.sqnorm if rule == MIN_DISTANCE else h
+        order = np.argsort(-ub[b], kind="stable")
+        best, done, npass = -np.inf, 0, 0
+        while done < k and ub[b, order[done]] >= best:
+            group = order[done : done + 4]
+            group = group[ub[b, group] >= best]
+            best = max(best, float(score[group].max()))
+            done += len(group)
+            npass += 1
+        need.append(int(np.sum(ub[b] >= score.max())))
+        summed.append(done)
+        passes.append(npass)
+        kept.append(int(keep.sum()))
+    return np.mean(need), np.mean(summed), np.mean(passes), np.mean(kept), np.mean(grid)
+
+
+def _bounds(model: SigmaPiSOM, index: Any, x: np.ndarray, y: np.ndarray, rule: int) -> Any:
+    """The bounds ``(B, K)`` of the pairs ``x, y`` as the search computes them, and their CPU
+    seconds per 1,000 pairs (the median of three)."""
+    st = model._run.state
+    ub = np.full((x.shape[0], st.shape[0]), np.nan)  # touched: no page faults in the timing
+    guess = np.empty(x.shape[0], dtype=np.int64)
+    n_tx, n_ty = int(index.tile_x.max()) + 1, int(index.tile_y.max()) + 1
+    times = []
+    for _ in range(3):
+        # left unformatted: the arguments in the rows of the kernel's signature
+        t, _ = cpu(lambda: _refining._bound_rows(index.norms, index.scale, st.sqnorm,
+                                                 index.tile_x, index.tile_y, n_tx, n_ty, x, y,
+                                                 float(st.tol), rule, ub, guess))  # fmt: skip
+        times.append(t * 1000 / x.shape[0])
+    return ub, float(np.median(times))
+
+
+def floors(model: SigmaPiSOM, acc: Any, batch: SimpleNamespace, won: np.ndarray) -> dict[str, Any]:
+    """What the refinement's arithmetic costs with its weights in cache, beside the stream, on
+    one call's pairs (``batch``, its winners ``won``): the winner search and the hard sums per
+    1,000 pairs in the stream (each pair once, as the round runs) and in cache (each pair
+    :data:`HOT` times in a row); one exact pass of four units on one pair in cache, per pass
+    and per multiply-add; how many units the search sums per pair (and the fewest any
+    bound-first search must), its passes, the kept input pairs and the prefilter's grid per
+    pair, and the bounds alone (their norms fit in cache) per 1,000 pairs."""
+    st, rule = model._run.state, model.winner_rule_.hard
+    geometry, code = model.config.geometry, fast._rule_code(rule)[1]
+    n = batch.x0.shape[0]
+    hot = np.repeat(np.arange(0, n, HOT), HOT)
+    once = (batch.x0, batch.y0, batch.x1, batch.y1, won)
+    views = {"stream": once, "in_cache": tuple(a[hot] for a in once)}
+    sums, mass = np.zeros_like(acc.sums), np.zeros_like(acc.mass)
+    out: dict[str, Any] = {"pairs": n, "copies_in_cache": HOT}
+    for name, (x0, y0, x1, y1, k) in views.items():
+        search, add = [], []
+        for _ in range(3):
+            t, _ = cpu(lambda: fast.KERNEL._refine_winners(st, acc, x0, y0, geometry, rule))  # noqa: B023
+            search.append(t * 1000 / x0.shape[0])
+            t, _ = cpu(lambda: _refining.hard_sums(sums, mass, k, x1, y1, st.tol))  # noqa: B023
+            add.append(t * 1000 / x0.shape[0])
+        out[f"search_{name}"] = float(np.median(search))
+        out[f"sums_{name}"] = float(np.median(add))
+    index = acc.index
+    x, y = np.ascontiguousarray(batch.x0[0]), np.ascontiguousarray(batch.y0[0])
+    _passes(index.raw_t, index.scale, st.sqnorm, code, x, y, st.tol, 1)
+    reps = 20000
+    t, grid = cpu(lambda: _passes(index.raw_t, index.scale, st.sqnorm, code, x, y, st.tol, reps))
+    need, summed, passes, kept, grid_mean = _summed(
+        model, index, batch.x0[:1000], batch.y0[:1000], code
+    )
+    _, bounds = _bounds(model, index, batch.x0, batch.y0, code)
+    out["exact_pass_of_4_units_in_cache_us"] = t / reps * 1e6
+    out["exact_ns_per_step_and_unit_in_cache"] = t / reps / (4 * grid) * 1e9
+    out["exact_grid_of_the_pair"] = int(grid)
+    out["units_summed_per_pair"] = float(summed)
+    out["units_that_must_be_summed_per_pair"] = float(need)
+    out["exact_passes_per_pair"] = float(passes)
+    out["kept_input_pairs_per_pair"] = float(kept)
+    out["prefilter_grid_per_pair"] = float(grid_mean)
+    out["bounds_cpu_s_per_1000_pairs"] = float(bounds)
+    out["counted_on_pairs"] = 1000
+    return out
 
 
 def whole(model: SigmaPiSOM) -> dict[str, Any]:
@@ -140,6 +269,7 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=509)
     parser.add_argument("--blocks", type=int, default=20, help="blocks of 1,000 pairs timed")
     parser.add_argument("--whole", action="store_true", help="also run the whole round")
+    parser.add_argument("--floors", action="store_true", help="also the costs in cache")
     parser.add_argument("--out", default=str(ROOT / "results" / "refine-profile.json"))
     args = parser.parse_args()
     result: dict[str, Any] = {
@@ -156,7 +286,7 @@ def main() -> None:
         t, _ = cpu(lambda: model.partial_fit(iterations=cfg.iterations))
         result["training_cpu_s"] = round(t, 2)
     result["iterations"] = model.t_
-    result.update(profile(model, args.blocks))
+    result.update(profile(model, args.blocks, args.floors))
     if args.whole:
         result["whole_round"] = whole(model)
         if "training_cpu_s" in result:
