@@ -245,6 +245,17 @@ def test_config_rejects_bad_values():
         ICubConfig(servo_steps=-1)
 
 
+def test_the_maps_anneal_their_learning_rate_past_the_presets_end():
+    from sigmapi.config import load_preset
+    from sigmapi.experiments.icub.maps import EPS, SIGMA, som_config
+
+    cfg = som_config((4, 4), (5, 5), (3, 2), 1.0, 100, 0, "auto")
+    assert cfg.eps == EPS and cfg.sigma == SIGMA and cfg.refine_rounds == 0
+    preset_end = load_preset("paper-2d").eps[-1][1]
+    assert EPS[-1][0] == 1.0 and EPS[-1][1] < preset_end  # still falling at the run's end
+    assert (cfg.map_shape, cfg.x_shape, cfg.y_shape) == ((3, 2), (4, 4), (5, 5))
+
+
 def test_a_tiny_run_writes_every_key(rendering, tmp_path):
     from sigmapi.experiments import write_result
     from sigmapi.experiments.icub.config import ICubConfig
