@@ -76,28 +76,11 @@ def icub_models(seed: int, folder: Path, n_slope: int = 1000) -> list[Model]:
 
     from sigmapi.envs.icub import ICubScene
     from sigmapi.experiments.icub.config import ICubConfig
-    from sigmapi.experiments.icub.maps import (
-        MapData,
-        eye_position,
-        learn_chain,
-        neck_position,
-        retina_position,
-    )
-    from sigmapi.experiments.icub.run import PLAN
+    from sigmapi.experiments.icub.maps import MapData, eye_position, neck_position, retina_position
+    from sigmapi.experiments.icub.run import learn_seed_chain
 
     cfg, scene = ICubConfig(), ICubScene()
-    train = MapData.record(scene, cfg.train_pairs, PLAN.rng(seed, "views"), cfg.moved_share)
-    chain = learn_chain(
-        train,
-        grid=cfg.grid,
-        width=cfg.code_width,
-        map_shape=cfg.map_shape,
-        iterations=cfg.iterations,
-        seed=int(PLAN.rng(seed, "map").integers(2**31)),
-        eye_size=scene.eye_size,
-        backend=cfg.backend,
-        code=cfg.head_code,
-    )
+    _, chain = learn_seed_chain(cfg, seed, scene)
     fresh = MapData.record(scene, n_slope, np.random.default_rng([seed, 77]), 0.0)
     scene.close()
 

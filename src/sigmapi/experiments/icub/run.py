@@ -35,6 +35,7 @@ from sigmapi.executor import Executor
 from sigmapi.experiments.base import Experiment, check_seeds, register, run_all
 from sigmapi.experiments.icub.config import QUICK, ICubConfig
 from sigmapi.experiments.icub.maps import (
+    ChainMaps,
     MapData,
     learn_chain,
     score,
@@ -47,7 +48,7 @@ from sigmapi.experiments.kit.seeds import SeedPlan
 from sigmapi.metrics import EVAL_SEED, z_decoder
 from sigmapi.progress import Progress
 
-__all__ = ["ICUB", "ICubExperiment", "check_frames"]
+__all__ = ["ICUB", "ICubExperiment", "check_frames", "learn_seed_chain"]
 
 
 PLAN = SeedPlan({"views": 0, "map": 1, "babbling": 2, "reaches": 3, "servo": 4})
@@ -93,11 +94,10 @@ class _Job:
     figures: bool
 
 
-def _run_seed(job: _Job) -> dict[str, Any]:
-    """Maps, babbling and reaches of one seed."""
-    cfg, seed = job.config, job.seed
-    scene = ICubScene()
-    t0 = time.process_time()
+def learn_seed_chain(cfg: ICubConfig, seed: int, scene: ICubScene) -> tuple[MapData, ChainMaps]:
+    """The training views and the chain of maps of ``seed`` (what :meth:`ICubExperiment.run`
+    learns for that seed; ``sigmapi physiology`` records the same maps in
+    ``benchmarks/bench_physiology.py --icub``)."""
     train = MapData.record(scene, cfg.train_pairs, PLAN.rng(seed, "views"), cfg.moved_share)
     chain = learn_chain(
         train,
@@ -110,6 +110,15 @@ def _run_seed(job: _Job) -> dict[str, Any]:
         backend=cfg.backend,
         code=cfg.head_code,
     )
+    return train, chain
+
+
+def _run_seed(job: _Job) -> dict[str, Any]:
+    """Maps, babbling and reaches of one seed."""
+    cfg, seed = job.config, job.seed
+    scene = ICubScene()
+    t0 = time.process_time()
+    train, chain = learn_seed_chain(cfg, seed, scene)
     out: dict[str, Any] = {"seed": seed, "maps": {}}
     for stage in (1, 2):
         m = score(chain, stage, job.cal, job.test)
