@@ -144,7 +144,7 @@ def main() -> None:
         })  # fmt: skip
         print(rows[-1], flush=True)
     tmp.cleanup()
-    command = "python benchmarks/bench_physiology.py " + " ".join(m.name for m in args.models)
+    command = " ".join(["python benchmarks/bench_physiology.py", *(str(m) for m in args.models)])
     if args.robot:
         command += " --robot " + " ".join(map(str, args.robot))
     if args.icub:

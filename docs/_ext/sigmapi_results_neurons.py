@@ -76,7 +76,18 @@ def _spiking() -> Table:
 @table("physiology")
 def _physiology() -> Table:
     """``benchmarks/bench_physiology.py``: trained maps against their random starts."""
-    data = load("physiology")
+    return _physiology_of("physiology")
+
+
+@table("physiology-icub")
+def _physiology_icub() -> Table:
+    """``benchmarks/bench_physiology.py --icub``: the iCub's two maps, each against the body
+    frame it should code (map 1: the head's, map 2: the torso's)."""
+    return _physiology_of("physiology-icub")
+
+
+def _physiology_of(name: str) -> Table:
+    data = load(name)
     rows = []
     for r in data["rows"]:
         t, s = r["trained"], r["random_start"]
@@ -94,7 +105,7 @@ def _physiology() -> Table:
             "over the gazes.")  # fmt: skip
     return Table(["model", "map", "trained: RF index", "measured", "body-centred share",
                   "random start: RF index", "measured", "KS (p)", "peak modulation, trained",
-                  "random"], rows, [_rel("physiology")], note, _command(data))  # fmt: skip
+                  "random"], rows, [_rel(name)], note, _command(data))  # fmt: skip
 
 
 @table("neurons-sparse")
