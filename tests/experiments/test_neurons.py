@@ -11,7 +11,12 @@ from sigmapi.metrics import evaluate
 from sigmapi.neurons.basis import BasisFunctionMap
 from sigmapi.neurons.dendritic import DendriticMap, branch_summary
 from sigmapi.neurons.sparse import SparseDendriticMap, sparse_summary
-from sigmapi.neurons.spiking import SpikingConfig, simulate_conjunction, simulate_dendritic
+from sigmapi.neurons.spiking import (
+    SpikingConfig,
+    coincidence_steps,
+    simulate_conjunction,
+    simulate_dendritic,
+)
 from sigmapi.neurons.training import TrainingConfig
 
 TINY = load_preset("tiny-1d")
@@ -99,6 +104,8 @@ def test_bad_settings_fail_with_one_line_naming_the_parameter():
         TrainingConfig(batch=100, eps=(0.02, 0.01))
     with pytest.raises(ConfigError, match="pool \\* peak_rate \\* dt"):
         SpikingConfig(pool=100, peak_rate=100.0, dt_ms=1.0)
+    with pytest.raises(ConfigError, match="coincidence_ms must be"):
+        SpikingConfig(coincidence_ms=0.0)
 
 
 def _selective_weights(n: int) -> np.ndarray:
@@ -111,16 +118,26 @@ def _selective_weights(n: int) -> np.ndarray:
 def test_coincidence_units_need_both_inputs_and_the_map_picks_the_driven_unit():
     n = 5
     eye = np.eye(n)
-    cfg = SpikingConfig(windows_ms=(50.0, 200.0), gain=0.6)
+    cfg = SpikingConfig(windows_ms=(50.0, 200.0), gain=0.3)
     x = np.repeat(eye[[2]], 20, axis=0)
     run = simulate_conjunction(_selective_weights(n), x, np.zeros_like(x), cfg,
                                np.random.default_rng(0))  # fmt: skip
     assert run.input_spikes[-1].mean() > 100 and run.hidden_spikes.max() == 0  # no y: no AND
     run = simulate_conjunction(_selective_weights(n), x, x.copy(), cfg, np.random.default_rng(0))
     assert np.mean(run.winners[-1] == 2) == 1.0 and run.map_spikes[-1].mean() > 1
-    # rate of the coincidence unit ~ r_x r_y 2 tau_c ln 2 (1000 Hz pools): ~1.4 kHz, minus resets
-    rate = run.hidden_spikes[-1].mean() / 0.2
-    assert 300 < rate < 1500
+
+
+@pytest.mark.parametrize("scale", [1.0, 0.5, 0.25])
+def test_a_conjunction_unit_fires_at_the_product_of_its_pools_rates(scale: float):
+    # pools of 10 at 100 Hz: r_x = 1000 Hz, r_y = 1000 * scale Hz; window m = 2 steps of
+    # 0.25 ms, so r_x r_y (2 m + 1) dt = 1250 * scale Hz: 250 * scale events per 200 ms
+    cfg = SpikingConfig(windows_ms=(200.0,))
+    assert coincidence_steps(cfg) == 2
+    x = np.zeros((40, 3))
+    x[:, 1] = 1.0
+    run = simulate_conjunction(_selective_weights(3), x, scale * x, cfg, np.random.default_rng(1))
+    events = run.hidden_spikes[0].mean()
+    assert abs(events / (250.0 * scale) - 1.0) < 0.1, events  # linear in r_y: no saturation
 
 
 def test_dendritic_spiking_neurons_follow_the_rate_map():
@@ -187,12 +204,17 @@ def test_sparse_dendritic_map_learns_the_transformation_with_few_synapses(seed):
 
 
 def test_the_spiking_time_step_shrinks_for_a_large_pool_at_a_high_rate():
-    from sigmapi.experiments.neurons.config import NeuronsConfig
+    from sigmapi.experiments.neurons.config import DENDRITIC_INHIBITION, NeuronsConfig
 
     c = NeuronsConfig(preset_2d="")
     assert c.spiking(100).dt_ms == 0.25 and c.spiking(100).pool == 20
     fast = c.spiking(200)  # 20 neurons at 200 Hz: 1 spike per 0.25 ms step, so 0.125 ms
     assert fast.dt_ms == 0.125 and fast.pool * fast.peak_rate * fast.dt_ms / 1000 <= 0.5
     assert c.spiking(100, pool=5).pool == 5
+    assert coincidence_steps(fast) == 2 * coincidence_steps(c.spiking(100))  # the same 0.5 ms
+    assert c.spiking(100).inhibition == c.spike_inhibition
+    assert c.spiking(100, dendritic=True).inhibition == DENDRITIC_INHIBITION
     with pytest.raises(ConfigError, match="spike_gain"):
         NeuronsConfig(preset_2d="", spike_gain=0.0)
+    with pytest.raises(ConfigError, match="spike_inhibition"):
+        NeuronsConfig(preset_2d="", spike_inhibition=-0.1)
