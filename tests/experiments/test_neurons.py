@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pytest
 
@@ -218,3 +220,26 @@ def test_the_spiking_time_step_shrinks_for_a_large_pool_at_a_high_rate():
         NeuronsConfig(preset_2d="", spike_gain=0.0)
     with pytest.raises(ConfigError, match="spike_inhibition"):
         NeuronsConfig(preset_2d="", spike_inhibition=-0.1)
+
+
+def test_the_experiments_conjunction_network_follows_its_rate_map_at_200_ms():
+    """`sigmapi neurons`' own spiking rows, with its default pool, gain and inhibition, on a
+    small map: the spiking winners agree with the rate map's (on paper-1d, fresh seeds:
+    0.98 at 200 ms) and the view consistency stays near the rate map's."""
+    from sigmapi import SigmaPiSOM
+    from sigmapi.experiments.neurons.config import NeuronsConfig
+    from sigmapi.experiments.neurons.run import NeuronsJob, _spiking_rows
+
+    c = NeuronsConfig(preset="tiny-1d", preset_2d="", windows_ms=(20, 200), peak_rates=(100,),
+                      spike_test=100, n_test=500)  # fmt: skip
+    sp = SigmaPiSOM(c.som_config, seed=0).fit()
+
+    def conj(x: np.ndarray, y: np.ndarray, cfg: SpikingConfig, rng: np.random.Generator) -> Any:
+        assert cfg.inhibition == c.spike_inhibition and cfg.gain == c.spike_gain
+        return simulate_conjunction(sp.weights_, x, y, cfg, rng)
+
+    rows = _spiking_rows(NeuronsJob(0, "1d", c), "conj", sp, conj, sp.winner, [(100, c.pool)])
+    short, long = rows
+    assert long["agreement"] > 0.93 and long["agreement"] > short["agreement"], rows
+    assert long["view_consistency"] > long["rate_view_consistency"] - 0.05, rows
+    assert long["spikes_per_decision"] > 8 * short["spikes_per_decision"], rows
