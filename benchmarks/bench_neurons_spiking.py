@@ -26,6 +26,7 @@ import numpy as np
 from _common import machine, write_result
 from sigmapi import SigmaPiSOM
 from sigmapi.experiments.neurons.config import REFERENCE_RATE, NeuronsConfig
+from sigmapi.experiments.neurons.result import within_margin
 from sigmapi.experiments.neurons.run import NeuronsJob, _spiking_rows
 from sigmapi.neurons.spiking import SpikingRun, simulate_conjunction
 
@@ -64,7 +65,7 @@ def main() -> None:
         agree = [r["agreement"] for r in sel]
         summary.append({"window_ms": w, "vc_gap_median": float(np.median(gap)),
                         "vc_gap_worst": float(min(gap)),
-                        "within_002": int(sum(g >= -0.02 for g in gap)),
+                        "within_002": int(sum(map(within_margin, gap))),
                         "agreement_median": float(np.median(agree)),
                         "agreement_worst": float(min(agree)),
                         "spikes_per_decision": float(np.median([r["spikes_per_decision"]

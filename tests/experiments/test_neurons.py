@@ -243,3 +243,11 @@ def test_the_experiments_conjunction_network_follows_its_rate_map_at_200_ms():
     assert long["agreement"] > 0.93 and long["agreement"] > short["agreement"], rows
     assert long["view_consistency"] > long["rate_view_consistency"] - 0.05, rows
     assert long["spikes_per_decision"] > 8 * short["spikes_per_decision"], rows
+
+
+def test_a_gap_of_exactly_the_margin_counts_as_within_it():
+    from sigmapi.experiments.neurons.result import VC_MARGIN, within_margin
+
+    gap = 0.9 - 0.92  # 270 and 276 of 300 test z's: -0.02, a rounding error below it in floats
+    assert gap < -VC_MARGIN and within_margin(gap)
+    assert within_margin(0.0) and not within_margin(-VC_MARGIN - 1 / 300)
