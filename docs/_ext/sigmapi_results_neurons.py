@@ -73,6 +73,30 @@ def _spiking() -> Table:
                  rows, [_rel("neurons")], note, _command(load("neurons")))  # fmt: skip
 
 
+@table("neurons-spiking-115-124")
+def _spiking_fresh() -> Table:
+    """``benchmarks/bench_neurons_spiking.py`` on fresh seeds 115-124, per window."""
+    data = load("neurons-spiking-115-124")
+    n = len(data["seeds"])
+    rows = [
+        [f"{s['window_ms']:g} ms", num(s["agreement_median"]), num(s["agreement_worst"]),
+         num(s["vc_gap_median"], "+.3f"), num(s["vc_gap_worst"], "+.3f"),
+         f"{s['within_002']} of {s['n_seeds']}", num(s["spikes_per_decision"], ",.0f")]
+        for s in data["summary"]
+    ]  # fmt: skip
+    note = (f"The conjunction network at {data['peak_rate']} Hz on seeds "
+            f"{seeds_label(data['seeds'])} ({n} seeds, none used to choose anything), "
+            f"{2 * data['test_z']} trials per seed (both views of {data['test_z']} test z's); "
+            f"pools of {data['pool']}, coincidence window {data['coincidence_ms']:g} ms, gain "
+            f"{data['spike_gain']:g}, inhibition {data['spike_inhibition']:g}. Gap: view "
+            f"consistency minus the rate map's on the same trials; within: seeds whose gap is "
+            f"at least -0.02. Spikes per decision (median over seeds): input, coincidence and "
+            f"map spikes in the window.")  # fmt: skip
+    return Table(["window", "agreement (median)", "agreement (worst)", "gap (median)",
+                  "gap (worst)", "within 0.02", "spikes per decision"], rows,
+                 [_rel("neurons-spiking-115-124")], note, _command(data))  # fmt: skip
+
+
 @table("physiology")
 def _physiology() -> Table:
     """``benchmarks/bench_physiology.py``: trained maps against their random starts."""

@@ -5,15 +5,19 @@ firing at ``peak_rate`` times the unit's code value (a code of length 1, whose p
 1). Two networks read them, each simulated for many trials at once with a fixed time step
 ``dt`` (exact exponential decay between steps):
 
-**conjunction** (a Sigma-Pi map, :class:`~sigmapi.SigmaPiSOM`): one coincidence unit per
-input pair ``(i, j)`` holds two synaptic traces, one driven by the pool of ``x_i``, one by the
-pool of ``y_j`` (each spike adds 1, decay ``tau_c``), and fires when both exceed 1/2: a
-retinal and a gaze spike within about ``tau_c ln 2`` of each other (an NMDA-like AND). Both
-traces reset at its spike. Its rate is about ``r_x r_y 2 tau_c ln 2``, the product the
-Sigma-Pi unit needs. The map units are leaky integrate-and-fire neurons (time constant
-``tau_m``, threshold 1, reset 0): unit ``k`` receives coincidence unit ``(i, j)`` with weight
-``gain w_kij / max w``, and every map spike inhibits every other map unit of the trial by
-``inhibition`` (a soft winner-take-all by lateral inhibition).
+**conjunction** (a Sigma-Pi map, :class:`~sigmapi.SigmaPiSOM`): every pair of a retinal and
+a gaze neuron has a coincidence detector (two clustered synapses and an NMDA-like AND) that
+fires once for every retinal and gaze spike at most ``coincidence_ms`` apart (``m`` whole
+steps, ``m = coincidence_ms / dt``; no refractory period: at 100 Hz a neuron's next spike
+within 1 ms is rare). The conjunction unit of the input pair ``(i, j)`` is the ``pool^2``
+detectors of the pools of ``x_i`` and ``y_j``, and its spikes per step are counted exactly from
+the pools' spikes: ``s_x s_y + s_x R_y + R_x s_y``, with ``R`` a pool's spikes in the ``m``
+steps before. Its rate is ``r_x r_y (2 m + 1) dt`` (``r`` the pools' rates), the product the
+Sigma-Pi unit needs at every rate, with no saturation. The map units are leaky
+integrate-and-fire neurons (time constant ``tau_m``, threshold 1, reset 0): unit ``k``
+receives conjunction unit ``(i, j)`` with weight ``gain w_kij / max w``, and every map spike
+inhibits every other map unit of the trial by ``inhibition`` (a soft winner-take-all by
+lateral inhibition).
 
 **dendritic** (a :class:`~sigmapi.neurons.dendritic.DendriticMap`): each map unit is a neuron
 with ``D`` dendritic compartments and a spiking soma. Compartment ``d`` filters its synaptic
@@ -38,7 +42,13 @@ from numpy.typing import NDArray
 
 from sigmapi import _validate
 
-__all__ = ["SpikingConfig", "SpikingRun", "simulate_conjunction", "simulate_dendritic"]
+__all__ = [
+    "SpikingConfig",
+    "SpikingRun",
+    "coincidence_steps",
+    "simulate_conjunction",
+    "simulate_dendritic",
+]
 
 Array = NDArray[np.float64]
 
@@ -55,8 +65,9 @@ class SpikingConfig:
     """Decision windows (ms)."""
     dt_ms: float = 0.25
     """Time step (ms)."""
-    tau_c_ms: float = 1.0
-    """Coincidence units: trace time constant (ms)."""
+    coincidence_ms: float = 0.5
+    """Coincidence detectors: the longest interval (ms) between a retinal and a gaze spike
+    that still counts as a coincidence (rounded to whole steps)."""
     tau_s_ms: float = 5.0
     """Dendritic compartments: synaptic time constant (ms)."""
     tau_m_ms: float = 10.0
@@ -71,7 +82,15 @@ class SpikingConfig:
     """Lateral inhibition per map spike, in units of the threshold."""
 
     def __post_init__(self) -> None:
-        for name in ("peak_rate", "dt_ms", "tau_c_ms", "tau_s_ms", "tau_m_ms", "gain", "plateau"):
+        for name in (
+            "peak_rate",
+            "dt_ms",
+            "coincidence_ms",
+            "tau_s_ms",
+            "tau_m_ms",
+            "gain",
+            "plateau",
+        ):
             _validate.positive(name, getattr(self, name), fix="a positive number")
         _validate.integer("pool", self.pool, 1, fix="e.g. 10")
         _validate.number("inhibition", self.inhibition, 0.0, fix="e.g. 0.5")
@@ -133,6 +152,11 @@ def _steps(cfg: SpikingConfig) -> NDArray[np.int64]:
     return np.asarray(np.round(np.asarray(cfg.windows_ms) / cfg.dt_ms), dtype=np.int64) - 1
 
 
+def coincidence_steps(cfg: SpikingConfig) -> int:
+    """``m``: the coincidence window in whole time steps (at least 1)."""
+    return max(1, round(cfg.coincidence_ms / cfg.dt_ms))
+
+
 def _poisson(rng: np.random.Generator, rates: Array, dt_s: float) -> Array:
     """Spikes of the pools in one step ``(B, n)`` (a pool's spikes: one Poisson count)."""
     return np.asarray(rng.poisson(rates * dt_s), dtype=np.float64)
@@ -141,7 +165,7 @@ def _poisson(rng: np.random.Generator, rates: Array, dt_s: float) -> Array:
 def simulate_conjunction(
     weights: Array, x: Array, y: Array, cfg: SpikingConfig, rng: np.random.Generator
 ) -> SpikingRun:
-    """Coincidence units into LIF map units (module docstring) for ``B`` trials, codes ``x``
+    """Coincidence detectors into LIF map units (module docstring) for ``B`` trials, codes ``x``
     ``(B, n_x)`` and ``y`` ``(B, n_y)``; ``weights`` the Sigma-Pi map's ``(K, n_x, n_y)``."""
     k, nx, ny = weights.shape
     b = x.shape[0]
@@ -153,19 +177,19 @@ def simulate_conjunction(
         cfg.peak_rate * cfg.pool * np.maximum(x, 0.0),
         cfg.peak_rate * cfg.pool * np.maximum(y, 0.0),
     )
-    decay = np.exp(-cfg.dt_ms / cfg.tau_c_ms)
-    ax, ay = np.zeros((b, nx, ny)), np.zeros((b, nx, ny))
+    m = coincidence_steps(cfg)
+    hx, hy = np.zeros((m, b, nx)), np.zeros((m, b, ny))  # the pools' spikes, m steps back
+    near_x, near_y = np.zeros((b, nx)), np.zeros((b, ny))  # their sums
     soma = _Soma(b, k, cfg, steps)
     n_in, n_c = np.zeros(b), np.zeros(b)
     ins, hid = np.zeros((len(steps), b)), np.zeros((len(steps), b))
     for t in range(int(steps[-1]) + 1):
         sx, sy = _poisson(rng, rx, dt_s), _poisson(rng, ry, dt_s)
-        ax = ax * decay + sx[:, :, None]
-        ay = ay * decay + sy[:, None, :]
-        fire = (ax > 0.5) & (ay > 0.5)
-        ax[fire] = 0.0
-        ay[fire] = 0.0
-        f = fire.reshape(b, -1).astype(np.float64)
+        c = sx[:, :, None] * (near_y + sy)[:, None, :] + near_x[:, :, None] * sy[:, None, :]
+        f = c.reshape(b, -1)
+        near_x += sx - hx[t % m]
+        near_y += sy - hy[t % m]
+        hx[t % m], hy[t % m] = sx, sy
         soma.step(t, f @ w)
         n_in += sx.sum(axis=1) + sy.sum(axis=1)
         n_c += f.sum(axis=1)

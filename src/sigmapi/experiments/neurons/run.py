@@ -72,10 +72,18 @@ def _z_table(model: Any, n: int) -> np.ndarray:
 
 
 def _spiking_rows(
-    job: NeuronsJob, name: str, model: Any, simulate: Any, rate_winner: Any, rates: Any
+    job: NeuronsJob,
+    name: str,
+    model: Any,
+    simulate: Any,
+    rate_winner: Any,
+    rates: Any,
+    *,
+    dendritic: bool = False,
 ) -> list[dict[str, Any]]:
     """One row per window and ``(peak rate, pool)`` of ``rates`` of a spiking deployment of
-    ``model`` (a pool other than the config's tags the name ``-pool<n>``)."""
+    ``model`` (a pool other than the config's tags the name ``-pool<n>``); ``dendritic``: the
+    dendritic network's settings (:meth:`NeuronsConfig.spiking`)."""
     c = job.config
     cal, test = evaluation_sets(model, c.n_test)
     n = min(c.spike_test, test.z.shape[0])
@@ -89,7 +97,7 @@ def _spiking_rows(
         key = (SPIKE_KEY, rate) if pool == c.pool else (SPIKE_KEY, rate, pool)
         rng = np.random.default_rng(np.random.SeedSequence(job.seed, spawn_key=key))
         start = time.perf_counter()
-        run: SpikingRun = simulate(x, y, c.spiking(rate, pool), rng)
+        run: SpikingRun = simulate(x, y, c.spiking(rate, pool, dendritic=dendritic), rng)
         secs = time.perf_counter() - start
         tag = "" if pool == c.pool else f"-pool{pool}"
         for i, window in enumerate(run.windows_ms):
@@ -207,7 +215,7 @@ def neurons_job(job: NeuronsJob) -> dict[str, Any]:
                 return simulate_dendritic(dm.u_, dm.v_, dm.gain, dm.threshold, x, y, cfg_s, rng)
 
             dend_rows = _spiking_rows(
-                job, "spiking-dendritic", dm, dend, dm.winner, [(ref, c.pool)]
+                job, "spiking-dendritic", dm, dend, dm.winner, [(ref, c.pool)], dendritic=True
             )
             for r in dend_rows:
                 r["branches"] = c.spiking_branches
