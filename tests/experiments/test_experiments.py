@@ -6,6 +6,7 @@ import html
 import importlib
 import json
 import re
+import threading
 from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 from typing import Literal
@@ -201,6 +202,26 @@ def test_sections_are_added_and_checked(tmp_path):
 
     with pytest.raises(RuntimeError, match=r"missing\.png"):
         reproduce(tmp_path / "r2", _options(), presets=[("tiny-1d", TINY_1D)], sections=[broken])
+
+
+def test_sections_run_beside_the_figures_and_their_errors_reach_the_caller(tmp_path):
+    started, drawn = threading.Event(), []
+
+    def waiting(ctx: ReportContext) -> Section:
+        started.set()
+        with ctx.drawing:  # the report's figures are drawn holding the same lock
+            drawn.append(threading.current_thread() is not threading.main_thread())
+        return Section("Waiting")
+
+    def failing(ctx: ReportContext) -> Section:
+        raise ConfigError("the section refused")
+
+    result = reproduce(
+        tmp_path / "r", _options(), presets=[("tiny-1d", TINY_1D)], sections=[waiting]
+    )
+    assert started.is_set() and drawn == [True] and "Waiting" in result.sections
+    with pytest.raises(ConfigError, match="the section refused"):
+        reproduce(tmp_path / "r2", _options(), presets=[("tiny-1d", TINY_1D)], sections=[failing])
 
 
 def test_linked_files_ignores_urls_and_anchors():

@@ -47,7 +47,8 @@ def reach_section(ctx: ReportContext) -> Section:
     result = run_with_progress(
         cfg, seeds, disable=not ctx.progress or None, workers=ctx.options.workers
     )
-    result.save_figure(ctx.out / FIGURE)
+    with ctx.drawing:  # the report may be drawing its own figures in another thread
+        result.save_figure(ctx.out / FIGURE)
 
     final = result.final_success()
     per_seed = result.final_success_per_seed()

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import shutil
 import statistics
+import threading
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -460,11 +461,15 @@ class ReportContext:
     """What a section gets: the report folder, the run settings and the trained models.
 
     ``models`` maps each preset name to its trained models, one per seed (in ``seeds`` order).
+    Sections run in a thread of their own while the report draws its figures and computes
+    the ceilings: a section draws its figures holding ``drawing``, which the report holds
+    while it draws its own.
     """
 
     out: Path
     options: ReproduceOptions
     models: dict[str, list[SigmaPiSOM]]
+    drawing: threading.Lock = field(default_factory=threading.Lock, repr=False, compare=False)
 
     @property
     def quick(self) -> bool:

@@ -39,6 +39,8 @@ the default run's, with the command and times that made it) has the top-level ke
 
 Experiments add sections to the report: a section is a function ``section(ctx:
 ReportContext) -> Section | None``; the default, :data:`SECTIONS`, is the reach experiment.
+The sections run in a thread of their own once the training has ended, beside the ceilings
+and the figures (which leave a core idle); a section draws holding ``ctx.drawing``.
 
 The experiment ``reproduce`` (:class:`Reproduce`, settings :class:`ReproduceConfig`) is
 :func:`reproduce` with the seeds, executor and progress given apart; each (preset, seed) is one
@@ -49,6 +51,8 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import multiprocessing
+import threading
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
@@ -185,37 +189,19 @@ def reproduce(
     runs_of = paper_presets(opts.quick) if presets is None else list(presets)
     result = ReproduceResult(opts, out=out)
     progress = Progress() if opts.progress else None
-    models: dict[str, list[SigmaPiSOM]] = {}
     figures: dict[str, list[tuple[str, str]]] = {}
     trained = _train_all(runs_of, opts, ex, progress)
-    for name, cfg in runs_of:
-        runs, models[name] = trained[name]
-        shown, why = figure_seed(runs, cfg)
-        seeds = opts.seeds_of(cfg)
-        entry = PresetResult(
-            cfg, runs, REFERENCE.get(name, {}), Z_ERROR_FLOOR.get(name), seeds[shown], why
-        )
-        entry.ceiling = _ceiling(name, result, models[name][shown], seeds[shown], opts, progress)
-        result.presets[name] = entry
-        for i, seed in enumerate(seeds):
-            if opts.save_models == "all" or (opts.save_models == "shown" and i == shown):
-                models[name][i].save(out / f"{name}-seed{seed}.npz")
-        run = figs.RunInfo(name, cfg, seeds, shown, opts.curve_test, why)
-        reference = _reference(name)
-        figures[name] = draw_preset(
-            run,
-            models[name][shown],
-            entry,
-            out,
-            opts.dpi,
-            reference,
-            progress,
-            test_size=opts.test_size,
-            curve_test=opts.curve_test,
-        )
-        result.figure_files += [out / file for file, _ in figures[name]]
-    ctx = ReportContext(out, opts, models)
-    added = [s for s in (fn(ctx) for fn in (SECTIONS if sections is None else sections)) if s]
+    ctx = ReportContext(out, opts, {name: trained[name][1] for name, _ in runs_of})
+    section_fns = SECTIONS if sections is None else sections
+    sectioned = _Background(lambda: [fn(ctx) for fn in section_fns])  # beside the figures
+    try:
+        for name, cfg in runs_of:
+            figures[name] = _report_preset(name, cfg, trained[name][0], ctx, result, progress)
+            result.figure_files += [out / file for file, _ in figures[name]]
+        added = [s for s in sectioned.result() if s]
+    except BaseException:  # an error or an interrupt: the sections' workers end now
+        sectioned.abandon()
+        raise
     for s in added:
         result.sections[s.title] = s.data
         result.figure_files += [out / file for file, _ in s.figures]
@@ -227,6 +213,73 @@ def reproduce(
         raise RuntimeError(f"report links files that were not written: {missing}")
     atomic_write_bytes(out / REPORT, text.encode())
     return result
+
+
+def _report_preset(
+    name: str,
+    cfg: SOMConfig,
+    runs: list[SeedRun],
+    ctx: ReportContext,
+    result: ReproduceResult,
+    progress: Progress | None,
+) -> list[tuple[str, str]]:
+    """Preset ``name``'s entry of ``result`` (statistics, the ceiling), its saved models and
+    its figures (drawn holding ``ctx.drawing``); the figures' files and captions."""
+    opts, models = ctx.options, ctx.models[name]
+    shown, why = figure_seed(runs, cfg)
+    seeds = opts.seeds_of(cfg)
+    entry = PresetResult(
+        cfg, runs, REFERENCE.get(name, {}), Z_ERROR_FLOOR.get(name), seeds[shown], why
+    )
+    entry.ceiling = _ceiling(name, result, models[shown], seeds[shown], opts, progress)
+    result.presets[name] = entry
+    for i, seed in enumerate(seeds):
+        if opts.save_models == "all" or (opts.save_models == "shown" and i == shown):
+            models[i].save(ctx.out / f"{name}-seed{seed}.npz")
+    run = figs.RunInfo(name, cfg, seeds, shown, opts.curve_test, why)
+    with ctx.drawing:
+        return draw_preset(
+            run,
+            models[shown],
+            entry,
+            ctx.out,
+            opts.dpi,
+            _reference(name),
+            progress,
+            test_size=opts.test_size,
+            curve_test=opts.curve_test,
+        )
+
+
+class _Background:
+    """``fn()`` run in a daemon thread from now on; :meth:`result` waits for its value (or
+    raises its error). The sections (the reach experiment: its seeds in a process pool) run so
+    beside the ceilings and the figures, whose drawing leaves a core idle. A daemon thread:
+    an interrupted report does not wait for it (its pool's workers end with this process)."""
+
+    def __init__(self, fn: Callable[[], Any]) -> None:
+        self._value: Any = None
+        self._error: BaseException | None = None
+        self._thread = threading.Thread(target=self._run, args=(fn,), daemon=True)
+        self._thread.start()
+
+    def _run(self, fn: Callable[[], Any]) -> None:
+        try:
+            self._value = fn()
+        except BaseException as e:  # raised again in the caller's thread by result()
+            self._error = e
+
+    def abandon(self) -> None:
+        """End the worker processes this process started (the sections' pool: the training's
+        has ended), so that the thread's jobs fail at once instead of holding up the exit."""
+        for child in multiprocessing.active_children():
+            child.terminate()
+
+    def result(self) -> Any:
+        self._thread.join()
+        if self._error is not None:
+            raise self._error
+        return self._value
 
 
 class Reproduce(Experiment[ReproduceConfig]):
