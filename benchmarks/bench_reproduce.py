@@ -12,9 +12,10 @@ children), their peak resident memory, the 1-minute load average sampled every 1
 ran (the machine is shared: wall seconds depend on it; CPU seconds much less), and under
 ``metrics`` the run's whole ``metrics.json`` (its keys: the docstring of
 ``sigmapi.experiments.reproduce.run``). The docs render the reproduction page from this file.
-A run with other options (``--args``, e.g. fewer seeds on a loaded machine) adds
-``default_run_estimate``: the default run's CPU and 2-core wall seconds extrapolated from it
-(:func:`default_estimate`).
+Run it with ``NUMBA_CACHE_DIR`` set to an empty folder to count numba's compile as a fresh
+install does (``numba_cache`` says which). A run with other options (``--args``, e.g. fewer
+seeds on a loaded machine) adds ``default_run_estimate``: the default run's CPU and 2-core
+wall seconds extrapolated from it (:func:`default_estimate`).
 """
 
 from __future__ import annotations
@@ -100,6 +101,8 @@ def main() -> None:
     default = not args.args
     code = "import sys; from sigmapi.cli import main; sys.exit(main(sys.argv[1:]))"
     cmd = [sys.executable, "-c", code, "reproduce", *options]
+    cache = os.environ.get("NUMBA_CACHE_DIR")
+    cold = cache is not None and (not Path(cache).exists() or not any(Path(cache).iterdir()))
     loads = [os.getloadavg()[0]]
     stop = threading.Event()
     sampler = threading.Thread(target=_sample_load, args=(stop, loads), daemon=True)
@@ -125,6 +128,12 @@ def main() -> None:
         "cpu_per_wall": round(cpu / wall, 2),
         "peak_rss_mb": round(after.ru_maxrss / 1024, 1),  # the largest child process
         "load_average_1min": load,
+        "numba_cache": (
+            f"cold: NUMBA_CACHE_DIR={cache} empty at the start, numba's compile counted, as "
+            "on a fresh install"
+            if cold
+            else f"as found ({cache or 'beside the sources'})"
+        ),
         "default_run_estimate": None if default else default_estimate(metrics, cpu),
         "console": proc.stdout.strip().splitlines(),
         "metrics": metrics,

@@ -354,7 +354,8 @@ def _reproduce() -> Table:
         f"training. The run took {num(get(data, 'wall_seconds', 'reproduce') / 60, '.1f')} min "
         f"wall and {num(get(data, 'cpu_seconds', 'reproduce'), '.0f')} CPU s (1-minute load "
         f"average {num(get(data, 'load_average_1min.median', 'reproduce'), '.1f')} median, "
-        f"{num(get(data, 'load_average_1min.max', 'reproduce'), '.1f')} at most)."
+        f"{num(get(data, 'load_average_1min.max', 'reproduce'), '.1f')} at most); numba's "
+        f"cache {data.get('numba_cache', 'as found')}."
     )
     return Table(
         ["preset", "seeds", "view consistency", "before refinement", "ceiling", "z error",

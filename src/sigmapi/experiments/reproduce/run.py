@@ -51,6 +51,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import math
 import multiprocessing
 import threading
 import time
@@ -444,6 +445,12 @@ FLAG_NOTE = (
 that the map is folded (a short run's coarse map raises it too); ``ordered`` is order R^2."""
 
 
+def _job_cost(cfg: SOMConfig) -> float:
+    """A job's work, to start the longest first: weights times the pairs they learn from."""
+    weights = math.prod(cfg.map_shape) * math.prod(cfg.x_shape) * math.prod(cfg.y_shape)
+    return float(weights) * (cfg.iterations + cfg.refine_rounds * cfg.refine_pairs)
+
+
 def _train_all(
     runs_of: Sequence[tuple[str, SOMConfig]],
     opts: ReproduceOptions,
@@ -459,6 +466,7 @@ def _train_all(
         for name, cfg in runs_of
         for seed in opts.seeds_of(cfg)
     ]
+    jobs.sort(key=lambda job: -_job_cost(job[1].cfg))  # longest first: no lone job at the end
     per_job = max(job_memory(cfg, opts.test_size) for _, cfg in runs_of)
 
     def describe(key: str, value: tuple[SeedRun, Any, Any]) -> str:
