@@ -43,6 +43,7 @@ __all__ = [
     "GAZES",
     "Recordable",
     "body_slope",
+    "check_gaze_axes",
     "compare_distributions",
     "gain_fields",
     "record",
@@ -148,6 +149,19 @@ def _centres(resp: Array, probes: Array, axis: int) -> tuple[Array, NDArray[np.b
     return centre, ~cut & strong & (peak > 0)
 
 
+def check_gaze_axes(gaze_axes: Sequence[int], d: int, fix: str) -> list[int]:
+    """``gaze_axes`` as a list, if it is a permutation of the ``d`` gaze axes (one gaze axis
+    per retinal axis); else a ConfigError naming it, with ``fix``."""
+    vals = list(gaze_axes)
+    ints = all(isinstance(v, int) and not isinstance(v, bool) for v in vals)
+    if not ints or sorted(vals) != list(range(d)):
+        raise _validate.fail(
+            "gaze_axes", f"a permutation of the gaze axes 0..{d - 1}, one per retinal axis",
+            vals, fix,
+        )  # fmt: skip
+    return vals
+
+
 def _pairing(model: Recordable, gaze_axes: Sequence[int] | None) -> list[int]:
     """The gaze axis that moves the fields along each retinal axis: ``gaze_axes`` (a
     permutation of the axes) or the identity (the paper's relation pairs axis ``a`` of x with
@@ -156,15 +170,8 @@ def _pairing(model: Recordable, gaze_axes: Sequence[int] | None) -> list[int]:
     d = model.x_code.ndim
     if gaze_axes is None or len(gaze_axes) == 0:
         return list(range(d))
-    vals = list(gaze_axes)
-    if sorted(vals) != list(range(d)) or not all(isinstance(v, int) for v in vals):
-        raise _validate.fail(
-            "gaze_axes",
-            f"a permutation of the gaze axes 0..{d - 1}, one per retinal axis",
-            vals,
-            "e.g. 1,0 where the second gaze axis moves the fields along the first retinal axis",
-        )
-    return [int(v) for v in vals]
+    fix = "e.g. 1,0 where the second gaze axis moves the fields along the first retinal axis"
+    return check_gaze_axes(gaze_axes, d, fix)
 
 
 def _slopes(model: Recordable, slope: Sequence[float] | None) -> Array:

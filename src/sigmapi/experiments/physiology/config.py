@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from sigmapi import _validate
-from sigmapi.analysis.physiology import GAZES
+from sigmapi.analysis.physiology import GAZES, check_gaze_axes
 
 __all__ = ["PhysiologyConfig"]
 
@@ -59,15 +59,6 @@ class PhysiologyConfig:
         if any(v == 0.0 for v in slopes):
             raise _validate.fail("body_slope", "nonzero", list(slopes), "e.g. -1")
         object.__setattr__(self, "body_slope", slopes)
-        axes = tuple(self.gaze_axes)
-        if axes and (
-            not all(isinstance(a, int) and not isinstance(a, bool) for a in axes)
-            or sorted(axes) != list(range(len(axes)))
-        ):
-            raise _validate.fail(
-                "gaze_axes",
-                "a permutation of the gaze axes (0, 1, ...), one per retinal axis",
-                list(axes),
-                "e.g. --gaze-axes 1,0",
-            )
+        axes = tuple(self.gaze_axes)  # the model's dimension is checked where it is loaded
+        check_gaze_axes(axes, len(axes), "e.g. --gaze-axes 1,0")
         object.__setattr__(self, "gaze_axes", axes)

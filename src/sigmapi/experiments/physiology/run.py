@@ -10,7 +10,6 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from sigmapi import _validate
 from sigmapi.analysis.physiology import compare_distributions, record, tuning_curves
 from sigmapi.codes import PopulationCode
 from sigmapi.errors import DataError
@@ -87,14 +86,7 @@ def record_model(cfg: PhysiologyConfig) -> dict[str, Any]:
     model = load_model(path)
     n_probe = cfg.n_probe or None
     slope = cfg.body_slope or None
-    axes = cfg.gaze_axes or None
-    if axes is not None and len(axes) != model.x_code.ndim:
-        raise _validate.fail(
-            "gaze_axes",
-            f"one gaze axis per retinal axis of the model ({model.x_code.ndim})",
-            list(axes),
-            "e.g. --gaze-axes 1,0 for a 2-D model",
-        )
+    axes = cfg.gaze_axes or None  # record() checks them against the model's axes
     trained = record(model, cfg.gazes, n_probe, slope, axes)
     start = record(RandomStart(model), cfg.gazes, n_probe, slope, axes)
     return {
