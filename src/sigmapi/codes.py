@@ -83,12 +83,18 @@ class PopulationCode:
     normalize: bool = True
     periodic: bool = False
     _coords: NDArray[np.float64] = field(init=False, repr=False, compare=False)
+    _units: tuple[NDArray[np.float64], ...] = field(init=False, repr=False, compare=False)
+    _scale: NDArray[np.float64] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "shape", _validate.shape("shape", self.shape))
         _validate.width("width", self.width, MIN_WIDTH, fix=_WIDTH_FIX)
         _validate.positive("height", self.height, fix="the paper uses 1.0")
         object.__setattr__(self, "_coords", grid_coordinates(self.shape))
+        # what every encode needs, made once (an agent encodes one view per step)
+        units = tuple(np.arange(n, dtype=np.float64)[None, :] for n in self.shape)
+        object.__setattr__(self, "_units", units)
+        object.__setattr__(self, "_scale", self.scale)
 
     @property
     def ndim(self) -> int:
@@ -128,6 +134,8 @@ class PopulationCode:
                 f"{name} must have shape (B, {self.ndim}) for a {self.ndim}-D code, got "
                 f"{arr.shape}; pass one row per position"
             )
+        if arr.size == 0 or (arr.min() >= 0.0 and arr.max() <= 1.0):  # NaN fails both
+            return arr
         if not np.all(np.isfinite(arr)):
             raise DataError(f"{name} must be finite, got NaN or inf; remove them")
         if np.any(arr < 0.0) or np.any(arr > 1.0):
@@ -146,9 +154,10 @@ class PopulationCode:
         return np.einsum("bud,bud->bu", diff, diff)
 
     def _finish(self, codes: NDArray[np.float64]) -> NDArray[np.float64]:
-        codes = self.height * codes
-        if self.normalize:
-            codes = codes / np.linalg.norm(codes, axis=-1, keepdims=True)
+        if self.height != 1.0:  # times 1.0 changes no bit
+            codes = self.height * codes
+        if self.normalize:  # np.linalg.norm's own arithmetic, without its checks
+            codes = codes / np.sqrt(np.add.reduce(codes * codes, axis=-1, keepdims=True))
         return codes
 
     def encode(self, p: ArrayLike) -> NDArray[np.float64]:
@@ -158,22 +167,28 @@ class PopulationCode:
         per axis.
         """
         hills = self.hills(p)
-        out = np.ones((hills[0].shape[0], 1))
-        for hill in hills:
-            out = (out[:, :, None] * hill[:, None, :]).reshape(hill.shape[0], -1)
+        out = hills[0]
+        for hill in hills[1:]:
+            out = (out[:, :, None] * hill[:, None, :]).reshape(
+                len(hill), out.shape[1] * hill.shape[1]
+            )
         return self._finish(out)
 
     def hills(self, p: ArrayLike) -> list[NDArray[np.float64]]:
         """The 1-D hills of positions ``p`` (shape ``(B, d)``, in [0, 1]), one ``(B, n_a)``
         array per axis of ``n_a`` units, unscaled: :meth:`encode` is their C-order outer
         product, times ``height``, normalised."""
-        arr = self.check_positions(p) * self.scale
+        arr = self.check_positions(p) * self._scale
+        spread = 2.0 * self.width**2
         out = []
         for axis, n in enumerate(self.shape):
-            diff = arr[:, axis, None] - np.arange(n, dtype=np.float64)[None, :]
+            diff = arr[:, axis, None] - self._units[axis]
             if self.periodic:
                 diff = diff - n * np.round(diff / n)
-            out.append(np.exp(-(diff**2) / (2.0 * self.width**2)))
+            np.square(diff, out=diff)  # in place: the same operations as -(d**2) / spread
+            np.negative(diff, out=diff)
+            np.divide(diff, spread, out=diff)
+            out.append(np.exp(diff, out=diff))
         return out
 
     def pattern(self, points: ArrayLike) -> NDArray[np.float64]:

@@ -57,6 +57,17 @@ def test_the_fixed_point_satisfies_eq7_on_its_grid(model):
     assert np.allclose(again, w, rtol=0, atol=1e-6)  # a backend may store float32
 
 
+def test_keeping_the_moments_between_rounds_changes_nothing(model, monkeypatch):
+    kept = ceiling.fixed_point(model, z_points=40, view_points=8, tol=0.0, max_rounds=4,
+                               n_test=300)  # fmt: skip
+    monkeypatch.setattr(ceiling, "MOMENTS_BYTES", 0)  # computed again every round
+    again = ceiling.fixed_point(model, z_points=40, view_points=8, tol=0.0, max_rounds=4,
+                                n_test=300)  # fmt: skip
+    assert kept.rounds == again.rounds >= 2 and kept.changed == again.changed
+    assert kept.model is not None and again.model is not None
+    assert np.array_equal(kept.model.weights_, again.model.weights_)  # bit for bit
+
+
 def test_the_fixed_point_removes_weight_noise(model):
     noisy = SigmaPiSOM.from_arrays(
         {**model.to_arrays()[0], "backend": "reference"},

@@ -224,6 +224,32 @@ def test_sections_run_beside_the_figures_and_their_errors_reach_the_caller(tmp_p
         reproduce(tmp_path / "r2", _options(), presets=[("tiny-1d", TINY_1D)], sections=[failing])
 
 
+MEASURING_FIRST = """
+from numba.core.registry import CPUDispatcher
+from sigmapi.config import load_preset
+from sigmapi.experiments.reproduce.run import _compile_measuring
+from sigmapi.kernels import _refining, _rows, fast
+cfg = load_preset("paper-2d").replace(map_shape=(3, 3), x_shape=(4, 4), y_shape=(4, 4),
+                                      iterations=2000, refine_rounds=1, refine_pairs=500)
+_compile_measuring(cfg)
+done = sorted(name for mod in (fast, _refining, _rows) for name, f in vars(mod).items()
+              if isinstance(f, CPUDispatcher) and f.signatures)
+print(" ".join(done))
+"""
+
+
+def test_a_worker_can_compile_the_measuring_half_first_without_the_training():
+    # two workers starting at once each compile one half (compile_once's measure_first)
+    import subprocess
+    import sys
+
+    out = subprocess.run(
+        [sys.executable, "-c", MEASURING_FIRST], capture_output=True, text=True, check=True
+    ).stdout.split()
+    assert "_settle_rows" in out and "_hard_sums" in out and "winners_rows_parallel" in out
+    assert "_train" not in out and "_unit_chunk" not in out, out
+
+
 def test_linked_files_ignores_urls_and_anchors():
     text = (
         "<img src='a.png'><a href=\"b c.json\">x</a><a href='https://x.org/y.png'>"

@@ -173,12 +173,33 @@ def _winners(model: SigmaPiSOM, grid: ViewGrid) -> NDArray[np.int64]:
     return model.winner(x, y, hard=True).reshape(zn, v)
 
 
+MOMENTS_BYTES = 512 * 2**20
+"""Largest size of the grid's ``M(z)`` that :func:`fixed_point` keeps between rounds (every
+round needs the same ones); larger grids compute them again each round."""
+
+
+def _moments(model: SigmaPiSOM, grid: ViewGrid, start: int, stop: int) -> NDArray[np.float64]:
+    """``M(z)`` ``(c, n_x n_y)`` of the grid's z's ``start:stop``: the weighted mean of their
+    views' outer products (the same for every round: it does not depend on the weights)."""
+    _, v, d = grid.px.shape
+    c = grid.px[start:stop].shape[0]
+    x = model.x_code.encode(grid.px[start:stop].reshape(-1, d)).reshape(c, v, -1)
+    y = model.y_code.encode(grid.py[start:stop].reshape(-1, d)).reshape(c, v, -1)
+    w = grid.weight[start:stop]
+    return np.matmul(np.swapaxes(x * w[:, :, None], 1, 2), y).reshape(c, -1)
+
+
 def _means(
-    model: SigmaPiSOM, grid: ViewGrid, winners: NDArray[np.int64], old: NDArray[np.float64]
+    model: SigmaPiSOM,
+    grid: ViewGrid,
+    winners: NDArray[np.int64],
+    old: NDArray[np.float64],
+    kept: dict[int, NDArray[np.float64]] | None = None,
 ) -> NDArray[np.float64]:
-    """Eq. 7 with the winners fixed: ``sum_z P(k|z) M(z) / sum_z P(k|z)`` per unit."""
+    """Eq. 7 with the winners fixed: ``sum_z P(k|z) M(z) / sum_z P(k|z)`` per unit.
+    ``kept`` holds the ``M(z)`` of earlier rounds by chunk (filled here), or is None."""
     k = model.n_units
-    zn, v, d = grid.px.shape
+    zn, v, _ = grid.px.shape
     n_x, n_y = old.shape[1], old.shape[2]
     sums = np.zeros((k, n_x * n_y))
     mass = np.zeros(k)
@@ -186,10 +207,12 @@ def _means(
     for s in range(0, zn, per):
         sl = slice(s, s + per)
         c = grid.px[sl].shape[0]
-        x = model.x_code.encode(grid.px[sl].reshape(-1, d)).reshape(c, v, n_x)
-        y = model.y_code.encode(grid.py[sl].reshape(-1, d)).reshape(c, v, n_y)
+        m = kept.get(s) if kept is not None else None
+        if m is None:
+            m = _moments(model, grid, s, s + per)  # M(z)
+            if kept is not None:
+                kept[s] = m
         w = grid.weight[sl]
-        m = np.matmul(np.swapaxes(x * w[:, :, None], 1, 2), y).reshape(c, -1)  # M(z)
         p = np.zeros((c, k))  # P(k | z) times the z's weight
         np.add.at(p, (np.repeat(np.arange(c), v), winners[sl].ravel()), w.ravel())
         p *= grid.z_weight[sl, None]
@@ -257,8 +280,10 @@ def fixed_point(
     winners = _winners(current, grid)
     mass = grid.z_weight[:, None] * grid.weight
     changed: list[float] = []
+    size = grid.px.shape[0] * weights[0].size * 8
+    kept: dict[int, NDArray[np.float64]] | None = {} if size <= MOMENTS_BYTES else None
     for _ in range(max_rounds):
-        weights = _means(current, grid, winners, weights)
+        weights = _means(current, grid, winners, weights, kept)
         current = SigmaPiSOM.from_arrays(header, {"weights": weights}, source="fixed point")
         new = _winners(current, grid)
         changed.append(float(np.sum(mass[new != winners])))

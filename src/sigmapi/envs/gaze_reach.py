@@ -376,7 +376,8 @@ class GazeReachEnv(gym.Env[Obs, np.int64]):
         """What the agent sees of objects at ``z`` with gaze ``y`` (both ``(B, dim)``): the
         retina and gaze codes, float32 ``(B, grid**dim)`` each (the observation's values)."""
         x = np.clip(2.0 * z - y, 0.0, 1.0)
-        return self.code.encode(x).astype(np.float32), self.code.encode(y).astype(np.float32)
+        both = self.code.encode(np.concatenate([x, y])).astype(np.float32)  # one call: row by row
+        return both[: len(x)], both[len(x) :]
 
     def _obs(self) -> Obs:
         retina, gaze = self._codes(self._z[None, :], self._y[None, :])

@@ -330,13 +330,16 @@ class SeedJob:
     curve_test: int
     test_size: int
     progress: bool = False
+    measure_first: bool = False
+    """Compile the kernels that refine and measure a map before those that train it
+    (:func:`compile_once`); :func:`_train_all` sets it on every other job."""
 
 
 _COMPILED: set[tuple[Any, ...]] = set()
 """The rule combinations this process has compiled (:func:`compile_once`)."""
 
 
-def compile_once(cfg: SOMConfig) -> float:
+def compile_once(cfg: SOMConfig, measure_first: bool = False) -> float:
     """Compile the kernel functions ``cfg`` trains, refines and is measured with, once per
     process, on a small run of the same rules; the wall seconds it took (0 if done before).
 
@@ -344,6 +347,13 @@ def compile_once(cfg: SOMConfig) -> float:
     sizes of the arrays, so a 3-unit map of the same rules, ordering, refinement and
     dimensions calls the same compiled code as the preset: the training times of
     :func:`train_seed` then hold no compile time, which is reported apart.
+
+    ``measure_first`` (in a process that has compiled nothing yet) compiles the kernels that
+    refine and measure a trained map before those that train it
+    (:func:`_compile_measuring`). On a fresh install two workers that start at once, one
+    each way round, then compile each half once and load the other half from numba's cache
+    (``NUMBA_CACHE_DIR``) rather than both compiling everything: 12 s of wall against 20 s
+    for a ``paper-2d`` job on two cores (``docs/guide/speed.md``).
     """
     from sigmapi.analysis.curves import LearningCurve
 
@@ -372,10 +382,28 @@ def compile_once(cfg: SOMConfig) -> float:
         refine_rounds=min(cfg.refine_rounds, 1),
         refine_pairs=min(cfg.refine_pairs, 500),
     )
+    if measure_first and not _COMPILED:
+        _compile_measuring(small)
     model = SigmaPiSOM(small).fit(callback=LearningCurve(at=[small.iterations], n_test=50))
     evaluate(model, n_test=50)
     _COMPILED.add(key)
     return time.perf_counter() - t0
+
+
+def _compile_measuring(small: SOMConfig) -> None:
+    """Call the kernels that refine and evaluate a trained map of config ``small`` without
+    calling the one that trains it: a short run on the reference kernel (NumPy) gives the
+    weights, moved onto ``small``'s own kernel, which refines them (``small``'s rounds) and
+    evaluates them."""
+    backend = SigmaPiSOM(small).backend
+    if backend == "reference":
+        return
+    short = small.replace(backend="reference", iterations=50, refine_rounds=0)
+    header, arrays = SigmaPiSOM(short).fit().to_arrays()
+    header = {**header, "config": {**small.to_dict(), "backend": "reference"}}
+    model = SigmaPiSOM.from_arrays(header, arrays, backend=backend, source="compile")
+    model.refine()
+    evaluate(model, n_test=50)
 
 
 def train_seed(job: SeedJob) -> tuple[SeedRun, dict[str, Any], dict[str, Any]]:
@@ -390,7 +418,7 @@ def train_seed(job: SeedJob) -> tuple[SeedRun, dict[str, Any], dict[str, Any]]:
 
     cfg = job.cfg
     compile_c0 = time.process_time()
-    compile_s = compile_once(cfg)
+    compile_s = compile_once(cfg, job.measure_first)
     c0 = time.process_time()
     compile_cpu = c0 - compile_c0
     model = SigmaPiSOM(cfg, seed=job.seed)
@@ -467,6 +495,8 @@ def _train_all(
         for seed in opts.seeds_of(cfg)
     ]
     jobs.sort(key=lambda job: -_job_cost(job[1].cfg))  # longest first: no lone job at the end
+    # every other job compiles the other half first: two workers share numba's compile
+    jobs = [(key, replace(job, measure_first=i % 2 == 1)) for i, (key, job) in enumerate(jobs)]
     per_job = max(job_memory(cfg, opts.test_size) for _, cfg in runs_of)
 
     def describe(key: str, value: tuple[SeedRun, Any, Any]) -> str:
