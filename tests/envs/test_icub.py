@@ -182,6 +182,9 @@ def test_babbling_teaches_an_association(scene: ICubScene):
     rng = np.random.default_rng(2)
     train, test = babble(scene, 150, rng), babble(scene, 20, rng)
     assert np.all(np.abs(train.palm[:, 2] - train.palm[0, 2]) < 0.021)  # one height
+    assert train.posture[:, 2].min() >= 0.8  # the shoulder's yaw from BABBLE_YAW
+    with pytest.raises(ConfigError, match="yaw"):
+        babble(scene, 5, rng, yaw=1.5)
     # states: a coarse code of the palm's true torso-centred direction (the ceiling's key)
     from sigmapi.envs import bump_features
 
@@ -243,6 +246,37 @@ def test_config_rejects_bad_values():
         ICubConfig(render="film.mp4")
     with pytest.raises(ConfigError, match="servo_steps"):
         ICubConfig(servo_steps=-1)
+    with pytest.raises(ConfigError, match="readout"):
+        ICubConfig(readout="mean")
+    with pytest.raises(ConfigError, match="babble_yaw"):
+        ICubConfig(babble_yaw=1.5)
+    from sigmapi.experiments.icub.reaching import BABBLE_YAW
+
+    assert ICubConfig().babble_yaw == BABBLE_YAW
+
+
+def test_the_readout_is_the_response_centre_of_mass_near_the_winner():
+    from types import SimpleNamespace
+
+    from sigmapi.experiments.icub.maps import response_centroid
+
+    coords = np.stack(np.meshgrid(np.arange(5.0), np.arange(5.0), indexing="ij"), -1)
+    coords = coords.reshape(-1, 2)
+    h = np.zeros((4, 25))
+    h[0, 12] = 1.0  # the winner alone: its place
+    h[1, [12, 13]] = [3.0, 1.0]  # a neighbour at a quarter of the weight: a quarter of the way
+    h[2, [12, 17, 4, 0]] = [1.0, 1.0, 5.0, -9.0]  # (0, 4) 2 units on an axis, (0, 0) negative
+    # row 3: all zero, the winner's place
+    model = SimpleNamespace(
+        map_coords=coords,
+        respond=lambda x, y: x,
+        winner=lambda x, y, hard: np.array([12, 12, 12, 7]),
+    )
+    c1 = response_centroid(model, h, None, 1.0)  # type: ignore[arg-type]
+    assert np.allclose(c1, [[2.0, 2.0], [2.0, 2.25], [2.5, 2.0], [1.0, 2.0]])
+    c2 = response_centroid(model, h, None, 2.0)  # type: ignore[arg-type]
+    assert np.allclose(c2[2], (np.array([2.0, 2.0]) + [3.0, 2.0] + 5 * np.array([0.0, 4.0])) / 7)
+    assert np.allclose(c2[[0, 1, 3]], c1[[0, 1, 3]])
 
 
 def test_the_maps_anneal_their_learning_rate_past_the_presets_end():

@@ -13,10 +13,12 @@ from typing import Any
 from sigmapi import _validate
 from sigmapi.config import BACKEND_NAMES
 
-__all__ = ["HEAD_CODES", "QUICK", "ICubConfig"]
+__all__ = ["HEAD_CODES", "QUICK", "READOUTS", "ICubConfig"]
 
 HEAD_CODES = ("winner", "centroid", "response")
 """What map 1 can hand to map 2 (:meth:`~sigmapi.experiments.icub.maps.ChainMaps.head`)."""
+READOUTS = ("centroid", "winner")
+"""What of map 2 can key the learned chain's association (:attr:`ICubConfig.readout`)."""
 
 
 @dataclass(frozen=True)
@@ -43,10 +45,17 @@ class ICubConfig:
     directions."""
     frame_scenes: int = 1000
     """Random scenes in which the rendered retina is compared with the exact projection."""
+    babble_yaw: float = 0.8
+    """The lowest shoulder yaw babbling draws, radians (the joint's range is -0.65 to 1.40:
+    :data:`~sigmapi.experiments.icub.reaching.BABBLE_YAW`)."""
     babbles: int = 2000
     """Babbles (random arm postures, the eyes on the hand) the associations learn from."""
     epochs: int = 8
     """Passes of the associations' delta rule over the babbles."""
+    readout: str = "centroid"
+    """Where on map 2 the learned chain's bump is centred: "centroid" (the centre of mass of
+    map 2's rectified response within 2 units of its winner) or "winner" (the winner's place
+    on the grid)."""
     feature_width: float = 2.5
     """Width of the bump a map's winner gives the association, map units."""
     reaches: int = 60
@@ -86,9 +95,17 @@ class ICubConfig:
         object.__setattr__(
             self, "moved_share", _validate.number("moved_share", self.moved_share, 0.0, 1.0)
         )
+        object.__setattr__(
+            self,
+            "babble_yaw",
+            _validate.number(
+                "babble_yaw", self.babble_yaw, -0.65, 1.3, fix="the joint's range is -0.65 to 1.40"
+            ),
+        )
         for name in ("code_width", "feature_width"):
             object.__setattr__(self, name, _validate.positive(name, getattr(self, name)))
         _validate.choice("head_code", self.head_code, HEAD_CODES)
+        _validate.choice("readout", self.readout, READOUTS)
         _validate.choice("backend", self.backend, BACKEND_NAMES)
         if self.render is not None and not str(self.render).lower().endswith(".gif"):
             raise _validate.fail("render", "a file name ending in .gif", self.render)
