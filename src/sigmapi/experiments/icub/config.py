@@ -48,6 +48,10 @@ class ICubConfig:
     babble_yaw: float = 0.8
     """The lowest shoulder yaw babbling draws, radians (the joint's range is -0.65 to 1.40:
     :data:`~sigmapi.experiments.icub.reaching.BABBLE_YAW`)."""
+    babble_wrist: tuple[float, ...] = (-0.6, -0.3)
+    """The range (low, high) of the wrist's pitch that babbling draws from, radians (the
+    joint's range is -1.396 to 0.436: :data:`~sigmapi.experiments.icub.reaching.BABBLE_WRIST`;
+    on the command line ``--babble-wrist=-0.6,-0.3``)."""
     babbles: int = 2000
     """Babbles (random arm postures, the eyes on the hand) the associations learn from."""
     epochs: int = 8
@@ -102,6 +106,7 @@ class ICubConfig:
                 "babble_yaw", self.babble_yaw, -0.65, 1.3, fix="the joint's range is -0.65 to 1.40"
             ),
         )
+        object.__setattr__(self, "babble_wrist", _wrist_range(self.babble_wrist))
         for name in ("code_width", "feature_width"):
             object.__setattr__(self, name, _validate.positive(name, getattr(self, name)))
         _validate.choice("head_code", self.head_code, HEAD_CODES)
@@ -119,6 +124,17 @@ class ICubConfig:
         return {
             k: list(v) if isinstance(v, tuple) else v for k, v in dataclasses.asdict(self).items()
         }
+
+
+def _wrist_range(value: Any) -> tuple[float, float]:
+    """``babble_wrist`` checked: two numbers, low <= high, within the wrist pitch's range."""
+    fix = "the joint's range is -1.396 to 0.436 rad; e.g. --babble-wrist=-0.6,-0.3"
+    if not isinstance(value, (tuple, list)) or len(value) != 2:
+        raise _validate.fail("babble_wrist", "two numbers (low, high)", value, fix)
+    lo, hi = (_validate.number("babble_wrist", w, -1.39, 0.43, fix=fix) for w in value)
+    if lo > hi:
+        raise _validate.fail("babble_wrist", "(low, high) with low <= high", value, fix)
+    return lo, hi
 
 
 QUICK = ICubConfig(

@@ -129,8 +129,9 @@ def _run_seed(job: _Job) -> dict[str, Any]:
         out["maps"][f"map{stage}"] = m
     out["map_cpu_s"] = time.process_time() - t0
     rng = PLAN.rng(seed, "babbling")
-    babbles = babble(scene, cfg.babbles, rng, yaw=cfg.babble_yaw)
-    held_out = babble(scene, 200, rng, yaw=cfg.babble_yaw)
+    wrist = (cfg.babble_wrist[0], cfg.babble_wrist[1])
+    babbles = babble(scene, cfg.babbles, rng, yaw=cfg.babble_yaw, wrist=wrist)
+    held_out = babble(scene, 200, rng, yaw=cfg.babble_yaw, wrist=wrist)
 
     def feats(method: str, v: Any) -> NDArray[np.float64]:
         return features(method, v, chain, cfg.grid, cfg.code_width, cfg.feature_width, cfg.readout)
