@@ -40,6 +40,10 @@ class ICubConfig:
     head_code: str = "winner"
     """What map 1 hands to map 2: "winner" (a code of its winner's place), "centroid" (of its
     response's centre of mass near the winner) or "response"."""
+    head_width: float = 0.85
+    """Width of the hill, map-1 units, of the code of map 1's place that map 2 reads
+    (``head_code`` "winner" or "centroid":
+    :data:`~sigmapi.experiments.icub.maps.HEAD_WIDTH`)."""
     eval_pairs: int = 1000
     """Calibration and test pairs (each, per map) that score the maps against the true
     directions."""
@@ -107,7 +111,7 @@ class ICubConfig:
             ),
         )
         object.__setattr__(self, "babble_wrist", _wrist_range(self.babble_wrist))
-        for name in ("code_width", "feature_width"):
+        for name in ("code_width", "head_width", "feature_width"):
             object.__setattr__(self, name, _validate.positive(name, getattr(self, name)))
         _validate.choice("head_code", self.head_code, HEAD_CODES)
         _validate.choice("readout", self.readout, READOUTS)

@@ -109,6 +109,7 @@ def learn_seed_chain(cfg: ICubConfig, seed: int, scene: ICubScene) -> tuple[MapD
         eye_size=scene.eye_size,
         backend=cfg.backend,
         code=cfg.head_code,
+        head_width=cfg.head_width,
     )
     return train, chain
 
