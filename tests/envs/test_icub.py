@@ -315,6 +315,31 @@ def test_the_readout_is_the_response_centre_of_mass_near_the_winner():
     assert np.allclose(c2[[0, 1, 3]], c1[[0, 1, 3]])
 
 
+def test_map_2_reads_map_1s_place_in_hills_of_the_head_width():
+    from types import SimpleNamespace
+
+    from sigmapi.codes import PopulationCode
+    from sigmapi.experiments.icub.config import ICubConfig
+    from sigmapi.experiments.icub.maps import HEAD_WIDTH, ChainMaps
+
+    coords = np.stack(np.meshgrid(np.arange(4.0), np.arange(4.0), indexing="ij"), -1)
+    map1 = SimpleNamespace(
+        map_coords=coords.reshape(-1, 2),
+        map_shape=(4, 4),
+        config=SimpleNamespace(code_width=1.0),
+        winner=lambda x, y, hard: np.array([5, 14]),
+    )
+    views: Any = None
+    for width, expect in ((None, 1.0), (0.6, 0.6)):
+        chain = ChainMaps(map1, map1, 64, head_width=width)  # type: ignore[arg-type]
+        chain.inputs1 = lambda v: (None, None)  # type: ignore[method-assign]
+        pos = coords.reshape(-1, 2)[[5, 14]] / 3.0
+        assert np.allclose(chain.head(views), PopulationCode((4, 4), expect).encode(pos))
+    assert ICubConfig().head_width == HEAD_WIDTH < 1.0
+    with pytest.raises(ConfigError, match="head_width"):
+        ICubConfig(head_width=0.0)
+
+
 def test_the_maps_anneal_their_learning_rate_past_the_presets_end():
     from sigmapi.config import load_preset
     from sigmapi.experiments.icub.maps import EPS, SIGMA, som_config

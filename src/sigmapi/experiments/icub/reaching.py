@@ -107,7 +107,7 @@ BABBLE_WRIST = (-0.6, -0.3)
 """The range of the wrist's pitch that babbling draws from, radians (the joint's range is -1.396
 to 0.436). With the wrist straight, the hand of a posture of the high-yaw family
 (:data:`BABBLE_YAW`) meets the table in the nearest, rightmost corner of the table, and the
-physics stops it 1-4 cm short of where the posture puts it (seed 0's babbles there). On tuning
+physics stops it up to 4 cm short of where the posture puts it (seed 0's babbles there). On tuning
 seeds 0-2 (300 reaches each, no servo) the true direction then touched 0.953, 0.957 and 0.937
 of the balls (0.39-0.54 of those in that corner) and the learned chain 0.890, 0.897 and 0.893;
 with the wrist's pitch from -0.6 to -0.3 the true direction 1.000 on each seed and the learned

@@ -212,10 +212,13 @@ class ICubExperiment(Experiment[ICubConfig]):
     summary = "the iCub learns a chain of maps from its eyes and neck, then learns to reach"
     config_type = ICubConfig
     quick = QUICK
-    seeds = (110, 111, 112, 113, 114)
+    seeds = (115, 116, 117, 118, 119)
     """The seeds of the acceptance run: none of them was tuned on (tuning used seeds 0-2; seeds
     100-104 measured the settings before :data:`~sigmapi.experiments.icub.maps.EPS`, seeds
-    105-109 those before the centroid readout of map 2, ``ICubConfig.readout``)."""
+    105-109 those before the centroid readout of map 2, ``ICubConfig.readout``, seeds 110-114
+    those before the bent wrist in babbling,
+    :data:`~sigmapi.experiments.icub.reaching.BABBLE_WRIST`, and map 2's narrower code of map
+    1's place, :data:`~sigmapi.experiments.icub.maps.HEAD_WIDTH`)."""
     quick_seeds = (0,)
     """The seed of ``--quick``: a tuning seed."""
     default_out = "icub"
