@@ -176,15 +176,46 @@ def test_scripted_reach_touches_the_ball_and_a_wrong_one_does_not(scene: ICubSce
     assert not physical_reach(scene, q).touched
 
 
+def test_a_bent_wrist_keeps_the_hand_off_the_table_in_the_near_corner(scene: ICubScene):
+    # babbled postures that put the palm in the nearest, rightmost corner of the table: with
+    # the wrist straight the physics stops the hand on the table short of the posture's palm,
+    # with the wrist's pitch from BABBLE_WRIST it gets there
+    from sigmapi.experiments.icub.reaching import BABBLE_WRIST, babble
+
+    def shortfall(wrist: tuple[float, float]) -> float:
+        rng = np.random.default_rng(4)
+        b = babble(scene, 120, rng, wrist=wrist)
+        corner = np.flatnonzero((b.palm[:, 0] < 0.197) & (b.palm[:, 1] < -0.25))[:8]
+        assert corner.size >= 5
+        gaps = []
+        for i in corner:
+            scene.reset()
+            scene.set_ball((0.55, 0.25))  # out of the way
+            physical_reach(scene, b.posture[i])
+            gaps.append(np.linalg.norm(scene.palm_position() - b.palm[i]))
+        scene.reset()
+        return float(np.median(gaps))
+
+    straight, bent = shortfall((0.0, 0.0)), shortfall(BABBLE_WRIST)
+    assert straight > 0.012 and bent < 0.006, (straight, bent)
+
+
 def test_babbling_teaches_an_association(scene: ICubScene):
-    from sigmapi.experiments.icub.reaching import babble
+    from sigmapi.experiments.icub.reaching import BABBLE_WRIST, babble
 
     rng = np.random.default_rng(2)
     train, test = babble(scene, 150, rng), babble(scene, 20, rng)
     assert np.all(np.abs(train.palm[:, 2] - train.palm[0, 2]) < 0.021)  # one height
     assert train.posture[:, 2].min() >= 0.8  # the shoulder's yaw from BABBLE_YAW
+    lo, hi = BABBLE_WRIST  # the wrist's pitch from its narrow range, its other joints straight
+    assert np.all((train.posture[:, 5] >= lo) & (train.posture[:, 5] <= hi))
+    assert np.ptp(train.posture[:, 5]) > 0.5 * (hi - lo)
+    assert np.all(train.posture[:, [4, 6]] == 0.0)
     with pytest.raises(ConfigError, match="yaw"):
         babble(scene, 5, rng, yaw=1.5)
+    for wrist in ((-0.3, -0.6), (-2.0, 0.0), (0.0, 0.5)):
+        with pytest.raises(ConfigError, match="wrist"):
+            babble(scene, 5, rng, wrist=wrist)
     # states: a coarse code of the palm's true torso-centred direction (the ceiling's key)
     from sigmapi.envs import bump_features
 
@@ -250,9 +281,14 @@ def test_config_rejects_bad_values():
         ICubConfig(readout="mean")
     with pytest.raises(ConfigError, match="babble_yaw"):
         ICubConfig(babble_yaw=1.5)
-    from sigmapi.experiments.icub.reaching import BABBLE_YAW
+    for wrist in ((-0.3, -0.6), (-2.0, 0.0), (-0.6,), "-0.6,-0.3", (-0.6, float("nan"))):
+        with pytest.raises(ConfigError, match="babble_wrist"):
+            ICubConfig(babble_wrist=wrist)  # type: ignore[arg-type]
+    assert ICubConfig(babble_wrist=[-1, 0]).babble_wrist == (-1.0, 0.0)  # type: ignore[arg-type]
+    from sigmapi.experiments.icub.reaching import BABBLE_WRIST, BABBLE_YAW
 
     assert ICubConfig().babble_yaw == BABBLE_YAW
+    assert ICubConfig().babble_wrist == BABBLE_WRIST
 
 
 def test_the_readout_is_the_response_centre_of_mass_near_the_winner():
@@ -277,6 +313,31 @@ def test_the_readout_is_the_response_centre_of_mass_near_the_winner():
     c2 = response_centroid(model, h, None, 2.0)  # type: ignore[arg-type]
     assert np.allclose(c2[2], (np.array([2.0, 2.0]) + [3.0, 2.0] + 5 * np.array([0.0, 4.0])) / 7)
     assert np.allclose(c2[[0, 1, 3]], c1[[0, 1, 3]])
+
+
+def test_map_2_reads_map_1s_place_in_hills_of_the_head_width():
+    from types import SimpleNamespace
+
+    from sigmapi.codes import PopulationCode
+    from sigmapi.experiments.icub.config import ICubConfig
+    from sigmapi.experiments.icub.maps import HEAD_WIDTH, ChainMaps
+
+    coords = np.stack(np.meshgrid(np.arange(4.0), np.arange(4.0), indexing="ij"), -1)
+    map1 = SimpleNamespace(
+        map_coords=coords.reshape(-1, 2),
+        map_shape=(4, 4),
+        config=SimpleNamespace(code_width=1.0),
+        winner=lambda x, y, hard: np.array([5, 14]),
+    )
+    views: Any = None
+    for width, expect in ((None, 1.0), (0.6, 0.6)):
+        chain = ChainMaps(map1, map1, 64, head_width=width)  # type: ignore[arg-type]
+        chain.inputs1 = lambda v: (None, None)  # type: ignore[method-assign]
+        pos = coords.reshape(-1, 2)[[5, 14]] / 3.0
+        assert np.allclose(chain.head(views), PopulationCode((4, 4), expect).encode(pos))
+    assert ICubConfig().head_width == HEAD_WIDTH < 1.0
+    with pytest.raises(ConfigError, match="head_width"):
+        ICubConfig(head_width=0.0)
 
 
 def test_the_maps_anneal_their_learning_rate_past_the_presets_end():

@@ -40,6 +40,10 @@ class ICubConfig:
     head_code: str = "winner"
     """What map 1 hands to map 2: "winner" (a code of its winner's place), "centroid" (of its
     response's centre of mass near the winner) or "response"."""
+    head_width: float = 0.85
+    """Width of the hill, map-1 units, of the code of map 1's place that map 2 reads
+    (``head_code`` "winner" or "centroid":
+    :data:`~sigmapi.experiments.icub.maps.HEAD_WIDTH`)."""
     eval_pairs: int = 1000
     """Calibration and test pairs (each, per map) that score the maps against the true
     directions."""
@@ -48,6 +52,10 @@ class ICubConfig:
     babble_yaw: float = 0.8
     """The lowest shoulder yaw babbling draws, radians (the joint's range is -0.65 to 1.40:
     :data:`~sigmapi.experiments.icub.reaching.BABBLE_YAW`)."""
+    babble_wrist: tuple[float, ...] = (-0.6, -0.3)
+    """The range (low, high) of the wrist's pitch that babbling draws from, radians (the
+    joint's range is -1.396 to 0.436: :data:`~sigmapi.experiments.icub.reaching.BABBLE_WRIST`;
+    on the command line ``--babble-wrist=-0.6,-0.3``)."""
     babbles: int = 2000
     """Babbles (random arm postures, the eyes on the hand) the associations learn from."""
     epochs: int = 8
@@ -102,7 +110,8 @@ class ICubConfig:
                 "babble_yaw", self.babble_yaw, -0.65, 1.3, fix="the joint's range is -0.65 to 1.40"
             ),
         )
-        for name in ("code_width", "feature_width"):
+        object.__setattr__(self, "babble_wrist", _wrist_range(self.babble_wrist))
+        for name in ("code_width", "head_width", "feature_width"):
             object.__setattr__(self, name, _validate.positive(name, getattr(self, name)))
         _validate.choice("head_code", self.head_code, HEAD_CODES)
         _validate.choice("readout", self.readout, READOUTS)
@@ -119,6 +128,17 @@ class ICubConfig:
         return {
             k: list(v) if isinstance(v, tuple) else v for k, v in dataclasses.asdict(self).items()
         }
+
+
+def _wrist_range(value: Any) -> tuple[float, float]:
+    """``babble_wrist`` checked: two numbers, low <= high, within the wrist pitch's range."""
+    fix = "the joint's range is -1.396 to 0.436 rad; e.g. --babble-wrist=-0.6,-0.3"
+    if not isinstance(value, (tuple, list)) or len(value) != 2:
+        raise _validate.fail("babble_wrist", "two numbers (low, high)", value, fix)
+    lo, hi = (_validate.number("babble_wrist", w, -1.39, 0.43, fix=fix) for w in value)
+    if lo > hi:
+        raise _validate.fail("babble_wrist", "(low, high) with low <= high", value, fix)
+    return lo, hi
 
 
 QUICK = ICubConfig(

@@ -109,6 +109,7 @@ def learn_seed_chain(cfg: ICubConfig, seed: int, scene: ICubScene) -> tuple[MapD
         eye_size=scene.eye_size,
         backend=cfg.backend,
         code=cfg.head_code,
+        head_width=cfg.head_width,
     )
     return train, chain
 
@@ -129,8 +130,9 @@ def _run_seed(job: _Job) -> dict[str, Any]:
         out["maps"][f"map{stage}"] = m
     out["map_cpu_s"] = time.process_time() - t0
     rng = PLAN.rng(seed, "babbling")
-    babbles = babble(scene, cfg.babbles, rng, yaw=cfg.babble_yaw)
-    held_out = babble(scene, 200, rng, yaw=cfg.babble_yaw)
+    wrist = (cfg.babble_wrist[0], cfg.babble_wrist[1])
+    babbles = babble(scene, cfg.babbles, rng, yaw=cfg.babble_yaw, wrist=wrist)
+    held_out = babble(scene, 200, rng, yaw=cfg.babble_yaw, wrist=wrist)
 
     def feats(method: str, v: Any) -> NDArray[np.float64]:
         return features(method, v, chain, cfg.grid, cfg.code_width, cfg.feature_width, cfg.readout)
@@ -210,10 +212,13 @@ class ICubExperiment(Experiment[ICubConfig]):
     summary = "the iCub learns a chain of maps from its eyes and neck, then learns to reach"
     config_type = ICubConfig
     quick = QUICK
-    seeds = (110, 111, 112, 113, 114)
+    seeds = (115, 116, 117, 118, 119)
     """The seeds of the acceptance run: none of them was tuned on (tuning used seeds 0-2; seeds
     100-104 measured the settings before :data:`~sigmapi.experiments.icub.maps.EPS`, seeds
-    105-109 those before the centroid readout of map 2, ``ICubConfig.readout``)."""
+    105-109 those before the centroid readout of map 2, ``ICubConfig.readout``, seeds 110-114
+    those before the bent wrist in babbling,
+    :data:`~sigmapi.experiments.icub.reaching.BABBLE_WRIST`, and map 2's narrower code of map
+    1's place, :data:`~sigmapi.experiments.icub.maps.HEAD_WIDTH`)."""
     quick_seeds = (0,)
     """The seed of ``--quick``: a tuning seed."""
     default_out = "icub"
