@@ -355,7 +355,7 @@ def compile_once(cfg: SOMConfig, measure_first: bool = False) -> float:
     (:func:`_compile_measuring`). On a fresh install two workers that start at once, one
     each way round, then compile each half once and load the other half from numba's cache
     (``NUMBA_CACHE_DIR``) rather than both compiling everything: 12 s of wall against 20 s
-    for a ``paper-2d`` job on two cores (``docs/guide/speed.md``).
+    for a ``paper-2d`` job on two cores (``docs/guide/reproduce.md``, "Times").
     """
     from sigmapi.analysis.curves import LearningCurve
 
