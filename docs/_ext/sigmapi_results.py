@@ -90,6 +90,7 @@ READERS: dict[str, tuple[str, str]] = {
     "chain-winner": ("chain.result:ChainResult", ""),
     "compare": ("compare.result:CompareResult", ""),
     "icub": ("icub.result:ICubResult", ""),
+    "icub-check": ("icub.result:ICubResult", ""),
     "neurons": ("neurons.result:NeuronsResult", ""),
     "paper-1d-procedures": ("sweep.run:SweepResult", ""),
     "paper-2d-procedures": ("sweep.run:SweepResult", ""),

@@ -340,6 +340,25 @@ def test_map_2_reads_map_1s_place_in_hills_of_the_head_width():
         ICubConfig(head_width=0.0)
 
 
+def test_the_exact_map_1_codes_the_true_head_direction_on_map_1s_grid():
+    from types import SimpleNamespace
+
+    from sigmapi.codes import PopulationCode
+    from sigmapi.envs.icub import HEAD_BOX
+    from sigmapi.experiments.icub.maps import _ExactMap1
+
+    map1 = SimpleNamespace(map_shape=(4, 3), config=SimpleNamespace(code_width=1.0))
+    lo, hi = HEAD_BOX[:, 0], HEAD_BOX[:, 1]
+    head = np.stack([lo, hi, 0.25 * lo + 0.75 * hi, lo - 1.0])  # the last outside: clipped
+    views = SimpleNamespace(head=head)
+    pos = np.array([[0.0, 0.0], [1.0, 1.0], [0.75, 0.75], [0.0, 0.0]])
+    for width, expect in ((None, 1.0), (0.85, 0.85)):
+        ref = _ExactMap1(map1, map1, 64, head_width=width)  # type: ignore[arg-type]
+        got = ref.head(views)  # type: ignore[arg-type]
+        assert np.allclose(got, PopulationCode((4, 3), expect).encode(pos))
+    assert np.argmax(got[1]) == 11 and np.argmax(got[0]) == 0  # far corner, near corner
+
+
 def test_the_maps_anneal_their_learning_rate_past_the_presets_end():
     from sigmapi.config import load_preset
     from sigmapi.experiments.icub.maps import EPS, SIGMA, som_config
@@ -362,6 +381,11 @@ def test_a_tiny_run_writes_every_key(rendering, tmp_path):
     d = json.loads(write_result(res, tmp_path).read_text())
     for name in ("map1", "map2"):
         assert {"order_r2", "direction_error_deg"} <= set(d["maps"][name])
+    exact = d["maps"]["map2"]["exact_map1"]
+    assert {"order_r2", "direction_error_deg", "folded_seeds"} <= set(exact)
+    ratio = d["maps"]["map2"]["direction_error_deg"] / exact["direction_error_deg"]
+    assert np.isclose(d["maps"]["map2"]["error_ratio_to_exact_map1"], ratio)
+    assert "exact map 1" in res.table()
     assert set(d["success"]) == {"learned", "true_direction", "retina", "retina_gaze",
                                  "scripted_ik"}  # fmt: skip
     assert set(d["success_servo"]) == {"learned", "true_direction", "retina", "retina_gaze"}

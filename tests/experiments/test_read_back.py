@@ -29,6 +29,7 @@ KEPT: list[tuple[str, Any, str]] = [
     ("chain", ChainResult, ""),
     ("compare", CompareResult, ""),
     ("icub", ICubResult, ""),
+    ("icub-check", ICubResult, ""),
     ("neurons", NeuronsResult, ""),
     ("reach", ReachResult, ""),
     ("reproduce", ReproduceResult, "metrics"),

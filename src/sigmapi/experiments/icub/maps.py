@@ -21,7 +21,10 @@ it should code (head-centred for map 1, torso-centred for map 2): the metrics of
 ``direction_error_deg`` (RMS angle between a test view's true direction and the mean true
 direction of the calibration views its winner won). Beside them: a same-size Kohonen map
 trained on the true directions themselves (the quantisation floor) and a cubic least-squares
-fit from the measured angles (the information bound).
+fit from the measured angles (the information bound); and for map 2, the same Sigma-Pi map
+(same settings, same seed) fed an exact map 1 (:func:`exact_map1`: the true head-centred
+direction as a code on map 1's grid), which tells what of map 2's error the rule itself makes
+and what the chain adds.
 """
 
 from __future__ import annotations
@@ -38,6 +41,7 @@ from sigmapi.config import SOMConfig, load_preset
 from sigmapi.envs.icub import (
     GAZE_HIGH,
     GAZE_LOW,
+    HEAD_BOX,
     ICubScene,
     ViewBatch,
     direction_vectors,
@@ -63,6 +67,7 @@ __all__ = [
     "ChainMaps",
     "MapData",
     "angle_error_deg",
+    "exact_map1",
     "eye_position",
     "learn_chain",
     "neck_position",
@@ -225,6 +230,30 @@ class ChainMaps:
         if stage == 1:
             return self.map1.winner(*self.inputs1(v), hard=True)
         return self.map2.winner(*self.inputs2(v), hard=True)
+
+
+class _ExactMap1(ChainMaps):
+    """A chain whose map 1 is exact: map 2 reads a code on map 1's grid (hills as wide as
+    :meth:`ChainMaps.head`'s) of the true head-centred direction, scaled over
+    :data:`~sigmapi.envs.icub.HEAD_BOX`. A reference for the analysis only: it reads the
+    truth, which the robot never does."""
+
+    def head(self, v: ViewBatch) -> Array:
+        m = self.map1
+        pos = np.clip((v.head - HEAD_BOX[:, 0]) / (HEAD_BOX[:, 1] - HEAD_BOX[:, 0]), 0.0, 1.0)
+        width = m.config.code_width if self.head_width is None else self.head_width
+        return PopulationCode(m.map_shape, width).encode(pos)
+
+
+def exact_map1(chain: ChainMaps, train: MapData, cal: MapData, test: MapData) -> dict[str, Any]:
+    """Map 2 again, with its settings and seed, trained on ``train``'s head turns with map 1
+    exact (:class:`_ExactMap1`), scored as :func:`score` scores map 2: the error and order the
+    rule reaches when all of map 1's error is taken away."""
+    ref = _ExactMap1(chain.map1, chain.map1, chain.eye_size, chain.code, chain.head_width)
+    ref.map2 = SigmaPiSOM(chain.map2.config)
+    a, b = train.head
+    ref.map2.fit((*ref.inputs2(a), *ref.inputs2(b)))
+    return score(ref, 2, cal, test)
 
 
 def response_centroid(model: SigmaPiSOM, x: Array, y: Array, radius: float) -> Array:

@@ -51,6 +51,29 @@ _MAP_KEYS = (
 )
 
 
+def _exact_map1(rows: list[dict[str, Any]], true: list[dict[str, Any]]) -> dict[str, Any]:
+    """Map 2 fed an exact map 1 (:func:`~sigmapi.experiments.icub.maps.exact_map1`), over the
+    seeds, and the chain's error over its error."""
+    ex = [r["exact_map1"] for r in rows]
+    err = [e["direction_error_deg"] for e in ex]
+    return {
+        "exact_map1": {
+            "order_r2": float(np.median([e["order_r2"] for e in ex])),
+            "order_r2_worst": float(min(e["order_r2"] for e in ex)),
+            "direction_error_deg": float(np.median(err)),
+            "ordered_seeds": int(sum(e["order_r2"] >= ORDERED_R2 for e in ex)),
+            "folded_seeds": int(sum(bool(e["folded"]) for e in ex)),
+            "error_ratio_to_true_direction": float(
+                np.median([e / t["direction_error_deg"] for e, t in zip(err, true, strict=True)])
+            ),
+            "per_seed": [{k: _plain(e[k]) for k in _MAP_KEYS} for e in ex],
+        },
+        "error_ratio_to_exact_map1": float(
+            np.median([r["direction_error_deg"] / e for r, e in zip(rows, err, strict=True)])
+        ),
+    }
+
+
 def _plain(v: Any) -> Any:
     if isinstance(v, (np.floating, np.integer, np.bool_)):
         return v.item()
@@ -117,6 +140,8 @@ class ICubResult:
                 },
                 "per_seed": [{k: _plain(r[k]) for k in _MAP_KEYS} for r in rows],
             }
+            if "exact_map1" in rows[0]:
+                out[name].update(_exact_map1(rows, true))
         return out
 
     def success(self) -> dict[str, float]:
@@ -212,6 +237,14 @@ class ICubResult:
                 f"{name:<6}{m['order_r2']:>10.3f}{m['order_r2_worst']:>8.3f}"
                 f"{m['direction_error_deg']:>8.2f}d{m['true_direction_map']['direction_error_deg']:>9.2f}d"
                 f"{m['supervised']['direction_error_deg']:>10.2f}d{m['folded_seeds']:>8d}"
+            )
+        ex = maps["map2"].get("exact_map1")
+        if ex is not None:
+            lines.append(
+                f"map 2 fed an exact map 1: order R2 {ex['order_r2']:.3f} (worst "
+                f"{ex['order_r2_worst']:.3f}), {ex['direction_error_deg']:.2f}d, "
+                f"{ex['error_ratio_to_true_direction']:.2f}x the true map's; folded "
+                f"{ex['folded_seeds']}"
             )
         lines.append("reach success: " + ", ".join(f"{k} {v:.2f}" for k, v in succ.items()))
         if self.servo():

@@ -37,6 +37,7 @@ from sigmapi.experiments.icub.config import QUICK, ICubConfig
 from sigmapi.experiments.icub.maps import (
     ChainMaps,
     MapData,
+    exact_map1,
     learn_chain,
     score,
     supervised_fit,
@@ -127,6 +128,8 @@ def _run_seed(job: _Job) -> dict[str, Any]:
             train, job.cal, job.test, stage, cfg.map_shape, cfg.iterations, seed
         )
         m["supervised"] = supervised_fit(train, job.test, stage, scene.eye_size)
+        if stage == 2:
+            m["exact_map1"] = exact_map1(chain, train, job.cal, job.test)
         out["maps"][f"map{stage}"] = m
     out["map_cpu_s"] = time.process_time() - t0
     rng = PLAN.rng(seed, "babbling")
@@ -212,13 +215,15 @@ class ICubExperiment(Experiment[ICubConfig]):
     summary = "the iCub learns a chain of maps from its eyes and neck, then learns to reach"
     config_type = ICubConfig
     quick = QUICK
-    seeds = (115, 116, 117, 118, 119)
+    seeds = (123, 124, 125, 126, 127)
     """The seeds of the acceptance run: none of them was tuned on (tuning used seeds 0-2; seeds
     100-104 measured the settings before :data:`~sigmapi.experiments.icub.maps.EPS`, seeds
     105-109 those before the centroid readout of map 2, ``ICubConfig.readout``, seeds 110-114
     those before the bent wrist in babbling,
     :data:`~sigmapi.experiments.icub.reaching.BABBLE_WRIST`, and map 2's narrower code of map
-    1's place, :data:`~sigmapi.experiments.icub.maps.HEAD_WIDTH`)."""
+    1's place, :data:`~sigmapi.experiments.icub.maps.HEAD_WIDTH`; seeds 115-119 and the check on
+    120-122 measured today's settings before map 2's reference fed an exact map 1,
+    :func:`~sigmapi.experiments.icub.maps.exact_map1`, which changes no setting)."""
     quick_seeds = (0,)
     """The seed of ``--quick``: a tuning seed."""
     default_out = "icub"
