@@ -206,7 +206,12 @@ class ChainMaps:
             place = response_centroid(m, x, y, 1.0)
         else:
             place = m.map_coords[m.winner(x, y, hard=True)]
-        pos = place / (np.asarray(m.map_shape) - 1.0)
+        return self.place_code(place / (np.asarray(m.map_shape) - 1.0))
+
+    def place_code(self, pos: Array) -> Array:
+        """A population code on map 1's grid, hills :attr:`head_width` wide, of positions
+        ``pos`` ``(B, 2)`` in [0, 1] per axis."""
+        m = self.map1
         width = m.config.code_width if self.head_width is None else self.head_width
         return PopulationCode(m.map_shape, width).encode(pos)
 
@@ -233,16 +238,14 @@ class ChainMaps:
 
 
 class _ExactMap1(ChainMaps):
-    """A chain whose map 1 is exact: map 2 reads a code on map 1's grid (hills as wide as
-    :meth:`ChainMaps.head`'s) of the true head-centred direction, scaled over
+    """A chain whose map 1 is exact: map 2 reads :meth:`ChainMaps.place_code` of the true
+    head-centred direction, scaled over
     :data:`~sigmapi.envs.icub.HEAD_BOX`. A reference for the analysis only: it reads the
     truth, which the robot never does."""
 
     def head(self, v: ViewBatch) -> Array:
-        m = self.map1
-        pos = np.clip((v.head - HEAD_BOX[:, 0]) / (HEAD_BOX[:, 1] - HEAD_BOX[:, 0]), 0.0, 1.0)
-        width = m.config.code_width if self.head_width is None else self.head_width
-        return PopulationCode(m.map_shape, width).encode(pos)
+        pos = (v.head - HEAD_BOX[:, 0]) / (HEAD_BOX[:, 1] - HEAD_BOX[:, 0])
+        return self.place_code(np.clip(pos, 0.0, 1.0))
 
 
 def exact_map1(chain: ChainMaps, train: MapData, cal: MapData, test: MapData) -> dict[str, Any]:

@@ -51,27 +51,25 @@ _MAP_KEYS = (
 )
 
 
-def _exact_map1(rows: list[dict[str, Any]], true: list[dict[str, Any]]) -> dict[str, Any]:
-    """Map 2 fed an exact map 1 (:func:`~sigmapi.experiments.icub.maps.exact_map1`), over the
-    seeds, and the chain's error over its error."""
-    ex = [r["exact_map1"] for r in rows]
-    err = [e["direction_error_deg"] for e in ex]
+def _scored(rows: list[dict[str, Any]], true: list[dict[str, Any]]) -> dict[str, Any]:
+    """A map's scores ``rows`` (one per seed) over the seeds: medians, the worst, how many
+    seeds were ordered and flagged, its error over the true-direction map's ``true``."""
+    ratio = [
+        r["direction_error_deg"] / t["direction_error_deg"] for r, t in zip(rows, true, strict=True)
+    ]
     return {
-        "exact_map1": {
-            "order_r2": float(np.median([e["order_r2"] for e in ex])),
-            "order_r2_worst": float(min(e["order_r2"] for e in ex)),
-            "direction_error_deg": float(np.median(err)),
-            "ordered_seeds": int(sum(e["order_r2"] >= ORDERED_R2 for e in ex)),
-            "folded_seeds": int(sum(bool(e["folded"]) for e in ex)),
-            "error_ratio_to_true_direction": float(
-                np.median([e / t["direction_error_deg"] for e, t in zip(err, true, strict=True)])
-            ),
-            "per_seed": [{k: _plain(e[k]) for k in _MAP_KEYS} for e in ex],
-        },
-        "error_ratio_to_exact_map1": float(
-            np.median([r["direction_error_deg"] / e for r, e in zip(rows, err, strict=True)])
-        ),
+        "order_r2": float(np.median([r["order_r2"] for r in rows])),
+        "direction_error_deg": float(np.median([r["direction_error_deg"] for r in rows])),
+        "order_r2_worst": float(min(r["order_r2"] for r in rows)),
+        "ordered_seeds": int(sum(r["order_r2"] >= ORDERED_R2 for r in rows)),
+        "folded_seeds": int(sum(bool(r["folded"]) for r in rows)),
+        "error_ratio_to_true_direction": float(np.median(ratio)),
+        "error_ratio_worst": float(max(ratio)),
     }
+
+
+def _per_seed(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    return [{k: _plain(r[k]) for k in _MAP_KEYS} for r in rows]
 
 
 def _plain(v: Any) -> Any:
@@ -115,18 +113,8 @@ class ICubResult:
         for name in ("map1", "map2"):
             rows = [s["maps"][name] for s in self.per_seed]
             true = [r["true_direction_map"] for r in rows]
-            ratio = [
-                r["direction_error_deg"] / t["direction_error_deg"]
-                for r, t in zip(rows, true, strict=True)
-            ]
             out[name] = {
-                "order_r2": float(np.median([r["order_r2"] for r in rows])),
-                "direction_error_deg": float(np.median([r["direction_error_deg"] for r in rows])),
-                "order_r2_worst": float(min(r["order_r2"] for r in rows)),
-                "ordered_seeds": int(sum(r["order_r2"] >= ORDERED_R2 for r in rows)),
-                "folded_seeds": int(sum(bool(r["folded"]) for r in rows)),
-                "error_ratio_to_true_direction": float(np.median(ratio)),
-                "error_ratio_worst": float(max(ratio)),
+                **_scored(rows, true),
                 "true_direction_map": {
                     "order_r2": float(np.median([t["order_r2"] for t in true])),
                     "direction_error_deg": float(
@@ -138,10 +126,20 @@ class ICubResult:
                         np.median([r["supervised"]["direction_error_deg"] for r in rows])
                     )
                 },
-                "per_seed": [{k: _plain(r[k]) for k in _MAP_KEYS} for r in rows],
+                "per_seed": _per_seed(rows),
             }
             if "exact_map1" in rows[0]:
-                out[name].update(_exact_map1(rows, true))
+                # map 2 fed an exact map 1 (maps.exact_map1), and the chain's error over its
+                ex = [r["exact_map1"] for r in rows]
+                out[name]["exact_map1"] = {**_scored(ex, true), "per_seed": _per_seed(ex)}
+                out[name]["error_ratio_to_exact_map1"] = float(
+                    np.median(
+                        [
+                            r["direction_error_deg"] / e["direction_error_deg"]
+                            for r, e in zip(rows, ex, strict=True)
+                        ]
+                    )
+                )
         return out
 
     def success(self) -> dict[str, float]:
