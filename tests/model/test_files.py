@@ -39,14 +39,30 @@ def _small(backend="fast", **kw):
 # ---------------------------------------------------------------------------- versions, sizes
 
 
+CROSS_MACHINE_ULPS = {"fast": 0, "reference": 64}
+"""How far a v1 file, written on another machine, may be from a fresh fit on this one.
+
+The fast backend's arithmetic is order-fixed and BLAS-free (numba loops without fastmath, so no
+reassociation or FMA contraction): bit for bit on every CPU. The reference backend sums through
+NumPy's ``einsum`` and ``@`` (OpenBLAS), whose summation order and FMA use follow the CPU's SIMD
+path (AVX-512, AVX2, SSE): measured 4 ulps after 250 iterations and 6 after 300 between the
+AVX-512 and AVX2 paths (``NPY_DISABLE_CPU_FEATURES="X86_V4 AVX512_ICL AVX512_SPR"``), the
+difference an AMD EPYC shows. 64 ulps is ten times that; any change to the rule moves the
+weights by orders of magnitude more. Within one machine a round trip stays bit exact
+(``test_round_trip_and_continuation_are_bit_exact``)."""
+
+
 @pytest.mark.parametrize("backend", sorted(p.stem[len("v1-") :] for p in DATA.glob("v1-*.npz")))
-def test_version_1_files_still_load_and_continue_bit_exact(backend):
+def test_version_1_files_still_load_and_continue(backend):
     old = sigmapi.load(DATA / f"v1-{backend}.npz")
     assert old.t_ == 250 and old.backend == backend
     fresh = SigmaPiSOM(**V1_CFG, backend=backend).fit(iterations=250)
-    np.testing.assert_array_equal(old.weights_, fresh.weights_)
-    np.testing.assert_array_equal(
-        old.partial_fit(iterations=50).weights_, fresh.partial_fit(iterations=50).weights_
+    ulps = CROSS_MACHINE_ULPS[backend]
+    np.testing.assert_array_max_ulp(old.weights_, fresh.weights_, maxulp=ulps)
+    np.testing.assert_array_max_ulp(
+        old.partial_fit(iterations=50).weights_,
+        fresh.partial_fit(iterations=50).weights_,
+        maxulp=ulps,
     )
     assert read_archive(DATA / f"v1-{backend}.npz")[0]["version"] == 1
 
