@@ -19,7 +19,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("cli",),
     ("experiments",),
     ("envs", "agents", "baselines", "neurons", "viz"),
-    ("analysis", "metrics", "checkpoints", "executor", "export"),
+    ("analysis", "metrics", "checkpoints", "executor", "export", "nwb"),
     ("model", "_outputs"),
     ("io", "config", "kernels", "tasks", "rules"),
     ("codes", "schedules"),

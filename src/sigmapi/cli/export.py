@@ -1,5 +1,6 @@
 """``sigmapi export MODEL --format onnx --out FILE``: a trained map for callers outside Python
-(:mod:`sigmapi.export`; docs/guide/export.md)."""
+(:mod:`sigmapi.export`; docs/guide/export.md); ``--format nwb``: the map as a recorded brain
+area in an NWB file (:mod:`sigmapi.nwb`; docs/guide/other-tools-nwb.md)."""
 
 from __future__ import annotations
 
@@ -13,7 +14,7 @@ from sigmapi.errors import UsageError
 
 __all__ = ["add_arguments", "cmd_export"]
 
-FORMATS = ("onnx",)
+FORMATS = ("onnx", "nwb")
 
 
 def cmd_export(args: argparse.Namespace) -> int:
@@ -25,6 +26,8 @@ def cmd_export(args: argparse.Namespace) -> int:
             "file written by `sigmapi train` or `sigmapi reproduce`"
         )
     out = check_output(args.out, args.force, "--out")
+    if args.format == "nwb":
+        return _export_nwb(args, out)
     from sigmapi.export import OPSET, export_onnx
 
     opset = OPSET if args.opset is None else args.opset
@@ -33,12 +36,23 @@ def cmd_export(args: argparse.Namespace) -> int:
     return 0
 
 
+def _export_nwb(args: argparse.Namespace, out: Path) -> int:
+    """``--format nwb``: :func:`sigmapi.nwb.export_nwb` (the ONNX options do not apply)."""
+    if args.opset is not None or args.inputs != "codes":
+        raise UsageError("--opset and --inputs apply to --format onnx only; drop them for nwb")
+    from sigmapi.nwb import export_nwb
+
+    export_nwb(args.model, out, force=True)
+    print(f"wrote {out} ({out.stat().st_size:,} bytes)", file=sys.stderr)
+    return 0
+
+
 def add_arguments(p: Any) -> None:
     """Add ``sigmapi export``'s options and handler to its parser ``p`` (the command's line in
     :data:`sigmapi.cli.COMMANDS`)."""
     p.add_argument("model", help="model file written by `sigmapi train` or `sigmapi reproduce`")
-    p.add_argument("--format", required=True, choices=FORMATS, help="file format (onnx)")
-    p.add_argument("--out", required=True, help="file to write, e.g. map.onnx")
+    p.add_argument("--format", required=True, choices=FORMATS, help="file format (onnx, nwb)")
+    p.add_argument("--out", required=True, help="file to write, e.g. map.onnx, map.nwb")
     p.add_argument("--opset", type=int, help="ONNX opset of the graph (default 21; 18 or later)")
     p.add_argument(
         "--inputs",

@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from sigmapi import _validate
+from sigmapi.analysis.monkey import EYE_GRID, N_RETINA, RESPONDS
 from sigmapi.analysis.physiology import GAZES, check_gaze_axes
 
 __all__ = ["PhysiologyConfig"]
@@ -31,6 +32,18 @@ class PhysiologyConfig:
     """For each retinal axis, the gaze axis that moves the receptive fields along it (empty:
     the same axis). The iCub's retina is (horizontal, vertical) and its gaze codes (tilt,
     pan): ``1,0``."""
+
+    eye_grid: tuple[float, ...] = field(default=EYE_GRID, metadata={"sep": ","})
+    """The monkey protocol's eye positions along each gaze axis (every combination is a
+    fixation; ``0.3,0.5,0.7``: the studies' 3 x 3 grid)."""
+    n_retina: int = N_RETINA
+    """The monkey protocol's stimulus positions along each retinal axis."""
+    responds: float = RESPONDS
+    """The monkey protocol counts a field at a fixation where the unit's best response there
+    is at least this share of its best at any fixation."""
+    nwb: bool = False
+    """Also write the recording as an NWB file, physiology.nwb, into --out (needs the nwb
+    extra: pip install 'sigmapi[nwb]')."""
 
     def __post_init__(self) -> None:
         if not isinstance(self.model, str) or not self.model:
@@ -62,3 +75,16 @@ class PhysiologyConfig:
         axes = tuple(self.gaze_axes)  # the model's dimension is checked where it is loaded
         check_gaze_axes(axes, len(axes), "e.g. --gaze-axes 1,0")
         object.__setattr__(self, "gaze_axes", axes)
+        grid = [
+            _validate.number("eye_grid", g, 0.0, 1.0, fix="fractions of the gaze axis")
+            for g in self.eye_grid
+        ]
+        if len(set(grid)) < 3:
+            raise _validate.fail(
+                "eye_grid", "at least 3 distinct eye positions", list(self.eye_grid),
+                "e.g. --eye-grid 0.3,0.5,0.7",
+            )  # fmt: skip
+        object.__setattr__(self, "eye_grid", tuple(sorted(set(grid))))
+        _validate.integer("n_retina", self.n_retina, 5, 101, fix=f"e.g. {N_RETINA}")
+        _validate.number("responds", self.responds, 0.0, 1.0, fix=f"e.g. {RESPONDS}")
+        _validate.boolean("nwb", self.nwb)

@@ -30,7 +30,9 @@ class PhysiologyResult:
         """``reference_frame_index`` (per unit, the trained map), ``trained`` and
         ``random_start`` (every index per unit, medians), ``comparison`` (Kolmogorov-Smirnov
         between the two index distributions), ``body_centred`` (median >= 0.9),
-        ``tuning``, ``settings``, ``seconds``."""
+        ``tuning``, ``monkey`` (the gain-field studies' protocol,
+        :func:`~sigmapi.analysis.monkey.monkey_protocol`, with the published numbers),
+        ``settings``, ``seconds``."""
         med = self.data["trained"]["median_reference_frame_index"]
         return {
             **self.data,
@@ -41,6 +43,10 @@ class PhysiologyResult:
                 "n_probe": self.config.n_probe,
                 "body_slope": list(self.config.body_slope),
                 "gaze_axes": list(self.config.gaze_axes),
+                "eye_grid": list(self.config.eye_grid),
+                "n_retina": self.config.n_retina,
+                "responds": self.config.responds,
+                "nwb": self.config.nwb,
             },
             "seconds": self.seconds,
         }
@@ -68,7 +74,26 @@ class PhysiologyResult:
                 f"trained vs random start: KS {c['ks']:.3f}, p = {c['p_value']:.2g} "
                 f"(n = {c['n'][0]}, {c['n'][1]})"
             )
+        rows.append(self._monkey_line())
         return "\n".join(rows)
+
+    def _monkey_line(self) -> str:
+        m = self.data["monkey"]
+        share = m["gain_modulated_share"]
+        idx, r2 = m["reference_frame_index"]["median"], m["gain_r2"]["median"]
+        left = ", ".join(f"{v} {k.replace('_', ' ')}" for k, v in m["left_out"].items())
+        return (
+            f"monkey protocol ({len(m['fixations'])} fixations, {m['n_retina']} stimuli per "
+            f"axis): {m['admitted']} of {m['units']} units admitted (left out: {left}); "
+            + (f"gain-modulated {100 * share:.0f} %" if share is not None else "no unit admitted")
+            + (f", planar-fit R^2 median {r2:.2f}" if r2 is not None else "")
+            + (f", reference-frame index median {idx:.2f}" if idx is not None else "")
+            + (
+                f" (every unit: {m['reference_frame_index_all']['median']:.2f})"
+                if m["reference_frame_index_all"]["median"] is not None
+                else ""
+            )
+        )
 
     def caption(self) -> str:
         """The figure's caption, computed from the data."""
@@ -100,11 +125,19 @@ class PhysiologyResult:
             f"modulation over gazes, median trained {t['median_peak_modulation']:.2f}, random "
             f"{s['median_peak_modulation']:.2f}."
         )
+        text += (
+            " Bottom: the gain-field studies' protocol (a grid of fixations, stimuli on a "
+            "grid of retinal positions) beside the monkeys' published numbers (hatched: not "
+            "verified against the paper): " + self._monkey_line() + "."
+        )
         return text
 
     def figure(self, out_dir: Path) -> list[Path]:
-        """``physiology.png`` and its caption ``physiology.txt``."""
+        """``physiology.png`` and its caption ``physiology.txt`` (and the NWB file the run
+        wrote there, ``--nwb``, in the list of files written)."""
         from sigmapi.viz.neurons import physiology_figure  # matplotlib: only when drawing
 
         out = Path(out_dir) / FIGURE
-        return [save_captioned(physiology_figure(self.to_dict()), out, self.caption(), dpi=110)]
+        fig = save_captioned(physiology_figure(self.to_dict()), out, self.caption(), dpi=110)
+        nwb = self.data.get("nwb")
+        return [fig, *([Path(out_dir) / nwb] if nwb else [])]

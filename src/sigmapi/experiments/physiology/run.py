@@ -10,9 +10,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from sigmapi.analysis.monkey import fixation_protocol, monkey_protocol
 from sigmapi.analysis.physiology import compare_distributions, record, tuning_curves
 from sigmapi.codes import PopulationCode
-from sigmapi.errors import DataError
+from sigmapi.errors import DataError, UsageError
 from sigmapi.executor import Executor
 from sigmapi.experiments.base import Experiment, register
 from sigmapi.model.som import SigmaPiSOM, load_model
@@ -22,7 +23,10 @@ from sigmapi.tasks import TwoViewSampler
 from .config import PhysiologyConfig
 from .result import PhysiologyResult
 
-__all__ = ["PHYSIOLOGY", "PhysiologyExperiment", "RandomStart", "record_model"]
+__all__ = ["NWB_FILE", "PHYSIOLOGY", "PhysiologyExperiment", "RandomStart", "record_model"]
+
+NWB_FILE = "physiology.nwb"
+"""The NWB file ``sigmapi physiology --nwb --out DIR`` writes into DIR."""
 
 
 class RandomStart:
@@ -74,9 +78,12 @@ def _tuning(model: Any, cfg: PhysiologyConfig, n_probe: int | None) -> dict[str,
     return out
 
 
-def record_model(cfg: PhysiologyConfig) -> dict[str, Any]:
-    """The trained map's and its random start's per-unit indices, their comparison and the
-    tuning curves the figure draws."""
+def record_model(cfg: PhysiologyConfig, recording: dict[str, Any] | None = None) -> dict[str, Any]:
+    """The trained map's and its random start's per-unit indices, their comparison, the
+    tuning curves the figure draws and the monkey protocol (``monkey``,
+    :func:`~sigmapi.analysis.monkey.monkey_protocol`); ``recording``, a dict, receives the
+    model and the protocol's raw :func:`~sigmapi.analysis.monkey.fixation_protocol` (for the
+    NWB file)."""
     path = Path(cfg.model)
     if not path.is_file():
         raise DataError(
@@ -89,6 +96,12 @@ def record_model(cfg: PhysiologyConfig) -> dict[str, Any]:
     axes = cfg.gaze_axes or None  # record() checks them against the model's axes
     trained = record(model, cfg.gazes, n_probe, slope, axes)
     start = record(RandomStart(model), cfg.gazes, n_probe, slope, axes)
+    raw = fixation_protocol(model, cfg.eye_grid, cfg.n_retina)
+    monkey = monkey_protocol(
+        model, cfg.eye_grid, cfg.n_retina, slope, axes, responds=cfg.responds, recording=raw
+    )
+    if recording is not None:
+        recording.update(model=model, fixation=raw)
     return {
         "model": str(path),
         "map_shape": list(model.map_shape),
@@ -100,6 +113,7 @@ def record_model(cfg: PhysiologyConfig) -> dict[str, Any]:
             trained["reference_frame_index"], start["reference_frame_index"]
         ),
         "tuning": _tuning(model, cfg, n_probe),
+        "monkey": monkey,
     }
 
 
@@ -113,6 +127,7 @@ class PhysiologyExperiment(Experiment[PhysiologyConfig]):
     config_type = PhysiologyConfig
     seeds = (0,)
     default_out = None
+    writes = ("physiology.png", "physiology.txt", NWB_FILE)
 
     def run(
         self,
@@ -124,7 +139,27 @@ class PhysiologyExperiment(Experiment[PhysiologyConfig]):
         progress: Progress | None = None,
     ) -> PhysiologyResult:
         start = time.perf_counter()
-        return PhysiologyResult(config, record_model(config), time.perf_counter() - start)
+        if config.nwb and out is None:
+            raise UsageError("--nwb writes physiology.nwb into --out; give --out DIR")
+        if config.nwb:
+            from sigmapi.nwb import pynwb_module
+
+            pynwb_module()  # the extra's hint before the recording
+        recording: dict[str, Any] = {}
+        data = record_model(config, recording)
+        if config.nwb and out is not None:
+            from sigmapi.nwb import export_nwb
+
+            export_nwb(
+                recording["model"],
+                Path(out) / NWB_FILE,
+                physiology=data,
+                fixation=recording["fixation"],
+                model_path=config.model,
+                force=True,
+            )
+            data["nwb"] = NWB_FILE
+        return PhysiologyResult(config, data, time.perf_counter() - start)
 
 
 PHYSIOLOGY = register(PhysiologyExperiment())

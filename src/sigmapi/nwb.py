@@ -1,0 +1,284 @@
+"""A trained map as a recorded brain area in an NWB file (Neurodata Without Borders, the DANDI
+archive's format): :func:`export_nwb`, ``sigmapi export MODEL --format nwb --out FILE.nwb``
+and ``sigmapi physiology MODEL --nwb --out DIR``.
+
+The file holds what :mod:`sigmapi.analysis.monkey`'s protocol records
+(docs/guide/neurons.md):
+
+- the **trials** table: one trial per condition of the protocol, a fixation of the eye grid
+  with a stimulus at a point of the retinal grid: columns ``retinal_position`` and ``gaze``
+  (one value per axis, fractions of the axis), ``body_position`` (the z of that view pair,
+  the model's relation ``forward(x, y)``), ``fixation`` and ``stimulus`` (the indices into
+  the two grids); trials are 1 s apart, each 0.5 s long (the protocol's counting window);
+- the **rates**: processing module ``misc``, TimeSeries ``responses``
+  ``(trials, units)``, the map's responses ``h = x^T W y`` to each trial (arbitrary units;
+  timestamps the trials' starts), and ``rates`` in Hz as the protocol scales them (the unit's
+  best response at 100 Hz);
+- the **units** table: one row per map unit, ``grid_position`` (its index on the map),
+  ``preferred_z``, ``admitted`` (by the protocol), ``reference_frame_index`` (NaN where not
+  admitted), ``gain_slope``, ``gain_r2`` (planarity of the gain field), ``gain_p_value`` and
+  ``gain_modulated``, and ``spike_times``: Poisson spikes drawn at the unit's rate in each
+  trial's window. sigmapi's spiking deployment (:mod:`sigmapi.neurons`) is not run by the
+  export; the table's description says so;
+- the **subject**: a simulated area (``species`` ``"in silico"``, sex ``"U"``, born when its
+  model file was written);
+- the **provenance**: ``source_script`` (``sigmapi <version>``), and in ``notes`` a JSON
+  object with the sigmapi version, the model's config, seed, iterations and the SHA-256 of
+  the model file (or of its weights, for a model not read from a file).
+
+pynwb is imported only here, when a file is made (the ``nwb`` extra); the file is written
+to a temp file beside the target and renamed (:func:`sigmapi.io.atomic_write`).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import tempfile
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from sigmapi._version import __version__
+from sigmapi.analysis.monkey import PEAK_RATE, WINDOW, fixation_protocol, monkey_protocol
+from sigmapi.errors import UsageError
+from sigmapi.io import atomic_write, digest
+from sigmapi.model.som import SigmaPiSOM, load_model
+
+__all__ = ["PERIOD", "export_nwb", "nwb_file", "pynwb_module"]
+
+PERIOD = 1.0
+"""Seconds from one trial's start to the next's."""
+
+_NEEDS = "install the nwb extra: pip install 'sigmapi[nwb]'"
+
+
+def pynwb_module() -> Any:
+    """The pynwb package, or a :class:`~sigmapi.errors.UsageError` with the one-line hint."""
+    try:
+        import pynwb
+    except ImportError:
+        raise UsageError(f"writing NWB files needs the pynwb package; {_NEEDS}") from None
+    return pynwb
+
+
+def _file_digest(path: str | Path) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def _provenance(model: SigmaPiSOM, model_path: str | Path | None) -> dict[str, Any]:
+    cfg = model.config
+    fields = {k: getattr(cfg, k) for k in cfg.__dataclass_fields__}
+    return {
+        "sigmapi_version": __version__,
+        "model_file": None if model_path is None else str(model_path),
+        "model_sha256": _file_digest(model_path) if model_path is not None else None,
+        "weights_sha256": digest(np.asarray(model.weights_)),
+        "seed": cfg.seed,
+        "iterations": int(model.t_),
+        "config": json.loads(json.dumps(fields, default=list)),
+    }
+
+
+def nwb_file(
+    model: SigmaPiSOM,
+    *,
+    physiology: dict[str, Any] | None = None,
+    fixation: dict[str, Any] | None = None,
+    model_path: str | Path | None = None,
+) -> Any:
+    """The ``pynwb.NWBFile`` of a fitted ``model`` (module docstring).
+
+    ``fixation`` and ``physiology``: a :func:`~sigmapi.analysis.monkey.fixation_protocol`
+    recording and the ``sigmapi physiology`` result (its ``monkey`` entry) made from it, as
+    ``sigmapi physiology --nwb`` passes them; else the protocol runs here with its defaults.
+    ``model_path``: the file the model was read from (its digest goes into the provenance).
+    """
+    pynwb = pynwb_module()
+    from hdmf.backends.hdf5 import H5DataIO
+    from hdmf.common import VectorData, VectorIndex
+    from pynwb.epoch import TimeIntervals
+    from pynwb.file import Subject
+    from pynwb.misc import Units
+
+    if fixation is None:
+        fixation = fixation_protocol(model)
+    monkey = (physiology or {}).get("monkey") or monkey_protocol(model, recording=fixation)
+    eyes, stimuli, resp = fixation["eyes"], fixation["stimuli"], fixation["responses"]
+    n_e, n_p, k = resp.shape
+    prov = _provenance(model, model_path)
+    ident = prov["model_sha256"] or prov["weights_sha256"]
+    now = datetime.now(UTC)
+    # the map's "birth": when its model file was written (the end of its training)
+    born = now if model_path is None else datetime.fromtimestamp(os.stat(model_path).st_mtime, UTC)
+    nwb = pynwb.NWBFile(
+        session_description=(
+            "A Sigma-Pi self-organizing map (sigmapi) recorded as a brain area: every unit's "
+            "response to stimuli at a grid of retinal positions while the eyes fixate a grid "
+            "of eye positions (the gain-field studies' protocol)"
+        ),
+        identifier=f"sigmapi-{ident[:32]}",
+        session_start_time=now,
+        experiment_description=monkey["test"],
+        source_script=f"sigmapi {__version__}",
+        source_script_file_name="sigmapi",
+        notes=json.dumps(prov),
+        keywords=["sigma-pi", "self-organizing map", "gain field", "reference frame"],
+        subject=Subject(
+            subject_id=f"sigmapi-map-seed-{model.config.seed}",
+            description="a simulated brain area: a Sigma-Pi self-organizing map trained by "
+            "sigmapi, no animal",
+            species="in silico",
+            sex="U",
+            date_of_birth=born,
+        ),
+    )
+    rel = model.sampler.relation
+    cond_e = np.repeat(np.arange(n_e), n_p)  # trial t: fixation t // P, stimulus t % P
+    cond_p = np.tile(np.arange(n_p), n_e)
+    x, y = stimuli[cond_p], eyes[cond_e]
+    z = np.asarray(rel.forward(x, y), dtype=np.float64)
+    starts = np.arange(n_e * n_p) * PERIOD
+    columns = {
+        "retinal_position": ("stimulus position on the retina, per axis (fraction of the axis)", x),
+        "gaze": ("eye position, per gaze axis (fraction of the axis)", y),
+        "body_position": ("body-centred position z = forward(retinal_position, gaze), per axis",
+                          z),
+        "fixation": ("index of the eye position in the protocol's eye grid", cond_e),
+        "stimulus": ("index of the stimulus in the protocol's retinal grid", cond_p),
+    }  # fmt: skip
+    nwb.trials = TimeIntervals(
+        name="trials",
+        description="the protocol's conditions: a stimulus at a retinal position while the "
+        "eyes fixate a gaze; one trial each",
+        columns=[
+            VectorData(name="start_time", description="trial start (s)", data=starts),
+            VectorData(name="stop_time", description="trial stop (s)", data=starts + WINDOW),
+            *(VectorData(name=n, description=d, data=v) for n, (d, v) in columns.items()),
+        ],
+    )
+    per = monkey["per_unit"]
+    top = np.maximum(resp.max(axis=(0, 1)), 1e-300)
+    flat = resp.reshape(n_e * n_p, k)
+    rates = PEAK_RATE * np.maximum(flat, 0.0) / top
+    module = nwb.create_processing_module(
+        name="misc", description="the map's responses to the protocol's trials (sigmapi)"
+    )
+    for name, data, unit, text in (
+        ("responses", flat, "a.u.",
+         "response h = x^T W y of every unit (columns) to each trial (rows, at the trials' "
+         "starts)"),
+        ("rates", rates, "Hz",
+         f"responses as firing rates: each unit's best response at {PEAK_RATE:g} Hz, "
+         "negative responses at 0; one row per trial"),
+    ):  # fmt: skip
+        module.add(
+            pynwb.TimeSeries(
+                name=name,
+                data=H5DataIO(data, compression="gzip"),
+                unit=unit,
+                starting_time=0.0,
+                rate=1.0 / PERIOD,
+                description=text,
+            )
+        )
+
+    def num(key: str) -> np.ndarray:
+        return np.asarray([np.nan if v is None else v for v in per[key]], dtype=np.float64)
+
+    rng = np.random.default_rng(int(monkey["seed"]))
+    counts = rng.poisson(rates * WINDOW)  # (trials, units)
+    spikes = []
+    for u in range(k):
+        times = np.repeat(starts, counts[:, u]) + rng.uniform(0.0, WINDOW, int(counts[:, u].sum()))
+        spikes.append(np.sort(times))
+    spike_times = VectorData(
+        name="spike_times",
+        description="Poisson spikes at the unit's rate in each trial's window (s)",
+        data=H5DataIO(np.concatenate(spikes), compression="gzip"),
+    )
+    pref = np.asarray(
+        [[np.nan if v is None else v for v in row] for row in per["preferred_z"]], np.float64
+    )
+    unit_columns = (
+        ("grid_position", "the unit's index on the map, per map axis",
+         np.stack(np.unravel_index(np.arange(k), model.map_shape), axis=1).astype(np.int64)),
+        ("preferred_z", "body position z at the receptive field's centre at the central "
+         "fixation, per axis", pref),
+        ("admitted", "whether the protocol admits the unit (field mapped at >= 3 eye "
+         "positions along every axis)", np.asarray(per["admitted"], dtype=bool)),
+        ("reference_frame_index", "receptive-field shift with the eye over a body-centred "
+         "field's (0 eye-centred, 1 body-centred); NaN where not admitted",
+         num("reference_frame_index")),
+        ("gain_slope", "slope of the planar gain-field fit, |b| over the mean rate",
+         num("gain_slope")),
+        ("gain_r2", "R^2 of the planar gain-field fit (planarity)", num("gain_r2")),
+        ("gain_p_value", "p-value of the eye-position effect (one-way ANOVA)",
+         num("gain_p_value")),
+        ("gain_modulated", "eye-position effect at p < 0.05",
+         np.asarray(per["gain_modulated"], dtype=bool)),
+    )  # fmt: skip
+    nwb.units = Units(
+        name="units",
+        description=(
+            "the map's units, one row each, read by the monkey protocol "
+            "(sigmapi.analysis.monkey). spike_times: Poisson spikes drawn at the unit's rate "
+            f"in each trial's {WINDOW:g} s window (seed {monkey['seed']}), a model of a "
+            "recording, not the output of sigmapi's spiking deployment (sigmapi.neurons), "
+            "which was not run for this file"
+        ),
+        columns=[
+            spike_times,
+            VectorIndex(
+                name="spike_times_index",
+                data=np.cumsum([len(t) for t in spikes]).astype(np.int64),
+                target=spike_times,
+            ),
+            *(VectorData(name=n, description=d, data=v) for n, d, v in unit_columns),
+        ],
+    )
+    return nwb
+
+
+def export_nwb(
+    model: SigmaPiSOM | str | Path,
+    out: str | Path,
+    *,
+    physiology: dict[str, Any] | None = None,
+    fixation: dict[str, Any] | None = None,
+    model_path: str | Path | None = None,
+    force: bool = False,
+) -> Path:
+    """Write the NWB file of ``model`` (a fitted model or a model file) to ``out``,
+    atomically; returns the path. Refuses an existing ``out`` unless ``force``
+    (:class:`~sigmapi.errors.UsageError`); ``physiology``, ``fixation``, ``model_path``:
+    as :func:`nwb_file` takes them."""
+    target = Path(out)
+    if target.exists() and not force:
+        raise UsageError(f"out {str(target)!r} exists; pass force=True (--force) to overwrite it")
+    pynwb = pynwb_module()  # before reading a large model
+    if not isinstance(model, SigmaPiSOM):
+        model_path = model if model_path is None else model_path
+        model = load_model(model)
+    nwb = nwb_file(model, physiology=physiology, fixation=fixation, model_path=model_path)
+    folder = target.parent if str(target.parent) else Path(".")
+    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp.nwb", dir=folder)
+    os.close(fd)
+    try:  # HDF5 writes by path; the bytes then go through atomic_write's rename
+        with pynwb.NWBHDF5IO(tmp, "w") as io:
+            io.write(nwb)
+        data = Path(tmp).read_bytes()
+    finally:
+        Path(tmp).unlink(missing_ok=True)
+
+    def write(fh: Any) -> None:
+        fh.write(data)
+
+    return atomic_write(target, write)
