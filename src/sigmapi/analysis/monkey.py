@@ -117,7 +117,9 @@ PUBLISHED: tuple[dict[str, Any], ...] = (
         "planar'",
         "note": "a majority: the share is above 0.5; the exact shares and R^2 values of the "
         "planar fits were not verified",
-        "source": "https://doi.org/10.1523/JNEUROSCI.10-04-01176.1990",
+        "source": "https://discovery.researcher.life/article/eye-position-effects-on-visual-"
+        "memory-and-saccaderelated-activity-in-areas-lip-and-7a-of-macaque/"
+        "97f3356ed50930c6914522b5d5b9c687",
     },
     {
         "study": "Bremmer, Graf, Ben Hamed & Duhamel 1999, NeuroReport 10:873-878",
@@ -127,7 +129,7 @@ PUBLISHED: tuple[dict[str, Any], ...] = (
         "n": 74,
         "verified": True,
         "where": "abstract: 40 of 74 neurons revealed an eye-position effect (fixation task)",
-        "source": "https://doi.org/10.1097/00001756-199903170-00037",
+        "source": "https://www.ncbi.nlm.nih.gov/pubmed/10208563",
     },
     {
         "study": "Bremmer, Ilg, Thiele, Distler & Hoffmann 1997, J Neurophysiol 77:944-961",
@@ -137,7 +139,8 @@ PUBLISHED: tuple[dict[str, Any], ...] = (
         "verified": True,
         "where": "abstract: the response was modulated by eye position in 61 % of MT and "
         "82 % of MST neurons; two-dimensional regression planes fitted most neurons",
-        "source": "https://doi.org/10.1152/jn.1997.77.2.944",
+        "source": "https://homepage.ruhr-uni-bochum.de/klaus-peter.hoffmann/abstract/"
+        "bremmer_jn1997.htm",
     },
     {
         "study": "Duhamel, Bremmer, Ben Hamed & Graf 1997, Nature 389:845-848",
@@ -149,7 +152,8 @@ PUBLISHED: tuple[dict[str, Any], ...] = (
         "coordinates'",
         "note": "a distribution from 0 (eye-centred) to 1 (head-centred); its numbers were "
         "not verified",
-        "source": "https://doi.org/10.1038/39865",
+        "source": "https://econpapers.repec.org/article/natnature/"
+        "v_3a389_3ay_3a1997_3ai_3a6653_3ad_3a10.1038_5f39865.htm",
     },
     {
         "study": "Avillac, Deneve, Olivier, Pouget & Duhamel 2005, Nat Neurosci 8:941-949",
@@ -161,7 +165,7 @@ PUBLISHED: tuple[dict[str, Any], ...] = (
         "head-centered coordinates' (3 fixation targets); tactile fields head-centred",
         "note": "the displacement-index histogram (its median, shares and sign convention) "
         "was not verified",
-        "source": "https://doi.org/10.1038/nn1480",
+        "source": "https://www.scilit.net/publications/167bfac559cf734b0b58308b3b065a12",
     },
     {
         "study": "Chen, DeAngelis & Angelaki 2014, J Neurophysiol 112:353-361",
@@ -174,8 +178,8 @@ PUBLISHED: tuple[dict[str, Any], ...] = (
         "source": "https://pmc.ncbi.nlm.nih.gov/articles/PMC4064410",
     },
 )
-"""What the monkey studies report, as far as this project could check them (the abstracts
-found with the search tools; the papers' figures and tables were not read)."""
+"""What the monkey studies report, as far as this project could check them: ``source`` is the
+page the abstract was read on (the papers' figures and tables were not read)."""
 
 
 def _grid(values: Sequence[float] | Array, d: int) -> Array:
