@@ -30,8 +30,15 @@ OUT = Path(__file__).resolve().parent / "results" / "physiology-monkey.json"
 
 GRIDS = {"default": EYE_GRID, "studies-3x3": (0.3, 0.5, 0.7)}
 
-KEYS = ("admitted_share", "gain_modulated_share", "gain_r2", "gain_ratio",
-        "reference_frame_index", "reference_frame_index_all", "reference_frame_index_left_out")  # fmt: skip
+KEYS = (
+    "admitted_share",
+    "gain_modulated_share",
+    "gain_r2",
+    "gain_ratio",
+    "reference_frame_index",
+    "reference_frame_index_all",
+    "reference_frame_index_left_out",
+)
 
 
 def _number(row: dict[str, Any], key: str) -> float | None:
