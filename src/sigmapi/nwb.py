@@ -268,11 +268,16 @@ def export_nwb(
         model_path = model if model_path is None else model_path
         model = load_model(model)
     nwb = nwb_file(model, physiology=physiology, fixation=fixation, model_path=model_path)
+    import h5py
+
     folder = target.parent if str(target.parent) else Path(".")
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp.nwb", dir=folder)
+    # HDF5 writes by path (and reads as it writes): a temp file named as atomic_write names
+    # its own (so that one a killed write left is cleared as stale), whose bytes then go
+    # through atomic_write's rename with the user's umask
+    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=folder)
     os.close(fd)
-    try:  # HDF5 writes by path; the bytes then go through atomic_write's rename
-        with pynwb.NWBHDF5IO(tmp, "w") as io:
+    try:
+        with h5py.File(tmp, "w") as h5, pynwb.NWBHDF5IO(file=h5, mode="w") as io:
             io.write(nwb)
         data = Path(tmp).read_bytes()
     finally:
