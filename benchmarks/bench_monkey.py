@@ -38,6 +38,7 @@ KEYS = (
     "reference_frame_index",
     "reference_frame_index_all",
     "reference_frame_index_left_out",
+    "displacement_index",
 )
 
 

@@ -16,7 +16,8 @@ The file holds what :mod:`sigmapi.analysis.monkey`'s protocol records
   best response at 100 Hz);
 - the **units** table: one row per map unit, ``grid_position`` (its index on the map),
   ``preferred_z``, ``admitted`` (by the protocol), ``reference_frame_index`` (NaN where not
-  admitted), ``gain_slope``, ``gain_r2`` (planarity of the gain field), ``gain_p_value`` and
+  admitted), ``displacement_index`` (the same by cross-correlation), ``gain_slope``,
+  ``gain_r2`` (planarity of the gain field), ``gain_p_value`` and
   ``gain_modulated``, and ``spike_times``: Poisson spikes drawn at the unit's rate in each
   trial's window. sigmapi's spiking deployment (:mod:`sigmapi.neurons`) is not run by the
   export; the table's description says so;
@@ -217,6 +218,9 @@ def nwb_file(
         ("reference_frame_index", "receptive-field shift with the eye over a body-centred "
          "field's (0 eye-centred, 1 body-centred); NaN where not admitted",
          num("reference_frame_index")),
+        ("displacement_index", "the same by cross-correlating the field's maps between "
+         "fixations (Avillac et al. 2005); NaN where not admitted",
+         num("displacement_index")),
         ("gain_slope", "slope of the planar gain-field fit, |b| over the mean rate",
          num("gain_slope")),
         ("gain_r2", "R^2 of the planar gain-field fit (planarity)", num("gain_r2")),

@@ -60,6 +60,8 @@ def test_an_eye_centred_gain_field_and_a_body_centred_field(ndim):
     assert eye["admitted"] == 3 and body["admitted"] == 3
     assert np.allclose(eye["per_unit"]["reference_frame_index"], 0.0, atol=0.05)
     assert np.allclose(body["per_unit"]["reference_frame_index"], 1.0, atol=0.05)
+    assert np.allclose(eye["per_unit"]["displacement_index"], 0.0, atol=0.05)
+    assert np.allclose(body["per_unit"]["displacement_index"], 1.0, atol=0.05)
     # a planar gain 1 + gaze: modulated, and the plane fits it
     assert eye["gain_modulated_share"] == 1.0 and eye["gain_r2"]["median"] > 0.99
     # a body-centred field leaves the fixed retinal stimulus as the eyes move: modulated
@@ -96,15 +98,33 @@ def small_map(tmp_path_factory):
     return model, path
 
 
+def _xcorr_shift(a, b):
+    """The shift s (grid steps) with b[p + s] most like a[p] (Pearson over the overlap,
+    |s| <= n // 2), refined by a parabola through the best and its neighbours."""
+    n = len(a)
+    shifts = list(range(-(n // 2), n // 2 + 1))
+    c = []
+    for s in shifts:
+        p = np.arange(max(0, -s), n - max(0, s))
+        u, v = a[p] - a[p].mean(), b[p + s] - b[p + s].mean()
+        den = np.sqrt((u @ u) * (v @ v))
+        c.append((u @ v) / den if den > 0 else -np.inf)
+    i = int(np.argmax(c))
+    if 0 < i < len(c) - 1 and c[i - 1] - 2 * c[i] + c[i + 1] < 0:
+        return shifts[i] + 0.5 * (c[i - 1] - c[i + 1]) / (c[i - 1] - 2 * c[i] + c[i + 1])
+    return float(shifts[i])
+
+
 def _independent(model, eye_grid, n_retina, share):
-    """The protocol's admission and reference-frame index, recomputed in plain NumPy (1-D)."""
+    """The protocol's admission, reference-frame index and cross-correlation displacement
+    index, recomputed in plain NumPy (1-D)."""
     eyes = np.asarray(eye_grid, dtype=float)
     stim = np.linspace(0.0, 1.0, n_retina)
     x = model.x_code.encode(stim[:, None])
     resp = np.stack(
         [model.respond(x, model.y_code.encode(np.full((n_retina, 1), e))) for e in eyes]
     )
-    index = []
+    index, shifted = [], []
     for u in range(resp.shape[2]):
         best_any = resp[:, :, u].max()
         es, cs = [], []
@@ -118,17 +138,25 @@ def _independent(model, eye_grid, n_retina, share):
                 cs.append((w * stim).sum() / w.sum())
         ok = len(set(es)) >= 3
         index.append(np.polyfit(es, cs, 1)[0] / -1.0 if ok else np.nan)
-    return np.asarray(index)
+        at = [int(np.nonzero(eyes == e)[0][0]) for e in es]
+        pairs = [
+            _xcorr_shift(resp[i, :, u], resp[j, :, u]) / (n_retina - 1)
+            / ((eyes[j] - eyes[i]) * -1.0)
+            for i in at for j in at if j > i
+        ]  # fmt: skip
+        shifted.append(np.median(pairs) if ok else np.nan)
+    return np.asarray(index), np.asarray(shifted)
 
 
 def test_the_protocol_agrees_with_an_independent_recomputation(small_map):
     model, _ = small_map
     grid = (0.3, 0.4, 0.5, 0.6, 0.7)
     r = monkey_protocol(model, grid, 41, responds=0.25)
-    got = np.array([np.nan if v is None else v for v in r["per_unit"]["reference_frame_index"]])
-    want = _independent(model, grid, 41, 0.25)
-    assert np.array_equal(np.isfinite(got), np.isfinite(want))
-    assert np.allclose(got[np.isfinite(got)], want[np.isfinite(want)], atol=1e-9)
+    want, want_shifted = _independent(model, grid, 41, 0.25)
+    for key, ref in (("reference_frame_index", want), ("displacement_index", want_shifted)):
+        got = np.array([np.nan if v is None else v for v in r["per_unit"][key]])
+        assert np.array_equal(np.isfinite(got), np.isfinite(ref)), key
+        assert np.allclose(got[np.isfinite(got)], ref[np.isfinite(ref)], atol=1e-9), key
     assert r["admitted"] == int(np.isfinite(want).sum()) > 0
     assert r["admitted"] + sum(r["left_out"].values()) == 9
     assert r["reference_frame_index"]["median"] > 0.8  # the map is body-centred
@@ -161,7 +189,8 @@ def test_the_nwb_file_reads_back_and_passes_the_inspector(small_map, tmp_path):
     z = (np.stack(trials["retinal_position"]) + np.stack(trials["gaze"])) / 2
     assert np.allclose(np.stack(trials["body_position"]), z)
     assert np.array_equal(resp, rec["responses"].reshape(e * p, k))
-    for col in ("reference_frame_index", "gain_r2", "gain_slope", "gain_p_value"):
+    for col in ("reference_frame_index", "displacement_index", "gain_r2", "gain_slope",
+                "gain_p_value"):  # fmt: skip
         w = np.array([np.nan if v is None else v for v in want[col]])
         assert np.array_equal(units[col].to_numpy(), w, equal_nan=True), col
     assert units["admitted"].tolist() == want["admitted"]

@@ -21,8 +21,9 @@ Each unit's response to every (fixation, stimulus) condition is recorded
   the eye position, over the fixations where the field counted, divided by the slope of a
   body-centred field (0 eye-centred, 1 body-centred), the mean over retinal axes. Duhamel
   et al. 1997 and Avillac et al. 2005 measured the shift of a field between fixations
-  against the eye's displacement; Avillac et al. aligned the fields by cross-correlation,
-  this protocol by their centres (the centre of mass of the half-maximum region);
+  against the eye's displacement; this protocol takes the field's centre (the centre of mass
+  of its half-maximum region). Avillac et al. aligned the fields by cross-correlation: that
+  is ``displacement_index`` (:func:`displacement_index`), on the admitted units;
 - **gain modulation** (Andersen et al. 1985; 1990): the stimulus held at the unit's best
   retinal position at the central fixation while the eyes move over the grid. The response
   is scaled to a firing rate (the unit's best response in the protocol at
@@ -59,6 +60,7 @@ __all__ = [
     "TRIALS",
     "WINDOW",
     "anova_oneway",
+    "displacement_index",
     "fixation_protocol",
     "monkey_protocol",
 ]
@@ -291,6 +293,71 @@ def _fields(
     return centre, responds, cut
 
 
+def _best_shift(a: Array, b: Array, axis: int) -> Array:
+    """Per unit (last axis): the shift ``s`` (in grid steps, refined by a parabola through the
+    peak and its neighbours) that maximizes the correlation of ``a`` with ``b`` moved by ``s``
+    along ``axis``: ``b[p + s] ~ a[p]``, over the overlap (at least half the grid)."""
+    n = a.shape[axis]
+    shifts = np.arange(-(n // 2), n // 2 + 1)
+    corr = np.full((shifts.size, a.shape[-1]), -np.inf)
+    for i, sh in enumerate(shifts):
+        lo, hi = max(0, -sh), n - max(0, sh)  # the p with p + sh on the grid
+        u = np.take(a, np.arange(lo, hi), axis=axis).reshape(-1, a.shape[-1])
+        v = np.take(b, np.arange(lo + sh, hi + sh), axis=axis).reshape(-1, a.shape[-1])
+        u, v = u - u.mean(axis=0), v - v.mean(axis=0)
+        den = np.sqrt((u**2).sum(axis=0) * (v**2).sum(axis=0))
+        corr[i] = np.where(den > 0, (u * v).sum(axis=0) / np.maximum(den, 1e-300), -np.inf)
+    top = np.argmax(corr, axis=0)
+    out = shifts[top].astype(np.float64)
+    inner = (top > 0) & (top < shifts.size - 1)
+    k = np.nonzero(inner)[0]
+    c0, c1, c2 = corr[top[k] - 1, k], corr[top[k], k], corr[top[k] + 1, k]
+    curv = c0 - 2 * c1 + c2
+    ok = np.isfinite(curv) & (curv < 0)
+    out[k[ok]] += 0.5 * (c0[ok] - c2[ok]) / curv[ok]
+    return np.where(np.isfinite(corr.max(axis=0)), out, np.nan)
+
+
+def displacement_index(
+    resp: Array,
+    stimuli: Array,
+    eyes: Array,
+    counts: NDArray[np.bool_],
+    slopes: Array,
+    pairing: list[int],
+) -> Array:
+    """Avillac et al. (2005)'s way to the reference-frame index ``(K,)``: for every two
+    fixations that differ only along the gaze axis paired with retinal axis ``a`` and where
+    the field counts at both (``counts`` ``(E, K)``), the shift that best aligns the two
+    response maps by cross-correlation, over the eyes' displacement, over a body-centred
+    field's shift (0 eye-centred, 1 body-centred); the median over such pairs, the mean over
+    axes; NaN where an axis has no pair."""
+    n_e, _, k = resp.shape
+    d = stimuli.shape[1]
+    n = len(np.unique(stimuli[:, 0]))
+    step = 1.0 / (n - 1)
+    maps = resp.reshape(n_e, *([n] * d), k)
+    per_axis = np.full((d, k), np.nan)
+    for a in range(d):
+        g = pairing[a]
+        others = [c for c in range(d) if c != g]
+        found: list[list[float]] = [[] for _ in range(k)]
+        for i in range(n_e):
+            for j in range(i + 1, n_e):
+                moved = eyes[j, g] - eyes[i, g]
+                if moved == 0 or np.any(eyes[i, others] != eyes[j, others]):
+                    continue
+                both = counts[i] & counts[j]
+                if not both.any():
+                    continue
+                shift = _best_shift(maps[i], maps[j], a) * step  # retinal units
+                for u in np.nonzero(both & np.isfinite(shift))[0]:
+                    found[u].append(float(shift[u] / (moved * slopes[a])))
+        per_axis[a] = [np.median(f) if f else np.nan for f in found]
+    every = np.all(np.isfinite(per_axis), axis=0)
+    return np.where(every, np.nanmean(np.where(every, per_axis, 0.0), axis=0), np.nan)
+
+
 def _shift_index(
     centre: Array, ok: NDArray[np.bool_], eyes: Array, slopes: Array, pairing: list[int]
 ) -> tuple[Array, Array]:
@@ -350,7 +417,7 @@ def monkey_protocol(
     a :func:`fixation_protocol` result to read instead of recording again. Returns per unit
     (lists, NaN as None): ``admitted``, ``reference_frame_index`` (admitted units),
     ``reference_frame_index_all`` (every unit, every fixation where it responds, the edge not
-    checked),
+    checked), ``displacement_index`` (admitted units, by cross-correlation),
     ``preferred_z``, ``best_stimulus``, ``gain_p_value``, ``gain_modulated``, ``gain_ratio``,
     ``gain_r2``, ``gain_slope``; and the summaries: ``admitted`` ``left_out`` (by reason),
     ``gain_modulated_share``, ``gain_r2``, ``reference_frame_index`` (admitted, all units),
@@ -367,6 +434,8 @@ def monkey_protocol(
     centre, strong, cut = _fields(resp, stimuli, share)
     per_axis, rfi = _shift_index(centre, strong & ~cut, eyes, slopes, pairing)
     admitted = np.isfinite(rfi)
+    shifted = displacement_index(resp, stimuli, eyes, strong & ~cut, slopes, pairing)
+    shifted = np.where(admitted, shifted, np.nan)
     # every unit admitted: every fixation where it responds at all, the edge not checked
     _, rfi_all = _shift_index(centre, resp.max(axis=1) > 0, eyes, slopes, pairing)
 
@@ -420,6 +489,7 @@ def monkey_protocol(
             "reference_frame_index": _plain(rfi),
             "reference_frame_index_per_axis": _plain(per_axis),
             "reference_frame_index_all": _plain(rfi_all),
+            "displacement_index": _plain(shifted),
             "preferred_z": _plain(pref_z),
             "best_stimulus": _plain(stimuli[best]),
             "gain_p_value": _plain(p),
@@ -439,6 +509,7 @@ def monkey_protocol(
         "gain_r2_modulated": _summary(r2[admitted & modulated]),
         "reference_frame_index": _summary(rfi),
         "reference_frame_index_all": _summary(rfi_all),
+        "displacement_index": _summary(shifted),
         "reference_frame_index_left_out": _summary(rfi_all[~admitted]),
         "published": [dict(p) for p in PUBLISHED],
     }

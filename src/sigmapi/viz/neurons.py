@@ -229,6 +229,9 @@ def _monkey_panels(axes: Any, m: dict[str, Any]) -> None:
             label=f"left out, every fixation (n={len(out)})")  # fmt: skip
     ax.hist(np.clip(adm, bins[0], bins[-1]), bins=bins, alpha=0.8, color="C0",
             label=f"admitted (n={len(adm)})")  # fmt: skip
+    shifted = [v for v in per["displacement_index"] if v is not None]
+    ax.hist(np.clip(shifted, bins[0], bins[-1]), bins=bins, histtype="step", color="C3", lw=1.5,
+            label=f"admitted, by cross-correlation (n={len(shifted)})")  # fmt: skip
     ax.axvline(0.0, color="0.4", ls=":")
     ax.axvline(1.0, color="0.4", ls=":")
     ax.axvspan(0.0, 1.0, color="C1", alpha=0.08,

@@ -89,6 +89,11 @@ class PhysiologyResult:
             + (f", planar-fit R^2 median {r2:.2f}" if r2 is not None else "")
             + (f", reference-frame index median {idx:.2f}" if idx is not None else "")
             + (
+                f" (by cross-correlation {m['displacement_index']['median']:.2f})"
+                if m["displacement_index"]["median"] is not None
+                else ""
+            )
+            + (
                 f" (every unit: {m['reference_frame_index_all']['median']:.2f})"
                 if m["reference_frame_index_all"]["median"] is not None
                 else ""
