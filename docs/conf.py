@@ -21,6 +21,7 @@ ROOT = DOCS.parent
 sys.path.insert(0, str(DOCS / "_ext"))
 
 from sigmapi_extras import gallery_pattern, note_skipped, skipped_examples  # noqa: E402
+from sigmapi_viewcode import fix_backlinks  # noqa: E402
 
 import sigmapi  # noqa: E402
 
@@ -58,6 +59,32 @@ nb_execution_timeout = 600
 nb_execution_raise_on_error = True  # a failing cell fails the build
 nb_execution_show_tb = True
 nb_merge_streams = True
+
+
+def _encrypt_the_kernel_transport() -> None:
+    """Run the tutorial's kernel with its ZeroMQ sockets encrypted (CurveZMQ).
+
+    MyST-NB starts the kernel through nbclient and jupyter_client, which connect to it over TCP
+    on localhost, unencrypted unless the manager provisions Curve keys; ipykernel >= 7 then
+    prints "Kernel is running over TCP without encryption" into every build. With
+    ``transport_encryption = "auto"`` jupyter_client provisions the keys for a kernel whose
+    kernelspec declares Curve support (ipykernel's ``python3`` does) and leaves any other kernel
+    as before. MyST-NB passes no kernel manager settings through, so the trait's default is set
+    here. (IPC sockets, the warning's other remedy, are files in the notebook's folder: a
+    killed build leaves them behind, and the next build's kernel then does not answer.)"""
+    try:
+        import zmq
+        from jupyter_client.manager import KernelManager
+    except ImportError:  # without the docs extra there is no notebook to run
+        return
+    # an older jupyter_client without the option has no keys to make, nor does a libzmq built
+    # without libsodium; the kernel then runs as before
+    trait = KernelManager.class_traits().get("transport_encryption")
+    if trait is not None and zmq.has("curve"):
+        trait.default_value = "auto"
+
+
+_encrypt_the_kernel_transport()
 
 # -- API reference from the docstrings (numpydoc sections, read by napoleon) -----------------
 autosummary_generate = True
@@ -145,4 +172,5 @@ def _skip_member(app, what, name, obj, skip, options):
 
 def setup(app):
     app.connect("autodoc-skip-member", _skip_member)
+    app.connect("html-page-context", fix_backlinks)  # _ext/sigmapi_viewcode.py
     app.connect("source-read", lambda app, docname, source: note_skipped(SKIPPED, docname, source))
