@@ -59,9 +59,9 @@ ROOT = Path(__file__).resolve().parents[2]
 DOCS = ROOT / "docs"
 PAGES = [ROOT / "README.md", *sorted(DOCS.rglob("*.md"))]
 
-ITERATIONS = 2000
+ITERATIONS = 1000
 """Training iterations of every preset in the snippet runs (the shipped ones: 20,000-300,000)."""
-REFINE_PAIRS = 2000
+REFINE_PAIRS = 1000
 """Pairs per refinement round of every preset in the snippet runs (shipped: 100,000-300,000)."""
 NEURON_PAIRS = 2000
 """Pairs of the online phase and of each batch step of a first-order map (default 100,000)."""
