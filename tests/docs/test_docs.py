@@ -111,6 +111,8 @@ def test_the_site_builds_with_warnings_as_errors(tmp_path):
     algorithm = (out / "algorithm.html").read_text("utf-8")
     assert 'src="_static/mathjax/tex-chtml.js"' in algorithm
     assert algorithm.count('class="math') > 50  # the page's formulas are math, not code
+    neurons = (out / "guide" / "neurons.html").read_text("utf-8")
+    assert neurons.count('class="math') > 30 and "du_kd" not in neurons  # so are the neurons'
     remote = re.compile(r"<(?:script|link|img|iframe)\b[^>]*\b(?:src|href)=\"(?:https?:)?//")
     for page in out.rglob("*.html"):
         assert not remote.search(page.read_text("utf-8")), f"{page} loads from the network"
