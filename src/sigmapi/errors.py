@@ -17,7 +17,21 @@ __all__ = [
     "ResourceError",
     "SigmapiError",
     "UsageError",
+    "install_hint",
 ]
+
+
+def install_hint(extra: str) -> str:
+    """How to install the optional dependencies ``extra`` (a name of pyproject.toml's
+    ``[project.optional-dependencies]``), the one wording of every message and ``--help`` that
+    names one: from PyPI and from a clone, as the README installs.
+
+    Examples
+    --------
+    >>> install_hint("robot")
+    "pip install 'sigmapi[robot]' (from a clone: pip install '.[robot]')"
+    """
+    return f"pip install 'sigmapi[{extra}]' (from a clone: pip install '.[{extra}]')"
 
 
 class SigmapiError(Exception):

@@ -44,7 +44,7 @@ from typing import Any
 
 from sigmapi import _memory, _validate
 from sigmapi.config import SOMConfig
-from sigmapi.errors import ConfigError
+from sigmapi.errors import ConfigError, install_hint
 from sigmapi.model.som import SigmaPiSOM
 
 __all__ = [
@@ -235,9 +235,7 @@ class Executor:
         try:
             import distributed  # noqa: F401
         except ImportError:  # pragma: no cover - depends on the install
-            raise ConfigError(
-                "engine 'dask' needs dask.distributed; install it with pip install 'sigmapi[sweep]'"
-            ) from None
+            raise _no_dask() from None
         if self.address is not None:
             probe_scheduler(self.address)
 
@@ -390,15 +388,19 @@ def die_with_parent(parent: int) -> None:
     threading.Thread(target=watch, name="sigmapi-parent-watch", daemon=True).start()
 
 
+def _no_dask() -> ConfigError:
+    return ConfigError(
+        f"engine 'dask' needs dask.distributed (not installed here); {install_hint('sweep')}"
+    )
+
+
 def _run_dask(
     fn: Callable[[Any], Any], jobs: Sequence[tuple[str, Any]], workers: int, address: str | None
 ) -> Iterator[Outcome]:
     try:
         from distributed import Client, LocalCluster, as_completed
     except ImportError:  # pragma: no cover - depends on the install
-        raise ConfigError(
-            "engine 'dask' needs dask.distributed; install it with pip install 'sigmapi[sweep]'"
-        ) from None
+        raise _no_dask() from None
     cluster = None
     if address is not None:
         probe_scheduler(address)

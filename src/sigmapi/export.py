@@ -34,7 +34,7 @@ from numpy.typing import NDArray
 from sigmapi import _validate
 from sigmapi._version import __version__
 from sigmapi.codes import PopulationCode
-from sigmapi.errors import ConfigError, ResourceError, UsageError
+from sigmapi.errors import ConfigError, ResourceError, UsageError, install_hint
 from sigmapi.io import atomic_write_bytes
 from sigmapi.model.som import SigmaPiSOM, load_model
 from sigmapi.rules.winners import Scoring
@@ -57,14 +57,14 @@ MIN_OPSET = 18
 _MAX_BYTES = 2_000_000_000
 """A single ONNX file (protobuf) holds less than 2 GiB."""
 
-_NEEDS = "the onnx extra: pip install 'sigmapi[onnx]'"
-
 
 def _onnx() -> Any:
     try:
         import onnx
     except ImportError:
-        raise UsageError(f"exporting to ONNX needs the onnx package; install {_NEEDS}") from None
+        raise UsageError(
+            f"exporting to ONNX needs the onnx package (not installed here); {install_hint('onnx')}"
+        ) from None
     return onnx
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import ast
 import dataclasses
+import difflib
 import inspect
 import itertools
 import os
@@ -42,8 +43,26 @@ __all__ = [
 ]
 
 
+def did_you_mean(word: str, choices: Collection[str]) -> str:
+    """``"; did you mean X?"`` for the choice ``X`` closest to a mistyped ``word``, or ``""``.
+
+    Examples
+    --------
+    >>> did_you_mean("--quik", ["--quick", "--quiet", "--out"])
+    '; did you mean --quick?'
+    """
+    close = difflib.get_close_matches(word, list(choices), n=1, cutoff=0.6)
+    return f"; did you mean {close[0]}?" if close else ""
+
+
+_CHOICE = re.compile(r"invalid choice: '(.*)' \(choose from (.*)\)$")
+
+
 class Parser(argparse.ArgumentParser):
     def error(self, message: str) -> NoReturn:  # one line, exit 2, as argparse does, no usage dump
+        m = _CHOICE.search(message)
+        if m:  # a mistyped command or value: the closest one
+            message += did_you_mean(m.group(1), re.findall(r"'([^']*)'", m.group(2)))
         self.exit(2, f"{self.prog}: error: {message}\n")
 
     def parse_known_args(  # type: ignore[override]
@@ -82,7 +101,14 @@ class LazyParser(Parser):
     def parse_known_args(  # type: ignore[override]
         self, args: Sequence[str] | None = None, namespace: argparse.Namespace | None = None
     ) -> tuple[argparse.Namespace, list[str]]:
-        return super(LazyParser, self.filled()).parse_known_args(args, namespace)
+        """The command's arguments; one it does not know is its mistake, reported with the
+        command's name (``sigmapi neurons: error: ...``) and the closest option."""
+        parsed, extras = super(LazyParser, self.filled()).parse_known_args(args, namespace)
+        if extras:
+            first = next((a for a in extras if a.startswith("-")), "")
+            hint = did_you_mean(first.partition("=")[0], self._option_string_actions)
+            self.error(f"unrecognized arguments: {' '.join(extras)}{hint}")
+        return parsed, extras
 
     def format_help(self) -> str:
         return super(LazyParser, self.filled()).format_help()

@@ -47,7 +47,7 @@ from sigmapi.cli._common import (
     dataclass_values,
     plain,
 )
-from sigmapi.errors import ConfigError, UsageError
+from sigmapi.errors import ConfigError, UsageError, install_hint
 from sigmapi.executor import ENGINES, Executor
 from sigmapi.experiments.base import (
     REGISTRY,
@@ -110,6 +110,9 @@ def add_experiment(sub: Any, name: str, summary: str) -> Parser:
 def add_experiment_options(p: Parser, experiment: Experiment[Any]) -> None:
     """Give ``p`` the options of ``experiment`` (its config's fields and the common ones)."""
     p.description = plain(type(experiment).__doc__ or experiment.summary)
+    extra = getattr(experiment, "extra", None)
+    if extra:
+        p.description += f" Needs the {extra} extra: {install_hint(extra)}."
     common = p.add_argument_group("common to every experiment")
     common.add_argument(
         "--seeds",
@@ -133,8 +136,11 @@ def add_experiment_options(p: Parser, experiment: Experiment[Any]) -> None:
         "--json", action="store_true", help="print the result as one JSON object on stdout"
     )
     if experiment.quick is not None:
+        took = getattr(experiment, "quick_time", None)
         common.add_argument(
-            "--quick", action="store_true", help="a first look: shorter settings, fewer seeds"
+            "--quick",
+            action="store_true",
+            help="a first look: shorter settings, fewer seeds" + (f" ({took})" if took else ""),
         )
     add_workers_flag(common, "jobs")
     common.add_argument(
@@ -142,7 +148,7 @@ def add_experiment_options(p: Parser, experiment: Experiment[Any]) -> None:
         choices=ENGINES,
         default="local",
         help="local: a process pool on this machine (default); dask: a Dask "
-        "cluster (--address, or a local one)",
+        f"cluster (--address, or a local one; {install_hint('sweep')})",
     )
     common.add_argument("--address", help="Dask scheduler address, e.g. tcp://10.0.0.5:8786")
     common.add_argument(
@@ -268,8 +274,9 @@ def run_experiment(experiment: Experiment[Any], args: argparse.Namespace) -> int
                 check = getattr(experiment, "before_writing", None)
                 if check is not None:  # what its figures and files outside --out need
                     check(config, force=args.force)
+                before = _stamps(out)
                 result = _run(experiment, config, seeds, out, executor, args.quiet)
-                files = [*result.figure(out), write_result(result, out)]
+                files = _written(out, before, [*result.figure(out), write_result(result, out)])
         except BaseException:  # a run that fails (a missing extra) leaves no empty folder
             if not was_marked and [p.name for p in out.iterdir()] == [MARKER]:
                 (out / MARKER).unlink()  # the marker this run wrote, alone: nothing to resume
@@ -281,6 +288,29 @@ def run_experiment(experiment: Experiment[Any], args: argparse.Namespace) -> int
     if args.out is not None:
         print(f"sigmapi {experiment.name}: wrote {', '.join(map(str, files))}", file=sys.stderr)
     return 0
+
+
+def _stamps(out: Path) -> dict[Path, tuple[int, int]]:
+    """Each file under ``out`` (the run's own lock and marker aside): its modification time
+    and size, to tell after the run which files it wrote."""
+    found = {}
+    for path in sorted(out.rglob("*")):
+        if path.name in (LOCK_NAME, MARKER) or path.is_symlink() or not path.is_file():
+            continue
+        st = path.stat()
+        found[path] = (st.st_mtime_ns, st.st_size)
+    return found
+
+
+def _written(out: Path, before: dict[Path, tuple[int, int]], listed: list[Path]) -> list[Path]:
+    """Every file the run wrote: those its result lists (its figures, ``result.json``, a file
+    outside ``--out``) and every other file under ``out`` that is new or changed since
+    ``before`` (a report, its data, captions, saved models), each once."""
+    files = {Path(f): None for f in listed}
+    for path, stamp in _stamps(out).items():
+        if before.get(path) != stamp:
+            files.setdefault(path)
+    return list(files)
 
 
 def _run(

@@ -10,7 +10,7 @@ from pathlib import Path
 from typing import Any
 
 from sigmapi.cli._common import check_output
-from sigmapi.errors import UsageError
+from sigmapi.errors import UsageError, install_hint
 
 __all__ = ["add_arguments", "cmd_export"]
 
@@ -50,6 +50,7 @@ def _export_nwb(args: argparse.Namespace, out: Path) -> int:
 def add_arguments(p: Any) -> None:
     """Add ``sigmapi export``'s options and handler to its parser ``p`` (the command's line in
     :data:`sigmapi.cli.COMMANDS`)."""
+    p.description = f"{p.description or ''} Needs the onnx extra: {install_hint('onnx')}.".strip()
     p.add_argument("model", help="model file written by `sigmapi train` or `sigmapi reproduce`")
     p.add_argument("--format", required=True, choices=FORMATS, help="file format (onnx, nwb)")
     p.add_argument("--out", required=True, help="file to write, e.g. map.onnx, map.nwb")

@@ -120,6 +120,13 @@ class Experiment(Protocol[C]):
     """The default seeds."""
     quick_seeds: tuple[int, ...] | None = None
     """The default seeds of the quick config (None: :attr:`seeds`)."""
+    quick_time: str | None = None
+    """How long the quick run took, and on what machine, as ``--help`` says it (e.g. ``"about
+    15 s on two quiet cores"``; None: not measured)."""
+    extra: str | None = None
+    """The optional dependencies the experiment needs: a name of pyproject.toml's extras
+    (e.g. ``"robot"``; None: none), which its ``--help`` names with the install command
+    (:func:`~sigmapi.errors.install_hint`)."""
     default_out: str | None = None
     """The folder the command line writes into by default (None: it writes nothing unless it
     is given one)."""
@@ -360,7 +367,9 @@ def run_all(
     ``per_job`` (bytes, :func:`~sigmapi.executor.job_memory`) bounds the jobs at once. With
     progress, one bar (or line) per finished job, ``describe(key, value)`` its text; where the
     jobs run one by one in this process, ``verbose(arg)`` gives each job instead a progress of
-    its own (e.g. a bar of its training iterations). A failed job raises its own error
+    its own (e.g. a bar of its training iterations), and in a log (stderr no terminal) the
+    parallel jobs of this machine too, beside the line per finished job: each job's lines
+    then say how far it is while none has finished. A failed job raises its own error
     (:func:`~sigmapi.executor.job_error`: a sigmapi error as itself, a bug as
     ``RuntimeError``), naming the job.
     """
@@ -374,8 +383,10 @@ def run_all(
     show = Progress.of(progress)
     plan = ex.plan(per_job, len(jobs))
     in_process = plan.workers == 1 and ex.engine == "local"
-    if in_process and verbose is not None and show.enabled:
+    parallel_lines = show.logs and ex.engine == "local"
+    if verbose is not None and show.enabled and (in_process or parallel_lines):
         jobs = [(key, verbose(arg)) for key, arg in jobs]
+    if in_process and verbose is not None and show.enabled:
         show = Progress(disable=True)  # the jobs show their own
     elif not in_process:
         show.note(f"{desc}: {len(jobs)} jobs, {plan.reason}")

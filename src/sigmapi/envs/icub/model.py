@@ -38,7 +38,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from sigmapi.envs.robot.scene import mujoco_module
-from sigmapi.errors import ConfigError
+from sigmapi.errors import ConfigError, install_hint
 
 if TYPE_CHECKING:
     import mujoco
@@ -119,7 +119,7 @@ def icub_models_module() -> Any:
         import icub_models
     except ImportError as exc:
         raise ConfigError(
-            f"the iCub needs its models (not installed here: {exc}); pip install 'sigmapi[robot]'"
+            f"the iCub needs its models (not installed here: {exc}); {install_hint('robot')}"
         ) from None
     return icub_models
 

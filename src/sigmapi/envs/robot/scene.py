@@ -29,7 +29,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from sigmapi.errors import ConfigError
+from sigmapi.errors import ConfigError, install_hint
 
 if TYPE_CHECKING:
     import mujoco
@@ -67,8 +67,7 @@ def mujoco_module() -> ModuleType:
         import mujoco
     except ImportError as exc:
         raise ConfigError(
-            f"the simulated robot needs MuJoCo (not installed here: {exc}); "
-            "pip install 'sigmapi[robot]'"
+            f"the simulated robot needs MuJoCo (not installed here: {exc}); {install_hint('robot')}"
         ) from None
     except (RuntimeError, AttributeError, OSError) as exc:  # MUJOCO_GL names no platform here
         raise _bad_gl(exc) from None

@@ -37,8 +37,9 @@ through the executor; :func:`run_chain` is the same from Python with a :class:`S
 from __future__ import annotations
 
 import time
-from collections.abc import Sequence
-from dataclasses import dataclass
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, replace
+from functools import partial
 from pathlib import Path
 from typing import Any, NamedTuple
 
@@ -59,6 +60,7 @@ from sigmapi.experiments.chain.result import (
     TARGET_RATIO,
     ChainResult,
 )
+from sigmapi.experiments.kit.jobs import Tick, counted
 from sigmapi.experiments.kit.seeds import SeedPlan
 from sigmapi.metrics import EVAL_SEED, evaluate, winner_metrics
 from sigmapi.model.som import SigmaPiSOM
@@ -170,11 +172,35 @@ class ChainJob:
     code: str
     cal: Triples
     test: Triples
+    show: Progress | None = None
+    """Where given, the job shows the iterations of its three maps."""
 
 
 def chain_seed(job: ChainJob) -> dict[str, Any]:
     """Train map A, map B and the single map on seed ``job.seed``'s triples and score both
     routes on the shared calibration and test triples (one entry of ``"seeds"``)."""
+    total = 3 * job.cfg.iterations
+    return counted(job.show, total, f"chain seed {job.seed}", partial(_chain_seed, job), "it")
+
+
+def _iterations(
+    tick: Tick | None, name: str, iterations: int
+) -> Callable[[SigmaPiSOM], None] | None:
+    """A ``fit`` callback that counts one map's iterations (up to ``iterations``) on ``tick``."""
+    if tick is None:
+        return None
+    seen = 0
+
+    def callback(model: SigmaPiSOM) -> None:
+        nonlocal seen
+        t = min(model.t_, iterations)
+        tick(t - seen, name)
+        seen = t
+
+    return callback
+
+
+def _chain_seed(job: ChainJob, tick: Tick | None) -> dict[str, Any]:
     seed, cfg, train_pairs, code, cal, test = (
         job.seed,
         job.cfg,
@@ -189,14 +215,18 @@ def chain_seed(job: ChainJob) -> dict[str, Any]:
 
     # the chain: A on its own task, then B on A's code of the triples' views and the head code
     start = time.perf_counter()
-    a = SigmaPiSOM(cfg, seed=seed).fit()
+    its = cfg.iterations
+    a = SigmaPiSOM(cfg, seed=seed).fit(callback=_iterations(tick, "map A", its))
     b = SigmaPiSOM(cfg.replace(x_shape=a.map_shape), seed=seed)
 
     def chain_inputs(t: Triples, v: int) -> tuple[Array, Array]:
         x, e, u = t.view(v)
         return head_code(a, x, e, code), b.y_code.encode(u)
 
-    b.fit((*chain_inputs(train, 0), *chain_inputs(train, 1)))
+    b.fit(
+        (*chain_inputs(train, 0), *chain_inputs(train, 1)),
+        callback=_iterations(tick, "map B", its),
+    )
     chain_seconds = time.perf_counter() - start
 
     def chain_winners(t: Triples, v: int) -> NDArray[np.int64]:
@@ -207,7 +237,12 @@ def chain_seed(job: ChainJob) -> dict[str, Any]:
     s = SigmaPiSOM(
         cfg.replace(x_shape=(cfg.x_shape[0], 1), y_shape=(*cfg.y_shape, *cfg.y_shape)), seed=seed
     )
-    s.fit((*_single_inputs(s, train, 0), *_single_inputs(s, train, 1)))
+    s.fit(
+        (*_single_inputs(s, train, 0), *_single_inputs(s, train, 1)),
+        callback=_iterations(tick, "single map", its),
+    )
+    if tick is not None:
+        tick(0, "scoring both routes")
     single_seconds = time.perf_counter() - start
 
     def single_winners(t: Triples, v: int) -> NDArray[np.int64]:
@@ -268,6 +303,7 @@ def _run(
         progress=progress,
         desc="chain",
         describe=describe,
+        verbose=lambda job: replace(job, show=progress),
     )
     return ChainResult(cfg, train_pairs, n_test, code, list(done.values()))
 
@@ -340,6 +376,7 @@ class Chain(Experiment[ChainConfig]):
     seeds = (0, 1, 2)
     quick = QUICK
     quick_seeds = (0,)
+    quick_time = "about 15 s on two cores"
 
     def run(
         self,

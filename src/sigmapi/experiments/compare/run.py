@@ -49,7 +49,7 @@ from sigmapi.baselines.kohonen import KohonenSOM, MiniSomMap
 from sigmapi.baselines.readout import GainFieldNetwork, RBMFeatures
 from sigmapi.baselines.scoring import score_readout, score_units
 from sigmapi.config import SOMConfig
-from sigmapi.errors import ConfigError
+from sigmapi.errors import ConfigError, install_hint
 from sigmapi.executor import Executor, job_memory
 from sigmapi.experiments.base import Experiment, check_seeds, register, run_all
 from sigmapi.experiments.compare.config import (
@@ -180,7 +180,7 @@ def check_installed(methods: Sequence[str]) -> None:
         names = " and ".join(PACKAGES[m] for m in missing)
         raise ConfigError(
             f"the baselines need {names} (not installed here); "
-            "pip install 'sigmapi[baselines]', or leave those methods out"
+            f"{install_hint('baselines')}, or leave those methods out"
         )
 
 
@@ -250,6 +250,8 @@ class Compare(Experiment[CompareConfig]):
     quick = QUICK
     seeds = SEEDS
     quick_seeds = QUICK_SEEDS
+    quick_time = "about 1 min on two cores"
+    extra = "baselines"
     default_out = "compare"
     writes = (FIGURE, Path(FIGURE).with_suffix(".txt").name)
     """The files written into --out besides result.json (checked before the work)."""

@@ -16,6 +16,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+import functools
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -45,6 +47,7 @@ from sigmapi.experiments.icub.maps import (
 )
 from sigmapi.experiments.icub.reaching import babble, features, learn_reaching, reach_tests
 from sigmapi.experiments.icub.result import ICubResult
+from sigmapi.experiments.kit.jobs import Steps, Tick, counted
 from sigmapi.experiments.kit.seeds import SeedPlan
 from sigmapi.metrics import EVAL_SEED, z_decoder
 from sigmapi.progress import Progress
@@ -93,13 +96,32 @@ class _Job:
     cal: MapData
     test: MapData
     figures: bool
+    show: Progress | None = None
+    """Where given, the job shows its steps (:data:`STEPS`)."""
 
 
-def learn_seed_chain(cfg: ICubConfig, seed: int, scene: ICubScene) -> tuple[MapData, ChainMaps]:
+STEPS = (
+    "record the training views",
+    "learn map 1 and map 2",
+    "score map 1",
+    "score map 2",
+    "babble",
+    "learn to reach",
+    "test the reaches",
+)
+"""The steps of one seed's job, as its progress names them."""
+
+
+def learn_seed_chain(
+    cfg: ICubConfig, seed: int, scene: ICubScene, steps: Steps | None = None
+) -> tuple[MapData, ChainMaps]:
     """The training views and the chain of maps of ``seed`` (what :meth:`ICubExperiment.run`
     learns for that seed; ``sigmapi physiology`` records the same maps in
-    ``benchmarks/bench_physiology.py --icub``)."""
+    ``benchmarks/bench_physiology.py --icub``); ``steps`` moves on when the views are
+    recorded."""
     train = MapData.record(scene, cfg.train_pairs, PLAN.rng(seed, "views"), cfg.moved_share)
+    if steps is not None:
+        steps.next()
     chain = learn_chain(
         train,
         grid=cfg.grid,
@@ -117,10 +139,17 @@ def learn_seed_chain(cfg: ICubConfig, seed: int, scene: ICubScene) -> tuple[MapD
 
 def _run_seed(job: _Job) -> dict[str, Any]:
     """Maps, babbling and reaches of one seed."""
+    work = functools.partial(_seed, job)
+    return counted(job.show, len(STEPS), f"icub seed {job.seed}", work, "step")
+
+
+def _seed(job: _Job, tick: Tick | None) -> dict[str, Any]:
+    steps = Steps(tick, STEPS)
     cfg, seed = job.config, job.seed
     scene = ICubScene()
     t0 = time.process_time()
-    train, chain = learn_seed_chain(cfg, seed, scene)
+    train, chain = learn_seed_chain(cfg, seed, scene, steps)
+    steps.next()
     out: dict[str, Any] = {"seed": seed, "maps": {}}
     for stage in (1, 2):
         m = score(chain, stage, job.cal, job.test)
@@ -131,16 +160,19 @@ def _run_seed(job: _Job) -> dict[str, Any]:
         if stage == 2:
             m["exact_map1"] = exact_map1(chain, train, job.cal, job.test)
         out["maps"][f"map{stage}"] = m
+        steps.next()
     out["map_cpu_s"] = time.process_time() - t0
     rng = PLAN.rng(seed, "babbling")
     wrist = (cfg.babble_wrist[0], cfg.babble_wrist[1])
     babbles = babble(scene, cfg.babbles, rng, yaw=cfg.babble_yaw, wrist=wrist)
     held_out = babble(scene, 200, rng, yaw=cfg.babble_yaw, wrist=wrist)
+    steps.next()
 
     def feats(method: str, v: Any) -> NDArray[np.float64]:
         return features(method, v, chain, cfg.grid, cfg.code_width, cfg.feature_width, cfg.readout)
 
     layers, curves = learn_reaching(scene, babbles, held_out, feats, epochs=cfg.epochs)
+    steps.next()
     film = None
     if job.figures:
 
@@ -166,6 +198,7 @@ def _run_seed(job: _Job) -> dict[str, Any]:
         distance=tests.distance,
         cpu_s=time.process_time() - t0,
     )
+    steps.next()
     if job.figures:
         c0 = job.cal.head[0]
         zc = z_decoder(chain.winner(c0, 2), c0.torso, chain.map2.map_coords)
@@ -225,7 +258,9 @@ class ICubExperiment(Experiment[ICubConfig]):
     120-122 measured today's settings before map 2's reference fed an exact map 1,
     :func:`~sigmapi.experiments.icub.maps.exact_map1`, which changes no setting)."""
     quick_seeds = (0,)
+    quick_time = "about 30 s on two quiet cores, 2 min on two busy ones"
     """The seed of ``--quick``: a tuning seed."""
+    extra = "robot"
     default_out = "icub"
 
     def before_writing(self, config: ICubConfig, *, force: bool) -> None:
@@ -251,12 +286,15 @@ class ICubExperiment(Experiment[ICubConfig]):
         mujoco_module()
         icub_models_module()  # before any work: both say which extra to install
         t0 = time.perf_counter()
-        show = Progress.of(progress)
-        show.note("icub: checking the frames and recording the evaluation views")
-        scene = ICubScene()
-        frames = check_frames(scene, config.frame_scenes, np.random.default_rng(EVAL_SEED))
-        cal, test = MapData.evaluation(scene, config.eval_pairs)
-        scene.close()
+        tick, bar = Progress.of(progress).counter(2, "icub", "step")
+        with bar:
+            steps = Steps(tick, ("check the frames", "record the evaluation views"))
+            scene = ICubScene()
+            frames = check_frames(scene, config.frame_scenes, np.random.default_rng(EVAL_SEED))
+            steps.next()
+            cal, test = MapData.evaluation(scene, config.eval_pairs)
+            steps.next()
+            scene.close()
         jobs = [(str(seed), _Job(config, seed, cal, test, i == 0)) for i, seed in enumerate(seeds)]
         values = run_all(
             _run_seed,
@@ -266,6 +304,7 @@ class ICubExperiment(Experiment[ICubConfig]):
             progress=progress,
             desc="icub",
             describe=lambda key, v: f"seed {key} ({v['cpu_s']:.0f} CPU s)",
+            verbose=lambda job: dataclasses.replace(job, show=progress),
         )
         res = ICubResult(config, seeds, frames, [values[str(s)] for s in seeds])
         res.seconds = time.perf_counter() - t0

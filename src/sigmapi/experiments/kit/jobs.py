@@ -16,7 +16,7 @@ from sigmapi.agents import ActorCritic, ActorCriticConfig, Episodes, actor_criti
 from sigmapi.experiments.kit.seeds import SeedPlan
 from sigmapi.progress import Progress
 
-__all__ = ["SeedEpisodes", "Tick", "counted", "learn_on_state", "seed_episodes"]
+__all__ = ["SeedEpisodes", "Steps", "Tick", "counted", "learn_on_state", "seed_episodes"]
 
 T = TypeVar("T")
 
@@ -24,15 +24,39 @@ Tick = Callable[[int, str], None]
 """``tick(n, phase)``: ``n`` episodes just finished (0 while the map learns), and what runs."""
 
 
-def counted(show: Progress | None, total: int, desc: str, work: Callable[[Tick | None], T]) -> T:
-    """``work(tick)`` with a bar of ``total`` episodes named ``desc`` where ``show`` is given
-    (the job runs in the caller's process, :func:`~sigmapi.experiments.base.run_all`'s
-    ``verbose``), else ``work(None)``."""
+def counted(
+    show: Progress | None,
+    total: int,
+    desc: str,
+    work: Callable[[Tick | None], T],
+    unit: str = "ep",
+) -> T:
+    """``work(tick)`` with a bar of ``total`` units (episodes) named ``desc`` where ``show``
+    is given (:func:`~sigmapi.experiments.base.run_all`'s ``verbose``), else ``work(None)``."""
     if show is None:
         return work(None)
-    tick, bar = show.counter(total, desc, "ep")
+    tick, bar = show.counter(total, desc, unit)
     with bar:
         return work(tick)
+
+
+class Steps:
+    """The named steps of a job, shown through ``tick`` (None: nothing shown): the first
+    is shown as it starts; :meth:`next` counts the step that ran and shows the next one."""
+
+    def __init__(self, tick: Tick | None, names: Sequence[str]) -> None:
+        self.tick, self.names, self.i = tick, tuple(names), 0
+        if tick is not None and self.names:
+            tick(0, self.names[0])
+
+    def next(self) -> None:
+        """The current step is done; the next one starts."""
+        if self.tick is None or self.i >= len(self.names):
+            return
+        self.tick(1, self.names[self.i])
+        self.i += 1
+        if self.i < len(self.names):
+            self.tick(0, self.names[self.i])
 
 
 def learn_on_state(

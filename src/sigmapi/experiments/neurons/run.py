@@ -11,6 +11,8 @@ conjunction network at every peak rate, the dendritic one at 100 Hz.
 
 from __future__ import annotations
 
+import dataclasses
+import functools
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -23,6 +25,7 @@ from sigmapi.analysis.physiology import record
 from sigmapi.config import SOMConfig
 from sigmapi.executor import Executor, job_memory
 from sigmapi.experiments.base import Experiment, check_seeds, register, run_all
+from sigmapi.experiments.kit.jobs import Tick, counted
 from sigmapi.metrics import evaluate, evaluation_sets, grid_spacing, winner_metrics
 from sigmapi.model.som import SigmaPiSOM
 from sigmapi.neurons.basis import BasisFunctionMap
@@ -49,6 +52,18 @@ class NeuronsJob:
     seed: int
     task: str  # "1d" or "2d"
     config: NeuronsConfig
+    show: Progress | None = None
+    """Where given, the job shows its steps (:func:`~sigmapi.experiments.kit.jobs.counted`)."""
+
+    @property
+    def steps(self) -> int:
+        """The job's steps: each map trained and each scored, each spiking run."""
+        c = self.config
+        if self.task == "2d":
+            return 2 * (2 + len(c.branches_2d) + len(c.sparse_branches_2d))
+        spiking = len(c.peak_rates) + sum(p != c.pool for p in c.pools_compared)
+        spiking += bool(c.spiking_branches) + bool(c.spiking_sparse_branches)
+        return 2 * (2 + len(c.branches) + len(c.sparse_branches)) + spiking
 
     @property
     def som_config(self) -> SOMConfig:
@@ -80,6 +95,7 @@ def _spiking_rows(
     rates: Any,
     *,
     dendritic: bool = False,
+    tick: Tick | None = None,
 ) -> list[dict[str, Any]]:
     """One row per window and ``(peak rate, pool)`` of ``rates`` of a spiking deployment of
     ``model`` (a pool other than the config's tags the name ``-pool<n>``); ``dendritic``: the
@@ -96,10 +112,12 @@ def _spiking_rows(
     for rate, pool in rates:
         key = (SPIKE_KEY, rate) if pool == c.pool else (SPIKE_KEY, rate, pool)
         rng = np.random.default_rng(np.random.SeedSequence(job.seed, spawn_key=key))
+        tag = "" if pool == c.pool else f"-pool{pool}"
+        _step(tick, 0, f"{name}{tag} at {rate:g} Hz")
         start = time.perf_counter()
         run: SpikingRun = simulate(x, y, c.spiking(rate, pool, dendritic=dendritic), rng)
         secs = time.perf_counter() - start
-        tag = "" if pool == c.pool else f"-pool{pool}"
+        _step(tick, 1, f"{name}{tag} at {rate:g} Hz")
         for i, window in enumerate(run.windows_ms):
             w = run.winners[i]
             m = winner_metrics(wc, cal.z, w[:n], w[n:], test.z[:n], model.map_coords, spacing)
@@ -128,22 +146,37 @@ def _spiking_rows(
     return rows
 
 
+def _step(tick: Tick | None, n: int, phase: str) -> None:
+    """``tick(n, phase)`` where the job shows its steps: 0 as a step starts, 1 when done."""
+    if tick is not None:
+        tick(n, phase)
+
+
 def neurons_job(job: NeuronsJob) -> dict[str, Any]:
     """Every map of one seed and task: ``{"maps": [rows], "spiking": [rows], "branches":
     summary of the middle dendritic map's branches}`` (rows: ``name``, ``task``, the
     :data:`METRICS`, ``folded``, ``synapses``, physiology medians in 1-D)."""
+    desc = f"neurons seed {job.seed} {job.task}"
+    return counted(job.show, job.steps, desc, functools.partial(_neurons_job, job), "step")
+
+
+def _neurons_job(job: NeuronsJob, tick: Tick | None) -> dict[str, Any]:
     c, cfg = job.config, job.som_config
     two_d = job.task == "2d"
     n_x, n_y = int(np.prod(cfg.x_shape)), int(np.prod(cfg.y_shape))
     maps: list[tuple[str, Any, dict[str, Any]]] = []
     start = time.perf_counter()
+    _step(tick, 0, "train sigma-pi")
     sp = SigmaPiSOM(cfg, seed=job.seed).fit()
+    _step(tick, 1, "train sigma-pi")
     maps.append(("sigma-pi", sp, {"synapses": n_x * n_y, "start": start}))
     training = c.training(two_d)
     dendritic: dict[int, DendriticMap] = {}
     for d in c.branches_2d if two_d else c.branches:
         start = time.perf_counter()
+        _step(tick, 0, f"train dendritic-D{d}")
         dm = DendriticMap(cfg, d).fit(training, seed=job.seed)
+        _step(tick, 1, f"train dendritic-D{d}")
         dendritic[d] = dm
         maps.append(
             (
@@ -161,7 +194,9 @@ def neurons_job(job: NeuronsJob) -> dict[str, Any]:
     sparse: dict[int, SparseDendriticMap] = {}
     for d in c.sparse_branches_2d if two_d else c.sparse_branches:
         start = time.perf_counter()
+        _step(tick, 0, f"train dendritic-sparse-D{d}")
         sm = SparseDendriticMap(cfg, d, stride=stride).fit(training, seed=job.seed)
+        _step(tick, 1, f"train dendritic-sparse-D{d}")
         sparse[d] = sm
         info = sparse_summary(sm, _z_table(sm, c.n_test))
         maps.append(
@@ -178,11 +213,14 @@ def neurons_job(job: NeuronsJob) -> dict[str, Any]:
             )
         )
     start = time.perf_counter()
+    _step(tick, 0, "train basis-function")
     bf = BasisFunctionMap(cfg, stride=stride).fit(training, seed=job.seed)
+    _step(tick, 1, "train basis-function")
     maps.append(("basis-function", bf, {"synapses": bf.synapses, "start": start}))
     rows = []
     for name, model, extra in maps:
         begin = extra.pop("start")
+        _step(tick, 0, f"score {name}")
         row = _scored(model, c.n_test, begin, name=name, task=job.task, seed=job.seed, **extra)
         if not two_d:
             phys = record(model)
@@ -192,6 +230,7 @@ def neurons_job(job: NeuronsJob) -> dict[str, Any]:
                 peak_modulation=phys["median_peak_modulation"],
             )
         rows.append(row)
+        _step(tick, 1, f"score {name}")
     mid = sorted(dendritic)[len(dendritic) // 2]
     summary = branch_summary(dendritic[mid], _z_table(dendritic[mid], c.n_test))
     summary.update(branches=mid, task=job.task, seed=job.seed)
@@ -205,7 +244,7 @@ def neurons_job(job: NeuronsJob) -> dict[str, Any]:
         ref = REFERENCE_RATE if REFERENCE_RATE in c.peak_rates else c.peak_rates[0]
         runs = [(rate, c.pool) for rate in c.peak_rates]
         runs += [(ref, p) for p in c.pools_compared if p != c.pool]
-        spiking += _spiking_rows(job, "spiking-conjunction", sp, conj, sp.winner, runs)
+        spiking += _spiking_rows(job, "spiking-conjunction", sp, conj, sp.winner, runs, tick=tick)
         if c.spiking_branches:
             dm = dendritic.get(c.spiking_branches) or DendriticMap(cfg, c.spiking_branches).fit(
                 training, seed=job.seed
@@ -215,7 +254,14 @@ def neurons_job(job: NeuronsJob) -> dict[str, Any]:
                 return simulate_dendritic(dm.u_, dm.v_, dm.gain, dm.threshold, x, y, cfg_s, rng)
 
             dend_rows = _spiking_rows(
-                job, "spiking-dendritic", dm, dend, dm.winner, [(ref, c.pool)], dendritic=True
+                job,
+                "spiking-dendritic",
+                dm,
+                dend,
+                dm.winner,
+                [(ref, c.pool)],
+                dendritic=True,
+                tick=tick,
             )
             for r in dend_rows:
                 r["branches"] = c.spiking_branches
@@ -230,7 +276,13 @@ def neurons_job(job: NeuronsJob) -> dict[str, Any]:
                 return simulate_conjunction(branch_weights, x, y, cfg_s, rng)
 
             sparse_rows = _spiking_rows(
-                job, "spiking-sparse-dendritic", sm, sparse_net, sm.winner, [(ref, c.pool)]
+                job,
+                "spiking-sparse-dendritic",
+                sm,
+                sparse_net,
+                sm.winner,
+                [(ref, c.pool)],
+                tick=tick,
             )
             for r in sparse_rows:
                 r["branches"] = c.spiking_sparse_branches
@@ -274,6 +326,7 @@ def run_neurons(
         progress=progress,
         desc="neurons",
         describe=describe,
+        verbose=lambda job: dataclasses.replace(job, show=progress),
     )
     return NeuronsResult(config, seeds, [done[k] for k, _ in jobs], time.perf_counter() - start)
 
@@ -288,6 +341,7 @@ class NeuronsExperiment(Experiment[NeuronsConfig]):
     quick = QUICK
     seeds = (100, 101, 102, 103, 104)
     quick_seeds = (100,)
+    quick_time = "about 1.5-2.5 min on two busy cores"
     default_out = "neurons"
 
     def run(

@@ -83,6 +83,8 @@ class RobotExperiment(ReachExperiment):
     config_type = RobotConfig
     quick = QUICK
     quick_seeds = (0,)
+    quick_time = "about 20 s on two cores"
+    extra = "robot"
     """The seed of ``--quick``: a tuning seed (a first look does not peek at the reported
     ones)."""
     default_out = "robot"

@@ -149,6 +149,7 @@ class StreamExperiment(Experiment[StreamConfig]):
     quick = QUICK
     seeds = tuple(range(800, 810))
     quick_seeds = (0,)
+    quick_time = "about 45 s on two busy cores"
     default_out = "stream"
     writes = (FIGURE, Path(FIGURE).with_suffix(".txt").name)
     """The files written into --out besides result.json (checked before the work)."""
