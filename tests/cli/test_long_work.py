@@ -172,3 +172,10 @@ def test_a_missing_extra_is_said_in_one_form_everywhere(module, extra, call, mon
     text = str(exc.value)
     assert "(not installed here" in text and text.endswith(f"); {install_hint(extra)}"), text
     assert "clone: pip install '.[" in install_hint(extra)  # as the README installs
+
+
+def test_the_readme_installs_every_extra_a_command_asks_for():
+    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text("utf-8")
+    asked = {e.extra for e in REGISTRY.values() if e.extra} | {"onnx", "sweep"}  # export, dask
+    for extra in sorted(asked):
+        assert f"'.[{extra}]'" in readme, extra  # the clone's form of install_hint(extra)

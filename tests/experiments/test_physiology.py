@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -120,6 +121,11 @@ def test_a_trained_map_is_body_centred_and_its_random_start_is_not(tmp_path):
     assert data["reference_frame_index"] == r["reference_frame_index"]
     assert data["comparison"]["ks"] > 0.5 and data["body_centred"] in (True, False)
     assert (tmp_path / "p" / "physiology.png").is_file()
+    # the wrote line lists every file the command wrote, the caption too
+    wrote = out.stderr.strip().splitlines()[-1].split("sigmapi physiology: wrote ")[1]
+    files = {p.name for p in (tmp_path / "p").iterdir() if not p.name.startswith(".")}
+    assert sorted(Path(f).name for f in wrote.split(", ")) == sorted(files)
+    assert files == {"physiology.png", "physiology.txt", "result.json"}
     missing = subprocess.run(
         [sys.executable, "-m", "sigmapi.cli", "physiology", str(tmp_path / "none.npz")],
         capture_output=True, text=True, check=False,
