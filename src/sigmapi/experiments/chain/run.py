@@ -37,7 +37,7 @@ through the executor; :func:`run_chain` is the same from Python with a :class:`S
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from functools import partial
 from pathlib import Path
@@ -60,7 +60,7 @@ from sigmapi.experiments.chain.result import (
     TARGET_RATIO,
     ChainResult,
 )
-from sigmapi.experiments.kit.jobs import Tick, counted
+from sigmapi.experiments.kit.jobs import Tick, counted, iterations_counted
 from sigmapi.experiments.kit.seeds import SeedPlan
 from sigmapi.metrics import EVAL_SEED, evaluate, winner_metrics
 from sigmapi.model.som import SigmaPiSOM
@@ -183,23 +183,6 @@ def chain_seed(job: ChainJob) -> dict[str, Any]:
     return counted(job.show, total, f"chain seed {job.seed}", partial(_chain_seed, job), "it")
 
 
-def _iterations(
-    tick: Tick | None, name: str, iterations: int
-) -> Callable[[SigmaPiSOM], None] | None:
-    """A ``fit`` callback that counts one map's iterations (up to ``iterations``) on ``tick``."""
-    if tick is None:
-        return None
-    seen = 0
-
-    def callback(model: SigmaPiSOM) -> None:
-        nonlocal seen
-        t = min(model.t_, iterations)
-        tick(t - seen, name)
-        seen = t
-
-    return callback
-
-
 def _chain_seed(job: ChainJob, tick: Tick | None) -> dict[str, Any]:
     seed, cfg, train_pairs, code, cal, test = (
         job.seed,
@@ -216,7 +199,7 @@ def _chain_seed(job: ChainJob, tick: Tick | None) -> dict[str, Any]:
     # the chain: A on its own task, then B on A's code of the triples' views and the head code
     start = time.perf_counter()
     its = cfg.iterations
-    a = SigmaPiSOM(cfg, seed=seed).fit(callback=_iterations(tick, "map A", its))
+    a = SigmaPiSOM(cfg, seed=seed).fit(callback=iterations_counted(tick, "map A", its))
     b = SigmaPiSOM(cfg.replace(x_shape=a.map_shape), seed=seed)
 
     def chain_inputs(t: Triples, v: int) -> tuple[Array, Array]:
@@ -225,7 +208,7 @@ def _chain_seed(job: ChainJob, tick: Tick | None) -> dict[str, Any]:
 
     b.fit(
         (*chain_inputs(train, 0), *chain_inputs(train, 1)),
-        callback=_iterations(tick, "map B", its),
+        callback=iterations_counted(tick, "map B", its),
     )
     chain_seconds = time.perf_counter() - start
 
@@ -239,7 +222,7 @@ def _chain_seed(job: ChainJob, tick: Tick | None) -> dict[str, Any]:
     )
     s.fit(
         (*_single_inputs(s, train, 0), *_single_inputs(s, train, 1)),
-        callback=_iterations(tick, "single map", its),
+        callback=iterations_counted(tick, "single map", its),
     )
     if tick is not None:
         tick(0, "scoring both routes")

@@ -33,8 +33,8 @@ executor (:func:`compare_seed`); the experiment ``compare`` (:class:`Compare`) i
 from __future__ import annotations
 
 import dataclasses
+import functools
 import importlib.util
-import sys
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -65,6 +65,7 @@ from sigmapi.experiments.compare.result import (
     CompareResult,
     MethodScore,
 )
+from sigmapi.experiments.kit.jobs import Tick, counted
 from sigmapi.experiments.kit.seeds import SeedPlan
 from sigmapi.metrics import evaluation_sets, grid_spacing
 from sigmapi.model.som import SigmaPiSOM
@@ -149,7 +150,14 @@ views, apart from the streams a model of the same seed draws."""
 
 
 def compare_seed(job: CompareJob) -> Scores:
-    """Train and score every method of ``job.cfg`` on seed ``job.seed``'s recording."""
+    """Train and score every method of ``job.cfg`` on seed ``job.seed``'s recording (with
+    ``job.progress``, a bar or lines of its methods)."""
+    work = functools.partial(_compare_seed, job)
+    show = Progress() if job.progress else None
+    return counted(show, len(job.cfg.methods), f"compare seed {job.seed}", work, "method")
+
+
+def _compare_seed(job: CompareJob, tick: Tick | None) -> Scores:
     cfg, seed, cal, test = job.cfg, job.seed, job.cal, job.test
     som_cfg = cfg.som_config
     base = SigmaPiSOM(som_cfg)
@@ -160,8 +168,8 @@ def compare_seed(job: CompareJob) -> Scores:
     views = (b.x0, b.y0, b.x1, b.y1)
     out: Scores = {}
     for name in cfg.methods:
-        if job.progress:
-            print(f"compare: seed {seed}: {name}", file=sys.stderr, flush=True)
+        if tick is not None:
+            tick(0, name)
         t0 = time.perf_counter()
         model = _train(name, cfg, som_cfg, views, seed)
         if hasattr(model, "winner"):
@@ -170,6 +178,8 @@ def compare_seed(job: CompareJob) -> Scores:
         else:
             vc, uc, curve = score_readout(model.features, cal, test, cfg.labels, spacing, cells)
         out[name] = (vc, uc, curve, time.perf_counter() - t0)
+        if tick is not None:
+            tick(1, name)
     return out
 
 

@@ -16,7 +16,15 @@ from sigmapi.agents import ActorCritic, ActorCriticConfig, Episodes, actor_criti
 from sigmapi.experiments.kit.seeds import SeedPlan
 from sigmapi.progress import Progress
 
-__all__ = ["SeedEpisodes", "Steps", "Tick", "counted", "learn_on_state", "seed_episodes"]
+__all__ = [
+    "SeedEpisodes",
+    "Steps",
+    "Tick",
+    "counted",
+    "iterations_counted",
+    "learn_on_state",
+    "seed_episodes",
+]
 
 T = TypeVar("T")
 
@@ -38,6 +46,24 @@ def counted(
     tick, bar = show.counter(total, desc, unit)
     with bar:
         return work(tick)
+
+
+def iterations_counted(
+    tick: Tick | None, name: str, iterations: int
+) -> Callable[[Any], None] | None:
+    """A ``fit`` callback (``callback(model)``) that counts one map's training iterations, up
+    to ``iterations``, on ``tick`` as phase ``name``; None where nothing is shown."""
+    if tick is None:
+        return None
+    seen = 0
+
+    def callback(model: Any) -> None:
+        nonlocal seen
+        t = min(int(model.t_), iterations)
+        tick(t - seen, name)
+        seen = t
+
+    return callback
 
 
 class Steps:

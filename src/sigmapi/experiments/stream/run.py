@@ -19,6 +19,8 @@ per-seed values; ``"acceptance"`` the comparison with pairs seed by seed at ``d 
 
 from __future__ import annotations
 
+import dataclasses
+import functools
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -30,6 +32,7 @@ import numpy as np
 from sigmapi.config import SOMConfig
 from sigmapi.executor import Executor, job_memory
 from sigmapi.experiments.base import Experiment, check_seeds, register, run_all
+from sigmapi.experiments.kit.jobs import Tick, counted, iterations_counted
 from sigmapi.experiments.kit.seeds import SeedPlan
 from sigmapi.experiments.stream.config import (
     QUICK,
@@ -76,13 +79,24 @@ class StreamJob:
     dwell: int | None
     traces: tuple[float, ...]
     n_test: int
+    show: Progress | None = None
+    """Where given, the job shows its maps' training iterations."""
 
 
 def stream_job(job: StreamJob) -> list[dict[str, Any]]:
     """Train and score the maps of one job: the map on pairs, or one map per trace constant on
     the stream of ``(seed, dwell)``; one dict per map (``seed``, ``dwell``, ``trace``, the
     :data:`METRICS`, ``folded``, ``seconds``)."""
+    maps = 1 if job.dwell is None else len(job.traces)
+    what = "pairs" if job.dwell is None else f"dwell {job.dwell}"
+    desc = f"stream seed {job.seed} {what}"
+    work = functools.partial(_stream_job, job)
+    return counted(job.show, maps * job.cfg.iterations, desc, work, "it")
+
+
+def _stream_job(job: StreamJob, tick: Tick | None) -> list[dict[str, Any]]:
     out = []
+    its = job.cfg.iterations
 
     def scored(model: SigmaPiSOM, trace: float | None, start: float) -> dict[str, Any]:
         m = evaluate(model, n_test=job.n_test)
@@ -93,13 +107,18 @@ def stream_job(job: StreamJob) -> list[dict[str, Any]]:
 
     if job.dwell is None:
         start = time.perf_counter()
-        return [scored(SigmaPiSOM(job.cfg, seed=job.seed).fit(), None, start)]
+        model = SigmaPiSOM(job.cfg, seed=job.seed)
+        return [scored(model.fit(callback=iterations_counted(tick, "pairs", its)), None, start)]
     model = SigmaPiSOM(job.cfg, seed=job.seed)
     rng = PLAN.rng(job.seed, "frames", job.dwell)
     frames = model.sampler.stream(job.cfg.iterations + 1, job.dwell, rng)
     for lam in job.traces:
         start = time.perf_counter()
-        model = SigmaPiSOM(job.cfg, seed=job.seed).fit_stream((frames.x, frames.y), trace=lam)
+        model = SigmaPiSOM(job.cfg, seed=job.seed).fit_stream(
+            (frames.x, frames.y),
+            trace=lam,
+            callback=iterations_counted(tick, f"trace {lam:g}", its),
+        )
         out.append(scored(model, lam, start))
     return out
 
@@ -134,6 +153,7 @@ def run_stream(
         progress=progress,
         desc="stream",
         describe=describe,
+        verbose=lambda job: dataclasses.replace(job, show=progress),
     )
     runs = [r for rows in done.values() for r in rows]
     return StreamResult(config, seeds, runs, time.perf_counter() - start)
