@@ -12,10 +12,10 @@ No open bar is silent for long: a heartbeat (:class:`Heartbeat`, one thread) red
 open bar on a terminal each second, and in a log writes a status line of every open bar
 whenever no progress line has been written for :data:`HEARTBEAT_S` seconds: what is done, what
 is left and an estimate of the time left from the throughput measured so far
-(:meth:`Lines.status`), e.g.::
+(:meth:`Lines.status`), e.g. (``sigmapi icub --quick 2> log``, the phase last)::
 
-    train paper-1d seed 0: 120,000 of 300,000 it after 1 min 40 s, 180,000 left,
-    about 2 min 30 s more (1,200 it/s)
+    icub seed 0: 6 of 7 step after 1 min 27 s, 1 left, about 14 s more (0.069 step/s); test
+    the reaches
 """
 
 from __future__ import annotations
