@@ -36,7 +36,7 @@ from sigmapi.metrics import (
     fold_indicators,
 )
 from sigmapi.model.som import SigmaPiSOM, load_model
-from sigmapi.progress import progress_callback
+from sigmapi.progress import counter, progress_callback
 
 __all__ = ["cmd_evaluate", "cmd_presets", "cmd_train", "register"]
 
@@ -91,8 +91,18 @@ def _train(args: argparse.Namespace, cfg: Any, out: Path, every: int | None) -> 
             model.partial_fit(iterations=step, callback=callback)
             if every is not None and model.t_ % every == 0 and model.t_ < cfg.iterations:
                 write_checkpoint(model, folder)
-    if model.refined_ < model.refine_total:
-        model.refine()  # the config's refinement after the training (rules/refinement.py)
+    if model.refined_ < model.refine_total:  # the config's refinement (rules/refinement.py)
+        left = model.refine_total - model.refined_
+        tick, bar = counter(left, f"refine {args.preset}", "pair", disable=args.quiet or None)
+        seen = model.refined_
+
+        def refined(m: SigmaPiSOM) -> None:
+            nonlocal seen
+            tick(m.refined_ - seen, "")
+            seen = m.refined_
+
+        with bar:
+            model.refine(callback=refined)
     model.save(out, compress=args.compress)
     print(f"wrote {out} ({model.t_} iterations, backend {model.backend})", file=sys.stderr)
     if not args.keep_checkpoints:
