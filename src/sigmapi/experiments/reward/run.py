@@ -235,7 +235,7 @@ class RewardExperiment(Experiment[RewardConfig]):
     seeds = (900, 901, 902, 903, 904, 905, 906, 907, 908, 909)
     """The seeds of the acceptance run (not the world's: none of them was tuned on)."""
     quick_seeds = (0,)
-    quick_time = "about 1 min on two cores"
+    quick_time = "about 30-60 s on two cores"
     default_out = "reward"
 
     def __init__(self, world: World = GAZE_REACH) -> None:

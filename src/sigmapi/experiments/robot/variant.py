@@ -83,7 +83,7 @@ class RobotExperiment(ReachExperiment):
     config_type = RobotConfig
     quick = QUICK
     quick_seeds = (0,)
-    quick_time = "about 20 s on two cores"
+    quick_time = "about 20 s on two quiet cores, 80 s on two busy ones"
     extra = "robot"
     """The seed of ``--quick``: a tuning seed (a first look does not peek at the reported
     ones)."""
