@@ -341,7 +341,7 @@ class NeuronsExperiment(Experiment[NeuronsConfig]):
     quick = QUICK
     seeds = (100, 101, 102, 103, 104)
     quick_seeds = (100,)
-    quick_time = "about 1.5-2.5 min on two busy cores"
+    quick_time = "about 1-2.5 min on two busy cores"
     default_out = "neurons"
 
     def run(
