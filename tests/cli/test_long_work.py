@@ -30,11 +30,11 @@ def _status(text: str) -> list[re.Match[str]]:
 
 def test_train_into_a_log_says_what_is_done_left_and_how_long_it_takes(tmp_path):
     log = tmp_path / "log"
-    env = {**os.environ, "SIGMAPI_HEARTBEAT_S": "0.1"}  # the 20 s of a real run, shortened
+    env = {**os.environ, "SIGMAPI_HEARTBEAT_S": "0.02"}  # the 20 s of a real run, shortened
     with log.open("w") as err:  # stderr a file: `sigmapi train ... 2> log`
         r = subprocess.run(
             [sys.executable, "-m", "sigmapi.cli", "train", "--preset", "tiny-1d", "--set",
-             "iterations=4000", "--backend", "reference", "--out", str(tmp_path / "m.npz")],
+             "iterations=6000", "--backend", "reference", "--out", str(tmp_path / "m.npz")],
             stdout=subprocess.DEVNULL, stderr=err, env=env, timeout=120,
         )  # fmt: skip
     text = log.read_text()
@@ -44,9 +44,9 @@ def test_train_into_a_log_says_what_is_done_left_and_how_long_it_takes(tmp_path)
     for m in found:
         n, total, left = (int(m[k].replace(",", "")) for k in ("n", "total", "left"))
         assert m["desc"] == "train tiny-1d" and m["unit"] == "it"
-        assert total == 4000 and n + left == total and 0 < n < total
+        assert total == 6000 and n + left == total and 0 < n <= total
     assert "\r" not in text  # plain lines, no bar
-    assert text.splitlines()[-2].startswith("train tiny-1d: 4,000 of 4,000 it in ")
+    assert text.splitlines()[-2].startswith("train tiny-1d: 6,000 of 6,000 it in ")
 
 
 def test_an_experiment_into_a_log_shows_its_jobs_work_with_an_estimate(
