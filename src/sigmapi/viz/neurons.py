@@ -1,4 +1,7 @@
-"""Figures of ``sigmapi neurons`` and ``sigmapi physiology``, drawn from their result dicts."""
+"""Figures of ``sigmapi neurons`` and ``sigmapi physiology``, drawn from their result dicts.
+
+Every mark has a legend entry (or a colour bar, where colour carries a value); the legends sit
+below their panels, off the data."""
 
 from __future__ import annotations
 
@@ -10,11 +13,14 @@ from matplotlib.figure import Figure
 
 __all__ = ["neurons_figure", "physiology_figure"]
 
+_BELOW = {"loc": "upper center", "bbox_to_anchor": (0.5, -0.16), "borderaxespad": 0.0}
+"""Legend keywords: below the panel, under its x label."""
+
 
 def neurons_figure(result: dict[str, Any]) -> Figure:
     """Three panels: view consistency against synapses per unit (1-D maps), the spiking
     networks against the decision window at the reference rate, the branches of one map."""
-    fig, axes = plt.subplots(1, 3, figsize=(15, 4.4))
+    fig, axes = plt.subplots(1, 3, figsize=(15, 6.2), layout="constrained")
     ax = axes[0]
     rate = [m for m in result["methods"] if m["kind"] == "rate" and m["task"] == "1d"]
     sp = next(m for m in rate if m["name"] == "sigma-pi")
@@ -64,7 +70,7 @@ def neurons_figure(result: dict[str, Any]) -> Figure:
     ax.set_xlabel("synapses per map unit (the most in any unit)")
     ax.set_ylabel("view consistency (same winner)")
     ax.set_title("1-D maps of first-order neurons")
-    ax.legend(fontsize=8, loc="lower right")
+    ax.legend(fontsize=8, **_BELOW)
 
     ax = axes[1]
     spk = [m for m in result["methods"] if m["kind"] == "spiking" and m["peak_rate"] == 100]
@@ -94,7 +100,7 @@ def neurons_figure(result: dict[str, Any]) -> Figure:
             color=colour,
             label=f"{base}: agreement - 1",
         )
-    ax.axhline(-0.02, color="0.5", lw=0.8, ls=":")
+    ax.axhline(-0.02, color="0.5", lw=0.8, ls=":", label="-0.02: the acceptance margin")
     ax.set_xscale("log")
     ticks = sorted({m["window_ms"] for m in spk})
     ax.set_xticks(ticks, [f"{t:g}" for t in ticks])
@@ -102,22 +108,24 @@ def neurons_figure(result: dict[str, Any]) -> Figure:
     ax.set_xlabel("decision window (ms)")
     ax.set_ylabel("difference (median over seeds)")
     ax.set_title("spiking networks, 100 Hz peak rate")
-    ax.legend(fontsize=7)
+    ax.legend(fontsize=7, **_BELOW)
 
     ax = axes[2]
     b = result["branches"][0]
     unit = np.asarray(b["unit"])
     xc, yc = np.asarray(b["x_centre"])[:, 0], np.asarray(b["y_centre"])[:, 0]
-    ax.scatter(xc, yc, c=unit, cmap="viridis", s=18)
+    dots = ax.scatter(xc, yc, c=unit, cmap="viridis", s=18, label="a branch")
+    fig.colorbar(dots, ax=ax, label="map unit of the branch")
     n = float(max(xc.max(), yc.max())) + 1.0
-    for s in np.arange(0, 2 * n, 2.0):
-        ax.plot([0, s], [s, 0], color="0.88", lw=0.6, zorder=0)
+    for i, s in enumerate(np.arange(0, 2 * n, 2.0)):
+        label = "retinal + gaze centre constant (one z)" if i == 0 else "_z"
+        ax.plot([0, s], [s, 0], color="0.75", lw=0.6, zorder=0, label=label)
     ax.set_xlim(-0.5, n)
     ax.set_ylim(-0.5, n)
     ax.set_xlabel("retinal centre of a branch's synapses (grid units, axis 0)")
     ax.set_ylabel("gaze centre (grid units, axis 0)")
     ax.set_title(f"branches of the D={b['branches']} map (colour: unit)")
-    fig.tight_layout()
+    ax.legend(fontsize=8, **_BELOW)
     return fig
 
 
@@ -127,7 +135,7 @@ def physiology_figure(result: dict[str, Any]) -> Figure:
     beside the published numbers (where the result has one)."""
     monkey = result.get("monkey")
     rows = 2 if monkey else 1
-    fig, grid = plt.subplots(rows, 3, figsize=(16, 4.6 * rows), squeeze=False)
+    fig, grid = plt.subplots(rows, 3, figsize=(16, 5.6 * rows), squeeze=False, layout="constrained")
     axes = grid[0]
     if monkey:
         _monkey_panels(grid[1], monkey)
@@ -138,11 +146,11 @@ def physiology_figure(result: dict[str, Any]) -> Figure:
         med = result[key]["median_reference_frame_index"]
         text = "no unit measured" if med is None else f"median {med:.2f}, n={len(vals)}"
         ax.hist(np.clip(vals, bins[0], bins[-1]), bins=bins, alpha=0.6, label=f"{label} ({text})")
-    ax.axvline(0.0, color="0.4", ls=":")
-    ax.axvline(1.0, color="0.4", ls=":")
+    ax.axvline(0.0, color="0.4", ls=":", label="0: eye-centred, 1: body-centred")
+    ax.axvline(1.0, color="0.4", ls=":", label="_body")
     ax.set_xlabel("reference-frame index (0 eye-centred, 1 body-centred)")
     ax.set_ylabel("units")
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=8, **_BELOW)
 
     ax = axes[1]
     curves = result["tuning"]
@@ -158,7 +166,7 @@ def physiology_figure(result: dict[str, Any]) -> Figure:
         + ", ".join(f"{g:g}" for g in curves["gazes"])
         + " (darker: larger)"
     )
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=8, **_BELOW)
 
     ax = axes[2]
     for key, label in (("trained", "trained map"), ("random_start", "random start")):
@@ -178,8 +186,7 @@ def physiology_figure(result: dict[str, Any]) -> Figure:
         )
     ax.set_xlabel("planar gain-field fit R^2 (response at fixed retinal position)")
     ax.set_ylabel("gain slope (|b| / mean response)")
-    ax.legend(fontsize=8)
-    fig.tight_layout()
+    ax.legend(fontsize=8, **_BELOW)
     return fig
 
 
