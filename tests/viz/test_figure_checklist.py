@@ -4,9 +4,11 @@ The checklist (:func:`check_figure`), on the drawn figure:
 
 1. **Every mark explained**: each drawn line, patch, collection and image is named in a legend
    (by its label), by the caption (its label appears in the caption text), or shares its style
-   (kind, colour, line style, marker) with a mark that is; a bar or an error bar counts by its
-   container's label; an RGB image (a camera frame) is its own explanation; colour that carries
-   a value (a scalar image, a scatter coloured by an array) has a colour bar.
+   (kind, colour, line style or marker) with a mark that is; a bar or an error bar counts by
+   its container's label; an RGB image (a camera frame) is its own explanation; colour that
+   carries a value (a scalar image, a scatter coloured by an array) has a colour bar (its own,
+   or one of the same colour map and limits). Where every unnamed mark of an Axes has one
+   colour and the Axes no legend, they are its one series, named by its title and axis labels.
 2. **Legends off the data**: no legend's box covers a data point, a point on a data line, a bar
    or a text label inside the Axes (reference lines across the whole Axes, spans and
    background patches may run under a legend).
@@ -49,6 +51,9 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 from matplotlib.text import Text
 from matplotlib.transforms import Bbox
+
+from sigmapi.analysis.map_data import receptive_field_centres
+from sigmapi.viz.figures import FIGURES, REGISTRY, DrawInputs, RunInfo, caption
 
 BIGGER = 1.3
 """Of two lines at the same points, the one below shows round the one above: its marker is
@@ -109,10 +114,12 @@ def _colour(c: Any) -> tuple[float, ...]:
 
 
 def _style(a: Any) -> tuple[Any, ...]:
-    """What tells a mark from another in a legend: kind, colour (not alpha), line, marker."""
-    if isinstance(a, Line2D):
-        mcol = a.get_markeredgecolor() if a.get_marker() not in ("None", "", None) else None
-        return ("line", _colour(a.get_color()), a.get_linestyle(), str(a.get_marker()), mcol)
+    """What tells a mark from another in a legend: kind, colour (not alpha or width), line
+    style or, for dots, marker."""
+    if isinstance(a, Line2D):  # a drawn line by its colour and dashes, dots by their marker
+        if a.get_linestyle() not in ("None", "", " "):
+            return ("line", _colour(a.get_color()), a.get_linestyle())
+        return ("dots", _colour(a.get_markerfacecolor()), str(a.get_marker()))
     if isinstance(a, Patch):
         face = _colour(a.get_facecolor()) if a.get_fill() else None
         return ("patch", face, _colour(a.get_edgecolor()), a.get_linestyle())
@@ -136,7 +143,16 @@ def _container_children(c: Container) -> Iterator[Any]:
 
 
 def _colourbar_mappables(fig: Figure) -> list[Any]:
-    return [ax._colorbar.mappable for ax in fig.axes if getattr(ax, "_colorbar", None)]
+    every = [a for ax in fig.axes for a in (ax, *ax.child_axes)]
+    return [ax._colorbar.mappable for ax in every if getattr(ax, "_colorbar", None)]
+
+
+def _same_scale(a: Any, bar: Any) -> bool:
+    """Whether the colour bar of ``bar`` reads the colours of ``a`` (the same mappable, or the
+    same colour map and limits: one colour bar for a row of panels)."""
+    return a is bar or (
+        a.get_cmap().name == bar.get_cmap().name and np.allclose(a.get_clim(), bar.get_clim())
+    )
 
 
 def _unexplained(fig: Figure, caption: str) -> list[str]:
@@ -161,7 +177,8 @@ def _unexplained(fig: Figure, caption: str) -> list[str]:
         arts = [*ax.lines, *ax.patches, *ax.collections, *ax.images]
         explained.update(id(a) for a in arts if said(a.get_label()))
         styles = {_style(a) for a in arts if id(a) in explained}
-        for a in _marks(ax):
+        marks, unnamed = _marks(ax), []
+        for a in marks:
             if isinstance(a, AxesImage) and np.asarray(a.get_array()).ndim == 3:
                 continue  # a camera frame: its own explanation
             valued = (
@@ -170,11 +187,20 @@ def _unexplained(fig: Figure, caption: str) -> list[str]:
                 and a.get_array() is not None
                 and np.size(a.get_array()) > 0
             )
-            if valued and a not in bars:
+            if valued and not any(_same_scale(a, b) for b in bars):
                 problems.append(f"{ax.get_title()!r}: {a} carries values in colour, no colour bar")
-            if valued or id(a) in explained or _style(a) in styles:
-                continue
-            problems.append(f"{ax.get_title()!r}: {type(a).__name__} {a.get_label()!r} unexplained")
+            if not (valued or id(a) in explained or _style(a) in styles):
+                unnamed.append(a)
+        one_series = (
+            len(unnamed) == len(marks)
+            and ax.get_legend() is None
+            and len({_style(a)[1] for a in unnamed}) == 1
+        )
+        if not one_series:
+            problems += [
+                f"{ax.get_title()!r}: {type(a).__name__} {a.get_label()!r} unexplained"
+                for a in unnamed
+            ]
     return problems
 
 
@@ -450,10 +476,29 @@ def _physiology_result(tmp_path: Path) -> Any:
     return PhysiologyResult(cfg, record_model(cfg), 0.0)
 
 
+def _stored(name: str, result_type: Any) -> Callable[[Path], Any]:
+    """A result read back from the project's measured ``benchmarks/results/NAME.json``."""
+
+    def read(tmp_path: Path) -> Any:
+        import json
+
+        path = Path(__file__).parents[2] / "benchmarks" / "results" / f"{name}.json"
+        return result_type.from_dict(json.loads(path.read_text()))
+
+    return read
+
+
+def _stream(tmp_path: Path) -> Any:
+    from sigmapi.experiments.stream.result import StreamResult
+
+    return _stored("stream", StreamResult)(tmp_path)
+
+
 RESULTS: dict[str, Callable[[Path], Any]] = {
     "icub": lambda tmp: _icub_result(),
     "neurons": _neurons_result,
     "physiology": _physiology_result,
+    "stream": _stream,
 }
 """Experiment name -> a small result of it, whose ``figure(out_dir)`` draws every figure."""
 
@@ -486,4 +531,24 @@ def test_every_figure_of_an_experiment_passes_the_checklist(name, saved, tmp_pat
         text = caption.read_text()
         assert len(text.strip()) > 40, f"{name}: {caption.name} says almost nothing"
         problems += [f"{path.name}: {p}" for p in check_figure(fig, text)]
+    assert not problems, "\n".join(problems)
+
+
+@pytest.mark.parametrize("name", FIGURES)
+@pytest.mark.parametrize("dims", ["1d", "2d"])
+def test_every_report_figure_passes_the_checklist(name, dims, model_1d, model_2d, curves):
+    """The figures of ``sigmapi reproduce`` and ``sigmapi figure`` (the registry), with the
+    captions the report prints under them."""
+    model = model_1d if dims == "1d" else model_2d
+    spec = REGISTRY[name]
+    centres = receptive_field_centres(model, 0) if spec.needs_centres(len(model.x_shape)) else None
+    other = {
+        k: vs if k in ("t", "refined", "sigma") else [0.97 * v for v in vs]
+        for k, vs in curves[0].items()
+    }
+    two = [*curves, other]  # two seeds: each seed's line apart from their mean
+    inputs = DrawInputs(two, {"z_error": 0.3}, "tiny", 0, centres, None)
+    fig, facts = spec.draw(model, inputs)
+    run = RunInfo("tiny", model.config, (0,), 0, curve_test=100, why="the only seed")
+    problems = check_figure(fig, caption(name, run, facts))
     assert not problems, "\n".join(problems)

@@ -255,11 +255,11 @@ def plot_net(
             f"{map_shape} and z of {d} dimensions"
         )
     g = centres.reshape(map_shape[0], map_shape[1], 2)
-    for r in range(map_shape[0]):
-        ax.plot(g[r, :, 0], g[r, :, 1], "-", color="C0", lw=1)
-    for c in range(map_shape[1]):
-        ax.plot(g[:, c, 0], g[:, c, 1], "-", color="C0", lw=1)
-    ax.plot(g[..., 0].ravel(), g[..., 1].ravel(), "o", color="C0", ms=3)
+    rows = [g[r] for r in range(map_shape[0])] + [g[:, c] for c in range(map_shape[1])]
+    for i, line in enumerate(rows):
+        label = "grid neighbours, joined" if i == 0 else "_neighbours"
+        ax.plot(line[:, 0], line[:, 1], "-", color="C0", lw=1, label=label)
+    ax.plot(g[..., 0].ravel(), g[..., 1].ravel(), "o", color="C0", ms=3, label="a unit")
     ax.plot(*g[0, 0], "s", color="C3", ms=8, label="unit (0, 0)")
     ax.plot(*g[0, -1], "^", color="C2", ms=8, label=f"unit (0, {map_shape[1] - 1})")
     ax.plot(*g[-1, 0], "v", color="C1", ms=8, label=f"unit ({map_shape[0] - 1}, 0)")
@@ -369,11 +369,14 @@ def plot_learning_curves(
                     pos = [v > 0 for v in vs]
                     xs = [x[k] for x, k in zip(xs, pos, strict=True)]
                     vs = [v[k] for v, k in zip(vs, pos, strict=True)]
-                for x, v in zip(xs, vs, strict=True):
-                    target.plot(x, v, "-", color=colour, lw=0.8, alpha=0.4)
                 same = bool(xs) and all(
                     len(x) == len(xs[0]) and len(x) > 0 and np.allclose(x, xs[0]) for x in xs
                 )
+                # each seed's line, unless every seed's is the mean's (e.g. the schedule's
+                # sigma): one line then, not several hidden under it
+                if not same or any(not np.allclose(v, vs[0]) for v in vs[1:]):
+                    for x, v in zip(xs, vs, strict=True):
+                        target.plot(x, v, "-", color=colour, lw=0.8, alpha=0.4)
                 if same:
                     many = len(vs) > 1
                     target.plot(

@@ -16,7 +16,20 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
+from sigmapi.metrics import FOLD_THRESHOLD
+
 __all__ = ["plot_fold_rate", "plot_view_consistency", "stream_figure"]
+
+
+BAND = "best to worst seed (shaded)"
+"""The label of the bands from the best to the worst seed (one legend entry for them all)."""
+
+
+def _legend(ax: Axes, **kwargs: Any) -> None:
+    """The Axes' legend, each label once (the bands share one entry)."""
+    handles, labels = ax.get_legend_handles_labels()
+    once = dict(zip(labels, handles, strict=True))
+    ax.legend(list(once.values()), list(once), **kwargs)
 
 
 def _ax(ax: Axes | None) -> Axes:
@@ -53,12 +66,14 @@ def plot_view_consistency(
     dwells = sorted({m["dwell"] for v in lines.values() for m in v})
     pairs = next(m for m in result["methods"] if m["dwell"] is None)
     vals = pairs["per_seed"]["view_consistency"]
-    ax.axhspan(min(vals), max(vals), color="k", alpha=0.1, lw=0)
+    ax.axhspan(min(vals), max(vals), color="k", alpha=0.1, lw=0, label=BAND)
     ax.axhline(pairs["view_consistency"], color="k", ls="--", label="explicit pairs")
     for i, (name, entries) in enumerate(lines.items()):
         d = [m["dwell"] for m in entries]
         per = np.array([m["per_seed"]["view_consistency"] for m in entries])
-        ax.fill_between(d, per.min(axis=1), per.max(axis=1), color=f"C{i}", alpha=0.15, lw=0)
+        ax.fill_between(
+            d, per.min(axis=1), per.max(axis=1), color=f"C{i}", alpha=0.15, lw=0, label=BAND
+        )
         ax.plot(d, [m["view_consistency"] for m in entries], "o-", color=f"C{i}", label=name)
     _dwell_axis(ax, dwells)
     ax.set_ylabel("view consistency (same winner)")
@@ -74,7 +89,7 @@ def plot_view_consistency(
         )
         ax.set_ylim(mid - 3 * margin, mid + 3 * margin)
         ax.set_title("near explicit pairs", fontsize=10)
-    ax.legend(fontsize=8, loc="lower right")
+    _legend(ax, fontsize=8, loc="lower right")
     return ax
 
 
@@ -93,7 +108,7 @@ def plot_fold_rate(result: Mapping[str, Any], ax: Axes | None = None) -> Axes:
         ax.plot(d * shift, [m["fold_rate"] for m in entries], "o-", color=f"C{i}", label=name)
     _dwell_axis(ax, dwells)
     ax.set_ylim(-0.05, 1.05)
-    ax.set_ylabel("fold rate (share of seeds folded)")
+    ax.set_ylabel(f"fold rate (share of seeds with fold score >= {FOLD_THRESHOLD:g})")
     ax.legend(fontsize=8, loc="best")
     return ax
 

@@ -330,7 +330,7 @@ def icub_figures(result: Any, out_dir: Path) -> list[Path]:
     out_dir.mkdir(parents=True, exist_ok=True)
     first = result.per_seed[0]
     seed = result.seeds[0]
-    seeds = ", ".join(map(str, result.seeds))
+    seeds = ("seed " if len(result.seeds) == 1 else "seeds ") + ", ".join(map(str, result.seeds))
     paths: list[Path] = []
 
     def save(fig: Any, name: str, caption: str) -> None:
@@ -366,7 +366,7 @@ def icub_figures(result: Any, out_dir: Path) -> list[Path]:
     save(
         plot_success_table(ball, succ),
         "success-table.png",
-        f"Every test ball of seeds {seeds} ({ball.shape[0]} reaches per method), top view, one "
+        f"Every test ball of {seeds} ({ball.shape[0]} reaches per method), top view, one "
         "panel per method: green dot, touched; red cross, missed; dashed, the region the balls "
         f"are drawn from. Success: {_rates(total)}.",
     )
@@ -374,7 +374,7 @@ def icub_figures(result: Any, out_dir: Path) -> list[Path]:
     save(
         plot_success_gaze(gaze, succ).figure,
         "success-gaze.png",
-        f"Reach success per method (seeds {seeds}, {ball.shape[0]} reaches each) over the "
+        f"Reach success per method ({seeds}, {ball.shape[0]} reaches each) over the "
         f"gaze's horizontal direction in {len(centres)} bins of equal count, centred at "
         + ", ".join(f"{c:+.0f}" for c in centres)
         + " degrees. "
@@ -385,7 +385,7 @@ def icub_figures(result: Any, out_dir: Path) -> list[Path]:
         save(
             plot_servo(total, served, total["scripted_ik"]).figure,
             "servo.png",
-            f"Success per associated method (seeds {seeds}): the posture of the first view "
+            f"Success per associated method ({seeds}): the posture of the first view "
             f"alone ({_rates({m: total[m] for m in served})}) and after the learned servo "
             f"({_rates(served)}); dashed: scripted IK, {total['scripted_ik']:.2f}.",
         )
@@ -396,7 +396,7 @@ def icub_figures(result: Any, out_dir: Path) -> list[Path]:
     save(
         ax.figure,
         "babbling.png",
-        f"Median palm error (cm, median over seeds {seeds}) on held-out babbles against the "
+        f"Median palm error (cm, median over {seeds}) on held-out babbles against the "
         f"number of babbles learned from (log axis); after {n_last} babbles: "
         + ", ".join(f"{m} {v:.1f} cm" for m, v in last.items())
         + ". "
