@@ -26,9 +26,11 @@ BAND = "best to worst seed (shaded)"
 
 
 def _legend(ax: Axes, **kwargs: Any) -> None:
-    """The Axes' legend, each label once (the bands share one entry)."""
+    """The Axes' legend, each label once (the bands share one entry, in grey)."""
     handles, labels = ax.get_legend_handles_labels()
-    once = dict(zip(labels, handles, strict=True))
+    once: dict[str, Any] = {}
+    for handle, label in zip(handles, labels, strict=True):
+        once.setdefault(label, handle)  # the bands: the first, the grey of explicit pairs
     ax.legend(list(once.values()), list(once), **kwargs)
 
 
