@@ -341,7 +341,8 @@ def test_reach_figure_names_rising_learners_and_spreads_and_labels_every_panel()
     labels = [t.get_text() for t in success.get_legend().get_texts()]
     assert any(t.startswith("retina only (still rising: +0.") for t in labels), labels
     assert not any("still rising" in t for t in labels if t.startswith("true z")), labels
-    assert steps.get_legend() is not None and len(steps.get_legend().get_texts()) == 2
+    steps_labels = [t.get_text() for t in steps.get_legend().get_texts()]
+    assert len(steps_labels) == 3 and steps_labels[-1] == "band: quartiles over seeds"  # 2 states
     assert len(steps.collections) == 2  # a quartile band per state
     c = res.curves()["true_z"]  # seeds' mean steps differ by 1 each: quartiles of 4 seeds
     np.testing.assert_allclose(c["steps_q75"] - c["steps_q25"], 1.5)

@@ -9,9 +9,9 @@ The checklist (:func:`check_figure`), on the drawn figure:
    carries a value (a scalar image, a scatter coloured by an array) has a colour bar (its own,
    or one of the same colour map and limits). Where every unnamed mark of an Axes has one
    colour and the Axes no legend, they are its one series, named by its title and axis labels.
-2. **Legends off the data**: no legend's box covers a data point, a point on a data line, a bar
-   or a text label inside the Axes (reference lines across the whole Axes, spans and
-   background patches may run under a legend).
+2. **Legends off the data**: no legend's box covers a data point, a point on a data line, a bar,
+   a text label inside the Axes, or a title, axis label or tick label (reference lines across
+   the whole Axes, spans and background patches may run under a legend).
 3. **Tick labels readable**: no two visible tick labels of one axis overlap.
 4. **No series hidden**: of two data lines at the same display points (within a pixel), the
    one below has a marker :data:`BIGGER` times the size of the one above (or the one above
@@ -263,6 +263,17 @@ def _boxes(ax: Axes, renderer: Any) -> list[tuple[str, Bbox]]:
     return out
 
 
+def _axis_texts(ax: Axes, renderer: Any) -> list[tuple[str, Bbox]]:
+    """The Axes' title, axis labels and tick labels, in display space."""
+    texts = [ax.title, ax.xaxis.label, ax.yaxis.label]
+    texts += _tick_labels(ax.xaxis) + _tick_labels(ax.yaxis)
+    return [
+        (f"label {t.get_text()!r}", t.get_window_extent(renderer))
+        for t in texts
+        if t.get_visible() and t.get_text().strip()
+    ]
+
+
 def _shrunk(box: Bbox, px: float = 1.0) -> Bbox:
     return Bbox.from_extents(box.x0 + px, box.y0 + px, box.x1 - px, box.y1 - px)
 
@@ -282,7 +293,7 @@ def _legends_on_data(fig: Figure, renderer: Any) -> list[str]:
                     f"legend {[t.get_text() for t in lg.get_texts()]} covers {int(hit.sum())} "
                     f"data points of {ax.get_title()!r}"
                 )
-            for what, other in _boxes(ax, renderer):
+            for what, other in [*_boxes(ax, renderer), *_axis_texts(ax, renderer)]:
                 if box.overlaps(_shrunk(other, 0.5)):
                     problems.append(
                         f"legend {[t.get_text() for t in lg.get_texts()]} covers the {what} of "
@@ -494,11 +505,64 @@ def _stream(tmp_path: Path) -> Any:
     return _stored("stream", StreamResult)(tmp_path)
 
 
+def _compare(tmp_path: Path) -> Any:
+    """The measured comparison (benchmarks/results/compare.json), its medians as one seed."""
+    import json
+
+    from sigmapi.experiments.compare.result import CompareResult, MethodScore
+
+    path = Path(__file__).parents[2] / "benchmarks" / "results" / "compare.json"
+    data = json.loads(path.read_text())
+    read = CompareResult.from_dict(data)
+    scores = {
+        m["name"]: MethodScore(
+            m["name"],
+            [m["view_consistency"]],
+            [m["unit_consistency"]],
+            [{int(n): e for n, e in m["z_error_by_labels"].items()}],
+            [1.0],
+        )
+        for m in data["methods"]
+    }
+    return CompareResult(read.config, scores, 1.0, read.seeds[:1])
+
+
+def _reach(dim: int) -> Callable[[Path], Any]:
+    """A tiny reach run (seconds): a 6-unit map, 20 episodes per state, two seeds."""
+
+    def run(tmp_path: Path) -> Any:
+        from sigmapi.experiments.reach.config import ReachConfig
+        from sigmapi.experiments.reach.run import REACH
+
+        shape = (6,) if dim == 1 else (3, 3)
+        cfg = ReachConfig().replace(dim=dim, grid=7, map_shape=shape, iterations=500,
+                                    episodes=20, block=10, final_episodes=10,
+                                    max_episode_steps=30, backend="reference")  # fmt: skip
+        return REACH.run(cfg, seeds=[0, 1])
+
+    return run
+
+
+def _reward(tmp_path: Path) -> Any:
+    """A tiny reward run (seconds): a 5x5 map, 40 episodes per method, two seeds."""
+    from sigmapi.experiments.reward.config import RewardConfig
+    from sigmapi.experiments.reward.run import REWARD
+
+    cfg = RewardConfig().replace(grid=5, map_shape=(5, 5), iterations=500, episodes=40,
+                                 block=10, final_episodes=20, n_test=300,
+                                 max_episode_steps=30)  # fmt: skip
+    return REWARD.run(cfg, seeds=[0, 1])
+
+
 RESULTS: dict[str, Callable[[Path], Any]] = {
     "icub": lambda tmp: _icub_result(),
     "neurons": _neurons_result,
     "physiology": _physiology_result,
     "stream": _stream,
+    "compare": _compare,
+    "reach-1d": _reach(1),
+    "reach-2d": _reach(2),
+    "reward": _reward,
 }
 """Experiment name -> a small result of it, whose ``figure(out_dir)`` draws every figure."""
 

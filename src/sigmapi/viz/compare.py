@@ -57,7 +57,7 @@ def plot_labels_curve(result: Mapping[str, Any], ax: Axes | None = None) -> Axes
             linewidth=2.5 if ref else 1.2,
         )
     floor = result["quantisation_floor"]
-    ax.axhline(floor, color="0.5", linewidth=0.8)
+    ax.axhline(floor, color="0.5", linewidth=0.8, label=f"winner-only floor {floor:.2f}")
     ax.annotate(
         "winner-only floor",
         (min(result["config"]["labels"]), floor),

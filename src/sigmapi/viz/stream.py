@@ -17,21 +17,13 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from sigmapi.metrics import FOLD_THRESHOLD
+from sigmapi.viz.series import legend_once
 
 __all__ = ["plot_fold_rate", "plot_view_consistency", "stream_figure"]
 
 
 BAND = "best to worst seed (shaded)"
 """The label of the bands from the best to the worst seed (one legend entry for them all)."""
-
-
-def _legend(ax: Axes, **kwargs: Any) -> None:
-    """The Axes' legend, each label once (the bands share one entry, in grey)."""
-    handles, labels = ax.get_legend_handles_labels()
-    once: dict[str, Any] = {}
-    for handle, label in zip(handles, labels, strict=True):
-        once.setdefault(label, handle)  # the bands: the first, the grey of explicit pairs
-    ax.legend(list(once.values()), list(once), **kwargs)
 
 
 def _ax(ax: Axes | None) -> Axes:
@@ -91,7 +83,7 @@ def plot_view_consistency(
         )
         ax.set_ylim(mid - 3 * margin, mid + 3 * margin)
         ax.set_title("near explicit pairs", fontsize=10)
-    _legend(ax, fontsize=8, loc="lower right")
+    legend_once(ax, fontsize=8, loc="lower right")  # the bands share one entry, in grey
     return ax
 
 

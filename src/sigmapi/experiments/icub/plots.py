@@ -21,9 +21,9 @@ from sigmapi._outputs import save_captioned, save_gif
 from sigmapi.envs.icub import REACH_REGION
 from sigmapi.experiments.icub.reaching import METHODS
 from sigmapi.metrics import FOLD_THRESHOLD, ORDERED_R2
+from sigmapi.viz.series import coincide_sentence, coinciding, plot_apart
 
 __all__ = [
-    "coinciding",
     "gaze_bins",
     "icub_figures",
     "plot_babbling",
@@ -37,10 +37,6 @@ __all__ = [
 ]
 
 _TABLE = (0.09, 0.59, -0.5, 0.3)  # near and far edge, right and left side (world x, y)
-
-_MARKERS = ("o", "s", "^", "D", "v", "P", "X")
-"""One marker per series; drawn largest first, each 1.35 times smaller than the one before
-(and its line thinner), so a series under another still shows round it."""
 
 _BESIDE = {"loc": "upper left", "bbox_to_anchor": (1.02, 1.0), "borderaxespad": 0.0}
 """Legend keywords: beside the Axes, right of the data."""
@@ -149,41 +145,6 @@ def plot_success_table(
     return fig
 
 
-def coinciding(series: Mapping[str, Sequence[float]]) -> dict[str, str]:
-    """Per series name, the earlier series it equals at every point (within 1e-9), if any:
-    what the legend and the caption say of series drawn on top of one another."""
-    out: dict[str, str] = {}
-    names = list(series)
-    for i, m in enumerate(names):
-        for other in names[:i]:
-            a, b = np.asarray(series[m], float), np.asarray(series[other], float)
-            if a.shape == b.shape and np.allclose(a, b, rtol=0.0, atol=1e-9):
-                out[m] = out.get(other, other)
-                break
-    return out
-
-
-def _plot_series(
-    ax: Any, x: Mapping[str, Sequence[float]], y: Mapping[str, Sequence[float]]
-) -> None:
-    """Draw each series of ``y`` over ``x`` with its own marker, the first largest, so series
-    that coincide all show; a coinciding one's label names the series it lies on."""
-    same = coinciding({m: [*x[m], *y[m]] for m in y})
-    for i, m in enumerate(y):
-        label = m if m not in same else f"{m} (coincides with {same[m]})"
-        ax.plot(
-            x[m],
-            y[m],
-            "-",
-            marker=_MARKERS[i % len(_MARKERS)],
-            ms=13 / 1.35**i,
-            lw=max(0.6, 3.0 - 0.4 * i),
-            color=f"C{i}",
-            label=label,
-            zorder=2 + i,
-        )
-
-
 def gaze_bins(
     gaze: NDArray[np.float64], success: Mapping[str, NDArray[np.bool_]], bins: int = 4
 ) -> tuple[list[float], dict[str, list[float]]]:
@@ -210,7 +171,7 @@ def plot_success_gaze(
     if ax is None:
         ax = plt.figure(figsize=(8, 4)).add_subplot()
     centres, rates = gaze_bins(gaze, success, bins)
-    _plot_series(ax, dict.fromkeys(rates, centres), rates)
+    plot_apart(ax, dict.fromkeys(rates, centres), rates)
     ax.set(
         xlabel="gaze direction: neck yaw - eye version (deg, + left)",
         ylabel="success (share of reaches)",
@@ -237,13 +198,13 @@ def _log_ticks(ax: Any, values: Sequence[float], apart: float = 0.15) -> None:
 
 def plot_babbling(curves: Mapping[str, Sequence[Sequence[float]]], ax: Any = None) -> Any:
     """Median palm error (cm) on held-out babbles against the babbles learned from (log
-    axis), one marker per method (:func:`_plot_series`)."""
+    axis), one marker per method (:func:`~sigmapi.viz.series.plot_apart`)."""
     import matplotlib.pyplot as plt
 
     if ax is None:
         ax = plt.figure(figsize=(8, 4)).add_subplot()
     pts = {m: np.asarray(p, dtype=float).reshape(-1, 2) for m, p in curves.items()}
-    _plot_series(
+    plot_apart(
         ax,
         {m: p[:, 0].tolist() for m, p in pts.items()},
         {m: p[:, 1].tolist() for m, p in pts.items()},
@@ -310,17 +271,6 @@ def _rates(values: Mapping[str, float]) -> str:
     return ", ".join(f"{m} {v:.2f}" for m, v in values.items())
 
 
-def _said(same: Mapping[str, str], where: str) -> str:
-    """A caption's sentence on coinciding series (:func:`coinciding`)."""
-    if not same:
-        return f"No two methods coincide {where}."
-    pairs = "; ".join(f"{m} coincides with {o}" for m, o in same.items())
-    return (
-        f"{pairs} {where}: drawn with markers of decreasing size (the later one smaller, on "
-        "top), so every series shows."
-    )
-
-
 def icub_figures(result: Any, out_dir: Path) -> list[Path]:
     """Write ``eyes.png``, ``map-on-table.png``, ``success-table.png``, ``success-gaze.png``,
     ``babbling.png``, ``film.png`` and, with the servo, ``servo.png`` (from the first seed; the
@@ -378,7 +328,7 @@ def icub_figures(result: Any, out_dir: Path) -> list[Path]:
         f"gaze's horizontal direction in {len(centres)} bins of equal count, centred at "
         + ", ".join(f"{c:+.0f}" for c in centres)
         + " degrees. "
-        + _said(coinciding({m: r for m, r in rates.items()}), "in every bin"),
+        + coincide_sentence(coinciding(rates), "in every bin"),
     )
     served = result.servo()
     if served:
@@ -400,7 +350,9 @@ def icub_figures(result: Any, out_dir: Path) -> list[Path]:
         f"number of babbles learned from (log axis); after {n_last} babbles: "
         + ", ".join(f"{m} {v:.1f} cm" for m, v in last.items())
         + ". "
-        + _said(coinciding({m: [e for _, e in p] for m, p in curves.items()}), "at every point"),
+        + coincide_sentence(
+            coinciding({m: [e for _, e in p] for m, p in curves.items()}), "at every point"
+        ),
     )
     film = first.get("film") or []
     if film:

@@ -17,8 +17,16 @@ from matplotlib.figure import Figure
 from numpy.typing import NDArray
 
 from sigmapi.experiments.reach.config import ReachConfig
+from sigmapi.viz.series import coinciding, legend_once, plot_apart
 
-__all__ = ["LABELS", "ReachData", "plot_reach_curves", "plot_value_function", "reach_figure"]
+__all__ = [
+    "LABELS",
+    "ReachData",
+    "coinciding_curves",
+    "plot_reach_curves",
+    "plot_value_function",
+    "reach_figure",
+]
 
 
 class ReachData(Protocol):
@@ -47,6 +55,16 @@ LABELS = {
 COLORS = {"map": "C0", "retina": "C3", "retina_gaze": "C1", "true_z": "k"}
 
 
+def coinciding_curves(result: ReachData) -> dict[str, dict[str, str]]:
+    """Per metric ("success", "steps"), the states whose curve equals an earlier state's at
+    every block (:func:`~sigmapi.viz.series.coinciding`): what the caption says of them."""
+    curves = result.curves()
+    return {
+        metric: coinciding({s: [*c["episode"], *c[key]] for s, c in curves.items()})
+        for metric, key in (("success", "success"), ("steps", "steps_to_reach"))
+    }
+
+
 def _ax(ax: Axes | None) -> Axes:
     if ax is None:
         ax = Figure(figsize=(5, 3.5), layout="constrained").subplots()
@@ -63,17 +81,26 @@ def plot_reach_curves(result: ReachData, metric: str = "success", ax: Axes | Non
         raise ValueError(f"metric must be 'success' or 'steps', got {metric!r}")
     ax = _ax(ax)
     rising, rise = result.still_rising(), result.final_rise()
-    for state, c in result.curves().items():
-        ep, color, label = c["episode"], COLORS.get(state), LABELS.get(state, state)
+    curves = result.curves()
+    labels, x, y = {}, {}, {}
+    for state, c in curves.items():
+        labels[state] = LABELS.get(state, state)
+        if metric == "success" and state in rising:
+            labels[state] += f" (still rising: {rise[state]:+.2f})"
+        x[state] = c["episode"].tolist()
+        y[state] = c["success" if metric == "success" else "steps_to_reach"].tolist()
+    # series that coincide (e.g. two states at success 1) each show; the caption says which
+    # (ReachResult.caption, from coinciding_curves)
+    plot_apart(ax, x, y, labels=labels, colours=COLORS, largest=8.0, width=1.8, say=False)
+    band = "band: 1 sd over seeds" if metric == "success" else "band: quartiles over seeds"
+    for state, c in curves.items():
         if metric == "success":
-            if state in rising:
-                label += f" (still rising: {rise[state]:+.2f})"
-            ax.plot(ep, c["success"], color=color, label=label)
             lo, hi = c["success"] - c["success_sd"], c["success"] + c["success_sd"]
         else:
-            ax.plot(ep, c["steps_to_reach"], color=color, label=label)
             lo, hi = c["steps_q25"], c["steps_q75"]
-        ax.fill_between(ep, lo, hi, color=color, alpha=0.15, linewidth=0)
+        ax.fill_between(
+            c["episode"], lo, hi, color=COLORS.get(state), alpha=0.15, linewidth=0, label=band
+        )
     n, run = len(result.seeds), result.config.run
     ax.set_xlabel(f"episode (blocks of {run.block})")
     if metric == "success":
@@ -84,7 +111,13 @@ def plot_reach_curves(result: ReachData, metric: str = "success", ax: Axes | Non
         ax.set_ylabel("steps to reach (successes)")
         ax.set_title(f"steps to reach, mean of {n} seed{'s' * (n > 1)} (band: IQR)", fontsize=9)
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=7, loc="lower right" if metric == "success" else "upper right")
+    legend_once(  # the bands share one entry
+        ax,
+        fontsize=7,
+        loc="upper center",
+        bbox_to_anchor=(0.5, -0.2),
+        ncol=3,
+    )
     return ax
 
 
@@ -106,14 +139,14 @@ def plot_value_function(
         im = ax.imshow(
             v.T, origin="lower", extent=(0, 1, 0, 1), cmap=kwargs.pop("cmap", "viridis"), **kwargs
         )
-        ax.plot([lo, hi, hi, lo, lo], [lo, lo, hi, hi, lo], color="w", lw=1.2)
+        ax.plot([lo, hi, hi, lo, lo], [lo, lo, hi, hi, lo], color="w", lw=1.2, label="goal region")
         ax.set_xlabel("z0")
         ax.set_ylabel("z1")
         bar = ax.figure.colorbar(im, ax=ax, fraction=0.046, pad=0.04)
         bar.set_label("V(z): expected discounted reward", fontsize=8)
     else:
-        ax.plot(z, v, color=COLORS.get(state), **kwargs)
-        ax.axvspan(lo, hi, color="0.85", zorder=0)
+        ax.plot(z, v, color=COLORS.get(state), label="the critic's value over z", **kwargs)
+        ax.axvspan(lo, hi, color="0.85", zorder=0, label="goal region")
         ax.set_xlabel("z")
         ax.set_ylabel("V(z): expected discounted reward")
     ax.set_title(f"V over z: {LABELS.get(state, state)}", fontsize=9)
@@ -125,7 +158,7 @@ def reach_figure(result: ReachData) -> Figure:
     states = list(result.values)
     n = max(len(states), 2)
     width = max(3.2 * n, 9.6)
-    fig = Figure(figsize=(width, 7.0), layout="constrained")
+    fig = Figure(figsize=(width, 8.0), layout="constrained")
     grid = fig.add_gridspec(2, n)
     half = n // 2
     ax0 = fig.add_subplot(grid[0, :half])
@@ -148,8 +181,8 @@ def reach_figure(result: ReachData) -> Figure:
         f"Gaze-and-reach, {env.dim}-D, saccade rate {env.saccade_rate:g}: actor-critic "
         f"(gamma {agent.gamma:g}, rates {agent.critic_lr:g}/{agent.actor_lr:g}, "
         f"beta {agent.beta:g}); "
-        f"bottom: critic's value over z after training (seed {result.seeds[0]}; white: goal "
-        f"region)",
+        f"bottom: critic's value over z after training (seed {result.seeds[0]}; "
+        f"{'white square' if env.dim == 2 else 'grey band'}: goal region)",
         result.levelling_note(),
     )
     chars = int(width * 13)  # about as many characters of 10-point text fit an inch

@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from sigmapi._outputs import save_figure
+from sigmapi._outputs import save_captioned, save_figure
 from sigmapi.experiments.kit.episodes import final_rates, success_curve
 from sigmapi.experiments.kit.written import as_object, config_and_seeds, summaries
 from sigmapi.experiments.reach.config import ReachConfig
@@ -235,6 +235,36 @@ class ReachResult:
         save_figure(reach_figure(self), out, dpi=dpi, facecolor="white")
         return out
 
+    def caption(self) -> str:
+        """The figure's caption, computed from the result."""
+        from sigmapi.experiments.reach.figures import LABELS, coinciding_curves
+
+        run, env = self.config.run, self.config.env
+        n = len(self.seeds)
+        final = ", ".join(f"{LABELS.get(s, s)} {v:.2f}" for s, v in self.final_success().items())
+        goal = "white square" if env.dim == 2 else "grey band"
+        text = (
+            f"Gaze-and-reach, {env.dim}-D, seed{'s' * (n > 1)} "
+            f"{', '.join(map(str, self.seeds))}: the actor-critic's success rate per block of "
+            f"{run.block} episodes (mean over seeds; band: 1 sd over seeds) and its steps to "
+            f"reach (band: the quartiles over seeds), one line per state it reads. Final "
+            f"success over the last {run.final_episodes} of {run.episodes} episodes: {final}; "
+            f"{self.levelling_note()}. Bottom: the critic's value over z after training "
+            f"(seed {self.seeds[0]}), the goal region a {goal}."
+        )
+        for metric, same in coinciding_curves(self).items():
+            for state, other in same.items():
+                text += (
+                    f" The {metric} curves of {LABELS.get(state, state)} and "
+                    f"{LABELS.get(other, other)} coincide at every block (drawn with markers "
+                    "of decreasing size, so both show)."
+                )
+        return text
+
     def figure(self, out_dir: str | Path) -> list[Path]:
-        """Write the figure (:data:`FIGURE`) into ``out_dir``; returns the files written."""
-        return [self.save_figure(Path(out_dir) / FIGURE)]
+        """Write the figure (:data:`FIGURE`) and its caption beside it (``reach.txt``) into
+        ``out_dir``; returns the figure's path."""
+        from sigmapi.experiments.reach.figures import reach_figure  # matplotlib: only to draw
+
+        out = Path(out_dir) / FIGURE
+        return [save_captioned(reach_figure(self), out, self.caption(), dpi=120, facecolor="white")]

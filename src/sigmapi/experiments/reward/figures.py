@@ -18,8 +18,9 @@ from numpy.typing import NDArray
 
 from sigmapi.experiments.kit.worlds import GAZE_REACH
 from sigmapi.experiments.reward.config import RewardConfig
+from sigmapi.viz.series import legend_once, plot_apart
 
-__all__ = ["LABELS", "plot_reward_curves", "plot_units", "reward_figure"]
+__all__ = ["LABELS", "drawn_units", "plot_reward_curves", "plot_units", "reward_figure"]
 
 
 class RewardData(Protocol):
@@ -51,8 +52,17 @@ def _ax(ax: Axes | None) -> Axes:
 def plot_reward_curves(result: RewardData, ax: Axes | None = None) -> Axes:
     """Success rate per block, mean over seeds (line), band from the worst to the best seed."""
     ax = _ax(ax)
-    for m, c in result.curves().items():
-        ax.plot(c["episode"], c["success"], color=COLORS.get(m), label=LABELS.get(m, m))
+    curves = result.curves()
+    plot_apart(  # curves that coincide each show, and their labels say so
+        ax,
+        {m: c["episode"].tolist() for m, c in curves.items()},
+        {m: c["success"].tolist() for m, c in curves.items()},
+        labels={m: LABELS.get(m, m) for m in curves},
+        colours=COLORS,
+        largest=7.0,
+        width=1.8,
+    )
+    for m, c in curves.items():
         ax.fill_between(
             c["episode"],
             c["success_min"],
@@ -60,13 +70,21 @@ def plot_reward_curves(result: RewardData, ax: Axes | None = None) -> Axes:
             color=COLORS.get(m),
             alpha=0.15,
             linewidth=0,
+            label="band: min-max over seeds",
         )
-    ax.axhline(result.config.run.target, color="0.5", linestyle=":", linewidth=1)
+    target = result.config.run.target
+    ax.axhline(target, color="0.5", linestyle=":", linewidth=1, label=f"target {target:.0%}")
     ax.set_xlabel(f"episode (blocks of {result.config.run.block})")
     ax.set_ylabel("success rate")
     ax.set_ylim(0.0, 1.02)
     ax.set_title(f"reaching success, mean of {len(result.seeds)} seeds (band: min-max)")
-    ax.legend(loc="lower right", fontsize=8)
+    legend_once(  # the bands share one entry
+        ax,
+        loc="upper center",
+        bbox_to_anchor=(0.5, -0.2),
+        ncol=2,
+        fontsize=8,
+    )
     ax.grid(alpha=0.3)
     return ax
 
@@ -83,11 +101,20 @@ def plot_units(result: RewardData, method: str, ax: Axes | None = None) -> Axes:
         for line in (
             np.moveaxis(grid, axis, 0).reshape(shape[axis], -1, grid.shape[-1]).transpose(1, 0, 2)
         ):
-            ax.plot(line[:, 0], line[:, 1], color="0.6", linewidth=0.6)
-    ax.plot(pz[:, 0], pz[:, 1], "o", color=COLORS.get(method), markersize=3)
+            ax.plot(
+                line[:, 0], line[:, 1], color="0.6", linewidth=0.6, label="map neighbours, joined"
+            )
+    ax.plot(
+        pz[:, 0],
+        pz[:, 1],
+        "o",
+        color=COLORS.get(method),
+        markersize=3,
+        label="a unit at its preferred z",
+    )
     goal = np.asarray(GAZE_REACH.source(cfg.env).goal)
     r, rn = cfg.env.goal_radius, cfg.run.near_radius
-    ax.add_patch(Rectangle(tuple(goal - r), 2 * r, 2 * r, color="0.85", zorder=0))
+    ax.add_patch(Rectangle(tuple(goal - r), 2 * r, 2 * r, color="0.85", zorder=0, label="the goal"))
     ax.add_patch(
         Rectangle(
             tuple(goal - rn),
@@ -97,6 +124,7 @@ def plot_units(result: RewardData, method: str, ax: Axes | None = None) -> Axes:
             linestyle="--",
             edgecolor="k",
             linewidth=0.8,
+            label="the region near the goal",
         )
     )
     mag = result.scores[method]["magnification"]
@@ -112,11 +140,16 @@ def plot_units(result: RewardData, method: str, ax: Axes | None = None) -> Axes:
     return ax
 
 
+def drawn_units(result: RewardData) -> list[str]:
+    """The methods whose units in z the figure draws (the 2-D task only)."""
+    if result.config.env.dim != 2:
+        return []
+    return [m for m in ("frozen", "gated", "shuffled") if m in result.units]
+
+
 def reward_figure(result: RewardData) -> Figure:
     """Curves on the left, each method's units in z on the right (first seed)."""
-    methods = [m for m in ("frozen", "gated", "shuffled") if m in result.units]
-    if result.config.env.dim != 2:  # the units in z are drawn for the 2-D task
-        methods = []
+    methods = drawn_units(result)
     fig = Figure(figsize=(4.2 + 3.0 * len(methods), 3.6), layout="constrained")
     axes = fig.subplots(1, 1 + len(methods), width_ratios=[1.5] + [1.0] * len(methods))
     axes = np.atleast_1d(axes)

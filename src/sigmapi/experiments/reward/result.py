@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from sigmapi._outputs import save_figure
+from sigmapi._outputs import save_captioned, save_figure
 from sigmapi.experiments.kit.episodes import block_rates, final_rates, success_curve
 from sigmapi.experiments.kit.written import as_object, config_and_seeds, summaries
 from sigmapi.experiments.reward.config import RewardConfig
@@ -204,9 +204,45 @@ class RewardResult:
         save_figure(reward_figure(self), out, dpi=dpi, facecolor="white")
         return out
 
+    def caption(self) -> str:
+        """The figure's caption, computed from the result."""
+        from sigmapi.experiments.reward.figures import LABELS, drawn_units
+
+        d, run = self.to_dict(), self.config.run
+        n = len(self.seeds)
+        final = ", ".join(
+            f"{LABELS.get(e['name'], e['name'])} {_fmt(e['final_success'])}" for e in d["methods"]
+        )
+        text = (
+            f"Gaze-and-reach, seed{'s' * (n > 1)} {', '.join(map(str, self.seeds))}: success "
+            f"rate per block of {run.block} episodes (mean over seeds; band: min-max over "
+            f"seeds), dotted: the target rate {run.target:.0%}. Final success over the last "
+            f"{run.final_episodes} of {run.episodes} episodes, median (worst seed): {final}."
+        )
+        shown = drawn_units(self)
+        if shown:
+            mags = ", ".join(
+                f"{LABELS.get(e['name'], e['name'])} x{e['magnification']['median']:.2f}"
+                for e in d["methods"]
+                if e["name"] in shown
+            )
+            text += (
+                f" Right, seed {self.seeds[0]}, per method: each dot a unit at its preferred z, "
+                "map neighbours, joined (grey lines); the goal (grey box) and the region near the "
+                "goal (dashed), whose units the magnification counts (units per area near the "
+                f"goal over units per area overall; median over seeds: {mags})."
+            )
+        return text
+
     def figure(self, out_dir: str | Path) -> list[Path]:
-        """Write the figure (:data:`FIGURE`) into ``out_dir``; returns the files written."""
-        return [self.save_figure(Path(out_dir) / FIGURE)]
+        """Write the figure (:data:`FIGURE`) and its caption beside it (``reward.txt``) into
+        ``out_dir``; returns the figure's path."""
+        from sigmapi.experiments.reward.figures import reward_figure  # matplotlib: only to draw
+
+        out = Path(out_dir) / FIGURE
+        return [
+            save_captioned(reward_figure(self), out, self.caption(), dpi=120, facecolor="white")
+        ]
 
 
 def _earlier(a: int | None, b: int | None, never: int) -> bool:

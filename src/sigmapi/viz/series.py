@@ -1,0 +1,94 @@
+"""Series that may coincide, drawn so that each one shows, and said so.
+
+:func:`plot_apart` draws named series over their x values with one marker each, the first
+largest and each later one :data:`SHRINK` times smaller (its line thinner) on top, so a series
+that lies under another still shows round it; a series equal to an earlier one at every point
+(:func:`coinciding`) gets "(coincides with NAME)" in its label. Captions state the same with
+:func:`coincide_sentence`. :func:`legend_once` gives marks that share a label (the bands of
+every series) one legend entry.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+__all__ = ["MARKERS", "SHRINK", "coincide_sentence", "coinciding", "legend_once", "plot_apart"]
+
+MARKERS = ("o", "s", "^", "D", "v", "P", "X")
+"""One marker per series, in drawing order."""
+
+SHRINK = 1.35
+"""Each series' marker is this many times smaller than the one drawn before it."""
+
+
+def coinciding(series: Mapping[str, Sequence[float]]) -> dict[str, str]:
+    """Per series name, the earlier series it equals at every point (within 1e-9), if any."""
+    out: dict[str, str] = {}
+    names = list(series)
+    for i, m in enumerate(names):
+        for other in names[:i]:
+            a, b = np.asarray(series[m], float), np.asarray(series[other], float)
+            if a.shape == b.shape and np.allclose(a, b, rtol=0.0, atol=1e-9):
+                out[m] = out.get(other, other)
+                break
+    return out
+
+
+def coincide_sentence(same: Mapping[str, str], where: str) -> str:
+    """A caption's sentence on the coinciding series ``same`` (:func:`coinciding`)."""
+    if not same:
+        return f"No two series coincide {where}."
+    pairs = "; ".join(f"{m} coincides with {o}" for m, o in same.items())
+    return (
+        f"{pairs} {where}: drawn with markers of decreasing size (the later one smaller, on "
+        "top), so every series shows."
+    )
+
+
+def plot_apart(
+    ax: Any,
+    x: Mapping[str, Sequence[float]],
+    y: Mapping[str, Sequence[float]],
+    *,
+    labels: Mapping[str, str] | None = None,
+    colours: Mapping[str, Any] | None = None,
+    largest: float = 13.0,
+    width: float = 3.0,
+    say: bool = True,
+) -> dict[str, str]:
+    """Draw each series of ``y`` over its ``x`` on ``ax`` (:func:`coinciding` on x and y):
+    marker ``MARKERS[i]`` of size ``largest / SHRINK**i``, line width from ``width`` down;
+    ``labels`` and ``colours`` per name (default: the name, ``C0``, ``C1``, ...). With ``say``
+    a coinciding series' label names the one it lies on (without, the caption must say so).
+    Returns the coinciding series."""
+    same = coinciding({m: [*x[m], *y[m]] for m in y})
+    for i, m in enumerate(y):
+        label = (labels or {}).get(m, m)
+        if say and m in same:
+            label += f" (coincides with {(labels or {}).get(same[m], same[m])})"
+        colour = (colours or {}).get(m) or f"C{i}"
+        ax.plot(
+            x[m],
+            y[m],
+            "-",
+            marker=MARKERS[i % len(MARKERS)],
+            ms=largest / SHRINK**i,
+            lw=max(0.6, width * (1.0 - 0.15 * i)),
+            color=colour,
+            label=label,
+            zorder=2 + i,
+        )
+    return same
+
+
+def legend_once(ax: Any, **kwargs: Any) -> Any:
+    """The legend of ``ax`` (``kwargs`` to ``ax.legend``) with each label once, drawn by the
+    first mark that has it (e.g. one entry for the bands of every series)."""
+    handles, labels = ax.get_legend_handles_labels()
+    once: dict[str, Any] = {}
+    for handle, label in zip(handles, labels, strict=True):
+        once.setdefault(label, handle)
+    return ax.legend(list(once.values()), list(once), **kwargs)
