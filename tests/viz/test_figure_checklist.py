@@ -554,6 +554,26 @@ def _reward(tmp_path: Path) -> Any:
     return REWARD.run(cfg, seeds=[0, 1])
 
 
+def _sweep(tmp_path: Path) -> Any:
+    """A sweep's table of synthetic rows: 2 code widths x 2 orderings x 3 seeds, one failed
+    run and one folded."""
+    from sigmapi.experiments.sweep.run import SweepResult, SweepSpec
+
+    spec = SweepSpec.from_dict({"preset": "tiny-1d", "seeds": [0, 1, 2],
+                                "grid": {"code_width": [0.5, 1.0],
+                                         "ordering": ["none", "crossview"]}})  # fmt: skip
+    rng = np.random.default_rng(0)
+    rows = []
+    for i, (width, ordering, seed) in enumerate(
+        itertools.product((0.5, 1.0), ("none", "crossview"), (0, 1, 2))
+    ):
+        r2 = 0.9 + 0.05 * (ordering == "crossview") + 0.02 * rng.random()
+        rows.append({"run_id": str(i), "seed": str(seed), "code_width": str(width),
+                     "ordering": ordering, "status": "failed" if i == 5 else "ok",
+                     "order_r2": f"{r2 - 0.5 * (i == 2):.3f}", "folded": str(i == 2)})  # fmt: skip
+    return SweepResult(spec, rows)
+
+
 RESULTS: dict[str, Callable[[Path], Any]] = {
     "icub": lambda tmp: _icub_result(),
     "neurons": _neurons_result,
@@ -563,6 +583,7 @@ RESULTS: dict[str, Callable[[Path], Any]] = {
     "reach-1d": _reach(1),
     "reach-2d": _reach(2),
     "reward": _reward,
+    "sweep": _sweep,
 }
 """Experiment name -> a small result of it, whose ``figure(out_dir)`` draws every figure."""
 

@@ -24,6 +24,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
+from sigmapi.metrics import FOLD_THRESHOLD
+from sigmapi.viz.series import legend_once
+
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
 
@@ -526,7 +529,7 @@ def plot_sweep(
         raw.sort(key=float)
     pos = {v: (float(v) if numeric else float(i)) for i, v in enumerate(raw)}
     groups = list(dict.fromkeys(tuple(str(r[g]) for g in group_by) for r in ok))
-    folded_label: str | None = "folded run"
+    folded_label = f"folded run (fold score >= {FOLD_THRESHOLD:g})"
     for gi, key in enumerate(groups):
         color = f"C{gi % 10}"
         label = ", ".join(f"{g} {v}" for g, v in zip(group_by, key, strict=True)) or None
@@ -551,6 +554,7 @@ def plot_sweep(
                 color=color,
                 alpha=0.6,
                 zorder=3,
+                label="a seed",
             )
             if folded.any():
                 ax.scatter(
@@ -562,14 +566,11 @@ def plot_sweep(
                     zorder=4,
                     label=folded_label,
                 )
-                folded_label = None
-        ax.plot(xs, med, "-o", color=color, label=label, zorder=2)
-        ax.fill_between(xs, lo, hi, color=color, alpha=0.15, lw=0)
+        ax.plot(xs, med, "-o", color=color, label=label or "median over seeds", zorder=2)
+        ax.fill_between(xs, lo, hi, color=color, alpha=0.15, lw=0, label="min-max over seeds")
     if not numeric:
         ax.set_xticks([float(i) for i in range(len(raw))], raw)
     ax.set_xlabel(param)
     ax.set_ylabel(f"{metric} (median, min-max over seeds)")
-    handles, _ = ax.get_legend_handles_labels()
-    if handles:
-        ax.legend(fontsize=8)
+    legend_once(ax, fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
     return ax
