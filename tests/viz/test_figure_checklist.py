@@ -574,6 +574,32 @@ def _sweep(tmp_path: Path) -> Any:
     return SweepResult(spec, rows)
 
 
+def _robot(tmp_path: Path) -> Any:
+    """A two-seed robot result of synthetic records on the measured quick run's config
+    (the map on the table reads the scene's geometry: MuJoCo)."""
+    import json
+
+    pytest.importorskip("mujoco")
+    from sigmapi.experiments.robot.config import RobotConfig
+    from sigmapi.experiments.robot.result import RobotResult
+
+    path = Path(__file__).parents[2] / "benchmarks" / "results" / "robot-docking-quick.json"
+    cfg = RobotConfig.from_dict(json.loads(path.read_text())["result"]["config"])
+    rng = np.random.default_rng(0)
+    n, episodes = 2, cfg.run.episodes
+    states = cfg.run.states
+    success = {
+        s: rng.random((n, episodes)) < p for s, p in zip(states, (0.8, 0.3, 0.4, 0.8), strict=True)
+    }
+    success[states[-1]] = success[states[0]].copy()  # two states' curves coincide
+    docked = {s: success[s] | (rng.random((n, episodes)) < 0.5) for s in states}
+    steps = {s: rng.integers(5, 100, (n, episodes)) for s in states}
+    k = int(np.prod(cfg.map.map_shape))
+    unit_z = [rng.uniform(0.1, 0.9, (k, 2)) for _ in range(n)]
+    metrics = [{"order_r2": 0.97, "folded": False, "fold_score": 0.2} for _ in range(n)]
+    return RobotResult(cfg, (5, 6), success, docked, steps, metrics, unit_z)
+
+
 RESULTS: dict[str, Callable[[Path], Any]] = {
     "icub": lambda tmp: _icub_result(),
     "neurons": _neurons_result,
@@ -584,6 +610,7 @@ RESULTS: dict[str, Callable[[Path], Any]] = {
     "reach-2d": _reach(2),
     "reward": _reward,
     "sweep": _sweep,
+    "robot": _robot,
 }
 """Experiment name -> a small result of it, whose ``figure(out_dir)`` draws every figure."""
 

@@ -1,7 +1,8 @@
 """Figures of the robot experiment: the map on the table, learning curves, a film strip.
 
 Thin plot functions (``ax`` in, Axes out) and :func:`robot_figures`, which writes them for a
-:class:`~sigmapi.experiments.robot.result.RobotResult`; :func:`film_episode` renders one
+:class:`~sigmapi.experiments.robot.result.RobotResult`, each with its caption beside it
+(``NAME.txt``), computed from the data; :func:`film_episode` renders one
 docking episode of the first seed's map learner and :func:`write_gif` saves frames as an
 animated GIF (Pillow, which matplotlib installs).
 """
@@ -14,10 +15,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from sigmapi._outputs import save_figure, save_gif
+from sigmapi._outputs import save_captioned, save_gif
 from sigmapi.envs.robot.frames import Frames
 from sigmapi.envs.robot.scene import Scene
 from sigmapi.experiments.robot.config import PLAN
+from sigmapi.metrics import FOLD_THRESHOLD, ORDERED_R2
+from sigmapi.viz.series import coincide_sentence, coinciding, legend_once, plot_apart
 
 __all__ = ["film_episode", "plot_curves", "plot_unit_positions", "robot_figures", "write_gif"]
 
@@ -29,22 +32,23 @@ def plot_unit_positions(
 ) -> Any:
     """Top view of the table with each map unit's preferred ball position (the mean place of
     the calibration balls it wins), joined along the map's rows and columns; the robot at the
-    origin facing +x."""
+    origin facing +x; legend beside the Axes."""
     import matplotlib.pyplot as plt
 
     if ax is None:
-        ax = plt.figure(figsize=(5, 5)).add_subplot()
+        ax = plt.figure(figsize=(7, 5)).add_subplot()
     frames = Frames(Scene())
     x0, x1, y0, y1 = _TABLE
-    ax.add_patch(plt.Rectangle((y0, x0), y1 - y0, x1 - x0, color=(0.85, 0.75, 0.6)))
-    ax.add_patch(plt.Circle((0.0, 0.0), 0.13, color="0.5"))
+    ax.add_patch(plt.Rectangle((y0, x0), y1 - y0, x1 - x0, color=(0.85, 0.75, 0.6), label="table"))
+    ax.add_patch(plt.Circle((0.0, 0.0), 0.13, color="0.5", label="robot (torso)"))
     ok = np.all(np.isfinite(unit_z), axis=1)
     p = np.full((len(unit_z), 3), np.nan)
     p[ok] = frames.torso_position(unit_z[ok])
     grid = p.reshape(*map_shape, 3)
-    for line in (*grid, *grid.transpose(1, 0, 2)):
-        ax.plot(-line[:, 1], line[:, 0], color="tab:blue", lw=0.8)
-    ax.plot(-p[:, 1], p[:, 0], "o", color="tab:red", ms=3)
+    for i, line in enumerate((*grid, *grid.transpose(1, 0, 2))):
+        label = "the map's rows and columns" if i == 0 else "_rows"
+        ax.plot(-line[:, 1], line[:, 0], color="tab:blue", lw=0.8, label=label)
+    ax.plot(-p[:, 1], p[:, 0], "o", color="tab:red", ms=3, label="a unit's ball position")
     ax.set(
         xlim=(-1.0, 1.0),
         ylim=(-0.2, 1.45),
@@ -53,21 +57,29 @@ def plot_unit_positions(
         ylabel="ahead of the robot (m)",
         title="each unit's preferred ball position",
     )
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
     return ax
 
 
 def plot_curves(curves: dict[str, dict[str, list[float]]], ax: Any = None) -> Any:
-    """Success per block of episodes, mean over seeds with one standard deviation shaded."""
+    """Success per block of episodes, mean over seeds with one standard deviation shaded; one
+    marker per state (curves that coincide each show, their legend entries say so)."""
     import matplotlib.pyplot as plt
 
     if ax is None:
-        ax = plt.figure(figsize=(6, 4)).add_subplot()
-    for state, c in curves.items():
+        ax = plt.figure(figsize=(8, 4)).add_subplot()
+    plot_apart(
+        ax,
+        {s: c["episode"] for s, c in curves.items()},
+        {s: c["success"] for s, c in curves.items()},
+        largest=8.0,
+        width=1.8,
+    )
+    for i, c in enumerate(curves.values()):
         e, m, sd = (np.asarray(c[k]) for k in ("episode", "success", "success_sd"))
-        ax.plot(e, m, label=state)
-        ax.fill_between(e, m - sd, m + sd, alpha=0.2)
-    ax.set(xlabel="episode", ylabel="success (docked and touched)", ylim=(0, 1))
-    ax.legend(loc="lower right")
+        ax.fill_between(e, m - sd, m + sd, color=f"C{i}", alpha=0.2, label="band: 1 sd over seeds")
+    ax.set(xlabel="episode", ylabel="success (docked and touched)", ylim=(-0.02, 1.02))
+    legend_once(ax, fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
     return ax
 
 
@@ -94,22 +106,60 @@ def write_gif(frames: list[NDArray[np.uint8]], path: Path, fps: int = 6) -> Path
     return save_gif(frames, path, fps=fps)
 
 
+def _map_words(metrics: dict[str, Any]) -> str:
+    """A map's order and fold verdicts, with their bounds (the fold score's threshold)."""
+    r2 = float(metrics["order_r2"])
+    order = "ordered" if r2 >= ORDERED_R2 else "twisted"
+    fold = "flagged folded" if metrics["folded"] else "not flagged folded"
+    score = metrics.get("fold_score")
+    said = "" if score is None else f": fold score {float(score):.2f}"
+    return (
+        f"order R^2 {r2:.3f}, {order} (ordered at >= {ORDERED_R2:g}); {fold} by the fold "
+        f"detector{said} (flagged at >= {FOLD_THRESHOLD:g})"
+    )
+
+
 def robot_figures(
     result: Any, out_dir: Path, film: list[NDArray[np.uint8]] | None = None
 ) -> list[Path]:
-    """Write ``map-on-table.png``, ``learning-curves.png`` and (with ``film``) ``film.png``."""
+    """Write ``map-on-table.png``, ``learning-curves.png`` and (with ``film``) ``film.png``,
+    each with its caption ``NAME.txt``."""
     import matplotlib.pyplot as plt
 
-    paths = []
+    paths: list[Path] = []
+    seeds = ("seed " if len(result.seeds) == 1 else "seeds ") + ", ".join(map(str, result.seeds))
+
+    def save(fig: Any, name: str, caption: str, dpi: int = 120) -> None:
+        paths.append(save_captioned(fig, out_dir / name, caption, dpi=dpi, bbox_inches="tight"))
+        plt.close(fig)
+
     if result.unit_z:
+        rows, cols = result.config.map.map_shape
         ax = plot_unit_positions(result.unit_z[0], result.config.map.map_shape)
-        paths.append(out_dir / "map-on-table.png")
-        save_figure(ax.figure, paths[-1], dpi=120, bbox_inches="tight")
-        plt.close(ax.figure)
-    ax = plot_curves(result.curves())
-    paths.append(out_dir / "learning-curves.png")
-    save_figure(ax.figure, paths[-1], dpi=120, bbox_inches="tight")
-    plt.close(ax.figure)
+        words = _map_words(result.map_metrics[0]) if result.map_metrics else ""
+        save(
+            ax.figure,
+            "map-on-table.png",
+            f"Seed {result.seeds[0]}, top view: the map's {rows}x{cols} units, each drawn (red "
+            "dot) at its preferred ball position (the mean place of the calibration balls it "
+            "wins) and joined (blue) along the map's rows and columns"
+            + (f"; {words}" if words else "")
+            + ". Tan: the table; grey disc: the robot, facing up.",
+        )
+    curves = result.curves()
+    final = result.final()
+    save(
+        plot_curves(curves).figure,
+        "learning-curves.png",
+        f"Success (docked and touched) per block of {result.config.run.block} episodes, mean "
+        f"over {seeds} (band: 1 sd over seeds), one line per state the learner reads; final "
+        f"success over the last {result.config.run.final_episodes} episodes: "
+        + ", ".join(f"{s} {float(np.mean(v)):.2f}" for s, v in final.items())
+        + ". "
+        + coincide_sentence(
+            coinciding({s: c["success"] for s, c in curves.items()}), "at every block"
+        ),
+    )
     if film:
         pick = np.linspace(0, len(film) - 1, min(6, len(film))).round().astype(int)
         fig, axes = plt.subplots(len(pick), 1, figsize=(7, 3 * len(pick)))
@@ -117,7 +167,11 @@ def robot_figures(
             a.imshow(film[i])
             a.set_axis_off()
             a.set_title(f"step {i}", fontsize=9)
-        paths.append(out_dir / "film.png")
-        save_figure(fig, paths[-1], dpi=90, bbox_inches="tight")
-        plt.close(fig)
+        save(
+            fig,
+            "film.png",
+            f"Seed {result.seeds[0]}: {len(pick)} of the {len(film)} frames of one docking "
+            "episode of the map learner after training (third-person and head cameras).",
+            dpi=90,
+        )
     return paths
