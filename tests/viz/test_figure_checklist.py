@@ -20,10 +20,13 @@ The checklist (:func:`check_figure`), on the drawn figure:
 5. **A caption file** (``NAME.txt``, :func:`sigmapi._outputs.save_captioned`) beside every
    figure an experiment writes.
 
-The figures are drawn from small synthetic results (no training), through each experiment's
-own ``figure(out_dir)``; every figure saved is caught at ``Figure.savefig`` and checked, so a
-new figure of these experiments is checked too. The report's figures are checked through the
-:data:`sigmapi.viz.figures.REGISTRY` on the tiny models of ``conftest.py``.
+The figures are drawn through each experiment's own ``figure(out_dir)`` from a small result
+(:data:`RESULTS`: synthetic records, a measured result read back from ``tests/data`` or
+``benchmarks/results``, or a run of a few seconds); every figure saved is caught at
+``Figure.savefig`` and checked, so a new figure of these experiments is checked too, and a new
+experiment fails :func:`test_every_experiment_is_checked` until it has a result here. The
+report's figures are checked through :data:`sigmapi.viz.figures.REGISTRY` on the tiny models
+of ``conftest.py``.
 """
 
 from __future__ import annotations
@@ -613,6 +616,24 @@ RESULTS: dict[str, Callable[[Path], Any]] = {
     "robot": _robot,
 }
 """Experiment name -> a small result of it, whose ``figure(out_dir)`` draws every figure."""
+
+
+ELSEWHERE = {
+    "chain": "writes no figure (ChainResult.figure returns [])",
+    "reproduce": "its figures are the registry's (test_every_report_figure_passes_the_checklist), "
+    "captioned in its report",
+}
+"""Experiments checked otherwise, and why."""
+
+
+def test_every_experiment_is_checked():
+    """A new experiment (a line of sigmapi.experiments.ENTRIES) gets a small result here, or a
+    reason in ELSEWHERE, or this fails."""
+    from sigmapi.experiments import ENTRIES
+
+    names = {name for name, _, _ in ENTRIES}
+    checked = {n.split("-")[0] for n in RESULTS} | set(ELSEWHERE)
+    assert names <= checked, f"no figure checklist for {sorted(names - checked)}"
 
 
 @pytest.fixture
