@@ -11,6 +11,8 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.figure import Figure
 
+from sigmapi.viz.series import legend_once
+
 __all__ = ["neurons_figure", "physiology_figure"]
 
 _BELOW = {"loc": "upper center", "bbox_to_anchor": (0.5, -0.16), "borderaxespad": 0.0}
@@ -211,7 +213,15 @@ def _monkey_panels(axes: Any, m: dict[str, Any]) -> None:
             bars.append((label, float(v), bool(p["verified"]), "C1"))
     ys = np.arange(len(bars))
     for y, (_, v, ok, colour) in zip(ys, bars, strict=True):
-        ax.barh(y, v, color=colour, alpha=0.75 if ok else 0.35, hatch=None if ok else "//")
+        who = "the map" if colour == "C0" else "published"
+        ax.barh(
+            y,
+            v,
+            color=colour,
+            alpha=0.75 if ok else 0.35,
+            hatch=None if ok else "//",
+            label=who if ok else f"{who}, not verified against the paper",
+        )
         ax.text(min(v, 0.98), y, f" {100 * v:.0f} %", va="center", ha="right", fontsize=7)
     ax.set_yticks(ys, [b[0] for b in bars], fontsize=7)
     ax.invert_yaxis()
@@ -222,6 +232,7 @@ def _monkey_panels(axes: Any, m: dict[str, Any]) -> None:
         "(hatched: not verified against the paper)",
         fontsize=8,
     )
+    legend_once(ax, fontsize=7, **_BELOW)
 
     ax = axes[1]
     per = m["per_unit"]
@@ -239,13 +250,13 @@ def _monkey_panels(axes: Any, m: dict[str, Any]) -> None:
     shifted = [v for v in per["displacement_index"] if v is not None]
     ax.hist(np.clip(shifted, bins[0], bins[-1]), bins=bins, histtype="step", color="C3", lw=1.5,
             label=f"admitted, by cross-correlation (n={len(shifted)})")  # fmt: skip
-    ax.axvline(0.0, color="0.4", ls=":")
-    ax.axvline(1.0, color="0.4", ls=":")
+    ax.axvline(0.0, color="0.4", ls=":", label="0: eye-centred, 1: body-centred")
+    ax.axvline(1.0, color="0.4", ls=":", label="_body")
     ax.axvspan(0.0, 1.0, color="C1", alpha=0.08,
                label="VIP: from eye- to head-centred\n(Duhamel 1997, Avillac 2005)")  # fmt: skip
     ax.set_xlabel("reference-frame index, monkey grid\n(0 eye-centred, 1 body-centred)")
     ax.set_ylabel("units")
-    ax.legend(fontsize=7)
+    ax.legend(fontsize=7, **_BELOW)
 
     ax = axes[2]
     r2 = [v for v, a in zip(per["gain_r2"], per["admitted"], strict=True) if a and v is not None]
@@ -254,4 +265,4 @@ def _monkey_panels(axes: Any, m: dict[str, Any]) -> None:
     ax.set_xlabel("planar gain-field fit R^2\n(rate at the best stimulus over the fixations)")
     ax.set_ylabel("units")
     ax.set_title("7a/LIP: 'usually planar or largely planar' (Andersen 1990)", fontsize=8)
-    ax.legend(fontsize=7)
+    ax.legend(fontsize=7, **_BELOW)
