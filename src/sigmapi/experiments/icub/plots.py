@@ -281,6 +281,7 @@ def icub_figures(result: Any, out_dir: Path) -> list[Path]:
     first = result.per_seed[0]
     seed = result.seeds[0]
     seeds = ("seed " if len(result.seeds) == 1 else "seeds ") + ", ".join(map(str, result.seeds))
+    over = "median over " if len(result.seeds) > 1 else ""
     paths: list[Path] = []
 
     def save(fig: Any, name: str, caption: str) -> None:
@@ -346,7 +347,7 @@ def icub_figures(result: Any, out_dir: Path) -> list[Path]:
     save(
         ax.figure,
         "babbling.png",
-        f"Median palm error (cm, median over {seeds}) on held-out babbles against the "
+        f"Median palm error (cm; {over}{seeds}) on held-out babbles against the "
         f"number of babbles learned from (log axis); after {n_last} babbles: "
         + ", ".join(f"{m} {v:.1f} cm" for m, v in last.items())
         + ". "
