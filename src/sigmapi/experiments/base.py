@@ -50,12 +50,14 @@ import types
 from collections.abc import Callable, Iterator, Mapping, MutableMapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Protocol, TypeVar, runtime_checkable
+from typing import Any, Protocol, TypeVar
 
 from sigmapi import _memory, _validate
 from sigmapi._outputs import write_file
 from sigmapi.errors import ConfigError
 from sigmapi.executor import Executor, job_error
+from sigmapi.experiments.kit.results import Result
+from sigmapi.experiments.kit.seeds import check_seeds
 from sigmapi.progress import Progress
 
 __all__ = [
@@ -81,23 +83,6 @@ C = TypeVar("C")
 KEY_VALUES: Mapping[str, Any] = types.MappingProxyType({"repeat": True, "metavar": "KEY=VALUE"})
 """Field metadata of a config field of ``key=value`` strings (``field(default=(),
 metadata=KEY_VALUES)``): given once per value on the command line, as values may hold commas."""
-
-
-@runtime_checkable
-class Result(Protocol):
-    """What an experiment's run returns."""
-
-    def to_dict(self) -> dict[str, Any]:
-        """Everything the result states, JSON-able (``result.json``, ``--json``)."""
-        ...
-
-    def table(self) -> str:
-        """The result as console text (a few lines a person reads)."""
-        ...
-
-    def figure(self, out_dir: Path) -> list[Path]:
-        """Write the result's figures into the folder ``out_dir``; the files written."""
-        ...
 
 
 class Experiment(Protocol[C]):
@@ -301,33 +286,6 @@ def register(experiment: Experiment[C]) -> Experiment[C]:
         raise ConfigError(f"experiment name {name!r} is taken by {loaded!r}; choose another")
     REGISTRY[name] = experiment
     return experiment
-
-
-def check_seeds(seeds: Any, name: str = "seeds") -> tuple[int, ...]:
-    """``seeds`` as a tuple of ints: at least one, each >= 0, no two alike.
-
-    The one check of every experiment's seeds (``name`` says where they came from, e.g.
-    ``"sweep spec 'a.toml': seeds"``).
-
-    Examples
-    --------
-    >>> check_seeds([2, 0, 1])
-    (2, 0, 1)
-    >>> check_seeds([0, 0])
-    Traceback (most recent call last):
-    ...
-    sigmapi.errors.ConfigError: seeds must be distinct, got [0, 0]; e.g. [0, 1, 2]
-    """
-    fix = "e.g. [0, 1, 2]"
-    if isinstance(seeds, (str, bytes)) or not isinstance(seeds, Sequence):
-        raise _validate.fail(name, "a list of non-negative ints", seeds, fix)
-    if not seeds:
-        raise ConfigError(f"{name} must name at least one seed, got none; {fix}")
-    if not all(_validate.is_int(s) and s >= 0 for s in seeds):
-        raise _validate.fail(name, "a list of non-negative ints", list(seeds), fix)
-    if len(set(seeds)) != len(seeds):
-        raise _validate.fail(name, "distinct", list(seeds), fix)
-    return tuple(int(s) for s in seeds)
 
 
 def write_result(result: Result, out_dir: str | Path) -> Path:

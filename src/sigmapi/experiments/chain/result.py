@@ -3,12 +3,12 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from sigmapi.config import SOMConfig
+from sigmapi.experiments.kit.results import Column, Result, render
 
 __all__ = ["SUMMARY_KEYS", "TARGET_RATIO", "ChainResult"]
 
@@ -21,9 +21,23 @@ the single map's."""
 SUMMARY_KEYS = ("z_error", "view_consistency", "order_r2", "usage", "weights", "train_seconds")
 """The scores summarised per route (medians over seeds)."""
 
+ROUTES = ("chain", "single")
+
+COLUMNS = (
+    Column("seed", "seed", "<5d"),
+    Column("route", "route", "7s"),
+    Column("z error", "z_error", "7.3f"),
+    Column("same winner", "view_consistency", "12.3f"),
+    Column("order R^2", "order_r2", "10.3f"),
+    Column("usage", "usage", "6.2f"),
+    Column("weights", "weights", "8d"),
+    Column("seconds", "train_seconds", "8.1f"),
+)
+"""The table's columns: one row per seed and route."""
+
 
 @dataclass
-class ChainResult:
+class ChainResult(Result):
     """Both routes per seed (:func:`chain_seed`) and the settings they ran with."""
 
     config: SOMConfig
@@ -31,6 +45,9 @@ class ChainResult:
     n_test: int
     code: str
     per_seed: list[dict[str, Any]]
+
+    KEYS = ("settings", "seeds: per_seed", "summary")
+    """The JSON form: the settings, one dict per seed and the summary."""
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> ChainResult:
@@ -54,9 +71,7 @@ class ChainResult:
             return float(np.median([r[route][key] for r in per_seed]))
 
         ratios = [r["ratio"] for r in per_seed]
-        out: dict[str, Any] = {
-            route: {k: med(route, k) for k in SUMMARY_KEYS} for route in ("chain", "single")
-        }
+        out: dict[str, Any] = {route: {k: med(route, k) for k in SUMMARY_KEYS} for route in ROUTES}
         out.update(
             ratio_median=float(np.median(ratios)),
             ratio_worst=float(max(ratios)),
@@ -67,35 +82,25 @@ class ChainResult:
         )
         return out
 
-    def to_dict(self) -> dict[str, Any]:
-        """``"settings"``, ``"seeds"`` (one dict per seed) and ``"summary"``."""
-        settings = {
+    def settings(self) -> dict[str, Any]:
+        """The map config, the training pairs, test points, code and the seeds."""
+        return {
             "config": self.config.to_dict(),
             "train_pairs": self.train_pairs,
             "n_test": self.n_test,
             "code": self.code,
             "seeds": [r["seed"] for r in self.per_seed],
         }
-        return {"settings": settings, "seeds": self.per_seed, "summary": self.summary()}
 
     def table(self) -> str:
         """Both routes per seed, then the summary line."""
-        rows = ["seed  route   z error  same winner  order R^2  usage  weights  seconds"]
-        for r in self.per_seed:
-            for route in ("chain", "single"):
-                m = r[route]
-                rows.append(
-                    f"{r['seed']:<5d} {route:7s} {m['z_error']:7.3f}  "
-                    f"{m['view_consistency']:11.3f}  {m['order_r2']:9.3f}  {m['usage']:5.2f}  "
-                    f"{m['weights']:7d}  {m['train_seconds']:7.1f}"
-                )
+        rows = [{"seed": r["seed"], "route": k, **r[k]} for r in self.per_seed for k in ROUTES]
         s = self.summary()
-        rows.append(
-            f"{s['met']} of {s['n_seeds']} seeds: chain z error <= {s['target_ratio']:g} x the "
-            f"single map's (median ratio {s['ratio_median']:.2f}, worst {s['ratio_worst']:.2f})"
+        return "\n".join(
+            [
+                *render(COLUMNS, rows),
+                f"{s['met']} of {s['n_seeds']} seeds: chain z error <= {s['target_ratio']:g} x "
+                f"the single map's (median ratio {s['ratio_median']:.2f}, worst "
+                f"{s['ratio_worst']:.2f})",
+            ]
         )
-        return "\n".join(rows)
-
-    def figure(self, out_dir: Path) -> list[Path]:
-        """The comparison has no figure: nothing is written."""
-        return []

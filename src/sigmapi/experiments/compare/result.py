@@ -15,7 +15,7 @@ from sigmapi.experiments.compare.config import (
     SEEDS,
     CompareConfig,
 )
-from sigmapi.experiments.kit.written import as_object, config_and_seeds, summaries, tuples
+from sigmapi.experiments.kit.results import Column, Result, render
 from sigmapi.metrics import grid_spacing
 from sigmapi.model.som import SigmaPiSOM
 
@@ -29,8 +29,16 @@ FIGURE = "compare.png"
 MATCH_SHARE = 1.1
 """labels needed: the z error within this factor of the error with all labels."""
 
-SUMMARIES = ("methods", "z_error_unit", "quantisation_floor")
-"""The keys of the JSON form computed from the scores."""
+COLUMNS = (
+    Column("method", "name", "24s"),
+    Column("same place", "view_consistency", "10.3f"),
+    Column("same unit", "unit_consistency", "9.3f"),
+    Column("z error", "z_error", "8.3f"),
+    Column("labels", "labels_used", "7d"),
+    Column("needed", "labels_needed", "7d"),
+    Column("to match", "labels_to_match_sigma_pi", ">8"),
+)
+"""The table's columns: one row per method (medians over seeds)."""
 
 
 @dataclass
@@ -62,36 +70,32 @@ class MethodScore:
         return min(hits) if hits else None
 
 
-def _config(table: dict[str, Any]) -> CompareConfig:
-    """The config of a result's JSON form (its ``labels`` are the config's own, from
-    ``n_test``)."""
-    table.pop("labels")
-    return CompareConfig(**tuples(table))
-
-
 @dataclass
-class CompareResult:
+class CompareResult(Result):
     """Scores of every method (:class:`MethodScore`) and the run's settings. A result read
     back from its JSON form (:meth:`from_dict`) holds no scores per seed and number of
     labels: its summaries are ``written``, as the file has them."""
 
     config: CompareConfig
-    scores: dict[str, MethodScore]
+    scores: dict[str, MethodScore] = field(default_factory=dict)
     seconds: float = 0.0
     seeds: tuple[int, ...] = SEEDS
     """The seeds, in the order of the scores' lists."""
     written: dict[str, Any] | None = field(default=None, repr=False)
     """The summaries of a result read back (:meth:`from_dict`); None for a run's result."""
 
-    @classmethod
-    def from_dict(cls, data: Any) -> CompareResult:
-        """The result a :meth:`to_dict` wrote (``result.json``): its config, seeds and time,
-        and its summaries as written (the file holds each method's medians, not its scores
-        per seed and number of labels)."""
-        obj = as_object(data)
-        config, seeds = config_and_seeds(obj, _config)
-        written = summaries(obj, SUMMARIES)
-        return cls(config, {}, float(obj["seconds"]), seeds, written)
+    KEYS = (
+        "methods",
+        "config: config_json",
+        "z_error_unit",
+        "quantisation_floor: floor",
+        "seconds",
+    )
+    """The JSON form: ``methods`` (name, view consistency, z error, labels used, ...), the
+    config with its seeds and labels, the z error's unit and its quantisation floor."""
+    COMPUTED = ("methods", "z_error_unit", "quantisation_floor")
+    SEEDS_IN_CONFIG = True
+    z_error_unit = "input grid spacings"
 
     @property
     def reference(self) -> MethodScore:
@@ -110,13 +114,15 @@ class CompareResult:
         width = (hi - lo) / np.asarray(som_cfg.map_shape, dtype=np.float64)
         return float(np.sqrt(np.sum((width * spacing) ** 2 / 12.0)))
 
-    def to_dict(self) -> dict[str, Any]:
-        """``{"methods": [{name, view_consistency, z_error, labels_used, ...}], ...}``."""
+    def config_json(self) -> dict[str, Any]:
+        """The config's fields, the seeds after its preset and overrides, and its labels."""
         cfg = dataclasses.asdict(self.config)
         head = {"preset": cfg.pop("preset"), "overrides": cfg.pop("overrides")}
-        config = {**head, "seeds": list(self.seeds), **cfg, "labels": list(self.config.labels)}
-        if self.written is not None:
-            return {**self.written, "config": config, "seconds": self.seconds}
+        return {**head, "seeds": list(self.seeds), **cfg, "labels": list(self.config.labels)}
+
+    def methods(self) -> list[dict[str, Any]]:
+        """Per method its medians over seeds, the labels it used and needed (and to match
+        the Sigma-Pi map's z error), its z error by labels and its values per seed."""
         target = self.reference.z_error
         labels_used = max(self.config.labels)
         methods = []
@@ -141,33 +147,18 @@ class CompareResult:
                     },
                 }
             )
-        return {
-            "methods": methods,
-            "config": config,
-            "z_error_unit": "input grid spacings",
-            "quantisation_floor": self.floor,
-            "seconds": self.seconds,
-        }
+        return methods
 
     def table(self) -> str:
         """The comparison as a plain-text table (medians over seeds)."""
-        d = self.to_dict()
-        rows = [
-            f"{'method':24s} {'same place':>10s} {'same unit':>9s} {'z error':>8s} "
-            f"{'labels':>7s} {'needed':>7s} {'to match':>8s}"
-        ]
-        for m in d["methods"]:
-            match = m["labels_to_match_sigma_pi"]
-            rows.append(
-                f"{m['name']:24s} {m['view_consistency']:10.3f} {m['unit_consistency']:9.3f} "
-                f"{m['z_error']:8.3f} {m['labels_used']:7d} {m['labels_needed']:7d} "
-                f"{'-' if match is None else str(match):>8s}"
-            )
-        rows.append(
-            f"z error in grid spacings; a map's winner alone cannot beat {self.floor:.3f} "
-            f"(z cut into {'x'.join(map(str, self.config.som_config.map_shape))} cells)"
+        shape = "x".join(map(str, self.config.som_config.map_shape))
+        return "\n".join(
+            [
+                *render(COLUMNS, self.to_dict()["methods"]),
+                f"z error in grid spacings; a map's winner alone cannot beat {self.floor:.3f} "
+                f"(z cut into {shape} cells)",
+            ]
         )
-        return "\n".join(rows)
 
     def figure(self, out_dir: Path) -> list[Path]:
         """``compare.png`` (:func:`~sigmapi.viz.compare.compare_figure`) and its caption

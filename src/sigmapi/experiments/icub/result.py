@@ -9,10 +9,9 @@ from typing import Any
 
 import numpy as np
 
-from sigmapi.experiments.base import check_seeds
 from sigmapi.experiments.icub.config import ICubConfig
 from sigmapi.experiments.icub.reaching import METHODS
-from sigmapi.experiments.kit.written import as_object, summaries, tuples
+from sigmapi.experiments.kit.results import Result
 from sigmapi.metrics import ORDERED_R2
 
 __all__ = ["TARGETS", "ICubResult"]
@@ -69,43 +68,43 @@ def _scored(rows: list[dict[str, Any]], true: list[dict[str, Any]]) -> dict[str,
 
 
 def _per_seed(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
-    return [{k: _plain(r[k]) for k in _MAP_KEYS} for r in rows]
-
-
-def _plain(v: Any) -> Any:
-    if isinstance(v, (np.floating, np.integer, np.bool_)):
-        return v.item()
-    return v
+    return [{k: r[k] for k in _MAP_KEYS} for r in rows]
 
 
 @dataclass
-class ICubResult:
+class ICubResult(Result):
     """Outcome of :meth:`~sigmapi.experiments.icub.run.ICubExperiment.run`: the frames check
     and one record per seed (maps' metrics, babbling curves, reaches)."""
 
     config: ICubConfig
     seeds: tuple[int, ...]
     frames: dict[str, Any]
-    per_seed: list[dict[str, Any]]
+    per_seed: list[dict[str, Any]] = field(default_factory=list)
     seconds: float = 0.0
     _summary: dict[str, Any] = field(default_factory=dict, repr=False)
     written: dict[str, Any] | None = field(default=None, repr=False)
     """The summaries of a result read back (:meth:`from_dict`: the file holds them, not the
     per-seed records); None for a run's result."""
 
-    @classmethod
-    def from_dict(cls, data: Any) -> ICubResult:
-        """The result a :meth:`to_dict` wrote (``result.json``): its config, seeds, frames
-        check and time, and its summaries as written."""
-        obj = as_object(data)
-        return cls(
-            ICubConfig(**tuples(as_object(obj["config"], "config"))),
-            check_seeds(obj["seeds"], "seeds"),
-            dict(obj["frames"]),
-            [],
-            float(obj["seconds"]),
-            written=summaries(obj, SUMMARIES, ("success_servo",)),
-        )
+    KEYS = (
+        "experiment",
+        "config",
+        "seeds",
+        "frames",
+        "maps",
+        "success",
+        "success_per_seed",
+        "success_servo: servo",
+        "babbling_cm: curves",
+        "targets",
+        "cpu_seconds_per_seed",
+        "seconds",
+    )
+    """The JSON form: the config, seeds and frames check, the maps' and reaches' summaries,
+    the acceptance bounds and whether each is met, the time."""
+    COMPUTED = SUMMARIES
+    LATER = ("success_servo",)
+    experiment = "icub"
 
     def maps(self) -> dict[str, dict[str, Any]]:
         """Per map: the medians over seeds, the per-seed values, the references."""
@@ -197,27 +196,8 @@ class ICubResult:
             "bounds": TARGETS,
         }
 
-    def to_dict(self) -> dict[str, Any]:
-        """Everything the result states, JSON-able."""
-        head = {
-            "experiment": "icub",
-            "config": self.config.to_dict(),
-            "seeds": list(self.seeds),
-            "frames": self.frames,
-        }
-        if self.written is not None:
-            return {**head, **self.written, "seconds": self.seconds}
-        return {
-            **head,
-            "maps": self.maps(),
-            "success": self.success(),
-            "success_per_seed": self.success_per_seed(),
-            "success_servo": self.servo(),
-            "babbling_cm": self.curves(),
-            "targets": self.targets(),
-            "cpu_seconds_per_seed": [float(s["cpu_s"]) for s in self.per_seed],
-            "seconds": self.seconds,
-        }
+    def cpu_seconds_per_seed(self) -> list[float]:
+        return [float(s["cpu_s"]) for s in self.per_seed]
 
     def table(self) -> str:
         """Console text: frames, maps, reaching."""

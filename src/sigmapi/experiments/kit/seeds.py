@@ -1,6 +1,6 @@
 """One seed plan: the random streams of one seed of an experiment, each by name.
 
-Every experiment takes its seeds as ints (:func:`~sigmapi.experiments.base.check_seeds`) and
+Every experiment takes its seeds as ints (:func:`check_seeds`) and
 draws each of its random streams from a :class:`SeedPlan`: ``plan.rng(seed, "starts")`` is
 ``default_rng(plan.sequence(seed, "starts"))``, a child ``SeedSequence`` of the seed with the
 spawn key the plan names. A stream is never turned into an int and back.
@@ -17,12 +17,16 @@ Two derivations, so that published results stay as they were:
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
-__all__ = ["MODEL_KEYS", "SeedPlan"]
+from sigmapi import _validate
+from sigmapi.errors import ConfigError
+
+__all__ = ["MODEL_KEYS", "SeedPlan", "check_seeds"]
 
 MODEL_KEYS = range(5)
 """Spawn keys under which a model of seed ``s`` draws its own streams (weights, data, ...)."""
@@ -62,3 +66,30 @@ class SeedPlan:
     def rng(self, seed: int, name: str, *more: int) -> np.random.Generator:
         """A generator of stream ``name`` of ``seed`` (:meth:`sequence`)."""
         return np.random.default_rng(self.sequence(seed, name, *more))
+
+
+def check_seeds(seeds: Any, name: str = "seeds") -> tuple[int, ...]:
+    """``seeds`` as a tuple of ints: at least one, each >= 0, no two alike.
+
+    The one check of every experiment's seeds (``name`` says where they came from, e.g.
+    ``"sweep spec 'a.toml': seeds"``).
+
+    Examples
+    --------
+    >>> check_seeds([2, 0, 1])
+    (2, 0, 1)
+    >>> check_seeds([0, 0])
+    Traceback (most recent call last):
+    ...
+    sigmapi.errors.ConfigError: seeds must be distinct, got [0, 0]; e.g. [0, 1, 2]
+    """
+    fix = "e.g. [0, 1, 2]"
+    if isinstance(seeds, (str, bytes)) or not isinstance(seeds, Sequence):
+        raise _validate.fail(name, "a list of non-negative ints", seeds, fix)
+    if not seeds:
+        raise ConfigError(f"{name} must name at least one seed, got none; {fix}")
+    if not all(_validate.is_int(s) and s >= 0 for s in seeds):
+        raise _validate.fail(name, "a list of non-negative ints", list(seeds), fix)
+    if len(set(seeds)) != len(seeds):
+        raise _validate.fail(name, "distinct", list(seeds), fix)
+    return tuple(int(s) for s in seeds)

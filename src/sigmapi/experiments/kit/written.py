@@ -10,7 +10,7 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any, TypeVar
 
-from sigmapi.experiments.base import check_seeds
+from sigmapi.experiments.kit.seeds import check_seeds
 
 __all__ = ["as_object", "config_and_seeds", "summaries", "tuples"]
 

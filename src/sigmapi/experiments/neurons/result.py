@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 
 from sigmapi._outputs import save_captioned
+from sigmapi.experiments.kit.results import Column, Result, render
 
 from .config import METRICS, REFERENCE_RATE, NeuronsConfig
 
@@ -35,6 +36,29 @@ _WORST_HIGH = ("z_error", "fold_score", "mean_synapses", "branch_z_gap")
 SPARSE = "dendritic-sparse"
 """Name prefix of the sparse dendritic maps."""
 
+RATE_COLUMNS = (
+    Column("method", "name", "28s"),
+    Column("task", "task", "4s"),
+    Column("synapses", "synapses", "8d"),
+    Column("same unit", "view_consistency", "9.3f"),
+    Column("worst", "view_consistency_worst", "6.3f"),
+    Column("z error", "z_error", "7.3f"),
+    Column("order", "order_r2", "6.3f"),
+    Column("ordered", lambda m: f"{m['ordered']:3d}/{m['n_seeds']:<3d}", ">7s"),
+    Column("RF index", lambda m: m.get("reference_frame_index"), "8.2f"),
+)
+"""The table's columns of the rate maps: one row per map and task (medians, worst seed)."""
+
+SPIKING_COLUMNS = (
+    Column("spiking (peak rate)", lambda m: f"{m['name']} ({m['peak_rate']} Hz)", "28s"),
+    Column("agree", "agreement", "6.3f"),
+    Column("same unit", "view_consistency", "9.3f"),
+    Column("rate map", "rate_view_consistency", "8.3f"),
+    Column("z error", "z_error", "7.3f"),
+    Column("spikes", "spikes_per_decision", "7.0f"),
+)
+"""The table's columns of the spiking networks: one row per network and peak rate."""
+
 
 def _scalars(summary: dict[str, Any]) -> dict[str, Any]:
     """A branch summary without its per-branch lists."""
@@ -54,13 +78,17 @@ def _median_worst(rows: list[dict[str, Any]], keys: tuple[str, ...]) -> dict[str
 
 
 @dataclass
-class NeuronsResult:
+class NeuronsResult(Result):
     """Every job's rows (:func:`~sigmapi.experiments.neurons.run.neurons_job`)."""
 
     config: NeuronsConfig
     seeds: tuple[int, ...]
     jobs: list[dict[str, Any]]
     seconds: float
+
+    KEYS = ("methods", "acceptance", "branches: branch_summaries", "settings", "runs", "seconds")
+    """The JSON form: :meth:`methods`, :meth:`acceptance`, the branches
+    (:meth:`branch_summaries`), the settings, every row (:meth:`runs`) and the time."""
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> NeuronsResult:
@@ -231,53 +259,24 @@ class NeuronsResult:
                 )
         return out
 
-    def to_dict(self) -> dict[str, Any]:
-        """``"methods"``, ``"acceptance"``, ``"branches"`` (what the branches of one dendritic
-        map per seed and task learned: branch by branch for the first, the summary for the
-        others), ``"settings"``, ``"runs"`` (every map's and spiking network's row per seed)
-        and ``"seconds"``."""
-        c = self.config
-        settings = {k: (list(v) if isinstance(v, tuple) else v) for k, v in vars(c).items()}
-        settings["seeds"] = list(self.seeds)
-        return {
-            "methods": self.methods(),
-            "acceptance": self.acceptance(),
-            "branches": [
-                _scalars(j["branches"]) if i else j["branches"] for i, j in enumerate(self.jobs)
-            ],
-            "settings": settings,
-            "runs": {"maps": self._rows("maps"), "spiking": self._rows("spiking")},
-            "seconds": self.seconds,
-        }
+    def branch_summaries(self) -> list[dict[str, Any]]:
+        """What the branches of one dendritic map per seed and task learned: branch by
+        branch for the first, the summary for the others."""
+        return [_scalars(j["branches"]) if i else j["branches"] for i, j in enumerate(self.jobs)]
+
+    def settings(self) -> dict[str, Any]:
+        """The config's fields and the seeds."""
+        return {**vars(self.config), "seeds": self.seeds}
+
+    def runs(self) -> dict[str, list[dict[str, Any]]]:
+        """Every map's and spiking network's row per seed."""
+        return {"maps": self._rows("maps"), "spiking": self._rows("spiking")}
 
     def table(self) -> str:
         """Medians per map, then the spiking networks at the reference rate, then acceptance."""
-        rows = [
-            f"{'method':28s} {'task':4s} {'synapses':>8s} {'same unit':>9s} {'worst':>6s} "
-            f"{'z error':>7s} {'order':>6s} {'ordered':>7s} {'RF index':>8s}"
-        ]
-        for m in self.methods():
-            if m["kind"] != "rate":
-                continue
-            rfi = m.get("reference_frame_index")
-            rows.append(
-                f"{m['name']:28s} {m['task']:4s} {m['synapses']:8d} {m['view_consistency']:9.3f} "
-                f"{m['view_consistency_worst']:6.3f} {m['z_error']:7.3f} {m['order_r2']:6.3f} "
-                f"{m['ordered']:3d}/{m['n_seeds']:<3d} "
-                + (f"{rfi:8.2f}" if rfi is not None else f"{'-':>8s}")
-            )
-        rows.append(
-            f"{'spiking (peak rate)':28s} {'agree':>6s} {'same unit':>9s} "
-            f"{'rate map':>8s} {'z error':>7s} {'spikes':>7s}"
-        )
-        for m in self.methods():
-            if m["kind"] == "spiking":
-                rows.append(
-                    f"{m['name'] + ' (' + str(m['peak_rate']) + ' Hz)':28s} "
-                    f"{m['agreement']:6.3f} {m['view_consistency']:9.3f} "
-                    f"{m['rate_view_consistency']:8.3f} {m['z_error']:7.3f} "
-                    f"{m['spikes_per_decision']:7.0f}"
-                )
+        methods = self.methods()
+        rows = render(RATE_COLUMNS, [m for m in methods if m["kind"] == "rate"])
+        rows += render(SPIKING_COLUMNS, [m for m in methods if m["kind"] == "spiking"])
         acc = self.acceptance()
         for c in acc["dendritic"]:
             rows.append(

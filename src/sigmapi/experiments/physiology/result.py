@@ -7,6 +7,7 @@ from pathlib import Path
 from typing import Any
 
 from sigmapi._outputs import save_captioned
+from sigmapi.experiments.kit.results import Column, Result, render
 
 from .config import PhysiologyConfig
 
@@ -17,57 +18,56 @@ FIGURE = "physiology.png"
 BODY_CENTRED = 0.9
 """A map whose median reference-frame index is at least this reads as body-centred."""
 
+COLUMNS = (
+    Column("map", "map", "14s"),
+    Column("RF index", "median_reference_frame_index", "9.3f"),
+    Column("measured", "measured", "8.2f"),
+    Column("body-centred", "body_centred_share", "12.2f"),
+    Column("gain R^2", "median_gain_r2", "8.3f"),
+    Column("peak mod.", "median_peak_modulation", "9.3f"),
+)
+"""The table's columns: one row per map (the trained one, its random start)."""
+
 
 @dataclass
-class PhysiologyResult:
+class PhysiologyResult(Result):
     """The recording of one model file (:func:`.run.record_model`)."""
 
     config: PhysiologyConfig
     data: dict[str, Any]
     seconds: float
 
-    def to_dict(self) -> dict[str, Any]:
-        """``reference_frame_index`` (per unit, the trained map), ``trained`` and
-        ``random_start`` (every index per unit, medians), ``comparison`` (Kolmogorov-Smirnov
-        between the two index distributions), ``body_centred`` (median >= 0.9),
-        ``tuning``, ``monkey`` (the gain-field studies' protocol,
-        :func:`~sigmapi.analysis.monkey.monkey_protocol`, with the published numbers),
-        ``settings``, ``seconds``."""
+    KEYS = ("*data", "body_centred", "settings", "seconds")
+    """The JSON form: ``reference_frame_index`` (per unit, the trained map), ``trained`` and
+    ``random_start`` (every index per unit, medians), ``comparison`` (Kolmogorov-Smirnov
+    between the two index distributions), ``tuning``, ``monkey`` (the gain-field studies'
+    protocol, :func:`~sigmapi.analysis.monkey.monkey_protocol`, with the published numbers),
+    the verdict (:meth:`body_centred`), the settings and the time."""
+
+    def body_centred(self) -> bool:
+        """Whether the trained map's median reference-frame index is at least
+        :data:`BODY_CENTRED`."""
         med = self.data["trained"]["median_reference_frame_index"]
+        return med is not None and med >= BODY_CENTRED
+
+    def settings(self) -> dict[str, Any]:
+        """The config's fields but the tuning units."""
+        c = self.config
         return {
-            **self.data,
-            "body_centred": med is not None and med >= BODY_CENTRED,
-            "settings": {
-                "model": self.config.model,
-                "gazes": list(self.config.gazes),
-                "n_probe": self.config.n_probe,
-                "body_slope": list(self.config.body_slope),
-                "gaze_axes": list(self.config.gaze_axes),
-                "eye_grid": list(self.config.eye_grid),
-                "n_retina": self.config.n_retina,
-                "responds": self.config.responds,
-                "nwb": self.config.nwb,
-            },
-            "seconds": self.seconds,
+            "model": c.model,
+            "gazes": c.gazes,
+            "n_probe": c.n_probe,
+            "body_slope": c.body_slope,
+            "gaze_axes": c.gaze_axes,
+            "eye_grid": c.eye_grid,
+            "n_retina": c.n_retina,
+            "responds": c.responds,
+            "nwb": c.nwb,
         }
 
     def table(self) -> str:
         """The medians of both maps and the comparison."""
-        rows = [
-            f"{'map':14s} {'RF index':>9s} {'measured':>8s} {'body-centred':>12s} "
-            f"{'gain R^2':>8s} {'peak mod.':>9s}"
-        ]
-        for key in ("trained", "random_start"):
-            r = self.data[key]
-            med = r["median_reference_frame_index"]
-            share = r["body_centred_share"]
-            rows.append(
-                f"{key:14s} "
-                + (f"{med:9.3f}" if med is not None else f"{'-':>9s}")
-                + f" {r['measured']:8.2f} "
-                + (f"{share:12.2f}" if share is not None else f"{'-':>12s}")
-                + f" {r['median_gain_r2']:8.3f} {r['median_peak_modulation']:9.3f}"
-            )
+        rows = render(COLUMNS, [{"map": k, **self.data[k]} for k in ("trained", "random_start")])
         c = self.data["comparison"]
         if c["ks"] is not None:
             rows.append(
@@ -110,7 +110,7 @@ class PhysiologyResult:
 
         verdict = (
             "body-centred"
-            if self.to_dict()["body_centred"]
+            if self.body_centred()
             else f"not body-centred by the {BODY_CENTRED} criterion"
         )
         text = (

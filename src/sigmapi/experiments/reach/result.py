@@ -12,7 +12,7 @@ from numpy.typing import NDArray
 
 from sigmapi._outputs import save_captioned, save_figure
 from sigmapi.experiments.kit.episodes import final_rates, success_curve
-from sigmapi.experiments.kit.written import as_object, config_and_seeds, summaries
+from sigmapi.experiments.kit.results import Result
 from sigmapi.experiments.reach.config import ReachConfig
 
 __all__ = ["FIGURE", "ReachResult"]
@@ -20,15 +20,9 @@ __all__ = ["FIGURE", "ReachResult"]
 FIGURE = "reach.png"
 """The file name :meth:`ReachResult.figure` writes in its folder."""
 
-SUMMARIES = ("success", "success_per_seed", "lost", "timed_out", "ratio_map_to_true_z", "curves")
-"""The keys of the JSON form computed from the episode records."""
-
-LATER = ("final_rise", "final_rise_se", "levelled_off")
-"""Keys computed from the records that results written before them lack."""
-
 
 @dataclass
-class ReachResult:
+class ReachResult(Result):
     """Outcome of :meth:`~sigmapi.experiments.reach.run.ReachExperiment.run`.
 
     ``success[state]``, ``lost[state]`` and ``steps[state]`` have shape ``(len(seeds),
@@ -51,19 +45,26 @@ class ReachResult:
     written: dict[str, Any] | None = field(default=None, repr=False)
     """The summaries of a result read back (:meth:`from_dict`); None for a run's result."""
 
-    @classmethod
-    def from_dict(cls, data: Any) -> ReachResult:
-        """The result a :meth:`to_dict` wrote (``result.json``): its config, seeds, maps'
-        metrics and time, and its summaries as written (the file holds no episode records)."""
-        obj = as_object(data)
-        config, seeds = config_and_seeds(obj, ReachConfig.from_dict)
-        return cls(
-            config,
-            seeds,
-            map_metrics=list(obj["map_metrics"]),
-            seconds=float(obj["seconds"]),
-            written=summaries(obj, SUMMARIES, LATER),
-        )
+    KEYS = (
+        "success: final_success",
+        "success_per_seed: final_success_per_seed",
+        "lost: final_lost",
+        "timed_out: final_timed_out",
+        "ratio_map_to_true_z",
+        "final_rise",
+        "final_rise_se",
+        "levelled_off",
+        "curves",
+        "map_metrics",
+        "config: config_and_seeds",
+        "seconds",
+    )
+    """The JSON form: final success (mean and per seed), lost and timed-out shares, the rise
+    over the final episodes and whether each learner levelled off, the curves (NaN: None),
+    the maps' metrics, the config (its parts and the seeds) and the time."""
+    COMPUTED = ("success", "success_per_seed", "lost", "timed_out", "ratio_map_to_true_z", "curves")
+    LATER = ("final_rise", "final_rise_se", "levelled_off")
+    SEEDS_IN_CONFIG = True
 
     def final_success(self) -> dict[str, float]:
         """Success rate over the last ``final_episodes`` episodes, mean over seeds."""
@@ -160,33 +161,9 @@ class ReachResult:
             }
         return out
 
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-able summary: final success (mean and per seed), lost and timed-out shares,
-        the rise over the final episodes and whether each learner levelled off, the curves,
-        the maps' metrics, the config (its parts and the seeds) and the time."""
-        tail = {
-            "map_metrics": self.map_metrics,
-            "config": {**self.config.to_dict(), "seeds": list(self.seeds)},
-            "seconds": self.seconds,
-        }
-        if self.written is not None:
-            return {**self.written, **tail}
-        curves = self.curves()
-        return {
-            "success": self.final_success(),
-            "success_per_seed": {s: v.tolist() for s, v in self.final_success_per_seed().items()},
-            "lost": self.final_lost(),
-            "timed_out": self.final_timed_out(),
-            "ratio_map_to_true_z": self.ratio_map_to_true_z(),
-            "final_rise": self.final_rise(),
-            "final_rise_se": self.final_rise_se(),
-            "levelled_off": {s: s not in self.still_rising() for s in self.success},
-            "curves": {
-                s: {k: [None if not np.isfinite(x) else float(x) for x in v] for k, v in c.items()}
-                for s, c in curves.items()
-            },
-            **tail,
-        }
+    def levelled_off(self) -> dict[str, bool]:
+        """Per state, whether its learner levelled off (:meth:`still_rising`)."""
+        return {s: s not in self.still_rising() for s in self.success}
 
     def table(self) -> str:
         """The final success of each state as lines of text (per seed, and the lost share)."""

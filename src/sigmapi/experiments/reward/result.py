@@ -13,7 +13,7 @@ from numpy.typing import NDArray
 
 from sigmapi._outputs import save_captioned, save_figure
 from sigmapi.experiments.kit.episodes import block_rates, final_rates, success_curve
-from sigmapi.experiments.kit.written import as_object, config_and_seeds, summaries
+from sigmapi.experiments.kit.results import Result
 from sigmapi.experiments.reward.config import RewardConfig
 
 __all__ = ["FIGURE", "MAGNIFICATION_TARGET", "RewardResult", "episodes_to_target"]
@@ -59,7 +59,7 @@ def _summary(values: list[float | None], higher: bool = True) -> dict[str, Any]:
 
 
 @dataclass
-class RewardResult:
+class RewardResult(Result):
     """Outcome of :meth:`~sigmapi.experiments.reward.run.RewardExperiment.run`.
 
     ``success[m]``, ``lost[m]``, ``steps[m]``: ``(len(seeds), episodes)`` per method ``m``, one
@@ -82,18 +82,11 @@ class RewardResult:
     written: dict[str, Any] | None = field(default=None, repr=False)
     """The summaries of a result read back (:meth:`from_dict`); None for a run's result."""
 
-    @classmethod
-    def from_dict(cls, data: Any) -> RewardResult:
-        """The result a :meth:`to_dict` wrote (``result.json``): its config, seeds and time,
-        and its summaries as written (the file holds no episode records)."""
-        obj = as_object(data)
-        config, seeds = config_and_seeds(obj, RewardConfig.from_dict)
-        return cls(
-            config,
-            seeds,
-            seconds=float(obj["seconds"]),
-            written=summaries(obj, SUMMARIES),
-        )
+    KEYS = (*SUMMARIES, "config: config_and_seeds", "seconds")
+    """The JSON form: ``methods``, the map before the episodes (``initial_map``), the
+    acceptance counts, the curves, the config (its parts and the seeds) and the time."""
+    COMPUTED = SUMMARIES
+    SEEDS_IN_CONFIG = True
 
     @classmethod
     def collect(
@@ -120,20 +113,12 @@ class RewardResult:
         b = self.config.run.block
         return {m: success_curve(succ, b, extremes=True) for m, succ in self.success.items()}
 
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-able: ``methods`` (per method its name, final success, episodes to the target
-        rate, magnification near the goal and its ratio to the frozen map, the quality away
-        from the goal; median, worst and per seed over the seeds), the map before the
-        episodes (``initial_map``), the acceptance counts, the config and the time."""
-        tail = {
-            "config": {**self.config.to_dict(), "seeds": list(self.seeds)},
-            "seconds": self.seconds,
-        }
-        if self.written is not None:
-            return {**self.written, **tail}
+    def methods(self) -> list[dict[str, Any]]:
+        """Per method its name, final success, episodes to the target rate, magnification
+        near the goal and its ratio to the frozen map, the quality away from the goal (median,
+        worst and per seed over the seeds)."""
         run = self.config.run
         f = run.final_episodes
-        n = len(self.seeds)
         frozen_ep = self._episodes("frozen") if "frozen" in self.success else None
         base_mag = self.scores["initial"]["magnification"]
         methods = []
@@ -163,16 +148,21 @@ class RewardResult:
                     _earlier(a, b, run.episodes) for a, b in zip(ep, frozen_ep, strict=True)
                 )
             methods.append(entry)
-        c = self.curves()
-        return {
-            "methods": methods,
-            "initial_map": {k: _summary(v.tolist()) for k, v in self.scores["initial"].items()},
-            "n_seeds": n,
-            "target": run.target,
-            "magnification_target": MAGNIFICATION_TARGET,
-            "curves": {m: {k: v.tolist() for k, v in cm.items()} for m, cm in c.items()},
-            **tail,
-        }
+        return methods
+
+    def initial_map(self) -> dict[str, dict[str, Any]]:
+        """The learned map's scores before the episodes (median, worst, per seed)."""
+        return {k: _summary(v.tolist()) for k, v in self.scores["initial"].items()}
+
+    def n_seeds(self) -> int:
+        return len(self.seeds)
+
+    def target(self) -> float:
+        """The success rate per block that counts as reached."""
+        return self.config.run.target
+
+    def magnification_target(self) -> float:
+        return MAGNIFICATION_TARGET
 
     def _episodes(self, m: str) -> list[int | None]:
         run = self.config.run

@@ -11,8 +11,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sigmapi.agents import ActorCritic
-from sigmapi.experiments.base import check_seeds
 from sigmapi.experiments.kit.episodes import final_rates, success_curve
+from sigmapi.experiments.kit.results import Result
 from sigmapi.experiments.kit.written import as_object, summaries
 from sigmapi.experiments.robot.config import RobotConfig
 from sigmapi.model.som import SigmaPiSOM
@@ -47,7 +47,7 @@ def _nan_stat(fn: Any, values: NDArray[np.float64]) -> float | None:
 
 
 @dataclass
-class RobotResult:
+class RobotResult(Result):
     """Outcome of :meth:`~sigmapi.experiments.robot.variant.RobotExperiment.run`.
 
     ``success[state]``, ``docked[state]`` and ``steps[state]`` have shape ``(len(seeds),
@@ -72,21 +72,38 @@ class RobotResult:
     written: dict[str, Any] | None = field(default=None, repr=False)
     """The summaries of a result read back (:meth:`from_dict`); None for a run's result."""
 
+    KEYS = (
+        "*map_summary",
+        "success: success_mean",
+        "success_per_seed: final",
+        "success_summary",
+        "docked: docked_mean",
+        "reach_given_docked: reach_given_docked_mean",
+        "reach_given_docked_min",
+        "ratio_map_to_true_z",
+        "margins",
+        "curves",
+        "map_metrics",
+        "config",
+        "seeds",
+        "seconds",
+    )
+    """The JSON form: the maps' metrics (keys of ``sigmapi evaluate``), ``success`` per state
+    (final, mean over seeds) with its median and worst seed, docking, the reach given
+    docking, the map's margins over the other states, the curves and the config."""
+    COMPUTED = SUMMARIES
+
     @classmethod
     def from_dict(cls, data: Any) -> RobotResult:
         """The result a :meth:`to_dict` wrote (``result.json``): its config, seeds, maps'
-        metrics and time, and its summaries as written (the file holds no episode records)."""
+        metrics and time, and its summaries as written (the file holds no episode records;
+        the maps' summary has the keys of their metrics)."""
         obj = as_object(data)
-        cfg = as_object(obj["config"], "config")
-        config = RobotConfig.from_dict(cfg)
+        values = cls.read_fields(obj)
         metrics = [dict(as_object(m, "map_metrics entry")) for m in obj["map_metrics"]]
         mapped = (*metrics[0], "order_r2_min", "folded_seeds") if metrics else ()
         return cls(
-            config,
-            check_seeds(obj["seeds"], "seeds"),
-            map_metrics=metrics,
-            seconds=float(obj["seconds"]),
-            written=summaries(obj, (*mapped, *SUMMARIES)),
+            **{**values, "map_metrics": metrics}, written=summaries(obj, (*mapped, *SUMMARIES))
         )
 
     def final(self, key: str = "success") -> dict[str, NDArray[np.float64]]:
@@ -128,42 +145,38 @@ class RobotResult:
         out["folded_seeds"] = int(sum(bool(m["folded"]) for m in self.map_metrics))
         return out
 
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-able: the map's metrics (keys of ``sigmapi evaluate``), ``success`` per state
-        (final, mean over seeds) with its median and worst seed, docking, the reach given
-        docking, the map's margins over the other states, the curves and the config."""
-        tail = {
-            "map_metrics": self.map_metrics,
-            "config": self.config.to_dict(),
-            "seeds": list(self.seeds),
-            "seconds": self.seconds,
-        }
-        if self.written is not None:
-            return {**self.written, **tail}
-        final, docked, reach = self.final(), self.final("docked"), self.reach_given_docked()
-        success = {s: float(v.mean()) for s, v in final.items()}
-        margins = {}
-        if "map" in final:
-            for s in ("retina", "retina_gaze"):
-                if s in final:
-                    margins[f"map_minus_{s}"] = _summary(final["map"] - final[s])
-        ratio = None
-        if "map" in success and success.get("true_z"):
-            per_seed = _summary(final["map"] / np.maximum(final["true_z"], 1e-12))
-            ratio = {**per_seed, "mean": success["map"] / success["true_z"]}
-        return {
-            **self.map_summary(),
-            "success": success,
-            "success_per_seed": {s: v.tolist() for s, v in final.items()},
-            "success_summary": {s: _summary(v) for s, v in final.items()},
-            "docked": {s: float(v.mean()) for s, v in docked.items()},
-            "reach_given_docked": {s: _nan_stat(np.nanmean, v) for s, v in reach.items()},
-            "reach_given_docked_min": {s: _nan_stat(np.nanmin, v) for s, v in reach.items()},
-            "ratio_map_to_true_z": ratio,
-            "margins": margins,
-            "curves": self.curves(),
-            **tail,
-        }
+    def success_mean(self) -> dict[str, float]:
+        """Per state, the final success rate (mean over seeds)."""
+        return {s: float(v.mean()) for s, v in self.final().items()}
+
+    def success_summary(self) -> dict[str, dict[str, float]]:
+        return {s: _summary(v) for s, v in self.final().items()}
+
+    def docked_mean(self) -> dict[str, float]:
+        """Per state, the final docking rate (mean over seeds)."""
+        return {s: float(v.mean()) for s, v in self.final("docked").items()}
+
+    def reach_given_docked_mean(self) -> dict[str, float | None]:
+        return {s: _nan_stat(np.nanmean, v) for s, v in self.reach_given_docked().items()}
+
+    def reach_given_docked_min(self) -> dict[str, float | None]:
+        return {s: _nan_stat(np.nanmin, v) for s, v in self.reach_given_docked().items()}
+
+    def margins(self) -> dict[str, dict[str, float]]:
+        """The map's final success minus the retina's and the retina-and-gaze's, per seed."""
+        final = self.final()
+        if "map" not in final:
+            return {}
+        others = [s for s in ("retina", "retina_gaze") if s in final]
+        return {f"map_minus_{s}": _summary(final["map"] - final[s]) for s in others}
+
+    def ratio_map_to_true_z(self) -> dict[str, float] | None:
+        """The map's final success over the true z's (per seed; ``mean``: of the means)."""
+        final, success = self.final(), self.success_mean()
+        if "map" not in success or not success.get("true_z"):
+            return None
+        per_seed = _summary(final["map"] / np.maximum(final["true_z"], 1e-12))
+        return {**per_seed, "mean": success["map"] / success["true_z"]}
 
     def table(self) -> str:
         """A few lines for a terminal."""

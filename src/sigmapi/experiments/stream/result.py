@@ -12,7 +12,8 @@ import numpy as np
 
 from sigmapi._outputs import save_captioned
 from sigmapi.errors import ConfigError
-from sigmapi.experiments.base import check_seeds
+from sigmapi.experiments.kit.results import Column, Result, render
+from sigmapi.experiments.kit.seeds import check_seeds
 from sigmapi.experiments.stream.config import (
     StreamConfig,
 )
@@ -34,19 +35,35 @@ MIN_DWELL = 4
 
 FIGURE = "stream.png"
 
+COLUMNS = (
+    Column("method", "name", "20s"),
+    Column("dwell", "dwell", ">5"),
+    Column("same unit", "view_consistency", "9.3f"),
+    Column("worst", "view_consistency_worst", "6.3f"),
+    Column("z error", "z_error", "8.3f"),
+    Column("order R^2", "order_r2", "9.3f"),
+    Column("worst", "order_r2_worst", "6.3f"),
+    Column("folded", lambda m: f"{m['n_seeds'] - m['ordered']:3d}/{m['n_seeds']:<3d}", ">7s"),
+)
+"""The table's columns: one row per method and dwell time (medians, worst seeds)."""
+
 
 def _name(trace: float | None) -> str:
     return "pairs" if trace is None else f"stream trace {trace:g}"
 
 
 @dataclass
-class StreamResult:
+class StreamResult(Result):
     """Every map's scores (:func:`stream_job`) and the settings they ran with."""
 
     config: StreamConfig
     seeds: tuple[int, ...]
     runs: list[dict[str, Any]]
     seconds: float
+
+    KEYS = ("methods", "acceptance", "settings", "seconds")
+    """The JSON form: :meth:`methods`, :meth:`acceptance`, :meth:`settings` and the whole
+    run's wall time."""
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> StreamResult:
@@ -138,11 +155,10 @@ class StreamResult:
                 )
         return out
 
-    def to_dict(self) -> dict[str, Any]:
-        """``"methods"`` (:meth:`methods`), ``"acceptance"``, ``"settings"`` (the config,
-        the resolved map config, the seeds) and ``"seconds"`` (the whole run's wall time)."""
+    def settings(self) -> dict[str, Any]:
+        """The config, the seeds and the resolved map config."""
         c = self.config
-        settings = {
+        return {
             "preset": c.preset,
             "overrides": list(c.overrides),
             "dwells": list(c.dwells),
@@ -151,26 +167,10 @@ class StreamResult:
             "seeds": list(self.seeds),
             "config": c.som_config.to_dict(),
         }
-        return {
-            "methods": self.methods(),
-            "acceptance": self.acceptance(),
-            "settings": settings,
-            "seconds": self.seconds,
-        }
 
     def table(self) -> str:
         """Medians per method and dwell time, then the acceptance lines."""
-        rows = [
-            f"{'method':20s} {'dwell':>5s} {'same unit':>9s} {'worst':>6s} {'z error':>8s} "
-            f"{'order R^2':>9s} {'worst':>6s} {'folded':>7s}"
-        ]
-        for m in self.methods():
-            d = "-" if m["dwell"] is None else str(m["dwell"])
-            rows.append(
-                f"{m['name']:20s} {d:>5s} {m['view_consistency']:9.3f} "
-                f"{m['view_consistency_worst']:6.3f} {m['z_error']:8.3f} {m['order_r2']:9.3f} "
-                f"{m['order_r2_worst']:6.3f} {m['n_seeds'] - m['ordered']:3d}/{m['n_seeds']:<3d}"
-            )
+        rows = render(COLUMNS, self.methods())
         for case in self.acceptance()["cases"]:
             rows.append(
                 f"trace {case['trace']:g}, dwell {case['dwell']}: {case['met']} of "

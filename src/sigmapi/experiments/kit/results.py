@@ -1,0 +1,210 @@
+"""The base of every experiment's result: its JSON form derived from its fields and methods,
+read back from it, and one renderer of console tables from column specs.
+
+A result is a dataclass that subclasses :class:`Result` and names the keys of its JSON form in
+order (:attr:`Result.KEYS`): each key is a field or a method of that name (its value, or what
+it returns), or ``"key: attribute"`` where the attribute is named otherwise. Values become JSON
+types on the way (:func:`plain`: nested dataclasses, tuples, numpy arrays and scalars). The
+keys computed from records a file does not hold (:attr:`Result.COMPUTED`: per-episode records,
+curves) read back as the summaries ``written``, and ``to_dict`` gives them back unchanged, so
+that ``to_dict -> from_dict -> to_dict`` is the identity. A table is :func:`render` of a list
+of :class:`Column`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+import typing
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, ClassVar, TypeVar
+
+import numpy as np
+
+from sigmapi.experiments.kit.seeds import check_seeds
+from sigmapi.experiments.kit.written import as_object
+
+__all__ = ["Column", "Result", "plain", "render"]
+
+R = TypeVar("R", bound="Result")
+
+
+def plain(value: Any) -> Any:
+    """``value`` as JSON types: a dataclass as its ``to_dict()`` (or its fields), a mapping as
+    a dict, a tuple or list as a list, a numpy array as nested lists and a numpy scalar as its
+    Python value (a NaN or infinity of an array as None); anything else as it is."""
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        to_dict = getattr(value, "to_dict", None)
+        if to_dict is not None:
+            return plain(to_dict())
+        return {f.name: plain(getattr(value, f.name)) for f in dataclasses.fields(value)}
+    if isinstance(value, Mapping):
+        return {k: plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [plain(v) for v in value]
+    if isinstance(value, np.ndarray):
+        if value.dtype.kind == "f" and not np.isfinite(value).all():  # NaN: no JSON number
+            return [plain(v) for v in value]
+        return value.tolist()
+    if isinstance(value, np.floating) and not np.isfinite(value):
+        return None
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
+def _entry(entry: str) -> tuple[str, str]:
+    key, _, attr = entry.partition(":")
+    return key.strip(), attr.strip() or key.strip()
+
+
+class Result:
+    """What an experiment's run returns: a dataclass whose JSON form (:meth:`to_dict`) is its
+    :attr:`KEYS` in order, that reads back from it (:meth:`from_dict`), and that has a table
+    (the console text) and figures (none by default)."""
+
+    KEYS: ClassVar[tuple[str, ...]] = ()
+    """The keys of the JSON form, in order: ``"key"`` (a field or method of that name) or
+    ``"key: attribute"``; a ``"*attribute"`` merges the dict the attribute gives. Empty: the
+    dataclass fields."""
+    COMPUTED: ClassVar[tuple[str, ...]] = ()
+    """The keys computed from what the file does not hold: a result read back holds them as
+    ``written`` (a field), every one of them required."""
+    LATER: ClassVar[tuple[str, ...]] = ()
+    """Computed keys that files written before them lack (read back where present)."""
+    SEEDS_IN_CONFIG: ClassVar[bool] = False
+    """Whether the JSON form's ``"config"`` holds the seeds too (:meth:`config_and_seeds`)."""
+
+    def _keys(self) -> tuple[str, ...]:
+        if self.KEYS:
+            return self.KEYS
+        return tuple(f.name for f in dataclasses.fields(self) if f.repr)  # type: ignore[arg-type]
+
+    def _value(self, attr: str) -> Any:
+        value = getattr(self, attr)
+        return value() if callable(value) else value
+
+    def to_dict(self) -> dict[str, Any]:
+        """Everything the result states, JSON-able (``result.json``, ``--json``): the
+        :attr:`KEYS` in order; a result read back gives its ``written`` summaries in place of
+        the computed keys."""
+        written: dict[str, Any] | None = getattr(self, "written", None)
+        out: dict[str, Any] = {}
+        for entry in self._keys():
+            spread = entry.startswith("*")
+            key, attr = _entry(entry.lstrip("*"))
+            if written is not None and (spread or key in (*self.COMPUTED, *self.LATER)):
+                out.update({k: v for k, v in written.items() if k not in out})
+                continue
+            value = plain(self._value(attr))
+            if spread:
+                out.update(value)
+            else:
+                out[key] = value
+        return out
+
+    def config_and_seeds(self) -> dict[str, Any]:
+        """The config's JSON form with the seeds (``"config"`` where :attr:`SEEDS_IN_CONFIG`)."""
+        config: Any = getattr(self, "config")  # noqa: B009 (a field of every result)
+        return {**plain(config), "seeds": list(getattr(self, "seeds"))}  # noqa: B009
+
+    @classmethod
+    def read_fields(cls, obj: Mapping[str, Any]) -> dict[str, Any]:
+        """The fields of a JSON form: each field named by a key of :attr:`KEYS` (not
+        computed), typed as the field is (a config by its ``from_dict`` or its fields, a
+        tuple, a float); the seeds from the config where :attr:`SEEDS_IN_CONFIG`."""
+        hints = typing.get_type_hints(cls)
+        names = {f.name for f in dataclasses.fields(cls) if f.init}  # type: ignore[arg-type]
+        values: dict[str, Any] = {}
+        for entry in cls.KEYS:
+            key, attr = _entry(entry.lstrip("*"))
+            if entry.startswith("*") or key in (*cls.COMPUTED, *cls.LATER) or key not in obj:
+                continue
+            if attr in names:
+                values[attr] = _typed(hints[attr], obj[key])
+            elif key == "config" and cls.SEEDS_IN_CONFIG:
+                config = dict(as_object(obj["config"], "config"))
+                values["seeds"] = check_seeds(config.pop("seeds"), "config.seeds")
+                values["config"] = _typed(hints["config"], config)
+        if "seeds" in values:
+            values["seeds"] = check_seeds(values["seeds"], "seeds")
+        return values
+
+    @classmethod
+    def from_dict(cls: type[R], data: Any) -> R:
+        """The result a :meth:`to_dict` wrote (``result.json``): its fields as the file holds
+        them and its computed keys as ``written`` (the file holds no records)."""
+        obj = as_object(data)
+        values = cls.read_fields(obj)
+        if cls.COMPUTED:
+            written = {k: obj[k] for k in cls.COMPUTED}
+            written.update({k: obj[k] for k in cls.LATER if k in obj})
+            values["written"] = written
+        return cls(**values)
+
+    def table(self) -> str:
+        """The result as console text (a few lines a person reads)."""
+        raise NotImplementedError
+
+    def figure(self, out_dir: Path) -> list[Path]:
+        """Write the result's figures into the folder ``out_dir``; the files written (none)."""
+        return []
+
+
+def _typed(hint: Any, value: Any) -> Any:
+    """``value`` read from JSON as a field of type ``hint``."""
+    kind = typing.get_origin(hint) or hint
+    if isinstance(kind, type) and hasattr(kind, "from_dict"):
+        return kind.from_dict(value)
+    if isinstance(kind, type) and dataclasses.is_dataclass(kind):  # a computed property: not read
+        given = {k: v for k, v in value.items() if not isinstance(getattr(kind, k, None), property)}
+        return kind(**{k: tuple(v) if isinstance(v, list) else v for k, v in given.items()})
+    if kind is tuple:
+        return tuple(value)
+    if kind is float:
+        return float(value)
+    if kind is list:
+        return list(value)
+    return value
+
+
+_SPEC = re.compile(r"(?P<align>[<>^]?)(?P<width>\d*)")
+
+
+@dataclass(frozen=True)
+class Column:
+    """One column of a console table: its header, the value of a row (a key of the row or a
+    function of it) and the format spec (e.g. ``"9.3f"``, ``"<20s"``); the header takes the
+    spec's width and alignment (numbers right, text left)."""
+
+    name: str
+    key: str | Callable[[Any], Any]
+    format: str = ""
+    missing: str = "-"
+    """What a value of None shows."""
+
+    def value(self, row: Any) -> Any:
+        return self.key(row) if callable(self.key) else row[self.key]
+
+    def _aligned(self, text: str) -> str:
+        m = _SPEC.match(self.format)
+        assert m is not None  # the pattern matches any string
+        align = m["align"] or ("<" if self.format.endswith("s") else ">")
+        return f"{text:{align}{m['width']}}"
+
+    def header(self) -> str:
+        return self._aligned(self.name)
+
+    def cell(self, row: Any) -> str:
+        v = self.value(row)
+        return self._aligned(self.missing) if v is None else format(v, self.format)
+
+
+def render(columns: Sequence[Column], rows: Sequence[Any], sep: str = " ") -> list[str]:
+    """The header line and one line per row of ``rows`` (mappings, or what the columns'
+    functions read)."""
+    lines = [sep.join(c.header() for c in columns)]
+    lines.extend(sep.join(c.cell(r) for c in columns) for r in rows)
+    return lines
