@@ -3,6 +3,9 @@ form, its table and its figures (:mod:`~sigmapi.experiments.icub.plots`)."""
 
 from __future__ import annotations
 
+import functools
+import operator
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -11,7 +14,7 @@ import numpy as np
 
 from sigmapi.experiments.icub.config import ICubConfig
 from sigmapi.experiments.icub.reaching import METHODS
-from sigmapi.experiments.kit.results import Result
+from sigmapi.experiments.kit.results import Column, Result, render
 from sigmapi.metrics import ORDERED_R2
 
 __all__ = ["TARGETS", "ICubResult"]
@@ -69,6 +72,22 @@ def _scored(rows: list[dict[str, Any]], true: list[dict[str, Any]]) -> dict[str,
 
 def _per_seed(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
     return [{k: r[k] for k in _MAP_KEYS} for r in rows]
+
+
+def _degrees(*path: str) -> Callable[[Mapping[str, Any]], str]:
+    return lambda m: f"{functools.reduce(operator.getitem, path, m):.2f}d"
+
+
+MAP_COLUMNS = (
+    Column("map", "map", "<6"),
+    Column("order R2", "order_r2", ">10.3f"),
+    Column("worst", "order_r2_worst", ">8.3f"),
+    Column("dir err", _degrees("direction_error_deg"), ">9"),
+    Column("true map", _degrees("true_direction_map", "direction_error_deg"), ">10"),
+    Column("cubic fit", _degrees("supervised", "direction_error_deg"), ">11"),
+    Column("folded", "folded_seeds", ">8d"),
+)
+"""The table's columns: one row per map (medians over seeds, in degrees)."""
 
 
 @dataclass
@@ -207,15 +226,8 @@ class ICubResult(Result):
             f"frames: rendered vs projected retina {f['pixel_rms_px']:.2f} px RMS "
             f"(max {f['pixel_max_px']:.2f}) over {f['scenes']} scenes; 64x64 eye frame "
             f"{f['eye_frame_ms_median']:.2f} ms median",
-            f"{'map':<6}{'order R2':>10}{'worst':>8}{'dir err':>9}{'true map':>10}"
-            f"{'cubic fit':>11}{'folded':>8}",
         ]
-        for name, m in maps.items():
-            lines.append(
-                f"{name:<6}{m['order_r2']:>10.3f}{m['order_r2_worst']:>8.3f}"
-                f"{m['direction_error_deg']:>8.2f}d{m['true_direction_map']['direction_error_deg']:>9.2f}d"
-                f"{m['supervised']['direction_error_deg']:>10.2f}d{m['folded_seeds']:>8d}"
-            )
+        lines += render(MAP_COLUMNS, [{"map": k, **m} for k, m in maps.items()], sep="")
         ex = maps["map2"].get("exact_map1")
         if ex is not None:
             lines.append(

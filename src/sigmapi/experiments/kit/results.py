@@ -14,6 +14,7 @@ of :class:`Column`.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import re
 import typing
 from collections.abc import Callable, Mapping, Sequence
@@ -67,8 +68,8 @@ class Result:
 
     KEYS: ClassVar[tuple[str, ...]] = ()
     """The keys of the JSON form, in order: ``"key"`` (a field or method of that name) or
-    ``"key: attribute"``; a ``"*attribute"`` merges the dict the attribute gives. Empty: the
-    dataclass fields."""
+    ``"key: attribute"`` (an attribute, a method or a dotted path, ``"options.seeds"``); a
+    ``"*attribute"`` merges the dict the attribute gives. Empty: the dataclass fields."""
     COMPUTED: ClassVar[tuple[str, ...]] = ()
     """The keys computed from what the file does not hold: a result read back holds them as
     ``written`` (a field), every one of them required."""
@@ -83,7 +84,7 @@ class Result:
         return tuple(f.name for f in dataclasses.fields(self) if f.repr)  # type: ignore[arg-type]
 
     def _value(self, attr: str) -> Any:
-        value = getattr(self, attr)
+        value = functools.reduce(getattr, attr.split("."), self)  # "options.seeds": a path
         return value() if callable(value) else value
 
     def to_dict(self) -> dict[str, Any]:
@@ -166,7 +167,8 @@ def _typed(hint: Any, value: Any) -> Any:
     if kind is float:
         return float(value)
     if kind is list:
-        return list(value)
+        (item,) = typing.get_args(hint) or (Any,)
+        return [_typed(item, v) for v in value]
     return value
 
 

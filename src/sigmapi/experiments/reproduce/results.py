@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Any, Literal, get_args
 from sigmapi import _validate
 from sigmapi.config import SOMConfig
 from sigmapi.experiments.base import check_seeds
+from sigmapi.experiments.kit.results import Result
 from sigmapi.metrics import ORDERED_R2, Metrics
 
 if TYPE_CHECKING:
@@ -164,8 +165,20 @@ class ReproduceOptions(ReproduceConfig):
         return self.seeds
 
 
+SECONDS = (
+    "train_seconds",
+    "refine_seconds",
+    "compile_seconds",
+    "measure_seconds",
+    "cpu_seconds",
+    "compile_cpu_seconds",
+)
+"""The times of a :class:`SeedRun`, whose medians over seeds :meth:`PresetResult.to_dict`
+stores (``seconds``)."""
+
+
 @dataclass
-class SeedRun:
+class SeedRun(Result):
     """One trained seed: its metrics (after and before the refinement), learning curve and
     times.
 
@@ -199,6 +212,10 @@ class SeedRun:
     cpu_seconds: float = 0.0
     compile_cpu_seconds: float = 0.0
 
+    KEYS = ("seed", *SECONDS, "backend", "*metrics", "unrefined", "curve")
+    """The JSON form: the seed, its times, the kernel, the metrics at the top and those of
+    the unrefined map, the learning curve."""
+
     def metric(self, key: str, stage: Stage = "refined") -> float:
         m = self.unrefined if stage == "unrefined" and self.unrefined is not None else self.metrics
         return float(getattr(m, key))
@@ -218,24 +235,9 @@ class SeedRun:
             **times,
         )
 
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "seed": self.seed,
-            "train_seconds": self.train_seconds,
-            "refine_seconds": self.refine_seconds,
-            "compile_seconds": self.compile_seconds,
-            "measure_seconds": self.measure_seconds,
-            "cpu_seconds": self.cpu_seconds,
-            "compile_cpu_seconds": self.compile_cpu_seconds,
-            "backend": self.backend,
-            **self.metrics.to_dict(),
-            "unrefined": None if self.unrefined is None else self.unrefined.to_dict(),
-            "curve": self.curve,
-        }
-
 
 @dataclass
-class PresetResult:
+class PresetResult(Result):
     """The runs of one preset over its seeds, the reference figures, the seed the figures
     show (and why), the rule's ceiling, and the figures drawn."""
 
@@ -252,6 +254,24 @@ class PresetResult:
     it started from, rounds); None when not computed."""
     figures: dict[str, dict[str, Any]] = field(default_factory=dict)
     """Per figure: its file and the facts its caption states."""
+
+    KEYS = (
+        "config",
+        "seeds: seed_list",
+        "runs",
+        "*refined",
+        "unrefined",
+        "ceiling",
+        "reference",
+        "z_error_floor",
+        "figures",
+        "shown_seed",
+        "shown_reason",
+        "seconds: median_seconds",
+    )
+    """The JSON form: the config, seeds and runs, the medians, worst seeds, means, sd and
+    counts after (at the top) and before the refinement, the ceiling, the references, the
+    figures, the seed they show and why, the median times."""
 
     @property
     def refines(self) -> bool:
@@ -302,51 +322,21 @@ class PresetResult:
             "folded_seeds": self.folded_seeds(stage),
         }
 
-    @classmethod
-    def from_dict(cls, data: Mapping[str, Any]) -> PresetResult:
-        """The preset's runs a :meth:`to_dict` wrote (its medians and counts are theirs)."""
-        return cls(
-            config=SOMConfig.from_dict(data["config"]),
-            runs=[SeedRun.from_dict(r) for r in data["runs"]],
-            reference=dict(data["reference"]),
-            z_error_floor=data["z_error_floor"],
-            shown_seed=int(data["shown_seed"]),
-            shown_reason=str(data["shown_reason"]),
-            ceiling=data["ceiling"],
-            figures=dict(data["figures"]),
-        )
+    def refined(self) -> dict[str, Any]:
+        return self._stage("refined")
 
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "config": self.config.to_dict(),
-            "seeds": [r.seed for r in self.runs],
-            "runs": [r.to_dict() for r in self.runs],
-            **self._stage("refined"),
-            "unrefined": self._stage("unrefined") if self.refines else None,
-            "ceiling": self.ceiling,
-            "reference": self.reference,
-            "z_error_floor": self.z_error_floor,
-            "figures": self.figures,
-            "shown_seed": self.shown_seed,
-            "shown_reason": self.shown_reason,
-            "seconds": {k: self.seconds(k) for k in SECONDS},
-        }
+    def unrefined(self) -> dict[str, Any] | None:
+        return self._stage("unrefined") if self.refines else None
 
+    def seed_list(self) -> list[int]:
+        return [r.seed for r in self.runs]
 
-SECONDS = (
-    "train_seconds",
-    "refine_seconds",
-    "compile_seconds",
-    "measure_seconds",
-    "cpu_seconds",
-    "compile_cpu_seconds",
-)
-"""The times of a :class:`SeedRun`, whose medians over seeds :meth:`PresetResult.to_dict`
-stores (``seconds``)."""
+    def median_seconds(self) -> dict[str, float]:
+        return {k: self.seconds(k) for k in SECONDS}
 
 
 @dataclass
-class ReproduceResult:
+class ReproduceResult(Result):
     """Everything the report states; :meth:`to_dict` is ``metrics.json``."""
 
     options: ReproduceOptions
@@ -358,6 +348,19 @@ class ReproduceResult:
     """The report folder."""
     figure_files: list[Path] = field(default_factory=list)
     """The figures of the report, in its folder."""
+
+    KEYS = (
+        "quick: options.quick",
+        "seeds: options.seeds",
+        "seeds_2d: options.seeds_2d",
+        "n_test: options.test_size",
+        "curve_test: options.curve_test",
+        "presets",
+        "sections",
+        "total_seconds",
+    )
+    """The JSON form (``metrics.json``): the options it states, the presets, the sections'
+    numbers and the time."""
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> ReproduceResult:
@@ -372,19 +375,6 @@ class ReproduceResult:
         )
         presets = {name: PresetResult.from_dict(p) for name, p in data["presets"].items()}
         return cls(options, presets, dict(data["sections"]), float(data["total_seconds"]))
-
-    def to_dict(self) -> dict[str, Any]:
-        o = self.options
-        return {
-            "quick": o.quick,
-            "seeds": list(o.seeds),
-            "seeds_2d": o.seeds_2d,
-            "n_test": o.test_size,
-            "curve_test": o.curve_test,
-            "presets": {name: p.to_dict() for name, p in self.presets.items()},
-            "sections": self.sections,
-            "total_seconds": self.total_seconds,
-        }
 
     def table(self) -> str:
         """Per preset the median metrics over its seeds, labelled (after and before the

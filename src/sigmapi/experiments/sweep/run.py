@@ -50,6 +50,7 @@ from sigmapi.config import SOMConfig, check_map_fits_task, load_preset
 from sigmapi.errors import ConfigError
 from sigmapi.executor import Executor, Outcome, job_memory
 from sigmapi.experiments.base import RESULT_FILE, Experiment, check_seeds, register
+from sigmapi.experiments.kit.results import Result
 from sigmapi.experiments.sweep.figures import METRICS, draw_summary
 from sigmapi.experiments.sweep.table import (
     METRIC_COLUMNS,
@@ -426,12 +427,17 @@ def _typed(value: Any) -> Any:
 
 
 @dataclass
-class SweepResult:
+class SweepResult(Result):
     """The table of a sweep (every run of its spec, in grid order) and its settings."""
 
     spec: SweepSpec
     rows: list[dict[str, Any]]
     metric: str = "order_r2"
+
+    KEYS = ("spec", "table: table_file", "runs", "failed", "rows: typed_rows")
+    """The JSON form: the spec, the table's file, the counts of runs and failed ones, and
+    the table's rows, typed."""
+    table_file = RESULTS
 
     @classmethod
     def from_dict(cls, data: Any) -> SweepResult:
@@ -440,17 +446,15 @@ class SweepResult:
             raise TypeError("a sweep's result must be a JSON object with a list of rows")
         return cls(SweepSpec.from_dict(data["spec"], "the result's spec"), list(data["rows"]))
 
-    def to_dict(self) -> dict[str, Any]:
-        """``spec``, ``table`` (the file), counts, and ``rows`` (the table's rows, typed)."""
-        rows = [{k: _typed(v) for k, v in r.items()} for r in self.rows]
-        failed = sum(r.get("status") != "ok" for r in rows)
-        return {
-            "spec": self.spec.to_dict(),
-            "table": RESULTS,
-            "runs": len(rows),
-            "failed": failed,
-            "rows": rows,
-        }
+    def typed_rows(self) -> list[dict[str, Any]]:
+        """The table's rows, each value typed (:func:`_typed`)."""
+        return [{k: _typed(v) for k, v in r.items()} for r in self.rows]
+
+    def runs(self) -> int:
+        return len(self.rows)
+
+    def failed(self) -> int:
+        return sum(r.get("status") != "ok" for r in self.typed_rows())
 
     def table(self) -> str:
         """Per grid point: the runs that finished and the median of :attr:`metric` over them."""
@@ -465,8 +469,7 @@ class SweepResult:
         for point, values in points.items():
             median = f"{statistics.median(values):12.3f}" if values else f"{'-':>12s}"
             lines.append(f"{point:40s} {len(values):7d} {median}")
-        d = self.to_dict()
-        lines.append(f"{d['runs']} runs, {d['failed']} failed; the table: {RESULTS}")
+        lines.append(f"{len(self.rows)} runs, {self.failed()} failed; the table: {RESULTS}")
         return "\n".join(lines)
 
     def figure(self, out_dir: Path) -> list[Path]:
