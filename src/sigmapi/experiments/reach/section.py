@@ -30,7 +30,10 @@ CAPTION = (
 )
 
 EXPLANATION = {
-    "map": "the learned Sigma-Pi map's response (learned from the robot's own saccades)",
+    "map": (
+        "the learned Sigma-Pi map's response (learned, without z, from the view pairs of the "
+        "eye's own saccades)"
+    ),
     "retina": "the retinal code x alone: under saccades it says little about z",
     "retina_gaze": (
         "x and y side by side: a linear learner can add a function of x to a function of y "

@@ -12,16 +12,18 @@ import re
 from typing import TYPE_CHECKING
 
 from sigmapi.experiments.reproduce.results import METRIC_KEYS, ORDERED_R2, OTHER_PROCEDURE
+from sigmapi.metrics import FOLD_THRESHOLD
 
 if TYPE_CHECKING:
     from sigmapi.config import SOMConfig
-    from sigmapi.experiments.reproduce.results import (
-        PresetResult,
-        ReproduceResult,
-        Section,
-        SeedRun,
-        Stage,
-    )
+    from sigmapi.metrics import FOLD_THRESHOLD
+from sigmapi.experiments.reproduce.results import (
+    PresetResult,
+    ReproduceResult,
+    Section,
+    SeedRun,
+    Stage,
+)
 
 __all__ = ["linked_files", "render"]
 
@@ -54,7 +56,10 @@ _LABEL = {
     "z_error": "z error (grid spacings)",
     "order_r2": "order R²",
     "usage": "usage",
-    "fold_score": "fold score",
+    "fold_score": (
+        "fold score<br><small>starved units, or the far-apart views over their limit; "
+        f"folded at &ge; {FOLD_THRESHOLD:g}</small>"
+    ),
 }
 
 
