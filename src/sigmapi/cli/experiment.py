@@ -14,8 +14,8 @@
   write, ``--force`` or not); the folder is locked while the command runs
   (:mod:`sigmapi._lock`: a second command on it stops at once) and checked to take files
   before any work, as are the files the experiment writes elsewhere and what its figures
-  need (its optional ``before_writing(config, force=...)``: ``robot --render``, the
-  renderer) and its fixed file names (its optional ``writes``);
+  need (its ``before_writing(config, force=...)``: ``robot --render``, the renderer) and
+  its fixed file names (its ``writes``);
 - ``--json``: print ``to_dict()`` as one JSON object on stdout (else the table);
 - ``--quick``: start from the experiment's quick config and seeds (where it has one);
 - ``--workers``, ``--engine``, ``--address``, ``--memory-budget``: the executor;
@@ -56,6 +56,7 @@ from sigmapi.experiments.base import (
     check_seeds,
     write_result,
 )
+from sigmapi.experiments.kit.parts import parts_of
 from sigmapi.progress import Progress
 
 __all__ = ["SPELLINGS", "add_experiment", "add_experiment_options", "run_experiment"]
@@ -188,9 +189,10 @@ def _make_folder(path: str) -> Path:
 
 def _parts(experiment: Experiment[Any]) -> dict[str | None, type]:
     """The dataclasses whose fields are the command's options: the config's own (key None),
-    or, for a config made of parts (a ``PARTS`` class attribute naming each part's dataclass,
-    and ``replace(**fields)`` finding the part of each field), every part's."""
-    parts = getattr(experiment.config_type, "PARTS", None)
+    or, for a config made of parts (:class:`~sigmapi.experiments.kit.parts.Parts`: each field
+    a part's dataclass, and ``replace(**fields)`` finding the part of each field), every
+    part's."""
+    parts = parts_of(experiment.config_type)
     return dict(parts) if parts else {None: experiment.config_type}
 
 
@@ -198,7 +200,7 @@ def _check_folder(out: Path, force: bool, experiment: Experiment[Any]) -> None:
     """Before any work: the folder takes files, and is this experiment's
     (:func:`~sigmapi._outputs.claim_folder`: its marker, or empty, or ``--force``); a run
     that does not resume needs ``--force`` to write over a run of its own there."""
-    for name in (RESULT_FILE, *getattr(experiment, "writes", ())):
+    for name in (RESULT_FILE, *experiment.writes):
         if (out / name).is_symlink() or ((out / name).exists() and not (out / name).is_file()):
             raise UsageError(
                 f"{str(out / name)!r} is a folder or a link; the command writes a "
@@ -223,7 +225,7 @@ def _check_folder(out: Path, force: bool, experiment: Experiment[Any]) -> None:
             f"--out folder {str(out)!r} is not empty; pass --force to write into it (it holds "
             f"a {experiment.name} run), or give another --out"
         )
-    claim_folder(out, experiment.name, force=force, owns=getattr(experiment, "owns", ()))
+    claim_folder(out, experiment.name, force=force, owns=experiment.owns)
 
 
 def _config(experiment: Experiment[Any], values: dict[str, Any], quick: bool) -> Any:
@@ -271,9 +273,8 @@ def run_experiment(experiment: Experiment[Any], args: argparse.Namespace) -> int
         try:
             with output_lock(out, f"--out folder {str(out)!r}"):
                 _check_folder(out, args.force, experiment)
-                check = getattr(experiment, "before_writing", None)
-                if check is not None:  # what its figures and files outside --out need
-                    check(config, force=args.force)
+                # what its figures and files outside --out need
+                experiment.before_writing(config, force=args.force)
                 before = _stamps(out)
                 result = _run(experiment, config, seeds, out, executor, args.quiet)
                 files = _written(out, before, [*result.figure(out), write_result(result, out)])

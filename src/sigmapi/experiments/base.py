@@ -118,6 +118,16 @@ class Experiment(Protocol[C]):
     resumes: bool = False
     """Whether a run into a folder that holds a run of the same config continues it (so that
     writing into a folder that is not empty is no mistake)."""
+    writes: tuple[str, ...] = ()
+    """The fixed file names the run writes into its output folder besides ``result.json``
+    (checked before the work: no folder or link in their place)."""
+    owns: tuple[str, ...] = ()
+    """What a folder the experiment did not mark may hold, being its own (a sweep's table)."""
+
+    def before_writing(self, config: C, *, force: bool) -> None:
+        """Check, before the work, what writing the figures and files outside the output
+        folder needs (a ``--render`` file, a renderer); nothing by default."""
+        return None
 
     def default_seeds(self, config: C, *, quick: bool = False) -> tuple[int, ...]:
         """The seeds to run ``config`` with when none are given."""

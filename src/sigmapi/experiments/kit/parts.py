@@ -1,19 +1,70 @@
 """Configs made of parts: frozen dataclasses (``env``, ``map``, ``agent``, ``run``, ...) held
-by one config whose ``PARTS`` class attribute names each part's class. Field names are unique
-across the parts, so ``config.replace(grid=7, episodes=150)`` finds each field's part, and the
-command line gives every part's fields as options (:mod:`sigmapi.cli.experiment`)."""
+by one config that subclasses :class:`Parts`, each of its fields a part. ``PARTS`` (each
+part's name and class) is derived from those fields, never listed again. Field names are
+unique across the parts, so ``config.replace(grid=7, episodes=150)`` finds each field's part,
+and the command line gives every part's fields as options (:mod:`sigmapi.cli.experiment`)."""
 
 from __future__ import annotations
 
 import dataclasses
+import inspect
+import typing
 from collections.abc import Mapping
-from typing import Any
+from typing import Any, ClassVar, Self
 
 from sigmapi import _validate
 from sigmapi.errors import ConfigError
 from sigmapi.experiments.kit.written import tuples
 
-__all__ = ["check_part_types", "parts_dict", "parts_from_dict", "replaced_parts"]
+__all__ = [
+    "Parts",
+    "check_part_types",
+    "parts_dict",
+    "parts_from_dict",
+    "parts_of",
+    "replaced_parts",
+]
+
+
+class Parts:
+    """The base of a config made of parts: every dataclass field is a part, a frozen dataclass
+    of its own. :attr:`PARTS` is derived from the fields (their declared classes) when the
+    config class is made."""
+
+    PARTS: ClassVar[dict[str, type]]
+    """Each part's name and class, in the order of the fields."""
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        hints = typing.get_type_hints(cls)
+        own = {k: hints[k] for k in inspect.get_annotations(cls)}
+        cls.PARTS = {k: v for k, v in own.items() if typing.get_origin(v) is not ClassVar}
+        for name, part in cls.PARTS.items():
+            if not (isinstance(part, type) and dataclasses.is_dataclass(part)):
+                raise TypeError(f"part {name!r} of {cls.__name__} must be a dataclass, got {part}")
+
+    @classmethod
+    def kind(cls) -> str:
+        """The experiment's word in messages: the class name without ``Config``, lower case."""
+        return cls.__name__.removesuffix("Config").lower()
+
+    def replace(self, **changes: Any) -> Self:
+        """A copy with ``changes``, fields of any part by name (``grid=7, episodes=150``)."""
+        return type(self)(**replaced_parts(self, self.PARTS, changes, self.kind()))
+
+    def to_dict(self) -> dict[str, Any]:
+        """The parts as JSON-able tables (tuples as lists): ``{"env": {...}, "map": ...}``."""
+        return parts_dict(self, self.PARTS)
+
+    @classmethod
+    def from_dict(cls, data: Any) -> Self:
+        """The config a :meth:`to_dict` wrote."""
+        return cls(**parts_from_dict(data, cls.PARTS, cls.kind()))
+
+
+def parts_of(config_type: type) -> dict[str, type]:
+    """The parts of a config type (:attr:`Parts.PARTS`; empty for a config of plain fields)."""
+    return dict(config_type.PARTS) if issubclass(config_type, Parts) else {}
 
 
 def check_part_types(config: Any, parts: dict[str, type]) -> None:

@@ -18,7 +18,7 @@ so a field added here is a command-line option too.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, ClassVar
+from typing import Any
 
 from sigmapi import _validate
 from sigmapi.agents import ActorCriticConfig
@@ -29,10 +29,8 @@ from sigmapi.errors import ConfigError
 from sigmapi.experiments.kit.episodes import check_episode_run
 from sigmapi.experiments.kit.maps import MapSpec
 from sigmapi.experiments.kit.parts import (
+    Parts,
     check_part_types,
-    parts_dict,
-    parts_from_dict,
-    replaced_parts,
 )
 from sigmapi.experiments.kit.worlds import GAZE_REACH, World
 
@@ -173,7 +171,7 @@ class ReachRunConfig:
 
 
 @dataclass(frozen=True)
-class ReachConfig:
+class ReachConfig(Parts):
     """Everything one reach comparison depends on, but its seeds. Defaults: the 2-D task, a
     saccade on every step, the paper-2d map, the authors' actor-critic, 600 episodes."""
 
@@ -186,14 +184,6 @@ class ReachConfig:
     run: ReachRunConfig = field(default_factory=ReachRunConfig)
     """The states, episodes and curves."""
 
-    PARTS: ClassVar[dict[str, type]] = {
-        "env": GazeReachConfig,
-        "map": MapConfig,
-        "agent": ActorCriticConfig,
-        "run": ReachRunConfig,
-    }
-    """Each part's name and class."""
-
     def __post_init__(self) -> None:
         check_parts(self, self.PARTS)
 
@@ -201,16 +191,7 @@ class ReachConfig:
         """A copy with ``changes``, fields of any part by name (``grid=7, episodes=150``)."""
         if "dim" in changes and "map_shape" not in changes:  # the default map follows the task
             changes = {**changes, "map_shape": default_map_shape(changes["dim"])}
-        return ReachConfig(**replaced_parts(self, self.PARTS, changes, "reach"))
-
-    def to_dict(self) -> dict[str, dict[str, Any]]:
-        """The parts as JSON-able tables (tuples as lists): ``{"env": {...}, "map": ...}``."""
-        return parts_dict(self, self.PARTS)
-
-    @classmethod
-    def from_dict(cls, data: Any) -> ReachConfig:
-        """The config a :meth:`to_dict` wrote."""
-        return cls(**parts_from_dict(data, cls.PARTS, "reach"))
+        return super().replace(**changes)
 
     def som_config(self, seed: int, world: World = GAZE_REACH) -> SOMConfig:
         """The config of the map of seed ``seed``, on the codes of ``world``

@@ -16,7 +16,7 @@ gate_eps=0.1)`` finds each field's part, and ``sigmapi reward`` has an option pe
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, ClassVar
+from typing import Any
 
 from sigmapi import _validate
 from sigmapi.agents import ActorCriticConfig, Gating
@@ -24,7 +24,7 @@ from sigmapi.agents.gated import VIEWS
 from sigmapi.config import SOMConfig
 from sigmapi.envs import GazeReachConfig
 from sigmapi.errors import ConfigError
-from sigmapi.experiments.kit.parts import parts_dict, parts_from_dict, replaced_parts
+from sigmapi.experiments.kit.parts import Parts
 from sigmapi.experiments.kit.worlds import GAZE_REACH, World
 from sigmapi.experiments.reach.config import (
     SMALL_PRESET,
@@ -144,7 +144,7 @@ def _small(part: str) -> Any:
 
 
 @dataclass(frozen=True)
-class RewardConfig:
+class RewardConfig(Parts):
     """Everything one reward-gating comparison depends on, but its seeds. Defaults: the 7x7
     world and map of the reach experiment's small setting, the authors' actor-critic."""
 
@@ -159,15 +159,6 @@ class RewardConfig:
     run: RewardRunConfig = field(default_factory=RewardRunConfig)
     """The methods, episodes and scores."""
 
-    PARTS: ClassVar[dict[str, type]] = {
-        "env": GazeReachConfig,
-        "map": MapConfig,
-        "agent": ActorCriticConfig,
-        "gate": GateConfig,
-        "run": RewardRunConfig,
-    }
-    """Each part's name and class."""
-
     def __post_init__(self) -> None:
         check_parts(self, self.PARTS)
         if self.map.model_path is not None:
@@ -175,19 +166,6 @@ class RewardConfig:
                 "model_path must be None for the reward experiment: each seed learns its own "
                 f"map, the one the methods start from, got {self.map.model_path!r}"
             )
-
-    def replace(self, **changes: Any) -> RewardConfig:
-        """A copy with ``changes``, fields of any part by name (``episodes=150``)."""
-        return RewardConfig(**replaced_parts(self, self.PARTS, changes, "reward"))
-
-    def to_dict(self) -> dict[str, dict[str, Any]]:
-        """The parts as JSON-able tables (tuples as lists)."""
-        return parts_dict(self, self.PARTS)
-
-    @classmethod
-    def from_dict(cls, data: Any) -> RewardConfig:
-        """The config a :meth:`to_dict` wrote."""
-        return cls(**parts_from_dict(data, cls.PARTS, "reward"))
 
     def som_config(self, seed: int, world: World = GAZE_REACH) -> SOMConfig:
         """The config of the map of seed ``seed``, on the codes of ``world``."""

@@ -17,7 +17,7 @@ flat (one table of every part's fields, as the robot's results have always been 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, ClassVar
+from typing import Any
 
 import gymnasium as gym
 
@@ -31,7 +31,7 @@ from sigmapi.envs.robot.views import RobotViews
 from sigmapi.errors import ConfigError
 from sigmapi.experiments.kit.episodes import check_episode_run
 from sigmapi.experiments.kit.maps import MapSpec
-from sigmapi.experiments.kit.parts import check_part_types, parts_dict, replaced_parts
+from sigmapi.experiments.kit.parts import Parts, check_part_types, parts_dict
 from sigmapi.experiments.kit.seeds import SeedPlan
 from sigmapi.experiments.kit.worlds import World, register_world
 from sigmapi.experiments.kit.written import as_object, tuples
@@ -149,7 +149,7 @@ class RobotRunConfig:
 
 
 @dataclass(frozen=True)
-class RobotConfig:
+class RobotConfig(Parts):
     """Everything one robot run depends on but its seeds (the CLI's options are its parts'
     fields)."""
 
@@ -161,14 +161,6 @@ class RobotConfig:
     """The learner (the authors' docking: gamma 0.9, learning rates 0.1, beta 2)."""
     run: RobotRunConfig = field(default_factory=RobotRunConfig)
     """The states, episodes and curves."""
-
-    PARTS: ClassVar[dict[str, type]] = {
-        "env": RobotEnvConfig,
-        "map": RobotMapConfig,
-        "agent": ActorCriticConfig,
-        "run": RobotRunConfig,
-    }
-    """Each part's name and class."""
 
     def __post_init__(self) -> None:
         check_part_types(self, self.PARTS)
@@ -193,10 +185,6 @@ class RobotConfig:
         if state == "true_z":
             return TrueZObservation(env, shape=m.map_shape, width=m.feature_width)
         return make_state_env(env, state, model, m.features, m.feature_width)
-
-    def replace(self, **changes: Any) -> RobotConfig:
-        """A copy with ``changes``, fields of any part by name (``grid=8, episodes=150``)."""
-        return RobotConfig(**replaced_parts(self, self.PARTS, changes, "robot"))
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-able and flat: every part's fields in one table (tuples as lists)."""
