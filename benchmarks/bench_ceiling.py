@@ -37,7 +37,7 @@ from sigmapi.config import apply_overrides
 ROOT = Path(__file__).resolve().parent
 METRICS = ("view_consistency", "view_within_one", "z_error", "order_r2", "fold_score")
 CIRCULAR = ("order_circular", "seam_jump", "seam_gap")
-"""The circular metrics of a map of angles (:mod:`sigmapi.analysis.circular`), recorded when
+"""The circular metrics of a map of angles (:mod:`sigmapi.metrics.circular`), recorded when
 present."""
 WORST = {"z_error": max, "fold_score": max, "seam_jump": max, "seam_gap": max}
 """Metrics where larger is worse; for the rest smaller is worse."""

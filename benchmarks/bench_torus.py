@@ -10,7 +10,7 @@ dimensions (z = (x + y) mod 1 per axis), the paper's random start (``ordering = 
 the ``cv-`` variants start from the cross-view start), one refinement round of 100,000 pairs
 after the training. Each variant (:data:`VARIANTS`) sets the code width, winner rule,
 schedule and refinement. Per seed: the
-metrics of :func:`sigmapi.evaluate` (the circular ones of :mod:`sigmapi.analysis.circular`) at the
+metrics of :func:`sigmapi.evaluate` (the circular ones of :mod:`sigmapi.metrics.circular`) at the
 end of the training and after the refinement, and the process CPU seconds; per variant
 how many seeds end seamless with circular order >= 0.95. Writes
 ``benchmarks/results/ceiling-torus.json``.

@@ -12,7 +12,7 @@ import pytest
 
 import sigmapi
 from sigmapi import ConfigError, SigmaPiSOM, evaluate, load_preset
-from sigmapi.analysis.circular import CIRCULAR_KEYS, circular_means, ring_fit, seam, wrap
+from sigmapi.metrics.circular import CIRCULAR_KEYS, circular_means, ring_fit, seam, wrap
 from sigmapi.codes import PopulationCode, grid_coordinates
 from sigmapi.rules.ordering import torus_angles
 from sigmapi.tasks import TwoViewSampler

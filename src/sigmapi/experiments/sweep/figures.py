@@ -8,9 +8,9 @@ from typing import Any, Protocol
 
 from sigmapi import _validate
 from sigmapi._outputs import save_captioned
-from sigmapi.analysis.circular import CIRCULAR_KEYS
 from sigmapi.experiments.sweep.table import METRIC_COLUMNS
 from sigmapi.metrics import FOLD_THRESHOLD
+from sigmapi.metrics.circular import CIRCULAR_KEYS
 
 __all__ = ["METRICS", "caption", "draw_summary"]
 

@@ -45,7 +45,7 @@ from typing import Any
 from sigmapi import _validate
 from sigmapi._lock import output_lock
 from sigmapi._outputs import claim_folder
-from sigmapi.analysis.circular import CIRCULAR_KEYS
+from sigmapi.metrics.circular import CIRCULAR_KEYS
 from sigmapi.config import SOMConfig, check_map_fits_task, load_preset
 from sigmapi.errors import ConfigError
 from sigmapi.executor import Executor, Outcome, job_memory

@@ -46,7 +46,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sigmapi import _memory, _validate
-from sigmapi.analysis.circular import circular_metrics, map_distance
+from sigmapi.metrics.circular import circular_metrics, map_distance
 from sigmapi.rules import Scoring
 
 if TYPE_CHECKING:
@@ -108,7 +108,7 @@ class Metrics:
     topographic_error: float = 0.0
     circular: dict[str, float | bool] | None = None
     """Maps of angles only (a relation with circular z): ``order_circular``, ``seam_jump``,
-    ``seam_gap``, ``seam_units_win`` and ``seamless`` (:mod:`sigmapi.analysis.circular`); their
+    ``seam_gap``, ``seam_units_win`` and ``seamless`` (:mod:`sigmapi.metrics.circular`); their
     ``z_error`` is then the circular one. None for every other relation."""
 
     def to_dict(self) -> dict[str, float | int | bool]:
