@@ -12,8 +12,8 @@ import pytest
 
 import sigmapi
 from sigmapi import ConfigError, SigmaPiSOM, evaluate, load_preset
-from sigmapi.metrics.circular import CIRCULAR_KEYS, circular_means, ring_fit, seam, wrap
 from sigmapi.codes import PopulationCode, grid_coordinates
+from sigmapi.metrics.circular import CIRCULAR_KEYS, circular_means, ring_fit, seam, wrap
 from sigmapi.rules.ordering import torus_angles
 from sigmapi.tasks import TwoViewSampler
 

@@ -45,7 +45,6 @@ from typing import Any
 from sigmapi import _validate
 from sigmapi._lock import output_lock
 from sigmapi._outputs import claim_folder
-from sigmapi.metrics.circular import CIRCULAR_KEYS
 from sigmapi.config import SOMConfig, check_map_fits_task, load_preset
 from sigmapi.errors import ConfigError
 from sigmapi.executor import Executor, Outcome, job_memory
@@ -61,6 +60,7 @@ from sigmapi.experiments.sweep.table import (
     run_key,
 )
 from sigmapi.metrics import evaluate
+from sigmapi.metrics.circular import CIRCULAR_KEYS
 from sigmapi.model.som import SigmaPiSOM
 from sigmapi.progress import Progress
 from sigmapi.tasks import get_relation
