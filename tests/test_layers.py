@@ -136,14 +136,13 @@ SHARED = ("sigmapi.experiments", "sigmapi.experiments.base", KIT)
 """What every experiment package may import from ``experiments/``: the registry and the kit."""
 
 BORROWS = {
-    ("reproduce", "reach"),
-    ("reach", "reproduce"),
     ("reward", "reach"),
     ("robot", "reach"),
     ("icub", "chain"),
 }
-"""An experiment package that uses another's parts: the report adds the reach section, written
-against the report's section type; the reward experiment's world and map are the reach
+"""An experiment package that uses another's parts (the report and the reach experiment share
+none: the report imports its sections by ``"module:function"``, written against the kit's
+``Section``): the reward experiment's world and map are the reach
 experiment's config parts; the robot is the reach experiment in the robot's world (its run,
 its per-seed job); the iCub's head map reads its eye map through the chain
 experiment's code of map A (``head_code``)."""
@@ -227,4 +226,41 @@ def test_only_the_run_state_and_the_training_modes_write_the_run():
                 bad.append(f"{m}:{a.lineno} writes the run's {a.attr}")
             if a.attr.startswith("_") and not (m.endswith("_core") and a.attr == "_run"):
                 bad.append(f"{m}:{a.lineno} writes the private attribute {a.attr}")
+    assert not bad, "\n".join(bad)
+
+
+def _names_a_backend(node: ast.AST, backends: set[str]) -> bool:
+    """Whether ``node`` picks a backend by its name: compares with one, passes one as
+    ``backend=`` or stores one under the key ``"backend"``."""
+
+    def named(n: ast.AST | None) -> bool:
+        return isinstance(n, ast.Constant) and n.value in backends
+
+    if isinstance(node, ast.Compare):
+        return any(named(n) for n in (node.left, *node.comparators))
+    if isinstance(node, ast.keyword):
+        return node.arg == "backend" and named(node.value)
+    if isinstance(node, ast.Dict):
+        return any(
+            isinstance(k, ast.Constant) and k.value == "backend" and named(v)
+            for k, v in zip(node.keys, node.values, strict=True)
+        )
+    return False
+
+
+def test_nothing_outside_the_kernels_names_a_backend_or_reads_its_state():
+    """Only ``kernels/`` picks a backend by its name or reads the arrays of its state: the
+    rest asks the kernel's interface (``COMPILES``, ``pair_cutoff``, ``weight_columns``,
+    ``DEFINITION``, ``columns.version1_members``)."""
+    from sigmapi.kernels import BACKENDS, columns
+
+    bad = []
+    for m, path in MODULES.items():
+        if m.startswith("sigmapi.kernels"):
+            continue
+        for node in ast.walk(ast.parse(path.read_text("utf-8"))):
+            if _names_a_backend(node, set(BACKENDS)):
+                bad.append(f"{m}:{getattr(node, 'lineno', '?')} picks a backend by its name")
+            if isinstance(node, ast.Constant) and node.value in columns.MEMBERS:
+                bad.append(f"{m}:{node.lineno} reads the kernel state's {node.value!r}")
     assert not bad, "\n".join(bad)

@@ -36,6 +36,7 @@ from sigmapi._version import __version__
 from sigmapi.codes import PopulationCode
 from sigmapi.errors import ConfigError, ResourceError, UsageError, install_hint
 from sigmapi.io import atomic_write_bytes
+from sigmapi.kernels import get_backend
 from sigmapi.model.som import SigmaPiSOM, load_model
 from sigmapi.rules.winners import Scoring
 
@@ -96,17 +97,16 @@ def score_matrix(model: SigmaPiSOM) -> tuple[NDArray[np.float64], NDArray[np.flo
 
 def _columns(model: SigmaPiSOM) -> tuple[NDArray[np.floating], NDArray[np.float64]]:
     """Weights as ``raw`` ``(n_x * n_y, K)`` and ``scale`` ``(K,)``, ``W[k] = scale[k] *
-    raw[:, k]``: the fast kernel's own columns where the model holds them, else dense."""
+    raw[:, k]``: the kernel's own columns where it keeps them, else dense
+    (:meth:`~sigmapi.kernels.base.Kernel.weight_columns`)."""
     _, arrays = model.to_arrays()
-    if "state_raw" in arrays and "state_scale" in arrays:
-        return np.asarray(arrays["state_raw"]), np.asarray(arrays["state_scale"], np.float64)
-    w = model.weights_
-    return np.ascontiguousarray(w.reshape(w.shape[0], -1).T), np.ones(w.shape[0])
+    shape = model.weights_.shape
+    return get_backend(model.backend).weight_columns((shape[0], shape[1], shape[2]), arrays)
 
 
 def _truncation(model: SigmaPiSOM) -> float:
     """The share of ``max|x| max|y|`` below which the model's kernel skips a code pair."""
-    return float(model.config.kernel_tol) if model.backend == "fast" else 0.0
+    return get_backend(model.backend).pair_cutoff(model.config.kernel_tol)
 
 
 def _code_meta(code: Any) -> str:

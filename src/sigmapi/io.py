@@ -58,6 +58,7 @@ from numpy.typing import NDArray
 
 from sigmapi import _memory
 from sigmapi.errors import DataError, ModelFileError
+from sigmapi.kernels import columns
 
 __all__ = [
     "FORMAT",
@@ -369,7 +370,8 @@ def _declared(header: dict[str, Any], source: str) -> Expect:
     bounded by its config; raises :class:`~sigmapi.errors.ModelFileError` if it cannot.
 
     Version 2 declares every array; version 1 declared the weights, and its state arrays were
-    the fast kernel's (``raw``, ``scale``, ``sqnorm``) of fixed shapes.
+    those of one kernel's layout, of fixed shapes (:func:`sigmapi.kernels.columns.
+    version1_members`).
     """
     k, nx, ny = _dims(header, source)
     n_weights = k * nx * ny
@@ -378,8 +380,7 @@ def _declared(header: dict[str, Any], source: str) -> Expect:
         states = header.get("state_sha256")
         if not isinstance(states, dict):
             raise _bad_header(source, "state_sha256 is not a table")
-        fixed: Expect = {"raw": (_FLOATS, (nx * ny, k)), "scale": (("<f8",), (k,))}
-        fixed["sqnorm"] = fixed["scale"]
+        fixed = columns.version1_members((k, nx, ny), _FLOATS)
         for name in states:
             if name not in fixed:
                 raise _bad_header(source, f"unknown version-1 state array {name!r}")

@@ -45,6 +45,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sigmapi.errors import ConfigError
+from sigmapi.kernels import DEFINITION
 from sigmapi.metrics import evaluate
 
 if TYPE_CHECKING:
@@ -275,7 +276,7 @@ def fixed_point(
             "defaults (z_points=None, view_points=None)"
         )
     grid = view_grid(model, zp, vp)
-    header = {**model.to_arrays()[0], "backend": "reference"}  # dense weights in, any kernel
+    header = {**model.to_arrays()[0], "backend": DEFINITION}  # dense weights in, any kernel
     current, weights = model, np.array(model.weights_, dtype=np.float64)
     winners = _winners(current, grid)
     mass = grid.z_weight[:, None] * grid.weight

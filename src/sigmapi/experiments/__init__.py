@@ -87,10 +87,10 @@ _LAZY = {
     "CompareConfig": "compare.run",
     "CompareResult": "compare.run",
     "run_compare": "compare.run",
-    "ReportContext": "reproduce.results",
+    "ReportContext": "kit.report",
     "ReproduceOptions": "reproduce.results",
     "ReproduceResult": "reproduce.results",
-    "Section": "reproduce.results",
+    "Section": "kit.report",
 }
 """The names this package re-exports from its experiments, imported on first use."""
 

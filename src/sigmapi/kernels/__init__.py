@@ -56,6 +56,7 @@ from sigmapi.rules.geometry import MapGeometry
 __all__ = [
     "BACKENDS",
     "BACKEND_CHOICES",
+    "DEFINITION",
     "ENTRY_POINT_GROUP",
     "REGISTRY",
     "BackendOptions",
@@ -92,6 +93,10 @@ REGISTRY: dict[str, Kernel[Any] | _Lazy] = {
 }
 """The backends by name: kernels, or loaders of those not imported yet (the fast kernel until
 first use, entry points)."""
+
+DEFINITION = reference.NAME
+"""The kernel that is the definition (dense NumPy, compiles nothing): the backend a short run
+takes where its speed does not matter."""
 
 AUTO = ("fast", "reference")
 """What ``backend="auto"`` picks: the first of these that imports here."""

@@ -161,6 +161,9 @@ class Kernel(Protocol[S]):
 
     NAME: ClassVar[str]
     """The backend's name (its key in :data:`sigmapi.kernels.REGISTRY`)."""
+    COMPILES: ClassVar[bool]
+    """Whether the kernel compiles its code on first use (a first call of each of its
+    steps takes the compile's time, which a measurement leaves out)."""
     options: BackendOptions
     """Its settings (device, dtype)."""
 
@@ -174,6 +177,19 @@ class Kernel(Protocol[S]):
 
     def memory_bytes(self, shape: Shape, tol: float) -> int:
         """Bytes of the state of weights of ``shape`` ``(K, n_x, n_y)`` at ``tol``."""
+        ...
+
+    def pair_cutoff(self, tol: float) -> float:
+        """The share of ``max|x| max|y|`` below which the kernel at ``tol`` skips a pair of
+        code values (0: it skips none, an exact kernel)."""
+        ...
+
+    def weight_columns(
+        self, shape: Shape, arrays: FileArrays
+    ) -> tuple[NDArray[np.floating], NDArray[np.float64]]:
+        """The weights of a model file's ``arrays`` (written by this kernel) as columns
+        ``raw`` ``(n_x n_y, K)`` and per-unit ``scale`` ``(K,)``, ``W[k] = scale[k] raw[:,
+        k]``: the kernel's own layout where it keeps one, else the dense weights and ones."""
         ...
 
     def prepare(self, weights: NDArray[np.float64], tol: float = ...) -> S:
@@ -369,6 +385,7 @@ class KernelBase(ABC, Generic[S]):
     """The devices :attr:`BackendOptions.device` may name on this backend."""
     DTYPES: ClassVar[tuple[str, ...]] = ("float64",)
     """The storage dtypes :attr:`BackendOptions.dtype` may name (None: the backend's own)."""
+    COMPILES: ClassVar[bool] = False
 
     def __init__(self, options: BackendOptions | None = None) -> None:
         self.options = self.check_options(BackendOptions() if options is None else options)
@@ -395,6 +412,17 @@ class KernelBase(ABC, Generic[S]):
 
     def __repr__(self) -> str:
         return f"<kernel {self.NAME!r} {self.options}>"
+
+    def pair_cutoff(self, tol: float) -> float:
+        """None skipped: the definition is exact."""
+        return 0.0
+
+    def weight_columns(
+        self, shape: Shape, arrays: FileArrays
+    ) -> tuple[NDArray[np.floating], NDArray[np.float64]]:
+        """The dense weights (:meth:`file_weights`) as columns, each scale 1."""
+        w = self.file_weights(shape, arrays)
+        return np.ascontiguousarray(w.reshape(w.shape[0], -1).T), np.ones(w.shape[0])
 
     # ------------------------------------------------------------------ the arithmetic
 

@@ -15,12 +15,31 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["columns_to_dense", "columns_top", "file_weights", "read_file", "sqnorms", "to_file"]
+__all__ = [
+    "columns_to_dense",
+    "columns_top",
+    "file_weights",
+    "read_file",
+    "sqnorms",
+    "to_file",
+    "version1_members",
+]
 
 Shape = tuple[int, int, int]
 MEMBERS = ("state_raw", "state_scale", "state_sqnorm")
 """The model file members of this layout (``state_sqnorm`` only while the norms are current)."""
 _VERSION_1 = "weights"
+
+
+def version1_members(
+    shape: Shape, floats: tuple[str, ...]
+) -> dict[str, tuple[tuple[str, ...], tuple[int, ...]]]:
+    """The state arrays a version-1 model file may hold (this layout, of fixed shapes, under
+    ``state_<name>``): name -> (allowed dtypes, shape) for weights of ``shape`` ``(K, n_x,
+    n_y)``; ``raw`` in any of ``floats``, the per-unit arrays in float64."""
+    k, nx, ny = shape
+    per_unit = (("<f8",), (k,))
+    return {"raw": (floats, (nx * ny, k)), "scale": per_unit, "sqnorm": per_unit}
 
 
 def columns_top(raw: NDArray[np.floating], scale: NDArray[np.floating], shape: Shape) -> float:

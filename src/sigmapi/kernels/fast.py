@@ -550,6 +550,7 @@ class FastKernel(KernelBase[FastState]):
 
     NAME = NAME
     DTYPES = ()
+    COMPILES = True
 
     def supports(self, rule: WinnerRule | str) -> bool:
         """Whether this kernel has the compiled form of winner rule ``rule`` (an object or
@@ -594,6 +595,17 @@ class FastKernel(KernelBase[FastState]):
     def file_weights(self, shape: tuple[int, int, int], arrays: FileArrays) -> NDArray[np.float64]:
         """Dense float64 weights of what :meth:`file_arrays` wrote (``raw x scale``)."""
         return columns.file_weights(shape, arrays)
+
+    def weight_columns(
+        self, shape: tuple[int, int, int], arrays: FileArrays
+    ) -> tuple[NDArray[np.floating], NDArray[np.float64]]:
+        """The columns :meth:`file_arrays` wrote, as they are."""
+        raw, scale, _ = columns.read_file(shape, arrays)
+        return raw, scale
+
+    def pair_cutoff(self, tol: float) -> float:
+        """``tol``: the sparse codes keep the values above ``tol`` times the largest."""
+        return float(tol)
 
     def from_file_arrays(
         self, shape: tuple[int, int, int], arrays: FileArrays, tol: float = 1e-6

@@ -12,14 +12,10 @@ default seeds (the acceptance run).
 from __future__ import annotations
 
 import html
-from typing import TYPE_CHECKING
 
+from sigmapi.experiments.kit.report import ReportContext, Section
 from sigmapi.experiments.reach.config import ReachConfig
 from sigmapi.experiments.reach.run import REACH, run_with_progress
-from sigmapi.experiments.reproduce.results import Section
-
-if TYPE_CHECKING:
-    from sigmapi.experiments.reproduce.results import ReportContext
 
 __all__ = ["reach_section"]
 

@@ -16,14 +16,13 @@ from sigmapi.metrics import FOLD_THRESHOLD
 
 if TYPE_CHECKING:
     from sigmapi.config import SOMConfig
-    from sigmapi.metrics import FOLD_THRESHOLD
-from sigmapi.experiments.reproduce.results import (
-    PresetResult,
-    ReproduceResult,
-    Section,
-    SeedRun,
-    Stage,
-)
+    from sigmapi.experiments.kit.report import Section
+    from sigmapi.experiments.reproduce.results import (
+        PresetResult,
+        ReproduceResult,
+        SeedRun,
+        Stage,
+    )
 
 __all__ = ["linked_files", "render"]
 

@@ -3,15 +3,14 @@
 :class:`ReproduceConfig` holds its settings (the command-line options), :class:`ReproduceOptions`
 those with the run's seeds, progress and workers; :class:`ReproduceResult` (one
 :class:`PresetResult` per preset, one :class:`SeedRun` per seed) is what ``metrics.json``
-holds, through ``to_dict()``. A :class:`Section` is a part of the report that an experiment
-adds (e.g. the reach experiment); it receives a :class:`ReportContext`.
+holds, through ``to_dict()``. The sections experiments add to the report are the kit's
+(:mod:`sigmapi.experiments.kit.report`).
 """
 
 from __future__ import annotations
 
 import shutil
 import statistics
-import threading
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -24,18 +23,16 @@ from sigmapi.experiments.kit.results import Result
 from sigmapi.metrics import ORDERED_R2, Metrics
 
 if TYPE_CHECKING:
-    from sigmapi.model.som import SigmaPiSOM
+    pass
 
 __all__ = [
     "METRIC_KEYS",
     "OTHER_PROCEDURE",
     "SAVE_MODELS",
     "PresetResult",
-    "ReportContext",
     "ReproduceConfig",
     "ReproduceOptions",
     "ReproduceResult",
-    "Section",
     "SeedRun",
 ]
 
@@ -127,7 +124,7 @@ class ReproduceConfig:
 @dataclass(frozen=True)
 class ReproduceOptions(ReproduceConfig):
     """A :class:`ReproduceConfig` with the run's seeds, progress and workers (what the report
-    and its sections see, :class:`ReportContext`).
+    and its sections see, :class:`~sigmapi.experiments.kit.report.ReportContext`).
 
     Attributes
     ----------
@@ -421,50 +418,3 @@ class ReproduceResult(Result):
             return list(self.figure_files)
         folder.mkdir(parents=True, exist_ok=True)
         return [Path(shutil.copy2(f, folder / f.name)) for f in self.figure_files]
-
-
-@dataclass(frozen=True)
-class Section:
-    """A section of the report.
-
-    Attributes
-    ----------
-    title : str
-        Heading (plain text; escaped).
-    html : str
-        Body, an HTML fragment (trusted: write it with :func:`html.escape` on your values).
-    figures : list of (str, str)
-        ``(file name relative to the report folder, caption)`` per image; the files must
-        exist when the report is written.
-    data : dict
-        Numbers to store in ``metrics.json`` under ``sections[title]``.
-    """
-
-    title: str
-    html: str = ""
-    figures: list[tuple[str, str]] = field(default_factory=list)
-    data: dict[str, Any] = field(default_factory=dict)
-
-
-@dataclass
-class ReportContext:
-    """What a section gets: the report folder, the run settings and the trained models.
-
-    ``models`` maps each preset name to its trained models, one per seed (in ``seeds`` order).
-    Sections run in a thread of their own while the report draws its figures and computes
-    the ceilings: a section draws its figures holding ``drawing``, which the report holds
-    while it draws its own.
-    """
-
-    out: Path
-    options: ReproduceOptions
-    models: dict[str, list[SigmaPiSOM]]
-    drawing: threading.Lock = field(default_factory=threading.Lock, repr=False, compare=False)
-
-    @property
-    def quick(self) -> bool:
-        return self.options.quick
-
-    @property
-    def progress(self) -> bool:
-        return self.options.progress

@@ -38,7 +38,9 @@ the default run's, with the command and times that made it) has the top-level ke
 - ``total_seconds``: wall seconds of the whole run.
 
 Experiments add sections to the report: a section is a function ``section(ctx:
-ReportContext) -> Section | None``; the default, :data:`SECTIONS`, is the reach experiment.
+ReportContext) -> Section | None`` (:mod:`sigmapi.experiments.kit.report`), named by its
+``"module:function"`` as experiments are; the default, :data:`SECTIONS`, is the reach
+experiment's.
 The sections run in a thread of their own once the training has ended, beside the ceilings
 and the figures (which leave a core idle); a section draws holding ``ctx.drawing``.
 
@@ -66,21 +68,20 @@ from sigmapi.config import SOMConfig, list_presets, load_preset
 from sigmapi.errors import ConfigError
 from sigmapi.executor import Executor, job_memory
 from sigmapi.experiments.base import Experiment, register, run_all
-from sigmapi.experiments.reach.section import reach_section
+from sigmapi.experiments.kit.report import ReportContext, SectionFn, section_function
 from sigmapi.experiments.reproduce.figures import draw_preset, figure_seed
 from sigmapi.experiments.reproduce.report_html import linked_files, render
 from sigmapi.experiments.reproduce.results import (
     OTHER_PROCEDURE,
     REPORT,
     PresetResult,
-    ReportContext,
     ReproduceConfig,
     ReproduceOptions,
     ReproduceResult,
-    Section,
     SeedRun,
 )
 from sigmapi.io import atomic_write_bytes
+from sigmapi.kernels import DEFINITION, get_backend
 from sigmapi.metrics import evaluate
 from sigmapi.model.som import SigmaPiSOM
 from sigmapi.progress import Progress
@@ -128,10 +129,9 @@ CEILING_ROUNDS = 8
 :data:`QUICK_CEILING_ROUNDS`); each round of the 2-D task costs seconds."""
 QUICK_CEILING_ROUNDS = 3
 
-SectionFn = Callable[[ReportContext], Section | None]
-
-SECTIONS: tuple[SectionFn, ...] = (reach_section,)
-"""The sections every full report adds after the figures."""
+SECTIONS: tuple[str | SectionFn, ...] = ("sigmapi.experiments.reach.section:reach_section",)
+"""The sections every full report adds after the figures: a section function or its
+``"module:function"`` (imported when the report runs, as experiments are)."""
 
 
 def paper_presets(quick: bool) -> list[tuple[str, SOMConfig]]:
@@ -160,7 +160,7 @@ def reproduce(
     options: ReproduceOptions | None = None,
     *,
     presets: Sequence[tuple[str, SOMConfig]] | None = None,
-    sections: Sequence[SectionFn] | None = None,
+    sections: Sequence[str | SectionFn] | None = None,
     executor: Executor | None = None,
 ) -> ReproduceResult:
     """Train and evaluate each paper preset for the seeds; write the report into ``out``.
@@ -173,7 +173,7 @@ def reproduce(
         Seeds, quick mode, progress bars, which models to save, test size.
     presets : list of (name, SOMConfig), optional
         What to run instead of the paper presets (tests use tiny configs).
-    sections : sequence of callables, optional
+    sections : sequence of callables or ``"module:function"`` strings, optional
         Functions that add report sections (default :data:`SECTIONS`, the reach
         experiment); ``()`` for none.
     executor : Executor, optional
@@ -195,7 +195,7 @@ def reproduce(
     figures: dict[str, list[tuple[str, str]]] = {}
     trained = _train_all(runs_of, opts, ex, progress)
     ctx = ReportContext(out, opts, {name: trained[name][1] for name, _ in runs_of})
-    section_fns = SECTIONS if sections is None else sections
+    section_fns = [section_function(s) for s in (SECTIONS if sections is None else sections)]
     sectioned = _Background(lambda: [fn(ctx) for fn in section_fns])  # beside the figures
     try:
         for name, cfg in runs_of:
@@ -399,11 +399,11 @@ def _compile_measuring(small: SOMConfig) -> None:
     weights, moved onto ``small``'s own kernel, which refines them (``small``'s rounds) and
     evaluates them."""
     backend = SigmaPiSOM(small).backend
-    if backend == "reference":
+    if not get_backend(backend).COMPILES:
         return
-    short = small.replace(backend="reference", iterations=50, refine_rounds=0)
+    short = small.replace(backend=DEFINITION, iterations=50, refine_rounds=0)
     header, arrays = SigmaPiSOM(short).fit().to_arrays()
-    header = {**header, "config": {**small.to_dict(), "backend": "reference"}}
+    header = {**header, "config": {**small.to_dict(), "backend": DEFINITION}}
     model = SigmaPiSOM.from_arrays(header, arrays, backend=backend, source="compile")
     model.refine()
     evaluate(model, n_test=50)
