@@ -6,9 +6,10 @@ field: the command-line options are generated from those fields (:mod:`sigmapi.c
 field added there is an option too. ``run(config, seeds=..., out=..., executor=...,
 progress=...)`` returns a :class:`Result`: ``to_dict()`` (JSON-able: what ``--json`` prints
 and :func:`write_result` stores as ``result.json``, the data that documents are rendered from),
-``table()`` (the console text) and ``figure(out_dir)`` (the figures it writes); a result the
-docs render reads back from its JSON form with ``from_dict`` (:mod:`~sigmapi.experiments.kit.
-written`).
+``table()`` (the console text) and ``figure(out_dir)`` (the figures it writes); a result reads
+back from its JSON form with ``from_dict``. Results subclass the kit's
+:class:`~sigmapi.experiments.kit.results.Result`, which derives ``to_dict`` and ``from_dict``
+from the keys it names (``KEYS``) and renders tables from column specs.
 
 Seeds are not part of a config: every experiment takes them as ``seeds``, a list of distinct
 non-negative ints checked by :func:`check_seeds`, and says its default ones
@@ -18,7 +19,7 @@ Executor` (:func:`run_all`); ``executor=None`` runs them one after another in th
 Adding an experiment
 --------------------
 One package in ``sigmapi/experiments/`` whose ``run`` module holds its config dataclass, its
-result (``to_dict``, ``table``, ``figure``) and an experiment object passed to
+result (a :class:`Result`: its ``KEYS``, ``table``, ``figure``) and an experiment object passed to
 :func:`register` at import time; one line in ``ENTRIES`` of ``sigmapi/experiments/__init__.py``
 (name, ``"module:object"``, the one-line summary), so that the command line lists it without
 importing it. The command ``sigmapi NAME`` then exists with an option per config field and the

@@ -14,7 +14,7 @@ from typing import Any, ClassVar, Self
 
 from sigmapi import _validate
 from sigmapi.errors import ConfigError
-from sigmapi.experiments.kit.written import tuples
+from sigmapi.experiments.kit.results import tuples
 
 __all__ = [
     "Parts",

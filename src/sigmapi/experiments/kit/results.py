@@ -1,5 +1,6 @@
 """The base of every experiment's result: its JSON form derived from its fields and methods,
-read back from it, and one renderer of console tables from column specs.
+read back from it (``from_dict``: the docs read every result file this way, so that a result's
+keys are defined once, by the result), and one renderer of console tables from column specs.
 
 A result is a dataclass that subclasses :class:`Result` and names the keys of its JSON form in
 order (:attr:`Result.KEYS`): each key is a field or a method of that name (its value, or what
@@ -25,11 +26,32 @@ from typing import Any, ClassVar, TypeVar
 import numpy as np
 
 from sigmapi.experiments.kit.seeds import check_seeds
-from sigmapi.experiments.kit.written import as_object
 
-__all__ = ["Column", "Result", "plain", "render"]
+__all__ = ["Column", "Result", "as_object", "plain", "render", "summaries", "tuples"]
 
 R = TypeVar("R", bound="Result")
+
+
+def as_object(data: Any, what: str = "a result's JSON form") -> Mapping[str, Any]:
+    """``data`` if it is a JSON object (a TypeError naming ``what`` if not)."""
+    if not isinstance(data, Mapping):
+        raise TypeError(f"{what} must be a JSON object, got {type(data).__name__}")
+    return data
+
+
+def summaries(data: Any, required: Sequence[str], optional: Sequence[str] = ()) -> dict[str, Any]:
+    """The summary keys of a result's JSON form as written: every one of ``required`` (a
+    KeyError naming the first one missing) and those of ``optional`` it holds (keys a newer
+    version added)."""
+    obj = as_object(data)
+    out = {k: obj[k] for k in required}
+    out.update({k: obj[k] for k in optional if k in obj})
+    return out
+
+
+def tuples(table: Mapping[str, Any]) -> dict[str, Any]:
+    """A config's fields as its JSON form holds them, lists as tuples (as the config has them)."""
+    return {k: tuple(v) if isinstance(v, list) else v for k, v in table.items()}
 
 
 def plain(value: Any) -> Any:
@@ -140,9 +162,7 @@ class Result:
         obj = as_object(data)
         values = cls.read_fields(obj)
         if cls.COMPUTED:
-            written = {k: obj[k] for k in cls.COMPUTED}
-            written.update({k: obj[k] for k in cls.LATER if k in obj})
-            values["written"] = written
+            values["written"] = summaries(obj, cls.COMPUTED, cls.LATER)
         return cls(**values)
 
     def table(self) -> str:
@@ -161,7 +181,7 @@ def _typed(hint: Any, value: Any) -> Any:
         return kind.from_dict(value)
     if isinstance(kind, type) and dataclasses.is_dataclass(kind):  # a computed property: not read
         given = {k: v for k, v in value.items() if not isinstance(getattr(kind, k, None), property)}
-        return kind(**{k: tuple(v) if isinstance(v, list) else v for k, v in given.items()})
+        return kind(**tuples(given))
     if kind is tuple:
         return tuple(value)
     if kind is float:

@@ -32,9 +32,9 @@ from sigmapi.errors import ConfigError
 from sigmapi.experiments.kit.episodes import check_episode_run
 from sigmapi.experiments.kit.maps import MapSpec
 from sigmapi.experiments.kit.parts import Parts, check_part_types, parts_dict
+from sigmapi.experiments.kit.results import as_object, tuples
 from sigmapi.experiments.kit.seeds import SeedPlan
 from sigmapi.experiments.kit.worlds import World, register_world
-from sigmapi.experiments.kit.written import as_object, tuples
 from sigmapi.model.som import SigmaPiSOM
 
 __all__ = [

@@ -12,8 +12,7 @@ from numpy.typing import NDArray
 
 from sigmapi.agents import ActorCritic
 from sigmapi.experiments.kit.episodes import final_rates, success_curve
-from sigmapi.experiments.kit.results import Result
-from sigmapi.experiments.kit.written import as_object, summaries
+from sigmapi.experiments.kit.results import Result, as_object, summaries
 from sigmapi.experiments.robot.config import RobotConfig
 from sigmapi.model.som import SigmaPiSOM
 
