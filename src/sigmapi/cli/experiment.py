@@ -192,8 +192,8 @@ def _parts(experiment: Experiment[Any]) -> dict[str | None, type]:
     or, for a config made of parts (:class:`~sigmapi.experiments.kit.parts.Parts`: each field
     a part's dataclass, and ``replace(**fields)`` finding the part of each field), every
     part's."""
-    parts = parts_of(experiment.config_type)
-    return dict(parts) if parts else {None: experiment.config_type}
+    parts: dict[str | None, type] = dict(parts_of(experiment.config_type).items())
+    return parts or {None: experiment.config_type}
 
 
 def _check_folder(out: Path, force: bool, experiment: Experiment[Any]) -> None:

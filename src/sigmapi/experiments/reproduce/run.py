@@ -228,7 +228,7 @@ def _report_preset(
 ) -> list[tuple[str, str]]:
     """Preset ``name``'s entry of ``result`` (statistics, the ceiling), its saved models and
     its figures (drawn holding ``ctx.drawing``); the figures' files and captions."""
-    opts, models = ctx.options, ctx.models[name]
+    opts, models = result.options, ctx.models[name]
     shown, why = figure_seed(runs, cfg)
     seeds = opts.seeds_of(cfg)
     entry = PresetResult(
