@@ -66,9 +66,26 @@ class MapCore(GridsMixin):
                 "pass hyperparameters as keywords instead"
             )
         cfg = config or SOMConfig()
-        self.config = stored_overrides(cfg, overrides) if overrides else cfg
-        self._run = RunState(get_backend(self.config.backend))
-        self.seed_entropy = entropy_of(self.config.seed)
+        cfg = stored_overrides(cfg, overrides) if overrides else cfg
+        self._run = RunState(cfg, entropy_of(cfg.seed), get_backend(cfg.backend))
+
+    @property
+    def config(self) -> SOMConfig:
+        """The hyperparameters (change them with ``set_params``)."""
+        return self._run.config
+
+    @config.setter
+    def config(self, value: SOMConfig) -> None:
+        self._run.reconfigure(value)  # what set_params does once it has checked ``value``
+
+    @property
+    def seed_entropy(self) -> int:
+        """The entropy of the random streams: the seed, or fresh entropy for ``seed=None``."""
+        return self._run.entropy
+
+    @seed_entropy.setter
+    def seed_entropy(self, value: int) -> None:
+        self._run.reseed(value)
 
     @property
     def t_(self) -> int:
@@ -105,7 +122,7 @@ class MapCore(GridsMixin):
         data), else as many pairs of the built-in task from the run's own random stream
         (child ``spawn_key=(2,)``).
         """
-        return _run.initial_weights(self.config, self._run.kernel, self.seed_entropy, views)
+        return _run.initial_weights(self._run, views)
 
     def memory_estimate(self) -> int:
         """Bytes this model needs at its peak: the float64 start and the ordered start's
@@ -130,7 +147,7 @@ class MapCore(GridsMixin):
     @property
     def sigma_(self) -> float:
         """Neighbourhood width at the current iteration (used by the soft winner)."""
-        return self._run.sigma_now(self.config)
+        return self._run.sigma_now()
 
     @property
     def winner_rule_(self) -> WinnerRule:
@@ -183,7 +200,7 @@ class MapCore(GridsMixin):
         """Map coordinates of the winner as fractions of each map axis, ``(B, d_map)`` in [0, 1]
         (on a periodic map, fractions of the turn in [0, 1): unit ``k`` of ``n`` at ``k / n``)."""
         k = self.winner(x, y)
-        return self._run.unit_positions(self.config)[k]
+        return self._run.unit_positions()[k]
 
     def unit_sqnorms(self) -> NDArray[np.float64]:
         """``|w_k|^2``, the squared length of every unit's weights; ``(n_units,)``.

@@ -62,8 +62,7 @@ class ParamsMixin(MapCore):
                 "or pass single hyperparameters, e.g. set_params(iterations=50000)"
             )
         old, new = self.config, cfg.replace(**params) if params else cfg
-        self._run.reconfigure(old, new)
-        self.config = new
+        self._run.reconfigure(new)
         if new.seed != old.seed:
             self.seed_entropy = entropy_of(new.seed)
         return self

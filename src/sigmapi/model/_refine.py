@@ -32,15 +32,15 @@ call's pairs by the units they need, so larger calls read the same weights and s
 often from cache (the sums do not depend on how the stream is cut)."""
 
 
-def per_round(c: SOMConfig, run: RunState) -> int:
+def per_round(run: RunState) -> int:
     """Pairs a round: the built-in task's ``refine_pairs``, or the rows the refinement in
     progress runs on."""
-    return c.refine_pairs if run.refine_rows is None else run.refine_rows
+    return run.config.refine_pairs if run.refine_rows is None else run.refine_rows
 
 
-def refine_total(c: SOMConfig, run: RunState) -> int:
+def refine_total(run: RunState) -> int:
     """Refinement pairs of the configured run: rounds x pairs a round."""
-    return c.refine_rounds * per_round(c, run)
+    return run.config.refine_rounds * per_round(run)
 
 
 def check_refiner(c: SOMConfig, kernel: Any) -> None:
@@ -80,11 +80,10 @@ def _check_same_rows(run: RunState, data: CodeViews | None) -> None:
     )
 
 
-def refine(
-    c: SOMConfig, run: RunState, entropy: int, data: CodeViews | None, notify: Notify
-) -> None:
+def refine(run: RunState, data: CodeViews | None, notify: Notify) -> None:
     """The rest of the configured refinement: on the built-in task (``data`` None) or one
     pass over the rows of ``data`` a round; ``notify`` after every block of pairs."""
+    c = run.config
     _check_same_rows(run, data)
     run.refine_rows = None if data is None else int(data[0].shape[0])
     per = c.refine_pairs if data is None else data[0].shape[0]
@@ -104,7 +103,7 @@ def refine(
                 b = lo // BLOCK
                 last = min(b + GROUP, -(-per // BLOCK))  # blocks b .. last - 1
                 hi = min(per, last * BLOCK)
-                views = _draw(c, entropy, r, b, last, lo - b * BLOCK, hi - b * BLOCK, drawn)
+                views = _draw(run, r, b, last, lo - b * BLOCK, hi - b * BLOCK, drawn)
                 ends = [min(per, (i + 1) * BLOCK) for i in range(b, last)]
             else:
                 hi = min(per, lo + GROUP * BLOCK)
@@ -145,8 +144,7 @@ def _block_done(run: RunState, refined: int, new: bool, notify: Notify) -> None:
 
 
 def _draw(
-    c: SOMConfig,
-    entropy: int,
+    run: RunState,
     r: int,
     first: int,
     last: int,
@@ -157,13 +155,13 @@ def _draw(
     """Pairs ``lo .. hi - 1`` of blocks ``first .. last - 1`` of round ``r`` (counted from
     the first block's start), each block from its own stream, drawn in place one block at
     a time into ``out`` (the four codes of a group; made on first use, then reused)."""
-    n = (last - first) * BLOCK
+    c, n = run.config, (last - first) * BLOCK
     if not out or out[0].shape[0] < n:
         out[:] = [np.empty((n, int(np.prod(s)))) for s in (c.x_shape, c.y_shape) * 2]
     sampler = sampler_of(c)
     for i in range(first, last):
         at = slice((i - first) * BLOCK, (i - first + 1) * BLOCK)
         sampler.sample(
-            BLOCK, rng(entropy, 4, r, i), out=(out[0][at], out[1][at], out[2][at], out[3][at])
+            BLOCK, rng(run.entropy, 4, r, i), out=(out[0][at], out[1][at], out[2][at], out[3][at])
         )
     return out[0][lo:hi], out[1][lo:hi], out[2][lo:hi], out[3][lo:hi]

@@ -1,11 +1,11 @@
 """The estimator's run: one private :class:`RunState` with one reset, its random streams, its
 schedule and its start.
 
-:class:`~sigmapi.model.som.SigmaPiSOM` holds its config, the entropy of its random streams
-and one :class:`RunState`: the kernel and its state (the weights), the counters (iterations
+:class:`~sigmapi.model.som.SigmaPiSOM` holds one :class:`RunState`: its config, the entropy
+of its random streams, the kernel and its state (the weights), the counters (iterations
 ``t``, refinement pairs ``refined``), the refinement in progress (its rows, the sums of its
-round), a stream's trace, the caches and the lock. The training modes are functions on it
-(:mod:`~sigmapi.model._train`: pairs and reward-gated iterations;
+round), a stream's trace, the caches and the lock. The training modes are functions of it
+alone (:mod:`~sigmapi.model._train`: pairs and reward-gated iterations;
 :mod:`~sigmapi.model._refine`: the refinement; :mod:`~sigmapi.model._stream`: streams);
 nothing else writes it.
 
@@ -110,14 +110,13 @@ def check_memory(c: SOMConfig, kernel: Kernel[Any]) -> None:
     )
 
 
-def initial_weights(
-    c: SOMConfig, kernel: Kernel[Any], entropy: int, views: tuple[Array, ...] | None = None
-) -> Array:
+def initial_weights(run: RunState, views: tuple[Array, ...] | None = None) -> Array:
     """The run's initial weights from the ordering procedure (:mod:`sigmapi.rules.ordering`):
     child stream ``(0,)``, and for an ordered start without ``views`` the built-in task's
     pairs from child ``(2,)``."""
+    c, entropy = run.config, run.entropy
     procedure = ordering(c.ordering)
-    check_memory(c, kernel)
+    check_memory(c, run.kernel)
     if views is None and procedure.init_pairs:
         b = sampler_of(c).sample(procedure.init_pairs, rng(entropy, 2))
         views = (b.x0, b.y0, b.x1, b.y1)
@@ -126,10 +125,15 @@ def initial_weights(
 
 @dataclass(eq=False)
 class RunState:
-    """Everything a run changes: the kernel and its state, the counters, the refinement in
-    progress, a stream's trace, the caches and the lock (one per model: calls from several
-    threads run one after the other)."""
+    """Everything a run changes and what it runs on: the config, the entropy of its random
+    streams, the kernel and its state, the counters, the refinement in progress, a stream's
+    trace, the caches and the lock (one per model: calls from several threads run one after
+    the other). The training modes take it alone."""
 
+    config: SOMConfig
+    """The hyperparameters (the estimator's ``config``)."""
+    entropy: int
+    """The entropy of the random streams (the estimator's ``seed_entropy``)."""
     kernel: Kernel[Any]
     state: KernelState | None = None
     t: int = 0
@@ -202,27 +206,34 @@ class RunState:
             self.weights = w
         return self.weights
 
-    def sigma_now(self, c: SOMConfig) -> float:
+    def sigma_now(self) -> float:
         """The neighbourhood width at the current iteration (cached per ``t``)."""
         t = self.t
         self.fitted()
         if self.sigma is None or self.sigma[0] != t:
-            self.sigma = (t, float(sigma_at(c, t)))
+            self.sigma = (t, float(sigma_at(self.config, t)))
         return self.sigma[1]
 
-    def unit_positions(self, c: SOMConfig) -> Array:
+    def unit_positions(self) -> Array:
         """Map positions of the units as fractions of each axis in [0, 1] (periodic: of the
         turn, unit ``k`` of ``n`` at ``k / n``), cached until the config changes."""
+        c = self.config
         if self.positions is None:
             n = np.asarray(c.map_shape, dtype=np.float64)
             scale = n if c.map_periodic else np.maximum(n - 1.0, 1.0)
             self.positions = grid_coordinates(c.map_shape) / scale
         return self.positions
 
-    def reconfigure(self, old: SOMConfig, new: SOMConfig) -> None:
-        """Follow a change of hyperparameters from ``old`` to ``new``: what follows the config
-        is forgotten; a new grid discards the weights (a fresh run, not fitted); a new backend
-        takes the weights over (the counters stay; a round in progress is replayed)."""
+    def reseed(self, entropy: int) -> None:
+        """Draw the random streams from ``entropy`` from now on (the cached data goes)."""
+        self.entropy = int(entropy)
+        self.block = None
+
+    def reconfigure(self, new: SOMConfig) -> None:
+        """Change the hyperparameters to ``new``: what follows the config is forgotten; a new
+        grid discards the weights (a fresh run, not fitted); a new backend takes the weights
+        over (the counters stay; a round in progress is replayed)."""
+        old, self.config = self.config, new
         moved = new.backend != old.backend
         grid = any(getattr(new, k) != getattr(old, k) for k in _GRIDS)
         weights = self.exported() if moved and not grid and self.state is not None else None

@@ -19,7 +19,6 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from sigmapi.config import SOMConfig
 from sigmapi.errors import ConfigError
 from sigmapi.kernels.base import STREAMER
 from sigmapi.model._refine import check_refiner, refine
@@ -38,7 +37,7 @@ def consecutive_pairs(x: Array, y: Array) -> CodeViews:
     return x[:-1], y[:-1], x[1:], y[1:]
 
 
-def check_streamer(c: SOMConfig, run: RunState) -> None:
+def check_streamer(run: RunState) -> None:
     """A ConfigError if the backend cannot learn from streams or the config asks for the
     ``same_view`` ablation (a stream has no second view to leave out)."""
     missing = [m for m in STREAMER if not hasattr(run.kernel, m)]
@@ -50,50 +49,40 @@ def check_streamer(c: SOMConfig, run: RunState) -> None:
             f"backend {str(run.kernel.NAME)!r} does not learn from streams (it lacks "
             f"{', '.join(missing)}); use a backend that does: {', '.join(able)}"
         )
-    if c.same_view:
+    if run.config.same_view:
         raise ConfigError(
             "same_view must be false to learn from a stream, got true: the ablation learns "
             "the view that chose the winner, and a stream's frames have no pairs to swap"
         )
 
 
-def fit_stream(
-    c: SOMConfig,
-    run: RunState,
-    entropy: int,
-    x: Array,
-    y: Array,
-    lam: float,
-    total: int,
-    notify: Notify,
-) -> None:
+def fit_stream(run: RunState, x: Array, y: Array, lam: float, total: int, notify: Notify) -> None:
     """A whole run on the frames from fresh initial weights: ``total`` iterations, the
     stream replayed in passes if shorter, then the refinement on its consecutive pairs if
     the run reached the configured length."""
-    check_streamer(c, run)
-    check_refiner(c, run.kernel)
+    check_streamer(run)
+    check_refiner(run.config, run.kernel)
     pairs = consecutive_pairs(x, y)
-    start(c, run, entropy, pairs)
+    start(run, pairs)
     while run.t < total:
         need = total - run.t + (1 if run.trace is None else 0)
-        _frames(c, run, x[:need], y[:need], lam, notify)
-    if run.t >= c.iterations:
-        refine(c, run, entropy, pairs, notify)
+        _frames(run, x[:need], y[:need], lam, notify)
+    if run.t >= run.config.iterations:
+        refine(run, pairs, notify)
 
 
-def partial_fit_stream(
-    c: SOMConfig, run: RunState, entropy: int, x: Array, y: Array, lam: float, notify: Notify
-) -> None:
+def partial_fit_stream(run: RunState, x: Array, y: Array, lam: float, notify: Notify) -> None:
     """The next frames of the stream (an unfitted run starts from the initial weights, the
     ordered start from these frames' consecutive pairs)."""
-    check_streamer(c, run)
+    check_streamer(run)
     if run.state is None:
-        start(c, run, entropy, consecutive_pairs(x, y))
-    _frames(c, run, x, y, lam, notify)
+        start(run, consecutive_pairs(x, y))
+    _frames(run, x, y, lam, notify)
 
 
-def _frames(c: SOMConfig, run: RunState, x: Array, y: Array, lam: float, notify: Notify) -> None:
+def _frames(run: RunState, x: Array, y: Array, lam: float, notify: Notify) -> None:
     """The frames in order, ``BLOCK`` at a time; ``run.t`` counts the frames learned."""
+    c = run.config
     for s in range(0, x.shape[0], BLOCK):
         xs, ys = x[s : s + BLOCK], y[s : s + BLOCK]
         primed = run.trace is not None

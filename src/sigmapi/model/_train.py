@@ -17,7 +17,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sigmapi import _validate
-from sigmapi.config import SOMConfig
 from sigmapi.errors import ConfigError
 from sigmapi.model._grids import sampler_of
 from sigmapi.model._refine import check_refiner, refine, refine_total
@@ -37,46 +36,43 @@ from sigmapi.tasks import Batch
 __all__ = ["fit", "learn_gated", "partial_fit", "start", "training_block"]
 
 
-def start(c: SOMConfig, run: RunState, entropy: int, views: CodeViews | None) -> None:
+def start(run: RunState, views: CodeViews | None) -> None:
     """A fresh run from the initial weights (the ordered start from ``views`` when given)."""
-    run.reset(run.prepared(initial_weights(c, run.kernel, entropy, views), c.kernel_tol))
+    run.reset(run.prepared(initial_weights(run, views), run.config.kernel_tol))
 
 
-def training_block(c: SOMConfig, run: RunState, entropy: int, b: int) -> Batch:
+def training_block(run: RunState, b: int) -> Batch:
     """The built-in task's data of block ``b`` (iterations ``b*BLOCK`` to ``(b+1)*BLOCK - 1``),
     from child stream ``(1, b)``; the last block drawn is kept."""
     if run.block is not None and run.block[0] == b:
         return run.block[1]
-    batch = sampler_of(c).sample(BLOCK, rng(entropy, 1, b))
+    batch = sampler_of(run.config).sample(BLOCK, rng(run.entropy, 1, b))
     run.block = (b, batch)
     return batch
 
 
-def fit(
-    c: SOMConfig, run: RunState, entropy: int, data: CodeViews | None, total: int, notify: Notify
-) -> None:
+def fit(run: RunState, data: CodeViews | None, total: int, notify: Notify) -> None:
     """A whole run from fresh initial weights: ``total`` iterations on the built-in task
     (``data`` None) or in passes over the rows of ``data``, then the refinement if the run
     reached the configured length."""
+    c = run.config
     check_refiner(c, run.kernel)
-    start(c, run, entropy, data)
+    start(run, data)
     if data is None:
-        _task(c, run, entropy, total, notify)
+        _task(run, total, notify)
     else:
         rows = data[0].shape[0]
         npass = 0
         while run.t < total:
-            order = rng(entropy, 3, npass).permutation(rows)[: total - run.t]
-            _rows(c, run, data, order, notify)
+            order = rng(run.entropy, 3, npass).permutation(rows)[: total - run.t]
+            _rows(run, data, order, notify)
             npass += 1
     if run.t >= c.iterations:
-        refine(c, run, entropy, data, notify)
+        refine(run, data, notify)
 
 
 def partial_fit(
-    c: SOMConfig,
     run: RunState,
-    entropy: int,
     data: CodeViews | None,
     iterations: int | None,
     notify: Notify,
@@ -84,17 +80,18 @@ def partial_fit(
     """Continue the run: every row of ``data`` once, in order; or ``iterations`` on the
     built-in task (None: the rest of the configured run, its refinement included). An
     unfitted run starts from the initial weights."""
+    c = run.config
     if run.state is None:
-        start(c, run, entropy, data)
+        start(run, data)
     if data is not None:
-        _rows(c, run, data, None, notify)
+        _rows(run, data, None, notify)
         return
     rest = iterations is None  # the rest of the configured run, refinement included
     if iterations is None:
         iterations = c.iterations - run.t
-        if iterations <= 0 and run.refined < refine_total(c, run):
+        if iterations <= 0 and run.refined < refine_total(run):
             check_refiner(c, run.kernel)
-            refine(c, run, entropy, None, notify)  # the configured run continues
+            refine(run, None, notify)  # the configured run continues
             return
         if iterations <= 0:
             raise ConfigError(
@@ -102,41 +99,38 @@ def partial_fit(
                 f"(t_ = {run.t}); pass iterations to train further, e.g. "
                 "partial_fit(iterations=1000)"
             )
-    _task(c, run, entropy, iterations, notify)
-    if rest and run.refined < refine_total(c, run):
+    _task(run, iterations, notify)
+    if rest and run.refined < refine_total(run):
         check_refiner(c, run.kernel)
-        refine(c, run, entropy, None, notify)
+        refine(run, None, notify)
 
 
-def _task(c: SOMConfig, run: RunState, entropy: int, iterations: int, notify: Notify) -> None:
+def _task(run: RunState, iterations: int, notify: Notify) -> None:
     """``iterations`` on the built-in task from ``run.t`` on, block by block."""
     end = run.t + iterations
     while run.t < end:
         b, off = divmod(run.t, BLOCK)
         stop = min(BLOCK, off + end - run.t)
-        batch = training_block(c, run, entropy, b)
+        batch = training_block(run, b)
         sl = slice(off, stop)
-        _views(c, run, batch.x0[sl], batch.y0[sl], batch.x1[sl], batch.y1[sl])
+        _views(run, batch.x0[sl], batch.y0[sl], batch.x1[sl], batch.y1[sl])
         if notify is not None:
             notify()
 
 
-def _rows(
-    c: SOMConfig, run: RunState, data: CodeViews, order: NDArray[np.intp] | None, notify: Notify
-) -> None:
+def _rows(run: RunState, data: CodeViews, order: NDArray[np.intp] | None, notify: Notify) -> None:
     """Iterations on the rows ``order`` of ``data`` (None: all, as given), in chunks of at
     most ``BLOCK`` rows, calling ``notify`` after each."""
     n = data[0].shape[0] if order is None else order.size
     for s in range(0, n, BLOCK):
         rows = slice(s, s + BLOCK) if order is None else order[s : s + BLOCK]
         x0, y0, x1, y1 = (v[rows] for v in data)
-        _views(c, run, x0, y0, x1, y1)
+        _views(run, x0, y0, x1, y1)
         if notify is not None:
             notify()
 
 
 def _views(
-    c: SOMConfig,
     run: RunState,
     x0: NDArray[Any],
     y0: NDArray[Any],
@@ -144,6 +138,7 @@ def _views(
     y1: NDArray[Any],
 ) -> None:
     """One stretch of iterations on view pairs; the ablation ``same_view`` learns view 0."""
+    c = run.config
     x1, y1 = (x0, y0) if c.same_view else (x1, y1)
     t = np.arange(run.t, run.t + x0.shape[0])
     run.kernel.train_block(
@@ -163,7 +158,6 @@ def _views(
 
 
 def learn_gated(
-    c: SOMConfig,
     run: RunState,
     data: CodeViews,
     g: NDArray[np.float64],
@@ -173,10 +167,10 @@ def learn_gated(
     """Reward-gated iterations outside the schedule (``run.t`` stays): the winner of view 0,
     unit ``k`` moved towards view 1 by ``eps g[t, k] a_k``, at ``sigma`` and ``eps`` (None:
     the schedule's at ``run.t``)."""
-    n = data[0].shape[0]
+    c, n = run.config, data[0].shape[0]
     kernel: Any = run.kernel
     s = (
-        run.sigma_now(c)
+        run.sigma_now()
         if sigma is None
         else _validate.width(
             "sigma",

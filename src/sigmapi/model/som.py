@@ -1,15 +1,15 @@
 """SigmaPiSOM: a self-organizing map of Sigma-Pi units (Weber & Wermter 2007).
 
-The estimator holds its config, the entropy of its random streams and one private run state
-(:mod:`sigmapi.model._run`: the kernel state, counters, caches, the refinement's sums, a
-stream's trace, one reset; and how the random streams are cut). The arithmetic is the
-kernel's (:mod:`sigmapi.kernels`) and its rules' (:mod:`sigmapi.rules`); the training modes
-are functions on the run state: view pairs and reward-gated iterations
-(:mod:`sigmapi.model._train`), the refinement (:mod:`sigmapi.model._refine`), streams of
-frames (:mod:`sigmapi.model._stream`). This class is their public face; the map's queries
-(:mod:`sigmapi.model._core`), the cost (:mod:`sigmapi.model._cost`), scikit-learn's
-parameters (:mod:`sigmapi.model._params`) and arrays, files and pickles
-(:mod:`sigmapi.model._persist`) are its bases.
+The estimator holds one private run state (:mod:`sigmapi.model._run`: its config, the
+entropy of its random streams, the kernel state, counters, caches, the refinement's sums, a
+stream's trace, one reset; and how the random streams are cut); ``config`` and
+``seed_entropy`` read it. The arithmetic is the kernel's (:mod:`sigmapi.kernels`) and its
+rules' (:mod:`sigmapi.rules`); the training modes are functions of the run state alone:
+view pairs and reward-gated iterations (:mod:`sigmapi.model._train`), the refinement
+(:mod:`sigmapi.model._refine`), streams of frames (:mod:`sigmapi.model._stream`). This
+class is their public face; the map's queries (:mod:`sigmapi.model._core`), the cost
+(:mod:`sigmapi.model._cost`), scikit-learn's parameters (:mod:`sigmapi.model._params`) and
+arrays, files and pickles (:mod:`sigmapi.model._persist`) are its bases.
 """
 
 from __future__ import annotations
@@ -86,7 +86,7 @@ class SigmaPiSOM(CostMixin, ParamsMixin, PersistMixin):
     # ------------------------------------------------------------------ training on pairs
     def training_block(self, b: int) -> Batch:
         """The training data of block ``b`` (iterations ``b*BLOCK`` to ``(b+1)*BLOCK - 1``)."""
-        return _train.training_block(self.config, self._run, self.seed_entropy, b)
+        return _train.training_block(self._run, b)
 
     def fit(
         self,
@@ -141,7 +141,7 @@ class SigmaPiSOM(CostMixin, ParamsMixin, PersistMixin):
                 fix = "pass fewer rows (a random subset), or partial_fit(views): each row once"
                 _memory.check_count("views rows", rows, 8, fix)
             notify = self._notify(callback)
-            _train.fit(self.config, self._run, self.seed_entropy, data, total, notify)
+            _train.fit(self._run, data, total, notify)
             return self
 
     def partial_fit(
@@ -181,7 +181,7 @@ class SigmaPiSOM(CostMixin, ParamsMixin, PersistMixin):
                 )
             n = None if iterations is None else _validate.integer("iterations", iterations, 0)
             notify = self._notify(callback)
-            _train.partial_fit(self.config, self._run, self.seed_entropy, data, n, notify)
+            _train.partial_fit(self._run, data, n, notify)
             return self
 
     def learn_gated(
@@ -218,7 +218,7 @@ class SigmaPiSOM(CostMixin, ParamsMixin, PersistMixin):
                     "iteration, got None; pass the views the gates belong to"
                 )
             g = check_gates(gates, data[0].shape[0], self.n_units)
-            _train.learn_gated(self.config, self._run, data, g, sigma, eps)
+            _train.learn_gated(self._run, data, g, sigma, eps)
         return self
 
     # ------------------------------------------------------------------ the refinement
@@ -232,12 +232,12 @@ class SigmaPiSOM(CostMixin, ParamsMixin, PersistMixin):
     def refine_total(self) -> int:
         """Refinement pairs of the configured run: rounds x pairs a round (the built-in
         task's ``refine_pairs``, or the rows the refinement in progress runs on)."""
-        return _refine.refine_total(self.config, self._run)
+        return _refine.refine_total(self._run)
 
     @property
     def refine_rounds_done_(self) -> int:
         """Refinement rounds complete (:attr:`refined_` // pairs a round)."""
-        return self.refined_ // _refine.per_round(self.config, self._run)
+        return self.refined_ // _refine.per_round(self._run)
 
     def refine(self, views: Views | None = None, *, callback: Callback | None = None) -> SigmaPiSOM:
         """Run the rest of the configured refinement (``config.refine_rounds`` rounds,
@@ -257,7 +257,7 @@ class SigmaPiSOM(CostMixin, ParamsMixin, PersistMixin):
             if data is not None and data[0].shape[0] == 0:
                 raise DataError("views must hold at least one row (pair of views), got 0 rows")
             notify = self._notify(callback)
-            _refine.refine(self.config, self._run, self.seed_entropy, data, notify)
+            _refine.refine(self._run, data, notify)
             return self
 
     # ------------------------------------------------------------------ streams
@@ -311,7 +311,7 @@ class SigmaPiSOM(CostMixin, ParamsMixin, PersistMixin):
             total = self.config.iterations if iterations is None else iterations
             total = _validate.integer("iterations", total, 0)
             notify = self._notify(callback)
-            _stream.fit_stream(self.config, self._run, self.seed_entropy, x, y, lam, total, notify)
+            _stream.fit_stream(self._run, x, y, lam, total, notify)
             return self
 
     def partial_fit_stream(
@@ -336,7 +336,7 @@ class SigmaPiSOM(CostMixin, ParamsMixin, PersistMixin):
             x, y = check_frames(frames, self.x_shape, self.y_shape, least=least)
             lam = check_trace(trace)
             notify = self._notify(callback)
-            _stream.partial_fit_stream(self.config, self._run, self.seed_entropy, x, y, lam, notify)
+            _stream.partial_fit_stream(self._run, x, y, lam, notify)
             return self
 
 
