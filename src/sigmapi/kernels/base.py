@@ -1,3 +1,4 @@
+# Over 500 lines: the contract (the Kernel protocol) and its defaults (KernelBase), read as one.
 """The kernel contract and the base every backend builds on.
 
 A kernel satisfies :class:`Kernel`. It owns its state (the weights in its own layout): it
