@@ -227,7 +227,7 @@ def test_sections_run_beside_the_figures_and_their_errors_reach_the_caller(tmp_p
 MEASURING_FIRST = """
 from numba.core.registry import CPUDispatcher
 from sigmapi.config import load_preset
-from sigmapi.experiments.reproduce.run import _compile_measuring
+from sigmapi.experiments.reproduce.training import _compile_measuring
 from sigmapi.kernels import _refining, _rows, fast
 cfg = load_preset("paper-2d").replace(map_shape=(3, 3), x_shape=(4, 4), y_shape=(4, 4),
                                       iterations=2000, refine_rounds=1, refine_pairs=500)

@@ -1,0 +1,235 @@
+"""The training of ``sigmapi reproduce``: one job per (preset, seed) (:func:`train_seed`: its
+learning curve, the map before and after the refinement, its times taken apart), the kernels
+compiled once per process on a small run of the same rules (:func:`compile_once`), and every
+job run through the executor, longest first (:func:`train_all`)."""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+from typing import Any
+
+from sigmapi.config import SOMConfig
+from sigmapi.executor import Executor, job_memory
+from sigmapi.experiments.base import run_all
+from sigmapi.experiments.reproduce.results import ReproduceOptions, SeedRun
+from sigmapi.kernels import DEFINITION, get_backend
+from sigmapi.metrics import evaluate
+from sigmapi.model.som import SigmaPiSOM
+from sigmapi.progress import Progress
+
+__all__ = ["FLAG_NOTE", "SeedJob", "compile_once", "train_all", "train_seed"]
+
+
+@dataclass(frozen=True)
+class SeedJob:
+    """One training run of ``reproduce``: preset ``name``'s config, trained from ``seed``."""
+
+    name: str
+    cfg: SOMConfig
+    seed: int
+    n_checkpoints: int
+    curve_test: int
+    test_size: int
+    progress: bool = False
+    measure_first: bool = False
+    """Compile the kernels that refine and measure a map before those that train it
+    (:func:`compile_once`); :func:`train_all` sets it on every other job."""
+
+
+_COMPILED: set[tuple[Any, ...]] = set()
+"""The rule combinations this process has compiled (:func:`compile_once`)."""
+
+
+def compile_once(cfg: SOMConfig, measure_first: bool = False) -> float:
+    """Compile the kernel functions ``cfg`` trains, refines and is measured with, once per
+    process, on a small run of the same rules; the wall seconds it took (0 if done before).
+
+    numba compiles a function on its first call (or loads it from its cache), whatever the
+    sizes of the arrays, so a 3-unit map of the same rules, ordering, refinement and
+    dimensions calls the same compiled code as the preset: the training times of
+    :func:`train_seed` then hold no compile time, which is reported apart.
+
+    ``measure_first`` (in a process that has compiled nothing yet) compiles the kernels that
+    refine and measure a trained map before those that train it
+    (:func:`_compile_measuring`). On a fresh install two workers that start at once, one
+    each way round, then compile each half once and load the other half from numba's cache
+    (``NUMBA_CACHE_DIR``) rather than both compiling everything: 12 s of wall against 20 s
+    for a ``paper-2d`` job on two cores (``docs/guide/reproduce.md``, "Times").
+    """
+    from sigmapi.analysis.curves import LearningCurve
+
+    key = (
+        cfg.backend,
+        cfg.winner_rule,
+        cfg.ordering,
+        cfg.refine_rounds > 0,
+        cfg.refine_sigma,
+        len(cfg.map_shape),
+        len(cfg.x_shape),
+        cfg.periodic,
+        cfg.map_periodic,
+        cfg.same_view,
+        cfg.threads,
+    )
+    if key in _COMPILED:
+        return 0.0
+    t0 = time.perf_counter()
+    small = cfg.replace(
+        map_shape=(3,) * len(cfg.map_shape),
+        x_shape=(4,) * len(cfg.x_shape),
+        y_shape=(4,) * len(cfg.y_shape),
+        iterations=2000,
+        seed=0,
+        refine_rounds=min(cfg.refine_rounds, 1),
+        refine_pairs=min(cfg.refine_pairs, 500),
+    )
+    if measure_first and not _COMPILED:
+        _compile_measuring(small)
+    model = SigmaPiSOM(small).fit(callback=LearningCurve(at=[small.iterations], n_test=50))
+    evaluate(model, n_test=50)
+    _COMPILED.add(key)
+    return time.perf_counter() - t0
+
+
+def _compile_measuring(small: SOMConfig) -> None:
+    """Call the kernels that refine and evaluate a trained map of config ``small`` without
+    calling the one that trains it: a short run on the reference kernel (NumPy) gives the
+    weights, moved onto ``small``'s own kernel, which refines them (``small``'s rounds) and
+    evaluates them."""
+    backend = SigmaPiSOM(small).backend
+    if not get_backend(backend).COMPILES:
+        return
+    short = small.replace(backend=DEFINITION, iterations=50, refine_rounds=0)
+    header, arrays = SigmaPiSOM(short).fit().to_arrays()
+    header = {**header, "config": {**small.to_dict(), "backend": DEFINITION}}
+    model = SigmaPiSOM.from_arrays(header, arrays, backend=backend, source="compile")
+    model.refine()
+    evaluate(model, n_test=50)
+
+
+def train_seed(job: SeedJob) -> tuple[SeedRun, dict[str, Any], dict[str, Any]]:
+    """Train one seed with learning-curve checkpoints and evaluate it (a job of
+    :func:`~sigmapi.executor.run_jobs`); ``(run, header, arrays)`` of the model.
+
+    The map at the end of the training is evaluated there, before the refinement (the
+    unrefined map of the same run, at no extra training); the times of the training, the
+    refinement, the measurements and the one-time compile are taken apart (:class:`SeedRun`).
+    """
+    from sigmapi.analysis.curves import LearningCurve, checkpoints
+
+    cfg = job.cfg
+    compile_c0 = time.process_time()
+    compile_s = compile_once(cfg, job.measure_first)
+    c0 = time.process_time()
+    compile_cpu = c0 - compile_c0
+    model = SigmaPiSOM(cfg, seed=job.seed)
+    callback, bar = Progress(disable=not job.progress or None).training(
+        cfg.iterations, f"{job.name} seed {job.seed}"
+    )
+    curve = LearningCurve(
+        at=checkpoints(cfg.iterations, job.n_checkpoints), n_test=job.curve_test, then=callback
+    )
+    marks: dict[str, Any] = {}
+
+    def step(m: SigmaPiSOM) -> None:
+        curve(m)
+        if "trained" not in marks and m.t_ >= cfg.iterations and m.refined_ == 0:
+            marks["trained"] = time.perf_counter()
+            marks["curve_s"] = curve.seconds
+            if cfg.refine_rounds > 0:
+                marks["unrefined"] = evaluate(m, n_test=job.test_size)
+            marks["eval_s"] = time.perf_counter() - marks["trained"]
+
+    t0 = time.perf_counter()
+    with bar:
+        model.fit(callback=step)
+    end = time.perf_counter()
+    e0 = time.perf_counter()
+    metrics = evaluate(model, n_test=job.test_size)
+    final_eval = time.perf_counter() - e0
+    trained = marks.get("trained", end)
+    train_s = trained - t0 - marks.get("curve_s", curve.seconds)
+    refine_s = end - trained - marks.get("eval_s", 0.0) - (curve.seconds - marks.get("curve_s", 0))
+    header, arrays = model.to_arrays()
+    run = SeedRun(
+        job.seed,
+        train_s,
+        model.backend,
+        metrics,
+        curve.to_dict(),
+        unrefined=marks.get("unrefined"),
+        refine_seconds=max(refine_s, 0.0),
+        compile_seconds=compile_s,
+        compile_cpu_seconds=compile_cpu,
+        measure_seconds=curve.seconds + marks.get("eval_s", 0.0) + final_eval,
+        cpu_seconds=time.process_time() - c0,
+    )
+    return run, header, arrays
+
+
+FLAG_NOTE = (
+    ", flagged by the fold detector (a sign of a fold or of a coarse map; order R^2 decides)"
+)
+"""What a console line adds for a map the z-free fold detector flags: the flag is no verdict
+that the map is folded (a short run's coarse map raises it too); ``ordered`` is order R^2."""
+
+
+def _job_cost(cfg: SOMConfig) -> float:
+    """A job's work, to start the longest first: weights times the pairs they learn from."""
+    weights = math.prod(cfg.map_shape) * math.prod(cfg.x_shape) * math.prod(cfg.y_shape)
+    return float(weights) * (cfg.iterations + cfg.refine_rounds * cfg.refine_pairs)
+
+
+def train_all(
+    runs_of: Sequence[tuple[str, SOMConfig]],
+    opts: ReproduceOptions,
+    executor: Executor,
+    progress: Progress | None,
+) -> dict[str, tuple[list[SeedRun], list[SigmaPiSOM]]]:
+    """Train every (preset, seed), in parallel where cores and memory allow."""
+    jobs = [
+        (
+            f"{name} seed {seed}",
+            SeedJob(name, cfg, seed, opts.n_checkpoints, opts.curve_test, opts.test_size),
+        )
+        for name, cfg in runs_of
+        for seed in opts.seeds_of(cfg)
+    ]
+    jobs.sort(key=lambda job: -_job_cost(job[1].cfg))  # longest first: no lone job at the end
+    # every other job compiles the other half first: two workers share numba's compile
+    jobs = [(key, replace(job, measure_first=i % 2 == 1)) for i, (key, job) in enumerate(jobs)]
+    per_job = max(job_memory(cfg, opts.test_size) for _, cfg in runs_of)
+
+    def describe(key: str, value: tuple[SeedRun, Any, Any]) -> str:
+        run, m = value[0], value[0].metrics
+        refine = f" + refinement {run.refine_seconds:.0f} s" if run.unrefined else ""
+        before = f" (before refinement {run.unrefined.order_r2:.3f})" if run.unrefined else ""
+        compiled = f"; compile {run.compile_seconds:.0f} s apart" if run.compile_seconds else ""
+        return (
+            f"{key}: training {run.train_seconds:.0f} s{refine}{compiled}, order R^2 "
+            f"{m.order_r2:.3f}{before}{FLAG_NOTE if m.folded else ''}"
+        )
+
+    done = run_all(
+        train_seed,
+        jobs,
+        executor=executor,
+        per_job=per_job,
+        progress=progress,
+        desc="reproduce",
+        describe=describe,
+        verbose=lambda job: replace(job, progress=True),
+    )
+    out: dict[str, tuple[list[SeedRun], list[SigmaPiSOM]]] = {}
+    for name, cfg in runs_of:
+        runs, models = [], []
+        for seed in opts.seeds_of(cfg):
+            key = f"{name} seed {seed}"
+            run, header, arrays = done[key]
+            runs.append(run)
+            models.append(SigmaPiSOM.from_arrays(header, arrays, source=key))
+        out[name] = (runs, models)
+    return out
