@@ -26,6 +26,7 @@ from sigmapi.config import SOMConfig
 from sigmapi.executor import Executor, job_memory
 from sigmapi.experiments.base import Experiment, check_seeds, register, run_all
 from sigmapi.experiments.kit.jobs import Tick, counted
+from sigmapi.experiments.kit.seeds import SeedPlan
 from sigmapi.metrics import evaluate, evaluation_sets, grid_spacing, winner_metrics
 from sigmapi.model.som import SigmaPiSOM
 from sigmapi.neurons.basis import BasisFunctionMap
@@ -41,8 +42,11 @@ from .result import NeuronsResult
 __all__ = ["METRICS", "NEURONS", "NeuronsExperiment", "NeuronsJob", "neurons_job", "run_neurons"]
 
 
-SPIKE_KEY = 11
-"""Spike trains of seed s: ``SeedSequence(s, spawn_key=(SPIKE_KEY, rate))``."""
+PLAN = SeedPlan({"spikes": 11})
+"""The streams of a seed (:class:`~sigmapi.experiments.kit.seeds.SeedPlan`, the seed as
+entropy): the spike trains at each peak rate (and pool, where not the config's), under key 11
+(outside :data:`~sigmapi.experiments.kit.seeds.MODEL_KEYS`: the maps of the seed draw
+their own)."""
 
 
 @dataclass(frozen=True)
@@ -110,8 +114,8 @@ def _spiking_rows(
     spacing = grid_spacing(model.x_shape, model.config.periodic)
     rows = []
     for rate, pool in rates:
-        key = (SPIKE_KEY, rate) if pool == c.pool else (SPIKE_KEY, rate, pool)
-        rng = np.random.default_rng(np.random.SeedSequence(job.seed, spawn_key=key))
+        more = (rate,) if pool == c.pool else (rate, pool)
+        rng = PLAN.rng(job.seed, "spikes", *more)
         tag = "" if pool == c.pool else f"-pool{pool}"
         _step(tick, 0, f"{name}{tag} at {rate:g} Hz")
         start = time.perf_counter()
