@@ -111,9 +111,8 @@ def add_experiment(sub: Any, name: str, summary: str) -> Parser:
 def add_experiment_options(p: Parser, experiment: Experiment[Any]) -> None:
     """Give ``p`` the options of ``experiment`` (its config's fields and the common ones)."""
     p.description = plain(type(experiment).__doc__ or experiment.summary)
-    extra = getattr(experiment, "extra", None)
-    if extra:
-        p.description += f" Needs the {extra} extra: {install_hint(extra)}."
+    if experiment.extra:
+        p.description += f" Needs the {experiment.extra} extra: {install_hint(experiment.extra)}."
     common = p.add_argument_group("common to every experiment")
     common.add_argument(
         "--seeds",
@@ -137,7 +136,7 @@ def add_experiment_options(p: Parser, experiment: Experiment[Any]) -> None:
         "--json", action="store_true", help="print the result as one JSON object on stdout"
     )
     if experiment.quick is not None:
-        took = getattr(experiment, "quick_time", None)
+        took = experiment.quick_time
         common.add_argument(
             "--quick",
             action="store_true",
