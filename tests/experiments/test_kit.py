@@ -1,25 +1,36 @@
-"""The experiments' kit: the seed plan, the episode arithmetic, the map spec, the worlds."""
+"""The experiments' kit: the seed plan, the episode arithmetic, the map spec, the worlds, the
+result base and its tables, configs of parts, report sections."""
 
 from __future__ import annotations
+
+import dataclasses
+import json
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
 import pytest
+from numpy.typing import NDArray
 
 from sigmapi import load_preset
+from sigmapi.agents import ActorCriticConfig
 from sigmapi.envs import GazeReachConfig, GazeReachEnv
 from sigmapi.errors import ConfigError
 from sigmapi.experiments.kit.episodes import block_ends, block_rates, final_rates
 from sigmapi.experiments.kit.maps import MapSpec
+from sigmapi.experiments.kit.parts import Parts, parts_of
+from sigmapi.experiments.kit.report import section_function
+from sigmapi.experiments.kit.results import Column, Result, plain, render
 from sigmapi.experiments.kit.seeds import SeedPlan
 from sigmapi.experiments.kit.worlds import WORLDS, World, get_world, register_world
-from sigmapi.experiments.reach.config import ReachConfig
+from sigmapi.experiments.reach.config import MapConfig, ReachConfig, ReachRunConfig
 from sigmapi.experiments.reach.run import REACH, ReachExperiment
 
 
 def test_a_seed_plan_names_the_streams_each_experiment_drew_before():
     from sigmapi.experiments.chain.run import PLAN as CHAIN
     from sigmapi.experiments.compare.run import PLAN as COMPARE
+    from sigmapi.experiments.neurons.run import PLAN as NEURONS
     from sigmapi.experiments.reach.run import PLAN as REACH
     from sigmapi.experiments.reward.run import PLAN as REWARD
     from sigmapi.experiments.robot.config import PLAN as ROBOT
@@ -39,6 +50,8 @@ def test_a_seed_plan_names_the_streams_each_experiment_drew_before():
     assert same(STREAM.sequence(3, "frames", 16), np.random.SeedSequence(3, spawn_key=(7, 16)))
     assert same(CHAIN.sequence(3, "triples"), np.random.SeedSequence(3, spawn_key=(16,)))
     assert same(COMPARE.sequence(3, "data"), np.random.SeedSequence(3, spawn_key=(13,)))
+    spikes = NEURONS.sequence(3, "spikes", 100, 5)  # the spike trains at 100 Hz, pool 5
+    assert same(spikes, np.random.SeedSequence(3, spawn_key=(11, 100, 5)))
     a, b = REACH.rng(2, "starts").random(3), REACH.rng(2, "starts").random(3)
     np.testing.assert_array_equal(a, b)
     with pytest.raises(ValueError, match="share a spawn key"):
@@ -155,3 +168,82 @@ def test_declared_bounds_are_checked_by_one_validator_and_shown_by_help():
     assert "(a number in (0, 1]; default 0.05)" in text  # --plateau-rise
     robot = " ".join(sub.choices["robot"].format_help().split())
     assert "(a number in [0, 1]; default 0.0)" in robot  # --moved-share
+
+
+@dataclasses.dataclass
+class _Toy(Result):
+    """A result with a config, seeds, records and a summary computed from them."""
+
+    config: GazeReachConfig
+    seeds: tuple[int, ...]
+    values: NDArray[np.float64] = dataclasses.field(default_factory=lambda: np.zeros(0))
+    seconds: float = 0.0
+    written: dict[str, Any] | None = None
+
+    KEYS = ("mean: mean_value", "values", "config: config_and_seeds", "seconds")
+    COMPUTED = ("mean", "values")
+    SEEDS_IN_CONFIG = True
+
+    def mean_value(self) -> np.float64:
+        return np.float64(np.nanmean(self.values))
+
+
+def test_a_result_is_its_keys_in_order_as_json_and_reads_back_its_summaries():
+    toy = _Toy(GazeReachConfig(grid=7), (3, 1), np.array([1.0, np.nan, 2.0]), 4.5)
+    d = toy.to_dict()
+    assert list(d) == ["mean", "values", "config", "seconds"]
+    assert d["mean"] == 1.5 and type(d["mean"]) is float  # a numpy scalar as Python's
+    assert d["values"] == [1.0, None, 2.0]  # NaN is no JSON number
+    assert d["config"]["grid"] == 7 and d["config"]["seeds"] == [3, 1]
+    back = _Toy.from_dict(json.loads(json.dumps(d)))
+    assert back.config == toy.config and back.seeds == (3, 1) and back.seconds == 4.5
+    assert back.written == {"mean": 1.5, "values": [1.0, None, 2.0]}
+    assert back.to_dict() == d  # to_dict -> from_dict -> to_dict is the identity
+    with pytest.raises(KeyError, match="values"):  # a computed key the file lacks
+        _Toy.from_dict({k: v for k, v in d.items() if k != "values"})
+    with pytest.raises(TypeError, match="JSON object"):
+        _Toy.from_dict([d])
+    with pytest.raises(ConfigError, match="distinct"):
+        _Toy.from_dict({**d, "config": {**d["config"], "seeds": [1, 1]}})
+    assert plain({"a": (np.int64(2), np.array([[1, 2]]))}) == {"a": [2, [[1, 2]]]}
+
+
+def test_a_table_is_its_columns_header_and_cells_aligned_by_their_spec():
+    cols = (
+        Column("name", "name", "6s"),
+        Column("score", "score", "7.3f"),
+        Column("n", lambda r: r["n"] * 2, ">4"),
+    )
+    lines = render(
+        cols, [{"name": "ab", "score": 0.5, "n": 3}, {"name": "c", "score": None, "n": 1}]
+    )
+    assert lines == ["name     score    n", "ab       0.500    6", "c            -    2"]
+
+
+def test_a_config_of_parts_derives_its_parts_from_its_fields():
+    assert ReachConfig.PARTS == {
+        "env": GazeReachConfig,
+        "map": MapConfig,
+        "agent": ActorCriticConfig,
+        "run": ReachRunConfig,
+    }
+    assert parts_of(ReachConfig) == ReachConfig.PARTS and parts_of(GazeReachConfig) == {}
+    cfg = ReachConfig().replace(grid=7, episodes=300)
+    assert (cfg.env.grid, cfg.run.episodes) == (7, 300)
+    assert ReachConfig.from_dict(cfg.to_dict()) == cfg
+    with pytest.raises(ConfigError, match="unknown reach config field 'nope'"):
+        cfg.replace(nope=1)
+    with pytest.raises(TypeError, match="must be a dataclass"):
+
+        @dataclasses.dataclass(frozen=True)
+        class Bad(Parts):
+            env: int = 0
+
+
+def test_a_report_section_is_named_by_module_and_function():
+    from sigmapi.experiments.reach.section import reach_section
+
+    assert section_function("sigmapi.experiments.reach.section:reach_section") is reach_section
+    assert section_function(reach_section) is reach_section
+    with pytest.raises(ConfigError, match="'module:function'"):
+        section_function("reach_section")
