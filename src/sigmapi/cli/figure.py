@@ -11,7 +11,7 @@ import numpy as np
 
 from sigmapi import _validate
 from sigmapi.analysis.curves import LearningCurve, checkpoints
-from sigmapi.cli._common import check_output
+from sigmapi.cli._common import check_output, declare_path
 from sigmapi.errors import UsageError
 from sigmapi.experiments.reproduce.results import CURVE_TEST, N_CHECKPOINTS
 from sigmapi.model.som import load_model
@@ -79,4 +79,6 @@ def add_arguments(p: Any) -> None:
     )
     p.add_argument("--force", action="store_true", help="overwrite --out if it exists")
     p.add_argument("--quiet", action="store_true", help="no progress bar (curves replay the run)")
+    declare_path(p, "model", "model", "input")
+    declare_path(p, "out", "--out", "output")
     p.set_defaults(func=cmd_figure)

@@ -7,10 +7,11 @@ command-line options of ``sigmapi icub`` are its fields.
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 from sigmapi import _validate
+from sigmapi._outputs import OUTPUT
 from sigmapi.config import BACKEND_NAMES
 
 __all__ = ["HEAD_CODES", "QUICK", "READOUTS", "ICubConfig"]
@@ -73,7 +74,7 @@ class ICubConfig:
     again beside the posture of the first view alone (0: no servo)."""
     backend: str = "auto"
     """Kernel that learns and reads the maps ("auto": the fast one when it is installed)."""
-    render: str | None = None
+    render: str | None = field(default=None, metadata=OUTPUT)
     """Also write an animated GIF of the first seed's first learned reach to this file."""
 
     def __post_init__(self) -> None:

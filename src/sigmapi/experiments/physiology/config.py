@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from sigmapi import _validate
+from sigmapi._outputs import INPUT
 from sigmapi.analysis.monkey import EYE_GRID, N_RETINA, RESPONDS
 from sigmapi.analysis.physiology import GAZES, check_gaze_axes
 
@@ -15,7 +16,7 @@ __all__ = ["PhysiologyConfig"]
 class PhysiologyConfig:
     """What ``sigmapi physiology`` records."""
 
-    model: str
+    model: str = field(metadata=INPUT)
     """The model file to record from (``sigmapi train --out FILE``)."""
     gazes: tuple[float, ...] = field(default=GAZES, metadata={"sep": ","})
     """Gaze directions (fractions of the gaze axis) the units are recorded at."""

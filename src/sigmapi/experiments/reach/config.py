@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 from sigmapi import _validate
+from sigmapi._outputs import INPUT
 from sigmapi.agents import ActorCriticConfig
 from sigmapi.codes import PopulationCode
 from sigmapi.config import BACKEND_NAMES, SOMConfig, list_presets
@@ -86,7 +87,7 @@ class MapConfig:
     "small-2d": the 7x7 map of the quick run)."""
     backend: str = "auto"
     """Kernel that learns and reads the map ("auto": the fast one when it is installed)."""
-    model_path: str | None = None
+    model_path: str | None = field(default=None, metadata=INPUT)
     """A trained model file to use for every seed instead of learning a map per seed."""
     features: str = "response"
     """Map features: "response" (activations clipped at 0, L2-normalised) or "bump" (Gaussian

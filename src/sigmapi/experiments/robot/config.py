@@ -22,6 +22,7 @@ from typing import Any, ClassVar
 import gymnasium as gym
 
 from sigmapi import _validate
+from sigmapi._outputs import OUTPUT
 from sigmapi.agents import ActorCriticConfig
 from sigmapi.config import BACKEND_NAMES
 from sigmapi.envs import FEATURES, STATES, Features, TrueZObservation, make_state_env
@@ -132,7 +133,7 @@ class RobotRunConfig:
     """Episodes per point of the learning curves."""
     states: tuple[str, ...] = STATES
     """States compared: map, retina, retina_gaze, true_z."""
-    render: str | None = None
+    render: str | None = field(default=None, metadata=OUTPUT)
     """Also write an animated GIF of one episode of the first seed's map learner (third-person
     and head cameras) to this file."""
 
