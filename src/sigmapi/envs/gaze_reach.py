@@ -36,7 +36,7 @@ from __future__ import annotations
 
 import itertools
 from dataclasses import dataclass
-from typing import Any, SupportsFloat
+from typing import Any, ClassVar, SupportsFloat
 
 import gymnasium as gym
 import numpy as np
@@ -46,6 +46,7 @@ from numpy.typing import NDArray
 
 from sigmapi import _memory, _validate
 from sigmapi.codes import _WIDTH_FIX, MIN_WIDTH, PopulationCode
+from sigmapi.envs.checks import check_action, check_options, check_vector
 from sigmapi.envs.gaze_render import draw_workspace
 from sigmapi.envs.protocols import Obs, Views, view_space
 from sigmapi.errors import ConfigError
@@ -256,6 +257,8 @@ class GazeReachEnv(gym.Env[Obs, np.int64]):
     """
 
     metadata: dict[str, Any] = {"render_modes": ["rgb_array"], "render_fps": 10}  # noqa: RUF012
+    reset_options: ClassVar[tuple[str, ...]] = ("z", "y")
+    """The names ``reset(options=...)`` takes."""
 
     def __init__(
         self,
@@ -398,10 +401,7 @@ class GazeReachEnv(gym.Env[Obs, np.int64]):
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[Obs, dict[str, Any]]:
         super().reset(seed=seed)
-        options = dict(options or {})
-        unknown = sorted(set(options) - {"z", "y"})
-        if unknown:
-            raise ConfigError(f"unknown reset option {unknown[0]!r}; valid options are 'z' and 'y'")
+        options = check_options(options, self.reset_options, "GazeReach")
         if "z" in options:
             z = self._position(options["z"], "options['z']")
         else:
@@ -425,21 +425,17 @@ class GazeReachEnv(gym.Env[Obs, np.int64]):
         return self._obs(), self._info(True, "")
 
     def _position(self, value: Any, name: str) -> NDArray[np.float64]:
-        p = _unit_vector(value, self.dim)
-        if p is None:
-            raise ConfigError(f"{name} must be {self.dim} number(s) in [0, 1], got {value!r}")
-        return p
+        if _validate.is_int(value) or isinstance(value, (float, np.floating)):
+            value = [value] * self.dim  # one number for every axis
+        return check_vector(name, value, (self.dim,), 0.0, 1.0, fix="positions in [0, 1]")
 
     def step(self, action: Any) -> tuple[Obs, SupportsFloat, bool, bool, dict[str, Any]]:
         if self._done:
             raise gym.error.ResetNeeded(
                 "the episode has ended (terminated) or not begun; call reset() before step()"
             )
-        if not self.action_space.contains(action):
-            raise ValueError(
-                f"action must be an int in [0, {len(self.moves)}), got {action!r}; see env.moves"
-            )
-        self._z = self._z + self.moves[int(action)]
+        a = check_action(self.action_space, action, fix="see env.moves")
+        self._z = self._z + self.moves[a]
         reward = 0.0
         event = ""
         if self.in_goal(self._z):
