@@ -309,9 +309,10 @@ def run_neurons(
     jobs = [(f"seed {s} 1d", NeuronsJob(s, "1d", config)) for s in seeds]
     if config.preset_2d:
         jobs += [(f"seed {s} 2d", NeuronsJob(s, "2d", config)) for s in seeds[: config.seeds_2d]]
-    per_job = job_memory(
-        config.som_config_2d if config.preset_2d else config.som_config, config.n_test
-    )
+    som = config.som_config_2d if config.preset_2d else config.som_config
+    views = int(np.prod(som.x_shape)) + int(np.prod(som.y_shape))  # one pair's codes
+    pairs = max(config.pairs, config.pairs_2d if config.preset_2d else 0)
+    per_job = job_memory(som, config.n_test) + config.spiking_cost()[1] + pairs * views * 8
 
     def describe(key: str, value: dict[str, Any]) -> str:
         return f"{key}: " + ", ".join(

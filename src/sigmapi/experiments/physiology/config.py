@@ -18,18 +18,29 @@ class PhysiologyConfig:
 
     model: str = field(metadata=INPUT)
     """The model file to record from (``sigmapi train --out FILE``)."""
-    gazes: tuple[float, ...] = field(default=GAZES, metadata={"sep": ","})
+    gazes: tuple[float, ...] = field(
+        default=GAZES,
+        metadata=_validate.bounded("numbers", 0, 1, fix="fractions of the gaze axis", sep=","),
+    )
     """Gaze directions (fractions of the gaze axis) the units are recorded at."""
-    n_probe: int = 0
+    n_probe: int = field(
+        default=0, metadata=_validate.bounded("int", 0, 1001, fix="0 for the default, e.g. 61")
+    )
     """Probe positions along the swept retinal axis (0: 61; 15 along any other)."""
-    tuning_units: int = 3
+    tuning_units: int = field(default=3, metadata=_validate.bounded("int", 1, 10, fix="e.g. 3"))
     """Units whose tuning curves the figure shows."""
-    body_slope: tuple[float, ...] = field(default=(), metadata={"sep": ","})
+    body_slope: tuple[float, ...] = field(
+        default=(),
+        metadata=_validate.bounded("numbers", -100, 100, count=3, fix="e.g. -1", sep=","),
+    )
     """How far a body-centred receptive field moves on the retina per unit of gaze, one value
     or one per gaze axis (empty: from the model's relation, -1 for z = (x + y) / 2). A map
     learned from a world of its own geometry needs that world's: the robot's and the iCub's
     are measured by ``benchmarks/bench_physiology.py --robot`` and ``--icub``."""
-    gaze_axes: tuple[int, ...] = field(default=(), metadata={"sep": ","})
+    gaze_axes: tuple[int, ...] = field(
+        default=(),
+        metadata=_validate.bounded("ints", 0, 2, count=3, fix="e.g. --gaze-axes 1,0", sep=","),
+    )
     """For each retinal axis, the gaze axis that moves the receptive fields along it (empty:
     the same axis). The iCub's retina is (horizontal, vertical) and its gaze codes (tilt,
     pan): ``1,0``."""
@@ -51,10 +62,8 @@ class PhysiologyConfig:
             raise _validate.fail(
                 "model", "a model file path", self.model, "e.g. sigmapi physiology model.npz"
             )
-        gazes = [
-            _validate.number("gazes", g, 0.0, 1.0, fix="fractions of the gaze axis")
-            for g in self.gazes
-        ]
+        _validate.check_fields(self)  # the bounds declared beside the fields
+        gazes = list(self.gazes)
         if len(set(gazes)) < 3:
             raise _validate.fail(
                 "gazes",
@@ -63,13 +72,9 @@ class PhysiologyConfig:
                 "e.g. --gazes 0.2,0.35,0.5,0.65,0.8",
             )
         object.__setattr__(self, "gazes", tuple(sorted(set(gazes))))
-        _validate.integer("n_probe", self.n_probe, 0, 1001, fix="0 for the default, e.g. 61")
         if 0 < self.n_probe < 5:
             raise _validate.fail("n_probe", "0 or at least 5", self.n_probe, "e.g. 61")
-        _validate.integer("tuning_units", self.tuning_units, 1, 10, fix="e.g. 3")
-        slopes = tuple(
-            _validate.number("body_slope", v, -100.0, 100.0, fix="e.g. -1") for v in self.body_slope
-        )
+        slopes = self.body_slope
         if any(v == 0.0 for v in slopes):
             raise _validate.fail("body_slope", "nonzero", list(slopes), "e.g. -1")
         object.__setattr__(self, "body_slope", slopes)
