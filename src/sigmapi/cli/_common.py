@@ -297,9 +297,11 @@ def check_paths(args: argparse.Namespace) -> None:
     inputs (:func:`sigmapi._outputs.refuse_input_as_output`), ``--force`` or not."""
     from sigmapi._outputs import refuse_input_as_output
 
-    declared = getattr(args, PATHS, ())
-    given = [(flag, getattr(args, dest, None), role) for dest, flag, role in declared]
-    given = [(flag, value, role) for flag, value, role in given if isinstance(value, str) and value]
+    given: list[tuple[str, str, str]] = []
+    for dest, flag, role in getattr(args, PATHS, ()):
+        value = getattr(args, dest, None)
+        if isinstance(value, str) and value:  # given (an option left out is None)
+            given.append((str(flag), value, str(role)))
     inputs = [(flag, value) for flag, value, role in given if role == "input"]
     outputs = [(flag, value, role == "folder") for flag, value, role in given if role != "input"]
     if inputs and outputs:

@@ -55,7 +55,7 @@ class ParamsMixin(MapCore):
         discarded (call :meth:`fit`). A new ``seed`` re-seeds the random streams; a new
         ``backend`` moves the weights onto that kernel.
         """
-        if getattr(self, "_calling_back", False):
+        if self._run.calling_back:
             shown = ", ".join(sorted(params)) or "nothing"
             raise ConfigError(
                 f"set_params must not run inside a callback of a training call (it would "

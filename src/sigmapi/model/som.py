@@ -82,17 +82,7 @@ class SigmaPiSOM(CostMixin, ParamsMixin, PersistMixin):
     def _notify(self, callback: Callback | None) -> Notify:
         """What a training mode calls after each block: ``callback(self)`` (during which
         :meth:`set_params` is refused: the run in progress keeps the config it started with)."""
-        if callback is None:
-            return None
-
-        def notify() -> None:
-            self._calling_back = True
-            try:
-                callback(self)
-            finally:
-                self._calling_back = False
-
-        return notify
+        return self._run.notifier(None if callback is None else lambda: callback(self))
 
     # ------------------------------------------------------------------ training on pairs
     def training_block(self, b: int) -> Batch:
