@@ -45,12 +45,21 @@ class PhysiologyConfig:
     the same axis). The iCub's retina is (horizontal, vertical) and its gaze codes (tilt,
     pan): ``1,0``."""
 
-    eye_grid: tuple[float, ...] = field(default=EYE_GRID, metadata={"sep": ","})
+    eye_grid: tuple[float, ...] = field(
+        default=EYE_GRID,
+        metadata=_validate.bounded(
+            "numbers", 0, 1, count=21, fix="fractions of the gaze axis", sep=","
+        ),
+    )
     """The monkey protocol's eye positions along each gaze axis (every combination is a
     fixation; ``0.3,0.5,0.7``: the studies' 3 x 3 grid)."""
-    n_retina: int = N_RETINA
+    n_retina: int = field(
+        default=N_RETINA, metadata=_validate.bounded("int", 5, 101, fix=f"e.g. {N_RETINA}")
+    )
     """The monkey protocol's stimulus positions along each retinal axis."""
-    responds: float = RESPONDS
+    responds: float = field(
+        default=RESPONDS, metadata=_validate.bounded("number", 0, 1, fix=f"e.g. {RESPONDS}")
+    )
     """The monkey protocol counts a field at a fixation where the unit's best response there
     is at least this share of its best at any fixation."""
     nwb: bool = False
@@ -81,16 +90,11 @@ class PhysiologyConfig:
         axes = tuple(self.gaze_axes)  # the model's dimension is checked where it is loaded
         check_gaze_axes(axes, len(axes), "e.g. --gaze-axes 1,0")
         object.__setattr__(self, "gaze_axes", axes)
-        grid = [
-            _validate.number("eye_grid", g, 0.0, 1.0, fix="fractions of the gaze axis")
-            for g in self.eye_grid
-        ]
+        grid = list(self.eye_grid)
         if len(set(grid)) < 3:
             raise _validate.fail(
                 "eye_grid", "at least 3 distinct eye positions", list(self.eye_grid),
                 "e.g. --eye-grid 0.3,0.5,0.7",
             )  # fmt: skip
         object.__setattr__(self, "eye_grid", tuple(sorted(set(grid))))
-        _validate.integer("n_retina", self.n_retina, 5, 101, fix=f"e.g. {N_RETINA}")
-        _validate.number("responds", self.responds, 0.0, 1.0, fix=f"e.g. {RESPONDS}")
         _validate.boolean("nwb", self.nwb)
