@@ -12,6 +12,13 @@ An experiment's output folder holds one experiment: :func:`claim_folder` finds t
 for the lock. A folder marked for another experiment is refused, ``--force`` or not; an
 unmarked folder that holds anything is refused without ``force`` (a user's own
 ``result.json``, ``sweep.png`` or any other file is never replaced unasked).
+
+No command writes over its own input (:func:`refuse_input_as_output`, which ``sigmapi``'s
+entry point runs before every command): an output that is, by inode, one of the command's
+input files (the same file, a hard link to it, or a symbolic link to it), or an output folder
+that holds one, is refused before any work, ``--force`` or not (``cp`` refuses this case too).
+A command declares its paths with :data:`INPUT` and :data:`OUTPUT` (field metadata of a
+config, or by hand on its parser).
 """
 
 from __future__ import annotations
@@ -31,10 +38,13 @@ from sigmapi.errors import UsageError
 from sigmapi.io import atomic_write, temp_pattern
 
 __all__ = [
+    "INPUT",
     "MARKER",
+    "OUTPUT",
     "check_file",
     "claim_folder",
     "marked_as",
+    "refuse_input_as_output",
     "save_captioned",
     "save_figure",
     "save_gif",
@@ -45,6 +55,57 @@ MARKER = ".sigmapi-experiment"
 """The file that marks a folder as one experiment's output (JSON: ``{"experiment": NAME}``)."""
 
 _MAX_MARKER = 4096
+
+INPUT: dict[str, str] = {"path": "input"}
+"""Field metadata: the field names a file the command reads (:func:`refuse_input_as_output`)."""
+OUTPUT: dict[str, str] = {"path": "output"}
+"""Field metadata: the field names a file the command writes (:func:`refuse_input_as_output`)."""
+
+
+def _identity(path: str | Path) -> tuple[int, int] | None:
+    """``(st_dev, st_ino)`` of ``path``, through links (None: nothing is there)."""
+    try:
+        st = os.stat(path)
+    except (OSError, ValueError):  # missing, unreadable, a NUL in the name: nothing to compare
+        return None
+    return st.st_dev, st.st_ino
+
+
+def _within(path: str | Path) -> list[tuple[int, int]]:
+    """The identities of ``path`` and of every folder above it, as written and as resolved."""
+    p = Path(path).absolute()
+    try:
+        real = Path(os.path.realpath(p))
+    except (OSError, ValueError):
+        real = p
+    ids = (_identity(q) for q in (p, *p.parents, real, *real.parents))
+    return [i for i in ids if i is not None]
+
+
+def refuse_input_as_output(
+    outputs: Sequence[tuple[str, str | Path, bool]], inputs: Sequence[tuple[str, str | Path]]
+) -> None:
+    """Before the work: no output is one of the inputs, compared by inode (``st_dev`` and
+    ``st_ino``, through symbolic and hard links); an output folder (the third item ``True``)
+    holds none of them. ``outputs`` are ``(flag, path, is_folder)``, ``inputs`` ``(flag,
+    path)``; raises :class:`~sigmapi.errors.UsageError`, ``--force`` or not."""
+    for oflag, opath, folder in outputs:
+        oid = _identity(opath)
+        if oid is None:  # a file or folder still to be made holds nothing yet
+            continue
+        for iflag, ipath in inputs:
+            if folder and oid in _within(ipath):
+                raise UsageError(
+                    f"{oflag} folder {str(opath)!r} holds the input {iflag} {str(ipath)!r}; "
+                    f"sigmapi never writes where it may replace its input, --force or not: "
+                    f"give another {oflag} (or move the input out of it)"
+                )
+            if not folder and oid == _identity(ipath):
+                raise UsageError(
+                    f"{oflag} {str(opath)!r} is the input {iflag} {str(ipath)!r} (the same "
+                    f"file, by inode); sigmapi never writes over its input, --force or not: "
+                    f"give another {oflag}"
+                )
 
 
 def _lstat(p: Path) -> os.stat_result | None:

@@ -203,9 +203,13 @@ def shape(
 # ------------------------------------------------------------------ declarative bounds
 
 
-KINDS = ("int", "number", "width", "bool", "choice")
+KINDS = ("int", "number", "width", "bool", "choice", "ints", "numbers")
 """The kinds of :class:`Bounds`: an int, a finite float, a width (:func:`width`), a bool
-(:func:`boolean`), one of given options (:func:`choice`)."""
+(:func:`boolean`), one of given options (:func:`choice`), a tuple of ints or of finite floats
+(each within the bounds, at most :attr:`Bounds.count` of them)."""
+
+MAX_ITEMS = 100
+"""Most values a tuple field (kinds ``"ints"`` and ``"numbers"``) takes unless it says."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -225,6 +229,11 @@ class Bounds:
     """The values a ``"choice"`` field takes (read when checked: a registry may grow)."""
     none: bool = False
     """Whether None is a value too (e.g. a seed: None draws fresh entropy)."""
+    count: int = MAX_ITEMS
+    """Most values of a tuple (kinds ``"ints"`` and ``"numbers"``)."""
+    why: str = ""
+    """Why a number has no upper bound (``hi`` None), where it has none: a size that drives
+    the work has one (tests/cli/test_hostile_round5.py walks every experiment's config)."""
 
     def describe(self) -> str:
         """``"an int >= 1"``, ``"a number in (0, 1]"``, ``"one of 'a', 'b'"``, ..."""
@@ -236,9 +245,14 @@ class Bounds:
             text = f"{_range('a number', self.lo, None, self.lo_open)}, <= {MAX_WIDTH:g}"
         elif self.kind == "bool":
             text = "true or false"
+        elif self.kind in ("ints", "numbers"):
+            kind = "an int" if self.kind == "ints" else "a number"
+            one = _range(kind, self.lo, self.hi, self.lo_open, self.hi_open)
+            text = f"up to {self.count} values, each {one}"
         else:
             text = "one of " + ", ".join(repr(o) for o in self.options)
-        return f"{text}, or None" if self.none else text
+        text = f"{text}, or None" if self.none else text
+        return f"{text} ({self.why})" if self.why else text
 
     def check(self, name: str, value: Any) -> Any:
         """``value`` checked (:func:`integer`, :func:`number`, :func:`width`,
@@ -255,9 +269,23 @@ class Bounds:
             return boolean(name, value, fix=self.fix)
         if self.kind == "choice":
             return choice(name, value, self.options, fix=self.fix)
+        if self.kind in ("ints", "numbers"):
+            return self._values(name, value)
         return number(
             name, value, self.lo, self.hi, lo_open=self.lo_open, hi_open=self.hi_open, fix=self.fix
         )
+
+    def _values(self, name: str, value: Any) -> tuple[Any, ...]:
+        """A tuple field's values, each checked as :attr:`kind` says."""
+        if isinstance(value, (str, bytes, Mapping)) or not isinstance(value, Iterable):
+            raise fail(name, self.describe(), value, self.fix)
+        items = tuple(value)
+        if len(items) > self.count:
+            shown = f"{len(items):,} values"
+            raise fail(name, f"at most {self.count} values", shown, self.fix)
+        kind = "int" if self.kind == "ints" else "number"
+        one = Bounds(kind, self.lo, self.hi, self.lo_open, self.hi_open, self.fix)
+        return tuple(one.check(name, v) for v in items)
 
 
 def bounded(
@@ -270,13 +298,20 @@ def bounded(
     fix: str = "",
     options: Collection[Any] = (),
     none: bool = False,
-) -> Mapping[str, Bounds]:
+    count: int = MAX_ITEMS,
+    why: str = "",
+    **more: Any,
+) -> Mapping[str, Any]:
     """Field metadata declaring :class:`Bounds`: ``episodes: int = field(default=600,
     metadata=bounded("int", 1))``, ``relation: str = field(default="mean",
-    metadata=bounded("choice", options=RELATIONS))``."""
+    metadata=bounded("choice", options=RELATIONS))``; ``more`` is further metadata (e.g.
+    ``sep=","``)."""
     if kind not in KINDS:
         raise ValueError(f"bounds are of a kind in {KINDS}, got {kind!r}")
-    return {"bounds": Bounds(kind, lo, hi, lo_open, hi_open, fix, options, none)}
+    return {
+        "bounds": Bounds(kind, lo, hi, lo_open, hi_open, fix, options, none, count, why),
+        **more,
+    }
 
 
 def check_fields(obj: Any) -> None:

@@ -206,7 +206,7 @@ def test_compare_help_shows_the_config_defaults():
     text = " ".join(_helps()["compare"].split())
     for f in dataclasses.fields(CompareConfig):
         if isinstance(f.default, int) and not isinstance(f.default, bool):  # bounds, then it
-            assert re.search(rf"\((an int >= \d+; )?default {f.default}\)", text), f.name
+            assert re.search(rf"\((an int in \[\d+, \d+\]; )?default {f.default}\)", text), f.name
         elif isinstance(f.default, str):
             assert f"(default {f.default})" in text, f.name
 

@@ -136,7 +136,7 @@ def test_one_set_of_defaults_for_make_the_class_and_the_config() -> None:
 @pytest.mark.parametrize(
     ("kwargs", "match"),
     [
-        ({"max_episode_steps": 0}, "max_episode_steps must be an int >= 1, got 0"),
+        ({"max_episode_steps": 0}, r"max_episode_steps must be an int in \[1, 100000\], got 0"),
         ({"grid": 1}, "grid must be an int >= 2"),
         ({"goal_radius": 0.5}, "leave 5 % of the workspace outside the goal box"),
     ],

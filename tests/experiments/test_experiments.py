@@ -288,7 +288,7 @@ def test_figure_command_writes_one_figure(tmp_path, capsys):
     [
         (["figure", "weights", "{tmp}/none.npz", "--out", "{tmp}/w.png"], "does not exist"),
         (["figure", "weights", "{tmp}/m.npz", "--out", "{tmp}/w.txt"], "must end in"),
-        (["figure", "weights", "{tmp}/m.npz", "--out", "{tmp}/m.npz"], "exists"),
+        (["figure", "weights", "{tmp}/m.npz", "--out", "{tmp}/m.npz"], "is the input model"),
         (["reproduce", "--out", "{tmp}/m.npz"], "is a file"),
         (["reproduce", "--out", "{tmp}", "--seeds", "1", "1"], "distinct"),
     ],

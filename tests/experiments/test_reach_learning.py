@@ -278,7 +278,7 @@ def test_cli_reach_user_mistakes_exit_2(tmp_path, capsys) -> None:
         err = capsys.readouterr().err
         assert f"dim must be 1 or 2, got {bad}" in err and "map_shape" not in err
     assert main(["reach", "--episodes", "0", "--out", out]) == 2
-    assert "episodes must be an int >= 1" in capsys.readouterr().err
+    assert "episodes must be an int in [1, 1000000], got 0" in capsys.readouterr().err
     assert main(["reach", "--model", str(tmp_path / "none.npz"), "--out", out, "--force"]) == 2
     assert "does not exist" in capsys.readouterr().err
     cfg = ReachConfig().replace(dim=1)  # the default map follows the task's dimension

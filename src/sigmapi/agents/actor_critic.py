@@ -19,7 +19,7 @@ Learning: An Introduction (1998), section 6.6.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -34,28 +34,25 @@ class ActorCriticConfig:
     """The learner's settings, the defaults of :class:`ActorCritic` (the authors' docking
     model)."""
 
-    gamma: float = 0.9
+    gamma: float = field(
+        default=0.9, metadata=_validate.bounded("number", 0, 1, fix="the authors use 0.9")
+    )
     """Discount of the actor-critic (the authors: 0.9)."""
-    critic_lr: float = 0.1
+    critic_lr: float = field(
+        default=0.1, metadata=_validate.bounded("number", 0, 10, fix="the authors use 0.1")
+    )
     """Learning rate of the critic (the authors: 0.1), per unit of ``|phi|^2``."""
-    actor_lr: float = 0.1
+    actor_lr: float = field(
+        default=0.1, metadata=_validate.bounded("number", 0, 10, fix="the authors use 0.1")
+    )
     """Learning rate of the actor (the authors: 0.1), per unit of ``|phi|^2``."""
-    beta: float = 2.0
+    beta: float = field(
+        default=2.0, metadata=_validate.bounded("number", 0, 1e6, fix="the authors use 2")
+    )
     """Inverse temperature of the softmax policy (the authors: 2)."""
 
     def __post_init__(self) -> None:
-        checked = {
-            "gamma": _validate.number("gamma", self.gamma, 0.0, 1.0, fix="the authors use 0.9"),
-            "critic_lr": _validate.number(
-                "critic_lr", self.critic_lr, 0.0, 10.0, fix="the authors use 0.1"
-            ),
-            "actor_lr": _validate.number(
-                "actor_lr", self.actor_lr, 0.0, 10.0, fix="the authors use 0.1"
-            ),
-            "beta": _validate.number("beta", self.beta, 0.0, 1e6, fix="the authors use 2"),
-        }
-        for name, value in checked.items():
-            object.__setattr__(self, name, value)
+        _validate.check_fields(self)  # the bounds declared beside the fields
 
 
 class ActorCritic:

@@ -13,7 +13,8 @@ imported, only when it runs or its help is shown: ``sigmapi --help``, ``--versio
 
 A user mistake (unknown preset, bad value, missing file) prints one line to stderr and exits
 with status 2; no traceback: every :class:`~sigmapi.errors.SigmapiError` is printed the same
-way.
+way. Before any command runs, none of its outputs may be one of its inputs
+(:func:`~sigmapi.cli._common.check_paths`: each command declares its file arguments).
 """
 
 from __future__ import annotations
@@ -26,7 +27,7 @@ import threading
 from collections.abc import Callable, Sequence
 
 from sigmapi.cli import train
-from sigmapi.cli._common import LazyParser, Parser, check_output, resolve_config
+from sigmapi.cli._common import LazyParser, Parser, check_output, check_paths, resolve_config
 from sigmapi.cli.experiment import add_experiment
 from sigmapi.errors import SigmapiError
 from sigmapi.experiments import REGISTRY
@@ -95,6 +96,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     except ValueError:  # not the main thread: leave signals alone
         previous = None
     try:
+        check_paths(args)  # no command writes over its own input, --force or not
         return int(args.func(args))
     except Terminated:
         print(f"sigmapi {args.command}: terminated", file=sys.stderr)

@@ -35,8 +35,10 @@ __all__ = [
     "add_dataclass_flags",
     "apply_set_flags",
     "check_output",
+    "check_paths",
     "config_keys_help",
     "dataclass_values",
+    "declare_path",
     "field_docs",
     "plain",
     "resolve_config",
@@ -274,6 +276,38 @@ def check_output(path: str | Path, force: bool, what: str = "output file") -> Pa
     return p
 
 
+PATHS = "_paths"
+"""The parser default that lists a command's file arguments: ``(dest, flag, role)``, role
+``"input"``, ``"output"`` or ``"folder"`` (an output folder)."""
+
+
+def declare_path(
+    p: argparse.ArgumentParser | argparse._ArgumentGroup, dest: str, flag: str, role: str
+) -> None:
+    """Declare the argument ``dest`` (shown as ``flag``) of ``p`` a path of ``role``
+    (:data:`PATHS`), which :func:`check_paths` compares before the command runs."""
+    if role not in ("input", "output", "folder"):
+        raise ValueError(f"a path's role is input, output or folder, got {role!r}")
+    given = tuple(p._defaults.get(PATHS, ()))  # a group shares its parser's defaults
+    p._defaults[PATHS] = (*given, (dest, flag, role))
+
+
+def check_paths(args: argparse.Namespace) -> None:
+    """Before every command (:func:`sigmapi.cli.main`): none of its outputs is one of its
+    inputs (:func:`sigmapi._outputs.refuse_input_as_output`), ``--force`` or not."""
+    from sigmapi._outputs import refuse_input_as_output
+
+    given: list[tuple[str, str, str]] = []
+    for dest, flag, role in getattr(args, PATHS, ()):
+        value = getattr(args, dest, None)
+        if isinstance(value, str) and value:  # given (an option left out is None)
+            given.append((str(flag), value, str(role)))
+    inputs = [(flag, value) for flag, value, role in given if role == "input"]
+    outputs = [(flag, value, role == "folder") for flag, value, role in given if role != "input"]
+    if inputs and outputs:
+        refuse_input_as_output(outputs, inputs)
+
+
 # ------------------------------------------------------------------ flags from a dataclass
 
 
@@ -432,6 +466,8 @@ def add_dataclass_flags(
         if f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING:
             kwargs.pop("metavar", None)
             p.add_argument(f.name, help=text, **kwargs)
+            if "path" in f.metadata:
+                declare_path(p, f.name, f.name, f.metadata["path"])
             continue
         flags = [f"--{f.name.replace('_', '-')}"]
         if aliases and f.name in aliases:
@@ -444,6 +480,8 @@ def add_dataclass_flags(
         if notes:
             text = f"{text.removesuffix('.')} ({'; '.join(notes)})"
         p.add_argument(*flags, dest=f.name, default=None, help=text, **kwargs)
+        if "path" in f.metadata:  # a file it reads or writes (sigmapi._outputs.INPUT)
+            declare_path(p, f.name, flags[0], f.metadata["path"])
 
 
 def dataclass_values(args: argparse.Namespace, cls: type) -> dict[str, Any]:

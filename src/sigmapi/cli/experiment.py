@@ -45,6 +45,7 @@ from sigmapi.cli._common import (
     add_dataclass_flags,
     add_workers_flag,
     dataclass_values,
+    declare_path,
     plain,
 )
 from sigmapi.errors import ConfigError, UsageError, install_hint
@@ -129,6 +130,7 @@ def add_experiment_options(p: Parser, experiment: Experiment[Any]) -> None:
         help="folder for result.json and the figures (default: "
         + (f"./{out})" if out else "none: nothing is written)"),
     )
+    declare_path(p, "out", "--out", "folder")
     common.add_argument(
         "--force", action="store_true", help="write into an --out folder that is not empty"
     )

@@ -9,7 +9,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from sigmapi.cli._common import check_output
+from sigmapi.cli._common import check_output, declare_path
 from sigmapi.errors import UsageError, install_hint
 
 __all__ = ["add_arguments", "cmd_export"]
@@ -63,4 +63,6 @@ def add_arguments(p: Any) -> None:
         "positions in [0, 1] that it encodes as the model does",
     )
     p.add_argument("--force", action="store_true", help="overwrite --out if it exists")
+    declare_path(p, "model", "model", "input")
+    declare_path(p, "out", "--out", "output")
     p.set_defaults(func=cmd_export)

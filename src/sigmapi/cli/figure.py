@@ -11,7 +11,7 @@ import numpy as np
 
 from sigmapi import _validate
 from sigmapi.analysis.curves import LearningCurve, checkpoints
-from sigmapi.cli._common import check_output
+from sigmapi.cli._common import check_output, declare_path
 from sigmapi.errors import UsageError
 from sigmapi.experiments.reproduce.results import CURVE_TEST, N_CHECKPOINTS
 from sigmapi.model.som import load_model
@@ -21,7 +21,34 @@ from sigmapi.viz.figures import DPI, FIGURES, draw_figure
 __all__ = ["add_arguments", "cmd_figure"]
 
 
+MAX_LABEL = 200
+"""Longest ``--label`` (a title's name for the model)."""
+
+MAX_REPLAY = 100_000_000
+"""Most iterations ``figure curves`` replays (the experiments' bound on a map's iterations)."""
+
+
+def _label(text: str | None) -> str | None:
+    """``--label`` checked: one line of at most :data:`MAX_LABEL` characters (titles draw it
+    as plain text: a ``$`` is no mathtext)."""
+    if text is None:
+        return None
+    shown = repr(text[:40]) + ("..." if len(text) > 40 else "")
+    if len(text) > MAX_LABEL:
+        raise UsageError(
+            f"--label must be at most {MAX_LABEL} characters, got {len(text):,} ({shown}); "
+            "give a short name for the model"
+        )
+    if any(ord(c) < 32 or ord(c) == 127 for c in text):
+        raise UsageError(
+            f"--label must be one line without control characters, got {shown}; "
+            "give a short name for the model"
+        )
+    return text
+
+
 def cmd_figure(args: argparse.Namespace) -> int:
+    label = _label(args.label)
     out = check_output(args.out, args.force, "--out")
     fmt = out.suffix.lower().lstrip(".")
     allowed = ("png", "pdf", "svg")
@@ -41,6 +68,12 @@ def cmd_figure(args: argparse.Namespace) -> int:
             f"{len(model.map_shape)}-D and z is {len(model.x_shape)}-D"
         )
     curves = None
+    if args.name == "curves" and model.t_ > MAX_REPLAY:
+        raise UsageError(
+            f"model {args.model!r} claims {model.t_:,} iterations; `sigmapi figure curves` "
+            f"replays the run, at most {MAX_REPLAY:,} iterations: draw another figure of "
+            "this model, or train one with fewer iterations"
+        )
     if args.name == "curves":
         # the training data are a pure function of the seed: re-running the model's schedule
         # from its seed replays the same run, now with checkpoints
@@ -57,7 +90,7 @@ def cmd_figure(args: argparse.Namespace) -> int:
                 file=sys.stderr,
             )
         curves = [curve.to_dict()]
-    label = args.label if args.label is not None else Path(args.model).name
+    label = label if label is not None else Path(args.model).name
     draw_figure(args.name, model, out, curves=curves, label=label, seed=args.seed, dpi=dpi)
     print(f"wrote {out}", file=sys.stderr)
     return 0
@@ -69,7 +102,11 @@ def add_arguments(p: Any) -> None:
     p.add_argument("model", help="model file written by `sigmapi train` or `sigmapi reproduce`")
     p.add_argument("--out", required=True, help="image file to write (.png, .pdf or .svg)")
     p.add_argument("--seed", type=int, default=0, help="seed of the figure's sampled inputs")
-    p.add_argument("--label", help="how titles name the model (default: the file name)")
+    p.add_argument(
+        "--label",
+        help=f"how titles name the model, plain text of at most {MAX_LABEL} characters "
+        "(default: the file name)",
+    )
     p.add_argument(
         "--dpi",
         type=int,
@@ -79,4 +116,6 @@ def add_arguments(p: Any) -> None:
     )
     p.add_argument("--force", action="store_true", help="overwrite --out if it exists")
     p.add_argument("--quiet", action="store_true", help="no progress bar (curves replay the run)")
+    declare_path(p, "model", "model", "input")
+    declare_path(p, "out", "--out", "output")
     p.set_defaults(func=cmd_figure)

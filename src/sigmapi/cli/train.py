@@ -24,6 +24,7 @@ from sigmapi.cli._common import (
     add_config_flags,
     check_output,
     config_keys_help,
+    declare_path,
     resolve_config,
 )
 from sigmapi.config import list_presets, load_preset
@@ -225,6 +226,8 @@ def register(sub: Any) -> None:
         action="store_true",
         help="continue from the newest good checkpoint of this --out (same command line)",
     )
+    declare_path(p, "config", "--config", "input")
+    declare_path(p, "out", "--out", "output")
     p.set_defaults(func=cmd_train)
 
     p = sub.add_parser("evaluate", help="metrics of a model file")

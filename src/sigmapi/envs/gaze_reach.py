@@ -35,8 +35,8 @@ actions, each diagonal moving ``step_size`` along both axes).
 from __future__ import annotations
 
 import itertools
-from dataclasses import dataclass
-from typing import Any, SupportsFloat
+from dataclasses import dataclass, field
+from typing import Any, ClassVar, SupportsFloat
 
 import gymnasium as gym
 import numpy as np
@@ -46,6 +46,7 @@ from numpy.typing import NDArray
 
 from sigmapi import _memory, _validate
 from sigmapi.codes import _WIDTH_FIX, MIN_WIDTH, PopulationCode
+from sigmapi.envs.checks import check_action, check_options, check_vector
 from sigmapi.envs.gaze_render import draw_workspace
 from sigmapi.envs.protocols import Obs, Views, view_space
 from sigmapi.errors import ConfigError
@@ -145,19 +146,33 @@ class GazeReachConfig:
     """The gaze-and-reach world and its time limit: the defaults of ``gymnasium.make(ENV_ID)``,
     of :class:`GazeReachEnv` and of ``sigmapi reach`` (the goal lies straight ahead, at 0.5)."""
 
-    dim: int = 2
+    dim: int = field(
+        default=2, metadata=_validate.bounded("int", 1, 2, fix="the task has 1-D and 2-D variants")
+    )
     """1 or 2: dimensions of the task."""
-    grid: int = 15
+    grid: int = field(default=15, metadata=_validate.bounded("int", 2, 1024, fix="e.g. 15"))
     """Units per axis of the retina and gaze codes (15x15 in 2-D, the paper's Fig. 8 network)."""
-    code_width: float = 1.0
+    code_width: float = field(
+        default=1.0, metadata=_validate.bounded("width", MIN_WIDTH, fix=_WIDTH_FIX)
+    )
     """Width of the input hills in grid units (1.0: the paper-2d preset; the 1-D paper: 0.5)."""
-    step_size: float = 0.05
+    step_size: float = field(
+        default=0.05,
+        metadata=_validate.bounded("number", 0, 0.5, lo_open=True, fix="use e.g. 0.05"),
+    )
     """How far one move shifts z along an axis."""
-    goal_radius: float = 0.1
+    goal_radius: float = field(
+        default=0.1, metadata=_validate.bounded("number", 0, 0.5, lo_open=True, fix="use e.g. 0.1")
+    )
     """Half-width of the goal box around z = 0.5 (straight ahead, within grasp range)."""
-    saccade_rate: float = 1.0
+    saccade_rate: float = field(
+        default=1.0, metadata=_validate.bounded("number", 0, 1, fix="a probability per step")
+    )
     """Probability of a saccade per step (1: on every step, the hardest case)."""
-    max_episode_steps: int = _registered_time_limit()
+    max_episode_steps: int = field(
+        default=_registered_time_limit(),
+        metadata=_validate.bounded("int", 1, 100_000, fix="e.g. 50"),
+    )
     """Time limit per episode (Gymnasium's TimeLimit; the default is the registered one, 3x
     the longest shortest path in 2-D)."""
 
@@ -180,8 +195,7 @@ class GazeReachConfig:
             ("saccade_rate", rate),
         ):
             object.__setattr__(self, name, value)
-        steps = _validate.integer("max_episode_steps", self.max_episode_steps, 1, fix="e.g. 50")
-        object.__setattr__(self, "max_episode_steps", steps)
+        _validate.check_fields(self)  # the bounds declared beside the fields (--help's)
 
     def env_kwargs(self) -> dict[str, Any]:
         """Keyword arguments of :class:`GazeReachEnv` (also of ``gymnasium.make``)."""
@@ -256,6 +270,8 @@ class GazeReachEnv(gym.Env[Obs, np.int64]):
     """
 
     metadata: dict[str, Any] = {"render_modes": ["rgb_array"], "render_fps": 10}  # noqa: RUF012
+    reset_options: ClassVar[tuple[str, ...]] = ("z", "y")
+    """The names ``reset(options=...)`` takes."""
 
     def __init__(
         self,
@@ -398,10 +414,7 @@ class GazeReachEnv(gym.Env[Obs, np.int64]):
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[Obs, dict[str, Any]]:
         super().reset(seed=seed)
-        options = dict(options or {})
-        unknown = sorted(set(options) - {"z", "y"})
-        if unknown:
-            raise ConfigError(f"unknown reset option {unknown[0]!r}; valid options are 'z' and 'y'")
+        options = check_options(options, self.reset_options, "GazeReach")
         if "z" in options:
             z = self._position(options["z"], "options['z']")
         else:
@@ -425,21 +438,17 @@ class GazeReachEnv(gym.Env[Obs, np.int64]):
         return self._obs(), self._info(True, "")
 
     def _position(self, value: Any, name: str) -> NDArray[np.float64]:
-        p = _unit_vector(value, self.dim)
-        if p is None:
-            raise ConfigError(f"{name} must be {self.dim} number(s) in [0, 1], got {value!r}")
-        return p
+        if _validate.is_int(value) or isinstance(value, (float, np.floating)):
+            value = [value] * self.dim  # one number for every axis
+        return check_vector(name, value, (self.dim,), 0.0, 1.0, fix="positions in [0, 1]")
 
     def step(self, action: Any) -> tuple[Obs, SupportsFloat, bool, bool, dict[str, Any]]:
         if self._done:
             raise gym.error.ResetNeeded(
                 "the episode has ended (terminated) or not begun; call reset() before step()"
             )
-        if not self.action_space.contains(action):
-            raise ValueError(
-                f"action must be an int in [0, {len(self.moves)}), got {action!r}; see env.moves"
-            )
-        self._z = self._z + self.moves[int(action)]
+        a = check_action(self.action_space, action, fix="see env.moves")
+        self._z = self._z + self.moves[a]
         reward = 0.0
         event = ""
         if self.in_goal(self._z):

@@ -10,6 +10,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from sigmapi import _validate
+from sigmapi.errors import DataError
 from sigmapi.model._core import MapCore
 from sigmapi.tasks import Batch
 
@@ -29,6 +31,14 @@ class CostMixin(MapCore):
         The distances use ``|x y^T|^2 = |x|^2 |y|^2`` and ``<x y^T, w_k> = h_k``, so no outer
         product is formed.
         """
+        self._run.fitted()  # NotFittedError before fitting, whatever the batch
+        if not all(hasattr(batch, name) for name in ("x0", "y0", "x1", "y1")):
+            raise DataError(
+                f"batch must be a sigmapi.tasks.Batch of two views (x0, y0, x1, y1), got "
+                f"{type(batch).__name__}; e.g. model.sampler.sample(1000, rng)"
+            )
+        if sigma is not None:
+            sigma = _validate.width("sigma", sigma, 0.0, lo_open=True)
         k = self.winner(batch.x0, batch.y0)
         h1 = self.respond(batch.x1, batch.y1)
         wn = self.unit_sqnorms()

@@ -55,6 +55,13 @@ class ParamsMixin(MapCore):
         discarded (call :meth:`fit`). A new ``seed`` re-seeds the random streams; a new
         ``backend`` moves the weights onto that kernel.
         """
+        if self._run.calling_back:
+            shown = ", ".join(sorted(params)) or "nothing"
+            raise ConfigError(
+                f"set_params must not run inside a callback of a training call (it would "
+                f"change {shown} under the run in progress, which keeps the config it started "
+                "with); change parameters after fit / partial_fit returns"
+            )
         cfg = params.pop("config", self.config)
         if not isinstance(cfg, SOMConfig):
             raise ConfigError(

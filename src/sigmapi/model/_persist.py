@@ -9,6 +9,7 @@ never pickled); this mixin gives :class:`sigmapi.SigmaPiSOM` its ``to_arrays`` /
 from __future__ import annotations
 
 import copy
+import os
 from pathlib import Path
 from typing import Any, Self
 
@@ -17,6 +18,7 @@ from numpy.typing import NDArray
 
 from sigmapi import _validate
 from sigmapi.config import BACKEND_NAMES, SOMConfig
+from sigmapi.errors import ConfigError
 from sigmapi.model._core import MapCore
 from sigmapi.model.file import read_parts, write_parts
 
@@ -93,6 +95,12 @@ class PersistMixin(MapCore):
         """Read a model written by :meth:`save` (optionally onto another ``backend``)."""
         from sigmapi.io import read_model
 
+        if not isinstance(path, (str, os.PathLike)) or isinstance(path, bytes):
+            shown = repr(path[:40]) if isinstance(path, (bytes, bytearray)) else repr(path)[:60]
+            raise ConfigError(
+                f"path must be a file name (str or pathlib.Path), got {type(path).__name__} "
+                f"{shown}; give the model file's name (a name in bytes: name.decode())"
+            )
         if backend is not None:
             _validate.choice("backend", backend, BACKEND_NAMES, fix=_BACKEND_FIX)
         header, arrays = read_model(path)

@@ -155,6 +155,24 @@ class RunState:
     positions: Array | None = None
     """``transform``'s table: every unit's map position as fractions of the axes."""
     lock: threading.RLock = field(default_factory=threading.RLock)
+    calling_back: bool = False
+    """Whether a training call's callback runs now (``set_params`` is refused meanwhile: the
+    run in progress keeps the config it started with)."""
+
+    def notifier(self, callback: Callable[[], object] | None) -> Notify:
+        """What a training mode calls after each block: ``callback()``, marked as running
+        (:attr:`calling_back`) while it runs; None without one."""
+        if callback is None:
+            return None
+
+        def notify() -> None:
+            self.calling_back = True
+            try:
+                callback()
+            finally:
+                self.calling_back = False
+
+        return notify
 
     def reset(self, state: KernelState | None) -> None:
         """The one reset: a fresh run from ``state`` (None: not fitted), with no iteration, no

@@ -4,7 +4,9 @@
 Iteration ``t`` finds the winner from view 0 and learns view 1 at the schedule's width and
 rate at ``t`` (the kernel's ``train_block``). The built-in task's data of block ``b`` comes
 from the run's child stream ``(1, b)``; your own rows come in passes, each in a fresh random
-order from child ``(3, pass)`` (:func:`fit`), or once in the given order (:func:`partial_fit`).
+order from child ``(3, pass)`` (:func:`fit`; a pass over more than :data:`PERMUTED_ROWS` rows
+that uses only some of them draws those without permuting them all), or once in the given
+order (:func:`partial_fit`).
 A run that reaches the configured length goes on to the refinement
 (:mod:`sigmapi.model._refine`).
 """
@@ -33,7 +35,12 @@ from sigmapi.model._run import (
 from sigmapi.model.views import CodeViews
 from sigmapi.tasks import Batch
 
-__all__ = ["fit", "learn_gated", "partial_fit", "start", "training_block"]
+__all__ = ["PERMUTED_ROWS", "fit", "learn_gated", "partial_fit", "start", "training_block"]
+
+PERMUTED_ROWS = 1 << 22
+"""Most rows a pass of :func:`fit` permutes in full; of more rows, a pass that uses only some
+draws them without replacement instead (``Generator.choice``): ``fit`` on 10^8 rows then
+costs its iterations, not the permutation of 10^8 rows."""
 
 
 def start(run: RunState, views: CodeViews | None) -> None:
@@ -64,7 +71,11 @@ def fit(run: RunState, data: CodeViews | None, total: int, notify: Notify) -> No
         rows = data[0].shape[0]
         npass = 0
         while run.t < total:
-            order = rng(run.entropy, 3, npass).permutation(rows)[: total - run.t]
+            need, draw = total - run.t, rng(run.entropy, 3, npass)
+            if rows > PERMUTED_ROWS and need < rows:
+                order = draw.choice(rows, size=need, replace=False)
+            else:
+                order = draw.permutation(rows)[:need]
             _rows(run, data, order, notify)
             npass += 1
     if run.t >= c.iterations:

@@ -80,8 +80,9 @@ class SigmaPiSOM(CostMixin, ParamsMixin, PersistMixin):
     """
 
     def _notify(self, callback: Callback | None) -> Notify:
-        """What a training mode calls after each block: ``callback(self)``."""
-        return None if callback is None else lambda: callback(self)
+        """What a training mode calls after each block: ``callback(self)`` (during which
+        :meth:`set_params` is refused: the run in progress keeps the config it started with)."""
+        return self._run.notifier(None if callback is None else lambda: callback(self))
 
     # ------------------------------------------------------------------ training on pairs
     def training_block(self, b: int) -> Batch:
@@ -137,9 +138,11 @@ class SigmaPiSOM(CostMixin, ParamsMixin, PersistMixin):
             rows = 0 if data is None else data[0].shape[0]
             if data is not None and rows == 0:
                 raise DataError("views must hold at least one row (pair of views), got 0 rows")
-            if rows:  # each pass permutes every row: the int64 order, before any work
+            if rows:  # a pass's int64 order (of every row, or of those it uses), before work
                 fix = "pass fewer rows (a random subset), or partial_fit(views): each row once"
-                _memory.check_count("views rows", rows, 8, fix)
+                _memory.check_count(
+                    "views rows", min(rows, max(total, _train.PERMUTED_ROWS)), 8, fix
+                )
             notify = self._notify(callback)
             _train.fit(self._run, data, total, notify)
             return self

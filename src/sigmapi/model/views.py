@@ -255,12 +255,15 @@ def check_gates(gates: Any, n: int, n_units: int) -> NDArray[np.float64]:
     """``gates`` as a float ``(n, n_units)`` array of numbers in ``[0, 1]`` (one row per view
     pair, one column per unit); a DataError naming the problem otherwise (ragged rows too)."""
     try:
-        g = np.asarray(gates, dtype=np.float64)
-    except (TypeError, ValueError) as exc:  # ragged rows, None, text
+        raw = np.asarray(gates)
+        if raw.dtype.kind not in "fiub":  # complex (its imaginary part lost), text, objects
+            raise TypeError(f"dtype {raw.dtype}")
+        g = raw.astype(np.float64)
+    except (TypeError, ValueError) as exc:  # ragged rows, None, text, complex
         raise DataError(
-            f"gates must be a ({n}, {n_units}) array of numbers in [0, 1], got "
+            f"gates must be a ({n}, {n_units}) array of real numbers in [0, 1], got "
             f"{type(gates).__name__} that numpy cannot make one of ({str(exc)[:80]}); give "
-            "every row one gate per unit"
+            "every row one real gate per unit"
         ) from None
     if g.shape != (n, n_units):
         raise DataError(

@@ -72,7 +72,8 @@ class DrawInputs:
 
     @property
     def tag(self) -> str:
-        return f" ({self.label})" if self.label else ""
+        """`` (label)`` for a title: the label as plain text (a ``$`` is no mathtext)."""
+        return " (" + self.label.replace("$", r"\$") + ")" if self.label else ""
 
 
 @dataclass(frozen=True)

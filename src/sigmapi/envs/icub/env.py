@@ -17,16 +17,18 @@ from); ``render_mode="rgb_array"`` renders a third-person view.
 
 from __future__ import annotations
 
-from typing import Any, SupportsFloat
+from typing import Any, ClassVar, SupportsFloat
 
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 from numpy.typing import NDArray
 
+from sigmapi.envs.checks import check_action, check_options, check_vector
 from sigmapi.envs.icub.frames import REACH_REGION, random_ball, random_gaze
+from sigmapi.envs.icub.model import BALL_RADIUS
 from sigmapi.envs.icub.reach import physical_reach
-from sigmapi.envs.icub.scene import EYE_SIZE, ICubScene
+from sigmapi.envs.icub.scene import EYE_SIZE, GAZE, ICubScene
 from sigmapi.errors import ConfigError
 
 __all__ = ["ENV_ID", "RETINA_SOURCES", "ICubReachEnv"]
@@ -54,6 +56,8 @@ class ICubReachEnv(gym.Env[Obs, NDArray[np.float32]]):
     """
 
     metadata: dict[str, Any] = {"render_modes": ["rgb_array"], "render_fps": 10}  # noqa: RUF012
+    reset_options: ClassVar[tuple[str, ...]] = ("ball", "gaze")
+    """The names ``reset(options=...)`` takes."""
 
     def __init__(
         self, retina: str = "projection", eye_size: int = EYE_SIZE, render_mode: str | None = None
@@ -74,6 +78,20 @@ class ICubReachEnv(gym.Env[Obs, NDArray[np.float32]]):
         )
         self.action_space = spaces.Box(-1.0, 1.0, (7,), np.float32)
         self._lo, self._hi = self.scene.arm_range.T
+        m = self.scene.model
+        table = m.geom("table").id
+        centre, half = m.geom_pos[table][:2], m.geom_size[table][:2] - BALL_RADIUS
+        self.ball_region = np.stack([centre - half, centre + half], axis=1)
+        """Where ``reset(options={"ball": (x, y)})`` may put the ball: the table top (world x
+        and y rows, ``(low, high)``, metres; less the ball's radius at each edge)."""
+        joint = {n: m.jnt_range[m.joint(n).id] for n in ("eyes_tilt", "r_eye_pan", *GAZE[3:])}
+        pan, span = joint["r_eye_pan"], joint["r_eye_pan"][1] - joint["r_eye_pan"][0]
+        self.gaze_range = np.array(
+            [joint["eyes_tilt"], pan, (-span, span), *(joint[n] for n in GAZE[3:])]
+        )
+        """The gazes ``reset(options={"gaze": ...})`` takes (:data:`GAZE` rows, ``(low,
+        high)``, radians): each joint within its range (the eyes' version and vergence also
+        keep each eye's pan within its range)."""
 
     def posture(self, action: NDArray[Any]) -> NDArray[np.float64]:
         """The arm posture (radians) of an action in [-1, 1]^7."""
@@ -103,19 +121,46 @@ class ICubReachEnv(gym.Env[Obs, NDArray[np.float32]]):
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[Obs, dict[str, Any]]:
-        """A new ball and gaze; ``options={"ball": (x, y), "gaze": six angles}`` fixes them."""
+        """A new ball and gaze; ``options={"ball": (x, y), "gaze": six angles}`` fixes them:
+        the ball on the table (:attr:`ball_region`), the gaze within the joints' ranges
+        (:attr:`gaze_range`); else one :class:`~sigmapi.errors.ConfigError` line."""
+        options = check_options(options, self.reset_options, "ICubReach")
+        ball, gaze = options.get("ball"), options.get("gaze")
+        if ball is not None:
+            ball = check_vector(
+                "options['ball']",
+                ball,
+                (2,),
+                *self.ball_region.T,
+                unit="(world x, y, metres)",
+                fix="a place on the table",
+            )
+        if gaze is not None:
+            gaze = self._check_gaze(gaze)
         super().reset(seed=seed)
-        options = options or {}
         s = self.scene
         s.reset()
-        ball = options.get("ball")
         s.set_ball(random_ball(self.np_random, 1, REACH_REGION)[0] if ball is None else ball)
-        if options.get("gaze") is None:
+        if gaze is None:
             random_gaze(s, s.ball_position(), self.np_random)
         else:
-            s.set_gaze(options["gaze"])
+            s.set_gaze(gaze)
         s.hold()
         return self._obs(), self._info()
+
+    def _check_gaze(self, value: Any) -> NDArray[np.float64]:
+        fix = f"the angles {GAZE}, each within its joint's range"
+        g = check_vector(
+            "options['gaze']", value, (6,), *self.gaze_range.T, unit="(radians)", fix=fix
+        )
+        pans = g[1] + np.array([0.5, -0.5]) * g[2]  # the left and the right eye's pan
+        lo, hi = self.gaze_range[1]
+        if np.any(pans < lo) or np.any(pans > hi):
+            raise ConfigError(
+                f"options['gaze'] must keep each eye's pan (version +- vergence / 2) in "
+                f"[{lo:.4g}, {hi:.4g}], got version {g[1]:.4g} and vergence {g[2]:.4g}; {fix}"
+            )
+        return g
 
     def _info(self) -> dict[str, Any]:
         s = self.scene
@@ -124,8 +169,10 @@ class ICubReachEnv(gym.Env[Obs, NDArray[np.float32]]):
     def step(
         self, action: NDArray[np.float32]
     ) -> tuple[Obs, SupportsFloat, bool, bool, dict[str, Any]]:
-        """Reach for posture ``action``; the episode ends (terminated) with the reach."""
-        out = physical_reach(self.scene, self.posture(action))
+        """Reach for posture ``action`` (7 finite numbers in [-1, 1]: :meth:`posture`; else one
+        :class:`~sigmapi.errors.ConfigError` line); the episode ends (terminated) with the reach."""
+        a = check_action(self.action_space, action, fix="each joint's range mapped onto [-1, 1]")
+        out = physical_reach(self.scene, self.posture(a))
         info = {**self._info(), "is_success": out.touched, "distance": out.distance}
         return self._obs(), float(out.touched), True, False, info
 

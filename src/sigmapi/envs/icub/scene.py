@@ -47,7 +47,7 @@ from sigmapi.envs.icub.model import (
     TABLE_HEIGHT,
     load_model,
 )
-from sigmapi.envs.robot.scene import blob_centroid, mujoco_module
+from sigmapi.envs.robot.scene import blob_centroid, check_rendering, mujoco_module
 from sigmapi.errors import ConfigError
 
 __all__ = ["EYE_SIZE", "GAZE", "ICubScene", "direction_angles", "direction_vectors"]
@@ -285,6 +285,7 @@ class ICubScene:
             size = (self.eye_size,) * 2 if eye else (240, 320)
         r = self._renderers.get(size)
         if r is None:
+            check_rendering()  # a platform that cannot render: one line naming MUJOCO_GL
             r = self._renderers[size] = self._mj.Renderer(self.model, *size)
         r.update_scene(self.data, camera=camera, scene_option=self._eye_opt if eye else None)
         return np.asarray(r.render())

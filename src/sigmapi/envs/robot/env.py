@@ -30,7 +30,7 @@ the wrappers of :mod:`sigmapi.envs.wrappers` check a map's codes against it.
 
 from __future__ import annotations
 
-from typing import Any, SupportsFloat
+from typing import Any, ClassVar, SupportsFloat
 
 import gymnasium as gym
 import numpy as np
@@ -38,6 +38,7 @@ from gymnasium import spaces
 from numpy.typing import NDArray
 
 from sigmapi import _validate
+from sigmapi.envs.checks import check_action, check_options
 from sigmapi.envs.protocols import Obs, Views, view_space
 from sigmapi.envs.robot.frames import RETINA_SOURCES, Frames, FramesCodes, Workspace
 from sigmapi.envs.robot.reach import perceived_target, scripted_reach
@@ -106,6 +107,8 @@ class RobotDockEnv(FramesCodes, gym.Env[Obs, np.int64]):
     """
 
     metadata: dict[str, Any] = {"render_modes": ["rgb_array"], "render_fps": 8}  # noqa: RUF012
+    reset_options: ClassVar[tuple[str, ...]] = ()
+    """The names ``reset(options=...)`` takes: none."""
 
     def __init__(
         self,
@@ -261,8 +264,7 @@ class RobotDockEnv(FramesCodes, gym.Env[Obs, np.int64]):
         """A new episode: the ball somewhere on the table near its edge, the base at a random
         pose that puts the ball in the workspace, outside the grasp region, off the table."""
         super().reset(seed=seed)
-        if options:
-            raise ConfigError(f"RobotDock takes no reset options, got {sorted(options)}")
+        check_options(options, self.reset_options, "RobotDock")
         rng = self.np_random
         for _ in range(1000):
             ball = np.array(
@@ -290,9 +292,7 @@ class RobotDockEnv(FramesCodes, gym.Env[Obs, np.int64]):
     def step(self, action: Any) -> tuple[Obs, SupportsFloat, bool, bool, dict[str, Any]]:
         if self._done:
             raise gym.error.ResetNeeded("the episode has ended or not begun; call reset()")
-        if not self.action_space.contains(action):
-            raise ValueError(f"action must be an int in [0, {len(ACTIONS)}), got {action!r}")
-        a = int(action)
+        a = check_action(self.action_space, action, fix=f"the moves {ACTIONS}")
         x, y, yaw = self._base
         if a < 2:
             s = self.step_length * (1.0 if a == 0 else -1.0)

@@ -21,6 +21,7 @@ pixel ``(row i, column j)`` covers ``u`` in ``[j, j + 1)`` and ``v`` in ``[i, i 
 from __future__ import annotations
 
 import os
+import warnings
 from dataclasses import dataclass
 from importlib import resources
 from types import ModuleType
@@ -92,15 +93,18 @@ def check_rendering() -> None:
     if _GL_OK:
         return
     mj = mujoco_module()
+    fatal = getattr(mj, "FatalError", RuntimeError)  # no OpenGL context (an empty MUJOCO_GL)
     try:
-        model = mj.MjModel.from_xml_string("<mujoco><worldbody/></mujoco>")
-        renderer = mj.Renderer(model, 8, 8)
-        try:
-            renderer.update_scene(mj.MjData(model))
-            renderer.render()
-        finally:
-            renderer.close()
-    except (RuntimeError, AttributeError, OSError, ImportError) as exc:
+        with warnings.catch_warnings():  # GLFW without a display warns, then fails: one line
+            warnings.simplefilter("ignore")
+            model = mj.MjModel.from_xml_string("<mujoco><worldbody/></mujoco>")
+            renderer = mj.Renderer(model, 8, 8)
+            try:
+                renderer.update_scene(mj.MjData(model))
+                renderer.render()
+            finally:
+                renderer.close()
+    except (RuntimeError, AttributeError, OSError, ImportError, fatal) as exc:
         raise _bad_gl(exc) from None
     _GL_OK.append(True)
 
@@ -317,6 +321,7 @@ class Scene:
             size = (self.head_size,) * 2 if camera == "head" else (240, 320)
         r = self._renderers.get(size)
         if r is None:
+            check_rendering()  # a platform that cannot render: one line naming MUJOCO_GL
             r = self._renderers[size] = self._mj.Renderer(self.model, *size)
         r.update_scene(self.data, camera=self._cam if camera == "head" else self._third)
         return np.asarray(r.render())

@@ -68,10 +68,12 @@ class ChainConfig:
     overrides: tuple[str, ...] = field(default=(), metadata=KEY_VALUES)
     """``key=value`` changes to the preset, e.g. ``iterations=50000`` (one per change)."""
     train_pairs: int = field(
-        default=20_000, metadata=_validate.bounded("int", 10, fix="e.g. 20000")
+        default=20_000, metadata=_validate.bounded("int", 10, 10_000_000, fix="e.g. 20000")
     )
     """View pairs of triples that map B and the single map are trained on."""
-    n_test: int = field(default=10_000, metadata=_validate.bounded("int", 10, fix="e.g. 10000"))
+    n_test: int = field(
+        default=10_000, metadata=_validate.bounded("int", 10, 1_000_000, fix="e.g. 10000")
+    )
     """Calibration and test triples (each), from the fixed evaluation seed."""
     code: Code = "response"
     """What map A hands to map B: its normalised response, or a code of its winner's position."""

@@ -38,17 +38,17 @@ class CompareConfig:
     overrides: tuple[str, ...] = field(default=(), metadata=KEY_VALUES)
     """``key=value`` changes to the preset, e.g. ``iterations=50000`` (one per change)."""
     train_pairs: int = field(
-        default=20_000, metadata=_validate.bounded("int", 100, fix="e.g. 20000")
+        default=20_000, metadata=_validate.bounded("int", 100, 10_000_000, fix="e.g. 20000")
     )
     """View pairs recorded per seed (every method trains on these rows)."""
     baseline_iterations: int = field(
-        default=100_000, metadata=_validate.bounded("int", 1, fix="e.g. 100000")
+        default=100_000, metadata=_validate.bounded("int", 1, 100_000_000, fix="e.g. 100000")
     )
     """Online updates of the first-order maps (sigmapi's and MiniSom)."""
-    rbm_epochs: int = field(default=10, metadata=_validate.bounded("int", 1, fix="e.g. 10"))
+    rbm_epochs: int = field(default=10, metadata=_validate.bounded("int", 1, 10_000, fix="e.g. 10"))
     """Training passes of the RBM over the data."""
     n_test: int = field(
-        default=10_000, metadata=_validate.bounded("int", LABELS[0], fix="e.g. 10000")
+        default=10_000, metadata=_validate.bounded("int", LABELS[0], 1_000_000, fix="e.g. 10000")
     )
     """Test z's (and calibration z's, the pool the labels are drawn from)."""
     methods: tuple[str, ...] = tuple(METHODS)

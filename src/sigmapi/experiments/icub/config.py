@@ -7,10 +7,12 @@ command-line options of ``sigmapi icub`` are its fields.
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 from sigmapi import _validate
+from sigmapi._outputs import OUTPUT
+from sigmapi.codes import _WIDTH_FIX, MIN_WIDTH
 from sigmapi.config import BACKEND_NAMES
 
 __all__ = ["HEAD_CODES", "QUICK", "READOUTS", "ICubConfig"]
@@ -20,99 +22,94 @@ HEAD_CODES = ("winner", "centroid", "response")
 READOUTS = ("centroid", "winner")
 """What of map 2 can key the learned chain's association (:attr:`ICubConfig.readout`)."""
 
+_WRIST_FIX = "the joint's range is -1.396 to 0.436 rad; e.g. --babble-wrist=-0.6,-0.3"
+
 
 @dataclass(frozen=True)
 class ICubConfig:
     """Everything one iCub run depends on but its seeds (the CLI's options are its fields)."""
 
-    grid: int = 16
+    grid: int = field(default=16, metadata=_validate.bounded("int", 3, 64, fix="e.g. 16"))
     """Units per axis of the population codes (retina, eye angles, neck angles)."""
-    code_width: float = 1.0
+    code_width: float = field(
+        default=1.0, metadata=_validate.bounded("width", MIN_WIDTH, fix=_WIDTH_FIX)
+    )
     """Width of the codes' hills, grid units."""
-    map_shape: tuple[int, ...] = (8, 8)
+    map_shape: tuple[int, ...] = field(
+        default=(8, 8), metadata=_validate.bounded("ints", 1, 64, count=2, fix="e.g. 8x8")
+    )
     """Grid of each Sigma-Pi map (map 1 and map 2)."""
-    train_pairs: int = 6000
+    train_pairs: int = field(
+        default=6000, metadata=_validate.bounded("int", 1, 1_000_000, fix="e.g. 6000")
+    )
     """View pairs per map (saccades of the eyes for map 1, turns of the head for map 2)."""
-    iterations: int = 40_000
+    iterations: int = field(
+        default=40_000, metadata=_validate.bounded("int", 1, 100_000_000, fix="e.g. 40000")
+    )
     """Learning iterations of each map."""
-    moved_share: float = 0.1
+    moved_share: float = field(default=0.1, metadata=_validate.bounded("number", 0, 1))
     """Share of the view pairs in which the ball moved between the two views."""
     head_code: str = "winner"
     """What map 1 hands to map 2: "winner" (a code of its winner's place), "centroid" (of its
     response's centre of mass near the winner) or "response"."""
-    head_width: float = 0.85
+    head_width: float = field(
+        default=0.85, metadata=_validate.bounded("width", MIN_WIDTH, fix="map-1 units; e.g. 0.85")
+    )
     """Width of the hill, map-1 units, of the code of map 1's place that map 2 reads
     (``head_code`` "winner" or "centroid":
     :data:`~sigmapi.experiments.icub.maps.HEAD_WIDTH`)."""
-    eval_pairs: int = 1000
+    eval_pairs: int = field(
+        default=1000, metadata=_validate.bounded("int", 1, 100_000, fix="e.g. 1000")
+    )
     """Calibration and test pairs (each, per map) that score the maps against the true
     directions."""
-    frame_scenes: int = 1000
+    frame_scenes: int = field(
+        default=1000,
+        metadata=_validate.bounded("int", 1, 20_000, fix="e.g. 1000 (about 5 ms a frame)"),
+    )
     """Random scenes in which the rendered retina is compared with the exact projection."""
-    babble_yaw: float = 0.8
+    babble_yaw: float = field(
+        default=0.8,
+        metadata=_validate.bounded("number", -0.65, 1.3, fix="the joint's range is -0.65 to 1.40"),
+    )
     """The lowest shoulder yaw babbling draws, radians (the joint's range is -0.65 to 1.40:
     :data:`~sigmapi.experiments.icub.reaching.BABBLE_YAW`)."""
-    babble_wrist: tuple[float, ...] = (-0.6, -0.3)
+    babble_wrist: tuple[float, ...] = field(
+        default=(-0.6, -0.3),
+        metadata=_validate.bounded("numbers", -1.39, 0.43, count=2, fix=_WRIST_FIX),
+    )
     """The range (low, high) of the wrist's pitch that babbling draws from, radians (the
     joint's range is -1.396 to 0.436: :data:`~sigmapi.experiments.icub.reaching.BABBLE_WRIST`;
     on the command line ``--babble-wrist=-0.6,-0.3``)."""
-    babbles: int = 2000
+    babbles: int = field(
+        default=2000, metadata=_validate.bounded("int", 50, 1_000_000, fix="e.g. 2000")
+    )
     """Babbles (random arm postures, the eyes on the hand) the associations learn from."""
-    epochs: int = 8
+    epochs: int = field(default=8, metadata=_validate.bounded("int", 1, 10_000, fix="e.g. 8"))
     """Passes of the associations' delta rule over the babbles."""
     readout: str = "centroid"
     """Where on map 2 the learned chain's bump is centred: "centroid" (the centre of mass of
     map 2's rectified response within 2 units of its winner) or "winner" (the winner's place
     on the grid)."""
-    feature_width: float = 2.5
+    feature_width: float = field(default=2.5, metadata=_validate.bounded("width", 0, lo_open=True))
     """Width of the bump a map's winner gives the association, map units."""
-    reaches: int = 60
+    reaches: int = field(default=60, metadata=_validate.bounded("int", 1, 100_000, fix="e.g. 60"))
     """Reaches per seed and method (random reachable balls, random gazes)."""
-    servo_steps: int = 3
+    servo_steps: int = field(default=3, metadata=_validate.bounded("int", 0, 100, fix="e.g. 3"))
     """Glances of the learned servo that correct each associated method's posture, reached
     again beside the posture of the first view alone (0: no servo)."""
     backend: str = "auto"
     """Kernel that learns and reads the maps ("auto": the fast one when it is installed)."""
-    render: str | None = None
+    render: str | None = field(default=None, metadata=OUTPUT)
     """Also write an animated GIF of the first seed's first learned reach to this file."""
 
     def __post_init__(self) -> None:
-        for name in (
-            "grid",
-            "train_pairs",
-            "iterations",
-            "eval_pairs",
-            "frame_scenes",
-            "babbles",
-            "epochs",
-            "reaches",
-        ):
-            object.__setattr__(self, name, _validate.integer(name, getattr(self, name), 1))
-        object.__setattr__(
-            self, "servo_steps", _validate.integer("servo_steps", self.servo_steps, 0)
-        )
-        object.__setattr__(self, "map_shape", _validate.shape("map_shape", self.map_shape))
+        _validate.check_fields(self)  # the bounds declared beside the fields
         if len(self.map_shape) != 2:
             raise _validate.fail(
                 "map_shape", "2 axes (a direction is 2-D)", self.map_shape, "e.g. 8x8"
             )
-        if self.grid < 3:
-            raise _validate.fail("grid", ">= 3", self.grid, "e.g. 16")
-        if self.babbles < 50:
-            raise _validate.fail("babbles", ">= 50", self.babbles, "e.g. 2000")
-        object.__setattr__(
-            self, "moved_share", _validate.number("moved_share", self.moved_share, 0.0, 1.0)
-        )
-        object.__setattr__(
-            self,
-            "babble_yaw",
-            _validate.number(
-                "babble_yaw", self.babble_yaw, -0.65, 1.3, fix="the joint's range is -0.65 to 1.40"
-            ),
-        )
         object.__setattr__(self, "babble_wrist", _wrist_range(self.babble_wrist))
-        for name in ("code_width", "head_width", "feature_width"):
-            object.__setattr__(self, name, _validate.positive(name, getattr(self, name)))
         _validate.choice("head_code", self.head_code, HEAD_CODES)
         _validate.choice("readout", self.readout, READOUTS)
         _validate.choice("backend", self.backend, BACKEND_NAMES)
@@ -132,7 +129,7 @@ class ICubConfig:
 
 def _wrist_range(value: Any) -> tuple[float, float]:
     """``babble_wrist`` checked: two numbers, low <= high, within the wrist pitch's range."""
-    fix = "the joint's range is -1.396 to 0.436 rad; e.g. --babble-wrist=-0.6,-0.3"
+    fix = _WRIST_FIX
     if not isinstance(value, (tuple, list)) or len(value) != 2:
         raise _validate.fail("babble_wrist", "two numbers (low, high)", value, fix)
     lo, hi = (_validate.number("babble_wrist", w, -1.39, 0.43, fix=fix) for w in value)

@@ -27,12 +27,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from sigmapi import _validate
+from sigmapi import _memory, _validate
 from sigmapi._outputs import check_file
 from sigmapi.envs.icub import ICubScene, ViewBatch, measure, random_gaze
 from sigmapi.envs.icub.frames import direction_ball
 from sigmapi.envs.icub.model import icub_models_module
-from sigmapi.envs.robot.scene import blob_centroid, mujoco_module
+from sigmapi.envs.robot.scene import blob_centroid, check_rendering, mujoco_module
 from sigmapi.executor import Executor
 from sigmapi.experiments.base import Experiment, check_seeds, register, run_all
 from sigmapi.experiments.icub.config import QUICK, ICubConfig
@@ -283,8 +283,10 @@ class ICubExperiment(Experiment[ICubConfig]):
         if not isinstance(config, ICubConfig):
             raise _validate.fail("config", "an ICubConfig", config)
         seeds = check_seeds(seeds)
+        _check_memory(config)  # every size that drives the work, before any of it
         mujoco_module()
         icub_models_module()  # before any work: both say which extra to install
+        check_rendering()  # and that this machine renders (MUJOCO_GL)
         t0 = time.perf_counter()
         tick, bar = Progress.of(progress).counter(2, "icub", "step")
         with bar:
@@ -312,13 +314,31 @@ class ICubExperiment(Experiment[ICubConfig]):
 
 
 def _job_memory(config: ICubConfig) -> int:
-    """Bytes of one job (an upper estimate): the maps' weights and trainer state, the views,
-    the renderer."""
+    """Bytes of one job (an upper estimate): the maps' weights and trainer state, the codes
+    of the training and evaluation views, the babbles' codes and features, the renderer."""
     n = config.grid**2
     units = int(np.prod(config.map_shape))
     weights = units * n * (n + units) * 8 * 6
-    views = config.train_pairs * 4 * 2 * (2 * n) * 8
-    return weights + views + 400 * 2**20
+    views = (config.train_pairs + 2 * config.eval_pairs) * 4 * 2 * (2 * n) * 8
+    babbles = config.babbles * (4 * n + 2 * units + 16) * 8 * 2
+    return weights + views + babbles + 400 * 2**20
+
+
+_PAIR_BYTES = 4 * 2 * 32 * 8
+"""Bytes of one recorded evaluation pair (eyes and head: two views of a few dozen angles)."""
+
+
+def _check_memory(config: ICubConfig) -> None:
+    """Before the frames check: one job and the main process's evaluation views fit in the
+    memory available (:func:`sigmapi._memory.check`), else one line naming the sizes."""
+    need = _job_memory(config) + 2 * config.eval_pairs * _PAIR_BYTES
+    _memory.check(
+        need,
+        f"an icub run of grid={config.grid}, map_shape={config.map_shape}, "
+        f"train_pairs={config.train_pairs:,}, eval_pairs={config.eval_pairs:,}, "
+        f"babbles={config.babbles:,}",
+        "lower --grid, --map-shape, --train-pairs, --eval-pairs or --babbles",
+    )
 
 
 ICUB = ICubExperiment()

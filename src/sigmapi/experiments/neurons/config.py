@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from sigmapi import _validate
+from sigmapi import _memory, _validate
 from sigmapi.config import SOMConfig, apply_overrides, load_preset
 from sigmapi.experiments.base import KEY_VALUES
 from sigmapi.neurons.spiking import SpikingConfig
@@ -23,7 +23,27 @@ DT_MS = 0.25
 DENDRITIC_INHIBITION = 0.5
 """Lateral inhibition per map spike of the dendritic spiking network (threshold units)."""
 
-__all__ = ["DENDRITIC_INHIBITION", "METRICS", "QUICK", "REFERENCE_RATE", "NeuronsConfig"]
+LONGEST_WINDOW_MS = 5000
+"""Longest decision window (ms) of the spiking networks."""
+
+HIGHEST_RATE = 2000
+"""Highest input peak rate (Hz) of the spiking networks (cortical neurons fire below 500)."""
+
+MAX_SPIKING_STEPS = 10**10
+"""Most trial-steps of spiking simulation per seed (:meth:`NeuronsConfig.spiking_cost`; the
+defaults run about 10^7)."""
+
+_FIX = "positive ints, e.g. 2,4,7"
+
+__all__ = [
+    "DENDRITIC_INHIBITION",
+    "HIGHEST_RATE",
+    "LONGEST_WINDOW_MS",
+    "METRICS",
+    "QUICK",
+    "REFERENCE_RATE",
+    "NeuronsConfig",
+]
 
 
 @dataclass(frozen=True)
@@ -36,58 +56,98 @@ class NeuronsConfig:
     """The 2-D task ("" for none)."""
     overrides: tuple[str, ...] = field(default=(), metadata=KEY_VALUES)
     """``key=value`` changes to both presets' Sigma-Pi maps, e.g. ``iterations=50000``."""
-    branches: tuple[int, ...] = field(default=(2, 4, 7, 10, 15), metadata={"sep": ","})
+    branches: tuple[int, ...] = field(
+        default=(2, 4, 7, 10, 15), metadata=_validate.bounded("ints", 1, 1000, fix=_FIX, sep=",")
+    )
     """Dendritic branches per unit, 1-D (one map per value)."""
-    branches_2d: tuple[int, ...] = field(default=(7,), metadata={"sep": ","})
+    branches_2d: tuple[int, ...] = field(
+        default=(7,), metadata=_validate.bounded("ints", 1, 1000, fix=_FIX, sep=",")
+    )
     """Dendritic branches per unit, 2-D."""
-    sparse_branches: tuple[int, ...] = field(default=(15, 30, 45), metadata={"sep": ","})
+    sparse_branches: tuple[int, ...] = field(
+        default=(15, 30, 45), metadata=_validate.bounded("ints", 1, 10_000, fix=_FIX, sep=",")
+    )
     """Branches per unit (mean over the map) of the sparse dendritic maps, two clustered
     synapses each (:class:`~sigmapi.neurons.sparse.SparseDendriticMap`), 1-D."""
-    sparse_branches_2d: tuple[int, ...] = field(default=(200,), metadata={"sep": ","})
+    sparse_branches_2d: tuple[int, ...] = field(
+        default=(200,), metadata=_validate.bounded("ints", 1, 10_000, fix=_FIX, sep=",")
+    )
     """The same, 2-D (candidate conjunctions at ``basis_stride_2d``)."""
-    seeds_2d: int = 2
+    seeds_2d: int = field(
+        default=2, metadata=_validate.bounded("int", 0, 1000, fix="0 runs no 2-D task")
+    )
     """How many of the seeds also run the 2-D task (the first ones)."""
-    pairs: int = 100_000
+    pairs: int = field(
+        default=100_000, metadata=_validate.bounded("int", 0, 10_000_000, fix="e.g. 100000")
+    )
     """View pairs of the dendritic and basis-function maps' online phase."""
-    pairs_2d: int = 30_000
+    pairs_2d: int = field(
+        default=30_000, metadata=_validate.bounded("int", 0, 10_000_000, fix="e.g. 50000")
+    )
     """The same, 2-D."""
-    windows_ms: tuple[int, ...] = field(default=(10, 20, 50, 100, 200, 500), metadata={"sep": ","})
+    windows_ms: tuple[int, ...] = field(
+        default=(10, 20, 50, 100, 200, 500),
+        metadata=_validate.bounded(
+            "ints", 1, LONGEST_WINDOW_MS, count=20, fix="e.g. 20,100,200", sep=","
+        ),
+    )
     """Decision windows of the spiking networks (ms)."""
-    peak_rates: tuple[int, ...] = field(default=(50, 100, 200), metadata={"sep": ","})
+    peak_rates: tuple[int, ...] = field(
+        default=(50, 100, 200),
+        metadata=_validate.bounded(
+            "ints", 1, HIGHEST_RATE, count=20, fix="e.g. 50,100,200", sep=","
+        ),
+    )
     """Input peak rates of the spiking networks (Hz); 100 is the acceptance's."""
-    spike_test: int = 300
+    spike_test: int = field(
+        default=300, metadata=_validate.bounded("int", 10, 100_000, fix="e.g. 300")
+    )
     """Test z's of the spiking networks (each shown as two views)."""
-    pool: int = 20
+    pool: int = field(default=20, metadata=_validate.bounded("int", 1, 1000, fix="e.g. 20"))
     """Poisson neurons per input unit of the spiking networks (chosen on seeds 0-2 among 20
     and 40 with the coincidence detectors of :mod:`sigmapi.neurons.spiking`: 40 raised the
     agreement with the rate map at 200 ms from about 0.98 to 0.99 for three times the spikes,
     and did not bring the view consistency closer)."""
-    spike_gain: float = 0.3
+    spike_gain: float = field(
+        default=0.3, metadata=_validate.bounded("number", 0, 100, lo_open=True, fix="e.g. 0.3")
+    )
     """The conjunction networks' largest synaptic weight onto a map soma (threshold units;
     chosen on seeds 0-2 among 0.15, 0.3 and 0.6 with the pool)."""
-    spike_inhibition: float = 0.25
+    spike_inhibition: float = field(
+        default=0.25, metadata=_validate.bounded("number", 0, 100, fix="e.g. 0.25")
+    )
     """Lateral inhibition per map spike of the conjunction networks (threshold units; chosen
     on seeds 0-2 between 0.25 and 0.5: at 200 ms the worst seed's view consistency was
     0.003 from the rate map's at 0.25, 0.010 at 0.5). The dendritic network keeps
     :data:`DENDRITIC_INHIBITION`."""
-    pools_compared: tuple[int, ...] = field(default=(5, 10), metadata={"sep": ","})
+    pools_compared: tuple[int, ...] = field(
+        default=(5, 10),
+        metadata=_validate.bounded("ints", 1, 1000, count=20, fix="e.g. 5,10", sep=","),
+    )
     """Other pool sizes the conjunction network runs at the reference rate (what a smaller
     pool costs in accuracy and saves in spikes)."""
-    basis_stride_2d: int = 2
+    basis_stride_2d: int = field(default=2, metadata=_validate.bounded("int", 1, 100, fix="e.g. 2"))
     """The 2-D basis-function layer's stride (every 2nd retinal and gaze unit per axis: 8^4
     hidden units instead of 15^4)."""
-    spiking_branches: int = 10
+    spiking_branches: int = field(
+        default=10, metadata=_validate.bounded("int", 0, 1000, fix="0: none")
+    )
     """The dendritic map (1-D, branches per unit) deployed in spiking neurons (0: none)."""
-    spiking_sparse_branches: int = 30
+    spiking_sparse_branches: int = field(
+        default=30, metadata=_validate.bounded("int", 0, 10_000, fix="0: none")
+    )
     """The sparse dendritic map (1-D, branches per unit) deployed in spiking neurons (0: none):
     each branch a coincidence detector of its retinal and its gaze pool, coupled to a LIF soma
     by its coupling."""
-    n_test: int = 5000
+    n_test: int = field(
+        default=5000, metadata=_validate.bounded("int", 100, 1_000_000, fix="e.g. 5000")
+    )
     """Test z's (and calibration z's) of the rate maps' evaluation."""
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
         set_(self, "overrides", tuple(self.overrides))
+        _validate.check_fields(self)  # the bounds declared beside the fields
         for name in (
             "branches",
             "branches_2d",
@@ -97,11 +157,7 @@ class NeuronsConfig:
             "peak_rates",
             "pools_compared",
         ):
-            vals = [
-                _validate.integer(name, v, 1, fix="positive ints, e.g. 2,4,7")
-                for v in getattr(self, name)
-            ]
-            set_(self, name, tuple(sorted(set(vals))))
+            set_(self, name, tuple(sorted(set(getattr(self, name)))))
         if not self.branches or not self.windows_ms or not self.peak_rates:
             raise _validate.fail(
                 "branches, windows_ms and peak_rates",
@@ -109,20 +165,39 @@ class NeuronsConfig:
                 (self.branches, self.windows_ms, self.peak_rates),
                 "give at least one value each",
             )
-        _validate.integer("seeds_2d", self.seeds_2d, 0, fix="0 runs no 2-D task")
-        _validate.integer("pairs", self.pairs, 0, fix="e.g. 100000")
-        _validate.integer("pairs_2d", self.pairs_2d, 0, fix="e.g. 50000")
-        _validate.integer("spike_test", self.spike_test, 10, fix="e.g. 300")
-        _validate.integer("pool", self.pool, 1, 1000, fix="e.g. 20")
-        _validate.positive("spike_gain", self.spike_gain, fix="e.g. 0.3")
-        _validate.number("spike_inhibition", self.spike_inhibition, 0.0, fix="e.g. 0.25")
-        _validate.integer("basis_stride_2d", self.basis_stride_2d, 1, fix="e.g. 2")
-        _validate.integer("spiking_branches", self.spiking_branches, 0, fix="0: none")
-        _validate.integer("spiking_sparse_branches", self.spiking_sparse_branches, 0, fix="0: none")
-        _validate.integer("n_test", self.n_test, 100, fix="e.g. 5000")
+        self._check_spiking_cost()
         self.som_config  # noqa: B018 (a bad preset or override fails here)
         if self.preset_2d:
             self.som_config_2d  # noqa: B018
+
+    def spiking_cost(self) -> tuple[int, int]:
+        """``(steps, bytes)``: the time steps of every spiking simulation of one seed's 1-D
+        task (each window's longest, at each rate and pool, each of :attr:`spike_test` trials
+        a step of the whole network) and the largest simulation's spike history (the
+        coincidence detectors' ``m`` steps of both pools of every trial), an upper estimate."""
+        runs = [(r, self.pool) for r in self.peak_rates]
+        runs += [(REFERENCE_RATE, p) for p in self.pools_compared]
+        n = 64  # the 1-D inputs' units (grid 15 or so) and their margins, generously
+        steps, peak = 0, 0
+        for rate, pool in runs:
+            dt = min(DT_MS, 500.0 / (pool * rate))
+            steps += int(max(self.windows_ms) / dt) * self.spike_test * 2
+            peak = max(peak, max(1, round(0.5 / dt)) * self.spike_test * 2 * n * 8 * 2)
+        return steps, peak
+
+    def _check_spiking_cost(self) -> None:
+        """The spiking simulations' time and memory, bounded before any work."""
+        steps, need = self.spiking_cost()
+        fix = "use fewer or shorter windows_ms, lower peak_rates, a smaller pool or spike_test"
+        if steps > MAX_SPIKING_STEPS:
+            raise _validate.fail(
+                "windows_ms x peak_rates x pool x spike_test",
+                f"at most {MAX_SPIKING_STEPS:.0e} trial-steps of spiking simulation per seed "
+                "(the defaults run about 7e+06)",
+                float(f"{steps:.3g}"),
+                fix,
+            )
+        _memory.check(need, f"a spiking simulation of peak_rates={self.peak_rates}", fix)
 
     @property
     def som_config(self) -> SOMConfig:

@@ -313,9 +313,11 @@ def run_neurons(
     jobs = [(f"seed {s} 1d", NeuronsJob(s, "1d", config)) for s in seeds]
     if config.preset_2d:
         jobs += [(f"seed {s} 2d", NeuronsJob(s, "2d", config)) for s in seeds[: config.seeds_2d]]
-    per_job = job_memory(
-        config.som_config_2d if config.preset_2d else config.som_config, config.n_test
-    )
+    som = config.som_config_2d if config.preset_2d else config.som_config
+    online = [(config.som_config, config.pairs)]  # the online phase's pairs, as codes
+    online += [(config.som_config_2d, config.pairs_2d)] if config.preset_2d else []
+    codes = max(n * (int(np.prod(c.x_shape)) + int(np.prod(c.y_shape))) * 8 for c, n in online)
+    per_job = job_memory(som, config.n_test) + config.spiking_cost()[1] + codes
 
     def describe(key: str, value: dict[str, Any]) -> str:
         return f"{key}: " + ", ".join(

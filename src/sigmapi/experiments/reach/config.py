@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from sigmapi import _validate
+from sigmapi._outputs import INPUT
 from sigmapi.agents import ActorCriticConfig
 from sigmapi.codes import PopulationCode
 from sigmapi.config import BACKEND_NAMES, SOMConfig, list_presets
@@ -71,11 +72,14 @@ def check_parts(config: Any, parts: dict[str, type]) -> None:
 class MapConfig:
     """The Sigma-Pi map a reach learner reads: its size, how it learns, how it is read."""
 
-    map_shape: tuple[int, ...] = (15, 15)
+    map_shape: tuple[int, ...] = field(
+        default=(15, 15), metadata=_validate.bounded("ints", 1, 1024, count=2, fix="e.g. 15x15")
+    )
     """Grid of the Sigma-Pi map learned in the environment (a 1-D task given without one
     gets a map of 12 units)."""
     iterations: int = field(
-        default=100_000, metadata=_validate.bounded("int", 1, fix="paper-2d runs 100000")
+        default=100_000,
+        metadata=_validate.bounded("int", 1, 100_000_000, fix="paper-2d runs 100000"),
     )
     """Iterations of the map, one per saccade view pair it learns from (paper-2d's length)."""
     preset: str = "paper-2d"
@@ -84,7 +88,7 @@ class MapConfig:
     "small-2d": the 7x7 map of the quick run)."""
     backend: str = "auto"
     """Kernel that learns and reads the map ("auto": the fast one when it is installed)."""
-    model_path: str | None = None
+    model_path: str | None = field(default=None, metadata=INPUT)
     """A trained model file to use for every seed instead of learning a map per seed."""
     features: str = "response"
     """Map features: "response" (activations clipped at 0, L2-normalised) or "bump" (Gaussian
@@ -149,11 +153,11 @@ class ReachRunConfig:
 
     states: tuple[str, ...] = STATES
     """State representations to compare."""
-    episodes: int = field(default=600, metadata=_validate.bounded("int", 1))
+    episodes: int = field(default=600, metadata=_validate.bounded("int", 1, 1_000_000))
     """Episodes of reinforcement learning per seed and state."""
-    block: int = field(default=50, metadata=_validate.bounded("int", 1))
+    block: int = field(default=50, metadata=_validate.bounded("int", 1, 1_000_000))
     """Episodes per point of the learning curves."""
-    final_episodes: int = field(default=200, metadata=_validate.bounded("int", 1))
+    final_episodes: int = field(default=200, metadata=_validate.bounded("int", 1, 1_000_000))
     """The final success rate is measured over this many last episodes."""
     plateau_rise: float = field(
         default=0.05,

@@ -87,24 +87,24 @@ class ReproduceConfig:
     save_models: SaveModels = "shown"
     """Which trained models to write beside the report: the one the figures show (the
     worst-ordered seed), all, or none."""
-    seeds_2d: int | None = 5
+    seeds_2d: int | None = field(
+        default=5, metadata=_validate.bounded("int", 1, 1000, none=True, fix="e.g. 5")
+    )
     """How many of the seeds the 2-D presets train: the first ones (as many as there are
     seeds for all of them; None in Python). A 2-D run costs about as much as 20 1-D runs;
     the default keeps the whole run within 15 minutes on two cores (measured in
     benchmarks/results/reproduce.json)."""
-    n_test: int | None = None
+    n_test: int | None = field(
+        default=None, metadata=_validate.bounded("int", 2, 1_000_000, none=True, fix="e.g. 10000")
+    )
     """Test set size of the final metrics (default: 10,000, and 2,000 in quick runs)."""
-    dpi: int = 100
+    dpi: int = field(default=100, metadata=_validate.bounded("int", 20, 1200, fix="300 for print"))
     """Resolution of the report's figures (300 for print)."""
 
     def __post_init__(self) -> None:
         _validate.boolean("quick", self.quick)
         _validate.choice("save_models", self.save_models, SAVE_MODELS)
-        if self.n_test is not None:
-            _validate.integer("n_test", self.n_test, 2, fix="e.g. 10000")
-        if self.seeds_2d is not None:
-            _validate.integer("seeds_2d", self.seeds_2d, 1, fix="e.g. 5, or None for all")
-        _validate.integer("dpi", self.dpi, 20, 1200, fix="300 for print")
+        _validate.check_fields(self)  # the bounds declared beside the fields
 
     @property
     def n_checkpoints(self) -> int:

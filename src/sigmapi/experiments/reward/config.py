@@ -52,32 +52,31 @@ class GateConfig:
     feedback: str = Gating.feedback
     """Per-unit feedback: "action" (the chosen action's actor weights, positive part, over
     their largest) or "none" (every unit 1)."""
-    gate_scale: float = Gating.scale
+    gate_scale: float = field(
+        default=Gating.scale,
+        metadata=_validate.bounded("number", 0, 1e6, lo_open=True, fix="e.g. 0.5"),
+    )
     """TD error that opens the gate fully (the factor is clipped to [0, 1])."""
-    gate_eps: float = Gating.eps
+    gate_eps: float = field(
+        default=Gating.eps, metadata=_validate.bounded("number", 0, 1, lo_open=True, fix="e.g. 0.3")
+    )
     """Learning rate of the gated update."""
-    gate_sigma: float = Gating.sigma
+    gate_sigma: float = field(
+        default=Gating.sigma,
+        metadata=_validate.bounded(
+            "number", 0, 1e3, lo_open=True, fix="e.g. 1.0; 1e-5 moves the winner alone"
+        ),
+    )
     """Neighbourhood width of the gated update, in map units."""
     gate_view: str = Gating.view
     """The view that learns: "next" (the state the step led to, the goal's own view on the
     rewarded step) or "start" (the state the step started from)."""
 
     def __post_init__(self) -> None:
+        _validate.check_fields(self)  # the bounds declared beside the fields
         _validate.choice("surprise", self.surprise, SURPRISE)
         _validate.choice("feedback", self.feedback, FEEDBACK)
         _validate.choice("gate_view", self.gate_view, VIEWS)
-        scale = _validate.positive("gate_scale", self.gate_scale, fix="e.g. 0.5")
-        eps = _validate.number("gate_eps", self.gate_eps, 0.0, 1.0, lo_open=True, fix="e.g. 0.3")
-        sigma = _validate.number(
-            "gate_sigma",
-            self.gate_sigma,
-            0.0,
-            1e3,
-            lo_open=True,
-            fix="e.g. 1.0; 1e-5 moves the winner alone",
-        )
-        for name, value in (("gate_scale", scale), ("gate_eps", eps), ("gate_sigma", sigma)):
-            object.__setattr__(self, name, value)
 
     def gating(self) -> Gating:
         """The loop's settings (:class:`~sigmapi.agents.gated.Gating`)."""
@@ -97,11 +96,11 @@ class RewardRunConfig:
 
     methods: tuple[str, ...] = METHODS
     """Maps to compare ("frozen", "gated", "shuffled"; "shuffled" needs "gated")."""
-    episodes: int = field(default=300, metadata=_validate.bounded("int", 1))
+    episodes: int = field(default=300, metadata=_validate.bounded("int", 1, 1_000_000))
     """Episodes of reinforcement learning per seed and method."""
-    block: int = field(default=20, metadata=_validate.bounded("int", 1))
+    block: int = field(default=20, metadata=_validate.bounded("int", 1, 1_000_000))
     """Episodes per point of the learning curves (and the window of the 80 % criterion)."""
-    final_episodes: int = field(default=100, metadata=_validate.bounded("int", 1))
+    final_episodes: int = field(default=100, metadata=_validate.bounded("int", 1, 1_000_000))
     """The final success rate is measured over this many last episodes."""
     target: float = field(
         default=0.8, metadata=_validate.bounded("number", 0, 1, lo_open=True, fix="e.g. 0.8")
@@ -111,7 +110,7 @@ class RewardRunConfig:
         default=0.2, metadata=_validate.bounded("number", 0, 0.5, lo_open=True, fix="e.g. 0.2")
     )
     """Chebyshev radius around the goal of the region "near the goal" (the magnification)."""
-    n_test: int = field(default=4000, metadata=_validate.bounded("int", 1))
+    n_test: int = field(default=4000, metadata=_validate.bounded("int", 1, 1_000_000))
     """Test objects (views at random z) that score the maps."""
 
     def __post_init__(self) -> None:

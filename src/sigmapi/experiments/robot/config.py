@@ -22,6 +22,7 @@ from typing import Any
 import gymnasium as gym
 
 from sigmapi import _validate
+from sigmapi._outputs import OUTPUT
 from sigmapi.agents import ActorCriticConfig
 from sigmapi.config import BACKEND_NAMES
 from sigmapi.envs import FEATURES, STATES, Features, TrueZObservation, make_state_env
@@ -64,7 +65,7 @@ class RobotEnvConfig:
         ),
     )
     """Units per axis of the retina and gaze codes."""
-    code_width: float = 1.0
+    code_width: float = field(default=1.0, metadata=_validate.bounded("width", 0, lo_open=True))
     """Width of the codes' hills, grid units."""
     moved_share: float = field(default=0.0, metadata=_validate.bounded("number", 0, 1))
     """Share of recorded pairs in which the ball moved between the two views (a nuisance)."""
@@ -72,7 +73,7 @@ class RobotEnvConfig:
     """Retinal position in the docking episodes: "projection" or "pixels" (rendered, slower)."""
     saccade_rate: float = field(default=1.0, metadata=_validate.bounded("number", 0, 1))
     """Probability of a saccade per docking step (1: the head looks around every step)."""
-    max_steps: int = field(default=100, metadata=_validate.bounded("int", 1))
+    max_steps: int = field(default=100, metadata=_validate.bounded("int", 1, 100_000))
     """Time limit of a docking episode (Gymnasium's TimeLimit)."""
 
     def __post_init__(self) -> None:
@@ -94,13 +95,15 @@ class RobotEnvConfig:
 class RobotMapConfig:
     """The map learned from the recorded view pairs, its scoring and how the learner reads it."""
 
-    map_shape: tuple[int, ...] = (8, 8)
+    map_shape: tuple[int, ...] = field(
+        default=(8, 8), metadata=_validate.bounded("ints", 1, 1024, count=2, fix="e.g. 8x8")
+    )
     """Grid of the Sigma-Pi map."""
-    train_pairs: int = field(default=10_000, metadata=_validate.bounded("int", 1))
+    train_pairs: int = field(default=10_000, metadata=_validate.bounded("int", 1, 10_000_000))
     """View pairs recorded from saccades for the map (body and ball still)."""
-    iterations: int = field(default=40_000, metadata=_validate.bounded("int", 1))
+    iterations: int = field(default=40_000, metadata=_validate.bounded("int", 1, 100_000_000))
     """Learning iterations of the map (the recorded pairs are used in passes)."""
-    eval_pairs: int = field(default=3000, metadata=_validate.bounded("int", 1))
+    eval_pairs: int = field(default=3000, metadata=_validate.bounded("int", 1, 1_000_000))
     """Calibration and test pairs (each) that score the map against the true z."""
     backend: str = "auto"
     """Kernel that learns and reads the map ("auto": the fast one when it is installed)."""
@@ -112,8 +115,8 @@ class RobotMapConfig:
     """Width of the bump features (map and true-z codes), in grid units."""
 
     def __post_init__(self) -> None:
-        _validate.check_fields(self)
         object.__setattr__(self, "map_shape", _validate.shape("map_shape", self.map_shape))
+        _validate.check_fields(self)
         if len(self.map_shape) != 2:
             raise _validate.fail("map_shape", "2 axes (z is 2-D)", self.map_shape, "e.g. 8x8")
         _validate.choice("backend", self.backend, BACKEND_NAMES)
@@ -124,15 +127,15 @@ class RobotMapConfig:
 class RobotRunConfig:
     """What is compared and for how long: the states, the episodes, the curves' blocks."""
 
-    episodes: int = field(default=400, metadata=_validate.bounded("int", 1))
+    episodes: int = field(default=400, metadata=_validate.bounded("int", 1, 1_000_000))
     """Docking episodes per seed and state."""
-    final_episodes: int = field(default=100, metadata=_validate.bounded("int", 1))
+    final_episodes: int = field(default=100, metadata=_validate.bounded("int", 1, 1_000_000))
     """Final success is measured over this many last episodes."""
-    block: int = field(default=50, metadata=_validate.bounded("int", 1))
+    block: int = field(default=50, metadata=_validate.bounded("int", 1, 1_000_000))
     """Episodes per point of the learning curves."""
     states: tuple[str, ...] = STATES
     """States compared: map, retina, retina_gaze, true_z."""
-    render: str | None = None
+    render: str | None = field(default=None, metadata=OUTPUT)
     """Also write an animated GIF of one episode of the first seed's map learner (third-person
     and head cameras) to this file."""
 

@@ -20,11 +20,21 @@ class StreamConfig:
     """The task and the map's settings (a preset name; ``sigmapi presets``)."""
     overrides: tuple[str, ...] = field(default=(), metadata=KEY_VALUES)
     """``key=value`` changes to the preset, e.g. ``iterations=50000`` (one per change)."""
-    dwells: tuple[int, ...] = field(default=(1, 2, 4, 8, 16), metadata={"sep": ","})
+    dwells: tuple[int, ...] = field(
+        default=(1, 2, 4, 8, 16),
+        metadata=_validate.bounded("ints", 1, 100_000, fix="saccades per position", sep=","),
+    )
     """Dwell times: saccades (frames) per object position."""
-    traces: tuple[float, ...] = (0.0, 0.5)
+    traces: tuple[float, ...] = field(
+        default=(0.0, 0.5),
+        metadata=_validate.bounded(
+            "numbers", 0, 1, hi_open=True, fix="trace constants, e.g. 0,0.5"
+        ),
+    )
     """Trace constants of the trace rule (0: the two-view rule on consecutive frames)."""
-    n_test: int = field(default=10_000, metadata=_validate.bounded("int", 10, fix="e.g. 10000"))
+    n_test: int = field(
+        default=10_000, metadata=_validate.bounded("int", 10, 1_000_000, fix="e.g. 10000")
+    )
     """Test z's (and calibration z's) of the evaluation."""
 
     def __post_init__(self) -> None:

@@ -44,7 +44,7 @@ from typing import Any
 
 from sigmapi import _validate
 from sigmapi._lock import output_lock
-from sigmapi._outputs import claim_folder
+from sigmapi._outputs import INPUT, claim_folder
 from sigmapi.config import SOMConfig, check_map_fits_task, load_preset
 from sigmapi.errors import ConfigError
 from sigmapi.executor import Executor, Outcome, job_memory
@@ -392,7 +392,7 @@ def _sweep(
 class SweepConfig:
     """What ``sigmapi sweep`` runs: a spec file, and how failed runs and the figure are handled."""
 
-    spec: str
+    spec: str = field(metadata=INPUT)
     """The sweep spec, a TOML file: preset, seeds, n_test, [set] and [grid] (see
     :mod:`sigmapi.experiments.sweep.run`); its seeds are the sweep's default seeds."""
     retry_failed: bool = False

@@ -164,10 +164,23 @@ def read_table(path: str | Path) -> Table | None:
     try:
         text = data[:end].decode("utf-8")
     except UnicodeDecodeError as exc:
+        first = data[: data.find(b"\n")].decode("utf-8", "replace").rstrip("\r").split(",")
+        if any(c not in first for c in REQUIRED):  # no sweep table's header: garbage
+            raise ConfigError(
+                f"{str(p)!r} is unreadable as a sigmapi sweep table (not UTF-8 text at byte "
+                f"{exc.start}, no sweep table's header); it is left as it is: give a new "
+                "--out, or move it away"
+            ) from None
         raise _damaged(p, f"not UTF-8 text at byte {exc.start}") from None
     reader = csv.reader(io.StringIO(text, newline=""))
     try:
         header = next(reader, None)
+        if header is None and data:  # bytes without one line end: garbage, not a table
+            raise ConfigError(
+                f"{str(p)!r} is unreadable as a sigmapi sweep table (its {len(data):,} bytes "
+                "hold no complete line of text); it is left as it is: give a new --out, or "
+                "move it away"
+            )
         if header is None:
             raise ConfigError(
                 f"{str(p)!r} is empty, not a sigmapi sweep table; remove it or give a new --out"
