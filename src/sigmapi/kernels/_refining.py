@@ -52,19 +52,28 @@ the best exact score (the float64 sums of about 1,000 terms round by about 1e-13
 ROWS = 16
 """Pairs per parallel work item."""
 
+F32_EPS = 2.0**-23
+"""float32's relative spacing: the bounds' float32 sums widen by it per term."""
+
 
 @dataclass
 class SearchIndex:
     """What a round's searches read: ``tile_x`` ``(n_x,)`` and ``tile_y`` ``(n_y,)``, the
     tile of every grid point of each code (input pair ``(i, j)`` lies in tile
-    ``tile_x[i] * tiles_y + tile_y[j]``); ``norms`` ``(tiles_x * tiles_y, K)`` float32 (rounded
-    up); ``raw_t`` ``(K, n_x n_y)`` the weights transposed; ``scale``, the state's scales it
-    was made from (a changed state needs a new index)."""
+    ``tile_x[i] * tiles_y + tile_y[j]``); ``members_x`` ``(tiles_x, TX)`` and ``members_y``
+    ``(tiles_y, TY)``, the grid points of every tile (ascending, -1 where a tile at the
+    grid's edge has fewer); ``norms`` ``(tiles_x * tiles_y, K)`` float32 (rounded up);
+    ``blocks`` ``(K, tiles_x * tiles_y, TX * TY)`` the weights by unit and tile, a tile's
+    input pairs ``(members_x[a, u], members_y[b, v])`` at ``u * TY + v`` (zeros where a
+    tile has fewer); ``scale``, the state's scales it was made from (a changed state needs a
+    new index)."""
 
     tile_x: NDArray[np.int64]
     tile_y: NDArray[np.int64]
+    members_x: NDArray[np.int64]
+    members_y: NDArray[np.int64]
     norms: NDArray[np.float32]
-    raw_t: NDArray[np.floating]
+    blocks: NDArray[np.floating]
     scale: NDArray[np.float64]
     scratch: dict[str, NDArray[Any]] = field(default_factory=dict, repr=False)
     """Work arrays of the searches, kept for the next one (a round searches its pairs in
@@ -79,7 +88,9 @@ class SearchIndex:
 
     def fits(self, raw: NDArray[np.floating], scale: NDArray[np.float64]) -> bool:
         """Whether this index was made from weights of this shape and these scales."""
-        return self.raw_t.shape == raw.shape[::-1] and np.array_equal(self.scale, scale)
+        n = self.tile_x.size * self.tile_y.size
+        fit = raw.shape == (n, self.blocks.shape[0]) and raw.dtype == self.blocks.dtype
+        return fit and np.array_equal(self.scale, scale)
 
 
 def _tiles(shape: tuple[int, ...], tile: int) -> tuple[NDArray[np.int64], int]:
@@ -108,6 +119,29 @@ def _tile_sq(raw, tile_x, tile_y, n_ty, n_tiles):  # pragma: no cover - compiled
     return out
 
 
+def _members(tiles: NDArray[np.int64], count: int) -> NDArray[np.int64]:
+    """The grid points of every tile ``(count, most)``, ascending, -1 where fewer."""
+    most = int(np.bincount(tiles, minlength=count).max())
+    out = np.full((count, most), -1, dtype=np.int64)
+    order = np.argsort(tiles, kind="stable")
+    first = np.searchsorted(tiles[order], np.arange(count))
+    slot = np.arange(tiles.size) - first[tiles[order]]
+    out[tiles[order], slot] = order
+    return out
+
+
+@njit(cache=True, parallel=True)
+def _to_blocks(raw, tile, slot, blocks):  # pragma: no cover - compiled
+    """``blocks[k, tile[p], slot[p]] = raw[p, k]``, parallel over blocks of 32 units."""
+    n_pairs, k_units = raw.shape
+    for c in prange((k_units + 31) // 32):
+        for p in range(n_pairs):
+            t = tile[p]
+            e = slot[p]
+            for k in range(c * 32, min(k_units, c * 32 + 32)):
+                blocks[k, t, e] = raw[p, k]
+
+
 def build(
     raw: NDArray[np.floating],
     scale: NDArray[np.float64],
@@ -125,7 +159,17 @@ def build(
     norms = exact.astype(np.float32)
     low = norms < exact  # round up, so that the float32 norms still bound
     norms[low] = np.nextafter(norms[low], np.float32(np.inf))
-    return SearchIndex(tx, ty, norms, np.ascontiguousarray(raw.T), scale.copy())
+    mx, my = _members(tx, ntx), _members(ty, nty)
+    at_x = np.empty(tx.size, dtype=np.int64)  # a grid point's place in its tile
+    at_x[mx[mx >= 0]] = np.nonzero(mx >= 0)[1]
+    at_y = np.empty(ty.size, dtype=np.int64)
+    at_y[my[my >= 0]] = np.nonzero(my >= 0)[1]
+    tiles = (tx[:, None] * nty + ty[None, :]).ravel()
+    slot = (at_x[:, None] * my.shape[1] + at_y[None, :]).ravel()
+    blocks = np.zeros((raw.shape[1], ntx * nty, mx.shape[1] * my.shape[1]), dtype=raw.dtype)
+    copy: Any = _to_blocks  # a numba dispatcher
+    copy(raw, tiles, slot, blocks)
+    return SearchIndex(tx, ty, mx, my, norms, blocks, scale.copy())
 
 
 @njit(cache=True, nogil=True)
@@ -161,17 +205,24 @@ def _bound_row(
     thr = tol * mx * my
     for k in range(k_units):
         s[k] = 0.0
+    n = 0
     for a in range(xs.shape[0]):
         if xt[a] * my <= thr:
             continue
         for b in range(n_ty):
             if xt[a] * yt[b] <= thr:
                 continue
+            # float32 sums (eight units a vector); the tile's norm rounded up to float32
             sv = np.sqrt(xs[a] * ys[b])
+            sv32 = np.float32(sv)
+            if sv32 < sv:
+                sv32 = np.nextafter(sv32, np.float32(np.inf))
             row = norms[a * n_ty + b]
             for k in range(k_units):
-                s[k] += sv * row[k]
-    up = 1.0 + MARGIN
+                s[k] += sv32 * row[k]
+            n += 1
+    # n positive float32 terms: within gamma_n < (n + 1) 2^-23 of their exact sum
+    up = 1.0 + MARGIN + (n + 2) * F32_EPS
     if rule == MIN_DISTANCE:
         down = 1.0 - MARGIN
         for k in range(k_units):
@@ -192,7 +243,7 @@ def _bound_rows(norms, scale, sqnorm, tile_x, tile_y, n_tx, n_ty, x, y, tol, rul
         xt = np.empty(n_tx)
         ys = np.empty(n_ty)
         yt = np.empty(n_ty)
-        s = np.empty(k_units)
+        s = np.empty(k_units, dtype=np.float32)
         for b in range(c * ROWS, min(n_rows, (c + 1) * ROWS)):
             u = ub[b]
             _bound_row(
@@ -230,7 +281,7 @@ def _kept(x, y, tol, ib, jb):  # pragma: no cover - compiled
 
 
 @njit(cache=True, nogil=True)
-def _exact(raw_t, scale, sqnorm, rule, cand, m, x, y, ib, ni, jb, nj, thr, score):
+def _exact(raw, scale, sqnorm, rule, cand, m, x, y, ib, ni, jb, nj, thr, score):
     """Scores of units ``cand[:m]`` (m <= 4) into ``score[:m]``: the sums of
     ``_rows.activate`` and the score of ``_rows._winner``, four independent sums per pass.
 
@@ -239,8 +290,7 @@ def _exact(raw_t, scale, sqnorm, rule, cand, m, x, y, ib, ni, jb, nj, thr, score
     it does not: adding a zero leaves a sum that started at +0 unchanged, so the sums are
     those of the kept pairs, bit for bit, without a branch or a list."""  # pragma: no cover
     ny = y.shape[0]
-    r0, r1 = raw_t[cand[0]], raw_t[cand[min(1, m - 1)]]
-    r2, r3 = raw_t[cand[min(2, m - 1)]], raw_t[cand[min(3, m - 1)]]
+    c0, c1, c2, c3 = cand[0], cand[min(1, m - 1)], cand[min(2, m - 1)], cand[min(3, m - 1)]
     a0 = 0.0
     a1 = 0.0
     a2 = 0.0
@@ -254,10 +304,10 @@ def _exact(raw_t, scale, sqnorm, rule, cand, m, x, y, ib, ni, jb, nj, thr, score
             v = xi * y[j]
             v = v if abs(v) > thr else 0.0
             p = base + j
-            a0 += r0[p] * v
-            a1 += r1[p] * v
-            a2 += r2[p] * v
-            a3 += r3[p] * v
+            a0 += raw[p, c0] * v
+            a1 += raw[p, c1] * v
+            a2 += raw[p, c2] * v
+            a3 += raw[p, c3] * v
     sums = (a0, a1, a2, a3)
     for g in range(m):
         k = cand[g]
@@ -269,54 +319,229 @@ def _exact(raw_t, scale, sqnorm, rule, cand, m, x, y, ib, ni, jb, nj, thr, score
 
 
 @njit(cache=True, nogil=True)
-def _settle_row(raw_t, scale, sqnorm, x, y, tol, rule, ub, ib, jb, cand, score):
-    """The winner of one pair from its bounds ``ub`` (overwritten): the units summed
-    exactly, best bound first and four at a time, until no bound left reaches the best
-    score; ties to the lowest index."""  # pragma: no cover - compiled
+def _spans(x, y, tol, ncol, ib, j0, jn, top):  # pragma: no cover - compiled
+    """The prefilter of :func:`_kept` as spans: the ``i`` with ``|x_i| max|y| > cut`` into
+    ``ib``; per row of ``ncol`` columns of y's grid that holds a ``j`` with ``|y_j| max|x| >
+    cut``, the columns from its first to its last such ``j`` (start ``j0``, length ``jn``)
+    and their largest ``|y_j|`` (``top``); returns the counts of both and the cut. A span may
+    hold a ``j`` the prefilter drops (a row's kept columns need not be adjacent): its
+    products are below the cut, since ``|x_i y_j| <= max|x| |y_j|`` holds in rounded
+    arithmetic too (rounding is monotone), and count as zeros."""
+    mx = 0.0
+    for i in range(x.shape[0]):
+        mx = max(mx, abs(x[i]))
+    my = 0.0
+    for j in range(y.shape[0]):
+        my = max(my, abs(y[j]))
+    thr = tol * mx * my
+    ni = 0
+    for i in range(x.shape[0]):  # without a branch: stored, and kept by counting it
+        ib[ni] = i
+        ni += abs(x[i]) * my > thr
+    nr = 0
+    for r in range(y.shape[0] // ncol):
+        first = ncol
+        last = -1
+        t = 0.0
+        for c in range(ncol):
+            a = abs(y[r * ncol + c])
+            if a * mx > thr:
+                last = c
+                first = min(first, c)
+                t = max(t, a)
+        if last >= 0:
+            j0[nr] = r * ncol + first
+            jn[nr] = last - first + 1
+            top[nr] = t
+            nr += 1
+    return ni, nr, thr
+
+
+@njit(cache=True, nogil=True)
+def _by_tile(x, members, xv, top):  # pragma: no cover - compiled
+    """A code by tile: ``xv[a, u] = x[members[a, u]]`` (0 where a tile has fewer points),
+    ``top[a]`` its largest ``|x_i|``; returns the code's largest ``|x_i|``."""
+    m = 0.0
+    for a in range(members.shape[0]):
+        t = 0.0
+        for u in range(members.shape[1]):
+            i = members[a, u]
+            v = x[i] if i >= 0 else 0.0
+            xv[a, u] = v
+            t = max(t, abs(v))
+        top[a] = t
+        m = max(m, t)
+    return m
+
+
+@njit(cache=True, nogil=True)
+def _products(x, y, tol, members_x, members_y, xv, yv, xt, yt, tl, vb):
+    """The pair's tiles and products: the tiles ``a * tiles_y + b`` whose largest ``|x_i
+    y_j|`` passes the cut of ``_rows._pairs`` into ``tl``, and on row ``q`` of ``vb`` (laid
+    out as a block of :class:`SearchIndex`) the products of tile ``tl[q]``: ``x_i y_j`` where
+    ``_pairs`` keeps it, else a zero. Every kept pair lies in such a tile (rounding is
+    monotone: ``|x_i y_j| <= max_tile |x| max_tile |y|`` holds rounded too). ``xv, yv, xt,
+    yt``: scratch of :func:`_by_tile`. Returns the tile count; fills nothing if ``vb`` has
+    fewer rows (call again with more)."""
+    n_tx, n_ty = members_x.shape[0], members_y.shape[0]  # pragma: no cover - compiled
+    n_mx, n_my = members_x.shape[1], members_y.shape[1]
+    mx = _by_tile(x, members_x, xv, xt)
+    my = _by_tile(y, members_y, yv, yt)
+    thr = tol * mx * my
+    n = 0
+    for a in range(n_tx):
+        if xt[a] * my <= thr:
+            continue
+        for b in range(n_ty):
+            n += xt[a] * yt[b] > thr
+    if n > vb.shape[0]:
+        return n
+    n = 0
+    for a in range(n_tx):
+        if xt[a] * my <= thr:
+            continue
+        for b in range(n_ty):
+            if xt[a] * yt[b] <= thr:
+                continue
+            yb = yv[b]
+            row = vb[n]
+            for u in range(n_mx):
+                xi = xv[a, u]
+                out = row[u * n_my : (u + 1) * n_my]
+                for e in range(n_my):
+                    v = xi * yb[e]
+                    out[e] = v if abs(v) > thr else 0.0
+            tl[n] = a * n_ty + b
+            n += 1
+    return n
+
+
+@njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
+def _approx(blocks, tl, n, vb):  # pragma: no cover - compiled
+    """``sum_p w_p v_p`` over the tiles ``tl[:n]`` of one unit's ``blocks`` and the products
+    ``vb`` of :func:`_products`, in any order (the compiler's vectors): within ``gamma_n
+    sum_p |w_p v_p|`` of the sum in the order of ``_rows._pairs``, as every order is."""
+    acc = 0.0
+    for q in range(n):
+        w = blocks[tl[q]]
+        v = vb[q]
+        part = 0.0
+        for e in range(w.shape[0]):
+            part += w[e] * v[e]
+        acc += part
+    return acc
+
+
+APPROX = 1e-10
+"""Relative slack of a score summed in any order (:func:`_approx`) against the score summed
+in the order of ``_rows._pairs``: both lie within ``gamma_n A`` of the exact real sum, ``A``
+the sum of the products' magnitudes (``n <= 50,625`` products: ``gamma_n < 6e-12``), and
+``scale_k A`` is at most the unit's tile bound; the slack ``APPROX (|bound| + |score| +
+2 scale_k^2 |w_k|^2)`` covers twice that, the scale's, the distance's and the bound's
+roundings many times over."""
+
+
+@njit(cache=True, nogil=True)
+def _settle_row(blocks, raw, scale, sqnorm, x, y, tol, rule, ub, tl, n, vb, done, near, cand):
+    """The winner of one pair from its bounds ``ub`` and its tiles and products (``tl[:n]``,
+    ``vb``, :func:`_products`): the unit of the largest bound scored first, then every unit
+    whose bound reaches the largest lower end of a score so far, each scored in any order
+    (:func:`_approx`) with the slack of :data:`APPROX`; if more than one unit's score may
+    reach the best one's, those few are summed again in the order of ``_rows._pairs``
+    (:func:`_exact`) and the best of them wins, ties to the lowest index. A unit left out has
+    a bound below a score some unit reaches, and a unit outscored beyond both slacks cannot
+    win: the winners of the full search, bit for bit."""  # pragma: no cover - compiled
     k_units = ub.shape[0]
+    g = 0
+    for k in range(1, k_units):
+        if ub[k] > ub[g]:
+            g = k
+    m = 0  # units scored: done[:m], their scores cand[:m] and slacks near[:m]
+    low = -np.inf  # the largest lower end of a score so far
+    best = 0  # the position in done of the best score
+    for j in range(-1, k_units):
+        k = g if j < 0 else j
+        if j >= 0 and (j == g or ub[j] < low):
+            continue
+        h = scale[k] * _approx(blocks[k], tl, n, vb)
+        c = scale[k] * scale[k] * sqnorm[k]
+        a = 2.0 * h - c if rule == MIN_DISTANCE else h
+        d = APPROX * (abs(ub[k]) + abs(a) + 2.0 * c)
+        done[m] = k
+        cand[m] = a
+        near[m] = d
+        if m == 0 or a > cand[best]:
+            best = m
+        low = max(low, a - d)
+        m += 1
+    lo = cand[best] - near[best]
+    nn = 0
+    for q in range(m):
+        if cand[q] + near[q] >= lo:
+            done[nn] = done[q]
+            nn += 1
+    if nn == 1:
+        return done[0]
+    return _exact_best(raw, scale, sqnorm, rule, x, y, tol, done, nn)
+
+
+@njit(cache=True, nogil=True)
+def _exact_best(raw, scale, sqnorm, rule, x, y, tol, units, nu):  # pragma: no cover
+    """The best of units ``units[:nu]`` by their scores in the order of ``_rows._pairs``
+    (:func:`_exact`, four at a time); ties to the lowest index."""
+    ib = np.empty(x.shape[0], dtype=np.int64)
+    jb = np.empty(y.shape[0], dtype=np.int64)
+    cand = np.empty(4, dtype=np.int64)
+    score = np.empty(4)
     ni, nj, thr = _kept(x, y, tol, ib, jb)
     best = -np.inf
     win = -1
-    while True:
-        m = 0
-        for g in range(4):
-            c = 0
-            for k in range(1, k_units):
-                if ub[k] > ub[c]:
-                    c = k
-            if ub[c] == -np.inf or ub[c] < best:
-                break
-            cand[g] = c
-            ub[c] = -np.inf
-            m += 1
-        if m == 0:
-            return win
-        _exact(raw_t, scale, sqnorm, rule, cand, m, x, y, ib, ni, jb, nj, thr, score)
+    for s in range(0, nu, 4):
+        m = min(4, nu - s)
+        for g in range(m):
+            cand[g] = units[s + g]
+        _exact(raw, scale, sqnorm, rule, cand, m, x, y, ib, ni, jb, nj, thr, score)
         for g in range(m):
             if score[g] > best or (score[g] == best and cand[g] < win):
                 best = score[g]
                 win = cand[g]
+    return win
 
 
 @njit(cache=True, parallel=True)
-def _settle_rows(raw_t, scale, sqnorm, x, y, tol, rule, ub, order, out):
+def _settle_rows(
+    blocks, raw, scale, sqnorm, members_x, members_y, x, y, tol, rule, ub, order, out
+):  # pragma: no cover - compiled
     """:func:`_settle_row` for every row, in parallel blocks of :data:`ROWS` rows visited in
-    ``order``."""  # pragma: no cover - compiled
+    ``order``."""
     n_rows = x.shape[0]
+    k_units = ub.shape[1]
+    n_tx, n_ty = members_x.shape[0], members_y.shape[0]
+    width = members_x.shape[1] * members_y.shape[1]
     for c in prange((n_rows + ROWS - 1) // ROWS):
-        ib = np.empty(x.shape[1], dtype=np.int64)
-        jb = np.empty(y.shape[1], dtype=np.int64)
-        cand = np.empty(4, dtype=np.int64)
-        score = np.empty(4)
+        xv = np.empty(members_x.shape)
+        yv = np.empty(members_y.shape)
+        xt = np.empty(n_tx)
+        yt = np.empty(n_ty)
+        tl = np.empty(n_tx * n_ty, dtype=np.int64)
+        vb = np.empty((64, width))
+        done = np.empty(k_units, dtype=np.int64)
+        near = np.empty(k_units)
+        cand = np.empty(k_units)
         for r in range(c * ROWS, min(n_rows, (c + 1) * ROWS)):
             b = order[r]
-            out[b] = _settle_row(
-                raw_t, scale, sqnorm, x[b], y[b], tol, rule, ub[b], ib, jb, cand, score
-            )
+            n = _products(x[b], y[b], tol, members_x, members_y, xv, yv, xt, yt, tl, vb)
+            if n > vb.shape[0]:
+                vb = np.empty((n, width))
+                n = _products(x[b], y[b], tol, members_x, members_y, xv, yv, xt, yt, tl, vb)
+            # left unformatted: the arguments in the rows of the kernel's signature
+            out[b] = _settle_row(blocks, raw, scale, sqnorm, x[b], y[b], tol, rule, ub[b], tl,
+                                 n, vb, done, near, cand)  # fmt: skip
 
 
 def search(
     index: SearchIndex,
+    raw: NDArray[np.floating],
     sqnorm: NDArray[np.float64],
     x: NDArray[np.float64],
     y: NDArray[np.float64],
@@ -324,9 +549,9 @@ def search(
     rule: int,
 ) -> NDArray[np.int64]:
     """Winners ``(B,)`` of the pairs ``(x_b, y_b)`` under the compiled rule ``rule`` (one of
-    :data:`RULES`) on the weights of ``index`` (with their exact ``sqnorm``): the bounds of
-    all pairs first, then the exact sums with the pairs ordered by their likely winner (so
-    that pairs summing the same units come together)."""
+    :data:`RULES`) on the weights ``raw`` of ``index`` (with their exact ``sqnorm``): the
+    bounds of all pairs first, then the scores of the units that can win, with the pairs
+    ordered by their likely winner (so that pairs reading the same units come together)."""
     n_rows, k_units = x.shape[0], index.norms.shape[1]
     n_tx, n_ty = int(index.tile_x.max()) + 1, int(index.tile_y.max()) + 1
     ub = index.work("ub", n_rows, k_units, np.float64)
@@ -338,38 +563,48 @@ def search(
           float(tol), int(rule), ub, guess)  # fmt: skip
     out = np.empty(n_rows, dtype=np.int64)
     order = np.argsort(guess, kind="stable")
-    settle(index.raw_t, index.scale, sqnorm, x, y, float(tol), int(rule), ub, order, out)
+    settle(index.blocks, raw, index.scale, sqnorm, index.members_x, index.members_y, x, y,
+           float(tol), int(rule), ub, order, out)  # fmt: skip
     return out
 
 
 @njit(cache=True, parallel=True)
-def _hard_sums(sums, mass, order, starts, x1, y1, tol):  # pragma: no cover - compiled
+def _hard_sums(sums, mass, order, starts, x1, y1, tol, ncol):  # pragma: no cover - compiled
     """``sums[k, p] += v_p`` over the kept pairs ``p`` of view 1 of every pair that unit
     ``k`` won and ``mass[k] += 1`` per such pair; ``order[starts[k]:starts[k + 1]]``: those
     pairs in their order. Parallel over units (each unit's sums on one thread, its pairs in
-    order). Runs over the prefiltered grid of :func:`_kept` and adds a zero where
-    ``_rows._pairs`` drops a pair (a sum that started at +0 is unchanged by it), without a
-    branch or a list."""
+    order). Runs over the spans of :func:`_spans` (adjacent columns of a row of y's grid, so
+    that the compiler adds several at once; a span none of whose products with ``x_i``
+    passes the cut is skipped) and adds a zero where ``_rows._pairs`` drops a
+    pair (a sum that started at +0 is unchanged by it), without a branch or a list."""
     k_units = sums.shape[0]
     ny = y1.shape[1]
     for c in prange((k_units + 15) // 16):
         ib = np.empty(x1.shape[1], dtype=np.int64)
-        jb = np.empty(ny, dtype=np.int64)
+        j0 = np.empty(ny, dtype=np.int64)
+        jn = np.empty(ny, dtype=np.int64)
+        top = np.empty(ny)
         for k in range(c * 16, min(k_units, c * 16 + 16)):
             row = sums[k]
             for r in range(starts[k], starts[k + 1]):
                 b = order[r]
                 x = x1[b]
                 y = y1[b]
-                ni, nj, thr = _kept(x, y, tol, ib, jb)
+                ni, nr, thr = _spans(x, y, tol, ncol, ib, j0, jn, top)
                 for u in range(ni):
                     i = ib[u]
                     xi = x[i]
+                    ax = abs(xi)
                     base = i * ny
-                    for w in range(nj):
-                        j = jb[w]
-                        v = xi * y[j]
-                        row[base + j] += v if abs(v) > thr else 0.0
+                    for q in range(nr):
+                        if ax * top[q] <= thr:  # no product of the span passes the cut
+                            continue
+                        m = jn[q]
+                        ys = y[j0[q] : j0[q] + m]  # from 0: no wrap-around check, vectors
+                        rs = row[base + j0[q] : base + j0[q] + m]
+                        for t in range(m):
+                            v = xi * ys[t]
+                            rs[t] += v if abs(v) > thr else 0.0
                 mass[k] += 1.0
 
 
@@ -380,15 +615,17 @@ def hard_sums(
     x1: NDArray[np.float64],
     y1: NDArray[np.float64],
     tol: float,
+    ncol: int = 0,
 ) -> None:
     """Add the pairs ``(x1_b, y1_b)`` to the sums ``(K, n_x n_y)`` and ``mass`` of their
     winners, each unit's pairs in order: the arithmetic of
     :meth:`sigmapi.rules.BatchMean.accumulate` at ``sigma = 0`` (a unit's sums gain
-    ``1 * v = v``, the others' a zero), bit for bit, on the kernel's sparse pairs."""
+    ``1 * v = v``, the others' a zero), bit for bit, on the kernel's sparse pairs. ``ncol``:
+    the columns of a row of y's grid (0: y a line)."""
     order = np.argsort(winners, kind="stable")
     starts = np.searchsorted(winners[order], np.arange(sums.shape[0] + 1))
     driver: Any = _hard_sums  # a numba dispatcher
-    driver(sums, mass, order, starts, x1, y1, float(tol))
+    driver(sums, mass, order, starts, x1, y1, float(tol), int(ncol or y1.shape[1]))
 
 
 @njit(cache=True, parallel=True)

@@ -818,7 +818,7 @@ class FastKernel(KernelBase[FastState]):
             index = acc.index = _refining.build(
                 state.raw, state.scale, acc.code_shapes or ((nx,), (ny,))
             )
-        return _refining.search(index, state.sqnorm, xa, ya, state.tol, code)
+        return _refining.search(index, state.raw, state.sqnorm, xa, ya, state.tol, code)
 
     def refine_block(
         self,
@@ -842,7 +842,8 @@ class FastKernel(KernelBase[FastState]):
         k = self._refine_winners(state, acc, x0, y0, geometry, winner_rule)
         x1a, y1a = _codes(x1, nx, "x1"), _codes(y1, ny, "y1")
         if sigma == 0:
-            _refining.hard_sums(acc.sums, acc.mass, k, x1a, y1a, state.tol)
+            ncol = acc.code_shapes[1][-1] if acc.code_shapes else ny
+            _refining.hard_sums(acc.sums, acc.mass, k, x1a, y1a, state.tol, ncol)
         else:
             a = assignment(k, geometry, float(sigma))
             jb, pi, pv = state.scratch()[:3]
