@@ -8,7 +8,7 @@ Usage (from the repository root)::
 Measures, in CPU seconds of this process (all threads) per 1,000 refinement pairs, on the
 fast kernel: drawing the pairs (the task's sampler, into arrays it reuses, as the refinement
 draws them), the refinement's winner search of view 0
-(``sigmapi.kernels._refining``: bounds per tile, then exact sums for the units that can win;
+(``sigmapi.kernels._refining``: bounds per tile and group, then scores for the units that can win;
 ``GROUP`` blocks of 1,000 pairs per call, as the refinement calls the kernel) beside the full
 search it replaces (``fast.winners_of``), whether the two find the same winners on every timed
 pair, the share of the reference kernel's winners kept (2,000 pairs), the hard assignment's
@@ -91,8 +91,7 @@ def profile(model: SigmaPiSOM, blocks: int, with_floors: bool = False) -> dict[s
     # the search's work arrays touched, as after a round's first call (a round makes 30 calls
     # into the same memory; two timed calls would count its first page faults 15 times over)
     rows = max(len(b.x0) for b in batches)
-    acc.index.work("ub", rows, st.shape[0], np.float64).fill(0.0)
-    acc.index.work("guess", rows, 0, np.int64).fill(0)
+    acc.index.work("key", rows, 0, np.int64).fill(0)
 
     def search() -> list[np.ndarray]:
         return [fast.KERNEL._refine_winners(st, acc, b.x0, b.y0, geometry, rule) for b in batches]
@@ -142,7 +141,7 @@ copy reads the pair's weights from the stream, the other 15 find them in cache."
 
 
 @njit(cache=True)
-def _passes(raw_t, scale, sqnorm, rule, x, y, tol, repeats):  # pragma: no cover - compiled
+def _passes(raw, scale, sqnorm, rule, x, y, tol, repeats):  # pragma: no cover - compiled
     """CPU work of ``repeats`` exact passes of four units (``_refining._exact``) on one pair,
     its weights in cache after the first; returns the pair's prefiltered grid size."""
     ib = np.empty(x.shape[0], dtype=np.int64)
@@ -151,7 +150,7 @@ def _passes(raw_t, scale, sqnorm, rule, x, y, tol, repeats):  # pragma: no cover
     score = np.empty(4)
     ni, nj, thr = _refining._kept(x, y, tol, ib, jb)
     for _ in range(repeats):
-        _refining._exact(raw_t, scale, sqnorm, rule, cand, 4, x, y, ib, ni, jb, nj, thr, score)
+        _refining._exact(raw, scale, sqnorm, rule, cand, 4, x, y, ib, ni, jb, nj, thr, score)
     return ni * nj
 
 
@@ -189,19 +188,37 @@ def _summed(model: SigmaPiSOM, index: Any, x: np.ndarray, y: np.ndarray, rule: i
     return np.mean(need), np.mean(summed), np.mean(passes), np.mean(kept), np.mean(grid)
 
 
+@njit(cache=True)
+def _unit_bounds(norms, members_x, members_y, c, x, y, tol, rule, ub):  # pragma: no cover
+    """Every unit's bound for every pair of ``x, y`` into ``ub``, as the search bounds a unit
+    (``_refining._products``, then ``_refining._bounds`` over all units)."""
+    n_tx, n_ty = members_x.shape[0], members_y.shape[0]
+    xv, yv = np.empty(members_x.shape), np.empty(members_y.shape)
+    xt, yt, xs, ys = np.empty(n_tx), np.empty(n_ty), np.empty(n_tx), np.empty(n_ty)
+    tl = np.empty(n_tx * n_ty, dtype=np.int64)
+    sv = np.empty(n_tx * n_ty, dtype=np.float32)
+    vb = np.empty((n_tx * n_ty, members_x.shape[1] * members_y.shape[1]))
+    s = np.empty(ub.shape[1], dtype=np.float32)
+    for b in range(x.shape[0]):
+        # left unformatted: the arguments in the rows of the kernel's signature
+        n = _refining._products(x[b], y[b], tol, members_x, members_y, xv, yv, xt, yt, xs, ys,
+                                tl, sv, vb)  # fmt: skip
+        _refining._bounds(norms, tl, sv, n, 0, ub.shape[1], c, rule, s, ub[b])
+
+
 def _bounds(model: SigmaPiSOM, index: Any, x: np.ndarray, y: np.ndarray, rule: int) -> Any:
-    """The bounds ``(B, K)`` of the pairs ``x, y`` as the search computes them, and their CPU
-    seconds per 1,000 pairs (the median of three)."""
+    """Every unit's bound ``(B, K)`` for the pairs ``x, y`` as the search computes a unit's
+    (the search itself bounds groups first, and units only in the groups that may win), and
+    their CPU seconds per 1,000 pairs (the median of three)."""
     st = model._run.state
     ub = np.full((x.shape[0], st.shape[0]), np.nan)  # touched: no page faults in the timing
-    guess = np.empty(x.shape[0], dtype=np.int64)
-    n_tx, n_ty = int(index.tile_x.max()) + 1, int(index.tile_y.max()) + 1
+    c = st.scale * st.scale * st.sqnorm
     times = []
     for _ in range(3):
         # left unformatted: the arguments in the rows of the kernel's signature
-        t, _ = cpu(lambda: _refining._bound_rows(index.norms, index.scale, st.sqnorm,
-                                                 index.tile_x, index.tile_y, n_tx, n_ty, x, y,
-                                                 float(st.tol), rule, ub, guess))  # fmt: skip
+        t, _ = cpu(lambda: _unit_bounds(index.norms, index.members_x, index.members_y, c,
+                                        np.ascontiguousarray(x), np.ascontiguousarray(y),
+                                        float(st.tol), rule, ub))  # fmt: skip
         times.append(t * 1000 / x.shape[0])
     return ub, float(np.median(times))
 
@@ -233,9 +250,9 @@ def floors(model: SigmaPiSOM, acc: Any, batch: SimpleNamespace, won: np.ndarray)
         out[f"sums_{name}"] = float(np.median(add))
     index = acc.index
     x, y = np.ascontiguousarray(batch.x0[0]), np.ascontiguousarray(batch.y0[0])
-    _passes(index.raw_t, index.scale, st.sqnorm, code, x, y, st.tol, 1)
+    _passes(st.raw, index.scale, st.sqnorm, code, x, y, st.tol, 1)
     reps = 20000
-    t, grid = cpu(lambda: _passes(index.raw_t, index.scale, st.sqnorm, code, x, y, st.tol, reps))
+    t, grid = cpu(lambda: _passes(st.raw, index.scale, st.sqnorm, code, x, y, st.tol, reps))
     need, summed, passes, kept, grid_mean = _summed(
         model, index, batch.x0[:1000], batch.y0[:1000], code
     )

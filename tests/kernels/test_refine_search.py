@@ -112,3 +112,39 @@ def test_the_hard_sums_and_the_new_weights_are_the_general_codes(trained):
     np.testing.assert_array_equal(new.sqnorm, want.sqnorm)
     kept = (st.raw[:, 7].astype(np.float64) * st.scale[7]).astype(st.raw.dtype)
     np.testing.assert_array_equal(new.raw[:, 7], kept)
+
+
+def test_near_ties_are_settled_in_the_full_searchs_order(trained):
+    """Two units whose scores differ by far less than the slack of the scores summed in any
+    order: the search sums them again in the order of the full search, so it still agrees."""
+    x, y = _pairs(trained, 600, 5)
+    st = trained._run.state
+    w = fast.KERNEL.export(st)
+    won = fast.KERNEL.winners_of(st, x, y, MapGeometry(MAP), "argmax", 0.0)
+    winner = int(np.bincount(won).argmax())
+    w[2] = w[winner] * (1.0 + 1e-13)  # a near twin: its activation ahead by about 1e-13
+    w[winner + 1 if winner < 24 else winner - 1] = w[winner] * (1.0 - 1e-13)
+    for rule in ("argmax", "min_distance"):
+        got, want, _ = _both(fast.KERNEL.prepare(w, tol=1e-4), x, y, rule, (XS, XS))
+        np.testing.assert_array_equal(got, want)
+    assert (want == 2).any()  # the near twin wins pairs whose scores went through the exact sums
+
+
+@pytest.mark.parametrize(("xs", "ys"), [((10,), (7,)), ((7, 5), (4, 8))])
+def test_codes_whose_grids_leave_tiles_part_full(xs, ys):
+    """Random weights and codes on grids that do not split into whole tiles (the blocks
+    padded with zeros), both hard rules: the full search's winners."""
+    model = SigmaPiSOM(map_shape=(4, 5), x_shape=xs, y_shape=ys, code_width=1.0,
+                       iterations=200, winner_rule="min_distance", kernel_tol=1e-4,
+                       backend="fast", refine_rounds=0, seed=8).fit()  # fmt: skip
+    x, y = _pairs(model, 800, 6)
+    rng = np.random.default_rng(1)
+    k, nx, ny = model._run.state.shape
+    for w in (fast.KERNEL.export(model._run.state), rng.normal(0.0, 0.1, (k, nx, ny))):
+        for rule in ("min_distance", "argmax"):
+            state = fast.KERNEL.prepare(w, tol=1e-4)
+            acc = fast.KERNEL.refine_start(state)
+            acc.code_shapes = (xs, ys)
+            got = fast.KERNEL._refine_winners(state, acc, x, y, MapGeometry((4, 5)), rule)
+            want = fast.KERNEL.winners_of(state, x, y, MapGeometry((4, 5)), rule, 0.0)
+            np.testing.assert_array_equal(got, want)

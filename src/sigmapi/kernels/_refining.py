@@ -1,5 +1,5 @@
-"""Compiled helpers of the fast kernel's refinement: the winner search by bounds (exact sums
-for a few units only) and the sums of the hard assignment.
+"""Compiled helpers of the fast kernel's refinement: the winner search by bounds (scores for
+a few units only) and the sums of the hard assignment.
 
 A refinement round searches the winners of many pairs on weights that stay fixed for the
 whole round (:mod:`sigmapi.rules.refinement`), so it pays to prepare the weights once per
@@ -8,22 +8,25 @@ round (:class:`SearchIndex`, :func:`build`):
 - the pair grid ``(x, y)`` is cut into **tiles** of :data:`TILE` grid points along every axis
   of both codes (a 2-D code pair: tiles of ``TILE**4`` input pairs), and for every unit and
   tile the norm of the unit's weights on that tile is kept (``norms[t, k] = scale_k
-  |raw[tile t, k]|``, float32 rounded up);
-- a transposed copy of the weights, ``raw_t`` ``(K, n_x n_y)``, holds one unit's weights
-  contiguously.
+  |raw[tile t, k]|``, float32 rounded up), and for every group of :data:`GROUP` units the
+  largest of its units' norms;
+- a copy of the weights by unit and tile, ``blocks`` ``(K, tiles, points per tile)``: a
+  unit's weights on one tile are contiguous.
 
 A pair's kept input pairs (the same ones as :func:`sigmapi.kernels._rows.activate` sums,
-``_rows._pairs``) fall in a few tiles; by Cauchy-Schwarz on every tile, ``|h_k| <= sum_t
-|v_t| norms[t, k]`` with ``|v_t|`` the norm of the pair's outer product on tile ``t``: an upper
-bound of every unit's score for the cost of ``tiles x K`` multiply-adds (about 36 tiles
-instead of about 1,000 kept pairs on paper-2d). The units are then summed exactly, best bound
-first, a few at a time, until no bound left reaches the best exact score. A unit whose bound
-lies below that score cannot win (the bounds carry a relative margin of 1e-9, far above the
-rounding of the sums), and a unit that is summed gets the very arithmetic of
-``_rows.activate`` and ``_rows._winner`` (the kept pairs in their order, float64): the
-winners are those of :meth:`sigmapi.kernels.fast.FastKernel.winners_of`, bit for bit, ties
-to the lowest index. For the rules whose score is a unit's own activation (``argmax``,
-``min_distance``: the hard rules); the smoothing rules keep the full search.
+``_rows._pairs``) fall in a few tiles (about 38 of 625 on paper-2d); its products there are
+laid out as the blocks (:func:`_products`, zeros where ``_pairs`` drops a pair). By
+Cauchy-Schwarz on every tile, ``|h_k| <= sum_t |v_t| norms[t, k]`` with ``|v_t|`` the norm of
+the pair's outer product on tile ``t``: an upper bound of a unit's score, or of every score of
+a group. The groups' bounds come first; the units' bounds of a group only where the group's
+bound reaches a score some unit has (about 5 of 29 groups on paper-2d). A unit whose bound
+reaches the best score so far is scored: its products summed tile by tile in any order, the
+compiler's vectors (:func:`_approx`), which lands within a rounding slack (:data:`APPROX`) of
+the sum in the order of ``_rows.activate``; only where two units' scores lie within their
+slacks are those units summed again in that order (:func:`_exact`). So the winners are those
+of :meth:`sigmapi.kernels.fast.FastKernel.winners_of`, bit for bit, ties to the lowest index.
+For the rules whose score is a unit's own activation (``argmax``, ``min_distance``: the hard
+rules); the smoothing rules keep the full search.
 """
 
 from __future__ import annotations
@@ -37,7 +40,7 @@ from numpy.typing import NDArray
 
 from sigmapi.kernels._rows import ARGMAX, MIN_DISTANCE
 
-__all__ = ["RULES", "TILE", "SearchIndex", "build", "finish", "hard_sums", "search"]
+__all__ = ["GROUP", "RULES", "TILE", "SearchIndex", "build", "finish", "hard_sums", "search"]
 
 TILE = 3
 """Grid points per tile along every axis of the codes (paper-2d: about 36 tiles per pair)."""
@@ -51,6 +54,9 @@ the best exact score (the float64 sums of about 1,000 terms round by about 1e-13
 
 ROWS = 16
 """Pairs per parallel work item."""
+
+GROUP = 8
+"""Units per group of the first bounds (consecutive units: mostly neighbours on the map)."""
 
 F32_EPS = 2.0**-23
 """float32's relative spacing: the bounds' float32 sums widen by it per term."""
@@ -73,6 +79,7 @@ class SearchIndex:
     members_x: NDArray[np.int64]
     members_y: NDArray[np.int64]
     norms: NDArray[np.float32]
+    group_norms: NDArray[np.float32]
     blocks: NDArray[np.floating]
     scale: NDArray[np.float64]
     scratch: dict[str, NDArray[Any]] = field(default_factory=dict, repr=False)
@@ -169,91 +176,11 @@ def build(
     blocks = np.zeros((raw.shape[1], ntx * nty, mx.shape[1] * my.shape[1]), dtype=raw.dtype)
     copy: Any = _to_blocks  # a numba dispatcher
     copy(raw, tiles, slot, blocks)
-    return SearchIndex(tx, ty, mx, my, norms, blocks, scale.copy())
-
-
-@njit(cache=True, nogil=True)
-def _code_tiles(x, tile_x, n_tiles, sq, top):  # pragma: no cover - compiled
-    """Per tile of one code: ``sq`` the sum of squares, ``top`` the largest ``|x_i|``;
-    returns the largest ``|x_i|`` of the code."""
-    for t in range(n_tiles):
-        sq[t] = 0.0
-        top[t] = 0.0
-    m = 0.0
-    for i in range(x.shape[0]):
-        t = tile_x[i]
-        a = abs(x[i])
-        sq[t] += a * a
-        top[t] = max(top[t], a)
-        m = max(m, a)
-    return m
-
-
-@njit(cache=True, nogil=True)
-def _bound_row(
-    norms, scale, sqnorm, tile_x, tile_y, x, y, tol, rule, xs, xt, ys, yt, s, ub
-):  # pragma: no cover - compiled
-    """``ub[k]``: an upper bound of unit ``k``'s score for the pair ``(x, y)``.
-
-    The kept input pairs of ``_rows._pairs`` lie in the tiles whose largest ``|x_i| |y_j|``
-    exceeds the cut ``tol max|x| max|y|``; on such a tile the kept part of ``x y^T`` has a
-    norm of at most ``|x_tile| |y_tile|``, so ``|h_k| <= sum_t |x_tx| |y_ty| norms[t, k]``."""
-    k_units = norms.shape[1]
-    n_ty = ys.shape[0]
-    mx = _code_tiles(x, tile_x, xs.shape[0], xs, xt)
-    my = _code_tiles(y, tile_y, n_ty, ys, yt)
-    thr = tol * mx * my
-    for k in range(k_units):
-        s[k] = 0.0
-    n = 0
-    for a in range(xs.shape[0]):
-        if xt[a] * my <= thr:
-            continue
-        for b in range(n_ty):
-            if xt[a] * yt[b] <= thr:
-                continue
-            # float32 sums (eight units a vector); the tile's norm rounded up to float32
-            sv = np.sqrt(xs[a] * ys[b])
-            sv32 = np.float32(sv)
-            if sv32 < sv:
-                sv32 = np.nextafter(sv32, np.float32(np.inf))
-            row = norms[a * n_ty + b]
-            for k in range(k_units):
-                s[k] += sv32 * row[k]
-            n += 1
-    # n positive float32 terms: within gamma_n < (n + 1) 2^-23 of their exact sum
-    up = 1.0 + MARGIN + (n + 2) * F32_EPS
-    if rule == MIN_DISTANCE:
-        down = 1.0 - MARGIN
-        for k in range(k_units):
-            ub[k] = 2.0 * s[k] * up - scale[k] * scale[k] * sqnorm[k] * down
-    else:
-        for k in range(k_units):
-            ub[k] = s[k] * up
-
-
-@njit(cache=True, parallel=True)
-def _bound_rows(norms, scale, sqnorm, tile_x, tile_y, n_tx, n_ty, x, y, tol, rule, ub, guess):
-    """:func:`_bound_row` for every row into ``ub`` ``(B, K)``, and ``guess[b]``, the unit of
-    the largest bound (the likely winner), in parallel blocks of :data:`ROWS` rows."""
-    n_rows = x.shape[0]  # pragma: no cover - compiled
-    k_units = norms.shape[1]
-    for c in prange((n_rows + ROWS - 1) // ROWS):
-        xs = np.empty(n_tx)
-        xt = np.empty(n_tx)
-        ys = np.empty(n_ty)
-        yt = np.empty(n_ty)
-        s = np.empty(k_units, dtype=np.float32)
-        for b in range(c * ROWS, min(n_rows, (c + 1) * ROWS)):
-            u = ub[b]
-            _bound_row(
-                norms, scale, sqnorm, tile_x, tile_y, x[b], y[b], tol, rule, xs, xt, ys, yt, s, u
-            )
-            g = 0
-            for k in range(1, k_units):
-                if u[k] > u[g]:
-                    g = k
-            guess[b] = g
+    n_groups = -(-raw.shape[1] // GROUP)
+    group = np.zeros((norms.shape[0], n_groups * GROUP), dtype=np.float32)
+    group[:, : raw.shape[1]] = norms
+    group = np.ascontiguousarray(group.reshape(norms.shape[0], n_groups, GROUP).max(axis=2))
+    return SearchIndex(tx, ty, mx, my, norms, group, blocks, scale.copy())
 
 
 @njit(cache=True, nogil=True)
@@ -358,35 +285,40 @@ def _spans(x, y, tol, ncol, ib, j0, jn, top):  # pragma: no cover - compiled
 
 
 @njit(cache=True, nogil=True)
-def _by_tile(x, members, xv, top):  # pragma: no cover - compiled
+def _by_tile(x, members, xv, top, sq):  # pragma: no cover - compiled
     """A code by tile: ``xv[a, u] = x[members[a, u]]`` (0 where a tile has fewer points),
-    ``top[a]`` its largest ``|x_i|``; returns the code's largest ``|x_i|``."""
+    ``top[a]`` its largest ``|x_i|`` and ``sq[a]`` its sum of squares; returns the code's
+    largest ``|x_i|``."""
     m = 0.0
     for a in range(members.shape[0]):
         t = 0.0
+        q = 0.0
         for u in range(members.shape[1]):
             i = members[a, u]
             v = x[i] if i >= 0 else 0.0
             xv[a, u] = v
             t = max(t, abs(v))
+            q += v * v
         top[a] = t
+        sq[a] = q
         m = max(m, t)
     return m
 
 
 @njit(cache=True, nogil=True)
-def _products(x, y, tol, members_x, members_y, xv, yv, xt, yt, tl, vb):
+def _products(x, y, tol, members_x, members_y, xv, yv, xt, yt, xs, ys, tl, sv, vb):
     """The pair's tiles and products: the tiles ``a * tiles_y + b`` whose largest ``|x_i
-    y_j|`` passes the cut of ``_rows._pairs`` into ``tl``, and on row ``q`` of ``vb`` (laid
-    out as a block of :class:`SearchIndex`) the products of tile ``tl[q]``: ``x_i y_j`` where
-    ``_pairs`` keeps it, else a zero. Every kept pair lies in such a tile (rounding is
-    monotone: ``|x_i y_j| <= max_tile |x| max_tile |y|`` holds rounded too). ``xv, yv, xt,
-    yt``: scratch of :func:`_by_tile`. Returns the tile count; fills nothing if ``vb`` has
-    fewer rows (call again with more)."""
+    y_j|`` passes the cut of ``_rows._pairs`` into ``tl``, the norm of the pair's outer
+    product on each ``|x_a| |y_b|`` (float32, rounded up) into ``sv``, and on row ``q`` of
+    ``vb`` (laid out as a block of :class:`SearchIndex`) the products of tile ``tl[q]``:
+    ``x_i y_j`` where ``_pairs`` keeps it, else a zero. Every kept pair lies in such a tile
+    (rounding is monotone: ``|x_i y_j| <= max_tile |x| max_tile |y|`` holds rounded too).
+    ``xv, yv, xt, yt, xs, ys``: scratch of :func:`_by_tile`. Returns the tile count; fills
+    nothing if ``vb`` has fewer rows (call again with more)."""
     n_tx, n_ty = members_x.shape[0], members_y.shape[0]  # pragma: no cover - compiled
     n_mx, n_my = members_x.shape[1], members_y.shape[1]
-    mx = _by_tile(x, members_x, xv, xt)
-    my = _by_tile(y, members_y, yv, yt)
+    mx = _by_tile(x, members_x, xv, xt, xs)
+    my = _by_tile(y, members_y, yv, yt, ys)
     thr = tol * mx * my
     n = 0
     for a in range(n_tx):
@@ -411,9 +343,40 @@ def _products(x, y, tol, members_x, members_y, xv, yv, xt, yt, tl, vb):
                 for e in range(n_my):
                     v = xi * yb[e]
                     out[e] = v if abs(v) > thr else 0.0
+            norm = np.sqrt(xs[a] * ys[b])
+            n32 = np.float32(norm)
+            sv[n] = n32 if n32 >= norm else np.nextafter(n32, np.float32(np.inf))
             tl[n] = a * n_ty + b
             n += 1
     return n
+
+
+@njit(cache=True, nogil=True)
+def _bounds(norms, tl, sv, n, k0, k1, c, rule, s, ub):  # pragma: no cover - compiled
+    """``ub[k0:k1]``: upper bounds of the scores of units (or groups) ``k0 .. k1 - 1`` from
+    the pair's tiles ``tl[:n]`` and norms ``sv`` (:func:`_products`) and the columns
+    ``k0:k1`` of ``norms`` (``c``: the units' ``scale^2 |w|^2``, a group's least). The kept
+    part of ``x y^T`` on a tile has a norm of at most ``|x_a| |y_b|``, so by Cauchy-Schwarz
+    ``|h_k| <= sum_t |x_a| |y_b| norms[t, k]``; summed in float32 (eight a vector), ``n``
+    positive terms within ``gamma_n < (n + 1) 2^-23`` of their exact sum, widened by that and
+    :data:`MARGIN`."""
+    m = k1 - k0
+    ss = s[k0:k1]  # slices indexed from 0: no wrap-around check, vectors
+    for k in range(m):
+        ss[k] = 0.0
+    for q in range(n):
+        row = norms[tl[q], k0:k1]
+        v = sv[q]
+        for k in range(m):
+            ss[k] += v * row[k]
+    up = 1.0 + MARGIN + (n + 2) * F32_EPS
+    if rule == MIN_DISTANCE:
+        down = 1.0 - MARGIN
+        for k in range(m):
+            ub[k0 + k] = 2.0 * ss[k] * up - c[k0 + k] * down
+    else:
+        for k in range(m):
+            ub[k0 + k] = ss[k] * up
 
 
 @njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
@@ -442,47 +405,92 @@ roundings many times over."""
 
 
 @njit(cache=True, nogil=True)
-def _settle_row(blocks, raw, scale, sqnorm, x, y, tol, rule, ub, tl, n, vb, done, near, cand):
-    """The winner of one pair from its bounds ``ub`` and its tiles and products (``tl[:n]``,
-    ``vb``, :func:`_products`): the unit of the largest bound scored first, then every unit
-    whose bound reaches the largest lower end of a score so far, each scored in any order
-    (:func:`_approx`) with the slack of :data:`APPROX`; if more than one unit's score may
+def _score(blocks, scale, sqnorm, rule, k, tl, n, vb):  # pragma: no cover - compiled
+    """Unit ``k``'s score for the pair, summed in any order (:func:`_approx`)."""
+    h = scale[k] * _approx(blocks[k], tl, n, vb)
+    return 2.0 * h - scale[k] * scale[k] * sqnorm[k] if rule == MIN_DISTANCE else h
+
+
+@njit(cache=True, nogil=True)
+def _settle_row(index, raw, scale, sqnorm, c, x, y, tol, rule, tl, sv, n, vb, work, cands):
+    """The winner of one pair from its tiles and products (``tl[:n]``, ``sv``, ``vb``,
+    :func:`_products`): the bounds of the groups of :data:`GROUP` units first; the group
+    of the best bound gets its units' bounds and the unit of the best of those is scored
+    (:func:`_approx`, with the slack of :data:`APPROX`); then, best group first, every group
+    whose bound reaches the largest lower end of a score so far gets its units' bounds, and
+    every unit of it whose bound reaches that is scored. If more than one unit's score may
     reach the best one's, those few are summed again in the order of ``_rows._pairs``
-    (:func:`_exact`) and the best of them wins, ties to the lowest index. A unit left out has
-    a bound below a score some unit reaches, and a unit outscored beyond both slacks cannot
-    win: the winners of the full search, bit for bit."""  # pragma: no cover - compiled
-    k_units = ub.shape[0]
-    g = 0
-    for k in range(1, k_units):
-        if ub[k] > ub[g]:
-            g = k
-    m = 0  # units scored: done[:m], their scores cand[:m] and slacks near[:m]
+    (:func:`_exact`) and the best of them wins, ties to the lowest index. A unit left out
+    has a bound below a score some unit reaches, and a unit outscored beyond both slacks
+    cannot win: the winners of the full search, bit for bit. ``index``: the
+    :class:`SearchIndex` arrays ``(blocks, norms, group_norms, group_c)``; ``work``: float
+    scratch ``(6, K)``; ``cands``: int64 scratch ``(K,)``."""  # pragma: no cover - compiled
+    blocks, norms, gnorms, gc = index
+    k_units = blocks.shape[0]
+    ub, ubg, cand, near, done = work[0], work[1], work[2], work[3], work[4]
+    s32 = work[5].view(np.float32)
+    n_groups = gnorms.shape[1]
+    _bounds(gnorms, tl, sv, n, 0, n_groups, gc, rule, s32, ubg)
+    m = 0  # units scored: done[:m] (as floats), their scores cand[:m] and slacks near[:m]
     low = -np.inf  # the largest lower end of a score so far
     best = 0  # the position in done of the best score
-    for j in range(-1, k_units):
-        k = g if j < 0 else j
-        if j >= 0 and (j == g or ub[j] < low):
-            continue
-        h = scale[k] * _approx(blocks[k], tl, n, vb)
-        c = scale[k] * scale[k] * sqnorm[k]
-        a = 2.0 * h - c if rule == MIN_DISTANCE else h
-        d = APPROX * (abs(ub[k]) + abs(a) + 2.0 * c)
+    first = -1
+    nc = 0  # the candidates: units whose bound reaches low, group by group
+    while True:
+        g = 0
+        for j in range(1, n_groups):
+            if ubg[j] > ubg[g]:
+                g = j
+        if ubg[g] == -np.inf or ubg[g] < low:
+            break
+        ubg[g] = -np.inf
+        k0 = g * GROUP
+        k1 = min(k_units, k0 + GROUP)
+        _bounds(norms, tl, sv, n, k0, k1, c, rule, s32, ub)
+        if first < 0:  # the best bound of the best group: scored first, for a first low
+            first = k0
+            for k in range(k0 + 1, k1):
+                if ub[k] > ub[first]:
+                    first = k
+            a = _score(blocks, scale, sqnorm, rule, first, tl, n, vb)
+            d = APPROX * (abs(ub[first]) + abs(a) + 2.0 * c[first])
+            done[0] = first
+            cand[0] = a
+            near[0] = d
+            m = 1
+            low = a - d
+        for k in range(k0, k1):
+            if k != first and ub[k] >= low:
+                cands[nc] = k
+                nc += 1
+    while True:  # the candidates, best bound first, while their bound reaches low
+        q = -1
+        for t in range(nc):
+            if cands[t] >= 0 and (q < 0 or ub[cands[t]] > ub[cands[q]]):
+                q = t
+        if q < 0 or ub[cands[q]] < low:
+            break
+        k = cands[q]
+        cands[q] = -1
+        a = _score(blocks, scale, sqnorm, rule, k, tl, n, vb)
+        d = APPROX * (abs(ub[k]) + abs(a) + 2.0 * c[k])
         done[m] = k
         cand[m] = a
         near[m] = d
-        if m == 0 or a > cand[best]:
+        if a > cand[best]:
             best = m
         low = max(low, a - d)
         m += 1
     lo = cand[best] - near[best]
+    units = np.empty(m, dtype=np.int64)
     nn = 0
     for q in range(m):
         if cand[q] + near[q] >= lo:
-            done[nn] = done[q]
+            units[nn] = int(done[q])
             nn += 1
     if nn == 1:
-        return done[0]
-    return _exact_best(raw, scale, sqnorm, rule, x, y, tol, done, nn)
+        return units[0]
+    return _exact_best(raw, scale, sqnorm, rule, x, y, tol, units, nn)
 
 
 @njit(cache=True, nogil=True)
@@ -509,34 +517,55 @@ def _exact_best(raw, scale, sqnorm, rule, x, y, tol, units, nu):  # pragma: no c
 
 
 @njit(cache=True, parallel=True)
+def _peaks(x, y, key):  # pragma: no cover - compiled
+    """``key[b] = argmax |x_b| * n_y + argmax |y_b|``: pairs of one key read the same tiles
+    and mostly the same units."""
+    ny = y.shape[1]
+    for b in prange(x.shape[0]):
+        i = 0
+        for t in range(1, x.shape[1]):
+            if abs(x[b, t]) > abs(x[b, i]):
+                i = t
+        j = 0
+        for t in range(1, ny):
+            if abs(y[b, t]) > abs(y[b, j]):
+                j = t
+        key[b] = i * ny + j
+
+
+@njit(cache=True, parallel=True)
 def _settle_rows(
-    blocks, raw, scale, sqnorm, members_x, members_y, x, y, tol, rule, ub, order, out
+    index, raw, scale, sqnorm, c, members_x, members_y, x, y, tol, rule, order, out
 ):  # pragma: no cover - compiled
     """:func:`_settle_row` for every row, in parallel blocks of :data:`ROWS` rows visited in
     ``order``."""
     n_rows = x.shape[0]
-    k_units = ub.shape[1]
+    k_units = raw.shape[1]
     n_tx, n_ty = members_x.shape[0], members_y.shape[0]
     width = members_x.shape[1] * members_y.shape[1]
-    for c in prange((n_rows + ROWS - 1) // ROWS):
+    for ch in prange((n_rows + ROWS - 1) // ROWS):
         xv = np.empty(members_x.shape)
         yv = np.empty(members_y.shape)
         xt = np.empty(n_tx)
         yt = np.empty(n_ty)
+        xs = np.empty(n_tx)
+        ys = np.empty(n_ty)
         tl = np.empty(n_tx * n_ty, dtype=np.int64)
+        sv = np.empty(n_tx * n_ty, dtype=np.float32)
         vb = np.empty((64, width))
-        done = np.empty(k_units, dtype=np.int64)
-        near = np.empty(k_units)
-        cand = np.empty(k_units)
-        for r in range(c * ROWS, min(n_rows, (c + 1) * ROWS)):
+        work = np.empty((6, k_units))
+        cands = np.empty(k_units, dtype=np.int64)
+        for r in range(ch * ROWS, min(n_rows, (ch + 1) * ROWS)):
             b = order[r]
-            n = _products(x[b], y[b], tol, members_x, members_y, xv, yv, xt, yt, tl, vb)
+            # left unformatted: the arguments in the rows of the kernel's signature
+            n = _products(x[b], y[b], tol, members_x, members_y, xv, yv, xt, yt, xs, ys, tl,
+                          sv, vb)  # fmt: skip
             if n > vb.shape[0]:
                 vb = np.empty((n, width))
-                n = _products(x[b], y[b], tol, members_x, members_y, xv, yv, xt, yt, tl, vb)
-            # left unformatted: the arguments in the rows of the kernel's signature
-            out[b] = _settle_row(blocks, raw, scale, sqnorm, x[b], y[b], tol, rule, ub[b], tl,
-                                 n, vb, done, near, cand)  # fmt: skip
+                n = _products(x[b], y[b], tol, members_x, members_y, xv, yv, xt, yt, xs, ys,
+                              tl, sv, vb)  # fmt: skip
+            out[b] = _settle_row(index, raw, scale, sqnorm, c, x[b], y[b], tol, rule, tl, sv,
+                                 n, vb, work, cands)  # fmt: skip
 
 
 def search(
@@ -552,19 +581,22 @@ def search(
     :data:`RULES`) on the weights ``raw`` of ``index`` (with their exact ``sqnorm``): the
     bounds of all pairs first, then the scores of the units that can win, with the pairs
     ordered by their likely winner (so that pairs reading the same units come together)."""
-    n_rows, k_units = x.shape[0], index.norms.shape[1]
-    n_tx, n_ty = int(index.tile_x.max()) + 1, int(index.tile_y.max()) + 1
-    ub = index.work("ub", n_rows, k_units, np.float64)
-    guess = index.work("guess", n_rows, 0, np.int64)
-    bound: Any = _bound_rows  # numba dispatchers
+    n_rows = x.shape[0]
+    c = index.scale * index.scale * sqnorm
+    k_units, n_groups = c.size, index.group_norms.shape[1]
+    gc = np.full(n_groups * GROUP, np.inf)
+    gc[:k_units] = c
+    gc = gc.reshape(n_groups, GROUP).min(axis=1)  # a group's least scale^2 |w|^2
+    key = index.work("key", n_rows, 0, np.int64)
+    peaks: Any = _peaks  # numba dispatchers
     settle: Any = _settle_rows
-    # left unformatted: the arguments in the rows of the kernel's signature
-    bound(index.norms, index.scale, sqnorm, index.tile_x, index.tile_y, n_tx, n_ty, x, y,
-          float(tol), int(rule), ub, guess)  # fmt: skip
+    peaks(x, y, key)
+    order = np.argsort(key, kind="stable")
     out = np.empty(n_rows, dtype=np.int64)
-    order = np.argsort(guess, kind="stable")
-    settle(index.blocks, raw, index.scale, sqnorm, index.members_x, index.members_y, x, y,
-           float(tol), int(rule), ub, order, out)  # fmt: skip
+    arrays = (index.blocks, index.norms, index.group_norms, gc)
+    # left unformatted: the arguments in the rows of the kernel's signature
+    settle(arrays, raw, index.scale, sqnorm, c, index.members_x, index.members_y, x, y,
+           float(tol), int(rule), order, out)  # fmt: skip
     return out
 
 
