@@ -20,11 +20,12 @@ Cauchy-Schwarz on every tile, ``|h_k| <= sum_t |v_t| norms[t, k]`` with ``|v_t|`
 the pair's outer product on tile ``t``: an upper bound of a unit's score, or of every score of
 a group. The groups' bounds come first; the units' bounds of a group only where the group's
 bound reaches a score some unit has (about 5 of 29 groups on paper-2d). A unit whose bound
-reaches the best score so far is scored: its products summed tile by tile in any order, the
-compiler's vectors (:func:`_approx`), which lands within a rounding slack (:data:`APPROX`) of
-the sum in the order of ``_rows.activate``; only where two units' scores lie within their
-slacks are those units summed again in that order (:func:`_exact`). So the winners are those
-of :meth:`sigmapi.kernels.fast.FastKernel.winners_of`, bit for bit, ties to the lowest index.
+reaches the best score so far is scored: its products summed tile by tile in float32 in any
+order, the compiler's vectors (:func:`_approx`), which lands within a rounding slack
+(:func:`slack`) of the float64 sum in the order of ``_rows.activate``; only where two units'
+scores lie within their slacks are those units summed again in that order (:func:`_exact`).
+So the winners are those of :meth:`sigmapi.kernels.fast.FastKernel.winners_of`, bit for bit,
+ties to the lowest index.
 For the rules whose score is a unit's own activation (``argmax``, ``min_distance``: the hard
 rules); the smoothing rules keep the full search.
 """
@@ -40,7 +41,17 @@ from numpy.typing import NDArray
 
 from sigmapi.kernels._rows import ARGMAX, MIN_DISTANCE
 
-__all__ = ["GROUP", "RULES", "TILE", "SearchIndex", "build", "finish", "hard_sums", "search"]
+__all__ = [
+    "GROUP",
+    "RULES",
+    "TILE",
+    "SearchIndex",
+    "build",
+    "finish",
+    "hard_sums",
+    "search",
+    "slack",
+]
 
 TILE = 3
 """Grid points per tile along every axis of the codes (paper-2d: about 36 tiles per pair)."""
@@ -311,8 +322,9 @@ def _products(x, y, tol, members_x, members_y, xv, yv, xt, yt, xs, ys, tl, sv, v
     y_j|`` passes the cut of ``_rows._pairs`` into ``tl``, the norm of the pair's outer
     product on each ``|x_a| |y_b|`` (float32, rounded up) into ``sv``, and on row ``q`` of
     ``vb`` (laid out as a block of :class:`SearchIndex`) the products of tile ``tl[q]``:
-    ``x_i y_j`` where ``_pairs`` keeps it, else a zero. Every kept pair lies in such a tile
-    (rounding is monotone: ``|x_i y_j| <= max_tile |x| max_tile |y|`` holds rounded too).
+    ``x_i y_j`` (rounded to ``vb``'s float32) where ``_pairs`` keeps it, else a zero. Every
+    kept pair lies in such a tile (rounding is monotone: ``|x_i y_j| <= max_tile |x|
+    max_tile |y|`` holds rounded too).
     ``xv, yv, xt, yt, xs, ys``: scratch of :func:`_by_tile`. Returns the tile count; fills
     nothing if ``vb`` has fewer rows (call again with more)."""
     n_tx, n_ty = members_x.shape[0], members_y.shape[0]  # pragma: no cover - compiled
@@ -382,26 +394,32 @@ def _bounds(norms, tl, sv, n, k0, k1, c, rule, s, ub):  # pragma: no cover - com
 @njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
 def _approx(blocks, tl, n, vb):  # pragma: no cover - compiled
     """``sum_p w_p v_p`` over the tiles ``tl[:n]`` of one unit's ``blocks`` and the products
-    ``vb`` of :func:`_products`, in any order (the compiler's vectors): within ``gamma_n
-    sum_p |w_p v_p|`` of the sum in the order of ``_rows._pairs``, as every order is."""
+    ``vb`` of :func:`_products` (float32): each tile's sum in float32 in any order (the
+    compiler's vectors, eight products a step), the tiles' sums in float64; within
+    :func:`slack` of the sum in the order of ``_rows._pairs``."""
     acc = 0.0
     for q in range(n):
         w = blocks[tl[q]]
         v = vb[q]
-        part = 0.0
+        part = np.float32(0.0)
         for e in range(w.shape[0]):
             part += w[e] * v[e]
         acc += part
     return acc
 
 
-APPROX = 1e-10
-"""Relative slack of a score summed in any order (:func:`_approx`) against the score summed
-in the order of ``_rows._pairs``: both lie within ``gamma_n A`` of the exact real sum, ``A``
-the sum of the products' magnitudes (``n <= 50,625`` products: ``gamma_n < 6e-12``), and
-``scale_k A`` is at most the unit's tile bound; the slack ``APPROX (|bound| + |score| +
-2 scale_k^2 |w_k|^2)`` covers twice that, the scale's, the distance's and the bound's
-roundings many times over."""
+def slack(width: int) -> float:
+    """Relative slack of a score summed by :func:`_approx` (blocks of ``width`` input pairs,
+    float32) against the score summed in the order of ``_rows._pairs`` (float64). A tile's
+    float32 sum of ``width`` products, each a float32 weight times a product rounded to
+    float32, in any order, lies within ``gamma_{width + 1}`` (float32) of its exact value
+    relative to the sum of the magnitudes ``A_t``; the float64 sums within ``gamma_n A``
+    (``n <= 50,625``: 6e-12 A). ``scale_k A`` is at most the unit's tile bound, and
+    ``|bound| + 2 scale_k^2 |w_k|^2`` at least twice that, so the slack ``slack (|bound| +
+    |score| + 2 scale_k^2 |w_k|^2)`` covers a min-distance score's ``2 scale_k`` times that
+    error with room (paper-2d: blocks of 81, a slack of 1e-5; 3.5 pairs in 10,000 then sum
+    some units again)."""
+    return (width + 2) * F32_EPS + 1e-10
 
 
 @njit(cache=True, nogil=True)
@@ -412,11 +430,11 @@ def _score(blocks, scale, sqnorm, rule, k, tl, n, vb):  # pragma: no cover - com
 
 
 @njit(cache=True, nogil=True)
-def _settle_row(index, raw, scale, sqnorm, c, x, y, tol, rule, tl, sv, n, vb, work, cands):
+def _settle_row(index, raw, scale, sqnorm, c, x, y, tol, rule, rel, tl, sv, n, vb, work, cands):
     """The winner of one pair from its tiles and products (``tl[:n]``, ``sv``, ``vb``,
     :func:`_products`): the bounds of the groups of :data:`GROUP` units first; the group
     of the best bound gets its units' bounds and the unit of the best of those is scored
-    (:func:`_approx`, with the slack of :data:`APPROX`); then, best group first, every group
+    (:func:`_approx`, with the slack of :func:`slack`); then, best group first, every group
     whose bound reaches the largest lower end of a score so far gets its units' bounds, and
     every unit of it whose bound reaches that is scored. If more than one unit's score may
     reach the best one's, those few are summed again in the order of ``_rows._pairs``
@@ -453,7 +471,7 @@ def _settle_row(index, raw, scale, sqnorm, c, x, y, tol, rule, tl, sv, n, vb, wo
                 if ub[k] > ub[first]:
                     first = k
             a = _score(blocks, scale, sqnorm, rule, first, tl, n, vb)
-            d = APPROX * (abs(ub[first]) + abs(a) + 2.0 * c[first])
+            d = rel * (abs(ub[first]) + abs(a) + 2.0 * c[first])
             done[0] = first
             cand[0] = a
             near[0] = d
@@ -473,7 +491,7 @@ def _settle_row(index, raw, scale, sqnorm, c, x, y, tol, rule, tl, sv, n, vb, wo
         k = cands[q]
         cands[q] = -1
         a = _score(blocks, scale, sqnorm, rule, k, tl, n, vb)
-        d = APPROX * (abs(ub[k]) + abs(a) + 2.0 * c[k])
+        d = rel * (abs(ub[k]) + abs(a) + 2.0 * c[k])
         done[m] = k
         cand[m] = a
         near[m] = d
@@ -535,7 +553,7 @@ def _peaks(x, y, key):  # pragma: no cover - compiled
 
 @njit(cache=True, parallel=True)
 def _settle_rows(
-    index, raw, scale, sqnorm, c, members_x, members_y, x, y, tol, rule, order, out
+    index, raw, scale, sqnorm, c, members_x, members_y, x, y, tol, rule, rel, order, out
 ):  # pragma: no cover - compiled
     """:func:`_settle_row` for every row, in parallel blocks of :data:`ROWS` rows visited in
     ``order``."""
@@ -552,7 +570,7 @@ def _settle_rows(
         ys = np.empty(n_ty)
         tl = np.empty(n_tx * n_ty, dtype=np.int64)
         sv = np.empty(n_tx * n_ty, dtype=np.float32)
-        vb = np.empty((64, width))
+        vb = np.empty((64, width), dtype=np.float32)
         work = np.empty((6, k_units))
         cands = np.empty(k_units, dtype=np.int64)
         for r in range(ch * ROWS, min(n_rows, (ch + 1) * ROWS)):
@@ -561,11 +579,11 @@ def _settle_rows(
             n = _products(x[b], y[b], tol, members_x, members_y, xv, yv, xt, yt, xs, ys, tl,
                           sv, vb)  # fmt: skip
             if n > vb.shape[0]:
-                vb = np.empty((n, width))
+                vb = np.empty((n, width), dtype=np.float32)
                 n = _products(x[b], y[b], tol, members_x, members_y, xv, yv, xt, yt, xs, ys,
                               tl, sv, vb)  # fmt: skip
-            out[b] = _settle_row(index, raw, scale, sqnorm, c, x[b], y[b], tol, rule, tl, sv,
-                                 n, vb, work, cands)  # fmt: skip
+            out[b] = _settle_row(index, raw, scale, sqnorm, c, x[b], y[b], tol, rule, rel, tl,
+                                 sv, n, vb, work, cands)  # fmt: skip
 
 
 def search(
@@ -595,8 +613,9 @@ def search(
     out = np.empty(n_rows, dtype=np.int64)
     arrays = (index.blocks, index.norms, index.group_norms, gc)
     # left unformatted: the arguments in the rows of the kernel's signature
+    rel = slack(index.blocks.shape[2])
     settle(arrays, raw, index.scale, sqnorm, c, index.members_x, index.members_y, x, y,
-           float(tol), int(rule), order, out)  # fmt: skip
+           float(tol), int(rule), rel, order, out)  # fmt: skip
     return out
 
 
