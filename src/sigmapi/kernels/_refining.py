@@ -535,10 +535,11 @@ def _exact_best(raw, scale, sqnorm, rule, x, y, tol, units, nu):  # pragma: no c
 
 
 @njit(cache=True, parallel=True)
-def _peaks(x, y, key):  # pragma: no cover - compiled
-    """``key[b] = argmax |x_b| * n_y + argmax |y_b|``: pairs of one key read the same tiles
-    and mostly the same units."""
+def _peaks(x, y, tile_x, tile_y, key):  # pragma: no cover - compiled
+    """``key[b]``: the tiles of the peaks of ``|x_b|`` and ``|y_b|`` (``tile_x[i] * tiles_y +
+    tile_y[j]``): pairs of one key read mostly the same tiles of mostly the same units."""
     ny = y.shape[1]
+    n_ty = tile_y.max() + 1
     for b in prange(x.shape[0]):
         i = 0
         for t in range(1, x.shape[1]):
@@ -548,7 +549,7 @@ def _peaks(x, y, key):  # pragma: no cover - compiled
         for t in range(1, ny):
             if abs(y[b, t]) > abs(y[b, j]):
                 j = t
-        key[b] = i * ny + j
+        key[b] = tile_x[i] * n_ty + tile_y[j]
 
 
 @njit(cache=True, parallel=True)
@@ -608,7 +609,7 @@ def search(
     key = index.work("key", n_rows, 0, np.int64)
     peaks: Any = _peaks  # numba dispatchers
     settle: Any = _settle_rows
-    peaks(x, y, key)
+    peaks(x, y, index.tile_x, index.tile_y, key)
     order = np.argsort(key, kind="stable")
     out = np.empty(n_rows, dtype=np.int64)
     arrays = (index.blocks, index.norms, index.group_norms, gc)
