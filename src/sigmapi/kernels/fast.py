@@ -803,9 +803,9 @@ class FastKernel(KernelBase[FastState]):
     ) -> NDArray[np.int64]:
         """The winners of :meth:`winners_of` (at sigma 0), by the round's bounds
         (:mod:`sigmapi.kernels._refining`) where the rule allows: the index is made from the
-        round's fixed weights on first use and kept in ``acc`` (it holds a transposed copy of
-        the weights, so a round holds the weights twice, beside its float64 sums). The exact
-        mode (``tol = 0``) and the smoothing rules search in full."""
+        round's fixed weights on first use and kept in ``acc`` (it holds a copy of the weights
+        by unit and tile, so a round holds the weights twice, beside its float64 sums). The
+        exact mode (``tol = 0``) and the smoothing rules search in full."""
         _, code = _rule_code(winner_rule)
         if state.tol == 0 or code not in _refining.RULES:
             return self.winners_of(state, x0, y0, geometry, winner_rule, 0.0)
