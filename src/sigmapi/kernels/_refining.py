@@ -404,7 +404,7 @@ def _approx(blocks, tl, n, vb):  # pragma: no cover - compiled
         part = np.float32(0.0)
         for e in range(w.shape[0]):
             part += w[e] * v[e]
-        acc += part
+        acc += np.float64(part)
     return acc
 
 
