@@ -16,9 +16,11 @@ The graph takes the two codes and gives what the model gives in Python:
   ``(n_units, n_units)`` matrix at that sigma), ties to the lowest index.
 
 The fast kernel skips the code pairs with ``|x_i y_j| <= kernel_tol max|x| max|y|``; the graph
-skips the same pairs, so that its winners are the kernel's. Weights stay in the precision
-the model file holds them (the fast kernel's float32 columns and float64 scales; dense float64
-otherwise) and are summed in float64.
+skips the same pairs, so that its winners are the kernel's, and like the kernel it reads only
+the weight rows of the pairs it keeps (a ``Scan`` over the batch, one pair at a time: about 970
+of the paper-2d map's 50,625 rows per pair), not the whole matrix. Its weights are the model
+file's, exactly (the fast kernel's float32 columns widened to float64, and float64 scales;
+dense float64 otherwise), summed in float64.
 """
 
 from __future__ import annotations
@@ -180,6 +182,125 @@ def _encoder(code: PopulationCode, pos: str, out: str, init: list[Any]) -> list[
     ]
 
 
+def _dense_response(raw: NDArray[np.floating], pairs: int, init: list[Any]) -> list[Any]:
+    """Nodes of ``response`` from ``x``, ``y``, every code pair: the outer products of the
+    batch times the weight columns (a model whose kernel skips no pair)."""
+    from onnx import TensorProto, helper, numpy_helper
+
+    init.append(numpy_helper.from_array(np.array([0, pairs], np.int64), "flat_shape"))
+    nodes = [
+        helper.make_node("Unsqueeze", ["x", "axis2"], ["x3"]),
+        helper.make_node("Unsqueeze", ["y", "axis1"], ["y3"]),
+        helper.make_node("Mul", ["x3", "y3"], ["outer"]),
+    ]
+    w = "w_raw"
+    if raw.dtype != np.float64:
+        nodes.append(helper.make_node("Cast", ["w_raw"], ["w64"], to=TensorProto.DOUBLE))
+        w = "w64"
+    return [
+        *nodes,
+        helper.make_node("Reshape", ["outer", "flat_shape"], ["pairs"]),
+        helper.make_node("MatMul", ["pairs", w], ["sums"]),
+        helper.make_node("Mul", ["sums", "w_scale"], ["response"]),
+    ]
+
+
+def _sparse_response(nx: int, ny: int, k: int, tol: float, init: list[Any]) -> list[Any]:
+    """The nodes (a ``Scan``) of ``response`` from ``x``, ``y``, one pair at a time, as the fast
+    kernel computes it (``kernels/_rows.py``): the thresholds ``thr = tol max|x| max|y|``, the
+    retinal units with ``|x_i| max|y| > thr`` and gaze units with ``|y_j| max|x| > thr`` (no
+    pair of another unit passes the cut), their outer product, the pairs with
+    ``|x_i y_j| > thr`` in the kernel's order (``i`` then ``j``), their weight rows gathered
+    and summed in float64 (``w_raw`` float64: the model's float32 columns, exactly, so that no
+    row read needs a cast). A pair thus costs the rows of its kept code pairs (about 970 of
+    the paper-2d map's 50,625), not the whole weight matrix."""
+    from onnx import TensorProto, helper, numpy_helper
+
+    def const(name: str, value: Any) -> str:
+        init.append(numpy_helper.from_array(np.asarray(value), name))
+        return name
+
+    const("tol", np.array(tol, np.float64))
+    const("units_x", np.arange(nx, dtype=np.int64))
+    const("units_y", np.arange(ny, dtype=np.int64))
+    const("n_y", np.array(ny, np.int64))
+    const("axis0", np.array([0], np.int64))
+    const("flat", np.array([-1], np.int64))
+    const("none", np.array(0, np.int64))
+    body = [
+        helper.make_node("Abs", ["xb"], ["ax"]),
+        helper.make_node("Abs", ["yb"], ["ay"]),
+        helper.make_node("ReduceMax", ["ax"], ["mx"], keepdims=0),
+        helper.make_node("ReduceMax", ["ay"], ["my"], keepdims=0),
+        helper.make_node("Mul", ["tol", "mx"], ["thr_x"]),
+        helper.make_node("Mul", ["thr_x", "my"], ["thr"]),
+        helper.make_node("Mul", ["ax", "my"], ["sx"]),
+        helper.make_node("Greater", ["sx", "thr"], ["on_x"]),
+        helper.make_node("Mul", ["ay", "mx"], ["sy"]),
+        helper.make_node("Greater", ["sy", "thr"], ["on_y"]),
+        helper.make_node("Compress", ["xb", "on_x"], ["vx"], axis=0),
+        helper.make_node("Compress", ["units_x", "on_x"], ["ix"], axis=0),
+        helper.make_node("Compress", ["yb", "on_y"], ["vy"], axis=0),
+        helper.make_node("Compress", ["units_y", "on_y"], ["iy"], axis=0),
+        helper.make_node("Unsqueeze", ["vx", "axis1"], ["vx2"]),
+        helper.make_node("Unsqueeze", ["vy", "axis0"], ["vy2"]),
+        helper.make_node("Mul", ["vx2", "vy2"], ["outer2"]),
+        helper.make_node("Reshape", ["outer2", "flat"], ["outer"]),
+        helper.make_node("Mul", ["ix", "n_y"], ["base"]),
+        helper.make_node("Unsqueeze", ["base", "axis1"], ["base2"]),
+        helper.make_node("Unsqueeze", ["iy", "axis0"], ["iy2"]),
+        helper.make_node("Add", ["base2", "iy2"], ["pair2"]),
+        helper.make_node("Reshape", ["pair2", "flat"], ["pair"]),
+        helper.make_node("Abs", ["outer"], ["abs_outer"]),
+        helper.make_node("Greater", ["abs_outer", "thr"], ["kept"]),
+        helper.make_node("Compress", ["outer", "kept"], ["pv"], axis=0),
+        helper.make_node("Compress", ["pair", "kept"], ["pi"], axis=0),
+        helper.make_node("Gather", ["w_raw", "pi"], ["rows"], axis=0),
+        helper.make_node("MatMul", ["pv", "rows"], ["sums"]),
+        helper.make_node("Mul", ["sums", "w_scale"], ["hb"]),
+    ]
+    f64 = TensorProto.DOUBLE
+    graph = helper.make_graph(
+        body,
+        "one_pair",
+        [
+            helper.make_tensor_value_info("xb", f64, [nx]),
+            helper.make_tensor_value_info("yb", f64, [ny]),
+        ],
+        [helper.make_tensor_value_info("hb", f64, [k])],
+    )
+    scan = helper.make_node("Scan", ["x", "y"], ["scanned"], body=graph, num_scan_inputs=2)
+    const("no_rows", np.zeros((0, k)))
+    out = [helper.make_tensor_value_info("rows_out", f64, [None, k])]
+    # onnxruntime's Scan refuses an empty batch: no pairs, no rows
+    return [
+        helper.make_node("Shape", ["x"], ["batch"], start=0, end=1),
+        helper.make_node("ReduceMax", ["batch"], ["b"], keepdims=0),
+        helper.make_node("Equal", ["b", "none"], ["empty"]),
+        helper.make_node(
+            "If",
+            ["empty"],
+            ["response"],
+            then_branch=helper.make_graph(
+                [helper.make_node("Identity", ["no_rows"], ["rows_out"])], "empty", [], out
+            ),
+            else_branch=helper.make_graph(
+                [scan, helper.make_node("Identity", ["scanned"], ["rows_out"])], "pairs", [], out
+            ),
+        ),
+    ]
+
+
+def _inputs(graph: Any) -> set[str]:
+    """Every value the nodes of ``graph`` (and of their subgraphs) read."""
+    names = {n for node in graph.node for n in node.input}
+    for node in graph.node:
+        for a in node.attribute:
+            if a.g.node:
+                names |= _inputs(a.g)
+    return names
+
+
 def onnx_model(model: SigmaPiSOM, opset: int = OPSET, inputs: str = "codes") -> Any:
     """The ONNX graph (an ``onnx.ModelProto``) of a fitted model's response and winner.
 
@@ -199,6 +320,9 @@ def onnx_model(model: SigmaPiSOM, opset: int = OPSET, inputs: str = "codes") -> 
     )
     _validate.choice("inputs", inputs, INPUTS, error=UsageError)
     raw, scale = _columns(model)  # raises NotFittedError before training
+    tol = _truncation(model)
+    if tol > 0:  # the graph gathers rows of float64 weights: no cast of every row it reads
+        raw = raw.astype(np.float64)
     nbytes = raw.nbytes + scale.nbytes
     if nbytes >= _MAX_BYTES:
         raise ResourceError(
@@ -208,13 +332,11 @@ def onnx_model(model: SigmaPiSOM, opset: int = OPSET, inputs: str = "codes") -> 
     a, b = score_matrix(model)
     k = model.n_units
     nx, ny = int(np.prod(model.x_shape)), int(np.prod(model.y_shape))
-    tol = _truncation(model)
     init = [
         numpy_helper.from_array(raw, "w_raw"),
         numpy_helper.from_array(scale.astype(np.float64), "w_scale"),
         numpy_helper.from_array(np.array([1], np.int64), "axis1"),
         numpy_helper.from_array(np.array([2], np.int64), "axis2"),
-        numpy_helper.from_array(np.array([0, nx * ny], np.int64), "flat_shape"),
     ]
     f64 = TensorProto.DOUBLE
     if inputs == "positions":
@@ -232,37 +354,10 @@ def onnx_model(model: SigmaPiSOM, opset: int = OPSET, inputs: str = "codes") -> 
             helper.make_tensor_value_info("x", f64, ["B", nx]),
             helper.make_tensor_value_info("y", f64, ["B", ny]),
         ]
-    nodes += [
-        helper.make_node("Unsqueeze", ["x", "axis2"], ["x3"]),
-        helper.make_node("Unsqueeze", ["y", "axis1"], ["y3"]),
-        helper.make_node("Mul", ["x3", "y3"], ["outer"]),
-    ]
-    pairs = "outer"
-    if tol > 0:  # the fast kernel's skipped pairs
-        init.append(numpy_helper.from_array(np.array(tol, np.float64), "tol"))
-        init.append(numpy_helper.from_array(np.array(0.0, np.float64), "zero"))
-        nodes += [
-            helper.make_node("Abs", ["x"], ["abs_x"]),
-            helper.make_node("Abs", ["y"], ["abs_y"]),
-            helper.make_node("ReduceMax", ["abs_x", "axis1"], ["max_x"], keepdims=1),
-            helper.make_node("ReduceMax", ["abs_y", "axis1"], ["max_y"], keepdims=1),
-            helper.make_node("Mul", ["max_x", "tol"], ["thr_x"]),
-            helper.make_node("Mul", ["thr_x", "max_y"], ["thr"]),
-            helper.make_node("Unsqueeze", ["thr", "axis2"], ["thr3"]),
-            helper.make_node("Abs", ["outer"], ["abs_outer"]),
-            helper.make_node("Greater", ["abs_outer", "thr3"], ["kept"]),
-            helper.make_node("Where", ["kept", "outer", "zero"], ["outer_kept"]),
-        ]
-        pairs = "outer_kept"
-    w = "w_raw"
-    if raw.dtype != np.float64:
-        nodes.append(helper.make_node("Cast", ["w_raw"], ["w64"], to=TensorProto.DOUBLE))
-        w = "w64"
-    nodes += [
-        helper.make_node("Reshape", [pairs, "flat_shape"], ["pairs"]),
-        helper.make_node("MatMul", ["pairs", w], ["sums"]),
-        helper.make_node("Mul", ["sums", "w_scale"], ["response"]),
-    ]
+    if tol > 0:
+        nodes += _sparse_response(nx, ny, k, tol, init)
+    else:
+        nodes += _dense_response(raw, nx * ny, init)
     scores = "response"
     if not np.array_equal(a, np.eye(k)):
         init.append(numpy_helper.from_array(a, "score_matrix"))
@@ -275,6 +370,9 @@ def onnx_model(model: SigmaPiSOM, opset: int = OPSET, inputs: str = "codes") -> 
     nodes.append(
         helper.make_node("ArgMax", [scores], ["winner"], axis=1, keepdims=0, select_last_index=0)
     )
+    used = {n for node in nodes for n in node.input}
+    used.update(n for node in nodes for a in node.attribute if a.g.node for n in _inputs(a.g))
+    init = [t for t in init if t.name in used]  # e.g. axis2, which only some graphs use
     graph = helper.make_graph(
         nodes,
         "sigmapi_map",

@@ -175,3 +175,25 @@ def test_a_graph_that_takes_positions_encodes_them_as_the_model_does(which, requ
     np.testing.assert_array_equal(winner, m.winner(x, y))
     want = m.respond(x, y)
     np.testing.assert_allclose(response, want, rtol=0, atol=1e-12 * np.abs(want).max())
+
+
+def test_a_fast_model_s_graph_reads_only_the_kept_pairs_rows(map_2d):
+    """The graph of a fast-kernel model gathers the weight rows of each pair's kept code
+    pairs (a Scan over the batch) instead of multiplying all n_x n_y pairs; zero codes and an
+    empty batch answer as ``respond`` and ``winner`` do."""
+    m = sigmapi.load(map_2d)
+    proto = onnx_model(m)
+    top = [n.op_type for n in proto.graph.node]
+    assert "If" in top and "MatMul" not in top[: top.index("If")]
+    assert {i.name for i in proto.graph.initializer} >= {"w_raw", "tol"}
+    assert "flat_shape" not in {i.name for i in proto.graph.initializer}
+    session = ort.InferenceSession(proto.SerializeToString(), providers=["CPUExecutionProvider"])
+    rng = np.random.default_rng(7)
+    x, y = m.x_code.encode(rng.random((4, 2))), m.y_code.encode(rng.random((4, 2)))
+    x[1], y[2] = 0.0, 0.0
+    response, winner = session.run(["response", "winner"], {"x": x, "y": y})
+    np.testing.assert_array_equal(winner, m.winner(x, y))
+    np.testing.assert_allclose(response, m.respond(x, y), rtol=0, atol=1e-12)
+    assert not response[1].any() and not response[2].any()
+    response, winner = session.run(["response", "winner"], {"x": x[:0], "y": y[:0]})
+    assert response.shape == (0, m.n_units) and winner.shape == (0,)
