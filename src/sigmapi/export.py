@@ -111,7 +111,7 @@ def _truncation(model: SigmaPiSOM) -> float:
     return get_backend(model.backend).pair_cutoff(model.config.kernel_tol)
 
 
-def _code_meta(code: Any) -> str:
+def code_meta(code: Any) -> str:
     d = {f.name: getattr(code, f.name) for f in dataclasses.fields(code) if f.init}
     return json.dumps({**d, "shape": list(code.shape)})
 
@@ -405,8 +405,8 @@ def onnx_model(model: SigmaPiSOM, opset: int = OPSET, inputs: str = "codes") -> 
     meta = {
         "sigmapi.map_shape": json.dumps(list(model.map_shape)),
         "sigmapi.map_periodic": json.dumps(bool(model.config.map_periodic)),
-        "sigmapi.x_code": _code_meta(model.x_code),
-        "sigmapi.y_code": _code_meta(model.y_code),
+        "sigmapi.x_code": code_meta(model.x_code),
+        "sigmapi.y_code": code_meta(model.y_code),
         "sigmapi.winner_rule": rule.name,
         "sigmapi.sigma": repr(float(model.sigma_)),
         "sigmapi.kernel_tol": repr(tol),
