@@ -8,7 +8,11 @@
   AND of one retinal and one gaze input, pruned to a budget (:class:`SparseDendriticMap`);
 - :mod:`~sigmapi.neurons.basis`: a basis-function network, a fixed conjunctive layer and a
   learned readout (:class:`BasisFunctionMap`);
-- :mod:`~sigmapi.neurons.spiking`: a trained map deployed in spiking neurons (NumPy only).
+- :mod:`~sigmapi.neurons.spiking`: a trained map deployed in spiking neurons (NumPy only);
+- :mod:`~sigmapi.neurons.nengo_net`: a trained map as a spiking Nengo network (the nengo
+  extra; imported only when used, not here);
+- :mod:`~sigmapi.neurons.nir_graph`: a trained map as a NIR graph of spiking primitives
+  (``sigmapi export --format nir``; the nir extra; not imported here).
 """
 
 from sigmapi.neurons.basis import BasisFunctionMap

@@ -30,11 +30,12 @@ The graph uses only primitives that most readers support (``Input``, ``Affine``,
 are chosen when the graph is made, on ``calibration`` pairs of random positions drawn with
 ``seed``: those of a small grid that give the most rate-level winners equal to the model's
 (:func:`conjunction_scores`). The graph's metadata holds them, the codes, and how to simulate
-it: ``dt = 1`` (the graph's time unit is one step) for ``steps = 2000`` steps. On paper-1d
-maps about 97 % of the rate-level winners are the model's (the sum-and-threshold conjunction
-is not the product; on a paper-2d map about 95 %). Simulated, the file gave the model's winners
-on 96.6 % of 500 fresh pairs in Norse and 97.0 % of 400 in a forward-Euler simulation of the
-primitives (paper-1d seed 7, ``tests/cli/test_export_nir.py``).
+it: ``dt = 1`` (the graph's time unit is one step) for ``steps = 2000`` steps. The
+sum-and-threshold conjunction is not the product: on paper-1d maps about 97 % of the
+rate-level winners are the model's, on a paper-2d map (seed 0) 92 %, so the 2-D graph misses
+the 95 % target. Simulated, the file of a paper-1d map (seed 7) gave the model's winners on
+96.6 % of 500 fresh pairs in Norse and on 97.0 % of 400 in a forward-Euler simulation of the
+primitives (``tests/cli/test_export_nir.py``).
 """
 
 from __future__ import annotations
@@ -108,10 +109,15 @@ def conjunction_scores(
     """Rate-level scores ``(B, K)`` of the graph: ``alpha`` times the conjunctions' rates
     (:func:`conjunction_rates`) in place of ``x_i y_j``, through the weights ``(K, n_x n_y)``
     and the rule's affine map ``(a, b)``."""
+    return alpha * _responses(weights, x, y, theta, v_conj) @ a + b
+
+
+def _responses(weights: Array, x: Array, y: Array, theta: float, v_conj: float) -> Array:
     out = np.empty((x.shape[0], weights.shape[0]))
     for s in range(0, x.shape[0], 128):  # (B, n_x n_y) in pieces: 2-D maps have 50,625 pairs
-        f = conjunction_rates(x[s : s + 128], y[s : s + 128], theta, v_conj)
-        out[s : s + 128] = alpha * (f @ weights.T) @ a + b
+        out[s : s + 128] = conjunction_rates(x[s : s + 128], y[s : s + 128], theta, v_conj) @ (
+            weights.T
+        )
     return out
 
 
@@ -125,15 +131,17 @@ def _calibrate(
     y = model.y_code.encode(rng.random((n, len(model.y_shape))))
     want = model.winner(x, y)
     peak = float(max(x.max(), y.max()))
-    xy = (x[:, :, None] * y[:, None, :]).reshape(n, -1)
     best: dict[str, float] = {"agreement": -1.0}
     for t in THETAS:
         top = float(np.max(x[:, :, None] + y[:, None, :])) - t * peak
         v_conj = top * CONJUNCTION_PERIOD  # the strongest fires once in the period
-        f = conjunction_rates(x, y, t * peak, v_conj)
-        ls = float((f * xy).sum() / max(float((f * f).sum()), 1e-300))
+        h = _responses(weights, x, y, t * peak, v_conj)
+        # alpha's least-squares value: the rates' scale against the products x_i y_j, from
+        # the responses (h against the model's responses)
+        hm = model.respond(x, y)
+        ls = float((h * hm).sum() / max(float((h * h).sum()), 1e-300))
         for m in ALPHAS if np.any(b != 0) else (1.0,):  # without an offset the scale is free
-            s = conjunction_scores(weights, a, b, x, y, t * peak, v_conj, m * ls)
+            s = m * ls * h @ a + b
             agree = float(np.mean(np.argmax(s, axis=1) == want))
             if agree > best["agreement"]:
                 win = s.max(axis=1)

@@ -1,0 +1,123 @@
+"""The Sigma-Pi map as a spiking Nengo network (``sigmapi.neurons.nengo_net``): its view
+consistency against the rate map's, on trained maps of fresh seeds.
+
+Per seed, two maps: ``1d``, paper-1d as the preset trains it (15 units, 15 x 15 codes); ``2d``,
+a small map of paper-2d's procedure (a 6 x 6 map, 7 x 7 codes, 3,000 iterations: the paper's
+15 x 15 x 15 x 15 map would take the Nengo reference simulator minutes per trial). For each,
+``--pairs`` test z's of ``sigmapi.metrics.evaluation_sets`` shown as their two views (so twice
+as many trials), each for the settling time plus the decision window, in one simulation:
+
+- ``view_consistency``: the share of test z's whose two views win the same map neuron in
+  Nengo; ``rate_view_consistency``: the same for the rate map (``model.winner``);
+  ``vc_gap``: their difference (the target: within 0.02);
+- ``agreement``: the share of trials whose Nengo winner is the rate map's;
+- ``seconds``: the wall-clock time of building and simulating the trials.
+
+Usage::
+
+    python benchmarks/bench_nengo.py --seeds 0 1 --out benchmarks/results/nengo-tuning.json
+    python benchmarks/bench_nengo.py --seeds 100 101 102 103 104     # fresh: nengo.json
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from _common import machine, write_result
+
+OUT = Path(__file__).resolve().parent / "results" / "nengo.json"
+
+
+def maps(seed: int) -> dict[str, Any]:
+    """The two trained maps of ``seed``."""
+    import sigmapi
+
+    one = sigmapi.SigmaPiSOM(sigmapi.load_preset("paper-1d"), seed=seed).fit()
+    two = sigmapi.SigmaPiSOM(
+        sigmapi.load_preset("paper-2d"),
+        map_shape=(6, 6),
+        x_shape=(7, 7),
+        y_shape=(7, 7),
+        iterations=3000,
+        refine_pairs=3000,
+        seed=seed,
+    ).fit()
+    return {"1d": one, "2d": two}
+
+
+def measure(model: Any, pairs: int, cfg: Any, seed: int) -> dict[str, Any]:
+    from sigmapi.metrics import evaluation_sets
+    from sigmapi.neurons.nengo_net import nengo_winners
+
+    _, test = evaluation_sets(model, max(pairs, 100))
+    x = np.vstack([test.x0[:pairs], test.x1[:pairs]])
+    y = np.vstack([test.y0[:pairs], test.y1[:pairs]])
+    rate = model.winner(x, y)
+    start = time.perf_counter()
+    w = nengo_winners(model, x, y, cfg, seed=seed)
+    secs = time.perf_counter() - start
+    vc, rvc = float(np.mean(w[:pairs] == w[pairs:])), float(np.mean(rate[:pairs] == rate[pairs:]))
+    return {
+        "view_consistency": vc,
+        "rate_view_consistency": rvc,
+        "vc_gap": vc - rvc,
+        "agreement": float(np.mean(w == rate)),
+        "trials": int(x.shape[0]),
+        "seconds": secs,
+        "simulated_s": x.shape[0] * (cfg.settle_ms + cfg.window_ms) / 1e3,
+    }
+
+
+def main() -> None:
+    from sigmapi.neurons.nengo_net import NengoConfig
+
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--seeds", type=int, nargs="+", default=[100, 101, 102, 103, 104])
+    p.add_argument("--pairs", type=int, default=500, help="test z's per map (two views each)")
+    p.add_argument("--window-ms", type=float, default=NengoConfig.window_ms)
+    p.add_argument("--out", type=Path, default=OUT)
+    args = p.parse_args()
+    cfg = NengoConfig(window_ms=args.window_ms)
+    start = time.perf_counter()
+    rows = []
+    for seed in args.seeds:
+        for name, model in maps(seed).items():
+            row = {"seed": seed, "map": name, **measure(model, args.pairs, cfg, seed)}
+            print(row, flush=True)
+            rows.append(row)
+    summary = {}
+    for name in ("1d", "2d"):
+        gaps = [r["vc_gap"] for r in rows if r["map"] == name]
+        summary[name] = {
+            "vc_gap_median": float(np.median(gaps)),
+            "vc_gap_worst": float(max(gaps, key=abs)),
+            "met": sum(abs(g) <= 0.02 for g in gaps),
+            "n_seeds": len(gaps),
+            "agreement_median": float(
+                np.median([r["agreement"] for r in rows if r["map"] == name])
+            ),
+            "seconds_median": float(np.median([r["seconds"] for r in rows if r["map"] == name])),
+        }
+    seeds = " ".join(map(str, args.seeds))
+    write_result(
+        args.out,
+        {
+            "command": f"python benchmarks/bench_nengo.py --seeds {seeds} "
+            f"--pairs {args.pairs} --window-ms {args.window_ms:g}",
+            "config": dataclasses.asdict(cfg),
+            "rows": rows,
+            "summary": summary,
+            "wall_s": time.perf_counter() - start,
+            "machine": machine(),
+        },
+    )
+
+
+if __name__ == "__main__":
+    main()
