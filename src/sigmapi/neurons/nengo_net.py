@@ -36,15 +36,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sigmapi import _validate
-from sigmapi.errors import UsageError
+from sigmapi.errors import UsageError, install_hint
 from sigmapi.export import score_matrix
 from sigmapi.model.som import SigmaPiSOM
 
 __all__ = ["NengoConfig", "build_network", "nengo_winners"]
 
 Array = NDArray[np.float64]
-
-_NEEDS = "the nengo extra: pip install 'sigmapi[nengo]'"
 
 
 @dataclass(frozen=True)
@@ -84,7 +82,10 @@ def _nengo() -> Any:
             warnings.filterwarnings("ignore", "numpy.core is deprecated", DeprecationWarning)
             import nengo
     except ImportError:
-        raise UsageError(f"the Nengo network needs the nengo package; install {_NEEDS}") from None
+        raise UsageError(
+            "the Nengo network needs the nengo package (not installed here); "
+            f"{install_hint('nengo')}"
+        ) from None
     return nengo
 
 
