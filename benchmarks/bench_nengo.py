@@ -81,6 +81,7 @@ def main() -> None:
     p.add_argument("--seeds", type=int, nargs="+", default=[100, 101, 102, 103, 104])
     p.add_argument("--pairs", type=int, default=500, help="test z's per map (two views each)")
     p.add_argument("--window-ms", type=float, default=NengoConfig.window_ms)
+    p.add_argument("--maps", nargs="+", choices=("1d", "2d"), default=["1d", "2d"])
     p.add_argument("--out", type=Path, default=OUT)
     args = p.parse_args()
     cfg = NengoConfig(window_ms=args.window_ms)
@@ -88,11 +89,13 @@ def main() -> None:
     rows = []
     for seed in args.seeds:
         for name, model in maps(seed).items():
+            if name not in args.maps:
+                continue
             row = {"seed": seed, "map": name, **measure(model, args.pairs, cfg, seed)}
             print(row, flush=True)
             rows.append(row)
     summary = {}
-    for name in ("1d", "2d"):
+    for name in args.maps:
         gaps = [r["vc_gap"] for r in rows if r["map"] == name]
         summary[name] = {
             "vc_gap_median": float(np.median(gaps)),
@@ -109,7 +112,7 @@ def main() -> None:
         args.out,
         {
             "command": f"python benchmarks/bench_nengo.py --seeds {seeds} "
-            f"--pairs {args.pairs} --window-ms {args.window_ms:g}",
+            f"--pairs {args.pairs} --window-ms {args.window_ms:g} --maps {' '.join(args.maps)}",
             "config": dataclasses.asdict(cfg),
             "rows": rows,
             "summary": summary,

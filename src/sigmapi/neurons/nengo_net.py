@@ -60,9 +60,11 @@ class NengoConfig:
     tau_s_ms: float = 5.0
     """Synaptic time constant (ms) of the input pools' spikes into the conjunctions."""
     drive: float = 8.0
-    """The median winner's current, in units of the map neurons' threshold (chosen on seeds
-    0-1 among 3, 8 and 16 with ``spread`` the same: 3 left the map neurons too few spikes to
-    rank close units, about 20 in a window; 8 and 16 did as well as each other)."""
+    """The median winner's current, in units of the map neurons' threshold. ``(drive,
+    spread)`` was chosen on seeds 0-1 (``benchmarks/bench_nengo.py``'s maps, 100 test z's)
+    among (3, 2), (8, 8) and (16, 16): (3, 2) gave the map neurons about 20 spikes in a window,
+    too few to rank close units (2-D agreement 0.86-0.92); the other two did equally well
+    (0.93-0.96)."""
     spread: float = 8.0
     """The range (5th to 95th percentile) of the winners' scores on the calibration pairs, in
     threshold units."""
