@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import importlib
+
 import numpy as np
 import pytest
 
@@ -10,6 +12,8 @@ from sigmapi import SigmaPiSOM, SOMConfig
 from sigmapi.metrics import evaluation_sets, fold_indicators
 from sigmapi.rules.geometry import MapGeometry
 from sigmapi.rules.ordering import crossview_init, crossview_scores
+
+ordering = importlib.import_module("sigmapi.rules.ordering")  # (rules.ordering: a function)
 
 SMALL_2D = SOMConfig(
     map_shape=(8, 8), x_shape=(8, 8), y_shape=(8, 8), code_width=1.0, iterations=20_000,
@@ -46,6 +50,31 @@ def test_crossview_start_is_ordered_and_oriented_like_the_retina():
         crossview_init(
             (b.x0[:2], b.y0[:2], b.x1[:2], b.y1[:2]), (15,), (15,), MapGeometry((15,)), 1.0
         )
+
+
+@pytest.mark.parametrize(
+    ("x_shape", "y_shape", "width"), [((15, 15), (15, 15), 1.0), ((7, 4), (8, 5), 0.8)]
+)
+def test_start_sums_the_tiles_that_hold_the_products(x_shape, y_shape, width):
+    """The ordered start's sum over the tiles that reach the cut (``_placed_sum``) is the sum
+    over every product within the cut's share of the largest weight; tiles part full at
+    the grid's ends (7, 4, 8 and 5 grid points) included, every grid point in one tile."""
+    som = SigmaPiSOM(map_shape=(6, 6), x_shape=x_shape, y_shape=y_shape, code_width=width)
+    b = som.sampler.sample(300, np.random.default_rng(4))
+    rng = np.random.default_rng(5)
+    a = rng.random((36, 300)) ** 8  # uneven placements, as the Gaussian profile's
+    a /= a.sum(axis=1, keepdims=True)
+    full = np.einsum("kp,pi,pj->kij", a, b.x1, b.y1)
+    w = ordering._placed_sum(a, b.x1, b.y1, x_shape, y_shape)
+    err = np.abs(w - full).max() / np.abs(full).max()
+    assert err <= 10 * ordering.INIT_CUT, err
+    for shape in (x_shape, y_shape):
+        cells = np.sort(np.concatenate(ordering._tiles(shape)))
+        np.testing.assert_array_equal(cells, np.arange(np.prod(shape)))
+    # flat codes reach every tile: the sum over every product, up to rounding
+    flat = np.ones_like(b.x1[:5]), np.ones_like(b.y1[:5])
+    w = ordering._placed_sum(a[:, :5], *flat, x_shape, y_shape)
+    np.testing.assert_allclose(w, np.einsum("kp,pi,pj->kij", a[:, :5], *flat), rtol=1e-13)
 
 
 def test_ordering_none_keeps_the_paper_procedure():

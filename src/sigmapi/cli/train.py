@@ -35,6 +35,7 @@ from sigmapi.metrics import (
     evaluate,
     evaluation_sets,
     fold_indicators,
+    hard_scores,
 )
 from sigmapi.model.som import SigmaPiSOM, load_model
 from sigmapi.progress import counter, progress_callback
@@ -134,9 +135,10 @@ def _finished_run(out: Any, cfg: Any) -> SigmaPiSOM:
 def _warn_if_folded(model: SigmaPiSOM, n: int = 4000) -> None:
     """One warning line when the trained map looks folded (the z-free fold score)."""
     _, test = evaluation_sets(model, n)
-    w0 = model.winner(test.x0, test.y0, hard=True)
+    scores = hard_scores(model, test.x0, test.y0)  # one pass: view 0's winners and the fold's
+    w0 = np.argmax(scores, axis=1)
     w1 = model.winner(test.x1, test.y1, hard=True)
-    starved, te, score = fold_indicators(model, test, w0, w1)
+    starved, te, score = fold_indicators(model, test, w0, w1, scores)
     if score >= FOLD_THRESHOLD:
         ring = model.map_shape if model.config.map_periodic else None
         apart = chebyshev(model.map_coords, w0, w1, ring)
