@@ -245,13 +245,16 @@ def crossview_init(
         return _placed_sum(a, views[2], views[3], x_shape, y_shape)
 
 
-def _tiles(shape: tuple[int, ...]) -> list[NDArray[np.int64]]:
-    """The flat indices of a code on grid ``shape`` by tile: blocks of :data:`INIT_TILE`
-    grid points per axis (part-full at the far ends), C order over the tiles."""
-    cells = np.indices(shape).reshape(len(shape), -1) // INIT_TILE
-    label = np.asarray(np.ravel_multi_index(tuple(cells), tuple(-(-n // INIT_TILE) for n in shape)))
-    order = np.argsort(label, kind="stable")
-    return np.split(order, np.flatnonzero(np.diff(label[order])) + 1)
+def _tiled(codes: NDArray[np.float64], shape: tuple[int, ...]) -> NDArray[np.float64]:
+    """Codes on grid ``shape`` by tile, ``(n, tiles, INIT_TILE ** d)``: the grid padded with
+    zeros to whole tiles of :data:`INIT_TILE` points per axis, tiles in C order over the tile
+    grid, each tile's points in C order."""
+    t, d, n = INIT_TILE, len(shape), codes.shape[0]
+    padded = np.zeros((n, *(-(-s // t) * t for s in shape)))
+    padded[(slice(None), *(slice(0, s) for s in shape))] = codes.reshape(n, *shape)
+    split = padded.reshape(n, *(v for s in padded.shape[1:] for v in (s // t, t)))
+    order = (0, *range(1, 2 * d, 2), *range(2, 2 * d + 1, 2))  # tile axes first, then points
+    return split.transpose(order).reshape(n, -1, t**d)
 
 
 def _placed_sum(
@@ -262,23 +265,31 @@ def _placed_sum(
     y_shape: tuple[int, ...],
 ) -> NDArray[np.float64]:
     """``W[k] = sum_p a[k, p] x1[p] y1[p]^T`` over the pairs' tiles that hold a product of at
-    least :data:`INIT_CUT` of the pair's largest (:data:`INIT_CUT`): per tile of the pair grid
-    one matrix product (BLAS) over the pairs that reach it. ``(n_units, n_x, n_y)``."""
-    tx, ty = _tiles(x_shape), _tiles(y_shape)
-    ax, ay = np.abs(x1), np.abs(y1)
-    top_x = np.stack([ax[:, t].max(axis=1) for t in tx], axis=1)  # (pairs, x tiles)
-    top_y = np.stack([ay[:, t].max(axis=1) for t in ty], axis=1)
-    cut = INIT_CUT * ax.max(axis=1) * ay.max(axis=1)
+    least :data:`INIT_CUT` of the pair's largest: per tile of the pair grid one matrix
+    product (BLAS) over the pairs that reach it, written into the weights' tile as a strided
+    view (no copy where the grids hold whole tiles). ``(n_units, n_x, n_y)``."""
+    t, units = INIT_TILE, a.shape[0]
+    xt, yt = _tiled(x1, x_shape), _tiled(y1, y_shape)
+    top_x, top_y = np.abs(xt).max(axis=2), np.abs(yt).max(axis=2)  # (pairs, tiles)
+    cut = INIT_CUT * top_x.max(axis=1) * top_y.max(axis=1)
     reach = top_x[:, :, None] * top_y[:, None, :] >= cut[:, None, None]
-    w = np.zeros((a.shape[0], x1.shape[1], y1.shape[1]))
-    for i, ti in enumerate(tx):
-        for j, tj in enumerate(ty):
+    grid_x, grid_y = (tuple(-(-s // t) for s in shape) for shape in (x_shape, y_shape))
+    w = np.zeros((units, *(g * t for g in grid_x + grid_y)))
+    view = w.reshape(units, *(v for g in grid_x + grid_y for v in (g, t)))
+    points = (t,) * (len(x_shape) + len(y_shape))
+    a_rows = np.ascontiguousarray(a.T)
+    for i in range(xt.shape[1]):
+        at_x = np.unravel_index(i, grid_x)
+        for j in range(yt.shape[1]):
             p = np.flatnonzero(reach[:, i, j])
             if p.size:
-                outer = x1[p[:, None], ti][:, :, None] * y1[p[:, None], tj][:, None, :]
-                block = a[:, p] @ outer.reshape(p.size, -1)
-                w[:, ti[:, None], tj[None, :]] = block.reshape(-1, ti.size, tj.size)
-    return w
+                outer = (xt[p, i][:, :, None] * yt[p, j][:, None, :]).reshape(p.size, -1)
+                at = (*at_x, *np.unravel_index(j, grid_y))
+                tile = (slice(None), *(v for g in at for v in (g, slice(None))))
+                view[tile] = (a_rows[p].T @ outer).reshape(units, *points)
+    inside = (slice(None), *(slice(0, s) for s in (*x_shape, *y_shape)))
+    nx, ny = math.prod(x_shape), math.prod(y_shape)
+    return np.ascontiguousarray(w[inside]).reshape(units, nx, ny)
 
 
 def check_periodic_map(map_shape: tuple[int, ...], map_periodic: bool) -> None:
