@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 
 from sigmapi.config import SOMConfig
-from sigmapi.experiments.kit.results import Column, Result, render
+from sigmapi.experiments.kit.results import Result, columns, render
 
 __all__ = ["SUMMARY_KEYS", "TARGET_RATIO", "ChainResult"]
 
@@ -23,15 +23,10 @@ SUMMARY_KEYS = ("z_error", "view_consistency", "order_r2", "usage", "weights", "
 
 ROUTES = ("chain", "single")
 
-COLUMNS = (
-    Column("seed", "seed", "<5d"),
-    Column("route", "route", "7s"),
-    Column("z error", "z_error", "7.3f"),
-    Column("same winner", "view_consistency", "12.3f"),
-    Column("order R^2", "order_r2", "10.3f"),
-    Column("usage", "usage", "6.2f"),
-    Column("weights", "weights", "8d"),
-    Column("seconds", "train_seconds", "8.1f"),
+COLUMNS = columns(
+    "seed:<5d route:7s z_error:7.3f view_consistency:12.3f order_r2:10.3f usage:6.2f",
+    "weights:8d train_seconds:8.1f",
+    view_consistency="same winner",
 )
 """The table's columns: one row per seed and route."""
 

@@ -15,7 +15,7 @@ from sigmapi.experiments.compare.config import (
     SEEDS,
     CompareConfig,
 )
-from sigmapi.experiments.kit.results import Column, Result, render
+from sigmapi.experiments.kit.results import Result, columns, render
 from sigmapi.metrics import grid_spacing
 from sigmapi.model.som import SigmaPiSOM
 
@@ -29,14 +29,14 @@ FIGURE = "compare.png"
 MATCH_SHARE = 1.1
 """labels needed: the z error within this factor of the error with all labels."""
 
-COLUMNS = (
-    Column("method", "name", "24s"),
-    Column("same place", "view_consistency", "10.3f"),
-    Column("same unit", "unit_consistency", "9.3f"),
-    Column("z error", "z_error", "8.3f"),
-    Column("labels", "labels_used", "7d"),
-    Column("needed", "labels_needed", "7d"),
-    Column("to match", "labels_to_match_sigma_pi", ">8"),
+COLUMNS = columns(
+    "name:24s view_consistency:10.3f unit_consistency:9.3f z_error:8.3f labels_used:7d",
+    "labels_needed:7d labels_to_match_sigma_pi:>8",
+    view_consistency="same place",
+    unit_consistency="same unit",
+    labels_used="labels",
+    labels_needed="needed",
+    labels_to_match_sigma_pi="to match",
 )
 """The table's columns: one row per method (medians over seeds)."""
 

@@ -27,7 +27,17 @@ import numpy as np
 
 from sigmapi.experiments.kit.seeds import check_seeds
 
-__all__ = ["Column", "Result", "as_object", "plain", "render", "summaries", "tuples"]
+__all__ = [
+    "HEADERS",
+    "Column",
+    "Result",
+    "as_object",
+    "columns",
+    "plain",
+    "render",
+    "summaries",
+    "tuples",
+]
 
 R = TypeVar("R", bound="Result")
 
@@ -222,6 +232,33 @@ class Column:
     def cell(self, row: Any) -> str:
         v = self.value(row)
         return self._aligned(self.missing) if v is None else format(v, self.format)
+
+
+HEADERS = {
+    "name": "method",
+    "view_consistency": "same unit",
+    "z_error": "z error",
+    "order_r2": "order R^2",
+    "train_seconds": "seconds",
+    "median_reference_frame_index": "RF index",
+}
+"""The headers of the keys several tables show; a key not here heads its own column, a key
+ending in ``_worst`` (the worst seed's value) is headed ``worst``."""
+
+
+def columns(*specs: str | Column, **headers: str) -> tuple[Column, ...]:
+    """The columns of a table: each word ``"key:format"`` of a string a column of that key
+    (headed by ``headers``, else :data:`HEADERS`), each :class:`Column` as it is."""
+    out: list[Column] = []
+    for spec in specs:
+        if isinstance(spec, Column):
+            out.append(spec)
+            continue
+        for word in spec.split():
+            key, _, fmt = word.partition(":")
+            worst = "worst" if key.endswith("_worst") else key
+            out.append(Column(headers.get(key) or HEADERS.get(key, worst), key, fmt))
+    return tuple(out)
 
 
 def render(columns: Sequence[Column], rows: Sequence[Any], sep: str = " ") -> list[str]:

@@ -7,7 +7,7 @@ from pathlib import Path
 from typing import Any
 
 from sigmapi._outputs import save_captioned
-from sigmapi.experiments.kit.results import Column, Result, render
+from sigmapi.experiments.kit.results import Result, columns, render
 
 from .config import PhysiologyConfig
 
@@ -18,13 +18,12 @@ FIGURE = "physiology.png"
 BODY_CENTRED = 0.9
 """A map whose median reference-frame index is at least this reads as body-centred."""
 
-COLUMNS = (
-    Column("map", "map", "14s"),
-    Column("RF index", "median_reference_frame_index", "9.3f"),
-    Column("measured", "measured", "8.2f"),
-    Column("body-centred", "body_centred_share", "12.2f"),
-    Column("gain R^2", "median_gain_r2", "8.3f"),
-    Column("peak mod.", "median_peak_modulation", "9.3f"),
+COLUMNS = columns(
+    "map:14s median_reference_frame_index:9.3f measured:8.2f body_centred_share:12.2f",
+    "median_gain_r2:8.3f median_peak_modulation:9.3f",
+    body_centred_share="body-centred",
+    median_gain_r2="gain R^2",
+    median_peak_modulation="peak mod.",
 )
 """The table's columns: one row per map (the trained one, its random start)."""
 

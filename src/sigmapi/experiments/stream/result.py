@@ -12,7 +12,7 @@ import numpy as np
 
 from sigmapi._outputs import save_captioned
 from sigmapi.errors import ConfigError
-from sigmapi.experiments.kit.results import Column, Result, render
+from sigmapi.experiments.kit.results import Column, Result, columns, render
 from sigmapi.experiments.kit.seeds import check_seeds
 from sigmapi.experiments.stream.config import (
     StreamConfig,
@@ -35,14 +35,9 @@ MIN_DWELL = 4
 
 FIGURE = "stream.png"
 
-COLUMNS = (
-    Column("method", "name", "20s"),
-    Column("dwell", "dwell", ">5"),
-    Column("same unit", "view_consistency", "9.3f"),
-    Column("worst", "view_consistency_worst", "6.3f"),
-    Column("z error", "z_error", "8.3f"),
-    Column("order R^2", "order_r2", "9.3f"),
-    Column("worst", "order_r2_worst", "6.3f"),
+COLUMNS = columns(
+    "name:20s dwell:>5 view_consistency:9.3f view_consistency_worst:6.3f z_error:8.3f",
+    "order_r2:9.3f order_r2_worst:6.3f",
     Column("folded", lambda m: f"{m['n_seeds'] - m['ordered']:3d}/{m['n_seeds']:<3d}", ">7s"),
 )
 """The table's columns: one row per method and dwell time (medians, worst seeds)."""
