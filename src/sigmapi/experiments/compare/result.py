@@ -161,9 +161,9 @@ class CompareResult(Result):
         )
 
     def figure(self, out_dir: Path) -> list[Path]:
-        """``compare.png`` (:func:`~sigmapi.viz.compare.compare_figure`) and its caption
-        beside it, ``compare.txt``; returns the figure's path."""
-        from sigmapi.viz.compare import compare_figure  # matplotlib: only when drawing
+        """``compare.png`` (:func:`.figures.compare_figure`) and its caption beside it,
+        ``compare.txt``; returns the figure's path."""
+        from .figures import compare_figure  # matplotlib: only when drawing
 
         out = Path(out_dir) / FIGURE
         return [save_captioned(compare_figure(self.to_dict()), out, self.caption(), dpi=120)]

@@ -344,7 +344,7 @@ class NeuronsResult(Result):
 
     def figure(self, out_dir: Path) -> list[Path]:
         """``neurons.png`` and its caption ``neurons.txt``."""
-        from sigmapi.viz.neurons import neurons_figure  # matplotlib: only when drawing
+        from .figures import neurons_figure  # matplotlib: only when drawing
 
         out = Path(out_dir) / FIGURE
         return [save_captioned(neurons_figure(self.to_dict()), out, self.caption(), dpi=110)]

@@ -139,7 +139,7 @@ class PhysiologyResult(Result):
     def figure(self, out_dir: Path) -> list[Path]:
         """``physiology.png`` and its caption ``physiology.txt`` (and the NWB file the run
         wrote there, ``--nwb``, in the list of files written)."""
-        from sigmapi.viz.neurons import physiology_figure  # matplotlib: only when drawing
+        from .figures import physiology_figure  # matplotlib: only when drawing
 
         out = Path(out_dir) / FIGURE
         fig = save_captioned(physiology_figure(self.to_dict()), out, self.caption(), dpi=110)

@@ -198,9 +198,9 @@ class StreamResult(Result):
         return text
 
     def figure(self, out_dir: Path) -> list[Path]:
-        """``stream.png`` (:func:`sigmapi.viz.stream.stream_figure`) and its caption beside it,
+        """``stream.png`` (:func:`.figures.stream_figure`) and its caption beside it,
         ``stream.txt``; returns the figure's path."""
-        from sigmapi.viz.stream import stream_figure  # matplotlib: only when drawing
+        from .figures import stream_figure  # matplotlib: only when drawing
 
         out = Path(out_dir) / FIGURE
         return [save_captioned(stream_figure(self.to_dict()), out, self.caption(), dpi=120)]
