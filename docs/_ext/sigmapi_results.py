@@ -99,7 +99,7 @@ READERS: dict[str, tuple[str, str]] = {
     "robot-docking": ("robot.result:RobotResult", "result"),
     "robot-docking-quick": ("robot.result:RobotResult", "result"),
     "robot-docking-tuning": ("robot.result:RobotResult", "result"),
-    "stream": ("stream.result:StreamResult", ""),
+    "stream": ("stream.run:StreamResult", ""),
 }
 """The results files an experiment wrote: the class (under :mod:`sigmapi.experiments`) whose
 ``from_dict`` reads each, and the key the result sits under where the script that kept it

@@ -20,7 +20,7 @@ from sigmapi.experiments.reach.result import ReachResult
 from sigmapi.experiments.reproduce.results import ReproduceResult
 from sigmapi.experiments.reward.result import RewardResult
 from sigmapi.experiments.robot.result import RobotResult
-from sigmapi.experiments.stream.result import StreamResult
+from sigmapi.experiments.stream.run import StreamResult
 from sigmapi.experiments.sweep.run import SweepResult
 
 RESULTS = Path(__file__).resolve().parents[2] / "benchmarks" / "results"

@@ -503,7 +503,7 @@ def _stored(name: str, result_type: Any) -> Callable[[Path], Any]:
 
 
 def _stream(tmp_path: Path) -> Any:
-    from sigmapi.experiments.stream.result import StreamResult
+    from sigmapi.experiments.stream.run import StreamResult
 
     return _stored("stream", StreamResult)(tmp_path)
 
