@@ -480,9 +480,7 @@ def _neurons_result(tmp_path: Path) -> Any:
 def _physiology_result(tmp_path: Path) -> Any:
     """The physiology of a tiny trained 1-D map (5 units)."""
     from sigmapi import SigmaPiSOM
-    from sigmapi.experiments.physiology.config import PhysiologyConfig
-    from sigmapi.experiments.physiology.result import PhysiologyResult
-    from sigmapi.experiments.physiology.run import record_model
+    from sigmapi.experiments.physiology.run import PhysiologyConfig, PhysiologyResult, record_model
 
     model = SigmaPiSOM(map_shape=(5,), x_shape=(5,), y_shape=(5,), iterations=2000, seed=0).fit()
     path = model.save(tmp_path / "m.npz") or tmp_path / "m.npz"
