@@ -86,9 +86,9 @@ def load(name: str) -> Any:
 
 _EXPERIMENTS = "sigmapi.experiments"
 READERS: dict[str, tuple[str, str]] = {
-    "chain": ("chain.result:ChainResult", ""),
-    "chain-winner": ("chain.result:ChainResult", ""),
-    "compare": ("compare.result:CompareResult", ""),
+    "chain": ("chain.run:ChainResult", ""),
+    "chain-winner": ("chain.run:ChainResult", ""),
+    "compare": ("compare.run:CompareResult", ""),
     "icub": ("icub.result:ICubResult", ""),
     "icub-check": ("icub.result:ICubResult", ""),
     "neurons": ("neurons.result:NeuronsResult", ""),

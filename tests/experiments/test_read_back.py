@@ -12,8 +12,8 @@ from typing import Any
 import pytest
 
 from sigmapi.errors import ConfigError
-from sigmapi.experiments.chain.result import ChainResult
-from sigmapi.experiments.compare.result import CompareResult
+from sigmapi.experiments.chain.run import ChainResult
+from sigmapi.experiments.compare.run import CompareResult
 from sigmapi.experiments.icub.result import ICubResult
 from sigmapi.experiments.neurons.result import NeuronsResult
 from sigmapi.experiments.reach.result import ReachResult

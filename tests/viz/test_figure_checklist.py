@@ -510,7 +510,7 @@ def _compare(tmp_path: Path) -> Any:
     """The measured comparison (benchmarks/results/compare.json), its medians as one seed."""
     import json
 
-    from sigmapi.experiments.compare.result import CompareResult, MethodScore
+    from sigmapi.experiments.compare.run import CompareResult, MethodScore
 
     path = Path(__file__).parents[2] / "benchmarks" / "results" / "compare.json"
     data = json.loads(path.read_text())
