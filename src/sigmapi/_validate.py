@@ -155,7 +155,9 @@ def positive(
     return number(name, value, 0.0, lo_open=True, fix=fix, error=error)
 
 
-def boolean(name: str, value: object, *, fix: str = "", error: type[Exception] = ConfigError) -> bool:
+def boolean(
+    name: str, value: object, *, fix: str = "", error: type[Exception] = ConfigError
+) -> bool:
     """``value`` if it is a bool (no truthiness: ``"yes"`` and ``1`` are refused)."""
     if not isinstance(value, bool):
         raise fail(name, "true or false", value, fix, error)

@@ -494,7 +494,7 @@ def _members(zf: zipfile.ZipFile, name: str) -> dict[str, zipfile.ZipInfo]:
     return {i.filename[: -len(".npy")]: i for i in infos}
 
 
-def _parse_header(raw: NDArray[np.uint8], name: str, kind: str) -> dict[str, Any]:
+def _parse_header(raw: NDArray[np.uint8], name: str, kind: str) -> dict[str, object]:
     try:
         header = json.loads(raw.tobytes().decode("utf-8"))
     except (UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:

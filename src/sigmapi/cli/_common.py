@@ -484,7 +484,7 @@ def add_dataclass_flags(
             declare_path(p, f.name, flags[0], f.metadata["path"])
 
 
-def dataclass_values(args: argparse.Namespace, cls: type) -> dict[str, Any]:
+def dataclass_values(args: argparse.Namespace, cls: type) -> dict[str, object]:
     """The fields of ``cls`` given on the command line (the options left out are not listed);
     repeated values as a tuple."""
     given = ((f.name, getattr(args, f.name, None)) for f in dataclasses.fields(cls))

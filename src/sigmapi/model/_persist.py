@@ -106,7 +106,7 @@ class PersistMixin(MapCore):
         header, arrays = read_model(path)
         return cls.from_arrays(header, arrays, backend=backend, source=str(path))
 
-    def __getstate__(self) -> dict[str, Any]:
+    def __getstate__(self) -> dict[str, object]:
         """State arrays and the config, never modules or compiled kernels (see :meth:`save`)."""
         if self.is_fitted:
             header, arrays = self.to_arrays()

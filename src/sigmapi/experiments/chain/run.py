@@ -211,7 +211,7 @@ class ChainResult(Result):
             list(data["seeds"]),
         )
 
-    def summary(self) -> dict[str, Any]:
+    def summary(self) -> dict[str, object]:
         """The medians of both routes, the median and worst ratio and how many seeds meet
         ``ratio <= TARGET_RATIO``."""
         per_seed = self.per_seed
@@ -231,7 +231,7 @@ class ChainResult(Result):
         )
         return out
 
-    def settings(self) -> dict[str, Any]:
+    def settings(self) -> dict[str, object]:
         """The map config, the training pairs, test points, code and the seeds."""
         return {
             "config": self.config.to_dict(),
@@ -351,14 +351,14 @@ class ChainJob:
     """Where given, the job shows the iterations of its three maps."""
 
 
-def chain_seed(job: ChainJob) -> dict[str, Any]:
+def chain_seed(job: ChainJob) -> dict[str, object]:
     """Train map A, map B and the single map on seed ``job.seed``'s triples and score both
     routes on the shared calibration and test triples (one entry of ``"seeds"``)."""
     total = 3 * job.cfg.iterations
     return counted(job.show, total, f"chain seed {job.seed}", partial(_chain_seed, job), "it")
 
 
-def _chain_seed(job: ChainJob, tick: Tick | None) -> dict[str, Any]:
+def _chain_seed(job: ChainJob, tick: Tick | None) -> dict[str, object]:
     seed, cfg, train_pairs, code, cal, test = (
         job.seed,
         job.cfg,
@@ -476,7 +476,7 @@ def run_chain(
     code: str = "response",
     executor: Executor | None = None,
     progress: Progress | None = None,
-) -> dict[str, Any]:
+) -> dict[str, object]:
     """The chain of frames against the single map, per seed and summarised.
 
     Parameters

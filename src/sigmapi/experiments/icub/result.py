@@ -53,7 +53,7 @@ _MAP_KEYS = (
 )
 
 
-def _scored(rows: list[dict[str, Any]], true: list[dict[str, Any]]) -> dict[str, Any]:
+def _scored(rows: list[dict[str, Any]], true: list[dict[str, Any]]) -> dict[str, object]:
     """A map's scores ``rows`` (one per seed) over the seeds: medians, the worst, how many
     seeds were ordered and flagged, its error over the true-direction map's ``true``."""
     ratio = [
@@ -190,7 +190,7 @@ class ICubResult(Result):
             ]
         return out
 
-    def targets(self) -> dict[str, Any]:
+    def targets(self) -> dict[str, object]:
         """Each acceptance bound and whether it is met."""
         maps, succ = self.maps(), self.success()
         n = len(self.seeds)

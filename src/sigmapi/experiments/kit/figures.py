@@ -67,7 +67,7 @@ def plot_apart(
     y: Mapping[str, Sequence[float]],
     *,
     labels: Mapping[str, str] | None = None,
-    colours: Mapping[str, Any] | None = None,
+    colours: Mapping[str, object] | None = None,
     largest: float = 13.0,
     width: float = 3.0,
     say: bool = True,
@@ -101,7 +101,7 @@ def legend_once(ax: Any, **kwargs: Any) -> Any:
     """The legend of ``ax`` (``kwargs`` to ``ax.legend``) with each label once, drawn by the
     first mark that has it (e.g. one entry for the bands of every series)."""
     handles, labels = ax.get_legend_handles_labels()
-    once: dict[str, Any] = {}
+    once: dict[str, object] = {}
     for handle, label in zip(handles, labels, strict=True):
         once.setdefault(label, handle)
     return ax.legend(list(once.values()), list(once), **kwargs)

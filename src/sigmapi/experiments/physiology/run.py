@@ -176,7 +176,7 @@ class PhysiologyResult(Result):
         med = self.data["trained"]["median_reference_frame_index"]
         return med is not None and med >= BODY_CENTRED
 
-    def settings(self) -> dict[str, Any]:
+    def settings(self) -> dict[str, object]:
         """The config's fields but the tuning units."""
         c = self.config
         return {
@@ -312,7 +312,7 @@ class RandomStart:
         return np.asarray(np.einsum("bi,kib->bk", np.asarray(x), t))
 
 
-def _tuning(model: Any, cfg: PhysiologyConfig, n_probe: int | None) -> dict[str, Any]:
+def _tuning(model: Any, cfg: PhysiologyConfig, n_probe: int | None) -> dict[str, object]:
     """Tuning curves along retinal axis 0 of ``tuning_units`` units spread over the map (in
     2-D on the probe row through each unit's peak at the middle gaze)."""
     resp, probes = tuning_curves(model, cfg.gazes, 0, n_probe, (cfg.gaze_axes or (0,))[0])
@@ -330,7 +330,9 @@ def _tuning(model: Any, cfg: PhysiologyConfig, n_probe: int | None) -> dict[str,
     return out
 
 
-def record_model(cfg: PhysiologyConfig, recording: dict[str, Any] | None = None) -> dict[str, Any]:
+def record_model(
+    cfg: PhysiologyConfig, recording: dict[str, Any] | None = None
+) -> dict[str, object]:
     """The trained map's and its random start's per-unit indices, their comparison, the
     tuning curves the figure draws and the monkey protocol (``monkey``,
     :func:`~sigmapi.analysis.monkey.monkey_protocol`); ``recording``, a dict, receives the

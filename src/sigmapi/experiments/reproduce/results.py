@@ -309,7 +309,7 @@ class PresetResult(Result):
         """Median over seeds of a time of :class:`SeedRun` (e.g. ``"train_seconds"``)."""
         return statistics.median(float(getattr(r, key)) for r in self.runs)
 
-    def _stage(self, stage: Stage) -> dict[str, Any]:
+    def _stage(self, stage: Stage) -> dict[str, object]:
         return {
             "median": self.median(stage),
             "worst": self.worst(stage),
@@ -319,7 +319,7 @@ class PresetResult(Result):
             "folded_seeds": self.folded_seeds(stage),
         }
 
-    def refined(self) -> dict[str, Any]:
+    def refined(self) -> dict[str, object]:
         return self._stage("refined")
 
     def unrefined(self) -> dict[str, Any] | None:

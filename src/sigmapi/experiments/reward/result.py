@@ -39,7 +39,7 @@ def episodes_to_target(success: NDArray[np.bool_], block: int, target: float) ->
     return int((hit[0] + 1) * block) if hit.size else None
 
 
-def _summary(values: list[float | None], higher: bool = True) -> dict[str, Any]:
+def _summary(values: list[float | None], higher: bool = True) -> dict[str, object]:
     """Median and worst over seeds (None, e.g. a target never reached, counts as worst)."""
     known = [v for v in values if v is not None and np.isfinite(v)]
     worst: float | None

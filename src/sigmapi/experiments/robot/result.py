@@ -131,7 +131,7 @@ class RobotResult(Result):
             for s, r in self.success.items()
         }
 
-    def map_summary(self) -> dict[str, Any]:
+    def map_summary(self) -> dict[str, object]:
         """The maps' metrics with the keys of ``sigmapi evaluate`` (means over seeds;
         ``folded``: any seed folded), ``order_r2_min`` and ``folded_seeds``."""
         if not self.map_metrics:

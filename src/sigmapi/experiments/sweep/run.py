@@ -206,7 +206,7 @@ class SweepSpec:
             ) from None
         return cls.from_toml(text, f"sweep spec {str(p)!r}")
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self) -> dict[str, object]:
         """The spec as its TOML file holds it (``set`` for :attr:`fixed`)."""
         return {
             "preset": self.preset,
@@ -248,7 +248,7 @@ class SweepSpec:
         return out
 
 
-def _base(preset: str, fixed: dict[str, Any], source: str) -> dict[str, Any]:
+def _base(preset: str, fixed: dict[str, Any], source: str) -> dict[str, object]:
     """The preset with the spec's ``[set]``, checked."""
     base = load_preset(preset).to_dict()
     try:
@@ -257,7 +257,7 @@ def _base(preset: str, fixed: dict[str, Any], source: str) -> dict[str, Any]:
         raise ConfigError(f"{source}: [set]: {exc}") from None
 
 
-def sweep_job(run: SweepRun) -> dict[str, Any]:
+def sweep_job(run: SweepRun) -> dict[str, object]:
     """Train and evaluate one run (a job of the executor); its metrics and seconds."""
     t0 = time.perf_counter()
     model = SigmaPiSOM(run.config).fit()
@@ -273,7 +273,7 @@ def read_results(path: str | Path) -> list[dict[str, str]]:
     return [] if table is None else list(table.rows.values())
 
 
-def _row(run: SweepRun, outcome: Outcome) -> dict[str, Any]:
+def _row(run: SweepRun, outcome: Outcome) -> dict[str, object]:
     row: dict[str, Any] = {
         "run_id": run.run_id,
         "run_key": run.run_key,
