@@ -300,7 +300,7 @@ def bounded(
     count: int = MAX_ITEMS,
     why: str = "",
     **more: Any,
-) -> Mapping[str, Any]:
+) -> Mapping[str, object]:
     """Field metadata declaring :class:`Bounds`: ``episodes: int = field(default=600,
     metadata=bounded("int", 1))``, ``relation: str = field(default="mean",
     metadata=bounded("choice", options=RELATIONS))``; ``more`` is further metadata (e.g.

@@ -263,7 +263,7 @@ class CompareResult(Result):
         head = {"preset": cfg.pop("preset"), "overrides": cfg.pop("overrides")}
         return {**head, "seeds": list(self.seeds), **cfg, "labels": list(self.config.labels)}
 
-    def methods(self) -> list[dict[str, Any]]:
+    def methods(self) -> list[dict[str, object]]:
         """Per method its medians over seeds, the labels it used and needed (and to match
         the Sigma-Pi map's z error), its z error by labels and its values per seed."""
         target = self.reference.z_error

@@ -70,7 +70,7 @@ def _scored(rows: list[dict[str, Any]], true: list[dict[str, Any]]) -> dict[str,
     }
 
 
-def _per_seed(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
+def _per_seed(rows: list[dict[str, Any]]) -> list[dict[str, object]]:
     return [{k: r[k] for k in _MAP_KEYS} for r in rows]
 
 

@@ -231,7 +231,7 @@ def _eye_views(
     scene.set_ball(ball)
     scene.set_gaze(gaze)
     scene.set_arm(posture)
-    out: dict[str, Any] = {}
+    out: dict[str, object] = {}
     for eye in ("l_eye", "r_eye"):
         out[eye] = scene.render(eye)
         out[f"{eye}_ball"] = scene.project(scene.ball_position(), eye)[0]

@@ -124,7 +124,7 @@ class Result:
         :attr:`KEYS` in order; a result read back gives its ``written`` summaries in place of
         the computed keys."""
         written: dict[str, Any] | None = getattr(self, "written", None)
-        out: dict[str, Any] = {}
+        out: dict[str, object] = {}
         for entry in self._keys():
             spread = entry.startswith("*")
             key, attr = _entry(entry.lstrip("*"))
@@ -150,7 +150,7 @@ class Result:
         tuple, a float); the seeds from the config where :attr:`SEEDS_IN_CONFIG`."""
         hints = typing.get_type_hints(cls)
         names = {f.name for f in dataclasses.fields(cls) if f.init}  # type: ignore[arg-type]
-        values: dict[str, Any] = {}
+        values: dict[str, object] = {}
         for entry in cls.KEYS:
             key, attr = _entry(entry.lstrip("*"))
             if entry.startswith("*") or key in (*cls.COMPUTED, *cls.LATER) or key not in obj:

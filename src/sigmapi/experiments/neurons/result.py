@@ -62,7 +62,7 @@ def _scalars(summary: dict[str, Any]) -> dict[str, Any]:
 
 
 def _median_worst(rows: list[dict[str, Any]], keys: tuple[str, ...]) -> dict[str, Any]:
-    out: dict[str, Any] = {}
+    out: dict[str, object] = {}
     for k in keys:
         vals = [r[k] for r in rows if r.get(k) is not None]
         if not vals:

@@ -100,7 +100,7 @@ def _spiking_rows(
     *,
     dendritic: bool = False,
     tick: Tick | None = None,
-) -> list[dict[str, Any]]:
+) -> list[dict[str, object]]:
     """One row per window and ``(peak rate, pool)`` of ``rates`` of a spiking deployment of
     ``model`` (a pool other than the config's tags the name ``-pool<n>``); ``dendritic``: the
     dendritic network's settings (:meth:`NeuronsConfig.spiking`)."""

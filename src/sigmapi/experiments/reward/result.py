@@ -113,7 +113,7 @@ class RewardResult(Result):
         b = self.config.run.block
         return {m: success_curve(succ, b, extremes=True) for m, succ in self.success.items()}
 
-    def methods(self) -> list[dict[str, Any]]:
+    def methods(self) -> list[dict[str, object]]:
         """Per method its name, final success, episodes to the target rate, magnification
         near the goal and its ratio to the frozen map, the quality away from the goal (median,
         worst and per seed over the seeds)."""

@@ -136,7 +136,7 @@ class RobotResult(Result):
         ``folded``: any seed folded), ``order_r2_min`` and ``folded_seeds``."""
         if not self.map_metrics:
             return {}
-        out: dict[str, Any] = {}
+        out: dict[str, object] = {}
         for k, v in self.map_metrics[0].items():
             vals = [m[k] for m in self.map_metrics]
             out[k] = any(vals) if isinstance(v, bool) else float(np.mean(vals))

@@ -310,7 +310,7 @@ def run_sweep(
     add: bool = False,
     on_plan: Callable[[int, int, str], None] | None = None,
     on_done: Callable[[bool, str], None] | None = None,
-) -> list[dict[str, Any]]:
+) -> list[dict[str, object]]:
     """Run the missing runs of ``spec``, appending each to ``out/results.csv``; this spec's rows.
 
     ``engine``, ``workers``, ``memory_budget`` (bytes) and ``address`` say where the runs go
@@ -332,7 +332,7 @@ def _sweep(
     on_done: Callable[[bool, str], None] | None,
     *,
     add: bool = False,
-) -> list[dict[str, Any]]:
+) -> list[dict[str, object]]:
     if out.exists() and not out.is_dir():
         raise ConfigError(f"out {str(out)!r} is a file; give a folder for the sweep's table")
     out.mkdir(parents=True, exist_ok=True)
@@ -446,7 +446,7 @@ class SweepResult(Result):
             raise TypeError("a sweep's result must be a JSON object with a list of rows")
         return cls(SweepSpec.from_dict(data["spec"], "the result's spec"), list(data["rows"]))
 
-    def typed_rows(self) -> list[dict[str, Any]]:
+    def typed_rows(self) -> list[dict[str, object]]:
         """The table's rows, each value typed (:func:`_typed`)."""
         return [{k: _typed(v) for k, v in r.items()} for r in self.rows]
 
