@@ -93,12 +93,12 @@ class ICubReachEnv(gym.Env[Obs, NDArray[np.float32]]):
         high)``, radians): each joint within its range (the eyes' version and vergence also
         keep each eye's pan within its range)."""
 
-    def posture(self, action: NDArray[Any]) -> NDArray[np.float64]:
+    def posture(self, action: NDArray[np.generic]) -> NDArray[np.float64]:
         """The arm posture (radians) of an action in [-1, 1]^7."""
         a = np.clip(np.asarray(action, dtype=np.float64), -1.0, 1.0)
         return self._lo + 0.5 * (a + 1.0) * (self._hi - self._lo)
 
-    def action_of(self, posture: NDArray[Any]) -> NDArray[np.float32]:
+    def action_of(self, posture: NDArray[np.generic]) -> NDArray[np.float32]:
         """The action (in [-1, 1]^7) of an arm posture (radians; clipped to the ranges)."""
         q = np.clip(np.asarray(posture, dtype=np.float64), self._lo, self._hi)
         return (2.0 * (q - self._lo) / (self._hi - self._lo) - 1.0).astype(np.float32)

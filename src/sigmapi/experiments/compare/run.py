@@ -343,7 +343,7 @@ Array = NDArray[np.float64]
 Views = tuple[Array, Array, Array, Array]
 
 
-SIGMA_PI_CHANGES: dict[str, dict[str, Any]] = {
+SIGMA_PI_CHANGES: dict[str, dict[str, object]] = {
     "sigma-pi": {"ordering": "crossview"},
     "sigma-pi same view": {"ordering": "crossview", "same_view": True},
     "sigma-pi ordering none": {"ordering": "none"},

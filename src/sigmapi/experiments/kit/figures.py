@@ -107,7 +107,7 @@ def legend_once(ax: Any, **kwargs: Any) -> Any:
     return ax.legend(list(once.values()), list(once), **kwargs)
 
 
-def film_strip(film: Sequence[Any], title: str, across: bool = True) -> tuple[Any, Any]:
+def film_strip(film: Sequence[object], title: str, across: bool = True) -> tuple[Any, Any]:
     """Six frames of ``film`` evenly apart (all of a shorter one) in one row (``across``) or
     one column, each titled ``title.format(i=index, k=index + 1, n=frames)``; returns the
     figure and the indices of the frames it shows."""

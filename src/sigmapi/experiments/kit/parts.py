@@ -93,7 +93,7 @@ def replaced_parts(
     }
 
 
-def parts_dict(config: Any, parts: dict[str, type]) -> dict[str, dict[str, Any]]:
+def parts_dict(config: Any, parts: dict[str, type]) -> dict[str, dict[str, object]]:
     """The parts of ``config`` as JSON-able tables (tuples as lists)."""
     return {
         part: {

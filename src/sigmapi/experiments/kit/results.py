@@ -261,7 +261,7 @@ def columns(*specs: str | Column, **headers: str) -> tuple[Column, ...]:
     return tuple(out)
 
 
-def render(columns: Sequence[Column], rows: Sequence[Any], sep: str = " ") -> list[str]:
+def render(columns: Sequence[Column], rows: Sequence[object], sep: str = " ") -> list[str]:
     """The header line and one line per row of ``rows`` (mappings, or what the columns'
     functions read)."""
     lines = [sep.join(c.header() for c in columns)]

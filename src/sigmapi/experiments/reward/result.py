@@ -150,7 +150,7 @@ class RewardResult(Result):
             methods.append(entry)
         return methods
 
-    def initial_map(self) -> dict[str, dict[str, Any]]:
+    def initial_map(self) -> dict[str, dict[str, object]]:
         """The learned map's scores before the episodes (median, worst, per seed)."""
         return {k: _summary(v.tolist()) for k, v in self.scores["initial"].items()}
 

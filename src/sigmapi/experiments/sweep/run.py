@@ -121,7 +121,7 @@ class SweepSpec:
 
     preset: str
     seeds: tuple[int, ...]
-    grid: dict[str, list[Any]]
+    grid: dict[str, list[object]]
     fixed: dict[str, Any] = field(default_factory=dict)
     n_test: int = 2000
 
