@@ -123,7 +123,7 @@ class Result:
         """Everything the result states, JSON-able (``result.json``, ``--json``): the
         :attr:`KEYS` in order; a result read back gives its ``written`` summaries in place of
         the computed keys."""
-        written: dict[str, Any] | None = getattr(self, "written", None)
+        written: dict[str, object] | None = getattr(self, "written", None)
         out: dict[str, object] = {}
         for entry in self._keys():
             spread = entry.startswith("*")

@@ -79,7 +79,7 @@ class RewardResult(Result):
     scores: dict[str, dict[str, NDArray[np.float64]]] = field(default_factory=dict)
     units: dict[str, NDArray[np.float64]] = field(default_factory=dict)
     seconds: float = 0.0
-    written: dict[str, Any] | None = field(default=None, repr=False)
+    written: dict[str, object] | None = field(default=None, repr=False)
     """The summaries of a result read back (:meth:`from_dict`); None for a run's result."""
 
     KEYS = (*SUMMARIES, "config: config_and_seeds", "seconds")
@@ -127,7 +127,7 @@ class RewardResult(Result):
             final = final_rates(self.success[m], f)
             mag = self.scores[m]["magnification"]
             ratio = mag / base_mag
-            entry: dict[str, Any] = {
+            entry: dict[str, object] = {
                 "name": m,
                 "final_success": _summary(final.tolist()),
                 "lost": float(self.lost[m][:, -f:].mean()),
@@ -240,7 +240,7 @@ def _earlier(a: int | None, b: int | None, never: int) -> bool:
     return (never + 1 if a is None else a) < (never + 1 if b is None else b)
 
 
-def _fmt(s: dict[str, Any], digits: int = 2) -> str:
+def _fmt(s: dict[str, object], digits: int = 2) -> str:
     med, worst = s["median"], s["worst"]
     show = lambda v: "never" if v is None else f"{v:.{digits}f}"  # noqa: E731
     return f"{show(med)} ({show(worst)})"

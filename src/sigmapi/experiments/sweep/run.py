@@ -431,7 +431,7 @@ class SweepResult(Result):
     """The table of a sweep (every run of its spec, in grid order) and its settings."""
 
     spec: SweepSpec
-    rows: list[dict[str, Any]]
+    rows: list[dict[str, object]]
     metric: str = "order_r2"
 
     KEYS = ("spec", "table: table_file", "runs", "failed", "rows: typed_rows")
