@@ -398,7 +398,7 @@ def _flag_kwargs(f: dataclasses.Field[Any], hint: Any) -> tuple[dict[str, Any], 
     default: Any = f.default
     shown = str(default)
     if f.metadata.get("repeat"):
-        kwargs: dict[str, Any] = {"action": "append", "metavar": f.metadata.get("metavar")}
+        kwargs: dict[str, object] = {"action": "append", "metavar": f.metadata.get("metavar")}
         if f.metadata.get("metavar") == "KEY=VALUE":
             kwargs["type"] = key_value
         return kwargs, " ".join(map(str, default)) if default else "none"

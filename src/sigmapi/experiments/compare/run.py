@@ -224,7 +224,7 @@ class CompareResult(Result):
     seconds: float = 0.0
     seeds: tuple[int, ...] = SEEDS
     """The seeds, in the order of the scores' lists."""
-    written: dict[str, Any] | None = field(default=None, repr=False)
+    written: dict[str, object] | None = field(default=None, repr=False)
     """The summaries of a result read back (:meth:`from_dict`); None for a run's result."""
 
     KEYS = (
@@ -257,7 +257,7 @@ class CompareResult(Result):
         width = (hi - lo) / np.asarray(som_cfg.map_shape, dtype=np.float64)
         return float(np.sqrt(np.sum((width * spacing) ** 2 / 12.0)))
 
-    def config_json(self) -> dict[str, Any]:
+    def config_json(self) -> dict[str, object]:
         """The config's fields, the seeds after its preset and overrides, and its labels."""
         cfg = dataclasses.asdict(self.config)
         head = {"preset": cfg.pop("preset"), "overrides": cfg.pop("overrides")}

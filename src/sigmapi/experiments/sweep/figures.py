@@ -36,7 +36,7 @@ class Spec(Protocol):
 
 
 def draw_summary(
-    spec: Spec, rows: list[dict[str, Any]], path: str | Path, metric: str = "order_r2"
+    spec: Spec, rows: list[dict[str, object]], path: str | Path, metric: str = "order_r2"
 ) -> Path:
     """``metric`` against the first grid parameter (lines: the other parameters' values),
     median and spread over seeds, folded runs marked; written to ``path``, its
@@ -67,7 +67,7 @@ def draw_summary(
     return p
 
 
-def caption(spec: Spec, rows: list[dict[str, Any]], metric: str) -> str:
+def caption(spec: Spec, rows: list[dict[str, object]], metric: str) -> str:
     """The summary figure's caption, computed from the table's ``rows``."""
     keys = sorted(spec.grid)
     ok = [r for r in rows if str(r.get("status")) == "ok"]
