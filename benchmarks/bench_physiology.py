@@ -29,8 +29,7 @@ import time
 from pathlib import Path
 
 from _common import machine, write_result
-from sigmapi.experiments.physiology.config import PhysiologyConfig
-from sigmapi.experiments.physiology.run import record_model
+from sigmapi.experiments.physiology.run import PhysiologyConfig, record_model
 
 OUT = Path(__file__).resolve().parent / "results" / "physiology.json"
 

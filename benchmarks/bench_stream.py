@@ -99,7 +99,7 @@ def main() -> None:
     combined = StreamResult.from_dict(result)
     print(combined.table())
     if args.figure is not None:
-        from sigmapi.viz.stream import stream_figure
+        from sigmapi.experiments.stream.figures import stream_figure
 
         stream_figure(result).savefig(args.figure, dpi=120)
         print(combined.caption())

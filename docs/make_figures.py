@@ -85,13 +85,13 @@ def _from_json(source: str, draw: Callable[[dict[str, Any]], Any]) -> Callable[[
 
 
 def _compare(data: dict[str, Any]) -> Any:
-    from sigmapi.viz.compare import compare_figure
+    from sigmapi.experiments.compare.figures import compare_figure
 
     return compare_figure(data)
 
 
 def _stream(data: dict[str, Any]) -> Any:
-    from sigmapi.viz.stream import stream_figure
+    from sigmapi.experiments.stream.figures import stream_figure
 
     return stream_figure(data)
 

@@ -15,8 +15,8 @@ from __future__ import annotations
 import argparse
 import dataclasses
 
+from sigmapi.experiments.compare.figures import compare_figure
 from sigmapi.experiments.compare.run import QUICK, QUICK_SEEDS, run_compare
-from sigmapi.viz.compare import compare_figure
 
 
 def main() -> None:

@@ -86,9 +86,9 @@ def load(name: str) -> Any:
 
 _EXPERIMENTS = "sigmapi.experiments"
 READERS: dict[str, tuple[str, str]] = {
-    "chain": ("chain.result:ChainResult", ""),
-    "chain-winner": ("chain.result:ChainResult", ""),
-    "compare": ("compare.result:CompareResult", ""),
+    "chain": ("chain.run:ChainResult", ""),
+    "chain-winner": ("chain.run:ChainResult", ""),
+    "compare": ("compare.run:CompareResult", ""),
     "icub": ("icub.result:ICubResult", ""),
     "icub-check": ("icub.result:ICubResult", ""),
     "neurons": ("neurons.result:NeuronsResult", ""),
@@ -99,7 +99,7 @@ READERS: dict[str, tuple[str, str]] = {
     "robot-docking": ("robot.result:RobotResult", "result"),
     "robot-docking-quick": ("robot.result:RobotResult", "result"),
     "robot-docking-tuning": ("robot.result:RobotResult", "result"),
-    "stream": ("stream.result:StreamResult", ""),
+    "stream": ("stream.run:StreamResult", ""),
 }
 """The results files an experiment wrote: the class (under :mod:`sigmapi.experiments`) whose
 ``from_dict`` reads each, and the key the result sits under where the script that kept it

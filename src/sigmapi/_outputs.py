@@ -42,6 +42,7 @@ __all__ = [
     "MARKER",
     "OUTPUT",
     "check_file",
+    "check_folder",
     "claim_folder",
     "marked_as",
     "refuse_input_as_output",
@@ -139,19 +140,26 @@ def check_file(path: str | Path, *, force: bool, what: str = "output file") -> P
             raise UsageError(f"{name} is not a regular file (a device or FIFO?); give a file name")
         if not force:
             raise UsageError(f"{name} exists; pass --force to overwrite it")
-    parent = p.parent if str(p.parent) else Path(".")
+    check_folder(p, name)
+    return p
+
+
+def check_folder(path: Path, name: str) -> None:
+    """Before the work: the folder of ``path`` exists and takes files (a file made there and
+    removed: found out now, not after a long run); ``name`` names the file in the one-line
+    :class:`~sigmapi.errors.UsageError`."""
+    parent = path.parent if str(path.parent) else Path(".")
     if not parent.is_dir():
         raise UsageError(f"folder {str(parent)!r} of {name} does not exist; create it first")
-    try:  # find out now, not after a long run, that the folder takes no files
-        fd, probe = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=parent)
+    try:
+        fd, probe = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=parent)
         os.close(fd)
         os.unlink(probe)
     except OSError as exc:
         raise UsageError(
-            f"cannot write {name} into {str(parent)!r}: {exc.strerror or exc}; "
-            "choose another folder"
+            f"cannot write {name}: cannot access its folder {str(parent)!r}: "
+            f"{exc.strerror or exc}; choose another folder"
         ) from None
-    return p
 
 
 def write_file(

@@ -12,7 +12,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Collection, Iterable, Mapping
-from typing import Any, TypeVar
+from typing import Any, TypeGuard, TypeVar
 
 import numpy as np
 
@@ -43,19 +43,19 @@ within int64 and reach the memory checks as numbers."""
 
 
 def fail(
-    name: str, constraint: str, value: Any, fix: str = "", error: type[Exception] = ConfigError
+    name: str, constraint: str, value: object, fix: str = "", error: type[Exception] = ConfigError
 ) -> Exception:
     """The error ``"<name> must be <constraint>, got <value>; <fix>"`` (to ``raise``)."""
     tail = f"; {fix}" if fix else ""
     return error(f"{name} must be {constraint}, got {value!r}{tail}")
 
 
-def is_int(value: Any) -> bool:
+def is_int(value: object) -> TypeGuard[int | np.integer[Any]]:
     """Whether ``value`` is an int (Python or NumPy), not a bool."""
     return isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
 
 
-def _is_real(value: Any) -> bool:
+def _is_real(value: object) -> TypeGuard[float | np.number[Any]]:
     return (
         isinstance(value, (int, float, np.integer, np.floating))
         and not isinstance(value, (bool, np.bool_))
@@ -89,7 +89,7 @@ def _range(
 
 def integer(
     name: str,
-    value: Any,
+    value: object,
     lo: int | None = None,
     hi: int | None = None,
     *,
@@ -97,15 +97,14 @@ def integer(
     error: type[Exception] = ConfigError,
 ) -> int:
     """``value`` as an int in ``[lo, hi]`` (either bound may be None); bools are refused."""
-    ok = is_int(value) and (lo is None or value >= lo) and (hi is None or value <= hi)
-    if not ok:
+    if not (is_int(value) and (lo is None or value >= lo) and (hi is None or value <= hi)):
         raise fail(name, _range("an int", lo, hi), value, fix, error)
     return int(value)
 
 
 def number(
     name: str,
-    value: Any,
+    value: object,
     lo: float | None = None,
     hi: float | None = None,
     *,
@@ -115,15 +114,13 @@ def number(
     error: type[Exception] = ConfigError,
 ) -> float:
     """``value`` as a finite float in the interval from ``lo`` to ``hi`` (open ends optional)."""
-    ok = _is_real(value)
-    if ok:
+    if _is_real(value):
         v = float(value)
-        ok = (lo is None or (v > lo if lo_open else v >= lo)) and (
+        if (lo is None or (v > lo if lo_open else v >= lo)) and (
             hi is None or (v < hi if hi_open else v <= hi)
-        )
-    if not ok:
-        raise fail(name, _range("a number", lo, hi, lo_open, hi_open), value, fix, error)
-    return float(value)
+        ):
+            return v
+    raise fail(name, _range("a number", lo, hi, lo_open, hi_open), value, fix, error)
 
 
 MAX_WIDTH = 1e6
@@ -134,7 +131,7 @@ overflow."""
 
 def width(
     name: str,
-    value: Any,
+    value: object,
     lo: float = 0.0,
     *,
     lo_open: bool = False,
@@ -152,13 +149,15 @@ def width(
 
 
 def positive(
-    name: str, value: Any, *, fix: str = "", error: type[Exception] = ConfigError
+    name: str, value: object, *, fix: str = "", error: type[Exception] = ConfigError
 ) -> float:
     """``value`` as a finite float > 0."""
     return number(name, value, 0.0, lo_open=True, fix=fix, error=error)
 
 
-def boolean(name: str, value: Any, *, fix: str = "", error: type[Exception] = ConfigError) -> bool:
+def boolean(
+    name: str, value: object, *, fix: str = "", error: type[Exception] = ConfigError
+) -> bool:
     """``value`` if it is a bool (no truthiness: ``"yes"`` and ``1`` are refused)."""
     if not isinstance(value, bool):
         raise fail(name, "true or false", value, fix, error)
@@ -254,7 +253,7 @@ class Bounds:
         text = f"{text}, or None" if self.none else text
         return f"{text} ({self.why})" if self.why else text
 
-    def check(self, name: str, value: Any) -> Any:
+    def check(self, name: str, value: object) -> Any:
         """``value`` checked (:func:`integer`, :func:`number`, :func:`width`,
         :func:`boolean` or :func:`choice`), in its canonical type."""
         if value is None and self.none:
@@ -275,7 +274,7 @@ class Bounds:
             name, value, self.lo, self.hi, lo_open=self.lo_open, hi_open=self.hi_open, fix=self.fix
         )
 
-    def _values(self, name: str, value: Any) -> tuple[Any, ...]:
+    def _values(self, name: str, value: object) -> tuple[Any, ...]:
         """A tuple field's values, each checked as :attr:`kind` says."""
         if isinstance(value, (str, bytes, Mapping)) or not isinstance(value, Iterable):
             raise fail(name, self.describe(), value, self.fix)
@@ -301,7 +300,7 @@ def bounded(
     count: int = MAX_ITEMS,
     why: str = "",
     **more: Any,
-) -> Mapping[str, Any]:
+) -> Mapping[str, object]:
     """Field metadata declaring :class:`Bounds`: ``episodes: int = field(default=600,
     metadata=bounded("int", 1))``, ``relation: str = field(default="mean",
     metadata=bounded("choice", options=RELATIONS))``; ``more`` is further metadata (e.g.

@@ -18,7 +18,6 @@ C. Weber and S. Wermter, "A self-organizing map of Sigma-Pi units", Neurocomputi
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -288,7 +287,7 @@ class PopulationCode:
             out[:, axis] = mu / self.scale[axis]
         return out
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self) -> dict[str, object]:
         """JSON-able description (the model file stores it)."""
         return {
             "shape": list(self.shape),

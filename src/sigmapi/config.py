@@ -265,7 +265,7 @@ class SOMConfig:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON/TOML-able dict of every field (tuples become lists)."""
-        out: dict[str, Any] = {}
+        out: dict[str, object] = {}
         for f in dataclasses.fields(self):
             out[f.name] = _plain(getattr(self, f.name))
         return out
@@ -422,7 +422,7 @@ def check_map_fits_task(cfg: SOMConfig) -> SOMConfig:
 
 def apply_overrides(cfg: SOMConfig, items: list[str]) -> SOMConfig:
     """Apply ``key=value`` overrides to ``cfg`` (each a field of :class:`SOMConfig`)."""
-    changes: dict[str, Any] = {}
+    changes: dict[str, object] = {}
     for item in items:
         key, value = parse_override(item)
         changes[key] = value

@@ -202,14 +202,14 @@ def digest(a: NDArray[Any]) -> str:
     return hashlib.sha256(np.ascontiguousarray(a).tobytes()).hexdigest()
 
 
-def header_digest(header: dict[str, Any]) -> str:
+def header_digest(header: dict[str, object]) -> str:
     """SHA-256 of the canonical JSON of ``header`` without its own ``header_sha256`` entry."""
     body = {k: v for k, v in header.items() if k != "header_sha256"}
     return hashlib.sha256(json.dumps(body, sort_keys=True).encode("utf-8")).hexdigest()
 
 
 def _write_archive(
-    fh: IO[bytes], header: dict[str, Any], arrays: dict[str, NDArray[Any]], compress: bool
+    fh: IO[bytes], header: dict[str, object], arrays: dict[str, NDArray[Any]], compress: bool
 ) -> None:
     head = np.frombuffer(json.dumps(header, sort_keys=True).encode("utf-8"), dtype=np.uint8)
     method = zipfile.ZIP_DEFLATED if compress else zipfile.ZIP_STORED
@@ -220,7 +220,7 @@ def _write_archive(
 
 
 def encode_archive(
-    header: dict[str, Any], arrays: dict[str, NDArray[Any]], compress: bool = False
+    header: dict[str, object], arrays: dict[str, NDArray[Any]], compress: bool = False
 ) -> bytes:
     """The bytes of an archive holding ``header`` as JSON plus ``arrays`` (as written)."""
     import io as _io
@@ -232,7 +232,7 @@ def encode_archive(
 
 def write_model(
     path: str | Path,
-    header: dict[str, Any],
+    header: dict[str, object],
     arrays: dict[str, NDArray[Any]],
     compress: bool = False,
 ) -> Path:
@@ -348,7 +348,7 @@ def _read_member(
     return out
 
 
-def _dims(header: dict[str, Any], name: str) -> tuple[int, int, int]:
+def _dims(header: dict[str, object], name: str) -> tuple[int, int, int]:
     """(n_units, n_x, n_y) of the header's config: what bounds every array's size."""
     cfg = header.get("config")
     if not isinstance(cfg, dict):
@@ -365,7 +365,7 @@ def _dims(header: dict[str, Any], name: str) -> tuple[int, int, int]:
 Expect = dict[str, tuple[tuple[str, ...], tuple[int, ...]]]
 
 
-def _declared(header: dict[str, Any], source: str) -> Expect:
+def _declared(header: dict[str, object], source: str) -> Expect:
     """Member name -> (allowed dtypes, shape) that the header of file ``source`` declares,
     bounded by its config; raises :class:`~sigmapi.errors.ModelFileError` if it cannot.
 
@@ -494,7 +494,7 @@ def _members(zf: zipfile.ZipFile, name: str) -> dict[str, zipfile.ZipInfo]:
     return {i.filename[: -len(".npy")]: i for i in infos}
 
 
-def _parse_header(raw: NDArray[np.uint8], name: str, kind: str) -> dict[str, Any]:
+def _parse_header(raw: NDArray[np.uint8], name: str, kind: str) -> dict[str, object]:
     try:
         header = json.loads(raw.tobytes().decode("utf-8"))
     except (UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:

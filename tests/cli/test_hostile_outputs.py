@@ -18,7 +18,7 @@ import pytest
 from test_hardening_sweep import SPEC3, _main, _one_line_2
 
 from sigmapi._lock import lock_path, output_lock
-from sigmapi._outputs import MARKER, check_file, claim_folder, write_file
+from sigmapi._outputs import MARKER, check_file, check_folder, claim_folder, write_file
 from sigmapi.errors import ConfigError, UsageError
 
 os.environ.setdefault("MUJOCO_GL", "egl")  # before mujoco is imported: headless rendering
@@ -297,7 +297,6 @@ _AS_NOBODY = textwrap.dedent(
     """
     import os, sys
     from sigmapi._lock import lock_path, output_lock  # imported first: nobody may not read them
-    from sigmapi.errors import UsageError
     os.setgid(65534); os.setuid(65534)
     folder, victim = sys.argv[1], sys.argv[2]
     lock = lock_path(os.path.join(folder, "m.npz"))
@@ -345,3 +344,17 @@ def test_a_planted_lock_link_as_a_non_root_user_in_a_shared_folder():
         assert victim.read_text() == "root's data"
     finally:
         shutil.rmtree(shared, ignore_errors=True)
+
+
+def test_an_output_folder_is_checked_once_for_existing_and_taking_files(tmp_path):
+    from sigmapi.cli._common import check_output
+
+    missing = tmp_path / "nope" / "x.json"
+    for check in (lambda p: check_file(p, force=False), lambda p: check_output(p, False)):
+        with pytest.raises(UsageError, match=r"folder '.*nope' of output file .* does not exist"):
+            check(missing)
+    check_folder(tmp_path / "x.json", "x")  # a folder that takes files passes
+    if not Path("/proc").is_dir():
+        pytest.skip("no /proc: no folder that refuses files even to root")
+    with pytest.raises(UsageError, match=r"cannot write output file .*cannot access its folder"):
+        check_output("/proc/sigmapi-test.json", False)

@@ -23,8 +23,7 @@ from sigmapi.baselines import (
 from sigmapi.baselines.kohonen import _train, nearest_unit
 from sigmapi.cli import main
 from sigmapi.experiments.compare import run as compare
-from sigmapi.experiments.compare.result import CompareResult
-from sigmapi.experiments.compare.run import CompareConfig, run_compare
+from sigmapi.experiments.compare.run import CompareConfig, CompareResult, run_compare
 from sigmapi.metrics import evaluation_sets, grid_spacing
 
 pytest.importorskip("sklearn")

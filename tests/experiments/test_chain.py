@@ -11,9 +11,9 @@ import pytest
 import sigmapi
 import sigmapi.experiments
 from sigmapi.cli import main
-from sigmapi.experiments.chain.result import ChainResult
 from sigmapi.experiments.chain.run import (
     TARGET_RATIO,
+    ChainResult,
     chain_config,
     head_code,
     run_chain,

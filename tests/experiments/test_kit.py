@@ -20,7 +20,7 @@ from sigmapi.experiments.kit.episodes import block_ends, block_rates, final_rate
 from sigmapi.experiments.kit.maps import MapSpec
 from sigmapi.experiments.kit.parts import Parts, parts_of
 from sigmapi.experiments.kit.report import section_function
-from sigmapi.experiments.kit.results import Column, Result, plain, render
+from sigmapi.experiments.kit.results import HEADERS, Column, Result, columns, plain, render
 from sigmapi.experiments.kit.seeds import SeedPlan
 from sigmapi.experiments.kit.worlds import WORLDS, World, get_world, register_world
 from sigmapi.experiments.reach.config import MapConfig, ReachConfig, ReachRunConfig
@@ -218,6 +218,23 @@ def test_a_table_is_its_columns_header_and_cells_aligned_by_their_spec():
         cols, [{"name": "ab", "score": 0.5, "n": 3}, {"name": "c", "score": None, "n": 1}]
     )
     assert lines == ["name     score    n", "ab       0.500    6", "c            -    2"]
+
+
+def test_columns_from_key_format_words_head_shared_keys_once():
+    extra = Column("n", "n", ">3")
+    cols = columns("name:8s z_error:7.3f", "z_error_worst:6.3f seed:<5d", extra, seed="run")
+    assert [(c.name, c.key, c.format) for c in cols[:4]] == [
+        (HEADERS["name"], "name", "8s"),
+        ("z error", "z_error", "7.3f"),
+        ("worst", "z_error_worst", "6.3f"),
+        ("run", "seed", "<5d"),
+    ]
+    assert cols[4] is extra
+    row = {"name": "pairs", "z_error": 0.25, "z_error_worst": 0.5, "seed": 3, "n": 7}
+    assert render(cols, [row]) == [
+        "method   z error  worst run     n",
+        "pairs      0.250  0.500 3       7",
+    ]
 
 
 def test_a_config_of_parts_derives_its_parts_from_its_fields():

@@ -21,7 +21,7 @@ from sigmapi.analysis.physiology import (
 )
 from sigmapi.codes import PopulationCode
 from sigmapi.errors import ConfigError
-from sigmapi.experiments.physiology.config import PhysiologyConfig
+from sigmapi.experiments.physiology.run import PhysiologyConfig
 from sigmapi.tasks import TwoViewSampler
 
 

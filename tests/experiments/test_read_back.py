@@ -12,15 +12,15 @@ from typing import Any
 import pytest
 
 from sigmapi.errors import ConfigError
-from sigmapi.experiments.chain.result import ChainResult
-from sigmapi.experiments.compare.result import CompareResult
+from sigmapi.experiments.chain.run import ChainResult
+from sigmapi.experiments.compare.run import CompareResult
 from sigmapi.experiments.icub.result import ICubResult
 from sigmapi.experiments.neurons.result import NeuronsResult
 from sigmapi.experiments.reach.result import ReachResult
 from sigmapi.experiments.reproduce.results import ReproduceResult
 from sigmapi.experiments.reward.result import RewardResult
 from sigmapi.experiments.robot.result import RobotResult
-from sigmapi.experiments.stream.result import StreamResult
+from sigmapi.experiments.stream.run import StreamResult
 from sigmapi.experiments.sweep.run import SweepResult
 
 RESULTS = Path(__file__).resolve().parents[2] / "benchmarks" / "results"

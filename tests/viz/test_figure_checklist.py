@@ -480,9 +480,7 @@ def _neurons_result(tmp_path: Path) -> Any:
 def _physiology_result(tmp_path: Path) -> Any:
     """The physiology of a tiny trained 1-D map (5 units)."""
     from sigmapi import SigmaPiSOM
-    from sigmapi.experiments.physiology.config import PhysiologyConfig
-    from sigmapi.experiments.physiology.result import PhysiologyResult
-    from sigmapi.experiments.physiology.run import record_model
+    from sigmapi.experiments.physiology.run import PhysiologyConfig, PhysiologyResult, record_model
 
     model = SigmaPiSOM(map_shape=(5,), x_shape=(5,), y_shape=(5,), iterations=2000, seed=0).fit()
     path = model.save(tmp_path / "m.npz") or tmp_path / "m.npz"
@@ -503,7 +501,7 @@ def _stored(name: str, result_type: Any) -> Callable[[Path], Any]:
 
 
 def _stream(tmp_path: Path) -> Any:
-    from sigmapi.experiments.stream.result import StreamResult
+    from sigmapi.experiments.stream.run import StreamResult
 
     return _stored("stream", StreamResult)(tmp_path)
 
@@ -512,7 +510,7 @@ def _compare(tmp_path: Path) -> Any:
     """The measured comparison (benchmarks/results/compare.json), its medians as one seed."""
     import json
 
-    from sigmapi.experiments.compare.result import CompareResult, MethodScore
+    from sigmapi.experiments.compare.run import CompareResult, MethodScore
 
     path = Path(__file__).parents[2] / "benchmarks" / "results" / "compare.json"
     data = json.loads(path.read_text())

@@ -156,7 +156,7 @@ def test_figure_dpi_on_request(model_1d, tmp_path: Path):
 def test_compare_figure_log_axes_read_plain_numbers():
     import re
 
-    from sigmapi.viz.compare import compare_figure
+    from sigmapi.experiments.compare.figures import compare_figure
 
     labels = [10, 20, 50, 100, 200, 500, 1000, 2000, 5000, 10000]
     methods = [

@@ -36,7 +36,7 @@ class Episodes:
     success: NDArray[np.bool_]
     failed: NDArray[np.bool_]
     steps: NDArray[np.int64]
-    info: dict[str, NDArray[Any]] = field(default_factory=dict)
+    info: dict[str, NDArray[np.generic]] = field(default_factory=dict)
 
 
 def discrete_actions(space: spaces.Space[Any]) -> tuple[int, int]:
@@ -85,7 +85,7 @@ def run_episodes(
     success = np.zeros(n, dtype=bool)
     failed = np.zeros(n, dtype=bool)
     steps = np.zeros(n, dtype=np.int64)
-    kept: dict[str, list[Any]] = {k: [] for k in info_keys}
+    kept: dict[str, list[object]] = {k: [] for k in info_keys}
     for ep in range(n):
         phi, info = env.reset(seed=int(starts[ep]))
         t = 0

@@ -39,7 +39,7 @@ distribution of a view given z is then only known through rejection.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
@@ -155,7 +155,7 @@ class Ceiling:
     view_points: int = 0
     model: SigmaPiSOM | None = field(default=None, repr=False)
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self) -> dict[str, object]:
         return {
             **self.metrics.to_dict(),
             "rounds": self.rounds,

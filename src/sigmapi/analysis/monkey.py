@@ -1,3 +1,5 @@
+# Over 500 lines: one protocol (the fixations, the admission, the statistics the studies used:
+# the ANOVA with its beta function, the planar fits, the displacement index), read as one.
 """The map probed as the monkey studies of gain fields probed parietal cortex.
 
 The animal fixates each point of a grid of eye positions (:data:`EYE_GRID` along every gaze

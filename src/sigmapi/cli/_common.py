@@ -11,13 +11,13 @@ import itertools
 import os
 import re
 import sys
-import tempfile
 import textwrap
 import typing
 from collections.abc import Callable, Collection, Mapping, Sequence
 from pathlib import Path
 from typing import Any, Literal, NoReturn
 
+from sigmapi._outputs import check_folder
 from sigmapi.config import (
     SOMConfig,
     apply_overrides,
@@ -259,20 +259,7 @@ def check_output(path: str | Path, force: bool, what: str = "output file") -> Pa
         raise UsageError(f"{what} {str(p)!r} is a folder; give a file name")
     if p.exists() and not p.is_file():
         raise UsageError(f"{what} {str(p)!r} is not a regular file (a device?); give a file name")
-    parent = p.parent if str(p.parent) else Path(".")
-    if not parent.is_dir():
-        raise UsageError(
-            f"folder {str(parent)!r} of {what} {str(p)!r} does not exist; create it first"
-        )
-    try:  # find out now, not after a long run, that the folder takes no files
-        fd, probe = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=parent)
-        os.close(fd)
-        os.unlink(probe)
-    except OSError as exc:
-        raise UsageError(
-            f"cannot access {str(parent)!r} to write {what} {str(p)!r}: {exc.strerror or exc}; "
-            "choose another folder"
-        ) from None
+    check_folder(p, f"{what} {str(p)!r}")
     return p
 
 
@@ -411,7 +398,7 @@ def _flag_kwargs(f: dataclasses.Field[Any], hint: Any) -> tuple[dict[str, Any], 
     default: Any = f.default
     shown = str(default)
     if f.metadata.get("repeat"):
-        kwargs: dict[str, Any] = {"action": "append", "metavar": f.metadata.get("metavar")}
+        kwargs: dict[str, object] = {"action": "append", "metavar": f.metadata.get("metavar")}
         if f.metadata.get("metavar") == "KEY=VALUE":
             kwargs["type"] = key_value
         return kwargs, " ".join(map(str, default)) if default else "none"
@@ -484,7 +471,7 @@ def add_dataclass_flags(
             declare_path(p, f.name, flags[0], f.metadata["path"])
 
 
-def dataclass_values(args: argparse.Namespace, cls: type) -> dict[str, Any]:
+def dataclass_values(args: argparse.Namespace, cls: type) -> dict[str, object]:
     """The fields of ``cls`` given on the command line (the options left out are not listed);
     repeated values as a tuple."""
     given = ((f.name, getattr(args, f.name, None)) for f in dataclasses.fields(cls))

@@ -229,12 +229,12 @@ def _check_folder(out: Path, force: bool, experiment: Experiment[Any]) -> None:
     claim_folder(out, experiment.name, force=force, owns=experiment.owns)
 
 
-def _config(experiment: Experiment[Any], values: dict[str, Any], quick: bool) -> Any:
+def _config(experiment: Experiment[Any], values: dict[str, object], quick: bool) -> Any:
     """The config of the flags (from the quick one with ``--quick``); an error that only the
     ``--set`` overrides cause names the flag, as ``sigmapi train`` does."""
     start = experiment.quick if quick and experiment.quick is not None else None
 
-    def build(given: dict[str, Any]) -> Any:
+    def build(given: dict[str, object]) -> Any:
         if None not in _parts(experiment):  # a config of parts: each field finds its part
             base = start if start is not None else experiment.config_type()
             return base.replace(**given) if given else base

@@ -95,8 +95,8 @@ def check_action(space: spaces.Space[Any], action: Any, fix: str = "") -> Any:
 
 
 def check_options(
-    options: Mapping[str, Any] | None, allowed: Collection[str], env: str
-) -> dict[str, Any]:
+    options: Mapping[str, object] | None, allowed: Collection[str], env: str
+) -> dict[str, object]:
     """The reset ``options`` of the environment ``env`` as a dict: a mapping whose names are
     among ``allowed`` (None: no options)."""
     if options is None:

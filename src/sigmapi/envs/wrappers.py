@@ -220,7 +220,7 @@ class TrueZObservation(gym.Wrapper[Features, Any, Any, Any]):
         g = np.clip(np.atleast_2d(z), 0.0, 1.0) * self.code.scale
         return bump_features(g, self.code.coords, self.width).astype(np.float32)
 
-    def _features(self, info: dict[str, Any]) -> Features:
+    def _features(self, info: dict[str, object]) -> Features:
         z = np.asarray(info.get("z", ()), dtype=np.float64)
         if z.shape != (self.code.ndim,):
             raise ConfigError(
@@ -230,12 +230,12 @@ class TrueZObservation(gym.Wrapper[Features, Any, Any, Any]):
         return self.encode(z)[0]
 
     def reset(
-        self, *, seed: int | None = None, options: dict[str, Any] | None = None
-    ) -> tuple[Features, dict[str, Any]]:
+        self, *, seed: int | None = None, options: dict[str, object] | None = None
+    ) -> tuple[Features, dict[str, object]]:
         _, info = self.env.reset(seed=seed, options=options)
         return self._features(info), info
 
-    def step(self, action: Any) -> tuple[Features, SupportsFloat, bool, bool, dict[str, Any]]:
+    def step(self, action: Any) -> tuple[Features, SupportsFloat, bool, bool, dict[str, object]]:
         _, r, terminated, truncated, info = self.env.step(action)
         return self._features(info), r, terminated, truncated, info
 

@@ -4,9 +4,11 @@
   registered lazily: :data:`ENTRIES`), :func:`register`, :func:`write_result`
   (``result.json``) and :func:`check_seeds`;
 - one package per experiment, each with its ``run`` (the experiment object and its run) and,
-  where it has them apart, ``config``, ``result`` and ``figures``; its ``__init__`` names its
-  guide and results page: :mod:`~sigmapi.experiments.reproduce` (the report: also ``results``
-  and ``report_html``), :mod:`~sigmapi.experiments.sweep`, :mod:`~sigmapi.experiments.compare`,
+  where it has them apart, ``config``, ``result`` and ``figures`` (the small ones, chain,
+  compare, stream and physiology, keep settings and result in ``run``, read top to bottom);
+  its ``__init__`` names its guide and results page: :mod:`~sigmapi.experiments.reproduce`
+  (the report: also ``results`` and ``report_html``), :mod:`~sigmapi.experiments.sweep`,
+  :mod:`~sigmapi.experiments.compare`,
   :mod:`~sigmapi.experiments.chain`, :mod:`~sigmapi.experiments.stream`,
   :mod:`~sigmapi.experiments.reach` (also ``section``, its part of the report),
   :mod:`~sigmapi.experiments.robot` (reach in the robot's world: ``variant``, ``map``),

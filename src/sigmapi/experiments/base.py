@@ -81,7 +81,7 @@ RESULT_FILE = "result.json"
 
 C = TypeVar("C")
 
-KEY_VALUES: Mapping[str, Any] = types.MappingProxyType({"repeat": True, "metavar": "KEY=VALUE"})
+KEY_VALUES: Mapping[str, object] = types.MappingProxyType({"repeat": True, "metavar": "KEY=VALUE"})
 """Field metadata of a config field of ``key=value`` strings (``field(default=(),
 metadata=KEY_VALUES)``): given once per value on the command line, as values may hold commas."""
 
@@ -360,7 +360,7 @@ def run_all(
     elif not in_process:
         show.note(f"{desc}: {len(jobs)} jobs, {plan.reason}")
     done, bar = show.jobs(len(jobs), desc)
-    values: dict[str, Any] = {}
+    values: dict[str, object] = {}
     with bar:
         for o in ex.run(fn, jobs, plan.workers):
             if not o.ok:

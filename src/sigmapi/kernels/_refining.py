@@ -1,3 +1,5 @@
+# Over 500 lines: one compiled search (the index of tiles, the bounds, the exact scores of near
+# ties, the hard sums and the finish), its numba steps read in the order a round runs them.
 """Compiled helpers of the fast kernel's refinement: the winner search by bounds (scores for
 a few units only) and the sums of the hard assignment.
 

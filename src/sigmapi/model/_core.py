@@ -35,7 +35,7 @@ def entropy_of(seed: int | None) -> int:
     return int(np.random.SeedSequence(seed).entropy)  # type: ignore[arg-type]
 
 
-def stored_overrides(cfg: SOMConfig, overrides: dict[str, Any]) -> SOMConfig:
+def stored_overrides(cfg: SOMConfig, overrides: dict[str, object]) -> SOMConfig:
     """``cfg`` with ``overrides`` applied, keeping the caller's objects where validation only
     rebuilt an identical value (scikit-learn's ``clone`` checks that ``__init__`` kept every
     parameter as given)."""

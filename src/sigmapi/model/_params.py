@@ -30,7 +30,7 @@ class ParamsMixin(MapCore):
 
         return Tags(estimator_type=None, target_tags=TargetTags(required=False))
 
-    def get_params(self, deep: bool = True) -> dict[str, Any]:
+    def get_params(self, deep: bool = True) -> dict[str, object]:
         """The hyperparameters, as scikit-learn's ``get_params``: every field of the config.
 
         ``SigmaPiSOM(**model.get_params())`` is an unfitted model with the same

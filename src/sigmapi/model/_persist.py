@@ -30,7 +30,7 @@ _BACKEND_FIX = "the backend to load the model onto, or None for the one that wro
 class PersistMixin(MapCore):
     """Arrays, files and pickles of an estimator with ``config``, ``t_`` and a kernel state."""
 
-    def to_arrays(self) -> tuple[dict[str, Any], dict[str, NDArray[Any]]]:
+    def to_arrays(self) -> tuple[dict[str, object], dict[str, NDArray[Any]]]:
         """The model as a JSON-able header and arrays (what a model file holds).
 
         The header holds the resolved ``config``, the iteration count ``t``, the
@@ -106,7 +106,7 @@ class PersistMixin(MapCore):
         header, arrays = read_model(path)
         return cls.from_arrays(header, arrays, backend=backend, source=str(path))
 
-    def __getstate__(self) -> dict[str, Any]:
+    def __getstate__(self) -> dict[str, object]:
         """State arrays and the config, never modules or compiled kernels (see :meth:`save`)."""
         if self.is_fitted:
             header, arrays = self.to_arrays()

@@ -78,7 +78,7 @@ def write_parts(
     state: Any,
     refined: int = 0,
     refine_rows: int | None = None,
-) -> tuple[dict[str, Any], dict[str, NDArray[Any]]]:
+) -> tuple[dict[str, object], dict[str, NDArray[Any]]]:
     """The header and arrays of a model file holding ``state``, the state of ``kernel``.
 
     Raises :class:`~sigmapi.errors.NumericalError` if the state holds NaN or inf or weights

@@ -41,8 +41,6 @@ it is a Kohonen map of first-order units, which cannot learn the transformation.
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 from numpy.typing import NDArray
 
@@ -191,7 +189,9 @@ def _centre_spread(w: Array, coords: Array) -> tuple[Array, Array, Array]:
     return centre, spread, np.sum(p * near, axis=1)
 
 
-def branch_summary(model: DendriticMap, z_of_unit: Array, min_use: float = 0.0) -> dict[str, Any]:
+def branch_summary(
+    model: DendriticMap, z_of_unit: Array, min_use: float = 0.0
+) -> dict[str, object]:
     """What the branches learned: per branch the centre of its retinal and its gaze synapses
     (grid units), their spread, the share of its weight in one region (within 1.5 grid units
     of its strongest synapse, per input), and the body-centred position ``z`` of the

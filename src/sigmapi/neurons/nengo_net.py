@@ -110,7 +110,7 @@ def _currents(model: SigmaPiSOM, cfg: NengoConfig, seed: int) -> tuple[Array, Ar
 
 def build_network(
     model: SigmaPiSOM, x: Array, y: Array, cfg: NengoConfig | None = None, seed: int = 0
-) -> tuple[Any, dict[str, Any]]:
+) -> tuple[Any, dict[str, object]]:
     """The ``nengo.Network`` that presents the trials ``x`` ``(B, n_x)``, ``y`` ``(B, n_y)``
     one after another, and its probes (``"map"``: the map neurons' spikes; ``"rate"``: them
     through a 20 ms synapse)."""

@@ -44,8 +44,6 @@ unit nothing is pruned.
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 from numpy.typing import NDArray
 
@@ -179,7 +177,7 @@ class SparseDendriticMap(BasisFunctionMap):
         self.c_ *= self.mask_
 
 
-def sparse_summary(model: SparseDendriticMap, z_of_unit: Array) -> dict[str, Any]:
+def sparse_summary(model: SparseDendriticMap, z_of_unit: Array) -> dict[str, object]:
     """What the kept branches are: per branch its unit, retinal and gaze position (grid units
     of each code), coupling, and the distance (grid units of x) of the body-centred position
     ``z`` of its conjunction from its unit's decoded z (``z_of_unit`` ``(K, d)``); the median

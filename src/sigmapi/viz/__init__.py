@@ -2,9 +2,10 @@
 
 - :mod:`~sigmapi.viz.plots`: drawing, ``ax=None`` in, the Axes out;
 - :mod:`~sigmapi.viz.figures`: the report's figures, a registry name -> draw function +
-  caption computed from the data;
-- :mod:`~sigmapi.viz.compare`: the figure of the comparison with the baselines;
-- :mod:`~sigmapi.viz.stream`: the dwell-time figure of the stream experiment.
+  caption computed from the data.
+
+An experiment's own figures live in its package (``sigmapi.experiments.<name>``), what they
+share in :mod:`sigmapi.experiments.kit.figures`.
 
 The figure data (Fig. 8, receptive fields, polarity, invariance, tiles), the learning curves'
 callback and the rule's ceiling (the fixed point of Eq. 7) are computed in

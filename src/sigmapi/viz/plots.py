@@ -1,5 +1,3 @@
-# Over 500 lines: the report's drawing functions (Fig. 8, tiles, net, curves, invariance, sweep)
-# beside the helpers they share (axes, insets, code images, colour maps), each written once.
 """Figures of the reproduction: thin drawing functions over the arrays of
 :mod:`sigmapi.analysis.map_data`.
 
@@ -13,7 +11,6 @@ too fit any layout. Nothing here calls ``plt.show()``; the report draws on Agg f
 - :func:`plot_net`: the map in input space (each unit at the z it responds to).
 - :func:`plot_learning_curves`: metrics and cost against iterations, with the sigma schedule.
 - :func:`plot_invariance`: the winner as a function of x and y.
-- :func:`plot_sweep`: a metric of a parameter sweep against one parameter, over seeds.
 """
 
 from __future__ import annotations
@@ -23,9 +20,6 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
-
-from sigmapi.metrics import FOLD_THRESHOLD
-from sigmapi.viz.series import legend_once
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -38,7 +32,6 @@ __all__ = [
     "plot_invariance",
     "plot_learning_curves",
     "plot_net",
-    "plot_sweep",
     "plot_weight_tiles",
 ]
 
@@ -493,84 +486,4 @@ def plot_invariance(
         fontsize=10,
     )
     ax.figure.colorbar(img, ax=ax, label=inv.value_label)
-    return ax
-
-
-def _number(v: Any) -> float | None:
-    try:
-        return float(v)
-    except (TypeError, ValueError):
-        return None
-
-
-def _truthy(v: Any) -> bool:
-    return v is True or str(v).strip().lower() in ("true", "1")
-
-
-def plot_sweep(
-    rows: Sequence[Mapping[str, Any]],
-    param: str,
-    metric: str,
-    group_by: Sequence[str] = (),
-    ax: Axes | None = None,
-) -> Axes:
-    """``metric`` against ``param`` over a sweep's rows: each seed a dot, the median a line
-    with the spread over seeds (min to max) as a band, folded runs as red crosses.
-
-    ``rows`` are sweep table rows (values may be strings, as read from CSV); rows whose
-    ``status`` is not ``ok`` are left out. One line per combination of ``group_by`` values.
-    A parameter whose values are not all numbers is drawn on a categorical axis.
-    """
-    ax = _axes(ax, (6.0, 4.0))
-    ok = [r for r in rows if r.get("status", "ok") == "ok"]
-    raw = list(dict.fromkeys(str(r[param]) for r in ok))
-    numeric = all(_number(v) is not None for v in raw)
-    if numeric:
-        raw.sort(key=float)
-    pos = {v: (float(v) if numeric else float(i)) for i, v in enumerate(raw)}
-    groups = list(dict.fromkeys(tuple(str(r[g]) for g in group_by) for r in ok))
-    folded_label = f"folded run (fold score >= {FOLD_THRESHOLD:g})"
-    for gi, key in enumerate(groups):
-        color = f"C{gi % 10}"
-        label = ", ".join(f"{g} {v}" for g, v in zip(group_by, key, strict=True)) or None
-        xs, med, lo, hi = [], [], [], []
-        for v in raw:
-            sel = [
-                r for r in ok if str(r[param]) == v and tuple(str(r[g]) for g in group_by) == key
-            ]
-            vals = np.array([float(r[metric]) for r in sel])
-            if vals.size == 0:
-                continue
-            x = pos[v]
-            xs.append(x)
-            med.append(float(np.median(vals)))
-            lo.append(float(vals.min()))
-            hi.append(float(vals.max()))
-            folded = np.array([_truthy(r.get("folded", False)) for r in sel])
-            ax.scatter(
-                np.full(int((~folded).sum()), x),
-                vals[~folded],
-                s=14,
-                color=color,
-                alpha=0.6,
-                zorder=3,
-                label="a seed",
-            )
-            if folded.any():
-                ax.scatter(
-                    np.full(int(folded.sum()), x),
-                    vals[folded],
-                    s=40,
-                    marker="x",
-                    color="crimson",
-                    zorder=4,
-                    label=folded_label,
-                )
-        ax.plot(xs, med, "-o", color=color, label=label or "median over seeds", zorder=2)
-        ax.fill_between(xs, lo, hi, color=color, alpha=0.15, lw=0, label="min-max over seeds")
-    if not numeric:
-        ax.set_xticks([float(i) for i in range(len(raw))], raw)
-    ax.set_xlabel(param)
-    ax.set_ylabel(f"{metric} (median, min-max over seeds)")
-    legend_once(ax, fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
     return ax

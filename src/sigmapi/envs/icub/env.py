@@ -55,7 +55,7 @@ class ICubReachEnv(gym.Env[Obs, NDArray[np.float32]]):
         ``"rgb_array"``: :meth:`render` returns a third-person view (240 x 320).
     """
 
-    metadata: dict[str, Any] = {"render_modes": ["rgb_array"], "render_fps": 10}  # noqa: RUF012
+    metadata: dict[str, object] = {"render_modes": ["rgb_array"], "render_fps": 10}  # noqa: RUF012
     reset_options: ClassVar[tuple[str, ...]] = ("ball", "gaze")
     """The names ``reset(options=...)`` takes."""
 
@@ -93,12 +93,12 @@ class ICubReachEnv(gym.Env[Obs, NDArray[np.float32]]):
         high)``, radians): each joint within its range (the eyes' version and vergence also
         keep each eye's pan within its range)."""
 
-    def posture(self, action: NDArray[Any]) -> NDArray[np.float64]:
+    def posture(self, action: NDArray[np.generic]) -> NDArray[np.float64]:
         """The arm posture (radians) of an action in [-1, 1]^7."""
         a = np.clip(np.asarray(action, dtype=np.float64), -1.0, 1.0)
         return self._lo + 0.5 * (a + 1.0) * (self._hi - self._lo)
 
-    def action_of(self, posture: NDArray[Any]) -> NDArray[np.float32]:
+    def action_of(self, posture: NDArray[np.generic]) -> NDArray[np.float32]:
         """The action (in [-1, 1]^7) of an arm posture (radians; clipped to the ranges)."""
         q = np.clip(np.asarray(posture, dtype=np.float64), self._lo, self._hi)
         return (2.0 * (q - self._lo) / (self._hi - self._lo) - 1.0).astype(np.float32)
@@ -119,8 +119,8 @@ class ICubReachEnv(gym.Env[Obs, NDArray[np.float32]]):
         }
 
     def reset(
-        self, *, seed: int | None = None, options: dict[str, Any] | None = None
-    ) -> tuple[Obs, dict[str, Any]]:
+        self, *, seed: int | None = None, options: dict[str, object] | None = None
+    ) -> tuple[Obs, dict[str, object]]:
         """A new ball and gaze; ``options={"ball": (x, y), "gaze": six angles}`` fixes them:
         the ball on the table (:attr:`ball_region`), the gaze within the joints' ranges
         (:attr:`gaze_range`); else one :class:`~sigmapi.errors.ConfigError` line."""
@@ -162,13 +162,13 @@ class ICubReachEnv(gym.Env[Obs, NDArray[np.float32]]):
             )
         return g
 
-    def _info(self) -> dict[str, Any]:
+    def _info(self) -> dict[str, object]:
         s = self.scene
         return {"ball": s.ball_position(), "torso_direction": s.torso_direction(s.ball_position())}
 
     def step(
         self, action: NDArray[np.float32]
-    ) -> tuple[Obs, SupportsFloat, bool, bool, dict[str, Any]]:
+    ) -> tuple[Obs, SupportsFloat, bool, bool, dict[str, object]]:
         """Reach for posture ``action`` (7 finite numbers in [-1, 1]: :meth:`posture`; else one
         :class:`~sigmapi.errors.ConfigError` line); the episode ends (terminated) with the reach."""
         a = check_action(self.action_space, action, fix="each joint's range mapped onto [-1, 1]")

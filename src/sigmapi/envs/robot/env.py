@@ -244,7 +244,7 @@ class RobotDockEnv(FramesCodes, gym.Env[Obs, np.int64]):
 
     def _info(
         self, event: str, direction: NDArray[np.float64], touched: bool = False
-    ) -> dict[str, Any]:
+    ) -> dict[str, object]:
         x, y = self._seen if self._seen is not None else (np.full(2, np.nan),) * 2
         return {
             "z": self.frames.z(direction[None, :])[0],

@@ -312,7 +312,9 @@ class Scene:
         return c, d / np.linalg.norm(d)
 
     # ------------------------------------------------------------------ pixels
-    def render(self, camera: str = "head", size: tuple[int, int] | None = None) -> NDArray[Any]:
+    def render(
+        self, camera: str = "head", size: tuple[int, int] | None = None
+    ) -> NDArray[np.uint8]:
         """An RGB image ``(H, W, 3)`` uint8 of camera ``"head"`` (``head_size`` square) or
         ``"third"`` (default 240 x 320), top row first."""
         if camera not in ("head", "third"):
@@ -370,7 +372,7 @@ def _unrotate(
     return v * c - (v @ k.T) * s + along  # k.T: v @ k.T is axis x v
 
 
-def blob_centroid(image: NDArray[Any]) -> NDArray[np.float64] | None:
+def blob_centroid(image: NDArray[np.generic]) -> NDArray[np.float64] | None:
     """Pixel coordinates ``(u, v)`` of the red blob's centroid in an RGB ``image``, or None.
 
     A pixel belongs to the blob when its red channel exceeds 150 and green and blue stay below

@@ -3,6 +3,6 @@ one map.
 
 Guide: docs/guide/chain.md; results: docs/results/chain.md.
 
-Modules (``run`` holds the experiment object, ``REGISTRY``'s entry): ``config``, ``result``,
-``run``.
+Modules: ``run`` (its settings, result and run in one module, read top to bottom; the
+experiment object, ``REGISTRY``'s entry).
 """

@@ -1,3 +1,4 @@
+# Over 500 lines: one experiment read top to bottom, its settings, result and run in one module.
 """A chain of frames: two Sigma-Pi maps in a row against one map on the whole transformation.
 
 Three 1-D positions in [0, 1]: the retinal position x, the eye-in-head angle e and the
@@ -32,16 +33,19 @@ z uniform in [0, 1]; a view (a, u) of z; then a view (x, e) of a.
 
 The experiment ``chain`` (:class:`Chain`, settings :class:`ChainConfig`) runs one job per seed
 through the executor; :func:`run_chain` is the same from Python with a :class:`SOMConfig`.
+
+One module, read top to bottom: the settings (:class:`ChainConfig`, :data:`QUICK` below the
+run), the result (:class:`ChainResult`: JSON form, summary, table) and the run.
 """
 
 from __future__ import annotations
 
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from functools import partial
 from pathlib import Path
-from typing import Any, NamedTuple
+from typing import Any, Literal, NamedTuple, get_args
 
 import numpy as np
 from numpy.typing import NDArray
@@ -49,18 +53,12 @@ from numpy.typing import NDArray
 from sigmapi import _memory, _validate
 from sigmapi.codes import PopulationCode
 from sigmapi.config import SOMConfig
+from sigmapi.errors import ConfigError
 from sigmapi.executor import Executor, job_memory
-from sigmapi.experiments.base import Experiment, check_seeds, register, run_all
-from sigmapi.experiments.chain.config import (
-    CODES,
-    ChainConfig,
-    chain_config,
-)
-from sigmapi.experiments.chain.result import (
-    TARGET_RATIO,
-    ChainResult,
-)
+from sigmapi.experiments.base import KEY_VALUES, Experiment, check_seeds, register, run_all
 from sigmapi.experiments.kit.jobs import Tick, counted, iterations_counted
+from sigmapi.experiments.kit.maps import MapSpec
+from sigmapi.experiments.kit.results import Result, columns, render
 from sigmapi.experiments.kit.seeds import SeedPlan
 from sigmapi.metrics import EVAL_SEED, evaluate, winner_metrics
 from sigmapi.model.som import SigmaPiSOM
@@ -70,11 +68,13 @@ from sigmapi.tasks import TwoViewSampler
 __all__ = [
     "CHAIN",
     "CODES",
+    "SUMMARY_KEYS",
     "TARGET_RATIO",
     "Chain",
     "ChainConfig",
     "ChainJob",
     "ChainResult",
+    "Code",
     "Triples",
     "chain_config",
     "chain_seed",
@@ -83,7 +83,182 @@ __all__ = [
     "sample_triples",
 ]
 
+
+# -- the settings ----------------------------------------------------------------------------------
+
+
+Code = Literal["response", "winner"]
+
+
+CODES: tuple[str, ...] = get_args(Code)
+"""What map A hands to map B: its normalised response, or a code of its winner's position."""
+
+
+def chain_config(config: SOMConfig | None = None, iterations: int | None = None) -> SOMConfig:
+    """The config every map of the comparison starts from (default: paper-1d, unrefined).
+
+    It must be 1-D (``map_shape``, ``x_shape`` and ``y_shape`` of one axis), non-periodic,
+    with the ``mean`` relation; map A uses it as it is.
+    """
+    cfg = (
+        config if config is not None else MapSpec("paper-1d", changes={"refine_rounds": 0}).config()
+    )
+    if not isinstance(cfg, SOMConfig):
+        raise _validate.fail(
+            "config",
+            "a sigmapi.SOMConfig or None",
+            type(cfg).__name__,
+            "load a preset with sigmapi.load_preset(name)",
+        )
+    for name in ("map_shape", "x_shape", "y_shape"):
+        if len(getattr(cfg, name)) != 1:
+            raise _validate.fail(
+                f"config.{name}",
+                "1-D (one axis)",
+                getattr(cfg, name),
+                "the chain of frames is built on 1-D positions, e.g. (15,)",
+            )
+    if cfg.periodic or cfg.relation != "mean":
+        raise ConfigError(
+            f"config must be non-periodic with relation 'mean', got periodic={cfg.periodic}, "
+            f"relation={cfg.relation!r}; the chain composes two means: a = (x + e) / 2, "
+            "z = (a + u) / 2"
+        )
+    if iterations is not None:
+        cfg = cfg.replace(iterations=_validate.integer("iterations", iterations, 1))
+    return cfg
+
+
+@dataclass(frozen=True)
+class ChainConfig:
+    """What ``sigmapi chain`` trains: the preset of every map and the data of maps B and single."""
+
+    preset: str = "paper-1d"
+    """The 1-D preset every map starts from (``sigmapi presets``), with sigmapi's ordering
+    procedure (``crossview``) and no refinement (``refine_rounds=0``, the setting
+    docs/results/chain.md measures; an override can turn it on)."""
+    overrides: tuple[str, ...] = field(default=(), metadata=KEY_VALUES)
+    """``key=value`` changes to the preset, e.g. ``iterations=50000`` (one per change)."""
+    train_pairs: int = field(
+        default=20_000, metadata=_validate.bounded("int", 10, 10_000_000, fix="e.g. 20000")
+    )
+    """View pairs of triples that map B and the single map are trained on."""
+    n_test: int = field(
+        default=10_000, metadata=_validate.bounded("int", 10, 1_000_000, fix="e.g. 10000")
+    )
+    """Calibration and test triples (each), from the fixed evaluation seed."""
+    code: Code = "response"
+    """What map A hands to map B: its normalised response, or a code of its winner's position."""
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "overrides", tuple(self.overrides))
+        _validate.check_fields(self)
+        _validate.choice("code", self.code, CODES)
+        self.som_config  # noqa: B018 (an unknown preset or a bad override fails here, not later)
+
+    @property
+    def som_config(self) -> SOMConfig:
+        """The preset with ``ordering="crossview"``, ``refine_rounds=0`` and the overrides
+        (:func:`chain_config`)."""
+        spec = MapSpec(self.preset, self.overrides, {"ordering": "crossview", "refine_rounds": 0})
+        return chain_config(spec.config())
+
+
+# -- the result: its JSON form, summary and table --------------------------------------------------
+
+
+TARGET_RATIO = 2.0
+"""The acceptance bound of the chain of frames: the chain's z error at most this many times
+the single map's."""
+
+
+SUMMARY_KEYS = ("z_error", "view_consistency", "order_r2", "usage", "weights", "train_seconds")
+"""The scores summarised per route (medians over seeds)."""
+
+ROUTES = ("chain", "single")
+
+COLUMNS = columns(
+    "seed:<5d route:7s z_error:7.3f view_consistency:12.3f order_r2:10.3f usage:6.2f",
+    "weights:8d train_seconds:8.1f",
+    view_consistency="same winner",
+)
+"""The table's columns: one row per seed and route."""
+
+
+@dataclass
+class ChainResult(Result):
+    """Both routes per seed (:func:`chain_seed`) and the settings they ran with."""
+
+    config: SOMConfig
+    train_pairs: int
+    n_test: int
+    code: str
+    per_seed: list[dict[str, Any]]
+
+    KEYS = ("settings", "seeds: per_seed", "summary")
+    """The JSON form: the settings, one dict per seed and the summary."""
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> ChainResult:
+        """The result that :meth:`to_dict` wrote (``result.json``)."""
+        settings = data["settings"]
+        config = SOMConfig.from_dict(settings["config"])
+        return cls(
+            config,
+            settings["train_pairs"],
+            settings["n_test"],
+            settings["code"],
+            list(data["seeds"]),
+        )
+
+    def summary(self) -> dict[str, object]:
+        """The medians of both routes, the median and worst ratio and how many seeds meet
+        ``ratio <= TARGET_RATIO``."""
+        per_seed = self.per_seed
+
+        def med(route: str, key: str) -> float:
+            return float(np.median([r[route][key] for r in per_seed]))
+
+        ratios = [r["ratio"] for r in per_seed]
+        out: dict[str, Any] = {route: {k: med(route, k) for k in SUMMARY_KEYS} for route in ROUTES}
+        out.update(
+            ratio_median=float(np.median(ratios)),
+            ratio_worst=float(max(ratios)),
+            met=int(sum(r <= TARGET_RATIO for r in ratios)),
+            n_seeds=len(per_seed),
+            target_ratio=TARGET_RATIO,
+            map_a_order_r2_min=min(r["map_a"]["order_r2"] for r in per_seed),
+        )
+        return out
+
+    def settings(self) -> dict[str, object]:
+        """The map config, the training pairs, test points, code and the seeds."""
+        return {
+            "config": self.config.to_dict(),
+            "train_pairs": self.train_pairs,
+            "n_test": self.n_test,
+            "code": self.code,
+            "seeds": [r["seed"] for r in self.per_seed],
+        }
+
+    def table(self) -> str:
+        """Both routes per seed, then the summary line."""
+        rows = [{"seed": r["seed"], "route": k, **r[k]} for r in self.per_seed for k in ROUTES]
+        s = self.summary()
+        return "\n".join(
+            [
+                *render(COLUMNS, rows),
+                f"{s['met']} of {s['n_seeds']} seeds: chain z error <= {s['target_ratio']:g} x "
+                f"the single map's (median ratio {s['ratio_median']:.2f}, worst "
+                f"{s['ratio_worst']:.2f})",
+            ]
+        )
+
+
 Array = NDArray[np.float64]
+
+
+# -- the run: the triples, both routes per seed, the experiment ------------------------------------
 
 
 PLAN = SeedPlan({"triples": 16})
@@ -176,14 +351,14 @@ class ChainJob:
     """Where given, the job shows the iterations of its three maps."""
 
 
-def chain_seed(job: ChainJob) -> dict[str, Any]:
+def chain_seed(job: ChainJob) -> dict[str, object]:
     """Train map A, map B and the single map on seed ``job.seed``'s triples and score both
     routes on the shared calibration and test triples (one entry of ``"seeds"``)."""
     total = 3 * job.cfg.iterations
     return counted(job.show, total, f"chain seed {job.seed}", partial(_chain_seed, job), "it")
 
 
-def _chain_seed(job: ChainJob, tick: Tick | None) -> dict[str, Any]:
+def _chain_seed(job: ChainJob, tick: Tick | None) -> dict[str, object]:
     seed, cfg, train_pairs, code, cal, test = (
         job.seed,
         job.cfg,
@@ -301,7 +476,7 @@ def run_chain(
     code: str = "response",
     executor: Executor | None = None,
     progress: Progress | None = None,
-) -> dict[str, Any]:
+) -> dict[str, object]:
     """The chain of frames against the single map, per seed and summarised.
 
     Parameters

@@ -3,6 +3,6 @@ pick instead.
 
 Guide: docs/guide/compare.md; results: docs/results/baselines.md.
 
-Modules (``run`` holds the experiment object, ``REGISTRY``'s entry): ``config``, ``result``,
-``run``.
+Modules: ``run`` (its settings, result and run in one module, read top to bottom; the
+experiment object, ``REGISTRY``'s entry) and ``figures`` (the figure, matplotlib).
 """

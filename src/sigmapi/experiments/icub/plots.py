@@ -20,8 +20,13 @@ from numpy.typing import NDArray
 from sigmapi._outputs import save_captioned, save_gif
 from sigmapi.envs.icub import REACH_REGION
 from sigmapi.experiments.icub.reaching import METHODS
+from sigmapi.experiments.kit.figures import (
+    coincide_sentence,
+    coinciding,
+    film_strip,
+    plot_apart,
+)
 from sigmapi.metrics import FOLD_THRESHOLD, ORDERED_R2
-from sigmapi.viz.series import coincide_sentence, coinciding, plot_apart
 
 __all__ = [
     "gaze_bins",
@@ -198,7 +203,7 @@ def _log_ticks(ax: Any, values: Sequence[float], apart: float = 0.15) -> None:
 
 def plot_babbling(curves: Mapping[str, Sequence[Sequence[float]]], ax: Any = None) -> Any:
     """Median palm error (cm) on held-out babbles against the babbles learned from (log
-    axis), one marker per method (:func:`~sigmapi.viz.series.plot_apart`)."""
+    axis), one marker per method (:func:`~sigmapi.experiments.kit.figures.plot_apart`)."""
     import matplotlib.pyplot as plt
 
     if ax is None:
@@ -357,12 +362,7 @@ def icub_figures(result: Any, out_dir: Path) -> list[Path]:
     )
     film = first.get("film") or []
     if film:
-        pick = np.linspace(0, len(film) - 1, min(6, len(film))).round().astype(int)
-        fig, axes = plt.subplots(1, len(pick), figsize=(3.0 * len(pick), 2.4))
-        for a, i in zip(np.atleast_1d(axes), pick, strict=True):
-            a.imshow(film[i])
-            a.set_axis_off()
-            a.set_title(f"frame {i + 1} of {len(film)}", fontsize=8)
+        fig, pick = film_strip(film, "frame {k} of {n}")
         save(
             fig,
             "film.png",

@@ -14,7 +14,7 @@ import numpy as np
 
 from sigmapi.experiments.icub.config import ICubConfig
 from sigmapi.experiments.icub.reaching import METHODS
-from sigmapi.experiments.kit.results import Column, Result, render
+from sigmapi.experiments.kit.results import Column, Result, columns, render
 from sigmapi.metrics import ORDERED_R2
 
 __all__ = ["TARGETS", "ICubResult"]
@@ -53,7 +53,7 @@ _MAP_KEYS = (
 )
 
 
-def _scored(rows: list[dict[str, Any]], true: list[dict[str, Any]]) -> dict[str, Any]:
+def _scored(rows: list[dict[str, Any]], true: list[dict[str, Any]]) -> dict[str, object]:
     """A map's scores ``rows`` (one per seed) over the seeds: medians, the worst, how many
     seeds were ordered and flagged, its error over the true-direction map's ``true``."""
     ratio = [
@@ -70,7 +70,7 @@ def _scored(rows: list[dict[str, Any]], true: list[dict[str, Any]]) -> dict[str,
     }
 
 
-def _per_seed(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
+def _per_seed(rows: list[dict[str, Any]]) -> list[dict[str, object]]:
     return [{k: r[k] for k in _MAP_KEYS} for r in rows]
 
 
@@ -78,14 +78,14 @@ def _degrees(*path: str) -> Callable[[Mapping[str, Any]], str]:
     return lambda m: f"{functools.reduce(operator.getitem, path, m):.2f}d"
 
 
-MAP_COLUMNS = (
-    Column("map", "map", "<6"),
-    Column("order R2", "order_r2", ">10.3f"),
-    Column("worst", "order_r2_worst", ">8.3f"),
+MAP_COLUMNS = columns(
+    "map:<6 order_r2:>10.3f order_r2_worst:>8.3f",
     Column("dir err", _degrees("direction_error_deg"), ">9"),
     Column("true map", _degrees("true_direction_map", "direction_error_deg"), ">10"),
     Column("cubic fit", _degrees("supervised", "direction_error_deg"), ">11"),
-    Column("folded", "folded_seeds", ">8d"),
+    "folded_seeds:>8d",
+    order_r2="order R2",
+    folded_seeds="folded",
 )
 """The table's columns: one row per map (medians over seeds, in degrees)."""
 
@@ -190,7 +190,7 @@ class ICubResult(Result):
             ]
         return out
 
-    def targets(self) -> dict[str, Any]:
+    def targets(self) -> dict[str, object]:
         """Each acceptance bound and whether it is met."""
         maps, succ = self.maps(), self.success()
         n = len(self.seeds)

@@ -60,7 +60,7 @@ PLAN = SeedPlan({"views": 0, "map": 1, "babbling": 2, "reaches": 3, "servo": 4})
 the maps are built from an int drawn from ``"map"``, so no stream meets a model's own keys."""
 
 
-def check_frames(scene: ICubScene, n: int, rng: np.random.Generator) -> dict[str, Any]:
+def check_frames(scene: ICubScene, n: int, rng: np.random.Generator) -> dict[str, object]:
     """Rendered retina against the exact projection over ``n`` random scenes, and the right
     eye frame's render time (wall and CPU milliseconds, medians)."""
     err, wall, cpu, hidden = [], [], [], 0
@@ -137,13 +137,13 @@ def learn_seed_chain(
     return train, chain
 
 
-def _run_seed(job: _Job) -> dict[str, Any]:
+def _run_seed(job: _Job) -> dict[str, object]:
     """Maps, babbling and reaches of one seed."""
     work = functools.partial(_seed, job)
     return counted(job.show, len(STEPS), f"icub seed {job.seed}", work, "step")
 
 
-def _seed(job: _Job, tick: Tick | None) -> dict[str, Any]:
+def _seed(job: _Job, tick: Tick | None) -> dict[str, object]:
     steps = Steps(tick, STEPS)
     cfg, seed = job.config, job.seed
     scene = ICubScene()
@@ -224,14 +224,14 @@ def _eye_views(
     ball: NDArray[np.float64],
     gaze: NDArray[np.float64],
     posture: NDArray[np.float64],
-) -> dict[str, Any]:
+) -> dict[str, object]:
     """Both eyes' frames with the arm at the learned posture for the ball, and where the ball
     and the palm project."""
     scene.reset()
     scene.set_ball(ball)
     scene.set_gaze(gaze)
     scene.set_arm(posture)
-    out: dict[str, Any] = {}
+    out: dict[str, object] = {}
     for eye in ("l_eye", "r_eye"):
         out[eye] = scene.render(eye)
         out[f"{eye}_ball"] = scene.project(scene.ball_position(), eye)[0]

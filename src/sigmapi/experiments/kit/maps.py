@@ -34,7 +34,7 @@ class MapSpec:
     """A shipped preset's name (``sigmapi presets``)."""
     overrides: tuple[str, ...] = ()
     """``key=value`` changes to it, as ``--set`` takes them (applied after ``changes``)."""
-    changes: Mapping[str, Any] = field(default_factory=dict)
+    changes: Mapping[str, object] = field(default_factory=dict)
     """Typed changes the experiment makes to the preset (before the user's overrides)."""
 
     def __post_init__(self) -> None:

@@ -75,7 +75,7 @@ def check_part_types(config: Any, parts: dict[str, type]) -> None:
 
 
 def replaced_parts(
-    config: Any, parts: dict[str, type], changes: dict[str, Any], kind: str
+    config: Any, parts: dict[str, type], changes: dict[str, object], kind: str
 ) -> dict[str, Any]:
     """The parts of ``config`` with ``changes`` (fields of any part, by name); an unknown
     field is a ConfigError that lists the valid ones (``kind``: "reach", "reward", ...)."""
@@ -93,7 +93,7 @@ def replaced_parts(
     }
 
 
-def parts_dict(config: Any, parts: dict[str, type]) -> dict[str, dict[str, Any]]:
+def parts_dict(config: Any, parts: dict[str, type]) -> dict[str, dict[str, object]]:
     """The parts of ``config`` as JSON-able tables (tuples as lists)."""
     return {
         part: {

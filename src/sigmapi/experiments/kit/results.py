@@ -27,7 +27,17 @@ import numpy as np
 
 from sigmapi.experiments.kit.seeds import check_seeds
 
-__all__ = ["Column", "Result", "as_object", "plain", "render", "summaries", "tuples"]
+__all__ = [
+    "HEADERS",
+    "Column",
+    "Result",
+    "as_object",
+    "columns",
+    "plain",
+    "render",
+    "summaries",
+    "tuples",
+]
 
 R = TypeVar("R", bound="Result")
 
@@ -113,8 +123,8 @@ class Result:
         """Everything the result states, JSON-able (``result.json``, ``--json``): the
         :attr:`KEYS` in order; a result read back gives its ``written`` summaries in place of
         the computed keys."""
-        written: dict[str, Any] | None = getattr(self, "written", None)
-        out: dict[str, Any] = {}
+        written: dict[str, object] | None = getattr(self, "written", None)
+        out: dict[str, object] = {}
         for entry in self._keys():
             spread = entry.startswith("*")
             key, attr = _entry(entry.lstrip("*"))
@@ -140,7 +150,7 @@ class Result:
         tuple, a float); the seeds from the config where :attr:`SEEDS_IN_CONFIG`."""
         hints = typing.get_type_hints(cls)
         names = {f.name for f in dataclasses.fields(cls) if f.init}  # type: ignore[arg-type]
-        values: dict[str, Any] = {}
+        values: dict[str, object] = {}
         for entry in cls.KEYS:
             key, attr = _entry(entry.lstrip("*"))
             if entry.startswith("*") or key in (*cls.COMPUTED, *cls.LATER) or key not in obj:
@@ -224,7 +234,34 @@ class Column:
         return self._aligned(self.missing) if v is None else format(v, self.format)
 
 
-def render(columns: Sequence[Column], rows: Sequence[Any], sep: str = " ") -> list[str]:
+HEADERS = {
+    "name": "method",
+    "view_consistency": "same unit",
+    "z_error": "z error",
+    "order_r2": "order R^2",
+    "train_seconds": "seconds",
+    "median_reference_frame_index": "RF index",
+}
+"""The headers of the keys several tables show; a key not here heads its own column, a key
+ending in ``_worst`` (the worst seed's value) is headed ``worst``."""
+
+
+def columns(*specs: str | Column, **headers: str) -> tuple[Column, ...]:
+    """The columns of a table: each word ``"key:format"`` of a string a column of that key
+    (headed by ``headers``, else :data:`HEADERS`), each :class:`Column` as it is."""
+    out: list[Column] = []
+    for spec in specs:
+        if isinstance(spec, Column):
+            out.append(spec)
+            continue
+        for word in spec.split():
+            key, _, fmt = word.partition(":")
+            worst = "worst" if key.endswith("_worst") else key
+            out.append(Column(headers.get(key) or HEADERS.get(key, worst), key, fmt))
+    return tuple(out)
+
+
+def render(columns: Sequence[Column], rows: Sequence[object], sep: str = " ") -> list[str]:
     """The header line and one line per row of ``rows`` (mappings, or what the columns'
     functions read)."""
     lines = [sep.join(c.header() for c in columns)]

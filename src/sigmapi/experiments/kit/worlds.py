@@ -82,7 +82,7 @@ def get_world(name: str) -> World:
     return WORLDS[name]
 
 
-def _gaze_kwargs(settings: GazeReachConfig) -> dict[str, Any]:
+def _gaze_kwargs(settings: GazeReachConfig) -> dict[str, object]:
     return {**settings.env_kwargs(), "max_episode_steps": settings.max_episode_steps}
 
 

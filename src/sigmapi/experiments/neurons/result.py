@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 
 from sigmapi._outputs import save_captioned
-from sigmapi.experiments.kit.results import Column, Result, render
+from sigmapi.experiments.kit.results import Column, Result, columns, render
 
 from .config import METRICS, REFERENCE_RATE, NeuronsConfig
 
@@ -36,26 +36,22 @@ _WORST_HIGH = ("z_error", "fold_score", "mean_synapses", "branch_z_gap")
 SPARSE = "dendritic-sparse"
 """Name prefix of the sparse dendritic maps."""
 
-RATE_COLUMNS = (
-    Column("method", "name", "28s"),
-    Column("task", "task", "4s"),
-    Column("synapses", "synapses", "8d"),
-    Column("same unit", "view_consistency", "9.3f"),
-    Column("worst", "view_consistency_worst", "6.3f"),
-    Column("z error", "z_error", "7.3f"),
-    Column("order", "order_r2", "6.3f"),
+RATE_COLUMNS = columns(
+    "name:28s task:4s synapses:8d view_consistency:9.3f view_consistency_worst:6.3f",
+    "z_error:7.3f order_r2:6.3f",
     Column("ordered", lambda m: f"{m['ordered']:3d}/{m['n_seeds']:<3d}", ">7s"),
     Column("RF index", lambda m: m.get("reference_frame_index"), "8.2f"),
+    order_r2="order",
 )
 """The table's columns of the rate maps: one row per map and task (medians, worst seed)."""
 
-SPIKING_COLUMNS = (
+SPIKING_COLUMNS = columns(
     Column("spiking (peak rate)", lambda m: f"{m['name']} ({m['peak_rate']} Hz)", "28s"),
-    Column("agree", "agreement", "6.3f"),
-    Column("same unit", "view_consistency", "9.3f"),
-    Column("rate map", "rate_view_consistency", "8.3f"),
-    Column("z error", "z_error", "7.3f"),
-    Column("spikes", "spikes_per_decision", "7.0f"),
+    "agreement:6.3f view_consistency:9.3f rate_view_consistency:8.3f z_error:7.3f",
+    "spikes_per_decision:7.0f",
+    agreement="agree",
+    rate_view_consistency="rate map",
+    spikes_per_decision="spikes",
 )
 """The table's columns of the spiking networks: one row per network and peak rate."""
 
@@ -66,7 +62,7 @@ def _scalars(summary: dict[str, Any]) -> dict[str, Any]:
 
 
 def _median_worst(rows: list[dict[str, Any]], keys: tuple[str, ...]) -> dict[str, Any]:
-    out: dict[str, Any] = {}
+    out: dict[str, object] = {}
     for k in keys:
         vals = [r[k] for r in rows if r.get(k) is not None]
         if not vals:
@@ -348,7 +344,7 @@ class NeuronsResult(Result):
 
     def figure(self, out_dir: Path) -> list[Path]:
         """``neurons.png`` and its caption ``neurons.txt``."""
-        from sigmapi.viz.neurons import neurons_figure  # matplotlib: only when drawing
+        from .figures import neurons_figure  # matplotlib: only when drawing
 
         out = Path(out_dir) / FIGURE
         return [save_captioned(neurons_figure(self.to_dict()), out, self.caption(), dpi=110)]

@@ -100,7 +100,7 @@ def _spiking_rows(
     *,
     dendritic: bool = False,
     tick: Tick | None = None,
-) -> list[dict[str, Any]]:
+) -> list[dict[str, object]]:
     """One row per window and ``(peak rate, pool)`` of ``rates`` of a spiking deployment of
     ``model`` (a pool other than the config's tags the name ``-pool<n>``); ``dendritic``: the
     dendritic network's settings (:meth:`NeuronsConfig.spiking`)."""
@@ -238,7 +238,7 @@ def _neurons_job(job: NeuronsJob, tick: Tick | None) -> dict[str, Any]:
     mid = sorted(dendritic)[len(dendritic) // 2]
     summary = branch_summary(dendritic[mid], _z_table(dendritic[mid], c.n_test))
     summary.update(branches=mid, task=job.task, seed=job.seed)
-    spiking: list[dict[str, Any]] = []
+    spiking: list[dict[str, object]] = []
     if not two_d:
         weights = sp.weights_
 

@@ -8,10 +8,9 @@ fixed gazes, a reference-frame index per unit (0 eye-centred, 1 body-centred; Du
 their medians and a Kolmogorov-Smirnov comparison of the two index distributions; the figure
 draws them (docs/guide/neurons.md).
 
-- :mod:`.config`: :class:`PhysiologyConfig`;
-- :mod:`.run`: the recording and the random start;
-- :mod:`.result`: :class:`PhysiologyResult`.
+- :mod:`.run`: its settings (:class:`PhysiologyConfig`), result (:class:`PhysiologyResult`),
+  the recording and the random start, and the experiment object (``REGISTRY``'s entry);
+- :mod:`.figures`: the figure (matplotlib, imported when drawing).
 
-The experiment object and its run are in ``run`` (``REGISTRY``'s entry); guide:
-docs/guide/neurons.md.
+Guide: docs/guide/neurons.md.
 """

@@ -1,29 +1,281 @@
-"""What ``sigmapi physiology`` records: the model file's map and its random start."""
+"""``sigmapi physiology`` in one module, read top to bottom: its settings
+(:class:`PhysiologyConfig`), its result (:class:`PhysiologyResult`: the JSON form, table and
+figure, drawn by :mod:`.figures`) and the run, which records the model file's map and its
+random start (:func:`record_model`, :class:`PhysiologyExperiment`)."""
 
 from __future__ import annotations
 
 import time
 from collections.abc import Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from sigmapi.analysis.monkey import fixation_protocol, monkey_protocol
-from sigmapi.analysis.physiology import compare_distributions, record, tuning_curves
+from sigmapi import _validate
+from sigmapi._outputs import INPUT, save_captioned
+from sigmapi.analysis.monkey import EYE_GRID, N_RETINA, RESPONDS, fixation_protocol, monkey_protocol
+from sigmapi.analysis.physiology import (
+    GAZES,
+    check_gaze_axes,
+    compare_distributions,
+    record,
+    tuning_curves,
+)
 from sigmapi.codes import PopulationCode
 from sigmapi.errors import DataError, UsageError
 from sigmapi.executor import Executor
 from sigmapi.experiments.base import Experiment, register
+from sigmapi.experiments.kit.results import Result, columns, render
 from sigmapi.model.som import SigmaPiSOM, load_model
 from sigmapi.progress import Progress
 from sigmapi.tasks import TwoViewSampler
 
-from .config import PhysiologyConfig
-from .result import PhysiologyResult
+__all__ = [
+    "BODY_CENTRED",
+    "FIGURE",
+    "NWB_FILE",
+    "PHYSIOLOGY",
+    "PhysiologyConfig",
+    "PhysiologyExperiment",
+    "PhysiologyResult",
+    "RandomStart",
+    "record_model",
+]
 
-__all__ = ["NWB_FILE", "PHYSIOLOGY", "PhysiologyExperiment", "RandomStart", "record_model"]
+
+# -- the settings ----------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class PhysiologyConfig:
+    """What ``sigmapi physiology`` records."""
+
+    model: str = field(metadata=INPUT)
+    """The model file to record from (``sigmapi train --out FILE``)."""
+    gazes: tuple[float, ...] = field(
+        default=GAZES,
+        metadata=_validate.bounded("numbers", 0, 1, fix="fractions of the gaze axis", sep=","),
+    )
+    """Gaze directions (fractions of the gaze axis) the units are recorded at."""
+    n_probe: int = field(
+        default=0, metadata=_validate.bounded("int", 0, 1001, fix="0 for the default, e.g. 61")
+    )
+    """Probe positions along the swept retinal axis (0: 61; 15 along any other)."""
+    tuning_units: int = field(default=3, metadata=_validate.bounded("int", 1, 10, fix="e.g. 3"))
+    """Units whose tuning curves the figure shows."""
+    body_slope: tuple[float, ...] = field(
+        default=(),
+        metadata=_validate.bounded("numbers", -100, 100, count=3, fix="e.g. -1", sep=","),
+    )
+    """How far a body-centred receptive field moves on the retina per unit of gaze, one value
+    or one per gaze axis (empty: from the model's relation, -1 for z = (x + y) / 2). A map
+    learned from a world of its own geometry needs that world's: the robot's and the iCub's
+    are measured by ``benchmarks/bench_physiology.py --robot`` and ``--icub``."""
+    gaze_axes: tuple[int, ...] = field(
+        default=(),
+        metadata=_validate.bounded("ints", 0, 2, count=3, fix="e.g. --gaze-axes 1,0", sep=","),
+    )
+    """For each retinal axis, the gaze axis that moves the receptive fields along it (empty:
+    the same axis). The iCub's retina is (horizontal, vertical) and its gaze codes (tilt,
+    pan): ``1,0``."""
+
+    eye_grid: tuple[float, ...] = field(
+        default=EYE_GRID,
+        metadata=_validate.bounded(
+            "numbers", 0, 1, count=21, fix="fractions of the gaze axis", sep=","
+        ),
+    )
+    """The monkey protocol's eye positions along each gaze axis (every combination is a
+    fixation; ``0.3,0.5,0.7``: the studies' 3 x 3 grid)."""
+    n_retina: int = field(
+        default=N_RETINA, metadata=_validate.bounded("int", 5, 101, fix=f"e.g. {N_RETINA}")
+    )
+    """The monkey protocol's stimulus positions along each retinal axis."""
+    responds: float = field(
+        default=RESPONDS, metadata=_validate.bounded("number", 0, 1, fix=f"e.g. {RESPONDS}")
+    )
+    """The monkey protocol counts a field at a fixation where the unit's best response there
+    is at least this share of its best at any fixation."""
+    nwb: bool = False
+    """Also write the recording as an NWB file, physiology.nwb, into --out (needs the nwb
+    extra: pip install 'sigmapi[nwb]')."""
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.model, str) or not self.model:
+            raise _validate.fail(
+                "model", "a model file path", self.model, "e.g. sigmapi physiology model.npz"
+            )
+        _validate.check_fields(self)  # the bounds declared beside the fields
+        gazes = list(self.gazes)
+        if len(set(gazes)) < 3:
+            raise _validate.fail(
+                "gazes",
+                "at least 3 distinct gazes",
+                list(self.gazes),
+                "e.g. --gazes 0.2,0.35,0.5,0.65,0.8",
+            )
+        object.__setattr__(self, "gazes", tuple(sorted(set(gazes))))
+        if 0 < self.n_probe < 5:
+            raise _validate.fail("n_probe", "0 or at least 5", self.n_probe, "e.g. 61")
+        slopes = self.body_slope
+        if any(v == 0.0 for v in slopes):
+            raise _validate.fail("body_slope", "nonzero", list(slopes), "e.g. -1")
+        object.__setattr__(self, "body_slope", slopes)
+        axes = tuple(self.gaze_axes)  # the model's dimension is checked where it is loaded
+        check_gaze_axes(axes, len(axes), "e.g. --gaze-axes 1,0")
+        object.__setattr__(self, "gaze_axes", axes)
+        grid = list(self.eye_grid)
+        if len(set(grid)) < 3:
+            raise _validate.fail(
+                "eye_grid", "at least 3 distinct eye positions", list(self.eye_grid),
+                "e.g. --eye-grid 0.3,0.5,0.7",
+            )  # fmt: skip
+        object.__setattr__(self, "eye_grid", tuple(sorted(set(grid))))
+        _validate.boolean("nwb", self.nwb)
+
+
+# -- the result: its JSON form, table and figure ---------------------------------------------------
+
+
+FIGURE = "physiology.png"
+
+BODY_CENTRED = 0.9
+"""A map whose median reference-frame index is at least this reads as body-centred."""
+
+COLUMNS = columns(
+    "map:14s median_reference_frame_index:9.3f measured:8.2f body_centred_share:12.2f",
+    "median_gain_r2:8.3f median_peak_modulation:9.3f",
+    body_centred_share="body-centred",
+    median_gain_r2="gain R^2",
+    median_peak_modulation="peak mod.",
+)
+"""The table's columns: one row per map (the trained one, its random start)."""
+
+
+@dataclass
+class PhysiologyResult(Result):
+    """The recording of one model file (:func:`.run.record_model`)."""
+
+    config: PhysiologyConfig
+    data: dict[str, Any]
+    seconds: float
+
+    KEYS = ("*data", "body_centred", "settings", "seconds")
+    """The JSON form: ``reference_frame_index`` (per unit, the trained map), ``trained`` and
+    ``random_start`` (every index per unit, medians), ``comparison`` (Kolmogorov-Smirnov
+    between the two index distributions), ``tuning``, ``monkey`` (the gain-field studies'
+    protocol, :func:`~sigmapi.analysis.monkey.monkey_protocol`, with the published numbers),
+    the verdict (:meth:`body_centred`), the settings and the time."""
+
+    def body_centred(self) -> bool:
+        """Whether the trained map's median reference-frame index is at least
+        :data:`BODY_CENTRED`."""
+        med = self.data["trained"]["median_reference_frame_index"]
+        return med is not None and med >= BODY_CENTRED
+
+    def settings(self) -> dict[str, object]:
+        """The config's fields but the tuning units."""
+        c = self.config
+        return {
+            "model": c.model,
+            "gazes": c.gazes,
+            "n_probe": c.n_probe,
+            "body_slope": c.body_slope,
+            "gaze_axes": c.gaze_axes,
+            "eye_grid": c.eye_grid,
+            "n_retina": c.n_retina,
+            "responds": c.responds,
+            "nwb": c.nwb,
+        }
+
+    def table(self) -> str:
+        """The medians of both maps and the comparison."""
+        rows = render(COLUMNS, [{"map": k, **self.data[k]} for k in ("trained", "random_start")])
+        c = self.data["comparison"]
+        if c["ks"] is not None:
+            rows.append(
+                f"trained vs random start: KS {c['ks']:.3f}, p = {c['p_value']:.2g} "
+                f"(n = {c['n'][0]}, {c['n'][1]})"
+            )
+        rows.append(self._monkey_line())
+        return "\n".join(rows)
+
+    def _monkey_line(self) -> str:
+        m = self.data["monkey"]
+        share = m["gain_modulated_share"]
+        idx, r2 = m["reference_frame_index"]["median"], m["gain_r2"]["median"]
+        left = ", ".join(f"{v} {k.replace('_', ' ')}" for k, v in m["left_out"].items())
+        return (
+            f"monkey protocol ({len(m['fixations'])} fixations, {m['n_retina']} stimuli per "
+            f"axis): {m['admitted']} of {m['units']} units admitted (left out: {left}); "
+            + (f"gain-modulated {100 * share:.0f} %" if share is not None else "no unit admitted")
+            + (f", planar-fit R^2 median {r2:.2f}" if r2 is not None else "")
+            + (f", reference-frame index median {idx:.2f}" if idx is not None else "")
+            + (
+                f" (by cross-correlation {m['displacement_index']['median']:.2f})"
+                if m["displacement_index"]["median"] is not None
+                else ""
+            )
+            + (
+                f" (every unit: {m['reference_frame_index_all']['median']:.2f})"
+                if m["reference_frame_index_all"]["median"] is not None
+                else ""
+            )
+        )
+
+    def caption(self) -> str:
+        """The figure's caption, computed from the data."""
+        t, s, c = self.data["trained"], self.data["random_start"], self.data["comparison"]
+
+        def med(r: dict[str, Any]) -> str:
+            v = r["median_reference_frame_index"]
+            return "no unit measured" if v is None else f"median {v:.2f}"
+
+        verdict = (
+            "body-centred"
+            if self.body_centred()
+            else f"not body-centred by the {BODY_CENTRED} criterion"
+        )
+        text = (
+            f"{self.data['model']} (map {'x'.join(map(str, self.data['map_shape']))}): "
+            f"reference-frame index (receptive-field shift with gaze over a body-centred "
+            f"field's; 0 eye-centred, 1 body-centred) of the trained map, {med(t)} over "
+            f"{100 * t['measured']:.0f} % of units with a field at >= 3 gazes: {verdict}; "
+            f"its random start, {med(s)}."
+        )
+        if c["ks"] is not None:
+            text += f" The two distributions differ by KS {c['ks']:.2f} (p = {c['p_value']:.2g})."
+        text += (
+            f" Middle: tuning curves over retinal position at gazes "
+            f"{', '.join(f'{g:g}' for g in self.config.gazes)}. Right: planar gain-field fits "
+            f"of the response at a fixed retinal position (median R^2 trained "
+            f"{t['median_gain_r2']:.2f}, random {s['median_gain_r2']:.2f}); the best response's "
+            f"modulation over gazes, median trained {t['median_peak_modulation']:.2f}, random "
+            f"{s['median_peak_modulation']:.2f}."
+        )
+        text += (
+            " Bottom: the gain-field studies' protocol (a grid of fixations, stimuli on a "
+            "grid of retinal positions) beside the monkeys' published numbers (hatched: not "
+            "verified against the paper): " + self._monkey_line() + "."
+        )
+        return text
+
+    def figure(self, out_dir: Path) -> list[Path]:
+        """``physiology.png`` and its caption ``physiology.txt`` (and the NWB file the run
+        wrote there, ``--nwb``, in the list of files written)."""
+        from .figures import physiology_figure  # matplotlib: only when drawing
+
+        out = Path(out_dir) / FIGURE
+        fig = save_captioned(physiology_figure(self.to_dict()), out, self.caption(), dpi=110)
+        nwb = self.data.get("nwb")
+        return [fig, *([Path(out_dir) / nwb] if nwb else [])]
+
+
+# -- the run: the recording of the model file and of its random start ------------------------------
+
 
 NWB_FILE = "physiology.nwb"
 """The NWB file ``sigmapi physiology --nwb --out DIR`` writes into DIR."""
@@ -60,7 +312,7 @@ class RandomStart:
         return np.asarray(np.einsum("bi,kib->bk", np.asarray(x), t))
 
 
-def _tuning(model: Any, cfg: PhysiologyConfig, n_probe: int | None) -> dict[str, Any]:
+def _tuning(model: Any, cfg: PhysiologyConfig, n_probe: int | None) -> dict[str, object]:
     """Tuning curves along retinal axis 0 of ``tuning_units`` units spread over the map (in
     2-D on the probe row through each unit's peak at the middle gaze)."""
     resp, probes = tuning_curves(model, cfg.gazes, 0, n_probe, (cfg.gaze_axes or (0,))[0])
@@ -78,7 +330,9 @@ def _tuning(model: Any, cfg: PhysiologyConfig, n_probe: int | None) -> dict[str,
     return out
 
 
-def record_model(cfg: PhysiologyConfig, recording: dict[str, Any] | None = None) -> dict[str, Any]:
+def record_model(
+    cfg: PhysiologyConfig, recording: dict[str, Any] | None = None
+) -> dict[str, object]:
     """The trained map's and its random start's per-unit indices, their comparison, the
     tuning curves the figure draws and the monkey protocol (``monkey``,
     :func:`~sigmapi.analysis.monkey.monkey_protocol`); ``recording``, a dict, receives the

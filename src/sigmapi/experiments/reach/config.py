@@ -130,7 +130,7 @@ class MapConfig:
             raise ConfigError(
                 f"a map's x and y codes differ only in shape, got {x_code} and {y_code}"
             )
-        codes: dict[str, Any] = {
+        codes: dict[str, object] = {
             "x_shape": x_code.shape,
             "y_shape": y_code.shape,
             "code_width": x_code.width,
@@ -138,7 +138,7 @@ class MapConfig:
             "code_normalize": x_code.normalize,
             "periodic": x_code.periodic,
         }
-        run: dict[str, Any] = {
+        run: dict[str, object] = {
             "map_shape": self.map_shape,
             "iterations": self.iterations,
             "backend": self.backend,

@@ -16,8 +16,8 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from numpy.typing import NDArray
 
+from sigmapi.experiments.kit.figures import coinciding, legend_once, plot_apart
 from sigmapi.experiments.reach.config import ReachConfig
-from sigmapi.viz.series import coinciding, legend_once, plot_apart
 
 __all__ = [
     "LABELS",
@@ -57,7 +57,8 @@ COLORS = {"map": "C0", "retina": "C3", "retina_gaze": "C1", "true_z": "k"}
 
 def coinciding_curves(result: ReachData) -> dict[str, dict[str, str]]:
     """Per metric ("success", "steps"), the states whose curve equals an earlier state's at
-    every block (:func:`~sigmapi.viz.series.coinciding`): what the caption says of them."""
+    every block (:func:`~sigmapi.experiments.kit.figures.coinciding`): what the caption says
+    of them."""
     curves = result.curves()
     return {
         metric: coinciding({s: [*c["episode"], *c[key]] for s, c in curves.items()})

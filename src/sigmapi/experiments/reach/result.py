@@ -5,7 +5,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -42,7 +41,7 @@ class ReachResult(Result):
     z_axis: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
     map_metrics: list[dict[str, float | int]] = field(default_factory=list)
     seconds: float = 0.0
-    written: dict[str, Any] | None = field(default=None, repr=False)
+    written: dict[str, object] | None = field(default=None, repr=False)
     """The summaries of a result read back (:meth:`from_dict`); None for a run's result."""
 
     KEYS = (

@@ -245,7 +245,7 @@ class ReachExperiment(Experiment[Any]):
 
     def make_map(
         self, config: Any, shared: Any, seed: int, tick: Tick | None
-    ) -> tuple[SigmaPiSOM, dict[str, Any]]:
+    ) -> tuple[SigmaPiSOM, dict[str, object]]:
         """Seed ``seed``'s map (learned in the world, or the config's model file) and its
         scores for the record (``extras``)."""
         model = _map_for_seed(config, self.world, seed, tick)

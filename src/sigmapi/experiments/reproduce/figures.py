@@ -6,7 +6,6 @@ from __future__ import annotations
 import statistics
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
 
 from sigmapi.config import SOMConfig
 from sigmapi.experiments.reproduce.results import PresetResult, SeedRun
@@ -60,7 +59,7 @@ def _table_gap(runs: Sequence[SeedRun], n_test: int) -> dict[str, float]:
 
 def _decoding_cause(
     model: SigmaPiSOM, run: SeedRun, curve_test: int, test_size: int
-) -> dict[str, Any]:
+) -> dict[str, object]:
     """The shown map's z error on the table's test z's but with the curves' decoding table
     (their calibration z's): beside the table's and the curve's last point, how much of the
     curve's gap the decoding table's size makes."""

@@ -249,7 +249,7 @@ class PresetResult(Result):
     """The fixed point of Eq. 7 reached from one map of the task
     (:func:`sigmapi.analysis.fixed_point.fixed_point`; its metrics, the seed and preset of the map
     it started from, rounds); None when not computed."""
-    figures: dict[str, dict[str, Any]] = field(default_factory=dict)
+    figures: dict[str, dict[str, object]] = field(default_factory=dict)
     """Per figure: its file and the facts its caption states."""
 
     KEYS = (
@@ -309,7 +309,7 @@ class PresetResult(Result):
         """Median over seeds of a time of :class:`SeedRun` (e.g. ``"train_seconds"``)."""
         return statistics.median(float(getattr(r, key)) for r in self.runs)
 
-    def _stage(self, stage: Stage) -> dict[str, Any]:
+    def _stage(self, stage: Stage) -> dict[str, object]:
         return {
             "median": self.median(stage),
             "worst": self.worst(stage),
@@ -319,7 +319,7 @@ class PresetResult(Result):
             "folded_seeds": self.folded_seeds(stage),
         }
 
-    def refined(self) -> dict[str, Any]:
+    def refined(self) -> dict[str, object]:
         return self._stage("refined")
 
     def unrefined(self) -> dict[str, Any] | None:
@@ -338,7 +338,7 @@ class ReproduceResult(Result):
 
     options: ReproduceOptions
     presets: dict[str, PresetResult] = field(default_factory=dict)
-    sections: dict[str, dict[str, Any]] = field(default_factory=dict)
+    sections: dict[str, dict[str, object]] = field(default_factory=dict)
     """Per added section (by title): the numbers it stores."""
     total_seconds: float = 0.0
     out: Path | None = None

@@ -324,7 +324,7 @@ def _ceiling(
     seed: int,
     opts: ReproduceOptions,
     progress: Progress | None,
-) -> dict[str, Any]:
+) -> dict[str, object]:
     """The rule's ceiling for preset ``name``: its twin's (same task) when the twin ran
     first, else the fixed point reached from ``model``
     (:func:`sigmapi.analysis.fixed_point.fixed_point`)."""

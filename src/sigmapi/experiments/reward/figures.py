@@ -16,9 +16,9 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Rectangle
 from numpy.typing import NDArray
 
+from sigmapi.experiments.kit.figures import legend_once, plot_apart
 from sigmapi.experiments.kit.worlds import GAZE_REACH
 from sigmapi.experiments.reward.config import RewardConfig
-from sigmapi.viz.series import legend_once, plot_apart
 
 __all__ = ["LABELS", "drawn_units", "plot_reward_curves", "plot_units", "reward_figure"]
 

@@ -39,7 +39,7 @@ def episodes_to_target(success: NDArray[np.bool_], block: int, target: float) ->
     return int((hit[0] + 1) * block) if hit.size else None
 
 
-def _summary(values: list[float | None], higher: bool = True) -> dict[str, Any]:
+def _summary(values: list[float | None], higher: bool = True) -> dict[str, object]:
     """Median and worst over seeds (None, e.g. a target never reached, counts as worst)."""
     known = [v for v in values if v is not None and np.isfinite(v)]
     worst: float | None
@@ -79,7 +79,7 @@ class RewardResult(Result):
     scores: dict[str, dict[str, NDArray[np.float64]]] = field(default_factory=dict)
     units: dict[str, NDArray[np.float64]] = field(default_factory=dict)
     seconds: float = 0.0
-    written: dict[str, Any] | None = field(default=None, repr=False)
+    written: dict[str, object] | None = field(default=None, repr=False)
     """The summaries of a result read back (:meth:`from_dict`); None for a run's result."""
 
     KEYS = (*SUMMARIES, "config: config_and_seeds", "seconds")
@@ -113,7 +113,7 @@ class RewardResult(Result):
         b = self.config.run.block
         return {m: success_curve(succ, b, extremes=True) for m, succ in self.success.items()}
 
-    def methods(self) -> list[dict[str, Any]]:
+    def methods(self) -> list[dict[str, object]]:
         """Per method its name, final success, episodes to the target rate, magnification
         near the goal and its ratio to the frozen map, the quality away from the goal (median,
         worst and per seed over the seeds)."""
@@ -127,7 +127,7 @@ class RewardResult(Result):
             final = final_rates(self.success[m], f)
             mag = self.scores[m]["magnification"]
             ratio = mag / base_mag
-            entry: dict[str, Any] = {
+            entry: dict[str, object] = {
                 "name": m,
                 "final_success": _summary(final.tolist()),
                 "lost": float(self.lost[m][:, -f:].mean()),
@@ -150,7 +150,7 @@ class RewardResult(Result):
             methods.append(entry)
         return methods
 
-    def initial_map(self) -> dict[str, dict[str, Any]]:
+    def initial_map(self) -> dict[str, dict[str, object]]:
         """The learned map's scores before the episodes (median, worst, per seed)."""
         return {k: _summary(v.tolist()) for k, v in self.scores["initial"].items()}
 
@@ -240,7 +240,7 @@ def _earlier(a: int | None, b: int | None, never: int) -> bool:
     return (never + 1 if a is None else a) < (never + 1 if b is None else b)
 
 
-def _fmt(s: dict[str, Any], digits: int = 2) -> str:
+def _fmt(s: dict[str, object], digits: int = 2) -> str:
     med, worst = s["median"], s["worst"]
     show = lambda v: "never" if v is None else f"{v:.{digits}f}"  # noqa: E731
     return f"{show(med)} ({show(worst)})"

@@ -152,7 +152,7 @@ class _SeedJob:
     """A bar of this seed's episodes (set only where the job runs in the caller's process)."""
 
 
-def _run_seed(job: _SeedJob) -> dict[str, Any]:
+def _run_seed(job: _SeedJob) -> dict[str, object]:
     total = len(job.config.run.methods) * job.config.run.episodes
     return counted(job.show, total, f"reward seed {job.seed}", lambda tick: _seed_runs(job, tick))
 
@@ -162,7 +162,7 @@ def _learn_map(cfg: RewardConfig, world: World, seed: int) -> SigmaPiSOM:
     return learn_map_in_env(world.make_env(cfg.env), cfg.som_config(som_seed, world), seed=env_seed)
 
 
-def _seed_runs(job: _SeedJob, progress: Tick | None) -> dict[str, Any]:
+def _seed_runs(job: _SeedJob, progress: Tick | None) -> dict[str, object]:
     """One seed: its map, then each method's learner on the same episodes, then the scores."""
     cfg, seed, world = job.config, job.seed, job.world
     run = cfg.run

@@ -80,7 +80,7 @@ class RobotEnvConfig:
         _validate.check_fields(self)
         _validate.choice("retina", self.retina, RETINA_SOURCES)
 
-    def env_kwargs(self) -> dict[str, Any]:
+    def env_kwargs(self) -> dict[str, object]:
         """The docking world's keyword arguments (``gymnasium.make``'s, time limit included)."""
         return {
             "grid": self.grid,
@@ -189,7 +189,7 @@ class RobotConfig(Parts):
             return TrueZObservation(env, shape=m.map_shape, width=m.feature_width)
         return make_state_env(env, state, model, m.features, m.feature_width)
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self) -> dict[str, object]:
         """JSON-able and flat: every part's fields in one table (tuples as lists)."""
         return {k: v for table in parts_dict(self, self.PARTS).values() for k, v in table.items()}
 
@@ -206,7 +206,7 @@ QUICK = RobotConfig().replace(
 """``sigmapi robot --quick``: a smaller map run and fewer episodes (minutes, not tens)."""
 
 
-def _robot_kwargs(settings: RobotEnvConfig) -> dict[str, Any]:
+def _robot_kwargs(settings: RobotEnvConfig) -> dict[str, object]:
     return settings.env_kwargs()
 
 

@@ -18,9 +18,15 @@ from numpy.typing import NDArray
 from sigmapi._outputs import save_captioned, save_gif
 from sigmapi.envs.robot.frames import Frames
 from sigmapi.envs.robot.scene import Scene
+from sigmapi.experiments.kit.figures import (
+    coincide_sentence,
+    coinciding,
+    film_strip,
+    legend_once,
+    plot_apart,
+)
 from sigmapi.experiments.robot.config import PLAN
 from sigmapi.metrics import FOLD_THRESHOLD, ORDERED_R2
-from sigmapi.viz.series import coincide_sentence, coinciding, legend_once, plot_apart
 
 __all__ = ["film_episode", "plot_curves", "plot_unit_positions", "robot_figures", "write_gif"]
 
@@ -161,12 +167,7 @@ def robot_figures(
         ),
     )
     if film:
-        pick = np.linspace(0, len(film) - 1, min(6, len(film))).round().astype(int)
-        fig, axes = plt.subplots(len(pick), 1, figsize=(7, 3 * len(pick)))
-        for a, i in zip(np.atleast_1d(axes), pick, strict=True):
-            a.imshow(film[i])
-            a.set_axis_off()
-            a.set_title(f"step {i}", fontsize=9)
+        fig, pick = film_strip(film, "step {i}", across=False)
         save(
             fig,
             "film.png",

@@ -68,7 +68,7 @@ class RobotResult(Result):
     agent: ActorCritic | None = None
     seconds: float = 0.0
     _film: list[NDArray[np.uint8]] | None = field(default=None, repr=False)
-    written: dict[str, Any] | None = field(default=None, repr=False)
+    written: dict[str, object] | None = field(default=None, repr=False)
     """The summaries of a result read back (:meth:`from_dict`); None for a run's result."""
 
     KEYS = (
@@ -131,12 +131,12 @@ class RobotResult(Result):
             for s, r in self.success.items()
         }
 
-    def map_summary(self) -> dict[str, Any]:
+    def map_summary(self) -> dict[str, object]:
         """The maps' metrics with the keys of ``sigmapi evaluate`` (means over seeds;
         ``folded``: any seed folded), ``order_r2_min`` and ``folded_seeds``."""
         if not self.map_metrics:
             return {}
-        out: dict[str, Any] = {}
+        out: dict[str, object] = {}
         for k, v in self.map_metrics[0].items():
             vals = [m[k] for m in self.map_metrics]
             out[k] = any(vals) if isinstance(v, bool) else float(np.mean(vals))

@@ -133,7 +133,7 @@ class RobotExperiment(ReachExperiment):
 
     def make_map(
         self, config: Any, shared: Any, seed: int, tick: Tick | None
-    ) -> tuple[SigmaPiSOM, dict[str, Any]]:
+    ) -> tuple[SigmaPiSOM, dict[str, object]]:
         """Seed ``seed``'s map from recorded view pairs, its scores and each unit's
         preferred z on the evaluation views (``shared``)."""
         if tick is not None:

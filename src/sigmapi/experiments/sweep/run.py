@@ -121,7 +121,7 @@ class SweepSpec:
 
     preset: str
     seeds: tuple[int, ...]
-    grid: dict[str, list[Any]]
+    grid: dict[str, list[object]]
     fixed: dict[str, Any] = field(default_factory=dict)
     n_test: int = 2000
 
@@ -206,7 +206,7 @@ class SweepSpec:
             ) from None
         return cls.from_toml(text, f"sweep spec {str(p)!r}")
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self) -> dict[str, object]:
         """The spec as its TOML file holds it (``set`` for :attr:`fixed`)."""
         return {
             "preset": self.preset,
@@ -248,7 +248,7 @@ class SweepSpec:
         return out
 
 
-def _base(preset: str, fixed: dict[str, Any], source: str) -> dict[str, Any]:
+def _base(preset: str, fixed: dict[str, Any], source: str) -> dict[str, object]:
     """The preset with the spec's ``[set]``, checked."""
     base = load_preset(preset).to_dict()
     try:
@@ -257,7 +257,7 @@ def _base(preset: str, fixed: dict[str, Any], source: str) -> dict[str, Any]:
         raise ConfigError(f"{source}: [set]: {exc}") from None
 
 
-def sweep_job(run: SweepRun) -> dict[str, Any]:
+def sweep_job(run: SweepRun) -> dict[str, object]:
     """Train and evaluate one run (a job of the executor); its metrics and seconds."""
     t0 = time.perf_counter()
     model = SigmaPiSOM(run.config).fit()
@@ -273,7 +273,7 @@ def read_results(path: str | Path) -> list[dict[str, str]]:
     return [] if table is None else list(table.rows.values())
 
 
-def _row(run: SweepRun, outcome: Outcome) -> dict[str, Any]:
+def _row(run: SweepRun, outcome: Outcome) -> dict[str, object]:
     row: dict[str, Any] = {
         "run_id": run.run_id,
         "run_key": run.run_key,
@@ -310,7 +310,7 @@ def run_sweep(
     add: bool = False,
     on_plan: Callable[[int, int, str], None] | None = None,
     on_done: Callable[[bool, str], None] | None = None,
-) -> list[dict[str, Any]]:
+) -> list[dict[str, object]]:
     """Run the missing runs of ``spec``, appending each to ``out/results.csv``; this spec's rows.
 
     ``engine``, ``workers``, ``memory_budget`` (bytes) and ``address`` say where the runs go
@@ -332,7 +332,7 @@ def _sweep(
     on_done: Callable[[bool, str], None] | None,
     *,
     add: bool = False,
-) -> list[dict[str, Any]]:
+) -> list[dict[str, object]]:
     if out.exists() and not out.is_dir():
         raise ConfigError(f"out {str(out)!r} is a file; give a folder for the sweep's table")
     out.mkdir(parents=True, exist_ok=True)
@@ -431,7 +431,7 @@ class SweepResult(Result):
     """The table of a sweep (every run of its spec, in grid order) and its settings."""
 
     spec: SweepSpec
-    rows: list[dict[str, Any]]
+    rows: list[dict[str, object]]
     metric: str = "order_r2"
 
     KEYS = ("spec", "table: table_file", "runs", "failed", "rows: typed_rows")
@@ -446,7 +446,7 @@ class SweepResult(Result):
             raise TypeError("a sweep's result must be a JSON object with a list of rows")
         return cls(SweepSpec.from_dict(data["spec"], "the result's spec"), list(data["rows"]))
 
-    def typed_rows(self) -> list[dict[str, Any]]:
+    def typed_rows(self) -> list[dict[str, object]]:
         """The table's rows, each value typed (:func:`_typed`)."""
         return [{k: _typed(v) for k, v in r.items()} for r in self.rows]
 

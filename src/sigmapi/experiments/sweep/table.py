@@ -94,7 +94,7 @@ def _check_plain(p: Path) -> os.stat_result | None:
     return st
 
 
-def run_key(config: dict[str, Any], seed: int, n_test: int) -> str:
+def run_key(config: dict[str, object], seed: int, n_test: int) -> str:
     """The identity of one run: 16 hex digits of a SHA-256 over the resolved ``config`` (a
     :meth:`~sigmapi.SOMConfig.to_dict`, its seed left out), ``seed``, ``n_test`` and the model
     format (name and version) of this sigmapi."""
@@ -217,7 +217,7 @@ def read_table(path: str | Path) -> Table | None:
     return Table(header, rows, torn)
 
 
-def _line(columns: Sequence[str], row: dict[str, Any]) -> bytes:
+def _line(columns: Sequence[str], row: dict[str, object]) -> bytes:
     buf = io.StringIO()
     csv.writer(buf, lineterminator="\n").writerow([_cell(row.get(c, "")) for c in columns])
     return buf.getvalue().encode("utf-8")
@@ -272,7 +272,7 @@ def open_table(
     return {k: r for k, r in table.rows.items() if k in keys}
 
 
-def append_row(path: str | Path, columns: Sequence[str], row: dict[str, Any]) -> None:
+def append_row(path: str | Path, columns: Sequence[str], row: dict[str, object]) -> None:
     """Append one row to the table at ``path`` with one ``write`` (and ``fsync``)."""
     data = _line(columns, row)
     fd = os.open(path, os.O_WRONLY | os.O_APPEND | _NOFOLLOW)

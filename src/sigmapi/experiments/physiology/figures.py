@@ -1,4 +1,4 @@
-"""Figures of ``sigmapi neurons`` and ``sigmapi physiology``, drawn from their result dicts.
+"""The figure of ``sigmapi physiology``, drawn from its result dict.
 
 Every mark has a legend entry (or a colour bar, where colour carries a value); the legends sit
 below their panels, off the data."""
@@ -11,124 +11,9 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.figure import Figure
 
-from sigmapi.viz.series import legend_once
+from sigmapi.experiments.kit.figures import BELOW, legend_once
 
-__all__ = ["neurons_figure", "physiology_figure"]
-
-_BELOW = {"loc": "upper center", "bbox_to_anchor": (0.5, -0.16), "borderaxespad": 0.0}
-"""Legend keywords: below the panel, under its x label."""
-
-
-def neurons_figure(result: dict[str, Any]) -> Figure:
-    """Three panels: view consistency against synapses per unit (1-D maps), the spiking
-    networks against the decision window at the reference rate, the branches of one map."""
-    fig, axes = plt.subplots(1, 3, figsize=(15, 6.2), layout="constrained")
-    ax = axes[0]
-    rate = [m for m in result["methods"] if m["kind"] == "rate" and m["task"] == "1d"]
-    sp = next(m for m in rate if m["name"] == "sigma-pi")
-    ax.axhspan(
-        sp["view_consistency"] - 0.02,
-        sp["view_consistency"],
-        color="0.85",
-        label="within 0.02 of Sigma-Pi",
-    )
-    groups = (
-        ("dendritic-D", "dense dendritic (median, worst)", "o"),
-        ("dendritic-sparse-D", "sparse dendritic, 2 synapses per branch", "D"),
-    )
-    for prefix, label, marker in groups:
-        dend = [m for m in rate if m["name"].startswith(prefix)]
-        if not dend:
-            continue
-        ax.errorbar(
-            [m["synapses"] for m in dend],
-            [m["view_consistency"] for m in dend],
-            yerr=[
-                [m["view_consistency"] - m["view_consistency_worst"] for m in dend],
-                [0.0] * len(dend),
-            ],
-            marker=marker,
-            capsize=3,
-            label=label,
-        )
-        for m in dend:
-            ax.annotate(
-                f"D={m['branches']}",
-                (m["synapses"], m["view_consistency"]),
-                textcoords="offset points",
-                xytext=(4, -12),
-                fontsize=8,
-            )
-    for m, mk in ((sp, "s"), (next(m for m in rate if m["name"] == "basis-function"), "^")):
-        ax.errorbar(
-            [m["synapses"]],
-            [m["view_consistency"]],
-            yerr=[[m["view_consistency"] - m["view_consistency_worst"]], [0.0]],
-            marker=mk,
-            capsize=3,
-            linestyle="none",
-            label=m["name"],
-        )
-    ax.set_xlabel("synapses per map unit (the most in any unit)")
-    ax.set_ylabel("view consistency (same winner)")
-    ax.set_title("1-D maps of first-order neurons")
-    ax.legend(fontsize=8, **_BELOW)
-
-    ax = axes[1]
-    spk = [m for m in result["methods"] if m["kind"] == "spiking" and m["peak_rate"] == 100]
-    for base, colour in (
-        ("spiking-conjunction", "C0"),
-        ("spiking-dendritic", "C1"),
-        ("spiking-sparse-dendritic", "C2"),
-    ):
-        rows = sorted(
-            (m for m in spk if m["name"].startswith(base + "-") and "-pool" not in m["name"]),
-            key=lambda m: m["window_ms"],
-        )
-        if not rows:
-            continue
-        w = [m["window_ms"] for m in rows]
-        ax.plot(
-            w,
-            [m["vc_gap"] for m in rows],
-            "o-",
-            color=colour,
-            label=f"{base}: view consistency - rate map's",
-        )
-        ax.plot(
-            w,
-            [m["agreement"] - 1.0 for m in rows],
-            "s--",
-            color=colour,
-            label=f"{base}: agreement - 1",
-        )
-    ax.axhline(-0.02, color="0.5", lw=0.8, ls=":", label="-0.02: the acceptance margin")
-    ax.set_xscale("log")
-    ticks = sorted({m["window_ms"] for m in spk})
-    ax.set_xticks(ticks, [f"{t:g}" for t in ticks])
-    ax.minorticks_off()
-    ax.set_xlabel("decision window (ms)")
-    ax.set_ylabel("difference (median over seeds)")
-    ax.set_title("spiking networks, 100 Hz peak rate")
-    ax.legend(fontsize=7, **_BELOW)
-
-    ax = axes[2]
-    b = result["branches"][0]
-    unit = np.asarray(b["unit"])
-    xc, yc = np.asarray(b["x_centre"])[:, 0], np.asarray(b["y_centre"])[:, 0]
-    dots = ax.scatter(xc, yc, c=unit, cmap="viridis", s=18, label="a branch")
-    fig.colorbar(dots, ax=ax, label="map unit of the branch")
-    n = float(max(xc.max(), yc.max())) + 1.0
-    for i, s in enumerate(np.arange(0, 2 * n, 2.0)):
-        label = "retinal + gaze centre constant (one z)" if i == 0 else "_z"
-        ax.plot([0, s], [s, 0], color="0.75", lw=0.6, zorder=0, label=label)
-    ax.set_xlim(-0.5, n)
-    ax.set_ylim(-0.5, n)
-    ax.set_xlabel("retinal centre of a branch's synapses (grid units, axis 0)")
-    ax.set_ylabel("gaze centre (grid units, axis 0)")
-    ax.set_title(f"branches of the D={b['branches']} map (colour: unit)")
-    ax.legend(fontsize=8, **_BELOW)
-    return fig
+__all__ = ["physiology_figure"]
 
 
 def physiology_figure(result: dict[str, Any]) -> Figure:
@@ -152,7 +37,7 @@ def physiology_figure(result: dict[str, Any]) -> Figure:
     ax.axvline(1.0, color="0.4", ls=":", label="_body")
     ax.set_xlabel("reference-frame index (0 eye-centred, 1 body-centred)")
     ax.set_ylabel("units")
-    ax.legend(fontsize=8, **_BELOW)
+    ax.legend(fontsize=8, **BELOW)
 
     ax = axes[1]
     curves = result["tuning"]
@@ -168,7 +53,7 @@ def physiology_figure(result: dict[str, Any]) -> Figure:
         + ", ".join(f"{g:g}" for g in curves["gazes"])
         + " (darker: larger)"
     )
-    ax.legend(fontsize=8, **_BELOW)
+    ax.legend(fontsize=8, **BELOW)
 
     ax = axes[2]
     for key, label in (("trained", "trained map"), ("random_start", "random start")):
@@ -188,7 +73,7 @@ def physiology_figure(result: dict[str, Any]) -> Figure:
         )
     ax.set_xlabel("planar gain-field fit R^2 (response at fixed retinal position)")
     ax.set_ylabel("gain slope (|b| / mean response)")
-    ax.legend(fontsize=8, **_BELOW)
+    ax.legend(fontsize=8, **BELOW)
     return fig
 
 
@@ -232,7 +117,7 @@ def _monkey_panels(axes: Any, m: dict[str, Any]) -> None:
         "(hatched: not verified against the paper)",
         fontsize=8,
     )
-    legend_once(ax, fontsize=7, **_BELOW)
+    legend_once(ax, fontsize=7, **BELOW)
 
     ax = axes[1]
     per = m["per_unit"]
@@ -256,7 +141,7 @@ def _monkey_panels(axes: Any, m: dict[str, Any]) -> None:
                label="VIP: from eye- to head-centred\n(Duhamel 1997, Avillac 2005)")  # fmt: skip
     ax.set_xlabel("reference-frame index, monkey grid\n(0 eye-centred, 1 body-centred)")
     ax.set_ylabel("units")
-    ax.legend(fontsize=7, **_BELOW)
+    ax.legend(fontsize=7, **BELOW)
 
     ax = axes[2]
     r2 = [v for v, a in zip(per["gain_r2"], per["admitted"], strict=True) if a and v is not None]
@@ -265,4 +150,4 @@ def _monkey_panels(axes: Any, m: dict[str, Any]) -> None:
     ax.set_xlabel("planar gain-field fit R^2\n(rate at the best stimulus over the fixations)")
     ax.set_ylabel("units")
     ax.set_title("7a/LIP: 'usually planar or largely planar' (Andersen 1990)", fontsize=8)
-    ax.legend(fontsize=7, **_BELOW)
+    ax.legend(fontsize=7, **BELOW)

@@ -16,8 +16,8 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
+from sigmapi.experiments.kit.figures import legend_once
 from sigmapi.metrics import FOLD_THRESHOLD
-from sigmapi.viz.series import legend_once
 
 __all__ = ["plot_fold_rate", "plot_view_consistency", "stream_figure"]
 

@@ -1,4 +1,5 @@
-"""Series that may coincide, drawn so that each one shows, and said so.
+"""What the experiments' figures share: series that may coincide, drawn so that each one
+shows, and said so; legends below a panel.
 
 :func:`plot_apart` draws named series over their x values with one marker each, the first
 largest and each later one :data:`SHRINK` times smaller (its line thinner) on top, so a series
@@ -15,7 +16,19 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["MARKERS", "SHRINK", "coincide_sentence", "coinciding", "legend_once", "plot_apart"]
+__all__ = [
+    "BELOW",
+    "MARKERS",
+    "SHRINK",
+    "coincide_sentence",
+    "coinciding",
+    "film_strip",
+    "legend_once",
+    "plot_apart",
+]
+
+BELOW = {"loc": "upper center", "bbox_to_anchor": (0.5, -0.16), "borderaxespad": 0.0}
+"""Legend keywords: below the panel, under its x label."""
 
 MARKERS = ("o", "s", "^", "D", "v", "P", "X")
 """One marker per series, in drawing order."""
@@ -54,7 +67,7 @@ def plot_apart(
     y: Mapping[str, Sequence[float]],
     *,
     labels: Mapping[str, str] | None = None,
-    colours: Mapping[str, Any] | None = None,
+    colours: Mapping[str, object] | None = None,
     largest: float = 13.0,
     width: float = 3.0,
     say: bool = True,
@@ -88,7 +101,25 @@ def legend_once(ax: Any, **kwargs: Any) -> Any:
     """The legend of ``ax`` (``kwargs`` to ``ax.legend``) with each label once, drawn by the
     first mark that has it (e.g. one entry for the bands of every series)."""
     handles, labels = ax.get_legend_handles_labels()
-    once: dict[str, Any] = {}
+    once: dict[str, object] = {}
     for handle, label in zip(handles, labels, strict=True):
         once.setdefault(label, handle)
     return ax.legend(list(once.values()), list(once), **kwargs)
+
+
+def film_strip(film: Sequence[object], title: str, across: bool = True) -> tuple[Any, Any]:
+    """Six frames of ``film`` evenly apart (all of a shorter one) in one row (``across``) or
+    one column, each titled ``title.format(i=index, k=index + 1, n=frames)``; returns the
+    figure and the indices of the frames it shows."""
+    import matplotlib.pyplot as plt  # matplotlib: only when drawing
+
+    pick = np.linspace(0, len(film) - 1, min(6, len(film))).round().astype(int)
+    shape, size = (
+        ((1, len(pick)), (3.0 * len(pick), 2.4)) if across else ((len(pick), 1), (7, 3 * len(pick)))
+    )
+    fig, axes = plt.subplots(*shape, figsize=size)
+    for a, i in zip(np.atleast_1d(axes), pick, strict=True):
+        a.imshow(film[i])
+        a.set_axis_off()
+        a.set_title(title.format(i=i, k=i + 1, n=len(film)), fontsize=8 if across else 9)
+    return fig, pick
