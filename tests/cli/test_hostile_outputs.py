@@ -297,6 +297,7 @@ _AS_NOBODY = textwrap.dedent(
     """
     import os, sys
     from sigmapi._lock import lock_path, output_lock  # imported first: nobody may not read them
+    from sigmapi.errors import UsageError
     os.setgid(65534); os.setuid(65534)
     folder, victim = sys.argv[1], sys.argv[2]
     lock = lock_path(os.path.join(folder, "m.npz"))
