@@ -23,19 +23,19 @@ config, or by hand on its parser).
 
 from __future__ import annotations
 
+import contextlib
 import io
 import json
 import os
 import re
 import stat
-import tempfile
 from collections.abc import Callable, Collection, Sequence
 from pathlib import Path
 from typing import IO, Any
 
 from sigmapi._lock import LOCK_NAME
 from sigmapi.errors import UsageError
-from sigmapi.io import atomic_write, temp_pattern
+from sigmapi.io import atomic_write, temp_name, temp_pattern
 
 __all__ = [
     "INPUT",
@@ -151,15 +151,22 @@ def check_folder(path: Path, name: str) -> None:
     parent = path.parent if str(path.parent) else Path(".")
     if not parent.is_dir():
         raise UsageError(f"folder {str(parent)!r} of {name} does not exist; create it first")
+    name_first = temp_name(parent, path.name)  # named first: a signal cannot orphan it
+    probe: Path | None = name_first
     try:
-        fd, probe = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=parent)
-        os.close(fd)
-        os.unlink(probe)
+        os.close(os.open(name_first, os.O_RDWR | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW, 0o600))
+    except FileExistsError:
+        probe = None  # another file by that name, not ours: left alone
     except OSError as exc:
+        probe = None
         raise UsageError(
             f"cannot write {name}: cannot access its folder {str(parent)!r}: "
             f"{exc.strerror or exc}; choose another folder"
         ) from None
+    finally:  # also when SIGTERM (SystemExit under the CLI) arrives right after the open
+        if probe is not None:
+            with contextlib.suppress(OSError):
+                os.unlink(probe)
 
 
 def write_file(

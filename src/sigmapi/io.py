@@ -42,9 +42,9 @@ import json
 import lzma
 import os
 import re
+import secrets
 import stat
 import struct
-import tempfile
 import threading
 import time
 import zipfile
@@ -127,6 +127,19 @@ def temp_pattern(name: str = r"[^/]+") -> str:
     return rf"\.{name}\.[A-Za-z0-9_]{{8}}\.tmp"
 
 
+_TEMP_FLAGS = os.O_RDWR | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0)
+_TEMP_CHARS = "abcdefghijklmnopqrstuvwxyz0123456789_"
+
+
+def temp_name(folder: Path, name: str) -> Path:
+    """A fresh temporary file name ``folder/.NAME.XXXXXXXX.tmp`` (:func:`temp_pattern`), not yet
+    made. A caller creates it with ``O_EXCL`` inside the ``try`` that removes it: unlike
+    ``tempfile.mkstemp``, which makes the file before its name reaches the caller, a signal
+    arriving between the two can no longer leave the file behind."""
+    token = "".join(secrets.choice(_TEMP_CHARS) for _ in range(8))
+    return folder / f".{name}.{token}.tmp"
+
+
 def stale_temps(folder: Path, name: str, idle_s: float = _STALE_S) -> list[Path]:
     """Temporary files in ``folder`` of writes of targets matching the regex ``name`` (our
     pattern only: ``.NAME.XXXXXXXX.tmp``), regular files not written to for ``idle_s``."""
@@ -165,17 +178,20 @@ def atomic_write(path: str | Path, write: Callable[[IO[bytes]], None]) -> Path:
         mode = stat.S_IMODE(target.stat().st_mode) if target.is_file() else None
     except OSError:
         mode = None
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=folder)
+    tmp = temp_name(folder, target.name)  # named before it exists: see below
     try:
-        if hasattr(os, "fchmod"):  # POSIX: mkstemp made it 0600
+        fd = os.open(tmp, _TEMP_FLAGS, 0o600)
+        if hasattr(os, "fchmod"):  # POSIX: made 0600, given the target's mode now
             os.fchmod(fd, mode if mode is not None else 0o666 & ~_umask())
         with os.fdopen(fd, "wb") as fh:
             write(fh)
             fh.flush()
             os.fsync(fh.fileno())
         os.replace(tmp, target)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
+    except FileExistsError:  # another file by that name (not ours): left alone
+        raise
+    except BaseException:  # SIGTERM (SystemExit) between the open and any later line too
+        tmp.unlink(missing_ok=True)
         raise
     try:  # make the rename itself durable
         dfd = os.open(folder, os.O_RDONLY)
