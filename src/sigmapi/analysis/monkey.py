@@ -104,7 +104,7 @@ PUBLISHED: tuple[dict[str, Any], ...] = (
         "value": 0.57,
         "verified": False,
         "where": "text (figure not checked)",
-        "note": "the share quoted in this project's issue 45; the abstract found says the "
+        "note": "a share often quoted for this study; the abstract found says the "
         "activity of 'many of the neurons' is a gain factor of eye position times the "
         "receptive field; the number itself was not verified against the paper",
         "source": "https://doi.org/10.1126/science.4048942",
