@@ -250,8 +250,9 @@ class Kernel(Protocol[S]):
         sigma: float,
     ) -> NDArray[np.int64]:
         """Winning unit of each pair ``(x_b, y_b)``, ``(B,)``: the same as ``winners`` of
-        ``activation``, for one pair as fast as the kernel allows (no per-call preparation)."""
-        ...
+        ``activation``, for one pair as fast as the kernel allows (no per-call preparation).
+        This default (which :class:`KernelBase` inherits) is that definition."""
+        return self.winners(state, self.activation(state, x, y), geometry, rule, sigma)
 
     def neighbourhood(
         self, winner: NDArray[np.int64], geometry: MapGeometry, sigma: float
@@ -479,18 +480,6 @@ class KernelBase(Kernel[S], ABC):
         """The row-wise argmax of :meth:`scores`, ``(B,)``; ties to the lowest index."""
         s = self.scores(state, h, geometry, rule, sigma)
         return np.asarray(np.argmax(s, axis=1), dtype=np.int64)
-
-    def winners_of(
-        self,
-        state: S,
-        x: Array,
-        y: Array,
-        geometry: MapGeometry,
-        rule: WinnerRule | str,
-        sigma: float,
-    ) -> NDArray[np.int64]:
-        """Winning unit of each pair ``(x_b, y_b)``: :meth:`winners` of :meth:`activation`."""
-        return self.winners(state, self.activation(state, x, y), geometry, rule, sigma)
 
     def neighbourhood(
         self, winner: NDArray[np.int64], geometry: MapGeometry, sigma: float
