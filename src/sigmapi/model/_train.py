@@ -13,8 +13,6 @@ A run that reaches the configured length goes on to the refinement
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 from numpy.typing import NDArray
 
@@ -143,10 +141,10 @@ def _rows(run: RunState, data: CodeViews, order: NDArray[np.intp] | None, notify
 
 def _views(
     run: RunState,
-    x0: NDArray[Any],
-    y0: NDArray[Any],
-    x1: NDArray[Any],
-    y1: NDArray[Any],
+    x0: NDArray[np.floating],
+    y0: NDArray[np.floating],
+    x1: NDArray[np.floating],
+    y1: NDArray[np.floating],
 ) -> None:
     """One stretch of iterations on view pairs; the ablation ``same_view`` learns view 0."""
     c = run.config
@@ -179,7 +177,7 @@ def learn_gated(
     unit ``k`` moved towards view 1 by ``eps g[t, k] a_k``, at ``sigma`` and ``eps`` (None:
     the schedule's at ``run.t``)."""
     c, n = run.config, data[0].shape[0]
-    kernel: Any = run.kernel
+    kernel = run.kernel
     s = (
         run.sigma_now()
         if sigma is None
