@@ -21,10 +21,10 @@ systems", in Humanoid Robots, Human-like Machines (2007).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from sigmapi.metrics import affine_fit
 
@@ -99,7 +99,11 @@ class Fig8Data:
 
 
 def fig8_data(
-    model: SigmaPiSOM, seed: Seed = 0, n_pairs: int = 4, z: Any = None, centres: Any = None
+    model: SigmaPiSOM,
+    seed: Seed = 0,
+    n_pairs: int = 4,
+    z: ArrayLike | None = None,
+    centres: ArrayLike | None = None,
 ) -> Fig8Data:
     """Data of Fig. 8: views of one z, and a pattern on one input with a hill on the other.
 
@@ -242,7 +246,7 @@ _POLARITY_NAMES = {
 }
 
 
-def map_polarity(model: SigmaPiSOM, centres: Any = None, seed: Seed = 0) -> Polarity:
+def map_polarity(model: SigmaPiSOM, centres: ArrayLike | None = None, seed: Seed = 0) -> Polarity:
     """How the learned map is oriented relative to z (see :class:`Polarity`).
 
     Before learning the orientation is unpredictable; after learning it is consistent (the
@@ -311,7 +315,7 @@ class InvarianceMatrix:
 
 
 def invariance_matrix(
-    model: SigmaPiSOM, axis: int = 0, n: int | None = None, centres: Any = None
+    model: SigmaPiSOM, axis: int = 0, n: int | None = None, centres: ArrayLike | None = None
 ) -> InvarianceMatrix:
     """Winners for every pair of grid positions of x and y along ``axis``.
 
