@@ -21,7 +21,7 @@ systems", in Humanoid Robots, Human-like Machines (2007).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -99,11 +99,7 @@ class Fig8Data:
 
 
 def fig8_data(
-    model: SigmaPiSOM,
-    seed: Seed = 0,
-    n_pairs: int = 4,
-    z: ArrayLike | None = None,
-    centres: ArrayLike | None = None,
+    model: SigmaPiSOM, seed: Seed = 0, n_pairs: int = 4, z: Any = None, centres: Any = None
 ) -> Fig8Data:
     """Data of Fig. 8: views of one z, and a pattern on one input with a hill on the other.
 

@@ -30,7 +30,7 @@ from sigmapi.model._run import (
     sigma_at,
     training_rule,
 )
-from sigmapi.model.views import CodeViews
+from sigmapi.model.views import Array, CodeViews
 from sigmapi.tasks import Batch
 
 __all__ = ["PERMUTED_ROWS", "fit", "learn_gated", "partial_fit", "start", "training_block"]
@@ -141,10 +141,10 @@ def _rows(run: RunState, data: CodeViews, order: NDArray[np.intp] | None, notify
 
 def _views(
     run: RunState,
-    x0: NDArray[np.floating],
-    y0: NDArray[np.floating],
-    x1: NDArray[np.floating],
-    y1: NDArray[np.floating],
+    x0: Array,
+    y0: Array,
+    x1: Array,
+    y1: Array,
 ) -> None:
     """One stretch of iterations on view pairs; the ablation ``same_view`` learns view 0."""
     c = run.config
