@@ -376,10 +376,10 @@ STREAMER: tuple[str, ...] = ("train_stream",)
 class KernelBase(Kernel[S], ABC):
     """A kernel's generic part: a backend subclasses it and implements its arithmetic
     (:meth:`prepare`, :meth:`export`, :meth:`activation`, :meth:`train_block`: the abstract
-    methods of :class:`Kernel`, which it subclasses), and may
-    override a default where its layout does better (the fast kernel: its norms, its file
-    arrays, its winners in one pass). Instances are registered
-    (:func:`sigmapi.kernels.register_backend`); :meth:`with_options` gives a configured copy.
+    methods of :class:`Kernel`, which it subclasses), and may override a default where its
+    layout does better (the fast kernel: its norms, its file arrays, its winners in one pass).
+    Instances are registered (:func:`sigmapi.kernels.register_backend`); :meth:`with_options`
+    gives a configured copy.
 
     The defaults are the definition (dense float64 weights, the rule objects' arithmetic),
     so a backend that keeps them agrees with the reference kernel by construction.
