@@ -31,11 +31,16 @@ import re
 import stat
 from collections.abc import Callable, Collection, Sequence
 from pathlib import Path
-from typing import IO, Any
+from typing import IO, TYPE_CHECKING, Any
 
 from sigmapi._lock import LOCK_NAME
 from sigmapi.errors import UsageError
 from sigmapi.io import atomic_write, temp_name, temp_pattern
+
+if TYPE_CHECKING:
+    import numpy as np
+    from matplotlib.figure import Figure
+    from numpy.typing import NDArray
 
 __all__ = [
     "INPUT",
@@ -197,7 +202,7 @@ def write_file(
     return atomic_write(p, data)
 
 
-def save_figure(fig: Any, path: str | Path, **kwargs: Any) -> Path:
+def save_figure(fig: Figure, path: str | Path, **kwargs: Any) -> Path:
     """Save the matplotlib figure ``fig`` to ``path`` through :func:`write_file` (the format
     from the suffix; ``kwargs`` go to ``savefig``)."""
     buf = io.BytesIO()
@@ -264,7 +269,7 @@ def claim_folder(
     return out
 
 
-def save_captioned(fig: Any, path: str | Path, caption: str, **kwargs: Any) -> Path:
+def save_captioned(fig: Figure, path: str | Path, caption: str, **kwargs: Any) -> Path:
     """Save ``fig`` to ``path`` (:func:`save_figure`) and its caption beside it, ``path`` with
     the suffix ``.txt`` (one line of text); returns the figure's path."""
     out = save_figure(fig, path, **kwargs)
@@ -272,7 +277,9 @@ def save_captioned(fig: Any, path: str | Path, caption: str, **kwargs: Any) -> P
     return out
 
 
-def save_gif(frames: Sequence[Any], path: str | Path, *, fps: int, force: bool = True) -> Path:
+def save_gif(
+    frames: Sequence[NDArray[np.uint8]], path: str | Path, *, fps: int, force: bool = True
+) -> Path:
     """Save ``frames`` (``(H, W, 3)`` uint8 arrays) as an animated GIF at ``path`` through
     :func:`write_file` (atomic, never through a link); Pillow comes with matplotlib."""
     from PIL import Image

@@ -12,11 +12,14 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Collection, Iterable, Mapping
-from typing import Any, TypeGuard, TypeVar
+from typing import TYPE_CHECKING, Any, TypeGuard, TypeVar, cast
 
 import numpy as np
 
 from sigmapi.errors import ConfigError
+
+if TYPE_CHECKING:
+    from _typeshed import DataclassInstance
 
 __all__ = [
     "KINDS",
@@ -63,27 +66,29 @@ def _is_real(value: object) -> TypeGuard[float | np.number[Any]]:
     )
 
 
-def _short(v: float | None) -> Any:
+def _short(v: float | None) -> str | None:
     """A bound as written by a person: 0 for 0.0, 1e+15 for 1000000000000000.0."""
+    if v is None:
+        return None
     if isinstance(v, float) and v.is_integer() and abs(v) < 1e6:
-        return int(v)
-    return f"{v:g}" if isinstance(v, float) else v
+        return str(int(v))
+    return f"{v:g}" if isinstance(v, float) else str(v)
 
 
 def _range(
     kind: str, lo: float | None, hi: float | None, lo_open: bool = False, hi_open: bool = False
 ) -> str:
     """``"an int >= 1"``, ``"a number in (0, 1]"``, ``"a finite number > 0"``, ..."""
-    lo, hi = _short(lo), _short(hi)
-    if lo is not None and hi is not None:
+    low, high = _short(lo), _short(hi)
+    if low is not None and high is not None:
         left, right = "(" if lo_open else "[", ")" if hi_open else "]"
-        return f"{kind} in {left}{lo}, {hi}{right}"
+        return f"{kind} in {left}{low}, {high}{right}"
     if kind == "a number":
         kind = "a finite number"
-    if lo is not None:
-        return f"{kind} {'>' if lo_open else '>='} {lo}"
-    if hi is not None:
-        return f"{kind} {'<' if hi_open else '<='} {hi}"
+    if low is not None:
+        return f"{kind} {'>' if lo_open else '>='} {low}"
+    if high is not None:
+        return f"{kind} {'<' if hi_open else '<='} {high}"
     return kind
 
 
@@ -180,23 +185,24 @@ def choice(
 
 
 def shape(
-    name: str, value: Any, fix: str = "", error: type[Exception] = ConfigError
+    name: str, value: object, fix: str = "", error: type[Exception] = ConfigError
 ) -> tuple[int, ...]:
     """``value`` (an int or a sequence of ints) as a non-empty tuple of positive ints."""
     fix = fix or f"use e.g. {name}=(15,) for 1-D or {name}=(15, 15) for 2-D"
     constraint = "a positive int or a non-empty tuple of positive ints"
-    items = (value,) if is_int(value) else value
+    items = (value,) if is_int(value) else cast("Iterable[object]", value)  # else TypeError
     try:
         out = tuple(items)
     except TypeError:
         raise fail(name, constraint, value, fix, error) from None
-    if not out or not all(is_int(s) and s >= 1 for s in out):
+    sizes = tuple(int(s) for s in out if is_int(s) and s >= 1)
+    if not out or len(sizes) != len(out):
         raise fail(name, constraint, value, fix, error)
-    if math.prod(int(s) for s in out) > MAX_UNITS:
+    if math.prod(sizes) > MAX_UNITS:
         raise fail(
             name, f"a shape of at most {MAX_UNITS:,} units (2**32) in all", value, fix, error
         )
-    return tuple(int(s) for s in out)
+    return sizes
 
 
 # ------------------------------------------------------------------ declarative bounds
@@ -224,7 +230,7 @@ class Bounds:
     hi_open: bool = False
     fix: str = ""
     """The fix the error names (e.g. ``"e.g. 600"``)."""
-    options: Collection[Any] = ()
+    options: Collection[object] = ()
     """The values a ``"choice"`` field takes (read when checked: a registry may grow)."""
     none: bool = False
     """Whether None is a value too (e.g. a seed: None draws fresh entropy)."""
@@ -253,7 +259,7 @@ class Bounds:
         text = f"{text}, or None" if self.none else text
         return f"{text} ({self.why})" if self.why else text
 
-    def check(self, name: str, value: object) -> Any:
+    def check(self, name: str, value: object) -> object:
         """``value`` checked (:func:`integer`, :func:`number`, :func:`width`,
         :func:`boolean` or :func:`choice`), in its canonical type."""
         if value is None and self.none:
@@ -274,7 +280,7 @@ class Bounds:
             name, value, self.lo, self.hi, lo_open=self.lo_open, hi_open=self.hi_open, fix=self.fix
         )
 
-    def _values(self, name: str, value: object) -> tuple[Any, ...]:
+    def _values(self, name: str, value: object) -> tuple[object, ...]:
         """A tuple field's values, each checked as :attr:`kind` says."""
         if isinstance(value, (str, bytes, Mapping)) or not isinstance(value, Iterable):
             raise fail(name, self.describe(), value, self.fix)
@@ -295,11 +301,11 @@ def bounded(
     lo_open: bool = False,
     hi_open: bool = False,
     fix: str = "",
-    options: Collection[Any] = (),
+    options: Collection[object] = (),
     none: bool = False,
     count: int = MAX_ITEMS,
     why: str = "",
-    **more: Any,
+    **more: object,
 ) -> Mapping[str, object]:
     """Field metadata declaring :class:`Bounds`: ``episodes: int = field(default=600,
     metadata=bounded("int", 1))``, ``relation: str = field(default="mean",
@@ -313,7 +319,7 @@ def bounded(
     }
 
 
-def check_fields(obj: Any) -> None:
+def check_fields(obj: DataclassInstance) -> None:
     """Check every field of the frozen dataclass ``obj`` that declares :class:`Bounds` (in the
     order of the fields) and store its canonical value: the one validator of declared bounds."""
     for f in dataclasses.fields(obj):

@@ -13,6 +13,7 @@ import json
 import math
 import re
 import tomllib
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
@@ -53,13 +54,13 @@ MAX_EXTRA = 64 * 1024
 """Largest ``[extra]`` table, in bytes of JSON (a model file's header holds it)."""
 
 
-def check_extra(extra: Any) -> dict[str, Any]:
+def check_extra(extra: object) -> dict[str, object]:
     """``extra`` if it is a table of plain values (strings, finite numbers, bools, lists and
     tables of them) of at most :data:`MAX_EXTRA` bytes of JSON; else a ConfigError naming it."""
     if not isinstance(extra, dict):
         raise ConfigError(f"extra must be a table, got {extra!r}")
 
-    def plain(v: Any, where: str) -> None:
+    def plain(v: object, where: str) -> None:
         if isinstance(v, dict):
             for k, item in v.items():
                 if not isinstance(k, str):
@@ -191,7 +192,7 @@ class SOMConfig:
     )
     """Seed of every random stream of the run (weights and data); None draws fresh entropy."""
 
-    extra: dict[str, Any] = field(default_factory=dict, compare=False, repr=False)
+    extra: dict[str, object] = field(default_factory=dict, compare=False, repr=False)
     """Unused by the SOM: free-form notes carried from the preset (e.g. its source)."""
 
     def __post_init__(self) -> None:
@@ -263,7 +264,7 @@ class SOMConfig:
         _check_keys(changes)
         return dataclasses.replace(self, **changes)
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self) -> dict[str, object]:
         """JSON/TOML-able dict of every field (tuples become lists)."""
         out: dict[str, object] = {}
         for f in dataclasses.fields(self):
@@ -271,7 +272,7 @@ class SOMConfig:
         return out
 
     @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> SOMConfig:
+    def from_dict(cls, data: Mapping[str, Any]) -> SOMConfig:
         """Build from a dict such as a parsed TOML file; unknown keys are an error."""
         if not isinstance(data, dict):
             raise ConfigError(
@@ -285,7 +286,7 @@ class SOMConfig:
         return cls(**kwargs)
 
 
-def _plain(value: Any) -> Any:
+def _plain(value: object) -> object:
     if isinstance(value, tuple):
         return [_plain(v) for v in value]
     if isinstance(value, dict):
@@ -293,7 +294,7 @@ def _plain(value: Any) -> Any:
     return value
 
 
-def _check_keys(data: dict[str, Any]) -> None:
+def _check_keys(data: Iterable[str]) -> None:
     names = {f.name for f in dataclasses.fields(SOMConfig)}
     unknown = sorted(set(data) - names)
     if unknown:
@@ -311,7 +312,7 @@ def list_presets() -> list[str]:
     return sorted(p.name[:-5] for p in files.iterdir() if p.name.endswith(".toml"))
 
 
-def _parse_toml(text: str, source: str) -> dict[str, Any]:
+def _parse_toml(text: str, source: str) -> dict[str, object]:
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
@@ -341,7 +342,7 @@ def load_config_file(path: str | Path, base: SOMConfig | None = None) -> SOMConf
     return _from_toml(data, f"config file {str(p)!r}", base)
 
 
-def _from_toml(data: dict[str, Any], source: str, base: SOMConfig | None = None) -> SOMConfig:
+def _from_toml(data: dict[str, object], source: str, base: SOMConfig | None = None) -> SOMConfig:
     data = dict(data)
     extra = data.pop("extra", {})
     if not isinstance(extra, dict):
@@ -350,7 +351,8 @@ def _from_toml(data: dict[str, Any], source: str, base: SOMConfig | None = None)
         merged = (base or SOMConfig()).to_dict()
         _check_keys(data)
         merged.update(data)
-        merged["extra"] = {**merged.get("extra", {}), **extra}
+        old = merged.get("extra")
+        merged["extra"] = {**(old if isinstance(old, dict) else {}), **extra}
         return SOMConfig.from_dict(merged)
     except ConfigError as exc:
         raise ConfigError(f"{source}: {exc}") from None
@@ -358,7 +360,7 @@ def _from_toml(data: dict[str, Any], source: str, base: SOMConfig | None = None)
         raise ConfigError(f"{source}: {exc}") from None
 
 
-def parse_override(item: str) -> tuple[str, Any]:
+def parse_override(item: str) -> tuple[str, object]:
     """Parse ``key=value``; the value is read as TOML (numbers, true/false, lists) or a string."""
     if "=" not in item:
         raise ConfigError(f"an override must be key=value, got {item!r}; e.g. iterations=50000")
@@ -381,7 +383,7 @@ _GRID_TEXT = re.compile(r"\d+(?:\s*x\s*\d+)+")
 _TUPLE_TEXT = re.compile(r"\(\s*\d+\s*(?:,\s*\d+\s*)*,?\s*\)")
 
 
-def _shape_text(raw: str) -> Any:
+def _shape_text(raw: str) -> str | tuple[int, ...]:
     """``raw`` as a grid when it is written as the command line writes one (``15x15``, the
     option ``--map-shape``'s form) or as a Python tuple of ints (``(15,)``, the form of the
     shape errors' examples); any other text stays a string."""

@@ -40,7 +40,7 @@ import traceback
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, TypeVar
 
 from sigmapi import _memory, _validate
 from sigmapi.config import SOMConfig
@@ -131,12 +131,15 @@ def probe_scheduler(address: str, timeout: float = CONNECT_TIMEOUT_S) -> None:
         )
 
 
+A = TypeVar("A")
+
+
 @dataclass(frozen=True)
 class Outcome:
     """One finished job: its key, its value (``None`` if it failed) and its error text."""
 
     key: str
-    value: Any
+    value: Any  # what the job's function returned: its caller knows the type
     error: str | None
     seconds: float
 
@@ -245,13 +248,13 @@ class Executor:
         return plan_workers(self.workers, per_job, self.memory_budget, n_jobs=max(1, n_jobs))
 
     def run(
-        self, fn: Callable[[Any], Any], jobs: Sequence[tuple[str, Any]], workers: int
+        self, fn: Callable[[A], object], jobs: Sequence[tuple[str, A]], workers: int
     ) -> Iterator[Outcome]:
         """:func:`run_jobs` on this engine, ``workers`` at once (from :meth:`plan`)."""
         return run_jobs(fn, jobs, workers=workers, engine=self.engine, address=self.address)
 
 
-def _call(fn: Callable[[Any], Any], arg: Any) -> tuple[Any, str | None, float]:
+def _call(fn: Callable[[A], object], arg: A) -> tuple[object, str | None, float]:
     """Run one job, catching its error: ``(value, error, seconds)``."""
     t0 = time.perf_counter()
     try:
@@ -283,8 +286,8 @@ def job_error(where: str, error: str) -> Exception:
 
 
 def run_jobs(
-    fn: Callable[[Any], Any],
-    jobs: Sequence[tuple[str, Any]],
+    fn: Callable[[A], object],
+    jobs: Sequence[tuple[str, A]],
     *,
     workers: int = 1,
     engine: str = "local",
@@ -312,7 +315,7 @@ def run_jobs(
         initializer=start_worker,
         initargs=(os.getpid(), worker_threads(workers)),
     )
-    pending: dict[Future[Any], str] = {}
+    pending: dict[Future[tuple[object, str | None, float]], str] = {}
     try:
         pending = {pool.submit(_call, fn, arg): key for key, arg in jobs}
         while pending:
@@ -327,7 +330,9 @@ def run_jobs(
     pool.shutdown(wait=True)
 
 
-def _stop(pool: ProcessPoolExecutor, pending: dict[Future[Any], str]) -> None:
+def _stop(
+    pool: ProcessPoolExecutor, pending: dict[Future[tuple[object, str | None, float]], str]
+) -> None:
     """End a pool at once: cancel the jobs not started, end the workers running the others
     (a job is a pure function of its argument: nothing of it is lost but its time)."""
     for fut in pending:
@@ -395,7 +400,7 @@ def _no_dask() -> ConfigError:
 
 
 def _run_dask(
-    fn: Callable[[Any], Any], jobs: Sequence[tuple[str, Any]], workers: int, address: str | None
+    fn: Callable[[A], object], jobs: Sequence[tuple[str, A]], workers: int, address: str | None
 ) -> Iterator[Outcome]:
     try:
         from distributed import Client, LocalCluster, as_completed

@@ -1,4 +1,4 @@
-# Over 400 lines: the file layout, its bounded reader and its atomic writer read as one.
+# Over 500 lines: the file layout, its bounded reader and its atomic writer read as one.
 """Model files: ``.npz`` archives read member by member with bounds, written atomically.
 
 This module reads and writes verified archives; it knows the file layout, not the model:
@@ -51,7 +51,7 @@ import zipfile
 import zlib
 from collections.abc import Callable
 from pathlib import Path
-from typing import IO, Any
+from typing import IO, cast
 
 import numpy as np
 from numpy.typing import NDArray
@@ -213,7 +213,7 @@ def atomic_write_bytes(path: str | Path, data: bytes) -> Path:
     return atomic_write(path, write)
 
 
-def digest(a: NDArray[Any]) -> str:
+def digest(a: NDArray[np.generic]) -> str:
     """SHA-256 of an array's bytes in C order."""
     return hashlib.sha256(np.ascontiguousarray(a).tobytes()).hexdigest()
 
@@ -225,7 +225,7 @@ def header_digest(header: dict[str, object]) -> str:
 
 
 def _write_archive(
-    fh: IO[bytes], header: dict[str, object], arrays: dict[str, NDArray[Any]], compress: bool
+    fh: IO[bytes], header: dict[str, object], arrays: dict[str, NDArray[np.generic]], compress: bool
 ) -> None:
     head = np.frombuffer(json.dumps(header, sort_keys=True).encode("utf-8"), dtype=np.uint8)
     method = zipfile.ZIP_DEFLATED if compress else zipfile.ZIP_STORED
@@ -236,7 +236,7 @@ def _write_archive(
 
 
 def encode_archive(
-    header: dict[str, object], arrays: dict[str, NDArray[Any]], compress: bool = False
+    header: dict[str, object], arrays: dict[str, NDArray[np.generic]], compress: bool = False
 ) -> bytes:
     """The bytes of an archive holding ``header`` as JSON plus ``arrays`` (as written)."""
     import io as _io
@@ -249,7 +249,7 @@ def encode_archive(
 def write_model(
     path: str | Path,
     header: dict[str, object],
-    arrays: dict[str, NDArray[Any]],
+    arrays: dict[str, NDArray[np.generic]],
     compress: bool = False,
 ) -> Path:
     """Write a model's ``header`` and ``arrays`` atomically to ``path``, with checksums.
@@ -283,12 +283,12 @@ def write_model(
 # ---------------------------------------------------------------------------- reading
 
 
-def _damaged(name: str, detail: Any) -> ModelFileError:
+def _damaged(name: str, detail: object) -> ModelFileError:
     """The error of file ``name`` whose archive structure is damaged, ``detail`` saying where."""
     return ModelFileError(f"{name!r} is damaged or not a sigmapi model file ({detail})")
 
 
-def _bad_header(name: str, detail: Any) -> ModelFileError:
+def _bad_header(name: str, detail: object) -> ModelFileError:
     """The error of file ``name`` whose header does not describe a model's arrays."""
     return ModelFileError(f"{name!r}: header is damaged ({detail})")
 
@@ -329,7 +329,7 @@ def _read_member(
     shape: tuple[int, ...] | None,
     name: str,
     max_bytes: int = MAX_HEADER,
-) -> NDArray[Any]:
+) -> NDArray[np.generic]:
     """One member of file ``name`` as an array, checked against ``descrs`` and ``shape``
     (None: 1-D, at most ``max_bytes``) before its data is read; read in chunks into an array
     of that size. Raises :class:`~sigmapi.errors.ModelFileError` if it does not fit."""
@@ -432,7 +432,7 @@ def _declared(header: dict[str, object], source: str) -> Expect:
 
 def read_archive(
     path: str | Path, kind: str = FORMAT
-) -> tuple[dict[str, Any], dict[str, NDArray[Any]]]:
+) -> tuple[dict[str, object], dict[str, NDArray[np.generic]]]:
     """Read and sanity-check an archive with bounds; returns (header, arrays). Never unpickles.
 
     Checks, before reading data: the zip directory (at most 8 members, names
@@ -510,7 +510,7 @@ def _members(zf: zipfile.ZipFile, name: str) -> dict[str, zipfile.ZipInfo]:
     return {i.filename[: -len(".npy")]: i for i in infos}
 
 
-def _parse_header(raw: NDArray[np.uint8], name: str, kind: str) -> dict[str, object]:
+def _parse_header(raw: NDArray[np.generic], name: str, kind: str) -> dict[str, object]:
     try:
         header = json.loads(raw.tobytes().decode("utf-8"))
     except (UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
@@ -533,7 +533,7 @@ def _parse_header(raw: NDArray[np.uint8], name: str, kind: str) -> dict[str, obj
     return header
 
 
-def read_model(path: str | Path) -> tuple[dict[str, Any], dict[str, NDArray[Any]]]:
+def read_model(path: str | Path) -> tuple[dict[str, object], dict[str, NDArray[np.generic]]]:
     """Read and verify a model file written by :func:`write_model`; returns (header, arrays).
 
     Checks the format, version, header checksum, that the members are the arrays the header
@@ -544,18 +544,18 @@ def read_model(path: str | Path) -> tuple[dict[str, Any], dict[str, NDArray[Any]
     """
     header, arrays = read_archive(path)
     name = str(path)
+    # read_archive checked the tables (_declared): version 1's state sums, version 2's arrays
     if header["version"] == 1:
-        sums = {
-            "weights": header.get("sha256"),
-            **{f"state_{k}": v for k, v in header["state_sha256"].items()},
-        }
+        states = cast(dict[str, object], header["state_sha256"])
+        sums = {"weights": header.get("sha256"), **{f"state_{k}": v for k, v in states.items()}}
         header["arrays"] = {
             k: {"dtype": a.dtype.str, "shape": list(a.shape), "sha256": sums[k]}
             for k, a in arrays.items()
         }
+    table = cast(dict[str, dict[str, object]], header["arrays"])
     for k, a in arrays.items():
         if not np.all(np.isfinite(a)):
             raise ModelFileError(f"{name!r}: array {k!r} holds NaN or inf values; damaged")
-        if digest(a) != header["arrays"][k]["sha256"]:
+        if digest(a) != table[k]["sha256"]:
             raise ModelFileError(f"{name!r}: checksum mismatch in array {k!r}; the file is damaged")
     return header, arrays

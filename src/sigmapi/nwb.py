@@ -39,15 +39,19 @@ import os
 import tempfile
 from datetime import UTC, datetime
 from pathlib import Path
-from typing import Any
+from types import ModuleType
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from sigmapi._version import __version__
 from sigmapi.analysis.monkey import PEAK_RATE, WINDOW, fixation_protocol, monkey_protocol
 from sigmapi.errors import UsageError
-from sigmapi.io import atomic_write, digest
+from sigmapi.io import atomic_write_bytes, digest
 from sigmapi.model.som import SigmaPiSOM, load_model
+
+if TYPE_CHECKING:
+    from pynwb import NWBFile
 
 __all__ = ["PERIOD", "export_nwb", "nwb_file", "pynwb_module"]
 
@@ -57,7 +61,7 @@ PERIOD = 1.0
 _NEEDS = "install the nwb extra: pip install 'sigmapi[nwb]'"
 
 
-def pynwb_module() -> Any:
+def pynwb_module() -> ModuleType:
     """The pynwb package, or a :class:`~sigmapi.errors.UsageError` with the one-line hint."""
     try:
         import pynwb
@@ -74,7 +78,7 @@ def _file_digest(path: str | Path) -> str:
     return h.hexdigest()
 
 
-def _provenance(model: SigmaPiSOM, model_path: str | Path | None) -> dict[str, Any]:
+def _provenance(model: SigmaPiSOM, model_path: str | Path | None) -> dict[str, object]:
     cfg = model.config
     fields = {k: getattr(cfg, k) for k in cfg.__dataclass_fields__}
     return {
@@ -94,7 +98,7 @@ def nwb_file(
     physiology: dict[str, Any] | None = None,
     fixation: dict[str, Any] | None = None,
     model_path: str | Path | None = None,
-) -> Any:
+) -> NWBFile:
     """The ``pynwb.NWBFile`` of a fitted ``model`` (module docstring).
 
     ``fixation`` and ``physiology``: a :func:`~sigmapi.analysis.monkey.fixation_protocol`
@@ -125,7 +129,7 @@ def nwb_file(
             "response to stimuli at a grid of retinal positions while the eyes fixate a grid "
             "of eye positions (the gain-field studies' protocol)"
         ),
-        identifier=f"sigmapi-{ident[:32]}",
+        identifier=f"sigmapi-{str(ident)[:32]}",
         session_start_time=now,
         experiment_description=monkey["test"],
         source_script=f"sigmapi {__version__}",
@@ -286,8 +290,4 @@ def export_nwb(
         data = Path(tmp).read_bytes()
     finally:
         Path(tmp).unlink(missing_ok=True)
-
-    def write(fh: Any) -> None:
-        fh.write(data)
-
-    return atomic_write(target, write)
+    return atomic_write_bytes(target, data)

@@ -27,13 +27,11 @@ import time
 import weakref
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Protocol, TypeVar
-
-if TYPE_CHECKING:
-    from tqdm import tqdm
+from typing import Protocol, TypeVar
 
 __all__ = [
     "HEARTBEAT_S",
+    "Bar",
     "Heartbeat",
     "Lines",
     "Progress",
@@ -45,6 +43,30 @@ __all__ = [
 ]
 
 T = TypeVar("T")
+
+
+class Bar(Protocol):
+    """What a bar offers its caller (a tqdm bar, or :class:`Lines` in a log)."""
+
+    n: int
+
+    def update(self, n: int) -> object: ...
+    def set_postfix(self, *args: object, **kwargs: object) -> None: ...
+    def set_postfix_str(self, phase: str, refresh: bool = True) -> None: ...
+    def close(self) -> None: ...
+    def __enter__(self) -> object: ...
+    def __exit__(self, *exc: object) -> None: ...
+
+
+class _Redrawn(Protocol):
+    """A tqdm bar, as the heartbeat redraws it."""
+
+    disable: bool
+
+    def refresh(self) -> object: ...
+
+
+R = TypeVar("R", bound=_Redrawn)
 
 
 def _heartbeat_s() -> float:
@@ -96,7 +118,7 @@ class Heartbeat:
         self.period, self.clock = period, clock
         self.last = clock()
         """When the last progress line was written."""
-        self._open: weakref.WeakSet[Any] = weakref.WeakSet()
+        self._open: weakref.WeakSet[_Redrawn | Lines] = weakref.WeakSet()
         self._lock = threading.Lock()
         self._thread: threading.Thread | None = None
 
@@ -104,7 +126,7 @@ class Heartbeat:
         """A progress line was just written: the silence starts again."""
         self.last = self.clock()
 
-    def add(self, bar: Any, thread: bool = True) -> None:
+    def add(self, bar: _Redrawn | Lines, thread: bool = True) -> None:
         """Keep ``bar`` beating until :meth:`remove` (``thread``: start the thread if none)."""
         with self._lock:
             if not self._open:
@@ -115,7 +137,7 @@ class Heartbeat:
                 self._thread.daemon = True
                 self._thread.start()
 
-    def remove(self, bar: Any) -> None:
+    def remove(self, bar: _Redrawn | Lines) -> None:
         with self._lock:
             self._open.discard(bar)
 
@@ -151,8 +173,12 @@ HEART = Heartbeat()
 
 
 class _Trained(Protocol):
-    t_: int
-    sigma_: float
+    """The model a training bar reads: its iteration count and its sigma."""
+
+    @property
+    def t_(self) -> int: ...
+    @property
+    def sigma_(self) -> float: ...
 
 
 class Lines:
@@ -177,7 +203,7 @@ class Lines:
     def update(self, n: int) -> None:
         self.n += n
 
-    def set_postfix(self, *args: Any, **kwargs: Any) -> None:
+    def set_postfix(self, *args: object, **kwargs: object) -> None:
         pass
 
     def set_postfix_str(self, phase: str, refresh: bool = True) -> None:
@@ -225,7 +251,7 @@ def _lines(disable: bool | None) -> bool:
     return disable is None and not (hasattr(sys.stderr, "isatty") and sys.stderr.isatty())
 
 
-def _bar(total: int, desc: str, unit: str, start: int, disable: bool | None) -> Any:
+def _bar(total: int, desc: str, unit: str, start: int, disable: bool | None) -> Bar:
     from tqdm import tqdm
 
     if _lines(disable):
@@ -246,7 +272,7 @@ def _bar(total: int, desc: str, unit: str, start: int, disable: bool | None) -> 
     )
 
 
-def _beating(bar: Any) -> Any:
+def _beating(bar: R) -> R:
     """``bar`` (a tqdm bar) redrawn by the heartbeat while it is open."""
     if not bar.disable:
         HEART.add(bar)
@@ -255,7 +281,7 @@ def _beating(bar: Any) -> Any:
 
 def progress_callback(
     total: int, desc: str, start: int = 0, disable: bool | None = None
-) -> tuple[Callable[[Any], None], tqdm[Any] | Lines]:
+) -> tuple[Callable[[_Trained], None], Bar]:
     """A bar of training iterations showing iterations/s and the current sigma.
 
     The callback takes the model (``callback(model)``, as ``fit`` calls it).
@@ -271,7 +297,7 @@ def progress_callback(
 
 def counter(
     total: int, desc: str, unit: str, disable: bool | None = None
-) -> tuple[Callable[[int, str], None], tqdm[Any] | Lines]:
+) -> tuple[Callable[[int, str], None], Bar]:
     """A bar of ``total`` units of work; ``callback(n, phase)`` adds ``n`` and shows ``phase``."""
     bar = _bar(total, desc, unit, 0, disable)
 
@@ -301,7 +327,7 @@ def _each_line(items: list[T], desc: str) -> Iterator[T]:
 
 def jobs_done(
     total: int, desc: str, disable: bool = False
-) -> tuple[Callable[[bool, str], None], tqdm[Any] | Lines]:
+) -> tuple[Callable[[bool, str], None], Bar]:
     """A bar of ``total`` parallel jobs; ``callback(ok, line)`` counts one finished job.
 
     On a terminal the bar shows jobs done, failed and left; in a log each finished job
@@ -351,13 +377,11 @@ class Progress:
 
     def training(
         self, total: int, desc: str, start: int = 0
-    ) -> tuple[Callable[[Any], None], tqdm[Any] | Lines]:
+    ) -> tuple[Callable[[_Trained], None], Bar]:
         """:func:`progress_callback`."""
         return progress_callback(total, desc, start, self.disable)
 
-    def counter(
-        self, total: int, desc: str, unit: str
-    ) -> tuple[Callable[[int, str], None], tqdm[Any] | Lines]:
+    def counter(self, total: int, desc: str, unit: str) -> tuple[Callable[[int, str], None], Bar]:
         """:func:`counter`."""
         return counter(total, desc, unit, self.disable)
 
@@ -365,7 +389,7 @@ class Progress:
         """:func:`each`."""
         return each(items, desc, self.disable)
 
-    def jobs(self, total: int, desc: str) -> tuple[Callable[[bool, str], None], tqdm[Any] | Lines]:
+    def jobs(self, total: int, desc: str) -> tuple[Callable[[bool, str], None], Bar]:
         """:func:`jobs_done`."""
         return jobs_done(total, desc, disable=not self.enabled)
 

@@ -8,7 +8,7 @@ environment that offers them can be learned, the gaze-and-reach world or another
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -20,7 +20,14 @@ from numpy.typing import NDArray
 from sigmapi.agents.actor_critic import ActorCritic, ActorCriticConfig
 from sigmapi.errors import ConfigError
 
-__all__ = ["Episodes", "actor_critic_for", "discrete_actions", "run_episodes"]
+__all__ = [
+    "Ending",
+    "Episodes",
+    "actor_critic_for",
+    "discrete_actions",
+    "run_episodes",
+    "tally",
+]
 
 
 @dataclass(frozen=True)
@@ -81,25 +88,42 @@ def run_episodes(
     episode (:attr:`Episodes.info`), e.g. what ended it.
     """
     _, first = discrete_actions(env.action_space)
-    n = len(starts)
-    success = np.zeros(n, dtype=bool)
-    failed = np.zeros(n, dtype=bool)
-    steps = np.zeros(n, dtype=np.int64)
-    kept: dict[str, list[object]] = {k: [] for k in info_keys}
-    for ep in range(n):
+
+    def play(ep: int) -> Ending:
         phi, info = env.reset(seed=int(starts[ep]))
-        t = 0
-        while True:
+        t, terminated, truncated = 0, False, False
+        while not (terminated or truncated):
             a = agent.act(phi)
             phi2, r, terminated, truncated, info = env.step(first + a)
             agent.update(phi, a, float(r), phi2, terminated)
             phi = phi2
             t += 1
-            if terminated or truncated:
-                break
+        return t, terminated, info
+
+    return tally(len(starts), play, on_episode, info_keys)
+
+
+Ending = tuple[int, bool, Mapping[str, object]]
+"""How an episode ended: the steps it took, whether the world terminated it (not the time
+limit), the last step's ``info``."""
+
+
+def tally(
+    n: int,
+    play: Callable[[int], Ending],
+    on_episode: Callable[[], None] | None = None,
+    info_keys: Sequence[str] = (),
+) -> Episodes:
+    """Play episodes ``0 .. n - 1`` in order (``play(ep)`` runs one) and tally their
+    :class:`Episodes`: ``on_episode()`` after each; ``info_keys`` as :func:`run_episodes`."""
+    success = np.zeros(n, dtype=bool)
+    failed = np.zeros(n, dtype=bool)
+    steps = np.zeros(n, dtype=np.int64)
+    kept: dict[str, list[object]] = {k: [] for k in info_keys}
+    for ep in range(n):
+        steps[ep], terminated, info = play(ep)
         success[ep] = bool(info["is_success"])
         failed[ep] = terminated and not success[ep]
-        steps[ep] = t
         for k, values in kept.items():
             values.append(info[k])
         if on_episode is not None:

@@ -30,7 +30,7 @@ from numpy.typing import NDArray
 
 from sigmapi import _validate
 from sigmapi.agents.actor_critic import ActorCritic
-from sigmapi.agents.episodes import Episodes, discrete_actions
+from sigmapi.agents.episodes import Ending, Episodes, discrete_actions, tally
 from sigmapi.envs import MapObservation, PlacedViewSource
 from sigmapi.envs.protocols import Obs
 from sigmapi.errors import ConfigError
@@ -112,17 +112,15 @@ def run_gated_episodes(
     model = env.model
     inner = cast(gym.Env[Obs, Any], env.env)
     _, first = discrete_actions(env.action_space)
-    n = len(starts)
-    success = np.zeros(n, dtype=bool)
-    failed = np.zeros(n, dtype=bool)
-    steps = np.zeros(n, dtype=np.int64)
     seen: list[float] = []
     updates = 0
-    for ep in range(n):
+
+    def play(ep: int) -> Ending:
+        nonlocal updates
         obs, info = inner.reset(seed=int(starts[ep]))
         phi = env.observation(obs)
-        t = 0
-        while True:
+        t, terminated, truncated = 0, False, False
+        while not (terminated or truncated):
             a = agent.act(phi)
             obs2, r, terminated, truncated, info2 = inner.step(first + a)
             phi2 = env.observation(obs2)
@@ -145,11 +143,7 @@ def run_gated_episodes(
                 updates += 1
             phi, obs, info = phi2, obs2, info2
             t += 1
-            if terminated or truncated:
-                break
-        success[ep] = bool(info["is_success"])
-        failed[ep] = terminated and not success[ep]
-        steps[ep] = t
-        if on_episode is not None:
-            on_episode()
-    return GatedEpisodes(Episodes(success, failed, steps), np.asarray(seen), updates)
+        return t, terminated, info
+
+    episodes = tally(len(starts), play, on_episode)
+    return GatedEpisodes(episodes, np.asarray(seen), updates)

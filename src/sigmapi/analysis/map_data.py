@@ -24,7 +24,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from sigmapi.metrics import affine_fit
 
@@ -242,7 +242,7 @@ _POLARITY_NAMES = {
 }
 
 
-def map_polarity(model: SigmaPiSOM, centres: Any = None, seed: Seed = 0) -> Polarity:
+def map_polarity(model: SigmaPiSOM, centres: ArrayLike | None = None, seed: Seed = 0) -> Polarity:
     """How the learned map is oriented relative to z (see :class:`Polarity`).
 
     Before learning the orientation is unpredictable; after learning it is consistent (the
@@ -311,7 +311,7 @@ class InvarianceMatrix:
 
 
 def invariance_matrix(
-    model: SigmaPiSOM, axis: int = 0, n: int | None = None, centres: Any = None
+    model: SigmaPiSOM, axis: int = 0, n: int | None = None, centres: ArrayLike | None = None
 ) -> InvarianceMatrix:
     """Winners for every pair of grid positions of x and y along ``axis``.
 

@@ -96,7 +96,7 @@ RESPONDS = 0.25
 """A receptive field counts at a fixation where the unit's best response there is at least
 this share of its best at any fixation (and the grid's edge does not cut it off)."""
 
-PUBLISHED: tuple[dict[str, Any], ...] = (
+PUBLISHED: tuple[dict[str, object], ...] = (
     {
         "study": "Andersen, Essick & Siegel 1985, Science 230:456-458",
         "area": "7a",
@@ -379,7 +379,7 @@ def _shift_index(
     return per_axis, np.where(every, np.nanmean(np.where(every, per_axis, 0.0), axis=0), np.nan)
 
 
-def _plain(a: Any) -> Any:
+def _plain(a: object) -> object:
     """NumPy to JSON: lists, NaN as None."""
     arr = np.asarray(a)
     if arr.dtype == bool:
@@ -390,7 +390,7 @@ def _plain(a: Any) -> Any:
     return [_plain(v) for v in arr]
 
 
-def _summary(values: Array) -> dict[str, Any]:
+def _summary(values: Array) -> dict[str, object]:
     v = np.asarray(values, dtype=np.float64)
     v = v[np.isfinite(v)]
     if v.size == 0:

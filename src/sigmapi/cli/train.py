@@ -7,7 +7,6 @@ import json
 import sys
 import textwrap
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
@@ -21,13 +20,14 @@ from sigmapi.checkpoints import (
 )
 from sigmapi.cli._common import (
     DEFAULT_PRESET,
+    LazyParser,
     add_config_flags,
     check_output,
     config_keys_help,
     declare_path,
     resolve_config,
 )
-from sigmapi.config import list_presets, load_preset
+from sigmapi.config import SOMConfig, list_presets, load_preset
 from sigmapi.errors import ModelFileError, UsageError
 from sigmapi.metrics import (
     FOLD_THRESHOLD,
@@ -55,7 +55,7 @@ def cmd_train(args: argparse.Namespace) -> int:
         return _train(args, cfg, out, every)
 
 
-def _train(args: argparse.Namespace, cfg: Any, out: Path, every: int | None) -> int:
+def _train(args: argparse.Namespace, cfg: SOMConfig, out: Path, every: int | None) -> int:
     folder = checkpoint_dir(out)
     model = None
     if args.resume:
@@ -113,7 +113,7 @@ def _train(args: argparse.Namespace, cfg: Any, out: Path, every: int | None) -> 
     return 0
 
 
-def _finished_run(out: Any, cfg: Any) -> SigmaPiSOM:
+def _finished_run(out: Path, cfg: SOMConfig) -> SigmaPiSOM:
     """The model in ``out`` if it is a run of ``cfg`` (``--resume`` may continue it), else a
     UsageError: resuming must never replace the file of another run."""
     try:
@@ -183,7 +183,7 @@ def cmd_presets(args: argparse.Namespace) -> int:
     return 0
 
 
-def register(sub: Any) -> None:
+def register(sub: argparse._SubParsersAction[LazyParser]) -> None:
     """Add ``train``, ``evaluate`` and ``presets`` to the sub-parsers ``sub``."""
     default = load_preset(DEFAULT_PRESET)
     description = (

@@ -24,7 +24,7 @@ from sigmapi.errors import ConfigError
 __all__ = ["check_action", "check_options", "check_vector"]
 
 
-def _shown(value: Any) -> Any:
+def _shown(value: object) -> object:
     """``value`` as an error shows it: an array as a (short) list."""
     if isinstance(value, np.ndarray):
         flat = value.ravel().tolist()
@@ -34,7 +34,7 @@ def _shown(value: Any) -> Any:
 
 def check_vector(
     name: str,
-    value: Any,
+    value: object,
     shape: tuple[int, ...],
     low: ArrayLike,
     high: ArrayLike,

@@ -36,7 +36,7 @@ from __future__ import annotations
 
 import itertools
 from dataclasses import dataclass, field
-from typing import Any, ClassVar, SupportsFloat
+from typing import Any, ClassVar, SupportsFloat, TypedDict
 
 import gymnasium as gym
 import numpy as np
@@ -70,7 +70,7 @@ def move_table(dim: int, diagonal: bool = False) -> NDArray[np.float64]:
     return np.array(rows, dtype=np.float64)
 
 
-def _unit_vector(value: Any, dim: int) -> NDArray[np.float64] | None:
+def _unit_vector(value: object, dim: int) -> NDArray[np.float64] | None:
     """``value`` as a float vector of length ``dim`` in [0, 1] (a scalar is repeated), or None."""
     try:
         arr = np.asarray(value, dtype=np.float64)
@@ -94,51 +94,58 @@ def _registered_time_limit() -> int:
 
 
 def _check_world(
-    dim: Any,
-    grid: Any,
-    code_width: Any,
-    step_size: Any,
-    goal: Any,
-    goal_radius: Any,
-    saccade_rate: Any,
+    dim: object,
+    grid: object,
+    code_width: object,
+    step_size: object,
+    goal: object,
+    goal_radius: object,
+    saccade_rate: object,
 ) -> tuple[int, int, float, float, NDArray[np.float64], float, float]:
     """The world's parameters in their canonical types, or a ConfigError naming the first bad
     one (the checks of :class:`GazeReachConfig` and :class:`GazeReachEnv`, written once)."""
     if not _validate.is_int(dim) or dim not in (1, 2):
         raise _validate.fail("dim", "1 or 2", dim, "the task has 1-D and 2-D variants")
-    dim = int(dim)
-    grid = _validate.integer("grid", grid, 2, fix="use e.g. grid=15 (the paper's 2-D network)")
-    n = grid**dim  # the code's (n, n) float64 table of hills, and one copy of it
+    d = int(dim)
+    n_grid = _validate.integer("grid", grid, 2, fix="use e.g. grid=15 (the paper's 2-D network)")
+    n = n_grid**d  # the code's (n, n) float64 table of hills, and one copy of it
     _memory.check(
         16 * n * n,
-        f"a world of grid={grid}, dim={dim} ({n:,} units a view)",
+        f"a world of grid={n_grid}, dim={d} ({n:,} units a view)",
         "use a smaller grid (the paper's 2-D network: grid=15)",
     )
-    code_width = _validate.width("code_width", code_width, MIN_WIDTH, fix=_WIDTH_FIX)
-    step_size = _validate.number(
-        "step_size", step_size, 0.0, 0.5, lo_open=True, fix="use e.g. 0.05"
-    )
-    g = _unit_vector(goal, dim)
+    width = _validate.width("code_width", code_width, MIN_WIDTH, fix=_WIDTH_FIX)
+    step = _validate.number("step_size", step_size, 0.0, 0.5, lo_open=True, fix="use e.g. 0.05")
+    g = _unit_vector(goal, d)
     if g is None:
         raise ConfigError(
-            f"goal must be a number or {dim} numbers in [0, 1], got {goal!r}; "
+            f"goal must be a number or {d} numbers in [0, 1], got {goal!r}; "
             "the default 0.5 is straight ahead"
         )
-    goal_radius = _validate.number(
+    radius = _validate.number(
         "goal_radius", goal_radius, 0.0, 0.5, lo_open=True, fix="use e.g. 0.1"
     )
-    free = 1.0 - float(np.prod(np.minimum(g + goal_radius, 1.0) - np.maximum(g - goal_radius, 0)))
+    free = 1.0 - float(np.prod(np.minimum(g + radius, 1.0) - np.maximum(g - radius, 0)))
     if free < 0.05:
         raise _validate.fail(
             "goal_radius",
             "small enough to leave 5 % of the workspace outside the goal box",
-            goal_radius,
+            radius,
             f"the box covers {100 * (1 - free):.0f} %; use e.g. 0.1",
         )
-    saccade_rate = _validate.number(
-        "saccade_rate", saccade_rate, 0.0, 1.0, fix="a probability per step"
-    )
-    return dim, grid, code_width, step_size, g, goal_radius, saccade_rate
+    rate = _validate.number("saccade_rate", saccade_rate, 0.0, 1.0, fix="a probability per step")
+    return d, n_grid, width, step, g, radius, rate
+
+
+class WorldKwargs(TypedDict):
+    """The keyword arguments of :class:`GazeReachEnv` a :class:`GazeReachConfig` sets."""
+
+    dim: int
+    grid: int
+    code_width: float
+    step_size: float
+    goal_radius: float
+    saccade_rate: float
 
 
 @dataclass(frozen=True)
@@ -197,7 +204,7 @@ class GazeReachConfig:
             object.__setattr__(self, name, value)
         _validate.check_fields(self)  # the bounds declared beside the fields (--help's)
 
-    def env_kwargs(self) -> dict[str, Any]:
+    def env_kwargs(self) -> WorldKwargs:
         """Keyword arguments of :class:`GazeReachEnv` (also of ``gymnasium.make``)."""
         return {
             "dim": self.dim,
@@ -399,7 +406,7 @@ class GazeReachEnv(gym.Env[Obs, np.int64]):
         retina, gaze = self._codes(self._z[None, :], self._y[None, :])
         return {"retina": retina[0], "gaze": gaze[0]}
 
-    def _info(self, saccade: bool, event: str) -> dict[str, Any]:
+    def _info(self, saccade: bool, event: str) -> dict[str, object]:
         return {
             "z": self._z.copy(),
             "x": 2.0 * self._z - self._y,
@@ -411,8 +418,8 @@ class GazeReachEnv(gym.Env[Obs, np.int64]):
 
     # ------------------------------------------------------------------ Gymnasium API
     def reset(
-        self, *, seed: int | None = None, options: dict[str, Any] | None = None
-    ) -> tuple[Obs, dict[str, Any]]:
+        self, *, seed: int | None = None, options: dict[str, object] | None = None
+    ) -> tuple[Obs, dict[str, object]]:
         super().reset(seed=seed)
         options = check_options(options, self.reset_options, "GazeReach")
         if "z" in options:
@@ -437,12 +444,12 @@ class GazeReachEnv(gym.Env[Obs, np.int64]):
         self._done = False
         return self._obs(), self._info(True, "")
 
-    def _position(self, value: Any, name: str) -> NDArray[np.float64]:
+    def _position(self, value: object, name: str) -> NDArray[np.float64]:
         if _validate.is_int(value) or isinstance(value, (float, np.floating)):
             value = [value] * self.dim  # one number for every axis
         return check_vector(name, value, (self.dim,), 0.0, 1.0, fix="positions in [0, 1]")
 
-    def step(self, action: Any) -> tuple[Obs, SupportsFloat, bool, bool, dict[str, Any]]:
+    def step(self, action: object) -> tuple[Obs, SupportsFloat, bool, bool, dict[str, object]]:
         if self._done:
             raise gym.error.ResetNeeded(
                 "the episode has ended (terminated) or not begun; call reset() before step()"

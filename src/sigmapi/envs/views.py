@@ -10,7 +10,6 @@ check what it returns and learn a map from it.
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any
 
 import gymnasium as gym
 import numpy as np
@@ -24,7 +23,7 @@ from sigmapi.model.som import SigmaPiSOM
 __all__ = ["collect_saccade_views", "collect_stream", "learn_map_in_env", "view_source"]
 
 
-def view_source(source: Any) -> ViewSource:
+def view_source(source: object) -> ViewSource:
     """``source`` as a :class:`~sigmapi.envs.ViewSource`: a Gymnasium environment is
     unwrapped first (wrappers hide the world's attributes); anything else must implement the
     protocol itself."""
@@ -37,7 +36,7 @@ def view_source(source: Any) -> ViewSource:
     return base
 
 
-def collect_saccade_views(source: Any, n_pairs: int, seed: int | None = None) -> Views:
+def collect_saccade_views(source: object, n_pairs: int, seed: int | None = None) -> Views:
     """Gather ``n_pairs`` pairs of views of the same ``z`` by keeping still and looking around.
 
     Parameters
@@ -78,7 +77,7 @@ def collect_saccade_views(source: Any, n_pairs: int, seed: int | None = None) ->
 
 
 def collect_stream(
-    source: Any, n_frames: int, dwell: int, seed: int | None = None
+    source: object, n_frames: int, dwell: int, seed: int | None = None
 ) -> tuple[np.ndarray, np.ndarray]:
     """A stream of ``n_frames`` views as the body sees them: the object stays at one place for
     ``dwell`` saccades, then moves to a fresh place, and nothing marks when.
@@ -118,7 +117,7 @@ def collect_stream(
 
 
 def learn_map_in_env(
-    source: Any,
+    source: object,
     config: SOMConfig,
     seed: int | None = None,
     callback: Callable[[SigmaPiSOM], None] | None = None,

@@ -235,7 +235,7 @@ class TrueZObservation(gym.Wrapper[Features, Any, Any, Any]):
         _, info = self.env.reset(seed=seed, options=options)
         return self._features(info), info
 
-    def step(self, action: Any) -> tuple[Features, SupportsFloat, bool, bool, dict[str, object]]:
+    def step(self, action: object) -> tuple[Features, SupportsFloat, bool, bool, dict[str, object]]:
         _, r, terminated, truncated, info = self.env.step(action)
         return self._features(info), r, terminated, truncated, info
 

@@ -1,4 +1,3 @@
-# Over 500 lines: the contract (the Kernel protocol) and its defaults (KernelBase), read as one.
 """The kernel contract and the base every backend builds on.
 
 A kernel satisfies :class:`Kernel`. It owns its state (the weights in its own layout): it
@@ -29,7 +28,7 @@ from __future__ import annotations
 import copy
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
-from typing import ClassVar, Generic, Protocol, Self, TypeVar, runtime_checkable
+from typing import ClassVar, Protocol, Self, TypeVar, runtime_checkable
 
 import numpy as np
 from numpy.typing import NDArray
@@ -193,10 +192,12 @@ class Kernel(Protocol[S]):
         k]``: the kernel's own layout where it keeps one, else the dense weights and ones."""
         ...
 
+    @abstractmethod
     def prepare(self, weights: NDArray[np.float64], tol: float = ...) -> S:
         """State from dense float64 weights ``(K, n_x, n_y)``."""
         ...
 
+    @abstractmethod
     def export(self, state: S) -> NDArray[np.float64]:
         """Dense float64 weights ``(K, n_x, n_y)`` of ``state``."""
         ...
@@ -222,6 +223,7 @@ class Kernel(Protocol[S]):
         """``|w_k|^2`` of every unit, ``(K,)`` (the ``min_distance`` rule's norms)."""
         ...
 
+    @abstractmethod
     def activation(self, state: S, x: Array, y: Array) -> NDArray[np.float64]:
         """``h[b, k] = x_b^T W_k y_b``; ``(B, K)``."""
         ...
@@ -248,8 +250,9 @@ class Kernel(Protocol[S]):
         sigma: float,
     ) -> NDArray[np.int64]:
         """Winning unit of each pair ``(x_b, y_b)``, ``(B,)``: the same as ``winners`` of
-        ``activation``, for one pair as fast as the kernel allows (no per-call preparation)."""
-        ...
+        ``activation``, for one pair as fast as the kernel allows (no per-call preparation).
+        This default (which :class:`KernelBase` inherits) is that definition."""
+        return self.winners(state, self.activation(state, x, y), geometry, rule, sigma)
 
     def neighbourhood(
         self, winner: NDArray[np.int64], geometry: MapGeometry, sigma: float
@@ -257,6 +260,7 @@ class Kernel(Protocol[S]):
         """The L2-normalised Gaussian neighbourhood ``(B, K)`` around each winner ``(B,)``."""
         ...
 
+    @abstractmethod
     def train_block(
         self,
         state: S,
@@ -369,12 +373,13 @@ STREAMER: tuple[str, ...] = ("train_stream",)
 """The methods a kernel that learns from streams defines (:class:`Streamer`)."""
 
 
-class KernelBase(ABC, Generic[S]):
+class KernelBase(Kernel[S], ABC):
     """A kernel's generic part: a backend subclasses it and implements its arithmetic
-    (:meth:`prepare`, :meth:`export`, :meth:`activation`, :meth:`train_block`), and may
-    override a default where its layout does better (the fast kernel: its norms, its file
-    arrays, its winners in one pass). Instances are registered
-    (:func:`sigmapi.kernels.register_backend`); :meth:`with_options` gives a configured copy.
+    (:meth:`prepare`, :meth:`export`, :meth:`activation`, :meth:`train_block`: the abstract
+    methods of :class:`Kernel`, which it subclasses), and may override a default where its
+    layout does better (the fast kernel: its norms, its file arrays, its winners in one pass).
+    Instances are registered (:func:`sigmapi.kernels.register_backend`); :meth:`with_options`
+    gives a configured copy.
 
     The defaults are the definition (dense float64 weights, the rule objects' arithmetic),
     so a backend that keeps them agrees with the reference kernel by construction.
@@ -424,38 +429,6 @@ class KernelBase(ABC, Generic[S]):
         """The dense weights (:meth:`file_weights`) as columns, each scale 1."""
         w = self.file_weights(shape, arrays)
         return np.ascontiguousarray(w.reshape(w.shape[0], -1).T), np.ones(w.shape[0])
-
-    # ------------------------------------------------------------------ the arithmetic
-
-    @abstractmethod
-    def prepare(self, weights: NDArray[np.float64], tol: float = 0.0) -> S:
-        """State from dense float64 weights ``(K, n_x, n_y)``."""
-
-    @abstractmethod
-    def export(self, state: S) -> NDArray[np.float64]:
-        """Dense float64 weights ``(K, n_x, n_y)`` of ``state``."""
-
-    @abstractmethod
-    def activation(self, state: S, x: Array, y: Array) -> NDArray[np.float64]:
-        """``h[b, k] = x_b^T W_k y_b``; ``(B, K)``."""
-
-    @abstractmethod
-    def train_block(
-        self,
-        state: S,
-        x0: Array,
-        y0: Array,
-        x1: Array,
-        y1: Array,
-        sigmas: Array,
-        eps: Array,
-        *,
-        geometry: MapGeometry,
-        winner_rule: WinnerRule | str,
-        gates: Array | None = None,
-        threads: bool = False,
-    ) -> NDArray[np.int64]:
-        """Learning iterations in place (:meth:`Kernel.train_block`)."""
 
     # ------------------------------------------------------------------ generic defaults
 
@@ -507,18 +480,6 @@ class KernelBase(ABC, Generic[S]):
         """The row-wise argmax of :meth:`scores`, ``(B,)``; ties to the lowest index."""
         s = self.scores(state, h, geometry, rule, sigma)
         return np.asarray(np.argmax(s, axis=1), dtype=np.int64)
-
-    def winners_of(
-        self,
-        state: S,
-        x: Array,
-        y: Array,
-        geometry: MapGeometry,
-        rule: WinnerRule | str,
-        sigma: float,
-    ) -> NDArray[np.int64]:
-        """Winning unit of each pair ``(x_b, y_b)``: :meth:`winners` of :meth:`activation`."""
-        return self.winners(state, self.activation(state, x, y), geometry, rule, sigma)
 
     def neighbourhood(
         self, winner: NDArray[np.int64], geometry: MapGeometry, sigma: float

@@ -46,7 +46,7 @@ from __future__ import annotations
 
 import functools
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, NamedTuple
 
 import numba
 import numpy as np
@@ -422,6 +422,41 @@ def _codes(a: NDArray[np.floating], n: int, name: str) -> NDArray[np.float64]:
     return arr
 
 
+class _Steps(NamedTuple):
+    """The checked inputs of a learning driver (:func:`_steps`)."""
+
+    rule: WinnerRule
+    code: int
+    dims: NDArray[np.int64]
+    strides: NDArray[np.int64]
+    codes: list[NDArray[np.float64]]
+    sigmas: NDArray[np.float64]
+    eps: NDArray[np.float64]
+    n: int
+
+
+def _steps(
+    state: FastState,
+    geometry: MapGeometry,
+    winner_rule: WinnerRule | str,
+    sigmas: NDArray[np.floating],
+    eps: NDArray[np.floating],
+    gates: NDArray[np.floating] | None = None,
+    **codes: NDArray[np.floating],
+) -> _Steps:
+    """The map's grid, the rule and its code, and ``codes`` (named ``x...`` ``(n, n_x)``, the
+    others ``(n, n_y)``), ``sigmas`` and ``eps`` (and ``gates``) checked for ``n`` steps."""
+    k_units, nx, ny = state.shape
+    dims, strides = _grid(geometry.shape, k_units)
+    rule, code = _rule_code(winner_rule, "winner_rule")
+    n = check_codes(state.shape, **codes)
+    check_steps(n, k_units, sigmas=sigmas, eps=eps, gates=gates)
+    arrays = [_codes(a, nx if k.startswith("x") else ny, k) for k, a in codes.items()]
+    sg = np.ascontiguousarray(sigmas, dtype=np.float64)
+    ep = np.ascontiguousarray(eps, dtype=np.float64)
+    return _Steps(rule, code, dims, strides, arrays, sg, ep, n)
+
+
 def _rows_of(
     state: FastState, x: NDArray[np.floating], y: NDArray[np.floating]
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -724,23 +759,13 @@ class FastKernel(KernelBase[FastState]):
         ``threads``: update the units on numba's threads (the same result) when the map is
         large enough (:data:`PARALLEL_MIN_WORK`) and numba has more than one thread.
         """
-        k_units, nx, ny = state.shape
-        dims, strides = _grid(geometry.shape, k_units)
-        rule, code = _rule_code(winner_rule, "winner_rule")
-        n_iter = check_codes(state.shape, x0=x0, y0=y0, x1=x1, y1=y1)
-        check_steps(n_iter, k_units, sigmas=sigmas, eps=eps, gates=gates)
-        xs = [
-            _codes(a, n, nm)
-            for a, n, nm in ((x0, nx, "x0"), (y0, ny, "y0"), (x1, nx, "x1"), (y1, ny, "y1"))
-        ]
-        sg = np.ascontiguousarray(sigmas, dtype=np.float64)
-        ep = np.ascontiguousarray(eps, dtype=np.float64)
+        st = _steps(state, geometry, winner_rule, sigmas, eps, gates, x0=x0, y0=y0, x1=x1, y1=y1)
         gt = NO_GATES if gates is None else np.ascontiguousarray(gates, dtype=np.float64)
-        out, track, parallel = _run(state, rule, n_iter, threads)
+        out, track, parallel = _run(state, st.rule, st.n, threads)
         driver: Any = _train  # a numba dispatcher (its stubs do not know the signature)
         # left unformatted: the arguments in the rows of the kernel's signature
-        driver(state.raw, state.scale, state.sqnorm, *xs, sg, ep, gt, dims, strides,
-               geometry.periodic, code, geometry.soft_cut, state.tol, out, track,
+        driver(state.raw, state.scale, state.sqnorm, *st.codes, st.sigmas, st.eps, gt, st.dims,
+               st.strides, geometry.periodic, st.code, geometry.soft_cut, state.tol, out, track,
                bool(parallel), _ahead(state, TRAIN_PREFETCH_AHEAD))  # fmt: skip
         return out
 
@@ -764,23 +789,17 @@ class FastKernel(KernelBase[FastState]):
         none yet). ``threads``: as :meth:`train_block` (the same result on any number of
         threads).
         """
-        k_units, nx, ny = state.shape
-        dims, strides = _grid(geometry.shape, k_units)
-        rule, code = _rule_code(winner_rule, "winner_rule")
-        n_frames = check_codes(state.shape, x=x, y=y)
-        check_steps(n_frames, k_units, sigmas=sigmas, eps=eps)
-        xa, ya = _codes(x, nx, "x"), _codes(y, ny, "y")
-        sg = np.ascontiguousarray(sigmas, dtype=np.float64)
-        ep = np.ascontiguousarray(eps, dtype=np.float64)
+        st = _steps(state, geometry, winner_rule, sigmas, eps, x=x, y=y)
+        k_units = state.shape[0]
         tr = np.zeros(k_units) if trace is None else np.array(trace, dtype=np.float64)
         if tr.shape != (k_units,):
             raise ValueError(f"trace must have shape ({k_units},), got {tr.shape}")
-        out, track, parallel = _run(state, rule, n_frames, threads)
+        out, track, parallel = _run(state, st.rule, st.n, threads)
         driver: Any = _train_stream  # a numba dispatcher
         # left unformatted: the arguments in the rows of the kernel's signature
-        primed = driver(state.raw, state.scale, state.sqnorm, xa, ya, tr, trace is not None,
-                        sg, ep, float(lam), dims, strides, geometry.periodic, code,
-                        geometry.soft_cut, state.tol, out, track, bool(parallel),
+        primed = driver(state.raw, state.scale, state.sqnorm, *st.codes, tr, trace is not None,
+                        st.sigmas, st.eps, float(lam), st.dims, st.strides, geometry.periodic,
+                        st.code, geometry.soft_cut, state.tol, out, track, bool(parallel),
                         _ahead(state, TRAIN_PREFETCH_AHEAD))  # fmt: skip
         return out, (tr if primed else None)
 

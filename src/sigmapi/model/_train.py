@@ -13,8 +13,6 @@ A run that reaches the configured length goes on to the refinement
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 from numpy.typing import NDArray
 
@@ -32,7 +30,7 @@ from sigmapi.model._run import (
     sigma_at,
     training_rule,
 )
-from sigmapi.model.views import CodeViews
+from sigmapi.model.views import Array, CodeViews
 from sigmapi.tasks import Batch
 
 __all__ = ["PERMUTED_ROWS", "fit", "learn_gated", "partial_fit", "start", "training_block"]
@@ -143,10 +141,10 @@ def _rows(run: RunState, data: CodeViews, order: NDArray[np.intp] | None, notify
 
 def _views(
     run: RunState,
-    x0: NDArray[Any],
-    y0: NDArray[Any],
-    x1: NDArray[Any],
-    y1: NDArray[Any],
+    x0: Array,
+    y0: Array,
+    x1: Array,
+    y1: Array,
 ) -> None:
     """One stretch of iterations on view pairs; the ablation ``same_view`` learns view 0."""
     c = run.config
@@ -179,7 +177,7 @@ def learn_gated(
     unit ``k`` moved towards view 1 by ``eps g[t, k] a_k``, at ``sigma`` and ``eps`` (None:
     the schedule's at ``run.t``)."""
     c, n = run.config, data[0].shape[0]
-    kernel: Any = run.kernel
+    kernel = run.kernel
     s = (
         run.sigma_now()
         if sigma is None

@@ -22,7 +22,7 @@ kernel checks that the two agree).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -34,6 +34,8 @@ from sigmapi.kernels import Kernel, KernelState, file_weights, get_backend
 from sigmapi.kernels.base import MAX_WEIGHT
 
 __all__ = ["ModelParts", "read_parts", "write_parts"]
+
+S = TypeVar("S", bound=KernelState)
 
 _INVALID = (ValueError, KeyError, TypeError, IndexError)
 """What a kernel's reader raises on arrays that do not make its state."""
@@ -74,18 +76,18 @@ def write_parts(
     config: SOMConfig,
     t: int,
     seed_entropy: int,
-    kernel: Kernel[Any],
-    state: Any,
+    kernel: Kernel[S],
+    state: S,
     refined: int = 0,
     refine_rows: int | None = None,
-) -> tuple[dict[str, object], dict[str, NDArray[Any]]]:
+) -> tuple[dict[str, object], dict[str, NDArray[np.generic]]]:
     """The header and arrays of a model file holding ``state``, the state of ``kernel``.
 
     Raises :class:`~sigmapi.errors.NumericalError` if the state holds NaN or inf or weights
     beyond :data:`~sigmapi.kernels.base.MAX_WEIGHT`, so that no file is written that
     :func:`read_parts` would refuse.
     """
-    arrays: dict[str, NDArray[Any]] = dict(kernel.file_arrays(state))
+    arrays: dict[str, NDArray[np.generic]] = dict(kernel.file_arrays(state))
     for k, v in arrays.items():
         if not np.all(np.isfinite(v)):
             raise NumericalError(

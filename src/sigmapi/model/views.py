@@ -24,7 +24,6 @@ sigmapi.errors.DataError: x must have shape (B, 5) (codes on grid (5,), ...), go
 from __future__ import annotations
 
 import math
-from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -64,7 +63,7 @@ CodeViews = tuple[Array, Array, Array, Array]
 """Checked views: four float64 arrays of the same number of rows."""
 
 
-def _asarray(a: ArrayLike, name: str, what: str) -> NDArray[Any]:
+def _asarray(a: ArrayLike, name: str, what: str) -> NDArray[np.generic]:
     """``np.asarray(a)``; ragged nested lists raise DataError naming ``name``."""
     try:
         return np.asarray(a)
@@ -75,7 +74,7 @@ def _asarray(a: ArrayLike, name: str, what: str) -> NDArray[Any]:
         ) from None
 
 
-def _distinct(arr: NDArray[Any]) -> NDArray[Any]:
+def _distinct(arr: NDArray[np.generic]) -> NDArray[np.generic]:
     """The part of ``arr`` that holds every value once where an axis repeats it (stride 0, as
     ``np.broadcast_to`` makes): checks then cost the data, not the shape."""
     repeated = [st == 0 and dim > 1 for st, dim in zip(arr.strides, arr.shape, strict=True)]
@@ -104,14 +103,16 @@ def check_codes(a: ArrayLike, name: str, shape: tuple[int, ...]) -> Array:
             f"got {np.shape(a)}; encode positions with model.x_code.encode / y_code.encode"
         )
     part = _distinct(arr)
+    out: Array
     if part is not arr:  # keep the repetition a view: no (B, n) copy
-        arr = np.broadcast_to(part.astype(np.float64, copy=False), arr.shape)
-        part = _distinct(arr)
+        out = np.broadcast_to(part.astype(np.float64, copy=False), arr.shape)
+        part = _distinct(out)
     else:
-        arr = part = arr.astype(np.float64, copy=False)
+        out = arr.astype(np.float64, copy=False)
+        part = out
     if not np.isfinite(part.sum()) and not np.all(np.isfinite(part)):  # one pass when finite
         raise DataError(f"{name} must be finite, got NaN or inf values; remove those rows")
-    return arr
+    return out
 
 
 def _same_rows(arrays: dict[str, Array], what: str) -> None:
@@ -133,7 +134,7 @@ def check_pairs(
     return xa, ya
 
 
-def check_views(views: Any, x_shape: tuple[int, ...], y_shape: tuple[int, ...]) -> CodeViews:
+def check_views(views: object, x_shape: tuple[int, ...], y_shape: tuple[int, ...]) -> CodeViews:
     """Two views ``(x0, y0, x1, y1)`` as checked codes of the same number of rows.
 
     Besides :func:`check_codes` on each array: ``|x_i y_j|`` of each view must stay within
@@ -156,7 +157,7 @@ def check_views(views: Any, x_shape: tuple[int, ...], y_shape: tuple[int, ...]) 
     return x0, y0, x1, y1
 
 
-def _what(obj: Any) -> str:
+def _what(obj: object) -> str:
     """What a caller passed where a tuple of arrays belongs, in words."""
     if isinstance(obj, np.ndarray):
         return f"one array of shape {obj.shape}"
@@ -179,7 +180,7 @@ def _check_product(xv: Array, yv: Array, name: str, sub: str = "") -> None:
 
 
 def check_frames(
-    frames: Any, x_shape: tuple[int, ...], y_shape: tuple[int, ...], least: int = 1
+    frames: object, x_shape: tuple[int, ...], y_shape: tuple[int, ...], least: int = 1
 ) -> tuple[Array, Array]:
     """A stream ``(x, y)`` as checked codes ``(T, n_x)``, ``(T, n_y)`` of at least ``least``
     frames (see :func:`check_codes`; ``|x_i y_j|`` within :data:`MAX_PRODUCT`)."""
@@ -200,7 +201,7 @@ def check_frames(
 
 
 def fit_views(
-    views: Any, x_shape: tuple[int, ...], y_shape: tuple[int, ...], method: str
+    views: object, x_shape: tuple[int, ...], y_shape: tuple[int, ...], method: str
 ) -> CodeViews | None:
     """The ``views`` argument of ``fit`` / ``partial_fit`` (``method``): None (the built-in
     task) or :func:`check_views`'s codes; an int is refused with the keyword that takes it."""
@@ -251,7 +252,7 @@ def encode_views(
     return out[0], out[1], out[2], out[3]
 
 
-def check_gates(gates: Any, n: int, n_units: int) -> NDArray[np.float64]:
+def check_gates(gates: object, n: int, n_units: int) -> NDArray[np.float64]:
     """``gates`` as a float ``(n, n_units)`` array of numbers in ``[0, 1]`` (one row per view
     pair, one column per unit); a DataError naming the problem otherwise (ragged rows too)."""
     try:

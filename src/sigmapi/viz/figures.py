@@ -10,12 +10,13 @@ inputs)`` returns the matplotlib figure and the facts its caption states (JSON-a
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from sigmapi.metrics import ORDERED_R2, chebyshev
 
@@ -67,8 +68,8 @@ class DrawInputs:
     reference: dict[str, float] | None = None
     label: str = ""
     seed: int = 0
-    centres: Any = None
-    ceiling: dict[str, Any] | None = None
+    centres: ArrayLike | None = None
+    ceiling: Mapping[str, float] | None = None
 
     @property
     def tag(self) -> str:
@@ -491,9 +492,9 @@ def draw_figure(
     reference: dict[str, float] | None = None,
     label: str = "",
     seed: int = 0,
-    centres: Any = None,
+    centres: ArrayLike | None = None,
     dpi: int = DPI,
-    ceiling: dict[str, Any] | None = None,
+    ceiling: Mapping[str, float] | None = None,
 ) -> Facts:
     """Draw figure ``name`` (one of :data:`FIGURES`) of ``model`` into ``path``.
 

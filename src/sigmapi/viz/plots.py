@@ -386,27 +386,16 @@ def plot_learning_curves(
                         if part == 0
                         else None,
                     )
-            for target in (pa, ra):
-                if target is None:
-                    continue
-                first = target is pa
-                if key in ref:
+            lines = []  # (value, line style, width, legend) of the horizontal lines
+            if key in ref:
+                lines.append((ref[key], "--", 1.0, f"reference {ref[key]:g}"))
+            if key in top_line:
+                legend = f"the rule's ceiling (fixed point) {top_line[key]:.3f}"
+                lines.append((top_line[key], "-.", 1.2, legend))
+            for target in (pa, ra) if ra is not None else (pa,):
+                for value, ls, lw, text in lines:
                     target.axhline(
-                        ref[key],
-                        color=colour,
-                        ls="--",
-                        lw=1,
-                        label=f"reference {ref[key]:g}" if first else None,
-                    )
-                if key in top_line:
-                    target.axhline(
-                        top_line[key],
-                        color=colour,
-                        ls="-.",
-                        lw=1.2,
-                        label=f"the rule's ceiling (fixed point) {top_line[key]:.3f}"
-                        if first
-                        else None,
+                        value, color=colour, ls=ls, lw=lw, label=text if target is pa else None
                     )
         if label.startswith("z error") and "z_error_floor" in ref:
             for target in (pa, ra):

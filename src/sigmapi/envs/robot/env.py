@@ -259,8 +259,8 @@ class RobotDockEnv(FramesCodes, gym.Env[Obs, np.int64]):
 
     # ------------------------------------------------------------------ Gymnasium API
     def reset(
-        self, *, seed: int | None = None, options: dict[str, Any] | None = None
-    ) -> tuple[Obs, dict[str, Any]]:
+        self, *, seed: int | None = None, options: dict[str, object] | None = None
+    ) -> tuple[Obs, dict[str, object]]:
         """A new episode: the ball somewhere on the table near its edge, the base at a random
         pose that puts the ball in the workspace, outside the grasp region, off the table."""
         super().reset(seed=seed)
@@ -289,7 +289,7 @@ class RobotDockEnv(FramesCodes, gym.Env[Obs, np.int64]):
         self._done = False
         return self._obs(), self._info("", self._direction())
 
-    def step(self, action: Any) -> tuple[Obs, SupportsFloat, bool, bool, dict[str, Any]]:
+    def step(self, action: object) -> tuple[Obs, SupportsFloat, bool, bool, dict[str, object]]:
         if self._done:
             raise gym.error.ResetNeeded("the episode has ended or not begun; call reset()")
         a = check_action(self.action_space, action, fix=f"the moves {ACTIONS}")

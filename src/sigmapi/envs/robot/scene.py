@@ -173,14 +173,15 @@ class Scene:
         self._hand_site = m.site("hand").id
         self.arm_range = np.array([m.joint(n).range for n in _ARM])
         """Joint limits of the arm ``(3, 2)``, radians."""
-        self._object_geom = m.geom("object").id
-        self._hand_geom = m.geom("hand").id
-        self._is_robot = np.zeros(m.ngeom, dtype=bool)
-        self._is_robot[[m.geom(n).id for n in ("base", "torso")]] = True
-        self._is_table = np.zeros(m.ngeom, dtype=bool)
-        self._is_table[
-            [m.geom(n).id for n in ("table_top", "leg_a", "leg_b", "leg_c", "leg_d")]
-        ] = True
+
+        def geoms(*names: str) -> NDArray[np.bool_]:  # a mask over the geoms
+            mask = np.zeros(m.ngeom, dtype=bool)
+            mask[[m.geom(n).id for n in names]] = True
+            return mask
+
+        self._is_ball, self._is_hand = geoms("object"), geoms("hand")
+        self._is_robot = geoms("base", "torso")
+        self._is_table = geoms("table_top", "leg_a", "leg_b", "leg_c", "leg_d")
         self._chain = {
             "neck": _offset(m.body_pos[m.body("neck").id], m.body_quat[m.body("neck").id]),
             "head": _offset(m.body_pos[self._head], m.body_quat[self._head]),
@@ -335,23 +336,21 @@ class Scene:
         self._renderers.clear()
 
     # ------------------------------------------------------------------ contacts
-    def robot_touches_table(self) -> bool:
-        """Whether the base or torso is in contact with the table (a bump)."""
+    def _touching(self, a: NDArray[np.bool_], b: NDArray[np.bool_]) -> bool:
+        """Whether a geom of mask ``a`` is in contact with one of mask ``b``."""
         n = self.data.ncon
         if n == 0:
             return False
         g1, g2 = self.data.contact.geom1[:n], self.data.contact.geom2[:n]
-        robot, table = self._is_robot, self._is_table
-        return bool(np.any((robot[g1] & table[g2]) | (robot[g2] & table[g1])))
+        return bool(np.any((a[g1] & b[g2]) | (a[g2] & b[g1])))
+
+    def robot_touches_table(self) -> bool:
+        """Whether the base or torso is in contact with the table (a bump)."""
+        return self._touching(self._is_robot, self._is_table)
 
     def hand_touches_object(self) -> bool:
         """Whether the hand is in contact with the ball."""
-        n = self.data.ncon
-        if n == 0:
-            return False
-        g1, g2 = self.data.contact.geom1[:n], self.data.contact.geom2[:n]
-        hand, ball = self._hand_geom, self._object_geom
-        return bool(np.any(((g1 == hand) & (g2 == ball)) | ((g1 == ball) & (g2 == hand))))
+        return self._touching(self._is_hand, self._is_ball)
 
 
 def _offset(pos: ArrayLike, quat: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
