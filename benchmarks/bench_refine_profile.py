@@ -197,12 +197,14 @@ def _unit_bounds(norms, members_x, members_y, c, x, y, tol, rule, ub):  # pragma
     xt, yt, xs, ys = np.empty(n_tx), np.empty(n_ty), np.empty(n_tx), np.empty(n_ty)
     tl = np.empty(n_tx * n_ty, dtype=np.int64)
     sv = np.empty(n_tx * n_ty, dtype=np.float32)
-    vb = np.empty((n_tx * n_ty, members_x.shape[1] * members_y.shape[1]))
+    width = members_x.shape[1] * members_y.shape[1]
+    vb = np.empty((n_tx * n_ty, width), dtype=np.float32)
+    xe, ye = np.empty(width), np.empty((n_ty, width))
     s = np.empty(ub.shape[1], dtype=np.float32)
     for b in range(x.shape[0]):
         # left unformatted: the arguments in the rows of the kernel's signature
         n = _refining._products(x[b], y[b], tol, members_x, members_y, xv, yv, xt, yt, xs, ys,
-                                tl, sv, vb)  # fmt: skip
+                                xe, ye, tl, sv, vb)  # fmt: skip
         _refining._bounds(norms, tl, sv, n, 0, ub.shape[1], c, rule, s, ub[b])
 
 

@@ -197,16 +197,36 @@ def build(
 
 
 @njit(cache=True, nogil=True)
+def _cut(x, y, tol):  # pragma: no cover - compiled
+    """``max|x|``, ``max|y|`` and the cut ``tol max|x| max|y|`` of ``_rows._pairs`` (a product
+    ``x_i y_j`` is kept where its magnitude exceeds the cut)."""
+    mx = _top(x)
+    my = _top(y)
+    return mx, my, tol * mx * my
+
+
+@njit(cache=True, nogil=True)
+def _top(v):  # pragma: no cover - compiled
+    """``max |v_i|`` (0 for an empty ``v``) in four running maxima: one chain of compares
+    waits on each step, four overlap (a maximum is exact in any order)."""
+    m0 = m1 = m2 = m3 = 0.0
+    n = v.shape[0]
+    end = n - n % 4
+    for i in range(0, end, 4):
+        m0 = max(m0, abs(v[i]))
+        m1 = max(m1, abs(v[i + 1]))
+        m2 = max(m2, abs(v[i + 2]))
+        m3 = max(m3, abs(v[i + 3]))
+    for i in range(end, n):
+        m0 = max(m0, abs(v[i]))
+    return max(max(m0, m1), max(m2, m3))
+
+
+@njit(cache=True, nogil=True)
 def _kept(x, y, tol, ib, jb):  # pragma: no cover - compiled
     """The prefilter of ``_rows._pairs``: the ``i`` with ``|x_i| max|y| > cut`` into ``ib``,
     the ``j`` with ``|y_j| max|x| > cut`` into ``jb``; returns their counts and the cut."""
-    mx = 0.0
-    for i in range(x.shape[0]):
-        mx = max(mx, abs(x[i]))
-    my = 0.0
-    for j in range(y.shape[0]):
-        my = max(my, abs(y[j]))
-    thr = tol * mx * my
+    mx, my, thr = _cut(x, y, tol)
     ni = 0
     for i in range(x.shape[0]):
         if abs(x[i]) * my > thr:
@@ -267,13 +287,7 @@ def _spans(x, y, tol, ncol, ib, j0, jn, top):  # pragma: no cover - compiled
     hold a ``j`` the prefilter drops (a row's kept columns need not be adjacent): its
     products are below the cut, since ``|x_i y_j| <= max|x| |y_j|`` holds in rounded
     arithmetic too (rounding is monotone), and count as zeros."""
-    mx = 0.0
-    for i in range(x.shape[0]):
-        mx = max(mx, abs(x[i]))
-    my = 0.0
-    for j in range(y.shape[0]):
-        my = max(my, abs(y[j]))
-    thr = tol * mx * my
+    mx, my, thr = _cut(x, y, tol)
     ni = 0
     for i in range(x.shape[0]):  # without a branch: stored, and kept by counting it
         ib[ni] = i
@@ -319,7 +333,16 @@ def _by_tile(x, members, xv, top, sq):  # pragma: no cover - compiled
 
 
 @njit(cache=True, nogil=True)
-def _products(x, y, tol, members_x, members_y, xv, yv, xt, yt, xs, ys, tl, sv, vb):
+def _spread(v, n_mx, n_my, axis, out):  # pragma: no cover - compiled
+    """A tile's values ``v`` of one code spread to a block's layout ``u * n_my + e``:
+    ``out[u * n_my + e] = v[u]`` (``axis`` 0, x's tile) or ``v[e]`` (``axis`` 1, y's)."""
+    for u in range(n_mx):
+        for e in range(n_my):
+            out[u * n_my + e] = v[u] if axis == 0 else v[e]
+
+
+@njit(cache=True, nogil=True)
+def _products(x, y, tol, members_x, members_y, xv, yv, xt, yt, xs, ys, xe, ye, tl, sv, vb):
     """The pair's tiles and products: the tiles ``a * tiles_y + b`` whose largest ``|x_i
     y_j|`` passes the cut of ``_rows._pairs`` into ``tl``, the norm of the pair's outer
     product on each ``|x_a| |y_b|`` (float32, rounded up) into ``sv``, and on row ``q`` of
@@ -327,8 +350,10 @@ def _products(x, y, tol, members_x, members_y, xv, yv, xt, yt, xs, ys, tl, sv, v
     ``x_i y_j`` (rounded to ``vb``'s float32) where ``_pairs`` keeps it, else a zero. Every
     kept pair lies in such a tile (rounding is monotone: ``|x_i y_j| <= max_tile |x|
     max_tile |y|`` holds rounded too).
-    ``xv, yv, xt, yt, xs, ys``: scratch of :func:`_by_tile`. Returns the tile count; fills
-    nothing if ``vb`` has fewer rows (call again with more)."""
+    ``xv, yv, xt, yt, xs, ys``: scratch of :func:`_by_tile`; ``xe`` ``(width,)`` and ``ye``
+    ``(tiles_y, width)``: the codes' tiles spread to a block's layout (:func:`_spread`), so
+    that a tile's products are one run. Returns the tile count; fills nothing if ``vb`` has
+    fewer rows (call again with more)."""
     n_tx, n_ty = members_x.shape[0], members_y.shape[0]  # pragma: no cover - compiled
     n_mx, n_my = members_x.shape[1], members_y.shape[1]
     mx = _by_tile(x, members_x, xv, xt, xs)
@@ -342,21 +367,23 @@ def _products(x, y, tol, members_x, members_y, xv, yv, xt, yt, xs, ys, tl, sv, v
             n += xt[a] * yt[b] > thr
     if n > vb.shape[0]:
         return n
+    width = n_mx * n_my
+    for b in range(n_ty):  # y's tiles that can pass, spread to a block's layout
+        if yt[b] * mx > thr:
+            _spread(yv[b], n_mx, n_my, 1, ye[b])
     n = 0
     for a in range(n_tx):
         if xt[a] * my <= thr:
             continue
+        _spread(xv[a], n_mx, n_my, 0, xe)
         for b in range(n_ty):
             if xt[a] * yt[b] <= thr:
                 continue
-            yb = yv[b]
+            yb = ye[b]
             row = vb[n]
-            for u in range(n_mx):
-                xi = xv[a, u]
-                out = row[u * n_my : (u + 1) * n_my]
-                for e in range(n_my):
-                    v = xi * yb[e]
-                    out[e] = v if abs(v) > thr else 0.0
+            for e in range(width):  # one run of a block's width: the compiler's vectors
+                v = xe[e] * yb[e]
+                row[e] = v if abs(v) > thr else 0.0
             norm = np.sqrt(xs[a] * ys[b])
             n32 = np.float32(norm)
             sv[n] = n32 if n32 >= norm else np.nextafter(n32, np.float32(np.inf))
@@ -573,18 +600,20 @@ def _settle_rows(
         ys = np.empty(n_ty)
         tl = np.empty(n_tx * n_ty, dtype=np.int64)
         sv = np.empty(n_tx * n_ty, dtype=np.float32)
+        xe = np.empty(width)
+        ye = np.empty((n_ty, width))
         vb = np.empty((64, width), dtype=np.float32)
         work = np.empty((6, k_units))
         cands = np.empty(k_units, dtype=np.int64)
         for r in range(ch * ROWS, min(n_rows, (ch + 1) * ROWS)):
             b = order[r]
             # left unformatted: the arguments in the rows of the kernel's signature
-            n = _products(x[b], y[b], tol, members_x, members_y, xv, yv, xt, yt, xs, ys, tl,
-                          sv, vb)  # fmt: skip
+            n = _products(x[b], y[b], tol, members_x, members_y, xv, yv, xt, yt, xs, ys, xe,
+                          ye, tl, sv, vb)  # fmt: skip
             if n > vb.shape[0]:
                 vb = np.empty((n, width), dtype=np.float32)
                 n = _products(x[b], y[b], tol, members_x, members_y, xv, yv, xt, yt, xs, ys,
-                              tl, sv, vb)  # fmt: skip
+                              xe, ye, tl, sv, vb)  # fmt: skip
             out[b] = _settle_row(index, raw, scale, sqnorm, c, x[b], y[b], tol, rule, rel, tl,
                                  sv, n, vb, work, cands)  # fmt: skip
 
