@@ -41,7 +41,15 @@ from sigmapi.executor import Executor, job_memory
 from sigmapi.experiments.base import KEY_VALUES, Experiment, register, run_all
 from sigmapi.experiments.kit.jobs import Tick, counted, iterations_counted
 from sigmapi.experiments.kit.maps import MapSpec
-from sigmapi.experiments.kit.results import Column, Result, columns, render
+from sigmapi.experiments.kit.results import (
+    Column,
+    Result,
+    as_object,
+    columns,
+    plain,
+    render,
+    tuples,
+)
 from sigmapi.experiments.kit.seeds import SeedPlan, check_seeds
 from sigmapi.metrics import evaluate
 from sigmapi.model.som import SigmaPiSOM
@@ -92,33 +100,15 @@ class StreamConfig:
     """Test z's (and calibration z's) of the evaluation."""
 
     def __post_init__(self) -> None:
-        set_ = object.__setattr__
-        set_(self, "overrides", tuple(self.overrides))
-        if not self.dwells:
-            raise _validate.fail(
-                "dwells", "at least one dwell time", list(self.dwells), "e.g. --dwells 1,2,4,8,16"
-            )
-        dwells = [
-            _validate.integer("dwells", d, 1, fix="saccades per position") for d in self.dwells
-        ]
-        set_(self, "dwells", tuple(sorted(set(dwells))))
-        if not self.traces:
-            raise _validate.fail(
-                "traces", "at least one trace constant", list(self.traces), "e.g. --traces 0,0.5"
-            )
-        traces = {
-            _validate.number(
-                "traces",
-                t,
-                0.0,
-                1.0,
-                hi_open=True,
-                fix="trace constants in [0, 1), e.g. --traces 0,0.5",
-            )
-            for t in self.traces
-        }
-        set_(self, "traces", tuple(sorted(traces)))
-        _validate.check_fields(self)
+        object.__setattr__(self, "overrides", tuple(self.overrides))
+        _validate.check_fields(self)  # each dwell time and trace constant within its bounds
+        for name, what, fix in (
+            ("dwells", "dwell time", "e.g. --dwells 1,2,4,8,16"),
+            ("traces", "trace constant", "e.g. --traces 0,0.5"),
+        ):
+            if not getattr(self, name):
+                raise _validate.fail(name, f"at least one {what}", [], fix)
+            object.__setattr__(self, name, tuple(sorted(set(getattr(self, name)))))
         self.som_config  # noqa: B018 (an unknown preset or a bad override fails here, not later)
 
     @property
@@ -140,6 +130,9 @@ QUICK = StreamConfig(
 
 METRICS = ("view_consistency", "view_within_one", "z_error", "order_r2", "fold_score")
 """The scores of each map (:func:`sigmapi.evaluate`), besides ``folded``."""
+
+PER_SEED = (*METRICS, "folded", "seconds")
+"""The values of each map that ``"methods"`` keeps per seed."""
 
 
 VC_MARGIN = 0.02
@@ -178,15 +171,11 @@ class StreamResult(Result):
     run's wall time."""
 
     @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> StreamResult:
+    def from_dict(cls, data: Any) -> StreamResult:
         """The result a :meth:`to_dict` wrote (e.g. read back from ``result.json``)."""
-        st = data["settings"]
+        st = as_object(data)["settings"]
         config = StreamConfig(
-            preset=st["preset"],
-            overrides=tuple(st["overrides"]),
-            dwells=tuple(st["dwells"]),
-            traces=tuple(st["traces"]),
-            n_test=st["n_test"],
+            **tuples({f.name: st[f.name] for f in dataclasses.fields(StreamConfig)})
         )
         seeds = tuple(st["seeds"])
         runs = [
@@ -194,7 +183,7 @@ class StreamResult(Result):
                 "seed": seed,
                 "dwell": m["dwell"],
                 "trace": m["trace"],
-                **{k: m["per_seed"][k][i] for k in (*METRICS, "folded", "seconds")},
+                **{k: m["per_seed"][k][i] for k in PER_SEED},
             }
             for m in data["methods"]
             for i, seed in enumerate(seeds)
@@ -238,7 +227,7 @@ class StreamResult(Result):
                 fold_rate=float(np.mean(folded)),
                 ordered=int(len(rows) - sum(folded)),
                 n_seeds=len(rows),
-                per_seed={k: [r[k] for r in rows] for k in (*METRICS, "folded", "seconds")},
+                per_seed={k: [r[k] for r in rows] for k in PER_SEED},
             )
             out.append(entry)
         return out
@@ -267,18 +256,10 @@ class StreamResult(Result):
                 )
         return out
 
-    def settings(self) -> dict[str, Any]:
+    def settings(self) -> dict[str, object]:
         """The config, the seeds and the resolved map config."""
-        c = self.config
-        return {
-            "preset": c.preset,
-            "overrides": list(c.overrides),
-            "dwells": list(c.dwells),
-            "traces": list(c.traces),
-            "n_test": c.n_test,
-            "seeds": list(self.seeds),
-            "config": c.som_config.to_dict(),
-        }
+        config = self.config
+        return {**plain(config), "seeds": self.seeds, "config": config.som_config.to_dict()}
 
     def table(self) -> str:
         """Medians per method and dwell time, then the acceptance lines."""
@@ -387,42 +368,6 @@ def _stream_job(job: StreamJob, tick: Tick | None) -> list[dict[str, Any]]:
     return out
 
 
-def run_stream(
-    config: StreamConfig,
-    seeds: Sequence[int],
-    executor: Executor | None = None,
-    progress: Progress | None = None,
-) -> StreamResult:
-    """Every map of ``config`` on each of ``seeds`` (one job per seed and dwell time, and one
-    per seed on pairs), scored; the :class:`StreamResult`."""
-    seeds = check_seeds(seeds)
-    cfg = config.som_config
-    start = time.perf_counter()
-    jobs = [(f"seed {s} pairs", StreamJob(s, cfg, None, (), config.n_test)) for s in seeds]
-    jobs += [
-        (f"seed {s} dwell {d}", StreamJob(s, cfg, d, config.traces, config.n_test))
-        for s in seeds
-        for d in config.dwells
-    ]
-    frames = 8 * (cfg.iterations + 1) * 2 * (int(np.prod(cfg.x_shape)) + int(np.prod(cfg.y_shape)))
-
-    def describe(key: str, rows: list[dict[str, Any]]) -> str:
-        return f"{key}: same unit " + ", ".join(f"{r['view_consistency']:.3f}" for r in rows)
-
-    done = run_all(
-        stream_job,
-        jobs,
-        executor=executor,
-        per_job=job_memory(cfg, config.n_test) + frames,
-        progress=progress,
-        desc="stream",
-        describe=describe,
-        verbose=lambda job: dataclasses.replace(job, show=progress),
-    )
-    runs = [r for rows in done.values() for r in rows]
-    return StreamResult(config, seeds, runs, time.perf_counter() - start)
-
-
 class StreamExperiment(Experiment[StreamConfig]):
     """Maps learned from a stream of frames (the trace rule) over dwell times and trace
     constants, against the map learned from explicit pairs, on the same seeds."""
@@ -447,7 +392,36 @@ class StreamExperiment(Experiment[StreamConfig]):
         executor: Executor | None = None,
         progress: Progress | None = None,
     ) -> StreamResult:
-        return run_stream(config, seeds, executor, progress)
+        """Every map of ``config`` on each of ``seeds`` (one job per seed and dwell time, and
+        one per seed on pairs), scored."""
+        seeds = check_seeds(seeds)
+        cfg = config.som_config
+        start = time.perf_counter()
+        jobs = [(f"seed {s} pairs", StreamJob(s, cfg, None, (), config.n_test)) for s in seeds]
+        jobs += [
+            (f"seed {s} dwell {d}", StreamJob(s, cfg, d, config.traces, config.n_test))
+            for s in seeds
+            for d in config.dwells
+        ]
+        frames = (
+            8 * (cfg.iterations + 1) * 2 * (int(np.prod(cfg.x_shape)) + int(np.prod(cfg.y_shape)))
+        )
+
+        def describe(key: str, rows: list[dict[str, Any]]) -> str:
+            return f"{key}: same unit " + ", ".join(f"{r['view_consistency']:.3f}" for r in rows)
+
+        done = run_all(
+            stream_job,
+            jobs,
+            executor=executor,
+            per_job=job_memory(cfg, config.n_test) + frames,
+            progress=progress,
+            desc="stream",
+            describe=describe,
+            verbose=lambda job: dataclasses.replace(job, show=progress),
+        )
+        runs = [r for rows in done.values() for r in rows]
+        return StreamResult(config, seeds, runs, time.perf_counter() - start)
 
 
 STREAM = register(StreamExperiment())
