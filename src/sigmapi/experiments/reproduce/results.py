@@ -14,16 +14,13 @@ import statistics
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Literal, get_args
+from typing import Any, Literal, get_args
 
 from sigmapi import _validate
 from sigmapi.config import SOMConfig
 from sigmapi.experiments.base import check_seeds
 from sigmapi.experiments.kit.results import Result
 from sigmapi.metrics import ORDERED_R2, Metrics
-
-if TYPE_CHECKING:
-    pass
 
 __all__ = [
     "METRIC_KEYS",

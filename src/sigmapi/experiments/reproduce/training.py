@@ -39,7 +39,13 @@ class SeedJob:
     (:func:`compile_once`); :func:`train_all` sets it on every other job."""
 
 
-_COMPILED: set[tuple[Any, ...]] = set()
+COMPILED_BY = (
+    "backend", "winner_rule", "ordering", "refine_sigma", "periodic", "map_periodic", "same_view",
+    "threads",
+)  # fmt: skip
+"""The config fields that choose the compiled code (with the dimensions and whether it refines)."""
+
+_COMPILED: set[tuple[object, ...]] = set()
 """The rule combinations this process has compiled (:func:`compile_once`)."""
 
 
@@ -56,24 +62,13 @@ def compile_once(cfg: SOMConfig, measure_first: bool = False) -> float:
     refine and measure a trained map before those that train it
     (:func:`_compile_measuring`). On a fresh install two workers that start at once, one
     each way round, then compile each half once and load the other half from numba's cache
-    (``NUMBA_CACHE_DIR``) rather than both compiling everything: 12 s of wall against 20 s
-    for a ``paper-2d`` job on two cores (``docs/guide/reproduce.md``, "Times").
+    (``NUMBA_CACHE_DIR``) rather than both compiling everything (docs/guide/reproduce.md,
+    "Times").
     """
     from sigmapi.analysis.curves import LearningCurve
 
-    key = (
-        cfg.backend,
-        cfg.winner_rule,
-        cfg.ordering,
-        cfg.refine_rounds > 0,
-        cfg.refine_sigma,
-        len(cfg.map_shape),
-        len(cfg.x_shape),
-        cfg.periodic,
-        cfg.map_periodic,
-        cfg.same_view,
-        cfg.threads,
-    )
+    dims = (cfg.refine_rounds > 0, len(cfg.map_shape), len(cfg.x_shape))
+    key = (*(getattr(cfg, k) for k in COMPILED_BY), *dims)
     if key in _COMPILED:
         return 0.0
     t0 = time.perf_counter()
