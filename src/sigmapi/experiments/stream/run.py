@@ -29,7 +29,7 @@ import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TypedDict
 
 import numpy as np
 
@@ -63,6 +63,7 @@ __all__ = [
     "STREAM",
     "STREAM_KEY",
     "VC_MARGIN",
+    "MapRun",
     "StreamConfig",
     "StreamExperiment",
     "StreamJob",
@@ -153,6 +154,34 @@ COLUMNS = columns(
 """The table's columns: one row per method and dwell time (medians, worst seeds)."""
 
 
+@dataclass(frozen=True)
+class MapRun:
+    """One map's scores (:func:`stream_job`): the map on pairs when ``dwell`` is None."""
+
+    seed: int
+    dwell: int | None
+    trace: float | None
+    view_consistency: float
+    view_within_one: float
+    z_error: float
+    order_r2: float
+    fold_score: float
+    folded: bool
+    seconds: float
+
+
+class Case(TypedDict):
+    """The acceptance at one trace constant and dwell time (:meth:`StreamResult.acceptance`)."""
+
+    trace: float
+    dwell: int
+    vc_gap_median: float
+    vc_gap_worst: float
+    met: int
+    n_seeds: int
+    all_met: bool
+
+
 def _name(trace: float | None) -> str:
     return "pairs" if trace is None else f"stream trace {trace:g}"
 
@@ -163,7 +192,7 @@ class StreamResult(Result):
 
     config: StreamConfig
     seeds: tuple[int, ...]
-    runs: list[dict[str, Any]]
+    runs: list[MapRun]
     seconds: float
 
     KEYS = ("methods", "acceptance", "settings", "seconds")
@@ -171,24 +200,20 @@ class StreamResult(Result):
     run's wall time."""
 
     @classmethod
-    def from_dict(cls, data: Any) -> StreamResult:
+    def from_dict(cls, data: object) -> StreamResult:
         """The result a :meth:`to_dict` wrote (e.g. read back from ``result.json``)."""
         st = as_object(data)["settings"]
         config = StreamConfig(
             **tuples({f.name: st[f.name] for f in dataclasses.fields(StreamConfig)})
         )
         seeds = tuple(st["seeds"])
+        obj = as_object(data)
         runs = [
-            {
-                "seed": seed,
-                "dwell": m["dwell"],
-                "trace": m["trace"],
-                **{k: m["per_seed"][k][i] for k in PER_SEED},
-            }
-            for m in data["methods"]
+            MapRun(seed, m["dwell"], m["trace"], **{k: m["per_seed"][k][i] for k in PER_SEED})
+            for m in obj["methods"]
             for i, seed in enumerate(seeds)
         ]
-        return cls(config, seeds, runs, float(data["seconds"]))
+        return cls(config, seeds, runs, float(obj["seconds"]))
 
     @classmethod
     def combine(cls, parts: Sequence[StreamResult]) -> StreamResult:
@@ -204,11 +229,11 @@ class StreamResult(Result):
             sum(p.seconds for p in parts),
         )
 
-    def _rows(self, trace: float | None, dwell: int | None) -> list[dict[str, Any]]:
-        rows = [r for r in self.runs if r["trace"] == trace and r["dwell"] == dwell]
-        return sorted(rows, key=lambda r: self.seeds.index(r["seed"]))
+    def _rows(self, trace: float | None, dwell: int | None) -> list[MapRun]:
+        rows = [r for r in self.runs if r.trace == trace and r.dwell == dwell]
+        return sorted(rows, key=lambda r: self.seeds.index(r.seed))
 
-    def methods(self) -> list[dict[str, Any]]:
+    def methods(self) -> list[dict[str, object]]:
         """One entry per method and dwell time: ``name``, ``dwell`` (None for pairs),
         ``trace``, the median of each metric, its worst seed (``*_worst``: lowest view
         consistency and order, highest z error and fold score), ``fold_rate``, ``ordered``
@@ -217,42 +242,46 @@ class StreamResult(Result):
         out = []
         for trace, dwell in keys:
             rows = self._rows(trace, dwell)
-            entry: dict[str, Any] = {"name": _name(trace), "dwell": dwell, "trace": trace}
+            entry: dict[str, object] = {"name": _name(trace), "dwell": dwell, "trace": trace}
             for k in METRICS:
-                vals = [r[k] for r in rows]
+                vals = [getattr(r, k) for r in rows]
                 worst = max(vals) if k in ("z_error", "fold_score") else min(vals)
                 entry.update({k: float(np.median(vals)), f"{k}_worst": float(worst)})
-            folded = [r["folded"] for r in rows]
+            folded = [r.folded for r in rows]
             entry.update(
                 fold_rate=float(np.mean(folded)),
                 ordered=int(len(rows) - sum(folded)),
                 n_seeds=len(rows),
-                per_seed={k: [r[k] for r in rows] for k in PER_SEED},
+                per_seed={k: [getattr(r, k) for r in rows] for k in PER_SEED},
             )
             out.append(entry)
         return out
 
-    def acceptance(self) -> dict[str, Any]:
+    def acceptance(self) -> dict[str, object]:
         """Per trace constant and dwell time ``>= MIN_DWELL``: the view consistency of the
         stream minus that of pairs, seed by seed (median, worst), how many seeds are within
         :data:`VC_MARGIN` and ordered, and whether every seed is."""
-        pairs = {r["seed"]: r for r in self._rows(None, None)}
-        out: dict[str, Any] = {"margin": VC_MARGIN, "min_dwell": MIN_DWELL, "cases": []}
+        return {"margin": VC_MARGIN, "min_dwell": MIN_DWELL, "cases": self.cases()}
+
+    def cases(self) -> list[Case]:
+        """The cases of :meth:`acceptance`, trace constant-major."""
+        pairs = {r.seed: r for r in self._rows(None, None)}
+        out = []
         for trace in self.config.traces:
             for dwell in (d for d in self.config.dwells if d >= MIN_DWELL):
                 rows = self._rows(trace, dwell)
-                gap = [r["view_consistency"] - pairs[r["seed"]]["view_consistency"] for r in rows]
-                met = [g >= -VC_MARGIN and not r["folded"] for g, r in zip(gap, rows, strict=True)]
-                out["cases"].append(
-                    {
-                        "trace": trace,
-                        "dwell": dwell,
-                        "vc_gap_median": float(np.median(gap)),
-                        "vc_gap_worst": float(min(gap)),
-                        "met": int(sum(met)),
-                        "n_seeds": len(rows),
-                        "all_met": bool(all(met)),
-                    }
+                gap = [r.view_consistency - pairs[r.seed].view_consistency for r in rows]
+                met = [g >= -VC_MARGIN and not r.folded for g, r in zip(gap, rows, strict=True)]
+                out.append(
+                    Case(
+                        trace=trace,
+                        dwell=dwell,
+                        vc_gap_median=float(np.median(gap)),
+                        vc_gap_worst=float(min(gap)),
+                        met=int(sum(met)),
+                        n_seeds=len(rows),
+                        all_met=bool(all(met)),
+                    )
                 )
         return out
 
@@ -264,7 +293,7 @@ class StreamResult(Result):
     def table(self) -> str:
         """Medians per method and dwell time, then the acceptance lines."""
         rows = render(COLUMNS, self.methods())
-        for case in self.acceptance()["cases"]:
+        for case in self.cases():
             rows.append(
                 f"trace {case['trace']:g}, dwell {case['dwell']}: {case['met']} of "
                 f"{case['n_seeds']} seeds within {VC_MARGIN} view consistency of pairs and "
@@ -277,9 +306,7 @@ class StreamResult(Result):
         """The figure's caption, computed from the result."""
         pairs = self.methods()[0]
         n = len(self.seeds)
-        best = max(
-            self.acceptance()["cases"], key=lambda c: (c["met"], c["vc_gap_median"]), default=None
-        )
+        best = max(self.cases(), key=lambda c: (c["met"], c["vc_gap_median"]), default=None)
         text = (
             f"{self.config.preset}, {n} seed{'s' * (n > 1)} ({', '.join(map(str, self.seeds))}): "
             f"view consistency and fold rate of maps learned from a stream in which the object "
@@ -328,10 +355,9 @@ class StreamJob:
     """Where given, the job shows its maps' training iterations."""
 
 
-def stream_job(job: StreamJob) -> list[dict[str, Any]]:
+def stream_job(job: StreamJob) -> list[MapRun]:
     """Train and score the maps of one job: the map on pairs, or one map per trace constant on
-    the stream of ``(seed, dwell)``; one dict per map (``seed``, ``dwell``, ``trace``, the
-    :data:`METRICS`, ``folded``, ``seconds``)."""
+    the stream of ``(seed, dwell)``; one :class:`MapRun` per map."""
     maps = 1 if job.dwell is None else len(job.traces)
     what = "pairs" if job.dwell is None else f"dwell {job.dwell}"
     desc = f"stream seed {job.seed} {what}"
@@ -339,16 +365,15 @@ def stream_job(job: StreamJob) -> list[dict[str, Any]]:
     return counted(job.show, maps * job.cfg.iterations, desc, work, "it")
 
 
-def _stream_job(job: StreamJob, tick: Tick | None) -> list[dict[str, Any]]:
+def _stream_job(job: StreamJob, tick: Tick | None) -> list[MapRun]:
     out = []
     its = job.cfg.iterations
 
-    def scored(model: SigmaPiSOM, trace: float | None, start: float) -> dict[str, Any]:
+    def scored(model: SigmaPiSOM, trace: float | None, start: float) -> MapRun:
         m = evaluate(model, n_test=job.n_test)
-        row: dict[str, Any] = {"seed": job.seed, "dwell": job.dwell, "trace": trace}
-        row.update({k: float(getattr(m, k)) for k in METRICS})
-        row.update(folded=bool(m.folded), seconds=time.perf_counter() - start)
-        return row
+        scores = {k: float(getattr(m, k)) for k in METRICS}
+        seconds = time.perf_counter() - start
+        return MapRun(job.seed, job.dwell, trace, **scores, folded=bool(m.folded), seconds=seconds)
 
     if job.dwell is None:
         start = time.perf_counter()
@@ -407,8 +432,8 @@ class StreamExperiment(Experiment[StreamConfig]):
             8 * (cfg.iterations + 1) * 2 * (int(np.prod(cfg.x_shape)) + int(np.prod(cfg.y_shape)))
         )
 
-        def describe(key: str, rows: list[dict[str, Any]]) -> str:
-            return f"{key}: same unit " + ", ".join(f"{r['view_consistency']:.3f}" for r in rows)
+        def describe(key: str, rows: list[MapRun]) -> str:
+            return f"{key}: same unit " + ", ".join(f"{r.view_consistency:.3f}" for r in rows)
 
         done = run_all(
             stream_job,
