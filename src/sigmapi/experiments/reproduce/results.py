@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import shutil
 import statistics
-from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal, get_args
@@ -19,7 +18,7 @@ from typing import Any, Literal, get_args
 from sigmapi import _validate
 from sigmapi.config import SOMConfig
 from sigmapi.experiments.base import check_seeds
-from sigmapi.experiments.kit.results import Result
+from sigmapi.experiments.kit.results import Result, as_object
 from sigmapi.metrics import ORDERED_R2, Metrics
 
 __all__ = [
@@ -215,8 +214,9 @@ class SeedRun(Result):
         return float(getattr(m, key))
 
     @classmethod
-    def from_dict(cls, data: Mapping[str, Any]) -> SeedRun:
+    def from_dict(cls, data: object) -> SeedRun:
         """The run a :meth:`to_dict` wrote."""
+        data = as_object(data)
         times = {k: float(data[k]) for k in SECONDS}
         rest = set(data) - {*SECONDS, "seed", "backend", "unrefined", "curve"}
         unrefined = data["unrefined"]
@@ -319,7 +319,7 @@ class PresetResult(Result):
     def refined(self) -> dict[str, object]:
         return self._stage("refined")
 
-    def unrefined(self) -> dict[str, Any] | None:
+    def unrefined(self) -> dict[str, object] | None:
         return self._stage("unrefined") if self.refines else None
 
     def seed_list(self) -> list[int]:
@@ -357,9 +357,10 @@ class ReproduceResult(Result):
     numbers and the time."""
 
     @classmethod
-    def from_dict(cls, data: Mapping[str, Any]) -> ReproduceResult:
+    def from_dict(cls, data: object) -> ReproduceResult:
         """The result a :meth:`to_dict` wrote (``metrics.json``): its options (those it
         states), presets and sections; no report folder."""
+        data = as_object(data)
         options = ReproduceOptions(
             quick=data["quick"],
             seeds=tuple(data["seeds"]),

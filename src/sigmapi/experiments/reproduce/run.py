@@ -34,7 +34,7 @@ import threading
 import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any
+from typing import Generic, TypeVar
 
 from threadpoolctl import threadpool_limits
 
@@ -71,6 +71,8 @@ __all__ = [
     "paper_presets",
     "reproduce",
 ]
+
+T = TypeVar("T")
 
 REFERENCE: dict[str, dict[str, float]] = {
     "paper-1d": {"view_consistency": 0.87, "view_within_one": 0.988, "z_error": 0.32},
@@ -337,21 +339,21 @@ def _report_preset(
         )
 
 
-class _Background:
+class _Background(Generic[T]):
     """``fn()`` run in a daemon thread from now on; :meth:`result` waits for its value (or
     raises its error). The sections (the reach experiment: its seeds in a process pool) run so
     beside the ceilings and the figures, whose drawing leaves a core idle. A daemon thread:
     an interrupted report does not wait for it (its pool's workers end with this process)."""
 
-    def __init__(self, fn: Callable[[], Any]) -> None:
-        self._value: Any = None
+    def __init__(self, fn: Callable[[], T]) -> None:
+        self._value: list[T] = []  # fn's value, once it has one
         self._error: BaseException | None = None
         self._thread = threading.Thread(target=self._run, args=(fn,), daemon=True)
         self._thread.start()
 
-    def _run(self, fn: Callable[[], Any]) -> None:
+    def _run(self, fn: Callable[[], T]) -> None:
         try:
-            self._value = fn()
+            self._value.append(fn())
         except BaseException as e:  # raised again in the caller's thread by result()
             self._error = e
 
@@ -361,11 +363,11 @@ class _Background:
         for child in multiprocessing.active_children():
             child.terminate()
 
-    def result(self) -> Any:
+    def result(self) -> T:
         self._thread.join()
         if self._error is not None:
             raise self._error
-        return self._value
+        return self._value[0]
 
 
 class Reproduce(Experiment[ReproduceConfig]):
