@@ -109,28 +109,20 @@ class PhysiologyConfig:
                 "model", "a model file path", self.model, "e.g. sigmapi physiology model.npz"
             )
         _validate.check_fields(self)  # the bounds declared beside the fields
-        gazes = list(self.gazes)
-        if len(set(gazes)) < 3:
-            raise _validate.fail(
-                "gazes",
-                "at least 3 distinct gazes",
-                list(self.gazes),
-                "e.g. --gazes 0.2,0.35,0.5,0.65,0.8",
-            )
-        object.__setattr__(self, "gazes", tuple(sorted(set(gazes))))
+        for name, what, fix in (
+            ("gazes", "gazes", "e.g. --gazes 0.2,0.35,0.5,0.65,0.8"),
+            ("eye_grid", "eye positions", "e.g. --eye-grid 0.3,0.5,0.7"),
+        ):
+            values = getattr(self, name)
+            if len(set(values)) < 3:
+                raise _validate.fail(name, f"at least 3 distinct {what}", list(values), fix)
+            object.__setattr__(self, name, tuple(sorted(set(values))))
         if 0 < self.n_probe < 5:
             raise _validate.fail("n_probe", "0 or at least 5", self.n_probe, "e.g. 61")
         if any(v == 0.0 for v in self.body_slope):
             raise _validate.fail("body_slope", "nonzero", list(self.body_slope), "e.g. -1")
         axes = self.gaze_axes  # the model's dimension is checked where it is loaded
         check_gaze_axes(axes, len(axes), "e.g. --gaze-axes 1,0")
-        grid = list(self.eye_grid)
-        if len(set(grid)) < 3:
-            raise _validate.fail(
-                "eye_grid", "at least 3 distinct eye positions", list(self.eye_grid),
-                "e.g. --eye-grid 0.3,0.5,0.7",
-            )  # fmt: skip
-        object.__setattr__(self, "eye_grid", tuple(sorted(set(grid))))
         _validate.boolean("nwb", self.nwb)
 
 
