@@ -146,11 +146,6 @@ class ReproduceOptions(ReproduceConfig):
         if self.workers is not None:
             _validate.integer("workers", self.workers, 1)
 
-    @property
-    def config(self) -> ReproduceConfig:
-        """The settings without the run's."""
-        return ReproduceConfig(self.quick, self.save_models, self.seeds_2d, self.n_test, self.dpi)
-
     def seeds_of(self, cfg: SOMConfig) -> tuple[int, ...]:
         """The seeds a preset trains: all of :attr:`seeds`, the first ``seeds_2d`` in 2-D."""
         if len(cfg.map_shape) >= 2 and self.seeds_2d is not None:
