@@ -20,7 +20,6 @@ if TYPE_CHECKING:
     from sigmapi.experiments.reproduce.results import (
         PresetResult,
         ReproduceResult,
-        SeedRun,
         Stage,
     )
 
@@ -152,7 +151,7 @@ def _table(result: ReproduceResult) -> str:
             for key in METRIC_KEYS:
                 value = med[key]
                 per_seed = ", ".join(
-                    _seed_value(r.metric(key, stage), _folded(r, stage)) for r in res.runs
+                    _seed_value(r.metric(key, stage), r.at(stage).folded) for r in res.runs
                 )
                 r = ref.get(key)
                 note = ""
@@ -181,11 +180,6 @@ def _table(result: ReproduceResult) -> str:
         "<th>mean ± sd</th><th>per seed (<b>bold</b>: flagged folded)</th><th>reference</th>"
         "<th></th></tr>" + "".join(rows) + "</table>"
     )
-
-
-def _folded(run: SeedRun, stage: Stage) -> bool:
-    m = run.unrefined if stage == "unrefined" and run.unrefined is not None else run.metrics
-    return bool(m.folded)
 
 
 def _mean_sd(mean: float, sd: float, n: int) -> str:

@@ -204,9 +204,14 @@ class SeedRun(Result):
     """The JSON form: the seed, its times, the kernel, the metrics at the top and those of
     the unrefined map, the learning curve."""
 
+    def at(self, stage: Stage = "refined") -> Metrics:
+        """The metrics of the map at ``stage`` (the final map's where there is no other)."""
+        return (
+            self.unrefined if stage == "unrefined" and self.unrefined is not None else self.metrics
+        )
+
     def metric(self, key: str, stage: Stage = "refined") -> float:
-        m = self.unrefined if stage == "unrefined" and self.unrefined is not None else self.metrics
-        return float(getattr(m, key))
+        return float(getattr(self.at(stage), key))
 
     @classmethod
     def from_dict(cls, data: object) -> SeedRun:
@@ -290,12 +295,7 @@ class PresetResult(Result):
 
     def folded_seeds(self, stage: Stage = "refined") -> list[int]:
         """Seeds the z-free fold detector flags."""
-        unrefined = stage == "unrefined"
-        return [
-            r.seed
-            for r in self.runs
-            if (r.unrefined if unrefined and r.unrefined else r.metrics).folded
-        ]
+        return [r.seed for r in self.runs if r.at(stage).folded]
 
     def seconds(self, key: str) -> float:
         """Median over seeds of a time of :class:`SeedRun` (e.g. ``"train_seconds"``)."""
