@@ -13,16 +13,11 @@ A spec names a preset, the seeds, fields fixed for every run (``[set]``) and a g
     iterations = [2000, 3000]
 
 Each run trains one model and evaluates it (:func:`sigmapi.evaluate`); ``DIR/results.csv``
-gets one row per run: the grid parameters, the seed, every metric (the fold score too), the
-training and total seconds, ``status`` (``ok`` or ``failed``) and the ``error`` of a failed
-run, and ``run_key``, the run's identity (:mod:`~sigmapi.experiments.sweep.table`: the
-resolved config, seed, ``n_test`` and model format). A row is appended after every finished
-run, so a killed sweep loses at most the runs in flight; started again with the same spec, it
-finds the finished runs in the table (by ``run_key``) and runs only the missing ones (failed
-ones again with ``retry_failed``). A table of another spec is refused, never rewritten (``add``
-adds to it on purpose); one command at a time writes a folder (:mod:`sigmapi._lock`); a spec
-names at most :data:`MAX_RUNS` runs. Runs go through :mod:`sigmapi.executor`: a process pool sized
-to the cores and the memory budget, or a Dask cluster.
+gets one row per run, appended after every finished run, so that a sweep started again with
+the same spec runs only the missing runs (:mod:`~sigmapi.experiments.sweep.table`: the run's
+identity ``run_key``, the strict reader). Runs go through :mod:`sigmapi.executor`; a spec
+names at most :data:`MAX_RUNS` runs. What the table holds, what is refused and the engines:
+docs/guide/sweeps.md.
 
 The experiment ``sweep`` (:class:`Sweep`, settings :class:`SweepConfig`: the spec file) is
 :func:`run_sweep` on the command line; seeds given to it replace the spec's.
