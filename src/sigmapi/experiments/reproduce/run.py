@@ -185,21 +185,19 @@ def draw_preset(
     model: SigmaPiSOM,
     entry: PresetResult,
     out: Path,
-    dpi: int,
+    opts: ReproduceOptions,
     reference: dict[str, float],
     progress: Progress | None,
-    *,
-    test_size: int,
-    curve_test: int,
 ) -> list[tuple[str, str]]:
-    """Draw every figure of one preset into ``out`` (``reference``: the published values the
-    curves mark; ``test_size`` and ``curve_test``: the table's and the curves' evaluation sizes,
-    whose gap the curves caption states); ``(file, caption)`` per figure.
+    """Draw every figure of one preset into ``out`` at the options' dpi
+    (``reference``: the published values the curves mark; the curves caption states the gap
+    between the table's and the curves' evaluation sizes); ``(file, caption)`` per figure.
 
     The facts each caption states are stored in ``entry.figures``.
     """
     from sigmapi.analysis.map_data import receptive_field_centres
 
+    test_size = opts.test_size
     centres = receptive_field_centres(model, seed=0)
     curves = [r.curve for r in entry.runs]
     seeds = run.seeds
@@ -220,13 +218,13 @@ def draw_preset(
             reference=reference,
             label=label,
             centres=centres,
-            dpi=dpi,
+            dpi=opts.dpi,
             ceiling=entry.ceiling,
         )
         if fig_name == "curves":
             facts["table_gap"] = _table_gap(entry.runs, test_size)
             facts["table_gap"]["decoding"] = _decoding_cause(
-                model, entry.runs[run.shown], curve_test, test_size
+                model, entry.runs[run.shown], run.curve_test, test_size
             )
         entry.figures[fig_name] = {"file": file, **facts}
         drawn.append((file, figs.caption(fig_name, run, facts)))
@@ -326,17 +324,7 @@ def _report_preset(
             models[i].save(ctx.out / f"{name}-seed{seed}.npz")
     run = figs.RunInfo(name, cfg, seeds, shown, opts.curve_test, why)
     with ctx.drawing:
-        return draw_preset(
-            run,
-            models[shown],
-            entry,
-            ctx.out,
-            opts.dpi,
-            _reference(name),
-            progress,
-            test_size=opts.test_size,
-            curve_test=opts.curve_test,
-        )
+        return draw_preset(run, models[shown], entry, ctx.out, opts, _reference(name), progress)
 
 
 class _Background(Generic[T]):
