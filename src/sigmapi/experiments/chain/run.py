@@ -168,11 +168,11 @@ class ChainResult(Result):
     """The JSON form: the settings, one dict per seed and the summary."""
 
     @classmethod
-    def from_dict(cls, data: Any) -> ChainResult:
+    def from_dict(cls, data: object) -> ChainResult:
         """The result that :meth:`to_dict` wrote (``result.json``)."""
-        st = as_object(data)["settings"]
-        config = SOMConfig.from_dict(st["config"])
-        return cls(config, st["train_pairs"], st["n_test"], st["code"], list(data["seeds"]))
+        obj = as_object(data)
+        st, config = obj["settings"], SOMConfig.from_dict(obj["settings"]["config"])
+        return cls(config, st["train_pairs"], st["n_test"], st["code"], list(obj["seeds"]))
 
     def summary(self) -> dict[str, object]:
         """The medians of both routes, the median and worst ratio and how many seeds meet
@@ -183,7 +183,7 @@ class ChainResult(Result):
             return float(np.median([r[route][key] for r in per_seed]))
 
         ratios = [r["ratio"] for r in per_seed]
-        out: dict[str, Any] = {route: {k: med(route, k) for k in SUMMARY_KEYS} for route in ROUTES}
+        out: dict[str, object] = {r: {k: med(r, k) for k in SUMMARY_KEYS} for r in ROUTES}
         out.update(
             ratio_median=float(np.median(ratios)),
             ratio_worst=float(max(ratios)),

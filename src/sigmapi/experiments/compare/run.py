@@ -491,7 +491,6 @@ class Compare(Experiment[CompareConfig]):
     extra = "baselines"
     default_out = "compare"
     writes = (FIGURE, Path(FIGURE).with_suffix(".txt").name)
-    """The files written into --out besides result.json (checked before the work)."""
 
     def run(
         self,

@@ -406,7 +406,6 @@ class StreamExperiment(Experiment[StreamConfig]):
     quick_time = "about 45 s on two busy cores"
     default_out = "stream"
     writes = (FIGURE, Path(FIGURE).with_suffix(".txt").name)
-    """The files written into --out besides result.json (checked before the work)."""
 
     def run(
         self,
