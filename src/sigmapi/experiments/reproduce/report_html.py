@@ -122,13 +122,8 @@ def _summary(result: ReproduceResult) -> str:
         )
         pad = "<td></td>" * ((ceiling is not None) + bool(ref))
         rows.append(f"<tr><td>seeds ordered (R² &ge; {ORDERED_R2})</td>{ordered}{pad}</tr>")
-        out.append(
-            "<table><tr><th>median <small>(worst seed)</small></th>"
-            + head
-            + "</tr>"
-            + "".join(rows)
-            + "</table>"
-        )
+        out += ["<table><tr><th>median <small>(worst seed)</small></th>", head, "</tr>"]
+        out += [*rows, "</table>"]
     return "".join(out)
 
 
