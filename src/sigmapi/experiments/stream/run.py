@@ -91,7 +91,7 @@ class StreamConfig:
     traces: tuple[float, ...] = field(
         default=(0.0, 0.5),
         metadata=_validate.bounded(
-            "numbers", 0, 1, hi_open=True, fix="trace constants, e.g. 0,0.5"
+            "numbers", 0, 1, hi_open=True, fix="trace constants in [0, 1), e.g. --traces 0,0.5"
         ),
     )
     """Trace constants of the trace rule (0: the two-view rule on consecutive frames)."""
