@@ -1,39 +1,17 @@
-# Over 500 lines: one experiment read top to bottom, its settings, result and run in one module.
 """A chain of frames: two Sigma-Pi maps in a row against one map on the whole transformation.
 
-Three 1-D positions in [0, 1]: the retinal position x, the eye-in-head angle e and the
-head-on-body angle u. The head-centred position is ``a = (x + e) / 2`` and the body-centred
-position ``z = (a + u) / 2`` (the paper's ``mean`` relation at both stages).
-
-- **The chain.** Map A (retina + eye -> head) is a :class:`~sigmapi.model.som.SigmaPiSOM` trained
-  on its built-in task (two views of the same a). Its output code for B is its response to
-  (x, e), rectified and scaled to unit length like the input codes (``code="response"``), or
-  a population code of its hard winner's position on the map (``code="winner"``, the width of
-  the input codes). Map B (A's code + head -> body) is a second Sigma-Pi map with
-  ``x_shape = A.map_shape``, trained with ``fit(views)`` on view pairs of two triples
-  (x, e, u), (x', e', u') with the same z. Both maps learn without a teacher; B learns
-  whatever orientation A's map took.
-- **The single map.** One Sigma-Pi map whose second input is the joint code of (e, u): the
-  2-D population code on a ``(n_e, n_u)`` grid, which for Gaussian hills is the outer product
-  ``e_code (x) u_code`` flattened, with the retina on a ``(n_x, 1)`` grid. Its units are
-  third-order, ``h_k = sum w_k,i,(j,l) x_i e_j u_l``, built from the second-order machinery.
-  Trained with ``fit(views)`` on the same triples' views, with the same config as map B
-  (iterations, schedules, winner rule, ordering procedure): only the grids differ.
-
-Both routes are scored on the same calibration and test triples (drawn from the fixed
-evaluation seed, never trained on) by the definitions of :mod:`sigmapi.metrics`: **z error**
-(per-unit mean z of the calibration wins, RMSE on the test set, in grid spacings of the head
-code u), **view consistency** (the two views of one test z win the same unit), **view within
-one**, **order R^2** (affine fit of z on the winner's map coordinate) and **usage**; and the
-cost: Sigma-Pi weights and training seconds (the chain's include computing A's code of B's
-training views).
-
-Triples are drawn as the task's views are (:meth:`sigmapi.tasks.TwoViewSampler.sample_view`):
-z uniform in [0, 1]; a view (a, u) of z; then a view (x, e) of a.
+Retinal position x, eye-in-head angle e and head-on-body angle u in [0, 1]; head-centred
+``a = (x + e) / 2``, body-centred ``z = (a + u) / 2``. **The chain**: map A (retina + eye ->
+head) trained on its built-in task hands its code (:func:`head_code`) to map B (A's code + head
+-> body), trained on view pairs of triples with the same z. **The single map**: one map of
+third-order units on the retina and the joint code of (e, u) (:func:`single_config`), trained
+on the same triples with B's config but for the grids. Both routes are scored by
+:func:`~sigmapi.metrics.winner_metrics` on the same calibration and test triples from the
+fixed evaluation seed, beside their cost (weights, training seconds). The definitions:
+docs/algorithm.md, "A chain of frames".
 
 The experiment ``chain`` (:class:`Chain`, settings :class:`ChainConfig`) runs one job per seed
 through the executor; :func:`run_chain` is the same from Python with a :class:`SOMConfig`.
-
 One module, read top to bottom: the settings (:class:`ChainConfig`, :data:`QUICK` below the
 run), the result (:class:`ChainResult`: JSON form, summary, table) and the run.
 """
@@ -58,7 +36,7 @@ from sigmapi.executor import Executor, job_memory
 from sigmapi.experiments.base import KEY_VALUES, Experiment, check_seeds, register, run_all
 from sigmapi.experiments.kit.jobs import Tick, counted, iterations_counted
 from sigmapi.experiments.kit.maps import MapSpec
-from sigmapi.experiments.kit.results import Result, columns, render
+from sigmapi.experiments.kit.results import Result, as_object, columns, render
 from sigmapi.experiments.kit.seeds import SeedPlan
 from sigmapi.metrics import EVAL_SEED, evaluate, winner_metrics
 from sigmapi.model.som import SigmaPiSOM
@@ -100,24 +78,15 @@ def chain_config(config: SOMConfig | None = None, iterations: int | None = None)
     It must be 1-D (``map_shape``, ``x_shape`` and ``y_shape`` of one axis), non-periodic,
     with the ``mean`` relation; map A uses it as it is.
     """
-    cfg = (
-        config if config is not None else MapSpec("paper-1d", changes={"refine_rounds": 0}).config()
-    )
+    unrefined = MapSpec("paper-1d", changes={"refine_rounds": 0})
+    cfg = config if config is not None else unrefined.config()
     if not isinstance(cfg, SOMConfig):
-        raise _validate.fail(
-            "config",
-            "a sigmapi.SOMConfig or None",
-            type(cfg).__name__,
-            "load a preset with sigmapi.load_preset(name)",
-        )
+        fix = "load a preset with sigmapi.load_preset(name)"
+        raise _validate.fail("config", "a sigmapi.SOMConfig or None", type(cfg).__name__, fix)
     for name in ("map_shape", "x_shape", "y_shape"):
         if len(getattr(cfg, name)) != 1:
-            raise _validate.fail(
-                f"config.{name}",
-                "1-D (one axis)",
-                getattr(cfg, name),
-                "the chain of frames is built on 1-D positions, e.g. (15,)",
-            )
+            fix = "the chain of frames is built on 1-D positions, e.g. (15,)"
+            raise _validate.fail(f"config.{name}", "1-D (one axis)", getattr(cfg, name), fix)
     if cfg.periodic or cfg.relation != "mean":
         raise ConfigError(
             f"config must be non-periodic with relation 'mean', got periodic={cfg.periodic}, "
@@ -199,17 +168,11 @@ class ChainResult(Result):
     """The JSON form: the settings, one dict per seed and the summary."""
 
     @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> ChainResult:
+    def from_dict(cls, data: object) -> ChainResult:
         """The result that :meth:`to_dict` wrote (``result.json``)."""
-        settings = data["settings"]
-        config = SOMConfig.from_dict(settings["config"])
-        return cls(
-            config,
-            settings["train_pairs"],
-            settings["n_test"],
-            settings["code"],
-            list(data["seeds"]),
-        )
+        obj = as_object(data)
+        st, config = obj["settings"], SOMConfig.from_dict(obj["settings"]["config"])
+        return cls(config, st["train_pairs"], st["n_test"], st["code"], list(obj["seeds"]))
 
     def summary(self) -> dict[str, object]:
         """The medians of both routes, the median and worst ratio and how many seeds meet
@@ -220,7 +183,7 @@ class ChainResult(Result):
             return float(np.median([r[route][key] for r in per_seed]))
 
         ratios = [r["ratio"] for r in per_seed]
-        out: dict[str, Any] = {route: {k: med(route, k) for k in SUMMARY_KEYS} for route in ROUTES}
+        out: dict[str, object] = {r: {k: med(r, k) for k in SUMMARY_KEYS} for r in ROUTES}
         out.update(
             ratio_median=float(np.median(ratios)),
             ratio_worst=float(max(ratios)),
@@ -233,13 +196,8 @@ class ChainResult(Result):
 
     def settings(self) -> dict[str, object]:
         """The map config, the training pairs, test points, code and the seeds."""
-        return {
-            "config": self.config.to_dict(),
-            "train_pairs": self.train_pairs,
-            "n_test": self.n_test,
-            "code": self.code,
-            "seeds": [r["seed"] for r in self.per_seed],
-        }
+        given = {k: getattr(self, k) for k in ("config", "train_pairs", "n_test", "code")}
+        return {**given, "seeds": [r["seed"] for r in self.per_seed]}
 
     def table(self) -> str:
         """Both routes per seed, then the summary line."""
@@ -329,6 +287,12 @@ def head_code(model_a: SigmaPiSOM, x: Array, e: Array, code: str = "response") -
     return np.asarray(h / np.where(norm > 0, norm, 1.0))
 
 
+def single_config(cfg: SOMConfig) -> SOMConfig:
+    """The single map's config: ``cfg`` with the retina on a ``(n_x, 1)`` grid and the joint
+    ``(n_e, n_u)`` grid of eye and head angles."""
+    return cfg.replace(x_shape=(cfg.x_shape[0], 1), y_shape=(*cfg.y_shape, *cfg.y_shape))
+
+
 def _single_inputs(model: SigmaPiSOM, t: Triples, v: int) -> tuple[Array, Array]:
     """The single map's codes of view ``v``: x on its ``(n_x, 1)`` grid, (e, u) jointly."""
     x, e, u = t.view(v)
@@ -359,16 +323,8 @@ def chain_seed(job: ChainJob) -> dict[str, object]:
 
 
 def _chain_seed(job: ChainJob, tick: Tick | None) -> dict[str, object]:
-    seed, cfg, train_pairs, code, cal, test = (
-        job.seed,
-        job.cfg,
-        job.train_pairs,
-        job.code,
-        job.cal,
-        job.test,
-    )
-    rng = PLAN.rng(seed, "triples")
-    train = sample_triples(train_pairs, rng)
+    seed, cfg, code, cal, test = job.seed, job.cfg, job.code, job.cal, job.test
+    train = sample_triples(job.train_pairs, PLAN.rng(seed, "triples"))
     spacing = float(cfg.y_shape[0] - 1)
 
     # the chain: A on its own task, then B on A's code of the triples' views and the head code
@@ -392,9 +348,7 @@ def _chain_seed(job: ChainJob, tick: Tick | None) -> dict[str, object]:
 
     # the single map on the whole transformation: same triples, same config but the grids
     start = time.perf_counter()
-    s = SigmaPiSOM(
-        cfg.replace(x_shape=(cfg.x_shape[0], 1), y_shape=(*cfg.y_shape, *cfg.y_shape)), seed=seed
-    )
+    s = SigmaPiSOM(single_config(cfg), seed=seed)
     s.fit(
         (*_single_inputs(s, train, 0), *_single_inputs(s, train, 1)),
         callback=iterations_counted(tick, "single map", its),
@@ -413,15 +367,8 @@ def _chain_seed(job: ChainJob, tick: Tick | None) -> dict[str, object]:
         ("chain", b, chain_winners, a.weights_.size + b.weights_.size, chain_seconds),
         ("single", s, single_winners, s.weights_.size, single_seconds),
     ):
-        scores = winner_metrics(
-            winners(cal, 0),
-            cal.z,
-            winners(test, 0),
-            winners(test, 1),
-            test.z,
-            model.map_coords,
-            spacing,
-        )
+        w0, w1 = winners(test, 0), winners(test, 1)
+        scores = winner_metrics(winners(cal, 0), cal.z, w0, w1, test.z, model.map_coords, spacing)
         out[name] = {**scores, "weights": int(weights), "train_seconds": secs}
     out["ratio"] = out["chain"]["z_error"] / out["single"]["z_error"]
     return out
@@ -440,18 +387,14 @@ def _run(
     width = 8 * 3 * (int(np.prod(cfg.x_shape)) + int(np.prod(cfg.y_shape)))  # a triple, float64
     _memory.check_count("train_pairs", train_pairs, 2 * width, "e.g. --train-pairs 20000")
     _memory.check_count("n_test", n_test, 4 * width, "e.g. --n-test 10000")
-    cal_rng, test_rng = (
-        np.random.default_rng(s) for s in np.random.SeedSequence(EVAL_SEED).spawn(2)
-    )
-    cal, test = sample_triples(n_test, cal_rng), sample_triples(n_test, test_rng)
+    evaluation = np.random.SeedSequence(EVAL_SEED).spawn(2)  # calibration, test
+    cal, test = (sample_triples(n_test, np.random.default_rng(s)) for s in evaluation)
     jobs = [(f"seed {s}", ChainJob(s, cfg, train_pairs, code, cal, test)) for s in seeds]
-    single = cfg.replace(x_shape=(cfg.x_shape[0], 1), y_shape=(*cfg.y_shape, *cfg.y_shape))
-    per_job = 2 * job_memory(cfg, n_test) + job_memory(single, n_test)
+    per_job = 2 * job_memory(cfg, n_test) + job_memory(single_config(cfg), n_test)
 
     def describe(key: str, r: dict[str, Any]) -> str:
-        return (
-            f"{key}: chain z error {r['chain']['z_error']:.3f}, single {r['single']['z_error']:.3f}"
-        )
+        chain, single = r["chain"]["z_error"], r["single"]["z_error"]
+        return f"{key}: chain z error {chain:.3f}, single {single:.3f}"
 
     done = run_all(
         chain_seed,
@@ -503,12 +446,9 @@ def run_chain(
     Returns
     -------
     dict
-        ``"settings"``; ``"seeds"``: one dict per seed with ``"map_a"`` (its own
-        :func:`~sigmapi.metrics.evaluate` on the head-centred task), ``"chain"`` and
-        ``"single"`` (z_error, view_consistency, view_within_one, order_r2, usage, weights,
-        train_seconds) and ``"ratio"`` (chain z error / single z error); ``"summary"``: the
-        medians of both routes, the median and worst ratio and how many seeds meet
-        ``ratio <= TARGET_RATIO`` (:meth:`ChainResult.to_dict`).
+        :meth:`ChainResult.to_dict`: ``"settings"``; ``"seeds"``, per seed ``"map_a"`` (its
+        own :func:`~sigmapi.metrics.evaluate`), the scores and costs of ``"chain"`` and
+        ``"single"`` and ``"ratio"`` (chain z error / single z error); ``"summary"``.
     """
     cfg = chain_config(config, iterations)
     seeds = check_seeds(seeds)
@@ -545,15 +485,8 @@ class Chain(Experiment[ChainConfig]):
         executor: Executor | None = None,
         progress: Progress | None = None,
     ) -> ChainResult:
-        return _run(
-            config.som_config,
-            seeds,
-            config.train_pairs,
-            config.n_test,
-            config.code,
-            executor,
-            progress,
-        )
+        c = config
+        return _run(c.som_config, seeds, c.train_pairs, c.n_test, c.code, executor, progress)
 
 
 CHAIN = register(Chain())

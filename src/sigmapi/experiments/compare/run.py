@@ -3,35 +3,17 @@
 
 Every method is trained on the same two-view data (``train_pairs`` view pairs of the preset's
 task per seed, the recording a user would make) and scored on the same evaluation sets as
-:func:`sigmapi.evaluate` (fixed seed ``EVAL_SEED``), by one definition for all:
+:func:`sigmapi.evaluate` (fixed seed ``EVAL_SEED``), by one definition for all: a linear
+read-out of z from the method's output, given the first ``L`` labels of the calibration set
+for each ``L`` of ``labels`` (:mod:`sigmapi.baselines.scoring`). The scores (**z error**,
+**view consistency** or same place, **same unit**, the **quantisation floor**, **labels
+needed** and **labels to match**) are defined in docs/algorithm.md, "Your own data and the
+baselines". Values over seeds are medians; every seed's value is kept.
 
-- every method ends in a linear read-out of z from its output. For a map the output is the
-  winning unit (one-hot) and the read-out the mean z of each unit's labelled wins (the
-  per-unit table of :func:`sigmapi.metrics.z_decoder`, least squares on the one-hot code);
-  for the gain-field and RBM baselines it is a ridge regression on the middle layer;
-- **z error**: RMSE of the read-out of view 0 on the test set, in input grid spacings, given
-  ``L`` labelled samples (the first ``L`` of the calibration set), for each ``L`` of
-  ``labels``; the table reports it at ``labels_used`` = all of them (the Sigma-Pi map's
-  figure is then :func:`sigmapi.evaluate`'s ``z_error``);
-- **view consistency**: the fraction of test z's whose two views land on the same *place*:
-  the same winning unit for a map; for a read-out, the same cell when the read-out z is
-  binned into as many cells per axis as the map has units (what a map of that size
-  resolves);
-- **same unit** (no label used): the same winner for a map; for a read-out method the same
-  most active middle-layer unit (gain-field unit, RBM hidden unit);
-- **quantisation floor**: the z error of the best decoder that sees only which of the map's
-  units won (z cut into as many equal cells as the map has units); a continuous read-out can
-  go below it;
-- **labels needed**: the fewest ``L`` whose z error is within 10 % of the method's error with
-  all labels (what its read-out needs); **labels to match**: the fewest ``L`` whose z error
-  is within 10 % of the Sigma-Pi map's with all labels (None: not within ``labels``).
-
-Values over seeds are medians; every seed's value is kept. Each seed is one job of the
-executor (:func:`compare_seed`); the experiment ``compare`` (:class:`Compare`) is
-:func:`run_compare` on the command line.
-
-One module, read top to bottom: the settings (:class:`CompareConfig`), the result
-(:class:`CompareResult`: JSON form, table, figure drawn by :mod:`.figures`) and the run.
+Each seed is one job of the executor (:func:`compare_seed`); the experiment ``compare``
+(:class:`Compare`) is :func:`run_compare` on the command line. One module, read top to bottom:
+the settings (:class:`CompareConfig`), the result (:class:`CompareResult`: JSON form, table,
+figure drawn by :mod:`.figures`) and the run.
 """
 
 from __future__ import annotations
@@ -40,10 +22,9 @@ import dataclasses
 import functools
 import importlib.util
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -362,7 +343,11 @@ PACKAGES = {"minisom": "minisom", "sklearn": "scikit-learn"}
 """The package that installs each optional module."""
 
 
-def _train(name: str, cfg: CompareConfig, som_cfg: SOMConfig, views: Views, seed: int) -> Any:
+Method = SigmaPiSOM | KohonenSOM | GainFieldNetwork | RBMFeatures
+"""A trained method: a map (its winner) or a read-out method (its middle layer)."""
+
+
+def _train(name: str, cfg: CompareConfig, som_cfg: SOMConfig, views: Views, seed: int) -> Method:
     """Train method ``name`` on ``views``; returns the trained object."""
     if name.startswith("sigma-pi"):
         return SigmaPiSOM(som_cfg, seed=seed, **SIGMA_PI_CHANGES[name]).fit(views)
@@ -414,8 +399,7 @@ def _compare_seed(job: CompareJob, tick: Tick | None) -> Scores:
     base = SigmaPiSOM(som_cfg)
     spacing = grid_spacing(som_cfg.x_shape, som_cfg.periodic)
     cells = (base.sampler.relation.z_range, som_cfg.map_shape)
-    rng = PLAN.rng(seed, "data")
-    b = base.sampler.sample(cfg.train_pairs, rng)
+    b = base.sampler.sample(cfg.train_pairs, PLAN.rng(seed, "data"))
     views = (b.x0, b.y0, b.x1, b.y1)
     out: Scores = {}
     for name in cfg.methods:
@@ -423,11 +407,15 @@ def _compare_seed(job: CompareJob, tick: Tick | None) -> Scores:
             tick(0, name)
         t0 = time.perf_counter()
         model = _train(name, cfg, som_cfg, views, seed)
-        if hasattr(model, "winner"):
-            unit = _hard_winner(model) if isinstance(model, SigmaPiSOM) else model.winner
-            vc, uc, curve = score_units(unit, base.map_coords, cal, test, cfg.labels, spacing)
-        else:
+        if isinstance(model, (GainFieldNetwork, RBMFeatures)):
             vc, uc, curve = score_readout(model.features, cal, test, cfg.labels, spacing, cells)
+        else:
+            unit = (
+                functools.partial(model.winner, hard=True)
+                if isinstance(model, SigmaPiSOM)
+                else model.winner
+            )
+            vc, uc, curve = score_units(unit, base.map_coords, cal, test, cfg.labels, spacing)
         out[name] = (vc, uc, curve, time.perf_counter() - t0)
         if tick is not None:
             tick(1, name)
@@ -479,25 +467,13 @@ def run_compare(
         per_job=job_memory(cfg.som_config, cfg.n_test),
         progress=progress,
         desc="compare",
-        verbose=_verbose,
+        verbose=lambda job: dataclasses.replace(job, progress=True),
     )
-    scores = {name: MethodScore(name) for name in cfg.methods}
-    for per_method in done.values():
-        for name, (vc, uc, curve, seconds) in per_method.items():
-            s = scores[name]
-            s.view_consistency.append(vc)
-            s.unit_consistency.append(uc)
-            s.z_error_by_labels.append(curve)
-            s.seconds.append(seconds)
+    scores = {}
+    for name in cfg.methods:  # each score over the seeds, in their order
+        vc, uc, curves, seconds = zip(*(per_seed[name] for per_seed in done.values()), strict=True)
+        scores[name] = MethodScore(name, list(vc), list(uc), list(curves), list(seconds))
     return CompareResult(cfg, scores, time.perf_counter() - start, seeds)
-
-
-def _verbose(job: CompareJob) -> CompareJob:
-    return dataclasses.replace(job, progress=True)
-
-
-def _hard_winner(model: SigmaPiSOM) -> Callable[[Array, Array], NDArray[np.int64]]:
-    return lambda x, y: model.winner(x, y, hard=True)
 
 
 class Compare(Experiment[CompareConfig]):
@@ -515,7 +491,6 @@ class Compare(Experiment[CompareConfig]):
     extra = "baselines"
     default_out = "compare"
     writes = (FIGURE, Path(FIGURE).with_suffix(".txt").name)
-    """The files written into --out besides result.json (checked before the work)."""
 
     def run(
         self,

@@ -5,6 +5,7 @@ random start (:func:`record_model`, :class:`PhysiologyExperiment`)."""
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -12,26 +13,25 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from sigmapi import _validate
 from sigmapi._outputs import INPUT, save_captioned
 from sigmapi.analysis.monkey import EYE_GRID, N_RETINA, RESPONDS, fixation_protocol, monkey_protocol
 from sigmapi.analysis.physiology import (
     GAZES,
+    Recordable,
     check_gaze_axes,
     compare_distributions,
     record,
     tuning_curves,
 )
-from sigmapi.codes import PopulationCode
 from sigmapi.errors import DataError, UsageError
 from sigmapi.executor import Executor
 from sigmapi.experiments.base import Experiment, register
 from sigmapi.experiments.kit.results import Result, columns, render
 from sigmapi.model.som import SigmaPiSOM, load_model
 from sigmapi.progress import Progress
-from sigmapi.tasks import TwoViewSampler
 
 __all__ = [
     "BODY_CENTRED",
@@ -109,31 +109,20 @@ class PhysiologyConfig:
                 "model", "a model file path", self.model, "e.g. sigmapi physiology model.npz"
             )
         _validate.check_fields(self)  # the bounds declared beside the fields
-        gazes = list(self.gazes)
-        if len(set(gazes)) < 3:
-            raise _validate.fail(
-                "gazes",
-                "at least 3 distinct gazes",
-                list(self.gazes),
-                "e.g. --gazes 0.2,0.35,0.5,0.65,0.8",
-            )
-        object.__setattr__(self, "gazes", tuple(sorted(set(gazes))))
+        for name, what, fix in (
+            ("gazes", "gazes", "e.g. --gazes 0.2,0.35,0.5,0.65,0.8"),
+            ("eye_grid", "eye positions", "e.g. --eye-grid 0.3,0.5,0.7"),
+        ):
+            values = getattr(self, name)
+            if len(set(values)) < 3:
+                raise _validate.fail(name, f"at least 3 distinct {what}", list(values), fix)
+            object.__setattr__(self, name, tuple(sorted(set(values))))
         if 0 < self.n_probe < 5:
             raise _validate.fail("n_probe", "0 or at least 5", self.n_probe, "e.g. 61")
-        slopes = self.body_slope
-        if any(v == 0.0 for v in slopes):
-            raise _validate.fail("body_slope", "nonzero", list(slopes), "e.g. -1")
-        object.__setattr__(self, "body_slope", slopes)
-        axes = tuple(self.gaze_axes)  # the model's dimension is checked where it is loaded
+        if any(v == 0.0 for v in self.body_slope):
+            raise _validate.fail("body_slope", "nonzero", list(self.body_slope), "e.g. -1")
+        axes = self.gaze_axes  # the model's dimension is checked where it is loaded
         check_gaze_axes(axes, len(axes), "e.g. --gaze-axes 1,0")
-        object.__setattr__(self, "gaze_axes", axes)
-        grid = list(self.eye_grid)
-        if len(set(grid)) < 3:
-            raise _validate.fail(
-                "eye_grid", "at least 3 distinct eye positions", list(self.eye_grid),
-                "e.g. --eye-grid 0.3,0.5,0.7",
-            )  # fmt: skip
-        object.__setattr__(self, "eye_grid", tuple(sorted(set(grid))))
         _validate.boolean("nwb", self.nwb)
 
 
@@ -178,18 +167,7 @@ class PhysiologyResult(Result):
 
     def settings(self) -> dict[str, object]:
         """The config's fields but the tuning units."""
-        c = self.config
-        return {
-            "model": c.model,
-            "gazes": c.gazes,
-            "n_probe": c.n_probe,
-            "body_slope": c.body_slope,
-            "gaze_axes": c.gaze_axes,
-            "eye_grid": c.eye_grid,
-            "n_retina": c.n_retina,
-            "responds": c.responds,
-            "nwb": c.nwb,
-        }
+        return {k: v for k, v in dataclasses.asdict(self.config).items() if k != "tuning_units"}
 
     def table(self) -> str:
         """The medians of both maps and the comparison."""
@@ -230,7 +208,7 @@ class PhysiologyResult(Result):
         """The figure's caption, computed from the data."""
         t, s, c = self.data["trained"], self.data["random_start"], self.data["comparison"]
 
-        def med(r: dict[str, Any]) -> str:
+        def med(r: dict[str, object]) -> str:
             v = r["median_reference_frame_index"]
             return "no unit measured" if v is None else f"median {v:.2f}"
 
@@ -286,48 +264,39 @@ class RandomStart:
     ``[-init_scale, init_scale]``, ``ordering = "none"``), for the model's own seed."""
 
     def __init__(self, model: SigmaPiSOM) -> None:
-        self.model = SigmaPiSOM(model.config.replace(ordering="none"), seed=model.seed_entropy)
-        self.weights = self.model.initial_weights()
+        start = SigmaPiSOM(model.config.replace(ordering="none"), seed=model.seed_entropy)
+        self.x_code, self.y_code = start.x_code, start.y_code
+        self.map_shape, self.sampler = start.map_shape, start.sampler
+        self.weights = start.initial_weights()
 
-    @property
-    def x_code(self) -> PopulationCode:
-        return self.model.x_code
-
-    @property
-    def y_code(self) -> PopulationCode:
-        return self.model.y_code
-
-    @property
-    def map_shape(self) -> tuple[int, ...]:
-        return self.model.map_shape
-
-    @property
-    def sampler(self) -> TwoViewSampler:
-        return self.model.sampler
-
-    def respond(self, x: Any, y: Any) -> NDArray[np.float64]:
+    def respond(self, x: ArrayLike, y: ArrayLike) -> NDArray[np.float64]:
         """``h_k = x^T W_k y`` ``(B, K)``."""
         k, nx, ny = self.weights.shape
         t = (self.weights.reshape(k * nx, ny) @ np.asarray(y).T).reshape(k, nx, -1)
         return np.asarray(np.einsum("bi,kib->bk", np.asarray(x), t))
 
 
-def _tuning(model: Any, cfg: PhysiologyConfig, n_probe: int | None) -> dict[str, object]:
+def _tuning(model: Recordable, cfg: PhysiologyConfig, n_probe: int | None) -> dict[str, object]:
     """Tuning curves along retinal axis 0 of ``tuning_units`` units spread over the map (in
     2-D on the probe row through each unit's peak at the middle gaze)."""
     resp, probes = tuning_curves(model, cfg.gazes, 0, n_probe, (cfg.gaze_axes or (0,))[0])
     k = resp.shape[2]
     units = np.unique(np.linspace(0, k - 1, cfg.tuning_units + 2)[1:-1].round().astype(int))
     mid = len(cfg.gazes) // 2
-    out: dict[str, Any] = {"units": units.tolist(), "gazes": list(cfg.gazes), "responses": []}
+    responses, positions = [], []
     for u in units:
         line = np.arange(probes.shape[0])
         if probes.shape[1] > 1:
             best = probes[np.argmax(resp[mid, :, u])]
             line = np.nonzero(np.all(probes[:, 1:] == best[1:], axis=1))[0]
-        out["responses"].append(resp[:, line, u].tolist())
-        out["positions"] = probes[line, 0].tolist()
-    return out
+        responses.append(resp[:, line, u].tolist())
+        positions = probes[line, 0].tolist()
+    return {
+        "units": units.tolist(),
+        "gazes": list(cfg.gazes),
+        "responses": responses,
+        "positions": positions,
+    }
 
 
 def record_model(

@@ -3,6 +3,6 @@ the report.
 
 Guide: docs/guide/reproduce.md; results: docs/results/reproduction.md.
 
-Modules (``run`` holds the experiment object, ``REGISTRY``'s entry): ``figures``,
-``report_html``, ``results``, ``run``.
+Modules (``run`` holds the experiment object, ``REGISTRY``'s entry, and draws each preset's
+figures): ``report_html``, ``results``, ``run``, ``training``.
 """

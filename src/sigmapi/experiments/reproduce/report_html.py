@@ -20,7 +20,6 @@ if TYPE_CHECKING:
     from sigmapi.experiments.reproduce.results import (
         PresetResult,
         ReproduceResult,
-        SeedRun,
         Stage,
     )
 
@@ -123,13 +122,8 @@ def _summary(result: ReproduceResult) -> str:
         )
         pad = "<td></td>" * ((ceiling is not None) + bool(ref))
         rows.append(f"<tr><td>seeds ordered (R² &ge; {ORDERED_R2})</td>{ordered}{pad}</tr>")
-        out.append(
-            "<table><tr><th>median <small>(worst seed)</small></th>"
-            + head
-            + "</tr>"
-            + "".join(rows)
-            + "</table>"
-        )
+        out += ["<table><tr><th>median <small>(worst seed)</small></th>", head, "</tr>"]
+        out += [*rows, "</table>"]
     return "".join(out)
 
 
@@ -152,7 +146,7 @@ def _table(result: ReproduceResult) -> str:
             for key in METRIC_KEYS:
                 value = med[key]
                 per_seed = ", ".join(
-                    _seed_value(r.metric(key, stage), _folded(r, stage)) for r in res.runs
+                    _seed_value(r.metric(key, stage), r.at(stage).folded) for r in res.runs
                 )
                 r = ref.get(key)
                 note = ""
@@ -181,11 +175,6 @@ def _table(result: ReproduceResult) -> str:
         "<th>mean ± sd</th><th>per seed (<b>bold</b>: flagged folded)</th><th>reference</th>"
         "<th></th></tr>" + "".join(rows) + "</table>"
     )
-
-
-def _folded(run: SeedRun, stage: Stage) -> bool:
-    m = run.unrefined if stage == "unrefined" and run.unrefined is not None else run.metrics
-    return bool(m.folded)
 
 
 def _mean_sd(mean: float, sd: float, n: int) -> str:

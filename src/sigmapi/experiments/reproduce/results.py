@@ -11,19 +11,15 @@ from __future__ import annotations
 
 import shutil
 import statistics
-from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Literal, get_args
+from typing import Any, Literal, get_args
 
 from sigmapi import _validate
 from sigmapi.config import SOMConfig
 from sigmapi.experiments.base import check_seeds
-from sigmapi.experiments.kit.results import Result
+from sigmapi.experiments.kit.results import Result, as_object
 from sigmapi.metrics import ORDERED_R2, Metrics
-
-if TYPE_CHECKING:
-    pass
 
 __all__ = [
     "METRIC_KEYS",
@@ -150,11 +146,6 @@ class ReproduceOptions(ReproduceConfig):
         if self.workers is not None:
             _validate.integer("workers", self.workers, 1)
 
-    @property
-    def config(self) -> ReproduceConfig:
-        """The settings without the run's."""
-        return ReproduceConfig(self.quick, self.save_models, self.seeds_2d, self.n_test, self.dpi)
-
     def seeds_of(self, cfg: SOMConfig) -> tuple[int, ...]:
         """The seeds a preset trains: all of :attr:`seeds`, the first ``seeds_2d`` in 2-D."""
         if len(cfg.map_shape) >= 2 and self.seeds_2d is not None:
@@ -213,13 +204,19 @@ class SeedRun(Result):
     """The JSON form: the seed, its times, the kernel, the metrics at the top and those of
     the unrefined map, the learning curve."""
 
+    def at(self, stage: Stage = "refined") -> Metrics:
+        """The metrics of the map at ``stage`` (the final map's where there is no other)."""
+        return (
+            self.unrefined if stage == "unrefined" and self.unrefined is not None else self.metrics
+        )
+
     def metric(self, key: str, stage: Stage = "refined") -> float:
-        m = self.unrefined if stage == "unrefined" and self.unrefined is not None else self.metrics
-        return float(getattr(m, key))
+        return float(getattr(self.at(stage), key))
 
     @classmethod
-    def from_dict(cls, data: Mapping[str, Any]) -> SeedRun:
+    def from_dict(cls, data: object) -> SeedRun:
         """The run a :meth:`to_dict` wrote."""
+        data = as_object(data)
         times = {k: float(data[k]) for k in SECONDS}
         rest = set(data) - {*SECONDS, "seed", "backend", "unrefined", "curve"}
         unrefined = data["unrefined"]
@@ -298,12 +295,7 @@ class PresetResult(Result):
 
     def folded_seeds(self, stage: Stage = "refined") -> list[int]:
         """Seeds the z-free fold detector flags."""
-        unrefined = stage == "unrefined"
-        return [
-            r.seed
-            for r in self.runs
-            if (r.unrefined if unrefined and r.unrefined else r.metrics).folded
-        ]
+        return [r.seed for r in self.runs if r.at(stage).folded]
 
     def seconds(self, key: str) -> float:
         """Median over seeds of a time of :class:`SeedRun` (e.g. ``"train_seconds"``)."""
@@ -322,7 +314,7 @@ class PresetResult(Result):
     def refined(self) -> dict[str, object]:
         return self._stage("refined")
 
-    def unrefined(self) -> dict[str, Any] | None:
+    def unrefined(self) -> dict[str, object] | None:
         return self._stage("unrefined") if self.refines else None
 
     def seed_list(self) -> list[int]:
@@ -360,9 +352,10 @@ class ReproduceResult(Result):
     numbers and the time."""
 
     @classmethod
-    def from_dict(cls, data: Mapping[str, Any]) -> ReproduceResult:
+    def from_dict(cls, data: object) -> ReproduceResult:
         """The result a :meth:`to_dict` wrote (``metrics.json``): its options (those it
         states), presets and sections; no report folder."""
+        data = as_object(data)
         options = ReproduceOptions(
             quick=data["quick"],
             seeds=tuple(data["seeds"]),

@@ -2,48 +2,22 @@
 
 Trains the paper presets (``paper-1d``, and ``paper-2d`` where that preset ships), each
 beside the authors' procedure at the same sizes (``paper-1d-authors``, ``paper-2d-authors``),
-on the seeds (the 2-D presets on the first ``seeds_2d`` of them: a 2-D run costs about 20
-1-D runs), recording learning curves at checkpoints. Each run's map is evaluated twice at no
-extra training: at the end of the training, before the refinement (the unrefined map of the
-same run), and at the end. The rule's ceiling, the fixed point of Eq. 7 reached from the map
-the figures show (:mod:`sigmapi.analysis.fixed_point`), is computed once per task and drawn in the
-learning curves. numba's one-time compile runs before each worker's first job and is timed
-apart (:mod:`~sigmapi.experiments.reproduce.training`: the jobs). The run draws the figures
-of the paper and writes into ``DIR``:
-
-- ``report.html``: self-contained (it links only the PNG files beside it): per task a table
-  of medians (worst seed in brackets) of sigmapi's map after and before its refinement, the
-  authors' procedure, the ceiling and the reference figures of docs/algorithm.md; every
-  seed's values; the figures with captions computed from the data;
-- ``metrics.json``: every number of the report (below);
-- the figures, ``<figure>-<preset>.png`` for the figures of :data:`~sigmapi.viz.figures.FIGURES`,
-  of the seed :func:`figure_seed` chooses (the worst-ordered; the caption says why);
-- the trained models, ``<preset>-seed<S>.npz``: by default the one the figures show
-  (``sigmapi figure`` redraws from it), or every seed's, or none (``save_models``; a
-  paper-2d file holds its 225 x 225 x 225 weights, so it is large).
-
-``metrics.json`` (``ReproduceResult.to_dict()``; ``benchmarks/results/reproduce.json`` holds
-the default run's, with the command and times that made it) has the top-level keys
-
-- ``quick``, ``seeds``, ``seeds_2d``, ``n_test``, ``curve_test``: the run's settings;
-- ``presets``: per preset name, ``config`` (resolved), ``seeds``, ``runs`` (per seed: the final
-  metrics of :func:`sigmapi.evaluate`, ``unrefined`` (the same before the refinement, or null),
-  ``curve`` (the learning-curve columns), ``train_seconds``, ``refine_seconds``,
-  ``compile_seconds``, ``measure_seconds``, ``cpu_seconds``), the statistics of the final maps
-  (``median``, ``worst``, ``mean``, ``sd``, ``ordered``, ``folded_seeds``), ``unrefined`` (the
-  same statistics before the refinement, or null), ``ceiling`` (the fixed point's metrics,
-  ``preset`` and ``seed`` of the map it started from, ``rounds``, ``changed``, ``seconds``),
-  ``reference``, ``z_error_floor``, ``shown_seed`` and ``shown_reason``, ``figures`` (per
-  figure its file and the facts its caption states) and ``seconds`` (medians of the times);
-- ``sections``: per added section (the reach experiment), the numbers it stores;
-- ``total_seconds``: wall seconds of the whole run.
+on the seeds (the 2-D presets on the first ``seeds_2d`` of them), recording learning curves at
+checkpoints; each run's map is evaluated at the end of the training, before the refinement,
+and at the end (:mod:`~sigmapi.experiments.reproduce.training`: the jobs, numba's one-time
+compile timed apart). The rule's ceiling, the fixed point of Eq. 7 reached from the map the
+figures show (:mod:`sigmapi.analysis.fixed_point`), is computed once per task. The run writes
+into ``DIR`` ``report.html`` (:mod:`~sigmapi.experiments.reproduce.report_html`),
+``metrics.json`` (:meth:`ReproduceResult.to_dict`), the figures of the seed :func:`figure_seed`
+chooses and the trained models ``save_models`` names; docs/guide/reproduce.md describes each
+file and every key of ``metrics.json``.
 
 Experiments add sections to the report: a section is a function ``section(ctx:
 ReportContext) -> Section | None`` (:mod:`sigmapi.experiments.kit.report`), named by its
 ``"module:function"`` as experiments are; the default, :data:`SECTIONS`, is the reach
-experiment's.
-The sections run in a thread of their own once the training has ended, beside the ceilings
-and the figures (which leave a core idle); a section draws holding ``ctx.drawing``.
+experiment's. The sections run in a thread of their own once the training has ended, beside
+the ceilings and the figures (which leave a core idle); a section draws holding
+``ctx.drawing``.
 
 The experiment ``reproduce`` (:class:`Reproduce`, settings :class:`ReproduceConfig`) is
 :func:`reproduce` with the seeds, executor and progress given apart; each (preset, seed) is one
@@ -55,11 +29,12 @@ from __future__ import annotations
 import dataclasses
 import json
 import multiprocessing
+import statistics
 import threading
 import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any
+from typing import Generic, TypeVar
 
 from threadpoolctl import threadpool_limits
 
@@ -68,7 +43,6 @@ from sigmapi.errors import ConfigError
 from sigmapi.executor import Executor
 from sigmapi.experiments.base import Experiment, register
 from sigmapi.experiments.kit.report import ReportContext, SectionFn, section_function
-from sigmapi.experiments.reproduce.figures import draw_preset, figure_seed
 from sigmapi.experiments.reproduce.report_html import linked_files, render
 from sigmapi.experiments.reproduce.results import (
     OTHER_PROCEDURE,
@@ -81,6 +55,7 @@ from sigmapi.experiments.reproduce.results import (
 )
 from sigmapi.experiments.reproduce.training import train_all
 from sigmapi.io import atomic_write_bytes
+from sigmapi.metrics import ORDERED_R2, evaluate
 from sigmapi.model.som import SigmaPiSOM
 from sigmapi.progress import Progress
 from sigmapi.viz import figures as figs
@@ -96,6 +71,8 @@ __all__ = [
     "paper_presets",
     "reproduce",
 ]
+
+T = TypeVar("T")
 
 REFERENCE: dict[str, dict[str, float]] = {
     "paper-1d": {"view_consistency": 0.87, "view_within_one": 0.988, "z_error": 0.32},
@@ -141,6 +118,117 @@ def paper_presets(quick: bool) -> list[tuple[str, SOMConfig]]:
                 cfg = cfg.replace(iterations=min(cfg.iterations, it), refine_pairs=pairs)
             out.append((preset, cfg))
     return out
+
+
+def figure_seed(runs: Sequence[SeedRun], cfg: SOMConfig) -> tuple[int, str]:
+    """The run the figures show, and why: the worst-ordered seed (lowest order R^2 of the
+    final map, the first on ties).
+
+    For the authors' procedure (random start) the comparison is about twisted maps, so its
+    worst-ordered map is the one to see; for sigmapi's, the worst-ordered map is the case a
+    reader would doubt (the others are at least as ordered). The reason names the seeds
+    and the values it was chosen from.
+    """
+    i = min(range(len(runs)), key=lambda j: (runs[j].metrics.order_r2, j))
+    r2 = runs[i].metrics.order_r2
+    if len(runs) == 1:
+        return i, f"its only seed (order R² {r2:.3f})"
+    n_twisted = sum(r.metrics.order_r2 < ORDERED_R2 for r in runs)
+    authors = cfg.ordering == "none"
+    if r2 < ORDERED_R2:
+        state = (
+            f"twisted (order R² {r2:.3f} < {ORDERED_R2}; {n_twisted} of {len(runs)} seeds twisted)"
+        )
+        what = "the comparison is about twisting" if authors else "the map to doubt"
+    else:
+        state = f"still ordered (order R² {r2:.3f}; every seed ≥ {ORDERED_R2})"
+        what = (
+            "no seed twisted here; the comparison is about twisting, so the least ordered"
+            if authors
+            else "the others are at least as ordered"
+        )
+    return i, f"the worst-ordered of its {len(runs)} seeds, {state}: {what}"
+
+
+def _table_gap(runs: Sequence[SeedRun], n_test: int) -> dict[str, float]:
+    """Median over seeds of each curve's last point minus the table's value (the same map,
+    measured on the curves' smaller sets): what the curves caption states."""
+    gap = {
+        k: statistics.median(r.curve[k][-1] - getattr(r.metrics, k) for r in runs)
+        for k in ("z_error", "view_consistency")
+    }
+    return {**gap, "n_test": n_test}
+
+
+def _decoding_cause(
+    model: SigmaPiSOM, run: SeedRun, curve_test: int, test_size: int
+) -> dict[str, object]:
+    """The shown map's z error on the table's test z's but with the curves' decoding table
+    (their calibration z's): beside the table's and the curve's last point, how much of the
+    curve's gap the decoding table's size makes."""
+    from sigmapi.analysis.curves import LearningCurve
+    from sigmapi.metrics import evaluation_sets
+
+    calibration, _ = evaluation_sets(model, curve_test, LearningCurve.seed)
+    _, test = evaluation_sets(model, test_size)
+    small = evaluate(model, test=test, calibration=calibration).z_error
+    return {
+        "seed": run.seed,
+        "z_error_curve_table": float(small),
+        "z_error_table": float(run.metrics.z_error),
+        "z_error_curve": float(run.curve["z_error"][-1]),
+    }
+
+
+def draw_preset(
+    run: figs.RunInfo,
+    model: SigmaPiSOM,
+    entry: PresetResult,
+    out: Path,
+    opts: ReproduceOptions,
+    reference: dict[str, float],
+    progress: Progress | None,
+) -> list[tuple[str, str]]:
+    """Draw every figure of one preset into ``out`` at the options' dpi
+    (``reference``: the published values the curves mark; the curves caption states the gap
+    between the table's and the curves' evaluation sizes); ``(file, caption)`` per figure.
+
+    The facts each caption states are stored in ``entry.figures``.
+    """
+    from sigmapi.analysis.map_data import receptive_field_centres
+
+    test_size = opts.test_size
+    centres = receptive_field_centres(model, seed=0)
+    curves = [r.curve for r in entry.runs]
+    seeds = run.seeds
+    drawn = []
+    bar = Progress.of(progress).each(figs.FIGURES, f"{run.preset} figures")
+    for fig_name in bar:
+        file = f"{fig_name}-{run.preset}.png"
+        label = f"{run.preset}, seed {seeds[run.shown]}"
+        if fig_name == "curves":
+            label = (
+                f"{run.preset}, seed{'s' if len(seeds) > 1 else ''} {', '.join(map(str, seeds))}"
+            )
+        facts = figs.draw_figure(
+            fig_name,
+            model,
+            out / file,
+            curves=curves,
+            reference=reference,
+            label=label,
+            centres=centres,
+            dpi=opts.dpi,
+            ceiling=entry.ceiling,
+        )
+        if fig_name == "curves":
+            facts["table_gap"] = _table_gap(entry.runs, test_size)
+            facts["table_gap"]["decoding"] = _decoding_cause(
+                model, entry.runs[run.shown], run.curve_test, test_size
+            )
+        entry.figures[fig_name] = {"file": file, **facts}
+        drawn.append((file, figs.caption(fig_name, run, facts)))
+    return drawn
 
 
 def _reference(name: str) -> dict[str, float]:
@@ -236,34 +324,24 @@ def _report_preset(
             models[i].save(ctx.out / f"{name}-seed{seed}.npz")
     run = figs.RunInfo(name, cfg, seeds, shown, opts.curve_test, why)
     with ctx.drawing:
-        return draw_preset(
-            run,
-            models[shown],
-            entry,
-            ctx.out,
-            opts.dpi,
-            _reference(name),
-            progress,
-            test_size=opts.test_size,
-            curve_test=opts.curve_test,
-        )
+        return draw_preset(run, models[shown], entry, ctx.out, opts, _reference(name), progress)
 
 
-class _Background:
+class _Background(Generic[T]):
     """``fn()`` run in a daemon thread from now on; :meth:`result` waits for its value (or
     raises its error). The sections (the reach experiment: its seeds in a process pool) run so
     beside the ceilings and the figures, whose drawing leaves a core idle. A daemon thread:
     an interrupted report does not wait for it (its pool's workers end with this process)."""
 
-    def __init__(self, fn: Callable[[], Any]) -> None:
-        self._value: Any = None
+    def __init__(self, fn: Callable[[], T]) -> None:
+        self._value: list[T] = []  # fn's value, once it has one
         self._error: BaseException | None = None
         self._thread = threading.Thread(target=self._run, args=(fn,), daemon=True)
         self._thread.start()
 
-    def _run(self, fn: Callable[[], Any]) -> None:
+    def _run(self, fn: Callable[[], T]) -> None:
         try:
-            self._value = fn()
+            self._value.append(fn())
         except BaseException as e:  # raised again in the caller's thread by result()
             self._error = e
 
@@ -273,11 +351,11 @@ class _Background:
         for child in multiprocessing.active_children():
             child.terminate()
 
-    def result(self) -> Any:
+    def result(self) -> T:
         self._thread.join()
         if self._error is not None:
             raise self._error
-        return self._value
+        return self._value[0]
 
 
 class Reproduce(Experiment[ReproduceConfig]):

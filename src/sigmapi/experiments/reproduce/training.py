@@ -9,14 +9,16 @@ import math
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
-from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
 
 from sigmapi.config import SOMConfig
 from sigmapi.executor import Executor, job_memory
 from sigmapi.experiments.base import run_all
 from sigmapi.experiments.reproduce.results import ReproduceOptions, SeedRun
 from sigmapi.kernels import DEFINITION, get_backend
-from sigmapi.metrics import evaluate
+from sigmapi.metrics import Metrics, evaluate
 from sigmapi.model.som import SigmaPiSOM
 from sigmapi.progress import Progress
 
@@ -39,7 +41,13 @@ class SeedJob:
     (:func:`compile_once`); :func:`train_all` sets it on every other job."""
 
 
-_COMPILED: set[tuple[Any, ...]] = set()
+COMPILED_BY = (
+    "backend", "winner_rule", "ordering", "refine_sigma", "periodic", "map_periodic", "same_view",
+    "threads",
+)  # fmt: skip
+"""The config fields that choose the compiled code (with the dimensions and whether it refines)."""
+
+_COMPILED: set[tuple[object, ...]] = set()
 """The rule combinations this process has compiled (:func:`compile_once`)."""
 
 
@@ -56,24 +64,13 @@ def compile_once(cfg: SOMConfig, measure_first: bool = False) -> float:
     refine and measure a trained map before those that train it
     (:func:`_compile_measuring`). On a fresh install two workers that start at once, one
     each way round, then compile each half once and load the other half from numba's cache
-    (``NUMBA_CACHE_DIR``) rather than both compiling everything: 12 s of wall against 20 s
-    for a ``paper-2d`` job on two cores (``docs/guide/reproduce.md``, "Times").
+    (``NUMBA_CACHE_DIR``) rather than both compiling everything (docs/guide/reproduce.md,
+    "Times").
     """
     from sigmapi.analysis.curves import LearningCurve
 
-    key = (
-        cfg.backend,
-        cfg.winner_rule,
-        cfg.ordering,
-        cfg.refine_rounds > 0,
-        cfg.refine_sigma,
-        len(cfg.map_shape),
-        len(cfg.x_shape),
-        cfg.periodic,
-        cfg.map_periodic,
-        cfg.same_view,
-        cfg.threads,
-    )
+    dims = (cfg.refine_rounds > 0, len(cfg.map_shape), len(cfg.x_shape))
+    key = (*(getattr(cfg, k) for k in COMPILED_BY), *dims)
     if key in _COMPILED:
         return 0.0
     t0 = time.perf_counter()
@@ -110,7 +107,11 @@ def _compile_measuring(small: SOMConfig) -> None:
     evaluate(model, n_test=50)
 
 
-def train_seed(job: SeedJob) -> tuple[SeedRun, dict[str, Any], dict[str, Any]]:
+Trained = tuple[SeedRun, dict[str, object], dict[str, NDArray[np.generic]]]
+"""What :func:`train_seed` returns: the run and its model as a header and arrays."""
+
+
+def train_seed(job: SeedJob) -> Trained:
     """Train one seed with learning-curve checkpoints and evaluate it (a job of
     :func:`~sigmapi.executor.run_jobs`); ``(run, header, arrays)`` of the model.
 
@@ -132,7 +133,8 @@ def train_seed(job: SeedJob) -> tuple[SeedRun, dict[str, Any], dict[str, Any]]:
     curve = LearningCurve(
         at=checkpoints(cfg.iterations, job.n_checkpoints), n_test=job.curve_test, then=callback
     )
-    marks: dict[str, Any] = {}
+    marks: dict[str, float] = {}  # times at the end of the training
+    unrefined: list[Metrics] = []  # the map there, where the preset refines
 
     def step(m: SigmaPiSOM) -> None:
         curve(m)
@@ -140,7 +142,7 @@ def train_seed(job: SeedJob) -> tuple[SeedRun, dict[str, Any], dict[str, Any]]:
             marks["trained"] = time.perf_counter()
             marks["curve_s"] = curve.seconds
             if cfg.refine_rounds > 0:
-                marks["unrefined"] = evaluate(m, n_test=job.test_size)
+                unrefined.append(evaluate(m, n_test=job.test_size))
             marks["eval_s"] = time.perf_counter() - marks["trained"]
 
     t0 = time.perf_counter()
@@ -160,7 +162,7 @@ def train_seed(job: SeedJob) -> tuple[SeedRun, dict[str, Any], dict[str, Any]]:
         model.backend,
         metrics,
         curve.to_dict(),
-        unrefined=marks.get("unrefined"),
+        unrefined=unrefined[0] if unrefined else None,
         refine_seconds=max(refine_s, 0.0),
         compile_seconds=compile_s,
         compile_cpu_seconds=compile_cpu,
@@ -203,7 +205,7 @@ def train_all(
     jobs = [(key, replace(job, measure_first=i % 2 == 1)) for i, (key, job) in enumerate(jobs)]
     per_job = max(job_memory(cfg, opts.test_size) for _, cfg in runs_of)
 
-    def describe(key: str, value: tuple[SeedRun, Any, Any]) -> str:
+    def describe(key: str, value: Trained) -> str:
         run, m = value[0], value[0].metrics
         refine = f" + refinement {run.refine_seconds:.0f} s" if run.unrefined else ""
         before = f" (before refinement {run.unrefined.order_r2:.3f})" if run.unrefined else ""

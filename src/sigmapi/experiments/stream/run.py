@@ -29,7 +29,7 @@ import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TypedDict
 
 import numpy as np
 
@@ -41,7 +41,15 @@ from sigmapi.executor import Executor, job_memory
 from sigmapi.experiments.base import KEY_VALUES, Experiment, register, run_all
 from sigmapi.experiments.kit.jobs import Tick, counted, iterations_counted
 from sigmapi.experiments.kit.maps import MapSpec
-from sigmapi.experiments.kit.results import Column, Result, columns, render
+from sigmapi.experiments.kit.results import (
+    Column,
+    Result,
+    as_object,
+    columns,
+    plain,
+    render,
+    tuples,
+)
 from sigmapi.experiments.kit.seeds import SeedPlan, check_seeds
 from sigmapi.metrics import evaluate
 from sigmapi.model.som import SigmaPiSOM
@@ -55,6 +63,7 @@ __all__ = [
     "STREAM",
     "STREAM_KEY",
     "VC_MARGIN",
+    "MapRun",
     "StreamConfig",
     "StreamExperiment",
     "StreamJob",
@@ -82,7 +91,7 @@ class StreamConfig:
     traces: tuple[float, ...] = field(
         default=(0.0, 0.5),
         metadata=_validate.bounded(
-            "numbers", 0, 1, hi_open=True, fix="trace constants, e.g. 0,0.5"
+            "numbers", 0, 1, hi_open=True, fix="trace constants in [0, 1), e.g. --traces 0,0.5"
         ),
     )
     """Trace constants of the trace rule (0: the two-view rule on consecutive frames)."""
@@ -92,33 +101,15 @@ class StreamConfig:
     """Test z's (and calibration z's) of the evaluation."""
 
     def __post_init__(self) -> None:
-        set_ = object.__setattr__
-        set_(self, "overrides", tuple(self.overrides))
-        if not self.dwells:
-            raise _validate.fail(
-                "dwells", "at least one dwell time", list(self.dwells), "e.g. --dwells 1,2,4,8,16"
-            )
-        dwells = [
-            _validate.integer("dwells", d, 1, fix="saccades per position") for d in self.dwells
-        ]
-        set_(self, "dwells", tuple(sorted(set(dwells))))
-        if not self.traces:
-            raise _validate.fail(
-                "traces", "at least one trace constant", list(self.traces), "e.g. --traces 0,0.5"
-            )
-        traces = {
-            _validate.number(
-                "traces",
-                t,
-                0.0,
-                1.0,
-                hi_open=True,
-                fix="trace constants in [0, 1), e.g. --traces 0,0.5",
-            )
-            for t in self.traces
-        }
-        set_(self, "traces", tuple(sorted(traces)))
-        _validate.check_fields(self)
+        object.__setattr__(self, "overrides", tuple(self.overrides))
+        _validate.check_fields(self)  # each dwell time and trace constant within its bounds
+        for name, what, fix in (
+            ("dwells", "dwell time", "e.g. --dwells 1,2,4,8,16"),
+            ("traces", "trace constant", "e.g. --traces 0,0.5"),
+        ):
+            if not getattr(self, name):
+                raise _validate.fail(name, f"at least one {what}", [], fix)
+            object.__setattr__(self, name, tuple(sorted(set(getattr(self, name)))))
         self.som_config  # noqa: B018 (an unknown preset or a bad override fails here, not later)
 
     @property
@@ -141,6 +132,9 @@ QUICK = StreamConfig(
 METRICS = ("view_consistency", "view_within_one", "z_error", "order_r2", "fold_score")
 """The scores of each map (:func:`sigmapi.evaluate`), besides ``folded``."""
 
+PER_SEED = (*METRICS, "folded", "seconds")
+"""The values of each map that ``"methods"`` keeps per seed."""
+
 
 VC_MARGIN = 0.02
 """Acceptance: stream learning at ``d >= 4`` within this much view consistency of pairs."""
@@ -160,6 +154,34 @@ COLUMNS = columns(
 """The table's columns: one row per method and dwell time (medians, worst seeds)."""
 
 
+@dataclass(frozen=True)
+class MapRun:
+    """One map's scores (:func:`stream_job`): the map on pairs when ``dwell`` is None."""
+
+    seed: int
+    dwell: int | None
+    trace: float | None
+    view_consistency: float
+    view_within_one: float
+    z_error: float
+    order_r2: float
+    fold_score: float
+    folded: bool
+    seconds: float
+
+
+class Case(TypedDict):
+    """The acceptance at one trace constant and dwell time (:meth:`StreamResult.acceptance`)."""
+
+    trace: float
+    dwell: int
+    vc_gap_median: float
+    vc_gap_worst: float
+    met: int
+    n_seeds: int
+    all_met: bool
+
+
 def _name(trace: float | None) -> str:
     return "pairs" if trace is None else f"stream trace {trace:g}"
 
@@ -170,7 +192,7 @@ class StreamResult(Result):
 
     config: StreamConfig
     seeds: tuple[int, ...]
-    runs: list[dict[str, Any]]
+    runs: list[MapRun]
     seconds: float
 
     KEYS = ("methods", "acceptance", "settings", "seconds")
@@ -178,28 +200,20 @@ class StreamResult(Result):
     run's wall time."""
 
     @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> StreamResult:
+    def from_dict(cls, data: object) -> StreamResult:
         """The result a :meth:`to_dict` wrote (e.g. read back from ``result.json``)."""
-        st = data["settings"]
+        st = as_object(data)["settings"]
         config = StreamConfig(
-            preset=st["preset"],
-            overrides=tuple(st["overrides"]),
-            dwells=tuple(st["dwells"]),
-            traces=tuple(st["traces"]),
-            n_test=st["n_test"],
+            **tuples({f.name: st[f.name] for f in dataclasses.fields(StreamConfig)})
         )
         seeds = tuple(st["seeds"])
+        obj = as_object(data)
         runs = [
-            {
-                "seed": seed,
-                "dwell": m["dwell"],
-                "trace": m["trace"],
-                **{k: m["per_seed"][k][i] for k in (*METRICS, "folded", "seconds")},
-            }
-            for m in data["methods"]
+            MapRun(seed, m["dwell"], m["trace"], **{k: m["per_seed"][k][i] for k in PER_SEED})
+            for m in obj["methods"]
             for i, seed in enumerate(seeds)
         ]
-        return cls(config, seeds, runs, float(data["seconds"]))
+        return cls(config, seeds, runs, float(obj["seconds"]))
 
     @classmethod
     def combine(cls, parts: Sequence[StreamResult]) -> StreamResult:
@@ -215,11 +229,11 @@ class StreamResult(Result):
             sum(p.seconds for p in parts),
         )
 
-    def _rows(self, trace: float | None, dwell: int | None) -> list[dict[str, Any]]:
-        rows = [r for r in self.runs if r["trace"] == trace and r["dwell"] == dwell]
-        return sorted(rows, key=lambda r: self.seeds.index(r["seed"]))
+    def _rows(self, trace: float | None, dwell: int | None) -> list[MapRun]:
+        rows = [r for r in self.runs if r.trace == trace and r.dwell == dwell]
+        return sorted(rows, key=lambda r: self.seeds.index(r.seed))
 
-    def methods(self) -> list[dict[str, Any]]:
+    def methods(self) -> list[dict[str, object]]:
         """One entry per method and dwell time: ``name``, ``dwell`` (None for pairs),
         ``trace``, the median of each metric, its worst seed (``*_worst``: lowest view
         consistency and order, highest z error and fold score), ``fold_rate``, ``ordered``
@@ -228,62 +242,58 @@ class StreamResult(Result):
         out = []
         for trace, dwell in keys:
             rows = self._rows(trace, dwell)
-            entry: dict[str, Any] = {"name": _name(trace), "dwell": dwell, "trace": trace}
+            entry: dict[str, object] = {"name": _name(trace), "dwell": dwell, "trace": trace}
             for k in METRICS:
-                vals = [r[k] for r in rows]
+                vals = [getattr(r, k) for r in rows]
                 worst = max(vals) if k in ("z_error", "fold_score") else min(vals)
                 entry.update({k: float(np.median(vals)), f"{k}_worst": float(worst)})
-            folded = [r["folded"] for r in rows]
+            folded = [r.folded for r in rows]
             entry.update(
                 fold_rate=float(np.mean(folded)),
                 ordered=int(len(rows) - sum(folded)),
                 n_seeds=len(rows),
-                per_seed={k: [r[k] for r in rows] for k in (*METRICS, "folded", "seconds")},
+                per_seed={k: [getattr(r, k) for r in rows] for k in PER_SEED},
             )
             out.append(entry)
         return out
 
-    def acceptance(self) -> dict[str, Any]:
+    def acceptance(self) -> dict[str, object]:
         """Per trace constant and dwell time ``>= MIN_DWELL``: the view consistency of the
         stream minus that of pairs, seed by seed (median, worst), how many seeds are within
         :data:`VC_MARGIN` and ordered, and whether every seed is."""
-        pairs = {r["seed"]: r for r in self._rows(None, None)}
-        out: dict[str, Any] = {"margin": VC_MARGIN, "min_dwell": MIN_DWELL, "cases": []}
+        return {"margin": VC_MARGIN, "min_dwell": MIN_DWELL, "cases": self.cases()}
+
+    def cases(self) -> list[Case]:
+        """The cases of :meth:`acceptance`, trace constant-major."""
+        pairs = {r.seed: r for r in self._rows(None, None)}
+        out = []
         for trace in self.config.traces:
             for dwell in (d for d in self.config.dwells if d >= MIN_DWELL):
                 rows = self._rows(trace, dwell)
-                gap = [r["view_consistency"] - pairs[r["seed"]]["view_consistency"] for r in rows]
-                met = [g >= -VC_MARGIN and not r["folded"] for g, r in zip(gap, rows, strict=True)]
-                out["cases"].append(
-                    {
-                        "trace": trace,
-                        "dwell": dwell,
-                        "vc_gap_median": float(np.median(gap)),
-                        "vc_gap_worst": float(min(gap)),
-                        "met": int(sum(met)),
-                        "n_seeds": len(rows),
-                        "all_met": bool(all(met)),
-                    }
+                gap = [r.view_consistency - pairs[r.seed].view_consistency for r in rows]
+                met = [g >= -VC_MARGIN and not r.folded for g, r in zip(gap, rows, strict=True)]
+                out.append(
+                    Case(
+                        trace=trace,
+                        dwell=dwell,
+                        vc_gap_median=float(np.median(gap)),
+                        vc_gap_worst=float(min(gap)),
+                        met=int(sum(met)),
+                        n_seeds=len(rows),
+                        all_met=bool(all(met)),
+                    )
                 )
         return out
 
-    def settings(self) -> dict[str, Any]:
+    def settings(self) -> dict[str, object]:
         """The config, the seeds and the resolved map config."""
-        c = self.config
-        return {
-            "preset": c.preset,
-            "overrides": list(c.overrides),
-            "dwells": list(c.dwells),
-            "traces": list(c.traces),
-            "n_test": c.n_test,
-            "seeds": list(self.seeds),
-            "config": c.som_config.to_dict(),
-        }
+        config = self.config
+        return {**plain(config), "seeds": self.seeds, "config": config.som_config.to_dict()}
 
     def table(self) -> str:
         """Medians per method and dwell time, then the acceptance lines."""
         rows = render(COLUMNS, self.methods())
-        for case in self.acceptance()["cases"]:
+        for case in self.cases():
             rows.append(
                 f"trace {case['trace']:g}, dwell {case['dwell']}: {case['met']} of "
                 f"{case['n_seeds']} seeds within {VC_MARGIN} view consistency of pairs and "
@@ -296,9 +306,7 @@ class StreamResult(Result):
         """The figure's caption, computed from the result."""
         pairs = self.methods()[0]
         n = len(self.seeds)
-        best = max(
-            self.acceptance()["cases"], key=lambda c: (c["met"], c["vc_gap_median"]), default=None
-        )
+        best = max(self.cases(), key=lambda c: (c["met"], c["vc_gap_median"]), default=None)
         text = (
             f"{self.config.preset}, {n} seed{'s' * (n > 1)} ({', '.join(map(str, self.seeds))}): "
             f"view consistency and fold rate of maps learned from a stream in which the object "
@@ -347,10 +355,9 @@ class StreamJob:
     """Where given, the job shows its maps' training iterations."""
 
 
-def stream_job(job: StreamJob) -> list[dict[str, Any]]:
+def stream_job(job: StreamJob) -> list[MapRun]:
     """Train and score the maps of one job: the map on pairs, or one map per trace constant on
-    the stream of ``(seed, dwell)``; one dict per map (``seed``, ``dwell``, ``trace``, the
-    :data:`METRICS`, ``folded``, ``seconds``)."""
+    the stream of ``(seed, dwell)``; one :class:`MapRun` per map."""
     maps = 1 if job.dwell is None else len(job.traces)
     what = "pairs" if job.dwell is None else f"dwell {job.dwell}"
     desc = f"stream seed {job.seed} {what}"
@@ -358,16 +365,15 @@ def stream_job(job: StreamJob) -> list[dict[str, Any]]:
     return counted(job.show, maps * job.cfg.iterations, desc, work, "it")
 
 
-def _stream_job(job: StreamJob, tick: Tick | None) -> list[dict[str, Any]]:
+def _stream_job(job: StreamJob, tick: Tick | None) -> list[MapRun]:
     out = []
     its = job.cfg.iterations
 
-    def scored(model: SigmaPiSOM, trace: float | None, start: float) -> dict[str, Any]:
+    def scored(model: SigmaPiSOM, trace: float | None, start: float) -> MapRun:
         m = evaluate(model, n_test=job.n_test)
-        row: dict[str, Any] = {"seed": job.seed, "dwell": job.dwell, "trace": trace}
-        row.update({k: float(getattr(m, k)) for k in METRICS})
-        row.update(folded=bool(m.folded), seconds=time.perf_counter() - start)
-        return row
+        scores = {k: float(getattr(m, k)) for k in METRICS}
+        seconds = time.perf_counter() - start
+        return MapRun(job.seed, job.dwell, trace, **scores, folded=bool(m.folded), seconds=seconds)
 
     if job.dwell is None:
         start = time.perf_counter()
@@ -387,42 +393,6 @@ def _stream_job(job: StreamJob, tick: Tick | None) -> list[dict[str, Any]]:
     return out
 
 
-def run_stream(
-    config: StreamConfig,
-    seeds: Sequence[int],
-    executor: Executor | None = None,
-    progress: Progress | None = None,
-) -> StreamResult:
-    """Every map of ``config`` on each of ``seeds`` (one job per seed and dwell time, and one
-    per seed on pairs), scored; the :class:`StreamResult`."""
-    seeds = check_seeds(seeds)
-    cfg = config.som_config
-    start = time.perf_counter()
-    jobs = [(f"seed {s} pairs", StreamJob(s, cfg, None, (), config.n_test)) for s in seeds]
-    jobs += [
-        (f"seed {s} dwell {d}", StreamJob(s, cfg, d, config.traces, config.n_test))
-        for s in seeds
-        for d in config.dwells
-    ]
-    frames = 8 * (cfg.iterations + 1) * 2 * (int(np.prod(cfg.x_shape)) + int(np.prod(cfg.y_shape)))
-
-    def describe(key: str, rows: list[dict[str, Any]]) -> str:
-        return f"{key}: same unit " + ", ".join(f"{r['view_consistency']:.3f}" for r in rows)
-
-    done = run_all(
-        stream_job,
-        jobs,
-        executor=executor,
-        per_job=job_memory(cfg, config.n_test) + frames,
-        progress=progress,
-        desc="stream",
-        describe=describe,
-        verbose=lambda job: dataclasses.replace(job, show=progress),
-    )
-    runs = [r for rows in done.values() for r in rows]
-    return StreamResult(config, seeds, runs, time.perf_counter() - start)
-
-
 class StreamExperiment(Experiment[StreamConfig]):
     """Maps learned from a stream of frames (the trace rule) over dwell times and trace
     constants, against the map learned from explicit pairs, on the same seeds."""
@@ -436,7 +406,6 @@ class StreamExperiment(Experiment[StreamConfig]):
     quick_time = "about 45 s on two busy cores"
     default_out = "stream"
     writes = (FIGURE, Path(FIGURE).with_suffix(".txt").name)
-    """The files written into --out besides result.json (checked before the work)."""
 
     def run(
         self,
@@ -447,7 +416,36 @@ class StreamExperiment(Experiment[StreamConfig]):
         executor: Executor | None = None,
         progress: Progress | None = None,
     ) -> StreamResult:
-        return run_stream(config, seeds, executor, progress)
+        """Every map of ``config`` on each of ``seeds`` (one job per seed and dwell time, and
+        one per seed on pairs), scored."""
+        seeds = check_seeds(seeds)
+        cfg = config.som_config
+        start = time.perf_counter()
+        jobs = [(f"seed {s} pairs", StreamJob(s, cfg, None, (), config.n_test)) for s in seeds]
+        jobs += [
+            (f"seed {s} dwell {d}", StreamJob(s, cfg, d, config.traces, config.n_test))
+            for s in seeds
+            for d in config.dwells
+        ]
+        frames = (
+            8 * (cfg.iterations + 1) * 2 * (int(np.prod(cfg.x_shape)) + int(np.prod(cfg.y_shape)))
+        )
+
+        def describe(key: str, rows: list[MapRun]) -> str:
+            return f"{key}: same unit " + ", ".join(f"{r.view_consistency:.3f}" for r in rows)
+
+        done = run_all(
+            stream_job,
+            jobs,
+            executor=executor,
+            per_job=job_memory(cfg, config.n_test) + frames,
+            progress=progress,
+            desc="stream",
+            describe=describe,
+            verbose=lambda job: dataclasses.replace(job, show=progress),
+        )
+        runs = [r for rows in done.values() for r in rows]
+        return StreamResult(config, seeds, runs, time.perf_counter() - start)
 
 
 STREAM = register(StreamExperiment())

@@ -13,16 +13,11 @@ A spec names a preset, the seeds, fields fixed for every run (``[set]``) and a g
     iterations = [2000, 3000]
 
 Each run trains one model and evaluates it (:func:`sigmapi.evaluate`); ``DIR/results.csv``
-gets one row per run: the grid parameters, the seed, every metric (the fold score too), the
-training and total seconds, ``status`` (``ok`` or ``failed``) and the ``error`` of a failed
-run, and ``run_key``, the run's identity (:mod:`~sigmapi.experiments.sweep.table`: the
-resolved config, seed, ``n_test`` and model format). A row is appended after every finished
-run, so a killed sweep loses at most the runs in flight; started again with the same spec, it
-finds the finished runs in the table (by ``run_key``) and runs only the missing ones (failed
-ones again with ``retry_failed``). A table of another spec is refused, never rewritten (``add``
-adds to it on purpose); one command at a time writes a folder (:mod:`sigmapi._lock`); a spec
-names at most :data:`MAX_RUNS` runs. Runs go through :mod:`sigmapi.executor`: a process pool sized
-to the cores and the memory budget, or a Dask cluster.
+gets one row per run, appended after every finished run, so that a sweep started again with
+the same spec runs only the missing runs (:mod:`~sigmapi.experiments.sweep.table`: the run's
+identity ``run_key``, the strict reader). Runs go through :mod:`sigmapi.executor`; a spec
+names at most :data:`MAX_RUNS` runs. What the table holds, what is refused and the engines:
+docs/guide/sweeps.md.
 
 The experiment ``sweep`` (:class:`Sweep`, settings :class:`SweepConfig`: the spec file) is
 :func:`run_sweep` on the command line; seeds given to it replace the spec's.
@@ -37,7 +32,7 @@ import math
 import statistics
 import time
 import tomllib
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -96,7 +91,7 @@ class SweepRun:
 
     run_id: str
     run_key: str
-    params: dict[str, Any]
+    params: dict[str, object]
     seed: int
     point: SOMConfig
     n_test: int
@@ -122,7 +117,7 @@ class SweepSpec:
     preset: str
     seeds: tuple[int, ...]
     grid: dict[str, list[object]]
-    fixed: dict[str, Any] = field(default_factory=dict)
+    fixed: dict[str, object] = field(default_factory=dict)
     n_test: int = 2000
 
     @classmethod
@@ -135,7 +130,7 @@ class SweepSpec:
         return cls.from_dict(data, source)
 
     @classmethod
-    def from_dict(cls, data: Any, source: str = "sweep spec") -> SweepSpec:
+    def from_dict(cls, data: object, source: str = "sweep spec") -> SweepSpec:
         """Check a spec given as its TOML file's table (what :meth:`to_dict` writes)."""
         if not isinstance(data, dict):
             raise ConfigError(f"{source} must be a table of keys, got {type(data).__name__}")
@@ -174,7 +169,7 @@ class SweepSpec:
         base = _base(preset, fixed, source)
         resolved = {}
         for key in sorted(grid):  # each value once, as the config resolves it
-            values: dict[str, Any] = {}
+            values: dict[str, object] = {}
             for value in grid[key]:
                 try:
                     got = SOMConfig.from_dict({**base, key: value}).to_dict()[key]
@@ -248,7 +243,7 @@ class SweepSpec:
         return out
 
 
-def _base(preset: str, fixed: dict[str, Any], source: str) -> dict[str, object]:
+def _base(preset: str, fixed: Mapping[str, object], source: str) -> dict[str, object]:
     """The preset with the spec's ``[set]``, checked."""
     base = load_preset(preset).to_dict()
     try:
@@ -274,7 +269,7 @@ def read_results(path: str | Path) -> list[dict[str, str]]:
 
 
 def _row(run: SweepRun, outcome: Outcome) -> dict[str, object]:
-    row: dict[str, Any] = {
+    row: dict[str, object] = {
         "run_id": run.run_id,
         "run_key": run.run_key,
         **run.params,
@@ -289,7 +284,7 @@ def _row(run: SweepRun, outcome: Outcome) -> dict[str, object]:
 def _job_memory(runs: Sequence[SweepRun]) -> int:
     """The largest job's memory (:func:`~sigmapi.executor.job_memory`), estimated once per
     distinct model size."""
-    seen: dict[Any, int] = {}
+    seen: dict[tuple[object, ...], int] = {}
     for r in runs:
         c = r.point
         size = (c.map_shape, c.x_shape, c.y_shape, c.backend, c.kernel_tol, r.n_test)
@@ -310,29 +305,19 @@ def run_sweep(
     add: bool = False,
     on_plan: Callable[[int, int, str], None] | None = None,
     on_done: Callable[[bool, str], None] | None = None,
+    executor: Executor | None = None,
 ) -> list[dict[str, object]]:
     """Run the missing runs of ``spec``, appending each to ``out/results.csv``; this spec's rows.
 
     ``engine``, ``workers``, ``memory_budget`` (bytes) and ``address`` say where the runs go
-    (:class:`~sigmapi.executor.Executor`). A table there that holds runs of another spec is
-    refused unless ``add`` (:func:`~sigmapi.experiments.sweep.table.open_table`).
-    ``on_plan(n_to_run, n_skipped, reason)`` is called once before the first run and
-    ``on_done(ok, line)`` after each.
+    (:class:`~sigmapi.executor.Executor`), unless ``executor`` is given. A table there that
+    holds runs of another spec is refused unless ``add``
+    (:func:`~sigmapi.experiments.sweep.table.open_table`). ``on_plan(n_to_run, n_skipped,
+    reason)`` is called once before the first run and ``on_done(ok, line)`` after each.
     """
-    executor = Executor(engine, workers, address, memory_budget)
-    return _sweep(spec, Path(out), executor, retry_failed, on_plan, on_done, add=add)
-
-
-def _sweep(
-    spec: SweepSpec,
-    out: Path,
-    executor: Executor,
-    retry_failed: bool,
-    on_plan: Callable[[int, int, str], None] | None,
-    on_done: Callable[[bool, str], None] | None,
-    *,
-    add: bool = False,
-) -> list[dict[str, object]]:
+    if executor is None:
+        executor = Executor(engine, workers, address, memory_budget)
+    out = Path(out)
     if out.exists() and not out.is_dir():
         raise ConfigError(f"out {str(out)!r} is a file; give a folder for the sweep's table")
     out.mkdir(parents=True, exist_ok=True)
@@ -412,7 +397,7 @@ class SweepConfig:
         return SweepSpec.read(self.spec)
 
 
-def _typed(value: Any) -> Any:
+def _typed(value: object) -> object:
     """A value of the table as written (a string) back as a bool, int or float where it is one."""
     if not isinstance(value, str) or value in ("", "nan"):
         return value
@@ -440,7 +425,7 @@ class SweepResult(Result):
     table_file = RESULTS
 
     @classmethod
-    def from_dict(cls, data: Any) -> SweepResult:
+    def from_dict(cls, data: object) -> SweepResult:
         """The result a :meth:`to_dict` wrote (``result.json``): its spec and rows."""
         if not isinstance(data, dict) or not isinstance(data["rows"], list):
             raise TypeError("a sweep's result must be a JSON object with a list of rows")
@@ -463,8 +448,9 @@ class SweepResult(Result):
         for r in self.rows:
             point = ", ".join(f"{k} {r[k]}" for k in keys) or self.spec.preset
             value = _typed(r.get(self.metric))
-            ok = str(r.get("status")) == "ok" and isinstance(value, (int, float))
-            points.setdefault(point, []).extend([float(value)] if ok else [])
+            finished = points.setdefault(point, [])
+            if str(r.get("status")) == "ok" and isinstance(value, (int, float)):
+                finished.append(float(value))
         lines = [f"{'grid point':40s} {'ok runs':>7s} {self.metric:>12s} (median)"]
         for point, values in points.items():
             median = f"{statistics.median(values):12.3f}" if values else f"{'-':>12s}"
@@ -527,8 +513,14 @@ class Sweep(Experiment[SweepConfig]):
             state["done"](ok, line)
 
         try:
-            rows = _sweep(
-                spec, Path(out), ex, config.retry_failed, on_plan, on_done, add=config.add
+            rows = run_sweep(
+                spec,
+                out,
+                retry_failed=config.retry_failed,
+                add=config.add,
+                on_plan=on_plan,
+                on_done=on_done,
+                executor=ex,
             )
         finally:
             if "bar" in state:

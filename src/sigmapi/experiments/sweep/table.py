@@ -26,7 +26,6 @@ import os
 import stat
 from collections.abc import Collection, Sequence
 from pathlib import Path
-from typing import Any
 
 from sigmapi.errors import ConfigError
 from sigmapi.io import FORMAT, VERSION, atomic_write_bytes
@@ -223,7 +222,7 @@ def _line(columns: Sequence[str], row: dict[str, object]) -> bytes:
     return buf.getvalue().encode("utf-8")
 
 
-def _cell(value: Any) -> Any:
+def _cell(value: object) -> object:
     if isinstance(value, float) and math.isnan(value):
         return "nan"
     return value
