@@ -75,7 +75,7 @@ def _median_worst(rows: list[dict[str, Any]], keys: tuple[str, ...]) -> dict[str
 
 @dataclass
 class NeuronsResult(Result):
-    """Every job's rows (:func:`~sigmapi.experiments.neurons.run.neurons_job`)."""
+    """Every job's rows (:meth:`~sigmapi.experiments.neurons.run.NeuronsExperiment.seed_run`)."""
 
     config: NeuronsConfig
     seeds: tuple[int, ...]

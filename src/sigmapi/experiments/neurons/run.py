@@ -11,21 +11,17 @@ conjunction network at every peak rate, the dendritic one at 100 Hz.
 
 from __future__ import annotations
 
-import dataclasses
-import functools
 import time
-from collections.abc import Sequence
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from sigmapi.analysis.physiology import record
 from sigmapi.config import SOMConfig
-from sigmapi.executor import Executor, job_memory
-from sigmapi.experiments.base import Experiment, check_seeds, register, run_all
-from sigmapi.experiments.kit.jobs import Tick, counted
+from sigmapi.executor import job_memory
+from sigmapi.experiments.base import register
+from sigmapi.experiments.kit.jobs import SeedRuns, Tick
 from sigmapi.experiments.kit.seeds import SeedPlan
 from sigmapi.metrics import evaluate, evaluation_sets, grid_spacing, winner_metrics
 from sigmapi.model.som import SigmaPiSOM
@@ -33,13 +29,12 @@ from sigmapi.neurons.basis import BasisFunctionMap
 from sigmapi.neurons.dendritic import DendriticMap, branch_summary
 from sigmapi.neurons.sparse import SparseDendriticMap, sparse_summary
 from sigmapi.neurons.spiking import SpikingRun, simulate_conjunction, simulate_dendritic
-from sigmapi.neurons.training import FirstOrderMap
 from sigmapi.progress import Progress
 
 from .config import METRICS, QUICK, REFERENCE_RATE, NeuronsConfig
 from .result import NeuronsResult
 
-__all__ = ["METRICS", "NEURONS", "NeuronsExperiment", "NeuronsJob", "neurons_job", "run_neurons"]
+__all__ = ["METRICS", "NEURONS", "NeuronsExperiment", "NeuronsJob"]
 
 
 PLAN = SeedPlan({"spikes": 11})
@@ -154,14 +149,6 @@ def _step(tick: Tick | None, n: int, phase: str) -> None:
     """``tick(n, phase)`` where the job shows its steps: 0 as a step starts, 1 when done."""
     if tick is not None:
         tick(n, phase)
-
-
-def neurons_job(job: NeuronsJob) -> dict[str, Any]:
-    """Every map of one seed and task: ``{"maps": [rows], "spiking": [rows], "branches":
-    summary of the middle dendritic map's branches}`` (rows: ``name``, ``task``, the
-    :data:`METRICS`, ``folded``, ``synapses``, physiology medians in 1-D)."""
-    desc = f"neurons seed {job.seed} {job.task}"
-    return counted(job.show, job.steps, desc, functools.partial(_neurons_job, job), "step")
 
 
 def _neurons_job(job: NeuronsJob, tick: Tick | None) -> dict[str, Any]:
@@ -296,50 +283,10 @@ def _neurons_job(job: NeuronsJob, tick: Tick | None) -> dict[str, Any]:
     return {"maps": rows, "spiking": spiking, "branches": summary}
 
 
-def is_first_order(model: Any) -> bool:
-    """Whether ``model`` is a map of this package's first-order neurons."""
-    return isinstance(model, FirstOrderMap)
-
-
-def run_neurons(
-    config: NeuronsConfig,
-    seeds: Sequence[int],
-    executor: Executor | None = None,
-    progress: Progress | None = None,
-) -> NeuronsResult:
-    """Every job of ``config`` on ``seeds`` (2-D on the first ``seeds_2d``); the result."""
-    seeds = check_seeds(seeds)
-    start = time.perf_counter()
-    jobs = [(f"seed {s} 1d", NeuronsJob(s, "1d", config)) for s in seeds]
-    if config.preset_2d:
-        jobs += [(f"seed {s} 2d", NeuronsJob(s, "2d", config)) for s in seeds[: config.seeds_2d]]
-    som = config.som_config_2d if config.preset_2d else config.som_config
-    online = [(config.som_config, config.pairs)]  # the online phase's pairs, as codes
-    online += [(config.som_config_2d, config.pairs_2d)] if config.preset_2d else []
-    codes = max(n * (int(np.prod(c.x_shape)) + int(np.prod(c.y_shape))) * 8 for c, n in online)
-    per_job = job_memory(som, config.n_test) + config.spiking_cost()[1] + codes
-
-    def describe(key: str, value: dict[str, Any]) -> str:
-        return f"{key}: " + ", ".join(
-            f"{r['name']} {r['view_consistency']:.3f}" for r in value["maps"]
-        )
-
-    done = run_all(
-        neurons_job,
-        jobs,
-        executor=executor,
-        per_job=per_job,
-        progress=progress,
-        desc="neurons",
-        describe=describe,
-        verbose=lambda job: dataclasses.replace(job, show=progress),
-    )
-    return NeuronsResult(config, seeds, [done[k] for k, _ in jobs], time.perf_counter() - start)
-
-
-class NeuronsExperiment(Experiment[NeuronsConfig]):
+class NeuronsExperiment(SeedRuns[NeuronsConfig]):
     """Dendritic neurons with first-order synapses, a basis-function network and spiking
-    networks against the Sigma-Pi map, on the same seeds (the chapter's section 7.1)."""
+    networks against the Sigma-Pi map, on the same seeds (the chapter's section 7.1): one job
+    per seed and task (2-D on the first ``seeds_2d`` seeds)."""
 
     name = "neurons"
     summary = "the transformation in dendritic, basis-function and spiking neurons"
@@ -349,17 +296,48 @@ class NeuronsExperiment(Experiment[NeuronsConfig]):
     quick_seeds = (100,)
     quick_time = "about 1-2.5 min on two busy cores"
     default_out = "neurons"
+    unit = "step"
 
-    def run(
-        self,
-        config: NeuronsConfig,
-        *,
-        seeds: Sequence[int],
-        out: Path | None = None,
-        executor: Executor | None = None,
-        progress: Progress | None = None,
+    def check(self, config: NeuronsConfig) -> int:
+        """One job's memory: the largest map's, the spiking runs' and the online phase's
+        pairs, as codes."""
+        som = config.som_config_2d if config.preset_2d else config.som_config
+        online = [(config.som_config, config.pairs)]
+        online += [(config.som_config_2d, config.pairs_2d)] if config.preset_2d else []
+        codes = max(n * (int(np.prod(c.x_shape)) + int(np.prod(c.y_shape))) * 8 for c, n in online)
+        return job_memory(som, config.n_test) + config.spiking_cost()[1] + codes
+
+    def jobs(
+        self, config: NeuronsConfig, seeds: tuple[int, ...], shared: object
+    ) -> list[tuple[str, NeuronsJob]]:
+        jobs = [(f"seed {s} 1d", NeuronsJob(s, "1d", config)) for s in seeds]
+        if config.preset_2d:
+            jobs += [
+                (f"seed {s} 2d", NeuronsJob(s, "2d", config)) for s in seeds[: config.seeds_2d]
+            ]
+        return jobs
+
+    def steps(self, job: NeuronsJob) -> int:
+        return job.steps
+
+    def desc(self, job: NeuronsJob) -> str:
+        return f"neurons seed {job.seed} {job.task}"
+
+    def describe(self, key: str, value: dict[str, Any]) -> str:
+        return f"{key}: " + ", ".join(
+            f"{r['name']} {r['view_consistency']:.3f}" for r in value["maps"]
+        )
+
+    def seed_run(self, job: NeuronsJob, tick: Tick | None) -> dict[str, Any]:
+        """Every map of one seed and task: ``{"maps": [rows], "spiking": [rows], "branches":
+        summary of the middle dendritic map's branches}`` (rows: ``name``, ``task``, the
+        :data:`METRICS`, ``folded``, ``synapses``, physiology medians in 1-D)."""
+        return _neurons_job(job, tick)
+
+    def collect(
+        self, config: NeuronsConfig, seeds: tuple[int, ...], values: list[Any]
     ) -> NeuronsResult:
-        return run_neurons(config, seeds, executor, progress)
+        return NeuronsResult(config, seeds, values, 0.0)
 
 
 NEURONS = register(NeuronsExperiment())

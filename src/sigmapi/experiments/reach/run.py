@@ -19,11 +19,8 @@ Examples
 
 from __future__ import annotations
 
-import dataclasses
 import functools
-import time
-from collections.abc import Iterable, Sequence
-from dataclasses import dataclass
+from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
@@ -42,8 +39,8 @@ from sigmapi.envs import (
 )
 from sigmapi.errors import ConfigError
 from sigmapi.executor import Executor, job_memory
-from sigmapi.experiments.base import Experiment, check_seeds, register, run_all
-from sigmapi.experiments.kit.jobs import SeedEpisodes, Tick, counted, seed_episodes
+from sigmapi.experiments.base import register
+from sigmapi.experiments.kit.jobs import SeedEpisodes, SeedJob, SeedRuns, Tick, seed_episodes
 from sigmapi.experiments.kit.seeds import SeedPlan
 from sigmapi.experiments.kit.worlds import GAZE_REACH, World
 from sigmapi.experiments.reach.config import SMALL_PRESET, ReachConfig, preset_setting
@@ -121,46 +118,6 @@ def _map_for_seed(
     return learn_map_in_env(env, som, seed=env_seed, callback=callback)
 
 
-@dataclass(frozen=True)
-class _SeedJob:
-    experiment: ReachExperiment
-    config: Any
-    first: bool
-    seed: int
-    shared: Any = None
-    """What every seed's job reads and the run made once (:meth:`ReachExperiment.prepare`)."""
-    show: Progress | None = None
-    """A bar of this seed's episodes (set only where the job runs in the caller's process)."""
-
-
-def _run_seed(job: _SeedJob) -> SeedEpisodes:
-    """Everything of one seed: its map, then every state's learner on the same episodes."""
-    total = len(job.config.run.states) * job.config.run.episodes
-    desc = f"{job.experiment.name} seed {job.seed}"
-    return counted(job.show, total, desc, lambda tick: _seed_runs(job, tick))
-
-
-def _seed_runs(job: _SeedJob, tick: Tick | None) -> SeedEpisodes:
-    """The protocol (:func:`~sigmapi.experiments.kit.jobs.seed_episodes`) with the variant's
-    map, state worlds and what it keeps of the first seed's learners."""
-    exp, cfg = job.experiment, job.config
-    got = seed_episodes(
-        job.seed,
-        cfg.run.states,
-        functools.partial(exp.make_map, cfg, job.shared),
-        functools.partial(exp.state_env, cfg),
-        cfg.agent,
-        exp.plan,
-        cfg.run.episodes,
-        tick=tick,
-        info_keys=exp.info_keys,
-        keep=functools.partial(exp.keep, cfg) if job.first else None,
-    )
-    if not (job.first and exp.returns_map):
-        got.model = None  # its scores travel back, not its weights
-    return got
-
-
 def _map_quality(model: SigmaPiSOM) -> dict[str, float | int]:
     """The project's map metrics (docs/algorithm.md) on a small test set, for the record."""
     return evaluate(model, n_test=2000).to_dict()
@@ -192,7 +149,7 @@ def _check_model(config: ReachConfig) -> None:
         )
 
 
-class ReachExperiment(Experiment[Any]):
+class ReachExperiment(SeedRuns[Any]):
     """Gaze-and-reach task: the same actor-critic on the learned Sigma-Pi map, the retina
     code, retina and gaze codes, and the true z (the upper bound), over seeds.
 
@@ -202,7 +159,7 @@ class ReachExperiment(Experiment[Any]):
     variant with a protocol of its own (the robot: its map learned from recorded view pairs
     and scored on the true z, its own result) is a subclass that overrides the hooks
     :meth:`check`, :meth:`prepare`, :meth:`make_map`, :meth:`state_env`, :meth:`keep` and
-    :meth:`collect`; :meth:`run` and the per-seed job are written once, here.
+    :meth:`collect`; the run is :class:`~sigmapi.experiments.kit.jobs.SeedRuns`.
     """
 
     name = "reach"
@@ -239,9 +196,30 @@ class ReachExperiment(Experiment[Any]):
         _check_memory(config, self.world)
         return job_memory(config.som_config(0, self.world), n_test=2000)
 
-    def prepare(self, config: Any, progress: Progress | None) -> Any:
-        """What every seed's job reads and the run makes once (here: nothing)."""
-        return None
+    def steps(self, job: SeedJob) -> int:
+        """A seed's episodes: every state's."""
+        return len(job.config.run.states) * job.config.run.episodes
+
+    def seed_run(self, job: SeedJob, tick: Tick | None) -> SeedEpisodes:
+        """Everything of one seed: its map, then every state's learner on the same episodes
+        (:func:`~sigmapi.experiments.kit.jobs.seed_episodes`) with the variant's map, state
+        worlds and what it keeps of the first seed's learners."""
+        cfg = job.config
+        got = seed_episodes(
+            job.seed,
+            cfg.run.states,
+            functools.partial(self.make_map, cfg, job.shared),
+            functools.partial(self.state_env, cfg),
+            cfg.agent,
+            self.plan,
+            cfg.run.episodes,
+            tick=tick,
+            info_keys=self.info_keys,
+            keep=functools.partial(self.keep, cfg) if job.first else None,
+        )
+        if not (job.first and self.returns_map):
+            got.model = None  # its scores travel back, not its weights
+        return got
 
     def make_map(
         self, config: Any, shared: Any, seed: int, tick: Tick | None
@@ -277,43 +255,6 @@ class ReachExperiment(Experiment[Any]):
             for s, (axis, vals) in one.kept.items():
                 res.values[s] = vals
                 res.z_axis = axis
-        return res
-
-    def run(
-        self,
-        config: Any,
-        *,
-        seeds: Sequence[int],
-        out: Path | None = None,
-        executor: Executor | None = None,
-        progress: Progress | None = None,
-    ) -> Any:
-        """Train the actor-critic on every state of ``config.run.states`` for every seed.
-
-        Each seed is one job of ``executor`` (the result does not depend on where it runs);
-        run one by one in this process, a seed shows a bar of its episodes. ``out`` is not
-        used: the run writes nothing while it runs. Returns the variant's result (here a
-        :class:`~sigmapi.experiments.reach.result.ReachResult`).
-        """
-        if not isinstance(config, self.config_type):
-            raise _validate.fail("config", f"a {self.config_type.__name__}", config)
-        seeds = check_seeds(seeds)
-        per_job = self.check(config)
-        t0 = time.perf_counter()
-        shared = self.prepare(config, progress)
-        jobs = [(str(s), _SeedJob(self, config, i == 0, s, shared)) for i, s in enumerate(seeds)]
-        values = run_all(
-            _run_seed,
-            jobs,
-            executor=executor,
-            per_job=per_job,
-            progress=progress,
-            desc=self.name,
-            verbose=lambda job: dataclasses.replace(job, show=progress),
-            describe=lambda key, _: f"seed {key}",
-        )
-        res = self.collect(config, seeds, [values[key] for key, _ in jobs])
-        res.seconds = time.perf_counter() - t0
         return res
 
 

@@ -37,31 +37,25 @@ Examples
 from __future__ import annotations
 
 import copy
-import dataclasses
 import functools
-import time
-from collections.abc import Sequence
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from sigmapi import _validate
 from sigmapi.agents import actor_critic_for, run_episodes, run_gated_episodes
 from sigmapi.codes import grid_coordinates
 from sigmapi.envs import GazeReachEnv, MapObservation, learn_map_in_env
-from sigmapi.executor import Executor, job_memory
-from sigmapi.experiments.base import Experiment, check_seeds, register, run_all
-from sigmapi.experiments.kit.jobs import Tick, counted
+from sigmapi.executor import job_memory
+from sigmapi.experiments.base import register
+from sigmapi.experiments.kit.jobs import SeedJob, SeedRuns, Tick
 from sigmapi.experiments.kit.seeds import SeedPlan
 from sigmapi.experiments.kit.worlds import GAZE_REACH, World
 from sigmapi.experiments.reward.config import RewardConfig
 from sigmapi.experiments.reward.result import RewardResult
 from sigmapi.metrics import winner_metrics
 from sigmapi.model.som import SigmaPiSOM
-from sigmapi.progress import Progress
 
 __all__ = [
     "PLAN",
@@ -143,28 +137,14 @@ def map_scores(
     }
 
 
-@dataclass(frozen=True)
-class _SeedJob:
-    config: RewardConfig
-    world: World
-    seed: int
-    show: Progress | None = None
-    """A bar of this seed's episodes (set only where the job runs in the caller's process)."""
-
-
-def _run_seed(job: _SeedJob) -> dict[str, object]:
-    total = len(job.config.run.methods) * job.config.run.episodes
-    return counted(job.show, total, f"reward seed {job.seed}", lambda tick: _seed_runs(job, tick))
-
-
 def _learn_map(cfg: RewardConfig, world: World, seed: int) -> SigmaPiSOM:
     env_seed, som_seed = (int(v) for v in PLAN.rng(seed, "map").integers(0, 2**31 - 1, size=2))
     return learn_map_in_env(world.make_env(cfg.env), cfg.som_config(som_seed, world), seed=env_seed)
 
 
-def _seed_runs(job: _SeedJob, progress: Tick | None) -> dict[str, object]:
+def _seed_runs(job: SeedJob, world: World, progress: Tick | None) -> dict[str, object]:
     """One seed: its map, then each method's learner on the same episodes, then the scores."""
-    cfg, seed, world = job.config, job.seed, job.world
+    cfg, seed = job.config, job.seed
     run = cfg.run
     learned = _learn_map(cfg, world, seed)
     place = world.source(cfg.env)
@@ -223,7 +203,7 @@ def _per_job(config: RewardConfig, world: World) -> int:
     return job_memory(som, n_test=config.run.n_test) + views
 
 
-class RewardExperiment(Experiment[RewardConfig]):
+class RewardExperiment(SeedRuns[RewardConfig]):
     """The frozen map, the reward-gated map and the shuffled-reward control, over seeds."""
 
     name = "reward"
@@ -241,36 +221,19 @@ class RewardExperiment(Experiment[RewardConfig]):
     def __init__(self, world: World = GAZE_REACH) -> None:
         self.world = world
 
-    def run(
-        self,
-        config: RewardConfig,
-        *,
-        seeds: Sequence[int],
-        out: Path | None = None,
-        executor: Executor | None = None,
-        progress: Progress | None = None,
+    def check(self, config: RewardConfig) -> int:
+        return _per_job(config, self.world)
+
+    def steps(self, job: SeedJob) -> int:
+        return len(job.config.run.methods) * job.config.run.episodes
+
+    def seed_run(self, job: SeedJob, tick: Tick | None) -> dict[str, object]:
+        return _seed_runs(job, self.world, tick)
+
+    def collect(
+        self, config: RewardConfig, seeds: tuple[int, ...], values: list[Any]
     ) -> RewardResult:
-        """Every method of ``config.run.methods`` for every seed; each seed is one job of
-        ``executor`` (the result does not depend on where it runs). ``out`` is not used: the
-        run writes nothing while it runs."""
-        if not isinstance(config, RewardConfig):
-            raise _validate.fail("config", "a RewardConfig", config)
-        seeds = check_seeds(seeds)
-        t0 = time.perf_counter()
-        jobs = [(str(s), _SeedJob(config, self.world, s)) for s in seeds]
-        values = run_all(
-            _run_seed,
-            jobs,
-            executor=executor,
-            per_job=_per_job(config, self.world),
-            progress=progress,
-            desc="reward",
-            verbose=lambda job: dataclasses.replace(job, show=progress),
-            describe=lambda key, _: f"seed {key}",
-        )
-        res = RewardResult.collect(config, seeds, [values[k] for k, _ in jobs])
-        res.seconds = time.perf_counter() - t0
-        return res
+        return RewardResult.collect(config, seeds, values)
 
 
 REWARD = RewardExperiment()
