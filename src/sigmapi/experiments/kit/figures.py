@@ -20,6 +20,7 @@ __all__ = [
     "BELOW",
     "MARKERS",
     "SHRINK",
+    "axes",
     "coincide_sentence",
     "coinciding",
     "film_strip",
@@ -35,6 +36,13 @@ MARKERS = ("o", "s", "^", "D", "v", "P", "X")
 
 SHRINK = 1.35
 """Each series' marker is this many times smaller than the one drawn before it."""
+
+
+def axes(ax: Any = None, size: tuple[float, float] = (5, 3.5)) -> Any:
+    """``ax``, or the Axes of a new figure of ``size`` inches (pyplot untouched)."""
+    from matplotlib.figure import Figure  # matplotlib: only when drawing
+
+    return Figure(figsize=size, layout="constrained").subplots() if ax is None else ax
 
 
 def coinciding(series: Mapping[str, Sequence[float]]) -> dict[str, str]:

@@ -25,6 +25,7 @@ from typing import Any, ClassVar, TypeVar
 
 import numpy as np
 
+from sigmapi._outputs import save_captioned
 from sigmapi.experiments.kit.seeds import check_seeds
 
 __all__ = [
@@ -175,13 +176,30 @@ class Result:
             values["written"] = summaries(obj, cls.COMPUTED, cls.LATER)
         return cls(**values)
 
+    FIGURE: ClassVar[str] = ""
+    """The file name of the one figure :meth:`figure` writes (:meth:`draw`; "": none)."""
+    SAVE: ClassVar[Mapping[str, object]] = {"dpi": 120, "facecolor": "white"}
+    """How :meth:`figure` saves it (``savefig``'s keywords)."""
+
     def table(self) -> str:
         """The result as console text (a few lines a person reads)."""
         raise NotImplementedError
 
-    def figure(self, out_dir: Path) -> list[Path]:
-        """Write the result's figures into the folder ``out_dir``; the files written (none)."""
-        return []
+    def draw(self) -> Any:
+        """The figure of :data:`FIGURE` (a matplotlib Figure)."""
+        raise NotImplementedError
+
+    def caption(self) -> str:
+        """The caption of :data:`FIGURE`, computed from the result."""
+        return ""
+
+    def figure(self, out_dir: str | Path) -> list[Path]:
+        """Write the result's figures into the folder ``out_dir`` (:data:`FIGURE` and its
+        caption beside it, ``.txt``); the files written (none without :data:`FIGURE`)."""
+        if not self.FIGURE:
+            return []
+        out = Path(out_dir) / self.FIGURE
+        return [save_captioned(self.draw(), out, self.caption(), **self.SAVE)]
 
 
 def _typed(hint: Any, value: Any) -> Any:

@@ -2,20 +2,21 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
-from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
-from sigmapi._outputs import save_captioned
 from sigmapi.experiments.kit.results import Column, Result, columns, render
 
 from .config import METRICS, REFERENCE_RATE, NeuronsConfig
 
-__all__ = ["FIGURE", "VC_MARGIN", "NeuronsResult", "within_margin"]
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
-FIGURE = "neurons.png"
+__all__ = ["VC_MARGIN", "NeuronsResult", "within_margin"]
+
 
 VC_MARGIN = 0.02
 """Acceptance: within this much view consistency of the reference (Sigma-Pi or rate map)."""
@@ -85,6 +86,8 @@ class NeuronsResult(Result):
     KEYS = ("methods", "acceptance", "branches: branch_summaries", "settings", "runs", "seconds")
     """The JSON form: :meth:`methods`, :meth:`acceptance`, the branches
     (:meth:`branch_summaries`), the settings, every row (:meth:`runs`) and the time."""
+    FIGURE = "neurons.png"
+    SAVE: ClassVar[Mapping[str, object]] = {"dpi": 110}
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> NeuronsResult:
@@ -342,9 +345,8 @@ class NeuronsResult(Result):
         )
         return text
 
-    def figure(self, out_dir: Path) -> list[Path]:
-        """``neurons.png`` and its caption ``neurons.txt``."""
+    def draw(self) -> Figure:
+        """The figure (:func:`~sigmapi.experiments.neurons.figures.neurons_figure`)."""
         from .figures import neurons_figure  # matplotlib: only when drawing
 
-        out = Path(out_dir) / FIGURE
-        return [save_captioned(neurons_figure(self.to_dict()), out, self.caption(), dpi=110)]
+        return neurons_figure(self.to_dict())

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import html
 
+from sigmapi._outputs import save_figure
 from sigmapi.experiments.kit.report import ReportContext, Section
 from sigmapi.experiments.reach.config import ReachConfig
 from sigmapi.experiments.reach.run import REACH, run_with_progress
@@ -47,7 +48,7 @@ def reach_section(ctx: ReportContext) -> Section:
         cfg, seeds, disable=not ctx.progress or None, workers=ctx.options.workers
     )
     with ctx.drawing:  # the report may be drawing its own figures in another thread
-        result.save_figure(ctx.out / FIGURE)
+        save_figure(result.draw(), ctx.out / FIGURE, **result.SAVE)
 
     final = result.final_success()
     per_seed = result.final_success_per_seed()
