@@ -12,8 +12,9 @@ conjunction network at every peak rate, the dendritic one at 100 Hz.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 
@@ -35,6 +36,8 @@ from .config import METRICS, QUICK, REFERENCE_RATE, NeuronsConfig
 from .result import NeuronsResult
 
 __all__ = ["METRICS", "NEURONS", "NeuronsExperiment", "NeuronsJob"]
+
+M = TypeVar("M")
 
 
 PLAN = SeedPlan({"spikes": 11})
@@ -155,59 +158,35 @@ def _neurons_job(job: NeuronsJob, tick: Tick | None) -> dict[str, Any]:
     c, cfg = job.config, job.som_config
     two_d = job.task == "2d"
     n_x, n_y = int(np.prod(cfg.x_shape)), int(np.prod(cfg.y_shape))
-    maps: list[tuple[str, Any, dict[str, Any]]] = []
-    start = time.perf_counter()
-    _step(tick, 0, "train sigma-pi")
-    sp = SigmaPiSOM(cfg, seed=job.seed).fit()
-    _step(tick, 1, "train sigma-pi")
-    maps.append(("sigma-pi", sp, {"synapses": n_x * n_y, "start": start}))
-    training = c.training(two_d)
+    training, stride = c.training(two_d), c.basis_stride_2d if two_d else 1
+    maps: list[tuple[str, Any, dict[str, Any]]] = []  # name, model, its row's own keys
+
+    def train(name: str, fit: Callable[..., M], *args: Any, **kwargs: Any) -> M:
+        start = time.perf_counter()  # a row's seconds: from its training to its scores
+        _step(tick, 0, f"train {name}")
+        model = fit(*args, **kwargs)
+        _step(tick, 1, f"train {name}")
+        maps.append((name, model, {"start": start}))
+        return model
+
+    sp = train("sigma-pi", SigmaPiSOM(cfg, seed=job.seed).fit)
+    maps[-1][2]["synapses"] = n_x * n_y
     dendritic: dict[int, DendriticMap] = {}
     for d in c.branches_2d if two_d else c.branches:
-        start = time.perf_counter()
-        _step(tick, 0, f"train dendritic-D{d}")
-        dm = DendriticMap(cfg, d).fit(training, seed=job.seed)
-        _step(tick, 1, f"train dendritic-D{d}")
-        dendritic[d] = dm
-        maps.append(
-            (
-                f"dendritic-D{d}",
-                dm,
-                {
-                    "synapses": dm.synapses,
-                    "branches": d,
-                    "active_synapses": dm.active_synapses(),
-                    "start": start,
-                },
-            )
+        dm = dendritic[d] = train(
+            f"dendritic-D{d}", DendriticMap(cfg, d).fit, training, seed=job.seed
         )
-    stride = c.basis_stride_2d if two_d else 1
+        maps[-1][2].update(synapses=dm.synapses, branches=d, active_synapses=dm.active_synapses())
     sparse: dict[int, SparseDendriticMap] = {}
     for d in c.sparse_branches_2d if two_d else c.sparse_branches:
-        start = time.perf_counter()
-        _step(tick, 0, f"train dendritic-sparse-D{d}")
-        sm = SparseDendriticMap(cfg, d, stride=stride).fit(training, seed=job.seed)
-        _step(tick, 1, f"train dendritic-sparse-D{d}")
-        sparse[d] = sm
-        info = sparse_summary(sm, _z_table(sm, c.n_test))
-        maps.append(
-            (
-                f"dendritic-sparse-D{d}",
-                sm,
-                {
-                    "synapses": sm.synapses,
-                    "mean_synapses": sm.mean_synapses,
-                    "branches": d,
-                    "branch_z_gap": info["z_gap_median"],
-                    "start": start,
-                },
-            )
+        fit = SparseDendriticMap(cfg, d, stride=stride).fit
+        sm = sparse[d] = train(f"dendritic-sparse-D{d}", fit, training, seed=job.seed)
+        gap = sparse_summary(sm, _z_table(sm, c.n_test))["z_gap_median"]
+        maps[-1][2].update(
+            synapses=sm.synapses, mean_synapses=sm.mean_synapses, branches=d, branch_z_gap=gap
         )
-    start = time.perf_counter()
-    _step(tick, 0, "train basis-function")
-    bf = BasisFunctionMap(cfg, stride=stride).fit(training, seed=job.seed)
-    _step(tick, 1, "train basis-function")
-    maps.append(("basis-function", bf, {"synapses": bf.synapses, "start": start}))
+    basis = BasisFunctionMap(cfg, stride=stride).fit
+    maps[-1][2]["synapses"] = train("basis-function", basis, training, seed=job.seed).synapses
     rows = []
     for name, model, extra in maps:
         begin = extra.pop("start")
@@ -225,62 +204,64 @@ def _neurons_job(job: NeuronsJob, tick: Tick | None) -> dict[str, Any]:
     mid = sorted(dendritic)[len(dendritic) // 2]
     summary = branch_summary(dendritic[mid], _z_table(dendritic[mid], c.n_test))
     summary.update(branches=mid, task=job.task, seed=job.seed)
-    spiking: list[dict[str, object]] = []
-    if not two_d:
-        weights = sp.weights_
-
-        def conj(x: Any, y: Any, cfg_s: Any, rng: Any) -> SpikingRun:
-            return simulate_conjunction(weights, x, y, cfg_s, rng)
-
-        ref = REFERENCE_RATE if REFERENCE_RATE in c.peak_rates else c.peak_rates[0]
-        runs = [(rate, c.pool) for rate in c.peak_rates]
-        runs += [(ref, p) for p in c.pools_compared if p != c.pool]
-        spiking += _spiking_rows(job, "spiking-conjunction", sp, conj, sp.winner, runs, tick=tick)
-        if c.spiking_branches:
-            dm = dendritic.get(c.spiking_branches) or DendriticMap(cfg, c.spiking_branches).fit(
-                training, seed=job.seed
-            )
-
-            def dend(x: Any, y: Any, cfg_s: Any, rng: Any) -> SpikingRun:
-                return simulate_dendritic(dm.u_, dm.v_, dm.gain, dm.threshold, x, y, cfg_s, rng)
-
-            dend_rows = _spiking_rows(
-                job,
-                "spiking-dendritic",
-                dm,
-                dend,
-                dm.winner,
-                [(ref, c.pool)],
-                dendritic=True,
-                tick=tick,
-            )
-            for r in dend_rows:
-                r["branches"] = c.spiking_branches
-            spiking += dend_rows
-        if c.spiking_sparse_branches:
-            sm = sparse.get(c.spiking_sparse_branches) or SparseDendriticMap(
-                cfg, c.spiking_sparse_branches
-            ).fit(training, seed=job.seed)
-            branch_weights = (sm.c_ * sm.mask_).reshape(sm.n_units, n_x, n_y)
-
-            def sparse_net(x: Any, y: Any, cfg_s: Any, rng: Any) -> SpikingRun:
-                return simulate_conjunction(branch_weights, x, y, cfg_s, rng)
-
-            sparse_rows = _spiking_rows(
-                job,
-                "spiking-sparse-dendritic",
-                sm,
-                sparse_net,
-                sm.winner,
-                [(ref, c.pool)],
-                tick=tick,
-            )
-            for r in sparse_rows:
-                r["branches"] = c.spiking_sparse_branches
-            spiking += sparse_rows
+    spiking = [] if two_d else _spiking(job, sp, dendritic, sparse, tick)
     for r in spiking:
         r.update(task=job.task, seed=job.seed)
     return {"maps": rows, "spiking": spiking, "branches": summary}
+
+
+def _spiking(
+    job: NeuronsJob,
+    sp: SigmaPiSOM,
+    dendritic: dict[int, DendriticMap],
+    sparse: dict[int, SparseDendriticMap],
+    tick: Tick | None,
+) -> list[dict[str, object]]:
+    """The rows of the spiking deployments of a 1-D job: the conjunction network at every
+    peak rate (and the compared pools at the reference rate), the dendritic and the sparse
+    dendritic maps at the reference rate (trained here where the job has not)."""
+    c, cfg = job.config, job.som_config
+    training = c.training(False)
+    ref = REFERENCE_RATE if REFERENCE_RATE in c.peak_rates else c.peak_rates[0]
+    runs = [(rate, c.pool) for rate in c.peak_rates]
+    runs += [(ref, p) for p in c.pools_compared if p != c.pool]
+
+    def conj(x: Any, y: Any, cfg_s: Any, rng: Any) -> SpikingRun:
+        return simulate_conjunction(sp.weights_, x, y, cfg_s, rng)
+
+    rows = _spiking_rows(job, "spiking-conjunction", sp, conj, sp.winner, runs, tick=tick)
+    if c.spiking_branches:
+        d = c.spiking_branches
+        dm = dendritic.get(d) or DendriticMap(cfg, d).fit(training, seed=job.seed)
+
+        def dend(x: Any, y: Any, cfg_s: Any, rng: Any) -> SpikingRun:
+            return simulate_dendritic(dm.u_, dm.v_, dm.gain, dm.threshold, x, y, cfg_s, rng)
+
+        got = _spiking_rows(
+            job,
+            "spiking-dendritic",
+            dm,
+            dend,
+            dm.winner,
+            [(ref, c.pool)],
+            dendritic=True,
+            tick=tick,
+        )
+        rows += [{**r, "branches": d} for r in got]
+    if c.spiking_sparse_branches:
+        d = c.spiking_sparse_branches
+        sm = sparse.get(d) or SparseDendriticMap(cfg, d).fit(training, seed=job.seed)
+        n_xy = (int(np.prod(cfg.x_shape)), int(np.prod(cfg.y_shape)))
+        branch_weights = (sm.c_ * sm.mask_).reshape(sm.n_units, *n_xy)
+
+        def sparse_net(x: Any, y: Any, cfg_s: Any, rng: Any) -> SpikingRun:
+            return simulate_conjunction(branch_weights, x, y, cfg_s, rng)
+
+        got = _spiking_rows(
+            job, "spiking-sparse-dendritic", sm, sparse_net, sm.winner, [(ref, c.pool)], tick=tick
+        )
+        rows += [{**r, "branches": d} for r in got]
+    return rows
 
 
 class NeuronsExperiment(SeedRuns[NeuronsConfig]):
