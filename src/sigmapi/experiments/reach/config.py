@@ -20,20 +20,24 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
+import numpy as np
+
 from sigmapi import _validate
 from sigmapi._outputs import INPUT
 from sigmapi.agents import ActorCriticConfig
 from sigmapi.codes import PopulationCode
 from sigmapi.config import BACKEND_NAMES, SOMConfig, list_presets
-from sigmapi.envs import FEATURES, STATES, GazeReachConfig
+from sigmapi.envs import FEATURES, STATES, GazeReachConfig, learn_map_in_env
 from sigmapi.errors import ConfigError
 from sigmapi.experiments.kit.episodes import check_episode_run
+from sigmapi.experiments.kit.jobs import Tick
 from sigmapi.experiments.kit.maps import MapSpec
 from sigmapi.experiments.kit.parts import (
     Parts,
     check_part_types,
 )
 from sigmapi.experiments.kit.worlds import GAZE_REACH, World
+from sigmapi.model.som import SigmaPiSOM
 
 __all__ = [
     "SMALL_PRESET",
@@ -107,6 +111,17 @@ class MapConfig:
         if self.model_path is not None and not isinstance(self.model_path, str):
             raise _validate.fail("model_path", "a file name or None", self.model_path)
         _validate.choice("features", self.features, FEATURES)
+
+    def learn(
+        self, world: World, settings: object, rng: np.random.Generator, tick: Tick | None = None
+    ) -> SigmaPiSOM:
+        """The map learned in ``world`` as ``settings`` make it (from its saccade views,
+        :func:`~sigmapi.envs.learn_map_in_env`), the views' and the weights' seeds drawn from
+        ``rng``; ``tick`` is told that the map learns."""
+        env_seed, som_seed = (int(v) for v in rng.integers(0, 2**31 - 1, size=2))
+        som = self.in_world(world, settings, som_seed)
+        told = None if tick is None else lambda model: tick(0, "learning the map")
+        return learn_map_in_env(world.make_env(settings), som, seed=env_seed, callback=told)
 
     def in_world(self, world: World, settings: Any, seed: int) -> SOMConfig:
         """The map's config on the codes of ``world`` as ``settings`` make it

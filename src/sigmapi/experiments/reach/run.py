@@ -34,7 +34,6 @@ from sigmapi.envs import (
     Features,
     PlacedViewSource,
     TrueZObservation,
-    learn_map_in_env,
     make_state_env,
 )
 from sigmapi.errors import ConfigError
@@ -102,53 +101,6 @@ PLAN = SeedPlan({"map": 0, "starts": 1, "agent": 2}, root=0)
 """The streams of a seed (:class:`~sigmapi.experiments.kit.seeds.SeedPlan`)."""
 
 
-def _map_for_seed(
-    config: ReachConfig, world: World, seed: int, progress: Tick | None = None
-) -> SigmaPiSOM:
-    if config.map.model_path is not None:
-        return load_model(Path(config.map.model_path))
-    r = PLAN.rng(seed, "map")
-    env_seed, som_seed = (int(v) for v in r.integers(0, 2**31 - 1, size=2))
-
-    def callback(model: SigmaPiSOM) -> None:
-        if progress is not None:
-            progress(0, "learning the map")
-
-    env, som = world.make_env(config.env), config.som_config(som_seed, world)
-    return learn_map_in_env(env, som, seed=env_seed, callback=callback)
-
-
-def _map_quality(model: SigmaPiSOM) -> dict[str, float | int]:
-    """The project's map metrics (docs/algorithm.md) on a small test set, for the record."""
-    return evaluate(model, n_test=2000).to_dict()
-
-
-def _check_memory(config: ReachConfig, world: World) -> None:
-    """Refuse a map (and its views) that this machine cannot hold, before anything is built."""
-    run = config.run  # the start states and, per seed and state, three (episodes,) arrays
-    _memory.check_count("episodes", run.episodes, 8 + 17 * len(run.states), "e.g. --episodes 600")
-    if config.map.model_path is not None or "map" not in config.run.states:
-        return
-    som = SigmaPiSOM(config.som_config(0, world))
-    n_x, n_y = int(np.prod(som.x_shape)), int(np.prod(som.y_shape))
-    _memory.check(
-        som.memory_estimate() + config.map.iterations * 2 * (n_x + n_y) * 8,
-        f"the reach experiment's map ({'x'.join(map(str, som.map_shape))} units on "
-        f"{n_x} x {n_y} inputs, {config.map.iterations} views)",
-        "use a smaller grid, map_shape or iterations",
-    )
-
-
-def _check_model(config: ReachConfig) -> None:
-    """A model file given for the map must exist (checked before any work starts)."""
-    path = config.map.model_path
-    if path is not None and "map" in config.run.states and not Path(path).is_file():
-        raise ConfigError(
-            f"model_path {path!r} does not exist; train one with `sigmapi train` or leave "
-            "model_path out to learn a map per seed"
-        )
-
-
 class ReachExperiment(SeedRuns[Any]):
     """Gaze-and-reach task: the same actor-critic on the learned Sigma-Pi map, the retina
     code, retina and gaze codes, and the true z (the upper bound), over seeds.
@@ -192,8 +144,25 @@ class ReachExperiment(SeedRuns[Any]):
     def check(self, config: Any) -> int:
         """Refuse a run that cannot go (a missing model file, a map this machine cannot
         hold) before any work; returns the peak bytes of one seed's job."""
-        _check_model(config)
-        _check_memory(config, self.world)
+        run, path = config.run, config.map.model_path
+        if path is not None and "map" in run.states and not Path(path).is_file():
+            raise ConfigError(
+                f"model_path {path!r} does not exist; train one with `sigmapi train` or leave "
+                "model_path out to learn a map per seed"
+            )
+        # the start states and, per seed and state, three (episodes,) arrays
+        _memory.check_count(
+            "episodes", run.episodes, 8 + 17 * len(run.states), "e.g. --episodes 600"
+        )
+        if path is None and "map" in run.states:  # the map and its views
+            som = SigmaPiSOM(config.som_config(0, self.world))
+            n_x, n_y = int(np.prod(som.x_shape)), int(np.prod(som.y_shape))
+            _memory.check(
+                som.memory_estimate() + config.map.iterations * 2 * (n_x + n_y) * 8,
+                f"the reach experiment's map ({'x'.join(map(str, som.map_shape))} units on "
+                f"{n_x} x {n_y} inputs, {config.map.iterations} views)",
+                "use a smaller grid, map_shape or iterations",
+            )
         return job_memory(config.som_config(0, self.world), n_test=2000)
 
     def steps(self, job: SeedJob) -> int:
@@ -224,10 +193,14 @@ class ReachExperiment(SeedRuns[Any]):
     def make_map(
         self, config: Any, shared: Any, seed: int, tick: Tick | None
     ) -> tuple[SigmaPiSOM, dict[str, object]]:
-        """Seed ``seed``'s map (learned in the world, or the config's model file) and its
-        scores for the record (``extras``)."""
-        model = _map_for_seed(config, self.world, seed, tick)
-        return model, {"map_metrics": _map_quality(model)}
+        """Seed ``seed``'s map (learned in the world, or the config's model file) and, for the
+        record, the project's map metrics (docs/algorithm.md) on a small test set."""
+        path, rng = config.map.model_path, self.plan.rng(seed, "map")
+        if path is None:
+            model = config.map.learn(self.world, config.env, rng, tick)
+        else:
+            model = load_model(Path(path))
+        return model, {"map_metrics": evaluate(model, n_test=2000).to_dict()}
 
     def state_env(self, config: Any, state: str, model: SigmaPiSOM | None) -> gym.Env[Any, Any]:
         """The world as ``state`` sees it (:func:`~sigmapi.envs.make_state_env`)."""

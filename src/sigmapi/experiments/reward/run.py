@@ -46,7 +46,7 @@ from numpy.typing import NDArray
 
 from sigmapi.agents import actor_critic_for, run_episodes, run_gated_episodes
 from sigmapi.codes import grid_coordinates
-from sigmapi.envs import GazeReachEnv, MapObservation, learn_map_in_env
+from sigmapi.envs import GazeReachEnv, MapObservation
 from sigmapi.executor import job_memory
 from sigmapi.experiments.base import register
 from sigmapi.experiments.kit.jobs import SeedJob, SeedRuns, Tick
@@ -137,72 +137,6 @@ def map_scores(
     }
 
 
-def _learn_map(cfg: RewardConfig, world: World, seed: int) -> SigmaPiSOM:
-    env_seed, som_seed = (int(v) for v in PLAN.rng(seed, "map").integers(0, 2**31 - 1, size=2))
-    return learn_map_in_env(world.make_env(cfg.env), cfg.som_config(som_seed, world), seed=env_seed)
-
-
-def _seed_runs(job: SeedJob, world: World, progress: Tick | None) -> dict[str, object]:
-    """One seed: its map, then each method's learner on the same episodes, then the scores."""
-    cfg, seed = job.config, job.seed
-    run = cfg.run
-    learned = _learn_map(cfg, world, seed)
-    place = world.source(cfg.env)
-    objects = probe_objects(place, run.n_test, PLAN.rng(seed, "probes"))
-    goal = np.asarray(place.goal, dtype=np.float64)
-    starts = PLAN.rng(seed, "starts").integers(0, 2**31 - 1, size=run.episodes)
-    out: dict[str, Any] = {
-        "initial": map_scores(learned, objects, goal, run.near_radius),
-        "initial_units": preferred_z(learned, objects),
-        "runs": {},
-    }
-    factors: NDArray[np.float64] | None = None
-    for m in sorted(run.methods, key=("frozen", "gated", "shuffled").index):
-        model = copy.copy(learned)
-        env = MapObservation(
-            world.make_env(cfg.env), model, cfg.map.features, cfg.map.feature_width
-        )
-        agent = actor_critic_for(env, cfg.agent, seed=PLAN.rng(seed, "agent"))
-        done = None if progress is None else functools.partial(progress, 1, m)
-        updates = 0
-        if m == "frozen":
-            ep = run_episodes(env, agent, starts, on_episode=done)
-        else:
-            replay = None
-            if m == "shuffled":
-                assert factors is not None  # the gated run came first
-                replay = PLAN.rng(seed, "shuffle").permutation(factors)
-            got = run_gated_episodes(
-                env,
-                agent,
-                starts,
-                cfg.gate.gating(),
-                PLAN.rng(seed, "fixations"),
-                surprises=replay,
-                on_episode=done,
-            )
-            ep, updates = got.episodes, got.updates
-            if m == "gated":
-                factors = got.surprises
-        out["runs"][m] = {
-            "success": ep.success,
-            "steps": ep.steps,
-            "lost": ep.failed,
-            "updates": updates,
-            "scores": map_scores(model, objects, goal, run.near_radius),
-            "units": preferred_z(model, objects),
-        }
-    return out
-
-
-def _per_job(config: RewardConfig, world: World) -> int:
-    """One job's memory: the map's (:func:`~sigmapi.executor.job_memory`), its recorded
-    views' positions (64 bytes an iteration) and the episodes' records (64 bytes each)."""
-    som = config.som_config(0, world)
-    views = 64 * som.iterations + 64 * config.run.episodes
-    return job_memory(som, n_test=config.run.n_test) + views
-
-
 class RewardExperiment(SeedRuns[RewardConfig]):
     """The frozen map, the reward-gated map and the shuffled-reward control, over seeds."""
 
@@ -222,13 +156,62 @@ class RewardExperiment(SeedRuns[RewardConfig]):
         self.world = world
 
     def check(self, config: RewardConfig) -> int:
-        return _per_job(config, self.world)
+        """One job's memory: the map's (:func:`~sigmapi.executor.job_memory`), its recorded
+        views' positions (64 bytes an iteration) and the episodes' records (64 bytes each)."""
+        som = config.som_config(0, self.world)
+        views = 64 * som.iterations + 64 * config.run.episodes
+        return job_memory(som, n_test=config.run.n_test) + views
 
     def steps(self, job: SeedJob) -> int:
         return len(job.config.run.methods) * job.config.run.episodes
 
-    def seed_run(self, job: SeedJob, tick: Tick | None) -> dict[str, object]:
-        return _seed_runs(job, self.world, tick)
+    def seed_run(self, job: SeedJob, tick: Tick | None) -> dict[str, Any]:
+        """One seed: its map, then each method's learner on the same episodes, then the
+        scores."""
+        cfg, seed, world, run = job.config, job.seed, self.world, job.config.run
+        learned = cfg.map.learn(world, cfg.env, PLAN.rng(seed, "map"))
+        place = world.source(cfg.env)
+        objects = probe_objects(place, run.n_test, PLAN.rng(seed, "probes"))
+        goal = np.asarray(place.goal, dtype=np.float64)
+        starts = PLAN.rng(seed, "starts").integers(0, 2**31 - 1, size=run.episodes)
+        out: dict[str, Any] = {
+            "initial": map_scores(learned, objects, goal, run.near_radius),
+            "initial_units": preferred_z(learned, objects),
+            "runs": {},
+        }
+        factors: NDArray[np.float64] | None = None
+        for m in sorted(run.methods, key=("frozen", "gated", "shuffled").index):
+            model = copy.copy(learned)
+            features = (cfg.map.features, cfg.map.feature_width)
+            env = MapObservation(world.make_env(cfg.env), model, *features)
+            agent = actor_critic_for(env, cfg.agent, seed=PLAN.rng(seed, "agent"))
+            done = None if tick is None else functools.partial(tick, 1, m)
+            updates = 0
+            if m == "frozen":
+                ep = run_episodes(env, agent, starts, on_episode=done)
+            else:  # the shuffled run replays the gated one's factors (it came first)
+                replay = None if factors is None else PLAN.rng(seed, "shuffle").permutation(factors)
+                fixations = PLAN.rng(seed, "fixations")
+                got = run_gated_episodes(
+                    env,
+                    agent,
+                    starts,
+                    cfg.gate.gating(),
+                    fixations,
+                    surprises=replay,
+                    on_episode=done,
+                )
+                ep, updates = got.episodes, got.updates
+                factors = got.surprises if m == "gated" else factors
+            out["runs"][m] = {
+                "success": ep.success,
+                "steps": ep.steps,
+                "lost": ep.failed,
+                "updates": updates,
+                "scores": map_scores(model, objects, goal, run.near_radius),
+                "units": preferred_z(model, objects),
+            }
+        return out
 
     def collect(
         self, config: RewardConfig, seeds: tuple[int, ...], values: list[Any]
