@@ -62,6 +62,37 @@ def _scalars(summary: dict[str, Any]) -> dict[str, Any]:
     return {k: v for k, v in summary.items() if not isinstance(v, list)}
 
 
+RATE_EXTRA = (
+    "reference_frame_index",
+    "gain_r2",
+    "peak_modulation",
+    "active_synapses",
+    "mean_synapses",
+    "branch_z_gap",
+)
+"""What a rate map's entry summarises besides the :data:`METRICS` (where its rows have it)."""
+RATE_PER_SEED = ("seed", *METRICS, "folded", "seconds")
+SPIKING_METRICS = (
+    "agreement",
+    "view_consistency",
+    "rate_view_consistency",
+    "view_within_one",
+    "z_error",
+    "order_r2",
+    "spikes_per_decision",
+    "map_spikes",
+)
+SPIKING_PER_SEED = ("seed", "agreement", "view_consistency", "rate_view_consistency")
+
+
+def _groups(rows: list[dict[str, Any]], *keys: str) -> dict[tuple[Any, ...], list[dict[str, Any]]]:
+    """``rows`` by their values of ``keys``, in the order they first appear."""
+    out: dict[tuple[Any, ...], list[dict[str, Any]]] = {}
+    for r in rows:
+        out.setdefault(tuple(r[k] for k in keys), []).append(r)
+    return out
+
+
 def _median_worst(rows: list[dict[str, Any]], keys: tuple[str, ...]) -> dict[str, Any]:
     out: dict[str, object] = {}
     for k in keys:
@@ -116,71 +147,39 @@ class NeuronsResult(Result):
         ``name``, ``task``, medians and worst seeds of the metrics, ``ordered``, ``n_seeds``,
         ``synapses`` and ``per_seed``."""
         out = []
-        maps = self._rows("maps")
-        for task in ("1d", "2d"):
-            names = dict.fromkeys(r["name"] for r in maps if r["task"] == task)
-            for name in names:
-                rows = [r for r in maps if r["task"] == task and r["name"] == name]
-                extra = (
-                    "reference_frame_index",
-                    "gain_r2",
-                    "peak_modulation",
-                    "active_synapses",
-                    "mean_synapses",
-                    "branch_z_gap",
-                )
-                entry: dict[str, Any] = {"name": name, "task": task, "kind": "rate"}
-                entry.update(_median_worst(rows, METRICS + extra))
-                entry.update(
-                    synapses=max(r["synapses"] for r in rows),
-                    branches=rows[0].get("branches"),
-                    ordered=int(sum(not r["folded"] for r in rows)),
-                    n_seeds=len(rows),
-                    per_seed={
-                        k: [r.get(k) for r in rows] for k in ("seed", *METRICS, "folded", "seconds")
-                    },
-                )
-                out.append(entry)
-        spk = self._rows("spiking")
-        keys = dict.fromkeys((r["name"], r["peak_rate"]) for r in spk)
-        for name, rate in keys:
-            rows = [r for r in spk if r["name"] == name and r["peak_rate"] == rate]
-            label = name if rate == REFERENCE_RATE else f"{name}-{rate}hz"
-            entry = {
-                "name": label,
-                "task": "1d",
-                "kind": "spiking",
-                "window_ms": rows[0]["window_ms"],
-                "peak_rate": rate,
-                "pool": rows[0].get("pool"),
-            }
-            entry.update(
-                _median_worst(
-                    rows,
-                    (
-                        "agreement",
-                        "view_consistency",
-                        "rate_view_consistency",
-                        "view_within_one",
-                        "z_error",
-                        "order_r2",
-                        "spikes_per_decision",
-                        "map_spikes",
-                    ),
-                )
+        maps = _groups(self._rows("maps"), "task", "name")
+        for (task, name), rows in sorted(maps.items(), key=lambda kv: kv[0][0]):
+            out.append(
+                {
+                    "name": name,
+                    "task": task,
+                    "kind": "rate",
+                    **_median_worst(rows, METRICS + RATE_EXTRA),
+                    "synapses": max(r["synapses"] for r in rows),
+                    "branches": rows[0].get("branches"),
+                    "ordered": int(sum(not r["folded"] for r in rows)),
+                    "n_seeds": len(rows),
+                    "per_seed": {k: [r.get(k) for r in rows] for k in RATE_PER_SEED},
+                }
             )
+        for (name, rate), rows in _groups(self._rows("spiking"), "name", "peak_rate").items():
             gap = [r["view_consistency"] - r["rate_view_consistency"] for r in rows]
-            entry.update(
-                vc_gap=float(np.median(gap)),
-                vc_gap_worst=float(min(gap)),
-                n_seeds=len(rows),
-                n_trials=rows[0]["n_trials"],
-                per_seed={
-                    k: [r[k] for r in rows]
-                    for k in ("seed", "agreement", "view_consistency", "rate_view_consistency")
-                },
+            out.append(
+                {
+                    "name": name if rate == REFERENCE_RATE else f"{name}-{rate}hz",
+                    "task": "1d",
+                    "kind": "spiking",
+                    "window_ms": rows[0]["window_ms"],
+                    "peak_rate": rate,
+                    "pool": rows[0].get("pool"),
+                    **_median_worst(rows, SPIKING_METRICS),
+                    "vc_gap": float(np.median(gap)),
+                    "vc_gap_worst": float(min(gap)),
+                    "n_seeds": len(rows),
+                    "n_trials": rows[0]["n_trials"],
+                    "per_seed": {k: [r[k] for r in rows] for k in SPIKING_PER_SEED},
+                }
             )
-            out.append(entry)
         return out
 
     def acceptance(self) -> dict[str, Any]:
@@ -189,61 +188,44 @@ class NeuronsResult(Result):
         than ``n_x n_y``; ``smallest_branches``: the fewest branches every seed meets it with.
         Spiking: per window up to :data:`MAX_WINDOW_MS` at :data:`REFERENCE_RATE`, the gap to
         the rate map's view consistency and the agreement."""
-        maps = self._rows("maps")
-        out: dict[str, Any] = {"margin": VC_MARGIN, "dendritic": [], "spiking": []}
-        for task in ("1d", "2d"):
-            ref = {r["seed"]: r for r in maps if r["task"] == task and r["name"] == "sigma-pi"}
-            names = dict.fromkeys(
-                r["name"] for r in maps if r["task"] == task and r["name"] != "sigma-pi"
+        maps = _groups(self._rows("maps"), "task", "name")
+        dendritic = []
+        for (task, name), rows in sorted(maps.items(), key=lambda kv: kv[0][0]):
+            if name == "sigma-pi":
+                continue
+            ref = {r["seed"]: r for r in maps[task, "sigma-pi"]}
+            gap = [r["view_consistency"] - ref[r["seed"]]["view_consistency"] for r in rows]
+            met = [within_margin(g) and not r["folded"] for g, r in zip(gap, rows, strict=True)]
+            most, theirs = max(r["synapses"] for r in rows), ref[rows[0]["seed"]]["synapses"]
+            dendritic.append(
+                {
+                    "name": name,
+                    "task": task,
+                    "branches": rows[0].get("branches"),
+                    "synapses": most,
+                    "sigma_pi_synapses": theirs,
+                    "fewer_synapses": most < theirs,
+                    "vc_gap_median": float(np.median(gap)),
+                    "vc_gap_worst": float(min(gap)),
+                    "met": int(sum(met)),
+                    "n_seeds": len(rows),
+                    "all_met": bool(all(met)),
+                }
             )
-            for name in names:
-                rows = [r for r in maps if r["task"] == task and r["name"] == name]
-                gap = [r["view_consistency"] - ref[r["seed"]]["view_consistency"] for r in rows]
-                met = [within_margin(g) and not r["folded"] for g, r in zip(gap, rows, strict=True)]
-                most = max(r["synapses"] for r in rows)
-                out["dendritic"].append(
-                    {
-                        "name": name,
-                        "task": task,
-                        "branches": rows[0].get("branches"),
-                        "synapses": most,
-                        "sigma_pi_synapses": ref[rows[0]["seed"]]["synapses"],
-                        "fewer_synapses": most < ref[rows[0]["seed"]]["synapses"],
-                        "vc_gap_median": float(np.median(gap)),
-                        "vc_gap_worst": float(min(gap)),
-                        "met": int(sum(met)),
-                        "n_seeds": len(rows),
-                        "all_met": bool(all(met)),
-                    }
-                )
+        out: dict[str, Any] = {"margin": VC_MARGIN, "dendritic": dendritic, "spiking": []}
         for task in ("1d", "2d"):
-            ok = [
-                c["branches"]
-                for c in out["dendritic"]
-                if c["task"] == task and c["branches"] and c["all_met"]
-            ]
-            out[f"smallest_branches_{task}"] = min(ok) if ok else None
-            cheap = [
-                c["branches"]
-                for c in out["dendritic"]
-                if c["task"] == task and c["branches"] and c["all_met"] and c["fewer_synapses"]
-            ]
-            out[f"smallest_branches_fewer_synapses_{task}"] = min(cheap) if cheap else None
-            sparse = [
-                c["branches"]
-                for c in out["dendritic"]
-                if c["task"] == task
-                and c["name"].startswith(SPARSE)
-                and c["all_met"]
-                and c["fewer_synapses"]
-            ]
-            out[f"smallest_sparse_branches_{task}"] = min(sparse) if sparse else None
+            ok = [c for c in dendritic if c["task"] == task and c["branches"] and c["all_met"]]
+            cheap = [c for c in ok if c["fewer_synapses"]]
+            sparse = [c for c in cheap if c["name"].startswith(SPARSE)]
+            named = {"branches": ok, "branches_fewer_synapses": cheap, "sparse_branches": sparse}
+            for key, these in named.items():
+                out[f"smallest_{key}_{task}"] = min((c["branches"] for c in these), default=None)
         for m in self.methods():
             if (
                 m["kind"] == "spiking"
                 and m["peak_rate"] == REFERENCE_RATE
                 and m["pool"] in (None, self.config.pool)
-                and (m["window_ms"] <= MAX_WINDOW_MS)
+                and m["window_ms"] <= MAX_WINDOW_MS
             ):
                 out["spiking"].append(
                     {
