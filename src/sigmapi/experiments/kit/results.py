@@ -21,12 +21,15 @@ import typing
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, ClassVar, TypeVar
+from typing import TYPE_CHECKING, Any, ClassVar, TypeVar
 
 import numpy as np
 
 from sigmapi._outputs import save_captioned
 from sigmapi.experiments.kit.seeds import check_seeds
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 __all__ = [
     "HEADERS",
@@ -43,14 +46,16 @@ __all__ = [
 R = TypeVar("R", bound="Result")
 
 
-def as_object(data: Any, what: str = "a result's JSON form") -> Mapping[str, Any]:
+def as_object(data: object, what: str = "a result's JSON form") -> Mapping[str, Any]:
     """``data`` if it is a JSON object (a TypeError naming ``what`` if not)."""
     if not isinstance(data, Mapping):
         raise TypeError(f"{what} must be a JSON object, got {type(data).__name__}")
     return data
 
 
-def summaries(data: Any, required: Sequence[str], optional: Sequence[str] = ()) -> dict[str, Any]:
+def summaries(
+    data: object, required: Sequence[str], optional: Sequence[str] = ()
+) -> dict[str, Any]:
     """The summary keys of a result's JSON form as written: every one of ``required`` (a
     KeyError naming the first one missing) and those of ``optional`` it holds (keys a newer
     version added)."""
@@ -65,7 +70,7 @@ def tuples(table: Mapping[str, Any]) -> dict[str, Any]:
     return {k: tuple(v) if isinstance(v, list) else v for k, v in table.items()}
 
 
-def plain(value: Any) -> Any:
+def plain(value: object) -> Any:
     """``value`` as JSON types: a dataclass as its ``to_dict()`` (or its fields), a mapping as
     a dict, a tuple or list as a list, a numpy array as nested lists and a numpy scalar as its
     Python value (a NaN or infinity of an array as None); anything else as it is."""
@@ -116,7 +121,7 @@ class Result:
             return self.KEYS
         return tuple(f.name for f in dataclasses.fields(self) if f.repr)  # type: ignore[arg-type]
 
-    def _value(self, attr: str) -> Any:
+    def _value(self, attr: str) -> object:
         value = functools.reduce(getattr, attr.split("."), self)  # "options.seeds": a path
         return value() if callable(value) else value
 
@@ -141,7 +146,7 @@ class Result:
 
     def config_and_seeds(self) -> dict[str, Any]:
         """The config's JSON form with the seeds (``"config"`` where :attr:`SEEDS_IN_CONFIG`)."""
-        config: Any = getattr(self, "config")  # noqa: B009 (a field of every result)
+        config: object = getattr(self, "config")  # noqa: B009 (a field of every result)
         return {**plain(config), "seeds": list(getattr(self, "seeds"))}  # noqa: B009
 
     @classmethod
@@ -185,7 +190,7 @@ class Result:
         """The result as console text (a few lines a person reads)."""
         raise NotImplementedError
 
-    def draw(self) -> Any:
+    def draw(self) -> Figure:
         """The figure of :data:`FIGURE` (a matplotlib Figure)."""
         raise NotImplementedError
 
@@ -193,7 +198,7 @@ class Result:
         """The caption of :data:`FIGURE`, computed from the result."""
         return ""
 
-    def figure(self, out_dir: str | Path) -> list[Path]:
+    def figure(self, out_dir: Path) -> list[Path]:
         """Write the result's figures into the folder ``out_dir`` (:data:`FIGURE` and its
         caption beside it, ``.txt``); the files written (none without :data:`FIGURE`)."""
         if not self.FIGURE:
@@ -202,7 +207,7 @@ class Result:
         return [save_captioned(self.draw(), out, self.caption(), **self.SAVE)]
 
 
-def _typed(hint: Any, value: Any) -> Any:
+def _typed(hint: object, value: Any) -> Any:
     """``value`` read from JSON as a field of type ``hint``."""
     kind = typing.get_origin(hint) or hint
     if isinstance(kind, type) and hasattr(kind, "from_dict"):

@@ -15,7 +15,11 @@ from .config import METRICS, REFERENCE_RATE, NeuronsConfig
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-__all__ = ["VC_MARGIN", "NeuronsResult", "within_margin"]
+__all__ = ["VC_MARGIN", "NeuronsResult", "Row", "within_margin"]
+
+Row = dict[str, Any]
+"""A record of the JSON form: a map's or a spiking network's row of one job (its name, task,
+seed and scores), an entry of :meth:`NeuronsResult.methods`, a branch summary."""
 
 
 VC_MARGIN = 0.02
@@ -57,7 +61,7 @@ SPIKING_COLUMNS = columns(
 """The table's columns of the spiking networks: one row per network and peak rate."""
 
 
-def _scalars(summary: dict[str, Any]) -> dict[str, Any]:
+def _scalars(summary: Row) -> Row:
     """A branch summary without its per-branch lists."""
     return {k: v for k, v in summary.items() if not isinstance(v, list)}
 
@@ -85,15 +89,15 @@ SPIKING_METRICS = (
 SPIKING_PER_SEED = ("seed", "agreement", "view_consistency", "rate_view_consistency")
 
 
-def _groups(rows: list[dict[str, Any]], *keys: str) -> dict[tuple[Any, ...], list[dict[str, Any]]]:
+def _groups(rows: list[Row], *keys: str) -> dict[tuple[object, ...], list[Row]]:
     """``rows`` by their values of ``keys``, in the order they first appear."""
-    out: dict[tuple[Any, ...], list[dict[str, Any]]] = {}
+    out: dict[tuple[object, ...], list[Row]] = {}
     for r in rows:
         out.setdefault(tuple(r[k] for k in keys), []).append(r)
     return out
 
 
-def _median_worst(rows: list[dict[str, Any]], keys: tuple[str, ...]) -> dict[str, Any]:
+def _median_worst(rows: list[Row], keys: tuple[str, ...]) -> Row:
     out: dict[str, object] = {}
     for k in keys:
         vals = [r[k] for r in rows if r.get(k) is not None]
@@ -111,7 +115,7 @@ class NeuronsResult(Result):
 
     config: NeuronsConfig
     seeds: tuple[int, ...]
-    jobs: list[dict[str, Any]]
+    jobs: list[Row]
     seconds: float
 
     KEYS = ("methods", "acceptance", "branches: branch_summaries", "settings", "runs", "seconds")
@@ -121,11 +125,11 @@ class NeuronsResult(Result):
     SAVE: ClassVar[Mapping[str, object]] = {"dpi": 110}
 
     @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> NeuronsResult:
+    def from_dict(cls, data: Row) -> NeuronsResult:
         """The result a :meth:`to_dict` wrote (e.g. read back from ``result.json``)."""
         st = dict(data["settings"])
         seeds = tuple(st.pop("seeds"))
-        given: dict[str, Any] = {k: tuple(v) if isinstance(v, list) else v for k, v in st.items()}
+        given: Row = {k: tuple(v) if isinstance(v, list) else v for k, v in st.items()}
         config = NeuronsConfig(**given)
         runs = data["runs"]
         jobs = [
@@ -139,16 +143,16 @@ class NeuronsResult(Result):
         ]
         return cls(config, seeds, jobs, float(data["seconds"]))
 
-    def _rows(self, kind: str) -> list[dict[str, Any]]:
+    def _rows(self, kind: str) -> list[Row]:
         return [r for j in self.jobs for r in j[kind]]
 
-    def methods(self) -> list[dict[str, Any]]:
+    def methods(self) -> list[Row]:
         """One entry per map (and task) and per spiking network, window and peak rate:
         ``name``, ``task``, medians and worst seeds of the metrics, ``ordered``, ``n_seeds``,
         ``synapses`` and ``per_seed``."""
         out = []
         maps = _groups(self._rows("maps"), "task", "name")
-        for (task, name), rows in sorted(maps.items(), key=lambda kv: kv[0][0]):
+        for (task, name), rows in sorted(maps.items(), key=lambda kv: str(kv[0][0])):
             out.append(
                 {
                     "name": name,
@@ -182,7 +186,7 @@ class NeuronsResult(Result):
             )
         return out
 
-    def acceptance(self) -> dict[str, Any]:
+    def acceptance(self) -> Row:
         """Dendritic: per branch count, seed by seed the view consistency minus the Sigma-Pi
         map's, seeds within :data:`VC_MARGIN` and ordered, and whether it has fewer synapses
         than ``n_x n_y``; ``smallest_branches``: the fewest branches every seed meets it with.
@@ -190,7 +194,7 @@ class NeuronsResult(Result):
         the rate map's view consistency and the agreement."""
         maps = _groups(self._rows("maps"), "task", "name")
         dendritic = []
-        for (task, name), rows in sorted(maps.items(), key=lambda kv: kv[0][0]):
+        for (task, name), rows in sorted(maps.items(), key=lambda kv: str(kv[0][0])):
             if name == "sigma-pi":
                 continue
             ref = {r["seed"]: r for r in maps[task, "sigma-pi"]}
@@ -212,7 +216,7 @@ class NeuronsResult(Result):
                     "all_met": bool(all(met)),
                 }
             )
-        out: dict[str, Any] = {"margin": VC_MARGIN, "dendritic": dendritic, "spiking": []}
+        out: Row = {"margin": VC_MARGIN, "dendritic": dendritic, "spiking": []}
         for task in ("1d", "2d"):
             ok = [c for c in dendritic if c["task"] == task and c["branches"] and c["all_met"]]
             cheap = [c for c in ok if c["fewer_synapses"]]
@@ -240,16 +244,16 @@ class NeuronsResult(Result):
                 )
         return out
 
-    def branch_summaries(self) -> list[dict[str, Any]]:
+    def branch_summaries(self) -> list[Row]:
         """What the branches of one dendritic map per seed and task learned: branch by
         branch for the first, the summary for the others."""
         return [_scalars(j["branches"]) if i else j["branches"] for i, j in enumerate(self.jobs)]
 
-    def settings(self) -> dict[str, Any]:
+    def settings(self) -> Row:
         """The config's fields and the seeds."""
         return {**vars(self.config), "seeds": self.seeds}
 
-    def runs(self) -> dict[str, list[dict[str, Any]]]:
+    def runs(self) -> dict[str, list[Row]]:
         """Every map's and spiking network's row per seed."""
         return {"maps": self._rows("maps"), "spiking": self._rows("spiking")}
 

@@ -12,11 +12,12 @@ conjunction network at every peak rate, the dendritic one at 100 Hz.
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any, TypeVar
 
 import numpy as np
+from numpy.typing import NDArray
 
 from sigmapi.analysis.physiology import record
 from sigmapi.config import SOMConfig
@@ -29,15 +30,21 @@ from sigmapi.model.som import SigmaPiSOM
 from sigmapi.neurons.basis import BasisFunctionMap
 from sigmapi.neurons.dendritic import DendriticMap, branch_summary
 from sigmapi.neurons.sparse import SparseDendriticMap, sparse_summary
-from sigmapi.neurons.spiking import SpikingRun, simulate_conjunction, simulate_dendritic
+from sigmapi.neurons.spiking import (
+    SpikingConfig,
+    SpikingRun,
+    simulate_conjunction,
+    simulate_dendritic,
+)
 from sigmapi.progress import Progress
 
 from .config import METRICS, QUICK, REFERENCE_RATE, NeuronsConfig
-from .result import NeuronsResult
+from .result import NeuronsResult, Row
 
 __all__ = ["METRICS", "NEURONS", "NeuronsExperiment", "NeuronsJob"]
 
 M = TypeVar("M")
+Array = NDArray[np.float64]
 
 
 PLAN = SeedPlan({"spikes": 11})
@@ -73,7 +80,7 @@ class NeuronsJob:
         return c.som_config if self.task == "1d" else c.som_config_2d
 
 
-def _scored(model: Any, n_test: int, start: float, **extra: Any) -> dict[str, Any]:
+def _scored(model: Any, n_test: int, start: float, **extra: Any) -> Row:
     m = evaluate(model, n_test=n_test)
     row = {k: float(getattr(m, k)) for k in METRICS}
     row.update(folded=bool(m.folded), seconds=time.perf_counter() - start, **extra)
@@ -92,9 +99,9 @@ def _spiking_rows(
     job: NeuronsJob,
     name: str,
     model: Any,
-    simulate: Any,
-    rate_winner: Any,
-    rates: Any,
+    simulate: Callable[[Array, Array, SpikingConfig, np.random.Generator], SpikingRun],
+    rate_winner: Callable[[Array, Array], NDArray[np.int64]],
+    rates: Sequence[tuple[float, int]],
     *,
     dendritic: bool = False,
     tick: Tick | None = None,
@@ -154,12 +161,12 @@ def _step(tick: Tick | None, n: int, phase: str) -> None:
         tick(n, phase)
 
 
-def _neurons_job(job: NeuronsJob, tick: Tick | None) -> dict[str, Any]:
+def _neurons_job(job: NeuronsJob, tick: Tick | None) -> Row:
     c, cfg = job.config, job.som_config
     two_d = job.task == "2d"
     n_x, n_y = int(np.prod(cfg.x_shape)), int(np.prod(cfg.y_shape))
     training, stride = c.training(two_d), c.basis_stride_2d if two_d else 1
-    maps: list[tuple[str, Any, dict[str, Any]]] = []  # name, model, its row's own keys
+    maps: list[tuple[str, Any, Row]] = []  # name, model, its row's own keys
 
     def train(name: str, fit: Callable[..., M], *args: Any, **kwargs: Any) -> M:
         start = time.perf_counter()  # a row's seconds: from its training to its scores
@@ -226,7 +233,7 @@ def _spiking(
     runs = [(rate, c.pool) for rate in c.peak_rates]
     runs += [(ref, p) for p in c.pools_compared if p != c.pool]
 
-    def conj(x: Any, y: Any, cfg_s: Any, rng: Any) -> SpikingRun:
+    def conj(x: Array, y: Array, cfg_s: SpikingConfig, rng: np.random.Generator) -> SpikingRun:
         return simulate_conjunction(sp.weights_, x, y, cfg_s, rng)
 
     rows = _spiking_rows(job, "spiking-conjunction", sp, conj, sp.winner, runs, tick=tick)
@@ -234,7 +241,7 @@ def _spiking(
         d = c.spiking_branches
         dm = dendritic.get(d) or DendriticMap(cfg, d).fit(training, seed=job.seed)
 
-        def dend(x: Any, y: Any, cfg_s: Any, rng: Any) -> SpikingRun:
+        def dend(x: Array, y: Array, cfg_s: SpikingConfig, rng: np.random.Generator) -> SpikingRun:
             return simulate_dendritic(dm.u_, dm.v_, dm.gain, dm.threshold, x, y, cfg_s, rng)
 
         got = _spiking_rows(
@@ -254,7 +261,9 @@ def _spiking(
         n_xy = (int(np.prod(cfg.x_shape)), int(np.prod(cfg.y_shape)))
         branch_weights = (sm.c_ * sm.mask_).reshape(sm.n_units, *n_xy)
 
-        def sparse_net(x: Any, y: Any, cfg_s: Any, rng: Any) -> SpikingRun:
+        def sparse_net(
+            x: Array, y: Array, cfg_s: SpikingConfig, rng: np.random.Generator
+        ) -> SpikingRun:
             return simulate_conjunction(branch_weights, x, y, cfg_s, rng)
 
         got = _spiking_rows(
@@ -304,12 +313,12 @@ class NeuronsExperiment(SeedRuns[NeuronsConfig]):
     def desc(self, job: NeuronsJob) -> str:
         return f"neurons seed {job.seed} {job.task}"
 
-    def describe(self, key: str, value: dict[str, Any]) -> str:
+    def describe(self, key: str, value: Row) -> str:
         return f"{key}: " + ", ".join(
             f"{r['name']} {r['view_consistency']:.3f}" for r in value["maps"]
         )
 
-    def seed_run(self, job: NeuronsJob, tick: Tick | None) -> dict[str, Any]:
+    def seed_run(self, job: NeuronsJob, tick: Tick | None) -> Row:
         """Every map of one seed and task: ``{"maps": [rows], "spiking": [rows], "branches":
         summary of the middle dendritic map's branches}`` (rows: ``name``, ``task``, the
         :data:`METRICS`, ``folded``, ``synapses``, physiology medians in 1-D)."""

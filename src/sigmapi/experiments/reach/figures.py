@@ -9,22 +9,41 @@ objects that draw on the Agg canvas when saved with ``fig.savefig(path)``.
 from __future__ import annotations
 
 import textwrap
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
+from numpy.typing import NDArray
 
 from sigmapi.experiments.kit.figures import axes, coinciding, legend_once, plot_apart
-from sigmapi.experiments.reach.result import ReachResult
+from sigmapi.experiments.reach.config import ReachConfig
 
 __all__ = [
     "LABELS",
+    "ReachData",
     "coinciding_curves",
     "plot_reach_curves",
     "plot_value_function",
     "reach_figure",
 ]
+
+
+class ReachData(Protocol):
+    """What the figures read of a :class:`~sigmapi.experiments.reach.result.ReachResult`."""
+
+    config: ReachConfig
+    seeds: tuple[int, ...]
+    values: dict[str, NDArray[np.float64]]
+    z_axis: NDArray[np.float64]
+
+    def curves(self) -> dict[str, dict[str, NDArray[np.float64]]]: ...
+
+    def final_rise(self) -> dict[str, float]: ...
+
+    def still_rising(self) -> list[str]: ...
+
+    def levelling_note(self) -> str: ...
 
 
 LABELS = {
@@ -36,7 +55,7 @@ LABELS = {
 COLORS = {"map": "C0", "retina": "C3", "retina_gaze": "C1", "true_z": "k"}
 
 
-def coinciding_curves(result: ReachResult) -> dict[str, dict[str, str]]:
+def coinciding_curves(result: ReachData) -> dict[str, dict[str, str]]:
     """Per metric ("success", "steps"), the states whose curve equals an earlier state's at
     every block (:func:`~sigmapi.experiments.kit.figures.coinciding`): what the caption says
     of them."""
@@ -47,7 +66,7 @@ def coinciding_curves(result: ReachResult) -> dict[str, dict[str, str]]:
     }
 
 
-def plot_reach_curves(result: ReachResult, metric: str = "success", ax: Axes | None = None) -> Axes:
+def plot_reach_curves(result: ReachData, metric: str = "success", ax: Axes | None = None) -> Axes:
     """Learning curves per state, with a legend: ``metric`` "success" (rate per block, mean
     over seeds, band = 1 sd over seeds; a learner that had not levelled off at the last
     episode, :meth:`~sigmapi.experiments.reach.result.ReachResult.still_rising`, is marked
@@ -98,7 +117,7 @@ def plot_reach_curves(result: ReachResult, metric: str = "success", ax: Axes | N
 
 
 def plot_value_function(
-    result: ReachResult, state: str, ax: Axes | None = None, **kwargs: Any
+    result: ReachData, state: str, ax: Axes | None = None, **kwargs: Any
 ) -> Axes:
     """The critic's value over body-centred z (the first seed) for ``state``, with the goal
     region; its colour bar (2-D) or y axis (1-D) is labelled.
@@ -129,7 +148,7 @@ def plot_value_function(
     return ax
 
 
-def reach_figure(result: ReachResult) -> Figure:
+def reach_figure(result: ReachData) -> Figure:
     """The comparison on one page: success and steps curves, then the value over z per state."""
     states = list(result.values)
     n = max(len(states), 2)

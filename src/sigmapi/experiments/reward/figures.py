@@ -8,16 +8,30 @@ touched.
 
 from __future__ import annotations
 
+from typing import Protocol
+
 import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from matplotlib.patches import Rectangle
+from numpy.typing import NDArray
 
 from sigmapi.experiments.kit.figures import axes, legend_once, plot_apart
 from sigmapi.experiments.kit.worlds import GAZE_REACH
-from sigmapi.experiments.reward.result import RewardResult
+from sigmapi.experiments.reward.config import RewardConfig
 
 __all__ = ["LABELS", "drawn_units", "plot_reward_curves", "plot_units", "reward_figure"]
+
+
+class RewardData(Protocol):
+    """What the figures read of a :class:`~sigmapi.experiments.reward.result.RewardResult`."""
+
+    config: RewardConfig
+    seeds: tuple[int, ...]
+    units: dict[str, NDArray[np.float64]]
+    scores: dict[str, dict[str, NDArray[np.float64]]]
+
+    def curves(self) -> dict[str, dict[str, NDArray[np.float64]]]: ...
 
 
 LABELS = {
@@ -29,7 +43,7 @@ LABELS = {
 COLORS = {"frozen": "C0", "gated": "C2", "shuffled": "C3", "initial": "C0"}
 
 
-def plot_reward_curves(result: RewardResult, ax: Axes | None = None) -> Axes:
+def plot_reward_curves(result: RewardData, ax: Axes | None = None) -> Axes:
     """Success rate per block, mean over seeds (line), band from the worst to the best seed."""
     ax = axes(ax)
     curves = result.curves()
@@ -69,7 +83,7 @@ def plot_reward_curves(result: RewardResult, ax: Axes | None = None) -> Axes:
     return ax
 
 
-def plot_units(result: RewardResult, method: str, ax: Axes | None = None) -> Axes:
+def plot_units(result: RewardData, method: str, ax: Axes | None = None) -> Axes:
     """The first seed's units at their preferred z, neighbours on the map joined, with the goal
     box (grey) and the region "near the goal" (dashed) whose units the magnification counts."""
     ax = axes(ax)
@@ -120,14 +134,14 @@ def plot_units(result: RewardResult, method: str, ax: Axes | None = None) -> Axe
     return ax
 
 
-def drawn_units(result: RewardResult) -> list[str]:
+def drawn_units(result: RewardData) -> list[str]:
     """The methods whose units in z the figure draws (the 2-D task only)."""
     if result.config.env.dim != 2:
         return []
     return [m for m in ("frozen", "gated", "shuffled") if m in result.units]
 
 
-def reward_figure(result: RewardResult) -> Figure:
+def reward_figure(result: RewardData) -> Figure:
     """Curves on the left, each method's units in z on the right (first seed)."""
     methods = drawn_units(result)
     fig = Figure(figsize=(4.2 + 3.0 * len(methods), 3.6), layout="constrained")
