@@ -1,18 +1,8 @@
-"""The settings of one reach comparison, in four frozen parts: the world, the map, the learner
-and the run.
-
-- :class:`~sigmapi.envs.GazeReachConfig` (``env``): the gaze-and-reach world and its time limit;
-- :class:`MapConfig` (``map``): the Sigma-Pi map learned in the world, and how the learner
-  reads it;
-- :class:`~sigmapi.agents.ActorCriticConfig` (``agent``): the actor-critic;
-- :class:`ReachRunConfig` (``run``): which states are compared, for how many episodes.
-
-Each part checks its own fields when it is built and builds nothing else. :class:`ReachConfig`
-holds one of each; field names are unique across the parts, so
-``ReachConfig().replace(grid=7, episodes=150)`` finds each field's part. The seeds are not
-settings: they are given to the run (:meth:`~sigmapi.experiments.reach.run.ReachExperiment.run`).
-The ``sigmapi reach`` options are generated from the parts' fields (:mod:`sigmapi.cli.experiment`),
-so a field added here is a command-line option too.
+"""The settings of one reach comparison, in four frozen parts (:class:`ReachConfig`): the world
+(:class:`~sigmapi.envs.GazeReachConfig`), the map (:class:`MapConfig`), the learner
+(:class:`~sigmapi.agents.ActorCriticConfig`) and the run (:class:`ReachRunConfig`). Each part
+checks its own fields; the seeds are not settings (they are given to the run), and the
+``sigmapi reach`` options are the parts' fields (:mod:`sigmapi.cli.experiment`).
 """
 
 from __future__ import annotations

@@ -1,29 +1,13 @@
 """The reward experiment: does a map whose plasticity is gated by reward come to serve the task?
 
-:data:`REWARD` (a :class:`RewardExperiment`) runs a
-:class:`~sigmapi.experiments.reward.config.RewardConfig` on a list of seeds and returns a
-:class:`~sigmapi.experiments.reward.result.RewardResult`. Per seed, one map is learned
-without a teacher in the gaze-and-reach world (as the reach experiment's), and the same
-actor-critic learns to reach on three copies of it (``methods``):
-
-- ``frozen``: the map as it was learned (the reach experiment's map state);
-- ``gated``: the map keeps learning during the episodes, each step's Kohonen update of unit
-  ``k`` gated by the TD error and the chosen action's feedback onto ``k``
-  (:func:`~sigmapi.agents.gated.run_gated_episodes`; docs/algorithm.md, "Reward-gated
-  plasticity");
-- ``shuffled``: the control: the same loop, with the gated run's global factors ``f(delta)``
-  replayed in a random order, so the gates have the same sizes but no relation to the task.
-
-Seed ``s``'s random streams are those of :data:`PLAN` (each child ``(s, key)`` of
-``SeedSequence(0)``): ``"map"`` seeds the map, ``"starts"`` the episodes' starts (the same
-for every method), ``"agent"`` the learner's action choices (the same stream for every
-method), ``"probes"`` the test objects that score the maps, ``"shuffle"`` the shuffle,
-``"fixations"`` the second fixations of the gated updates.
-
-Scores of each map after its episodes (:func:`map_scores`): the magnification near the goal
-(units whose preferred z lies within ``near_radius`` of the goal, per unit area of z, over the
-used units per unit area of the whole workspace), and view consistency and order R^2 on objects
-away from the goal (the map's quality where reward does not shape it).
+:data:`REWARD` runs a :class:`~sigmapi.experiments.reward.config.RewardConfig` on seeds and
+returns a :class:`~sigmapi.experiments.reward.result.RewardResult`: per seed, one map learned
+without a teacher, then the same actor-critic on three copies of it, ``frozen``, ``gated``
+(:func:`~sigmapi.agents.gated.run_gated_episodes`) and ``shuffled`` (docs/guide/reward.md,
+docs/algorithm.md "Reward-gated plasticity"), each map scored by :func:`map_scores`. Seed
+``s``'s random streams are those of :data:`PLAN`: ``"map"``, ``"starts"`` and ``"agent"`` (the
+same for every method), ``"probes"`` (the test objects), ``"shuffle"`` and ``"fixations"`` (the
+gated updates' second fixations).
 
 Examples
 --------

@@ -1,17 +1,8 @@
-"""The settings of one robot run, in four frozen parts, like the reach experiment's: the
-world, the map, the learner and the run.
-
-- :class:`RobotEnvConfig` (``env``): the docking world, its time limit and how the map's view
-  pairs are recorded in it (the settings of :data:`ROBOT_WORLD`);
-- :class:`RobotMapConfig` (``map``): the Sigma-Pi map learned from the recorded pairs, how it
-  is scored and how the learner reads it;
-- :class:`~sigmapi.agents.ActorCriticConfig` (``agent``): the actor-critic;
-- :class:`RobotRunConfig` (``run``): which states are compared, for how many episodes.
-
-:class:`RobotConfig` holds one of each (``RobotConfig().replace(grid=8, episodes=150)`` finds
-each field's part; the ``sigmapi robot`` options are the parts' fields). Its JSON form is
-flat (one table of every part's fields, as the robot's results have always been written):
-:meth:`RobotConfig.to_dict` and :meth:`RobotConfig.from_dict`.
+"""The settings of one robot run, in four frozen parts as the reach experiment's
+(:class:`RobotConfig`): the docking world and how the map's view pairs are recorded in it
+(:class:`RobotEnvConfig`, the settings of :data:`ROBOT_WORLD`), the map (:class:`RobotMapConfig`),
+the learner and the run (:class:`RobotRunConfig`). Its JSON form is flat (one table of every
+part's fields, as the robot's results have always been written).
 """
 
 from __future__ import annotations

@@ -1,20 +1,13 @@
-"""The robot experiment: the reach experiment (:class:`~sigmapi.experiments.reach.run.
-ReachExperiment`: its run and per-seed job) in the robot's world, with the robot's map.
+"""The robot experiment (``sigmapi robot``): the reach experiment's run in the robot's world,
+with the robot's map (docs/guide/robot.md).
 
-:data:`ROBOT` (a :class:`RobotExperiment`) runs a
-:class:`~sigmapi.experiments.robot.config.RobotConfig` on a list of seeds and returns a
-:class:`~sigmapi.experiments.robot.result.RobotResult`. Per seed, everything random comes from
-the streams of :data:`~sigmapi.experiments.robot.config.PLAN`, children of
-``SeedSequence(seed)``: ``"map"`` seeds the map's recorded views and weights, ``"starts"`` the
-episodes' start states (the same for every state: same learner, same episodes), ``"agent"``
-the learner's action choices, ``"film"`` the start of the filmed episode. What the robot does
-its own way is its map: view pairs recorded from the still robot's saccades and learned in
-passes (:func:`~sigmapi.experiments.robot.map.learn_map`), scored on evaluation pairs drawn
-from :data:`~sigmapi.metrics.EVAL_SEED` (the same for every seed, never moved); the
-actor-critic of the authors' docking model then learns on each state
-(:data:`~sigmapi.envs.STATES`) through ``gymnasium.make("sigmapi/RobotDock-v0")`` and the
-state wrappers, as in every world. ``sigmapi robot`` is generated from :data:`ROBOT` (the
-experiment registry): its command, options and result file keep their names.
+:data:`ROBOT` runs a :class:`~sigmapi.experiments.robot.config.RobotConfig` on seeds and returns
+a :class:`~sigmapi.experiments.robot.result.RobotResult`. Seed ``s``'s random streams are those
+of :data:`~sigmapi.experiments.robot.config.PLAN`: ``"map"`` (the map's recorded views and
+weights), ``"starts"`` and ``"agent"`` (the same for every state), ``"film"`` (the filmed
+episode's start). The map learns in passes over view pairs recorded from the still robot's
+saccades (:func:`~sigmapi.experiments.robot.map.learn_map`) and is scored on evaluation pairs
+drawn from :data:`~sigmapi.metrics.EVAL_SEED` (the same for every seed).
 
 Examples
 --------
