@@ -130,7 +130,11 @@ class ReachExperiment(SeedRuns[Any]):
     returns_map = False
     """Whether the first seed's map travels back from its job (for the result's figures)."""
 
-    def __init__(self, world: World = GAZE_REACH) -> None:
+    world: World = GAZE_REACH
+    """The world it runs in (``ReachExperiment(world)``: another)."""
+
+    def __init__(self, world: World | None = None) -> None:
+        world = world or self.world
         env = self.config_type.PARTS["env"]
         if not issubclass(world.settings, env):
             raise _validate.fail(

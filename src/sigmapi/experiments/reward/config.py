@@ -6,6 +6,7 @@ the world, the map learned before the episodes (the reach experiment's
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -70,15 +71,9 @@ class GateConfig:
         _validate.choice("gate_view", self.gate_view, VIEWS)
 
     def gating(self) -> Gating:
-        """The loop's settings (:class:`~sigmapi.agents.gated.Gating`)."""
-        return Gating(
-            self.surprise,
-            self.feedback,
-            self.gate_scale,
-            self.gate_eps,
-            self.gate_sigma,
-            self.gate_view,
-        )
+        """The loop's settings (:class:`~sigmapi.agents.gated.Gating`: the same fields, in
+        order, without their ``gate_`` prefix)."""
+        return Gating(*dataclasses.astuple(self))
 
 
 @dataclass(frozen=True)

@@ -197,10 +197,6 @@ QUICK = RobotConfig().replace(
 """``sigmapi robot --quick``: a smaller map run and fewer episodes (minutes, not tens)."""
 
 
-def _robot_kwargs(settings: RobotEnvConfig) -> dict[str, object]:
-    return settings.env_kwargs()
-
-
 def _robot_source(settings: RobotEnvConfig) -> RobotViews:
     return RobotViews(settings.grid, settings.code_width, moved_share=settings.moved_share)
 
@@ -210,7 +206,7 @@ ROBOT_WORLD = register_world(
         name="robot",
         env_id=ENV_ID,
         settings=RobotEnvConfig,
-        kwargs=_robot_kwargs,
+        kwargs=RobotEnvConfig.env_kwargs,
         source=_robot_source,
         map=MapSpec("robot-2d"),
         seeds=(100, 101, 102, 103, 104),

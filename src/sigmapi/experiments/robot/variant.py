@@ -33,7 +33,6 @@ from sigmapi.envs.robot.views import RobotViewBatch
 from sigmapi.executor import job_memory as _som_job_memory
 from sigmapi.experiments.base import register
 from sigmapi.experiments.kit.jobs import SeedEpisodes, Tick
-from sigmapi.experiments.kit.worlds import World
 from sigmapi.experiments.reach.run import ReachExperiment
 from sigmapi.experiments.robot.config import PLAN, QUICK, ROBOT_WORLD, RobotConfig
 from sigmapi.experiments.robot.map import (
@@ -69,28 +68,27 @@ def job_memory(config: RobotConfig) -> int:
 class RobotExperiment(ReachExperiment):
     """A simulated robot (MuJoCo) records view pairs from its saccades and learns the
     Sigma-Pi map; then an actor-critic docks on the map, the retina code, retina and gaze
-    codes and the true z (the upper bound), over seeds."""
+    codes and the true z (the upper bound), over seeds.
+
+    ``RobotExperiment(world)`` runs it in another world whose settings are a
+    :class:`~sigmapi.experiments.robot.config.RobotEnvConfig` (default
+    :data:`~sigmapi.experiments.robot.config.ROBOT_WORLD`, whose default seeds are the
+    acceptance run's, none tuned on)."""
 
     name = "robot"
     summary = "a simulated robot learns the map from its own saccades, then docks on it"
     config_type = RobotConfig
     quick = QUICK
     quick_seeds = (0,)
-    quick_time = "about 20 s on two quiet cores, 80 s on two busy ones"
-    extra = "robot"
     """The seed of ``--quick``: a tuning seed (a first look does not peek at the reported
     ones)."""
+    quick_time = "about 20 s on two quiet cores, 80 s on two busy ones"
+    extra = "robot"
     default_out = "robot"
     plan = PLAN
     info_keys = INFO_KEYS
     returns_map = True
-
-    def __init__(self, world: World = ROBOT_WORLD) -> None:
-        """The robot's protocol in ``world`` (default :data:`~sigmapi.experiments.robot.
-        config.ROBOT_WORLD`, whose default seeds are the acceptance run's, none tuned on):
-        a world whose settings are a :class:`~sigmapi.experiments.robot.config.RobotEnvConfig`,
-        its view pairs recorded from its view source, its map from its map spec."""
-        super().__init__(world)
+    world = ROBOT_WORLD
 
     def before_writing(self, config: RobotConfig, *, force: bool) -> None:
         """What writing the figures needs, checked before the work: the ``--render`` file
