@@ -199,6 +199,18 @@ class Entry:
         return found is not None and getattr(found, attr, experiment) is experiment
 
 
+_NAME = re.compile(r"[a-z][a-z0-9]*(-[a-z0-9]+)*")
+
+
+def _check_name(name: object) -> str:
+    """``name`` if it is an experiment's name: a command word (a ConfigError if not)."""
+    if not isinstance(name, str) or not _NAME.fullmatch(name):
+        raise _validate.fail(
+            "experiment name", "lower-case words joined by '-'", name, 'e.g. "reproduce" or "chain"'
+        )
+    return name
+
+
 class Registry(MutableMapping[str, "AnyExperiment"]):
     """Experiments by name, each imported when first looked up (as Gymnasium does for its
     environments): ``entries`` lists them all, loaded or not, with their summaries, so that
@@ -240,13 +252,7 @@ class Registry(MutableMapping[str, "AnyExperiment"]):
 
     def add(self, name: str, target: str, summary: str) -> None:
         """Register experiment ``name`` by its ``"module:object"`` without importing it."""
-        if not isinstance(name, str) or not _NAME.fullmatch(name):
-            raise _validate.fail(
-                "experiment name",
-                "lower-case words joined by '-'",
-                name,
-                'e.g. "reproduce" or "chain"',
-            )
+        _check_name(name)
         if not re.fullmatch(r"[\w.]+:\w+", target):
             raise _validate.fail(
                 f"target of experiment {name!r}",
@@ -264,8 +270,6 @@ class Registry(MutableMapping[str, "AnyExperiment"]):
         self.entries[name] = Entry(name, target, summary)
 
 
-_NAME = re.compile(r"[a-z][a-z0-9]*(-[a-z0-9]+)*")
-
 REGISTRY = Registry()
 """Every registered experiment by name, imported on first look-up; the command line has a
 sub-command for each (:meth:`Registry.add` registers one by its ``"module:object"``)."""
@@ -278,11 +282,7 @@ def register(experiment: Experiment[C]) -> Experiment[C]:
     dataclass. A module named by a lazy entry (:meth:`Registry.add`) registers its experiment
     when it is imported: that fills the entry.
     """
-    name = getattr(experiment, "name", None)
-    if not isinstance(name, str) or not _NAME.fullmatch(name):
-        raise _validate.fail(
-            "experiment name", "lower-case words joined by '-'", name, 'e.g. "reproduce" or "chain"'
-        )
+    name = _check_name(getattr(experiment, "name", None))
     cls = getattr(experiment, "config_type", None)
     if not (
         isinstance(cls, type) and dataclasses.is_dataclass(cls) and cls.__dataclass_params__.frozen  # type: ignore[attr-defined]

@@ -1,7 +1,7 @@
 """The per-seed job of an experiment and its progress: one function, run where the executor
 puts it, that shows a bar of its episodes only where it runs in the caller's process; and the
 one protocol of the embodied experiments: a seed's map, then the same learner on every state
-the experiment compares (:func:`seed_episodes`, each state by :func:`learn_on_state`); and
+the experiment compares (:func:`seed_episodes`); and
 :class:`SeedRuns`, the run of an experiment of one job per seed, written once."""
 
 from __future__ import annotations
@@ -32,7 +32,6 @@ __all__ = [
     "Tick",
     "counted",
     "iterations_counted",
-    "learn_on_state",
     "seed_episodes",
 ]
 
@@ -95,26 +94,6 @@ class Steps:
             self.tick(0, self.names[self.i])
 
 
-def learn_on_state(
-    env: gym.Env[Any, Any],
-    agent: ActorCriticConfig,
-    plan: SeedPlan,
-    seed: int,
-    episodes: int,
-    *,
-    on_episode: Callable[[], None] | None = None,
-    info_keys: Sequence[str] = (),
-) -> tuple[Episodes, ActorCritic]:
-    """The actor-critic of ``agent`` learning over ``episodes`` episodes of ``env`` (a state
-    the learner sees): its action choices from stream ``"agent"`` of ``seed``'s ``plan``, the
-    episodes' starts from stream ``"starts"`` (so every state of a seed meets the same
-    episodes). The episodes' records (:func:`~sigmapi.agents.run_episodes`) and the learner."""
-    learner = actor_critic_for(env, agent, seed=plan.rng(seed, "agent"))
-    starts = plan.rng(seed, "starts").integers(0, 2**31 - 1, size=episodes)
-    records = run_episodes(env, learner, starts, on_episode=on_episode, info_keys=info_keys)
-    return records, learner
-
-
 @dataclass
 class SeedEpisodes:
     """What :func:`seed_episodes` gives of one seed: its map (None when no state reads one)
@@ -143,16 +122,18 @@ def seed_episodes(
     """The protocol of one seed of an embodied experiment (reach, robot): the map, learned by
     ``make_map(seed, tick)`` (``(model, extras)``) where a state reads it (``"map"`` in
     ``states``); then per state, the world as that state sees it (``state_env(state,
-    model)``) and the same learner on the same episodes (:func:`learn_on_state`), ``tick(1,
-    state)`` after each; ``keep(state, env, learner)``, where given, what to keep of it."""
+    model)``) and the same learner on the same episodes (its action choices from stream
+    ``"agent"`` of ``seed``'s ``plan``, the episodes' starts from stream ``"starts"``:
+    :func:`~sigmapi.agents.run_episodes`), ``tick(1, state)`` after each; ``keep(state, env,
+    learner)``, where given, what to keep of it."""
     model, extras = make_map(seed, tick) if "map" in states else (None, {})
     out = SeedEpisodes(model, extras)
     for state in states:
         env = state_env(state, model)
         done = None if tick is None else functools.partial(tick, 1, state)
-        out.runs[state], learner = learn_on_state(
-            env, agent, plan, seed, episodes, on_episode=done, info_keys=info_keys
-        )
+        learner = actor_critic_for(env, agent, seed=plan.rng(seed, "agent"))
+        starts = plan.rng(seed, "starts").integers(0, 2**31 - 1, size=episodes)
+        out.runs[state] = run_episodes(env, learner, starts, on_episode=done, info_keys=info_keys)
         if keep is not None:
             out.kept[state] = keep(state, env, learner)
         env.close()

@@ -20,7 +20,6 @@ Examples
 from __future__ import annotations
 
 import functools
-from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
@@ -37,7 +36,7 @@ from sigmapi.envs import (
     make_state_env,
 )
 from sigmapi.errors import ConfigError
-from sigmapi.executor import Executor, job_memory
+from sigmapi.executor import job_memory
 from sigmapi.experiments.base import register
 from sigmapi.experiments.kit.jobs import SeedEpisodes, SeedJob, SeedRuns, Tick, seed_episodes
 from sigmapi.experiments.kit.seeds import SeedPlan
@@ -46,13 +45,11 @@ from sigmapi.experiments.reach.config import SMALL_PRESET, ReachConfig, preset_s
 from sigmapi.experiments.reach.result import ReachResult
 from sigmapi.metrics import evaluate
 from sigmapi.model.som import SigmaPiSOM, load_model
-from sigmapi.progress import Progress
 
 __all__ = [
     "PLAN",
     "REACH",
     "ReachExperiment",
-    "run_with_progress",
     "value_over_z",
 ]
 
@@ -238,19 +235,3 @@ class ReachExperiment(SeedRuns[Any]):
 REACH = ReachExperiment()
 register(REACH)
 """The reach experiment."""
-
-
-def run_with_progress(
-    config: ReachConfig,
-    seeds: Iterable[int],
-    disable: bool | None = None,
-    workers: int | None = None,
-) -> ReachResult:
-    """:meth:`REACH.run <ReachExperiment.run>` with progress on stderr and the seeds as jobs
-    of a local process pool (``workers=None``: one per core, as memory allows)."""
-    return REACH.run(
-        config,
-        seeds=list(seeds),
-        executor=Executor(workers=workers),
-        progress=Progress(disable=disable),
-    )
