@@ -111,7 +111,7 @@ def plot_reach_curves(result: ReachData, metric: str = "success", ax: Axes | Non
         fontsize=7,
         loc="upper center",
         bbox_to_anchor=(0.5, -0.2),
-        ncol=3,
+        ncol=2,
     )
     return ax
 
