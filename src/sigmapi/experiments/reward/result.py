@@ -80,12 +80,22 @@ class RewardResult(Result):
     written: dict[str, object] | None = field(default=None, repr=False)
     """The summaries of a result read back (:meth:`from_dict`); None for a run's result."""
 
-    KEYS = (*SUMMARIES, "config: config_and_seeds", "seconds")
+    KEYS = (
+        "methods",
+        "initial_map",
+        "n_seeds",
+        "target: config.run.target",
+        "magnification_target: MAGNIFICATION_TARGET",
+        "curves",
+        "config: config_and_seeds",
+        "seconds",
+    )
     """The JSON form: ``methods``, the map before the episodes (``initial_map``), the
     acceptance counts, the curves, the config (its parts and the seeds) and the time."""
     COMPUTED = SUMMARIES
     SEEDS_IN_CONFIG = True
     FIGURE = "reward.png"
+    MAGNIFICATION_TARGET = MAGNIFICATION_TARGET
 
     @classmethod
     def collect(
@@ -155,13 +165,6 @@ class RewardResult(Result):
 
     def n_seeds(self) -> int:
         return len(self.seeds)
-
-    def target(self) -> float:
-        """The success rate per block that counts as reached."""
-        return self.config.run.target
-
-    def magnification_target(self) -> float:
-        return MAGNIFICATION_TARGET
 
     def _episodes(self, m: str) -> list[int | None]:
         run = self.config.run
