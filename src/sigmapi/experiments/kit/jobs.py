@@ -22,6 +22,7 @@ from sigmapi.executor import Executor
 from sigmapi.experiments.base import C, Experiment, run_all
 from sigmapi.experiments.kit.results import Result
 from sigmapi.experiments.kit.seeds import SeedPlan, check_seeds
+from sigmapi.model.som import SigmaPiSOM
 from sigmapi.progress import Progress
 
 __all__ = [
@@ -100,7 +101,7 @@ class SeedEpisodes:
     and what the map's maker added (its scores), each state's episode records and what
     ``keep`` kept of each state's learner."""
 
-    model: Any
+    model: SigmaPiSOM | None
     extras: dict[str, Any]
     runs: dict[str, Episodes] = field(default_factory=dict)
     kept: dict[str, Any] = field(default_factory=dict)
@@ -109,8 +110,8 @@ class SeedEpisodes:
 def seed_episodes(
     seed: int,
     states: Sequence[str],
-    make_map: Callable[[int, Tick | None], tuple[Any, dict[str, Any]]],
-    state_env: Callable[[str, Any], gym.Env[Any, Any]],
+    make_map: Callable[[int, Tick | None], tuple[SigmaPiSOM, dict[str, Any]]],
+    state_env: Callable[[str, SigmaPiSOM | None], gym.Env[Any, Any]],
     agent: ActorCriticConfig,
     plan: SeedPlan,
     episodes: int,

@@ -40,7 +40,7 @@ __all__ = [
 ]
 
 
-def default_map_shape(dim: Any) -> tuple[int, ...]:
+def default_map_shape(dim: object) -> tuple[int, ...]:
     """The map of a ``dim``-D task when none is given: 15x15 in 2-D (paper-2d), 12 units in
     1-D."""
     return (15, 15) if dim == 2 else (12,)
@@ -113,7 +113,7 @@ class MapConfig:
         told = None if tick is None else lambda model: tick(0, "learning the map")
         return learn_map_in_env(world.make_env(settings), som, seed=env_seed, callback=told)
 
-    def in_world(self, world: World, settings: Any, seed: int) -> SOMConfig:
+    def in_world(self, world: World, settings: object, seed: int) -> SOMConfig:
         """The map's config on the codes of ``world`` as ``settings`` make it
         (:meth:`som_config`)."""
         source = world.source(settings)
@@ -196,7 +196,7 @@ class ReachConfig(Parts):
     def __post_init__(self) -> None:
         check_parts(self, self.PARTS)
 
-    def replace(self, **changes: Any) -> ReachConfig:
+    def replace(self, **changes: object) -> ReachConfig:
         """A copy with ``changes``, fields of any part by name (``grid=7, episodes=150``)."""
         if "dim" in changes and "map_shape" not in changes:  # the default map follows the task
             changes = {**changes, "map_shape": default_map_shape(changes["dim"])}

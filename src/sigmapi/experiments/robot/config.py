@@ -159,7 +159,7 @@ class RobotConfig(Parts):
     def __post_init__(self) -> None:
         check_part_types(self, self.PARTS)
 
-    def make_env(self, world: World | None = None, **kwargs: Any) -> gym.Env[Any, Any]:
+    def make_env(self, world: World | None = None, **kwargs: object) -> gym.Env[Any, Any]:
         """The docking world through ``gymnasium.make`` (``world``, default
         :data:`ROBOT_WORLD`; its TimeLimit included); ``kwargs`` go to it too (e.g.
         ``render_mode="rgb_array"``)."""
@@ -170,7 +170,7 @@ class RobotConfig(Parts):
         state: str,
         model: SigmaPiSOM | None = None,
         world: World | None = None,
-        **kwargs: Any,
+        **kwargs: object,
     ) -> gym.Env[Features, Any]:
         """The docking world (:meth:`make_env`) as ``state`` sees it
         (:mod:`sigmapi.envs.wrappers`); ``"true_z"`` codes z on the map's grid (like for
@@ -185,7 +185,7 @@ class RobotConfig(Parts):
         return {k: v for table in parts_dict(self, self.PARTS).values() for k, v in table.items()}
 
     @classmethod
-    def from_dict(cls, data: Any) -> RobotConfig:
+    def from_dict(cls, data: object) -> RobotConfig:
         """The config a :meth:`to_dict` wrote (an unknown field is a ConfigError naming the
         valid ones)."""
         return cls().replace(**tuples(as_object(data, "robot config")))

@@ -3,6 +3,7 @@ computed from them, its JSON form, its table and its figures."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -41,7 +42,9 @@ def _summary(values: NDArray[np.float64]) -> dict[str, float]:
     }
 
 
-def _nan_stat(fn: Any, values: NDArray[np.float64]) -> float | None:
+def _nan_stat(
+    fn: Callable[[NDArray[np.float64]], float], values: NDArray[np.float64]
+) -> float | None:
     return float(fn(values)) if np.any(np.isfinite(values)) else None
 
 

@@ -19,8 +19,6 @@ Examples
 
 from __future__ import annotations
 
-from typing import Any
-
 import gymnasium as gym
 import numpy as np
 
@@ -28,6 +26,7 @@ from sigmapi import _memory
 from sigmapi._outputs import check_file
 from sigmapi.agents import ActorCritic
 from sigmapi.codes import PopulationCode
+from sigmapi.envs import Features
 from sigmapi.envs.robot.scene import check_rendering, mujoco_module
 from sigmapi.envs.robot.views import RobotViewBatch
 from sigmapi.executor import job_memory as _som_job_memory
@@ -47,6 +46,9 @@ from sigmapi.model.som import SigmaPiSOM
 from sigmapi.progress import Progress
 
 __all__ = ["INFO_KEYS", "PLAN", "QUICK", "ROBOT", "RobotExperiment", "job_memory"]
+
+Views = tuple[RobotViewBatch, RobotViewBatch]
+"""The calibration and test views every seed's map is scored on."""
 
 INFO_KEYS = ("docked", "event")
 """What the experiment keeps of each episode's last ``info`` besides ``is_success``."""
@@ -97,7 +99,7 @@ class RobotExperiment(ReachExperiment):
             check_file(config.run.render, force=force, what="--render file")
         check_rendering()
 
-    def check(self, config: Any) -> int:
+    def check(self, config: RobotConfig) -> int:
         """MuJoCo (and a renderer for the pixel retina) before any work, and the memory of
         one job (the main process records views too: checked first)."""
         mujoco_module()  # says which extra to install
@@ -113,9 +115,7 @@ class RobotExperiment(ReachExperiment):
         )
         return per_job
 
-    def prepare(
-        self, config: Any, progress: Progress | None
-    ) -> tuple[RobotViewBatch, RobotViewBatch] | None:
+    def prepare(self, config: RobotConfig, progress: Progress | None) -> Views | None:
         """The evaluation views every seed's map is scored on (where a state reads a map)."""
         if "map" not in config.run.states:
             return None
@@ -123,7 +123,7 @@ class RobotExperiment(ReachExperiment):
         return evaluation_pairs(config)
 
     def make_map(
-        self, config: Any, shared: Any, seed: int, tick: Tick | None
+        self, config: RobotConfig, shared: Views, seed: int, tick: Tick | None
     ) -> tuple[SigmaPiSOM, dict[str, object]]:
         """Seed ``seed``'s map from recorded view pairs, its scores and each unit's
         preferred z on the evaluation views (``shared``)."""
@@ -136,16 +136,22 @@ class RobotExperiment(ReachExperiment):
             "unit_z": unit_positions(model, cal),
         }
 
-    def state_env(self, config: Any, state: str, model: SigmaPiSOM | None) -> gym.Env[Any, Any]:
+    def state_env(
+        self, config: RobotConfig, state: str, model: SigmaPiSOM | None
+    ) -> gym.Env[Features, object]:
         """The docking world as ``state`` sees it (:meth:`RobotConfig.state_env
         <sigmapi.experiments.robot.config.RobotConfig.state_env>`)."""
         return config.state_env(state, model, self.world)
 
-    def keep(self, config: Any, state: str, env: gym.Env[Any, Any], agent: ActorCritic) -> Any:
+    def keep(
+        self, config: RobotConfig, state: str, env: gym.Env[Features, object], agent: ActorCritic
+    ) -> ActorCritic | None:
         """The first seed's map learner (the figures film it)."""
         return agent if state == "map" else None
 
-    def collect(self, config: Any, seeds: tuple[int, ...], got: list[SeedEpisodes]) -> RobotResult:
+    def collect(
+        self, config: RobotConfig, seeds: tuple[int, ...], got: list[SeedEpisodes]
+    ) -> RobotResult:
         """The result of the seeds' jobs (``got``, in the order of ``seeds``)."""
         res = RobotResult(config, seeds)
         for state in config.run.states:
