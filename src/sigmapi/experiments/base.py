@@ -57,7 +57,7 @@ from sigmapi import _memory, _validate
 from sigmapi._outputs import write_file
 from sigmapi.errors import ConfigError
 from sigmapi.executor import Executor, job_error
-from sigmapi.experiments.kit.results import Result
+from sigmapi.experiments.kit.results import JSON, Result
 from sigmapi.experiments.kit.seeds import check_seeds
 from sigmapi.progress import Progress
 
@@ -314,7 +314,7 @@ def write_result(result: Result, out_dir: str | Path) -> Path:
     return write_file(folder / RESULT_FILE, (text + "\n").encode("utf-8"), what="result file")
 
 
-def read_result(path: str | Path) -> dict[str, Any]:
+def read_result(path: str | Path) -> JSON:
     """The dict a :func:`write_result` wrote: ``path`` is its folder or the file itself."""
     p = Path(path)
     if p.is_dir():

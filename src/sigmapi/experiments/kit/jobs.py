@@ -20,7 +20,7 @@ from sigmapi import _validate
 from sigmapi.agents import ActorCritic, ActorCriticConfig, Episodes, actor_critic_for, run_episodes
 from sigmapi.executor import Executor
 from sigmapi.experiments.base import C, Experiment, run_all
-from sigmapi.experiments.kit.results import Result
+from sigmapi.experiments.kit.results import JSON, Result
 from sigmapi.experiments.kit.seeds import SeedPlan, check_seeds
 from sigmapi.model.som import SigmaPiSOM
 from sigmapi.progress import Progress
@@ -102,7 +102,7 @@ class SeedEpisodes:
     ``keep`` kept of each state's learner."""
 
     model: SigmaPiSOM | None
-    extras: dict[str, Any]
+    extras: JSON
     runs: dict[str, Episodes] = field(default_factory=dict)
     kept: dict[str, Any] = field(default_factory=dict)
 
@@ -110,7 +110,7 @@ class SeedEpisodes:
 def seed_episodes(
     seed: int,
     states: Sequence[str],
-    make_map: Callable[[int, Tick | None], tuple[SigmaPiSOM, dict[str, Any]]],
+    make_map: Callable[[int, Tick | None], tuple[SigmaPiSOM, JSON]],
     state_env: Callable[[str, SigmaPiSOM | None], gym.Env[Any, Any]],
     agent: ActorCriticConfig,
     plan: SeedPlan,

@@ -33,6 +33,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "HEADERS",
+    "JSON",
     "Column",
     "Result",
     "as_object",
@@ -45,6 +46,10 @@ __all__ = [
 
 R = TypeVar("R", bound="Result")
 
+JSON = dict[str, Any]
+"""A JSON object as it is written or read back: a result's form, a record (values of any JSON
+type)."""
+
 
 def as_object(data: object, what: str = "a result's JSON form") -> Mapping[str, Any]:
     """``data`` if it is a JSON object (a TypeError naming ``what`` if not)."""
@@ -53,9 +58,7 @@ def as_object(data: object, what: str = "a result's JSON form") -> Mapping[str, 
     return data
 
 
-def summaries(
-    data: object, required: Sequence[str], optional: Sequence[str] = ()
-) -> dict[str, Any]:
+def summaries(data: object, required: Sequence[str], optional: Sequence[str] = ()) -> JSON:
     """The summary keys of a result's JSON form as written: every one of ``required`` (a
     KeyError naming the first one missing) and those of ``optional`` it holds (keys a newer
     version added)."""
@@ -125,7 +128,7 @@ class Result:
         value = functools.reduce(getattr, attr.split("."), self)  # "options.seeds": a path
         return value() if callable(value) else value
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self) -> JSON:
         """Everything the result states, JSON-able (``result.json``, ``--json``): the
         :attr:`KEYS` in order; a result read back gives its ``written`` summaries in place of
         the computed keys."""
@@ -144,7 +147,7 @@ class Result:
                 out[key] = value
         return out
 
-    def config_and_seeds(self) -> dict[str, Any]:
+    def config_and_seeds(self) -> JSON:
         """The config's JSON form with the seeds (``"config"`` where :attr:`SEEDS_IN_CONFIG`)."""
         config: object = getattr(self, "config")  # noqa: B009 (a field of every result)
         return {**plain(config), "seeds": list(getattr(self, "seeds"))}  # noqa: B009

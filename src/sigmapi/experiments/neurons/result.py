@@ -4,11 +4,11 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, ClassVar
+from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
 
-from sigmapi.experiments.kit.results import Column, Result, columns, render
+from sigmapi.experiments.kit.results import JSON, Column, Result, columns, render
 
 from .config import METRICS, REFERENCE_RATE, NeuronsConfig
 
@@ -17,7 +17,7 @@ if TYPE_CHECKING:
 
 __all__ = ["VC_MARGIN", "NeuronsResult", "Row", "within_margin"]
 
-Row = dict[str, Any]
+Row = JSON
 """A record of the JSON form: a map's or a spiking network's row of one job (its name, task,
 seed and scores), an entry of :meth:`NeuronsResult.methods`, a branch summary."""
 

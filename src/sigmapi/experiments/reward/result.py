@@ -5,13 +5,13 @@ and seed, the summaries computed from them (median, worst, counts over seeds), i
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
 from sigmapi.experiments.kit.episodes import block_rates, final_rates, success_curve
-from sigmapi.experiments.kit.results import Result
+from sigmapi.experiments.kit.results import JSON, Result
 from sigmapi.experiments.reward.config import RewardConfig
 
 if TYPE_CHECKING:
@@ -99,7 +99,7 @@ class RewardResult(Result):
 
     @classmethod
     def collect(
-        cls, config: RewardConfig, seeds: tuple[int, ...], per_seed: list[dict[str, Any]]
+        cls, config: RewardConfig, seeds: tuple[int, ...], per_seed: list[JSON]
     ) -> RewardResult:
         """The result of the per-seed values of the run (in the order of ``seeds``)."""
         res = cls(config, seeds)

@@ -34,6 +34,7 @@ from sigmapi.envs import GazeReachEnv, MapObservation
 from sigmapi.executor import job_memory
 from sigmapi.experiments.base import register
 from sigmapi.experiments.kit.jobs import SeedJob, SeedRuns, Tick
+from sigmapi.experiments.kit.results import JSON
 from sigmapi.experiments.kit.seeds import SeedPlan
 from sigmapi.experiments.kit.worlds import GAZE_REACH, World
 from sigmapi.experiments.reward.config import RewardConfig
@@ -149,7 +150,7 @@ class RewardExperiment(SeedRuns[RewardConfig]):
     def steps(self, job: SeedJob) -> int:
         return len(job.config.run.methods) * job.config.run.episodes
 
-    def seed_run(self, job: SeedJob, tick: Tick | None) -> dict[str, Any]:
+    def seed_run(self, job: SeedJob, tick: Tick | None) -> JSON:
         """One seed: its map, then each method's learner on the same episodes, then the
         scores."""
         cfg, seed, world, run = job.config, job.seed, self.world, job.config.run
@@ -158,7 +159,7 @@ class RewardExperiment(SeedRuns[RewardConfig]):
         objects = probe_objects(place, run.n_test, PLAN.rng(seed, "probes"))
         goal = np.asarray(place.goal, dtype=np.float64)
         starts = PLAN.rng(seed, "starts").integers(0, 2**31 - 1, size=run.episodes)
-        out: dict[str, Any] = {
+        out: JSON = {
             "initial": map_scores(learned, objects, goal, run.near_radius),
             "initial_units": preferred_z(learned, objects),
             "runs": {},

@@ -28,6 +28,7 @@ from sigmapi.experiments.kit.figures import (
     legend_once,
     plot_apart,
 )
+from sigmapi.experiments.kit.results import JSON
 from sigmapi.experiments.robot.config import PLAN
 from sigmapi.metrics import FOLD_THRESHOLD, ORDERED_R2
 
@@ -115,7 +116,7 @@ def write_gif(frames: list[NDArray[np.uint8]], path: Path, fps: int = 6) -> Path
     return save_gif(frames, path, fps=fps)
 
 
-def _map_words(metrics: dict[str, Any]) -> str:
+def _map_words(metrics: JSON) -> str:
     """A map's order and fold verdicts, with their bounds (the fold score's threshold)."""
     r2 = float(metrics["order_r2"])
     order = "ordered" if r2 >= ORDERED_R2 else "twisted"
