@@ -10,11 +10,11 @@ import dataclasses
 import inspect
 import typing
 from collections.abc import Mapping
-from typing import Any, ClassVar, Self
+from typing import ClassVar, Self
 
 from sigmapi import _validate
 from sigmapi.errors import ConfigError
-from sigmapi.experiments.kit.results import tuples
+from sigmapi.experiments.kit.results import JSON, tuples
 
 __all__ = [
     "Parts",
@@ -76,7 +76,7 @@ def check_part_types(config: object, parts: dict[str, type]) -> None:
 
 def replaced_parts(
     config: object, parts: dict[str, type], changes: dict[str, object], kind: str
-) -> dict[str, Any]:
+) -> JSON:
     """The parts of ``config`` with ``changes`` (fields of any part, by name); an unknown
     field is a ConfigError that lists the valid ones (``kind``: "reach", "reward", ...)."""
     owner = {f.name: part for part, cls in parts.items() for f in dataclasses.fields(cls)}
@@ -104,7 +104,7 @@ def parts_dict(config: object, parts: dict[str, type]) -> dict[str, dict[str, ob
     }
 
 
-def parts_from_dict(data: object, parts: dict[str, type], kind: str) -> dict[str, Any]:
+def parts_from_dict(data: object, parts: dict[str, type], kind: str) -> JSON:
     """The parts a :func:`parts_dict` wrote, built again (lists as tuples): each part's
     table must hold only its class's fields (a ConfigError naming the first that is not one;
     a KeyError naming a missing part)."""

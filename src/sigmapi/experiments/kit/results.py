@@ -68,7 +68,7 @@ def summaries(data: object, required: Sequence[str], optional: Sequence[str] = (
     return out
 
 
-def tuples(table: Mapping[str, Any]) -> dict[str, Any]:
+def tuples(table: Mapping[str, object]) -> JSON:
     """A config's fields as its JSON form holds them, lists as tuples (as the config has them)."""
     return {k: tuple(v) if isinstance(v, list) else v for k, v in table.items()}
 
@@ -153,7 +153,7 @@ class Result:
         return {**plain(config), "seeds": list(getattr(self, "seeds"))}  # noqa: B009
 
     @classmethod
-    def read_fields(cls, obj: Mapping[str, Any]) -> dict[str, Any]:
+    def read_fields(cls, obj: Mapping[str, object]) -> JSON:
         """The fields of a JSON form: each field named by a key of :attr:`KEYS` (not
         computed), typed as the field is (a config by its ``from_dict`` or its fields, a
         tuple, a float); the seeds from the config where :attr:`SEEDS_IN_CONFIG`."""

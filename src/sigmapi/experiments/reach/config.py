@@ -26,6 +26,7 @@ from sigmapi.experiments.kit.parts import (
     Parts,
     check_part_types,
 )
+from sigmapi.experiments.kit.results import JSON
 from sigmapi.experiments.kit.worlds import GAZE_REACH, World
 from sigmapi.model.som import SigmaPiSOM
 
@@ -213,7 +214,7 @@ SMALL_PRESET = "small-2d"
 width 0.5, a 7x7 map on 10,000 views with the small-map schedule (:func:`preset_setting`)."""
 
 
-def preset_setting(name: str) -> dict[str, Any]:
+def preset_setting(name: str) -> JSON:
     """The fields of a reach config that the 2-D preset ``name`` fixes: the world's grid and
     code width (the preset's square ``x_shape`` and ``code_width``), the map's shape and
     length, and the preset itself. ``ReachConfig().replace(**preset_setting("small-2d"))``
