@@ -53,7 +53,9 @@ from sigmapi.executor import ENGINES, Executor
 from sigmapi.experiments.base import (
     REGISTRY,
     RESULT_FILE,
+    AnyExperiment,
     Experiment,
+    Result,
     check_seeds,
     write_result,
 )
@@ -82,7 +84,7 @@ def _gib(text: str) -> float:
     return value
 
 
-def _seeds_default(experiment: Experiment[Any]) -> str:
+def _seeds_default(experiment: AnyExperiment) -> str:
     """How ``--help`` states the default seeds."""
     if getattr(type(experiment), "default_seeds", None) is Experiment.default_seeds:
         seeds, quick = experiment.seeds, experiment.quick_seeds or experiment.seeds
@@ -109,7 +111,7 @@ def add_experiment(sub: Any, name: str, summary: str) -> Parser:
     )
 
 
-def add_experiment_options(p: Parser, experiment: Experiment[Any]) -> None:
+def add_experiment_options(p: Parser, experiment: AnyExperiment) -> None:
     """Give ``p`` the options of ``experiment`` (its config's fields and the common ones)."""
     p.description = plain(type(experiment).__doc__ or experiment.summary)
     if experiment.extra:
@@ -188,7 +190,7 @@ def _make_folder(path: str) -> Path:
     return out
 
 
-def _parts(experiment: Experiment[Any]) -> dict[str | None, type]:
+def _parts(experiment: AnyExperiment) -> dict[str | None, type]:
     """The dataclasses whose fields are the command's options: the config's own (key None),
     or, for a config made of parts (:class:`~sigmapi.experiments.kit.parts.Parts`: each field
     a part's dataclass, and ``replace(**fields)`` finding the part of each field), every
@@ -197,7 +199,7 @@ def _parts(experiment: Experiment[Any]) -> dict[str | None, type]:
     return parts or {None: experiment.config_type}
 
 
-def _check_folder(out: Path, force: bool, experiment: Experiment[Any]) -> None:
+def _check_folder(out: Path, force: bool, experiment: AnyExperiment) -> None:
     """Before any work: the folder takes files, and is this experiment's
     (:func:`~sigmapi._outputs.claim_folder`: its marker, or empty, or ``--force``); a run
     that does not resume needs ``--force`` to write over a run of its own there."""
@@ -229,12 +231,12 @@ def _check_folder(out: Path, force: bool, experiment: Experiment[Any]) -> None:
     claim_folder(out, experiment.name, force=force, owns=experiment.owns)
 
 
-def _config(experiment: Experiment[Any], values: dict[str, object], quick: bool) -> Any:
+def _config(experiment: AnyExperiment, values: dict[str, object], quick: bool) -> object:
     """The config of the flags (from the quick one with ``--quick``); an error that only the
     ``--set`` overrides cause names the flag, as ``sigmapi train`` does."""
     start = experiment.quick if quick and experiment.quick is not None else None
 
-    def build(given: dict[str, object]) -> Any:
+    def build(given: dict[str, object]) -> object:
         if None not in _parts(experiment):  # a config of parts: each field finds its part
             base = start if start is not None else experiment.config_type()
             return base.replace(**given) if given else base
@@ -251,7 +253,7 @@ def _config(experiment: Experiment[Any], values: dict[str, object], quick: bool)
         raise ConfigError(f"--set: {exc}") from None
 
 
-def run_experiment(experiment: Experiment[Any], args: argparse.Namespace) -> int:
+def run_experiment(experiment: AnyExperiment, args: argparse.Namespace) -> int:
     """Build the config from the flags, run the experiment, write ``result.json`` and the
     figures into ``--out``, print the table (or the JSON)."""
     quick = bool(getattr(args, "quick", False))
@@ -316,13 +318,13 @@ def _written(out: Path, before: dict[Path, tuple[int, int]], listed: list[Path])
 
 
 def _run(
-    experiment: Experiment[Any],
-    config: Any,
+    experiment: AnyExperiment,
+    config: object,
     seeds: tuple[int, ...],
     out: Path | None,
     executor: Executor,
     quiet: bool,
-) -> Any:
+) -> Result:
     executor.check()  # a scheduler that does not answer: before any work
     progress = None if quiet else Progress()
     return experiment.run(config, seeds=seeds, out=out, executor=executor, progress=progress)

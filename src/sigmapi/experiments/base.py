@@ -57,7 +57,7 @@ from sigmapi import _memory, _validate
 from sigmapi._outputs import write_file
 from sigmapi.errors import ConfigError
 from sigmapi.executor import Executor, job_error
-from sigmapi.experiments.kit.results import Result
+from sigmapi.experiments.kit.results import JSON, Result
 from sigmapi.experiments.kit.seeds import check_seeds
 from sigmapi.progress import Progress
 
@@ -65,6 +65,7 @@ __all__ = [
     "KEY_VALUES",
     "REGISTRY",
     "RESULT_FILE",
+    "AnyExperiment",
     "Entry",
     "Experiment",
     "Registry",
@@ -80,6 +81,8 @@ RESULT_FILE = "result.json"
 """The file :func:`write_result` writes into an experiment's output folder."""
 
 C = TypeVar("C")
+J = TypeVar("J")
+V = TypeVar("V")
 
 KEY_VALUES: Mapping[str, object] = types.MappingProxyType({"repeat": True, "metavar": "KEY=VALUE"})
 """Field metadata of a config field of ``key=value`` strings (``field(default=(),
@@ -164,6 +167,10 @@ class Experiment(Protocol[C]):
         ...
 
 
+AnyExperiment = Experiment[Any]
+"""An experiment of any config type (what the registry holds)."""
+
+
 @dataclass(frozen=True)
 class Entry:
     """An experiment not imported yet: its name, ``"module:object"`` and its one-line summary
@@ -173,7 +180,7 @@ class Entry:
     target: str
     summary: str
 
-    def load(self) -> Experiment[Any]:
+    def load(self) -> AnyExperiment:
         """Import the module and return the object (an experiment named :attr:`name`)."""
         module, _, attr = self.target.partition(":")
         experiment = getattr(importlib.import_module(module), attr)
@@ -192,23 +199,35 @@ class Entry:
         return found is not None and getattr(found, attr, experiment) is experiment
 
 
-class Registry(MutableMapping[str, "Experiment[Any]"]):
+_NAME = re.compile(r"[a-z][a-z0-9]*(-[a-z0-9]+)*")
+
+
+def _check_name(name: object) -> str:
+    """``name`` if it is an experiment's name: a command word (a ConfigError if not)."""
+    if not isinstance(name, str) or not _NAME.fullmatch(name):
+        raise _validate.fail(
+            "experiment name", "lower-case words joined by '-'", name, 'e.g. "reproduce" or "chain"'
+        )
+    return name
+
+
+class Registry(MutableMapping[str, "AnyExperiment"]):
     """Experiments by name, each imported when first looked up (as Gymnasium does for its
     environments): ``entries`` lists them all, loaded or not, with their summaries, so that
     listing the commands imports no experiment."""
 
     def __init__(self) -> None:
         self.entries: dict[str, Entry] = {}
-        self._loaded: dict[str, Experiment[Any]] = {}
+        self._loaded: dict[str, AnyExperiment] = {}
 
-    def __getitem__(self, name: str) -> Experiment[Any]:
+    def __getitem__(self, name: str) -> AnyExperiment:
         if name not in self._loaded:
             entry = self.entries[name]  # KeyError: no such experiment
             experiment = entry.load()  # its module calls register(), or does not
             self._loaded.setdefault(name, experiment)
         return self._loaded[name]
 
-    def __setitem__(self, name: str, experiment: Experiment[Any]) -> None:
+    def __setitem__(self, name: str, experiment: AnyExperiment) -> None:
         self._loaded[name] = experiment
         if name not in self.entries:  # registered as an object: its entry only describes it
             where = f"{type(experiment).__module__}:{type(experiment).__name__}"
@@ -227,19 +246,13 @@ class Registry(MutableMapping[str, "Experiment[Any]"]):
     def __contains__(self, name: object) -> bool:
         return name in self.entries
 
-    def loaded(self, name: str) -> Experiment[Any] | None:
+    def loaded(self, name: str) -> AnyExperiment | None:
         """The experiment ``name`` if it has been imported (else None, importing nothing)."""
         return self._loaded.get(name)
 
     def add(self, name: str, target: str, summary: str) -> None:
         """Register experiment ``name`` by its ``"module:object"`` without importing it."""
-        if not isinstance(name, str) or not _NAME.fullmatch(name):
-            raise _validate.fail(
-                "experiment name",
-                "lower-case words joined by '-'",
-                name,
-                'e.g. "reproduce" or "chain"',
-            )
+        _check_name(name)
         if not re.fullmatch(r"[\w.]+:\w+", target):
             raise _validate.fail(
                 f"target of experiment {name!r}",
@@ -257,8 +270,6 @@ class Registry(MutableMapping[str, "Experiment[Any]"]):
         self.entries[name] = Entry(name, target, summary)
 
 
-_NAME = re.compile(r"[a-z][a-z0-9]*(-[a-z0-9]+)*")
-
 REGISTRY = Registry()
 """Every registered experiment by name, imported on first look-up; the command line has a
 sub-command for each (:meth:`Registry.add` registers one by its ``"module:object"``)."""
@@ -271,11 +282,7 @@ def register(experiment: Experiment[C]) -> Experiment[C]:
     dataclass. A module named by a lazy entry (:meth:`Registry.add`) registers its experiment
     when it is imported: that fills the entry.
     """
-    name = getattr(experiment, "name", None)
-    if not isinstance(name, str) or not _NAME.fullmatch(name):
-        raise _validate.fail(
-            "experiment name", "lower-case words joined by '-'", name, 'e.g. "reproduce" or "chain"'
-        )
+    name = _check_name(getattr(experiment, "name", None))
     cls = getattr(experiment, "config_type", None)
     if not (
         isinstance(cls, type) and dataclasses.is_dataclass(cls) and cls.__dataclass_params__.frozen  # type: ignore[attr-defined]
@@ -307,7 +314,7 @@ def write_result(result: Result, out_dir: str | Path) -> Path:
     return write_file(folder / RESULT_FILE, (text + "\n").encode("utf-8"), what="result file")
 
 
-def read_result(path: str | Path) -> dict[str, Any]:
+def read_result(path: str | Path) -> JSON:
     """The dict a :func:`write_result` wrote: ``path`` is its folder or the file itself."""
     p = Path(path)
     if p.is_dir():
@@ -321,16 +328,16 @@ def read_result(path: str | Path) -> dict[str, Any]:
 
 
 def run_all(
-    fn: Callable[[Any], Any],
-    jobs: Sequence[tuple[str, Any]],
+    fn: Callable[[J], V],
+    jobs: Sequence[tuple[str, J]],
     *,
     executor: Executor | None,
     per_job: int,
     progress: Progress | None,
     desc: str,
-    describe: Callable[[str, Any], str] | None = None,
-    verbose: Callable[[Any], Any] | None = None,
-) -> dict[str, Any]:
+    describe: Callable[[str, V], str] | None = None,
+    verbose: Callable[[J], J] | None = None,
+) -> dict[str, V]:
     """Run ``fn`` on each ``(key, arg)`` of ``jobs`` through ``executor``; the values by key.
 
     ``per_job`` (bytes, :func:`~sigmapi.executor.job_memory`) bounds the jobs at once. With
@@ -360,7 +367,7 @@ def run_all(
     elif not in_process:
         show.note(f"{desc}: {len(jobs)} jobs, {plan.reason}")
     done, bar = show.jobs(len(jobs), desc)
-    values: dict[str, object] = {}
+    values: dict[str, V] = {}
     with bar:
         for o in ex.run(fn, jobs, plan.workers):
             if not o.ok:

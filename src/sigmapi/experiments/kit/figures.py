@@ -12,14 +12,20 @@ every series) one legend entry.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from matplotlib.artist import Artist
+    from matplotlib.axes import Axes
+    from matplotlib.legend import Legend
 
 __all__ = [
     "BELOW",
     "MARKERS",
     "SHRINK",
+    "axes",
     "coincide_sentence",
     "coinciding",
     "film_strip",
@@ -35,6 +41,13 @@ MARKERS = ("o", "s", "^", "D", "v", "P", "X")
 
 SHRINK = 1.35
 """Each series' marker is this many times smaller than the one drawn before it."""
+
+
+def axes(ax: Axes | None = None, size: tuple[float, float] = (5, 3.5)) -> Axes:
+    """``ax``, or the Axes of a new figure of ``size`` inches (pyplot untouched)."""
+    from matplotlib.figure import Figure  # matplotlib: only when drawing
+
+    return Figure(figsize=size, layout="constrained").subplots() if ax is None else ax
 
 
 def coinciding(series: Mapping[str, Sequence[float]]) -> dict[str, str]:
@@ -62,7 +75,7 @@ def coincide_sentence(same: Mapping[str, str], where: str) -> str:
 
 
 def plot_apart(
-    ax: Any,
+    ax: Axes,
     x: Mapping[str, Sequence[float]],
     y: Mapping[str, Sequence[float]],
     *,
@@ -97,11 +110,11 @@ def plot_apart(
     return same
 
 
-def legend_once(ax: Any, **kwargs: Any) -> Any:
+def legend_once(ax: Axes, **kwargs: Any) -> Legend:
     """The legend of ``ax`` (``kwargs`` to ``ax.legend``) with each label once, drawn by the
     first mark that has it (e.g. one entry for the bands of every series)."""
     handles, labels = ax.get_legend_handles_labels()
-    once: dict[str, object] = {}
+    once: dict[str, Artist] = {}
     for handle, label in zip(handles, labels, strict=True):
         once.setdefault(label, handle)
     return ax.legend(list(once.values()), list(once), **kwargs)

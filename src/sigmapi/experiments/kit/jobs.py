@@ -1,28 +1,38 @@
 """The per-seed job of an experiment and its progress: one function, run where the executor
 puts it, that shows a bar of its episodes only where it runs in the caller's process; and the
 one protocol of the embodied experiments: a seed's map, then the same learner on every state
-the experiment compares (:func:`seed_episodes`, each state by :func:`learn_on_state`)."""
+the experiment compares (:func:`seed_episodes`); and
+:class:`SeedRuns`, the run of an experiment of one job per seed, written once."""
 
 from __future__ import annotations
 
+import dataclasses
 import functools
+import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any, TypeVar
 
 import gymnasium as gym
 
+from sigmapi import _validate
 from sigmapi.agents import ActorCritic, ActorCriticConfig, Episodes, actor_critic_for, run_episodes
-from sigmapi.experiments.kit.seeds import SeedPlan
+from sigmapi.executor import Executor
+from sigmapi.experiments.base import C, Experiment, run_all
+from sigmapi.experiments.kit.results import JSON, Result
+from sigmapi.experiments.kit.seeds import SeedPlan, check_seeds
+from sigmapi.model.som import SigmaPiSOM
 from sigmapi.progress import Progress
 
 __all__ = [
     "SeedEpisodes",
+    "SeedJob",
+    "SeedRuns",
     "Steps",
     "Tick",
     "counted",
     "iterations_counted",
-    "learn_on_state",
     "seed_episodes",
 ]
 
@@ -85,34 +95,14 @@ class Steps:
             self.tick(0, self.names[self.i])
 
 
-def learn_on_state(
-    env: gym.Env[Any, Any],
-    agent: ActorCriticConfig,
-    plan: SeedPlan,
-    seed: int,
-    episodes: int,
-    *,
-    on_episode: Callable[[], None] | None = None,
-    info_keys: Sequence[str] = (),
-) -> tuple[Episodes, ActorCritic]:
-    """The actor-critic of ``agent`` learning over ``episodes`` episodes of ``env`` (a state
-    the learner sees): its action choices from stream ``"agent"`` of ``seed``'s ``plan``, the
-    episodes' starts from stream ``"starts"`` (so every state of a seed meets the same
-    episodes). The episodes' records (:func:`~sigmapi.agents.run_episodes`) and the learner."""
-    learner = actor_critic_for(env, agent, seed=plan.rng(seed, "agent"))
-    starts = plan.rng(seed, "starts").integers(0, 2**31 - 1, size=episodes)
-    records = run_episodes(env, learner, starts, on_episode=on_episode, info_keys=info_keys)
-    return records, learner
-
-
 @dataclass
 class SeedEpisodes:
     """What :func:`seed_episodes` gives of one seed: its map (None when no state reads one)
     and what the map's maker added (its scores), each state's episode records and what
     ``keep`` kept of each state's learner."""
 
-    model: Any
-    extras: dict[str, Any]
+    model: SigmaPiSOM | None
+    extras: JSON
     runs: dict[str, Episodes] = field(default_factory=dict)
     kept: dict[str, Any] = field(default_factory=dict)
 
@@ -120,8 +110,8 @@ class SeedEpisodes:
 def seed_episodes(
     seed: int,
     states: Sequence[str],
-    make_map: Callable[[int, Tick | None], tuple[Any, dict[str, Any]]],
-    state_env: Callable[[str, Any], gym.Env[Any, Any]],
+    make_map: Callable[[int, Tick | None], tuple[SigmaPiSOM, JSON]],
+    state_env: Callable[[str, SigmaPiSOM | None], gym.Env[Any, Any]],
     agent: ActorCriticConfig,
     plan: SeedPlan,
     episodes: int,
@@ -133,17 +123,112 @@ def seed_episodes(
     """The protocol of one seed of an embodied experiment (reach, robot): the map, learned by
     ``make_map(seed, tick)`` (``(model, extras)``) where a state reads it (``"map"`` in
     ``states``); then per state, the world as that state sees it (``state_env(state,
-    model)``) and the same learner on the same episodes (:func:`learn_on_state`), ``tick(1,
-    state)`` after each; ``keep(state, env, learner)``, where given, what to keep of it."""
+    model)``) and the same learner on the same episodes (its action choices from stream
+    ``"agent"`` of ``seed``'s ``plan``, the episodes' starts from stream ``"starts"``:
+    :func:`~sigmapi.agents.run_episodes`), ``tick(1, state)`` after each; ``keep(state, env,
+    learner)``, where given, what to keep of it."""
     model, extras = make_map(seed, tick) if "map" in states else (None, {})
     out = SeedEpisodes(model, extras)
     for state in states:
         env = state_env(state, model)
         done = None if tick is None else functools.partial(tick, 1, state)
-        out.runs[state], learner = learn_on_state(
-            env, agent, plan, seed, episodes, on_episode=done, info_keys=info_keys
-        )
+        learner = actor_critic_for(env, agent, seed=plan.rng(seed, "agent"))
+        starts = plan.rng(seed, "starts").integers(0, 2**31 - 1, size=episodes)
+        out.runs[state] = run_episodes(env, learner, starts, on_episode=done, info_keys=info_keys)
         if keep is not None:
             out.kept[state] = keep(state, env, learner)
         env.close()
     return out
+
+
+@dataclass(frozen=True)
+class SeedJob:
+    """One seed's job of a :class:`SeedRuns` experiment."""
+
+    config: Any
+    seed: int
+    first: bool = False
+    """Whether it is the first seed's (the one whose learners and maps the figures show)."""
+    shared: Any = None
+    """What every seed's job reads and the run made once (:meth:`SeedRuns.prepare`)."""
+    show: Progress | None = None
+    """A bar of this job's steps (set only where the job runs in the caller's process)."""
+
+
+class SeedRuns(Experiment[C]):
+    """An experiment of one job per seed (or per seed and part), its run written once:
+    :meth:`check` (before any work; the peak bytes of one job), :meth:`prepare` (what every
+    job reads), :meth:`jobs`, each job's :meth:`seed_run` (with a bar of its :meth:`steps`
+    where it runs in the caller's process) through the executor, then :meth:`collect`."""
+
+    unit = "ep"
+    """What the bar of a job counts (:meth:`steps`)."""
+
+    def check(self, config: C) -> int:
+        """Refuse a run that cannot go before any work; the peak bytes of one job."""
+        raise NotImplementedError
+
+    def prepare(self, config: C, progress: Progress | None) -> object:
+        """What every seed's job reads and the run makes once (here: nothing)."""
+        return None
+
+    def jobs(self, config: C, seeds: tuple[int, ...], shared: object) -> list[tuple[str, Any]]:
+        """The jobs by key: one per seed (:class:`SeedJob`)."""
+        return [(str(s), SeedJob(config, s, i == 0, shared)) for i, s in enumerate(seeds)]
+
+    def steps(self, job: Any) -> int:
+        """How many steps the bar of ``job`` counts."""
+        raise NotImplementedError
+
+    def desc(self, job: Any) -> str:
+        """The name of the bar of ``job``."""
+        return f"{self.name} seed {job.seed}"
+
+    def describe(self, key: str, value: Any) -> str:
+        """The line of a finished job."""
+        return f"seed {key}"
+
+    def seed_run(self, job: Any, tick: Tick | None) -> Any:
+        """Everything of one job (``tick``: its progress, None where nothing is shown)."""
+        raise NotImplementedError
+
+    def collect(self, config: C, seeds: tuple[int, ...], values: list[Any]) -> Result:
+        """The result of the jobs' values (in the order of :meth:`jobs`)."""
+        raise NotImplementedError
+
+    def run_job(self, job: Any) -> Any:
+        """:meth:`seed_run` with a bar of its steps where ``job.show`` is given."""
+        run = functools.partial(self.seed_run, job)
+        return counted(job.show, self.steps(job), self.desc(job), run, self.unit)
+
+    def run(
+        self,
+        config: C,
+        *,
+        seeds: Sequence[int],
+        out: Path | None = None,
+        executor: Executor | None = None,
+        progress: Progress | None = None,
+    ) -> Any:
+        """Every job of ``config`` and ``seeds``, each a job of ``executor`` (the result does
+        not depend on where it runs); run one by one in this process, a job shows a bar of its
+        steps. ``out`` is not used: the run writes nothing while it runs."""
+        if not isinstance(config, self.config_type):
+            raise _validate.fail("config", f"a {self.config_type.__name__}", config)
+        seeds = check_seeds(seeds)
+        per_job = self.check(config)
+        t0 = time.perf_counter()
+        jobs = self.jobs(config, seeds, self.prepare(config, progress))
+        values = run_all(
+            self.run_job,
+            jobs,
+            executor=executor,
+            per_job=per_job,
+            progress=progress,
+            desc=self.name,
+            verbose=lambda job: dataclasses.replace(job, show=progress),
+            describe=self.describe,
+        )
+        res: Any = self.collect(config, seeds, [values[key] for key, _ in jobs])
+        res.seconds = time.perf_counter() - t0
+        return res

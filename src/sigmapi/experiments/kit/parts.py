@@ -10,11 +10,11 @@ import dataclasses
 import inspect
 import typing
 from collections.abc import Mapping
-from typing import Any, ClassVar, Self
+from typing import ClassVar, Self
 
 from sigmapi import _validate
 from sigmapi.errors import ConfigError
-from sigmapi.experiments.kit.results import tuples
+from sigmapi.experiments.kit.results import JSON, tuples
 
 __all__ = [
     "Parts",
@@ -34,7 +34,7 @@ class Parts:
     PARTS: ClassVar[dict[str, type]]
     """Each part's name and class, in the order of the fields."""
 
-    def __init_subclass__(cls, **kwargs: Any) -> None:
+    def __init_subclass__(cls, **kwargs: object) -> None:
         super().__init_subclass__(**kwargs)
         hints = typing.get_type_hints(cls)
         own = {k: hints[k] for k in inspect.get_annotations(cls)}
@@ -48,16 +48,16 @@ class Parts:
         """The experiment's word in messages: the class name without ``Config``, lower case."""
         return cls.__name__.removesuffix("Config").lower()
 
-    def replace(self, **changes: Any) -> Self:
+    def replace(self, **changes: object) -> Self:
         """A copy with ``changes``, fields of any part by name (``grid=7, episodes=150``)."""
         return type(self)(**replaced_parts(self, self.PARTS, changes, self.kind()))
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self) -> dict[str, object]:
         """The parts as JSON-able tables (tuples as lists): ``{"env": {...}, "map": ...}``."""
-        return parts_dict(self, self.PARTS)
+        return dict(parts_dict(self, self.PARTS))
 
     @classmethod
-    def from_dict(cls, data: Any) -> Self:
+    def from_dict(cls, data: object) -> Self:
         """The config a :meth:`to_dict` wrote."""
         return cls(**parts_from_dict(data, cls.PARTS, cls.kind()))
 
@@ -67,7 +67,7 @@ def parts_of(config_type: type) -> dict[str, type]:
     return dict(config_type.PARTS) if issubclass(config_type, Parts) else {}
 
 
-def check_part_types(config: Any, parts: dict[str, type]) -> None:
+def check_part_types(config: object, parts: dict[str, type]) -> None:
     """Each part of ``config`` is of its class (a ConfigError naming the first that is not)."""
     for name, cls in parts.items():
         if not isinstance(getattr(config, name), cls):
@@ -75,8 +75,8 @@ def check_part_types(config: Any, parts: dict[str, type]) -> None:
 
 
 def replaced_parts(
-    config: Any, parts: dict[str, type], changes: dict[str, object], kind: str
-) -> dict[str, Any]:
+    config: object, parts: dict[str, type], changes: dict[str, object], kind: str
+) -> JSON:
     """The parts of ``config`` with ``changes`` (fields of any part, by name); an unknown
     field is a ConfigError that lists the valid ones (``kind``: "reach", "reward", ...)."""
     owner = {f.name: part for part, cls in parts.items() for f in dataclasses.fields(cls)}
@@ -93,7 +93,7 @@ def replaced_parts(
     }
 
 
-def parts_dict(config: Any, parts: dict[str, type]) -> dict[str, dict[str, object]]:
+def parts_dict(config: object, parts: dict[str, type]) -> dict[str, dict[str, object]]:
     """The parts of ``config`` as JSON-able tables (tuples as lists)."""
     return {
         part: {
@@ -104,7 +104,7 @@ def parts_dict(config: Any, parts: dict[str, type]) -> dict[str, dict[str, objec
     }
 
 
-def parts_from_dict(data: Any, parts: dict[str, type], kind: str) -> dict[str, Any]:
+def parts_from_dict(data: object, parts: dict[str, type], kind: str) -> JSON:
     """The parts a :func:`parts_dict` wrote, built again (lists as tuples): each part's
     table must hold only its class's fields (a ConfigError naming the first that is not one;
     a KeyError naming a missing part)."""

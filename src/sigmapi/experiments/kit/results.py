@@ -21,14 +21,19 @@ import typing
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, ClassVar, TypeVar
+from typing import TYPE_CHECKING, Any, ClassVar, TypeVar
 
 import numpy as np
 
+from sigmapi._outputs import save_captioned
 from sigmapi.experiments.kit.seeds import check_seeds
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 __all__ = [
     "HEADERS",
+    "JSON",
     "Column",
     "Result",
     "as_object",
@@ -41,15 +46,19 @@ __all__ = [
 
 R = TypeVar("R", bound="Result")
 
+JSON = dict[str, Any]
+"""A JSON object as it is written or read back: a result's form, a record (values of any JSON
+type)."""
 
-def as_object(data: Any, what: str = "a result's JSON form") -> Mapping[str, Any]:
+
+def as_object(data: object, what: str = "a result's JSON form") -> Mapping[str, Any]:
     """``data`` if it is a JSON object (a TypeError naming ``what`` if not)."""
     if not isinstance(data, Mapping):
         raise TypeError(f"{what} must be a JSON object, got {type(data).__name__}")
     return data
 
 
-def summaries(data: Any, required: Sequence[str], optional: Sequence[str] = ()) -> dict[str, Any]:
+def summaries(data: object, required: Sequence[str], optional: Sequence[str] = ()) -> JSON:
     """The summary keys of a result's JSON form as written: every one of ``required`` (a
     KeyError naming the first one missing) and those of ``optional`` it holds (keys a newer
     version added)."""
@@ -59,12 +68,12 @@ def summaries(data: Any, required: Sequence[str], optional: Sequence[str] = ()) 
     return out
 
 
-def tuples(table: Mapping[str, Any]) -> dict[str, Any]:
+def tuples(table: Mapping[str, object]) -> JSON:
     """A config's fields as its JSON form holds them, lists as tuples (as the config has them)."""
     return {k: tuple(v) if isinstance(v, list) else v for k, v in table.items()}
 
 
-def plain(value: Any) -> Any:
+def plain(value: object) -> Any:
     """``value`` as JSON types: a dataclass as its ``to_dict()`` (or its fields), a mapping as
     a dict, a tuple or list as a list, a numpy array as nested lists and a numpy scalar as its
     Python value (a NaN or infinity of an array as None); anything else as it is."""
@@ -115,11 +124,11 @@ class Result:
             return self.KEYS
         return tuple(f.name for f in dataclasses.fields(self) if f.repr)  # type: ignore[arg-type]
 
-    def _value(self, attr: str) -> Any:
+    def _value(self, attr: str) -> object:
         value = functools.reduce(getattr, attr.split("."), self)  # "options.seeds": a path
         return value() if callable(value) else value
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self) -> JSON:
         """Everything the result states, JSON-able (``result.json``, ``--json``): the
         :attr:`KEYS` in order; a result read back gives its ``written`` summaries in place of
         the computed keys."""
@@ -138,13 +147,13 @@ class Result:
                 out[key] = value
         return out
 
-    def config_and_seeds(self) -> dict[str, Any]:
+    def config_and_seeds(self) -> JSON:
         """The config's JSON form with the seeds (``"config"`` where :attr:`SEEDS_IN_CONFIG`)."""
-        config: Any = getattr(self, "config")  # noqa: B009 (a field of every result)
+        config: object = getattr(self, "config")  # noqa: B009 (a field of every result)
         return {**plain(config), "seeds": list(getattr(self, "seeds"))}  # noqa: B009
 
     @classmethod
-    def read_fields(cls, obj: Mapping[str, Any]) -> dict[str, Any]:
+    def read_fields(cls, obj: Mapping[str, object]) -> JSON:
         """The fields of a JSON form: each field named by a key of :attr:`KEYS` (not
         computed), typed as the field is (a config by its ``from_dict`` or its fields, a
         tuple, a float); the seeds from the config where :attr:`SEEDS_IN_CONFIG`."""
@@ -175,16 +184,33 @@ class Result:
             values["written"] = summaries(obj, cls.COMPUTED, cls.LATER)
         return cls(**values)
 
+    FIGURE: ClassVar[str] = ""
+    """The file name of the one figure :meth:`figure` writes (:meth:`draw`; "": none)."""
+    SAVE: ClassVar[Mapping[str, object]] = {"dpi": 120, "facecolor": "white"}
+    """How :meth:`figure` saves it (``savefig``'s keywords)."""
+
     def table(self) -> str:
         """The result as console text (a few lines a person reads)."""
         raise NotImplementedError
 
+    def draw(self) -> Figure:
+        """The figure of :data:`FIGURE` (a matplotlib Figure)."""
+        raise NotImplementedError
+
+    def caption(self) -> str:
+        """The caption of :data:`FIGURE`, computed from the result."""
+        return ""
+
     def figure(self, out_dir: Path) -> list[Path]:
-        """Write the result's figures into the folder ``out_dir``; the files written (none)."""
-        return []
+        """Write the result's figures into the folder ``out_dir`` (:data:`FIGURE` and its
+        caption beside it, ``.txt``); the files written (none without :data:`FIGURE`)."""
+        if not self.FIGURE:
+            return []
+        out = Path(out_dir) / self.FIGURE
+        return [save_captioned(self.draw(), out, self.caption(), **self.SAVE)]
 
 
-def _typed(hint: Any, value: Any) -> Any:
+def _typed(hint: object, value: Any) -> Any:
     """``value`` read from JSON as a field of type ``hint``."""
     kind = typing.get_origin(hint) or hint
     if isinstance(kind, type) and hasattr(kind, "from_dict"):

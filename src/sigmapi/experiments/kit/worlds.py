@@ -48,7 +48,7 @@ class World:
     seeds: tuple[int, ...]
     """The default seeds of an experiment in this world."""
 
-    def make_env(self, settings: Any, **kwargs: Any) -> gym.Env[Any, Any]:
+    def make_env(self, settings: object, **kwargs: Any) -> gym.Env[Any, Any]:
         """The environment of ``settings`` through ``gymnasium.make`` (its time limit
         included, without Gymnasium's checker); ``kwargs`` go to it too (``render_mode``)."""
         if not isinstance(settings, self.settings):

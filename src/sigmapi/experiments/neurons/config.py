@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 from sigmapi import _memory, _validate
@@ -104,22 +105,17 @@ class NeuronsConfig:
     )
     """Test z's of the spiking networks (each shown as two views)."""
     pool: int = field(default=20, metadata=_validate.bounded("int", 1, 1000, fix="e.g. 20"))
-    """Poisson neurons per input unit of the spiking networks (chosen on seeds 0-2 among 20
-    and 40 with the coincidence detectors of :mod:`sigmapi.neurons.spiking`: 40 raised the
-    agreement with the rate map at 200 ms from about 0.98 to 0.99 for three times the spikes,
-    and did not bring the view consistency closer)."""
+    """Poisson neurons per input unit of the spiking networks (chosen on seeds 0-2, with the
+    gain and the inhibition: docs/guide/neurons.md)."""
     spike_gain: float = field(
         default=0.3, metadata=_validate.bounded("number", 0, 100, lo_open=True, fix="e.g. 0.3")
     )
-    """The conjunction networks' largest synaptic weight onto a map soma (threshold units;
-    chosen on seeds 0-2 among 0.15, 0.3 and 0.6 with the pool)."""
+    """The conjunction networks' largest synaptic weight onto a map soma (threshold units)."""
     spike_inhibition: float = field(
         default=0.25, metadata=_validate.bounded("number", 0, 100, fix="e.g. 0.25")
     )
-    """Lateral inhibition per map spike of the conjunction networks (threshold units; chosen
-    on seeds 0-2 between 0.25 and 0.5: at 200 ms the worst seed's view consistency was
-    0.003 from the rate map's at 0.25, 0.010 at 0.5). The dendritic network keeps
-    :data:`DENDRITIC_INHIBITION`."""
+    """Lateral inhibition per map spike of the conjunction networks (threshold units; the
+    dendritic network keeps :data:`DENDRITIC_INHIBITION`)."""
     pools_compared: tuple[int, ...] = field(
         default=(5, 10),
         metadata=_validate.bounded("ints", 1, 1000, count=20, fix="e.g. 5,10", sep=","),
@@ -148,16 +144,9 @@ class NeuronsConfig:
         set_ = object.__setattr__
         set_(self, "overrides", tuple(self.overrides))
         _validate.check_fields(self)  # the bounds declared beside the fields
-        for name in (
-            "branches",
-            "branches_2d",
-            "sparse_branches",
-            "sparse_branches_2d",
-            "windows_ms",
-            "peak_rates",
-            "pools_compared",
-        ):
-            set_(self, name, tuple(sorted(set(getattr(self, name)))))
+        for f in dataclasses.fields(self):  # the sets of ints: sorted, each value once
+            if f.type == "tuple[int, ...]":
+                set_(self, f.name, tuple(sorted(set(getattr(self, f.name)))))
         if not self.branches or not self.windows_ms or not self.peak_rates:
             raise _validate.fail(
                 "branches, windows_ms and peak_rates",

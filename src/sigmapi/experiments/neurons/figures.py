@@ -5,18 +5,17 @@ below their panels, off the data."""
 
 from __future__ import annotations
 
-from typing import Any
-
 import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.figure import Figure
 
 from sigmapi.experiments.kit.figures import BELOW
+from sigmapi.experiments.kit.results import JSON
 
 __all__ = ["neurons_figure"]
 
 
-def neurons_figure(result: dict[str, Any]) -> Figure:
+def neurons_figure(result: JSON) -> Figure:
     """Three panels: view consistency against synapses per unit (1-D maps), the spiking
     networks against the decision window at the reference rate, the branches of one map."""
     fig, axes = plt.subplots(1, 3, figsize=(15, 6.2), layout="constrained")

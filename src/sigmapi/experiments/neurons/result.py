@@ -2,20 +2,25 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
-from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
 
-from sigmapi._outputs import save_captioned
-from sigmapi.experiments.kit.results import Column, Result, columns, render
+from sigmapi.experiments.kit.results import JSON, Column, Result, columns, render
 
 from .config import METRICS, REFERENCE_RATE, NeuronsConfig
 
-__all__ = ["FIGURE", "VC_MARGIN", "NeuronsResult", "within_margin"]
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
-FIGURE = "neurons.png"
+__all__ = ["VC_MARGIN", "NeuronsResult", "Row", "within_margin"]
+
+Row = JSON
+"""A record of the JSON form: a map's or a spiking network's row of one job (its name, task,
+seed and scores), an entry of :meth:`NeuronsResult.methods`, a branch summary."""
+
 
 VC_MARGIN = 0.02
 """Acceptance: within this much view consistency of the reference (Sigma-Pi or rate map)."""
@@ -56,12 +61,43 @@ SPIKING_COLUMNS = columns(
 """The table's columns of the spiking networks: one row per network and peak rate."""
 
 
-def _scalars(summary: dict[str, Any]) -> dict[str, Any]:
+def _scalars(summary: Row) -> Row:
     """A branch summary without its per-branch lists."""
     return {k: v for k, v in summary.items() if not isinstance(v, list)}
 
 
-def _median_worst(rows: list[dict[str, Any]], keys: tuple[str, ...]) -> dict[str, Any]:
+RATE_EXTRA = (
+    "reference_frame_index",
+    "gain_r2",
+    "peak_modulation",
+    "active_synapses",
+    "mean_synapses",
+    "branch_z_gap",
+)
+"""What a rate map's entry summarises besides the :data:`METRICS` (where its rows have it)."""
+RATE_PER_SEED = ("seed", *METRICS, "folded", "seconds")
+SPIKING_METRICS = (
+    "agreement",
+    "view_consistency",
+    "rate_view_consistency",
+    "view_within_one",
+    "z_error",
+    "order_r2",
+    "spikes_per_decision",
+    "map_spikes",
+)
+SPIKING_PER_SEED = ("seed", "agreement", "view_consistency", "rate_view_consistency")
+
+
+def _groups(rows: list[Row], *keys: str) -> dict[tuple[object, ...], list[Row]]:
+    """``rows`` by their values of ``keys``, in the order they first appear."""
+    out: dict[tuple[object, ...], list[Row]] = {}
+    for r in rows:
+        out.setdefault(tuple(r[k] for k in keys), []).append(r)
+    return out
+
+
+def _median_worst(rows: list[Row], keys: tuple[str, ...]) -> Row:
     out: dict[str, object] = {}
     for k in keys:
         vals = [r[k] for r in rows if r.get(k) is not None]
@@ -75,23 +111,25 @@ def _median_worst(rows: list[dict[str, Any]], keys: tuple[str, ...]) -> dict[str
 
 @dataclass
 class NeuronsResult(Result):
-    """Every job's rows (:func:`~sigmapi.experiments.neurons.run.neurons_job`)."""
+    """Every job's rows (:meth:`~sigmapi.experiments.neurons.run.NeuronsExperiment.seed_run`)."""
 
     config: NeuronsConfig
     seeds: tuple[int, ...]
-    jobs: list[dict[str, Any]]
+    jobs: list[Row]
     seconds: float
 
     KEYS = ("methods", "acceptance", "branches: branch_summaries", "settings", "runs", "seconds")
     """The JSON form: :meth:`methods`, :meth:`acceptance`, the branches
     (:meth:`branch_summaries`), the settings, every row (:meth:`runs`) and the time."""
+    FIGURE = "neurons.png"
+    SAVE: ClassVar[Mapping[str, object]] = {"dpi": 110}
 
     @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> NeuronsResult:
+    def from_dict(cls, data: Row) -> NeuronsResult:
         """The result a :meth:`to_dict` wrote (e.g. read back from ``result.json``)."""
         st = dict(data["settings"])
         seeds = tuple(st.pop("seeds"))
-        given: dict[str, Any] = {k: tuple(v) if isinstance(v, list) else v for k, v in st.items()}
+        given: Row = {k: tuple(v) if isinstance(v, list) else v for k, v in st.items()}
         config = NeuronsConfig(**given)
         runs = data["runs"]
         jobs = [
@@ -105,142 +143,93 @@ class NeuronsResult(Result):
         ]
         return cls(config, seeds, jobs, float(data["seconds"]))
 
-    def _rows(self, kind: str) -> list[dict[str, Any]]:
+    def _rows(self, kind: str) -> list[Row]:
         return [r for j in self.jobs for r in j[kind]]
 
-    def methods(self) -> list[dict[str, Any]]:
+    def methods(self) -> list[Row]:
         """One entry per map (and task) and per spiking network, window and peak rate:
         ``name``, ``task``, medians and worst seeds of the metrics, ``ordered``, ``n_seeds``,
         ``synapses`` and ``per_seed``."""
         out = []
-        maps = self._rows("maps")
-        for task in ("1d", "2d"):
-            names = dict.fromkeys(r["name"] for r in maps if r["task"] == task)
-            for name in names:
-                rows = [r for r in maps if r["task"] == task and r["name"] == name]
-                extra = (
-                    "reference_frame_index",
-                    "gain_r2",
-                    "peak_modulation",
-                    "active_synapses",
-                    "mean_synapses",
-                    "branch_z_gap",
-                )
-                entry: dict[str, Any] = {"name": name, "task": task, "kind": "rate"}
-                entry.update(_median_worst(rows, METRICS + extra))
-                entry.update(
-                    synapses=max(r["synapses"] for r in rows),
-                    branches=rows[0].get("branches"),
-                    ordered=int(sum(not r["folded"] for r in rows)),
-                    n_seeds=len(rows),
-                    per_seed={
-                        k: [r.get(k) for r in rows] for k in ("seed", *METRICS, "folded", "seconds")
-                    },
-                )
-                out.append(entry)
-        spk = self._rows("spiking")
-        keys = dict.fromkeys((r["name"], r["peak_rate"]) for r in spk)
-        for name, rate in keys:
-            rows = [r for r in spk if r["name"] == name and r["peak_rate"] == rate]
-            label = name if rate == REFERENCE_RATE else f"{name}-{rate}hz"
-            entry = {
-                "name": label,
-                "task": "1d",
-                "kind": "spiking",
-                "window_ms": rows[0]["window_ms"],
-                "peak_rate": rate,
-                "pool": rows[0].get("pool"),
-            }
-            entry.update(
-                _median_worst(
-                    rows,
-                    (
-                        "agreement",
-                        "view_consistency",
-                        "rate_view_consistency",
-                        "view_within_one",
-                        "z_error",
-                        "order_r2",
-                        "spikes_per_decision",
-                        "map_spikes",
-                    ),
-                )
+        maps = _groups(self._rows("maps"), "task", "name")
+        for (task, name), rows in sorted(maps.items(), key=lambda kv: str(kv[0][0])):
+            out.append(
+                {
+                    "name": name,
+                    "task": task,
+                    "kind": "rate",
+                    **_median_worst(rows, METRICS + RATE_EXTRA),
+                    "synapses": max(r["synapses"] for r in rows),
+                    "branches": rows[0].get("branches"),
+                    "ordered": int(sum(not r["folded"] for r in rows)),
+                    "n_seeds": len(rows),
+                    "per_seed": {k: [r.get(k) for r in rows] for k in RATE_PER_SEED},
+                }
             )
+        for (name, rate), rows in _groups(self._rows("spiking"), "name", "peak_rate").items():
             gap = [r["view_consistency"] - r["rate_view_consistency"] for r in rows]
-            entry.update(
-                vc_gap=float(np.median(gap)),
-                vc_gap_worst=float(min(gap)),
-                n_seeds=len(rows),
-                n_trials=rows[0]["n_trials"],
-                per_seed={
-                    k: [r[k] for r in rows]
-                    for k in ("seed", "agreement", "view_consistency", "rate_view_consistency")
-                },
+            out.append(
+                {
+                    "name": name if rate == REFERENCE_RATE else f"{name}-{rate}hz",
+                    "task": "1d",
+                    "kind": "spiking",
+                    "window_ms": rows[0]["window_ms"],
+                    "peak_rate": rate,
+                    "pool": rows[0].get("pool"),
+                    **_median_worst(rows, SPIKING_METRICS),
+                    "vc_gap": float(np.median(gap)),
+                    "vc_gap_worst": float(min(gap)),
+                    "n_seeds": len(rows),
+                    "n_trials": rows[0]["n_trials"],
+                    "per_seed": {k: [r[k] for r in rows] for k in SPIKING_PER_SEED},
+                }
             )
-            out.append(entry)
         return out
 
-    def acceptance(self) -> dict[str, Any]:
+    def acceptance(self) -> Row:
         """Dendritic: per branch count, seed by seed the view consistency minus the Sigma-Pi
         map's, seeds within :data:`VC_MARGIN` and ordered, and whether it has fewer synapses
         than ``n_x n_y``; ``smallest_branches``: the fewest branches every seed meets it with.
         Spiking: per window up to :data:`MAX_WINDOW_MS` at :data:`REFERENCE_RATE`, the gap to
         the rate map's view consistency and the agreement."""
-        maps = self._rows("maps")
-        out: dict[str, Any] = {"margin": VC_MARGIN, "dendritic": [], "spiking": []}
-        for task in ("1d", "2d"):
-            ref = {r["seed"]: r for r in maps if r["task"] == task and r["name"] == "sigma-pi"}
-            names = dict.fromkeys(
-                r["name"] for r in maps if r["task"] == task and r["name"] != "sigma-pi"
+        maps = _groups(self._rows("maps"), "task", "name")
+        dendritic = []
+        for (task, name), rows in sorted(maps.items(), key=lambda kv: str(kv[0][0])):
+            if name == "sigma-pi":
+                continue
+            ref = {r["seed"]: r for r in maps[task, "sigma-pi"]}
+            gap = [r["view_consistency"] - ref[r["seed"]]["view_consistency"] for r in rows]
+            met = [within_margin(g) and not r["folded"] for g, r in zip(gap, rows, strict=True)]
+            most, theirs = max(r["synapses"] for r in rows), ref[rows[0]["seed"]]["synapses"]
+            dendritic.append(
+                {
+                    "name": name,
+                    "task": task,
+                    "branches": rows[0].get("branches"),
+                    "synapses": most,
+                    "sigma_pi_synapses": theirs,
+                    "fewer_synapses": most < theirs,
+                    "vc_gap_median": float(np.median(gap)),
+                    "vc_gap_worst": float(min(gap)),
+                    "met": int(sum(met)),
+                    "n_seeds": len(rows),
+                    "all_met": bool(all(met)),
+                }
             )
-            for name in names:
-                rows = [r for r in maps if r["task"] == task and r["name"] == name]
-                gap = [r["view_consistency"] - ref[r["seed"]]["view_consistency"] for r in rows]
-                met = [within_margin(g) and not r["folded"] for g, r in zip(gap, rows, strict=True)]
-                most = max(r["synapses"] for r in rows)
-                out["dendritic"].append(
-                    {
-                        "name": name,
-                        "task": task,
-                        "branches": rows[0].get("branches"),
-                        "synapses": most,
-                        "sigma_pi_synapses": ref[rows[0]["seed"]]["synapses"],
-                        "fewer_synapses": most < ref[rows[0]["seed"]]["synapses"],
-                        "vc_gap_median": float(np.median(gap)),
-                        "vc_gap_worst": float(min(gap)),
-                        "met": int(sum(met)),
-                        "n_seeds": len(rows),
-                        "all_met": bool(all(met)),
-                    }
-                )
+        out: Row = {"margin": VC_MARGIN, "dendritic": dendritic, "spiking": []}
         for task in ("1d", "2d"):
-            ok = [
-                c["branches"]
-                for c in out["dendritic"]
-                if c["task"] == task and c["branches"] and c["all_met"]
-            ]
-            out[f"smallest_branches_{task}"] = min(ok) if ok else None
-            cheap = [
-                c["branches"]
-                for c in out["dendritic"]
-                if c["task"] == task and c["branches"] and c["all_met"] and c["fewer_synapses"]
-            ]
-            out[f"smallest_branches_fewer_synapses_{task}"] = min(cheap) if cheap else None
-            sparse = [
-                c["branches"]
-                for c in out["dendritic"]
-                if c["task"] == task
-                and c["name"].startswith(SPARSE)
-                and c["all_met"]
-                and c["fewer_synapses"]
-            ]
-            out[f"smallest_sparse_branches_{task}"] = min(sparse) if sparse else None
+            ok = [c for c in dendritic if c["task"] == task and c["branches"] and c["all_met"]]
+            cheap = [c for c in ok if c["fewer_synapses"]]
+            sparse = [c for c in cheap if c["name"].startswith(SPARSE)]
+            named = {"branches": ok, "branches_fewer_synapses": cheap, "sparse_branches": sparse}
+            for key, these in named.items():
+                out[f"smallest_{key}_{task}"] = min((c["branches"] for c in these), default=None)
         for m in self.methods():
             if (
                 m["kind"] == "spiking"
                 and m["peak_rate"] == REFERENCE_RATE
                 and m["pool"] in (None, self.config.pool)
-                and (m["window_ms"] <= MAX_WINDOW_MS)
+                and m["window_ms"] <= MAX_WINDOW_MS
             ):
                 out["spiking"].append(
                     {
@@ -255,16 +244,16 @@ class NeuronsResult(Result):
                 )
         return out
 
-    def branch_summaries(self) -> list[dict[str, Any]]:
+    def branch_summaries(self) -> list[Row]:
         """What the branches of one dendritic map per seed and task learned: branch by
         branch for the first, the summary for the others."""
         return [_scalars(j["branches"]) if i else j["branches"] for i, j in enumerate(self.jobs)]
 
-    def settings(self) -> dict[str, Any]:
+    def settings(self) -> Row:
         """The config's fields and the seeds."""
         return {**vars(self.config), "seeds": self.seeds}
 
-    def runs(self) -> dict[str, list[dict[str, Any]]]:
+    def runs(self) -> dict[str, list[Row]]:
         """Every map's and spiking network's row per seed."""
         return {"maps": self._rows("maps"), "spiking": self._rows("spiking")}
 
@@ -342,9 +331,8 @@ class NeuronsResult(Result):
         )
         return text
 
-    def figure(self, out_dir: Path) -> list[Path]:
-        """``neurons.png`` and its caption ``neurons.txt``."""
+    def draw(self) -> Figure:
+        """The figure (:func:`~sigmapi.experiments.neurons.figures.neurons_figure`)."""
         from .figures import neurons_figure  # matplotlib: only when drawing
 
-        out = Path(out_dir) / FIGURE
-        return [save_captioned(neurons_figure(self.to_dict()), out, self.caption(), dpi=110)]
+        return neurons_figure(self.to_dict())

@@ -11,35 +11,40 @@ conjunction network at every peak rate, the dendritic one at 100 Hz.
 
 from __future__ import annotations
 
-import dataclasses
-import functools
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
+from numpy.typing import NDArray
 
 from sigmapi.analysis.physiology import record
 from sigmapi.config import SOMConfig
-from sigmapi.executor import Executor, job_memory
-from sigmapi.experiments.base import Experiment, check_seeds, register, run_all
-from sigmapi.experiments.kit.jobs import Tick, counted
+from sigmapi.executor import job_memory
+from sigmapi.experiments.base import register
+from sigmapi.experiments.kit.jobs import SeedRuns, Tick
 from sigmapi.experiments.kit.seeds import SeedPlan
 from sigmapi.metrics import evaluate, evaluation_sets, grid_spacing, winner_metrics
 from sigmapi.model.som import SigmaPiSOM
 from sigmapi.neurons.basis import BasisFunctionMap
 from sigmapi.neurons.dendritic import DendriticMap, branch_summary
 from sigmapi.neurons.sparse import SparseDendriticMap, sparse_summary
-from sigmapi.neurons.spiking import SpikingRun, simulate_conjunction, simulate_dendritic
-from sigmapi.neurons.training import FirstOrderMap
+from sigmapi.neurons.spiking import (
+    SpikingConfig,
+    SpikingRun,
+    simulate_conjunction,
+    simulate_dendritic,
+)
 from sigmapi.progress import Progress
 
 from .config import METRICS, QUICK, REFERENCE_RATE, NeuronsConfig
-from .result import NeuronsResult
+from .result import NeuronsResult, Row
 
-__all__ = ["METRICS", "NEURONS", "NeuronsExperiment", "NeuronsJob", "neurons_job", "run_neurons"]
+__all__ = ["METRICS", "NEURONS", "NeuronsExperiment", "NeuronsJob"]
+
+M = TypeVar("M")
+Array = NDArray[np.float64]
 
 
 PLAN = SeedPlan({"spikes": 11})
@@ -75,7 +80,7 @@ class NeuronsJob:
         return c.som_config if self.task == "1d" else c.som_config_2d
 
 
-def _scored(model: Any, n_test: int, start: float, **extra: Any) -> dict[str, Any]:
+def _scored(model: Any, n_test: int, start: float, **extra: Any) -> Row:
     m = evaluate(model, n_test=n_test)
     row = {k: float(getattr(m, k)) for k in METRICS}
     row.update(folded=bool(m.folded), seconds=time.perf_counter() - start, **extra)
@@ -94,9 +99,9 @@ def _spiking_rows(
     job: NeuronsJob,
     name: str,
     model: Any,
-    simulate: Any,
-    rate_winner: Any,
-    rates: Any,
+    simulate: Callable[[Array, Array, SpikingConfig, np.random.Generator], SpikingRun],
+    rate_winner: Callable[[Array, Array], NDArray[np.int64]],
+    rates: Sequence[tuple[float, int]],
     *,
     dendritic: bool = False,
     tick: Tick | None = None,
@@ -156,71 +161,39 @@ def _step(tick: Tick | None, n: int, phase: str) -> None:
         tick(n, phase)
 
 
-def neurons_job(job: NeuronsJob) -> dict[str, Any]:
-    """Every map of one seed and task: ``{"maps": [rows], "spiking": [rows], "branches":
-    summary of the middle dendritic map's branches}`` (rows: ``name``, ``task``, the
-    :data:`METRICS`, ``folded``, ``synapses``, physiology medians in 1-D)."""
-    desc = f"neurons seed {job.seed} {job.task}"
-    return counted(job.show, job.steps, desc, functools.partial(_neurons_job, job), "step")
-
-
-def _neurons_job(job: NeuronsJob, tick: Tick | None) -> dict[str, Any]:
+def _neurons_job(job: NeuronsJob, tick: Tick | None) -> Row:
     c, cfg = job.config, job.som_config
     two_d = job.task == "2d"
     n_x, n_y = int(np.prod(cfg.x_shape)), int(np.prod(cfg.y_shape))
-    maps: list[tuple[str, Any, dict[str, Any]]] = []
-    start = time.perf_counter()
-    _step(tick, 0, "train sigma-pi")
-    sp = SigmaPiSOM(cfg, seed=job.seed).fit()
-    _step(tick, 1, "train sigma-pi")
-    maps.append(("sigma-pi", sp, {"synapses": n_x * n_y, "start": start}))
-    training = c.training(two_d)
+    training, stride = c.training(two_d), c.basis_stride_2d if two_d else 1
+    maps: list[tuple[str, Any, Row]] = []  # name, model, its row's own keys
+
+    def train(name: str, fit: Callable[..., M], *args: Any, **kwargs: Any) -> M:
+        start = time.perf_counter()  # a row's seconds: from its training to its scores
+        _step(tick, 0, f"train {name}")
+        model = fit(*args, **kwargs)
+        _step(tick, 1, f"train {name}")
+        maps.append((name, model, {"start": start}))
+        return model
+
+    sp = train("sigma-pi", SigmaPiSOM(cfg, seed=job.seed).fit)
+    maps[-1][2]["synapses"] = n_x * n_y
     dendritic: dict[int, DendriticMap] = {}
     for d in c.branches_2d if two_d else c.branches:
-        start = time.perf_counter()
-        _step(tick, 0, f"train dendritic-D{d}")
-        dm = DendriticMap(cfg, d).fit(training, seed=job.seed)
-        _step(tick, 1, f"train dendritic-D{d}")
-        dendritic[d] = dm
-        maps.append(
-            (
-                f"dendritic-D{d}",
-                dm,
-                {
-                    "synapses": dm.synapses,
-                    "branches": d,
-                    "active_synapses": dm.active_synapses(),
-                    "start": start,
-                },
-            )
+        dm = dendritic[d] = train(
+            f"dendritic-D{d}", DendriticMap(cfg, d).fit, training, seed=job.seed
         )
-    stride = c.basis_stride_2d if two_d else 1
+        maps[-1][2].update(synapses=dm.synapses, branches=d, active_synapses=dm.active_synapses())
     sparse: dict[int, SparseDendriticMap] = {}
     for d in c.sparse_branches_2d if two_d else c.sparse_branches:
-        start = time.perf_counter()
-        _step(tick, 0, f"train dendritic-sparse-D{d}")
-        sm = SparseDendriticMap(cfg, d, stride=stride).fit(training, seed=job.seed)
-        _step(tick, 1, f"train dendritic-sparse-D{d}")
-        sparse[d] = sm
-        info = sparse_summary(sm, _z_table(sm, c.n_test))
-        maps.append(
-            (
-                f"dendritic-sparse-D{d}",
-                sm,
-                {
-                    "synapses": sm.synapses,
-                    "mean_synapses": sm.mean_synapses,
-                    "branches": d,
-                    "branch_z_gap": info["z_gap_median"],
-                    "start": start,
-                },
-            )
+        fit = SparseDendriticMap(cfg, d, stride=stride).fit
+        sm = sparse[d] = train(f"dendritic-sparse-D{d}", fit, training, seed=job.seed)
+        gap = sparse_summary(sm, _z_table(sm, c.n_test))["z_gap_median"]
+        maps[-1][2].update(
+            synapses=sm.synapses, mean_synapses=sm.mean_synapses, branches=d, branch_z_gap=gap
         )
-    start = time.perf_counter()
-    _step(tick, 0, "train basis-function")
-    bf = BasisFunctionMap(cfg, stride=stride).fit(training, seed=job.seed)
-    _step(tick, 1, "train basis-function")
-    maps.append(("basis-function", bf, {"synapses": bf.synapses, "start": start}))
+    basis = BasisFunctionMap(cfg, stride=stride).fit
+    maps[-1][2]["synapses"] = train("basis-function", basis, training, seed=job.seed).synapses
     rows = []
     for name, model, extra in maps:
         begin = extra.pop("start")
@@ -238,108 +211,72 @@ def _neurons_job(job: NeuronsJob, tick: Tick | None) -> dict[str, Any]:
     mid = sorted(dendritic)[len(dendritic) // 2]
     summary = branch_summary(dendritic[mid], _z_table(dendritic[mid], c.n_test))
     summary.update(branches=mid, task=job.task, seed=job.seed)
-    spiking: list[dict[str, object]] = []
-    if not two_d:
-        weights = sp.weights_
-
-        def conj(x: Any, y: Any, cfg_s: Any, rng: Any) -> SpikingRun:
-            return simulate_conjunction(weights, x, y, cfg_s, rng)
-
-        ref = REFERENCE_RATE if REFERENCE_RATE in c.peak_rates else c.peak_rates[0]
-        runs = [(rate, c.pool) for rate in c.peak_rates]
-        runs += [(ref, p) for p in c.pools_compared if p != c.pool]
-        spiking += _spiking_rows(job, "spiking-conjunction", sp, conj, sp.winner, runs, tick=tick)
-        if c.spiking_branches:
-            dm = dendritic.get(c.spiking_branches) or DendriticMap(cfg, c.spiking_branches).fit(
-                training, seed=job.seed
-            )
-
-            def dend(x: Any, y: Any, cfg_s: Any, rng: Any) -> SpikingRun:
-                return simulate_dendritic(dm.u_, dm.v_, dm.gain, dm.threshold, x, y, cfg_s, rng)
-
-            dend_rows = _spiking_rows(
-                job,
-                "spiking-dendritic",
-                dm,
-                dend,
-                dm.winner,
-                [(ref, c.pool)],
-                dendritic=True,
-                tick=tick,
-            )
-            for r in dend_rows:
-                r["branches"] = c.spiking_branches
-            spiking += dend_rows
-        if c.spiking_sparse_branches:
-            sm = sparse.get(c.spiking_sparse_branches) or SparseDendriticMap(
-                cfg, c.spiking_sparse_branches
-            ).fit(training, seed=job.seed)
-            branch_weights = (sm.c_ * sm.mask_).reshape(sm.n_units, n_x, n_y)
-
-            def sparse_net(x: Any, y: Any, cfg_s: Any, rng: Any) -> SpikingRun:
-                return simulate_conjunction(branch_weights, x, y, cfg_s, rng)
-
-            sparse_rows = _spiking_rows(
-                job,
-                "spiking-sparse-dendritic",
-                sm,
-                sparse_net,
-                sm.winner,
-                [(ref, c.pool)],
-                tick=tick,
-            )
-            for r in sparse_rows:
-                r["branches"] = c.spiking_sparse_branches
-            spiking += sparse_rows
+    spiking = [] if two_d else _spiking(job, sp, dendritic, sparse, tick)
     for r in spiking:
         r.update(task=job.task, seed=job.seed)
     return {"maps": rows, "spiking": spiking, "branches": summary}
 
 
-def is_first_order(model: Any) -> bool:
-    """Whether ``model`` is a map of this package's first-order neurons."""
-    return isinstance(model, FirstOrderMap)
+def _spiking(
+    job: NeuronsJob,
+    sp: SigmaPiSOM,
+    dendritic: dict[int, DendriticMap],
+    sparse: dict[int, SparseDendriticMap],
+    tick: Tick | None,
+) -> list[dict[str, object]]:
+    """The rows of the spiking deployments of a 1-D job: the conjunction network at every
+    peak rate (and the compared pools at the reference rate), the dendritic and the sparse
+    dendritic maps at the reference rate (trained here where the job has not)."""
+    c, cfg = job.config, job.som_config
+    training = c.training(False)
+    ref = REFERENCE_RATE if REFERENCE_RATE in c.peak_rates else c.peak_rates[0]
+    runs = [(rate, c.pool) for rate in c.peak_rates]
+    runs += [(ref, p) for p in c.pools_compared if p != c.pool]
 
+    def conj(x: Array, y: Array, cfg_s: SpikingConfig, rng: np.random.Generator) -> SpikingRun:
+        return simulate_conjunction(sp.weights_, x, y, cfg_s, rng)
 
-def run_neurons(
-    config: NeuronsConfig,
-    seeds: Sequence[int],
-    executor: Executor | None = None,
-    progress: Progress | None = None,
-) -> NeuronsResult:
-    """Every job of ``config`` on ``seeds`` (2-D on the first ``seeds_2d``); the result."""
-    seeds = check_seeds(seeds)
-    start = time.perf_counter()
-    jobs = [(f"seed {s} 1d", NeuronsJob(s, "1d", config)) for s in seeds]
-    if config.preset_2d:
-        jobs += [(f"seed {s} 2d", NeuronsJob(s, "2d", config)) for s in seeds[: config.seeds_2d]]
-    som = config.som_config_2d if config.preset_2d else config.som_config
-    online = [(config.som_config, config.pairs)]  # the online phase's pairs, as codes
-    online += [(config.som_config_2d, config.pairs_2d)] if config.preset_2d else []
-    codes = max(n * (int(np.prod(c.x_shape)) + int(np.prod(c.y_shape))) * 8 for c, n in online)
-    per_job = job_memory(som, config.n_test) + config.spiking_cost()[1] + codes
+    rows = _spiking_rows(job, "spiking-conjunction", sp, conj, sp.winner, runs, tick=tick)
+    if c.spiking_branches:
+        d = c.spiking_branches
+        dm = dendritic.get(d) or DendriticMap(cfg, d).fit(training, seed=job.seed)
 
-    def describe(key: str, value: dict[str, Any]) -> str:
-        return f"{key}: " + ", ".join(
-            f"{r['name']} {r['view_consistency']:.3f}" for r in value["maps"]
+        def dend(x: Array, y: Array, cfg_s: SpikingConfig, rng: np.random.Generator) -> SpikingRun:
+            return simulate_dendritic(dm.u_, dm.v_, dm.gain, dm.threshold, x, y, cfg_s, rng)
+
+        got = _spiking_rows(
+            job,
+            "spiking-dendritic",
+            dm,
+            dend,
+            dm.winner,
+            [(ref, c.pool)],
+            dendritic=True,
+            tick=tick,
         )
+        rows += [{**r, "branches": d} for r in got]
+    if c.spiking_sparse_branches:
+        d = c.spiking_sparse_branches
+        sm = sparse.get(d) or SparseDendriticMap(cfg, d).fit(training, seed=job.seed)
+        n_xy = (int(np.prod(cfg.x_shape)), int(np.prod(cfg.y_shape)))
+        branch_weights = (sm.c_ * sm.mask_).reshape(sm.n_units, *n_xy)
 
-    done = run_all(
-        neurons_job,
-        jobs,
-        executor=executor,
-        per_job=per_job,
-        progress=progress,
-        desc="neurons",
-        describe=describe,
-        verbose=lambda job: dataclasses.replace(job, show=progress),
-    )
-    return NeuronsResult(config, seeds, [done[k] for k, _ in jobs], time.perf_counter() - start)
+        def sparse_net(
+            x: Array, y: Array, cfg_s: SpikingConfig, rng: np.random.Generator
+        ) -> SpikingRun:
+            return simulate_conjunction(branch_weights, x, y, cfg_s, rng)
+
+        got = _spiking_rows(
+            job, "spiking-sparse-dendritic", sm, sparse_net, sm.winner, [(ref, c.pool)], tick=tick
+        )
+        rows += [{**r, "branches": d} for r in got]
+    return rows
 
 
-class NeuronsExperiment(Experiment[NeuronsConfig]):
+class NeuronsExperiment(SeedRuns[NeuronsConfig]):
     """Dendritic neurons with first-order synapses, a basis-function network and spiking
-    networks against the Sigma-Pi map, on the same seeds (the chapter's section 7.1)."""
+    networks against the Sigma-Pi map, on the same seeds (the chapter's section 7.1): one job
+    per seed and task (2-D on the first ``seeds_2d`` seeds)."""
 
     name = "neurons"
     summary = "the transformation in dendritic, basis-function and spiking neurons"
@@ -349,17 +286,48 @@ class NeuronsExperiment(Experiment[NeuronsConfig]):
     quick_seeds = (100,)
     quick_time = "about 1-2.5 min on two busy cores"
     default_out = "neurons"
+    unit = "step"
 
-    def run(
-        self,
-        config: NeuronsConfig,
-        *,
-        seeds: Sequence[int],
-        out: Path | None = None,
-        executor: Executor | None = None,
-        progress: Progress | None = None,
+    def check(self, config: NeuronsConfig) -> int:
+        """One job's memory: the largest map's, the spiking runs' and the online phase's
+        pairs, as codes."""
+        som = config.som_config_2d if config.preset_2d else config.som_config
+        online = [(config.som_config, config.pairs)]
+        online += [(config.som_config_2d, config.pairs_2d)] if config.preset_2d else []
+        codes = max(n * (int(np.prod(c.x_shape)) + int(np.prod(c.y_shape))) * 8 for c, n in online)
+        return job_memory(som, config.n_test) + config.spiking_cost()[1] + codes
+
+    def jobs(
+        self, config: NeuronsConfig, seeds: tuple[int, ...], shared: object
+    ) -> list[tuple[str, NeuronsJob]]:
+        jobs = [(f"seed {s} 1d", NeuronsJob(s, "1d", config)) for s in seeds]
+        if config.preset_2d:
+            jobs += [
+                (f"seed {s} 2d", NeuronsJob(s, "2d", config)) for s in seeds[: config.seeds_2d]
+            ]
+        return jobs
+
+    def steps(self, job: NeuronsJob) -> int:
+        return job.steps
+
+    def desc(self, job: NeuronsJob) -> str:
+        return f"neurons seed {job.seed} {job.task}"
+
+    def describe(self, key: str, value: Row) -> str:
+        return f"{key}: " + ", ".join(
+            f"{r['name']} {r['view_consistency']:.3f}" for r in value["maps"]
+        )
+
+    def seed_run(self, job: NeuronsJob, tick: Tick | None) -> Row:
+        """Every map of one seed and task: ``{"maps": [rows], "spiking": [rows], "branches":
+        summary of the middle dendritic map's branches}`` (rows: ``name``, ``task``, the
+        :data:`METRICS`, ``folded``, ``synapses``, physiology medians in 1-D)."""
+        return _neurons_job(job, tick)
+
+    def collect(
+        self, config: NeuronsConfig, seeds: tuple[int, ...], values: list[Any]
     ) -> NeuronsResult:
-        return run_neurons(config, seeds, executor, progress)
+        return NeuronsResult(config, seeds, values, 0.0)
 
 
 NEURONS = register(NeuronsExperiment())

@@ -1,18 +1,8 @@
-"""The settings of one reach comparison, in four frozen parts: the world, the map, the learner
-and the run.
-
-- :class:`~sigmapi.envs.GazeReachConfig` (``env``): the gaze-and-reach world and its time limit;
-- :class:`MapConfig` (``map``): the Sigma-Pi map learned in the world, and how the learner
-  reads it;
-- :class:`~sigmapi.agents.ActorCriticConfig` (``agent``): the actor-critic;
-- :class:`ReachRunConfig` (``run``): which states are compared, for how many episodes.
-
-Each part checks its own fields when it is built and builds nothing else. :class:`ReachConfig`
-holds one of each; field names are unique across the parts, so
-``ReachConfig().replace(grid=7, episodes=150)`` finds each field's part. The seeds are not
-settings: they are given to the run (:meth:`~sigmapi.experiments.reach.run.ReachExperiment.run`).
-The ``sigmapi reach`` options are generated from the parts' fields (:mod:`sigmapi.cli.experiment`),
-so a field added here is a command-line option too.
+"""The settings of one reach comparison, in four frozen parts (:class:`ReachConfig`): the world
+(:class:`~sigmapi.envs.GazeReachConfig`), the map (:class:`MapConfig`), the learner
+(:class:`~sigmapi.agents.ActorCriticConfig`) and the run (:class:`ReachRunConfig`). Each part
+checks its own fields; the seeds are not settings (they are given to the run), and the
+``sigmapi reach`` options are the parts' fields (:mod:`sigmapi.cli.experiment`).
 """
 
 from __future__ import annotations
@@ -20,20 +10,25 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
+import numpy as np
+
 from sigmapi import _validate
 from sigmapi._outputs import INPUT
 from sigmapi.agents import ActorCriticConfig
 from sigmapi.codes import PopulationCode
 from sigmapi.config import BACKEND_NAMES, SOMConfig, list_presets
-from sigmapi.envs import FEATURES, STATES, GazeReachConfig
+from sigmapi.envs import FEATURES, STATES, GazeReachConfig, learn_map_in_env
 from sigmapi.errors import ConfigError
 from sigmapi.experiments.kit.episodes import check_episode_run
+from sigmapi.experiments.kit.jobs import Tick
 from sigmapi.experiments.kit.maps import MapSpec
 from sigmapi.experiments.kit.parts import (
     Parts,
     check_part_types,
 )
+from sigmapi.experiments.kit.results import JSON
 from sigmapi.experiments.kit.worlds import GAZE_REACH, World
+from sigmapi.model.som import SigmaPiSOM
 
 __all__ = [
     "SMALL_PRESET",
@@ -46,7 +41,7 @@ __all__ = [
 ]
 
 
-def default_map_shape(dim: Any) -> tuple[int, ...]:
+def default_map_shape(dim: object) -> tuple[int, ...]:
     """The map of a ``dim``-D task when none is given: 15x15 in 2-D (paper-2d), 12 units in
     1-D."""
     return (15, 15) if dim == 2 else (12,)
@@ -108,7 +103,18 @@ class MapConfig:
             raise _validate.fail("model_path", "a file name or None", self.model_path)
         _validate.choice("features", self.features, FEATURES)
 
-    def in_world(self, world: World, settings: Any, seed: int) -> SOMConfig:
+    def learn(
+        self, world: World, settings: object, rng: np.random.Generator, tick: Tick | None = None
+    ) -> SigmaPiSOM:
+        """The map learned in ``world`` as ``settings`` make it (from its saccade views,
+        :func:`~sigmapi.envs.learn_map_in_env`), the views' and the weights' seeds drawn from
+        ``rng``; ``tick`` is told that the map learns."""
+        env_seed, som_seed = (int(v) for v in rng.integers(0, 2**31 - 1, size=2))
+        som = self.in_world(world, settings, som_seed)
+        told = None if tick is None else lambda model: tick(0, "learning the map")
+        return learn_map_in_env(world.make_env(settings), som, seed=env_seed, callback=told)
+
+    def in_world(self, world: World, settings: object, seed: int) -> SOMConfig:
         """The map's config on the codes of ``world`` as ``settings`` make it
         (:meth:`som_config`)."""
         source = world.source(settings)
@@ -191,7 +197,7 @@ class ReachConfig(Parts):
     def __post_init__(self) -> None:
         check_parts(self, self.PARTS)
 
-    def replace(self, **changes: Any) -> ReachConfig:
+    def replace(self, **changes: object) -> ReachConfig:
         """A copy with ``changes``, fields of any part by name (``grid=7, episodes=150``)."""
         if "dim" in changes and "map_shape" not in changes:  # the default map follows the task
             changes = {**changes, "map_shape": default_map_shape(changes["dim"])}
@@ -208,7 +214,7 @@ SMALL_PRESET = "small-2d"
 width 0.5, a 7x7 map on 10,000 views with the small-map schedule (:func:`preset_setting`)."""
 
 
-def preset_setting(name: str) -> dict[str, Any]:
+def preset_setting(name: str) -> JSON:
     """The fields of a reach config that the 2-D preset ``name`` fixes: the world's grid and
     code width (the preset's square ``x_shape`` and ``code_width``), the map's shape and
     length, and the preset itself. ``ReachConfig().replace(**preset_setting("small-2d"))``

@@ -16,7 +16,7 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from numpy.typing import NDArray
 
-from sigmapi.experiments.kit.figures import coinciding, legend_once, plot_apart
+from sigmapi.experiments.kit.figures import axes, coinciding, legend_once, plot_apart
 from sigmapi.experiments.reach.config import ReachConfig
 
 __all__ = [
@@ -66,12 +66,6 @@ def coinciding_curves(result: ReachData) -> dict[str, dict[str, str]]:
     }
 
 
-def _ax(ax: Axes | None) -> Axes:
-    if ax is None:
-        ax = Figure(figsize=(5, 3.5), layout="constrained").subplots()
-    return ax
-
-
 def plot_reach_curves(result: ReachData, metric: str = "success", ax: Axes | None = None) -> Axes:
     """Learning curves per state, with a legend: ``metric`` "success" (rate per block, mean
     over seeds, band = 1 sd over seeds; a learner that had not levelled off at the last
@@ -80,7 +74,7 @@ def plot_reach_curves(result: ReachData, metric: str = "success", ax: Axes | Non
     the quartiles over seeds)."""
     if metric not in ("success", "steps"):
         raise ValueError(f"metric must be 'success' or 'steps', got {metric!r}")
-    ax = _ax(ax)
+    ax = axes(ax)
     rising, rise = result.still_rising(), result.final_rise()
     curves = result.curves()
     labels, x, y = {}, {}, {}
@@ -117,7 +111,7 @@ def plot_reach_curves(result: ReachData, metric: str = "success", ax: Axes | Non
         fontsize=7,
         loc="upper center",
         bbox_to_anchor=(0.5, -0.2),
-        ncol=3,
+        ncol=2,
     )
     return ax
 
@@ -132,7 +126,7 @@ def plot_value_function(
     """
     if state not in result.values:
         raise ValueError(f"no value function for state {state!r}; have {sorted(result.values)}")
-    ax = _ax(ax)
+    ax = axes(ax)
     v, z = result.values[state], result.z_axis
     radius = result.config.env.goal_radius
     lo, hi = 0.5 - radius, 0.5 + radius

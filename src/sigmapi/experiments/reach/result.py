@@ -4,20 +4,19 @@ them, its JSON form, its table and its figure."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
-from sigmapi._outputs import save_captioned, save_figure
 from sigmapi.experiments.kit.episodes import final_rates, success_curve
 from sigmapi.experiments.kit.results import Result
 from sigmapi.experiments.reach.config import ReachConfig
 
-__all__ = ["FIGURE", "ReachResult"]
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
-FIGURE = "reach.png"
-"""The file name :meth:`ReachResult.figure` writes in its folder."""
+__all__ = ["ReachResult"]
 
 
 @dataclass
@@ -64,6 +63,7 @@ class ReachResult(Result):
     COMPUTED = ("success", "success_per_seed", "lost", "timed_out", "ratio_map_to_true_z", "curves")
     LATER = ("final_rise", "final_rise_se", "levelled_off")
     SEEDS_IN_CONFIG = True
+    FIGURE = "reach.png"
 
     def final_success(self) -> dict[str, float]:
         """Success rate over the last ``final_episodes`` episodes, mean over seeds."""
@@ -202,14 +202,11 @@ class ReachResult(Result):
             "their final rates are the episode budget's as much as the state's (--episodes)"
         )
 
-    def save_figure(self, path: str | Path, dpi: int = 120) -> Path:
-        """Draw the comparison (:func:`~sigmapi.experiments.reach.figures.reach_figure`) to
-        ``path`` (.png, .pdf or .svg) and return it."""
+    def draw(self) -> Figure:
+        """The comparison (:func:`~sigmapi.experiments.reach.figures.reach_figure`)."""
         from sigmapi.experiments.reach.figures import reach_figure  # matplotlib: only to draw
 
-        out = Path(path)
-        save_figure(reach_figure(self), out, dpi=dpi, facecolor="white")
-        return out
+        return reach_figure(self)
 
     def caption(self) -> str:
         """The figure's caption, computed from the result."""
@@ -236,11 +233,3 @@ class ReachResult(Result):
                     "of decreasing size, so both show)."
                 )
         return text
-
-    def figure(self, out_dir: str | Path) -> list[Path]:
-        """Write the figure (:data:`FIGURE`) and its caption beside it (``reach.txt``) into
-        ``out_dir``; returns the figure's path."""
-        from sigmapi.experiments.reach.figures import reach_figure  # matplotlib: only to draw
-
-        out = Path(out_dir) / FIGURE
-        return [save_captioned(reach_figure(self), out, self.caption(), dpi=120, facecolor="white")]

@@ -19,11 +19,7 @@ Examples
 
 from __future__ import annotations
 
-import dataclasses
 import functools
-import time
-from collections.abc import Iterable, Sequence
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -37,26 +33,23 @@ from sigmapi.envs import (
     Features,
     PlacedViewSource,
     TrueZObservation,
-    learn_map_in_env,
     make_state_env,
 )
 from sigmapi.errors import ConfigError
-from sigmapi.executor import Executor, job_memory
-from sigmapi.experiments.base import Experiment, check_seeds, register, run_all
-from sigmapi.experiments.kit.jobs import SeedEpisodes, Tick, counted, seed_episodes
+from sigmapi.executor import job_memory
+from sigmapi.experiments.base import register
+from sigmapi.experiments.kit.jobs import SeedEpisodes, SeedJob, SeedRuns, Tick, seed_episodes
 from sigmapi.experiments.kit.seeds import SeedPlan
 from sigmapi.experiments.kit.worlds import GAZE_REACH, World
 from sigmapi.experiments.reach.config import SMALL_PRESET, ReachConfig, preset_setting
 from sigmapi.experiments.reach.result import ReachResult
 from sigmapi.metrics import evaluate
 from sigmapi.model.som import SigmaPiSOM, load_model
-from sigmapi.progress import Progress
 
 __all__ = [
     "PLAN",
     "REACH",
     "ReachExperiment",
-    "run_with_progress",
     "value_over_z",
 ]
 
@@ -105,94 +98,7 @@ PLAN = SeedPlan({"map": 0, "starts": 1, "agent": 2}, root=0)
 """The streams of a seed (:class:`~sigmapi.experiments.kit.seeds.SeedPlan`)."""
 
 
-def _map_for_seed(
-    config: ReachConfig, world: World, seed: int, progress: Tick | None = None
-) -> SigmaPiSOM:
-    if config.map.model_path is not None:
-        return load_model(Path(config.map.model_path))
-    r = PLAN.rng(seed, "map")
-    env_seed, som_seed = (int(v) for v in r.integers(0, 2**31 - 1, size=2))
-
-    def callback(model: SigmaPiSOM) -> None:
-        if progress is not None:
-            progress(0, "learning the map")
-
-    env, som = world.make_env(config.env), config.som_config(som_seed, world)
-    return learn_map_in_env(env, som, seed=env_seed, callback=callback)
-
-
-@dataclass(frozen=True)
-class _SeedJob:
-    experiment: ReachExperiment
-    config: Any
-    first: bool
-    seed: int
-    shared: Any = None
-    """What every seed's job reads and the run made once (:meth:`ReachExperiment.prepare`)."""
-    show: Progress | None = None
-    """A bar of this seed's episodes (set only where the job runs in the caller's process)."""
-
-
-def _run_seed(job: _SeedJob) -> SeedEpisodes:
-    """Everything of one seed: its map, then every state's learner on the same episodes."""
-    total = len(job.config.run.states) * job.config.run.episodes
-    desc = f"{job.experiment.name} seed {job.seed}"
-    return counted(job.show, total, desc, lambda tick: _seed_runs(job, tick))
-
-
-def _seed_runs(job: _SeedJob, tick: Tick | None) -> SeedEpisodes:
-    """The protocol (:func:`~sigmapi.experiments.kit.jobs.seed_episodes`) with the variant's
-    map, state worlds and what it keeps of the first seed's learners."""
-    exp, cfg = job.experiment, job.config
-    got = seed_episodes(
-        job.seed,
-        cfg.run.states,
-        functools.partial(exp.make_map, cfg, job.shared),
-        functools.partial(exp.state_env, cfg),
-        cfg.agent,
-        exp.plan,
-        cfg.run.episodes,
-        tick=tick,
-        info_keys=exp.info_keys,
-        keep=functools.partial(exp.keep, cfg) if job.first else None,
-    )
-    if not (job.first and exp.returns_map):
-        got.model = None  # its scores travel back, not its weights
-    return got
-
-
-def _map_quality(model: SigmaPiSOM) -> dict[str, float | int]:
-    """The project's map metrics (docs/algorithm.md) on a small test set, for the record."""
-    return evaluate(model, n_test=2000).to_dict()
-
-
-def _check_memory(config: ReachConfig, world: World) -> None:
-    """Refuse a map (and its views) that this machine cannot hold, before anything is built."""
-    run = config.run  # the start states and, per seed and state, three (episodes,) arrays
-    _memory.check_count("episodes", run.episodes, 8 + 17 * len(run.states), "e.g. --episodes 600")
-    if config.map.model_path is not None or "map" not in config.run.states:
-        return
-    som = SigmaPiSOM(config.som_config(0, world))
-    n_x, n_y = int(np.prod(som.x_shape)), int(np.prod(som.y_shape))
-    _memory.check(
-        som.memory_estimate() + config.map.iterations * 2 * (n_x + n_y) * 8,
-        f"the reach experiment's map ({'x'.join(map(str, som.map_shape))} units on "
-        f"{n_x} x {n_y} inputs, {config.map.iterations} views)",
-        "use a smaller grid, map_shape or iterations",
-    )
-
-
-def _check_model(config: ReachConfig) -> None:
-    """A model file given for the map must exist (checked before any work starts)."""
-    path = config.map.model_path
-    if path is not None and "map" in config.run.states and not Path(path).is_file():
-        raise ConfigError(
-            f"model_path {path!r} does not exist; train one with `sigmapi train` or leave "
-            "model_path out to learn a map per seed"
-        )
-
-
-class ReachExperiment(Experiment[Any]):
+class ReachExperiment(SeedRuns[Any]):
     """Gaze-and-reach task: the same actor-critic on the learned Sigma-Pi map, the retina
     code, retina and gaze codes, and the true z (the upper bound), over seeds.
 
@@ -202,7 +108,7 @@ class ReachExperiment(Experiment[Any]):
     variant with a protocol of its own (the robot: its map learned from recorded view pairs
     and scored on the true z, its own result) is a subclass that overrides the hooks
     :meth:`check`, :meth:`prepare`, :meth:`make_map`, :meth:`state_env`, :meth:`keep` and
-    :meth:`collect`; :meth:`run` and the per-seed job are written once, here.
+    :meth:`collect`; the run is :class:`~sigmapi.experiments.kit.jobs.SeedRuns`.
     """
 
     name = "reach"
@@ -221,7 +127,11 @@ class ReachExperiment(Experiment[Any]):
     returns_map = False
     """Whether the first seed's map travels back from its job (for the result's figures)."""
 
-    def __init__(self, world: World = GAZE_REACH) -> None:
+    world: World = GAZE_REACH
+    """The world it runs in (``ReachExperiment(world)``: another)."""
+
+    def __init__(self, world: World | None = None) -> None:
+        world = world or self.world
         env = self.config_type.PARTS["env"]
         if not issubclass(world.settings, env):
             raise _validate.fail(
@@ -235,21 +145,63 @@ class ReachExperiment(Experiment[Any]):
     def check(self, config: Any) -> int:
         """Refuse a run that cannot go (a missing model file, a map this machine cannot
         hold) before any work; returns the peak bytes of one seed's job."""
-        _check_model(config)
-        _check_memory(config, self.world)
+        run, path = config.run, config.map.model_path
+        if path is not None and "map" in run.states and not Path(path).is_file():
+            raise ConfigError(
+                f"model_path {path!r} does not exist; train one with `sigmapi train` or leave "
+                "model_path out to learn a map per seed"
+            )
+        # the start states and, per seed and state, three (episodes,) arrays
+        _memory.check_count(
+            "episodes", run.episodes, 8 + 17 * len(run.states), "e.g. --episodes 600"
+        )
+        if path is None and "map" in run.states:  # the map and its views
+            som = SigmaPiSOM(config.som_config(0, self.world))
+            n_x, n_y = int(np.prod(som.x_shape)), int(np.prod(som.y_shape))
+            _memory.check(
+                som.memory_estimate() + config.map.iterations * 2 * (n_x + n_y) * 8,
+                f"the reach experiment's map ({'x'.join(map(str, som.map_shape))} units on "
+                f"{n_x} x {n_y} inputs, {config.map.iterations} views)",
+                "use a smaller grid, map_shape or iterations",
+            )
         return job_memory(config.som_config(0, self.world), n_test=2000)
 
-    def prepare(self, config: Any, progress: Progress | None) -> Any:
-        """What every seed's job reads and the run makes once (here: nothing)."""
-        return None
+    def steps(self, job: SeedJob) -> int:
+        """A seed's episodes: every state's."""
+        return len(job.config.run.states) * job.config.run.episodes
+
+    def seed_run(self, job: SeedJob, tick: Tick | None) -> SeedEpisodes:
+        """Everything of one seed: its map, then every state's learner on the same episodes
+        (:func:`~sigmapi.experiments.kit.jobs.seed_episodes`) with the variant's map, state
+        worlds and what it keeps of the first seed's learners."""
+        cfg = job.config
+        got = seed_episodes(
+            job.seed,
+            cfg.run.states,
+            functools.partial(self.make_map, cfg, job.shared),
+            functools.partial(self.state_env, cfg),
+            cfg.agent,
+            self.plan,
+            cfg.run.episodes,
+            tick=tick,
+            info_keys=self.info_keys,
+            keep=functools.partial(self.keep, cfg) if job.first else None,
+        )
+        if not (job.first and self.returns_map):
+            got.model = None  # its scores travel back, not its weights
+        return got
 
     def make_map(
         self, config: Any, shared: Any, seed: int, tick: Tick | None
     ) -> tuple[SigmaPiSOM, dict[str, object]]:
-        """Seed ``seed``'s map (learned in the world, or the config's model file) and its
-        scores for the record (``extras``)."""
-        model = _map_for_seed(config, self.world, seed, tick)
-        return model, {"map_metrics": _map_quality(model)}
+        """Seed ``seed``'s map (learned in the world, or the config's model file) and, for the
+        record, the project's map metrics (docs/algorithm.md) on a small test set."""
+        path, rng = config.map.model_path, self.plan.rng(seed, "map")
+        if path is None:
+            model = config.map.learn(self.world, config.env, rng, tick)
+        else:
+            model = load_model(Path(path))
+        return model, {"map_metrics": evaluate(model, n_test=2000).to_dict()}
 
     def state_env(self, config: Any, state: str, model: SigmaPiSOM | None) -> gym.Env[Any, Any]:
         """The world as ``state`` sees it (:func:`~sigmapi.envs.make_state_env`)."""
@@ -279,60 +231,7 @@ class ReachExperiment(Experiment[Any]):
                 res.z_axis = axis
         return res
 
-    def run(
-        self,
-        config: Any,
-        *,
-        seeds: Sequence[int],
-        out: Path | None = None,
-        executor: Executor | None = None,
-        progress: Progress | None = None,
-    ) -> Any:
-        """Train the actor-critic on every state of ``config.run.states`` for every seed.
-
-        Each seed is one job of ``executor`` (the result does not depend on where it runs);
-        run one by one in this process, a seed shows a bar of its episodes. ``out`` is not
-        used: the run writes nothing while it runs. Returns the variant's result (here a
-        :class:`~sigmapi.experiments.reach.result.ReachResult`).
-        """
-        if not isinstance(config, self.config_type):
-            raise _validate.fail("config", f"a {self.config_type.__name__}", config)
-        seeds = check_seeds(seeds)
-        per_job = self.check(config)
-        t0 = time.perf_counter()
-        shared = self.prepare(config, progress)
-        jobs = [(str(s), _SeedJob(self, config, i == 0, s, shared)) for i, s in enumerate(seeds)]
-        values = run_all(
-            _run_seed,
-            jobs,
-            executor=executor,
-            per_job=per_job,
-            progress=progress,
-            desc=self.name,
-            verbose=lambda job: dataclasses.replace(job, show=progress),
-            describe=lambda key, _: f"seed {key}",
-        )
-        res = self.collect(config, seeds, [values[key] for key, _ in jobs])
-        res.seconds = time.perf_counter() - t0
-        return res
-
 
 REACH = ReachExperiment()
 register(REACH)
 """The reach experiment."""
-
-
-def run_with_progress(
-    config: ReachConfig,
-    seeds: Iterable[int],
-    disable: bool | None = None,
-    workers: int | None = None,
-) -> ReachResult:
-    """:meth:`REACH.run <ReachExperiment.run>` with progress on stderr and the seeds as jobs
-    of a local process pool (``workers=None``: one per core, as memory allows)."""
-    return REACH.run(
-        config,
-        seeds=list(seeds),
-        executor=Executor(workers=workers),
-        progress=Progress(disable=disable),
-    )

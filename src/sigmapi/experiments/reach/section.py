@@ -13,9 +13,12 @@ from __future__ import annotations
 
 import html
 
+from sigmapi._outputs import save_figure
+from sigmapi.executor import Executor
 from sigmapi.experiments.kit.report import ReportContext, Section
 from sigmapi.experiments.reach.config import ReachConfig
-from sigmapi.experiments.reach.run import REACH, run_with_progress
+from sigmapi.experiments.reach.run import REACH
+from sigmapi.progress import Progress
 
 __all__ = ["reach_section"]
 
@@ -43,11 +46,11 @@ def reach_section(ctx: ReportContext) -> Section:
     """Run the reach comparison (smaller with ``ctx.quick``) and return its report section."""
     cfg = REACH.quick if ctx.quick and REACH.quick is not None else ReachConfig()
     seeds = REACH.default_seeds(cfg, quick=ctx.quick)
-    result = run_with_progress(
-        cfg, seeds, disable=not ctx.progress or None, workers=ctx.options.workers
-    )
+    executor = Executor(workers=ctx.options.workers)
+    show = Progress(disable=not ctx.progress or None)
+    result = REACH.run(cfg, seeds=seeds, executor=executor, progress=show)
     with ctx.drawing:  # the report may be drawing its own figures in another thread
-        result.save_figure(ctx.out / FIGURE)
+        save_figure(result.draw(), ctx.out / FIGURE, **result.SAVE)
 
     final = result.final_success()
     per_seed = result.final_success_per_seed()

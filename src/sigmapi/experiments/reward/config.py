@@ -1,20 +1,12 @@
-"""The settings of one reward-gating comparison, in five frozen parts: the world, the map, the
-learner, the gate and the run.
-
-- :class:`~sigmapi.envs.GazeReachConfig` (``env``): the gaze-and-reach world;
-- :class:`~sigmapi.experiments.reach.config.MapConfig` (``map``): the map learned without a
-  teacher before the episodes (the reach experiment's);
-- :class:`~sigmapi.agents.ActorCriticConfig` (``agent``): the actor-critic;
-- :class:`GateConfig` (``gate``): how the map keeps learning during the episodes;
-- :class:`RewardRunConfig` (``run``): which methods, how many episodes, how it is scored.
-
-Field names are unique across the parts, so ``RewardConfig().replace(episodes=150,
-gate_eps=0.1)`` finds each field's part, and ``sigmapi reward`` has an option per field
-(:mod:`sigmapi.cli.experiment`).
+"""The settings of one reward-gating comparison, in five frozen parts (:class:`RewardConfig`):
+the world, the map learned before the episodes (the reach experiment's
+:class:`~sigmapi.experiments.reach.config.MapConfig`), the learner, the gate
+(:class:`GateConfig`) and the run (:class:`RewardRunConfig`).
 """
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -79,15 +71,9 @@ class GateConfig:
         _validate.choice("gate_view", self.gate_view, VIEWS)
 
     def gating(self) -> Gating:
-        """The loop's settings (:class:`~sigmapi.agents.gated.Gating`)."""
-        return Gating(
-            self.surprise,
-            self.feedback,
-            self.gate_scale,
-            self.gate_eps,
-            self.gate_sigma,
-            self.gate_view,
-        )
+        """The loop's settings (:class:`~sigmapi.agents.gated.Gating`: the same fields, in
+        order, without their ``gate_`` prefix)."""
+        return Gating(*dataclasses.astuple(self))
 
 
 @dataclass(frozen=True)

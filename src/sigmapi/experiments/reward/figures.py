@@ -16,7 +16,7 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Rectangle
 from numpy.typing import NDArray
 
-from sigmapi.experiments.kit.figures import legend_once, plot_apart
+from sigmapi.experiments.kit.figures import axes, legend_once, plot_apart
 from sigmapi.experiments.kit.worlds import GAZE_REACH
 from sigmapi.experiments.reward.config import RewardConfig
 
@@ -43,15 +43,9 @@ LABELS = {
 COLORS = {"frozen": "C0", "gated": "C2", "shuffled": "C3", "initial": "C0"}
 
 
-def _ax(ax: Axes | None) -> Axes:
-    if ax is None:
-        ax = Figure(figsize=(5, 3.5), layout="constrained").subplots()
-    return ax
-
-
 def plot_reward_curves(result: RewardData, ax: Axes | None = None) -> Axes:
     """Success rate per block, mean over seeds (line), band from the worst to the best seed."""
-    ax = _ax(ax)
+    ax = axes(ax)
     curves = result.curves()
     plot_apart(  # curves that coincide each show, and their labels say so
         ax,
@@ -92,7 +86,7 @@ def plot_reward_curves(result: RewardData, ax: Axes | None = None) -> Axes:
 def plot_units(result: RewardData, method: str, ax: Axes | None = None) -> Axes:
     """The first seed's units at their preferred z, neighbours on the map joined, with the goal
     box (grey) and the region "near the goal" (dashed) whose units the magnification counts."""
-    ax = _ax(ax)
+    ax = axes(ax)
     cfg = result.config
     pz = result.units[method]
     shape = tuple(cfg.map.map_shape)

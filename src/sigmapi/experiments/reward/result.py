@@ -5,21 +5,19 @@ and seed, the summaries computed from them (median, worst, counts over seeds), i
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
-from sigmapi._outputs import save_captioned, save_figure
 from sigmapi.experiments.kit.episodes import block_rates, final_rates, success_curve
-from sigmapi.experiments.kit.results import Result
+from sigmapi.experiments.kit.results import JSON, Result
 from sigmapi.experiments.reward.config import RewardConfig
 
-__all__ = ["FIGURE", "MAGNIFICATION_TARGET", "RewardResult", "episodes_to_target"]
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
-FIGURE = "reward.png"
-"""The file name :meth:`RewardResult.figure` writes in its folder."""
+__all__ = ["MAGNIFICATION_TARGET", "RewardResult", "episodes_to_target"]
 
 MAGNIFICATION_TARGET = 1.5
 """The gated map's magnification near the goal over the frozen map's that counts as shaped."""
@@ -82,15 +80,26 @@ class RewardResult(Result):
     written: dict[str, object] | None = field(default=None, repr=False)
     """The summaries of a result read back (:meth:`from_dict`); None for a run's result."""
 
-    KEYS = (*SUMMARIES, "config: config_and_seeds", "seconds")
+    KEYS = (
+        "methods",
+        "initial_map",
+        "n_seeds",
+        "target: config.run.target",
+        "magnification_target: MAGNIFICATION_TARGET",
+        "curves",
+        "config: config_and_seeds",
+        "seconds",
+    )
     """The JSON form: ``methods``, the map before the episodes (``initial_map``), the
     acceptance counts, the curves, the config (its parts and the seeds) and the time."""
     COMPUTED = SUMMARIES
     SEEDS_IN_CONFIG = True
+    FIGURE = "reward.png"
+    MAGNIFICATION_TARGET = MAGNIFICATION_TARGET
 
     @classmethod
     def collect(
-        cls, config: RewardConfig, seeds: tuple[int, ...], per_seed: list[dict[str, Any]]
+        cls, config: RewardConfig, seeds: tuple[int, ...], per_seed: list[JSON]
     ) -> RewardResult:
         """The result of the per-seed values of the run (in the order of ``seeds``)."""
         res = cls(config, seeds)
@@ -157,13 +166,6 @@ class RewardResult(Result):
     def n_seeds(self) -> int:
         return len(self.seeds)
 
-    def target(self) -> float:
-        """The success rate per block that counts as reached."""
-        return self.config.run.target
-
-    def magnification_target(self) -> float:
-        return MAGNIFICATION_TARGET
-
     def _episodes(self, m: str) -> list[int | None]:
         run = self.config.run
         return [episodes_to_target(s, run.block, run.target) for s in self.success[m]]
@@ -186,13 +188,11 @@ class RewardResult(Result):
             )
         return "\n".join(lines)
 
-    def save_figure(self, path: str | Path, dpi: int = 120) -> Path:
-        """Draw the comparison (:func:`~sigmapi.experiments.reward.figures.reward_figure`)."""
+    def draw(self) -> Figure:
+        """The comparison (:func:`~sigmapi.experiments.reward.figures.reward_figure`)."""
         from sigmapi.experiments.reward.figures import reward_figure  # matplotlib: only to draw
 
-        out = Path(path)
-        save_figure(reward_figure(self), out, dpi=dpi, facecolor="white")
-        return out
+        return reward_figure(self)
 
     def caption(self) -> str:
         """The figure's caption, computed from the result."""
@@ -223,16 +223,6 @@ class RewardResult(Result):
                 f"goal over units per area overall; median over seeds: {mags})."
             )
         return text
-
-    def figure(self, out_dir: str | Path) -> list[Path]:
-        """Write the figure (:data:`FIGURE`) and its caption beside it (``reward.txt``) into
-        ``out_dir``; returns the figure's path."""
-        from sigmapi.experiments.reward.figures import reward_figure  # matplotlib: only to draw
-
-        out = Path(out_dir) / FIGURE
-        return [
-            save_captioned(reward_figure(self), out, self.caption(), dpi=120, facecolor="white")
-        ]
 
 
 def _earlier(a: int | None, b: int | None, never: int) -> bool:

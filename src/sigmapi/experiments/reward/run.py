@@ -1,29 +1,13 @@
 """The reward experiment: does a map whose plasticity is gated by reward come to serve the task?
 
-:data:`REWARD` (a :class:`RewardExperiment`) runs a
-:class:`~sigmapi.experiments.reward.config.RewardConfig` on a list of seeds and returns a
-:class:`~sigmapi.experiments.reward.result.RewardResult`. Per seed, one map is learned
-without a teacher in the gaze-and-reach world (as the reach experiment's), and the same
-actor-critic learns to reach on three copies of it (``methods``):
-
-- ``frozen``: the map as it was learned (the reach experiment's map state);
-- ``gated``: the map keeps learning during the episodes, each step's Kohonen update of unit
-  ``k`` gated by the TD error and the chosen action's feedback onto ``k``
-  (:func:`~sigmapi.agents.gated.run_gated_episodes`; docs/algorithm.md, "Reward-gated
-  plasticity");
-- ``shuffled``: the control: the same loop, with the gated run's global factors ``f(delta)``
-  replayed in a random order, so the gates have the same sizes but no relation to the task.
-
-Seed ``s``'s random streams are those of :data:`PLAN` (each child ``(s, key)`` of
-``SeedSequence(0)``): ``"map"`` seeds the map, ``"starts"`` the episodes' starts (the same
-for every method), ``"agent"`` the learner's action choices (the same stream for every
-method), ``"probes"`` the test objects that score the maps, ``"shuffle"`` the shuffle,
-``"fixations"`` the second fixations of the gated updates.
-
-Scores of each map after its episodes (:func:`map_scores`): the magnification near the goal
-(units whose preferred z lies within ``near_radius`` of the goal, per unit area of z, over the
-used units per unit area of the whole workspace), and view consistency and order R^2 on objects
-away from the goal (the map's quality where reward does not shape it).
+:data:`REWARD` runs a :class:`~sigmapi.experiments.reward.config.RewardConfig` on seeds and
+returns a :class:`~sigmapi.experiments.reward.result.RewardResult`: per seed, one map learned
+without a teacher, then the same actor-critic on three copies of it, ``frozen``, ``gated``
+(:func:`~sigmapi.agents.gated.run_gated_episodes`) and ``shuffled`` (docs/guide/reward.md,
+docs/algorithm.md "Reward-gated plasticity"), each map scored by :func:`map_scores`. Seed
+``s``'s random streams are those of :data:`PLAN`: ``"map"``, ``"starts"`` and ``"agent"`` (the
+same for every method), ``"probes"`` (the test objects), ``"shuffle"`` and ``"fixations"`` (the
+gated updates' second fixations).
 
 Examples
 --------
@@ -37,31 +21,26 @@ Examples
 from __future__ import annotations
 
 import copy
-import dataclasses
 import functools
-import time
-from collections.abc import Sequence
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from sigmapi import _validate
 from sigmapi.agents import actor_critic_for, run_episodes, run_gated_episodes
 from sigmapi.codes import grid_coordinates
-from sigmapi.envs import GazeReachEnv, MapObservation, learn_map_in_env
-from sigmapi.executor import Executor, job_memory
-from sigmapi.experiments.base import Experiment, check_seeds, register, run_all
-from sigmapi.experiments.kit.jobs import Tick, counted
+from sigmapi.envs import GazeReachEnv, MapObservation
+from sigmapi.executor import job_memory
+from sigmapi.experiments.base import register
+from sigmapi.experiments.kit.jobs import SeedJob, SeedRuns, Tick
+from sigmapi.experiments.kit.results import JSON
 from sigmapi.experiments.kit.seeds import SeedPlan
 from sigmapi.experiments.kit.worlds import GAZE_REACH, World
 from sigmapi.experiments.reward.config import RewardConfig
 from sigmapi.experiments.reward.result import RewardResult
 from sigmapi.metrics import winner_metrics
 from sigmapi.model.som import SigmaPiSOM
-from sigmapi.progress import Progress
 
 __all__ = [
     "PLAN",
@@ -143,87 +122,7 @@ def map_scores(
     }
 
 
-@dataclass(frozen=True)
-class _SeedJob:
-    config: RewardConfig
-    world: World
-    seed: int
-    show: Progress | None = None
-    """A bar of this seed's episodes (set only where the job runs in the caller's process)."""
-
-
-def _run_seed(job: _SeedJob) -> dict[str, object]:
-    total = len(job.config.run.methods) * job.config.run.episodes
-    return counted(job.show, total, f"reward seed {job.seed}", lambda tick: _seed_runs(job, tick))
-
-
-def _learn_map(cfg: RewardConfig, world: World, seed: int) -> SigmaPiSOM:
-    env_seed, som_seed = (int(v) for v in PLAN.rng(seed, "map").integers(0, 2**31 - 1, size=2))
-    return learn_map_in_env(world.make_env(cfg.env), cfg.som_config(som_seed, world), seed=env_seed)
-
-
-def _seed_runs(job: _SeedJob, progress: Tick | None) -> dict[str, object]:
-    """One seed: its map, then each method's learner on the same episodes, then the scores."""
-    cfg, seed, world = job.config, job.seed, job.world
-    run = cfg.run
-    learned = _learn_map(cfg, world, seed)
-    place = world.source(cfg.env)
-    objects = probe_objects(place, run.n_test, PLAN.rng(seed, "probes"))
-    goal = np.asarray(place.goal, dtype=np.float64)
-    starts = PLAN.rng(seed, "starts").integers(0, 2**31 - 1, size=run.episodes)
-    out: dict[str, Any] = {
-        "initial": map_scores(learned, objects, goal, run.near_radius),
-        "initial_units": preferred_z(learned, objects),
-        "runs": {},
-    }
-    factors: NDArray[np.float64] | None = None
-    for m in sorted(run.methods, key=("frozen", "gated", "shuffled").index):
-        model = copy.copy(learned)
-        env = MapObservation(
-            world.make_env(cfg.env), model, cfg.map.features, cfg.map.feature_width
-        )
-        agent = actor_critic_for(env, cfg.agent, seed=PLAN.rng(seed, "agent"))
-        done = None if progress is None else functools.partial(progress, 1, m)
-        updates = 0
-        if m == "frozen":
-            ep = run_episodes(env, agent, starts, on_episode=done)
-        else:
-            replay = None
-            if m == "shuffled":
-                assert factors is not None  # the gated run came first
-                replay = PLAN.rng(seed, "shuffle").permutation(factors)
-            got = run_gated_episodes(
-                env,
-                agent,
-                starts,
-                cfg.gate.gating(),
-                PLAN.rng(seed, "fixations"),
-                surprises=replay,
-                on_episode=done,
-            )
-            ep, updates = got.episodes, got.updates
-            if m == "gated":
-                factors = got.surprises
-        out["runs"][m] = {
-            "success": ep.success,
-            "steps": ep.steps,
-            "lost": ep.failed,
-            "updates": updates,
-            "scores": map_scores(model, objects, goal, run.near_radius),
-            "units": preferred_z(model, objects),
-        }
-    return out
-
-
-def _per_job(config: RewardConfig, world: World) -> int:
-    """One job's memory: the map's (:func:`~sigmapi.executor.job_memory`), its recorded
-    views' positions (64 bytes an iteration) and the episodes' records (64 bytes each)."""
-    som = config.som_config(0, world)
-    views = 64 * som.iterations + 64 * config.run.episodes
-    return job_memory(som, n_test=config.run.n_test) + views
-
-
-class RewardExperiment(Experiment[RewardConfig]):
+class RewardExperiment(SeedRuns[RewardConfig]):
     """The frozen map, the reward-gated map and the shuffled-reward control, over seeds."""
 
     name = "reward"
@@ -241,36 +140,68 @@ class RewardExperiment(Experiment[RewardConfig]):
     def __init__(self, world: World = GAZE_REACH) -> None:
         self.world = world
 
-    def run(
-        self,
-        config: RewardConfig,
-        *,
-        seeds: Sequence[int],
-        out: Path | None = None,
-        executor: Executor | None = None,
-        progress: Progress | None = None,
+    def check(self, config: RewardConfig) -> int:
+        """One job's memory: the map's (:func:`~sigmapi.executor.job_memory`), its recorded
+        views' positions (64 bytes an iteration) and the episodes' records (64 bytes each)."""
+        som = config.som_config(0, self.world)
+        views = 64 * som.iterations + 64 * config.run.episodes
+        return job_memory(som, n_test=config.run.n_test) + views
+
+    def steps(self, job: SeedJob) -> int:
+        return len(job.config.run.methods) * job.config.run.episodes
+
+    def seed_run(self, job: SeedJob, tick: Tick | None) -> JSON:
+        """One seed: its map, then each method's learner on the same episodes, then the
+        scores."""
+        cfg, seed, world, run = job.config, job.seed, self.world, job.config.run
+        learned = cfg.map.learn(world, cfg.env, PLAN.rng(seed, "map"))
+        place = world.source(cfg.env)
+        objects = probe_objects(place, run.n_test, PLAN.rng(seed, "probes"))
+        goal = np.asarray(place.goal, dtype=np.float64)
+        starts = PLAN.rng(seed, "starts").integers(0, 2**31 - 1, size=run.episodes)
+        out: JSON = {
+            "initial": map_scores(learned, objects, goal, run.near_radius),
+            "initial_units": preferred_z(learned, objects),
+            "runs": {},
+        }
+        factors: NDArray[np.float64] | None = None
+        for m in sorted(run.methods, key=("frozen", "gated", "shuffled").index):
+            model = copy.copy(learned)
+            features = (cfg.map.features, cfg.map.feature_width)
+            env = MapObservation(world.make_env(cfg.env), model, *features)
+            agent = actor_critic_for(env, cfg.agent, seed=PLAN.rng(seed, "agent"))
+            done = None if tick is None else functools.partial(tick, 1, m)
+            updates = 0
+            if m == "frozen":
+                ep = run_episodes(env, agent, starts, on_episode=done)
+            else:  # the shuffled run replays the gated one's factors (it came first)
+                replay = None if factors is None else PLAN.rng(seed, "shuffle").permutation(factors)
+                fixations = PLAN.rng(seed, "fixations")
+                got = run_gated_episodes(
+                    env,
+                    agent,
+                    starts,
+                    cfg.gate.gating(),
+                    fixations,
+                    surprises=replay,
+                    on_episode=done,
+                )
+                ep, updates = got.episodes, got.updates
+                factors = got.surprises if m == "gated" else factors
+            out["runs"][m] = {
+                "success": ep.success,
+                "steps": ep.steps,
+                "lost": ep.failed,
+                "updates": updates,
+                "scores": map_scores(model, objects, goal, run.near_radius),
+                "units": preferred_z(model, objects),
+            }
+        return out
+
+    def collect(
+        self, config: RewardConfig, seeds: tuple[int, ...], values: list[Any]
     ) -> RewardResult:
-        """Every method of ``config.run.methods`` for every seed; each seed is one job of
-        ``executor`` (the result does not depend on where it runs). ``out`` is not used: the
-        run writes nothing while it runs."""
-        if not isinstance(config, RewardConfig):
-            raise _validate.fail("config", "a RewardConfig", config)
-        seeds = check_seeds(seeds)
-        t0 = time.perf_counter()
-        jobs = [(str(s), _SeedJob(config, self.world, s)) for s in seeds]
-        values = run_all(
-            _run_seed,
-            jobs,
-            executor=executor,
-            per_job=_per_job(config, self.world),
-            progress=progress,
-            desc="reward",
-            verbose=lambda job: dataclasses.replace(job, show=progress),
-            describe=lambda key, _: f"seed {key}",
-        )
-        res = RewardResult.collect(config, seeds, [values[k] for k, _ in jobs])
-        res.seconds = time.perf_counter() - t0
-        return res
+        return RewardResult.collect(config, seeds, values)
 
 
 REWARD = RewardExperiment()

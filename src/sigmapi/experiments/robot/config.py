@@ -1,17 +1,8 @@
-"""The settings of one robot run, in four frozen parts, like the reach experiment's: the
-world, the map, the learner and the run.
-
-- :class:`RobotEnvConfig` (``env``): the docking world, its time limit and how the map's view
-  pairs are recorded in it (the settings of :data:`ROBOT_WORLD`);
-- :class:`RobotMapConfig` (``map``): the Sigma-Pi map learned from the recorded pairs, how it
-  is scored and how the learner reads it;
-- :class:`~sigmapi.agents.ActorCriticConfig` (``agent``): the actor-critic;
-- :class:`RobotRunConfig` (``run``): which states are compared, for how many episodes.
-
-:class:`RobotConfig` holds one of each (``RobotConfig().replace(grid=8, episodes=150)`` finds
-each field's part; the ``sigmapi robot`` options are the parts' fields). Its JSON form is
-flat (one table of every part's fields, as the robot's results have always been written):
-:meth:`RobotConfig.to_dict` and :meth:`RobotConfig.from_dict`.
+"""The settings of one robot run, in four frozen parts as the reach experiment's
+(:class:`RobotConfig`): the docking world and how the map's view pairs are recorded in it
+(:class:`RobotEnvConfig`, the settings of :data:`ROBOT_WORLD`), the map (:class:`RobotMapConfig`),
+the learner and the run (:class:`RobotRunConfig`). Its JSON form is flat (one table of every
+part's fields, as the robot's results have always been written).
 """
 
 from __future__ import annotations
@@ -168,7 +159,7 @@ class RobotConfig(Parts):
     def __post_init__(self) -> None:
         check_part_types(self, self.PARTS)
 
-    def make_env(self, world: World | None = None, **kwargs: Any) -> gym.Env[Any, Any]:
+    def make_env(self, world: World | None = None, **kwargs: object) -> gym.Env[Any, Any]:
         """The docking world through ``gymnasium.make`` (``world``, default
         :data:`ROBOT_WORLD`; its TimeLimit included); ``kwargs`` go to it too (e.g.
         ``render_mode="rgb_array"``)."""
@@ -179,7 +170,7 @@ class RobotConfig(Parts):
         state: str,
         model: SigmaPiSOM | None = None,
         world: World | None = None,
-        **kwargs: Any,
+        **kwargs: object,
     ) -> gym.Env[Features, Any]:
         """The docking world (:meth:`make_env`) as ``state`` sees it
         (:mod:`sigmapi.envs.wrappers`); ``"true_z"`` codes z on the map's grid (like for
@@ -194,7 +185,7 @@ class RobotConfig(Parts):
         return {k: v for table in parts_dict(self, self.PARTS).values() for k, v in table.items()}
 
     @classmethod
-    def from_dict(cls, data: Any) -> RobotConfig:
+    def from_dict(cls, data: object) -> RobotConfig:
         """The config a :meth:`to_dict` wrote (an unknown field is a ConfigError naming the
         valid ones)."""
         return cls().replace(**tuples(as_object(data, "robot config")))
@@ -206,10 +197,6 @@ QUICK = RobotConfig().replace(
 """``sigmapi robot --quick``: a smaller map run and fewer episodes (minutes, not tens)."""
 
 
-def _robot_kwargs(settings: RobotEnvConfig) -> dict[str, object]:
-    return settings.env_kwargs()
-
-
 def _robot_source(settings: RobotEnvConfig) -> RobotViews:
     return RobotViews(settings.grid, settings.code_width, moved_share=settings.moved_share)
 
@@ -219,7 +206,7 @@ ROBOT_WORLD = register_world(
         name="robot",
         env_id=ENV_ID,
         settings=RobotEnvConfig,
-        kwargs=_robot_kwargs,
+        kwargs=RobotEnvConfig.env_kwargs,
         source=_robot_source,
         map=MapSpec("robot-2d"),
         seeds=(100, 101, 102, 103, 104),

@@ -10,10 +10,13 @@ animated GIF (Pillow, which matplotlib installs).
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
 
 from sigmapi._outputs import save_captioned, save_gif
 from sigmapi.envs.robot.frames import Frames
@@ -25,6 +28,7 @@ from sigmapi.experiments.kit.figures import (
     legend_once,
     plot_apart,
 )
+from sigmapi.experiments.kit.results import JSON
 from sigmapi.experiments.robot.config import PLAN
 from sigmapi.metrics import FOLD_THRESHOLD, ORDERED_R2
 
@@ -34,8 +38,8 @@ _TABLE = (0.15, 1.45, -1.1, 1.1)  # near edge, far edge, right, left (world x, y
 
 
 def plot_unit_positions(
-    unit_z: NDArray[np.float64], map_shape: tuple[int, ...], ax: Any = None
-) -> Any:
+    unit_z: NDArray[np.float64], map_shape: tuple[int, ...], ax: Axes | None = None
+) -> Axes:
     """Top view of the table with each map unit's preferred ball position (the mean place of
     the calibration balls it wins), joined along the map's rows and columns; the robot at the
     origin facing +x; legend beside the Axes."""
@@ -67,7 +71,7 @@ def plot_unit_positions(
     return ax
 
 
-def plot_curves(curves: dict[str, dict[str, list[float]]], ax: Any = None) -> Any:
+def plot_curves(curves: dict[str, dict[str, list[float]]], ax: Axes | None = None) -> Axes:
     """Success per block of episodes, mean over seeds with one standard deviation shaded; one
     marker per state (curves that coincide each show, their legend entries say so)."""
     import matplotlib.pyplot as plt
@@ -112,7 +116,7 @@ def write_gif(frames: list[NDArray[np.uint8]], path: Path, fps: int = 6) -> Path
     return save_gif(frames, path, fps=fps)
 
 
-def _map_words(metrics: dict[str, Any]) -> str:
+def _map_words(metrics: JSON) -> str:
     """A map's order and fold verdicts, with their bounds (the fold score's threshold)."""
     r2 = float(metrics["order_r2"])
     order = "ordered" if r2 >= ORDERED_R2 else "twisted"

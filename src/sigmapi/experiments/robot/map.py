@@ -44,9 +44,8 @@ __all__ = [
 ]
 
 ROBOT_MAP = ROBOT_WORLD.map
-"""The map's settings: the ``robot-2d`` preset (``paper-2d``'s winner rule, learning rate and
-ordered start, a neighbourhood of 3 -> 1 at half-way -> 0.5 map units, no refinement rounds);
-the run sets its codes, size, length, seed and backend."""
+"""The map's settings: the ``robot-2d`` preset (see the module's docstring); the run sets its
+codes, size, length, seed and backend."""
 
 
 def robot_som_config(

@@ -3,6 +3,7 @@ computed from them, its JSON form, its table and its figures."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -12,7 +13,7 @@ from numpy.typing import NDArray
 
 from sigmapi.agents import ActorCritic
 from sigmapi.experiments.kit.episodes import final_rates, success_curve
-from sigmapi.experiments.kit.results import Result, as_object, summaries
+from sigmapi.experiments.kit.results import JSON, Result, as_object, summaries
 from sigmapi.experiments.robot.config import RobotConfig
 from sigmapi.model.som import SigmaPiSOM
 
@@ -41,7 +42,9 @@ def _summary(values: NDArray[np.float64]) -> dict[str, float]:
     }
 
 
-def _nan_stat(fn: Any, values: NDArray[np.float64]) -> float | None:
+def _nan_stat(
+    fn: Callable[[NDArray[np.float64]], float], values: NDArray[np.float64]
+) -> float | None:
     return float(fn(values)) if np.any(np.isfinite(values)) else None
 
 
@@ -62,7 +65,7 @@ class RobotResult(Result):
     success: dict[str, NDArray[np.bool_]] = field(default_factory=dict)
     docked: dict[str, NDArray[np.bool_]] = field(default_factory=dict)
     steps: dict[str, NDArray[np.int64]] = field(default_factory=dict)
-    map_metrics: list[dict[str, Any]] = field(default_factory=list)
+    map_metrics: list[JSON] = field(default_factory=list)
     unit_z: list[NDArray[np.float64]] = field(default_factory=list)
     model: SigmaPiSOM | None = None
     agent: ActorCritic | None = None

@@ -1,20 +1,13 @@
-"""The robot experiment: the reach experiment (:class:`~sigmapi.experiments.reach.run.
-ReachExperiment`: its run and per-seed job) in the robot's world, with the robot's map.
+"""The robot experiment (``sigmapi robot``): the reach experiment's run in the robot's world,
+with the robot's map (docs/guide/robot.md).
 
-:data:`ROBOT` (a :class:`RobotExperiment`) runs a
-:class:`~sigmapi.experiments.robot.config.RobotConfig` on a list of seeds and returns a
-:class:`~sigmapi.experiments.robot.result.RobotResult`. Per seed, everything random comes from
-the streams of :data:`~sigmapi.experiments.robot.config.PLAN`, children of
-``SeedSequence(seed)``: ``"map"`` seeds the map's recorded views and weights, ``"starts"`` the
-episodes' start states (the same for every state: same learner, same episodes), ``"agent"``
-the learner's action choices, ``"film"`` the start of the filmed episode. What the robot does
-its own way is its map: view pairs recorded from the still robot's saccades and learned in
-passes (:func:`~sigmapi.experiments.robot.map.learn_map`), scored on evaluation pairs drawn
-from :data:`~sigmapi.metrics.EVAL_SEED` (the same for every seed, never moved); the
-actor-critic of the authors' docking model then learns on each state
-(:data:`~sigmapi.envs.STATES`) through ``gymnasium.make("sigmapi/RobotDock-v0")`` and the
-state wrappers, as in every world. ``sigmapi robot`` is generated from :data:`ROBOT` (the
-experiment registry): its command, options and result file keep their names.
+:data:`ROBOT` runs a :class:`~sigmapi.experiments.robot.config.RobotConfig` on seeds and returns
+a :class:`~sigmapi.experiments.robot.result.RobotResult`. Seed ``s``'s random streams are those
+of :data:`~sigmapi.experiments.robot.config.PLAN`: ``"map"`` (the map's recorded views and
+weights), ``"starts"`` and ``"agent"`` (the same for every state), ``"film"`` (the filmed
+episode's start). The map learns in passes over view pairs recorded from the still robot's
+saccades (:func:`~sigmapi.experiments.robot.map.learn_map`) and is scored on evaluation pairs
+drawn from :data:`~sigmapi.metrics.EVAL_SEED` (the same for every seed).
 
 Examples
 --------
@@ -26,8 +19,6 @@ Examples
 
 from __future__ import annotations
 
-from typing import Any
-
 import gymnasium as gym
 import numpy as np
 
@@ -35,12 +26,12 @@ from sigmapi import _memory
 from sigmapi._outputs import check_file
 from sigmapi.agents import ActorCritic
 from sigmapi.codes import PopulationCode
+from sigmapi.envs import Features
 from sigmapi.envs.robot.scene import check_rendering, mujoco_module
 from sigmapi.envs.robot.views import RobotViewBatch
 from sigmapi.executor import job_memory as _som_job_memory
 from sigmapi.experiments.base import register
 from sigmapi.experiments.kit.jobs import SeedEpisodes, Tick
-from sigmapi.experiments.kit.worlds import World
 from sigmapi.experiments.reach.run import ReachExperiment
 from sigmapi.experiments.robot.config import PLAN, QUICK, ROBOT_WORLD, RobotConfig
 from sigmapi.experiments.robot.map import (
@@ -55,6 +46,9 @@ from sigmapi.model.som import SigmaPiSOM
 from sigmapi.progress import Progress
 
 __all__ = ["INFO_KEYS", "PLAN", "QUICK", "ROBOT", "RobotExperiment", "job_memory"]
+
+Views = tuple[RobotViewBatch, RobotViewBatch]
+"""The calibration and test views every seed's map is scored on."""
 
 INFO_KEYS = ("docked", "event")
 """What the experiment keeps of each episode's last ``info`` besides ``is_success``."""
@@ -76,28 +70,27 @@ def job_memory(config: RobotConfig) -> int:
 class RobotExperiment(ReachExperiment):
     """A simulated robot (MuJoCo) records view pairs from its saccades and learns the
     Sigma-Pi map; then an actor-critic docks on the map, the retina code, retina and gaze
-    codes and the true z (the upper bound), over seeds."""
+    codes and the true z (the upper bound), over seeds.
+
+    ``RobotExperiment(world)`` runs it in another world whose settings are a
+    :class:`~sigmapi.experiments.robot.config.RobotEnvConfig` (default
+    :data:`~sigmapi.experiments.robot.config.ROBOT_WORLD`, whose default seeds are the
+    acceptance run's, none tuned on)."""
 
     name = "robot"
     summary = "a simulated robot learns the map from its own saccades, then docks on it"
     config_type = RobotConfig
     quick = QUICK
     quick_seeds = (0,)
-    quick_time = "about 20 s on two quiet cores, 80 s on two busy ones"
-    extra = "robot"
     """The seed of ``--quick``: a tuning seed (a first look does not peek at the reported
     ones)."""
+    quick_time = "about 20 s on two quiet cores, 80 s on two busy ones"
+    extra = "robot"
     default_out = "robot"
     plan = PLAN
     info_keys = INFO_KEYS
     returns_map = True
-
-    def __init__(self, world: World = ROBOT_WORLD) -> None:
-        """The robot's protocol in ``world`` (default :data:`~sigmapi.experiments.robot.
-        config.ROBOT_WORLD`, whose default seeds are the acceptance run's, none tuned on):
-        a world whose settings are a :class:`~sigmapi.experiments.robot.config.RobotEnvConfig`,
-        its view pairs recorded from its view source, its map from its map spec."""
-        super().__init__(world)
+    world = ROBOT_WORLD
 
     def before_writing(self, config: RobotConfig, *, force: bool) -> None:
         """What writing the figures needs, checked before the work: the ``--render`` file
@@ -106,7 +99,7 @@ class RobotExperiment(ReachExperiment):
             check_file(config.run.render, force=force, what="--render file")
         check_rendering()
 
-    def check(self, config: Any) -> int:
+    def check(self, config: RobotConfig) -> int:
         """MuJoCo (and a renderer for the pixel retina) before any work, and the memory of
         one job (the main process records views too: checked first)."""
         mujoco_module()  # says which extra to install
@@ -122,9 +115,7 @@ class RobotExperiment(ReachExperiment):
         )
         return per_job
 
-    def prepare(
-        self, config: Any, progress: Progress | None
-    ) -> tuple[RobotViewBatch, RobotViewBatch] | None:
+    def prepare(self, config: RobotConfig, progress: Progress | None) -> Views | None:
         """The evaluation views every seed's map is scored on (where a state reads a map)."""
         if "map" not in config.run.states:
             return None
@@ -132,7 +123,7 @@ class RobotExperiment(ReachExperiment):
         return evaluation_pairs(config)
 
     def make_map(
-        self, config: Any, shared: Any, seed: int, tick: Tick | None
+        self, config: RobotConfig, shared: Views, seed: int, tick: Tick | None
     ) -> tuple[SigmaPiSOM, dict[str, object]]:
         """Seed ``seed``'s map from recorded view pairs, its scores and each unit's
         preferred z on the evaluation views (``shared``)."""
@@ -145,16 +136,22 @@ class RobotExperiment(ReachExperiment):
             "unit_z": unit_positions(model, cal),
         }
 
-    def state_env(self, config: Any, state: str, model: SigmaPiSOM | None) -> gym.Env[Any, Any]:
+    def state_env(
+        self, config: RobotConfig, state: str, model: SigmaPiSOM | None
+    ) -> gym.Env[Features, object]:
         """The docking world as ``state`` sees it (:meth:`RobotConfig.state_env
         <sigmapi.experiments.robot.config.RobotConfig.state_env>`)."""
         return config.state_env(state, model, self.world)
 
-    def keep(self, config: Any, state: str, env: gym.Env[Any, Any], agent: ActorCritic) -> Any:
+    def keep(
+        self, config: RobotConfig, state: str, env: gym.Env[Features, object], agent: ActorCritic
+    ) -> ActorCritic | None:
         """The first seed's map learner (the figures film it)."""
         return agent if state == "map" else None
 
-    def collect(self, config: Any, seeds: tuple[int, ...], got: list[SeedEpisodes]) -> RobotResult:
+    def collect(
+        self, config: RobotConfig, seeds: tuple[int, ...], got: list[SeedEpisodes]
+    ) -> RobotResult:
         """The result of the seeds' jobs (``got``, in the order of ``seeds``)."""
         res = RobotResult(config, seeds)
         for state in config.run.states:
