@@ -23,11 +23,13 @@ torso-centred directions ``(azimuth, elevation)`` (radians;
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from sigmapi.envs.icub.detect import detect
 from sigmapi.envs.icub.scene import ICubScene
 from sigmapi.errors import ConfigError
 
@@ -40,11 +42,16 @@ __all__ = [
     "TORSO_BOX",
     "ViewBatch",
     "direction_ball",
+    "look",
     "measure",
     "neck_for",
     "random_ball",
     "random_gaze",
     "random_neck",
+    "saccade",
+    "search",
+    "sensed_view",
+    "turn_head",
     "view_pairs",
 ]
 
@@ -65,6 +72,13 @@ uniformly (:func:`neck_for`): the head turns so that the ball lies anywhere in t
 its field; a neck outside the neck's range is drawn again."""
 MOVE = 0.06
 """How far a moved ball moves between two views (uniform in +-MOVE along x and y, metres)."""
+SEARCH_TRIES = 200
+"""Random gazes :func:`search` tries before it gives up."""
+GOAL_MARGIN = 8.0
+"""How far inside the image a saccade's goal lies (:func:`look`), pixels."""
+PAIRS_PER_BALL = 6
+"""Pairs of views :func:`view_pairs` records of one ball before the experimenter puts down
+the next (each pair's second view is the next pair's first)."""
 REACH_REGION = ((0.14, 0.31), (-0.36, 0.08))
 """The table area (world x and y) the reaching tests draw balls from (the scripted inverse
 kinematics' reach, measured on a grid: ``docs/guide/icub.md``)."""
@@ -80,7 +94,8 @@ def direction_ball(scene: ICubScene, rng: np.random.Generator, n: int) -> Array:
     """``n`` ball positions ``(n, 2)`` (world x, y) whose torso-centred directions are
     uniform in :data:`TORSO_BOX`."""
     d = rng.uniform(TORSO_BOX[:, 0], TORSO_BOX[:, 1], (n, 2))
-    return scene.table_point(d)[:, :2]
+    with scene.truth():  # the experimenter puts the ball
+        return scene.table_point(d)[:, :2]
 
 
 def random_gaze(
@@ -193,6 +208,79 @@ def _batch(rows: list[tuple[Array, Array, Array, Array]]) -> ViewBatch:
     return ViewBatch(*cols)
 
 
+def sensed_view(
+    scene: ICubScene, uv: ArrayLike, point: Callable[[], Array]
+) -> tuple[Array, Array, Array, Array]:
+    """One view as the robot senses it: the detected retinal position ``uv`` and the gaze
+    joints now; beside them the labels (head- and torso-centred directions of the true point
+    ``point()``, read within :meth:`~sigmapi.envs.icub.scene.ICubScene.truth`: analysis and
+    references only)."""
+    with scene.truth():
+        p = point()
+        labels = scene.head_direction(p), scene.torso_direction(p)
+    return np.array(uv, dtype=np.float64), scene.gaze(), *labels
+
+
+def saccade(scene: ICubScene, uv: ArrayLike, goal: ArrayLike) -> None:
+    """Move the eyes (the neck still) so that what the right eye sees at ``uv`` lands near
+    pixel ``goal``: one proportional step on the retinal error, each axis's angle from the
+    camera's focal length (a pan for ``u``, a tilt for ``v``), clipped to the random gazes'
+    range; the image and the joint angles only."""
+    c, f = 0.5 * scene.eye_size, scene.focal
+    (u, v), (gu, gv) = np.asarray(uv, dtype=np.float64), np.asarray(goal, dtype=np.float64)
+    g = scene.gaze()
+    g[0] -= np.arctan((v - c) / f) - np.arctan((gv - c) / f)
+    g[1] += np.arctan((u - c) / f) - np.arctan((gu - c) / f)
+    g[:3] = np.clip(g[:3], GAZE_LOW[:3], GAZE_HIGH[:3])
+    scene.set_gaze(g)
+
+
+def turn_head(scene: ICubScene, rng: np.random.Generator) -> None:
+    """A random neck command (uniform in the random gazes' range), the eyes turned back by
+    the neck's change (tilt against pitch, pan against yaw; clipped), so that what was seen
+    tends to stay in view: the joint angles only."""
+    g = scene.gaze()
+    neck = rng.uniform(GAZE_LOW[3:], GAZE_HIGH[3:])
+    d = neck - g[3:]
+    g[0] -= d[0]
+    g[1] += d[2]
+    g[:3] = np.clip(g[:3], GAZE_LOW[:3], GAZE_HIGH[:3])
+    g[3:] = neck
+    scene.set_gaze(g)
+
+
+def search(
+    scene: ICubScene,
+    rng: np.random.Generator,
+    targets: tuple[str, ...] = ("ball",),
+    *,
+    neck: ArrayLike | None = None,
+    tries: int = SEARCH_TRIES,
+) -> list[Array] | None:
+    """Random gaze commands (uniform in :data:`GAZE_LOW`..:data:`GAZE_HIGH`; ``neck`` holds the
+    neck) until the right eye detects every one of ``targets``; their retinal positions, or
+    None after ``tries`` (the gaze is then the last one tried)."""
+    for _ in range(tries):
+        g = rng.uniform(GAZE_LOW, GAZE_HIGH)
+        if neck is not None:
+            g[3:] = neck
+        scene.set_gaze(g)
+        img = scene.render("r_eye")
+        seen = [detect(img, t) for t in targets]
+        if all(x is not None for x in seen):
+            return seen  # type: ignore[return-value]
+    return None
+
+
+def look(scene: ICubScene, rng: np.random.Generator, target: str, uv: ArrayLike) -> Array | None:
+    """A saccade that moves ``target``, seen at ``uv``, to a random place on the retina
+    (uniform, :data:`GOAL_MARGIN` pixels inside); where it is seen after, or None when the
+    eyes lost it."""
+    m = GOAL_MARGIN
+    saccade(scene, uv, rng.uniform(m, scene.eye_size - m, 2))
+    return scene.see(target)
+
+
 def view_pairs(
     scene: ICubScene,
     n: int,
@@ -201,43 +289,38 @@ def view_pairs(
     stage: str = "eyes",
     moved_share: float = 0.0,
 ) -> tuple[ViewBatch, ViewBatch]:
-    """``n`` pairs of views of a ball on the table (see the module's account)."""
+    """``n`` pairs of views of a ball on the table, as the robot senses them (see the
+    module's account)."""
     if stage not in ("eyes", "head"):
         raise ConfigError(f"stage must be 'eyes' or 'head', got {stage!r}")
     first: list[tuple[Array, Array, Array, Array]] = []
     second: list[tuple[Array, Array, Array, Array]] = []
-    balls = direction_ball(scene, rng, n)
-    moved = rng.random(n) < moved_share
-    for i in range(n):
-        # the eyes' pairs draw the head-centred direction first, then balls until a neck in
-        # range puts one there: their head-centred directions are uniform in HEAD_BOX
-        head = rng.uniform(HEAD_BOX[:, 0], HEAD_BOX[:, 1]) if stage == "eyes" else None
-        for attempt in range(500):  # no gaze sees both views: draw again (a new ball)
-            if attempt and (head is not None or attempt % 50 == 0):
-                balls[i] = direction_ball(scene, rng, 1)[0]
-            scene.set_ball(balls[i])
-            ball = scene.ball_position()
-            try:
-                neck = (
-                    random_neck(scene, ball, rng) if head is None else neck_for(scene, ball, head)
-                )
-                if neck is None:
-                    continue
-                random_gaze(scene, ball, rng, neck=neck)
-                view = measure(scene, ball)
-                if moved[i]:
-                    scene.set_ball(balls[i] + rng.uniform(-MOVE, MOVE, 2))
-                    ball = scene.ball_position()
-                if stage == "head":
-                    neck = random_neck(scene, ball, rng)
-                    if neck is None:
-                        continue
-                random_gaze(scene, ball, rng, neck=neck)
-            except ConfigError:
-                continue
-            first.append(view)
-            second.append(measure(scene, ball))
-            break
-        else:
-            raise ConfigError(f"no pair of views of the ball at {balls[i].tolist()} found")
+    while len(first) < n:
+        xy = direction_ball(scene, rng, 1)[0]
+        scene.set_ball(xy)
+        found = search(scene, rng)
+        if found is None:
+            continue
+        uv = look(scene, rng, "ball", found[0])
+        for _ in range(PAIRS_PER_BALL):
+            if uv is None or len(first) >= n:
+                break
+            view = sensed_view(scene, uv, scene.ball_position)
+            seen: Array | None = uv  # the ball still, the eyes still: where it was seen
+            if rng.random() < moved_share:
+                xy = xy + rng.uniform(-MOVE, MOVE, 2)
+                scene.set_ball(xy)
+                seen = None
+            if stage == "head":
+                turn_head(scene, rng)
+                seen = None
+            if seen is None:
+                seen = scene.see("ball")
+            if seen is None:
+                lost = search(scene, rng, neck=scene.gaze()[3:] if stage == "eyes" else None)
+                seen = None if lost is None else lost[0]
+            uv = None if seen is None else look(scene, rng, "ball", seen)
+            if uv is not None:
+                first.append(view)
+                second.append(sensed_view(scene, uv, scene.ball_position))
     return _batch(first), _batch(second)

@@ -50,19 +50,15 @@ from sigmapi.agents import Association
 from sigmapi.codes import PopulationCode
 from sigmapi.envs import bump_features
 from sigmapi.envs.icub import (
-    BALL_RADIUS,
     REACH_REGION,
-    TABLE_HEIGHT,
     TORSO_BOX,
     ICubScene,
     ViewBatch,
     arm_ik,
-    measure,
     physical_reach,
     random_ball,
-    random_gaze,
-    random_neck,
 )
+from sigmapi.envs.icub.frames import look, search, sensed_view
 from sigmapi.envs.icub.reach import AIM
 from sigmapi.errors import ConfigError
 from sigmapi.experiments.icub.maps import ChainMaps, eye_position, neck_position, retina_position
@@ -137,7 +133,6 @@ def babble(
     """``n`` babbles (see the module's account), the shoulder's yaw drawn from ``yaw`` (or
     its lower limit, if higher) to its upper limit and the wrist's pitch from ``wrist`` (low,
     high; within the joint's range); the scene's arm goes back to rest."""
-    aim = TABLE_HEIGHT + BALL_RADIUS + AIM
     lo, hi = scene.arm_range.T.copy()
     lo[_YAW] = max(lo[_YAW], yaw)
     if lo[_YAW] >= hi[_YAW]:
@@ -159,16 +154,18 @@ def babble(
         q = np.zeros(7)
         q[list(_BABBLED)] = rng.uniform(lo[list(_BABBLED)], hi[list(_BABBLED)])
         scene.set_arm(q)
-        p = scene.palm_position()
-        if abs(p[2] - aim) > tolerance or not 0.09 < p[0] < 0.45 or not -0.48 < p[1] < 0.2:
+        if not scene.hand_on_table(tolerance):
             continue
-        neck = random_neck(scene, p, rng)
-        if neck is None:
+        found = search(scene, rng, ("hand",))
+        if found is None:
             continue
-        random_gaze(scene, p, rng, neck=neck)
+        uv = look(scene, rng, "hand", found[0])
+        if uv is None:
+            continue
         postures.append(q)
-        palms.append(p)
-        rows.append(measure(scene, p))
+        rows.append(sensed_view(scene, uv, scene.palm_position))
+        with scene.truth():  # for the babbling curve's score only
+            palms.append(scene.palm_position())
     scene.reset()
     cols = [np.array(c) for c in zip(*rows, strict=True)]
     return Babbles(np.array(postures), np.array(palms), ViewBatch(*cols))
@@ -244,7 +241,8 @@ def _palm_error(scene: ICubScene, postures: Array, palms: Array) -> float:
     errs = []
     for q, p in zip(postures, palms, strict=True):
         scene.set_arm(q)
-        errs.append(np.linalg.norm(scene.palm_position() - p))
+        with scene.truth():  # the babbling curve's score
+            errs.append(np.linalg.norm(scene.palm_position() - p))
     return float(np.median(errs))
 
 
@@ -267,29 +265,19 @@ def reachable_balls(scene: ICubScene, n: int, rng: np.random.Generator) -> Array
     while len(out) < n:
         b = random_ball(rng, 1, REACH_REGION)[0]
         scene.set_ball(b)
-        if arm_ik(scene, scene.ball_position() + np.array([0.0, 0.0, AIM]))[1] < 0.01:
-            out.append(b)
+        with scene.truth():  # the experimenter's choice of balls
+            if arm_ik(scene, scene.ball_position() + np.array([0.0, 0.0, AIM]))[1] < 0.01:
+                out.append(b)
     return np.array(out)
 
 
-def glance(scene: ICubScene, points: Array, rng: np.random.Generator, tries: int = 50) -> bool:
-    """Set a random gaze (neck and eyes, as the maps' views draw them) that keeps every point of
-    ``points`` ``(k, 3)`` in the right eye's view (aimed at their mean); False when none of
-    ``tries`` does (the gaze is then unchanged)."""
-    saved, mid = scene.gaze(), points.mean(axis=0)
-    for _ in range(tries):
-        neck = random_neck(scene, mid, rng)
-        if neck is None:
-            continue
-        try:
-            random_gaze(scene, mid, rng, neck=neck)
-        except ConfigError:
-            continue
-        uv = scene.project(points)
-        if np.all(np.isfinite(uv)) and np.all((uv >= 4.0) & (uv <= scene.eye_size - 4.0)):
-            return True
-    scene.set_gaze(saved)
-    return False
+def glance(
+    scene: ICubScene, rng: np.random.Generator, tries: int = 200
+) -> tuple[Array, Array] | None:
+    """Random gazes (:func:`~sigmapi.envs.icub.frames.search`) until the right eye sees both
+    the ball and the hand; where it sees them, or None (the gaze is then the last one tried)."""
+    found = search(scene, rng, ("ball", "hand"), tries=tries)
+    return None if found is None else (found[0], found[1])
 
 
 def servo(
@@ -303,13 +291,15 @@ def servo(
     """The posture after ``steps`` glances of the learned servo (the module's account), from
     posture ``q``; the scene's arm and gaze are left where the last glance put them."""
     q = np.array(q, dtype=np.float64)
-    ball = scene.ball_position()
     for _ in range(steps):
         scene.set_arm(q)
-        palm = scene.palm_position()
-        if not glance(scene, np.stack([ball, palm]), rng):
+        seen = glance(scene, rng)
+        if seen is None:
             break
-        rows = [measure(scene, ball), measure(scene, palm)]
+        rows = [
+            sensed_view(scene, seen[0], scene.ball_position),
+            sensed_view(scene, seen[1], scene.palm_position),
+        ]
         a_ball, a_palm = layer.predict(
             feats(ViewBatch(*(np.array(c) for c in zip(*rows, strict=True))))
         )
@@ -334,13 +324,17 @@ def reach_tests(
     frames filmed, in order."""
     balls = reachable_balls(scene, n, rng)
     gazes, views = [], []
-    for b in balls:
-        scene.reset()
-        scene.set_ball(b)
-        p = scene.ball_position()
-        random_gaze(scene, p, rng, neck=random_neck(scene, p, rng))
+    for i in range(n):
+        while True:  # the eyes look for the ball; one they cannot find is put elsewhere
+            scene.reset()
+            scene.set_ball(balls[i])
+            found = search(scene, rng)
+            uv = None if found is None else look(scene, rng, "ball", found[0])
+            if uv is not None:
+                break
+            balls[i] = reachable_balls(scene, 1, rng)[0]
         gazes.append(scene.gaze())
-        views.append(measure(scene, p))
+        views.append(sensed_view(scene, uv, scene.ball_position))
     cols = [np.array(c) for c in zip(*views, strict=True)]
     vb = ViewBatch(*cols)
     postures = {m: layers[m].predict(feats(m, vb)) for m in ASSOCIATED}
@@ -368,7 +362,8 @@ def reach_tests(
             if method == "scripted_ik":
                 scene.reset()
                 scene.set_ball(b)
-                q = arm_ik(scene, scene.ball_position() + np.array([0.0, 0.0, AIM]))[0]
+                with scene.truth():  # the reference: scripted inverse kinematics
+                    q = arm_ik(scene, scene.ball_position() + np.array([0.0, 0.0, AIM]))[0]
             else:
                 q = postures[method][i]
             ok[i], dist[i] = touch(i, q, film(i, method) if film is not None else 0)
