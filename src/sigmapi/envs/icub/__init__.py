@@ -35,6 +35,7 @@ from sigmapi.envs.icub.scene import (
     EYE_SIZE,
     GAZE,
     ICubScene,
+    TruthLeak,
     direction_angles,
     direction_vectors,
 )
@@ -56,6 +57,7 @@ __all__ = [
     "ICubReachEnv",
     "ICubScene",
     "ReachOutcome",
+    "TruthLeak",
     "ViewBatch",
     "arm_ik",
     "cache_dir",

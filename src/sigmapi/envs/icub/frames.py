@@ -7,18 +7,27 @@ torso-centred directions ``(azimuth, elevation)`` (radians;
 :meth:`~sigmapi.envs.icub.scene.ICubScene.head_direction`,
 :meth:`~sigmapi.envs.icub.scene.ICubScene.torso_direction`).
 
-- :func:`random_gaze` draws a gaze that keeps a point in the right eye's view (uniform in
-  :data:`GAZE_LOW`..:data:`GAZE_HIGH`, redrawn until the point lies at least ``margin`` pixels
-  inside the image); ``neck=`` keeps the neck where it is (a saccade of the eyes only).
-- :func:`view_pairs` records pairs of views of one still point: ``stage="eyes"`` (the head
-  still: the pair shares the neck angles and thus the head-centred direction, drawn first and
-  uniform in :data:`HEAD_BOX`) or ``"head"``
-  (the neck turns too: the pair shares the torso-centred direction); a ``moved_share`` of the
-  pairs see the ball moved between the views (a nuisance the learner must live with).
-- :func:`direction_ball` draws balls on the table whose torso-centred directions are uniform
-  in :data:`TORSO_BOX` (the maps' views; a ball for which no gaze gives a pair of views is
-  drawn again); :func:`random_ball` uniform in a table area
-  (the reaches, in :data:`REACH_REGION`).
+The robot's own looking (the image and the joint angles only; :func:`sensed_view` reads
+the truth only for a view's labels, within ``scene.truth()``):
+
+- :func:`search`: random gaze commands until the right eye detects the target(s);
+- :func:`saccade` / :func:`look`: the eyes move by the angles of the retinal error, to put a
+  seen target at a given (or a random) place on the retina;
+- :func:`orient`: the head turns so that a seen target lies at a chosen head-centred
+  direction, estimated from the eye angles and the retinal offset;
+- :func:`view_pairs` records pairs of views of one ball: ``stage="eyes"`` (the head still:
+  the pair shares the head-centred direction; the head turns to a random direction in
+  :data:`HEAD_BOX` before each pair, then the eyes make saccades) or ``"head"`` (the head
+  turns between the views: the pair shares the torso-centred direction); a ``moved_share``
+  of the pairs see the ball moved between the views (a nuisance the learner must live with).
+  :data:`PAIRS_PER_BALL` pairs per ball.
+
+The experimenter's and the references' tools (they read the truth):
+:func:`direction_ball` draws balls on the table whose torso-centred directions are uniform
+in :data:`TORSO_BOX`; :func:`random_ball` uniform in a table area (the reaches, in
+:data:`REACH_REGION`); :func:`random_gaze` draws a gaze that keeps a point in view (from its
+projection), :func:`neck_for` / :func:`random_neck` a neck that puts it at a head-centred
+direction; :func:`measure` one view from the projection.
 """
 
 from __future__ import annotations
@@ -45,6 +54,7 @@ __all__ = [
     "look",
     "measure",
     "neck_for",
+    "orient",
     "random_ball",
     "random_gaze",
     "random_neck",
@@ -72,13 +82,18 @@ uniformly (:func:`neck_for`): the head turns so that the ball lies anywhere in t
 its field; a neck outside the neck's range is drawn again."""
 MOVE = 0.06
 """How far a moved ball moves between two views (uniform in +-MOVE along x and y, metres)."""
+TURN = np.radians(25.0)
+"""The largest step of each neck joint in one :func:`turn_head`, radians."""
 SEARCH_TRIES = 200
 """Random gazes :func:`search` tries before it gives up."""
 GOAL_MARGIN = 8.0
 """How far inside the image a saccade's goal lies (:func:`look`), pixels."""
-PAIRS_PER_BALL = 6
+PAIRS_PER_BALL = 2
 """Pairs of views :func:`view_pairs` records of one ball before the experimenter puts down
-the next (each pair's second view is the next pair's first)."""
+the next. On tuning seed 0 (``--quick``'s maps; order R^2 of map 1 and map 2) 1 pair gave
+0.83 and 0.82, 2 pairs 0.80 and 0.79, 3 pairs 0.69 and 0.66, 6 pairs 0.63 and 0.66: the
+fewer pairs per ball the better, and each ball costs a search (1 pair took twice the time of
+2)."""
 REACH_REGION = ((0.14, 0.31), (-0.36, 0.08))
 """The table area (world x and y) the reaching tests draw balls from (the scripted inverse
 kinematics' reach, measured on a grid: ``docs/guide/icub.md``)."""
@@ -236,17 +251,36 @@ def saccade(scene: ICubScene, uv: ArrayLike, goal: ArrayLike) -> None:
 
 
 def turn_head(scene: ICubScene, rng: np.random.Generator) -> None:
-    """A random neck command (uniform in the random gazes' range), the eyes turned back by
+    """A random neck command (the neck now plus uniform steps of up to :data:`TURN` radians
+    per joint, clipped to the random gazes' range), the eyes turned back by
     the neck's change (tilt against pitch, pan against yaw; clipped), so that what was seen
     tends to stay in view: the joint angles only."""
     g = scene.gaze()
-    neck = rng.uniform(GAZE_LOW[3:], GAZE_HIGH[3:])
+    neck = np.clip(g[3:] + rng.uniform(-TURN, TURN, 3), GAZE_LOW[3:], GAZE_HIGH[3:])
     d = neck - g[3:]
     g[0] -= d[0]
     g[1] += d[2]
     g[:3] = np.clip(g[:3], GAZE_LOW[:3], GAZE_HIGH[:3])
     g[3:] = neck
     scene.set_gaze(g)
+
+
+def orient(scene: ICubScene, uv: ArrayLike, goal: ArrayLike) -> None:
+    """Turn the head so that what the right eye sees at ``uv`` lies at head-centred direction
+    ``goal`` (azimuth, elevation), and the eyes to it: the direction now is estimated from
+    the image and the joints alone (the eye's tilt and pan plus the retinal offset's angles;
+    the eyes' offset from the neck's axes is ignored), the neck turns by the difference and
+    the eyes point at ``goal`` (each clipped to the random gazes' range)."""
+    c, f = 0.5 * scene.eye_size, scene.focal
+    u, v = np.asarray(uv, dtype=np.float64)
+    g = scene.gaze()
+    pan = g[1] - 0.5 * g[2]
+    now = np.array([-(pan + np.arctan((u - c) / f)), g[0] - np.arctan((v - c) / f)])
+    az, el = np.asarray(goal, dtype=np.float64)
+    g[3] += now[1] - el
+    g[5] += now[0] - az
+    g[0], g[1] = el, -az + 0.5 * g[2]
+    scene.set_gaze(np.clip(g, GAZE_LOW, GAZE_HIGH))
 
 
 def search(
@@ -281,6 +315,24 @@ def look(scene: ICubScene, rng: np.random.Generator, target: str, uv: ArrayLike)
     return scene.see(target)
 
 
+def _find(
+    scene: ICubScene, rng: np.random.Generator, uv: Array | None, *, head: bool
+) -> Array | None:
+    """After the head turned to a random head-centred direction in :data:`HEAD_BOX`
+    (``head``, :func:`orient`, from where the ball was seen, ``uv``) or the ball moved: where
+    the right eye sees the ball after a saccade to a random place; the eyes look for it (the
+    neck held) when it is out of view."""
+    if head and uv is not None:
+        orient(scene, uv, rng.uniform(HEAD_BOX[:, 0], HEAD_BOX[:, 1]))
+    seen = scene.see("ball")
+    if seen is None:
+        found = search(scene, rng, neck=scene.gaze()[3:])
+        if found is None:
+            return None
+        seen = found[0]
+    return look(scene, rng, "ball", seen)
+
+
 def view_pairs(
     scene: ICubScene,
     n: int,
@@ -299,27 +351,21 @@ def view_pairs(
         xy = direction_ball(scene, rng, 1)[0]
         scene.set_ball(xy)
         found = search(scene, rng)
-        if found is None:
-            continue
-        uv = look(scene, rng, "ball", found[0])
-        for _ in range(PAIRS_PER_BALL):
+        uv = None if found is None else found[0]
+        for k in range(PAIRS_PER_BALL):
+            if stage == "eyes" or k == 0:  # the head turns before the saccades' pairs
+                uv = _find(scene, rng, uv, head=True)
             if uv is None or len(first) >= n:
                 break
             view = sensed_view(scene, uv, scene.ball_position)
-            seen: Array | None = uv  # the ball still, the eyes still: where it was seen
-            if rng.random() < moved_share:
+            moved = rng.random() < moved_share
+            if moved:
                 xy = xy + rng.uniform(-MOVE, MOVE, 2)
                 scene.set_ball(xy)
-                seen = None
-            if stage == "head":
-                turn_head(scene, rng)
-                seen = None
-            if seen is None:
-                seen = scene.see("ball")
-            if seen is None:
-                lost = search(scene, rng, neck=scene.gaze()[3:] if stage == "eyes" else None)
-                seen = None if lost is None else lost[0]
-            uv = None if seen is None else look(scene, rng, "ball", seen)
+            if stage == "head" or moved:
+                uv = _find(scene, rng, uv, head=stage == "head")
+            else:  # the ball still, the eyes still: where it was seen, moved to a new place
+                uv = look(scene, rng, "ball", uv)
             if uv is not None:
                 first.append(view)
                 second.append(sensed_view(scene, uv, scene.ball_position))

@@ -3,11 +3,11 @@
 **Babbling** (:func:`babble`): the right arm takes random postures (shoulder pitch and roll
 and elbow uniform in their ranges, the shoulder's yaw uniform from :data:`BABBLE_YAW` to its
 upper limit, the wrist's pitch uniform in the narrow range :data:`BABBLE_WRIST`, which bends the
-hand down, the wrist's other joints straight); a posture is kept when it puts the
-palm at the height a reach aims at (:data:`~sigmapi.envs.icub.reach.AIM` above a ball's
-centre, within 1 cm) above the table, and the eyes and neck then look at the hand (a gaze as
-in the maps' views, the palm in view). Each babble gives a view of the palm (retina from the
-projection, gaze) and the posture.
+hand down, the wrist's other joints straight); a posture is kept by what the robot senses: the
+hand touches the table lightly (:meth:`~sigmapi.envs.icub.scene.ICubScene.hand_on_table`) and
+the eyes find its marker (:func:`~sigmapi.envs.icub.frames.search`, then a saccade that puts it
+at a random place on the retina). Each babble gives a view of the hand (the detected marker,
+the gaze) and the posture; the palm's true position is kept for scoring only.
 
 **The states** (:data:`METHODS`) a posture is associated with, each through an
 :class:`~sigmapi.agents.Association` trained on the same babbles:
@@ -23,15 +23,17 @@ projection, gaze) and the posture.
 
 **The reaches** (:func:`reach_tests`): balls uniform in the table area the scripted inverse
 kinematics reaches (:data:`~sigmapi.envs.icub.REACH_REGION`, kept when it reaches them within
-1 cm), each seen from a random gaze; every method's posture goes to the physics
-(:func:`~sigmapi.envs.icub.physical_reach`), beside ``scripted_ik`` (damped least squares on
-the true ball position: the upper bound). Success: the hand touched the ball.
+1 cm: the experimenter's choice), each found by the eyes (random gazes, then a saccade to a
+random place on the retina; a ball they cannot find is replaced); every method's posture goes
+to the physics (:func:`~sigmapi.envs.icub.physical_reach`), beside ``scripted_ik`` (damped
+least squares on the true ball position: the upper bound). Success: the hand touched the ball.
 
 **The learned servo** (:func:`servo`, every associated method alike): before the physical
 reach the arm holds the posture its association gave, the eyes and neck look where they see
-both the hand and the ball in one glance, and the posture moves by ``A(ball) - A(hand)`` (the
-association's postures for the two views, from the same gaze); a few such glances. It uses only
-what was learned (the maps, the association) and the measured views, never the true
+both the hand and the ball in one glance (:func:`glance`), and the posture moves by
+``A(ball) - A(hand)`` (the association's postures for the two views, from the same gaze); a
+few such glances. It uses only what was learned (the maps, the association) and the sensed
+views, never the true
 kinematics: seen in the same glance, the two views share the gaze, so errors the method makes
 alike for both (a map's unit off by some degrees, a posture that misses its place) cancel in
 the difference. ``success`` holds the reaches to the posture of the first view alone (the
@@ -58,6 +60,7 @@ from sigmapi.envs.icub import (
     physical_reach,
     random_ball,
 )
+from sigmapi.envs.icub.detect import detect
 from sigmapi.envs.icub.frames import look, search, sensed_view
 from sigmapi.envs.icub.reach import AIM
 from sigmapi.errors import ConfigError
@@ -132,7 +135,8 @@ def babble(
 ) -> Babbles:
     """``n`` babbles (see the module's account), the shoulder's yaw drawn from ``yaw`` (or
     its lower limit, if higher) to its upper limit and the wrist's pitch from ``wrist`` (low,
-    high; within the joint's range); the scene's arm goes back to rest."""
+    high; within the joint's range), the touch no deeper than ``tolerance`` metres; the
+    scene's arm goes back to rest."""
     lo, hi = scene.arm_range.T.copy()
     lo[_YAW] = max(lo[_YAW], yaw)
     if lo[_YAW] >= hi[_YAW]:
@@ -272,12 +276,27 @@ def reachable_balls(scene: ICubScene, n: int, rng: np.random.Generator) -> Array
 
 
 def glance(
-    scene: ICubScene, rng: np.random.Generator, tries: int = 200
+    scene: ICubScene, rng: np.random.Generator, tries: int = 10
 ) -> tuple[Array, Array] | None:
-    """Random gazes (:func:`~sigmapi.envs.icub.frames.search`) until the right eye sees both
-    the ball and the hand; where it sees them, or None (the gaze is then the last one tried)."""
-    found = search(scene, rng, ("ball", "hand"), tries=tries)
-    return None if found is None else (found[0], found[1])
+    """Where the right eye sees both the ball and the hand in one glance: the eyes look for the
+    ball (:func:`~sigmapi.envs.icub.frames.search`), then move it to random places on the
+    retina (:func:`~sigmapi.envs.icub.frames.look`) until the hand is seen too, at most
+    ``tries`` times; None when they do not (the gaze is then the last one)."""
+    found = search(scene, rng)
+    if found is None:
+        return None
+    ball = found[0]
+    for _ in range(tries):
+        img = scene.render("r_eye")
+        ball, hand = detect(img, "ball"), detect(img, "hand")
+        if ball is None:
+            return None
+        if hand is not None:
+            return ball, hand
+        ball = look(scene, rng, "ball", ball)
+        if ball is None:
+            return None
+    return None
 
 
 def servo(

@@ -32,8 +32,9 @@ from sigmapi._outputs import check_file
 from sigmapi.envs.icub import ICubScene, ViewBatch, random_gaze
 from sigmapi.envs.icub.detect import TARGETS, detect
 from sigmapi.envs.icub.frames import direction_ball, sensed_view
-from sigmapi.envs.icub.model import icub_models_module
+from sigmapi.envs.icub.model import REST_ARM, icub_models_module
 from sigmapi.envs.robot.scene import check_rendering, mujoco_module
+from sigmapi.errors import ConfigError
 from sigmapi.executor import Executor
 from sigmapi.experiments.base import Experiment, check_seeds, register, run_all
 from sigmapi.experiments.icub.config import QUICK, ICubConfig
@@ -65,8 +66,9 @@ the maps are built from an int drawn from ``"map"``, so no stream meets a model'
 
 def check_frames(scene: ICubScene, n: int, rng: np.random.Generator) -> dict[str, Any]:
     """The detector (:mod:`sigmapi.envs.icub.detect`) against the exact projection over ``n``
-    random scenes (a ball on the table, the hand on the table in a babbling posture, a gaze
-    that keeps the ball in the right eye's view; the simulator's truth scores it here): per
+    random scenes, each twice (a ball on the table with the arm at rest, and the hand on the
+    table in a babbling posture; a gaze that keeps the ball, or the marker's centre, in the
+    right eye's view; the simulator's truth scores it here): per
     target and eye the error in pixels and degrees, how often a target in view (its centre 4
     pixels inside) was missed and how often one out of view was reported; the right eye
     frame's render time and the detector's time per frame (wall and CPU milliseconds,
@@ -81,26 +83,36 @@ def check_frames(scene: ICubScene, n: int, rng: np.random.Generator) -> dict[str
     lo, hi = scene.arm_range.T
     with scene.truth():
         for b in direction_ball(scene, rng, n):
+            scene.reset()
             scene.set_ball(b)
+            random_gaze(scene, scene.ball_position(), rng)  # the arm at rest, out of view
+            scenes = [("ball", scene.gaze(), REST_ARM)]
             while True:  # the hand on the table somewhere, as babbling puts it
                 q = np.zeros(7)
                 q[[0, 1, 2, 3, 5]] = rng.uniform(lo[[0, 1, 2, 3, 5]], hi[[0, 1, 2, 3, 5]])
                 scene.set_arm(q)
-                if scene.hand_on_table():
+                if not scene.hand_on_table():
+                    continue
+                try:  # a marker under the table's edge: no gaze sees it
+                    random_gaze(scene, scene.marker_position(), rng)
                     break
-            random_gaze(scene, scene.ball_position(), rng)
-            points = {"ball": scene.ball_position(), "hand": scene.marker_position()}
-            for eye in EYES:
-                t0, c0 = time.perf_counter(), time.process_time()
-                img = scene.render(eye)
-                if eye == "r_eye":
-                    wall.append(time.perf_counter() - t0)
-                    cpu.append(time.process_time() - c0)
-                for target in TARGETS:
+                except ConfigError:
+                    continue
+            scenes.append(("hand", scene.gaze(), q))
+            for target, gaze, arm in scenes:
+                scene.set_arm(arm)
+                scene.set_gaze(gaze)
+                point = scene.ball_position() if target == "ball" else scene.marker_position()
+                for eye in EYES:
+                    t0, c0 = time.perf_counter(), time.process_time()
+                    img = scene.render(eye)
+                    if eye == "r_eye" and target == "ball":
+                        wall.append(time.perf_counter() - t0)
+                        cpu.append(time.process_time() - c0)
                     t1 = time.perf_counter()
                     px = detect(img, target)
                     det.append(time.perf_counter() - t1)
-                    truth = scene.project(points[target], eye)[0]
+                    truth = scene.project(point, eye)[0]
                     size = scene.eye_size
                     seen = bool(np.all((truth >= 4.0) & (truth <= size - 4.0)))
                     key = (target, eye)
@@ -361,6 +373,7 @@ class ICubExperiment(Experiment[ICubConfig]):
         with bar:
             steps = Steps(tick, ("check the frames", "record the evaluation views"))
             scene = ICubScene()
+            scene.seal()  # the frames check and the evaluation's labels read it in truth()
             frames = check_frames(scene, config.frame_scenes, np.random.default_rng(EVAL_SEED))
             steps.next()
             cal, test = MapData.evaluation(scene, config.eval_pairs)
