@@ -61,7 +61,7 @@ from sigmapi.envs.icub import (
     random_ball,
 )
 from sigmapi.envs.icub.detect import detect
-from sigmapi.envs.icub.frames import look, search, sensed_view
+from sigmapi.envs.icub.frames import GOAL_MARGIN, look, saccade, search, sensed_view
 from sigmapi.envs.icub.reach import AIM
 from sigmapi.errors import ConfigError
 from sigmapi.experiments.icub.maps import ChainMaps, eye_position, neck_position, retina_position
@@ -280,22 +280,22 @@ def glance(
 ) -> tuple[Array, Array] | None:
     """Where the right eye sees both the ball and the hand in one glance: the eyes look for the
     ball (:func:`~sigmapi.envs.icub.frames.search`), then move it to random places on the
-    retina (:func:`~sigmapi.envs.icub.frames.look`) until the hand is seen too, at most
+    retina (:func:`~sigmapi.envs.icub.frames.saccade`) until the hand is seen too, at most
     ``tries`` times; None when they do not (the gaze is then the last one)."""
     found = search(scene, rng)
     if found is None:
         return None
-    ball = found[0]
-    for _ in range(tries):
+    at = found[0]
+    for k in range(tries + 1):
+        if k:
+            saccade(scene, at, rng.uniform(GOAL_MARGIN, scene.eye_size - GOAL_MARGIN, 2))
         img = scene.render("r_eye")
         ball, hand = detect(img, "ball"), detect(img, "hand")
         if ball is None:
             return None
         if hand is not None:
             return ball, hand
-        ball = look(scene, rng, "ball", ball)
-        if ball is None:
-            return None
+        at = ball
     return None
 
 

@@ -86,7 +86,7 @@ def check_frames(scene: ICubScene, n: int, rng: np.random.Generator) -> dict[str
             scene.reset()
             scene.set_ball(b)
             random_gaze(scene, scene.ball_position(), rng)  # the arm at rest, out of view
-            scenes = [("ball", scene.gaze(), REST_ARM)]
+            scenes = [("ball", scene.gaze(), np.array(REST_ARM))]
             while True:  # the hand on the table somewhere, as babbling puts it
                 q = np.zeros(7)
                 q[[0, 1, 2, 3, 5]] = rng.uniform(lo[[0, 1, 2, 3, 5]], hi[[0, 1, 2, 3, 5]])
