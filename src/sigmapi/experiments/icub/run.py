@@ -339,7 +339,7 @@ class ICubExperiment(Experiment[ICubConfig]):
     120-122 measured today's settings before map 2's reference fed an exact map 1,
     :func:`~sigmapi.experiments.icub.maps.exact_map1`, which changes no setting)."""
     quick_seeds = (0,)
-    quick_time = "about 30 s on two quiet cores, 1-2 min on two busy ones"
+    quick_time = "about 2 min on two quiet cores, 2-3 min on two busy ones"
     """The seed of ``--quick``: a tuning seed."""
     extra = "robot"
     default_out = "icub"
