@@ -61,7 +61,6 @@ __all__ = [
     "saccade",
     "search",
     "sensed_view",
-    "turn_head",
     "view_pairs",
 ]
 
@@ -82,8 +81,6 @@ uniformly (:func:`neck_for`): the head turns so that the ball lies anywhere in t
 its field; a neck outside the neck's range is drawn again."""
 MOVE = 0.06
 """How far a moved ball moves between two views (uniform in +-MOVE along x and y, metres)."""
-TURN = np.radians(25.0)
-"""The largest step of each neck joint in one :func:`turn_head`, radians."""
 SEARCH_TRIES = 200
 """Random gazes :func:`search` tries before it gives up."""
 GOAL_MARGIN = 8.0
@@ -247,21 +244,6 @@ def saccade(scene: ICubScene, uv: ArrayLike, goal: ArrayLike) -> None:
     g[0] -= np.arctan((v - c) / f) - np.arctan((gv - c) / f)
     g[1] += np.arctan((u - c) / f) - np.arctan((gu - c) / f)
     g[:3] = np.clip(g[:3], GAZE_LOW[:3], GAZE_HIGH[:3])
-    scene.set_gaze(g)
-
-
-def turn_head(scene: ICubScene, rng: np.random.Generator) -> None:
-    """A random neck command (the neck now plus uniform steps of up to :data:`TURN` radians
-    per joint, clipped to the random gazes' range), the eyes turned back by
-    the neck's change (tilt against pitch, pan against yaw; clipped), so that what was seen
-    tends to stay in view: the joint angles only."""
-    g = scene.gaze()
-    neck = np.clip(g[3:] + rng.uniform(-TURN, TURN, 3), GAZE_LOW[3:], GAZE_HIGH[3:])
-    d = neck - g[3:]
-    g[0] -= d[0]
-    g[1] += d[2]
-    g[:3] = np.clip(g[:3], GAZE_LOW[:3], GAZE_HIGH[:3])
-    g[3:] = neck
     scene.set_gaze(g)
 
 
