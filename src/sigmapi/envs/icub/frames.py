@@ -76,9 +76,11 @@ TORSO_BOX = np.radians([[-50.0, 20.0], [-82.0, -48.0]])
 views are drawn from, uniformly: a part of the table around the arm's reach (in these
 coordinates a near rectangle on the table: 0.1-0.4 m ahead, 0.45 m right to 0.15 m left)."""
 HEAD_BOX = np.radians([[-30.0, 30.0], [-50.0, -15.0]])
-"""The head-centred directions (azimuth, elevation rows) the views' necks put the ball at,
-uniformly (:func:`neck_for`): the head turns so that the ball lies anywhere in this part of
-its field; a neck outside the neck's range is drawn again."""
+"""The head-centred directions (azimuth, elevation rows) the head turns the ball to, uniformly,
+in the views of :func:`view_pairs` (:func:`orient`, from the robot's own estimate: the true
+directions spill a few degrees over the edges, and a neck at its limit stops short); for
+:func:`random_neck` and :func:`random_gaze` (``head_box``) the box the true direction is
+drawn in."""
 MOVE = 0.06
 """How far a moved ball moves between two views (uniform in +-MOVE along x and y, metres)."""
 SEARCH_TRIES = 200
