@@ -419,14 +419,23 @@ def test_the_exact_map_1_codes_the_true_head_direction_on_map_1s_grid():
 
 
 def test_the_maps_anneal_their_learning_rate_past_the_presets_end():
+    """The icub-2d preset is what the maps trained before their schedule became a preset:
+    paper-2d with sigma 3 -> 1 -> 1, eps on to 0.004 and no refinement rounds."""
     from sigmapi.config import load_preset
-    from sigmapi.experiments.icub.maps import EPS, SIGMA, som_config
+    from sigmapi.experiments.icub.maps import som_config
 
+    before = load_preset("paper-2d").replace(
+        sigma=((0.0, 3.0), (0.5, 1.0), (1.0, 1.0)),
+        eps=((0.0, 0.1), (0.7, 0.01), (1.0, 0.004)),
+        refine_rounds=0,
+    )
     cfg = som_config((4, 4), (5, 5), (3, 2), 1.0, 100, 0, "auto")
-    assert cfg.eps == EPS and cfg.sigma == SIGMA and cfg.refine_rounds == 0
+    fixed = {"map_shape": (3, 2), "x_shape": (4, 4), "y_shape": (5, 5), "iterations": 100}
+    got, want = cfg.to_dict(), before.replace(seed=0, code_width=1.0, **fixed).to_dict()
+    got.pop("extra"), want.pop("extra")
+    assert got == want
     preset_end = load_preset("paper-2d").eps[-1][1]
-    assert EPS[-1][0] == 1.0 and EPS[-1][1] < preset_end  # still falling at the run's end
-    assert (cfg.map_shape, cfg.x_shape, cfg.y_shape) == ((3, 2), (4, 4), (5, 5))
+    assert cfg.eps[-1][0] == 1.0 and cfg.eps[-1][1] < preset_end  # still falling at the end
 
 
 def test_a_tiny_run_writes_every_key(rendering, tmp_path, monkeypatch):

@@ -95,24 +95,14 @@ BABBLE_YAW = 0.8
 """The lowest shoulder yaw babbling draws, radians (the joint's range is -0.65 to 1.40). The
 arm reaches most places on the table in postures of several families (four joints for three
 coordinates of the palm), and an association averages the postures it saw at a place: two
-families average to a posture that reaches neither. Keeping the yaw high keeps one family. On
-tuning seeds 0-2 (300 reaches each, no servo, map 2's centroid readout) the learned chain
-touched 0.833, 0.803, 0.810 of the balls with the whole range and, with the yaw from 0.1,
-0.25, 0.4, 0.6, 0.8, 1.0 and 1.2, a mean of 0.851, 0.860, 0.881, 0.874, 0.900, 0.890 and 0.878
-(0.910, 0.893, 0.897 at 0.8); the true direction 0.913, 0.943, 0.913 and, from 0.25 up,
-0.93-0.96. Babbled with the yaw below 0.4 instead (the other family), the true direction
-touched every ball in the nearest, rightmost twelfth of the table but 0.75-0.83 elsewhere."""
+families average to a posture that reaches neither. Keeping the yaw high keeps one family
+(chosen on the tuning seeds: ``docs/guide/icub.md``, where the settings come from)."""
 BABBLE_WRIST = (-0.6, -0.3)
 """The range of the wrist's pitch that babbling draws from, radians (the joint's range is -1.396
 to 0.436). With the wrist straight, the hand of a posture of the high-yaw family
 (:data:`BABBLE_YAW`) meets the table in the nearest, rightmost corner of the table, and the
-physics stops it up to 4 cm short of where the posture puts it (seed 0's babbles there). On tuning
-seeds 0-2 (300 reaches each, no servo) the true direction then touched 0.953, 0.957 and 0.937
-of the balls (0.39-0.54 of those in that corner) and the learned chain 0.890, 0.897 and 0.893;
-with the wrist's pitch from -0.6 to -0.3 the true direction 1.000 on each seed and the learned
-chain 0.963, 0.913 and 0.933 (from -0.8 to -0.2: 1.000 and 0.957, 0.900, 0.940; from -1.0 to
-0: 1.000 and 0.950, 0.910, 0.933; from -0.6 to 0: 0.997, 0.997, 0.987 and 0.933, 0.927,
-0.917; from 0 to 0.44, bending the hand up: 0.910 and 0.857 on seed 0)."""
+physics stops it short of where the posture puts it; bent a little, it stays off the table
+(chosen on the tuning seeds: ``docs/guide/icub.md``)."""
 
 
 @dataclass(frozen=True)

@@ -331,7 +331,7 @@ class ICubExperiment(Experiment[ICubConfig]):
     quick = QUICK
     seeds = (123, 124, 125, 126, 127)
     """The seeds of the acceptance run: none of them was tuned on (tuning used seeds 0-2; seeds
-    100-104 measured the settings before :data:`~sigmapi.experiments.icub.maps.EPS`, seeds
+    100-104 measured the settings before the learning rate of the ``icub-2d`` preset, seeds
     105-109 those before the centroid readout of map 2, ``ICubConfig.readout``, seeds 110-114
     those before the bent wrist in babbling,
     :data:`~sigmapi.experiments.icub.reaching.BABBLE_WRIST`, and map 2's narrower code of map
