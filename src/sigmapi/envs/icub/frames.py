@@ -11,23 +11,27 @@ The robot's own looking (the image and the joint angles only; :func:`sensed_view
 the truth only for a view's labels, within ``scene.truth()``):
 
 - :func:`search`: random gaze commands until the right eye detects the target(s);
-- :func:`saccade` / :func:`look`: the eyes move by the angles of the retinal error, to put a
-  seen target at a given (or a random) place on the retina;
+- :func:`saccade`: the eyes move by the angles of the retinal error, to put a seen target at
+  a given place on the retina; :func:`look`: a random command of the eyes, accepted when the
+  target would stay in view (predicted from the retinal position and the angles' change);
 - :func:`orient`: the head turns so that a seen target lies at a chosen head-centred
-  direction, estimated from the eye angles and the retinal offset;
+  direction, estimated from the eye angles and the retinal offset; :func:`head_goal` draws
+  that direction uniformly in :data:`HEAD_BOX` among those the neck reaches (by the same
+  estimate);
 - :func:`view_pairs` records pairs of views of one ball: ``stage="eyes"`` (the head still:
-  the pair shares the head-centred direction; the head turns to a random direction in
-  :data:`HEAD_BOX` before each pair, then the eyes make saccades) or ``"head"`` (the head
-  turns between the views: the pair shares the torso-centred direction); a ``moved_share``
-  of the pairs see the ball moved between the views (a nuisance the learner must live with).
-  :data:`PAIRS_PER_BALL` pairs per ball.
+  the pair shares the head-centred direction; the head turns before each pair, then the eyes
+  look twice) or ``"head"`` (the head turns between the views: the pair shares the
+  torso-centred direction); a ``moved_share`` of the pairs see the ball moved between the
+  views (a nuisance the learner must live with). :data:`PAIRS_PER_BALL` pairs per ball, the
+  balls put by the experimenter (:func:`place_ball`).
 
 The experimenter's and the references' tools (they read the truth):
-:func:`direction_ball` draws balls on the table whose torso-centred directions are uniform
-in :data:`TORSO_BOX`; :func:`random_ball` uniform in a table area (the reaches, in
-:data:`REACH_REGION`); :func:`random_gaze` draws a gaze that keeps a point in view (from its
-projection), :func:`neck_for` / :func:`random_neck` a neck that puts it at a head-centred
-direction; :func:`measure` one view from the projection.
+:func:`place_ball` puts the maps' balls uniformly on the table (:data:`MAP_REGION`) or, by
+:func:`direction_ball`, with their torso-centred directions uniform in :data:`TORSO_BOX`;
+:func:`random_ball` uniform in a table area (the reaches, in :data:`REACH_REGION`);
+:func:`random_gaze` draws a gaze that keeps a point in view (from its projection),
+:func:`neck_for` / :func:`random_neck` a neck that puts it at a head-centred direction;
+:func:`measure` one view from the projection.
 """
 
 from __future__ import annotations
@@ -43,9 +47,11 @@ from sigmapi.envs.icub.scene import ICubScene
 from sigmapi.errors import ConfigError
 
 __all__ = [
+    "BALLS",
     "GAZE_HIGH",
     "GAZE_LOW",
     "HEAD_BOX",
+    "MAP_REGION",
     "MOVE",
     "REACH_REGION",
     "TORSO_BOX",
@@ -55,6 +61,7 @@ __all__ = [
     "measure",
     "neck_for",
     "orient",
+    "place_ball",
     "random_ball",
     "random_gaze",
     "random_neck",
@@ -87,12 +94,20 @@ SEARCH_TRIES = 200
 """Random gazes :func:`search` tries before it gives up."""
 GOAL_MARGIN = 8.0
 """How far inside the image a saccade's goal lies (:func:`look`), pixels."""
+LOOK_TRIES = 200
+"""Random eye commands :func:`look` tries before it gives up."""
 PAIRS_PER_BALL = 2
 """Pairs of views :func:`view_pairs` records of one ball before the experimenter puts down
-the next. On tuning seed 0 (``--quick``'s maps; order R^2 of map 1 and map 2) 1 pair gave
-0.83 and 0.82, 2 pairs 0.80 and 0.79, 3 pairs 0.69 and 0.66, 6 pairs 0.63 and 0.66: the
-fewer pairs per ball the better, and each ball costs a search (1 pair took twice the time of
-2)."""
+the next (each ball costs a search by random gazes; chosen on the tuning seeds:
+``docs/guide/icub.md``)."""
+MAP_REGION = ((0.12, 0.40), (-0.45, 0.15))
+"""The table area (world x and y, metres) the experimenter puts the maps' balls on, uniformly
+(:data:`BALLS` ``"table"``): the part of the table around the arm's reach that
+:data:`TORSO_BOX` covers (0.12-0.41 m ahead, 0.47 m right to 0.15 m left), as a rectangle."""
+BALLS = ("table", "directions")
+"""Where the experimenter puts the maps' balls (:func:`place_ball`): uniform on the table in
+:data:`MAP_REGION` ("table"), or uniform in the torso-centred directions of :data:`TORSO_BOX`,
+the coordinates map 2 is scored in ("directions")."""
 REACH_REGION = ((0.14, 0.31), (-0.36, 0.08))
 """The table area (world x and y) the reaching tests draw balls from (the scripted inverse
 kinematics' reach, measured on a grid: ``docs/guide/icub.md``)."""
@@ -110,6 +125,16 @@ def direction_ball(scene: ICubScene, rng: np.random.Generator, n: int) -> Array:
     d = rng.uniform(TORSO_BOX[:, 0], TORSO_BOX[:, 1], (n, 2))
     with scene.truth():  # the experimenter puts the ball
         return scene.table_point(d)[:, :2]
+
+
+def place_ball(scene: ICubScene, rng: np.random.Generator, balls: str = "table") -> Array:
+    """Where the experimenter puts the next ball of the maps' views (world x, y;
+    :data:`BALLS`)."""
+    if balls not in BALLS:
+        raise ConfigError(f"balls must be one of {BALLS}, got {balls!r}")
+    if balls == "table":
+        return random_ball(rng, 1, MAP_REGION)[0]
+    return direction_ball(scene, rng, 1)[0]
 
 
 def random_gaze(
@@ -249,12 +274,8 @@ def saccade(scene: ICubScene, uv: ArrayLike, goal: ArrayLike) -> None:
     scene.set_gaze(g)
 
 
-def orient(scene: ICubScene, uv: ArrayLike, goal: ArrayLike) -> None:
-    """Turn the head so that what the right eye sees at ``uv`` lies at head-centred direction
-    ``goal`` (azimuth, elevation), and the eyes to it: the direction now is estimated from
-    the image and the joints alone (the eye's tilt and pan plus the retinal offset's angles;
-    the eyes' offset from the neck's axes is ignored), the neck turns by the difference and
-    the eyes point at ``goal`` (each clipped to the random gazes' range)."""
+def _turned(scene: ICubScene, uv: ArrayLike, goal: ArrayLike) -> Array:
+    """The gaze (not clipped) of :func:`orient`."""
     c, f = 0.5 * scene.eye_size, scene.focal
     u, v = np.asarray(uv, dtype=np.float64)
     g = scene.gaze()
@@ -264,7 +285,31 @@ def orient(scene: ICubScene, uv: ArrayLike, goal: ArrayLike) -> None:
     g[3] += now[1] - el
     g[5] += now[0] - az
     g[0], g[1] = el, -az + 0.5 * g[2]
-    scene.set_gaze(np.clip(g, GAZE_LOW, GAZE_HIGH))
+    return g
+
+
+def orient(scene: ICubScene, uv: ArrayLike, goal: ArrayLike) -> None:
+    """Turn the head so that what the right eye sees at ``uv`` lies at head-centred direction
+    ``goal`` (azimuth, elevation), and the eyes to it: the direction now is estimated from
+    the image and the joints alone (the eye's tilt and pan plus the retinal offset's angles;
+    the eyes' offset from the neck's axes is ignored), the neck turns by the difference and
+    the eyes point at ``goal`` (each clipped to the random gazes' range)."""
+    scene.set_gaze(np.clip(_turned(scene, uv, goal), GAZE_LOW, GAZE_HIGH))
+
+
+def head_goal(
+    scene: ICubScene, rng: np.random.Generator, uv: ArrayLike, tries: int = SEARCH_TRIES
+) -> Array:
+    """A head-centred direction uniform in :data:`HEAD_BOX` that the neck can turn what the
+    right eye sees at ``uv`` to (:func:`orient`'s estimate; the neck within the random gazes'
+    range): directions it cannot reach are drawn again (after ``tries``, the last one)."""
+    goal = rng.uniform(HEAD_BOX[:, 0], HEAD_BOX[:, 1])
+    for _ in range(tries):
+        neck = _turned(scene, uv, goal)[3:]
+        if np.all(neck >= GAZE_LOW[3:]) and np.all(neck <= GAZE_HIGH[3:]):
+            break
+        goal = rng.uniform(HEAD_BOX[:, 0], HEAD_BOX[:, 1])
+    return goal
 
 
 def search(
@@ -291,23 +336,39 @@ def search(
 
 
 def look(scene: ICubScene, rng: np.random.Generator, target: str, uv: ArrayLike) -> Array | None:
-    """A saccade that moves ``target``, seen at ``uv``, to a random place on the retina
-    (uniform, :data:`GOAL_MARGIN` pixels inside); where it is seen after, or None when the
-    eyes lost it."""
-    m = GOAL_MARGIN
-    saccade(scene, uv, rng.uniform(m, scene.eye_size - m, 2))
-    return scene.see(target)
+    """A random command of the eyes (tilt, version and vergence uniform in the random gazes'
+    range, the neck held), accepted when ``target``, seen at ``uv``, would land at least
+    :data:`GOAL_MARGIN` pixels inside the image (predicted from the retinal position and the
+    commanded change of the angles, through the camera's focal length: the image and the
+    joint angles only); where it is seen after, or None when no command of :data:`LOOK_TRIES`
+    is accepted or the eyes lost it."""
+    c, f, m, size = 0.5 * scene.eye_size, scene.focal, GOAL_MARGIN, scene.eye_size
+    u, v = np.asarray(uv, dtype=np.float64)
+    now = scene.gaze()
+    at_u, at_v = np.arctan((u - c) / f), np.arctan((v - c) / f)
+    for _ in range(LOOK_TRIES):
+        g = now.copy()
+        g[:3] = rng.uniform(GAZE_LOW[:3], GAZE_HIGH[:3])
+        to_u = at_u - ((g[1] - 0.5 * g[2]) - (now[1] - 0.5 * now[2]))  # the right eye's pan
+        to_v = at_v + (g[0] - now[0])
+        if max(abs(to_u), abs(to_v)) >= 0.5 * np.pi - 0.1:
+            continue
+        pu, pv = c + f * np.tan(to_u), c + f * np.tan(to_v)
+        if m <= pu <= size - m and m <= pv <= size - m:
+            scene.set_gaze(g)
+            return scene.see(target)
+    return None
 
 
 def _find(
     scene: ICubScene, rng: np.random.Generator, uv: Array | None, *, head: bool
 ) -> Array | None:
-    """After the head turned to a random head-centred direction in :data:`HEAD_BOX`
-    (``head``, :func:`orient`, from where the ball was seen, ``uv``) or the ball moved: where
-    the right eye sees the ball after a saccade to a random place; the eyes look for it (the
-    neck held) when it is out of view."""
+    """After the head turned to a random head-centred direction in :data:`HEAD_BOX` that the
+    neck reaches (``head``, :func:`head_goal` and :func:`orient`, from where the ball was seen,
+    ``uv``) or the ball moved: where the right eye sees the ball after the eyes :func:`look`;
+    the eyes look for it (the neck held) when it is out of view."""
     if head and uv is not None:
-        orient(scene, uv, rng.uniform(HEAD_BOX[:, 0], HEAD_BOX[:, 1]))
+        orient(scene, uv, head_goal(scene, rng, uv))
     seen = scene.see("ball")
     if seen is None:
         found = search(scene, rng, neck=scene.gaze()[3:])
@@ -324,19 +385,22 @@ def view_pairs(
     *,
     stage: str = "eyes",
     moved_share: float = 0.0,
+    balls: str = "table",
+    per_ball: int = PAIRS_PER_BALL,
 ) -> tuple[ViewBatch, ViewBatch]:
     """``n`` pairs of views of a ball on the table, as the robot senses them (see the
-    module's account)."""
+    module's account); the experimenter puts the balls as ``balls`` says
+    (:func:`place_ball`), ``per_ball`` pairs each."""
     if stage not in ("eyes", "head"):
         raise ConfigError(f"stage must be 'eyes' or 'head', got {stage!r}")
     first: list[tuple[Array, Array, Array, Array]] = []
     second: list[tuple[Array, Array, Array, Array]] = []
     while len(first) < n:
-        xy = direction_ball(scene, rng, 1)[0]
+        xy = place_ball(scene, rng, balls)
         scene.set_ball(xy)
         found = search(scene, rng)
         uv = None if found is None else found[0]
-        for k in range(PAIRS_PER_BALL):
+        for k in range(per_ball):
             if stage == "eyes" or k == 0:  # the head turns before the saccades' pairs
                 uv = _find(scene, rng, uv, head=True)
             if uv is None or len(first) >= n:

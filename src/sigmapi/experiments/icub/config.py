@@ -14,6 +14,7 @@ from sigmapi import _validate
 from sigmapi._outputs import OUTPUT
 from sigmapi.codes import _WIDTH_FIX, MIN_WIDTH
 from sigmapi.config import BACKEND_NAMES
+from sigmapi.envs.icub.frames import BALLS, PAIRS_PER_BALL
 
 __all__ = ["HEAD_CODES", "QUICK", "READOUTS", "ICubConfig"]
 
@@ -47,6 +48,15 @@ class ICubConfig:
         default=40_000, metadata=_validate.bounded("int", 1, 100_000_000, fix="e.g. 40000")
     )
     """Learning iterations of each map."""
+    balls: str = field(default="table", metadata=_validate.bounded("choice", options=BALLS))
+    """Where the experimenter puts the balls of the maps' views (training and scoring):
+    "table" (uniform on a rectangle of the table, as the robot would meet them) or
+    "directions" (uniform in the torso-centred directions map 2 is scored in)."""
+    pairs_per_ball: int = field(
+        default=PAIRS_PER_BALL, metadata=_validate.bounded("int", 1, 100, fix="e.g. 2")
+    )
+    """Pairs of views the robot records of one ball (each after its own head turn) before the
+    experimenter puts down the next."""
     moved_share: float = field(default=0.1, metadata=_validate.bounded("number", 0, 1))
     """Share of the view pairs in which the ball moved between the two views."""
     head_code: str = field(

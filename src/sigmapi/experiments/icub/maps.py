@@ -42,6 +42,7 @@ from sigmapi.envs.icub import (
     GAZE_HIGH,
     GAZE_LOW,
     HEAD_BOX,
+    PAIRS_PER_BALL,
     ICubScene,
     ViewBatch,
     direction_vectors,
@@ -147,19 +148,43 @@ class MapData:
 
     @classmethod
     def record(
-        cls, scene: ICubScene, n: int, rng: np.random.Generator, moved_share: float = 0.0
+        cls,
+        scene: ICubScene,
+        n: int,
+        rng: np.random.Generator,
+        moved_share: float = 0.0,
+        balls: str = "table",
+        per_ball: int = PAIRS_PER_BALL,
     ) -> MapData:
-        """``n`` pairs of each kind from ``rng``, ``moved_share`` of them with a moved ball."""
+        """``n`` pairs of each kind from ``rng``, ``moved_share`` of them with a moved ball, the
+        balls put as ``balls`` says (:data:`~sigmapi.envs.icub.frames.BALLS`), ``per_ball``
+        pairs each."""
         return cls(
-            view_pairs(scene, n, rng, stage="eyes", moved_share=moved_share),
-            view_pairs(scene, n, rng, stage="head", moved_share=moved_share),
+            *(
+                view_pairs(
+                    scene,
+                    n,
+                    rng,
+                    stage=stage,
+                    moved_share=moved_share,
+                    balls=balls,
+                    per_ball=per_ball,
+                )
+                for stage in ("eyes", "head")
+            )
         )
 
     @classmethod
-    def evaluation(cls, scene: ICubScene, n: int) -> tuple[MapData, MapData]:
-        """Calibration and test pairs (unmoved) from the fixed evaluation seed."""
+    def evaluation(
+        cls, scene: ICubScene, n: int, balls: str = "table", per_ball: int = PAIRS_PER_BALL
+    ) -> tuple[MapData, MapData]:
+        """Calibration and test pairs (unmoved) from the fixed evaluation seed, the balls put
+        as ``balls`` says, ``per_ball`` pairs each."""
         cal, test = (np.random.default_rng(s) for s in np.random.SeedSequence(EVAL_SEED).spawn(2))
-        return cls.record(scene, n, cal), cls.record(scene, n, test)
+        return (
+            cls.record(scene, n, cal, balls=balls, per_ball=per_ball),
+            cls.record(scene, n, test, balls=balls, per_ball=per_ball),
+        )
 
 
 class ChainMaps:

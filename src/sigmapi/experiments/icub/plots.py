@@ -323,10 +323,10 @@ def icub_figures(result: Any, out_dir: Path) -> list[Path]:
         )
     ball = np.concatenate([s["ball"] for s in result.per_seed])
     gaze = np.concatenate([s["gaze"] for s in result.per_seed])
-    succ = {m: np.concatenate([s["success"][m] for s in result.per_seed]) for m in METHODS}
+    succ = {m: np.concatenate([s["success"][m] for s in result.per_seed]) for m in result.methods()}
     total = result.success()
     save(
-        plot_success_table(ball, succ),
+        plot_success_table(ball, succ, tuple(succ)),
         "success-table.png",
         f"Every test ball of {seeds} ({ball.shape[0]} reaches per method), top view, one "
         "panel per method: green dot, touched; red cross, missed; dashed, the region the balls "

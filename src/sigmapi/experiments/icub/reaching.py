@@ -5,9 +5,10 @@ and elbow uniform in their ranges, the shoulder's yaw uniform from :data:`BABBLE
 upper limit, the wrist's pitch uniform in the narrow range :data:`BABBLE_WRIST`, which bends the
 hand down, the wrist's other joints straight); a posture is kept by what the robot senses: the
 hand touches the table lightly (:meth:`~sigmapi.envs.icub.scene.ICubScene.hand_on_table`) and
-the eyes find its marker (:func:`~sigmapi.envs.icub.frames.search`, then a saccade that puts it
-at a random place on the retina). Each babble gives a view of the hand (the detected marker,
-the gaze) and the posture; the palm's true position is kept for scoring only.
+the eyes find its marker (:func:`~sigmapi.envs.icub.frames.search`, then a random command of
+the eyes that keeps it in view, :func:`~sigmapi.envs.icub.frames.look`). Each babble gives a
+view of the hand (the detected marker, the gaze) and the posture; the palm's true position is
+kept for scoring only.
 
 **The states** (:data:`METHODS`) a posture is associated with, each through an
 :class:`~sigmapi.agents.Association` trained on the same babbles:
@@ -23,10 +24,11 @@ the gaze) and the posture; the palm's true position is kept for scoring only.
 
 **The reaches** (:func:`reach_tests`): balls uniform in the table area the scripted inverse
 kinematics reaches (:data:`~sigmapi.envs.icub.REACH_REGION`, kept when it reaches them within
-1 cm: the experimenter's choice), each found by the eyes (random gazes, then a saccade to a
-random place on the retina; a ball they cannot find is replaced); every method's posture goes
-to the physics (:func:`~sigmapi.envs.icub.physical_reach`), beside ``scripted_ik`` (damped
-least squares on the true ball position: the upper bound). Success: the hand touched the ball.
+1 cm: the experimenter's choice), each found by the eyes (random gazes, then a random command
+of the eyes that keeps it in view; a ball they cannot find is replaced); every method's posture
+goes to the physics (:func:`~sigmapi.envs.icub.physical_reach`), beside ``scripted_ik`` (damped
+least squares on the true ball position: the upper bound) and ``random_posture`` (a babbled
+posture drawn at random: the chance rate). Success: the hand touched the ball.
 
 **The learned servo** (:func:`servo`, every associated method alike): before the physical
 reach the arm holds the posture its association gave, the eyes and neck look where they see
@@ -84,8 +86,9 @@ __all__ = [
 
 Array = NDArray[np.float64]
 
-METHODS = ("learned", "true_direction", "retina", "retina_gaze", "scripted_ik")
-"""The reaching methods compared, in the order of the result."""
+METHODS = ("learned", "true_direction", "retina", "retina_gaze", "scripted_ik", "random_posture")
+"""The reaching methods compared, in the order of the result (``random_posture``: a babbled
+posture drawn at random, the chance rate)."""
 ASSOCIATED = METHODS[:4]
 """The methods that reach through an association learned from babbling."""
 _BABBLED = (0, 1, 2, 3, 5)  # shoulder pitch, roll, yaw, elbow, wrist pitch
@@ -326,9 +329,12 @@ def reach_tests(
     *,
     servo_steps: int = 0,
     servo_rng: np.random.Generator | None = None,
+    babbled: Array | None = None,
 ) -> tuple[ReachTests, list[NDArray[np.uint8]]]:
     """``n`` reaches per method (see the module's account), each associated method's also
     after ``servo_steps`` glances of :func:`servo` (gazes from ``servo_rng``) when > 0;
+    ``random_posture`` reaches with a posture drawn from ``babbled`` (``(m, 7)``; None: that
+    method is left out);
     ``film(i, method)`` > 0 films that many frames per leg of reach ``i`` by ``method``; the
     frames filmed, in order."""
     balls = reachable_balls(scene, n, rng)
@@ -359,7 +365,10 @@ def reach_tests(
         frames.extend(out.frames)
         return out.touched, out.distance
 
+    chance = None if babbled is None else babbled[rng.integers(0, len(babbled), n)]
     for method in METHODS:
+        if method == "random_posture" and chance is None:
+            continue
         ok, dist = np.zeros(n, dtype=bool), np.zeros(n)
         served = np.zeros(n, dtype=bool)
         serve = servo_steps > 0 and method in ASSOCIATED
@@ -373,6 +382,8 @@ def reach_tests(
                 scene.set_ball(b)
                 with scene.truth():  # the reference: scripted inverse kinematics
                     q = arm_ik(scene, scene.ball_position() + np.array([0.0, 0.0, AIM]))[0]
+            elif method == "random_posture":
+                q = chance[i]  # type: ignore[index]
             else:
                 q = postures[method][i]
             ok[i], dist[i] = touch(i, q, film(i, method) if film is not None else 0)

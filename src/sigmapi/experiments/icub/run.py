@@ -191,7 +191,10 @@ def learn_seed_chain(
     learns for that seed; ``sigmapi physiology`` records the same maps in
     ``benchmarks/bench_physiology.py --icub``); ``steps`` moves on when the views are
     recorded."""
-    train = MapData.record(scene, cfg.train_pairs, PLAN.rng(seed, "views"), cfg.moved_share)
+    rng = PLAN.rng(seed, "views")
+    train = MapData.record(
+        scene, cfg.train_pairs, rng, cfg.moved_share, cfg.balls, cfg.pairs_per_ball
+    )
     if steps is not None:
         steps.next()
     chain = learn_chain(
@@ -261,6 +264,7 @@ def _seed(job: _Job, tick: Tick | None) -> dict[str, Any]:
         film,
         servo_steps=cfg.servo_steps,
         servo_rng=PLAN.rng(seed, "servo"),
+        babbled=held_out.posture,
     )
     out.update(
         curves=curves,
@@ -376,7 +380,9 @@ class ICubExperiment(Experiment[ICubConfig]):
             scene.seal()  # the frames check and the evaluation's labels read it in truth()
             frames = check_frames(scene, config.frame_scenes, np.random.default_rng(EVAL_SEED))
             steps.next()
-            cal, test = MapData.evaluation(scene, config.eval_pairs)
+            cal, test = MapData.evaluation(
+                scene, config.eval_pairs, config.balls, config.pairs_per_ball
+            )
             steps.next()
             scene.close()
         jobs = [(str(seed), _Job(config, seed, cal, test, i == 0)) for i, seed in enumerate(seeds)]
