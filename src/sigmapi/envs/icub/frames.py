@@ -65,6 +65,7 @@ __all__ = [
     "random_ball",
     "random_gaze",
     "random_neck",
+    "reaches",
     "saccade",
     "search",
     "sensed_view",
@@ -94,6 +95,9 @@ SEARCH_TRIES = 200
 """Random gazes :func:`search` tries before it gives up."""
 GOAL_MARGIN = 8.0
 """How far inside the image a saccade's goal lies (:func:`look`), pixels."""
+GOAL_BALLS = 50
+"""Balls :func:`view_pairs` waits for one that its neck can turn to map 1's next head-centred
+direction before it draws another direction."""
 LOOK_TRIES = 200
 """Random eye commands :func:`look` tries before it gives up."""
 PAIRS_PER_BALL = 2
@@ -297,16 +301,22 @@ def orient(scene: ICubScene, uv: ArrayLike, goal: ArrayLike) -> None:
     scene.set_gaze(np.clip(_turned(scene, uv, goal), GAZE_LOW, GAZE_HIGH))
 
 
+def reaches(scene: ICubScene, uv: ArrayLike, goal: ArrayLike) -> bool:
+    """Whether the neck can turn what the right eye sees at ``uv`` to head-centred direction
+    ``goal`` (:func:`orient`'s estimate; the neck within the random gazes' range)."""
+    neck = _turned(scene, uv, goal)[3:]
+    return bool(np.all(neck >= GAZE_LOW[3:]) and np.all(neck <= GAZE_HIGH[3:]))
+
+
 def head_goal(
     scene: ICubScene, rng: np.random.Generator, uv: ArrayLike, tries: int = SEARCH_TRIES
 ) -> Array:
     """A head-centred direction uniform in :data:`HEAD_BOX` that the neck can turn what the
-    right eye sees at ``uv`` to (:func:`orient`'s estimate; the neck within the random gazes'
-    range): directions it cannot reach are drawn again (after ``tries``, the last one)."""
+    right eye sees at ``uv`` to (:func:`reaches`): directions it cannot reach are drawn again
+    (after ``tries``, the last one)."""
     goal = rng.uniform(HEAD_BOX[:, 0], HEAD_BOX[:, 1])
     for _ in range(tries):
-        neck = _turned(scene, uv, goal)[3:]
-        if np.all(neck >= GAZE_LOW[3:]) and np.all(neck <= GAZE_HIGH[3:]):
+        if reaches(scene, uv, goal):
             break
         goal = rng.uniform(HEAD_BOX[:, 0], HEAD_BOX[:, 1])
     return goal
@@ -361,14 +371,14 @@ def look(scene: ICubScene, rng: np.random.Generator, target: str, uv: ArrayLike)
 
 
 def _find(
-    scene: ICubScene, rng: np.random.Generator, uv: Array | None, *, head: bool
+    scene: ICubScene, rng: np.random.Generator, uv: Array | None, goal: Array | None
 ) -> Array | None:
-    """After the head turned to a random head-centred direction in :data:`HEAD_BOX` that the
-    neck reaches (``head``, :func:`head_goal` and :func:`orient`, from where the ball was seen,
-    ``uv``) or the ball moved: where the right eye sees the ball after the eyes :func:`look`;
-    the eyes look for it (the neck held) when it is out of view."""
-    if head and uv is not None:
-        orient(scene, uv, head_goal(scene, rng, uv))
+    """After the head turned to head-centred direction ``goal`` (:func:`orient`, from where
+    the ball was seen, ``uv``; None: the head still) or the ball moved: where the right eye
+    sees the ball after the eyes :func:`look`; the eyes look for it (the neck held) when it
+    is out of view."""
+    if goal is not None and uv is not None:
+        orient(scene, uv, goal)
     seen = scene.see("ball")
     if seen is None:
         found = search(scene, rng, neck=scene.gaze()[3:])
@@ -390,19 +400,31 @@ def view_pairs(
 ) -> tuple[ViewBatch, ViewBatch]:
     """``n`` pairs of views of a ball on the table, as the robot senses them (see the
     module's account); the experimenter puts the balls as ``balls`` says
-    (:func:`place_ball`), ``per_ball`` pairs each."""
+    (:func:`place_ball`), at most ``per_ball`` pairs each. For map 1's pairs the robot draws
+    the head-centred direction first, uniformly in :data:`HEAD_BOX`, and keeps it until a
+    ball comes that its neck can turn there (:func:`reaches`; after :data:`GOAL_BALLS` balls
+    it draws another): their directions are uniform in the box, not skewed to those most
+    balls reach."""
     if stage not in ("eyes", "head"):
         raise ConfigError(f"stage must be 'eyes' or 'head', got {stage!r}")
     first: list[tuple[Array, Array, Array, Array]] = []
     second: list[tuple[Array, Array, Array, Array]] = []
+    goal, waited = None, 0
     while len(first) < n:
         xy = place_ball(scene, rng, balls)
         scene.set_ball(xy)
         found = search(scene, rng)
         uv = None if found is None else found[0]
+        waited += 1
         for k in range(per_ball):
-            if stage == "eyes" or k == 0:  # the head turns before the saccades' pairs
-                uv = _find(scene, rng, uv, head=True)
+            if stage == "eyes":  # the head turns before each of the eyes' pairs
+                if goal is None or waited > GOAL_BALLS:
+                    goal, waited = rng.uniform(HEAD_BOX[:, 0], HEAD_BOX[:, 1]), 0
+                if uv is None or not reaches(scene, uv, goal):
+                    break  # the next ball
+                uv, goal = _find(scene, rng, uv, goal), None
+            elif k == 0:
+                uv = _find(scene, rng, uv, None if uv is None else head_goal(scene, rng, uv))
             if uv is None or len(first) >= n:
                 break
             view = sensed_view(scene, uv, scene.ball_position)
@@ -410,8 +432,10 @@ def view_pairs(
             if moved:
                 xy = xy + rng.uniform(-MOVE, MOVE, 2)
                 scene.set_ball(xy)
-            if stage == "head" or moved:
-                uv = _find(scene, rng, uv, head=stage == "head")
+            if stage == "head":
+                uv = _find(scene, rng, uv, head_goal(scene, rng, uv))
+            elif moved:
+                uv = _find(scene, rng, uv, None)
             else:  # the ball still, the eyes still: where it was seen, moved to a new place
                 uv = look(scene, rng, "ball", uv)
             if uv is not None:
