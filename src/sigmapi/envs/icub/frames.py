@@ -7,44 +7,68 @@ torso-centred directions ``(azimuth, elevation)`` (radians;
 :meth:`~sigmapi.envs.icub.scene.ICubScene.head_direction`,
 :meth:`~sigmapi.envs.icub.scene.ICubScene.torso_direction`).
 
-- :func:`random_gaze` draws a gaze that keeps a point in the right eye's view (uniform in
-  :data:`GAZE_LOW`..:data:`GAZE_HIGH`, redrawn until the point lies at least ``margin`` pixels
-  inside the image); ``neck=`` keeps the neck where it is (a saccade of the eyes only).
-- :func:`view_pairs` records pairs of views of one still point: ``stage="eyes"`` (the head
-  still: the pair shares the neck angles and thus the head-centred direction, drawn first and
-  uniform in :data:`HEAD_BOX`) or ``"head"``
-  (the neck turns too: the pair shares the torso-centred direction); a ``moved_share`` of the
-  pairs see the ball moved between the views (a nuisance the learner must live with).
-- :func:`direction_ball` draws balls on the table whose torso-centred directions are uniform
-  in :data:`TORSO_BOX` (the maps' views; a ball for which no gaze gives a pair of views is
-  drawn again); :func:`random_ball` uniform in a table area
-  (the reaches, in :data:`REACH_REGION`).
+The robot's own looking (the image and the joint angles only; :func:`sensed_view` reads
+the truth only for a view's labels, within ``scene.truth()``):
+
+- :func:`search`: random gaze commands until the right eye detects the target(s);
+- :func:`saccade`: the eyes move by the angles of the retinal error, to put a seen target at
+  a given place on the retina; :func:`look`: a random command of the eyes, accepted when the
+  target would stay in view (predicted from the retinal position and the angles' change);
+- :func:`orient`: the head turns so that a seen target lies at a chosen head-centred
+  direction, estimated from the eye angles and the retinal offset; :func:`head_goal` draws
+  that direction uniformly in :data:`HEAD_BOX` among those the neck reaches (by the same
+  estimate);
+- :func:`view_pairs` records pairs of views of one ball: ``stage="eyes"`` (the head still:
+  the pair shares the head-centred direction; the head turns before each pair, then the eyes
+  look twice) or ``"head"`` (the head turns between the views: the pair shares the
+  torso-centred direction); a ``moved_share`` of the pairs see the ball moved between the
+  views (a nuisance the learner must live with). :data:`PAIRS_PER_BALL` pairs per ball, the
+  balls put by the experimenter (:func:`place_ball`).
+
+The experimenter's and the references' tools (they read the truth):
+:func:`place_ball` puts the maps' balls uniformly on the table (:data:`MAP_REGION`) or, by
+:func:`direction_ball`, with their torso-centred directions uniform in :data:`TORSO_BOX`;
+:func:`random_ball` uniform in a table area (the reaches, in :data:`REACH_REGION`);
+:func:`random_gaze` draws a gaze that keeps a point in view (from its projection),
+:func:`neck_for` / :func:`random_neck` a neck that puts it at a head-centred direction;
+:func:`measure` one view from the projection.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from sigmapi.envs.icub.detect import detect
 from sigmapi.envs.icub.scene import ICubScene
 from sigmapi.errors import ConfigError
 
 __all__ = [
+    "BALLS",
     "GAZE_HIGH",
     "GAZE_LOW",
     "HEAD_BOX",
+    "MAP_REGION",
     "MOVE",
     "REACH_REGION",
     "TORSO_BOX",
     "ViewBatch",
     "direction_ball",
+    "look",
     "measure",
     "neck_for",
+    "orient",
+    "place_ball",
     "random_ball",
     "random_gaze",
     "random_neck",
+    "reaches",
+    "saccade",
+    "search",
+    "sensed_view",
     "view_pairs",
 ]
 
@@ -60,11 +84,34 @@ TORSO_BOX = np.radians([[-50.0, 20.0], [-82.0, -48.0]])
 views are drawn from, uniformly: a part of the table around the arm's reach (in these
 coordinates a near rectangle on the table: 0.1-0.4 m ahead, 0.45 m right to 0.15 m left)."""
 HEAD_BOX = np.radians([[-30.0, 30.0], [-50.0, -15.0]])
-"""The head-centred directions (azimuth, elevation rows) the views' necks put the ball at,
-uniformly (:func:`neck_for`): the head turns so that the ball lies anywhere in this part of
-its field; a neck outside the neck's range is drawn again."""
+"""The head-centred directions (azimuth, elevation rows) the head turns the ball to, uniformly,
+in the views of :func:`view_pairs` (:func:`orient`, from the robot's own estimate: the true
+directions spill a few degrees over the edges, and a neck at its limit stops short); for
+:func:`random_neck` and :func:`random_gaze` (``head_box``) the box the true direction is
+drawn in."""
 MOVE = 0.06
 """How far a moved ball moves between two views (uniform in +-MOVE along x and y, metres)."""
+SEARCH_TRIES = 200
+"""Random gazes :func:`search` tries before it gives up."""
+GOAL_MARGIN = 8.0
+"""How far inside the image a saccade's goal lies (:func:`look`), pixels."""
+GOAL_BALLS = 50
+"""Balls :func:`view_pairs` waits for one that its neck can turn to map 1's next head-centred
+direction before it draws another direction."""
+LOOK_TRIES = 200
+"""Random eye commands :func:`look` tries before it gives up."""
+PAIRS_PER_BALL = 2
+"""Pairs of views :func:`view_pairs` records of one ball before the experimenter puts down
+the next (each ball costs a search by random gazes; chosen on the tuning seeds:
+``docs/guide/icub.md``)."""
+MAP_REGION = ((0.12, 0.40), (-0.45, 0.15))
+"""The table area (world x and y, metres) the experimenter puts the maps' balls on, uniformly
+(:data:`BALLS` ``"table"``): the part of the table around the arm's reach that
+:data:`TORSO_BOX` covers (0.12-0.41 m ahead, 0.47 m right to 0.15 m left), as a rectangle."""
+BALLS = ("table", "directions")
+"""Where the experimenter puts the maps' balls (:func:`place_ball`): uniform on the table in
+:data:`MAP_REGION` ("table"), or uniform in the torso-centred directions of :data:`TORSO_BOX`,
+the coordinates map 2 is scored in ("directions")."""
 REACH_REGION = ((0.14, 0.31), (-0.36, 0.08))
 """The table area (world x and y) the reaching tests draw balls from (the scripted inverse
 kinematics' reach, measured on a grid: ``docs/guide/icub.md``)."""
@@ -80,7 +127,18 @@ def direction_ball(scene: ICubScene, rng: np.random.Generator, n: int) -> Array:
     """``n`` ball positions ``(n, 2)`` (world x, y) whose torso-centred directions are
     uniform in :data:`TORSO_BOX`."""
     d = rng.uniform(TORSO_BOX[:, 0], TORSO_BOX[:, 1], (n, 2))
-    return scene.table_point(d)[:, :2]
+    with scene.truth():  # the experimenter puts the ball
+        return scene.table_point(d)[:, :2]
+
+
+def place_ball(scene: ICubScene, rng: np.random.Generator, balls: str = "table") -> Array:
+    """Where the experimenter puts the next ball of the maps' views (world x, y;
+    :data:`BALLS`)."""
+    if balls not in BALLS:
+        raise ConfigError(f"balls must be one of {BALLS}, got {balls!r}")
+    if balls == "table":
+        return random_ball(rng, 1, MAP_REGION)[0]
+    return direction_ball(scene, rng, 1)[0]
 
 
 def random_gaze(
@@ -193,6 +251,143 @@ def _batch(rows: list[tuple[Array, Array, Array, Array]]) -> ViewBatch:
     return ViewBatch(*cols)
 
 
+def sensed_view(
+    scene: ICubScene, uv: ArrayLike, point: Callable[[], Array]
+) -> tuple[Array, Array, Array, Array]:
+    """One view as the robot senses it: the detected retinal position ``uv`` and the gaze
+    joints now; beside them the labels (head- and torso-centred directions of the true point
+    ``point()``, read within :meth:`~sigmapi.envs.icub.scene.ICubScene.truth`: analysis and
+    references only)."""
+    with scene.truth():
+        p = point()
+        labels = scene.head_direction(p), scene.torso_direction(p)
+    return np.array(uv, dtype=np.float64), scene.gaze(), *labels
+
+
+def saccade(scene: ICubScene, uv: ArrayLike, goal: ArrayLike) -> None:
+    """Move the eyes (the neck still) so that what the right eye sees at ``uv`` lands near
+    pixel ``goal``: one proportional step on the retinal error, each axis's angle from the
+    camera's focal length (a pan for ``u``, a tilt for ``v``), clipped to the random gazes'
+    range; the image and the joint angles only."""
+    c, f = 0.5 * scene.eye_size, scene.focal
+    (u, v), (gu, gv) = np.asarray(uv, dtype=np.float64), np.asarray(goal, dtype=np.float64)
+    g = scene.gaze()
+    g[0] -= np.arctan((v - c) / f) - np.arctan((gv - c) / f)
+    g[1] += np.arctan((u - c) / f) - np.arctan((gu - c) / f)
+    g[:3] = np.clip(g[:3], GAZE_LOW[:3], GAZE_HIGH[:3])
+    scene.set_gaze(g)
+
+
+def _turned(scene: ICubScene, uv: ArrayLike, goal: ArrayLike) -> Array:
+    """The gaze (not clipped) of :func:`orient`."""
+    c, f = 0.5 * scene.eye_size, scene.focal
+    u, v = np.asarray(uv, dtype=np.float64)
+    g = scene.gaze()
+    pan = g[1] - 0.5 * g[2]
+    now = np.array([-(pan + np.arctan((u - c) / f)), g[0] - np.arctan((v - c) / f)])
+    az, el = np.asarray(goal, dtype=np.float64)
+    g[3] += now[1] - el
+    g[5] += now[0] - az
+    g[0], g[1] = el, -az + 0.5 * g[2]
+    return g
+
+
+def orient(scene: ICubScene, uv: ArrayLike, goal: ArrayLike) -> None:
+    """Turn the head so that what the right eye sees at ``uv`` lies at head-centred direction
+    ``goal`` (azimuth, elevation), and the eyes to it: the direction now is estimated from
+    the image and the joints alone (the eye's tilt and pan plus the retinal offset's angles;
+    the eyes' offset from the neck's axes is ignored), the neck turns by the difference and
+    the eyes point at ``goal`` (each clipped to the random gazes' range)."""
+    scene.set_gaze(np.clip(_turned(scene, uv, goal), GAZE_LOW, GAZE_HIGH))
+
+
+def reaches(scene: ICubScene, uv: ArrayLike, goal: ArrayLike) -> bool:
+    """Whether the neck can turn what the right eye sees at ``uv`` to head-centred direction
+    ``goal`` (:func:`orient`'s estimate; the neck within the random gazes' range)."""
+    neck = _turned(scene, uv, goal)[3:]
+    return bool(np.all(neck >= GAZE_LOW[3:]) and np.all(neck <= GAZE_HIGH[3:]))
+
+
+def head_goal(
+    scene: ICubScene, rng: np.random.Generator, uv: ArrayLike, tries: int = SEARCH_TRIES
+) -> Array:
+    """A head-centred direction uniform in :data:`HEAD_BOX` that the neck can turn what the
+    right eye sees at ``uv`` to (:func:`reaches`): directions it cannot reach are drawn again
+    (after ``tries``, the last one)."""
+    goal = rng.uniform(HEAD_BOX[:, 0], HEAD_BOX[:, 1])
+    for _ in range(tries):
+        if reaches(scene, uv, goal):
+            break
+        goal = rng.uniform(HEAD_BOX[:, 0], HEAD_BOX[:, 1])
+    return goal
+
+
+def search(
+    scene: ICubScene,
+    rng: np.random.Generator,
+    targets: tuple[str, ...] = ("ball",),
+    *,
+    neck: ArrayLike | None = None,
+    tries: int = SEARCH_TRIES,
+) -> list[Array] | None:
+    """Random gaze commands (uniform in :data:`GAZE_LOW`..:data:`GAZE_HIGH`; ``neck`` holds the
+    neck) until the right eye detects every one of ``targets``; their retinal positions, or
+    None after ``tries`` (the gaze is then the last one tried)."""
+    for _ in range(tries):
+        g = rng.uniform(GAZE_LOW, GAZE_HIGH)
+        if neck is not None:
+            g[3:] = neck
+        scene.set_gaze(g)
+        img = scene.render("r_eye")
+        seen = [detect(img, t) for t in targets]
+        if all(x is not None for x in seen):
+            return seen  # type: ignore[return-value]
+    return None
+
+
+def look(scene: ICubScene, rng: np.random.Generator, target: str, uv: ArrayLike) -> Array | None:
+    """A random command of the eyes (tilt, version and vergence uniform in the random gazes'
+    range, the neck held), accepted when ``target``, seen at ``uv``, would land at least
+    :data:`GOAL_MARGIN` pixels inside the image (predicted from the retinal position and the
+    commanded change of the angles, through the camera's focal length: the image and the
+    joint angles only); where it is seen after, or None when no command of :data:`LOOK_TRIES`
+    is accepted or the eyes lost it."""
+    c, f, m, size = 0.5 * scene.eye_size, scene.focal, GOAL_MARGIN, scene.eye_size
+    u, v = np.asarray(uv, dtype=np.float64)
+    now = scene.gaze()
+    at_u, at_v = np.arctan((u - c) / f), np.arctan((v - c) / f)
+    for _ in range(LOOK_TRIES):
+        g = now.copy()
+        g[:3] = rng.uniform(GAZE_LOW[:3], GAZE_HIGH[:3])
+        to_u = at_u - ((g[1] - 0.5 * g[2]) - (now[1] - 0.5 * now[2]))  # the right eye's pan
+        to_v = at_v + (g[0] - now[0])
+        if max(abs(to_u), abs(to_v)) >= 0.5 * np.pi - 0.1:
+            continue
+        pu, pv = c + f * np.tan(to_u), c + f * np.tan(to_v)
+        if m <= pu <= size - m and m <= pv <= size - m:
+            scene.set_gaze(g)
+            return scene.see(target)
+    return None
+
+
+def _find(
+    scene: ICubScene, rng: np.random.Generator, uv: Array | None, goal: Array | None
+) -> Array | None:
+    """After the head turned to head-centred direction ``goal`` (:func:`orient`, from where
+    the ball was seen, ``uv``; None: the head still) or the ball moved: where the right eye
+    sees the ball after the eyes :func:`look`; the eyes look for it (the neck held) when it
+    is out of view."""
+    if goal is not None and uv is not None:
+        orient(scene, uv, goal)
+    seen = scene.see("ball")
+    if seen is None:
+        found = search(scene, rng, neck=scene.gaze()[3:])
+        if found is None:
+            return None
+        seen = found[0]
+    return look(scene, rng, "ball", seen)
+
+
 def view_pairs(
     scene: ICubScene,
     n: int,
@@ -200,44 +395,50 @@ def view_pairs(
     *,
     stage: str = "eyes",
     moved_share: float = 0.0,
+    balls: str = "table",
+    per_ball: int = PAIRS_PER_BALL,
 ) -> tuple[ViewBatch, ViewBatch]:
-    """``n`` pairs of views of a ball on the table (see the module's account)."""
+    """``n`` pairs of views of a ball on the table, as the robot senses them (see the
+    module's account); the experimenter puts the balls as ``balls`` says
+    (:func:`place_ball`), at most ``per_ball`` pairs each. For map 1's pairs the robot draws
+    the head-centred direction first, uniformly in :data:`HEAD_BOX`, and keeps it until a
+    ball comes that its neck can turn there (:func:`reaches`; after :data:`GOAL_BALLS` balls
+    it draws another): their directions are uniform in the box, not skewed to those most
+    balls reach."""
     if stage not in ("eyes", "head"):
         raise ConfigError(f"stage must be 'eyes' or 'head', got {stage!r}")
     first: list[tuple[Array, Array, Array, Array]] = []
     second: list[tuple[Array, Array, Array, Array]] = []
-    balls = direction_ball(scene, rng, n)
-    moved = rng.random(n) < moved_share
-    for i in range(n):
-        # the eyes' pairs draw the head-centred direction first, then balls until a neck in
-        # range puts one there: their head-centred directions are uniform in HEAD_BOX
-        head = rng.uniform(HEAD_BOX[:, 0], HEAD_BOX[:, 1]) if stage == "eyes" else None
-        for attempt in range(500):  # no gaze sees both views: draw again (a new ball)
-            if attempt and (head is not None or attempt % 50 == 0):
-                balls[i] = direction_ball(scene, rng, 1)[0]
-            scene.set_ball(balls[i])
-            ball = scene.ball_position()
-            try:
-                neck = (
-                    random_neck(scene, ball, rng) if head is None else neck_for(scene, ball, head)
-                )
-                if neck is None:
-                    continue
-                random_gaze(scene, ball, rng, neck=neck)
-                view = measure(scene, ball)
-                if moved[i]:
-                    scene.set_ball(balls[i] + rng.uniform(-MOVE, MOVE, 2))
-                    ball = scene.ball_position()
-                if stage == "head":
-                    neck = random_neck(scene, ball, rng)
-                    if neck is None:
-                        continue
-                random_gaze(scene, ball, rng, neck=neck)
-            except ConfigError:
-                continue
-            first.append(view)
-            second.append(measure(scene, ball))
-            break
-        else:
-            raise ConfigError(f"no pair of views of the ball at {balls[i].tolist()} found")
+    goal, waited = None, 0
+    while len(first) < n:
+        xy = place_ball(scene, rng, balls)
+        scene.set_ball(xy)
+        found = search(scene, rng)
+        uv = None if found is None else found[0]
+        waited += 1
+        for k in range(per_ball):
+            if stage == "eyes":  # the head turns before each of the eyes' pairs
+                if goal is None or waited > GOAL_BALLS:
+                    goal, waited = rng.uniform(HEAD_BOX[:, 0], HEAD_BOX[:, 1]), 0
+                if uv is None or not reaches(scene, uv, goal):
+                    break  # the next ball
+                uv, goal = _find(scene, rng, uv, goal), None
+            elif k == 0:
+                uv = _find(scene, rng, uv, None if uv is None else head_goal(scene, rng, uv))
+            if uv is None or len(first) >= n:
+                break
+            view = sensed_view(scene, uv, scene.ball_position)
+            moved = rng.random() < moved_share
+            if moved:
+                xy = xy + rng.uniform(-MOVE, MOVE, 2)
+                scene.set_ball(xy)
+            if stage == "head":
+                uv = _find(scene, rng, uv, head_goal(scene, rng, uv))
+            elif moved:
+                uv = _find(scene, rng, uv, None)
+            else:  # the ball still, the eyes still: where it was seen, moved to a new place
+                uv = look(scene, rng, "ball", uv)
+            if uv is not None:
+                first.append(view)
+                second.append(sensed_view(scene, uv, scene.ball_position))
     return _batch(first), _batch(second)

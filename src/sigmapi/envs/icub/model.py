@@ -15,6 +15,9 @@ what the URDF lacks added (:func:`build_spec`):
   each with a pan joint (positive: to the robot's right) and a camera at its rotation centre
   (``fovy`` :data:`FOVY`); version ``(l + r) / 2`` and vergence ``l - r`` are fixed tendons
   with position actuators, as on the robot;
+- a green marker on the back of the right hand (:data:`HAND_MARKER`; no contacts), which the
+  eyes detect as they detect the ball (:mod:`sigmapi.envs.icub.detect`), as iCub experiments
+  mark the hand;
 - a table, and a red ball on it (free joint), contacts only between the right forearm and hand,
   the ball and the table; lights without shadows (software EGL spends most of a frame on them).
 
@@ -49,7 +52,9 @@ __all__ = [
     "BUILD",
     "EYE_GROUPS",
     "FOVY",
+    "HAND_MARKER",
     "HOME_ARM",
+    "MARKER_RADIUS",
     "NECK",
     "REST_ARM",
     "ROBOT",
@@ -64,7 +69,7 @@ __all__ = [
 
 ROBOT = "iCubGazeboV2_7"
 """The ``icub-models`` robot that is converted."""
-BUILD = 5
+BUILD = 6
 """Version of the conversion in this module: part of the cache key (raise it on any change)."""
 ROOT_HEIGHT = 0.63
 """Height of the robot's root link above the floor, metres."""
@@ -90,6 +95,11 @@ ARM = (
 """The right arm's joints, shoulder to wrist."""
 HOME_ARM = (-0.52, 0.52, 0.0, 0.785, 0.0, 0.0, 0.0)
 """The Gazebo model's home pose of an arm, radians (``ARM``'s order)."""
+HAND_MARKER = (0.0, 0.0, -0.03)
+"""Where the green marker on the back of the right hand sits in the palm's frame
+(``r_hand_dh_frame``), metres: 3 cm behind the palm, where the eyes see it over the table."""
+MARKER_RADIUS = 0.015
+"""Radius of the hand's marker (a flat green sphere, no contacts), metres."""
 REST_ARM = (0.17, 0.35, 0.0, 0.27, 0.0, 0.0, 0.0)
 """The right arm's rest pose, radians: hanging at the side, out of the eyes' view of the table."""
 _LEFT = tuple("l" + name[1:] for name in ARM)
@@ -186,7 +196,19 @@ def build_spec() -> mujoco.MjSpec:
                 geom.rgba = [0.85, 0.75, 0.6, 1.0]
             else:
                 geom.group, geom.contype, geom.conaffinity = 2, 0, 0
-    spec.body("r_hand_dh_frame").add_site(name="palm", size=[0.005, 0, 0])
+    hand = spec.body("r_hand_dh_frame")
+    hand.add_site(name="palm", size=[0.005, 0, 0])
+    spec.add_material(name="marker", rgba=[0, 1, 0, 1], emission=1.0)
+    hand.add_geom(
+        name="hand_marker",
+        type=mj.mjtGeom.mjGEOM_SPHERE,
+        size=[MARKER_RADIUS, 0, 0],
+        pos=list(HAND_MARKER),
+        material="marker",
+        group=1,
+        contype=0,
+        conaffinity=0,
+    )
     _add_eyes(spec, head_pos, head_rot, yaw_x, roll_z)
     _add_world(spec)
     _add_actuators(spec)

@@ -99,9 +99,9 @@ def physical_reach(
             scene._mj.mj_step(scene.model, scene.data)
             if i % 10 == 0:
                 touched = touched or scene.hand_touches_ball()
-                best = min(
-                    best, float(np.linalg.norm(scene.palm_position() - scene.ball_position()))
-                )
+                with scene.truth():  # the score
+                    gap = float(np.linalg.norm(scene.palm_position() - scene.ball_position()))
+                best = min(best, gap)
             if film and i % max(1, steps // film) == 0:
                 frames.append(scene.render("third"))
     touched = touched or scene.hand_touches_ball()

@@ -32,11 +32,15 @@ is a fan on the table.
 
 from __future__ import annotations
 
-from typing import Any
+import functools
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from typing import Any, TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from sigmapi.envs.icub.detect import detect
 from sigmapi.envs.icub.model import (
     ARM,
     BALL_RADIUS,
@@ -48,9 +52,41 @@ from sigmapi.envs.icub.model import (
     load_model,
 )
 from sigmapi.envs.robot.scene import blob_centroid, check_rendering, mujoco_module
-from sigmapi.errors import ConfigError
+from sigmapi.errors import ConfigError, SigmapiError
 
-__all__ = ["EYE_SIZE", "GAZE", "ICubScene", "direction_angles", "direction_vectors"]
+__all__ = [
+    "EYE_SIZE",
+    "GAZE",
+    "ICubScene",
+    "TruthLeak",
+    "direction_angles",
+    "direction_vectors",
+]
+
+
+class TruthLeak(SigmapiError, RuntimeError):
+    """The simulator's truth (a body's, site's or camera's place in the world) was read
+    outside :meth:`ICubScene.truth` on a sealed scene (:meth:`ICubScene.seal`)."""
+
+
+_F = TypeVar("_F", bound=Callable[..., Any])
+
+
+def _truth(method: _F) -> _F:
+    """Mark ``method`` as a reader of the simulator's truth: on a sealed scene it raises
+    :class:`TruthLeak` outside :meth:`ICubScene.truth`."""
+
+    @functools.wraps(method)
+    def guarded(self: ICubScene, *args: Any, **kwargs: Any) -> Any:
+        if self._sealed and not self._truth_depth:
+            raise TruthLeak(
+                f"ICubScene.{method.__name__} reads the simulator's truth outside "
+                "scene.truth() (only scoring and labelled references may)"
+            )
+        return method(self, *args, **kwargs)
+
+    return guarded  # type: ignore[return-value]
+
 
 EYE_SIZE = 64
 """Side of an eye's square image, pixels."""
@@ -112,6 +148,7 @@ class ICubScene:
         self._table_geom = m.geom("table").id
         self._hand = np.asarray(m.geom_bodyid == m.body("r_hand").id)
         self._palm = m.site("palm").id
+        self._marker = m.geom("hand_marker").id
         self._chest = m.body("chest").id
         self._head = m.body("head").id
         tilt = m.body("eyes_tilt_link").id
@@ -120,6 +157,7 @@ class ICubScene:
         self._head_fix = q.reshape(3, 3)  # the tilt link's frame in the head's at tilt 0
         self.arm_range = np.array([m.jnt_range[m.joint(n).id] for n in ARM])
         self._renderers: dict[tuple[int, int], Any] = {}
+        self._sealed, self._truth_depth = False, 0
         self._eye_opt = self._mj.MjvOption()
         self._eye_opt.geomgroup[:] = np.array(EYE_GROUPS, dtype=np.uint8)
         self.reset()
@@ -200,13 +238,20 @@ class ICubScene:
         if forward:
             self._forward()
 
+    @_truth
     def ball_position(self) -> Array:
         """The ball's centre in the world, ``(3,)``."""
         return np.array(self.data.xpos[self._ball_body])
 
+    @_truth
     def palm_position(self) -> Array:
         """The palm's position (a site on ``r_hand_dh_frame``) in the world, ``(3,)``."""
         return np.array(self.data.site_xpos[self._palm])
+
+    @_truth
+    def marker_position(self) -> Array:
+        """The centre of the hand's marker in the world, ``(3,)``."""
+        return np.array(self.data.geom_xpos[self._marker])
 
     def step(self, seconds: float) -> None:
         """Run the physics for ``seconds`` (the actuators follow their targets)."""
@@ -214,6 +259,7 @@ class ICubScene:
             self._mj.mj_step(self.model, self.data)
 
     # ------------------------------------------------------------------ frames
+    @_truth
     def torso_frame(self) -> tuple[Array, Array]:
         """The chest's position ``(3,)`` and rotation ``(3, 3)`` with columns forward, left,
         up (the URDF's chest frame has x left, y up, z forward: re-ordered here)."""
@@ -221,22 +267,26 @@ class ICubScene:
         r = self.data.xmat[self._chest].reshape(3, 3)
         return c, np.stack([r[:, 2], r[:, 0], r[:, 1]], axis=1)
 
+    @_truth
     def head_frame(self) -> tuple[Array, Array]:
         """The right eye's centre ``(3,)`` and the head's rotation ``(3, 3)`` (columns forward,
         left, up with the eyes at zero)."""
         r = self.data.xmat[self._head].reshape(3, 3) @ self._head_fix
         return np.array(self.data.xpos[self.model.body("r_eye").id]), r
 
+    @_truth
     def torso_direction(self, p: ArrayLike) -> Array:
         """Torso-centred ``(azimuth, elevation)`` of world points ``p`` ``(..., 3)``."""
         c, r = self.torso_frame()
         return direction_angles((np.asarray(p) - c) @ r - self._torso_origin)
 
+    @_truth
     def head_direction(self, p: ArrayLike) -> Array:
         """Head-centred ``(azimuth, elevation)`` of world points ``p`` ``(..., 3)``."""
         c, r = self.head_frame()
         return direction_angles((np.asarray(p) - c) @ r)
 
+    @_truth
     def table_point(self, direction: ArrayLike) -> Array:
         """World points ``(B, 3)`` at the ball's centre height seen from the torso-centred
         origin in torso-centred directions ``(B, 2)`` (azimuth, elevation < 0)."""
@@ -247,6 +297,7 @@ class ICubScene:
         t = (TABLE_HEIGHT + BALL_RADIUS - origin[2]) / ray[:, 2]
         return origin + t[:, None] * ray
 
+    @_truth
     def look_at(self, p: ArrayLike, vergence: float = 0.0) -> None:
         """Turn the eyes (not the neck) so that the right eye fixates world point ``p`` (the
         tilt is the outer gimbal: tilt in the head's x-z plane, then the pan out of it)."""
@@ -256,12 +307,14 @@ class ICubScene:
         self.set_gaze([tilt, pan + 0.5 * vergence, vergence, *self.gaze()[3:]])
 
     # ------------------------------------------------------------------ the eyes
+    @_truth
     def camera_pose(self, eye: str) -> tuple[Array, Array]:
         """Camera ``eye`` (``"l_eye"`` or ``"r_eye"``): position and rotation (columns: right,
         up, backward; it looks along -z) as MuJoCo computed them."""
         cam = self.model.camera(eye).id
         return np.array(self.data.cam_xpos[cam]), self.data.cam_xmat[cam].reshape(3, 3)
 
+    @_truth
     def project(self, points: ArrayLike, eye: str = "r_eye") -> Array:
         """Pixel coordinates ``(B, 2)`` of world points ``(B, 3)`` in ``eye`` (the pinhole of
         the camera's pose and ``fovy``; NaN behind the camera)."""
@@ -290,6 +343,26 @@ class ICubScene:
         r.update_scene(self.data, camera=camera, scene_option=self._eye_opt if eye else None)
         return np.asarray(r.render())
 
+    def see(self, target: str, eye: str = "r_eye") -> Array | None:
+        """Where ``eye`` sees ``target`` (``"ball"`` or ``"hand"``, its marker) in its rendered
+        frame, ``(u, v)`` pixels, or None when the detection is not valid
+        (:func:`~sigmapi.envs.icub.detect.detect`: only the pixels are read)."""
+        return detect(self.render(eye), target)
+
+    def seal(self) -> None:
+        """From now on the truth's readers raise :class:`TruthLeak` outside :meth:`truth`."""
+        self._sealed = True
+
+    @contextmanager
+    def truth(self) -> Iterator[None]:
+        """Within this block the simulator's truth may be read (scoring, labelled references
+        and where the experimenter puts the ball)."""
+        self._truth_depth += 1
+        try:
+            yield
+        finally:
+            self._truth_depth -= 1
+
     def ball_pixels(self, eye: str = "r_eye") -> Array | None:
         """The ball's retinal position read from ``eye``'s rendered pixels (the red blob's
         centroid), or None when it is not in view."""
@@ -302,6 +375,21 @@ class ICubScene:
         self._renderers.clear()
 
     # ------------------------------------------------------------------ contacts
+    def hand_on_table(self, depth: float = 0.01) -> bool:
+        """Touch, sensed with the arm where it is set: whether the right hand touches the
+        table, lightly (no contact of the arm with the table deeper than ``depth`` metres,
+        MuJoCo's contact distance: how hard a touch sensor would feel it pressed); the
+        contacts are found again from the pose (``mj_collision``)."""
+        self._mj.mj_collision(self.model, self.data)
+        n = self.data.ncon
+        g1, g2 = self.data.contact.geom1[:n], self.data.contact.geom2[:n]
+        t = self._table_geom
+        on = (g1 == t) | (g2 == t)
+        if not np.any(on) or np.any(self.data.contact.dist[:n][on] < -depth):
+            return False
+        h = self._hand
+        return bool(np.any(on & (h[g1] | h[g2])))
+
     def hand_touches_ball(self) -> bool:
         """Whether the right hand (the palm's link, not the forearm) touches the ball."""
         n = self.data.ncon

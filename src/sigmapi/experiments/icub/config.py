@@ -14,6 +14,7 @@ from sigmapi import _validate
 from sigmapi._outputs import OUTPUT
 from sigmapi.codes import _WIDTH_FIX, MIN_WIDTH
 from sigmapi.config import BACKEND_NAMES
+from sigmapi.envs.icub.frames import BALLS, PAIRS_PER_BALL
 
 __all__ = ["HEAD_CODES", "QUICK", "READOUTS", "ICubConfig"]
 
@@ -47,9 +48,20 @@ class ICubConfig:
         default=40_000, metadata=_validate.bounded("int", 1, 100_000_000, fix="e.g. 40000")
     )
     """Learning iterations of each map."""
+    balls: str = field(default="table", metadata=_validate.bounded("choice", options=BALLS))
+    """Where the experimenter puts the balls of the maps' views (training and scoring):
+    "table" (uniform on a rectangle of the table, as the robot would meet them) or
+    "directions" (uniform in the torso-centred directions map 2 is scored in)."""
+    pairs_per_ball: int = field(
+        default=PAIRS_PER_BALL, metadata=_validate.bounded("int", 1, 100, fix="e.g. 2")
+    )
+    """Pairs of views the robot records of one ball (each after its own head turn) before the
+    experimenter puts down the next."""
     moved_share: float = field(default=0.1, metadata=_validate.bounded("number", 0, 1))
     """Share of the view pairs in which the ball moved between the two views."""
-    head_code: str = "winner"
+    head_code: str = field(
+        default="winner", metadata=_validate.bounded("choice", options=HEAD_CODES)
+    )
     """What map 1 hands to map 2: "winner" (a code of its winner's place), "centroid" (of its
     response's centre of mass near the winner) or "response"."""
     head_width: float = field(
@@ -87,7 +99,7 @@ class ICubConfig:
     """Babbles (random arm postures, the eyes on the hand) the associations learn from."""
     epochs: int = field(default=8, metadata=_validate.bounded("int", 1, 10_000, fix="e.g. 8"))
     """Passes of the associations' delta rule over the babbles."""
-    readout: str = "centroid"
+    readout: str = field(default="centroid", metadata=_validate.bounded("choice", options=READOUTS))
     """Where on map 2 the learned chain's bump is centred: "centroid" (the centre of mass of
     map 2's rectified response within 2 units of its winner) or "winner" (the winner's place
     on the grid)."""
@@ -98,7 +110,9 @@ class ICubConfig:
     servo_steps: int = field(default=3, metadata=_validate.bounded("int", 0, 100, fix="e.g. 3"))
     """Glances of the learned servo that correct each associated method's posture, reached
     again beside the posture of the first view alone (0: no servo)."""
-    backend: str = "auto"
+    backend: str = field(
+        default="auto", metadata=_validate.bounded("choice", options=BACKEND_NAMES)
+    )
     """Kernel that learns and reads the maps ("auto": the fast one when it is installed)."""
     render: str | None = field(default=None, metadata=OUTPUT)
     """Also write an animated GIF of the first seed's first learned reach to this file."""
@@ -110,9 +124,6 @@ class ICubConfig:
                 "map_shape", "2 axes (a direction is 2-D)", self.map_shape, "e.g. 8x8"
             )
         object.__setattr__(self, "babble_wrist", _wrist_range(self.babble_wrist))
-        _validate.choice("head_code", self.head_code, HEAD_CODES)
-        _validate.choice("readout", self.readout, READOUTS)
-        _validate.choice("backend", self.backend, BACKEND_NAMES)
         if self.render is not None and not str(self.render).lower().endswith(".gif"):
             raise _validate.fail("render", "a file name ending in .gif", self.render)
 

@@ -11,9 +11,9 @@
 
 Population codes read measured angles, each scaled to [0, 1] over the range the random gazes
 are drawn from (:data:`~sigmapi.envs.icub.GAZE_LOW`.. :data:`~sigmapi.envs.icub.GAZE_HIGH`).
-Both maps use the ``paper-2d`` preset (min-distance winner, the cross-view ordered start) with
-a neighbourhood that ends at 1 map unit (:data:`SIGMA`), a learning rate that anneals on to
-0.004 (:data:`EPS`) and no refinement rounds.
+Both maps use the ``icub-2d`` preset (:data:`MAP`: ``paper-2d``'s min-distance winner and
+cross-view ordered start, a neighbourhood that ends at 1 map unit, a learning rate that
+anneals on to 0.004, no refinement rounds).
 
 Each map is scored on unmoved pairs from the fixed evaluation seed against the true direction
 it should code (head-centred for map 1, torso-centred for map 2): the metrics of
@@ -37,17 +37,19 @@ from numpy.typing import NDArray
 
 from sigmapi.baselines import KohonenSOM
 from sigmapi.codes import PopulationCode
-from sigmapi.config import SOMConfig, load_preset
+from sigmapi.config import SOMConfig
 from sigmapi.envs.icub import (
     GAZE_HIGH,
     GAZE_LOW,
     HEAD_BOX,
+    PAIRS_PER_BALL,
     ICubScene,
     ViewBatch,
     direction_vectors,
     view_pairs,
 )
 from sigmapi.experiments.chain.run import head_code
+from sigmapi.experiments.kit.maps import MapSpec
 from sigmapi.metrics import (
     EVAL_SEED,
     FOLD_THRESHOLD,
@@ -60,10 +62,9 @@ from sigmapi.model.som import SigmaPiSOM
 from sigmapi.tasks import Batch
 
 __all__ = [
-    "EPS",
     "HEAD_WIDTH",
+    "MAP",
     "READOUT_RADIUS",
-    "SIGMA",
     "ChainMaps",
     "MapData",
     "angle_error_deg",
@@ -79,31 +80,19 @@ __all__ = [
 
 Array = NDArray[np.float64]
 
-SIGMA = ((0.0, 3.0), (0.5, 1.0), (1.0, 1.0))
-"""The maps' neighbourhood width (map units) over a run: 3 -> 1 at half-way, then 1."""
-EPS = ((0.0, 0.1), (0.7, 0.01), (1.0, 0.004))
-"""The maps' learning rate over a run: the preset's 0.1 -> 0.01 at 70 %, then on to 0.004 (the
-preset holds 0.01). On tuning seeds 0-2 this lowered both maps' direction errors on every seed
-(map 1 3.87/4.00/3.82 -> 3.72/3.83/3.67 degrees, map 2 5.21/5.29/5.48 -> 5.02/5.12/5.22); ending
-at 0.002 starved a unit of map 1 on seed 2."""
+MAP = MapSpec("icub-2d")
+"""The maps' settings: the ``icub-2d`` preset (its schedule, chosen on the tuning seeds, is
+explained in the preset file); the run sets the sizes, the codes, the length and the seed."""
 
 HEAD_WIDTH = 0.85
 """Width (map-1 units) of the hill of the code of map 1's place that map 2 reads
 (:meth:`ChainMaps.head`); the retina's, the eyes' and the neck's codes keep the config's
-``code_width`` (1). On tuning seeds 0-2 (map 1 as learned, map 2 learned again on the same
-views) width 1 gave map 2 order R^2 0.932, 0.930, 0.924, direction errors 5.02, 5.06, 5.27
-degrees and the learned chain 0.963, 0.940, 0.937 of 300 reaches (babbling with
-:data:`~sigmapi.experiments.icub.reaching.BABBLE_WRIST`); width 0.85 0.936, 0.935, 0.932,
-4.95, 4.92, 4.78 degrees and 0.973, 0.967, 0.947; width 0.7 0.733, 0.924, 0.867 and 0.970,
-0.967, 0.970; 0.5 0.642, 0.873, 0.774 and 0.950, 0.970, 0.957; 2 0.795 and 0.850, 0.733 and
-0.713 (seeds 0 and 1). Every code of map 2 at 0.85 (the neck's too): 0.930, 0.933, 0.920 and
-0.983, 0.957, 0.940."""
+``code_width`` (1). Narrower hills lowered map 2's error and wider ones its order (chosen on
+the tuning seeds: ``docs/guide/icub.md``, where the settings come from)."""
 
 READOUT_RADIUS = 2.0
 """Units (map units on each axis, around the winner) whose response :meth:`ChainMaps.place`
-weighs. On tuning seeds 0-2 (300 reaches each, no servo) the learned chain touched 0.790,
-0.760, 0.770 of the balls keyed by map 2's winner, 0.813, 0.773, 0.787 with radius 1 and
-0.833, 0.803, 0.810 with radius 2 (0.847, 0.783, 0.807 with 3)."""
+weighs (chosen on the tuning seeds: ``docs/guide/icub.md``)."""
 
 _EYE_LO = np.array([GAZE_LOW[0], GAZE_LOW[1] - 0.5 * GAZE_HIGH[2]])
 _EYE_HI = np.array([GAZE_HIGH[0], GAZE_HIGH[1] - 0.5 * GAZE_LOW[2]])
@@ -136,19 +125,15 @@ def som_config(
     seed: int,
     backend: str,
 ) -> SOMConfig:
-    """The ``paper-2d`` preset on these grids with :data:`SIGMA`, :data:`EPS` and no refinement
-    rounds."""
-    return load_preset("paper-2d").replace(
+    """The maps' preset (:data:`MAP`) on these grids."""
+    return MAP.config(
         map_shape=tuple(map_shape),
         x_shape=tuple(x_shape),
         y_shape=tuple(y_shape),
         code_width=width,
         iterations=iterations,
-        sigma=SIGMA,
-        eps=EPS,
         seed=seed,
         backend=backend,
-        refine_rounds=0,
     )
 
 
@@ -163,19 +148,43 @@ class MapData:
 
     @classmethod
     def record(
-        cls, scene: ICubScene, n: int, rng: np.random.Generator, moved_share: float = 0.0
+        cls,
+        scene: ICubScene,
+        n: int,
+        rng: np.random.Generator,
+        moved_share: float = 0.0,
+        balls: str = "table",
+        per_ball: int = PAIRS_PER_BALL,
     ) -> MapData:
-        """``n`` pairs of each kind from ``rng``, ``moved_share`` of them with a moved ball."""
+        """``n`` pairs of each kind from ``rng``, ``moved_share`` of them with a moved ball, the
+        balls put as ``balls`` says (:data:`~sigmapi.envs.icub.frames.BALLS`), ``per_ball``
+        pairs each."""
         return cls(
-            view_pairs(scene, n, rng, stage="eyes", moved_share=moved_share),
-            view_pairs(scene, n, rng, stage="head", moved_share=moved_share),
+            *(
+                view_pairs(
+                    scene,
+                    n,
+                    rng,
+                    stage=stage,
+                    moved_share=moved_share,
+                    balls=balls,
+                    per_ball=per_ball,
+                )
+                for stage in ("eyes", "head")
+            )
         )
 
     @classmethod
-    def evaluation(cls, scene: ICubScene, n: int) -> tuple[MapData, MapData]:
-        """Calibration and test pairs (unmoved) from the fixed evaluation seed."""
+    def evaluation(
+        cls, scene: ICubScene, n: int, balls: str = "table", per_ball: int = PAIRS_PER_BALL
+    ) -> tuple[MapData, MapData]:
+        """Calibration and test pairs (unmoved) from the fixed evaluation seed, the balls put
+        as ``balls`` says, ``per_ball`` pairs each."""
         cal, test = (np.random.default_rng(s) for s in np.random.SeedSequence(EVAL_SEED).spawn(2))
-        return cls.record(scene, n, cal), cls.record(scene, n, test)
+        return (
+            cls.record(scene, n, cal, balls=balls, per_ball=per_ball),
+            cls.record(scene, n, test, balls=balls, per_ball=per_ball),
+        )
 
 
 class ChainMaps:

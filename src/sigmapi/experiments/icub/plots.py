@@ -247,8 +247,8 @@ def plot_servo(
 
 
 def plot_eyes(eyes: Mapping[str, Any]) -> Any:
-    """Both eyes' frames, the ball's (yellow circle) and the palm's (cyan cross) projections;
-    one legend below the panels."""
+    """Both eyes' frames, the ball's (yellow circle) and the palm's (cyan cross) projections,
+    the detector's ball (white x) and hand marker (magenta x); one legend below the panels."""
     import matplotlib.pyplot as plt
 
     fig, axes = plt.subplots(1, 2, figsize=(7, 4.0), layout="constrained")
@@ -258,10 +258,15 @@ def plot_eyes(eyes: Mapping[str, Any]) -> Any:
         (bu, bv), (pu, pv) = eyes[f"{eye}_ball"], eyes[f"{eye}_palm"]
         ax.plot([bu], [bv], "o", mfc="none", mec="yellow", ms=12, mew=1.5, label="ball")
         ax.plot([pu], [pv], "+", color="cyan", ms=12, mew=2, label="palm")
+        for target, colour in (("ball", "white"), ("hand", "magenta")):
+            seen = eyes.get(f"{eye}_{target}_seen")
+            if seen is not None:
+                ax.plot([seen[0]], [seen[1]], "x", color=colour, ms=8, mew=1.5,
+                        label=f"{target} detected")  # fmt: skip
         ax.set(xlim=(0, img.shape[1]), ylim=(img.shape[0], 0), title=title)
         ax.set_xlabel(f"ball ({bu:.1f}, {bv:.1f}) px, palm ({pu:.1f}, {pv:.1f}) px", fontsize=8)
     handles, labels = axes[0].get_legend_handles_labels()
-    labels = [f"{t}, projected into the eye" for t in labels]
+    labels = [t if "detected" in t else f"{t}, projected into the eye" for t in labels]
     leg = fig.legend(handles, labels, loc="outside lower center", ncol=2)
     leg.get_frame().set_facecolor("0.6")  # the yellow circle shows on grey
     return fig
@@ -301,7 +306,8 @@ def icub_figures(result: Any, out_dir: Path) -> list[Path]:
             "eyes.png",
             f"Seed {seed}: both eyes' {w}x{h} frames with the arm at the posture the learned "
             "method reaches to for the first test ball; yellow circle: where the ball projects "
-            "into each eye, cyan cross: where the palm projects.",
+            "into each eye, cyan cross: where the palm projects; white and magenta x: where the "
+            "detector finds the ball and the hand's marker in the pixels.",
         )
     if "unit_table" in first:
         record = first["maps"]["map2"]
@@ -317,10 +323,10 @@ def icub_figures(result: Any, out_dir: Path) -> list[Path]:
         )
     ball = np.concatenate([s["ball"] for s in result.per_seed])
     gaze = np.concatenate([s["gaze"] for s in result.per_seed])
-    succ = {m: np.concatenate([s["success"][m] for s in result.per_seed]) for m in METHODS}
+    succ = {m: np.concatenate([s["success"][m] for s in result.per_seed]) for m in result.methods()}
     total = result.success()
     save(
-        plot_success_table(ball, succ),
+        plot_success_table(ball, succ, tuple(succ)),
         "success-table.png",
         f"Every test ball of {seeds} ({ball.shape[0]} reaches per method), top view, one "
         "panel per method: green dot, touched; red cross, missed; dashed, the region the balls "

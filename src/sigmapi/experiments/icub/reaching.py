@@ -3,11 +3,12 @@
 **Babbling** (:func:`babble`): the right arm takes random postures (shoulder pitch and roll
 and elbow uniform in their ranges, the shoulder's yaw uniform from :data:`BABBLE_YAW` to its
 upper limit, the wrist's pitch uniform in the narrow range :data:`BABBLE_WRIST`, which bends the
-hand down, the wrist's other joints straight); a posture is kept when it puts the
-palm at the height a reach aims at (:data:`~sigmapi.envs.icub.reach.AIM` above a ball's
-centre, within 1 cm) above the table, and the eyes and neck then look at the hand (a gaze as
-in the maps' views, the palm in view). Each babble gives a view of the palm (retina from the
-projection, gaze) and the posture.
+hand down, the wrist's other joints straight); a posture is kept by what the robot senses: the
+hand touches the table lightly (:meth:`~sigmapi.envs.icub.scene.ICubScene.hand_on_table`) and
+the eyes find its marker (:func:`~sigmapi.envs.icub.frames.search`, then a random command of
+the eyes that keeps it in view, :func:`~sigmapi.envs.icub.frames.look`). Each babble gives a
+view of the hand (the detected marker, the gaze) and the posture; the palm's true position is
+kept for scoring only.
 
 **The states** (:data:`METHODS`) a posture is associated with, each through an
 :class:`~sigmapi.agents.Association` trained on the same babbles:
@@ -23,15 +24,18 @@ projection, gaze) and the posture.
 
 **The reaches** (:func:`reach_tests`): balls uniform in the table area the scripted inverse
 kinematics reaches (:data:`~sigmapi.envs.icub.REACH_REGION`, kept when it reaches them within
-1 cm), each seen from a random gaze; every method's posture goes to the physics
-(:func:`~sigmapi.envs.icub.physical_reach`), beside ``scripted_ik`` (damped least squares on
-the true ball position: the upper bound). Success: the hand touched the ball.
+1 cm: the experimenter's choice), each found by the eyes (random gazes, then a random command
+of the eyes that keeps it in view; a ball they cannot find is replaced); every method's posture
+goes to the physics (:func:`~sigmapi.envs.icub.physical_reach`), beside ``scripted_ik`` (damped
+least squares on the true ball position: the upper bound) and ``random_posture`` (a babbled
+posture drawn at random: the chance rate). Success: the hand touched the ball.
 
 **The learned servo** (:func:`servo`, every associated method alike): before the physical
 reach the arm holds the posture its association gave, the eyes and neck look where they see
-both the hand and the ball in one glance, and the posture moves by ``A(ball) - A(hand)`` (the
-association's postures for the two views, from the same gaze); a few such glances. It uses only
-what was learned (the maps, the association) and the measured views, never the true
+both the hand and the ball in one glance (:func:`glance`), and the posture moves by
+``A(ball) - A(hand)`` (the association's postures for the two views, from the same gaze); a
+few such glances. It uses only what was learned (the maps, the association) and the sensed
+views, never the true
 kinematics: seen in the same glance, the two views share the gaze, so errors the method makes
 alike for both (a map's unit off by some degrees, a posture that misses its place) cancel in
 the difference. ``success`` holds the reaches to the posture of the first view alone (the
@@ -50,19 +54,16 @@ from sigmapi.agents import Association
 from sigmapi.codes import PopulationCode
 from sigmapi.envs import bump_features
 from sigmapi.envs.icub import (
-    BALL_RADIUS,
     REACH_REGION,
-    TABLE_HEIGHT,
     TORSO_BOX,
     ICubScene,
     ViewBatch,
     arm_ik,
-    measure,
     physical_reach,
     random_ball,
-    random_gaze,
-    random_neck,
 )
+from sigmapi.envs.icub.detect import detect
+from sigmapi.envs.icub.frames import GOAL_MARGIN, look, saccade, search, sensed_view
 from sigmapi.envs.icub.reach import AIM
 from sigmapi.errors import ConfigError
 from sigmapi.experiments.icub.maps import ChainMaps, eye_position, neck_position, retina_position
@@ -85,8 +86,9 @@ __all__ = [
 
 Array = NDArray[np.float64]
 
-METHODS = ("learned", "true_direction", "retina", "retina_gaze", "scripted_ik")
-"""The reaching methods compared, in the order of the result."""
+METHODS = ("learned", "true_direction", "retina", "retina_gaze", "scripted_ik", "random_posture")
+"""The reaching methods compared, in the order of the result (``random_posture``: a babbled
+posture drawn at random, the chance rate)."""
 ASSOCIATED = METHODS[:4]
 """The methods that reach through an association learned from babbling."""
 _BABBLED = (0, 1, 2, 3, 5)  # shoulder pitch, roll, yaw, elbow, wrist pitch
@@ -96,24 +98,14 @@ BABBLE_YAW = 0.8
 """The lowest shoulder yaw babbling draws, radians (the joint's range is -0.65 to 1.40). The
 arm reaches most places on the table in postures of several families (four joints for three
 coordinates of the palm), and an association averages the postures it saw at a place: two
-families average to a posture that reaches neither. Keeping the yaw high keeps one family. On
-tuning seeds 0-2 (300 reaches each, no servo, map 2's centroid readout) the learned chain
-touched 0.833, 0.803, 0.810 of the balls with the whole range and, with the yaw from 0.1,
-0.25, 0.4, 0.6, 0.8, 1.0 and 1.2, a mean of 0.851, 0.860, 0.881, 0.874, 0.900, 0.890 and 0.878
-(0.910, 0.893, 0.897 at 0.8); the true direction 0.913, 0.943, 0.913 and, from 0.25 up,
-0.93-0.96. Babbled with the yaw below 0.4 instead (the other family), the true direction
-touched every ball in the nearest, rightmost twelfth of the table but 0.75-0.83 elsewhere."""
+families average to a posture that reaches neither. Keeping the yaw high keeps one family
+(chosen on the tuning seeds: ``docs/guide/icub.md``, where the settings come from)."""
 BABBLE_WRIST = (-0.6, -0.3)
 """The range of the wrist's pitch that babbling draws from, radians (the joint's range is -1.396
 to 0.436). With the wrist straight, the hand of a posture of the high-yaw family
 (:data:`BABBLE_YAW`) meets the table in the nearest, rightmost corner of the table, and the
-physics stops it up to 4 cm short of where the posture puts it (seed 0's babbles there). On tuning
-seeds 0-2 (300 reaches each, no servo) the true direction then touched 0.953, 0.957 and 0.937
-of the balls (0.39-0.54 of those in that corner) and the learned chain 0.890, 0.897 and 0.893;
-with the wrist's pitch from -0.6 to -0.3 the true direction 1.000 on each seed and the learned
-chain 0.963, 0.913 and 0.933 (from -0.8 to -0.2: 1.000 and 0.957, 0.900, 0.940; from -1.0 to
-0: 1.000 and 0.950, 0.910, 0.933; from -0.6 to 0: 0.997, 0.997, 0.987 and 0.933, 0.927,
-0.917; from 0 to 0.44, bending the hand up: 0.910 and 0.857 on seed 0)."""
+physics stops it short of where the posture puts it; bent a little, it stays off the table
+(chosen on the tuning seeds: ``docs/guide/icub.md``)."""
 
 
 @dataclass(frozen=True)
@@ -136,8 +128,8 @@ def babble(
 ) -> Babbles:
     """``n`` babbles (see the module's account), the shoulder's yaw drawn from ``yaw`` (or
     its lower limit, if higher) to its upper limit and the wrist's pitch from ``wrist`` (low,
-    high; within the joint's range); the scene's arm goes back to rest."""
-    aim = TABLE_HEIGHT + BALL_RADIUS + AIM
+    high; within the joint's range), the touch no deeper than ``tolerance`` metres; the
+    scene's arm goes back to rest."""
     lo, hi = scene.arm_range.T.copy()
     lo[_YAW] = max(lo[_YAW], yaw)
     if lo[_YAW] >= hi[_YAW]:
@@ -159,16 +151,18 @@ def babble(
         q = np.zeros(7)
         q[list(_BABBLED)] = rng.uniform(lo[list(_BABBLED)], hi[list(_BABBLED)])
         scene.set_arm(q)
-        p = scene.palm_position()
-        if abs(p[2] - aim) > tolerance or not 0.09 < p[0] < 0.45 or not -0.48 < p[1] < 0.2:
+        if not scene.hand_on_table(tolerance):
             continue
-        neck = random_neck(scene, p, rng)
-        if neck is None:
+        found = search(scene, rng, ("hand",))
+        if found is None:
             continue
-        random_gaze(scene, p, rng, neck=neck)
+        uv = look(scene, rng, "hand", found[0])
+        if uv is None:
+            continue
         postures.append(q)
-        palms.append(p)
-        rows.append(measure(scene, p))
+        rows.append(sensed_view(scene, uv, scene.palm_position))
+        with scene.truth():  # for the babbling curve's score only
+            palms.append(scene.palm_position())
     scene.reset()
     cols = [np.array(c) for c in zip(*rows, strict=True)]
     return Babbles(np.array(postures), np.array(palms), ViewBatch(*cols))
@@ -244,7 +238,8 @@ def _palm_error(scene: ICubScene, postures: Array, palms: Array) -> float:
     errs = []
     for q, p in zip(postures, palms, strict=True):
         scene.set_arm(q)
-        errs.append(np.linalg.norm(scene.palm_position() - p))
+        with scene.truth():  # the babbling curve's score
+            errs.append(np.linalg.norm(scene.palm_position() - p))
     return float(np.median(errs))
 
 
@@ -267,29 +262,34 @@ def reachable_balls(scene: ICubScene, n: int, rng: np.random.Generator) -> Array
     while len(out) < n:
         b = random_ball(rng, 1, REACH_REGION)[0]
         scene.set_ball(b)
-        if arm_ik(scene, scene.ball_position() + np.array([0.0, 0.0, AIM]))[1] < 0.01:
-            out.append(b)
+        with scene.truth():  # the experimenter's choice of balls
+            if arm_ik(scene, scene.ball_position() + np.array([0.0, 0.0, AIM]))[1] < 0.01:
+                out.append(b)
     return np.array(out)
 
 
-def glance(scene: ICubScene, points: Array, rng: np.random.Generator, tries: int = 50) -> bool:
-    """Set a random gaze (neck and eyes, as the maps' views draw them) that keeps every point of
-    ``points`` ``(k, 3)`` in the right eye's view (aimed at their mean); False when none of
-    ``tries`` does (the gaze is then unchanged)."""
-    saved, mid = scene.gaze(), points.mean(axis=0)
-    for _ in range(tries):
-        neck = random_neck(scene, mid, rng)
-        if neck is None:
-            continue
-        try:
-            random_gaze(scene, mid, rng, neck=neck)
-        except ConfigError:
-            continue
-        uv = scene.project(points)
-        if np.all(np.isfinite(uv)) and np.all((uv >= 4.0) & (uv <= scene.eye_size - 4.0)):
-            return True
-    scene.set_gaze(saved)
-    return False
+def glance(
+    scene: ICubScene, rng: np.random.Generator, tries: int = 10
+) -> tuple[Array, Array] | None:
+    """Where the right eye sees both the ball and the hand in one glance: the eyes look for the
+    ball (:func:`~sigmapi.envs.icub.frames.search`), then move it to random places on the
+    retina (:func:`~sigmapi.envs.icub.frames.saccade`) until the hand is seen too, at most
+    ``tries`` times; None when they do not (the gaze is then the last one)."""
+    found = search(scene, rng)
+    if found is None:
+        return None
+    at = found[0]
+    for k in range(tries + 1):
+        if k:
+            saccade(scene, at, rng.uniform(GOAL_MARGIN, scene.eye_size - GOAL_MARGIN, 2))
+        img = scene.render("r_eye")
+        ball, hand = detect(img, "ball"), detect(img, "hand")
+        if ball is None:
+            return None
+        if hand is not None:
+            return ball, hand
+        at = ball
+    return None
 
 
 def servo(
@@ -303,13 +303,15 @@ def servo(
     """The posture after ``steps`` glances of the learned servo (the module's account), from
     posture ``q``; the scene's arm and gaze are left where the last glance put them."""
     q = np.array(q, dtype=np.float64)
-    ball = scene.ball_position()
     for _ in range(steps):
         scene.set_arm(q)
-        palm = scene.palm_position()
-        if not glance(scene, np.stack([ball, palm]), rng):
+        seen = glance(scene, rng)
+        if seen is None:
             break
-        rows = [measure(scene, ball), measure(scene, palm)]
+        rows = [
+            sensed_view(scene, seen[0], scene.ball_position),
+            sensed_view(scene, seen[1], scene.palm_position),
+        ]
         a_ball, a_palm = layer.predict(
             feats(ViewBatch(*(np.array(c) for c in zip(*rows, strict=True))))
         )
@@ -327,20 +329,27 @@ def reach_tests(
     *,
     servo_steps: int = 0,
     servo_rng: np.random.Generator | None = None,
+    babbled: Array | None = None,
 ) -> tuple[ReachTests, list[NDArray[np.uint8]]]:
     """``n`` reaches per method (see the module's account), each associated method's also
     after ``servo_steps`` glances of :func:`servo` (gazes from ``servo_rng``) when > 0;
+    ``random_posture`` reaches with a posture drawn from ``babbled`` (``(m, 7)``; None: that
+    method is left out);
     ``film(i, method)`` > 0 films that many frames per leg of reach ``i`` by ``method``; the
     frames filmed, in order."""
     balls = reachable_balls(scene, n, rng)
     gazes, views = [], []
-    for b in balls:
-        scene.reset()
-        scene.set_ball(b)
-        p = scene.ball_position()
-        random_gaze(scene, p, rng, neck=random_neck(scene, p, rng))
+    for i in range(n):
+        while True:  # the eyes look for the ball; one they cannot find is put elsewhere
+            scene.reset()
+            scene.set_ball(balls[i])
+            found = search(scene, rng)
+            uv = None if found is None else look(scene, rng, "ball", found[0])
+            if uv is not None:
+                break
+            balls[i] = reachable_balls(scene, 1, rng)[0]
         gazes.append(scene.gaze())
-        views.append(measure(scene, p))
+        views.append(sensed_view(scene, uv, scene.ball_position))
     cols = [np.array(c) for c in zip(*views, strict=True)]
     vb = ViewBatch(*cols)
     postures = {m: layers[m].predict(feats(m, vb)) for m in ASSOCIATED}
@@ -356,7 +365,10 @@ def reach_tests(
         frames.extend(out.frames)
         return out.touched, out.distance
 
+    chance = None if babbled is None else babbled[rng.integers(0, len(babbled), n)]
     for method in METHODS:
+        if method == "random_posture" and chance is None:
+            continue
         ok, dist = np.zeros(n, dtype=bool), np.zeros(n)
         served = np.zeros(n, dtype=bool)
         serve = servo_steps > 0 and method in ASSOCIATED
@@ -368,7 +380,10 @@ def reach_tests(
             if method == "scripted_ik":
                 scene.reset()
                 scene.set_ball(b)
-                q = arm_ik(scene, scene.ball_position() + np.array([0.0, 0.0, AIM]))[0]
+                with scene.truth():  # the reference: scripted inverse kinematics
+                    q = arm_ik(scene, scene.ball_position() + np.array([0.0, 0.0, AIM]))[0]
+            elif method == "random_posture":
+                q = chance[i]  # type: ignore[index]
             else:
                 q = postures[method][i]
             ok[i], dist[i] = touch(i, q, film(i, method) if film is not None else 0)

@@ -164,8 +164,13 @@ class ICubResult(Result):
         """Per method, the share of all reaches (every seed) that touched the ball."""
         return {
             m: float(np.mean(np.concatenate([s["success"][m] for s in self.per_seed])))
-            for m in METHODS
+            for m in self.methods()
         }
+
+    def methods(self) -> tuple[str, ...]:
+        """The reaching methods of the per-seed records, in :data:`METHODS`' order (a record
+        written before ``random_posture`` lacks it)."""
+        return tuple(m for m in METHODS if m in self.per_seed[0]["success"])
 
     def servo(self) -> dict[str, float]:
         """Per associated method, the share of all reaches that touched the ball after the
@@ -175,7 +180,7 @@ class ICubResult(Result):
 
     def success_per_seed(self) -> dict[str, list[float]]:
         """Per method, the share of each seed's reaches that touched the ball."""
-        return {m: [float(np.mean(s["success"][m])) for s in self.per_seed] for m in METHODS}
+        return {m: [float(np.mean(s["success"][m])) for s in self.per_seed] for m in self.methods()}
 
     def curves(self) -> dict[str, list[list[float]]]:
         """Per associated method, the babbling curve (babbles, median palm error in cm),
