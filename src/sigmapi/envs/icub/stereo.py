@@ -42,6 +42,7 @@ __all__ = [
     "EYE_HALF",
     "EYE_HIGH",
     "EYE_LOW",
+    "FUSION",
     "NECK_HIGH",
     "NECK_LOW",
     "fixate",
@@ -63,9 +64,11 @@ BOX = np.array([[0.16, 0.36], [-0.28, -0.04], [0.61, 0.81]])
 (left) and ``z`` (up; the table's top is at 0.56 m), metres, ``(3, 2)`` low and high."""
 EYE_HALF = 0.034
 """Half the distance between the eyes' rotation centres, metres (the model's, after iKin)."""
-EYE_LOW = np.radians([-35.0, -30.0, 0.0])
-"""Low ends of the eyes' random commands: tilt, version, vergence (radians)."""
-EYE_HIGH = np.radians([10.0, 30.0, 25.0])
+EYE_LOW = np.radians([-35.0, -30.0, 4.0])
+"""Low ends of the eyes' random commands: tilt, version, vergence (radians; the vergence
+spans the box's distances, 8-27 degrees fixated, with a margin of the disparities'
+:data:`FUSION` range)."""
+EYE_HIGH = np.radians([10.0, 30.0, 20.0])
 """High ends of the eyes' random commands."""
 NECK_LOW = np.radians([-40.0, -8.0, -40.0])
 """Low ends of the neck's random postures in the 3-D task: pitch, roll, yaw (radians)."""
@@ -75,6 +78,9 @@ FIX_LIMIT = np.radians([[-35.0, 15.0], [-50.0, 50.0]])
 """The fixation's clip: tilt and each eye's pan (the joints' ranges, radians)."""
 NECK_PITCH = np.radians([-40.0, 22.0])
 """The neck pitch's range (radians): the fixation turns the neck by what the tilt cannot."""
+FUSION = 12.0
+"""The widest horizontal disparity ``|u_left - u_right|`` (pixels) at which :func:`search_both`
+takes the two detections as one ball (about 10 degrees; wider, the eyes look again)."""
 SEARCH_TRIES = 300
 """Random eye commands before :func:`search_both` gives up."""
 
@@ -117,15 +123,20 @@ def see_both(scene: ICubScene, target: str = "ball") -> tuple[Array, Array] | No
 
 
 def search_both(
-    scene: ICubScene, rng: np.random.Generator, target: str = "ball", tries: int = SEARCH_TRIES
+    scene: ICubScene,
+    rng: np.random.Generator,
+    target: str = "ball",
+    tries: int = SEARCH_TRIES,
+    fusion: float | None = FUSION,
 ) -> tuple[Array, Array] | None:
     """Random eye commands (uniform in :data:`EYE_LOW`..:data:`EYE_HIGH`, the neck held) until
-    both eyes see ``target``; its detections, or None after ``tries``."""
+    both eyes see ``target`` with a horizontal disparity within ``fusion`` pixels (None: any);
+    its detections, or None after ``tries``."""
     neck = scene.gaze()[3:]
     for _ in range(tries):
         scene.set_gaze([*rng.uniform(EYE_LOW, EYE_HIGH), *neck])
         seen = see_both(scene, target)
-        if seen is not None:
+        if seen is not None and (fusion is None or abs(seen[0][0] - seen[1][0]) <= fusion):
             return seen
     return None
 

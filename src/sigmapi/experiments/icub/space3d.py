@@ -76,9 +76,9 @@ __all__ = [
 
 Array = NDArray[np.float64]
 
-DISPARITY = 24.0
+DISPARITY = st.FUSION
 """Half the range of horizontal disparities the retina's code spans, pixels (``u_left -
-u_right`` in [-24, 24]: about +-19 degrees of vergence error through the focal length)."""
+u_right`` within the fusion range, :data:`~sigmapi.envs.icub.stereo.FUSION`)."""
 HEAD_WIDTH = 0.85
 """Width (map-H units) of the hill of map H's place code that map T reads."""
 PAIRS_PER_BALL = 2
@@ -250,6 +250,32 @@ def _truth(stage: str, v: Views3D) -> Array:
     return v.head if stage == "head" else v.torso
 
 
+def _origin(stage: str) -> Array:
+    """Where :func:`spherical` sees from: between the eyes (head-centred; the right eye's
+    centre is the frame's origin) or the torso-centred origin."""
+    return np.array([0.0, st.EYE_HALF, 0.0]) if stage == "head" else np.zeros(3)
+
+
+def spherical(z: Array, origin: Array) -> Array:
+    """``(azimuth, elevation, distance)`` ``(n, 3)`` of positions ``z`` ``(n, 3)`` (x forward,
+    y left, z up) seen from ``origin``: ``asin(y / r)``, ``atan2(z, x)`` (radians, the
+    gimbals' angles of :func:`~sigmapi.envs.icub.direction_angles`) and ``r`` (metres)."""
+    v = z - origin
+    r = np.linalg.norm(v, axis=1)
+    return np.column_stack(
+        [np.arcsin(np.clip(v[:, 1] / r, -1, 1)), np.arctan2(v[:, 2], v[:, 0]), r]
+    )
+
+
+def _per_axis(cc: Array, zc: Array, ct: Array, zt: Array) -> list[float]:
+    """R^2 per coordinate of the affine fit from map coordinates ``cc`` to ``zc`` (the
+    calibration views), scored on ``ct``, ``zt`` (the test views)."""
+    beta = affine_fit(cc, zc)
+    pred = np.column_stack([ct, np.ones(ct.shape[0])]) @ beta
+    sst = np.sum((zt - zt.mean(axis=0)) ** 2, axis=0)
+    return [float(r) for r in 1.0 - np.sum((pred - zt) ** 2, axis=0) / sst]
+
+
 def _position_scores(
     wc: NDArray[np.int64],
     zc: Array,
@@ -257,16 +283,19 @@ def _position_scores(
     w1: NDArray[np.int64],
     zt: Array,
     coords: Array,
+    origin: Array | None = None,
 ) -> dict[str, Any]:
-    """Order (overall and per axis), view consistency, usage and the error in cm of a
-    quantiser whose calibration winners are ``wc`` (true positions ``zc``) and test winners
-    ``w0``, ``w1`` (true positions ``zt``), units at ``coords``."""
+    """Order (overall, per axis of ``x, y, z`` and per axis of :func:`spherical` from
+    ``origin``), view consistency, usage and the error in cm of a quantiser whose
+    calibration winners are ``wc`` (true positions ``zc``) and test winners ``w0``, ``w1``
+    (true positions ``zt``), units at ``coords``; ``origin`` None: zero."""
+    origin = np.zeros(3) if origin is None else origin
     m = winner_metrics(wc, zc, w0, w1, zt, coords, 1.0)
     m.pop("z_error")
-    beta = affine_fit(coords[wc], zc)
-    pred = np.column_stack([coords[w0], np.ones(w0.size)]) @ beta
-    sst = np.sum((zt - zt.mean(axis=0)) ** 2, axis=0)
-    m["order_r2_per_axis"] = [float(r) for r in 1.0 - np.sum((pred - zt) ** 2, axis=0) / sst]
+    m["order_r2_per_axis"] = _per_axis(coords[wc], zc, coords[w0], zt)
+    m["order_r2_per_axis_spherical"] = _per_axis(
+        coords[wc], spherical(zc, origin), coords[w0], spherical(zt, origin)
+    )
     err = np.linalg.norm(z_decoder(wc, zc, coords)[w0] - zt, axis=1) * 100.0
     m["error_cm"] = float(np.sqrt(np.mean(err**2)))
     m["error_cm_median"] = float(np.median(err))
@@ -286,7 +315,8 @@ def score_map(
     w0 = np.argmax(scores, axis=1)
     w1 = model.winner(x1, y1, hard=True)
     wc = model.winner(*chain.inputs(stage, c0), hard=True)
-    out = _position_scores(wc, _truth(stage, c0), w0, w1, _truth(stage, t0), model.map_coords)
+    zc, zt = _truth(stage, c0), _truth(stage, t0)
+    out = _position_scores(wc, zc, w0, w1, zt, model.map_coords, _origin(stage))
     z = _truth(stage, t0)
     batch = Batch(x0, y0, x1, y1, z, t0.left, t0.gaze, t1.left, t1.gaze)
     starved, te, fold = fold_indicators(model, batch, w0, w1, scores)
@@ -323,9 +353,8 @@ def true_position_map(
         return som.winner(z, np.zeros((z.shape[0], 0)))
 
     (c0, _), (t0, t1) = cal, test
-    return _position_scores(
-        win(c0), _truth(stage, c0), win(t0), win(t1), _truth(stage, t0), som.coords
-    )
+    zc, zt = _truth(stage, c0), _truth(stage, t0)
+    return _position_scores(win(c0), zc, win(t0), win(t1), zt, som.coords, _origin(stage))
 
 
 def kmeans_reference(
