@@ -409,12 +409,12 @@ def evaluation_pairs(
 def run_maps(
     seed: int,
     *,
-    train_pairs: int = 3000,
-    eval_pairs: int = 600,
+    train_pairs: int = 2000,
+    eval_pairs: int = 400,
     grid: int = 6,
     width: float = 1.0,
     map_shape: tuple[int, int, int] = (6, 6, 6),
-    iterations: int = 30_000,
+    iterations: int = 15_000,
     backend: str = "auto",
 ) -> dict[str, Any]:
     """One seed of the 3-D maps: record, learn, score against both references."""
