@@ -290,7 +290,7 @@ def _position_scores(
     calibration winners are ``wc`` (true positions ``zc``) and test winners ``w0``, ``w1``
     (true positions ``zt``), units at ``coords``; ``origin`` None: zero."""
     origin = np.zeros(3) if origin is None else origin
-    m = winner_metrics(wc, zc, w0, w1, zt, coords, 1.0)
+    m: dict[str, Any] = dict(winner_metrics(wc, zc, w0, w1, zt, coords, 1.0))
     m.pop("z_error")
     m["order_r2_per_axis"] = _per_axis(coords[wc], zc, coords[w0], zt)
     m["order_r2_per_axis_spherical"] = _per_axis(
