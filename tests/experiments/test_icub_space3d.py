@@ -1,0 +1,108 @@
+"""The iCub's 3-D maps: the codes, the scores per axis and the references, a tiny sealed run.
+
+The run needs MuJoCo, ``icub-models`` and an OpenGL context; the scoring tests need none.
+"""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+import pytest
+
+os.environ.setdefault("MUJOCO_GL", "egl")
+
+from sigmapi.experiments.icub import space3d as s3
+from sigmapi.metrics import ORDERED_R2
+
+
+def _grid_quantiser(z: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Winners of an ideal n x n x n map laid over the box of ``z``, and its unit coordinates."""
+    lo, hi = z.min(axis=0), z.max(axis=0)
+    cell = np.clip(((z - lo) / (hi - lo) * n).astype(int), 0, n - 1)
+    coords = np.array(np.unravel_index(np.arange(n**3), (n,) * 3), dtype=float).T
+    return np.ravel_multi_index(cell.T, (n,) * 3), coords
+
+
+def test_position_scores_per_axis_tell_an_ordered_map_from_a_scrambled_one():
+    rng = np.random.default_rng(0)
+    zc, zt = rng.uniform(0, 0.2, (3000, 3)), rng.uniform(0, 0.2, (1000, 3))
+    wc, coords = _grid_quantiser(zc, 6)
+    w0, _ = _grid_quantiser(zt, 6)
+    good = s3._position_scores(wc, zc, w0, w0, zt, coords)
+    assert min(good["order_r2_per_axis"]) > ORDERED_R2
+    assert good["error_cm"] == pytest.approx(0.2 / 6 / np.sqrt(12) * np.sqrt(3) * 100, rel=0.15)
+    perm = rng.permutation(216)  # the same cells, the units scrambled on the grid
+    bad = s3._position_scores(perm[wc], zc, perm[w0], perm[w0], zt, coords)
+    assert max(bad["order_r2_per_axis"]) < 0.5
+    assert bad["error_cm"] == pytest.approx(good["error_cm"])  # a lookup table does not care
+    # one axis scrambled, the others kept: only that axis's order falls
+    cell = np.array(np.unravel_index(w0, (6, 6, 6))).T
+    cell_c = np.array(np.unravel_index(wc, (6, 6, 6))).T
+    flip = np.array([0, 3, 1, 5, 2, 4])
+    cell[:, 2], cell_c[:, 2] = flip[cell[:, 2]], flip[cell_c[:, 2]]
+    w0s = np.ravel_multi_index(cell.T, (6, 6, 6))
+    wcs = np.ravel_multi_index(cell_c.T, (6, 6, 6))
+    part = s3._position_scores(wcs, zc, w0s, w0s, zt, coords)["order_r2_per_axis"]
+    assert part[0] > ORDERED_R2 and part[1] > ORDERED_R2 and part[2] < 0.6
+
+
+def _views(z: np.ndarray) -> s3.Views3D:
+    n = z.shape[0]
+    return s3.Views3D(np.zeros((n, 2)), np.zeros((n, 2)), np.zeros((n, 6)), z, z)
+
+
+def test_kmeans_reference_shrinks_with_more_centres_and_matches_the_grid():
+    rng = np.random.default_rng(1)
+    train = (_views(rng.uniform(0, 0.2, (2000, 3))), _views(rng.uniform(0, 0.2, (2000, 3))))
+    cal = (_views(rng.uniform(0, 0.2, (2000, 3))),) * 2
+    test = (_views(rng.uniform(0, 0.2, (1000, 3))),) * 2
+    e8 = s3.kmeans_reference("head", train, cal, test, 8, 0)["error_cm"]
+    e64 = s3.kmeans_reference("head", train, cal, test, 64, 0)["error_cm"]
+    assert e64 < 0.7 * e8
+    # 64 centres in a 20 cm cube: about the error of a 4x4x4 grid of cells, 2.5 cm
+    assert 1.5 < e64 < 3.0
+
+
+def test_codes_span_the_unit_cube():
+    v = s3.Views3D(
+        left=np.array([[40.0, 10.0], [8.0, 60.0]]),
+        right=np.array([[30.0, 12.0], [20.0, 58.0]]),
+        gaze=np.array([[0.0, 0.0, 0.2, -0.4, 0.0, -0.3], [-0.6, 0.5, 0.0, -0.7, 0.1, 0.0]]),
+        head=np.zeros((2, 3)),
+        torso=np.zeros((2, 3)),
+    )
+    r, e, n = s3.retina3(v, 64), s3.eyes3(v), s3.neck3(v)
+    for a in (r, e, n):
+        assert a.shape == (2, 3) and np.all((a >= 0) & (a <= 1))
+    assert r[0, 2] > 0.5 > r[1, 2]  # crossed and uncrossed disparity
+    assert r[0, 1] > r[1, 1]  # the first ball higher in both eyes
+
+
+def test_a_tiny_sealed_run_learns_from_pixels_only():
+    pytest.importorskip("mujoco")
+    pytest.importorskip("icub_models")
+    from sigmapi.envs.icub import ICubScene
+    from sigmapi.envs.icub import stereo as st
+
+    scene = ICubScene()
+    try:
+        scene.render("r_eye")
+    except Exception as exc:  # no GL context
+        pytest.skip(f"no OpenGL context here: {exc}")
+    st.float_ball(scene)
+    scene.seal()  # every truth reader now raises outside scene.truth()
+    rng = np.random.default_rng(0)
+    eyes = s3.record_pairs(scene, 60, rng, "eyes")
+    head = s3.record_pairs(scene, 60, rng, "head")
+    assert eyes[0].n == 60 and head[1].n == 60
+    # a pair of the eyes shares the head-centred place; of the head, the torso-centred
+    assert np.allclose(eyes[0].head, eyes[1].head, atol=1e-9)
+    assert np.allclose(head[0].torso, head[1].torso, atol=1e-9)
+    assert not np.allclose(head[0].head, head[1].head, atol=1e-3)
+    chain = s3.learn_chain3d(
+        eyes, head, grid=4, width=1.0, map_shape=(3, 3, 3), iterations=300, seed=0, eye_size=64
+    )
+    m = s3.score_map(chain, "head", eyes, eyes)
+    assert len(m["order_r2_per_axis"]) == 3 and m["error_cm"] > 0
+    assert "folded" in m and "fold_score" in m
