@@ -17,10 +17,10 @@ The graph takes the two codes and gives what the model gives in Python:
 
 The fast kernel skips the code pairs with ``|x_i y_j| <= kernel_tol max|x| max|y|``; the graph
 skips the same pairs, so that its winners are the kernel's, and like the kernel it reads only
-the weight rows of the pairs it keeps (a ``Scan`` over the batch, one pair at a time: about 970
-of the paper-2d map's 50,625 rows per pair), not the whole matrix. Its weights are the model
-file's, exactly (the fast kernel's float32 columns widened to float64, and float64 scales;
-dense float64 otherwise), summed in float64.
+the weight rows of the pairs it keeps (a ``Scan`` over the batch, one pair at a time: about
+1,000-1,300 of the paper-2d map's 50,625 rows per pair), not the whole matrix. Its weights
+are the model file's, exactly (the fast kernel's float32 columns widened to float64, and
+float64 scales; dense float64 otherwise), summed in float64.
 """
 
 from __future__ import annotations
@@ -212,8 +212,8 @@ def _sparse_response(nx: int, ny: int, k: int, tol: float, init: list[Any]) -> l
     pair of another unit passes the cut), their outer product, the pairs with
     ``|x_i y_j| > thr`` in the kernel's order (``i`` then ``j``), their weight rows gathered
     and summed in float64 (``w_raw`` float64: the model's float32 columns, exactly, so that no
-    row read needs a cast). A pair thus costs the rows of its kept code pairs (about 970 of
-    the paper-2d map's 50,625), not the whole weight matrix."""
+    row read needs a cast). A pair thus costs the rows of its kept code pairs (about
+    1,000-1,300 of the paper-2d map's 50,625), not the whole weight matrix."""
     from onnx import TensorProto, helper, numpy_helper
 
     def const(name: str, value: Any) -> str:

@@ -43,6 +43,8 @@ def test_the_nir_file_reads_back_exactly(model_file, map_1d, tmp_path):
     kinds = {k: type(v).__name__ for k, v in back.nodes.items()}
     assert kinds == {"input": "Input", "conjunction": "Affine", "conjunction_if": "IF",
                      "map": "Affine", "map_lif": "LIF", "output": "Output"}  # fmt: skip
+    nx, ny = map_1d.x_code.size, map_1d.y_code.size  # a conjunction per pair, a relay per unit
+    assert back.nodes["conjunction_if"].v_threshold.shape == (nx * ny + nx + ny,)
     for name, node in want.nodes.items():
         for field, value in node.to_dict().items():
             if isinstance(value, np.ndarray):

@@ -1,0 +1,158 @@
+"""The NIR graph of a map (``sigmapi export --format nir``), simulated: how often its winner
+is the model's, on pairs the graph's calibration did not see.
+
+Usage (from the repository root)::
+
+    sigmapi train --preset paper-2d --seed 1 --out /tmp/p2_1.npz      # once per map, ~2 min
+    python benchmarks/bench_nir.py --models /tmp/p2_1.npz /tmp/p2_2.npz [--norse-pairs 100]
+
+Writes ``benchmarks/results/nir.json``. For each model: the graph as
+:func:`sigmapi.neurons.nir_graph.nir_graph` makes it (its calibration: pairs of seed 0) and
+the time that takes; ``--pairs`` fresh pairs (random positions, ``--pair-seed``) run through
+the graph's primitives by NIR's definitions (Affine ``W x + b``; IF ``v += dt R I``; LIF
+``v += dt / tau ((v_leak - v) + R I)``; a spike when ``v > v_threshold``, then ``v = v_reset``;
+every layer in the same step, as ``tests/cli/test_export_nir.py`` simulates them) for the
+graph's ``steps``; the winner is the map neuron with the most spikes (ties: the lowest index).
+An IF neuron under a constant input ``I > 0`` fires every ``floor(v_threshold / (R I dt)) + 1``
+steps and never under ``I <= 0``, so the simulation adds each conjunction's weights at those
+steps instead of stepping 51,075 membranes (the map's LIF neurons are stepped). With
+``--norse-pairs N`` Norse (``norse.torch.from_nir``, an independent reader; needs torch)
+simulates the file on the first N of the pairs too.
+"""
+
+from __future__ import annotations
+
+import argparse
+import io
+import statistics
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from _common import commit, machine, write_result
+
+ROOT = Path(__file__).resolve().parent
+SRC = ROOT.parent / "src"
+
+
+def simulate(graph: Any, inputs: np.ndarray, chunk: int = 25) -> np.ndarray:
+    """The map neurons' spike counts ``(B, K)`` of ``graph`` under the constant ``inputs``
+    ``(B, n_x + n_y)`` (module docstring)."""
+    n = graph.nodes
+    dt, steps = float(graph.metadata["dt"]), int(graph.metadata["steps"])
+    conj, fire, mapped, lif = n["conjunction"], n["conjunction_if"], n["map"], n["map_lif"]
+    assert np.all(fire.v_reset == 0) and np.all(fire.v_threshold > 0)
+    w_map = mapped.weight.astype(np.float64)
+    divisors = [[p for p in range(1, t + 1) if t % p == 0] for t in range(steps + 1)]
+    counts = np.zeros((len(inputs), w_map.shape[0]))
+    for s in range(0, len(inputs), chunk):
+        drive = inputs[s : s + chunk] @ conj.weight.T.astype(np.float64) + conj.bias
+        gain = dt * fire.r * drive  # what an IF membrane gains per step
+        by_period = np.zeros((len(drive), steps + 1, w_map.shape[0]))
+        for b, g in enumerate(gain):
+            on = np.flatnonzero(g > 0)
+            period = np.floor(fire.v_threshold[on] / g[on]) + 1
+            keep = period <= steps
+            np.add.at(by_period[b], period[keep].astype(np.int64), w_map[:, on[keep]].T)
+        v = np.zeros((len(drive), w_map.shape[0]))
+        for t in range(1, steps + 1):
+            current = by_period[:, divisors[t], :].sum(axis=1) + mapped.bias
+            v = v + dt / lif.tau * ((lif.v_leak - v) + lif.r * current)
+            spikes = v > lif.v_threshold
+            v = np.where(spikes, lif.v_reset, v)
+            counts[s : s + chunk] += spikes
+    return counts
+
+
+def norse_counts(graph: Any, inputs: np.ndarray) -> np.ndarray:
+    import torch
+    from norse.torch import from_nir
+
+    net = from_nir(graph, dt=float(graph.metadata["dt"]))
+    x = torch.tensor(inputs, dtype=torch.float32)
+    counts, state = torch.zeros(len(inputs), graph.nodes["map_lif"].tau.shape[0]), None
+    with torch.no_grad():
+        for _ in range(int(graph.metadata["steps"])):
+            spikes, state = net(x, state)
+            counts += spikes
+    return np.asarray(counts.numpy())
+
+
+def measure(path: str, pairs: int, pair_seed: int, norse_pairs: int) -> dict[str, Any]:
+    import nir
+
+    import sigmapi
+    from sigmapi.neurons.nir_graph import nir_graph
+
+    model = sigmapi.load(path)
+    t0 = time.perf_counter()
+    graph = nir_graph(model)
+    made = time.perf_counter() - t0
+    buffer = io.BytesIO()
+    nir.write(buffer, graph)
+    graph = nir.read(io.BytesIO(buffer.getvalue()))  # what a reader of the file gets
+    rng = np.random.default_rng(pair_seed)
+    d = len(model.x_shape)
+    x, y = model.x_code.encode(rng.random((pairs, d))), model.y_code.encode(rng.random((pairs, d)))
+    inputs = np.concatenate([x, y], axis=1)
+    want = model.winner(x, y)
+    t0 = time.perf_counter()
+    counts = simulate(graph, inputs)
+    out: dict[str, Any] = {
+        "model": path,
+        "map_shape": list(model.map_shape),
+        "graph_seconds": made,
+        "graph_bytes": len(buffer.getvalue()),
+        "calibration_agreement": float(graph.metadata["calibration_agreement"]),
+        "held_out_agreement": float(graph.metadata["held_out_agreement"]),
+        "held_out_simulated_agreement": float(graph.metadata["simulated_agreement"]),
+        "map_spikes": int(graph.metadata["map_spikes"]),
+        "theta": float(graph.metadata["theta"]),
+        "pairs": pairs,
+        "agreement": float(np.mean(counts.argmax(axis=1) == want)),
+        "winner_spikes_median": float(np.median(counts.max(axis=1))),
+        "simulation_seconds": time.perf_counter() - t0,
+    }
+    if norse_pairs:
+        t0 = time.perf_counter()
+        got = norse_counts(graph, inputs[:norse_pairs]).argmax(axis=1)
+        out["norse_pairs"] = norse_pairs
+        out["norse_agreement"] = float(np.mean(got == want[:norse_pairs]))
+        out["norse_equal_to_simulation"] = float(
+            np.mean(got == counts[:norse_pairs].argmax(axis=1))
+        )
+        out["norse_seconds"] = time.perf_counter() - t0
+    print(out, flush=True)
+    return out
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--models", nargs="+", required=True, help="model files (sigmapi train)")
+    parser.add_argument("--pairs", type=int, default=500, help="fresh pairs per model")
+    parser.add_argument("--pair-seed", type=int, default=2026, help="seed of the fresh pairs")
+    parser.add_argument("--norse-pairs", type=int, default=0, help="of those, run in Norse")
+    parser.add_argument("--out", type=Path, default=ROOT / "results" / "nir.json")
+    args = parser.parse_args()
+    import nir
+
+    runs = [measure(m, args.pairs, args.pair_seed, args.norse_pairs) for m in args.models]
+    agree = [r["agreement"] for r in runs]
+    write_result(
+        args.out,
+        {
+            "runs": runs,
+            "agreement_median": statistics.median(agree),
+            "agreement_worst": min(agree),
+            "at_least_95_percent": sum(a >= 0.95 for a in agree),
+            "nir": nir.__version__,
+            "commit": commit(SRC),
+            "machine": machine(),
+        },
+    )
+
+
+if __name__ == "__main__":
+    main()
