@@ -24,8 +24,8 @@ Usage::
 
     python benchmarks/bench_nengo.py --seeds 0 1 --out benchmarks/results/nengo-tuning.json
     python benchmarks/bench_nengo.py --seeds 100 101 102 103 104     # fresh: nengo.json
-    python benchmarks/bench_nengo.py --model-files maps/paper-2d-seed12{0,1,2}.npz \
-        --pairs 50 --out benchmarks/results/nengo-paper-2d-120-122.json
+    python benchmarks/bench_nengo.py --model-files paper-2d-seed123.npz paper-2d-seed124.npz \
+        --pairs 50 --out benchmarks/results/nengo-paper-2d-123-124.json
 """
 
 from __future__ import annotations
