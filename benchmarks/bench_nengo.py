@@ -3,7 +3,8 @@ consistency against the rate map's, on trained maps of fresh seeds.
 
 Per seed, two maps: ``1d``, paper-1d as the preset trains it (15 units, 15 x 15 codes); ``2d``,
 a small map of paper-2d's procedure (a 6 x 6 map, 7 x 7 codes, 3,000 iterations: the paper's
-15 x 15 x 15 x 15 map would take the Nengo reference simulator minutes per trial). For each,
+15 x 15 map of 15 x 15 codes takes the Nengo reference simulator about 2 s of CPU per 220 ms
+trial, so 1,000 trials about half an hour; ``--model-files`` runs it). For each,
 ``--pairs`` test z's of ``sigmapi.metrics.evaluation_sets`` shown as their two views (so twice
 as many trials), each for the settling time plus the decision window, in one simulation:
 
