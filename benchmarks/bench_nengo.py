@@ -3,7 +3,8 @@ consistency against the rate map's, on trained maps of fresh seeds.
 
 Per seed, two maps: ``1d``, paper-1d as the preset trains it (15 units, 15 x 15 codes); ``2d``,
 a small map of paper-2d's procedure (a 6 x 6 map, 7 x 7 codes, 3,000 iterations: the paper's
-15 x 15 x 15 x 15 map would take the Nengo reference simulator minutes per trial). For each,
+15 x 15 map of 15 x 15 codes takes the Nengo reference simulator about 2 s of CPU per 220 ms
+trial, so 1,000 trials about half an hour; ``--model-files`` runs it). For each,
 ``--pairs`` test z's of ``sigmapi.metrics.evaluation_sets`` shown as their two views (so twice
 as many trials), each for the settling time plus the decision window, in one simulation:
 
@@ -11,18 +12,28 @@ as many trials), each for the settling time plus the decision window, in one sim
   Nengo; ``rate_view_consistency``: the same for the rate map (``model.winner``);
   ``vc_gap``: their difference (the target: within 0.02);
 - ``agreement``: the share of trials whose Nengo winner is the rate map's;
-- ``seconds``: the wall-clock time of building and simulating the trials.
+- ``seconds``: the wall-clock time of building and simulating the trials; ``peak_rss_mb``:
+  the process's peak resident memory after it (``ru_maxrss``, so the largest map so far);
+  ``neurons``: the network's spiking neurons (input pools and map units) and ``products``:
+  the conjunction node's outputs (``n_x n_y``), the size of the learned transform's input.
+
+``--model-files`` runs trained model files instead (``map`` ``paper-2d``, the full 15 x 15
+map of 15 x 15 codes; its seed the file's): train them with
+``sigmapi train --preset paper-2d --seed N --out FILE``.
 
 Usage::
 
     python benchmarks/bench_nengo.py --seeds 0 1 --out benchmarks/results/nengo-tuning.json
     python benchmarks/bench_nengo.py --seeds 100 101 102 103 104     # fresh: nengo.json
+    python benchmarks/bench_nengo.py --model-files paper-2d-seed123.npz paper-2d-seed124.npz \
+        --pairs 50 --out benchmarks/results/nengo-paper-2d-123-124.json
 """
 
 from __future__ import annotations
 
 import argparse
 import dataclasses
+import resource
 import time
 from pathlib import Path
 from typing import Any
@@ -63,6 +74,7 @@ def measure(model: Any, pairs: int, cfg: Any, seed: int) -> dict[str, Any]:
     w = nengo_winners(model, x, y, cfg, seed=seed)
     secs = time.perf_counter() - start
     vc, rvc = float(np.mean(w[:pairs] == w[pairs:])), float(np.mean(rate[:pairs] == rate[pairs:]))
+    nx, ny = x.shape[1], y.shape[1]
     return {
         "view_consistency": vc,
         "rate_view_consistency": rvc,
@@ -70,8 +82,27 @@ def measure(model: Any, pairs: int, cfg: Any, seed: int) -> dict[str, Any]:
         "agreement": float(np.mean(w == rate)),
         "trials": int(x.shape[0]),
         "seconds": secs,
+        "seconds_per_trial": secs / x.shape[0],
         "simulated_s": x.shape[0] * (cfg.settle_ms + cfg.window_ms) / 1e3,
+        "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0,
+        "neurons": (nx + ny) * cfg.pool + model.n_units,
+        "products": nx * ny,
     }
+
+
+def _models(args: argparse.Namespace) -> Any:
+    """``(seed, map name, model)`` of each map the arguments ask for."""
+    if args.model_files:
+        from sigmapi.model.som import load_model
+
+        for path in args.model_files:
+            model = load_model(path)
+            yield int(model.config.seed), "paper-2d", model
+        return
+    for seed in args.seeds:
+        for name, model in maps(seed).items():
+            if name in args.maps:
+                yield seed, name, model
 
 
 def main() -> None:
@@ -82,20 +113,25 @@ def main() -> None:
     p.add_argument("--pairs", type=int, default=500, help="test z's per map (two views each)")
     p.add_argument("--window-ms", type=float, default=NengoConfig.window_ms)
     p.add_argument("--maps", nargs="+", choices=("1d", "2d"), default=["1d", "2d"])
+    p.add_argument(
+        "--model-files",
+        type=Path,
+        nargs="+",
+        default=[],
+        help="trained model files to run instead of --seeds (map paper-2d)",
+    )
     p.add_argument("--out", type=Path, default=OUT)
     args = p.parse_args()
     cfg = NengoConfig(window_ms=args.window_ms)
     start = time.perf_counter()
     rows = []
-    for seed in args.seeds:
-        for name, model in maps(seed).items():
-            if name not in args.maps:
-                continue
-            row = {"seed": seed, "map": name, **measure(model, args.pairs, cfg, seed)}
-            print(row, flush=True)
-            rows.append(row)
+    for seed, name, model in _models(args):
+        row = {"seed": seed, "map": name, **measure(model, args.pairs, cfg, seed)}
+        print(row, flush=True)
+        rows.append(row)
+    names = ["paper-2d"] if args.model_files else args.maps
     summary = {}
-    for name in args.maps:
+    for name in names:
         gaps = [r["vc_gap"] for r in rows if r["map"] == name]
         summary[name] = {
             "vc_gap_median": float(np.median(gaps)),
@@ -107,12 +143,16 @@ def main() -> None:
             ),
             "seconds_median": float(np.median([r["seconds"] for r in rows if r["map"] == name])),
         }
-    seeds = " ".join(map(str, args.seeds))
+    which = (
+        f"--model-files {' '.join(map(str, args.model_files))}"
+        if args.model_files
+        else f"--seeds {' '.join(map(str, args.seeds))} --maps {' '.join(args.maps)}"
+    )
     write_result(
         args.out,
         {
-            "command": f"python benchmarks/bench_nengo.py --seeds {seeds} "
-            f"--pairs {args.pairs} --window-ms {args.window_ms:g} --maps {' '.join(args.maps)}",
+            "command": f"python benchmarks/bench_nengo.py {which} "
+            f"--pairs {args.pairs} --window-ms {args.window_ms:g}",
             "config": dataclasses.asdict(cfg),
             "rows": rows,
             "summary": summary,

@@ -18,9 +18,12 @@ The file holds what :mod:`sigmapi.analysis.monkey`'s protocol records
   ``preferred_z``, ``admitted`` (by the protocol), ``reference_frame_index`` (NaN where not
   admitted), ``displacement_index`` (the same by cross-correlation), ``gain_slope``,
   ``gain_r2`` (planarity of the gain field), ``gain_p_value`` and
-  ``gain_modulated``, and ``spike_times``: Poisson spikes drawn at the unit's rate in each
-  trial's window. sigmapi's spiking deployment (:mod:`sigmapi.neurons`) is not run by the
-  export; the table's description says so;
+  ``gain_modulated``, and ``spike_times``: the spikes sigmapi's spiking deployment produced
+  in each trial's window where it ran (a :class:`TrialSpikes` passed in: ``sigmapi export``
+  and ``sigmapi physiology --nwb`` run
+  :func:`sigmapi.neurons.spiking.protocol_spikes` on the protocol's trials where they fit
+  its budget), else Poisson spikes drawn at the unit's rate in each trial's window; the
+  column's and the table's descriptions, and ``spike_times`` in the provenance, say which;
 - the **subject**: a simulated area (``species`` ``"in silico"``, sex ``"U"``, born when its
   model file was written);
 - the **provenance**: ``source_script`` (``sigmapi <version>``), and in ``notes`` a JSON
@@ -37,12 +40,15 @@ import hashlib
 import json
 import os
 import tempfile
+from collections.abc import Callable
+from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
 from types import ModuleType
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from sigmapi._version import __version__
 from sigmapi.analysis.monkey import PEAK_RATE, WINDOW, fixation_protocol, monkey_protocol
@@ -53,10 +59,38 @@ from sigmapi.model.som import SigmaPiSOM, load_model
 if TYPE_CHECKING:
     from pynwb import NWBFile
 
-__all__ = ["PERIOD", "export_nwb", "nwb_file", "pynwb_module"]
+__all__ = ["PERIOD", "TrialSpikes", "export_nwb", "nwb_file", "protocol_trials", "pynwb_module"]
 
 PERIOD = 1.0
 """Seconds from one trial's start to the next's."""
+
+
+@dataclass(frozen=True)
+class TrialSpikes:
+    """Spikes a simulation produced in the protocol's trials (in the file's trial order,
+    :func:`protocol_trials`): one entry per spike, ``trial`` and ``unit`` its indices and
+    ``time`` its time (s) from the trial's start, within the trial's window; ``source``:
+    what produced them, a phrase for the descriptions (e.g. "sigmapi's spiking deployment
+    ..."); ``settings``: that run's settings, for the provenance."""
+
+    trial: NDArray[np.int64]
+    unit: NDArray[np.int64]
+    time: NDArray[np.float64]
+    source: str
+    settings: dict[str, object]
+
+
+Spikes = TrialSpikes | Callable[[SigmaPiSOM, dict[str, Any]], TrialSpikes | None] | None
+"""What :func:`nwb_file` takes as ``spikes``."""
+
+
+def protocol_trials(fixation: dict[str, Any]) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """The file's trials as indices ``(fixation, stimulus)`` into a
+    :func:`~sigmapi.analysis.monkey.fixation_protocol` recording's ``eyes`` and ``stimuli``:
+    trial ``t`` is fixation ``t // P`` and stimulus ``t % P`` (``P`` stimuli)."""
+    n_e, n_p = len(fixation["eyes"]), len(fixation["stimuli"])
+    return np.repeat(np.arange(n_e), n_p), np.tile(np.arange(n_p), n_e)
+
 
 _NEEDS = "install the nwb extra: pip install 'sigmapi[nwb]'"
 
@@ -98,6 +132,7 @@ def nwb_file(
     physiology: dict[str, Any] | None = None,
     fixation: dict[str, Any] | None = None,
     model_path: str | Path | None = None,
+    spikes: Spikes = None,
 ) -> NWBFile:
     """The ``pynwb.NWBFile`` of a fitted ``model`` (module docstring).
 
@@ -105,6 +140,10 @@ def nwb_file(
     recording and the ``sigmapi physiology`` result (its ``monkey`` entry) made from it, as
     ``sigmapi physiology --nwb`` passes them; else the protocol runs here with its defaults.
     ``model_path``: the file the model was read from (its digest goes into the provenance).
+    ``spikes``: the units' spike times in the trials of ``fixation``, or a function of the
+    model and ``fixation`` that gives them or None
+    (:func:`sigmapi.neurons.spiking.protocol_spikes`); where none, Poisson draws at the
+    units' rates.
     """
     pynwb = pynwb_module()
     from hdmf.backends.hdf5 import H5DataIO
@@ -116,9 +155,16 @@ def nwb_file(
     if fixation is None:
         fixation = fixation_protocol(model)
     monkey = (physiology or {}).get("monkey") or monkey_protocol(model, recording=fixation)
+    if callable(spikes):
+        spikes = spikes(model, fixation)
     eyes, stimuli, resp = fixation["eyes"], fixation["stimuli"], fixation["responses"]
     n_e, n_p, k = resp.shape
     prov = _provenance(model, model_path)
+    prov["spike_times"] = (
+        {"source": "poisson", "seed": int(monkey["seed"])}
+        if spikes is None
+        else {"source": "spiking", "settings": spikes.settings}
+    )
     ident = prov["model_sha256"] or prov["weights_sha256"]
     now = datetime.now(UTC)
     # the map's "birth": when its model file was written (the end of its training)
@@ -146,8 +192,7 @@ def nwb_file(
         ),
     )
     rel = model.sampler.relation
-    cond_e = np.repeat(np.arange(n_e), n_p)  # trial t: fixation t // P, stimulus t % P
-    cond_p = np.tile(np.arange(n_p), n_e)
+    cond_e, cond_p = protocol_trials(fixation)
     x, y = stimuli[cond_p], eyes[cond_e]
     z = np.asarray(rel.forward(x, y), dtype=np.float64)
     starts = np.arange(n_e * n_p) * PERIOD
@@ -198,16 +243,11 @@ def nwb_file(
     def num(key: str) -> np.ndarray:
         return np.asarray([np.nan if v is None else v for v in per[key]], dtype=np.float64)
 
-    rng = np.random.default_rng(int(monkey["seed"]))
-    counts = rng.poisson(rates * WINDOW)  # (trials, units)
-    spikes = []
-    for u in range(k):
-        times = np.repeat(starts, counts[:, u]) + rng.uniform(0.0, WINDOW, int(counts[:, u].sum()))
-        spikes.append(np.sort(times))
+    trains, spike_text = _spike_trains(spikes, rates, starts, int(monkey["seed"]))
     spike_times = VectorData(
         name="spike_times",
-        description="Poisson spikes at the unit's rate in each trial's window (s)",
-        data=H5DataIO(np.concatenate(spikes), compression="gzip"),
+        description=f"{spike_text} (s)",
+        data=H5DataIO(np.concatenate(trains), compression="gzip"),
     )
     pref = np.asarray(
         [[np.nan if v is None else v for v in row] for row in per["preferred_z"]], np.float64
@@ -237,22 +277,46 @@ def nwb_file(
         name="units",
         description=(
             "the map's units, one row each, read by the monkey protocol "
-            "(sigmapi.analysis.monkey). spike_times: Poisson spikes drawn at the unit's rate "
-            f"in each trial's {WINDOW:g} s window (seed {monkey['seed']}), a model of a "
-            "recording, not the output of sigmapi's spiking deployment (sigmapi.neurons), "
-            "which was not run for this file"
+            f"(sigmapi.analysis.monkey). spike_times: {spike_text}"
         ),
         columns=[
             spike_times,
             VectorIndex(
                 name="spike_times_index",
-                data=np.cumsum([len(t) for t in spikes]).astype(np.int64),
+                data=np.cumsum([len(t) for t in trains]).astype(np.int64),
                 target=spike_times,
             ),
             *(VectorData(name=n, description=d, data=v) for n, d, v in unit_columns),
         ],
     )
     return nwb
+
+
+def _spike_trains(
+    spikes: TrialSpikes | None, rates: NDArray[np.float64], starts: NDArray[np.float64], seed: int
+) -> tuple[list[NDArray[np.float64]], str]:
+    """Each unit's sorted spike times (s, the file's clock) and the phrase that says what they
+    are: ``spikes`` where given, else Poisson draws at ``rates`` ``(trials, units)``."""
+    k = rates.shape[1]
+    if spikes is not None:
+        times = starts[spikes.trial] + spikes.time
+        order = np.lexsort((times, spikes.unit))
+        unit, times = spikes.unit[order], times[order]
+        bounds = np.searchsorted(unit, np.arange(k + 1))
+        trains = [times[bounds[u] : bounds[u + 1]] for u in range(k)]
+        return trains, f"the spikes {spikes.source} produced in each trial's window"
+    rng = np.random.default_rng(seed)
+    counts = rng.poisson(rates * WINDOW)  # (trials, units)
+    trains = []
+    for u in range(k):
+        times = np.repeat(starts, counts[:, u]) + rng.uniform(0.0, WINDOW, int(counts[:, u].sum()))
+        trains.append(np.sort(times))
+    text = (
+        f"Poisson spikes drawn at the unit's rate in each trial's {WINDOW:g} s window (seed "
+        f"{seed}), a model of a recording: sigmapi's spiking deployment "
+        "(sigmapi.neurons.spiking) was not run for this file"
+    )
+    return trains, text
 
 
 def export_nwb(
@@ -263,11 +327,12 @@ def export_nwb(
     fixation: dict[str, Any] | None = None,
     model_path: str | Path | None = None,
     force: bool = False,
+    spikes: Spikes = None,
 ) -> Path:
     """Write the NWB file of ``model`` (a fitted model or a model file) to ``out``,
     atomically; returns the path. Refuses an existing ``out`` unless ``force``
-    (:class:`~sigmapi.errors.UsageError`); ``physiology``, ``fixation``, ``model_path``:
-    as :func:`nwb_file` takes them."""
+    (:class:`~sigmapi.errors.UsageError`); ``physiology``, ``fixation``, ``model_path``,
+    ``spikes``: as :func:`nwb_file` takes them."""
     target = Path(out)
     if target.exists() and not force:
         raise UsageError(f"out {str(target)!r} exists; pass force=True (--force) to overwrite it")
@@ -275,7 +340,9 @@ def export_nwb(
     if not isinstance(model, SigmaPiSOM):
         model_path = model if model_path is None else model_path
         model = load_model(model)
-    nwb = nwb_file(model, physiology=physiology, fixation=fixation, model_path=model_path)
+    nwb = nwb_file(
+        model, physiology=physiology, fixation=fixation, model_path=model_path, spikes=spikes
+    )
     import h5py
 
     folder = target.parent if str(target.parent) else Path(".")

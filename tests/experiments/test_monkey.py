@@ -3,6 +3,7 @@ the commands that make them (`sigmapi physiology`, `sigmapi export --format nwb`
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import json
 import subprocess
@@ -204,6 +205,56 @@ def test_the_nwb_file_reads_back_and_passes_the_inspector(small_map, tmp_path):
     assert not critical, [m.message for m in critical]
 
 
+def _read_units(path):
+    import pynwb
+
+    with pynwb.NWBHDF5IO(str(path), "r") as io:
+        f = io.read()
+        trains = [np.asarray(t) for t in f.units["spike_times"][:]]
+        return (trains, f.units["spike_times"].target.description, f.units.description,
+                json.loads(f.notes)["spike_times"], f.trials["start_time"].data[:])  # fmt: skip
+
+
+def test_the_nwb_file_holds_the_spikes_the_spiking_deployment_produced(small_map, tmp_path):
+    pytest.importorskip("pynwb")
+    inspector = pytest.importorskip("nwbinspector")
+    from sigmapi.neurons.spiking import protocol_spikes
+    from sigmapi.nwb import export_nwb, protocol_trials
+
+    model, path = small_map
+    rec = fixation_protocol(model, (0.3, 0.5, 0.7), 11)
+    got = protocol_spikes(model, rec)
+    out = export_nwb(path, tmp_path / "s.nwb", fixation=rec, spikes=got)
+    trains, text, table, prov, starts = _read_units(out)
+    assert len(starts) == len(protocol_trials(rec)[0]) == 33
+    assert np.all((got.time >= 0) & (got.time < 0.5)) and len(got.unit) > 100
+    for u, train in enumerate(trains):  # every spike of the run, at its trial's start + time
+        mine = got.unit == u
+        assert np.array_equal(train, np.sort(starts[got.trial[mine]] + got.time[mine]))
+    assert sum(len(t) for t in trains) == len(got.unit)
+    assert text.startswith("the spikes sigmapi's spiking deployment")
+    assert text.removesuffix(" (s)") in table
+    assert "not run" not in table
+    assert prov["source"] == "spiking" and prov["settings"]["inhibition"] == 0.25
+    found = list(inspector.inspect_nwbfile(nwbfile_path=str(out)))
+    top = inspector.Importance.CRITICAL.value
+    assert not [m.message for m in found if m.importance.value >= top]
+    # a map whose protocol does not fit the budget keeps the Poisson draw, and says so
+    out = export_nwb(model, tmp_path / "p.nwb", fixation=rec,
+                     spikes=lambda m, f: protocol_spikes(m, f, budget=1.0))  # fmt: skip
+    trains, text, _, prov, _ = _read_units(out)
+    assert text.startswith("Poisson") and "was not run" in text and prov["source"] == "poisson"
+    assert sum(len(t) for t in trains) > 0
+
+
+def test_the_protocols_spiking_network_is_the_one_sigmapi_neurons_deploys():
+    from sigmapi.experiments.neurons.config import NeuronsConfig
+    from sigmapi.neurons.spiking import PROTOCOL
+
+    want = NeuronsConfig().spiking(PROTOCOL.peak_rate)
+    assert PROTOCOL == dataclasses.replace(want, windows_ms=(500.0,))
+
+
 def test_without_pynwb_one_line_names_the_extra(monkeypatch):
     from sigmapi.nwb import pynwb_module
 
@@ -223,6 +274,7 @@ def test_the_commands_as_a_user_runs_them(small_map, tmp_path):
     out = _cli("export", path, "--format", "nwb", "--out", tmp_path / "m.nwb")
     assert out.returncode == 0, out.stderr
     assert (tmp_path / "m.nwb").stat().st_size > 0 and "wrote" in out.stderr
+    assert _read_units(tmp_path / "m.nwb")[3]["source"] == "spiking"  # the deployment ran
     again = _cli("export", path, "--format", "nwb", "--out", tmp_path / "m.nwb")
     assert again.returncode == 2 and "--force" in again.stderr  # it exists
     again = _cli("export", path, "--format", "nwb", "--out", tmp_path / "m.nwb", "--force",
@@ -237,7 +289,7 @@ def test_the_commands_as_a_user_runs_them(small_map, tmp_path):
     assert {"gain_modulated_share", "gain_r2", "reference_frame_index", "left_out",
             "published", "admitted"} <= set(m)  # fmt: skip
     assert data["reference_frame_index"] and data["nwb"] == "physiology.nwb"
-    assert (tmp_path / "p" / "physiology.nwb").is_file()
+    assert _read_units(tmp_path / "p" / "physiology.nwb")[3]["source"] == "spiking"
     assert (tmp_path / "p" / "physiology.png").is_file()
     bad = _cli("physiology", path, "--nwb")
     assert bad.returncode == 2 and "--out" in bad.stderr and "Traceback" not in bad.stderr

@@ -129,6 +129,21 @@ def test_coincidence_units_need_both_inputs_and_the_map_picks_the_driven_unit():
     assert np.mean(run.winners[-1] == 2) == 1.0 and run.map_spikes[-1].mean() > 1
 
 
+def test_a_recorded_run_keeps_every_map_spike_and_is_the_same_run():
+    n = 5
+    cfg = SpikingConfig(windows_ms=(20.0, 100.0), gain=0.3)
+    x = np.repeat(np.eye(n)[[1, 3]], 6, axis=0)
+    plain = simulate_conjunction(_selective_weights(n), x, x.copy(), cfg, np.random.default_rng(2))
+    run = simulate_conjunction(_selective_weights(n), x, x.copy(), cfg,
+                               np.random.default_rng(2), record=True)  # fmt: skip
+    assert plain.map_spike_steps is None and np.array_equal(plain.winners, run.winners)
+    trial, unit, step = run.map_spike_steps.T
+    for i, window in enumerate(cfg.windows_ms):  # the counts per window are the recorded spikes
+        early = step < window / cfg.dt_ms
+        assert np.array_equal(np.bincount(trial[early], minlength=12), run.map_spikes[i])
+    assert np.array_equal(unit, np.where(trial < 6, 1, 3)) and len(unit) > 12
+
+
 @pytest.mark.parametrize("scale", [1.0, 0.5, 0.25])
 def test_a_conjunction_unit_fires_at_the_product_of_its_pools_rates(scale: float):
     # pools of 10 at 100 Hz: r_x = 1000 Hz, r_y = 1000 * scale Hz; window m = 2 steps of

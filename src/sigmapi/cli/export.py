@@ -28,11 +28,13 @@ def _onnx(args: argparse.Namespace, out: Path) -> None:
 
 
 def _nwb(args: argparse.Namespace, out: Path) -> None:
-    """:func:`sigmapi.nwb.export_nwb` (the ONNX options do not apply)."""
+    """:func:`sigmapi.nwb.export_nwb` with the spikes of the spiking deployment where it runs
+    (:func:`sigmapi.neurons.spiking.protocol_spikes`; the ONNX options do not apply)."""
     _only_onnx(args, "nwb")
+    from sigmapi.neurons.spiking import protocol_spikes
     from sigmapi.nwb import export_nwb
 
-    export_nwb(args.model, out, force=True)
+    export_nwb(args.model, out, force=True, spikes=protocol_spikes)
 
 
 def _nir(args: argparse.Namespace, out: Path) -> None:

@@ -30,10 +30,15 @@ lateral inhibition.
 The decision after a window of ``T`` ms is the map unit with the most spikes in it (ties: the
 higher membrane potential at ``T``). One simulation of the longest window gives every shorter
 window. The module needs numpy only.
+
+:func:`protocol_spikes` runs the conjunction network on the trials of the gain-field studies'
+protocol (:mod:`sigmapi.analysis.monkey`) and keeps every map spike, for the NWB file
+(:mod:`sigmapi.nwb`), where the run fits :data:`PROTOCOL_BUDGET`.
 """
 
 from __future__ import annotations
 
+import json
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -41,11 +46,17 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sigmapi import _validate
+from sigmapi.analysis.monkey import WINDOW
+from sigmapi.model.som import SigmaPiSOM
+from sigmapi.nwb import TrialSpikes, protocol_trials
 
 __all__ = [
+    "PROTOCOL",
+    "PROTOCOL_BUDGET",
     "SpikingConfig",
     "SpikingRun",
     "coincidence_steps",
+    "protocol_spikes",
     "simulate_conjunction",
     "simulate_dendritic",
 ]
@@ -114,19 +125,24 @@ class SpikingConfig:
 class SpikingRun:
     """One simulation's decisions: ``winners`` ``(W, B)`` per window, spikes per trial in
     each window by layer (``input``, ``hidden``: coincidence units or dendritic plateaus
-    counted as none, ``map``), each ``(W, B)``."""
+    counted as none, ``map``), each ``(W, B)``; ``map_spike_steps``, where the simulation
+    recorded them: every map spike as a row ``(trial, unit, step)`` ``(n, 3)``, in the order
+    they fired (step ``s`` covers ``s dt`` to ``(s + 1) dt`` of the trial)."""
 
     windows_ms: tuple[float, ...]
     winners: NDArray[np.int64]
     input_spikes: Array
     hidden_spikes: Array
     map_spikes: Array
+    map_spike_steps: NDArray[np.int64] | None = None
 
 
 class _Soma:
     """The map's LIF somata of ``B`` trials with lateral inhibition; counts per window."""
 
-    def __init__(self, b: int, k: int, cfg: SpikingConfig, steps: NDArray[np.int64]) -> None:
+    def __init__(
+        self, b: int, k: int, cfg: SpikingConfig, steps: NDArray[np.int64], record: bool = False
+    ) -> None:
         self.v = np.zeros((b, k))
         self.count = np.zeros((b, k))
         self.decay = np.exp(-cfg.dt_ms / cfg.tau_m_ms)
@@ -134,6 +150,7 @@ class _Soma:
         self.at = {int(s): i for i, s in enumerate(steps)}
         self.winners = np.zeros((len(steps), b), dtype=np.int64)
         self.spikes = np.zeros((len(steps), b))
+        self.fired: list[NDArray[np.int64]] | None = [] if record else None
 
     def step(self, t: int, current: Array) -> None:
         v = self.v * self.decay + current
@@ -142,10 +159,19 @@ class _Soma:
         v = np.where(fire, 0.0, v - self.inh * (n - fire))
         self.v = np.maximum(v, -1.0)  # inhibition cannot hyperpolarise without bound
         self.count += fire
+        if self.fired is not None and fire.any():
+            trial, unit = np.nonzero(fire)
+            self.fired.append(np.stack([trial, unit, np.full_like(trial, t)], axis=1))
         if t in self.at:
             i = self.at[t]
             self.winners[i] = np.argmax(self.count + np.clip(self.v, 0.0, 0.999), axis=1)
             self.spikes[i] = self.count.sum(axis=1)
+
+    def spike_steps(self) -> NDArray[np.int64] | None:
+        """The recorded spikes ``(n, 3)`` (:class:`SpikingRun`), or None unrecorded."""
+        if self.fired is None:
+            return None
+        return np.concatenate([np.zeros((0, 3), np.int64), *self.fired]).astype(np.int64)
 
 
 def _steps(cfg: SpikingConfig) -> NDArray[np.int64]:
@@ -163,10 +189,16 @@ def _poisson(rng: np.random.Generator, rates: Array, dt_s: float) -> Array:
 
 
 def simulate_conjunction(
-    weights: Array, x: Array, y: Array, cfg: SpikingConfig, rng: np.random.Generator
+    weights: Array,
+    x: Array,
+    y: Array,
+    cfg: SpikingConfig,
+    rng: np.random.Generator,
+    record: bool = False,
 ) -> SpikingRun:
     """Coincidence detectors into LIF map units (module docstring) for ``B`` trials, codes ``x``
-    ``(B, n_x)`` and ``y`` ``(B, n_y)``; ``weights`` the Sigma-Pi map's ``(K, n_x, n_y)``."""
+    ``(B, n_x)`` and ``y`` ``(B, n_y)``; ``weights`` the Sigma-Pi map's ``(K, n_x, n_y)``;
+    ``record``: keep every map spike (:attr:`SpikingRun.map_spike_steps`)."""
     k, nx, ny = weights.shape
     b = x.shape[0]
     w = np.maximum(weights, 0.0).reshape(k, nx * ny)
@@ -180,7 +212,7 @@ def simulate_conjunction(
     m = coincidence_steps(cfg)
     hx, hy = np.zeros((m, b, nx)), np.zeros((m, b, ny))  # the pools' spikes, m steps back
     near_x, near_y = np.zeros((b, nx)), np.zeros((b, ny))  # their sums
-    soma = _Soma(b, k, cfg, steps)
+    soma = _Soma(b, k, cfg, steps, record)
     n_in, n_c = np.zeros(b), np.zeros(b)
     ins, hid = np.zeros((len(steps), b)), np.zeros((len(steps), b))
     for t in range(int(steps[-1]) + 1):
@@ -195,7 +227,9 @@ def simulate_conjunction(
         n_c += f.sum(axis=1)
         if t in soma.at:
             ins[soma.at[t]], hid[soma.at[t]] = n_in, n_c
-    return SpikingRun(tuple(cfg.windows_ms), soma.winners, ins, hid, soma.spikes)
+    return SpikingRun(
+        tuple(cfg.windows_ms), soma.winners, ins, hid, soma.spikes, soma.spike_steps()
+    )
 
 
 def simulate_dendritic(
@@ -240,3 +274,65 @@ def simulate_dendritic(
 def windows_of(values: Sequence[float]) -> tuple[float, ...]:
     """Sorted distinct windows (ms)."""
     return tuple(sorted({float(v) for v in values}))
+
+
+PROTOCOL = SpikingConfig(pool=20, gain=0.3, inhibition=0.25, windows_ms=(1000.0 * WINDOW,))
+"""The conjunction network :func:`protocol_spikes` runs: the settings ``sigmapi neurons``
+deploys a map with (100 Hz, pools of 20, 0.25 ms steps, its ``spike_gain`` and
+``spike_inhibition``; docs/guide/neurons.md), for the protocol's counting window."""
+
+PROTOCOL_BUDGET = 2.0e9
+"""The most ``trials x conjunction units x time steps`` :func:`protocol_spikes` simulates
+(a paper-1d map's protocol, 105 trials of 225 conjunction units for 2,000 steps, is 4.7e7;
+a paper-2d map's, 11,025 trials of 50,625 for 2,000 steps, is 1.1e12: too long for the
+NumPy network by about four orders of magnitude)."""
+
+_BATCH = 4_000_000
+"""Trials times conjunction units simulated at once (the coincidence counts of a step take
+8 bytes each)."""
+
+
+def protocol_spikes(
+    model: SigmaPiSOM,
+    fixation: dict[str, NDArray[np.float64]],
+    cfg: SpikingConfig = PROTOCOL,
+    seed: int = 0,
+    budget: float = PROTOCOL_BUDGET,
+) -> TrialSpikes | None:
+    """Every map spike of the conjunction network deployed from ``model``'s weights in the
+    trials of a :func:`~sigmapi.analysis.monkey.fixation_protocol` recording ``fixation``
+    (the NWB file's order, :func:`sigmapi.nwb.protocol_trials`), each trial a fresh network
+    run for ``cfg``'s longest window; None where ``trials x n_x n_y x steps`` exceeds
+    ``budget``. A spike's time is the start of the step it fired in."""
+    cond_e, cond_p = protocol_trials(fixation)
+    weights = np.asarray(model.weights_, dtype=np.float64)
+    _, nx, ny = weights.shape
+    n_steps = int(_steps(cfg)[-1]) + 1
+    if len(cond_e) * nx * ny * n_steps > budget:
+        return None
+    x = model.x_code.encode(fixation["stimuli"][cond_p])
+    y = model.y_code.encode(fixation["eyes"][cond_e])
+    rng = np.random.default_rng(seed)
+    per = max(1, _BATCH // (nx * ny))
+    found = []
+    for lo in range(0, len(cond_e), per):
+        run = simulate_conjunction(weights, x[lo : lo + per], y[lo : lo + per], cfg, rng, True)
+        assert run.map_spike_steps is not None
+        found.append(run.map_spike_steps + np.array([lo, 0, 0]))
+    spikes = np.concatenate(found)
+    settings = {
+        "network": "conjunction (sigmapi.neurons.spiking.simulate_conjunction)",
+        **{name: getattr(cfg, name) for name in cfg.__dataclass_fields__},
+        "seed": seed,
+    }
+    return TrialSpikes(
+        trial=spikes[:, 0],
+        unit=spikes[:, 1],
+        time=spikes[:, 2] * cfg.dt_ms / 1000.0,
+        source=(
+            "sigmapi's spiking deployment (the conjunction network of sigmapi.neurons.spiking: "
+            f"Poisson input pools at {cfg.peak_rate:g} Hz, coincidence detectors, LIF map "
+            f"units with lateral inhibition, {cfg.dt_ms:g} ms steps, seed {seed})"
+        ),
+        settings=json.loads(json.dumps(settings, default=list)),
+    )

@@ -371,6 +371,7 @@ class PhysiologyExperiment(Experiment[PhysiologyConfig]):
         recording: dict[str, Any] = {}
         data = record_model(config, recording)
         if config.nwb and out is not None:
+            from sigmapi.neurons.spiking import protocol_spikes
             from sigmapi.nwb import export_nwb
 
             export_nwb(
@@ -380,6 +381,7 @@ class PhysiologyExperiment(Experiment[PhysiologyConfig]):
                 fixation=recording["fixation"],
                 model_path=config.model,
                 force=True,
+                spikes=protocol_spikes,
             )
             data["nwb"] = NWB_FILE
         return PhysiologyResult(config, data, time.perf_counter() - start)
