@@ -436,7 +436,7 @@ def _icub_result() -> Any:
         n = 40
         ball = np.column_stack([rng.uniform(0.15, 0.3, n), rng.uniform(-0.1, 0.3, n)])
         gaze = rng.normal(0.0, 0.2, (n, 6))
-        success = {m: rng.random(n) < p for m, p in zip(METHODS, (1, 1, 0.5, 0.7, 1), strict=True)}
+        success = {m: rng.random(n) < p for m, p in zip(METHODS, (1, 1, 0.5, 0.7, 1, 0.3), strict=True)}
         success["learned"] = success["true_direction"].copy()
         cuts = np.unique(np.geomspace(50, 800, 6).astype(int))  # the quick run's (log axis)
         curves = {m: [[c, 0.3 / np.sqrt(c) + 0.02 * i] for c in cuts]
