@@ -30,14 +30,7 @@ from numpy.typing import NDArray
 
 from sigmapi import _validate
 from sigmapi.agents.actor_critic import ActorCritic
-from sigmapi.agents.episodes import (
-    Ending,
-    Episodes,
-    Start,
-    discrete_actions,
-    reset_from,
-    tally,
-)
+from sigmapi.agents.episodes import Ending, Episodes, Start, discrete_actions, reset_from, tally
 from sigmapi.envs import MapObservation, PlacedViewSource
 from sigmapi.envs.protocols import Obs
 from sigmapi.errors import ConfigError

@@ -34,14 +34,18 @@ if TYPE_CHECKING:
 __all__ = [
     "HEADERS",
     "JSON",
+    "VC_MARGIN",
     "Column",
     "Result",
     "as_object",
     "columns",
+    "margin_case",
+    "margin_line",
     "plain",
     "render",
     "summaries",
     "tuples",
+    "within_margin",
 ]
 
 R = TypeVar("R", bound="Result")
@@ -66,6 +70,42 @@ def summaries(data: object, required: Sequence[str], optional: Sequence[str] = (
     out = {k: obj[k] for k in required}
     out.update({k: obj[k] for k in optional if k in obj})
     return out
+
+
+VC_MARGIN = 0.02
+"""Acceptance of a map against its reference (the Sigma-Pi map, the rate map, maps learned
+from pairs): its view consistency within this much of the reference's."""
+
+
+def within_margin(gap: float) -> bool:
+    """Whether a view-consistency ``gap`` is within :data:`VC_MARGIN` (a gap of exactly
+    -0.02, e.g. 6 test z's of 300, counts: the two rates' float difference may fall a
+    rounding error below it)."""
+    return gap >= -VC_MARGIN - 1e-9
+
+
+def margin_case(gaps: Sequence[float], folded: Sequence[bool]) -> JSON:
+    """The acceptance of a map against its reference over seeds, from each seed's
+    view-consistency ``gaps`` (the map's minus the reference's) and whether its map
+    ``folded``: ``vc_gap_median``, ``vc_gap_worst``, the seeds within :data:`VC_MARGIN` and
+    ordered (``met``), ``n_seeds`` and ``all_met``."""
+    met = [within_margin(g) and not f for g, f in zip(gaps, folded, strict=True)]
+    return {
+        "vc_gap_median": float(np.median(gaps)),
+        "vc_gap_worst": float(min(gaps)),
+        "met": int(sum(met)),
+        "n_seeds": len(met),
+        "all_met": bool(all(met)),
+    }
+
+
+def margin_line(case: Mapping[str, Any], against: str) -> str:
+    """A :func:`margin_case` in words: how many seeds are within :data:`VC_MARGIN`
+    ``against`` (e.g. ``"of sigma-pi"``) and ordered, the median and worst gap."""
+    return (
+        f"{case['met']} of {case['n_seeds']} seeds within {VC_MARGIN} {against} and ordered "
+        f"(gap median {case['vc_gap_median']:+.3f}, worst {case['vc_gap_worst']:+.3f})"
+    )
 
 
 def tuples(table: Mapping[str, object]) -> JSON:
