@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import dataclasses
 import json
-from typing import Any
 
 import gymnasium as gym
 import numpy as np
@@ -199,8 +198,7 @@ class _Toy(Result):
     config: GazeReachConfig
     seeds: tuple[int, ...]
     values: NDArray[np.float64] = dataclasses.field(default_factory=lambda: np.zeros(0))
-    seconds: float = 0.0
-    written: dict[str, Any] | None = None
+    seconds: float = 0.0  # written (the summaries read back): the base's field
 
     KEYS = ("mean: mean_value", "values", "config: config_and_seeds", "seconds")
     COMPUTED = ("mean", "values")

@@ -19,7 +19,7 @@ import functools
 import re
 import typing
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, ClassVar, TypeVar
 
@@ -142,10 +142,15 @@ def _entry(entry: str) -> tuple[str, str]:
     return key.strip(), attr.strip() or key.strip()
 
 
+@dataclass
 class Result:
     """What an experiment's run returns: a dataclass whose JSON form (:meth:`to_dict`) is its
     :attr:`KEYS` in order, that reads back from it (:meth:`from_dict`), and that has a table
     (the console text) and figures (none by default)."""
+
+    written: dict[str, object] | None = field(default=None, repr=False, kw_only=True)
+    """The summaries of a result read back (:meth:`from_dict`, its :attr:`COMPUTED` keys);
+    None for a run's result."""
 
     KEYS: ClassVar[tuple[str, ...]] = ()
     """The keys of the JSON form, in order: ``"key"`` (a field or method of that name) or
@@ -162,7 +167,7 @@ class Result:
     def _keys(self) -> tuple[str, ...]:
         if self.KEYS:
             return self.KEYS
-        return tuple(f.name for f in dataclasses.fields(self) if f.repr)  # type: ignore[arg-type]
+        return tuple(f.name for f in dataclasses.fields(self) if f.repr)
 
     def _value(self, attr: str) -> object:
         value = functools.reduce(getattr, attr.split("."), self)  # "options.seeds": a path
@@ -172,7 +177,7 @@ class Result:
         """Everything the result states, JSON-able (``result.json``, ``--json``): the
         :attr:`KEYS` in order; a result read back gives its ``written`` summaries in place of
         the computed keys."""
-        written: dict[str, object] | None = getattr(self, "written", None)
+        written = self.written
         out: dict[str, object] = {}
         for entry in self._keys():
             spread = entry.startswith("*")
@@ -198,7 +203,7 @@ class Result:
         computed), typed as the field is (a config by its ``from_dict`` or its fields, a
         tuple, a float); the seeds from the config where :attr:`SEEDS_IN_CONFIG`."""
         hints = typing.get_type_hints(cls)
-        names = {f.name for f in dataclasses.fields(cls) if f.init}  # type: ignore[arg-type]
+        names = {f.name for f in dataclasses.fields(cls) if f.init}
         values: dict[str, object] = {}
         for entry in cls.KEYS:
             key, attr = _entry(entry.lstrip("*"))
