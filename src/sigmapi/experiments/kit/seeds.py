@@ -12,12 +12,16 @@ Two things take a seed of their own, and each has one rule:
 - a model (:class:`~sigmapi.SigmaPiSOM`, whose ``SOMConfig.seed`` is an int) is built with
   the seed ``s`` itself: its streams (weights, data, passes, refinement) are then the children
   of ``SeedSequence(s)`` under :data:`MODEL_KEYS` (0-4), the same tree as the plan's, so a
-  plan names its keys from 5 up (checked). Two models of one seed (a chain's maps, compare's
-  methods) draw the same streams, as the same seed promises;
+  plan names its keys from 5 up (checked). Two models of one seed (chain's maps A and B, the
+  iCub's maps 1 and 2, compare's methods) draw the same streams, as the same seed promises;
 - an environment is seeded from a generator: an episode's start is a generator of the plan
   (:meth:`SeedPlan.rngs`, one per episode) that becomes the world's ``np_random`` before a
   ``reset()`` (:func:`~sigmapi.agents.reset_from`; Gymnasium's ``reset(seed=n)`` is the
-  same with ``default_rng(n)``), and a source of views or a learner takes the generator itself.
+  same with ``default_rng(n)``).
+
+Whatever takes a generator or a ``SeedSequence`` takes the plan's: a source of views
+(:func:`~sigmapi.envs.collect_saccade_views`), the actor-critic, the neurons' dendritic and
+basis-function maps.
 """
 
 from __future__ import annotations
