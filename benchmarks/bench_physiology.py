@@ -60,7 +60,7 @@ def _robot_model(seed: int, folder: Path) -> Path:
     from sigmapi.experiments.robot.config import PLAN, RobotConfig
     from sigmapi.experiments.robot.map import learn_map
 
-    model = learn_map(RobotConfig(), PLAN.rng(seed, "map"))
+    model = learn_map(RobotConfig(), seed, PLAN.rng(seed, "views"))
     return Path(model.save(folder / f"robot_{seed}.npz"))
 
 

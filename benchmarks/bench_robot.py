@@ -143,8 +143,8 @@ def _child_map(seeds: list[int], moved: list[float]) -> dict[str, Any]:
         cfg = base.replace(moved_share=share)
         for seed in seeds:
             t0 = time.perf_counter()
-            rng = PLAN.rng(seed, "map")
-            model = learn_map(cfg, rng)  # the experiment's own map of this seed
+            views = PLAN.rng(seed, "views")
+            model = learn_map(cfg, seed, views)  # the experiment's own map of this seed
             m = score_map(model, *evaluation)
             rows.append({"seed": seed, "moved_share": share,
                          "seconds": round(time.perf_counter() - t0, 1),

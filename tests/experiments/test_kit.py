@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import dataclasses
 import json
-from typing import Any
 
 import gymnasium as gym
 import numpy as np
@@ -21,15 +20,16 @@ from sigmapi.experiments.kit.maps import MapSpec
 from sigmapi.experiments.kit.parts import Parts, parts_of
 from sigmapi.experiments.kit.report import section_function
 from sigmapi.experiments.kit.results import HEADERS, Column, Result, columns, plain, render
-from sigmapi.experiments.kit.seeds import SeedPlan
+from sigmapi.experiments.kit.seeds import MODEL_KEYS, SeedPlan
 from sigmapi.experiments.kit.worlds import WORLDS, World, get_world, register_world
 from sigmapi.experiments.reach.config import MapConfig, ReachConfig, ReachRunConfig
 from sigmapi.experiments.reach.run import REACH, ReachExperiment
 
 
-def test_a_seed_plan_names_the_streams_each_experiment_drew_before():
+def test_a_seed_plan_names_each_stream_a_child_of_the_seed_apart_from_a_models():
     from sigmapi.experiments.chain.run import PLAN as CHAIN
     from sigmapi.experiments.compare.run import PLAN as COMPARE
+    from sigmapi.experiments.icub.run import PLAN as ICUB
     from sigmapi.experiments.neurons.run import PLAN as NEURONS
     from sigmapi.experiments.reach.run import PLAN as REACH
     from sigmapi.experiments.reward.run import PLAN as REWARD
@@ -39,14 +39,14 @@ def test_a_seed_plan_names_the_streams_each_experiment_drew_before():
     def same(a: np.random.SeedSequence, b: np.random.SeedSequence) -> bool:
         return (a.entropy, a.spawn_key) == (b.entropy, b.spawn_key)
 
-    root = np.random.SeedSequence(0)  # reach and reward: seed s is child s of the root 0
-    reward = ("map", "starts", "agent", "probes", "shuffle", "fixations")
-    for plan, names in ((REACH, ("map", "starts", "agent")), (REWARD, reward)):
-        for k, name in enumerate(names):
-            child = np.random.SeedSequence(root.entropy, spawn_key=(5, k))
-            assert same(plan.sequence(5, name), child), name
-    for k, name in enumerate(("map", "starts", "agent", "film")):  # robot: the seed's children
-        assert same(ROBOT.sequence(9, name), np.random.SeedSequence(9, spawn_key=(k,)))
+    plans = (CHAIN, COMPARE, ICUB, NEURONS, REACH, REWARD, ROBOT, STREAM)
+    for plan in plans:  # one derivation: stream `name` of seed s is child (key,) of s
+        for name, key in plan.keys.items():
+            assert key not in MODEL_KEYS, name  # a model built with s draws under 0-4
+            assert same(plan.sequence(9, name), np.random.SeedSequence(9, spawn_key=(key,)))
+    reward = ("views", "starts", "agent", "probes", "shuffle", "fixations")
+    assert [REWARD.keys[n] for n in reward] == [5, 6, 7, 8, 9, 10]
+    assert [REACH.keys[n] for n in ("views", "starts", "agent")] == [5, 6, 7]
     assert same(STREAM.sequence(3, "frames", 16), np.random.SeedSequence(3, spawn_key=(7, 16)))
     assert same(CHAIN.sequence(3, "triples"), np.random.SeedSequence(3, spawn_key=(16,)))
     assert same(COMPARE.sequence(3, "data"), np.random.SeedSequence(3, spawn_key=(13,)))
@@ -54,10 +54,31 @@ def test_a_seed_plan_names_the_streams_each_experiment_drew_before():
     assert same(spikes, np.random.SeedSequence(3, spawn_key=(11, 100, 5)))
     a, b = REACH.rng(2, "starts").random(3), REACH.rng(2, "starts").random(3)
     np.testing.assert_array_equal(a, b)
+    starts = REACH.rngs(2, "starts", 3)  # one generator per episode, each its own child
+    assert all(isinstance(g, np.random.Generator) for g in starts)
+    np.testing.assert_array_equal(starts[2].random(2), REACH.rng(2, "starts", 2).random(2))
+    assert starts[0].random() != starts[1].random()
     with pytest.raises(ValueError, match="share a spawn key"):
-        SeedPlan({"a": 1, "b": 1})
+        SeedPlan({"a": 5, "b": 5})
+    with pytest.raises(ValueError, match=r"streams \['b'\] .* keys of a model of the seed \(0-4\)"):
+        SeedPlan({"a": 5, "b": 4})
     with pytest.raises(KeyError):
         REACH.rng(0, "nope")
+
+
+def test_an_episode_starts_from_a_generator_as_from_the_seed_it_stands_for():
+    from sigmapi.agents import reset_from
+    from sigmapi.experiments.kit.worlds import GAZE_REACH
+
+    env = GAZE_REACH.make_env(GazeReachConfig(grid=7))
+    by_seed, _ = env.reset(seed=12)
+    by_rng, _ = reset_from(env, np.random.default_rng(12))  # Gymnasium's reset(seed=n)
+    for k in by_seed:
+        np.testing.assert_array_equal(by_seed[k], by_rng[k])
+    gen = np.random.default_rng(5)
+    reset_from(env, gen)
+    assert env.unwrapped.np_random is gen  # the world draws from the generator handed to it
+    env.close()
 
 
 def test_block_and_final_rates():
@@ -177,8 +198,7 @@ class _Toy(Result):
     config: GazeReachConfig
     seeds: tuple[int, ...]
     values: NDArray[np.float64] = dataclasses.field(default_factory=lambda: np.zeros(0))
-    seconds: float = 0.0
-    written: dict[str, Any] | None = None
+    seconds: float = 0.0  # written (the summaries read back): the base's field
 
     KEYS = ("mean: mean_value", "values", "config: config_and_seeds", "seconds")
     COMPUTED = ("mean", "values")

@@ -167,7 +167,7 @@ def test_a_seed_draws_the_same_streams_alone_or_beside_others() -> None:
     second = REACH.run(cfg, seeds=[1])
     np.testing.assert_array_equal(both.steps["retina"][1], second.steps["retina"][0])
     assert not np.array_equal(both.steps["retina"][0], second.steps["retina"][0])
-    assert PLAN.sequence(1, "starts").spawn_key == (1, 1)  # child (seed, key) of the root 0
+    assert PLAN.sequence(1, "starts").spawn_key == (6,)  # child (key,) of SeedSequence(1)
     for bad in ([], [0, 0], [-1]):
         with pytest.raises(ConfigError, match="seeds must"):
             REACH.run(cfg, seeds=bad)

@@ -7,7 +7,13 @@ from __future__ import annotations
 
 from sigmapi.agents.actor_critic import ActorCritic, ActorCriticConfig
 from sigmapi.agents.association import Association
-from sigmapi.agents.episodes import Episodes, actor_critic_for, discrete_actions, run_episodes
+from sigmapi.agents.episodes import (
+    Episodes,
+    actor_critic_for,
+    discrete_actions,
+    reset_from,
+    run_episodes,
+)
 from sigmapi.agents.gated import GatedEpisodes, Gating, run_gated_episodes
 
 __all__ = [
@@ -19,6 +25,7 @@ __all__ = [
     "Gating",
     "actor_critic_for",
     "discrete_actions",
+    "reset_from",
     "run_episodes",
     "run_gated_episodes",
 ]

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, TypeVar
 
 import gymnasium as gym
 import numpy as np
@@ -25,9 +25,12 @@ __all__ = [
     "Episodes",
     "actor_critic_for",
     "discrete_actions",
+    "reset_from",
     "run_episodes",
     "tally",
 ]
+
+ObsT = TypeVar("ObsT")
 
 
 @dataclass(frozen=True)
@@ -73,14 +76,30 @@ def actor_critic_for(
     return ActorCritic.from_config(config, int(obs.shape[0]), n_actions, seed=seed)
 
 
+Start = int | np.integer[Any] | np.random.Generator
+"""An episode's start: the seed of its ``reset`` (an int) or the generator the world draws
+it from (:func:`reset_from`)."""
+
+
+def reset_from(env: gym.Env[ObsT, Any], start: Start) -> tuple[ObsT, dict[str, Any]]:
+    """``env.reset`` from ``start``: an int is the seed of the reset (Gymnasium's
+    ``reset(seed=n)``, the world's generator ``default_rng(n)``); a generator becomes the
+    world's ``np_random`` (the same, from a stream one was handed) before a ``reset()``."""
+    if isinstance(start, np.random.Generator):
+        env.np_random = start
+        return env.reset()
+    return env.reset(seed=int(start))
+
+
 def run_episodes(
     env: gym.Env[Any, Any],
     agent: ActorCritic,
-    starts: Sequence[int] | NDArray[np.int64],
+    starts: Sequence[Start] | NDArray[np.int64],
     on_episode: Callable[[], None] | None = None,
     info_keys: Sequence[str] = (),
 ) -> Episodes:
-    """Learn over one episode per entry of ``starts`` (the seed of its ``reset``).
+    """Learn over one episode per entry of ``starts`` (how its ``reset`` is seeded:
+    :func:`reset_from`).
 
     After every step the agent learns from ``(s, a, r, s')`` (``s'`` terminal only when
     ``terminated``: a time limit is no part of the task). ``on_episode()`` is called after each
@@ -90,7 +109,7 @@ def run_episodes(
     _, first = discrete_actions(env.action_space)
 
     def play(ep: int) -> Ending:
-        phi, info = env.reset(seed=int(starts[ep]))
+        phi, info = reset_from(env, starts[ep])
         t, terminated, truncated = 0, False, False
         while not (terminated or truncated):
             a = agent.act(phi)

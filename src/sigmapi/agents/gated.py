@@ -30,7 +30,7 @@ from numpy.typing import NDArray
 
 from sigmapi import _validate
 from sigmapi.agents.actor_critic import ActorCritic
-from sigmapi.agents.episodes import Ending, Episodes, discrete_actions, tally
+from sigmapi.agents.episodes import Ending, Episodes, Start, discrete_actions, reset_from, tally
 from sigmapi.envs import MapObservation, PlacedViewSource
 from sigmapi.envs.protocols import Obs
 from sigmapi.errors import ConfigError
@@ -87,13 +87,14 @@ class GatedEpisodes:
 def run_gated_episodes(
     env: MapObservation,
     agent: ActorCritic,
-    starts: Sequence[int] | NDArray[np.int64],
+    starts: Sequence[Start] | NDArray[np.int64],
     gating: Gating,
     rng: np.random.Generator,
     surprises: NDArray[np.float64] | None = None,
     on_episode: Callable[[], None] | None = None,
 ) -> GatedEpisodes:
-    """Learn over one episode per entry of ``starts``, the map learning as it is gated.
+    """Learn over one episode per entry of ``starts`` (:func:`~sigmapi.agents.reset_from`),
+    the map learning as it is gated.
 
     ``env``: the world read through its map (:class:`~sigmapi.envs.MapObservation`; its
     ``model`` is changed in place). ``rng``: the second fixations. ``surprises``: the
@@ -117,7 +118,7 @@ def run_gated_episodes(
 
     def play(ep: int) -> Ending:
         nonlocal updates
-        obs, info = inner.reset(seed=int(starts[ep]))
+        obs, info = reset_from(inner, starts[ep])
         phi = env.observation(obs)
         t, terminated, truncated = 0, False, False
         while not (terminated or truncated):

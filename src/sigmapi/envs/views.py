@@ -20,7 +20,11 @@ from sigmapi.envs.protocols import PlacedViewSource, Views, ViewSource
 from sigmapi.errors import ConfigError
 from sigmapi.model.som import SigmaPiSOM
 
-__all__ = ["collect_saccade_views", "collect_stream", "learn_map_in_env", "view_source"]
+__all__ = ["Seed", "collect_saccade_views", "collect_stream", "learn_map_in_env", "view_source"]
+
+Seed = int | np.random.SeedSequence | np.random.Generator | None
+"""What draws a source's views: a seed, a ``SeedSequence`` or the generator itself (None:
+fresh entropy), as :func:`numpy.random.default_rng` takes it."""
 
 
 def view_source(source: object) -> ViewSource:
@@ -36,7 +40,7 @@ def view_source(source: object) -> ViewSource:
     return base
 
 
-def collect_saccade_views(source: object, n_pairs: int, seed: int | None = None) -> Views:
+def collect_saccade_views(source: object, n_pairs: int, seed: Seed = None) -> Views:
     """Gather ``n_pairs`` pairs of views of the same ``z`` by keeping still and looking around.
 
     Parameters
@@ -46,8 +50,9 @@ def collect_saccade_views(source: object, n_pairs: int, seed: int | None = None)
         :class:`~sigmapi.envs.GazeReachEnv`, wrapped or not.
     n_pairs : int
         Number of view pairs.
-    seed : int, optional
-        Seed of the source's random choices (object positions, fixations).
+    seed : int, SeedSequence or Generator, optional
+        Seed of the source's random choices (object positions, fixations), or the generator
+        they are drawn from.
 
     Returns
     -------
@@ -77,7 +82,7 @@ def collect_saccade_views(source: object, n_pairs: int, seed: int | None = None)
 
 
 def collect_stream(
-    source: object, n_frames: int, dwell: int, seed: int | None = None
+    source: object, n_frames: int, dwell: int, seed: Seed = None
 ) -> tuple[np.ndarray, np.ndarray]:
     """A stream of ``n_frames`` views as the body sees them: the object stays at one place for
     ``dwell`` saccades, then moves to a fresh place, and nothing marks when.
@@ -92,9 +97,9 @@ def collect_stream(
         Frames (saccades) of the stream.
     dwell : int
         Saccades per place of the object.
-    seed : int, optional
-        Seed of the places (uniform in ``[0, 1]`` per dimension of ``z``, as both sources
-        place the object) and of the source's saccades.
+    seed : int, SeedSequence or Generator, optional
+        Seed (or generator) of the places (uniform in ``[0, 1]`` per dimension of ``z``, as
+        both sources place the object) and of the source's saccades.
 
     Returns
     -------
@@ -119,7 +124,7 @@ def collect_stream(
 def learn_map_in_env(
     source: object,
     config: SOMConfig,
-    seed: int | None = None,
+    seed: Seed = None,
     callback: Callable[[SigmaPiSOM], None] | None = None,
 ) -> SigmaPiSOM:
     """Train a :class:`~sigmapi.SigmaPiSOM` on saccade views of ``source``.
@@ -128,7 +133,8 @@ def learn_map_in_env(
     teacher, no access to z) and learned with ``partial_fit(views=...)``: the winner from one
     view, the update from the other. ``config`` must code x and y as the source does
     (``x_shape``, ``y_shape``, ``code_width``, ...: the map's ``x_code`` and ``y_code`` equal
-    the source's).
+    the source's). ``seed``: of the views (:func:`collect_saccade_views`); the map's own
+    streams are ``config.seed``'s.
     """
     src = view_source(source)
     som = SigmaPiSOM(config)

@@ -70,8 +70,11 @@ class BasisFunctionMap(FirstOrderMap):
         """Hidden (basis-function) units."""
         return int(self.ix.size * self.iy.size)
 
-    def fit(self, training: TrainingConfig | None = None, seed: int = 0) -> BasisFunctionMap:
-        """Train the readout with the two-view rule; returns self."""
+    def fit(
+        self, training: TrainingConfig | None = None, seed: int | np.random.SeedSequence = 0
+    ) -> BasisFunctionMap:
+        """Train the readout with the two-view rule (``seed``: of its pairs and start, an int
+        or a ``SeedSequence``); returns self."""
         train(self, training or TrainingConfig(), np.random.default_rng(seed))
         return self
 

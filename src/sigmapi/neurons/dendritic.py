@@ -90,8 +90,11 @@ class DendriticMap(FirstOrderMap):
         self.u_ = np.zeros((k, d, self.x_code.size))
         self.v_ = np.zeros((k, d, self.y_code.size))
 
-    def fit(self, training: TrainingConfig | None = None, seed: int = 0) -> DendriticMap:
-        """Train with the two-view rule (:func:`sigmapi.neurons.training.train`); returns self."""
+    def fit(
+        self, training: TrainingConfig | None = None, seed: int | np.random.SeedSequence = 0
+    ) -> DendriticMap:
+        """Train with the two-view rule (:func:`sigmapi.neurons.training.train`; ``seed``: of
+        its pairs and start, an int or a ``SeedSequence``); returns self."""
         train(self, training or TrainingConfig(), np.random.default_rng(seed))
         return self
 

@@ -104,8 +104,11 @@ class SparseDendriticMap(BasisFunctionMap):
         self.budget = _validate.choice("budget", budget, ("map", "unit"))
         self.mask_ = np.ones((self.n_units, self.n_hidden), dtype=bool)
 
-    def fit(self, training: TrainingConfig | None = None, seed: int = 0) -> SparseDendriticMap:
-        """Train with the two-view rule and the pruning schedule; returns self."""
+    def fit(
+        self, training: TrainingConfig | None = None, seed: int | np.random.SeedSequence = 0
+    ) -> SparseDendriticMap:
+        """Train with the two-view rule and the pruning schedule (``seed``: of its pairs and
+        start, an int or a ``SeedSequence``); returns self."""
         train(self, training or TrainingConfig(), np.random.default_rng(seed))
         return self
 

@@ -205,8 +205,6 @@ class CompareResult(Result):
     seconds: float = 0.0
     seeds: tuple[int, ...] = SEEDS
     """The seeds, in the order of the scores' lists."""
-    written: dict[str, object] | None = field(default=None, repr=False)
-    """The summaries of a result read back (:meth:`from_dict`); None for a run's result."""
 
     KEYS = (
         "methods",

@@ -294,14 +294,14 @@ def learn_chain(
     head_width: float | None = None,
 ) -> ChainMaps:
     """Map 1 on ``data.eyes``, then map 2 on map 1's code of ``data.head`` (hills
-    ``head_width`` wide, None: ``width``)."""
+    ``head_width`` wide, None: ``width``), both built with ``seed`` (their streams the
+    seed's own, :mod:`sigmapi.experiments.kit.seeds`)."""
     g = (grid, grid)
-    s1, s2 = (int(s) for s in np.random.default_rng(seed).integers(0, 2**31 - 1, 2))
-    map1 = SigmaPiSOM(som_config(g, g, map_shape, width, iterations, s1, backend))
+    map1 = SigmaPiSOM(som_config(g, g, map_shape, width, iterations, seed, backend))
     chain = ChainMaps(map1, map1, eye_size, code, head_width)
     a, b = data.eyes
     map1.fit((*chain.inputs1(a), *chain.inputs1(b)))
-    cfg2 = som_config(map1.map_shape, g, map_shape, width, iterations, s2, backend)
+    cfg2 = som_config(map1.map_shape, g, map_shape, width, iterations, seed, backend)
     chain.map2 = SigmaPiSOM(cfg2)
     a, b = data.head
     chain.map2.fit((*chain.inputs2(a), *chain.inputs2(b)))

@@ -101,7 +101,6 @@ class ICubResult(Result):
     per_seed: list[dict[str, Any]] = field(default_factory=list)
     seconds: float = 0.0
     _summary: dict[str, Any] = field(default_factory=dict, repr=False)
-    written: dict[str, Any] | None = field(default=None, repr=False)
     """The summaries of a result read back (:meth:`from_dict`: the file holds them, not the
     per-seed records); None for a run's result."""
 

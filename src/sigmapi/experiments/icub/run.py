@@ -59,9 +59,10 @@ __all__ = ["ICUB", "ICubExperiment", "check_frames", "learn_seed_chain"]
 
 EYES = ("l_eye", "r_eye")
 
-PLAN = SeedPlan({"views": 0, "map": 1, "babbling": 2, "reaches": 3, "servo": 4})
-"""The random streams of one seed (the seed as entropy: ``SeedSequence(seed, spawn_key=(k,))``);
-the maps are built from an int drawn from ``"map"``, so no stream meets a model's own keys."""
+PLAN = SeedPlan({"views": 5, "babbling": 6, "reaches": 7, "servo": 8})
+"""The random streams of one seed (children of ``SeedSequence(seed)``,
+:mod:`sigmapi.experiments.kit.seeds`); the maps are built with the seed itself, their
+streams the seed's own."""
 
 
 def check_frames(scene: ICubScene, n: int, rng: np.random.Generator) -> dict[str, Any]:
@@ -203,7 +204,7 @@ def learn_seed_chain(
         width=cfg.code_width,
         map_shape=cfg.map_shape,
         iterations=cfg.iterations,
-        seed=int(PLAN.rng(seed, "map").integers(2**31)),
+        seed=seed,
         eye_size=scene.eye_size,
         backend=cfg.backend,
         code=cfg.head_code,

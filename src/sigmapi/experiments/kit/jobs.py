@@ -124,7 +124,7 @@ def seed_episodes(
     ``make_map(seed, tick)`` (``(model, extras)``) where a state reads it (``"map"`` in
     ``states``); then per state, the world as that state sees it (``state_env(state,
     model)``) and the same learner on the same episodes (its action choices from stream
-    ``"agent"`` of ``seed``'s ``plan``, the episodes' starts from stream ``"starts"``:
+    ``"agent"`` of ``seed``'s ``plan``, episode ``i``'s start from stream ``("starts", i)``:
     :func:`~sigmapi.agents.run_episodes`), ``tick(1, state)`` after each; ``keep(state, env,
     learner)``, where given, what to keep of it."""
     model, extras = make_map(seed, tick) if "map" in states else (None, {})
@@ -133,7 +133,7 @@ def seed_episodes(
         env = state_env(state, model)
         done = None if tick is None else functools.partial(tick, 1, state)
         learner = actor_critic_for(env, agent, seed=plan.rng(seed, "agent"))
-        starts = plan.rng(seed, "starts").integers(0, 2**31 - 1, size=episodes)
+        starts = plan.rngs(seed, "starts", episodes)  # fresh for each state: the same starts
         out.runs[state] = run_episodes(env, learner, starts, on_episode=done, info_keys=info_keys)
         if keep is not None:
             out.kept[state] = keep(state, env, learner)

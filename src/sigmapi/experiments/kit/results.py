@@ -19,7 +19,7 @@ import functools
 import re
 import typing
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, ClassVar, TypeVar
 
@@ -34,14 +34,18 @@ if TYPE_CHECKING:
 __all__ = [
     "HEADERS",
     "JSON",
+    "VC_MARGIN",
     "Column",
     "Result",
     "as_object",
     "columns",
+    "margin_case",
+    "margin_line",
     "plain",
     "render",
     "summaries",
     "tuples",
+    "within_margin",
 ]
 
 R = TypeVar("R", bound="Result")
@@ -66,6 +70,42 @@ def summaries(data: object, required: Sequence[str], optional: Sequence[str] = (
     out = {k: obj[k] for k in required}
     out.update({k: obj[k] for k in optional if k in obj})
     return out
+
+
+VC_MARGIN = 0.02
+"""Acceptance of a map against its reference (the Sigma-Pi map, the rate map, maps learned
+from pairs): its view consistency within this much of the reference's."""
+
+
+def within_margin(gap: float) -> bool:
+    """Whether a view-consistency ``gap`` is within :data:`VC_MARGIN` (a gap of exactly
+    -0.02, e.g. 6 test z's of 300, counts: the two rates' float difference may fall a
+    rounding error below it)."""
+    return gap >= -VC_MARGIN - 1e-9
+
+
+def margin_case(gaps: Sequence[float], folded: Sequence[bool]) -> JSON:
+    """The acceptance of a map against its reference over seeds, from each seed's
+    view-consistency ``gaps`` (the map's minus the reference's) and whether its map
+    ``folded``: ``vc_gap_median``, ``vc_gap_worst``, the seeds within :data:`VC_MARGIN` and
+    ordered (``met``), ``n_seeds`` and ``all_met``."""
+    met = [within_margin(g) and not f for g, f in zip(gaps, folded, strict=True)]
+    return {
+        "vc_gap_median": float(np.median(gaps)),
+        "vc_gap_worst": float(min(gaps)),
+        "met": int(sum(met)),
+        "n_seeds": len(met),
+        "all_met": bool(all(met)),
+    }
+
+
+def margin_line(case: Mapping[str, Any], against: str) -> str:
+    """A :func:`margin_case` in words: how many seeds are within :data:`VC_MARGIN`
+    ``against`` (e.g. ``"of sigma-pi"``) and ordered, the median and worst gap."""
+    return (
+        f"{case['met']} of {case['n_seeds']} seeds within {VC_MARGIN} {against} and ordered "
+        f"(gap median {case['vc_gap_median']:+.3f}, worst {case['vc_gap_worst']:+.3f})"
+    )
 
 
 def tuples(table: Mapping[str, object]) -> JSON:
@@ -102,10 +142,15 @@ def _entry(entry: str) -> tuple[str, str]:
     return key.strip(), attr.strip() or key.strip()
 
 
+@dataclass
 class Result:
     """What an experiment's run returns: a dataclass whose JSON form (:meth:`to_dict`) is its
     :attr:`KEYS` in order, that reads back from it (:meth:`from_dict`), and that has a table
     (the console text) and figures (none by default)."""
+
+    written: dict[str, object] | None = field(default=None, repr=False, kw_only=True)
+    """The summaries of a result read back (:meth:`from_dict`, its :attr:`COMPUTED` keys);
+    None for a run's result."""
 
     KEYS: ClassVar[tuple[str, ...]] = ()
     """The keys of the JSON form, in order: ``"key"`` (a field or method of that name) or
@@ -122,7 +167,7 @@ class Result:
     def _keys(self) -> tuple[str, ...]:
         if self.KEYS:
             return self.KEYS
-        return tuple(f.name for f in dataclasses.fields(self) if f.repr)  # type: ignore[arg-type]
+        return tuple(f.name for f in dataclasses.fields(self) if f.repr)
 
     def _value(self, attr: str) -> object:
         value = functools.reduce(getattr, attr.split("."), self)  # "options.seeds": a path
@@ -132,7 +177,7 @@ class Result:
         """Everything the result states, JSON-able (``result.json``, ``--json``): the
         :attr:`KEYS` in order; a result read back gives its ``written`` summaries in place of
         the computed keys."""
-        written: dict[str, object] | None = getattr(self, "written", None)
+        written = self.written
         out: dict[str, object] = {}
         for entry in self._keys():
             spread = entry.startswith("*")
@@ -158,7 +203,7 @@ class Result:
         computed), typed as the field is (a config by its ``from_dict`` or its fields, a
         tuple, a float); the seeds from the config where :attr:`SEEDS_IN_CONFIG`."""
         hints = typing.get_type_hints(cls)
-        names = {f.name for f in dataclasses.fields(cls) if f.init}  # type: ignore[arg-type]
+        names = {f.name for f in dataclasses.fields(cls) if f.init}
         values: dict[str, object] = {}
         for entry in cls.KEYS:
             key, attr = _entry(entry.lstrip("*"))

@@ -1,18 +1,27 @@
 """One seed plan: the random streams of one seed of an experiment, each by name.
 
-Every experiment takes its seeds as ints (:func:`check_seeds`) and
-draws each of its random streams from a :class:`SeedPlan`: ``plan.rng(seed, "starts")`` is
-``default_rng(plan.sequence(seed, "starts"))``, a child ``SeedSequence`` of the seed with the
-spawn key the plan names. A stream is never turned into an int and back.
+Every experiment takes its seeds as ints (:func:`check_seeds`) and draws each of its random
+streams from a :class:`SeedPlan`, by one derivation: stream ``name`` of seed ``s`` is the
+child ``SeedSequence(s, spawn_key=(key, *more))`` of ``SeedSequence(s)`` under the spawn key
+the plan names (``more``: keys below it, e.g. one stream per dwell time or per episode). The
+plan hands out generators (:meth:`SeedPlan.rng`, :meth:`SeedPlan.rngs`) and sequences
+(:meth:`SeedPlan.sequence`), never ints: a stream is never drawn as an int and passed on.
 
-Two derivations, so that published results stay as they were:
+Two things take a seed of their own, and each has one rule:
 
-- the seed as entropy (``root=None``): ``SeedSequence(seed, spawn_key=(key, *more))``. A
-  :class:`~sigmapi.SigmaPiSOM` built with the same seed draws its own streams under spawn
-  keys 0-4 (:data:`MODEL_KEYS`), so a plan whose experiment builds such a model with that
-  seed names keys outside them (chain 16, compare 13, stream 7);
-- under a fixed root (``root=0``, reach and reward): ``SeedSequence(root, spawn_key=(seed,
-  key, *more))``: seed ``s`` is child ``s`` of ``SeedSequence(root)``.
+- a model (:class:`~sigmapi.SigmaPiSOM`, whose ``SOMConfig.seed`` is an int) is built with
+  the seed ``s`` itself: its streams (weights, data, passes, refinement) are then the children
+  of ``SeedSequence(s)`` under :data:`MODEL_KEYS` (0-4), the same tree as the plan's, so a
+  plan names its keys from 5 up (checked). Two models of one seed (chain's maps A and B, the
+  iCub's maps 1 and 2, compare's methods) draw the same streams, as the same seed promises;
+- an environment is seeded from a generator: an episode's start is a generator of the plan
+  (:meth:`SeedPlan.rngs`, one per episode) that becomes the world's ``np_random`` before a
+  ``reset()`` (:func:`~sigmapi.agents.reset_from`; Gymnasium's ``reset(seed=n)`` is the
+  same with ``default_rng(n)``).
+
+Whatever takes a generator or a ``SeedSequence`` takes the plan's: a source of views
+(:func:`~sigmapi.envs.collect_saccade_views`), the actor-critic, the neurons' dendritic and
+basis-function maps.
 """
 
 from __future__ import annotations
@@ -38,34 +47,45 @@ class SeedPlan:
 
     Examples
     --------
-    >>> plan = SeedPlan({"map": 0, "starts": 1}, root=0)
+    >>> plan = SeedPlan({"map": 5, "starts": 6})
     >>> plan.sequence(3, "starts").spawn_key
-    (3, 1)
-    >>> SeedPlan({"frames": 7}).sequence(3, "frames", 20).spawn_key
-    (7, 20)
+    (6,)
+    >>> plan.sequence(3, "starts", 20).spawn_key
+    (6, 20)
+    >>> [int(g.integers(10)) for g in plan.rngs(3, "starts", 2)] == [
+    ...     int(plan.rng(3, "starts", i).integers(10)) for i in range(2)]
+    True
     """
 
     keys: Mapping[str, int]
-    """The spawn key of each stream, by name."""
-    root: int | None = None
-    """None: the seed is the entropy; an int: the seed is a child of ``SeedSequence(root)``."""
+    """The spawn key of each stream, by name (none of :data:`MODEL_KEYS`)."""
 
     def __post_init__(self) -> None:
         if len(set(self.keys.values())) != len(self.keys):
             raise ValueError(f"two streams of a seed plan share a spawn key: {dict(self.keys)}")
+        model = sorted(k for k, v in self.keys.items() if v in MODEL_KEYS)
+        if model:
+            raise ValueError(
+                f"streams {model} of a seed plan take spawn keys of a model of the seed "
+                f"({MODEL_KEYS.start}-{MODEL_KEYS.stop - 1}): give them keys from "
+                f"{MODEL_KEYS.stop} up"
+            )
         object.__setattr__(self, "keys", dict(self.keys))  # a copy (picklable)
 
     def sequence(self, seed: int, name: str, *more: int) -> np.random.SeedSequence:
         """The ``SeedSequence`` of stream ``name`` of ``seed`` (``more``: further keys below
         it, e.g. one stream per dwell time)."""
-        key = self.keys[name]
-        if self.root is None:
-            return np.random.SeedSequence(seed, spawn_key=(key, *more))
-        return np.random.SeedSequence(self.root, spawn_key=(seed, key, *more))
+        return np.random.SeedSequence(seed, spawn_key=(self.keys[name], *more))
 
     def rng(self, seed: int, name: str, *more: int) -> np.random.Generator:
         """A generator of stream ``name`` of ``seed`` (:meth:`sequence`)."""
         return np.random.default_rng(self.sequence(seed, name, *more))
+
+    def rngs(self, seed: int, name: str, n: int) -> list[np.random.Generator]:
+        """``n`` generators of stream ``name`` of ``seed``, one per item (``rng(seed, name,
+        i)`` for ``i < n``): an episode's start is a function of the seed and the episode
+        alone, however many draws the episodes before it took."""
+        return [self.rng(seed, name, i) for i in range(n)]
 
 
 def check_seeds(seeds: Any, name: str = "seeds") -> tuple[int, ...]:

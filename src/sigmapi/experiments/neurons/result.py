@@ -8,7 +8,17 @@ from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
 
-from sigmapi.experiments.kit.results import JSON, Column, Result, columns, render
+from sigmapi.experiments.kit.results import (
+    JSON,
+    VC_MARGIN,
+    Column,
+    Result,
+    columns,
+    margin_case,
+    margin_line,
+    render,
+    within_margin,
+)
 
 from .config import METRICS, REFERENCE_RATE, NeuronsConfig
 
@@ -20,17 +30,6 @@ __all__ = ["VC_MARGIN", "NeuronsResult", "Row", "within_margin"]
 Row = JSON
 """A record of the JSON form: a map's or a spiking network's row of one job (its name, task,
 seed and scores), an entry of :meth:`NeuronsResult.methods`, a branch summary."""
-
-
-VC_MARGIN = 0.02
-"""Acceptance: within this much view consistency of the reference (Sigma-Pi or rate map)."""
-
-
-def within_margin(gap: float) -> bool:
-    """Whether a view-consistency ``gap`` is within :data:`VC_MARGIN` (a gap of exactly
-    -0.02, e.g. 6 test z's of 300, counts: the two rates' float difference may fall a
-    rounding error below it)."""
-    return gap >= -VC_MARGIN - 1e-9
 
 
 MAX_WINDOW_MS = 200
@@ -199,7 +198,6 @@ class NeuronsResult(Result):
                 continue
             ref = {r["seed"]: r for r in maps[task, "sigma-pi"]}
             gap = [r["view_consistency"] - ref[r["seed"]]["view_consistency"] for r in rows]
-            met = [within_margin(g) and not r["folded"] for g, r in zip(gap, rows, strict=True)]
             most, theirs = max(r["synapses"] for r in rows), ref[rows[0]["seed"]]["synapses"]
             dendritic.append(
                 {
@@ -209,11 +207,7 @@ class NeuronsResult(Result):
                     "synapses": most,
                     "sigma_pi_synapses": theirs,
                     "fewer_synapses": most < theirs,
-                    "vc_gap_median": float(np.median(gap)),
-                    "vc_gap_worst": float(min(gap)),
-                    "met": int(sum(met)),
-                    "n_seeds": len(rows),
-                    "all_met": bool(all(met)),
+                    **margin_case(gap, [r["folded"] for r in rows]),
                 }
             )
         out: Row = {"margin": VC_MARGIN, "dendritic": dendritic, "spiking": []}
@@ -265,10 +259,8 @@ class NeuronsResult(Result):
         acc = self.acceptance()
         for c in acc["dendritic"]:
             rows.append(
-                f"{c['name']} ({c['task']}): {c['met']} of {c['n_seeds']} seeds within "
-                f"{VC_MARGIN} of sigma-pi and ordered (gap median {c['vc_gap_median']:+.3f}, "
-                f"worst {c['vc_gap_worst']:+.3f}); {c['synapses']} synapses per unit against "
-                f"{c['sigma_pi_synapses']}"
+                f"{c['name']} ({c['task']}): {margin_line(c, 'of sigma-pi')}; {c['synapses']} "
+                f"synapses per unit against {c['sigma_pi_synapses']}"
             )
         return "\n".join(rows)
 

@@ -47,11 +47,11 @@ M = TypeVar("M")
 Array = NDArray[np.float64]
 
 
-PLAN = SeedPlan({"spikes": 11})
-"""The streams of a seed (:class:`~sigmapi.experiments.kit.seeds.SeedPlan`, the seed as
-entropy): the spike trains at each peak rate (and pool, where not the config's), under key 11
-(outside :data:`~sigmapi.experiments.kit.seeds.MODEL_KEYS`: the maps of the seed draw
-their own)."""
+PLAN = SeedPlan({"spikes": 11, "neurons": 12})
+"""The streams of a seed (:class:`~sigmapi.experiments.kit.seeds.SeedPlan`): the spike trains
+at each peak rate (and pool, where not the config's), under key 11; the training pairs and
+start of the dendritic, sparse dendritic and basis-function maps, under key 12 (each map the
+same stream, as the Sigma-Pi map's are its seed's own)."""
 
 
 @dataclass(frozen=True)
@@ -167,6 +167,7 @@ def _neurons_job(job: NeuronsJob, tick: Tick | None) -> Row:
     n_x, n_y = int(np.prod(cfg.x_shape)), int(np.prod(cfg.y_shape))
     training, stride = c.training(two_d), c.basis_stride_2d if two_d else 1
     maps: list[tuple[str, Any, Row]] = []  # name, model, its row's own keys
+    drawn = PLAN.sequence(job.seed, "neurons")  # the neuron maps' pairs and start
 
     def train(name: str, fit: Callable[..., M], *args: Any, **kwargs: Any) -> M:
         start = time.perf_counter()  # a row's seconds: from its training to its scores
@@ -180,20 +181,18 @@ def _neurons_job(job: NeuronsJob, tick: Tick | None) -> Row:
     maps[-1][2]["synapses"] = n_x * n_y
     dendritic: dict[int, DendriticMap] = {}
     for d in c.branches_2d if two_d else c.branches:
-        dm = dendritic[d] = train(
-            f"dendritic-D{d}", DendriticMap(cfg, d).fit, training, seed=job.seed
-        )
+        dm = dendritic[d] = train(f"dendritic-D{d}", DendriticMap(cfg, d).fit, training, seed=drawn)
         maps[-1][2].update(synapses=dm.synapses, branches=d, active_synapses=dm.active_synapses())
     sparse: dict[int, SparseDendriticMap] = {}
     for d in c.sparse_branches_2d if two_d else c.sparse_branches:
         fit = SparseDendriticMap(cfg, d, stride=stride).fit
-        sm = sparse[d] = train(f"dendritic-sparse-D{d}", fit, training, seed=job.seed)
+        sm = sparse[d] = train(f"dendritic-sparse-D{d}", fit, training, seed=drawn)
         gap = sparse_summary(sm, _z_table(sm, c.n_test))["z_gap_median"]
         maps[-1][2].update(
             synapses=sm.synapses, mean_synapses=sm.mean_synapses, branches=d, branch_z_gap=gap
         )
     basis = BasisFunctionMap(cfg, stride=stride).fit
-    maps[-1][2]["synapses"] = train("basis-function", basis, training, seed=job.seed).synapses
+    maps[-1][2]["synapses"] = train("basis-function", basis, training, seed=drawn).synapses
     rows = []
     for name, model, extra in maps:
         begin = extra.pop("start")
@@ -239,7 +238,9 @@ def _spiking(
     rows = _spiking_rows(job, "spiking-conjunction", sp, conj, sp.winner, runs, tick=tick)
     if c.spiking_branches:
         d = c.spiking_branches
-        dm = dendritic.get(d) or DendriticMap(cfg, d).fit(training, seed=job.seed)
+        dm = dendritic.get(d) or DendriticMap(cfg, d).fit(
+            training, seed=PLAN.sequence(job.seed, "neurons")
+        )
 
         def dend(x: Array, y: Array, cfg_s: SpikingConfig, rng: np.random.Generator) -> SpikingRun:
             return simulate_dendritic(dm.u_, dm.v_, dm.gain, dm.threshold, x, y, cfg_s, rng)
@@ -257,7 +258,9 @@ def _spiking(
         rows += [{**r, "branches": d} for r in got]
     if c.spiking_sparse_branches:
         d = c.spiking_sparse_branches
-        sm = sparse.get(d) or SparseDendriticMap(cfg, d).fit(training, seed=job.seed)
+        sm = sparse.get(d) or SparseDendriticMap(cfg, d).fit(
+            training, seed=PLAN.sequence(job.seed, "neurons")
+        )
         n_xy = (int(np.prod(cfg.x_shape)), int(np.prod(cfg.y_shape)))
         branch_weights = (sm.c_ * sm.mask_).reshape(sm.n_units, *n_xy)
 

@@ -104,15 +104,20 @@ class MapConfig:
         _validate.choice("features", self.features, FEATURES)
 
     def learn(
-        self, world: World, settings: object, rng: np.random.Generator, tick: Tick | None = None
+        self,
+        world: World,
+        settings: object,
+        seed: int,
+        views: np.random.Generator,
+        tick: Tick | None = None,
     ) -> SigmaPiSOM:
-        """The map learned in ``world`` as ``settings`` make it (from its saccade views,
-        :func:`~sigmapi.envs.learn_map_in_env`), the views' and the weights' seeds drawn from
-        ``rng``; ``tick`` is told that the map learns."""
-        env_seed, som_seed = (int(v) for v in rng.integers(0, 2**31 - 1, size=2))
-        som = self.in_world(world, settings, som_seed)
+        """The map of seed ``seed`` learned in ``world`` as ``settings`` make it (from its
+        saccade views, drawn from ``views``: :func:`~sigmapi.envs.learn_map_in_env`); the map
+        is built with the seed itself, its weights' streams the seed's
+        (:mod:`sigmapi.experiments.kit.seeds`); ``tick`` is told that the map learns."""
+        som = self.in_world(world, settings, seed)
         told = None if tick is None else lambda model: tick(0, "learning the map")
-        return learn_map_in_env(world.make_env(settings), som, seed=env_seed, callback=told)
+        return learn_map_in_env(world.make_env(settings), som, seed=views, callback=told)
 
     def in_world(self, world: World, settings: object, seed: int) -> SOMConfig:
         """The map's config on the codes of ``world`` as ``settings`` make it

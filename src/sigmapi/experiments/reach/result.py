@@ -40,8 +40,6 @@ class ReachResult(Result):
     z_axis: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
     map_metrics: list[dict[str, float | int]] = field(default_factory=list)
     seconds: float = 0.0
-    written: dict[str, object] | None = field(default=None, repr=False)
-    """The summaries of a result read back (:meth:`from_dict`); None for a run's result."""
 
     KEYS = (
         "success: final_success",

@@ -3,10 +3,11 @@
 :data:`REACH` (a :class:`ReachExperiment`) runs a
 :class:`~sigmapi.experiments.reach.config.ReachConfig` on a list of seeds and returns a
 :class:`~sigmapi.experiments.reach.result.ReachResult`. Seed ``s``'s random streams are
-those of :data:`PLAN`: ``"map"`` seeds the map's data (saccade views) and weights,
-``"starts"`` the episodes' start states (identical for every state representation: same
-learner, same episodes), ``"agent"`` the learner's action choices (the same stream for every
-representation); each is child ``(s, key)`` of ``SeedSequence(0)``.
+those of :data:`PLAN`: ``"views"`` the map's data (saccade views; its weights are the seed's
+own, the map built with seed ``s``), ``"starts"`` the episodes' start states (identical for
+every state representation: same learner, same episodes), ``"agent"`` the learner's action
+choices (the same stream for every representation); each is child ``(key, ...)`` of
+``SeedSequence(s)`` (:mod:`sigmapi.experiments.kit.seeds`).
 
 Examples
 --------
@@ -94,7 +95,7 @@ def value_over_z(
     return axis, out.reshape((n,) * dim)
 
 
-PLAN = SeedPlan({"map": 0, "starts": 1, "agent": 2}, root=0)
+PLAN = SeedPlan({"views": 5, "starts": 6, "agent": 7})
 """The streams of a seed (:class:`~sigmapi.experiments.kit.seeds.SeedPlan`)."""
 
 
@@ -196,9 +197,10 @@ class ReachExperiment(SeedRuns[Any]):
     ) -> tuple[SigmaPiSOM, dict[str, object]]:
         """Seed ``seed``'s map (learned in the world, or the config's model file) and, for the
         record, the project's map metrics (docs/algorithm.md) on a small test set."""
-        path, rng = config.map.model_path, self.plan.rng(seed, "map")
+        path = config.map.model_path
         if path is None:
-            model = config.map.learn(self.world, config.env, rng, tick)
+            views = self.plan.rng(seed, "views")
+            model = config.map.learn(self.world, config.env, seed, views, tick)
         else:
             model = load_model(Path(path))
         return model, {"map_metrics": evaluate(model, n_test=2000).to_dict()}

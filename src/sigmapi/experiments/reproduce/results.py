@@ -217,7 +217,7 @@ class SeedRun(Result):
     def from_dict(cls, data: object) -> SeedRun:
         """The run a :meth:`to_dict` wrote."""
         data = as_object(data)
-        times = {k: float(data[k]) for k in SECONDS}
+        times: dict[str, Any] = {k: float(data[k]) for k in SECONDS}
         rest = set(data) - {*SECONDS, "seed", "backend", "unrefined", "curve"}
         unrefined = data["unrefined"]
         return cls(

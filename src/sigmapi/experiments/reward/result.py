@@ -77,8 +77,6 @@ class RewardResult(Result):
     scores: dict[str, dict[str, NDArray[np.float64]]] = field(default_factory=dict)
     units: dict[str, NDArray[np.float64]] = field(default_factory=dict)
     seconds: float = 0.0
-    written: dict[str, object] | None = field(default=None, repr=False)
-    """The summaries of a result read back (:meth:`from_dict`); None for a run's result."""
 
     KEYS = (
         "methods",

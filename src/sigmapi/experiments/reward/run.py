@@ -5,9 +5,11 @@ returns a :class:`~sigmapi.experiments.reward.result.RewardResult`: per seed, on
 without a teacher, then the same actor-critic on three copies of it, ``frozen``, ``gated``
 (:func:`~sigmapi.agents.gated.run_gated_episodes`) and ``shuffled`` (docs/guide/reward.md,
 docs/algorithm.md "Reward-gated plasticity"), each map scored by :func:`map_scores`. Seed
-``s``'s random streams are those of :data:`PLAN`: ``"map"``, ``"starts"`` and ``"agent"`` (the
+``s``'s random streams are those of :data:`PLAN`: ``"views"`` (the map's saccade views; the
+map is built with seed ``s``, its weights the seed's own), ``"starts"`` and ``"agent"`` (the
 same for every method), ``"probes"`` (the test objects), ``"shuffle"`` and ``"fixations"`` (the
-gated updates' second fixations).
+gated updates' second fixations); each a child of ``SeedSequence(s)``
+(:mod:`sigmapi.experiments.kit.seeds`).
 
 Examples
 --------
@@ -53,9 +55,7 @@ __all__ = [
 ]
 
 
-PLAN = SeedPlan(
-    {"map": 0, "starts": 1, "agent": 2, "probes": 3, "shuffle": 4, "fixations": 5}, root=0
-)
+PLAN = SeedPlan({"views": 5, "starts": 6, "agent": 7, "probes": 8, "shuffle": 9, "fixations": 10})
 """The streams of a seed (:class:`~sigmapi.experiments.kit.seeds.SeedPlan`)."""
 
 
@@ -154,11 +154,10 @@ class RewardExperiment(SeedRuns[RewardConfig]):
         """One seed: its map, then each method's learner on the same episodes, then the
         scores."""
         cfg, seed, world, run = job.config, job.seed, self.world, job.config.run
-        learned = cfg.map.learn(world, cfg.env, PLAN.rng(seed, "map"))
+        learned = cfg.map.learn(world, cfg.env, seed, PLAN.rng(seed, "views"))
         place = world.source(cfg.env)
         objects = probe_objects(place, run.n_test, PLAN.rng(seed, "probes"))
         goal = np.asarray(place.goal, dtype=np.float64)
-        starts = PLAN.rng(seed, "starts").integers(0, 2**31 - 1, size=run.episodes)
         out: JSON = {
             "initial": map_scores(learned, objects, goal, run.near_radius),
             "initial_units": preferred_z(learned, objects),
@@ -171,6 +170,7 @@ class RewardExperiment(SeedRuns[RewardConfig]):
             env = MapObservation(world.make_env(cfg.env), model, *features)
             agent = actor_critic_for(env, cfg.agent, seed=PLAN.rng(seed, "agent"))
             done = None if tick is None else functools.partial(tick, 1, m)
+            starts = PLAN.rngs(seed, "starts", run.episodes)  # fresh: every method's the same
             updates = 0
             if m == "frozen":
                 ep = run_episodes(env, agent, starts, on_episode=done)

@@ -39,9 +39,9 @@ __all__ = [
     "RobotRunConfig",
 ]
 
-PLAN = SeedPlan({"map": 0, "starts": 1, "agent": 2, "film": 3})
+PLAN = SeedPlan({"views": 5, "starts": 6, "agent": 7, "film": 8})
 """The streams of a seed (:class:`~sigmapi.experiments.kit.seeds.SeedPlan`): children of
-``SeedSequence(seed)``."""
+``SeedSequence(seed)``, apart from the map's own (the map is built with the seed)."""
 
 
 @dataclass(frozen=True)

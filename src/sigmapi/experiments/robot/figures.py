@@ -19,6 +19,7 @@ if TYPE_CHECKING:
     from matplotlib.axes import Axes
 
 from sigmapi._outputs import save_captioned, save_gif
+from sigmapi.agents import reset_from
 from sigmapi.envs.robot.frames import Frames
 from sigmapi.envs.robot.scene import Scene
 from sigmapi.experiments.kit.figures import (
@@ -99,8 +100,7 @@ def film_episode(result: Any, max_frames: int = 60) -> list[NDArray[np.uint8]]:
     if result.model is None or result.agent is None:
         return []
     env = result.config.state_env("map", result.model, render_mode="rgb_array")
-    start = PLAN.rng(result.seeds[0], "film")
-    phi, _ = env.reset(seed=int(start.integers(0, 2**31 - 1)))
+    phi, _ = reset_from(env, PLAN.rng(result.seeds[0], "film"))
     frames = [env.render()]
     for _ in range(max_frames - 1):
         phi, _, terminated, truncated, _ = env.step(result.agent.act(phi))

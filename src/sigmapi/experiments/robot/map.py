@@ -70,20 +70,20 @@ def robot_som_config(
 
 
 def learn_map(
-    config: RobotConfig, rng: np.random.Generator, world: World = ROBOT_WORLD
+    config: RobotConfig, seed: int, views: np.random.Generator, world: World = ROBOT_WORLD
 ) -> SigmaPiSOM:
-    """The map of one run: ``config.map.train_pairs`` view pairs recorded from the still
+    """The map of seed ``seed``: ``config.map.train_pairs`` view pairs recorded from the still
     body's saccades in ``world`` (its view source; ``config.env.moved_share`` of them
-    spoiled), then ``fit(views)`` with the world's map spec; the views' and the weights'
-    seeds drawn from ``rng``."""
+    spoiled), drawn from ``views``, then ``fit(views)`` with the world's map spec, the map
+    built with the seed itself (its weights' streams the seed's,
+    :mod:`sigmapi.experiments.kit.seeds`)."""
     source = world.source(config.env)
-    views_seed, som_seed = (int(v) for v in rng.integers(0, 2**31 - 1, size=2))
-    views = collect_saccade_views(source, config.map.train_pairs, seed=views_seed)
+    pairs = collect_saccade_views(source, config.map.train_pairs, seed=views)
     m = config.map
     cfg = robot_som_config(
-        source.x_code, m.map_shape, m.iterations, som_seed, m.backend, spec=world.map
+        source.x_code, m.map_shape, m.iterations, seed, m.backend, spec=world.map
     )
-    return SigmaPiSOM(cfg).fit(views)
+    return SigmaPiSOM(cfg).fit(pairs)
 
 
 def evaluation_pairs(config: RobotConfig) -> tuple[RobotViewBatch, RobotViewBatch]:

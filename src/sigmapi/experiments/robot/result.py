@@ -71,8 +71,6 @@ class RobotResult(Result):
     agent: ActorCritic | None = None
     seconds: float = 0.0
     _film: list[NDArray[np.uint8]] | None = field(default=None, repr=False)
-    written: dict[str, object] | None = field(default=None, repr=False)
-    """The summaries of a result read back (:meth:`from_dict`); None for a run's result."""
 
     KEYS = (
         "*map_summary",

@@ -3,11 +3,12 @@ with the robot's map (docs/guide/robot.md).
 
 :data:`ROBOT` runs a :class:`~sigmapi.experiments.robot.config.RobotConfig` on seeds and returns
 a :class:`~sigmapi.experiments.robot.result.RobotResult`. Seed ``s``'s random streams are those
-of :data:`~sigmapi.experiments.robot.config.PLAN`: ``"map"`` (the map's recorded views and
-weights), ``"starts"`` and ``"agent"`` (the same for every state), ``"film"`` (the filmed
-episode's start). The map learns in passes over view pairs recorded from the still robot's
-saccades (:func:`~sigmapi.experiments.robot.map.learn_map`) and is scored on evaluation pairs
-drawn from :data:`~sigmapi.metrics.EVAL_SEED` (the same for every seed).
+of :data:`~sigmapi.experiments.robot.config.PLAN`: ``"views"`` (the map's recorded views; the
+map is built with seed ``s``, its weights the seed's own), ``"starts"`` and ``"agent"`` (the
+same for every state), ``"film"`` (the filmed episode's start). The map learns in passes over
+view pairs recorded from the still robot's saccades
+(:func:`~sigmapi.experiments.robot.map.learn_map`) and is scored on evaluation pairs drawn from
+:data:`~sigmapi.metrics.EVAL_SEED` (the same for every seed).
 
 Examples
 --------
@@ -129,7 +130,7 @@ class RobotExperiment(ReachExperiment):
         preferred z on the evaluation views (``shared``)."""
         if tick is not None:
             tick(0, "learning the map")
-        model = learn_map(config, self.plan.rng(seed, "map"), self.world)
+        model = learn_map(config, seed, self.plan.rng(seed, "views"), self.world)
         cal, test = shared
         return model, {
             "map_metrics": score_map(model, cal, test),

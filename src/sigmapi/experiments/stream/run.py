@@ -42,10 +42,13 @@ from sigmapi.experiments.base import KEY_VALUES, Experiment, register, run_all
 from sigmapi.experiments.kit.jobs import Tick, counted, iterations_counted
 from sigmapi.experiments.kit.maps import MapSpec
 from sigmapi.experiments.kit.results import (
+    VC_MARGIN,
     Column,
     Result,
     as_object,
     columns,
+    margin_case,
+    margin_line,
     plain,
     render,
     tuples,
@@ -134,10 +137,6 @@ METRICS = ("view_consistency", "view_within_one", "z_error", "order_r2", "fold_s
 
 PER_SEED = (*METRICS, "folded", "seconds")
 """The values of each map that ``"methods"`` keeps per seed."""
-
-
-VC_MARGIN = 0.02
-"""Acceptance: stream learning at ``d >= 4`` within this much view consistency of pairs."""
 
 
 MIN_DWELL = 4
@@ -271,18 +270,8 @@ class StreamResult(Result):
             for dwell in (d for d in self.config.dwells if d >= MIN_DWELL):
                 rows = self._rows(trace, dwell)
                 gap = [r.view_consistency - pairs[r.seed].view_consistency for r in rows]
-                met = [g >= -VC_MARGIN and not r.folded for g, r in zip(gap, rows, strict=True)]
-                out.append(
-                    Case(
-                        trace=trace,
-                        dwell=dwell,
-                        vc_gap_median=float(np.median(gap)),
-                        vc_gap_worst=float(min(gap)),
-                        met=int(sum(met)),
-                        n_seeds=len(rows),
-                        all_met=bool(all(met)),
-                    )
-                )
+                margin = margin_case(gap, [r.folded for r in rows])
+                out.append(Case(trace=trace, dwell=dwell, **margin))  # type: ignore[typeddict-item]
         return out
 
     def settings(self) -> dict[str, object]:
@@ -295,10 +284,8 @@ class StreamResult(Result):
         rows = render(COLUMNS, self.methods())
         for case in self.cases():
             rows.append(
-                f"trace {case['trace']:g}, dwell {case['dwell']}: {case['met']} of "
-                f"{case['n_seeds']} seeds within {VC_MARGIN} view consistency of pairs and "
-                f"ordered (gap median {case['vc_gap_median']:+.3f}, worst "
-                f"{case['vc_gap_worst']:+.3f})"
+                f"trace {case['trace']:g}, dwell {case['dwell']}: "
+                + margin_line(case, "view consistency of pairs")
             )
         return "\n".join(rows)
 
