@@ -5,6 +5,7 @@ Usage (from the repository root)::
 
     sigmapi train --preset paper-2d --seed 1 --out /tmp/p2_1.npz      # once per map, ~2 min
     python benchmarks/bench_nir.py --models /tmp/p2_1.npz /tmp/p2_2.npz [--norse-pairs 100]
+        [--graph-dir /tmp/graphs]   # keep the graphs; a later run reads them, e.g. for Norse
 
 Writes ``benchmarks/results/nir.json``. For each model: the graph as
 :func:`sigmapi.neurons.nir_graph.nir_graph` makes it (its calibration: pairs of seed 0) and
@@ -95,19 +96,30 @@ def norse_spikes(graph: Any, inputs: np.ndarray) -> tuple[np.ndarray, np.ndarray
     return np.asarray(counts.numpy()), np.asarray(last.numpy())
 
 
-def measure(path: str, pairs: int, pair_seed: int, norse_pairs: int) -> dict[str, Any]:
+def measure(
+    path: str, pairs: int, pair_seed: int, norse_pairs: int, graph_dir: Path | None
+) -> dict[str, Any]:
     import nir
 
     import sigmapi
+    from sigmapi.io import atomic_write_bytes
     from sigmapi.neurons.nir_graph import nir_graph, winners
 
     model = sigmapi.load(path)
-    t0 = time.perf_counter()
-    graph = nir_graph(model)
-    made = time.perf_counter() - t0
-    buffer = io.BytesIO()
-    nir.write(buffer, graph)
-    graph = nir.read(io.BytesIO(buffer.getvalue()))  # what a reader of the file gets
+    kept = graph_dir / (Path(path).stem + ".nir") if graph_dir else None
+    made: float | None = None
+    if kept is not None and kept.exists():  # written by an earlier run: not timed again
+        data = kept.read_bytes()
+    else:
+        t0 = time.perf_counter()
+        graph = nir_graph(model)
+        made = time.perf_counter() - t0
+        buffer = io.BytesIO()
+        nir.write(buffer, graph)
+        data = buffer.getvalue()
+        if kept is not None:
+            atomic_write_bytes(kept, data)
+    graph = nir.read(io.BytesIO(data))  # what a reader of the file gets
     rng = np.random.default_rng(pair_seed)
     d = len(model.x_shape)
     x, y = model.x_code.encode(rng.random((pairs, d))), model.y_code.encode(rng.random((pairs, d)))
@@ -120,7 +132,7 @@ def measure(path: str, pairs: int, pair_seed: int, norse_pairs: int) -> dict[str
         "model": path,
         "map_shape": list(model.map_shape),
         "graph_seconds": made,
-        "graph_bytes": len(buffer.getvalue()),
+        "graph_bytes": len(data),
         "calibration_agreement": float(graph.metadata["calibration_agreement"]),
         "held_out_agreement": float(graph.metadata["held_out_agreement"]),
         "held_out_simulated_agreement": float(graph.metadata["simulated_agreement"]),
@@ -157,11 +169,18 @@ def main() -> None:
     parser.add_argument("--pairs", type=int, default=500, help="fresh pairs per model")
     parser.add_argument("--pair-seed", type=int, default=2026, help="seed of the fresh pairs")
     parser.add_argument("--norse-pairs", type=int, default=0, help="of those, run in Norse")
+    parser.add_argument(
+        "--graph-dir", type=Path, default=None,
+        help="keep each model's graph here (MODEL_STEM.nir) and read it from there next time",
+    )  # fmt: skip
     parser.add_argument("--out", type=Path, default=ROOT / "results" / "nir.json")
     args = parser.parse_args()
     import nir
 
-    runs = [measure(m, args.pairs, args.pair_seed, args.norse_pairs) for m in args.models]
+    runs = [
+        measure(m, args.pairs, args.pair_seed, args.norse_pairs, args.graph_dir)
+        for m in args.models
+    ]
     agree = [r["agreement"] for r in runs]
     write_result(
         args.out,

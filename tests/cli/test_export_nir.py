@@ -115,7 +115,7 @@ def test_the_graph_simulated_picks_the_models_winners(map_1d):
     agree = np.mean(got == map_1d.winner(x, y))
     print(f"reference simulation: {agree:.3f} of {len(x)} fresh pairs")
     assert agree >= 0.95, agree
-    assert np.median(counts.max(axis=1)) >= 10  # the winner's rate is resolved by spikes
+    assert counts.max(axis=1).min() >= 1  # every winner fired: no pair read by index alone
 
 
 def test_nir_refuses_the_onnx_options_in_one_line(model_file, tmp_path, capsys):
