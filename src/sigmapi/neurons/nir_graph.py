@@ -26,8 +26,12 @@ The graph uses only primitives that most readers support (``Input``, ``Affine``,
   norms in the bias), the relays with fitted weights, and a bias: the rule's offset, the fit's
   constant, and a shift that keeps the winner's drive positive (the same for every unit, so
   it changes no ranking). The units are leaky integrate-and-fire neurons with a time constant
-  far longer than a trial (near-perfect integrators); the winner is the unit that fires most
-  (ties: the lowest index).
+  far longer than a trial (near-perfect integrators). The readout (:func:`winners`) counts
+  spikes, then latency: the winner is the unit that fires most, and among those the one whose
+  last spike came earliest (it reached that count first: the most input); then the lowest
+  index. With few spikes (a threshold a few times below the winner's input over the trial)
+  this reads the time each unit takes to gather its input, finer than a count of one step's
+  worth of spikes, and no input is lost at a reset before the first spike.
 
 The sum-and-threshold conjunction is not the product: its error depends on where the codes'
 peaks sit (a normalised 2-D code's peak ranges from about 0.44 to 0.65, by how far the
@@ -37,7 +41,7 @@ responses by terms linear in each code: per unit ``k``, ``alpha_k`` and the rela
 are the least-squares fit of the model's responses ``h_k`` to ``alpha_k r_k + beta_k . [x,
 y, 1]`` (``r_k`` the conjunctions' rates through ``W_k``, every rate the neurons' exact spike
 count over the trial). On paper-2d maps this lifts the agreement to about 96 % of held-out
-calibration pairs (rates), about 94 % of fresh pairs simulated. ``theta`` is chosen from a
+calibration pairs (rates). ``theta`` is chosen from a
 small grid: for each, the fit on two thirds of ``calibration`` pairs of random positions
 (drawn with ``seed``), the winners on the last third; the best is refitted on all of them.
 The map neurons' threshold gives the winner one of :data:`MAP_SPIKES` spikes in a trial: the
@@ -63,7 +67,15 @@ from sigmapi.export import code_meta, score_matrix
 from sigmapi.io import atomic_write_bytes
 from sigmapi.model.som import SigmaPiSOM, load_model
 
-__all__ = ["DT_S", "STEPS", "conjunction_rates", "export_nir", "if_rates", "nir_graph"]
+__all__ = [
+    "DT_S",
+    "STEPS",
+    "conjunction_rates",
+    "export_nir",
+    "if_rates",
+    "nir_graph",
+    "winners",
+]
 
 Array = NDArray[np.float64]
 
@@ -76,12 +88,14 @@ CONJUNCTION_PERIOD = 10
 """The strongest conjunction neuron of the calibration pairs fires about once in this many
 steps (at ``DT_S``), and so does the strongest relay: a rate that ``STEPS`` resolve to about
 1 %."""
-MAP_SPIKES = (20, 30, 45, 60)
-"""Candidate numbers of the winner's spikes in a trial (about; the median winner's). Few
-spikes tie units whose drives differ by less than one spike; many spikes make a neuron's
-threshold small against the bursts of input it gets when conjunctions fire together (one
-spike a step at most, the rest of the burst lost at the reset). The graph's calibration picks
-the one whose simulated winners agree most with the model's."""
+MAP_SPIKES = (3, 5, 10, 20)
+"""Candidate numbers of the winner's spikes in a trial (about; the median winner's). Under
+:func:`winners` few spikes read the latency of each unit's input (paper-2d maps, seeds 0-2:
+3 spikes gave the winners of the input integrated without spikes); many spikes make a
+neuron's threshold small against the bursts of input it gets when conjunctions fire together
+(one spike a step at most, the rest of the burst lost at the reset); below 3 a weak winner
+may not fire. The graph's calibration picks the one whose simulated winners agree most with
+the model's."""
 HELD_OUT_SIMULATED = 400
 """Held-out calibration pairs simulated to pick the winner's spikes."""
 TAU_S = 1e6
@@ -182,15 +196,27 @@ def _calibrate(
             "top_score": float(np.median(win)) + shift}  # fmt: skip
 
 
-def _spike_counts(c: dict[str, Any], map_w: Any, map_b: Any, v_map: Any) -> Array:
-    """The map neurons' spike counts ``(B, K)`` on the held-out pairs of calibration ``c``:
-    the graph run by NIR's definitions at ``dt = 1`` for :data:`STEPS` steps, the conjunctions
-    and relays by their firing periods (under a constant input ``I > 0`` an IF neuron fires
-    every ``floor(v_threshold / I) + 1`` steps), the map's LIF neurons stepped."""
+def winners(counts: Array, last_spike: Array) -> NDArray[np.intp]:
+    """The graph's readout, per pair: the map neuron with the most spikes in the trial; among
+    those, the one whose last spike came earliest (it reached that count first: the most
+    input); then the lowest index. ``counts`` and ``last_spike`` (the step, from 0, of each
+    neuron's last spike; anything for a neuron that did not fire) are ``(B, K)``."""
+    counts = np.asarray(counts, dtype=np.float64)
+    last = np.where(counts > 0, np.asarray(last_spike, dtype=np.float64), 0.0)
+    span = max(float(last.max(initial=0.0)), 0.0) + 2.0  # a spike more outweighs any step
+    return np.asarray(np.argmax(counts * span - last, axis=1))
+
+
+def _spike_counts(c: dict[str, Any], map_w: Any, map_b: Any, v_map: Any) -> tuple[Array, Array]:
+    """The map neurons' spike counts and last spikes' steps ``(B, K)`` on the held-out pairs
+    of calibration ``c``: the graph run by NIR's definitions at ``dt = 1`` for :data:`STEPS`
+    steps, the conjunctions and relays by their firing periods (under a constant input
+    ``I > 0`` an IF neuron fires every ``floor(v_threshold / I) + 1`` steps), the map's LIF
+    neurons stepped."""
     x, y = c["held_x"], c["held_y"]
     k = map_w.shape[0]
     w = map_w.astype(np.float64)
-    counts = np.zeros((len(x), k))
+    counts, last = np.zeros((len(x), k)), np.full((len(x), k), -1.0)
     for s in range(0, len(x), 50):
         xs, ys = x[s : s + 50], y[s : s + 50]
         conj = (xs[:, :, None] + ys[:, None, :] - np.float32(c["theta"])).reshape(len(xs), -1)
@@ -212,7 +238,8 @@ def _spike_counts(c: dict[str, Any], map_w: Any, map_b: Any, v_map: Any) -> Arra
             fired = v > v_map
             v = np.where(fired, 0.0, v)
             counts[s : s + 50] += fired
-    return counts
+            last[s : s + 50][fired] = t
+    return counts, last
 
 
 def nir_graph(model: SigmaPiSOM, calibration: int = 3000, seed: int = 0) -> Any:
@@ -247,8 +274,7 @@ def nir_graph(model: SigmaPiSOM, calibration: int = 3000, seed: int = 0) -> Any:
     v_map, c["simulated_agreement"] = -1.0, -1.0
     for spikes in MAP_SPIKES:  # the one whose simulated winners agree most, on held-out pairs
         v = np.float32(c["top_score"] * STEPS * DT_S / TAU_S / spikes)
-        counts = _spike_counts(c, map_w, map_b, v)
-        agree = float(np.mean(np.argmax(counts, axis=1) == c["held_winners"]))
+        agree = float(np.mean(winners(*_spike_counts(c, map_w, map_b, v)) == c["held_winners"]))
         if agree > c["simulated_agreement"]:
             v_map, c["simulated_agreement"], c["map_spikes"] = float(v), agree, spikes
     f32 = np.float32
@@ -289,8 +315,9 @@ def nir_graph(model: SigmaPiSOM, calibration: int = 3000, seed: int = 0) -> Any:
         "simulated_agreement": c["simulated_agreement"],
         "dt": DT_S,
         "steps": STEPS,
-        "readout": "winner = the map_lif unit with the most spikes over the steps "
-        "(ties: the lowest index); input: [x, y] held constant",
+        "readout": "winner = the map_lif unit with the most spikes over the steps; ties: "
+        "the one whose last spike came earliest, then the lowest index; input: [x, y] "
+        "held constant",
     }
     return nir.NIRGraph(nodes=nodes, edges=edges, metadata=meta)
 
