@@ -88,6 +88,7 @@ __all__ = [
     "learn_chain3d",
     "neck3",
     "parabola_place",
+    "projected",
     "record_pairs",
     "retina3",
     "score_chain",
@@ -257,6 +258,23 @@ def sensed_scales(views: tuple[Views3D, ...], percent: float = SENSED_PERCENT) -
     ranges the robot's own senses met (pixels and joint angles; never the truth)."""
     s = np.concatenate([sensed(v) for v in views])
     return Scales(*(np.percentile(s, [percent, 100.0 - percent], axis=0)))
+
+
+def projected(scene: ICubScene, v: Views3D) -> Views3D:
+    """Views ``v`` with each eye's detection replaced by the camera's projection of the
+    ball's true centre at the same gaze: **a reference arm that reads the truth** (the
+    comparison "maps from pixels against maps from projections"), never a learner's input
+    in the pixels arm. The ball is put back where each view saw it (from its torso-centred
+    label: the torso does not move)."""
+    left, right = np.empty_like(v.left), np.empty_like(v.right)
+    with scene.truth():
+        c, r = scene.torso_frame()
+        world = c + (v.torso + scene._torso_origin) @ r.T
+        for i in range(v.n):
+            scene.set_gaze(v.gaze[i])
+            left[i] = scene.project(world[i], "l_eye")[0]
+            right[i] = scene.project(world[i], "r_eye")[0]
+    return Views3D(left, right, v.gaze, v.head, v.torso)
 
 
 def retina3(v: Views3D, eye_size: int) -> Array:
