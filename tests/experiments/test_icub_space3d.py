@@ -192,7 +192,16 @@ def test_a_tiny_sealed_run_learns_from_pixels_only():
     assert np.allclose(head[0].torso, head[1].torso, atol=1e-9)
     assert not np.allclose(head[0].head, head[1].head, atol=1e-3)
     chain = s3.learn_chain3d(
-        eyes, head, grid=4, width=1.0, map_shape=(3, 3, 3), iterations=300, seed=0, eye_size=64
+        eyes,
+        head,
+        grid=4,
+        width=1.0,
+        map_shape=(3, 3, 3),
+        iterations=300,
+        seed=0,
+        eye_size=64,
+        design="grid",
+        readout="hard",
     )
     m = s3.score_map(chain, "head", eyes, eyes)
     assert len(m["order_r2_per_axis"]) == 3 and m["error_cm"] > 0
@@ -223,3 +232,8 @@ def test_a_tiny_sealed_run_learns_from_pixels_only():
             )
             w = chain.winners(stage, head[0])
             assert w.shape == (60,) and w.max() < 27
+    # the reference arm: the cameras' projections of the true centre, where the pixels saw it
+    proj = s3.projected(scene, eyes[0])
+    off = np.abs(np.concatenate([proj.left - eyes[0].left, proj.right - eyes[0].right]))
+    assert np.median(off) < 1.0 and np.all(off < 4.0)
+    assert np.array_equal(proj.gaze, eyes[0].gaze) and np.array_equal(proj.head, eyes[0].head)

@@ -71,10 +71,15 @@ from sigmapi.model.som import SigmaPiSOM
 from sigmapi.tasks import Batch
 
 __all__ = [
+    "DEPTH_GRID",
+    "DESIGN",
     "DESIGNS",
     "DISPARITY",
+    "GRID",
     "HEAD_WIDTH",
+    "ITERATIONS",
     "PAIRS_PER_BALL",
+    "READOUT",
     "READOUTS",
     "SCALES",
     "SENSED",
@@ -111,6 +116,17 @@ SENSED_PERCENT = 1.0
 spans (the outer 1 % of the views clipped to the ends)."""
 PAIRS_PER_BALL = 2
 """View pairs recorded per placed ball (each from a new head posture)."""
+DESIGN = "axes"
+"""The maps' design by default (:data:`DESIGNS`; chosen on seeds 0 and 1,
+docs/guide/icub-3d.md)."""
+GRID = 12
+"""Units per axis of the codes by default (the direction's and map T's)."""
+DEPTH_GRID = 24
+"""Units of map H's disparity and vergence codes by default."""
+READOUT = "soft"
+"""How map T reads map H's place by default (:data:`READOUTS`)."""
+ITERATIONS = 30_000
+"""Iterations per map by default."""
 _SEARCHES = 4  # head postures tried before a ball is given up
 _SEARCH_TRIES = 100  # eye commands per head posture
 
@@ -466,11 +482,11 @@ def learn_chain3d(
     seed: int,
     eye_size: int,
     backend: str = "auto",
-    design: str = "grid",
+    design: str = DESIGN,
     torso_design: str | None = None,
     scales: str = "fixed",
     depth_grid: int | None = None,
-    readout: str = "hard",
+    readout: str = READOUT,
     torso_grid: int | None = None,
     head_shape: tuple[int, int, int] | None = None,
 ) -> Chain3D:
@@ -766,16 +782,16 @@ def run_maps(
     *,
     train_pairs: int = 2000,
     eval_pairs: int = 400,
-    grid: int = 6,
+    grid: int = GRID,
     width: float = 1.0,
     map_shape: tuple[int, int, int] = (6, 6, 6),
-    iterations: int = 15_000,
+    iterations: int = ITERATIONS,
     backend: str = "auto",
-    design: str = "grid",
+    design: str = DESIGN,
     torso_design: str | None = None,
     scales: str = "fixed",
-    depth_grid: int | None = None,
-    readout: str = "hard",
+    depth_grid: int | None = DEPTH_GRID,
+    readout: str = READOUT,
     torso_grid: int | None = None,
     head_shape: tuple[int, int, int] | None = None,
 ) -> dict[str, Any]:
