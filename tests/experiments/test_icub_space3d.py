@@ -116,6 +116,8 @@ def test_sensed_scales_span_the_views_percentiles_and_read_no_truth():
     assert np.mean(u == 1.0, axis=0) == pytest.approx(np.full(9, 0.05), abs=0.002)
     fixed = s3.fixed_scales(64).unit(v)
     assert np.allclose(fixed[:, 0:3], s3.retina3(v, 64)) and np.allclose(fixed[:, 6:], s3.neck3(v))
+    still = s3.Views3D(v.left, v.right, np.zeros((n, 6)), v.head, v.torso)  # joints never moved
+    assert np.all(s3.sensed_scales((still,)).unit(still)[:, 3:] == 0.0)
     # columns and rows met 10-50 of 64 pixels: sensed codes spread them wider than fixed ones
     assert np.all(np.std(u[:, :2], axis=0) > 2.0 * np.std(fixed[:, :2], axis=0))
 

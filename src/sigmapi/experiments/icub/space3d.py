@@ -250,7 +250,8 @@ class Scales:
 
     def unit(self, v: Views3D) -> Array:
         """The sensed variables of ``v`` scaled to [0, 1] ``(n, 9)``."""
-        return np.clip((sensed(v) - self.low) / (self.high - self.low), 0.0, 1.0)
+        span = np.where(self.high > self.low, self.high - self.low, 1.0)  # a constant: 0
+        return np.clip((sensed(v) - self.low) / span, 0.0, 1.0)
 
 
 SCALES = ("fixed", "sensed")
@@ -283,9 +284,8 @@ def projected(scene: ICubScene, v: Views3D) -> Views3D:
     in the pixels arm. The ball is put back where each view saw it (from its torso-centred
     label: the torso does not move)."""
     left, right = np.empty_like(v.left), np.empty_like(v.right)
+    world = st.torso_to_world(scene, v.torso)
     with scene.truth():
-        c, r = scene.torso_frame()
-        world = c + (v.torso + scene._torso_origin) @ r.T
         for i in range(v.n):
             scene.set_gaze(v.gaze[i])
             left[i] = scene.project(world[i], "l_eye")[0]
@@ -362,7 +362,7 @@ class Chain3D:
         map_t: Model,
         eye_size: int,
         scales: Scales | None = None,
-        readout: str = "hard",
+        readout: str = READOUT,
     ) -> None:
         self.map_h, self.map_t, self.eye_size = map_h, map_t, eye_size
         self.scales = fixed_scales(eye_size) if scales is None else scales
