@@ -79,6 +79,99 @@ def test_codes_span_the_unit_cube():
     assert r[0, 1] > r[1, 1]  # the first ball higher in both eyes
 
 
+def test_parabola_place_finds_the_peak_between_units():
+    grid = np.arange(7.0)
+    peaks = np.array([2.3, 4.0, 3.6, 0.2, 5.9])
+    scores = -((grid[None, :] - peaks[:, None]) ** 2)  # a parabola: its vertex exactly
+    place = s3.parabola_place(scores, (7,))[:, 0]
+    assert place[:3] == pytest.approx(peaks[:3])
+    assert place[3] == 0.0 and place[4] == 6.0  # at the grid's ends: the end unit, unmoved
+    # 2-D: each axis on its own; a flat neighbourhood (no bend) does not move
+    yy, xx = np.meshgrid(np.arange(5.0), np.arange(4.0), indexing="ij")
+    bowl = -((yy - 2.4) ** 2) - 0.5 * (xx - 1.8) ** 2
+    assert s3.parabola_place(bowl.reshape(1, -1), (5, 4))[0] == pytest.approx([2.4, 1.8])
+    flat = np.zeros((1, 20))
+    flat[0, 7] = 1.0
+    assert s3.parabola_place(flat, (5, 4))[0] == pytest.approx([1.0, 3.0])
+    ridge = np.zeros((1, 20))
+    ridge[0, [6, 7, 8]] = [1.0, 1.0, 0.0]
+    assert s3.parabola_place(ridge, (5, 4))[0][1] == pytest.approx(2.5)  # half a unit at most
+
+
+def test_sensed_scales_span_the_views_percentiles_and_read_no_truth():
+    rng = np.random.default_rng(2)
+    n = 1000
+    v = s3.Views3D(
+        left=rng.uniform(10, 50, (n, 2)),
+        right=rng.uniform(10, 50, (n, 2)),
+        gaze=rng.uniform(-0.5, 0.5, (n, 6)),
+        head=np.full((n, 3), np.nan),  # the truth unread
+        torso=np.full((n, 3), np.nan),
+    )
+    sc = s3.sensed_scales((v,), percent=5.0)
+    u = sc.unit(v)
+    assert np.all(np.isfinite(u)) and np.all((u >= 0) & (u <= 1))
+    # 5 % of the views at either end of each variable clipped to the end
+    assert np.mean(u == 0.0, axis=0) == pytest.approx(np.full(9, 0.05), abs=0.002)
+    assert np.mean(u == 1.0, axis=0) == pytest.approx(np.full(9, 0.05), abs=0.002)
+    fixed = s3.fixed_scales(64).unit(v)
+    assert np.allclose(fixed[:, 0:3], s3.retina3(v, 64)) and np.allclose(fixed[:, 6:], s3.neck3(v))
+    still = s3.Views3D(v.left, v.right, np.zeros((n, 6)), v.head, v.torso)  # joints never moved
+    assert np.all(s3.sensed_scales((still,)).unit(still)[:, 3:] == 0.0)
+    # columns and rows met 10-50 of 64 pixels: sensed codes spread them wider than fixed ones
+    assert np.all(np.std(u[:, :2], axis=0) > 2.0 * np.std(fixed[:, :2], axis=0))
+
+
+def _fitted(shape: tuple[int, ...], seed: int) -> tuple[object, np.ndarray, np.ndarray]:
+    """A tiny fitted Sigma-Pi map on the paper's sum task and codes of fresh views."""
+    from sigmapi.model.som import SigmaPiSOM
+
+    d = len(shape)
+    som = SigmaPiSOM(map_shape=shape, x_shape=(5,) * d, y_shape=(5,) * d, iterations=300, seed=seed)
+    rng = np.random.default_rng(seed)
+    z = rng.uniform(0.2, 0.8, (200, d))
+    px = rng.uniform(np.maximum(0, 2 * z - 1), np.minimum(1, 2 * z))
+    som.fit(som.encode_views(px, 2 * z - px, px, 2 * z - px))
+    x, y = som.encode_views(px[:20], 2 * z[:20] - px[:20], px[:20], 2 * z[:20] - px[:20])[:2]
+    return som, x, y
+
+
+def test_factor_map_wins_the_product_of_its_parts_winners():
+    (a, xa, ya), (b, xb, yb) = _fitted((3, 2), 0), _fitted((4,), 1)
+    fm = s3.FactorMap(a, b)
+    assert fm.map_shape == (3, 2, 4) and fm.n_units == 24 and fm.axes == [[0, 1], [2]]
+    w = fm.winner((xa, ya), (xb, yb))
+    wa, wb = a.winner(xa, ya, hard=True), b.winner(xb, yb, hard=True)
+    assert np.array_equal(fm.map_coords[w], np.column_stack([a.map_coords[wa], b.map_coords[wb]]))
+    assert fm.n_weights == a.weights_.size + b.weights_.size
+    c, xc, yc = _fitted((2,), 2)
+    three = s3.FactorMap(b, c, b)
+    w3 = three.winner((xb, yb), (xc, yc), (xb, yb))
+    assert three.axes == [[0], [1], [2]]
+    assert np.array_equal(three.map_coords[w3][:, 0], three.map_coords[w3][:, 2])
+
+
+def test_bad_design_scales_and_readout_are_refused_by_name():
+    from sigmapi.errors import ConfigError
+
+    v = (_views(np.zeros((8, 3))),) * 2
+    for key, bad in (("design", "cube"), ("torso_design", "cube"), ("scales", "truth")):
+        with pytest.raises(ConfigError, match=f"{key} must be one of .*'{bad}'"):
+            s3.learn_chain3d(
+                v,
+                v,
+                grid=4,
+                width=1.0,
+                map_shape=(2, 2, 2),
+                iterations=10,
+                seed=0,
+                eye_size=64,
+                **{key: bad},
+            )
+    with pytest.raises(ConfigError, match="readout must be one of"):
+        s3.Chain3D(None, None, 64, readout="blur")  # type: ignore[arg-type]
+
+
 def test_a_tiny_sealed_run_learns_from_pixels_only():
     pytest.importorskip("mujoco")
     pytest.importorskip("icub_models")
@@ -101,8 +194,48 @@ def test_a_tiny_sealed_run_learns_from_pixels_only():
     assert np.allclose(head[0].torso, head[1].torso, atol=1e-9)
     assert not np.allclose(head[0].head, head[1].head, atol=1e-3)
     chain = s3.learn_chain3d(
-        eyes, head, grid=4, width=1.0, map_shape=(3, 3, 3), iterations=300, seed=0, eye_size=64
+        eyes,
+        head,
+        grid=4,
+        width=1.0,
+        map_shape=(3, 3, 3),
+        iterations=300,
+        seed=0,
+        eye_size=64,
+        design="grid",
+        readout="hard",
     )
     m = s3.score_map(chain, "head", eyes, eyes)
     assert len(m["order_r2_per_axis"]) == 3 and m["error_cm"] > 0
     assert "folded" in m and "fold_score" in m
+    # the factorised designs, sensed codes and the soft readout on the same views
+    for design, parts in (("factorised", {"direction", "distance"}), ("axes", {"azimuth"})):
+        chain = s3.learn_chain3d(
+            eyes,
+            head,
+            grid=4,
+            width=1.0,
+            map_shape=(3, 3, 3),
+            iterations=300,
+            seed=0,
+            eye_size=64,
+            design=design,
+            scales="sensed",
+            depth_grid=6,
+            readout="soft",
+        )
+        place = chain.place_h(head[0])
+        assert place.shape == (60, 3) and np.all((place >= 0) & (place <= 1))
+        assert len(np.unique(place[:, 0])) > 3  # moved between the units
+        for stage in ("head", "torso"):
+            m = s3.score_map(chain, stage, head if stage == "torso" else eyes, head)
+            assert parts <= set(m["parts"]) and m["fold_score"] == max(
+                p["fold_score"] for p in m["parts"].values()
+            )
+            w = chain.winners(stage, head[0])
+            assert w.shape == (60,) and w.max() < 27
+    # the reference arm: the cameras' projections of the true centre, where the pixels saw it
+    proj = s3.projected(scene, eyes[0])
+    off = np.abs(np.concatenate([proj.left - eyes[0].left, proj.right - eyes[0].right]))
+    assert np.median(off) < 1.0 and np.all(off < 4.0)
+    assert np.array_equal(proj.gaze, eyes[0].gaze) and np.array_equal(proj.head, eyes[0].head)

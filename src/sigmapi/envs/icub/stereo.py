@@ -54,6 +54,7 @@ __all__ = [
     "search_both",
     "see_both",
     "torso_position",
+    "torso_to_world",
     "triangulate",
 ]
 
@@ -218,3 +219,11 @@ def torso_position(scene: ICubScene, p: ArrayLike) -> Array:
     with scene.truth():
         c, r = scene.torso_frame()
         return (np.asarray(p, dtype=np.float64) - c) @ r - scene._torso_origin
+
+
+def torso_to_world(scene: ICubScene, z: ArrayLike) -> Array:
+    """World points ``(..., 3)`` of torso-centred positions ``z`` (the inverse of
+    :func:`torso_position`): references only (read within ``scene.truth()``)."""
+    with scene.truth():
+        c, r = scene.torso_frame()
+        return c + (np.asarray(z, dtype=np.float64) + scene._torso_origin) @ r.T

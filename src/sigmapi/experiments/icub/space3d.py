@@ -1,20 +1,30 @@
-"""The iCub's 3-D peripersonal space seen by both eyes: a chain of two 3-D Sigma-Pi maps, scored.
+"""The iCub's 3-D peripersonal space seen by both eyes: a chain of two 3-D maps, scored.
 
 The world is :mod:`sigmapi.envs.icub.stereo`'s: a ball anywhere in a box 20 cm deep and 20 cm
 high within the right arm's reach, in the air, seen by both eyes.
 
-- **Map H** (head-centred, eyes first): a 3-D Sigma-Pi map (``map_shape``, e.g. 6x6x6) on a
-  3-D population code of what both eyes see (:func:`retina3`: the eyes' mean column and row
-  and the horizontal disparity ``u_left - u_right``) and a 3-D code of the eyes' angles
-  (:func:`eyes3`: version, tilt, vergence). Its view pairs come from two random eye commands
-  (the neck still) that both see the ball: the pair shares the ball's head-centred position.
-  Per axis the relation is close to the paper's sum: the head-centred azimuth is the version
-  plus the column's angle, the elevation the tilt plus the row's, and the distance a
-  function of the vergence plus the disparity's angle.
-- **Map T** (torso-centred, then the head): a 3-D Sigma-Pi map on a code of map H's winner's
-  place on its grid (hills :data:`HEAD_WIDTH` wide) and a 3-D code of the neck's pitch, roll
-  and yaw (:func:`neck3`). Its pairs: the head turns to a new random posture between the
-  two views, and the eyes find the ball again: the pair shares the torso-centred position.
+- **Map H** (head-centred, eyes first) reads what both eyes see (the eyes' mean column and
+  row and the horizontal disparity ``u_left - u_right``) and the eyes' angles (version,
+  tilt, vergence). Its view pairs come from two random eye commands (the neck still) that
+  both see the ball: the pair shares the ball's head-centred position. Per axis the
+  relation is close to the paper's sum: the head-centred azimuth is the version plus the
+  column's angle, the elevation the tilt plus the row's, and the distance a function of the
+  vergence plus the disparity's angle.
+- **Map T** (torso-centred, then the head) reads map H's winner's place and the neck's yaw,
+  pitch and roll. Its pairs: the head turns to a new random posture between the two views,
+  and the eyes find the ball again: the pair shares the torso-centred position.
+
+Each map is one of :data:`DESIGNS` (:func:`learn_chain3d`): ``"grid"``, one 3-D Sigma-Pi map
+(``map_shape``, e.g. 6x6x6) on 3-D population codes of both inputs (map T's first code a
+hill :data:`HEAD_WIDTH` wide at map H's place on its grid); ``"factorised"``, a
+:class:`FactorMap` of a 2-D direction map (column and row with version and tilt; map T: map
+H's direction place with the neck's yaw and pitch) and a 1-D distance map (disparity with
+vergence; map T: map H's distance place with the neck's pitch); ``"axes"``, a
+:class:`FactorMap` of three 1-D maps, one per axis, each on the pair of variables whose sum
+that axis is (map T: the azimuth with the neck's yaw, the elevation and the distance with
+its pitch). The codes span the commands' ranges or the sensed ones (:data:`SCALES`); map T
+reads map H's place as its winner's grid coordinates or moved between units by the scores
+(:data:`READOUTS`).
 
 Every learning input is read from the pixels (:func:`~sigmapi.envs.icub.stereo.see_both`)
 and the joint angles, on a sealed scene; the simulator's truth gives only the labels
@@ -33,6 +43,7 @@ centres on the true positions (``kmeans``), each scored the same way.
 
 from __future__ import annotations
 
+import sys
 import time
 from dataclasses import dataclass
 from typing import Any
@@ -41,9 +52,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sigmapi.baselines import KohonenSOM
-from sigmapi.codes import PopulationCode
+from sigmapi.codes import PopulationCode, grid_coordinates
 from sigmapi.envs.icub import ICubScene
 from sigmapi.envs.icub import stereo as st
+from sigmapi.errors import ConfigError
 from sigmapi.experiments.icub.maps import som_config
 from sigmapi.metrics import (
     EVAL_SEED,
@@ -59,18 +71,36 @@ from sigmapi.model.som import SigmaPiSOM
 from sigmapi.tasks import Batch
 
 __all__ = [
+    "DEPTH_GRID",
+    "DESIGN",
+    "DESIGNS",
     "DISPARITY",
+    "GRID",
     "HEAD_WIDTH",
+    "ITERATIONS",
     "PAIRS_PER_BALL",
+    "READOUT",
+    "READOUTS",
+    "SCALES",
+    "SENSED",
     "Chain3D",
+    "FactorMap",
+    "Scales",
     "Views3D",
     "eyes3",
+    "fixed_scales",
     "kmeans_reference",
     "learn_chain3d",
     "neck3",
+    "parabola_place",
+    "projected",
     "record_pairs",
     "retina3",
+    "score_chain",
     "score_map",
+    "sensed",
+    "sensed_scales",
+    "soft_place",
     "true_position_map",
 ]
 
@@ -81,8 +111,22 @@ DISPARITY = st.FUSION
 u_right`` within the fusion range, :data:`~sigmapi.envs.icub.stereo.FUSION`)."""
 HEAD_WIDTH = 0.85
 """Width (map-H units) of the hill of map H's place code that map T reads."""
+SENSED_PERCENT = 1.0
+"""The percentile at either end of a sensed variable's range that :func:`sensed_scales`
+spans (the outer 1 % of the views clipped to the ends)."""
 PAIRS_PER_BALL = 2
 """View pairs recorded per placed ball (each from a new head posture)."""
+DESIGN = "axes"
+"""The maps' design by default (:data:`DESIGNS`; chosen on seeds 0 and 1,
+docs/guide/icub-3d.md)."""
+GRID = 12
+"""Units per axis of the codes by default (the direction's and map T's)."""
+DEPTH_GRID = 24
+"""Units of map H's disparity and vergence codes by default."""
+READOUT = "soft"
+"""How map T reads map H's place by default (:data:`READOUTS`)."""
+ITERATIONS = 30_000
+"""Iterations per map by default."""
 _SEARCHES = 4  # head postures tried before a ball is given up
 _SEARCH_TRIES = 100  # eye commands per head posture
 
@@ -160,63 +204,271 @@ def record_pairs(
     return _stack(first), _stack(second)
 
 
+SENSED = (
+    "column",
+    "row_up",
+    "disparity",
+    "version",
+    "tilt",
+    "vergence",
+    "neck_yaw_right",
+    "neck_pitch",
+    "neck_roll",
+)
+"""The sensed variables the codes read, in :func:`sensed` order: both eyes' mean column and
+mean row (upward) and the horizontal disparity ``u_left - u_right`` (pixels), the eyes'
+version, tilt and vergence and the neck's yaw (to the right), pitch and roll (radians)."""
+
+
+def sensed(v: Views3D) -> Array:
+    """The :data:`SENSED` variables of views ``v`` ``(n, 9)``: pixels and joint angles only."""
+    g = v.gaze
+    return np.column_stack(
+        [
+            0.5 * (v.left[:, 0] + v.right[:, 0]),
+            -0.5 * (v.left[:, 1] + v.right[:, 1]),
+            v.left[:, 0] - v.right[:, 0],
+            g[:, 1],
+            g[:, 0],
+            g[:, 2],
+            -g[:, 5],
+            g[:, 3],
+            g[:, 4],
+        ]
+    )
+
+
+@dataclass(frozen=True)
+class Scales:
+    """The interval ``[low, high]`` of each :data:`SENSED` variable that its code spans (a
+    value outside is clipped to the nearer end)."""
+
+    low: Array
+    """``(9,)`` the low ends."""
+    high: Array
+    """``(9,)`` the high ends."""
+
+    def unit(self, v: Views3D) -> Array:
+        """The sensed variables of ``v`` scaled to [0, 1] ``(n, 9)``."""
+        span = np.where(self.high > self.low, self.high - self.low, 1.0)  # a constant: 0
+        return np.clip((sensed(v) - self.low) / span, 0.0, 1.0)
+
+
+SCALES = ("fixed", "sensed")
+"""What the codes span (:func:`learn_chain3d`): the commands' ranges or the sensed ones."""
+
+
+def fixed_scales(eye_size: int) -> Scales:
+    """The ranges the robot's commands span: the whole image, disparities within
+    +-:data:`DISPARITY` pixels, the eyes' random commands
+    (:data:`~sigmapi.envs.icub.stereo.EYE_LOW`..``EYE_HIGH``) and the neck's random postures
+    (:data:`~sigmapi.envs.icub.stereo.NECK_LOW`..``NECK_HIGH``)."""
+    e, n = st.EYE_LOW[[1, 0, 2]], st.NECK_LOW
+    eh, nh = st.EYE_HIGH[[1, 0, 2]], st.NECK_HIGH
+    low = [0.0, -float(eye_size), -DISPARITY, *e, -nh[2], n[0], n[1]]
+    high = [float(eye_size), 0.0, DISPARITY, *eh, -n[2], nh[0], nh[1]]
+    return Scales(np.array(low), np.array(high))
+
+
+def sensed_scales(views: tuple[Views3D, ...], percent: float = SENSED_PERCENT) -> Scales:
+    """Each variable's ``percent``-th to ``(100 - percent)``-th percentile over ``views``: the
+    ranges the robot's own senses met (pixels and joint angles; never the truth)."""
+    s = np.concatenate([sensed(v) for v in views])
+    return Scales(*(np.percentile(s, [percent, 100.0 - percent], axis=0)))
+
+
+def projected(scene: ICubScene, v: Views3D) -> Views3D:
+    """Views ``v`` with each eye's detection replaced by the camera's projection of the
+    ball's true centre at the same gaze: **a reference arm that reads the truth** (the
+    comparison "maps from pixels against maps from projections"), never a learner's input
+    in the pixels arm. The ball is put back where each view saw it (from its torso-centred
+    label: the torso does not move)."""
+    left, right = np.empty_like(v.left), np.empty_like(v.right)
+    world = st.torso_to_world(scene, v.torso)
+    with scene.truth():
+        for i in range(v.n):
+            scene.set_gaze(v.gaze[i])
+            left[i] = scene.project(world[i], "l_eye")[0]
+            right[i] = scene.project(world[i], "r_eye")[0]
+    return Views3D(left, right, v.gaze, v.head, v.torso)
+
+
 def retina3(v: Views3D, eye_size: int) -> Array:
     """Both eyes' retina as positions in [0, 1]^3: mean column, mean row (upward) and the
     horizontal disparity over +-:data:`DISPARITY` pixels."""
-    u = 0.5 * (v.left[:, 0] + v.right[:, 0]) / eye_size
-    up = 1.0 - 0.5 * (v.left[:, 1] + v.right[:, 1]) / eye_size
-    d = 0.5 + 0.5 * (v.left[:, 0] - v.right[:, 0]) / DISPARITY
-    return np.clip(np.column_stack([u, up, d]), 0.0, 1.0)
+    return fixed_scales(eye_size).unit(v)[:, 0:3]
 
 
 def eyes3(v: Views3D) -> Array:
     """The eyes' version, tilt and vergence scaled to [0, 1] over the random commands'
     range (:data:`~sigmapi.envs.icub.stereo.EYE_LOW`..``EYE_HIGH``)."""
-    lo, hi = st.EYE_LOW[[1, 0, 2]], st.EYE_HIGH[[1, 0, 2]]
-    g = v.gaze[:, [1, 0, 2]]
-    return np.clip((g - lo) / (hi - lo), 0.0, 1.0)
+    return fixed_scales(1).unit(v)[:, 3:6]
 
 
 def neck3(v: Views3D) -> Array:
     """The neck's yaw (to the right), pitch and roll scaled to [0, 1] over the random
     postures' range (:data:`~sigmapi.envs.icub.stereo.NECK_LOW`..``NECK_HIGH``; the
     fixation's extra pitch clipped)."""
-    lo, hi = st.NECK_LOW[[2, 0, 1]], st.NECK_HIGH[[2, 0, 1]]
-    g = v.gaze[:, [5, 3, 4]]
-    pos = (g - lo) / (hi - lo)
-    pos[:, 0] = 1.0 - pos[:, 0]
-    return np.clip(pos, 0.0, 1.0)
+    return fixed_scales(1).unit(v)[:, 6:9]
+
+
+class FactorMap:
+    """A 3-D map made of lower-dimensional Sigma-Pi maps, each on some of the three axes
+    (a 2-D direction map and a 1-D distance map, or one 1-D map per axis). Unit ``(i, j,
+    k)`` of the product grid (the parts' grids side by side) wins when each part's unit
+    does; :meth:`winner` reads one ``(x, y)`` pair of codes per part (so
+    ``model.winner(*chain.inputs(stage, v))`` holds for either design)."""
+
+    def __init__(self, *parts: SigmaPiSOM) -> None:
+        self.parts = parts
+        self.map_shape = tuple(int(n) for p in parts for n in p.map_shape)
+        self.map_coords = grid_coordinates(self.map_shape)
+        self.n_units = int(np.prod(self.map_shape))
+
+    @property
+    def axes(self) -> list[list[int]]:
+        """The axes of the 3-D position each part lays out."""
+        out, k = [], 0
+        for p in self.parts:
+            out.append(list(range(k, k + len(p.map_shape))))
+            k += len(p.map_shape)
+        return out
+
+    @property
+    def n_weights(self) -> int:
+        """The weights of all parts."""
+        return int(sum(p.weights_.size for p in self.parts))
+
+    def join(self, *winners: NDArray[np.int64]) -> NDArray[np.int64]:
+        """The product grid's unit of the parts' units ``winners``."""
+        sizes = tuple(p.n_units for p in self.parts)
+        return np.asarray(np.ravel_multi_index(winners, sizes), dtype=np.int64)
+
+    def winner(self, *codes: tuple[Array, Array], hard: bool = True) -> NDArray[np.int64]:
+        """The product grid's winners of the parts' codes ``codes`` (one ``(x, y)`` each)."""
+        return self.join(*(p.winner(*c, hard=hard) for p, c in zip(self.parts, codes, strict=True)))
+
+
+Model = SigmaPiSOM | FactorMap
 
 
 class Chain3D:
-    """Map H and map T of one seed, and the codes that feed them."""
+    """Map H and map T of one seed, and the codes that feed them (each map a 3-D
+    :class:`~sigmapi.model.som.SigmaPiSOM` or a :class:`FactorMap`)."""
 
-    def __init__(self, map_h: SigmaPiSOM, map_t: SigmaPiSOM, eye_size: int) -> None:
+    def __init__(
+        self,
+        map_h: Model,
+        map_t: Model,
+        eye_size: int,
+        scales: Scales | None = None,
+        readout: str = READOUT,
+    ) -> None:
         self.map_h, self.map_t, self.eye_size = map_h, map_t, eye_size
+        self.scales = fixed_scales(eye_size) if scales is None else scales
+        _check_choice("readout", readout, READOUTS)
+        self.readout = readout
 
-    def inputs_h(self, v: Views3D) -> tuple[Array, Array]:
-        """Map H's codes of views ``v``: both retinas, the eyes' angles."""
-        m = self.map_h
-        return m.x_code.encode(retina3(v, self.eye_size)), m.y_code.encode(eyes3(v))
+    def inputs_h(self, v: Views3D) -> Any:
+        """Map H's codes of views ``v``: both retinas (column, row, disparity) and the eyes'
+        angles (version, tilt, vergence), an ``(x, y)`` pair; of a :class:`FactorMap` one
+        pair per part, on its axes (e.g. column and row with version and tilt)."""
+        s = self.scales.unit(v)
+        return _codes(self.map_h, s[:, 0:3], s[:, 3:6])
+
+    def winners_h(self, v: Views3D) -> NDArray[np.int64]:
+        """Map H's winners of views ``v``."""
+        return self.map_h.winner(*self.inputs_h(v), hard=True)
 
     def place_h(self, v: Views3D) -> Array:
-        """Map H's winner's place ``(n, 3)`` in [0, 1] per axis."""
+        """Map H's winner's place ``(n, 3)`` in [0, 1] per axis: the winner's grid
+        coordinates (``readout="hard"``), or moved along each axis to the vertex of the
+        parabola through the winner's and its two neighbours' scores (``"soft"``, at most half
+        a unit: :func:`soft_place`)."""
         m = self.map_h
-        w = m.winner(*self.inputs_h(v), hard=True)
-        return m.map_coords[w] / (np.asarray(m.map_shape) - 1.0)
+        size = np.asarray(m.map_shape) - 1.0
+        if self.readout == "hard":
+            return m.map_coords[self.winners_h(v)] / size
+        inputs = self.inputs_h(v)
+        if isinstance(m, FactorMap):
+            places = [soft_place(p, *c) for p, c in zip(m.parts, inputs, strict=True)]
+            return np.column_stack(places) / size
+        return soft_place(m, *inputs) / size
 
-    def inputs_t(self, v: Views3D) -> tuple[Array, Array]:
-        """Map T's codes of views ``v``: map H's place, the neck's angles."""
-        code = PopulationCode(self.map_h.map_shape, HEAD_WIDTH).encode(self.place_h(v))
-        return code, self.map_t.y_code.encode(neck3(v))
+    def inputs_t(self, v: Views3D) -> Any:
+        """Map T's codes of views ``v``: map H's place (hills :data:`HEAD_WIDTH` wide) and
+        the neck's yaw, pitch and roll; of a :class:`FactorMap` one pair per part: map H's
+        place on the part's axes with the neck's yaw for the azimuth and its pitch for the
+        elevation and the distance."""
+        place, neck, m = self.place_h(v), self.scales.unit(v)[:, 6:9], self.map_t
+        if isinstance(m, FactorMap):
+            return _codes(m, place, neck[:, [0, 1, 1]])
+        code = PopulationCode(self.map_h.map_shape, HEAD_WIDTH).encode(place)
+        return code, m.y_code.encode(neck)
 
-    def inputs(self, stage: str, v: Views3D) -> tuple[Array, Array]:
+    def inputs(self, stage: str, v: Views3D) -> Any:
         """The codes of map ``stage`` (``"head"`` for H, ``"torso"`` for T)."""
         return self.inputs_h(v) if stage == "head" else self.inputs_t(v)
 
-    def model(self, stage: str) -> SigmaPiSOM:
+    def model(self, stage: str) -> Model:
         """Map H (``"head"``) or map T (``"torso"``)."""
         return self.map_h if stage == "head" else self.map_t
+
+    def winners(self, stage: str, v: Views3D) -> NDArray[np.int64]:
+        """Map ``stage``'s winners of views ``v`` (units of its 3-D grid)."""
+        return self.model(stage).winner(*self.inputs(stage, v), hard=True)
+
+    @property
+    def n_weights(self) -> int:
+        """The weights of both maps."""
+        return sum(_n_weights(m) for m in (self.map_h, self.map_t))
+
+
+def _codes(m: Model, x: Array, y: Array) -> Any:
+    """Codes of positions ``x`` and ``y`` ``(n, 3)`` in [0, 1]: one ``(x, y)`` pair for a
+    Sigma-Pi map, one per part, on its axes, for a :class:`FactorMap`."""
+    if isinstance(m, FactorMap):
+        return tuple(
+            (p.x_code.encode(x[:, a]), p.y_code.encode(y[:, a]))
+            for p, a in zip(m.parts, m.axes, strict=True)
+        )
+    return m.x_code.encode(x), m.y_code.encode(y)
+
+
+def _n_weights(m: Model) -> int:
+    return m.n_weights if isinstance(m, FactorMap) else int(m.weights_.size)
+
+
+def _fit(m: Model, a: Any, b: Any) -> None:
+    """Fit ``m`` on the codes of a pair's first views ``a`` and second views ``b``."""
+    if isinstance(m, FactorMap):
+        for part, pa, pb in zip(m.parts, a, b, strict=True):
+            part.fit((*pa, *pb))
+    else:
+        m.fit((*a, *b))
+
+
+def _new_map(
+    design: str,
+    codes: tuple[int, int, int],
+    map_shape: tuple[int, int, int],
+    width: float,
+    iterations: int,
+    seed: int,
+    backend: str,
+) -> Model:
+    """A fresh 3-D map on codes of ``codes`` units per axis (both inputs): ``"grid"`` one
+    Sigma-Pi map; ``"factorised"`` a :class:`FactorMap` of a 2-D map on the first two axes
+    and a 1-D map on the third; ``"axes"`` one 1-D map per axis."""
+    if design == "grid":
+        return SigmaPiSOM(som_config(codes, codes, map_shape, width, iterations, seed, backend))
+    split = [[0, 1], [2]] if design == "factorised" else [[0], [1], [2]]
+    seeds = [seed, *(int(s) for s in np.random.default_rng(seed).integers(0, 2**31 - 1, 2))]
+    parts = []
+    for axes, s in zip(split, seeds, strict=False):
+        c, ms = tuple(codes[a] for a in axes), tuple(map_shape[a] for a in axes)
+        parts.append(SigmaPiSOM(som_config(c, c, ms, width, iterations, s, backend)))
+    return FactorMap(*parts)
 
 
 def learn_chain3d(
@@ -230,20 +482,91 @@ def learn_chain3d(
     seed: int,
     eye_size: int,
     backend: str = "auto",
+    design: str = DESIGN,
+    torso_design: str | None = None,
+    scales: str = "fixed",
+    depth_grid: int | None = None,
+    readout: str = READOUT,
+    torso_grid: int | None = None,
+    head_shape: tuple[int, int, int] | None = None,
 ) -> Chain3D:
     """Map H on the eyes' pairs, then map T on map H's code of the head's pairs (codes of
-    ``grid`` units per axis, hills ``width`` wide; both maps ``map_shape``)."""
-    g = (grid,) * 3
+    ``grid`` units per axis, hills ``width`` wide; both maps ``map_shape``).
+
+    ``design``: ``"grid"`` (each map one 3-D Sigma-Pi map) or ``"factorised"`` (each a
+    :class:`FactorMap`: a 2-D direction map and a 1-D distance map, ``map_shape`` their
+    product); ``torso_design``: map T's, when it differs. ``scales``: ``"fixed"`` (the codes
+    span the commands' ranges, :func:`fixed_scales`) or ``"sensed"`` (the training views'
+    percentiles, :func:`sensed_scales`). ``depth_grid``: units of the codes along the depth
+    (the disparity and the vergence; the default ``grid``). ``readout``: how map T reads
+    map H's place (:data:`READOUTS`, :meth:`Chain3D.place_h`). ``torso_grid``: units per
+    axis of map T's codes (the default ``grid``). ``head_shape``: map H's shape, when it
+    differs from map T's (``map_shape``)."""
+    _check_choice("design", design, DESIGNS)
+    t_design = design if torso_design is None else torso_design
+    _check_choice("torso_design", t_design, DESIGNS)
+    _check_choice("scales", scales, SCALES)
+    sc = fixed_scales(eye_size) if scales == "fixed" else sensed_scales((*eyes, *head))
+    dg = grid if depth_grid is None else depth_grid
     s1, s2 = (int(s) for s in np.random.default_rng(seed).integers(0, 2**31 - 1, 2))
-    map_h = SigmaPiSOM(som_config(g, g, map_shape, width, iterations, s1, backend))
-    chain = Chain3D(map_h, map_h, eye_size)
+    h_shape = map_shape if head_shape is None else head_shape
+    map_h = _new_map(design, (grid, grid, dg), h_shape, width, iterations, s1, backend)
+    chain = Chain3D(map_h, map_h, eye_size, sc, readout)
     a, b = eyes
-    map_h.fit((*chain.inputs_h(a), *chain.inputs_h(b)))
-    cfg = som_config(map_h.map_shape, g, map_shape, width, iterations, s2, backend)
-    chain.map_t = SigmaPiSOM(cfg)
+    _fit(map_h, chain.inputs_h(a), chain.inputs_h(b))
+    tg = (grid if torso_grid is None else torso_grid,) * 3
+    if t_design == "grid":  # map H's place code (its grid) with the neck's
+        cfg = som_config(map_h.map_shape, tg, map_shape, width, iterations, s2, backend)
+        chain.map_t = SigmaPiSOM(cfg)
+    else:
+        chain.map_t = _new_map(t_design, tg, map_shape, width, iterations, s2, backend)
     a, b = head
-    chain.map_t.fit((*chain.inputs_t(a), *chain.inputs_t(b)))
+    _fit(chain.map_t, chain.inputs_t(a), chain.inputs_t(b))
     return chain
+
+
+DESIGNS = ("grid", "factorised", "axes")
+"""The maps' designs (:func:`learn_chain3d`)."""
+PART_NAMES = {2: ("direction", "distance"), 3: ("azimuth", "elevation", "distance")}
+"""The names of a :class:`FactorMap`'s parts in the scores, by their number."""
+READOUTS = ("hard", "soft")
+"""How map T reads map H's place (:meth:`Chain3D.place_h`)."""
+
+
+def _check_choice(name: str, value: str, choices: tuple[str, ...]) -> None:
+    if value not in choices:
+        raise ConfigError(
+            f"{name} must be one of {', '.join(choices)}, got {value!r}; pick one of those"
+        )
+
+
+def soft_place(model: SigmaPiSOM, x: Array, y: Array) -> Array:
+    """Grid places ``(n, d)`` of the hard winners of codes ``x``, ``y`` moved to the vertex
+    of the parabola through their scores (:func:`~sigmapi.metrics.hard_scores`,
+    :func:`parabola_place`)."""
+    return parabola_place(hard_scores(model, x, y), tuple(int(n) for n in model.map_shape))
+
+
+def parabola_place(scores: Array, shape: tuple[int, ...]) -> Array:
+    """Grid places ``(n, d)`` of the best units of ``scores`` ``(n, prod(shape))`` (units in
+    C order on grid ``shape``), each axis moved to the vertex of the parabola through the
+    best unit's and its two neighbours' scores along that axis, by at most half a unit (no
+    move at the grid's ends or where the scores do not bend down)."""
+    w = np.argmax(scores, axis=1)
+    idx = np.array(np.unravel_index(w, shape)).T  # (n, d)
+    place = idx.astype(np.float64)
+    rows = np.arange(w.size)
+    for a, n in enumerate(shape):
+        lo, hi = idx.copy(), idx.copy()
+        lo[:, a] = np.maximum(idx[:, a] - 1, 0)
+        hi[:, a] = np.minimum(idx[:, a] + 1, n - 1)
+        s_lo = scores[rows, np.ravel_multi_index(lo.T, shape)]
+        s_hi = scores[rows, np.ravel_multi_index(hi.T, shape)]
+        bend = s_lo - 2.0 * scores[rows, w] + s_hi
+        inside = (idx[:, a] > 0) & (idx[:, a] < n - 1) & (bend < 0)
+        step = np.where(inside, 0.5 * (s_lo - s_hi) / np.where(inside, bend, -1.0), 0.0)
+        place[:, a] += np.clip(step, -0.5, 0.5)
+    return place
 
 
 def _truth(stage: str, v: Views3D) -> Array:
@@ -302,32 +625,57 @@ def _position_scores(
     return m
 
 
+def _folds(
+    model: SigmaPiSOM, a: tuple[Array, Array], b: tuple[Array, Array], z: Array
+) -> tuple[NDArray[np.int64], dict[str, Any]]:
+    """View 0's winners of a Sigma-Pi map on the codes ``a`` and ``b`` of the test pairs'
+    two views, and its fold indicators."""
+    scores = hard_scores(model, *a)
+    w0 = np.argmax(scores, axis=1)
+    w1 = model.winner(*b, hard=True)
+    empty = np.zeros((z.shape[0], 0))
+    batch = Batch(*a, *b, z, empty, empty, empty, empty)
+    starved, te, fold = fold_indicators(model, batch, w0, w1, scores)
+    return w0, {
+        "fold_score": fold,
+        "folded": bool(fold >= FOLD_THRESHOLD),
+        "starved_units": starved,
+        "topographic_error": te,
+    }
+
+
 def score_map(
     chain: Chain3D, stage: str, cal: tuple[Views3D, Views3D], test: tuple[Views3D, Views3D]
 ) -> dict[str, Any]:
     """Map ``stage``'s metrics against the true 3-D positions (the module's account) with its
-    fold score."""
+    fold score; a :class:`FactorMap`'s fold indicators are its two maps' (``parts``): the
+    score the larger, the starved units summed, the topographic error the larger, and
+    folded when either is."""
     model = chain.model(stage)
     (c0, _), (t0, t1) = cal, test
-    x0, y0 = chain.inputs(stage, t0)
-    x1, y1 = chain.inputs(stage, t1)
-    scores = hard_scores(model, x0, y0)
-    w0 = np.argmax(scores, axis=1)
-    w1 = model.winner(x1, y1, hard=True)
-    wc = model.winner(*chain.inputs(stage, c0), hard=True)
-    zc, zt = _truth(stage, c0), _truth(stage, t0)
-    out = _position_scores(wc, zc, w0, w1, zt, model.map_coords, _origin(stage))
+    a, b = chain.inputs(stage, t0), chain.inputs(stage, t1)
     z = _truth(stage, t0)
-    batch = Batch(x0, y0, x1, y1, z, t0.left, t0.gaze, t1.left, t1.gaze)
-    starved, te, fold = fold_indicators(model, batch, w0, w1, scores)
-    out.update(
-        ordered=bool(min(out["order_r2_per_axis"]) >= ORDERED_R2),
-        fold_score=fold,
-        fold_threshold=FOLD_THRESHOLD,
-        folded=bool(fold >= FOLD_THRESHOLD),
-        starved_units=starved,
-        topographic_error=te,
-    )
+    if isinstance(model, FactorMap):
+        names = PART_NAMES[len(model.parts)]
+        parts = {
+            n: _folds(m, pa, pb, z) for n, m, pa, pb in zip(names, model.parts, a, b, strict=True)
+        }
+        w0 = model.join(*(w for w, _ in parts.values()))
+        folds = {k: v for k, (_, v) in parts.items()}
+        fold = {
+            "fold_score": max(f["fold_score"] for f in folds.values()),
+            "folded": any(f["folded"] for f in folds.values()),
+            "starved_units": sum(f["starved_units"] for f in folds.values()),
+            "topographic_error": max(f["topographic_error"] for f in folds.values()),
+            "parts": folds,
+        }
+    else:
+        w0, fold = _folds(model, a, b, z)
+    w1 = model.winner(*b, hard=True)
+    wc = chain.winners(stage, c0)
+    out = _position_scores(wc, _truth(stage, c0), w0, w1, z, model.map_coords, _origin(stage))
+    out.update(fold, ordered=bool(min(out["order_r2_per_axis"]) >= ORDERED_R2))
+    out["fold_threshold"] = FOLD_THRESHOLD
     return out
 
 
@@ -406,18 +754,49 @@ def evaluation_pairs(
     return out
 
 
+def score_chain(
+    chain: Chain3D,
+    train: dict[str, tuple[Views3D, Views3D]],
+    ev: dict[str, tuple[tuple[Views3D, Views3D], tuple[Views3D, Views3D]]],
+    iterations: int,
+    seed: int,
+) -> dict[str, Any]:
+    """Both maps of ``chain`` scored (:func:`score_map`) beside a same-size map keyed by the
+    true position and k-means with as many centres as the map has units."""
+    out: dict[str, Any] = {}
+    for name, stage, data in (("map_head", "head", "eyes"), ("map_torso", "torso", "head")):
+        cal, test = ev[data]
+        shape = tuple(int(n) for n in chain.model(stage).map_shape)
+        m = score_map(chain, stage, cal, test)
+        m["true_position"] = true_position_map(
+            stage, train[data], cal, test, shape, iterations, seed
+        )
+        m["kmeans"] = kmeans_reference(stage, train[data], cal, test, int(np.prod(shape)), seed)
+        m["error_ratio_to_kmeans"] = m["error_cm"] / m["kmeans"]["error_cm"]
+        out[name] = m
+    return out
+
+
 def run_maps(
     seed: int,
     *,
     train_pairs: int = 2000,
     eval_pairs: int = 400,
-    grid: int = 6,
+    grid: int = GRID,
     width: float = 1.0,
     map_shape: tuple[int, int, int] = (6, 6, 6),
-    iterations: int = 15_000,
+    iterations: int = ITERATIONS,
     backend: str = "auto",
+    design: str = DESIGN,
+    torso_design: str | None = None,
+    scales: str = "fixed",
+    depth_grid: int | None = DEPTH_GRID,
+    readout: str = READOUT,
+    torso_grid: int | None = None,
+    head_shape: tuple[int, int, int] | None = None,
 ) -> dict[str, Any]:
-    """One seed of the 3-D maps: record, learn, score against both references."""
+    """One seed of the 3-D maps: record, learn (:func:`learn_chain3d`'s options), score
+    against both references; the seconds taken and the process's peak resident memory."""
     t0 = time.perf_counter()
     scene = ICubScene()
     st.float_ball(scene)
@@ -425,6 +804,7 @@ def run_maps(
     rng = np.random.default_rng(seed)
     train = {s: record_pairs(scene, train_pairs, rng, s) for s in ("eyes", "head")}
     ev = evaluation_pairs(scene, eval_pairs)
+    scene.close()
     t_record = time.perf_counter() - t0
     chain = learn_chain3d(
         train["eyes"],
@@ -436,24 +816,31 @@ def run_maps(
         seed=seed,
         eye_size=scene.eye_size,
         backend=backend,
+        design=design,
+        torso_design=torso_design,
+        scales=scales,
+        depth_grid=depth_grid,
+        readout=readout,
+        torso_grid=torso_grid,
+        head_shape=head_shape,
     )
     t_learn = time.perf_counter() - t0 - t_record
-    out: dict[str, Any] = {}
-    k = int(np.prod(map_shape))
-    for name, stage, data in (("map_head", "head", "eyes"), ("map_torso", "torso", "head")):
-        cal, test = ev[data]
-        m = score_map(chain, stage, cal, test)
-        m["true_position"] = true_position_map(
-            stage, train[data], cal, test, map_shape, iterations, seed
-        )
-        m["kmeans"] = kmeans_reference(stage, train[data], cal, test, k, seed)
-        m["error_ratio_to_kmeans"] = m["error_cm"] / m["kmeans"]["error_cm"]
-        out[name] = m
-    scene.close()
+    out = score_chain(chain, train, ev, iterations, seed)
     out["seconds"] = {
         "record": t_record,
         "learn": t_learn,
         "total": time.perf_counter() - t0,
     }
-    out["weights"] = int(chain.map_h.weights_.size + chain.map_t.weights_.size)
+    out["weights"] = chain.n_weights
+    out["peak_rss_mb"] = _peak_rss_mb()
     return out
+
+
+def _peak_rss_mb() -> float | None:
+    """The process's peak resident memory, MB (None where the platform does not say)."""
+    try:
+        import resource
+    except ImportError:  # not on Windows
+        return None
+    kb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    return kb / 1024.0 if sys.platform != "darwin" else kb / 2**20
