@@ -37,6 +37,7 @@ from sigmapi.envs.robot.scene import check_rendering, mujoco_module
 from sigmapi.errors import ConfigError
 from sigmapi.executor import Executor
 from sigmapi.experiments.base import Experiment, check_seeds, register, run_all
+from sigmapi.experiments.icub.box import ICubBoxResult, run_box
 from sigmapi.experiments.icub.config import QUICK, ICubConfig
 from sigmapi.experiments.icub.maps import (
     ChainMaps,
@@ -363,11 +364,17 @@ class ICubExperiment(Experiment[ICubConfig]):
         out: Path | None = None,
         executor: Executor | None = None,
         progress: Progress | None = None,
-    ) -> ICubResult:
-        """The frames check, then one job per seed (see the module's account)."""
+    ) -> ICubResult | ICubBoxResult:
+        """The frames check, then one job per seed (see the module's account); with
+        ``config.space`` "box", the 3-D task (:func:`~sigmapi.experiments.icub.box.run_box`)."""
         if not isinstance(config, ICubConfig):
             raise _validate.fail("config", "an ICubConfig", config)
         seeds = check_seeds(seeds)
+        if config.space == "box":
+            mujoco_module()
+            icub_models_module()
+            check_rendering()
+            return run_box(config, seeds, executor=executor, progress=progress)
         _check_memory(config)  # every size that drives the work, before any of it
         mujoco_module()
         icub_models_module()  # before any work: both say which extra to install
