@@ -72,7 +72,7 @@ def _box_seed(job: _BoxJob) -> dict[str, Any]:
         babbles=cfg.box_babbles,
         epochs=cfg.epochs,
         reaches=cfg.reaches,
-        feature_width=cfg.feature_width,
+        feature_width=cfg.box_feature_width,
         yaw=cfg.babble_yaw,
         wrist=(cfg.babble_wrist[0], cfg.babble_wrist[1]),
         grid=BOX_GRID,

@@ -38,7 +38,7 @@ class ICubConfig:
     space: str = field(default="table", metadata=_validate.bounded("choice", options=SPACES))
     """Where the balls are: "table" (the 2-D task: on the table, the right eye) or "box"
     (the 3-D task: in the air, both eyes; it reads the ``box_*`` fields, ``babble_yaw``,
-    ``babble_wrist``, ``epochs``, ``feature_width``, ``reaches`` and ``backend``)."""
+    ``babble_wrist``, ``epochs``, ``reaches`` and ``backend``)."""
     grid: int = field(default=16, metadata=_validate.bounded("int", 3, 64, fix="e.g. 16"))
     """Units per axis of the population codes (retina, eye angles, neck angles)."""
     code_width: float = field(
@@ -138,6 +138,11 @@ class ICubConfig:
     )
     """Babbles (random arm postures, both eyes on the hand) of the 3-D task (``space``
     "box")."""
+    box_feature_width: float = field(
+        default=1.0, metadata=_validate.bounded("width", 0, lo_open=True)
+    )
+    """Width of the bump map T's winner (or the true position) gives the 3-D task's
+    association, map units (``space`` "box")."""
     backend: str = field(
         default="auto", metadata=_validate.bounded("choice", options=BACKEND_NAMES)
     )
