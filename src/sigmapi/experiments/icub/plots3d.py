@@ -24,6 +24,7 @@ def end_point_histogram(errors: Mapping[str, NDArray[np.float64]], path: Path) -
     bins, the median and the 90th percentile marked; the figure at ``path`` with its caption
     beside it."""
     import matplotlib.pyplot as plt
+    from matplotlib.ticker import MaxNLocator
 
     path.parent.mkdir(parents=True, exist_ok=True)
     top = float(max(np.percentile(e, 98) for e in errors.values()))
@@ -42,7 +43,9 @@ def end_point_histogram(errors: Mapping[str, NDArray[np.float64]], path: Path) -
             transform=ax.transAxes,
             ha="right",
             fontsize=8,
+            bbox={"facecolor": "white", "edgecolor": "none", "alpha": 0.9},
         )
+        ax.yaxis.set_major_locator(MaxNLocator(integer=True, nbins=3))
     np.atleast_1d(axes)[-1].set_xlabel("end-point error, cm (the last bin holds the rest)")
     n = len(next(iter(errors.values())))
     caption = (
@@ -84,7 +87,14 @@ def end_point_definition(path: Path) -> Path:
         arrowprops={"arrowstyle": "->"},
     )
     ax.plot(*c, "ko")
-    ax.annotate("C: palm's contact point", c, xytext=(c[0] - 3.5, c[1] + 4.6), fontsize=8)
+    ax.annotate(
+        "C: palm's contact point",
+        c,
+        xytext=(c[0] - 1.0, c[1] + 4.8),
+        fontsize=8,
+        arrowprops={"arrowstyle": "->"},
+    )
+    ax.text(c[0] - 3.7, c[1] - 3.7, "the hand", fontsize=8, color="0.3")
     ax.annotate("", c + np.array([1.6, 0.0]), c, arrowprops={"arrowstyle": "->", "color": "0.3"})
     ax.text(c[0] + 0.3, c[1] + 0.4, "palm's normal", fontsize=7)
     u = (b - c) / np.linalg.norm(b - c)
