@@ -228,3 +228,36 @@ def test_icub_space_air_is_refused_in_one_line(capsys):
     assert main(["icub", "--space", "air", "--json"]) == 2
     err = capsys.readouterr().err.strip()
     assert "space" in err and "air" in err and "\n" not in err
+
+
+def test_a_box_result_reads_back_through_the_icub_result():
+    from sigmapi.experiments.icub.result import ICubResult
+
+    res = ICubBoxResult(
+        ICubConfig(space="box"), (5,), [_record(5, [0.01, 0.02, 0.03, 0.04], [True] * 4)]
+    )
+    d = json.loads(json.dumps(res.to_dict()))
+    back = ICubResult.from_dict(d)
+    assert isinstance(back, ICubBoxResult) and back.config.space == "box"
+    assert json.loads(json.dumps(back.to_dict())) == d
+
+
+def test_sigmapi_icub_space_box_runs_and_writes_the_keys(tmp_path, capsys):
+    _scene()  # MuJoCo, the models and a GL context, or a skip
+    from sigmapi.cli import main
+
+    rc = main(
+        ["icub", "--space", "box", "--seeds", "7", "--box-pairs", "20", "--box-eval-pairs",
+         "20", "--box-iterations", "50", "--box-babbles", "50", "--reaches", "2", "--json",
+         "--out", str(tmp_path / "out"), "--quiet"]
+    )  # fmt: skip
+    assert rc == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["space"] == "box" and set(d["methods"]) == set(METHODS)
+    for m in METHODS:
+        assert set(d["methods"][m]["end_point_cm"]) == {"median", "p90"}
+        assert 0.0 <= d["methods"][m]["strict_success"] <= 1.0
+    for name in ("map_head", "map_torso"):
+        assert len(d["maps"][name]["order_r2_per_axis"]) == 3
+        assert "order_r2" in d["maps"][name]
+    assert (tmp_path / "out" / "end_point_histogram.png").exists()

@@ -138,6 +138,9 @@ class ICubBoxResult(Result):
     seeds: tuple[int, ...]
     per_seed: list[dict[str, Any]] = field(default_factory=list)
     seconds: float = 0.0
+    written: dict[str, Any] | None = field(default=None, repr=False)
+    """The summaries of a result read back (:meth:`from_dict`: the file holds them, not the
+    per-seed records); None for a run's result."""
 
     KEYS = (
         "experiment",
@@ -155,6 +158,15 @@ class ICubBoxResult(Result):
     )
     """The JSON form: the config and seeds, per map and per method the pooled numbers, per
     seed the methods' numbers, the targets, the time and the peak memory."""
+    COMPUTED = (
+        "maps",
+        "methods",
+        "methods_per_seed",
+        "fixation_converged",
+        "targets",
+        "seconds_per_seed",
+        "peak_memory_mb",
+    )
     experiment = "icub"
 
     def maps(self) -> dict[str, dict[str, Any]]:
