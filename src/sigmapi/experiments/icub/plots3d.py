@@ -31,10 +31,10 @@ def end_point_histogram(errors: Mapping[str, NDArray[np.float64]], path: Path) -
     bins = np.linspace(0.0, max(top, 1.0), 31)
     fig, axes = plt.subplots(len(errors), 1, figsize=(6.0, 1.3 * len(errors)), sharex=True)
     for ax, (name, e) in zip(np.atleast_1d(axes), errors.items(), strict=True):
-        ax.hist(np.clip(e, 0.0, bins[-1]), bins=bins, color="0.55")
+        ax.hist(np.clip(e, 0.0, bins[-1]), bins=bins, color="0.55", label="reaches")
         med, p90 = float(np.median(e)), float(np.percentile(e, 90))
-        ax.axvline(med, color="C3")
-        ax.axvline(p90, color="C0", ls="--")
+        ax.axvline(med, color="C3", label="median")
+        ax.axvline(p90, color="C0", ls="--", label="90th percentile")
         ax.set_ylabel(name, rotation=0, ha="right", va="center")
         ax.text(
             0.99,
@@ -51,7 +51,7 @@ def end_point_histogram(errors: Mapping[str, NDArray[np.float64]], path: Path) -
     caption = (
         f"End-point error per method, eyes free ({n} reaches each): the distance from the "
         "palm's contact point where the reach ended to the ball's surface where it was put. "
-        "Red: median; blue dashed: 90th percentile."
+        "Red line: the median; blue dashed: the 90th percentile."
     )
     out = save_captioned(fig, path, caption, dpi=110, bbox_inches="tight")
     plt.close(fig)
