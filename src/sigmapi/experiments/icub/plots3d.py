@@ -73,7 +73,7 @@ def end_point_definition(path: Path) -> Path:
     c = np.array([-5.5, 2.0])  # the palm's contact point, some way off the ball
     ax.add_patch(Circle(tuple(b), r, color="C3", alpha=0.8))
     ax.plot(*b, "k+")
-    ax.annotate("b (centre)", b, xytext=(0.4, -0.8), fontsize=8)
+    ax.annotate("b (centre)", _xy(b), xytext=(0.4, -0.8), fontsize=8)
     # the hand: 3.9 cm behind to 1.2 cm in front of C along the palm's normal (+x here)
     ax.add_patch(Rectangle((c[0] - 3.9, c[1] - 4.0), 5.1, 8.0, color="0.8"))
     ax.plot([c[0], c[0]], [c[1] - 4.0, c[1] + 4.0], color="0.3", lw=2)
@@ -81,7 +81,7 @@ def end_point_definition(path: Path) -> Path:
     ax.add_patch(Circle(tuple(m), MARKER_RADIUS * cm, color="C2"))
     ax.annotate(
         "marker (3 cm behind C)",
-        m,
+        _xy(m),
         xytext=(m[0] - 4.5, m[1] - 5.6),
         fontsize=8,
         arrowprops={"arrowstyle": "->"},
@@ -89,13 +89,15 @@ def end_point_definition(path: Path) -> Path:
     ax.plot(*c, "ko")
     ax.annotate(
         "C: palm's contact point",
-        c,
+        _xy(c),
         xytext=(c[0] - 1.0, c[1] + 4.8),
         fontsize=8,
         arrowprops={"arrowstyle": "->"},
     )
     ax.text(c[0] - 3.7, c[1] - 3.7, "the hand", fontsize=8, color="0.3")
-    ax.annotate("", c + np.array([1.6, 0.0]), c, arrowprops={"arrowstyle": "->", "color": "0.3"})
+    ax.annotate(
+        "", _xy(c + np.array([1.6, 0.0])), _xy(c), arrowprops={"arrowstyle": "->", "color": "0.3"}
+    )
     ax.text(c[0] + 0.3, c[1] + 0.4, "palm's normal", fontsize=7)
     u = (b - c) / np.linalg.norm(b - c)
     s = b - r * u
@@ -104,7 +106,7 @@ def end_point_definition(path: Path) -> Path:
     mid = 0.5 * (c + s)
     ax.annotate(
         "end-point error = | |C - b| - R |",
-        mid,
+        _xy(mid),
         xytext=(mid[0] - 2.5, mid[1] - 5.5),
         fontsize=9,
         color="C0",
@@ -126,3 +128,8 @@ def end_point_definition(path: Path) -> Path:
     out = save_captioned(fig, path, caption, dpi=110, bbox_inches="tight")
     plt.close(fig)
     return out
+
+
+def _xy(p: NDArray[np.float64]) -> tuple[float, float]:
+    """A 2-D point as the pair matplotlib's annotations take."""
+    return float(p[0]), float(p[1])

@@ -420,8 +420,10 @@ def reach_tests3d(
             elif cond == "free":
                 run(ik if method == "scripted_ik" else chance, method, cond)
             else:  # the same postures whatever the eyes did
-                for d in (res.end_point, res.strict, res.touched, res.moved, res.aim):
-                    d[cond][method] = d["free"][method]
+                for f in (res.end_point, res.moved, res.aim):
+                    f[cond][method] = f["free"][method]
+                for b in (res.strict, res.touched):
+                    b[cond][method] = b["free"][method]
     scene.reset()
     return res, frames
 
