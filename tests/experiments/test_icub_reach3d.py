@@ -146,9 +146,10 @@ def _record(seed: int, learned: list[float], strict: list[bool]) -> dict:
     ep["learned"] = learned
     st = {m: [False] * 4 for m in METHODS}
     st["learned"] = strict
-    raw = {"end_point_m": {}, "strict": {}, "touched": {}, "reaches": {}}
+    raw = {"end_point_m": {}, "aim_m": {}, "strict": {}, "touched": {}, "reaches": {}}
     for cond in ("free", "fixated"):
         raw["end_point_m"][cond] = ep
+        raw["aim_m"][cond] = ep
         raw["strict"][cond] = st
         raw["touched"][cond] = {m: [True] * 4 for m in METHODS}
         raw["reaches"][cond] = {

@@ -83,6 +83,7 @@ def _box_seed(job: _BoxJob) -> dict[str, Any]:
     tests = out.pop("tests")
     for key, raw in (
         ("end_point_m", tests.end_point),
+        ("aim_m", tests.aim),
         ("strict", tests.strict),
         ("touched", tests.touched),
     ):
@@ -204,19 +205,22 @@ class ICubBoxResult(Result):
         e = 100.0 * np.concatenate([s["end_point_m"][cond][method] for s in self.per_seed])
         strict = np.concatenate([s["strict"][cond][method] for s in self.per_seed])
         touched = np.concatenate([s["touched"][cond][method] for s in self.per_seed])
+        aim = 100.0 * np.concatenate([s["aim_m"][cond][method] for s in self.per_seed])
         return {
             "end_point_cm": {
                 "median": float(np.median(e)),
                 "p90": float(np.percentile(e, 90)),
             },
+            "aim_cm": {"median": float(np.median(aim)), "p90": float(np.percentile(aim, 90))},
             "strict_success": float(np.mean(strict)),
             "success": float(np.mean(touched)),
         }
 
     def methods(self) -> dict[str, dict[str, Any]]:
         """Per method, over every reach of every seed with the eyes free: ``end_point_cm``
-        (``median``, ``p90``), ``strict_success``, ``success`` (touched); the same after a
-        fixation under ``fixated``."""
+        (``median``, ``p90``), ``aim_cm`` (the marker at the posture to the ball's centre,
+        :attr:`~sigmapi.experiments.icub.reach3d.Reach3D.aim`), ``strict_success``,
+        ``success`` (touched); the same after a fixation under ``fixated``."""
         return {
             m: {**self._pooled("free", m), "fixated": self._pooled("fixated", m)} for m in METHODS
         }
