@@ -204,9 +204,9 @@ class Features3D:
 
     def __call__(self, method: str, v: s3.Views3D) -> Array:
         """The state ``(n, n_features)`` of views ``v`` for ``method``."""
-        m_t = self.chain.map_t
+        m_t = self.chain.model("torso")  # map T, whatever its design
         if method == "learned":
-            w = m_t.winner(*self.chain.inputs_t(v), hard=True)
+            w = m_t.winner(*self.chain.inputs("torso", v), hard=True)
             return bump_features(m_t.map_coords[w], m_t.map_coords, self.feature_width)
         if method == "true_position":
             lo, hi = self.torso_box.T
