@@ -210,6 +210,8 @@ def test_the_space_is_a_declared_choice():
     with pytest.raises(ConfigError, match="space"):
         ICubConfig(space="air")
     assert QUICK.box_pairs < ICubConfig().box_pairs
+    with pytest.raises(ConfigError, match="render must be unset with space 'box'"):
+        ICubConfig(space="box", render="reach.gif")  # no film in 3-D: refused, not ignored
 
 
 def test_icub_help_shows_the_space_and_the_box_fields(capsys):
