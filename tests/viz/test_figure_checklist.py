@@ -436,7 +436,9 @@ def _icub_result() -> Any:
         n = 40
         ball = np.column_stack([rng.uniform(0.15, 0.3, n), rng.uniform(-0.1, 0.3, n)])
         gaze = rng.normal(0.0, 0.2, (n, 6))
-        success = {m: rng.random(n) < p for m, p in zip(METHODS, (1, 1, 0.5, 0.7, 1, 0.3), strict=True)}
+        success = {
+            m: rng.random(n) < p for m, p in zip(METHODS, (1, 1, 0.5, 0.7, 1, 0.3), strict=True)
+        }
         success["learned"] = success["true_direction"].copy()
         cuts = np.unique(np.geomspace(50, 800, 6).astype(int))  # the quick run's (log axis)
         curves = {m: [[c, 0.3 / np.sqrt(c) + 0.02 * i] for c in cuts]
@@ -601,8 +603,23 @@ def _robot(tmp_path: Path) -> Any:
     return RobotResult(cfg, (5, 6), success, docked, steps, metrics, unit_z)
 
 
+def _icub_box_result() -> Any:
+    """Two seeds of the 3-D task (synthetic reaches: the end-point histogram per method)."""
+    from sigmapi.experiments.icub.box import ICubBoxResult
+    from sigmapi.experiments.icub.config import ICubConfig
+    from sigmapi.experiments.icub.reach3d import METHODS
+
+    rng = np.random.default_rng(0)
+    per_seed = []
+    for k in range(2):
+        ep = {m: rng.gamma(2.0, 0.02 * (1 + i), 20).tolist() for i, m in enumerate(METHODS)}
+        per_seed.append({"seed": k, "end_point_m": {"free": ep, "fixated": ep}})
+    return ICubBoxResult(ICubConfig(space="box"), (0, 1), per_seed)
+
+
 RESULTS: dict[str, Callable[[Path], Any]] = {
     "icub": lambda tmp: _icub_result(),
+    "icub-box": lambda tmp: _icub_box_result(),
     "neurons": _neurons_result,
     "physiology": _physiology_result,
     "stream": _stream,

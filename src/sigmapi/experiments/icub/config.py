@@ -15,8 +15,19 @@ from sigmapi._outputs import OUTPUT
 from sigmapi.codes import _WIDTH_FIX, MIN_WIDTH
 from sigmapi.config import BACKEND_NAMES
 from sigmapi.envs.icub.frames import BALLS, PAIRS_PER_BALL
+from sigmapi.experiments.kit.seeds import SeedPlan
 
-__all__ = ["HEAD_CODES", "QUICK", "READOUTS", "ICubConfig"]
+__all__ = ["HEAD_CODES", "PLAN", "QUICK", "READOUTS", "SPACES", "ICubConfig"]
+
+PLAN = SeedPlan({"views": 5, "babbling": 6, "reaches": 7, "servo": 8})
+"""The random streams of one seed, on the table and in the box (children of
+``SeedSequence(seed)``, :mod:`sigmapi.experiments.kit.seeds`); the maps are built with the
+seed itself, their streams the seed's own."""
+
+SPACES = ("table", "box")
+"""Where the balls are: on the table, seen by the right eye (the 2-D task), or hanging
+anywhere in a box within the arm's reach, seen by both eyes (the 3-D task,
+:mod:`~sigmapi.experiments.icub.reach3d`)."""
 
 HEAD_CODES = ("winner", "centroid", "response")
 """What map 1 can hand to map 2 (:meth:`~sigmapi.experiments.icub.maps.ChainMaps.head`)."""
@@ -30,6 +41,10 @@ _WRIST_FIX = "the joint's range is -1.396 to 0.436 rad; e.g. --babble-wrist=-0.6
 class ICubConfig:
     """Everything one iCub run depends on but its seeds (the CLI's options are its fields)."""
 
+    space: str = field(default="table", metadata=_validate.bounded("choice", options=SPACES))
+    """Where the balls are: "table" (the 2-D task: on the table, the right eye) or "box"
+    (the 3-D task: in the air, both eyes; it reads the ``box_*`` fields, ``babble_yaw``,
+    ``babble_wrist``, ``epochs``, ``reaches`` and ``backend``)."""
     grid: int = field(default=16, metadata=_validate.bounded("int", 3, 64, fix="e.g. 16"))
     """Units per axis of the population codes (retina, eye angles, neck angles)."""
     code_width: float = field(
@@ -110,6 +125,30 @@ class ICubConfig:
     servo_steps: int = field(default=3, metadata=_validate.bounded("int", 0, 100, fix="e.g. 3"))
     """Glances of the learned servo that correct each associated method's posture, reached
     again beside the posture of the first view alone (0: no servo)."""
+    box_pairs: int = field(
+        default=1500, metadata=_validate.bounded("int", 1, 1_000_000, fix="e.g. 1500")
+    )
+    """View pairs per 3-D map (``space`` "box": eye movements for map H, head turns for map
+    T)."""
+    box_iterations: int = field(
+        default=30_000, metadata=_validate.bounded("int", 1, 100_000_000, fix="e.g. 30000")
+    )
+    """Learning iterations of each 3-D map (``space`` "box")."""
+    box_eval_pairs: int = field(
+        default=300, metadata=_validate.bounded("int", 1, 100_000, fix="e.g. 300")
+    )
+    """Calibration and test pairs (each, per map) that score the 3-D maps (``space``
+    "box")."""
+    box_babbles: int = field(
+        default=1500, metadata=_validate.bounded("int", 50, 1_000_000, fix="e.g. 1500")
+    )
+    """Babbles (random arm postures, both eyes on the hand) of the 3-D task (``space``
+    "box")."""
+    box_feature_width: float = field(
+        default=1.0, metadata=_validate.bounded("width", 0, lo_open=True)
+    )
+    """Width of the bump map T's winner (or the true position) gives the 3-D task's
+    association, map units (``space`` "box")."""
     backend: str = field(
         default="auto", metadata=_validate.bounded("choice", options=BACKEND_NAMES)
     )
@@ -126,6 +165,13 @@ class ICubConfig:
         object.__setattr__(self, "babble_wrist", _wrist_range(self.babble_wrist))
         if self.render is not None and not str(self.render).lower().endswith(".gif"):
             raise _validate.fail("render", "a file name ending in .gif", self.render)
+        if self.render is not None and self.space == "box":
+            raise _validate.fail(
+                "render",
+                "unset with space 'box' (the 3-D task films no reach)",
+                self.render,
+                "drop --render, or use --space table",
+            )
 
     def replace(self, **changes: Any) -> ICubConfig:
         """A copy with ``changes``."""
@@ -157,5 +203,8 @@ QUICK = ICubConfig(
     babbles=800,
     epochs=6,
     reaches=30,
+    box_pairs=300,
+    box_eval_pairs=100,
+    box_babbles=400,
 )
 """``sigmapi icub --quick``: smaller maps' data, fewer babbles and reaches (minutes)."""

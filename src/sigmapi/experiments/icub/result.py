@@ -124,6 +124,17 @@ class ICubResult(Result):
     LATER = ("success_servo",)
     experiment = "icub"
 
+    @classmethod
+    def from_dict(cls, data: Any) -> Any:
+        """The result a :meth:`to_dict` wrote; a file of ``sigmapi icub --space box``
+        (``"space": "box"``) reads back as an
+        :class:`~sigmapi.experiments.icub.box.ICubBoxResult`."""
+        if isinstance(data, Mapping) and data.get("space") == "box":
+            from sigmapi.experiments.icub.box import ICubBoxResult
+
+            return ICubBoxResult.from_dict(data)
+        return super().from_dict(data)
+
     def maps(self) -> dict[str, dict[str, Any]]:
         """Per map: the medians over seeds, the per-seed values, the references."""
         out: dict[str, dict[str, Any]] = {}

@@ -37,7 +37,8 @@ from sigmapi.envs.robot.scene import check_rendering, mujoco_module
 from sigmapi.errors import ConfigError
 from sigmapi.executor import Executor
 from sigmapi.experiments.base import Experiment, check_seeds, register, run_all
-from sigmapi.experiments.icub.config import QUICK, ICubConfig
+from sigmapi.experiments.icub.box import ICubBoxResult, run_box
+from sigmapi.experiments.icub.config import PLAN, QUICK, ICubConfig
 from sigmapi.experiments.icub.maps import (
     ChainMaps,
     MapData,
@@ -50,7 +51,6 @@ from sigmapi.experiments.icub.maps import (
 from sigmapi.experiments.icub.reaching import babble, features, learn_reaching, reach_tests
 from sigmapi.experiments.icub.result import ICubResult
 from sigmapi.experiments.kit.jobs import Steps, Tick, counted
-from sigmapi.experiments.kit.seeds import SeedPlan
 from sigmapi.metrics import EVAL_SEED, z_decoder
 from sigmapi.progress import Progress
 
@@ -58,11 +58,6 @@ __all__ = ["ICUB", "ICubExperiment", "check_frames", "learn_seed_chain"]
 
 
 EYES = ("l_eye", "r_eye")
-
-PLAN = SeedPlan({"views": 5, "babbling": 6, "reaches": 7, "servo": 8})
-"""The random streams of one seed (children of ``SeedSequence(seed)``,
-:mod:`sigmapi.experiments.kit.seeds`); the maps are built with the seed itself, their
-streams the seed's own."""
 
 
 def check_frames(scene: ICubScene, n: int, rng: np.random.Generator) -> dict[str, Any]:
@@ -364,11 +359,17 @@ class ICubExperiment(Experiment[ICubConfig]):
         out: Path | None = None,
         executor: Executor | None = None,
         progress: Progress | None = None,
-    ) -> ICubResult:
-        """The frames check, then one job per seed (see the module's account)."""
+    ) -> ICubResult | ICubBoxResult:
+        """The frames check, then one job per seed (see the module's account); with
+        ``config.space`` "box", the 3-D task (:func:`~sigmapi.experiments.icub.box.run_box`)."""
         if not isinstance(config, ICubConfig):
             raise _validate.fail("config", "an ICubConfig", config)
         seeds = check_seeds(seeds)
+        if config.space == "box":
+            mujoco_module()
+            icub_models_module()
+            check_rendering()
+            return run_box(config, seeds, executor=executor, progress=progress)
         _check_memory(config)  # every size that drives the work, before any of it
         mujoco_module()
         icub_models_module()  # before any work: both say which extra to install

@@ -1,0 +1,135 @@
+"""Figures of the iCub's 3-D task: the end-point error per method, and what it measures.
+
+- :func:`end_point_histogram`: the end-point errors of every method, one panel each;
+- :func:`end_point_definition`: a side view of the palm, its contact point, the marker behind
+  it and the ball, with the distance the end-point error is.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from sigmapi._outputs import save_captioned
+from sigmapi.envs.icub.model import BALL_RADIUS, HAND_MARKER, MARKER_RADIUS
+
+__all__ = ["end_point_definition", "end_point_histogram"]
+
+
+def end_point_histogram(errors: Mapping[str, NDArray[np.float64]], path: Path) -> Path:
+    """One histogram per method of its end-point errors ``errors[method]`` (cm), on shared
+    bins, the median and the 90th percentile marked; the figure at ``path`` with its caption
+    beside it."""
+    import matplotlib.pyplot as plt
+    from matplotlib.ticker import MaxNLocator
+
+    path.parent.mkdir(parents=True, exist_ok=True)
+    top = float(max(np.percentile(e, 98) for e in errors.values()))
+    bins = np.linspace(0.0, max(top, 1.0), 31)
+    fig, axes = plt.subplots(len(errors), 1, figsize=(6.0, 1.3 * len(errors)), sharex=True)
+    for ax, (name, e) in zip(np.atleast_1d(axes), errors.items(), strict=True):
+        ax.hist(np.clip(e, 0.0, bins[-1]), bins=bins, color="0.55", label="reaches")
+        med, p90 = float(np.median(e)), float(np.percentile(e, 90))
+        ax.axvline(med, color="C3", label="median")
+        ax.axvline(p90, color="C0", ls="--", label="90th percentile")
+        ax.set_ylabel(name, rotation=0, ha="right", va="center")
+        ax.text(
+            0.99,
+            0.8,
+            f"median {med:.1f}, p90 {p90:.1f} cm",
+            transform=ax.transAxes,
+            ha="right",
+            fontsize=8,
+            bbox={"facecolor": "white", "edgecolor": "none", "alpha": 0.9},
+        )
+        ax.yaxis.set_major_locator(MaxNLocator(integer=True, nbins=3))
+    np.atleast_1d(axes)[-1].set_xlabel("end-point error, cm (the last bin holds the rest)")
+    n = len(next(iter(errors.values())))
+    caption = (
+        f"End-point error per method, eyes free ({n} reaches each): the distance from the "
+        "palm's contact point where the reach ended to the ball's surface where it was put. "
+        "Red line: the median; blue dashed: the 90th percentile."
+    )
+    out = save_captioned(fig, path, caption, dpi=110, bbox_inches="tight")
+    plt.close(fig)
+    return out
+
+
+def end_point_definition(path: Path) -> Path:
+    """The end-point error drawn (a side view, to scale, centimetres): the hand's section
+    along the palm's normal, the palm's contact point ``C``, the marker behind it, the ball,
+    and ``| |C - b| - R |``; written to ``path`` with its caption."""
+    import matplotlib.pyplot as plt
+    from matplotlib.patches import Circle, Rectangle
+
+    path.parent.mkdir(parents=True, exist_ok=True)
+    cm = 100.0
+    r = BALL_RADIUS * cm
+    fig, ax = plt.subplots(figsize=(6.0, 3.6))
+    b = np.array([0.0, 0.0])
+    c = np.array([-5.5, 2.0])  # the palm's contact point, some way off the ball
+    ax.add_patch(Circle(tuple(b), r, color="C3", alpha=0.8))
+    ax.plot(*b, "k+")
+    ax.annotate("b (centre)", _xy(b), xytext=(0.4, -0.8), fontsize=8)
+    # the hand: 3.9 cm behind to 1.2 cm in front of C along the palm's normal (+x here)
+    ax.add_patch(Rectangle((c[0] - 3.9, c[1] - 4.0), 5.1, 8.0, color="0.8"))
+    ax.plot([c[0], c[0]], [c[1] - 4.0, c[1] + 4.0], color="0.3", lw=2)
+    m = c + np.array([HAND_MARKER[2] * cm, 0.0])
+    ax.add_patch(Circle(tuple(m), MARKER_RADIUS * cm, color="C2"))
+    ax.annotate(
+        "marker (3 cm behind C)",
+        _xy(m),
+        xytext=(m[0] - 4.5, m[1] - 5.6),
+        fontsize=8,
+        arrowprops={"arrowstyle": "->"},
+    )
+    ax.plot(*c, "ko")
+    ax.annotate(
+        "C: palm's contact point",
+        _xy(c),
+        xytext=(c[0] - 1.0, c[1] + 4.8),
+        fontsize=8,
+        arrowprops={"arrowstyle": "->"},
+    )
+    ax.text(c[0] - 3.7, c[1] - 3.7, "the hand", fontsize=8, color="0.3")
+    ax.annotate(
+        "", _xy(c + np.array([1.6, 0.0])), _xy(c), arrowprops={"arrowstyle": "->", "color": "0.3"}
+    )
+    ax.text(c[0] + 0.3, c[1] + 0.4, "palm's normal", fontsize=7)
+    u = (b - c) / np.linalg.norm(b - c)
+    s = b - r * u
+    ax.plot(*zip(c, s, strict=True), color="C0", lw=2)
+    ax.plot(*zip(s, b, strict=True), color="C0", lw=1, ls=":")
+    mid = 0.5 * (c + s)
+    ax.annotate(
+        "end-point error = | |C - b| - R |",
+        _xy(mid),
+        xytext=(mid[0] - 2.5, mid[1] - 5.5),
+        fontsize=9,
+        color="C0",
+        arrowprops={"arrowstyle": "->", "color": "C0"},
+    )
+    ax.text(r * 0.75, r * 0.9, f"R = {r:.0f} cm", fontsize=8)
+    ax.set_aspect("equal")
+    ax.set_xlim(-11, 5)
+    ax.set_ylim(-6, 7.5)
+    ax.set_xlabel("cm")
+    caption = (
+        "The end-point error: the distance from the palm's contact point C (the palm site, "
+        "the middle of the palm's surface) where the reach ended to the surface of the ball "
+        f"(radius {r:.0f} cm) where the experimenter put it. A contact counts as the palm's "
+        "when its point lies no more than 1 cm behind C along the palm's normal; the hand "
+        "(grey, to scale along the normal) reaches 3.9 cm behind C, the green marker the eyes "
+        "see sits 3 cm behind it."
+    )
+    out = save_captioned(fig, path, caption, dpi=110, bbox_inches="tight")
+    plt.close(fig)
+    return out
+
+
+def _xy(p: NDArray[np.float64]) -> tuple[float, float]:
+    """A 2-D point as the pair matplotlib's annotations take."""
+    return float(p[0]), float(p[1])

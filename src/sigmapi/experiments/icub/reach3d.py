@@ -1,0 +1,532 @@
+"""Reaches in the iCub's 3-D peripersonal space, judged in centimetres (issue 44, item 3).
+
+The world is :mod:`sigmapi.envs.icub.stereo`'s (a ball hanging anywhere in a box within the
+right arm's reach, seen by both eyes); the maps are
+:mod:`sigmapi.experiments.icub.space3d`'s (map H head-centred, map T torso-centred).
+
+**Babbling** (:func:`babble3d`): the right arm takes random postures (as on the table:
+:func:`~sigmapi.experiments.icub.reaching.babble`'s joints and ranges); a posture is kept by
+what the robot senses: the arm touches nothing (no contact of the hand or forearm, with the
+table or anything else) and both eyes find the hand's green marker (random head postures and
+eye commands, :func:`look`). A babble is the posture and both eyes' view of the marker (its
+pixels and the gaze); the marker's true place is kept as the labels of the references.
+
+**The states** (:data:`ASSOCIATED`), each associated with the postures by an
+:class:`~sigmapi.agents.Association` trained on the same babbles:
+
+- ``learned``: a Gaussian bump on map T's grid, centred at map T's winner's place (the
+  learned chain: both eyes' pixels and the eyes' angles through map H, the neck's through
+  map T);
+- ``true_position``: the same bump, centred at the true torso-centred position placed on a
+  grid of map T's size (a labelled reference: the association's ceiling with a perfect map);
+- ``retina``: a 3-D population code of both eyes' pixels alone (mean column, mean row,
+  disparity: :func:`~sigmapi.experiments.icub.space3d.retina3`);
+- ``retina_gaze``: that code beside codes of the eyes' angles and of the neck's, no map.
+
+Beside them ``scripted_ik`` (damped least squares on the true ball position: the marker at
+the ball's centre, the upper bound) and ``random_posture`` (a held-out babble's posture drawn
+at random: the chance rate).
+
+**The reach** (:func:`reach3d`): the arm starts at
+:data:`~sigmapi.envs.icub.model.HOME_ARM`, moves to the approach posture (the posture with
+the elbow bent by :data:`~sigmapi.envs.icub.reach.LIFT` more) in :data:`LEG` seconds and then
+to the posture in :data:`APPROACH` seconds (joint targets ramped, each leg reaching its goal at
+70 % of its time), and stops where it is at the first touch of the ball (the arm's touch: any
+contact of the hand or forearm with the ball); :data:`SETTLE` seconds later it is scored:
+
+- **end-point error**: the distance from the palm's contact point ``C`` (the palm site: the
+  middle of the palm's surface, the vertices of the hand within 2 cm of it lie at most 1.6 mm
+  in front of it) to the surface of the ball where the experimenter put it:
+  ``| |C - b| - R |`` (``b`` its centre, ``R`` its radius), centimetres;
+- **strict success**: the palm touched the ball (a contact of the hand whose point lies on
+  the palm's side: at least :data:`PALM_SIDE` along the palm's normal from ``C``; the back
+  of the hand and of the fingers lie behind it, the marker 3 cm behind) and the ball moved
+  less than :data:`MOVED` (its centre at the end against where it was put).
+
+**The reach tests** (:func:`reach_tests3d`): balls uniform in the box that the scripted IK
+reaches within 1 cm (the experimenter's choice, as on the table); the robot finds each with
+both eyes (random head postures and eye commands: **eyes free**, the ball anywhere in both
+views), then fixates it (:func:`~sigmapi.envs.icub.stereo.fixate`: **fixated**); each
+associated method reaches from each view.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from sigmapi.agents import Association
+from sigmapi.codes import PopulationCode
+from sigmapi.envs import bump_features
+from sigmapi.envs.icub import ICubScene, arm_ik
+from sigmapi.envs.icub import stereo as st
+from sigmapi.envs.icub.model import BALL_RADIUS, HOME_ARM
+from sigmapi.envs.icub.reach import LIFT
+from sigmapi.experiments.icub import space3d as s3
+from sigmapi.experiments.icub.config import PLAN
+from sigmapi.experiments.icub.reaching import _BABBLED, _WRIST, _YAW
+
+__all__ = [
+    "APPROACH",
+    "ASSOCIATED",
+    "CONDITIONS",
+    "LEG",
+    "METHODS",
+    "MOVED",
+    "PALM_SIDE",
+    "SETTLE",
+    "Babbles3D",
+    "Reach3D",
+    "ReachTests3D",
+    "babble3d",
+    "features3d",
+    "look",
+    "reach3d",
+    "reach_tests3d",
+    "scripted_ik",
+    "summarise",
+]
+
+Array = NDArray[np.float64]
+
+METHODS = ("learned", "true_position", "retina", "retina_gaze", "scripted_ik", "random_posture")
+"""The reaching methods compared in 3-D, in the order of the result."""
+ASSOCIATED = METHODS[:4]
+"""The methods that reach through an association learned from babbling."""
+CONDITIONS = ("free", "fixated")
+"""The eyes when the state is read: free (the ball anywhere in both views) or fixated."""
+LEG = 0.6
+"""Seconds of the move from the home pose to the approach posture."""
+APPROACH = 0.8
+"""Seconds of the move from the approach posture to the posture."""
+SETTLE = 0.05
+"""Seconds the physics runs after the arm stopped, before the reach is scored."""
+PALM_SIDE = -0.01
+"""A contact of the hand is the palm's when its point lies at least this far along the palm's
+normal from the palm's contact point (metres; the hand spans -0.039 to 0.012 along it)."""
+MOVED = 0.01
+"""Strict success: the ball's centre moved less than this, metres."""
+_FAR = (1.5, -1.5, 0.7)  # where the ball waits while the robot babbles (out of reach and view)
+_SEARCHES = 4  # head postures tried before a ball or a hand is given up
+_SEARCH_TRIES = 60  # eye commands per head posture
+
+
+@dataclass(frozen=True)
+class Babbles3D:
+    """``n`` babbles: postures ``(n, 7)`` and both eyes' views of the hand's marker (the
+    labels: the marker's true head- and torso-centred positions)."""
+
+    posture: Array
+    views: s3.Views3D
+
+
+def look(
+    scene: ICubScene, rng: np.random.Generator, target: str = "ball"
+) -> tuple[Array, Array] | None:
+    """Random head postures (:func:`~sigmapi.envs.icub.stereo.random_neck3d`) and eye
+    commands until both eyes see ``target``; its detections, or None."""
+    for _ in range(_SEARCHES):
+        scene.set_gaze([0.0, 0.0, 0.0, *st.random_neck3d(rng)])
+        seen = st.search_both(scene, rng, target, tries=_SEARCH_TRIES)
+        if seen is not None:
+            return seen
+    return None
+
+
+def _arm_touches(scene: ICubScene) -> bool:
+    """Touch, sensed with the arm where it is set: any contact of the hand or forearm."""
+    scene._mj.mj_collision(scene.model, scene.data)
+    n = scene.data.ncon
+    g1, g2 = scene.data.contact.geom1[:n], scene.data.contact.geom2[:n]
+    arm = scene.model.geom_contype == 2
+    return bool(np.any(arm[g1] | arm[g2]))
+
+
+def _labels(scene: ICubScene, p: Array) -> tuple[Array, Array]:
+    return st.head_position(scene, p), st.torso_position(scene, p)
+
+
+def babble3d(
+    scene: ICubScene,
+    n: int,
+    rng: np.random.Generator,
+    *,
+    yaw: float,
+    wrist: tuple[float, float],
+) -> Babbles3D:
+    """``n`` babbles (the module's account), the shoulder's yaw drawn from ``yaw`` to its
+    upper limit and the wrist's pitch from ``wrist``; the scene's arm goes back to rest."""
+    lo, hi = scene.arm_range.T.copy()
+    lo[_YAW] = max(lo[_YAW], yaw)
+    lo[_WRIST], hi[_WRIST] = wrist
+    idx = list(_BABBLED)
+    scene.reset()
+    st.place_ball(scene, _FAR)
+    postures: list[Array] = []
+    rows: list[tuple[Array, ...]] = []
+    while len(postures) < n:
+        q = np.zeros(7)
+        q[idx] = rng.uniform(lo[idx], hi[idx])
+        scene.set_arm(q)
+        if _arm_touches(scene):
+            continue
+        seen = look(scene, rng, "hand")
+        if seen is None:
+            continue
+        with scene.truth():  # the labels of the references only
+            marker = scene.marker_position()
+        postures.append(q)
+        rows.append((seen[0], seen[1], scene.gaze(), *_labels(scene, marker)))
+    scene.reset()
+    cols = [np.array(c, dtype=np.float64) for c in zip(*rows, strict=True)]
+    return Babbles3D(np.array(postures), s3.Views3D(*cols))
+
+
+def _unit(a: Array) -> Array:
+    n = np.linalg.norm(a, axis=1, keepdims=True)
+    return a / np.where(n > 0, n, 1.0)
+
+
+@dataclass
+class Features3D:
+    """The states of views for each associated method (the module's account)."""
+
+    chain: s3.Chain3D
+    grid: int
+    width: float
+    feature_width: float
+    torso_box: Array
+    """``(3, 2)`` the torso-centred range the ``true_position`` grid spans (metres)."""
+
+    def __call__(self, method: str, v: s3.Views3D) -> Array:
+        """The state ``(n, n_features)`` of views ``v`` for ``method``."""
+        m_t = self.chain.model("torso")  # map T, whatever its design
+        if method == "learned":
+            w = m_t.winner(*self.chain.inputs("torso", v), hard=True)
+            return bump_features(m_t.map_coords[w], m_t.map_coords, self.feature_width)
+        if method == "true_position":
+            lo, hi = self.torso_box.T
+            pos = np.clip((v.torso - lo) / (hi - lo), 0.0, 1.0)
+            centres = pos * (np.asarray(m_t.map_shape, dtype=np.float64) - 1.0)
+            return bump_features(centres, m_t.map_coords, self.feature_width)
+        code = PopulationCode((self.grid,) * 3, self.width)
+        retina = _unit(code.encode(s3.retina3(v, self.chain.eye_size)))
+        if method == "retina":
+            return retina
+        if method == "retina_gaze":
+            parts = [retina, _unit(code.encode(s3.eyes3(v))), _unit(code.encode(s3.neck3(v)))]
+            return np.hstack(parts) / np.sqrt(3.0)
+        raise ValueError(f"no features for method {method!r}")
+
+
+def features3d(
+    scene: ICubScene, chain: s3.Chain3D, grid: int, width: float, feature_width: float
+) -> Features3D:
+    """The states of the associated methods; ``true_position``'s grid spans the box's
+    torso-centred range (its corners, read as the reference's labels)."""
+    corners = np.array(np.meshgrid(*st.BOX)).reshape(3, -1).T
+    t = st.torso_position(scene, corners)
+    box = np.column_stack([t.min(axis=0), t.max(axis=0)])
+    return Features3D(chain, grid, width, feature_width, box)
+
+
+@dataclass(frozen=True)
+class Reach3D:
+    """What one physical reach did (the module's account)."""
+
+    touched: bool
+    """The arm touched the ball (any contact of the hand or forearm)."""
+    palm: bool
+    """The palm touched it (a contact on the palm's side, :data:`PALM_SIDE`)."""
+    moved: float
+    """How far the ball's centre moved, metres."""
+    end_point: float
+    """The end-point error, metres: the palm's contact point to the ball's surface."""
+    aim: float
+    """The aim's error, metres: the hand's marker at the posture (kinematics, before the
+    reach) to the ball's centre, where every method aims it."""
+    frames: tuple[NDArray[np.uint8], ...] = ()
+
+    @property
+    def strict(self) -> bool:
+        """Strict success: the palm touched it and it moved less than :data:`MOVED`."""
+        return self.palm and self.moved < MOVED
+
+
+def _contacts(scene: ICubScene) -> tuple[bool, bool]:
+    """(the arm touches the ball, a touch is on the palm's side) from the physics' contacts
+    now; the palm's side is the score's (the palm's frame read in ``scene.truth()``)."""
+    d = scene.data
+    n = d.ncon
+    if n == 0:
+        return False, False
+    g1, g2 = d.contact.geom1[:n], d.contact.geom2[:n]
+    b = scene._ball_geom
+    arm = scene.model.geom_contype == 2
+    hit = ((g1 == b) & arm[g2]) | ((g2 == b) & arm[g1])
+    if not np.any(hit):
+        return False, False
+    hand = ((g1 == b) & scene._hand[g2]) | ((g2 == b) & scene._hand[g1])
+    with scene.truth():  # the score: which side of the hand touched
+        c, r = scene.palm_position(), d.site_xmat[scene._palm].reshape(3, 3)
+    normal = (d.contact.pos[:n][hand] - c) @ r[:, 2]
+    return True, bool(np.any(normal >= PALM_SIDE))
+
+
+def reach3d(scene: ICubScene, q: Array, *, film: int = 0) -> Reach3D:
+    """Reach posture ``q`` from the home pose with the ball where it is (the module's
+    account); ``film`` > 0 keeps that many third-person frames per leg."""
+    lo, hi = scene.arm_range.T
+    goal = np.clip(q, lo, hi)
+    scene.set_arm(goal)
+    with scene.truth():  # the score's references: where the ball was put, the aim
+        b0 = scene.ball_position()
+        aim = float(np.linalg.norm(scene.marker_position() - b0))
+    scene.set_arm(HOME_ARM)
+    above = goal.copy()
+    above[3] += LIFT  # the elbow
+    above = np.clip(above, lo, hi)
+    touched = palm = False
+    frames: list[NDArray[np.uint8]] = []
+    dt = scene.model.opt.timestep
+    for target, seconds in ((above, LEG), (goal, APPROACH)):
+        steps = max(1, round(seconds / dt))
+        start = scene.arm()
+        for i in range(steps):
+            scene.set_arm_targets(start + (target - start) * min(1.0, (i + 1) / (0.7 * steps)))
+            scene._mj.mj_step(scene.model, scene.data)
+            t, p = _contacts(scene)
+            touched, palm = touched or t, palm or p
+            if film and i % max(1, steps // film) == 0:
+                frames.append(scene.render("third"))
+            if touched:
+                scene.set_arm_targets(scene.arm())  # the touch stops the arm
+                break
+        if touched:
+            break
+    scene.step(SETTLE)
+    with scene.truth():  # the score
+        b1, c = scene.ball_position(), scene.palm_position()
+    err = abs(float(np.linalg.norm(c - b0)) - BALL_RADIUS)
+    return Reach3D(touched, palm, float(np.linalg.norm(b1 - b0)), err, aim, tuple(frames))
+
+
+def scripted_ik(scene: ICubScene, p: Array, rounds: int = 3) -> tuple[Array, float]:
+    """The reference: a posture that puts the hand's marker at world point ``p`` (damped
+    least squares on the palm, :func:`~sigmapi.envs.icub.arm_ik`, aimed at ``p`` plus the
+    palm's offset from the marker at the posture so far), and the marker's distance left."""
+    with scene.truth():
+        q, _ = arm_ik(scene, p)
+        saved = scene.arm()
+        for _ in range(rounds):
+            scene.set_arm(q)
+            off = scene.palm_position() - scene.marker_position()
+            q, _ = arm_ik(scene, p + off, q0=q)
+        scene.set_arm(q)
+        err = float(np.linalg.norm(scene.marker_position() - p))
+        scene.set_arm(saved)
+    return q, err
+
+
+def _reachable(scene: ICubScene, rng: np.random.Generator) -> Array:
+    """A ball centre uniform in the box that the scripted IK reaches within 1 cm."""
+    while True:
+        p = st.random_point(rng, 1)[0]
+        if scripted_ik(scene, p)[1] < 0.01:
+            return p
+
+
+@dataclass
+class ReachTests3D:
+    """Every reach of one seed: balls ``(n, 3)`` (world), per condition and method the reaches'
+    end-point errors (metres), strict successes, touches and the ball's moves."""
+
+    ball: Array
+    fixated: NDArray[np.bool_]
+    """Per ball, whether the fixation converged (else the fixated state is the free one)."""
+    end_point: dict[str, dict[str, Array]] = field(default_factory=dict)
+    strict: dict[str, dict[str, NDArray[np.bool_]]] = field(default_factory=dict)
+    touched: dict[str, dict[str, NDArray[np.bool_]]] = field(default_factory=dict)
+    moved: dict[str, dict[str, Array]] = field(default_factory=dict)
+    aim: dict[str, dict[str, Array]] = field(default_factory=dict)
+
+
+def _view_row(scene: ICubScene, seen: tuple[Array, Array], p: Array) -> tuple[Array, ...]:
+    return (seen[0], seen[1], scene.gaze(), *_labels(scene, p))
+
+
+def _views(rows: list[tuple[Array, ...]]) -> s3.Views3D:
+    return s3.Views3D(*(np.array(c, dtype=np.float64) for c in zip(*rows, strict=True)))
+
+
+def reach_tests3d(
+    scene: ICubScene,
+    layers: dict[str, Association],
+    feats: Callable[[str, s3.Views3D], Array],
+    n: int,
+    rng: np.random.Generator,
+    babbled: Array,
+    film: Callable[[int, str], int] | None = None,
+) -> tuple[ReachTests3D, list[NDArray[np.uint8]]]:
+    """``n`` reaches per condition and method (the module's account); ``random_posture``
+    draws from ``babbled`` ``(m, 7)``; ``film(i, method)`` frames per leg of reach ``i``
+    (eyes free); the frames filmed, in order."""
+    balls: list[Array] = []
+    free: list[tuple[Array, ...]] = []
+    fixed: list[tuple[Array, ...]] = []
+    converged: list[bool] = []
+    while len(balls) < n:
+        scene.reset()
+        p = _reachable(scene, rng)
+        st.place_ball(scene, p)
+        seen = look(scene, rng)
+        if seen is None:  # the eyes cannot find it: the experimenter puts another
+            continue
+        balls.append(p)
+        free.append(_view_row(scene, seen, p))
+        fix = st.fixate(scene)
+        converged.append(fix is not None)
+        fixed.append(free[-1] if fix is None else _view_row(scene, fix[0], p))
+    ball = np.array(balls)
+    views = {"free": _views(free), "fixated": _views(fixed)}
+    res = ReachTests3D(ball, np.array(converged))
+    frames: list[NDArray[np.uint8]] = []
+    chance = babbled[rng.integers(0, len(babbled), n)]
+    ik = np.array([scripted_ik(scene, p)[0] for p in ball])
+
+    def run(postures: Array, method: str, cond: str) -> None:
+        out = []
+        for i, q in enumerate(postures):
+            scene.reset()
+            st.place_ball(scene, ball[i])
+            k = film(i, method) if film is not None and cond == "free" else 0
+            r = reach3d(scene, q, film=k)
+            frames.extend(r.frames)
+            out.append(r)
+        res.end_point.setdefault(cond, {})[method] = np.array([r.end_point for r in out])
+        res.strict.setdefault(cond, {})[method] = np.array([r.strict for r in out])
+        res.touched.setdefault(cond, {})[method] = np.array([r.touched for r in out])
+        res.moved.setdefault(cond, {})[method] = np.array([r.moved for r in out])
+        res.aim.setdefault(cond, {})[method] = np.array([r.aim for r in out])
+
+    for cond in CONDITIONS:
+        for method in METHODS:
+            if method in ASSOCIATED:
+                run(layers[method].predict(feats(method, views[cond])), method, cond)
+            elif cond == "free":
+                run(ik if method == "scripted_ik" else chance, method, cond)
+            else:  # the same postures whatever the eyes did
+                for f in (res.end_point, res.moved, res.aim):
+                    f[cond][method] = f["free"][method]
+                for b in (res.strict, res.touched):
+                    b[cond][method] = b["free"][method]
+    scene.reset()
+    return res, frames
+
+
+def summarise(tests: ReachTests3D) -> dict[str, dict[str, dict[str, Any]]]:
+    """Per condition and method: ``end_point_cm`` (``median``, ``p90``), ``strict_success``,
+    ``success`` (touched), the ball's median move and the aim's median error (cm)."""
+    out: dict[str, dict[str, dict[str, Any]]] = {}
+    for cond, per in tests.end_point.items():
+        out[cond] = {}
+        for method, e in per.items():
+            out[cond][method] = {
+                "end_point_cm": {
+                    "median": float(np.median(e) * 100.0),
+                    "p90": float(np.percentile(e, 90) * 100.0),
+                },
+                "strict_success": float(np.mean(tests.strict[cond][method])),
+                "success": float(np.mean(tests.touched[cond][method])),
+                "ball_moved_cm_median": float(np.median(tests.moved[cond][method]) * 100.0),
+                "aim_cm_median": float(np.median(tests.aim[cond][method]) * 100.0),
+            }
+    return out
+
+
+def run_seed3d(
+    seed: int,
+    *,
+    pairs: int,
+    eval_pairs: int,
+    iterations: int,
+    babbles: int,
+    epochs: int,
+    reaches: int,
+    feature_width: float,
+    yaw: float,
+    wrist: tuple[float, float],
+    grid: int = 6,
+    width: float = 1.0,
+    map_shape: tuple[int, int, int] = (6, 6, 6),
+    map_grid: int = s3.GRID,
+    depth_grid: int | None = s3.DEPTH_GRID,
+    backend: str = "auto",
+    keep: bool = False,
+) -> dict[str, Any]:
+    """One seed of the 3-D task: the maps recorded, learned and scored; babbling; the
+    associations; the reaches eyes free and fixated, summarised; ``keep``: also the raw
+    reaches (``tests``) for the figures. ``grid``: units per axis of the retina's and the
+    gaze's codes that the associated methods read; ``map_grid`` and ``depth_grid``: the
+    maps' codes (:func:`~sigmapi.experiments.icub.space3d.learn_chain3d`, its measured
+    design by default)."""
+    t0 = time.perf_counter()
+    r_views, r_babble, r_reach = (PLAN.rng(seed, s) for s in ("views", "babbling", "reaches"))
+    scene = ICubScene()
+    st.float_ball(scene)
+    scene.seal()  # the truth only where scene.truth() says: scoring and references
+    train = {s: s3.record_pairs(scene, pairs, r_views, s) for s in ("eyes", "head")}
+    ev = s3.evaluation_pairs(scene, eval_pairs)
+    chain = s3.learn_chain3d(
+        train["eyes"],
+        train["head"],
+        grid=map_grid,
+        depth_grid=depth_grid,
+        width=width,
+        map_shape=map_shape,
+        iterations=iterations,
+        seed=seed,
+        eye_size=scene.eye_size,
+        backend=backend,
+    )
+    maps: dict[str, Any] = {}
+    k = int(np.prod(map_shape))
+    for name, stage, data in (("map_head", "head", "eyes"), ("map_torso", "torso", "head")):
+        cal, test = ev[data]
+        m = s3.score_map(chain, stage, cal, test)
+        m["true_position"] = s3.true_position_map(
+            stage, train[data], cal, test, map_shape, iterations, seed
+        )
+        m["kmeans"] = s3.kmeans_reference(stage, train[data], cal, test, k, seed)
+        m["error_ratio_to_kmeans"] = m["error_cm"] / m["kmeans"]["error_cm"]
+        maps[name] = m
+    t_maps = time.perf_counter() - t0
+    bab = babble3d(scene, babbles, r_babble, yaw=yaw, wrist=wrist)
+    held = babble3d(scene, max(50, babbles // 10), r_babble, yaw=yaw, wrist=wrist)
+    feats = features3d(scene, chain, grid, width, feature_width)
+    layers = {}
+    for method in ASSOCIATED:
+        phi = feats(method, bab.views)
+        layers[method] = Association(phi.shape[1], 7, epochs=epochs).fit(phi, bab.posture)
+    t_babble = time.perf_counter() - t0 - t_maps
+    tests, _ = reach_tests3d(scene, layers, feats, reaches, r_reach, held.posture)
+    scene.close()
+    out: dict[str, Any] = {
+        "seed": seed,
+        "maps": maps,
+        "reaches": summarise(tests),
+        "fixation_converged": float(np.mean(tests.fixated)),
+        "seconds": {
+            "maps": t_maps,
+            "babbling": t_babble,
+            "total": time.perf_counter() - t0,
+        },
+    }
+    if keep:
+        out["tests"] = tests
+    return out

@@ -1,0 +1,266 @@
+"""The iCub's reaches in 3-D: the palm's contacts, the reach's scores, babbling on a sealed
+scene, the states, the pooled result and ``sigmapi icub --space box``.
+
+The scene tests need MuJoCo, ``icub-models`` and an OpenGL context; the result's tests none.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+
+import numpy as np
+import pytest
+
+os.environ.setdefault("MUJOCO_GL", "egl")
+
+from sigmapi.errors import ConfigError
+from sigmapi.experiments.icub.box import ICubBoxResult
+from sigmapi.experiments.icub.config import QUICK, ICubConfig
+from sigmapi.experiments.icub.reach3d import METHODS
+
+
+def _scene():
+    pytest.importorskip("mujoco")
+    pytest.importorskip("icub_models")
+    from sigmapi.envs.icub import ICubScene
+    from sigmapi.envs.icub import stereo as st
+
+    scene = ICubScene()
+    try:
+        scene.render("r_eye")
+    except Exception as exc:  # no GL context
+        pytest.skip(f"no OpenGL context here: {exc}")
+    st.float_ball(scene)
+    return scene
+
+
+def _palm_frame(scene):
+    with scene.truth():
+        return scene.palm_position(), scene.data.site_xmat[scene._palm].reshape(3, 3).copy()
+
+
+def test_a_touch_counts_as_the_palms_only_on_the_palms_side():
+    from sigmapi.envs.icub import stereo as st
+    from sigmapi.envs.icub.model import BALL_RADIUS, HOME_ARM
+    from sigmapi.experiments.icub import reach3d as r3
+
+    scene = _scene()
+    scene.set_arm(HOME_ARM)
+    c, r = _palm_frame(scene)
+    n = r[:, 2]  # the palm's normal
+    for where, palm in ((c + (BALL_RADIUS - 0.002) * n, True), (c - 0.066 * n, False)):
+        st.place_ball(scene, where)
+        scene._mj.mj_collision(scene.model, scene.data)
+        assert r3._contacts(scene) == (True, palm)
+    st.place_ball(scene, c + 0.2 * n)  # well off the hand
+    scene._mj.mj_collision(scene.model, scene.data)
+    assert r3._contacts(scene) == (False, False)
+
+
+def test_reach_scores_the_end_point_the_aim_and_the_balls_move():
+    from sigmapi.envs.icub import stereo as st
+    from sigmapi.envs.icub.model import REST_ARM
+    from sigmapi.experiments.icub import reach3d as r3
+
+    scene = _scene()
+    scene.seal()
+    rng = np.random.default_rng(3)
+    p = r3._reachable(scene, rng)
+    q, left = r3.scripted_ik(scene, p)
+    assert left < 0.01
+    st.place_ball(scene, p)
+    hit = r3.reach3d(scene, q)
+    assert hit.touched and hit.aim < 0.01
+    assert hit.end_point < 0.06  # the reach ends where the arm first touched the ball
+    # a posture far from the ball: no touch, the ball stays, the palm ends far off
+    scene.reset()
+    st.place_ball(scene, p)
+    far = np.array(REST_ARM)  # hanging at the side
+    with scene.truth():
+        scene.set_arm(far)
+        gap = float(np.linalg.norm(scene.marker_position() - p))
+    miss = r3.reach3d(scene, far)
+    assert not miss.touched and not miss.strict and miss.moved < 1e-3
+    assert miss.aim == pytest.approx(gap) and miss.end_point > 0.05
+
+
+def test_babbling_and_reaching_in_3d_read_no_truth_outside_the_scores():
+    from sigmapi.agents import Association
+    from sigmapi.experiments.icub import reach3d as r3
+    from sigmapi.experiments.icub import space3d as s3
+
+    scene = _scene()
+    scene.seal()  # every truth reader raises outside scene.truth()
+    rng = np.random.default_rng(0)
+    bab = r3.babble3d(scene, 12, rng, yaw=0.8, wrist=(-0.6, -0.3))
+    assert bab.posture.shape == (12, 7) and bab.views.n == 12
+    assert np.all(np.isfinite(bab.views.left)) and np.all(np.isfinite(bab.views.torso))
+    eyes = s3.record_pairs(scene, 20, rng, "eyes")
+    head = s3.record_pairs(scene, 20, rng, "head")
+    chain = s3.learn_chain3d(
+        eyes, head, grid=4, width=1.0, map_shape=(3, 3, 3), iterations=100, seed=0, eye_size=64
+    )
+    feats = r3.features3d(scene, chain, 4, 1.0, 1.0)
+    # the learned chain, the retina and retina + gaze never read the labels
+    blind = s3.Views3D(
+        bab.views.left,
+        bab.views.right,
+        bab.views.gaze,
+        bab.views.head * np.nan,
+        bab.views.torso * np.nan,
+    )
+    for m in ("learned", "retina", "retina_gaze"):
+        assert np.array_equal(feats(m, blind), feats(m, bab.views))
+    assert np.isnan(feats("true_position", blind)).all()
+    layers = {
+        m: Association(feats(m, bab.views).shape[1], 7, epochs=2).fit(
+            feats(m, bab.views), bab.posture
+        )
+        for m in r3.ASSOCIATED
+    }
+    tests, _ = r3.reach_tests3d(scene, layers, feats, 3, rng, bab.posture)
+    out = r3.summarise(tests)
+    assert set(out) == set(r3.CONDITIONS)
+    for cond in r3.CONDITIONS:
+        assert set(out[cond]) == set(METHODS)
+        for m in METHODS:
+            assert out[cond][m]["end_point_cm"]["p90"] >= out[cond][m]["end_point_cm"]["median"]
+    # the reference and the chance rate do not depend on what the eyes did
+    assert out["free"]["scripted_ik"] == out["fixated"]["scripted_ik"]
+
+
+def _record(seed: int, learned: list[float], strict: list[bool]) -> dict:
+    maps = {
+        "order_r2": 0.5,
+        "order_r2_per_axis": [0.9, 0.96, 0.97],
+        "ordered": False,
+        "folded": True,
+        "fold_score": 40.0,
+        "error_cm": 6.0,
+        "error_ratio_to_kmeans": 2.0,
+        "true_position": {"order_r2": 0.9, "error_cm": 3.0},
+        "kmeans": {"error_cm": 3.0},
+    }
+    ep = {m: [0.01 * (i + 1) for i in range(4)] for m in METHODS}
+    ep["learned"] = learned
+    st = {m: [False] * 4 for m in METHODS}
+    st["learned"] = strict
+    raw = {"end_point_m": {}, "aim_m": {}, "strict": {}, "touched": {}, "reaches": {}}
+    for cond in ("free", "fixated"):
+        raw["end_point_m"][cond] = ep
+        raw["aim_m"][cond] = ep
+        raw["strict"][cond] = st
+        raw["touched"][cond] = {m: [True] * 4 for m in METHODS}
+        raw["reaches"][cond] = {
+            m: {
+                "end_point_cm": {
+                    "median": float(np.median(ep[m]) * 100),
+                    "p90": float(np.percentile(ep[m], 90) * 100),
+                },
+                "strict_success": float(np.mean(st[m])),
+            }
+            for m in METHODS
+        }
+    return {
+        "seed": seed,
+        "maps": {"map_head": maps, "map_torso": maps},
+        "fixation_converged": 1.0,
+        "seconds": {"total": 10.0},
+        "peak_rss_mb": 700.0,
+        **raw,
+    }
+
+
+def test_the_box_result_pools_every_reach_and_judges_the_targets():
+    res = ICubBoxResult(
+        ICubConfig(space="box"),
+        (5, 6),
+        [
+            _record(5, [0.005, 0.01, 0.015, 0.02], [True, True, True, True]),
+            _record(6, [0.05, 0.06, 0.07, 0.08], [False, True, False, False]),
+        ],
+    )
+    d = json.loads(json.dumps(res.to_dict()))
+    assert d["space"] == "box" and d["seeds"] == [5, 6]
+    assert set(d["methods"]) == set(METHODS)
+    learned = d["methods"]["learned"]
+    pooled = 100 * np.array([0.005, 0.01, 0.015, 0.02, 0.05, 0.06, 0.07, 0.08])
+    assert learned["end_point_cm"]["median"] == pytest.approx(np.median(pooled))
+    assert learned["end_point_cm"]["p90"] == pytest.approx(np.percentile(pooled, 90))
+    assert learned["strict_success"] == pytest.approx(5 / 8)
+    assert learned["fixated"]["strict_success"] == pytest.approx(5 / 8)
+    assert d["maps"]["map_head"]["order_r2_per_axis"] == pytest.approx([0.9, 0.96, 0.97])
+    assert d["maps"]["map_torso"]["folded_seeds"] == 2
+    t = d["targets"]
+    assert t["learned_end_point_cm"] is False  # a median of 3.5 cm
+    assert t["seeds_met"]["learned_end_point_cm"] == 1  # seed 5's 1.25 cm
+    assert t["seeds_met"]["learned_strict_success"] == 1
+    assert t["random_posture_strict_success"] is True
+    assert t["maps_ordered_all_seeds"] is False
+    assert d["peak_memory_mb"] == 700.0
+    text = res.table()
+    for m in METHODS:
+        assert m in text
+    assert "map_torso" in text
+
+
+def test_the_space_is_a_declared_choice():
+    assert ICubConfig().space == "table" and QUICK.space == "table"
+    with pytest.raises(ConfigError, match="space"):
+        ICubConfig(space="air")
+    assert QUICK.box_pairs < ICubConfig().box_pairs
+    with pytest.raises(ConfigError, match="render must be unset with space 'box'"):
+        ICubConfig(space="box", render="reach.gif")  # no film in 3-D: refused, not ignored
+
+
+def test_icub_help_shows_the_space_and_the_box_fields(capsys):
+    from sigmapi.cli import main
+
+    with pytest.raises(SystemExit) as exc:
+        main(["icub", "--help"])
+    assert exc.value.code == 0
+    out = capsys.readouterr().out
+    for flag in ("--space", "box", "--box-pairs", "--box-babbles"):
+        assert flag in out
+
+
+def test_icub_space_air_is_refused_in_one_line(capsys):
+    from sigmapi.cli import main
+
+    assert main(["icub", "--space", "air", "--json"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "space" in err and "air" in err and "\n" not in err
+
+
+def test_a_box_result_reads_back_through_the_icub_result():
+    from sigmapi.experiments.icub.result import ICubResult
+
+    res = ICubBoxResult(
+        ICubConfig(space="box"), (5,), [_record(5, [0.01, 0.02, 0.03, 0.04], [True] * 4)]
+    )
+    d = json.loads(json.dumps(res.to_dict()))
+    back = ICubResult.from_dict(d)
+    assert isinstance(back, ICubBoxResult) and back.config.space == "box"
+    assert json.loads(json.dumps(back.to_dict())) == d
+
+
+def test_sigmapi_icub_space_box_runs_and_writes_the_keys(tmp_path, capsys):
+    _scene()  # MuJoCo, the models and a GL context, or a skip
+    from sigmapi.cli import main
+
+    rc = main(
+        ["icub", "--space", "box", "--seeds", "7", "--box-pairs", "20", "--box-eval-pairs",
+         "20", "--box-iterations", "50", "--box-babbles", "50", "--reaches", "2", "--json",
+         "--out", str(tmp_path / "out"), "--quiet"]
+    )  # fmt: skip
+    assert rc == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["space"] == "box" and set(d["methods"]) == set(METHODS)
+    for m in METHODS:
+        assert set(d["methods"][m]["end_point_cm"]) == {"median", "p90"}
+        assert 0.0 <= d["methods"][m]["strict_success"] <= 1.0
+    for name in ("map_head", "map_torso"):
+        assert len(d["maps"][name]["order_r2_per_axis"]) == 3
+        assert "order_r2" in d["maps"][name]
+    assert (tmp_path / "out" / "end_point_histogram.png").exists()
