@@ -139,9 +139,6 @@ class ICubBoxResult(Result):
     seeds: tuple[int, ...]
     per_seed: list[dict[str, Any]] = field(default_factory=list)
     seconds: float = 0.0
-    written: dict[str, Any] | None = field(default=None, repr=False)
-    """The summaries of a result read back (:meth:`from_dict`: the file holds them, not the
-    per-seed records); None for a run's result."""
 
     KEYS = (
         "experiment",
