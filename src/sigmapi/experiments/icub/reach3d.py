@@ -494,17 +494,7 @@ def run_seed3d(
         eye_size=scene.eye_size,
         backend=backend,
     )
-    maps: dict[str, Any] = {}
-    k = int(np.prod(map_shape))
-    for name, stage, data in (("map_head", "head", "eyes"), ("map_torso", "torso", "head")):
-        cal, test = ev[data]
-        m = s3.score_map(chain, stage, cal, test)
-        m["true_position"] = s3.true_position_map(
-            stage, train[data], cal, test, map_shape, iterations, seed
-        )
-        m["kmeans"] = s3.kmeans_reference(stage, train[data], cal, test, k, seed)
-        m["error_ratio_to_kmeans"] = m["error_cm"] / m["kmeans"]["error_cm"]
-        maps[name] = m
+    maps = s3.score_chain(chain, train, ev, iterations, seed)
     t_maps = time.perf_counter() - t0
     bab = babble3d(scene, babbles, r_babble, yaw=yaw, wrist=wrist)
     held = babble3d(scene, max(50, babbles // 10), r_babble, yaw=yaw, wrist=wrist)
