@@ -1,4 +1,6 @@
-"""Reaches in the iCub's 3-D peripersonal space, judged in centimetres (issue 44, item 3).
+# Over 500 lines: one task read top to bottom (babbling, the states, the reach, its scores and
+# one seed's run); the pooled result lives in box.py, the figures in plots3d.py.
+"""Reaches in the iCub's 3-D peripersonal space, judged in centimetres.
 
 The world is :mod:`sigmapi.envs.icub.stereo`'s (a ball hanging anywhere in a box within the
 right arm's reach, seen by both eyes); the maps are

@@ -1,3 +1,6 @@
+# Over 500 lines: the 3-D maps of one chain (its views, codes, three designs, the soft readout)
+# and their scoring beside both references, read as one; the measurements live in
+# docs/guide/icub-3d.md.
 """The iCub's 3-D peripersonal space seen by both eyes: a chain of two 3-D maps, scored.
 
 The world is :mod:`sigmapi.envs.icub.stereo`'s: a ball anywhere in a box 20 cm deep and 20 cm
