@@ -4,7 +4,8 @@ One job per seed (:func:`~sigmapi.experiments.icub.reach3d.run_seed3d`): the 3-D
 recorded from both eyes' pixels, learned and scored against the true positions; babbling;
 the associations; the reaches with the eyes free and after a fixation. :class:`ICubBoxResult`
 pools the seeds: per map the median scores, per method the end-point error (median and 90th
-percentile over every reach of every seed) and the strict success, and the targets of issue 44.
+percentile over every reach of every seed) and the strict success, and the task's targets
+(:data:`TARGETS3D`).
 """
 
 from __future__ import annotations
@@ -42,11 +43,11 @@ TARGETS3D: dict[str, float] = {
     "order_r2_per_axis": ORDERED_R2,
     "map_error_ratio_to_kmeans": 1.5,
 }
-"""Issue 44's bounds for the 3-D task (eyes free): ``learned_end_point_cm`` and
-``learned_end_point_over_true`` (the learned chain's median end-point error, and over the
-true position's), the strict successes (the learned chain's at least, a random posture's at
-most, the learned chain's over the retina's by at least), every map's order per axis and its
-error over k-means'."""
+"""The bounds of the 3-D task's targets (eyes free; docs/guide/icub-3d.md):
+``learned_end_point_cm`` and ``learned_end_point_over_true`` (the learned chain's median
+end-point error, and over the true position's), the strict successes (the learned chain's
+at least, a random posture's at most, the learned chain's over the retina's by at least),
+every map's order per axis and its error over k-means'."""
 
 
 def _peak_mb() -> float:
@@ -263,8 +264,8 @@ class ICubBoxResult(Result):
         }
 
     def targets(self) -> dict[str, object]:
-        """Each target of issue 44 (eyes free), pooled over the seeds, and on how many seeds
-        it was met."""
+        """Each target of :data:`TARGETS3D` (eyes free), pooled over the seeds, and on how many
+        seeds it was met."""
         meth, maps = self.methods(), self.maps()
         lrn = meth["learned"]
         ep, ept = lrn["end_point_cm"]["median"], meth["true_position"]["end_point_cm"]["median"]
