@@ -479,11 +479,7 @@ def run_seed3d(
     design by default)."""
     t0 = time.perf_counter()
     r_views, r_babble, r_reach = (PLAN.rng(seed, s) for s in ("views", "babbling", "reaches"))
-    scene = ICubScene()
-    st.float_ball(scene)
-    scene.seal()  # the truth only where scene.truth() says: scoring and references
-    train = {s: s3.record_pairs(scene, pairs, r_views, s) for s in ("eyes", "head")}
-    ev = s3.evaluation_pairs(scene, eval_pairs)
+    scene, train, ev = s3.record_box(r_views, pairs, eval_pairs)
     chain = s3.learn_chain3d(
         train["eyes"],
         train["head"],

@@ -97,6 +97,7 @@ __all__ = [
     "neck3",
     "parabola_place",
     "projected",
+    "record_box",
     "record_pairs",
     "retina3",
     "score_chain",
@@ -757,6 +758,22 @@ def evaluation_pairs(
     return out
 
 
+def record_box(
+    rng: np.random.Generator, train_pairs: int, eval_pairs: int
+) -> tuple[
+    ICubScene,
+    dict[str, tuple[Views3D, Views3D]],
+    dict[str, tuple[tuple[Views3D, Views3D], tuple[Views3D, Views3D]]],
+]:
+    """A sealed scene with the floating ball, each stage's ``train_pairs`` training pairs
+    (from ``rng``) and its :func:`evaluation_pairs`; the caller closes the scene."""
+    scene = ICubScene()
+    st.float_ball(scene)
+    scene.seal()  # the truth only where scene.truth() says: scoring and references
+    train = {s: record_pairs(scene, train_pairs, rng, s) for s in ("eyes", "head")}
+    return scene, train, evaluation_pairs(scene, eval_pairs)
+
+
 def score_chain(
     chain: Chain3D,
     train: dict[str, tuple[Views3D, Views3D]],
@@ -801,12 +818,7 @@ def run_maps(
     """One seed of the 3-D maps: record, learn (:func:`learn_chain3d`'s options), score
     against both references; the seconds taken and the process's peak resident memory."""
     t0 = time.perf_counter()
-    scene = ICubScene()
-    st.float_ball(scene)
-    scene.seal()
-    rng = np.random.default_rng(seed)
-    train = {s: record_pairs(scene, train_pairs, rng, s) for s in ("eyes", "head")}
-    ev = evaluation_pairs(scene, eval_pairs)
+    scene, train, ev = record_box(np.random.default_rng(seed), train_pairs, eval_pairs)
     scene.close()
     t_record = time.perf_counter() - t0
     chain = learn_chain3d(
