@@ -42,25 +42,6 @@ from sigmapi.model.som import SigmaPiSOM
 from sigmapi.progress import Progress
 from sigmapi.tasks import TwoViewSampler
 
-__all__ = [
-    "CHAIN",
-    "CODES",
-    "SUMMARY_KEYS",
-    "TARGET_RATIO",
-    "Chain",
-    "ChainConfig",
-    "ChainJob",
-    "ChainResult",
-    "Code",
-    "Triples",
-    "chain_config",
-    "chain_seed",
-    "head_code",
-    "run_chain",
-    "sample_triples",
-]
-
-
 # -- the settings ----------------------------------------------------------------------------------
 
 

@@ -17,8 +17,6 @@ from matplotlib import ticker
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-__all__ = ["compare_figure", "plot_consistency", "plot_labels_curve"]
-
 STYLE = {
     "sigma-pi": ("C0", "-", "o"),
     "sigma-pi same view": ("C0", ":", "v"),

@@ -47,25 +47,6 @@ from sigmapi.model.som import SigmaPiSOM
 from sigmapi.progress import Progress
 from sigmapi.tasks import Batch
 
-__all__ = [
-    "COMPARE",
-    "FIGURE",
-    "LABELS",
-    "MATCH_SHARE",
-    "METHODS",
-    "QUICK",
-    "QUICK_SEEDS",
-    "SEEDS",
-    "Compare",
-    "CompareConfig",
-    "CompareJob",
-    "CompareResult",
-    "MethodScore",
-    "compare_seed",
-    "run_compare",
-]
-
-
 # -- the settings ----------------------------------------------------------------------------------
 
 

@@ -22,17 +22,6 @@ from sigmapi.experiments.kit.seeds import SeedPlan
 from sigmapi.model.som import SigmaPiSOM
 from sigmapi.progress import Progress
 
-__all__ = [
-    "SeedEpisodes",
-    "SeedJob",
-    "SeedRuns",
-    "Steps",
-    "Tick",
-    "counted",
-    "iterations_counted",
-    "seed_episodes",
-]
-
 T = TypeVar("T")
 
 Tick = Callable[[int, str], None]

@@ -30,19 +30,6 @@ from sigmapi.experiments.base import Experiment, Run, register
 from sigmapi.experiments.kit.results import Result, columns, render
 from sigmapi.model.som import SigmaPiSOM, load_model
 
-__all__ = [
-    "BODY_CENTRED",
-    "FIGURE",
-    "NWB_FILE",
-    "PHYSIOLOGY",
-    "PhysiologyConfig",
-    "PhysiologyExperiment",
-    "PhysiologyResult",
-    "RandomStart",
-    "record_model",
-]
-
-
 # -- the settings ----------------------------------------------------------------------------------
 
 

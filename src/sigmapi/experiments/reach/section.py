@@ -20,8 +20,6 @@ from sigmapi.experiments.reach.config import ReachConfig
 from sigmapi.experiments.reach.run import REACH
 from sigmapi.progress import Progress
 
-__all__ = ["reach_section"]
-
 FIGURE = "reach-2d.png"
 CAPTION = (
     "Success rate and steps to reach per block of episodes for each state, and the learned "

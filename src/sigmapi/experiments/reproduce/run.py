@@ -60,18 +60,6 @@ from sigmapi.model.som import SigmaPiSOM
 from sigmapi.progress import Progress
 from sigmapi.viz import figures as figs
 
-__all__ = [
-    "OTHER_PROCEDURE",
-    "QUICK_ITERATIONS",
-    "REFERENCE",
-    "REPRODUCE",
-    "SECTIONS",
-    "Reproduce",
-    "figure_seed",
-    "paper_presets",
-    "reproduce",
-]
-
 T = TypeVar("T")
 
 REFERENCE: dict[str, dict[str, float]] = {

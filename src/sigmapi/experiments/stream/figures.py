@@ -19,9 +19,6 @@ from matplotlib.figure import Figure
 from sigmapi.experiments.kit.figures import legend_once
 from sigmapi.metrics import FOLD_THRESHOLD
 
-__all__ = ["plot_fold_rate", "plot_view_consistency", "stream_figure"]
-
-
 BAND = "best to worst seed (shaded)"
 """The label of the bands from the best to the worst seed (one legend entry for them all)."""
 

@@ -58,23 +58,6 @@ from sigmapi.metrics import evaluate
 from sigmapi.model.som import SigmaPiSOM
 from sigmapi.progress import Progress
 
-__all__ = [
-    "FIGURE",
-    "METRICS",
-    "MIN_DWELL",
-    "QUICK",
-    "STREAM",
-    "STREAM_KEY",
-    "VC_MARGIN",
-    "MapRun",
-    "StreamConfig",
-    "StreamExperiment",
-    "StreamJob",
-    "StreamResult",
-    "stream_job",
-]
-
-
 # -- the settings ----------------------------------------------------------------------------------
 
 

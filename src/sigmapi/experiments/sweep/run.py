@@ -60,21 +60,6 @@ from sigmapi.model.som import SigmaPiSOM
 from sigmapi.progress import Progress
 from sigmapi.tasks import get_relation
 
-__all__ = [
-    "MAX_RUNS",
-    "RESULTS",
-    "SWEEP",
-    "Sweep",
-    "SweepConfig",
-    "SweepResult",
-    "SweepRun",
-    "SweepSpec",
-    "draw_summary",
-    "read_results",
-    "run_sweep",
-    "sweep_job",
-]
-
 FIGURE = "sweep.png"
 """The sweep's summary figure in its output folder."""
 
