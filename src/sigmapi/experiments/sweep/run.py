@@ -87,10 +87,6 @@ class SweepRun:
         return self.point.replace(seed=self.seed)
 
 
-def _field(source: str, key: str) -> str:
-    return f"{source}: [grid] {key}"
-
-
 @dataclass(frozen=True)
 class SweepSpec:
     """A parsed sweep spec (module docstring); :meth:`runs` lists the cross product.
