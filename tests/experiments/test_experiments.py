@@ -457,10 +457,10 @@ class ToyExperiment(Experiment[ToyConfig]):
     quick_seeds = (9,)
     default_out = None
 
-    def run(self, config, *, seeds, out=None, executor=None, progress=None):
-        assert executor is not None and progress is None  # the CLI gives one; --quiet
-        assert out is None or out.is_dir()
-        return ToyResult(config, tuple(seeds), None if out is None else str(out))
+    def execute(self, config, run):
+        assert run.executor is not None and run.progress is None  # the CLI gives one; --quiet
+        assert run.out is None or run.out.is_dir()
+        return ToyResult(config, run.seeds, None if run.out is None else str(run.out))
 
 
 @pytest.fixture

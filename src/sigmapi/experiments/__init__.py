@@ -1,6 +1,7 @@
 """Experiments above the library: one protocol, a registry, a kit, one package per experiment.
 
-- :mod:`~sigmapi.experiments.base`: the :class:`Experiment` protocol, :data:`REGISTRY` (names
+- :mod:`~sigmapi.experiments.base`: the :class:`Experiment` protocol (an experiment writes its
+  ``execute(config, run)``, ``run`` a :class:`Run`), :data:`REGISTRY` (names
   registered lazily: :data:`ENTRIES`), :func:`register`, :func:`write_result`
   (``result.json``) and :func:`check_seeds`;
 - one package per experiment, each with its ``run`` (the experiment object and its run) and,
@@ -29,6 +30,7 @@ from sigmapi.experiments.base import (
     REGISTRY,
     Experiment,
     Result,
+    Run,
     check_seeds,
     read_result,
     register,
@@ -110,6 +112,7 @@ __all__ = [
     "REGISTRY",
     "Experiment",
     "Result",
+    "Run",
     "check_seeds",
     "read_result",
     "register",

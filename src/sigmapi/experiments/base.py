@@ -4,10 +4,12 @@ An :class:`Experiment` names a command (``name``), says in one line what it does
 and holds its settings in ``config_type``, a frozen dataclass with a docstring under each
 field: the command-line options are generated from those fields (:mod:`sigmapi.cli`), so a
 field added there is an option too. ``run(config, seeds=..., out=..., executor=...,
-progress=...)`` returns a :class:`Result`: ``to_dict()`` (JSON-able: what ``--json`` prints
-and :func:`write_result` stores as ``result.json``, the data that documents are rendered from),
-``table()`` (the console text) and ``figure(out_dir)`` (the figures it writes); a result reads
-back from its JSON form with ``from_dict``. Results subclass the kit's
+progress=...)`` checks them and calls the one method an experiment writes, ``execute(config,
+run)`` (``run``: a :class:`Run`, the seeds and the rest); it returns a :class:`Result`:
+``to_dict()`` (JSON-able: what ``--json`` prints and :func:`write_result` stores as
+``result.json``, the data that documents are rendered from), ``table()`` (the console text)
+and ``figure(out_dir)`` (the figures it writes); a result reads back from its JSON form with
+``from_dict``. Results subclass the kit's
 :class:`~sigmapi.experiments.kit.results.Result`, which derives ``to_dict`` and ``from_dict``
 from the keys it names (``KEYS``) and renders tables from column specs.
 
@@ -34,7 +36,7 @@ registers from ``sigmapi/experiments/reach/run.py``::
     class Reach(Experiment[ReachRun]):
         name, summary, config_type = "reach", "learn to reach from the map", ReachRun
 
-        def run(self, config, *, seeds, out=None, executor=None, progress=None):
+        def execute(self, config, run):  # run: the seeds, out, executor, progress
             ...  # -> a Result
 
     register(Reach())
@@ -70,6 +72,7 @@ __all__ = [
     "Experiment",
     "Registry",
     "Result",
+    "Run",
     "check_seeds",
     "read_result",
     "register",
@@ -148,7 +151,8 @@ class Experiment(Protocol[C]):
         executor: Executor | None = None,
         progress: Progress | None = None,
     ) -> Result:
-        """Run ``config`` for each of ``seeds``.
+        """Run ``config`` for each of ``seeds``: the config's type and the seeds checked, then
+        :meth:`execute`.
 
         Parameters
         ----------
@@ -164,7 +168,28 @@ class Experiment(Protocol[C]):
         progress : Progress, optional
             Progress on stderr (None: nothing).
         """
-        ...
+        if not isinstance(config, self.config_type):
+            raise _validate.fail("config", f"a {self.config_type.__name__}", config)
+        return self.execute(config, Run(check_seeds(seeds), out, executor, progress))
+
+    def execute(self, config: C, run: Run) -> Result:
+        """What the experiment does with a checked ``config`` and ``run`` (the one method an
+        experiment writes: :meth:`run` calls it)."""
+        raise NotImplementedError
+
+
+@dataclass(frozen=True)
+class Run:
+    """What :meth:`Experiment.run` hands to :meth:`Experiment.execute` besides the config."""
+
+    seeds: tuple[int, ...]
+    """Distinct non-negative ints (:func:`check_seeds`)."""
+    out: Path | None = None
+    """A folder for what the run writes as it goes (None: nothing)."""
+    executor: Executor | None = None
+    """Where the per-seed jobs run (None: one after another in this process)."""
+    progress: Progress | None = None
+    """Progress on stderr (None: nothing)."""
 
 
 AnyExperiment = Experiment[Any]

@@ -22,7 +22,6 @@ import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from functools import partial
-from pathlib import Path
 from typing import Any, Literal, NamedTuple, get_args
 
 import numpy as np
@@ -33,7 +32,7 @@ from sigmapi.codes import PopulationCode
 from sigmapi.config import SOMConfig
 from sigmapi.errors import ConfigError
 from sigmapi.executor import Executor, job_memory
-from sigmapi.experiments.base import KEY_VALUES, Experiment, check_seeds, register, run_all
+from sigmapi.experiments.base import KEY_VALUES, Experiment, Run, check_seeds, register, run_all
 from sigmapi.experiments.kit.jobs import Tick, counted, iterations_counted
 from sigmapi.experiments.kit.maps import MapSpec
 from sigmapi.experiments.kit.results import Result, as_object, columns, render
@@ -42,25 +41,6 @@ from sigmapi.metrics import EVAL_SEED, evaluate, winner_metrics
 from sigmapi.model.som import SigmaPiSOM
 from sigmapi.progress import Progress
 from sigmapi.tasks import TwoViewSampler
-
-__all__ = [
-    "CHAIN",
-    "CODES",
-    "SUMMARY_KEYS",
-    "TARGET_RATIO",
-    "Chain",
-    "ChainConfig",
-    "ChainJob",
-    "ChainResult",
-    "Code",
-    "Triples",
-    "chain_config",
-    "chain_seed",
-    "head_code",
-    "run_chain",
-    "sample_triples",
-]
-
 
 # -- the settings ----------------------------------------------------------------------------------
 
@@ -476,17 +456,9 @@ class Chain(Experiment[ChainConfig]):
     quick_seeds = (0,)
     quick_time = "about 15 s on two cores"
 
-    def run(
-        self,
-        config: ChainConfig,
-        *,
-        seeds: Sequence[int],
-        out: Path | None = None,
-        executor: Executor | None = None,
-        progress: Progress | None = None,
-    ) -> ChainResult:
-        c = config
-        return _run(c.som_config, seeds, c.train_pairs, c.n_test, c.code, executor, progress)
+    def execute(self, config: ChainConfig, run: Run) -> ChainResult:
+        c, r = config, run
+        return _run(c.som_config, r.seeds, c.train_pairs, c.n_test, c.code, r.executor, r.progress)
 
 
 CHAIN = register(Chain())

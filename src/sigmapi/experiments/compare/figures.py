@@ -17,7 +17,7 @@ from matplotlib import ticker
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-__all__ = ["compare_figure", "plot_consistency", "plot_labels_curve"]
+from sigmapi.experiments.kit.figures import axes
 
 STYLE = {
     "sigma-pi": ("C0", "-", "o"),
@@ -31,15 +31,9 @@ STYLE = {
 }
 
 
-def _ax(ax: Axes | None) -> Axes:
-    if ax is None:
-        ax = Figure(figsize=(5.5, 4), layout="constrained").subplots()
-    return ax
-
-
 def plot_labels_curve(result: Mapping[str, Any], ax: Axes | None = None) -> Axes:
     """z error (median over seeds) against the number of labelled samples, per method."""
-    ax = _ax(ax)
+    ax = axes(ax, (5.5, 4))
     for method in result["methods"]:
         name = method["name"]
         curve = {int(n): e for n, e in method["z_error_by_labels"].items()}
@@ -92,7 +86,7 @@ def _plain_log_ticks(ax: Axes) -> None:
 
 def plot_consistency(result: Mapping[str, Any], ax: Axes | None = None) -> Axes:
     """Same place for both views (with all labels) and same unit (no label), per method."""
-    ax = _ax(ax)
+    ax = axes(ax, (5.5, 4))
     names = [m["name"] for m in result["methods"]]
     pos = np.arange(len(names))
     place = [float(m["view_consistency"]) for m in result["methods"]]

@@ -37,7 +37,7 @@ from sigmapi.baselines.scoring import score_readout, score_units
 from sigmapi.config import SOMConfig
 from sigmapi.errors import ConfigError, install_hint
 from sigmapi.executor import Executor, job_memory
-from sigmapi.experiments.base import KEY_VALUES, Experiment, check_seeds, register, run_all
+from sigmapi.experiments.base import KEY_VALUES, Experiment, Run, check_seeds, register, run_all
 from sigmapi.experiments.kit.jobs import Tick, counted
 from sigmapi.experiments.kit.maps import MapSpec
 from sigmapi.experiments.kit.results import Result, columns, render
@@ -46,25 +46,6 @@ from sigmapi.metrics import evaluation_sets, grid_spacing
 from sigmapi.model.som import SigmaPiSOM
 from sigmapi.progress import Progress
 from sigmapi.tasks import Batch
-
-__all__ = [
-    "COMPARE",
-    "FIGURE",
-    "LABELS",
-    "MATCH_SHARE",
-    "METHODS",
-    "QUICK",
-    "QUICK_SEEDS",
-    "SEEDS",
-    "Compare",
-    "CompareConfig",
-    "CompareJob",
-    "CompareResult",
-    "MethodScore",
-    "compare_seed",
-    "run_compare",
-]
-
 
 # -- the settings ----------------------------------------------------------------------------------
 
@@ -490,16 +471,8 @@ class Compare(Experiment[CompareConfig]):
     default_out = "compare"
     writes = (FIGURE, Path(FIGURE).with_suffix(".txt").name)
 
-    def run(
-        self,
-        config: CompareConfig,
-        *,
-        seeds: Sequence[int],
-        out: Path | None = None,
-        executor: Executor | None = None,
-        progress: Progress | None = None,
-    ) -> CompareResult:
-        return run_compare(config, progress, seeds=seeds, executor=executor)
+    def execute(self, config: CompareConfig, run: Run) -> CompareResult:
+        return run_compare(config, run.progress, seeds=run.seeds, executor=run.executor)
 
 
 COMPARE = register(Compare())

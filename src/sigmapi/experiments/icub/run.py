@@ -19,15 +19,13 @@ from __future__ import annotations
 import dataclasses
 import functools
 import time
-from collections.abc import Sequence
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from sigmapi import _memory, _validate
+from sigmapi import _memory
 from sigmapi._outputs import check_file
 from sigmapi.envs.icub import ICubScene, ViewBatch, random_gaze
 from sigmapi.envs.icub.detect import TARGETS, detect
@@ -35,8 +33,7 @@ from sigmapi.envs.icub.frames import direction_ball, sensed_view
 from sigmapi.envs.icub.model import REST_ARM, icub_models_module
 from sigmapi.envs.robot.scene import check_rendering, mujoco_module
 from sigmapi.errors import ConfigError
-from sigmapi.executor import Executor
-from sigmapi.experiments.base import Experiment, check_seeds, register, run_all
+from sigmapi.experiments.base import Experiment, Run, register, run_all
 from sigmapi.experiments.icub.box import ICubBoxResult, run_box
 from sigmapi.experiments.icub.config import PLAN, QUICK, ICubConfig
 from sigmapi.experiments.icub.maps import (
@@ -351,20 +348,10 @@ class ICubExperiment(Experiment[ICubConfig]):
         if config.render is not None:
             check_file(config.render, force=force, what="--render file")
 
-    def run(
-        self,
-        config: ICubConfig,
-        *,
-        seeds: Sequence[int],
-        out: Path | None = None,
-        executor: Executor | None = None,
-        progress: Progress | None = None,
-    ) -> ICubResult | ICubBoxResult:
+    def execute(self, config: ICubConfig, run: Run) -> ICubResult | ICubBoxResult:
         """The frames check, then one job per seed (see the module's account); with
         ``config.space`` "box", the 3-D task (:func:`~sigmapi.experiments.icub.box.run_box`)."""
-        if not isinstance(config, ICubConfig):
-            raise _validate.fail("config", "an ICubConfig", config)
-        seeds = check_seeds(seeds)
+        seeds, executor, progress = run.seeds, run.executor, run.progress
         if config.space == "box":
             mujoco_module()
             icub_models_module()

@@ -13,8 +13,6 @@ from numpy.typing import NDArray
 from sigmapi.envs import STATES
 from sigmapi.errors import ConfigError
 
-__all__ = ["block_ends", "block_rates", "check_episode_run", "final_rates", "success_curve"]
-
 
 def block_rates(outcomes: NDArray[np.bool_], block: int) -> NDArray[np.float64]:
     """The rate of each block of ``block`` episodes per seed, ``(seeds, episodes // block)``

@@ -21,18 +21,6 @@ if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.legend import Legend
 
-__all__ = [
-    "BELOW",
-    "MARKERS",
-    "SHRINK",
-    "axes",
-    "coincide_sentence",
-    "coinciding",
-    "film_strip",
-    "legend_once",
-    "plot_apart",
-]
-
 BELOW = {"loc": "upper center", "bbox_to_anchor": (0.5, -0.16), "borderaxespad": 0.0}
 """Legend keywords: below the panel, under its x label."""
 

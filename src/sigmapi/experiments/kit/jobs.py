@@ -11,30 +11,16 @@ import functools
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any, TypeVar
 
 import gymnasium as gym
 
-from sigmapi import _validate
 from sigmapi.agents import ActorCritic, ActorCriticConfig, Episodes, actor_critic_for, run_episodes
-from sigmapi.executor import Executor
-from sigmapi.experiments.base import C, Experiment, run_all
+from sigmapi.experiments.base import C, Experiment, Run, run_all
 from sigmapi.experiments.kit.results import JSON, Result
-from sigmapi.experiments.kit.seeds import SeedPlan, check_seeds
+from sigmapi.experiments.kit.seeds import SeedPlan
 from sigmapi.model.som import SigmaPiSOM
 from sigmapi.progress import Progress
-
-__all__ = [
-    "SeedEpisodes",
-    "SeedJob",
-    "SeedRuns",
-    "Steps",
-    "Tick",
-    "counted",
-    "iterations_counted",
-    "seed_episodes",
-]
 
 T = TypeVar("T")
 
@@ -201,34 +187,23 @@ class SeedRuns(Experiment[C]):
         run = functools.partial(self.seed_run, job)
         return counted(job.show, self.steps(job), self.desc(job), run, self.unit)
 
-    def run(
-        self,
-        config: C,
-        *,
-        seeds: Sequence[int],
-        out: Path | None = None,
-        executor: Executor | None = None,
-        progress: Progress | None = None,
-    ) -> Any:
-        """Every job of ``config`` and ``seeds``, each a job of ``executor`` (the result does
-        not depend on where it runs); run one by one in this process, a job shows a bar of its
-        steps. ``out`` is not used: the run writes nothing while it runs."""
-        if not isinstance(config, self.config_type):
-            raise _validate.fail("config", f"a {self.config_type.__name__}", config)
-        seeds = check_seeds(seeds)
+    def execute(self, config: C, run: Run) -> Any:
+        """Every job of ``config`` and the run's seeds, each a job of its executor (the result
+        does not depend on where it runs); run one by one in this process, a job shows a bar of
+        its steps. ``run.out`` is not used: the run writes nothing while it runs."""
         per_job = self.check(config)
         t0 = time.perf_counter()
-        jobs = self.jobs(config, seeds, self.prepare(config, progress))
+        jobs = self.jobs(config, run.seeds, self.prepare(config, run.progress))
         values = run_all(
             self.run_job,
             jobs,
-            executor=executor,
+            executor=run.executor,
             per_job=per_job,
-            progress=progress,
+            progress=run.progress,
             desc=self.name,
-            verbose=lambda job: dataclasses.replace(job, show=progress),
+            verbose=lambda job: dataclasses.replace(job, show=run.progress),
             describe=self.describe,
         )
-        res: Any = self.collect(config, seeds, [values[key] for key, _ in jobs])
+        res: Any = self.collect(config, run.seeds, [values[key] for key, _ in jobs])
         res.seconds = time.perf_counter() - t0
         return res

@@ -14,8 +14,6 @@ from typing import Any
 
 from sigmapi.config import SOMConfig, apply_overrides, load_preset
 
-__all__ = ["MapSpec"]
-
 
 @dataclass(frozen=True)
 class MapSpec:

@@ -16,15 +16,6 @@ from sigmapi import _validate
 from sigmapi.errors import ConfigError
 from sigmapi.experiments.kit.results import JSON, tuples
 
-__all__ = [
-    "Parts",
-    "check_part_types",
-    "parts_dict",
-    "parts_from_dict",
-    "parts_of",
-    "replaced_parts",
-]
-
 
 class Parts:
     """The base of a config made of parts: every dataclass field is a part, a frozen dataclass

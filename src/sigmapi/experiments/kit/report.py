@@ -18,8 +18,6 @@ from sigmapi import _validate
 if TYPE_CHECKING:
     from sigmapi.model.som import SigmaPiSOM
 
-__all__ = ["ReportContext", "ReportOptions", "Section", "SectionFn", "section_function"]
-
 
 @dataclass(frozen=True)
 class Section:

@@ -31,23 +31,6 @@ from sigmapi.experiments.kit.seeds import check_seeds
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-__all__ = [
-    "HEADERS",
-    "JSON",
-    "VC_MARGIN",
-    "Column",
-    "Result",
-    "as_object",
-    "columns",
-    "margin_case",
-    "margin_line",
-    "plain",
-    "render",
-    "summaries",
-    "tuples",
-    "within_margin",
-]
-
 R = TypeVar("R", bound="Result")
 
 JSON = dict[str, Any]

@@ -35,8 +35,6 @@ import numpy as np
 from sigmapi import _validate
 from sigmapi.errors import ConfigError
 
-__all__ = ["MODEL_KEYS", "SeedPlan", "check_seeds"]
-
 MODEL_KEYS = range(5)
 """Spawn keys under which a model of seed ``s`` draws its own streams (weights, data, ...)."""
 

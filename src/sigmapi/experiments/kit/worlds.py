@@ -25,8 +25,6 @@ from sigmapi.envs import ENV_ID, GazeReachConfig, GazeReachEnv
 from sigmapi.errors import ConfigError
 from sigmapi.experiments.kit.maps import MapSpec
 
-__all__ = ["GAZE_REACH", "WORLDS", "World", "get_world", "register_world"]
-
 
 @dataclass(frozen=True)
 class World:

@@ -36,16 +36,6 @@ defaults run about 10^7)."""
 
 _FIX = "positive ints, e.g. 2,4,7"
 
-__all__ = [
-    "DENDRITIC_INHIBITION",
-    "HIGHEST_RATE",
-    "LONGEST_WINDOW_MS",
-    "METRICS",
-    "QUICK",
-    "REFERENCE_RATE",
-    "NeuronsConfig",
-]
-
 
 @dataclass(frozen=True)
 class NeuronsConfig:

@@ -12,8 +12,6 @@ from matplotlib.figure import Figure
 from sigmapi.experiments.kit.figures import BELOW
 from sigmapi.experiments.kit.results import JSON
 
-__all__ = ["neurons_figure"]
-
 
 def neurons_figure(result: JSON) -> Figure:
     """Three panels: view consistency against synapses per unit (1-D maps), the spiking

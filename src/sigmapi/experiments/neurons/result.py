@@ -25,8 +25,6 @@ from .config import METRICS, REFERENCE_RATE, NeuronsConfig
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-__all__ = ["VC_MARGIN", "NeuronsResult", "Row", "within_margin"]
-
 Row = JSON
 """A record of the JSON form: a map's or a spiking network's row of one job (its name, task,
 seed and scores), an entry of :meth:`NeuronsResult.methods`, a branch summary."""

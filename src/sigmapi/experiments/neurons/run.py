@@ -41,8 +41,6 @@ from sigmapi.progress import Progress
 from .config import METRICS, QUICK, REFERENCE_RATE, NeuronsConfig
 from .result import NeuronsResult, Row
 
-__all__ = ["METRICS", "NEURONS", "NeuronsExperiment", "NeuronsJob"]
-
 M = TypeVar("M")
 Array = NDArray[np.float64]
 

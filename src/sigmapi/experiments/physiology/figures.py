@@ -13,8 +13,6 @@ from matplotlib.figure import Figure
 
 from sigmapi.experiments.kit.figures import BELOW, legend_once
 
-__all__ = ["physiology_figure"]
-
 
 def physiology_figure(result: dict[str, Any]) -> Figure:
     """Reference-frame index distributions (trained map against its random start), tuning

@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import dataclasses
 import time
-from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -27,24 +26,9 @@ from sigmapi.analysis.physiology import (
     tuning_curves,
 )
 from sigmapi.errors import DataError, UsageError
-from sigmapi.executor import Executor
-from sigmapi.experiments.base import Experiment, register
+from sigmapi.experiments.base import Experiment, Run, register
 from sigmapi.experiments.kit.results import Result, columns, render
 from sigmapi.model.som import SigmaPiSOM, load_model
-from sigmapi.progress import Progress
-
-__all__ = [
-    "BODY_CENTRED",
-    "FIGURE",
-    "NWB_FILE",
-    "PHYSIOLOGY",
-    "PhysiologyConfig",
-    "PhysiologyExperiment",
-    "PhysiologyResult",
-    "RandomStart",
-    "record_model",
-]
-
 
 # -- the settings ----------------------------------------------------------------------------------
 
@@ -352,17 +336,9 @@ class PhysiologyExperiment(Experiment[PhysiologyConfig]):
     default_out = None
     writes = ("physiology.png", "physiology.txt", NWB_FILE)
 
-    def run(
-        self,
-        config: PhysiologyConfig,
-        *,
-        seeds: Sequence[int],
-        out: Path | None = None,
-        executor: Executor | None = None,
-        progress: Progress | None = None,
-    ) -> PhysiologyResult:
+    def execute(self, config: PhysiologyConfig, run: Run) -> PhysiologyResult:
         start = time.perf_counter()
-        if config.nwb and out is None:
+        if config.nwb and run.out is None:
             raise UsageError("--nwb writes physiology.nwb into --out; give --out DIR")
         if config.nwb:
             from sigmapi.nwb import pynwb_module
@@ -370,13 +346,13 @@ class PhysiologyExperiment(Experiment[PhysiologyConfig]):
             pynwb_module()  # the extra's hint before the recording
         recording: dict[str, Any] = {}
         data = record_model(config, recording)
-        if config.nwb and out is not None:
+        if config.nwb and run.out is not None:
             from sigmapi.neurons.spiking import protocol_spikes
             from sigmapi.nwb import export_nwb
 
             export_nwb(
                 recording["model"],
-                Path(out) / NWB_FILE,
+                Path(run.out) / NWB_FILE,
                 physiology=data,
                 fixation=recording["fixation"],
                 model_path=config.model,

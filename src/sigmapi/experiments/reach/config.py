@@ -30,16 +30,6 @@ from sigmapi.experiments.kit.results import JSON
 from sigmapi.experiments.kit.worlds import GAZE_REACH, World
 from sigmapi.model.som import SigmaPiSOM
 
-__all__ = [
-    "SMALL_PRESET",
-    "MapConfig",
-    "ReachConfig",
-    "ReachRunConfig",
-    "check_parts",
-    "default_map_shape",
-    "preset_setting",
-]
-
 
 def default_map_shape(dim: object) -> tuple[int, ...]:
     """The map of a ``dim``-D task when none is given: 15x15 in 2-D (paper-2d), 12 units in

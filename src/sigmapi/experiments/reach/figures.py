@@ -19,15 +19,6 @@ from numpy.typing import NDArray
 from sigmapi.experiments.kit.figures import axes, coinciding, legend_once, plot_apart
 from sigmapi.experiments.reach.config import ReachConfig
 
-__all__ = [
-    "LABELS",
-    "ReachData",
-    "coinciding_curves",
-    "plot_reach_curves",
-    "plot_value_function",
-    "reach_figure",
-]
-
 
 class ReachData(Protocol):
     """What the figures read of a :class:`~sigmapi.experiments.reach.result.ReachResult`."""

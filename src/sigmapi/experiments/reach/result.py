@@ -16,8 +16,6 @@ from sigmapi.experiments.reach.config import ReachConfig
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-__all__ = ["ReachResult"]
-
 
 @dataclass
 class ReachResult(Result):

@@ -47,13 +47,6 @@ from sigmapi.experiments.reach.result import ReachResult
 from sigmapi.metrics import evaluate
 from sigmapi.model.som import SigmaPiSOM, load_model
 
-__all__ = [
-    "PLAN",
-    "REACH",
-    "ReachExperiment",
-    "value_over_z",
-]
-
 
 def value_over_z(
     agent: ActorCritic,

@@ -12,15 +12,15 @@ default seeds (the acceptance run).
 from __future__ import annotations
 
 import html
+from typing import cast
 
 from sigmapi._outputs import save_figure
 from sigmapi.executor import Executor
 from sigmapi.experiments.kit.report import ReportContext, Section
 from sigmapi.experiments.reach.config import ReachConfig
+from sigmapi.experiments.reach.result import ReachResult
 from sigmapi.experiments.reach.run import REACH
 from sigmapi.progress import Progress
-
-__all__ = ["reach_section"]
 
 FIGURE = "reach-2d.png"
 CAPTION = (
@@ -48,7 +48,7 @@ def reach_section(ctx: ReportContext) -> Section:
     seeds = REACH.default_seeds(cfg, quick=ctx.quick)
     executor = Executor(workers=ctx.options.workers)
     show = Progress(disable=not ctx.progress or None)
-    result = REACH.run(cfg, seeds=seeds, executor=executor, progress=show)
+    result = cast(ReachResult, REACH.run(cfg, seeds=seeds, executor=executor, progress=show))
     with ctx.drawing:  # the report may be drawing its own figures in another thread
         save_figure(result.draw(), ctx.out / FIGURE, **result.SAVE)
 

@@ -23,8 +23,6 @@ if TYPE_CHECKING:
         Stage,
     )
 
-__all__ = ["linked_files", "render"]
-
 _STYLE = """
 body { font-family: system-ui, sans-serif; max-width: 1150px; margin: 2em auto; padding: 0 1em;
        color: #222; line-height: 1.45; }

@@ -21,17 +21,6 @@ from sigmapi.experiments.base import check_seeds
 from sigmapi.experiments.kit.results import Result, as_object
 from sigmapi.metrics import ORDERED_R2, Metrics
 
-__all__ = [
-    "METRIC_KEYS",
-    "OTHER_PROCEDURE",
-    "SAVE_MODELS",
-    "PresetResult",
-    "ReproduceConfig",
-    "ReproduceOptions",
-    "ReproduceResult",
-    "SeedRun",
-]
-
 METRIC_KEYS = (
     "view_consistency",
     "view_within_one",

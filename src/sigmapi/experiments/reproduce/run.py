@@ -41,7 +41,7 @@ from threadpoolctl import threadpool_limits
 from sigmapi.config import SOMConfig, list_presets, load_preset
 from sigmapi.errors import ConfigError
 from sigmapi.executor import Executor
-from sigmapi.experiments.base import Experiment, register
+from sigmapi.experiments.base import Experiment, Run, register
 from sigmapi.experiments.kit.report import ReportContext, SectionFn, section_function
 from sigmapi.experiments.reproduce.report_html import linked_files, render
 from sigmapi.experiments.reproduce.results import (
@@ -59,18 +59,6 @@ from sigmapi.metrics import ORDERED_R2, evaluate
 from sigmapi.model.som import SigmaPiSOM
 from sigmapi.progress import Progress
 from sigmapi.viz import figures as figs
-
-__all__ = [
-    "OTHER_PROCEDURE",
-    "QUICK_ITERATIONS",
-    "REFERENCE",
-    "REPRODUCE",
-    "SECTIONS",
-    "Reproduce",
-    "figure_seed",
-    "paper_presets",
-    "reproduce",
-]
 
 T = TypeVar("T")
 
@@ -372,24 +360,15 @@ class Reproduce(Experiment[ReproduceConfig]):
     quick_time = "about 50 s on two cores, numba's cache empty"
     default_out = "report"
 
-    def run(
-        self,
-        config: ReproduceConfig,
-        *,
-        seeds: Sequence[int],
-        out: Path | None = None,
-        executor: Executor | None = None,
-        progress: Progress | None = None,
-    ) -> ReproduceResult:
+    def execute(self, config: ReproduceConfig, run: Run) -> ReproduceResult:
         """:func:`reproduce` into ``out`` (required: the report's folder)."""
-        if out is None:
+        if run.out is None:
             raise ConfigError("out must be the report's folder, got None; e.g. Path('report')")
-        ex = executor if executor is not None else Executor(workers=1)
+        ex = run.executor if run.executor is not None else Executor(workers=1)
         fields = {f.name: getattr(config, f.name) for f in dataclasses.fields(ReproduceConfig)}
-        opts = ReproduceOptions(
-            **fields, seeds=tuple(seeds), progress=Progress.of(progress).enabled, workers=ex.workers
-        )
-        return reproduce(out, opts, executor=ex)
+        shown = Progress.of(run.progress).enabled
+        opts = ReproduceOptions(**fields, seeds=run.seeds, progress=shown, workers=ex.workers)
+        return reproduce(run.out, opts, executor=ex)
 
 
 REPRODUCE = register(Reproduce())

@@ -22,8 +22,6 @@ from sigmapi.metrics import Metrics, evaluate
 from sigmapi.model.som import SigmaPiSOM
 from sigmapi.progress import Progress
 
-__all__ = ["FLAG_NOTE", "SeedJob", "compile_once", "train_all", "train_seed"]
-
 
 @dataclass(frozen=True)
 class SeedJob:

@@ -26,8 +26,6 @@ from sigmapi.experiments.reach.config import (
 )
 from sigmapi.rules.gating import FEEDBACK, SURPRISE
 
-__all__ = ["METHODS", "GateConfig", "RewardConfig", "RewardRunConfig"]
-
 METHODS = ("frozen", "gated", "shuffled")
 """The compared maps: frozen after unsupervised learning; learning on, gated by the step's
 TD error and the chosen action; learning on with the gated run's factors shuffled in time."""

@@ -20,8 +20,6 @@ from sigmapi.experiments.kit.figures import axes, legend_once, plot_apart
 from sigmapi.experiments.kit.worlds import GAZE_REACH
 from sigmapi.experiments.reward.config import RewardConfig
 
-__all__ = ["LABELS", "drawn_units", "plot_reward_curves", "plot_units", "reward_figure"]
-
 
 class RewardData(Protocol):
     """What the figures read of a :class:`~sigmapi.experiments.reward.result.RewardResult`."""

@@ -17,8 +17,6 @@ from sigmapi.experiments.reward.config import RewardConfig
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-__all__ = ["MAGNIFICATION_TARGET", "RewardResult", "episodes_to_target"]
-
 MAGNIFICATION_TARGET = 1.5
 """The gated map's magnification near the goal over the frozen map's that counts as shaped."""
 

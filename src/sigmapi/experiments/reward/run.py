@@ -44,17 +44,6 @@ from sigmapi.experiments.reward.result import RewardResult
 from sigmapi.metrics import winner_metrics
 from sigmapi.model.som import SigmaPiSOM
 
-__all__ = [
-    "PLAN",
-    "REWARD",
-    "Probes",
-    "RewardExperiment",
-    "map_scores",
-    "preferred_z",
-    "probe_objects",
-]
-
-
 PLAN = SeedPlan({"views": 5, "starts": 6, "agent": 7, "probes": 8, "shuffle": 9, "fixations": 10})
 """The streams of a seed (:class:`~sigmapi.experiments.kit.seeds.SeedPlan`)."""
 

@@ -29,16 +29,6 @@ from sigmapi.experiments.kit.seeds import SeedPlan
 from sigmapi.experiments.kit.worlds import World, register_world
 from sigmapi.model.som import SigmaPiSOM
 
-__all__ = [
-    "PLAN",
-    "QUICK",
-    "ROBOT_WORLD",
-    "RobotConfig",
-    "RobotEnvConfig",
-    "RobotMapConfig",
-    "RobotRunConfig",
-]
-
 PLAN = SeedPlan({"views": 5, "starts": 6, "agent": 7, "film": 8})
 """The streams of a seed (:class:`~sigmapi.experiments.kit.seeds.SeedPlan`): children of
 ``SeedSequence(seed)``, apart from the map's own (the map is built with the seed)."""

@@ -33,8 +33,6 @@ from sigmapi.experiments.kit.results import JSON
 from sigmapi.experiments.robot.config import PLAN
 from sigmapi.metrics import FOLD_THRESHOLD, ORDERED_R2
 
-__all__ = ["film_episode", "plot_curves", "plot_unit_positions", "robot_figures", "write_gif"]
-
 _TABLE = (0.15, 1.45, -1.1, 1.1)  # near edge, far edge, right, left (world x, y; robot.xml)
 
 

@@ -34,15 +34,6 @@ from sigmapi.metrics import (
 from sigmapi.model.som import SigmaPiSOM
 from sigmapi.tasks import Batch
 
-__all__ = [
-    "ROBOT_MAP",
-    "evaluation_pairs",
-    "learn_map",
-    "robot_som_config",
-    "score_map",
-    "unit_positions",
-]
-
 ROBOT_MAP = ROBOT_WORLD.map
 """The map's settings: the ``robot-2d`` preset (see the module's docstring); the run sets its
 codes, size, length, seed and backend."""

@@ -17,8 +17,6 @@ from sigmapi.experiments.kit.results import JSON, Result, as_object, summaries
 from sigmapi.experiments.robot.config import RobotConfig
 from sigmapi.model.som import SigmaPiSOM
 
-__all__ = ["RobotResult"]
-
 SUMMARIES = (
     "success",
     "success_per_seed",

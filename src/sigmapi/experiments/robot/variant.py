@@ -46,8 +46,6 @@ from sigmapi.experiments.robot.result import RobotResult
 from sigmapi.model.som import SigmaPiSOM
 from sigmapi.progress import Progress
 
-__all__ = ["INFO_KEYS", "PLAN", "QUICK", "ROBOT", "RobotExperiment", "job_memory"]
-
 Views = tuple[RobotViewBatch, RobotViewBatch]
 """The calibration and test views every seed's map is scored on."""
 

@@ -16,20 +16,11 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from sigmapi.experiments.kit.figures import legend_once
+from sigmapi.experiments.kit.figures import axes, legend_once
 from sigmapi.metrics import FOLD_THRESHOLD
-
-__all__ = ["plot_fold_rate", "plot_view_consistency", "stream_figure"]
-
 
 BAND = "best to worst seed (shaded)"
 """The label of the bands from the best to the worst seed (one legend entry for them all)."""
-
-
-def _ax(ax: Axes | None) -> Axes:
-    if ax is None:
-        ax = Figure(figsize=(5.5, 4), layout="constrained").subplots()
-    return ax
 
 
 def _lines(result: Mapping[str, Any]) -> dict[str, list[Mapping[str, Any]]]:
@@ -55,7 +46,7 @@ def plot_view_consistency(
 
     ``margin``: zoom in on the pairs' median +- 3 margins and shade +- ``margin`` around it
     (the acceptance's margin); values outside lie beyond the axis."""
-    ax = _ax(ax)
+    ax = axes(ax, (5.5, 4))
     lines = _lines(result)
     dwells = sorted({m["dwell"] for v in lines.values() for m in v})
     pairs = next(m for m in result["methods"] if m["dwell"] is None)
@@ -90,7 +81,7 @@ def plot_view_consistency(
 def plot_fold_rate(result: Mapping[str, Any], ax: Axes | None = None) -> Axes:
     """Share of seeds whose map folded (:func:`sigmapi.metrics.fold_score`) over the dwell
     time, per stream method; the map on explicit pairs as a horizontal line."""
-    ax = _ax(ax)
+    ax = axes(ax, (5.5, 4))
     lines = _lines(result)
     dwells = sorted({m["dwell"] for v in lines.values() for m in v})
     pairs = next(m for m in result["methods"] if m["dwell"] is None)

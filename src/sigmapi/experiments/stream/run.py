@@ -37,8 +37,8 @@ from sigmapi import _validate
 from sigmapi._outputs import save_captioned
 from sigmapi.config import SOMConfig
 from sigmapi.errors import ConfigError
-from sigmapi.executor import Executor, job_memory
-from sigmapi.experiments.base import KEY_VALUES, Experiment, register, run_all
+from sigmapi.executor import job_memory
+from sigmapi.experiments.base import KEY_VALUES, Experiment, Run, register, run_all
 from sigmapi.experiments.kit.jobs import Tick, counted, iterations_counted
 from sigmapi.experiments.kit.maps import MapSpec
 from sigmapi.experiments.kit.results import (
@@ -57,23 +57,6 @@ from sigmapi.experiments.kit.seeds import SeedPlan, check_seeds
 from sigmapi.metrics import evaluate
 from sigmapi.model.som import SigmaPiSOM
 from sigmapi.progress import Progress
-
-__all__ = [
-    "FIGURE",
-    "METRICS",
-    "MIN_DWELL",
-    "QUICK",
-    "STREAM",
-    "STREAM_KEY",
-    "VC_MARGIN",
-    "MapRun",
-    "StreamConfig",
-    "StreamExperiment",
-    "StreamJob",
-    "StreamResult",
-    "stream_job",
-]
-
 
 # -- the settings ----------------------------------------------------------------------------------
 
@@ -394,19 +377,10 @@ class StreamExperiment(Experiment[StreamConfig]):
     default_out = "stream"
     writes = (FIGURE, Path(FIGURE).with_suffix(".txt").name)
 
-    def run(
-        self,
-        config: StreamConfig,
-        *,
-        seeds: Sequence[int],
-        out: Path | None = None,
-        executor: Executor | None = None,
-        progress: Progress | None = None,
-    ) -> StreamResult:
+    def execute(self, config: StreamConfig, run: Run) -> StreamResult:
         """Every map of ``config`` on each of ``seeds`` (one job per seed and dwell time, and
         one per seed on pairs), scored."""
-        seeds = check_seeds(seeds)
-        cfg = config.som_config
+        seeds, cfg = run.seeds, config.som_config
         start = time.perf_counter()
         jobs = [(f"seed {s} pairs", StreamJob(s, cfg, None, (), config.n_test)) for s in seeds]
         jobs += [
@@ -424,12 +398,12 @@ class StreamExperiment(Experiment[StreamConfig]):
         done = run_all(
             stream_job,
             jobs,
-            executor=executor,
+            executor=run.executor,
             per_job=job_memory(cfg, config.n_test) + frames,
-            progress=progress,
+            progress=run.progress,
             desc="stream",
             describe=describe,
-            verbose=lambda job: dataclasses.replace(job, show=progress),
+            verbose=lambda job: dataclasses.replace(job, show=run.progress),
         )
         runs = [r for rows in done.values() for r in rows]
         return StreamResult(config, seeds, runs, time.perf_counter() - start)

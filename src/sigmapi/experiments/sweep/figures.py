@@ -18,8 +18,6 @@ from sigmapi.metrics.circular import CIRCULAR_KEYS
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
 
-__all__ = ["METRICS", "caption", "draw_summary", "plot_sweep"]
-
 METRICS = (*METRIC_COLUMNS, *CIRCULAR_KEYS)
 """What the summary figure may show."""
 

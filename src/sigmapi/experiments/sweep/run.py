@@ -43,7 +43,7 @@ from sigmapi._outputs import INPUT, claim_folder
 from sigmapi.config import SOMConfig, check_map_fits_task, load_preset
 from sigmapi.errors import ConfigError
 from sigmapi.executor import Executor, Outcome, job_memory
-from sigmapi.experiments.base import RESULT_FILE, Experiment, check_seeds, register
+from sigmapi.experiments.base import RESULT_FILE, Experiment, Run, check_seeds, register
 from sigmapi.experiments.kit.results import Result
 from sigmapi.experiments.sweep.figures import METRICS, draw_summary
 from sigmapi.experiments.sweep.table import (
@@ -59,21 +59,6 @@ from sigmapi.metrics.circular import CIRCULAR_KEYS
 from sigmapi.model.som import SigmaPiSOM
 from sigmapi.progress import Progress
 from sigmapi.tasks import get_relation
-
-__all__ = [
-    "MAX_RUNS",
-    "RESULTS",
-    "SWEEP",
-    "Sweep",
-    "SweepConfig",
-    "SweepResult",
-    "SweepRun",
-    "SweepSpec",
-    "draw_summary",
-    "read_results",
-    "run_sweep",
-    "sweep_job",
-]
 
 FIGURE = "sweep.png"
 """The sweep's summary figure in its output folder."""
@@ -100,10 +85,6 @@ class SweepRun:
     def config(self) -> SOMConfig:
         """The run's config: the grid point's with the run's seed."""
         return self.point.replace(seed=self.seed)
-
-
-def _field(source: str, key: str) -> str:
-    return f"{source}: [grid] {key}"
 
 
 @dataclass(frozen=True)
@@ -482,24 +463,17 @@ class Sweep(Experiment[SweepConfig]):
         """The spec's seeds."""
         return config.read_spec().seeds
 
-    def run(
-        self,
-        config: SweepConfig,
-        *,
-        seeds: Sequence[int],
-        out: Path | None = None,
-        executor: Executor | None = None,
-        progress: Progress | None = None,
-    ) -> SweepResult:
+    def execute(self, config: SweepConfig, run: Run) -> SweepResult:
         """Run the missing runs of the spec (with ``seeds``) into ``out`` (required)."""
+        out = run.out
         if out is None:
             raise ConfigError(
                 "out must be a folder for the sweep's table, got None; the table "
                 "is written there after every run"
             )
-        spec = dataclasses.replace(config.read_spec(), seeds=check_seeds(seeds))
-        ex = executor if executor is not None else Executor(workers=1)
-        show = Progress.of(progress)
+        spec = dataclasses.replace(config.read_spec(), seeds=run.seeds)
+        ex = run.executor if run.executor is not None else Executor(workers=1)
+        show = Progress.of(run.progress)
         state: dict[str, Any] = {}
 
         def on_plan(n_run: int, n_skip: int, reason: str) -> None:

@@ -31,16 +31,6 @@ from sigmapi.errors import ConfigError
 from sigmapi.io import FORMAT, VERSION, atomic_write_bytes
 from sigmapi.metrics import Metrics
 
-__all__ = [
-    "METRIC_COLUMNS",
-    "RESULTS",
-    "Table",
-    "append_row",
-    "open_table",
-    "read_table",
-    "run_key",
-]
-
 RESULTS = "results.csv"
 """The sweep's table in its output folder."""
 
