@@ -8,8 +8,10 @@ right arm's reach, seen by both eyes); the maps are
 
 **Babbling** (:func:`babble3d`, learning from touch): the right arm takes random postures (as
 on the table: :func:`~sigmapi.experiments.icub.reaching.babble`'s joints and ranges) that
-touch nothing; the experimenter presses the ball :data:`TOUCH_DEPTH` into the palm (truth:
-where the experimenter puts the ball), and the posture is kept by what the robot senses: its
+touch nothing; when the palm lies where balls are met (the ball's centre on it in
+:data:`~sigmapi.envs.icub.stereo.BOX`), the experimenter presses the ball :data:`TOUCH_DEPTH`
+into the palm (truth: where the experimenter puts the ball), and the posture is kept by what
+the robot senses: its
 skin (:func:`_skin`: the palm feels the ball, no other part of the arm feels anything) and
 both eyes find the ball (random head postures and eye commands, :func:`look`). A babble is
 the posture and both eyes' view of the ball on its palm (its pixels and the gaze); the ball's
@@ -125,6 +127,10 @@ BACK_OFF = (0.0, 0.0, -0.15, 0.0, 0.0, -0.35, 0.0)
 """The approach posture is the posture plus this (shoulder yaw and wrist pitch, radians): the
 palm some 4 cm back from the ball, against its facing; the last leg moves it forward onto
 the ball, palm first."""
+FOLLOW_THROUGH = 1.0
+"""When the posture is reached untouched, the arm goes on the same way, this many
+:data:`BACK_OFF` past it, in :data:`APPROACH` seconds, until the first touch (0: it stops at
+the posture)."""
 TOUCH_DEPTH = 0.002
 """How far into the palm's skin the experimenter presses the ball while babbling, metres."""
 _FAR = (1.5, -1.5, 0.7)  # where the ball waits while the robot babbles (out of reach and view)
@@ -228,6 +234,8 @@ def babble3d(
             continue
         with scene.truth():  # the experimenter presses the ball against the palm
             p = _touch_point(scene, TOUCH_DEPTH)
+        if np.any((p < st.BOX[:, 0]) | (p > st.BOX[:, 1])):  # where balls are met only
+            continue
         st.place_ball(scene, p)
         palm, other = _skin(scene)
         if not palm or other:  # kept by the skin: the palm alone feels the ball
@@ -344,7 +352,9 @@ def reach3d(scene: ICubScene, q: Array, *, film: int = 0) -> Reach3D:
     touched = palm = False
     frames: list[NDArray[np.uint8]] = []
     dt = scene.model.opt.timestep
-    for target, seconds in ((above, LEG), (goal, APPROACH)):
+    beyond = np.clip(goal - FOLLOW_THROUGH * np.asarray(BACK_OFF), lo, hi)
+    legs = ((above, LEG), (goal, APPROACH), (beyond, APPROACH if FOLLOW_THROUGH else 0.0))
+    for target, seconds in legs[: 3 if FOLLOW_THROUGH else 2]:
         steps = max(1, round(seconds / dt))
         start = scene.arm()
         for i in range(steps):
