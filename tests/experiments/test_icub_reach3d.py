@@ -140,6 +140,28 @@ def test_reach_scores_the_end_point_the_aim_and_the_balls_move():
     assert miss.aim == pytest.approx(gap) and miss.end_point > 0.05
 
 
+def test_the_follow_through_finds_a_ball_beyond_the_posture(monkeypatch):
+    from sigmapi.envs.icub import stereo as st
+    from sigmapi.experiments.icub import reach3d as r3
+
+    scene = _scene()
+    rng = np.random.default_rng(5)
+    p = r3._reachable(scene, rng)
+    q, _ = r3.scripted_ik(scene, p)
+    with scene.truth():  # the ball 2 cm further along the palm's facing than the posture holds
+        scene.set_arm(q)
+        far = p + 0.02 * scene.data.site_xmat[scene._palm].reshape(3, 3)[:, 2]
+    scene.seal()
+    st.place_ball(scene, far)
+    on = r3.reach3d(scene, q)
+    assert on.touched and on.strict
+    monkeypatch.setattr(r3, "FOLLOW_THROUGH", 0.0)
+    scene.reset()
+    st.place_ball(scene, far)
+    short = r3.reach3d(scene, q)
+    assert not short.touched and short.end_point > 0.015
+
+
 def test_babbling_and_reaching_in_3d_read_no_truth_outside_the_scores():
     from sigmapi.agents import Association
     from sigmapi.envs.icub import stereo as st

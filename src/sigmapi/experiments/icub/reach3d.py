@@ -11,11 +11,10 @@ on the table: :func:`~sigmapi.experiments.icub.reaching.babble`'s joints and ran
 touch nothing; when the palm lies where balls are met (the ball's centre on it in
 :data:`~sigmapi.envs.icub.stereo.BOX`), the experimenter presses the ball :data:`TOUCH_DEPTH`
 into the palm (truth: where the experimenter puts the ball), and the posture is kept by what
-the robot senses: its
-skin (:func:`_skin`: the palm feels the ball, no other part of the arm feels anything) and
-both eyes find the ball (random head postures and eye commands, :func:`look`). A babble is
-the posture and both eyes' view of the ball on its palm (its pixels and the gaze); the ball's
-true place is kept as the labels of the references.
+the robot senses: its skin (:func:`_skin`: the palm feels the ball, no other part of the arm
+feels anything) and both eyes find the ball (random head postures and eye commands,
+:func:`look`). A babble is the posture and both eyes' view of the ball on its palm (its
+pixels and the gaze); the ball's true place is kept as the labels of the references.
 
 **The states** (:data:`ASSOCIATED`), each associated with the postures by an
 :class:`~sigmapi.agents.Association` trained on the same babbles:
@@ -35,10 +34,11 @@ at random: the chance rate).
 
 **The reach** (:func:`reach3d`, palm first): the arm starts at :data:`START_ARM` (the hand
 out of the box), moves to the approach posture (the posture plus :data:`BACK_OFF`: the palm
-backed off against its facing) in :data:`LEG` seconds and then to the posture in
-:data:`APPROACH` seconds (joint targets ramped, each leg reaching its goal at 70 % of its
-time), and stops where it is at the first touch of the ball (the arm's touch: any contact of
-the hand or forearm with the ball); :data:`SETTLE` seconds later it is scored:
+backed off against its facing) in :data:`LEG` seconds, then to the posture in
+:data:`APPROACH` seconds and, untouched, on the same way past it (:data:`FOLLOW_THROUGH`);
+the joint targets are ramped (each leg reaching its goal at 70 % of its time), and the arm
+stops where it is at the first touch of the ball (the arm's touch: any contact of the hand
+or forearm with the ball); :data:`SETTLE` seconds later it is scored:
 
 - **end-point error**: the distance from the palm's contact point ``C`` (the palm site: the
   middle of the palm's surface, the vertices of the hand within 2 cm of it lie at most 1.6 mm
@@ -323,7 +323,7 @@ class Reach3D:
 
 def _contacts(scene: ICubScene) -> tuple[bool, bool]:
     """(the arm touches the ball, a touch is on the palm's side) from the physics' contacts
-    now; the palm's side is the score's (the palm's frame read in ``scene.truth()``)."""
+    now; the palm's side as the skin reads it (:func:`_palm_side`), the score's test."""
     d = scene.data
     n = d.ncon
     if n == 0:
@@ -348,13 +348,14 @@ def reach3d(scene: ICubScene, q: Array, *, film: int = 0) -> Reach3D:
         b0 = scene.ball_position()
         aim = float(np.linalg.norm(_touch_point(scene) - b0))
     scene.set_arm(START_ARM)
-    above = np.clip(goal + np.asarray(BACK_OFF), lo, hi)
+    back = np.asarray(BACK_OFF)
+    legs = [(np.clip(goal + back, lo, hi), LEG), (goal, APPROACH)]
+    if FOLLOW_THROUGH:
+        legs.append((np.clip(goal - FOLLOW_THROUGH * back, lo, hi), APPROACH))
     touched = palm = False
     frames: list[NDArray[np.uint8]] = []
     dt = scene.model.opt.timestep
-    beyond = np.clip(goal - FOLLOW_THROUGH * np.asarray(BACK_OFF), lo, hi)
-    legs = ((above, LEG), (goal, APPROACH), (beyond, APPROACH if FOLLOW_THROUGH else 0.0))
-    for target, seconds in legs[: 3 if FOLLOW_THROUGH else 2]:
+    for target, seconds in legs:
         steps = max(1, round(seconds / dt))
         start = scene.arm()
         for i in range(steps):
