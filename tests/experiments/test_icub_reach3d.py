@@ -58,6 +58,59 @@ def test_a_touch_counts_as_the_palms_only_on_the_palms_side():
     assert r3._contacts(scene) == (False, False)
 
 
+def test_the_skin_feels_the_ball_on_the_palm_apart_from_the_rest_of_the_arm():
+    from sigmapi.envs.icub import stereo as st
+    from sigmapi.envs.icub.model import BALL_RADIUS, HOME_ARM
+    from sigmapi.experiments.icub import reach3d as r3
+
+    scene = _scene()
+    scene.set_arm(HOME_ARM)
+    c, r = _palm_frame(scene)
+    n = r[:, 2]
+    scene.seal()  # the skin is a sensor: it reads no truth
+    for where, felt in (
+        (c + (BALL_RADIUS - r3.TOUCH_DEPTH) * n, (True, False)),  # on the palm
+        (c - 0.066 * n, (False, True)),  # against the back of the hand
+        (c + 0.2 * n, (False, False)),  # off the hand
+    ):
+        st.place_ball(scene, where)
+        assert r3._skin(scene) == felt
+
+
+def test_the_reach_starts_with_the_hand_out_of_the_box():
+    from sigmapi.envs.icub import stereo as st
+    from sigmapi.envs.icub.model import BALL_RADIUS
+    from sigmapi.experiments.icub import reach3d as r3
+
+    scene = _scene()
+    scene.set_arm(r3.START_ARM)
+    with scene.truth():
+        c = scene.palm_position()
+    lo, hi = st.BOX[:, 0] - BALL_RADIUS, st.BOX[:, 1] + BALL_RADIUS
+    assert np.any((c < lo) | (c > hi))  # no ball in the box is in the start pose's way
+
+
+def test_the_scripted_reach_puts_the_palm_on_the_ball_first():
+    from sigmapi.envs.icub import stereo as st
+    from sigmapi.experiments.icub import reach3d as r3
+
+    scene = _scene()
+    scene.seal()
+    rng = np.random.default_rng(11)
+    hits = []
+    for _ in range(6):
+        scene.reset()
+        p = r3._reachable(scene, rng)
+        q, left = r3.scripted_ik(scene, p)
+        assert left < 0.01
+        st.place_ball(scene, p)
+        hits.append(r3.reach3d(scene, q))
+    # palm first: the old reach (the marker at the ball's centre, from the home pose through
+    # the lifted elbow) touched first with the palm on 0.49 of such balls, moved them on 0.38
+    assert sum(h.strict for h in hits) >= 4
+    assert np.median([h.end_point for h in hits]) < 0.015
+
+
 def test_reach_scores_the_end_point_the_aim_and_the_balls_move():
     from sigmapi.envs.icub import stereo as st
     from sigmapi.envs.icub.model import REST_ARM
@@ -72,21 +125,46 @@ def test_reach_scores_the_end_point_the_aim_and_the_balls_move():
     st.place_ball(scene, p)
     hit = r3.reach3d(scene, q)
     assert hit.touched and hit.aim < 0.01
-    assert hit.end_point < 0.06  # the reach ends where the arm first touched the ball
+    # the reach ends where the arm first touched the ball: the palm, or at worst a fingertip
+    # (the hand spans 9.6 cm ahead of the palm's contact point)
+    assert hit.end_point < 0.12
     # a posture far from the ball: no touch, the ball stays, the palm ends far off
     scene.reset()
     st.place_ball(scene, p)
     far = np.array(REST_ARM)  # hanging at the side
     with scene.truth():
         scene.set_arm(far)
-        gap = float(np.linalg.norm(scene.marker_position() - p))
+        gap = float(np.linalg.norm(r3._touch_point(scene) - p))
     miss = r3.reach3d(scene, far)
     assert not miss.touched and not miss.strict and miss.moved < 1e-3
     assert miss.aim == pytest.approx(gap) and miss.end_point > 0.05
 
 
+def test_the_follow_through_finds_a_ball_beyond_the_posture(monkeypatch):
+    from sigmapi.envs.icub import stereo as st
+    from sigmapi.experiments.icub import reach3d as r3
+
+    scene = _scene()
+    rng = np.random.default_rng(5)
+    p = r3._reachable(scene, rng)
+    q, _ = r3.scripted_ik(scene, p)
+    with scene.truth():  # the ball 2 cm further along the palm's facing than the posture holds
+        scene.set_arm(q)
+        far = p + 0.02 * scene.data.site_xmat[scene._palm].reshape(3, 3)[:, 2]
+    scene.seal()
+    st.place_ball(scene, far)
+    on = r3.reach3d(scene, q)
+    assert on.touched and on.strict
+    monkeypatch.setattr(r3, "FOLLOW_THROUGH", 0.0)
+    scene.reset()
+    st.place_ball(scene, far)
+    short = r3.reach3d(scene, q)
+    assert not short.touched and short.end_point > 0.015
+
+
 def test_babbling_and_reaching_in_3d_read_no_truth_outside_the_scores():
     from sigmapi.agents import Association
+    from sigmapi.envs.icub import stereo as st
     from sigmapi.experiments.icub import reach3d as r3
     from sigmapi.experiments.icub import space3d as s3
 
@@ -94,7 +172,12 @@ def test_babbling_and_reaching_in_3d_read_no_truth_outside_the_scores():
     scene.seal()  # every truth reader raises outside scene.truth()
     rng = np.random.default_rng(0)
     bab = r3.babble3d(scene, 12, rng, yaw=0.8, wrist=(-0.6, -0.3))
-    assert bab.posture.shape == (12, 7) and bab.views.n == 12
+    assert bab.posture.shape == (12, 7) and bab.views.n == 12 and bab.tried >= 12
+    with scene.truth():  # each kept posture rests the ball it saw on the palm
+        for q, t in zip(bab.posture, bab.views.torso, strict=True):
+            scene.set_arm(q)
+            seen_at = st.torso_position(scene, r3._touch_point(scene))
+            assert np.linalg.norm(seen_at - t) < 0.005
     assert np.all(np.isfinite(bab.views.left)) and np.all(np.isfinite(bab.views.torso))
     eyes = s3.record_pairs(scene, 20, rng, "eyes")
     head = s3.record_pairs(scene, 20, rng, "head")

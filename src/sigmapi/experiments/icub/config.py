@@ -142,8 +142,8 @@ class ICubConfig:
     box_babbles: int = field(
         default=1500, metadata=_validate.bounded("int", 50, 1_000_000, fix="e.g. 1500")
     )
-    """Babbles (random arm postures, both eyes on the hand) of the 3-D task (``space``
-    "box")."""
+    """Babbles (random arm postures whose palm felt a ball in the box, both eyes on the ball)
+    of the 3-D task (``space`` "box")."""
     box_feature_width: float = field(
         default=1.0, metadata=_validate.bounded("width", 0, lo_open=True)
     )

@@ -6,12 +6,15 @@ The world is :mod:`sigmapi.envs.icub.stereo`'s (a ball hanging anywhere in a box
 right arm's reach, seen by both eyes); the maps are
 :mod:`sigmapi.experiments.icub.space3d`'s (map H head-centred, map T torso-centred).
 
-**Babbling** (:func:`babble3d`): the right arm takes random postures (as on the table:
-:func:`~sigmapi.experiments.icub.reaching.babble`'s joints and ranges); a posture is kept by
-what the robot senses: the arm touches nothing (no contact of the hand or forearm, with the
-table or anything else) and both eyes find the hand's green marker (random head postures and
-eye commands, :func:`look`). A babble is the posture and both eyes' view of the marker (its
-pixels and the gaze); the marker's true place is kept as the labels of the references.
+**Babbling** (:func:`babble3d`, learning from touch): the right arm takes random postures (as
+on the table: :func:`~sigmapi.experiments.icub.reaching.babble`'s joints and ranges) that
+touch nothing; when the palm lies where balls are met (the ball's centre on it in
+:data:`~sigmapi.envs.icub.stereo.BOX`), the experimenter presses the ball :data:`TOUCH_DEPTH`
+into the palm (truth: where the experimenter puts the ball), and the posture is kept by what
+the robot senses: its skin (:func:`_skin`: the palm feels the ball, no other part of the arm
+feels anything) and both eyes find the ball (random head postures and eye commands,
+:func:`look`). A babble is the posture and both eyes' view of the ball on its palm (its
+pixels and the gaze); the ball's true place is kept as the labels of the references.
 
 **The states** (:data:`ASSOCIATED`), each associated with the postures by an
 :class:`~sigmapi.agents.Association` trained on the same babbles:
@@ -25,16 +28,17 @@ pixels and the gaze); the marker's true place is kept as the labels of the refer
   disparity: :func:`~sigmapi.experiments.icub.space3d.retina3`);
 - ``retina_gaze``: that code beside codes of the eyes' angles and of the neck's, no map.
 
-Beside them ``scripted_ik`` (damped least squares on the true ball position: the marker at
-the ball's centre, the upper bound) and ``random_posture`` (a held-out babble's posture drawn
+Beside them ``scripted_ik`` (damped least squares on the true ball position: the ball resting
+on the palm, the upper bound) and ``random_posture`` (a held-out babble's posture drawn
 at random: the chance rate).
 
-**The reach** (:func:`reach3d`): the arm starts at
-:data:`~sigmapi.envs.icub.model.HOME_ARM`, moves to the approach posture (the posture with
-the elbow bent by :data:`~sigmapi.envs.icub.reach.LIFT` more) in :data:`LEG` seconds and then
-to the posture in :data:`APPROACH` seconds (joint targets ramped, each leg reaching its goal at
-70 % of its time), and stops where it is at the first touch of the ball (the arm's touch: any
-contact of the hand or forearm with the ball); :data:`SETTLE` seconds later it is scored:
+**The reach** (:func:`reach3d`, palm first): the arm starts at :data:`START_ARM` (the hand
+out of the box), moves to the approach posture (the posture plus :data:`BACK_OFF`: the palm
+backed off against its facing) in :data:`LEG` seconds, then to the posture in
+:data:`APPROACH` seconds and, untouched, on the same way past it (:data:`FOLLOW_THROUGH`);
+the joint targets are ramped (each leg reaching its goal at 70 % of its time), and the arm
+stops where it is at the first touch of the ball (the arm's touch: any contact of the hand
+or forearm with the ball); :data:`SETTLE` seconds later it is scored:
 
 - **end-point error**: the distance from the palm's contact point ``C`` (the palm site: the
   middle of the palm's surface, the vertices of the hand within 2 cm of it lie at most 1.6 mm
@@ -46,9 +50,9 @@ contact of the hand or forearm with the ball); :data:`SETTLE` seconds later it i
   less than :data:`MOVED` (its centre at the end against where it was put).
 
 **The reach tests** (:func:`reach_tests3d`): balls uniform in the box that the scripted IK
-reaches within 1 cm (the experimenter's choice, as on the table); the robot finds each with
-both eyes (random head postures and eye commands: **eyes free**, the ball anywhere in both
-views), then fixates it (:func:`~sigmapi.envs.icub.stereo.fixate`: **fixated**); each
+rests on the palm within 1 cm (the experimenter's choice, as on the table); the robot finds
+each with both eyes (random head postures and eye commands: **eyes free**, the ball anywhere
+in both views), then fixates it (:func:`~sigmapi.envs.icub.stereo.fixate`: **fixated**); each
 associated method reaches from each view.
 """
 
@@ -67,8 +71,7 @@ from sigmapi.codes import PopulationCode
 from sigmapi.envs import bump_features
 from sigmapi.envs.icub import ICubScene, arm_ik
 from sigmapi.envs.icub import stereo as st
-from sigmapi.envs.icub.model import BALL_RADIUS, HOME_ARM
-from sigmapi.envs.icub.reach import LIFT
+from sigmapi.envs.icub.model import BALL_RADIUS
 from sigmapi.experiments.icub import space3d as s3
 from sigmapi.experiments.icub.config import PLAN
 from sigmapi.experiments.icub.reaching import _BABBLED, _WRIST, _YAW
@@ -76,12 +79,15 @@ from sigmapi.experiments.icub.reaching import _BABBLED, _WRIST, _YAW
 __all__ = [
     "APPROACH",
     "ASSOCIATED",
+    "BACK_OFF",
     "CONDITIONS",
     "LEG",
     "METHODS",
     "MOVED",
     "PALM_SIDE",
     "SETTLE",
+    "START_ARM",
+    "TOUCH_DEPTH",
     "Babbles3D",
     "Reach3D",
     "ReachTests3D",
@@ -113,6 +119,20 @@ PALM_SIDE = -0.01
 normal from the palm's contact point (metres; the hand spans -0.039 to 0.012 along it)."""
 MOVED = 0.01
 """Strict success: the ball's centre moved less than this, metres."""
+START_ARM = (-0.52, 1.3, 0.0, 0.785, 0.0, 0.0, 0.0)
+"""Where a reach starts, radians (:data:`~sigmapi.envs.icub.model.ARM`'s order): the home pose
+with the shoulder rolled out to 1.3 rad, the hand right of and above the box (the home pose
+holds the hand inside the box, where the first leg swept balls away)."""
+BACK_OFF = (0.0, 0.0, -0.15, 0.0, 0.0, -0.35, 0.0)
+"""The approach posture is the posture plus this (shoulder yaw and wrist pitch, radians): the
+palm some 4 cm back from the ball, against its facing; the last leg moves it forward onto
+the ball, palm first."""
+FOLLOW_THROUGH = 1.0
+"""When the posture is reached untouched, the arm goes on the same way, this many
+:data:`BACK_OFF` past it, in :data:`APPROACH` seconds, until the first touch (0: it stops at
+the posture)."""
+TOUCH_DEPTH = 0.002
+"""How far into the palm's skin the experimenter presses the ball while babbling, metres."""
 _FAR = (1.5, -1.5, 0.7)  # where the ball waits while the robot babbles (out of reach and view)
 _SEARCHES = 4  # head postures tried before a ball or a hand is given up
 _SEARCH_TRIES = 60  # eye commands per head posture
@@ -120,11 +140,13 @@ _SEARCH_TRIES = 60  # eye commands per head posture
 
 @dataclass(frozen=True)
 class Babbles3D:
-    """``n`` babbles: postures ``(n, 7)`` and both eyes' views of the hand's marker (the
-    labels: the marker's true head- and torso-centred positions)."""
+    """``n`` babbles: postures ``(n, 7)`` and both eyes' views of the ball the palm touched
+    (the labels: the ball's true head- and torso-centred positions); ``tried``: the postures
+    drawn for them (the keep rate is ``n / tried``)."""
 
     posture: Array
     views: s3.Views3D
+    tried: int = 0
 
 
 def look(
@@ -149,6 +171,37 @@ def _arm_touches(scene: ICubScene) -> bool:
     return bool(np.any(arm[g1] | arm[g2]))
 
 
+def _palm_side(scene: ICubScene, points: Array) -> NDArray[np.bool_]:
+    """Whether contact points ``(k, 3)`` lie on the palm's side of the hand (:data:`PALM_SIDE`
+    along the palm's normal from its contact point): where on the hand they are, in the
+    hand's own frame, as a tactile skin's taxels report it."""
+    d = scene.data
+    c, r = d.site_xpos[scene._palm], d.site_xmat[scene._palm].reshape(3, 3)
+    return np.asarray((points - c) @ r[:, 2] >= PALM_SIDE)
+
+
+def _skin(scene: ICubScene) -> tuple[bool, bool]:
+    """The arm's touch sensors, the arm where it is set: (the palm's skin touches the ball,
+    any other part of the arm touches anything); the contacts found again from the pose."""
+    scene._mj.mj_collision(scene.model, scene.data)
+    d, n = scene.data, scene.data.ncon
+    g1, g2 = d.contact.geom1[:n], d.contact.geom2[:n]
+    arm = scene.model.geom_contype == 2
+    b = scene._ball_geom
+    on_ball = ((g1 == b) & scene._hand[g2]) | ((g2 == b) & scene._hand[g1])
+    palm = on_ball & _palm_side(scene, d.contact.pos[:n])
+    other = (arm[g1] | arm[g2]) & ~palm
+    return bool(np.any(palm)), bool(np.any(other))
+
+
+def _touch_point(scene: ICubScene, inset: float = 0.0) -> Array:
+    """Where a ball's centre sits when it rests on the palm (the palm's contact point plus a
+    radius less ``inset`` along its normal), world; truth: the experimenter's and the scores'
+    reading."""
+    r = scene.data.site_xmat[scene._palm].reshape(3, 3)
+    return scene.palm_position() + (BALL_RADIUS - inset) * r[:, 2]
+
+
 def _labels(scene: ICubScene, p: Array) -> tuple[Array, Array]:
     return st.head_position(scene, p), st.torso_position(scene, p)
 
@@ -168,25 +221,33 @@ def babble3d(
     lo[_WRIST], hi[_WRIST] = wrist
     idx = list(_BABBLED)
     scene.reset()
-    st.place_ball(scene, _FAR)
     postures: list[Array] = []
     rows: list[tuple[Array, ...]] = []
+    tried = 0
     while len(postures) < n:
+        tried += 1
+        st.place_ball(scene, _FAR)
         q = np.zeros(7)
         q[idx] = rng.uniform(lo[idx], hi[idx])
         scene.set_arm(q)
         if _arm_touches(scene):
             continue
-        seen = look(scene, rng, "hand")
+        with scene.truth():  # the experimenter presses the ball against the palm
+            p = _touch_point(scene, TOUCH_DEPTH)
+        if np.any((p < st.BOX[:, 0]) | (p > st.BOX[:, 1])):  # where balls are met only
+            continue
+        st.place_ball(scene, p)
+        palm, other = _skin(scene)
+        if not palm or other:  # kept by the skin: the palm alone feels the ball
+            continue
+        seen = look(scene, rng, "ball")
         if seen is None:
             continue
-        with scene.truth():  # the labels of the references only
-            marker = scene.marker_position()
         postures.append(q)
-        rows.append((seen[0], seen[1], scene.gaze(), *_labels(scene, marker)))
+        rows.append((seen[0], seen[1], scene.gaze(), *_labels(scene, p)))
     scene.reset()
     cols = [np.array(c, dtype=np.float64) for c in zip(*rows, strict=True)]
-    return Babbles3D(np.array(postures), s3.Views3D(*cols))
+    return Babbles3D(np.array(postures), s3.Views3D(*cols), tried)
 
 
 def _unit(a: Array) -> Array:
@@ -250,8 +311,8 @@ class Reach3D:
     end_point: float
     """The end-point error, metres: the palm's contact point to the ball's surface."""
     aim: float
-    """The aim's error, metres: the hand's marker at the posture (kinematics, before the
-    reach) to the ball's centre, where every method aims it."""
+    """The aim's error, metres: where a ball resting on the palm would be centred at the
+    posture (kinematics, before the reach) to the ball's centre."""
     frames: tuple[NDArray[np.uint8], ...] = ()
 
     @property
@@ -262,7 +323,7 @@ class Reach3D:
 
 def _contacts(scene: ICubScene) -> tuple[bool, bool]:
     """(the arm touches the ball, a touch is on the palm's side) from the physics' contacts
-    now; the palm's side is the score's (the palm's frame read in ``scene.truth()``)."""
+    now; the palm's side as the skin reads it (:func:`_palm_side`), the score's test."""
     d = scene.data
     n = d.ncon
     if n == 0:
@@ -274,10 +335,7 @@ def _contacts(scene: ICubScene) -> tuple[bool, bool]:
     if not np.any(hit):
         return False, False
     hand = ((g1 == b) & scene._hand[g2]) | ((g2 == b) & scene._hand[g1])
-    with scene.truth():  # the score: which side of the hand touched
-        c, r = scene.palm_position(), d.site_xmat[scene._palm].reshape(3, 3)
-    normal = (d.contact.pos[:n][hand] - c) @ r[:, 2]
-    return True, bool(np.any(normal >= PALM_SIDE))
+    return True, bool(np.any(_palm_side(scene, d.contact.pos[:n][hand])))
 
 
 def reach3d(scene: ICubScene, q: Array, *, film: int = 0) -> Reach3D:
@@ -288,15 +346,16 @@ def reach3d(scene: ICubScene, q: Array, *, film: int = 0) -> Reach3D:
     scene.set_arm(goal)
     with scene.truth():  # the score's references: where the ball was put, the aim
         b0 = scene.ball_position()
-        aim = float(np.linalg.norm(scene.marker_position() - b0))
-    scene.set_arm(HOME_ARM)
-    above = goal.copy()
-    above[3] += LIFT  # the elbow
-    above = np.clip(above, lo, hi)
+        aim = float(np.linalg.norm(_touch_point(scene) - b0))
+    scene.set_arm(START_ARM)
+    back = np.asarray(BACK_OFF)
+    legs = [(np.clip(goal + back, lo, hi), LEG), (goal, APPROACH)]
+    if FOLLOW_THROUGH:
+        legs.append((np.clip(goal - FOLLOW_THROUGH * back, lo, hi), APPROACH))
     touched = palm = False
     frames: list[NDArray[np.uint8]] = []
     dt = scene.model.opt.timestep
-    for target, seconds in ((above, LEG), (goal, APPROACH)):
+    for target, seconds in legs:
         steps = max(1, round(seconds / dt))
         start = scene.arm()
         for i in range(steps):
@@ -318,25 +377,26 @@ def reach3d(scene: ICubScene, q: Array, *, film: int = 0) -> Reach3D:
     return Reach3D(touched, palm, float(np.linalg.norm(b1 - b0)), err, aim, tuple(frames))
 
 
-def scripted_ik(scene: ICubScene, p: Array, rounds: int = 3) -> tuple[Array, float]:
-    """The reference: a posture that puts the hand's marker at world point ``p`` (damped
-    least squares on the palm, :func:`~sigmapi.envs.icub.arm_ik`, aimed at ``p`` plus the
-    palm's offset from the marker at the posture so far), and the marker's distance left."""
+def scripted_ik(scene: ICubScene, p: Array, rounds: int = 4) -> tuple[Array, float]:
+    """The reference: a posture that rests a ball centred at world point ``p`` on the palm
+    (damped least squares on the palm, :func:`~sigmapi.envs.icub.arm_ik`, aimed at ``p``
+    less a radius along the palm's normal at the posture so far), and the palm's touch point
+    (:func:`_touch_point`) distance left to ``p``."""
     with scene.truth():
-        q, _ = arm_ik(scene, p)
         saved = scene.arm()
+        q, _ = arm_ik(scene, p)
         for _ in range(rounds):
             scene.set_arm(q)
-            off = scene.palm_position() - scene.marker_position()
-            q, _ = arm_ik(scene, p + off, q0=q)
+            off = _touch_point(scene) - scene.palm_position()
+            q, _ = arm_ik(scene, p - off, q0=q)
         scene.set_arm(q)
-        err = float(np.linalg.norm(scene.marker_position() - p))
+        err = float(np.linalg.norm(_touch_point(scene) - p))
         scene.set_arm(saved)
     return q, err
 
 
 def _reachable(scene: ICubScene, rng: np.random.Generator) -> Array:
-    """A ball centre uniform in the box that the scripted IK reaches within 1 cm."""
+    """A ball centre uniform in the box that the scripted IK rests on the palm within 1 cm."""
     while True:
         p = st.random_point(rng, 1)[0]
         if scripted_ik(scene, p)[1] < 0.01:
@@ -509,6 +569,7 @@ def run_seed3d(
         "maps": maps,
         "reaches": summarise(tests),
         "fixation_converged": float(np.mean(tests.fixated)),
+        "babbles_kept": bab.posture.shape[0] / bab.tried,
         "seconds": {
             "maps": t_maps,
             "babbling": t_babble,
