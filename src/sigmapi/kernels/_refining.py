@@ -626,11 +626,14 @@ def search(
     y: NDArray[np.float64],
     tol: float,
     rule: int,
+    exact: bool = True,
 ) -> NDArray[np.int64]:
     """Winners ``(B,)`` of the pairs ``(x_b, y_b)`` under the compiled rule ``rule`` (one of
     :data:`RULES`) on the weights ``raw`` of ``index`` (with their exact ``sqnorm``): the
     bounds of all pairs first, then the scores of the units that can win, with the pairs
-    ordered by their likely winner (so that pairs reading the same units come together)."""
+    ordered by their likely winner (so that pairs reading the same units come together).
+    ``exact`` False (the refinement's fast path): the best of the float32 scores, no slack
+    and no exact re-check (only scores equal to the last bit are summed again)."""
     n_rows = x.shape[0]
     c = index.scale * index.scale * sqnorm
     k_units, n_groups = c.size, index.group_norms.shape[1]
@@ -645,7 +648,7 @@ def search(
     out = np.empty(n_rows, dtype=np.int64)
     arrays = (index.blocks, index.norms, index.group_norms, gc)
     # left unformatted: the arguments in the rows of the kernel's signature
-    rel = slack(index.blocks.shape[2])
+    rel = slack(index.blocks.shape[2]) if exact else 0.0
     settle(arrays, raw, index.scale, sqnorm, c, index.members_x, index.members_y, x, y,
            float(tol), int(rule), rel, order, out)  # fmt: skip
     return out
