@@ -695,7 +695,7 @@ def _hard_sums(sums, mass, order, starts, x1, y1, tol, ncol):  # pragma: no cove
 
 
 def hard_sums(
-    sums: NDArray[np.float64],
+    sums: NDArray[np.floating],
     mass: NDArray[np.float64],
     winners: NDArray[np.int64],
     x1: NDArray[np.float64],
@@ -706,8 +706,9 @@ def hard_sums(
     """Add the pairs ``(x1_b, y1_b)`` to the sums ``(K, n_x n_y)`` and ``mass`` of their
     winners, each unit's pairs in order: the arithmetic of
     :meth:`sigmapi.rules.BatchMean.accumulate` at ``sigma = 0`` (a unit's sums gain
-    ``1 * v = v``, the others' a zero), bit for bit, on the kernel's sparse pairs. ``ncol``:
-    the columns of a row of y's grid (0: y a line)."""
+    ``1 * v = v``, the others' a zero), bit for bit, on the kernel's sparse pairs (float32
+    ``sums``, the refinement's fast path: each sum rounded to float32). ``ncol``: the columns
+    of a row of y's grid (0: y a line)."""
     order = np.argsort(winners, kind="stable")
     starts = np.searchsorted(winners[order], np.arange(sums.shape[0] + 1))
     driver: Any = _hard_sums  # a numba dispatcher
@@ -734,7 +735,7 @@ def _finish(raw, scale, sums, mass, out):  # pragma: no cover - compiled
 def finish(
     raw: NDArray[np.floating],
     scale: NDArray[np.float64],
-    sums: NDArray[np.float64],
+    sums: NDArray[np.floating],
     mass: NDArray[np.float64],
 ) -> NDArray[np.floating]:
     """The new unscaled weights ``(n_x n_y, K)`` (scales 1) in ``raw``'s type: what
