@@ -866,15 +866,15 @@ class FastKernel(KernelBase[FastState]):
         _, nx, ny = state.shape
         k = self._refine_winners(state, acc, x0, y0, geometry, winner_rule)
         x1a, y1a = _codes(x1, nx, "x1"), _codes(y1, ny, "y1")
+        tol = max(state.tol, acc.tol)  # acc.tol > 0: the fast path's own cut
         if sigma == 0:
             ncol = acc.code_shapes[1][-1] if acc.code_shapes else ny
-            tol = max(state.tol, acc.tol)  # acc.tol > 0: the fast path's own cut
             _refining.hard_sums(acc.sums, acc.mass, k, x1a, y1a, tol, ncol)
         else:
             a = assignment(k, geometry, float(sigma))
             jb, pi, pv = state.scratch()[:3]
             driver: Any = _refine_sums  # a numba dispatcher
-            driver(acc.sums, acc.mass, np.ascontiguousarray(a), x1a, y1a, state.tol, jb, pi, pv)
+            driver(acc.sums, acc.mass, np.ascontiguousarray(a), x1a, y1a, tol, jb, pi, pv)
         acc.pairs += int(x1a.shape[0])
         return k
 
