@@ -54,9 +54,13 @@ def cpu(fn: Callable[[], Any]) -> tuple[float, Any]:
     return time.process_time() - c, out
 
 
-def profile(model: SigmaPiSOM, blocks: int, with_floors: bool = False) -> dict[str, Any]:
+def profile(
+    model: SigmaPiSOM, blocks: int, with_floors: bool = False, tol: float = 0.0
+) -> dict[str, Any]:
     """The phases of one refinement round's first ``blocks`` blocks on ``model``'s map (and,
-    ``with_floors``, :func:`floors` on the first group of them)."""
+    ``with_floors``, :func:`floors` on the first group of them); ``tol``: the refinement's
+    ``refine_tol`` (0: the bit-exact path; above 0 the fast path, whose winners are then
+    compared with the full search's as a share, not for equality)."""
     st, rule = model._run.state, model.winner_rule_.hard
     geometry = model.config.geometry
     n = 1000
@@ -67,20 +71,21 @@ def profile(model: SigmaPiSOM, blocks: int, with_floors: bool = False) -> dict[s
     def draw(b: int) -> SimpleNamespace:
         at = slice(b * n, (b + 1) * n)
         views = (codes[0][at], codes[1][at], codes[2][at], codes[3][at])
-        model.sampler.sample(n, rng(model.seed_entropy, 4, 0, b), out=views)
+        model.sampler.sample(n, rng(model.seed_entropy, 4, 0, b), out=views, exact=tol == 0)
         return SimpleNamespace(**dict(zip(("x0", "y0", "x1", "y1"), views, strict=True)))
 
     warm = draw(0)  # compiles (or loads) what the timed calls use
     t_sample, batches = cpu(lambda: [draw(b) for b in range(1, blocks + 1)])
-    acc = fast.KERNEL.refine_start(st)
+    acc = fast.KERNEL.refine_start(st, tol=tol)
     acc.sums.fill(0.0)  # its pages touched: the round's first touch is not a block's cost
     acc.code_shapes = (model.x_shape, model.y_shape)
     t_index, _ = cpu(
         lambda: fast.KERNEL._refine_winners(st, acc, warm.x0[:32], warm.y0[:32], geometry, rule)
     )
     fast.KERNEL.winners_of(st, warm.x0[:32], warm.y0[:32], geometry, rule, 0.0)
+    cut = max(st.tol, acc.tol)  # the sums' cut (the fast path's own above the kernel's)
     _refining.hard_sums(np.zeros_like(acc.sums), np.zeros_like(acc.mass),
-                        np.zeros(4, dtype=np.int64), warm.x1[:4], warm.y1[:4], st.tol)  # fmt: skip
+                        np.zeros(4, dtype=np.int64), warm.x1[:4], warm.y1[:4], cut)  # fmt: skip
 
     # as the refinement calls the kernel: GROUP blocks at a time
     batches = [
@@ -106,7 +111,7 @@ def profile(model: SigmaPiSOM, blocks: int, with_floors: bool = False) -> dict[s
     def sums() -> None:
         for b, k in zip(batches, winners, strict=True):
             _refining.hard_sums(acc.sums, acc.mass, k, np.ascontiguousarray(b.x1),
-                                np.ascontiguousarray(b.y1), st.tol)  # fmt: skip
+                                np.ascontiguousarray(b.y1), cut)  # fmt: skip
 
     t_sums, _ = cpu(sums)
     t_finish, _ = cpu(lambda: fast.KERNEL.refine_finish(st, acc))
@@ -126,6 +131,10 @@ def profile(model: SigmaPiSOM, blocks: int, with_floors: bool = False) -> dict[s
     out = {
         "cpu_s_per_1000_pairs": per,
         "winners_equal_to_full_search": same,
+        "winners_share_equal_to_full_search": float(
+            np.mean(np.concatenate(winners) == np.concatenate(every))
+        ),
+        "refine_tol": tol,
         "winners_compared": int(blocks * n),
         "reference_winners_kept": float(np.mean(winners[0][:2000] == ref)),
         "reference_check_pairs": int(sum(len(b.x0) for b in check)),
@@ -289,6 +298,7 @@ def main() -> None:
     parser.add_argument("--blocks", type=int, default=20, help="blocks of 1,000 pairs timed")
     parser.add_argument("--whole", action="store_true", help="also run the whole round")
     parser.add_argument("--floors", action="store_true", help="also the costs in cache")
+    parser.add_argument("--refine-tol", type=float, default=0.0, help="0: the bit-exact path")
     parser.add_argument("--out", default=str(ROOT / "results" / "refine-profile.json"))
     args = parser.parse_args()
     result: dict[str, Any] = {
@@ -298,14 +308,17 @@ def main() -> None:
     }
     if args.model:
         model = sigmapi.load(args.model)
+        model.config = model.config.replace(refine_tol=args.refine_tol)
     else:
-        cfg = sigmapi.load_preset("paper-2d").replace(seed=args.seed, refine_rounds=0)
+        cfg = sigmapi.load_preset("paper-2d").replace(
+            seed=args.seed, refine_rounds=0, refine_tol=args.refine_tol
+        )
         model = SigmaPiSOM(cfg)
         model.partial_fit(iterations=0)  # the ordered start (and the kernel's numba loads)
         t, _ = cpu(lambda: model.partial_fit(iterations=cfg.iterations))
         result["training_cpu_s"] = round(t, 2)
     result["iterations"] = model.t_
-    result.update(profile(model, args.blocks, args.floors))
+    result.update(profile(model, args.blocks, args.floors, args.refine_tol))
     if args.whole:
         result["whole_round"] = whole(model)
         if "training_cpu_s" in result:

@@ -168,6 +168,18 @@ class SOMConfig:
     )
     """Neighbourhood width of the refinement's weighted mean (map units); 0 = each unit the
     mean of the pairs it won alone."""
+    refine_tol: float = field(
+        default=0.0,
+        metadata=_validate.bounded(
+            "number", 0, 1, hi_open=True, fix="0 is the kernel's own arithmetic, bit for bit"
+        ),
+    )
+    """The refinement's fast path (fast kernel, hard winners): 0 runs it on the kernel's own
+    arithmetic, bit for bit; above 0 it skips the input pairs below ``max(kernel_tol,
+    refine_tol)`` of their peak in its winner search and sums, takes the best of the search's
+    float32 scores without the exact re-check, keeps its sums in float32 and draws its codes
+    within rounding (normalised hills multiplied out): cheaper per pair, the same maps within
+    a stated tolerance (docs/guide/ceiling.md)."""
     same_view: bool = field(default=False, metadata=_validate.bounded("bool"))
     """Ablation: learn from the view that chose the winner (the paper learns from the other)."""
     backend: str = field(

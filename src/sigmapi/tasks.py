@@ -199,6 +199,17 @@ def _encoder() -> Callable[[PopulationCode, Array, Array | None], Array]:
     return encode
 
 
+@functools.cache
+def _fast_encoder() -> Callable[[PopulationCode, Array, Array | None], Array]:
+    """The refinement's encoder within rounding (:func:`sigmapi.kernels._codes.encode_fast`)
+    where numba imports, else NumPy's."""
+    try:
+        from sigmapi.kernels._codes import encode_fast
+    except ImportError:  # numba missing or broken here: NumPy's encode
+        return _numpy_encode
+    return encode_fast
+
+
 class TwoViewSampler:
     """Draws batches of two views (x0, y0), (x1, y1) of the same z.
 
@@ -342,19 +353,22 @@ class TwoViewSampler:
         rng: np.random.Generator,
         z: Array | None = None,
         out: tuple[Array, Array, Array, Array] | None = None,
+        exact: bool = True,
     ) -> Batch:
         """``n`` pairs of views of ``n`` body-centred positions (drawn unless ``z`` is given).
 
         ``out``: four C-contiguous float64 arrays ``(n, n_x)``, ``(n, n_y)``, ``(n, n_x)``,
         ``(n, n_y)`` to write the codes ``x0, y0, x1, y1`` into (the batch holds them), for a
-        caller that draws many batches into the same memory."""
+        caller that draws many batches into the same memory. ``exact`` False: the same
+        positions, their codes within rounding of ``encode``'s rather than bit for bit
+        (normalised hills multiplied out: the refinement's fast path, ``refine_tol > 0``)."""
         each = 8 * (2 * (self.x_code.size + self.y_code.size) + 5 * self.ndim)
         _check_rows(len(z) if z is not None else n, each, "draw fewer pairs")
         if z is None:
             z = self.sample_z(n, rng)
         px0, py0 = self.sample_view(z, rng)
         px1, py1 = self.sample_view(z, rng)
-        enc = _encoder()
+        enc = _encoder() if exact else _fast_encoder()
         dest = out if out is not None else (None, None, None, None)
         return Batch(
             enc(self.x_code, px0, dest[0]),

@@ -122,7 +122,7 @@ def test_a_backend_without_the_methods_is_refused(registry):
         SigmaPiSOM(SMALL, backend="norefine").fit()
 
 
-@pytest.mark.parametrize("field", ["refine_rounds", "refine_pairs", "refine_sigma"])
+@pytest.mark.parametrize("field", ["refine_rounds", "refine_pairs", "refine_sigma", "refine_tol"])
 def test_bad_settings_name_their_field(field):
     with pytest.raises(ConfigError, match=field):
         SMALL.replace(**{field: -1})

@@ -626,11 +626,14 @@ def search(
     y: NDArray[np.float64],
     tol: float,
     rule: int,
+    exact: bool = True,
 ) -> NDArray[np.int64]:
     """Winners ``(B,)`` of the pairs ``(x_b, y_b)`` under the compiled rule ``rule`` (one of
     :data:`RULES`) on the weights ``raw`` of ``index`` (with their exact ``sqnorm``): the
     bounds of all pairs first, then the scores of the units that can win, with the pairs
-    ordered by their likely winner (so that pairs reading the same units come together)."""
+    ordered by their likely winner (so that pairs reading the same units come together).
+    ``exact`` False (the refinement's fast path): the best of the float32 scores, no slack
+    and no exact re-check (only scores equal to the last bit are summed again)."""
     n_rows = x.shape[0]
     c = index.scale * index.scale * sqnorm
     k_units, n_groups = c.size, index.group_norms.shape[1]
@@ -645,7 +648,7 @@ def search(
     out = np.empty(n_rows, dtype=np.int64)
     arrays = (index.blocks, index.norms, index.group_norms, gc)
     # left unformatted: the arguments in the rows of the kernel's signature
-    rel = slack(index.blocks.shape[2])
+    rel = slack(index.blocks.shape[2]) if exact else 0.0
     settle(arrays, raw, index.scale, sqnorm, c, index.members_x, index.members_y, x, y,
            float(tol), int(rule), rel, order, out)  # fmt: skip
     return out
@@ -692,7 +695,7 @@ def _hard_sums(sums, mass, order, starts, x1, y1, tol, ncol):  # pragma: no cove
 
 
 def hard_sums(
-    sums: NDArray[np.float64],
+    sums: NDArray[np.floating],
     mass: NDArray[np.float64],
     winners: NDArray[np.int64],
     x1: NDArray[np.float64],
@@ -703,8 +706,9 @@ def hard_sums(
     """Add the pairs ``(x1_b, y1_b)`` to the sums ``(K, n_x n_y)`` and ``mass`` of their
     winners, each unit's pairs in order: the arithmetic of
     :meth:`sigmapi.rules.BatchMean.accumulate` at ``sigma = 0`` (a unit's sums gain
-    ``1 * v = v``, the others' a zero), bit for bit, on the kernel's sparse pairs. ``ncol``:
-    the columns of a row of y's grid (0: y a line)."""
+    ``1 * v = v``, the others' a zero), bit for bit, on the kernel's sparse pairs (float32
+    ``sums``, the refinement's fast path: each sum rounded to float32). ``ncol``: the columns
+    of a row of y's grid (0: y a line)."""
     order = np.argsort(winners, kind="stable")
     starts = np.searchsorted(winners[order], np.arange(sums.shape[0] + 1))
     driver: Any = _hard_sums  # a numba dispatcher
@@ -731,7 +735,7 @@ def _finish(raw, scale, sums, mass, out):  # pragma: no cover - compiled
 def finish(
     raw: NDArray[np.floating],
     scale: NDArray[np.float64],
-    sums: NDArray[np.float64],
+    sums: NDArray[np.floating],
     mass: NDArray[np.float64],
 ) -> NDArray[np.floating]:
     """The new unscaled weights ``(n_x n_y, K)`` (scales 1) in ``raw``'s type: what

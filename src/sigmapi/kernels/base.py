@@ -302,8 +302,10 @@ class Refiner(Protocol[S]):
     backends that refine (no silent fallback to another kernel).
     """
 
-    def refine_start(self, state: S) -> Sums:
-        """Empty float64 accumulators of one round, in the kernel's layout."""
+    def refine_start(self, state: S, *, tol: float = 0.0) -> Sums:
+        """Empty accumulators of one round, in the kernel's layout; ``tol``: the config's
+        ``refine_tol`` (0: the kernel's own arithmetic, bit for bit; a kernel without a fast
+        path ignores it)."""
         ...
 
     def refine_block(

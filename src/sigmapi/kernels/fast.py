@@ -805,11 +805,14 @@ class FastKernel(KernelBase[FastState]):
 
     # ------------------------------------------------------------------ refinement
 
-    def refine_start(self, state: FastState) -> Sums:
+    def refine_start(self, state: FastState, *, tol: float = 0.0) -> Sums:
         """Empty accumulators: sums ``(K, n_x * n_y)`` (a unit's pairs contiguous, unlike the
-        weights' layout: a pair adds to few units), mass ``(K,)``."""
+        weights' layout: a pair adds to few units), mass ``(K,)``. ``tol > 0`` (the config's
+        ``refine_tol``; not in exact mode): the fast path, its sums float32."""
         k, nx, ny = state.shape
-        return Sums(np.zeros((k, nx * ny)), np.zeros(k))
+        fast_path = tol > 0 and state.tol > 0
+        sums = np.zeros((k, nx * ny), dtype=np.float32 if fast_path else np.float64)
+        return Sums(sums, np.zeros(k), tol=float(tol) if fast_path else 0.0)
 
     def _refine_winners(
         self,
@@ -837,6 +840,9 @@ class FastKernel(KernelBase[FastState]):
             index = acc.index = _refining.build(
                 state.raw, state.scale, acc.code_shapes or ((nx,), (ny,))
             )
+        if acc.tol > 0:  # the fast path: its own cut, the best float32 score
+            tol = max(state.tol, acc.tol)
+            return _refining.search(index, state.raw, state.sqnorm, xa, ya, tol, code, False)
         return _refining.search(index, state.raw, state.sqnorm, xa, ya, state.tol, code)
 
     def refine_block(
@@ -860,14 +866,15 @@ class FastKernel(KernelBase[FastState]):
         _, nx, ny = state.shape
         k = self._refine_winners(state, acc, x0, y0, geometry, winner_rule)
         x1a, y1a = _codes(x1, nx, "x1"), _codes(y1, ny, "y1")
+        tol = max(state.tol, acc.tol)  # acc.tol > 0: the fast path's own cut
         if sigma == 0:
             ncol = acc.code_shapes[1][-1] if acc.code_shapes else ny
-            _refining.hard_sums(acc.sums, acc.mass, k, x1a, y1a, state.tol, ncol)
+            _refining.hard_sums(acc.sums, acc.mass, k, x1a, y1a, tol, ncol)
         else:
             a = assignment(k, geometry, float(sigma))
             jb, pi, pv = state.scratch()[:3]
             driver: Any = _refine_sums  # a numba dispatcher
-            driver(acc.sums, acc.mass, np.ascontiguousarray(a), x1a, y1a, state.tol, jb, pi, pv)
+            driver(acc.sums, acc.mass, np.ascontiguousarray(a), x1a, y1a, tol, jb, pi, pv)
         acc.pairs += int(x1a.shape[0])
         return k
 

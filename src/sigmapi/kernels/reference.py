@@ -177,8 +177,9 @@ class ReferenceKernel(KernelBase[NDArray[np.float64]]):
             out[t] = k[0]
         return out, tr
 
-    def refine_start(self, state: NDArray[np.float64]) -> Sums:
-        """Empty accumulators of a refinement round: sums ``(K, n_x, n_y)``, mass ``(K,)``."""
+    def refine_start(self, state: NDArray[np.float64], *, tol: float = 0.0) -> Sums:
+        """Empty accumulators of a refinement round: sums ``(K, n_x, n_y)``, mass ``(K,)``
+        (exact: ``tol``, the fast path's tolerance, is ignored)."""
         k, nx, ny = state.shape
         return BATCH_MEAN.start((k, nx, ny))
 

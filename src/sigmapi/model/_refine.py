@@ -94,7 +94,7 @@ def refine(run: RunState, data: CodeViews | None, notify: Notify) -> None:
         r, done = divmod(run.refined, per)
         if run.refine_acc is None or run.refine_acc[0] != r:
             # a round's winners use the weights of its start: replay its pairs so far
-            run.refine_acc = (r, kernel.refine_start(run.state))
+            run.refine_acc = (r, kernel.refine_start(run.state, tol=c.refine_tol))
             run.refine_acc[1].code_shapes = (c.x_shape, c.y_shape)
         acc = run.refine_acc[1]
         while acc.pairs < per:
@@ -161,7 +161,6 @@ def _draw(
     sampler = sampler_of(c)
     for i in range(first, last):
         at = slice((i - first) * BLOCK, (i - first + 1) * BLOCK)
-        sampler.sample(
-            BLOCK, rng(run.entropy, 4, r, i), out=(out[0][at], out[1][at], out[2][at], out[3][at])
-        )
+        views = (out[0][at], out[1][at], out[2][at], out[3][at])
+        sampler.sample(BLOCK, rng(run.entropy, 4, r, i), out=views, exact=c.refine_tol == 0)
     return out[0][lo:hi], out[1][lo:hi], out[2][lo:hi], out[3][lo:hi]

@@ -38,17 +38,21 @@ __all__ = ["BATCH_MEAN", "REFINEMENTS", "BatchMean", "Sums", "assignment"]
 @dataclass
 class Sums:
     """Accumulators of one round: ``sums`` (a kernel's layout; the reference's
-    ``(K, n_x, n_y)``) and ``mass`` ``(K,)``, float64; ``pairs``: how many pairs they hold.
+    ``(K, n_x, n_y)``; float64, float32 on a fast path) and ``mass`` ``(K,)``, float64;
+    ``pairs``: how many pairs they hold.
 
     ``code_shapes``: the grids of the codes ``(x_shape, y_shape)`` if known (a kernel may use
     their geometry to search faster; None: each code a line); ``index``: what a kernel
-    prepared from the round's fixed weights for its searches (None until it does)."""
+    prepared from the round's fixed weights for its searches (None until it does); ``tol``:
+    the config's ``refine_tol`` (0: the kernel's own arithmetic, bit for bit; above 0 a
+    kernel's fast path within a tolerance, its sums maybe float32)."""
 
-    sums: NDArray[np.float64]
+    sums: NDArray[np.floating]
     mass: NDArray[np.float64]
     pairs: int = 0
     code_shapes: tuple[tuple[int, ...], tuple[int, ...]] | None = None
     index: Any = None
+    tol: float = 0.0
 
 
 def assignment(

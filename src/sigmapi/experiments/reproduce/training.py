@@ -40,8 +40,8 @@ class SeedJob:
 
 
 COMPILED_BY = (
-    "backend", "winner_rule", "ordering", "refine_sigma", "periodic", "map_periodic", "same_view",
-    "threads",
+    "backend", "winner_rule", "ordering", "refine_sigma", "refine_tol", "periodic", "map_periodic",
+    "same_view", "threads",
 )  # fmt: skip
 """The config fields that choose the compiled code (with the dimensions and whether it refines)."""
 
