@@ -28,8 +28,6 @@ from sigmapi.experiments.kit.results import Result
 from sigmapi.metrics import ORDERED_R2
 from sigmapi.progress import Progress
 
-__all__ = ["BOX_GRID", "BOX_MAP", "TARGETS3D", "ICubBoxResult", "run_box"]
-
 BOX_GRID = 6
 """Units per axis of the 3-D codes (both retinas, the eyes' and the neck's angles)."""
 BOX_MAP = (6, 6, 6)

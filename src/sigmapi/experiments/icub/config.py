@@ -17,8 +17,6 @@ from sigmapi.config import BACKEND_NAMES
 from sigmapi.envs.icub.frames import BALLS, PAIRS_PER_BALL
 from sigmapi.experiments.kit.seeds import SeedPlan
 
-__all__ = ["HEAD_CODES", "PLAN", "QUICK", "READOUTS", "SPACES", "ICubConfig"]
-
 PLAN = SeedPlan({"views": 5, "babbling": 6, "reaches": 7, "servo": 8})
 """The random streams of one seed, on the table and in the box (children of
 ``SeedSequence(seed)``, :mod:`sigmapi.experiments.kit.seeds`); the maps are built with the

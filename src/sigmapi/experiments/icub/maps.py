@@ -61,23 +61,6 @@ from sigmapi.metrics import (
 from sigmapi.model.som import SigmaPiSOM
 from sigmapi.tasks import Batch
 
-__all__ = [
-    "HEAD_WIDTH",
-    "MAP",
-    "READOUT_RADIUS",
-    "ChainMaps",
-    "MapData",
-    "angle_error_deg",
-    "exact_map1",
-    "eye_position",
-    "learn_chain",
-    "neck_position",
-    "response_centroid",
-    "retina_position",
-    "score",
-    "som_config",
-]
-
 Array = NDArray[np.float64]
 
 MAP = MapSpec("icub-2d")

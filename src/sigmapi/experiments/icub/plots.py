@@ -28,19 +28,6 @@ from sigmapi.experiments.kit.figures import (
 )
 from sigmapi.metrics import FOLD_THRESHOLD, ORDERED_R2
 
-__all__ = [
-    "gaze_bins",
-    "icub_figures",
-    "plot_babbling",
-    "plot_eyes",
-    "plot_servo",
-    "plot_success_gaze",
-    "plot_success_table",
-    "plot_units_on_table",
-    "verdicts",
-    "write_gif",
-]
-
 _TABLE = (0.09, 0.59, -0.5, 0.3)  # near and far edge, right and left side (world x, y)
 
 _BESIDE = {"loc": "upper left", "bbox_to_anchor": (1.02, 1.0), "borderaxespad": 0.0}

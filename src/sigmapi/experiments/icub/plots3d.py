@@ -16,8 +16,6 @@ from numpy.typing import NDArray
 from sigmapi._outputs import save_captioned
 from sigmapi.envs.icub.model import BALL_RADIUS, HAND_MARKER, MARKER_RADIUS
 
-__all__ = ["end_point_definition", "end_point_histogram"]
-
 
 def end_point_histogram(errors: Mapping[str, NDArray[np.float64]], path: Path) -> Path:
     """One histogram per method of its end-point errors ``errors[method]`` (cm), on shared

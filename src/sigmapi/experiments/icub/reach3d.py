@@ -76,30 +76,6 @@ from sigmapi.experiments.icub import space3d as s3
 from sigmapi.experiments.icub.config import PLAN
 from sigmapi.experiments.icub.reaching import _BABBLED, _WRIST, _YAW
 
-__all__ = [
-    "APPROACH",
-    "ASSOCIATED",
-    "BACK_OFF",
-    "CONDITIONS",
-    "LEG",
-    "METHODS",
-    "MOVED",
-    "PALM_SIDE",
-    "SETTLE",
-    "START_ARM",
-    "TOUCH_DEPTH",
-    "Babbles3D",
-    "Reach3D",
-    "ReachTests3D",
-    "babble3d",
-    "features3d",
-    "look",
-    "reach3d",
-    "reach_tests3d",
-    "scripted_ik",
-    "summarise",
-]
-
 Array = NDArray[np.float64]
 
 METHODS = ("learned", "true_position", "retina", "retina_gaze", "scripted_ik", "random_posture")

@@ -68,22 +68,6 @@ from sigmapi.envs.icub.reach import AIM
 from sigmapi.errors import ConfigError
 from sigmapi.experiments.icub.maps import ChainMaps, eye_position, neck_position, retina_position
 
-__all__ = [
-    "ASSOCIATED",
-    "BABBLE_WRIST",
-    "BABBLE_YAW",
-    "METHODS",
-    "Babbles",
-    "ReachTests",
-    "babble",
-    "features",
-    "glance",
-    "learn_reaching",
-    "reach_tests",
-    "reachable_balls",
-    "servo",
-]
-
 Array = NDArray[np.float64]
 
 METHODS = ("learned", "true_direction", "retina", "retina_gaze", "scripted_ik", "random_posture")

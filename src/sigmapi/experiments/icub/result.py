@@ -17,8 +17,6 @@ from sigmapi.experiments.icub.reaching import METHODS
 from sigmapi.experiments.kit.results import Column, Result, columns, render
 from sigmapi.metrics import ORDERED_R2
 
-__all__ = ["TARGETS", "ICubResult"]
-
 TARGETS: dict[str, float] = {
     "pixel_rms_px": 0.5,
     "eye_frame_ms_median": 10.0,

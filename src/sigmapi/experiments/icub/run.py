@@ -51,9 +51,6 @@ from sigmapi.experiments.kit.jobs import Steps, Tick, counted
 from sigmapi.metrics import EVAL_SEED, z_decoder
 from sigmapi.progress import Progress
 
-__all__ = ["ICUB", "ICubExperiment", "check_frames", "learn_seed_chain"]
-
-
 EYES = ("l_eye", "r_eye")
 
 

@@ -73,41 +73,6 @@ from sigmapi.metrics import (
 from sigmapi.model.som import SigmaPiSOM
 from sigmapi.tasks import Batch
 
-__all__ = [
-    "DEPTH_GRID",
-    "DESIGN",
-    "DESIGNS",
-    "DISPARITY",
-    "GRID",
-    "HEAD_WIDTH",
-    "ITERATIONS",
-    "PAIRS_PER_BALL",
-    "READOUT",
-    "READOUTS",
-    "SCALES",
-    "SENSED",
-    "Chain3D",
-    "FactorMap",
-    "Scales",
-    "Views3D",
-    "eyes3",
-    "fixed_scales",
-    "kmeans_reference",
-    "learn_chain3d",
-    "neck3",
-    "parabola_place",
-    "projected",
-    "record_box",
-    "record_pairs",
-    "retina3",
-    "score_chain",
-    "score_map",
-    "sensed",
-    "sensed_scales",
-    "soft_place",
-    "true_position_map",
-]
-
 Array = NDArray[np.float64]
 
 DISPARITY = st.FUSION
