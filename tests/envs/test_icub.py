@@ -517,8 +517,8 @@ def test_a_tiny_run_writes_every_key(rendering, tmp_path, monkeypatch):
     from sigmapi.experiments.icub.config import ICubConfig
     from sigmapi.experiments.icub.run import ICUB
 
-    cfg = ICubConfig(train_pairs=300, iterations=600, map_shape=(4, 4), grid=6,
-                     eval_pairs=100, frame_scenes=10, babbles=60, epochs=2, reaches=3)  # fmt: skip
+    cfg = ICubConfig(train_pairs=80, iterations=600, map_shape=(4, 4), grid=6,
+                     eval_pairs=30, frame_scenes=10, babbles=50, epochs=2, reaches=3)  # fmt: skip
     # the run learns and decides with the truth out of reach: each scene it makes is sealed
     # (body, site, ball and camera positions raise outside scene.truth(): scoring, the
     # references, where the experimenter puts the ball), and a leak fails the run
