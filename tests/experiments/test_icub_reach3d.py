@@ -74,7 +74,7 @@ def test_the_skin_feels_the_ball_on_the_palm_apart_from_the_rest_of_the_arm():
         (c + 0.2 * n, (False, False)),  # off the hand
     ):
         st.place_ball(scene, where)
-        assert r3._skin(scene) == felt
+        assert scene.skin(r3.PALM_SIDE) == felt
 
 
 def test_the_reach_starts_with_the_hand_out_of_the_box():

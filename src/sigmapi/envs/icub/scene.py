@@ -390,6 +390,28 @@ class ICubScene:
         h = self._hand
         return bool(np.any(on & (h[g1] | h[g2])))
 
+    def palm_side(self, points: ArrayLike, side: float) -> NDArray[np.bool_]:
+        """Whether contact points ``(k, 3)`` lie on the palm's side of the hand (at least
+        ``side`` metres along the palm's normal from its contact point): where on the hand
+        they are, in the hand's own frame, as a tactile skin's taxels report it."""
+        c, r = self.data.site_xpos[self._palm], self.data.site_xmat[self._palm].reshape(3, 3)
+        return np.asarray((np.asarray(points) - c) @ r[:, 2] >= side)
+
+    def skin(self, side: float) -> tuple[bool, bool]:
+        """The arm's touch sensors, the arm where it is set: (the palm's skin touches the
+        ball, any other part of the arm touches anything); the palm's skin is the hand's
+        contacts with the ball on the palm's side (:meth:`palm_side`); the contacts are found
+        again from the pose (``mj_collision``)."""
+        self._mj.mj_collision(self.model, self.data)
+        d, n = self.data, self.data.ncon
+        g1, g2 = d.contact.geom1[:n], d.contact.geom2[:n]
+        arm = self.model.geom_contype == 2
+        b = self._ball_geom
+        on_ball = ((g1 == b) & self._hand[g2]) | ((g2 == b) & self._hand[g1])
+        palm = on_ball & self.palm_side(d.contact.pos[:n], side)
+        other = (arm[g1] | arm[g2]) & ~palm
+        return bool(np.any(palm)), bool(np.any(other))
+
     def hand_touches_ball(self) -> bool:
         """Whether the right hand (the palm's link, not the forearm) touches the ball."""
         n = self.data.ncon

@@ -11,10 +11,11 @@ on the table: :func:`~sigmapi.experiments.icub.reaching.babble`'s joints and ran
 touch nothing; when the palm lies where balls are met (the ball's centre on it in
 :data:`~sigmapi.envs.icub.stereo.BOX`), the experimenter presses the ball :data:`TOUCH_DEPTH`
 into the palm (truth: where the experimenter puts the ball), and the posture is kept by what
-the robot senses: its skin (:func:`_skin`: the palm feels the ball, no other part of the arm
-feels anything) and both eyes find the ball (random head postures and eye commands,
-:func:`look`). A babble is the posture and both eyes' view of the ball on its palm (its
-pixels and the gaze); the ball's true place is kept as the labels of the references.
+the robot senses: its skin (:meth:`~sigmapi.envs.icub.ICubScene.skin`: the palm feels the
+ball, no other part of the arm feels anything) and both eyes find the ball (random head
+postures and eye commands, :func:`look`). A babble is the posture and both eyes' view of the
+ball on its palm (its pixels and the gaze); the ball's true place is kept as the labels of the
+references.
 
 **The states** (:data:`ASSOCIATED`), each associated with the postures by an
 :class:`~sigmapi.agents.Association` trained on the same babbles:
@@ -147,29 +148,6 @@ def _arm_touches(scene: ICubScene) -> bool:
     return bool(np.any(arm[g1] | arm[g2]))
 
 
-def _palm_side(scene: ICubScene, points: Array) -> NDArray[np.bool_]:
-    """Whether contact points ``(k, 3)`` lie on the palm's side of the hand (:data:`PALM_SIDE`
-    along the palm's normal from its contact point): where on the hand they are, in the
-    hand's own frame, as a tactile skin's taxels report it."""
-    d = scene.data
-    c, r = d.site_xpos[scene._palm], d.site_xmat[scene._palm].reshape(3, 3)
-    return np.asarray((points - c) @ r[:, 2] >= PALM_SIDE)
-
-
-def _skin(scene: ICubScene) -> tuple[bool, bool]:
-    """The arm's touch sensors, the arm where it is set: (the palm's skin touches the ball,
-    any other part of the arm touches anything); the contacts found again from the pose."""
-    scene._mj.mj_collision(scene.model, scene.data)
-    d, n = scene.data, scene.data.ncon
-    g1, g2 = d.contact.geom1[:n], d.contact.geom2[:n]
-    arm = scene.model.geom_contype == 2
-    b = scene._ball_geom
-    on_ball = ((g1 == b) & scene._hand[g2]) | ((g2 == b) & scene._hand[g1])
-    palm = on_ball & _palm_side(scene, d.contact.pos[:n])
-    other = (arm[g1] | arm[g2]) & ~palm
-    return bool(np.any(palm)), bool(np.any(other))
-
-
 def _touch_point(scene: ICubScene, inset: float = 0.0) -> Array:
     """Where a ball's centre sits when it rests on the palm (the palm's contact point plus a
     radius less ``inset`` along its normal), world; truth: the experimenter's and the scores'
@@ -213,7 +191,7 @@ def babble3d(
         if np.any((p < st.BOX[:, 0]) | (p > st.BOX[:, 1])):  # where balls are met only
             continue
         st.place_ball(scene, p)
-        palm, other = _skin(scene)
+        palm, other = scene.skin(PALM_SIDE)
         if not palm or other:  # kept by the skin: the palm alone feels the ball
             continue
         seen = look(scene, rng, "ball")
@@ -299,7 +277,8 @@ class Reach3D:
 
 def _contacts(scene: ICubScene) -> tuple[bool, bool]:
     """(the arm touches the ball, a touch is on the palm's side) from the physics' contacts
-    now; the palm's side as the skin reads it (:func:`_palm_side`), the score's test."""
+    now; the palm's side as the skin reads it
+    (:meth:`~sigmapi.envs.icub.ICubScene.palm_side`), the score's test."""
     d = scene.data
     n = d.ncon
     if n == 0:
@@ -311,7 +290,7 @@ def _contacts(scene: ICubScene) -> tuple[bool, bool]:
     if not np.any(hit):
         return False, False
     hand = ((g1 == b) & scene._hand[g2]) | ((g2 == b) & scene._hand[g1])
-    return True, bool(np.any(_palm_side(scene, d.contact.pos[:n][hand])))
+    return True, bool(np.any(scene.palm_side(d.contact.pos[:n][hand], PALM_SIDE)))
 
 
 def reach3d(scene: ICubScene, q: Array, *, film: int = 0) -> Reach3D:
