@@ -138,6 +138,15 @@ def _outer_fast(a, h, out):  # pragma: no cover - compiled
                 seg[j] = ai * hb[j]
 
 
+def _out(out: NDArray[np.float64] | None, shape: tuple[int, int]) -> NDArray[np.float64]:
+    """``out`` checked to be C-contiguous float64 of ``shape``, or a fresh array of it."""
+    if out is None:
+        return np.empty(shape)
+    if out.shape != shape or out.dtype != np.float64 or not out.flags.c_contiguous:
+        raise ValueError(f"out must be C-contiguous float64 of shape {shape}, got {out.shape}")
+    return out
+
+
 def encode_fast(
     code: PopulationCode, p: ArrayLike, out: NDArray[np.float64] | None = None
 ) -> NDArray[np.float64]:
@@ -150,10 +159,7 @@ def encode_fast(
     elif code.height != 1.0:
         hills[0] = hills[0] * code.height
     shape = (hills[0].shape[0], int(np.prod([h.shape[1] for h in hills])))
-    if out is None:
-        out = np.empty(shape)
-    elif out.shape != shape or out.dtype != np.float64 or not out.flags.c_contiguous:
-        raise ValueError(f"out must be C-contiguous float64 of shape {shape}, got {out.shape}")
+    out = _out(out, shape)
     if len(hills) == 1:
         out[...] = hills[0]
         return out
@@ -181,9 +187,6 @@ def encode(
         driver(a, hill, 1.0, False, nxt)
         a = nxt
     shape = (a.shape[0], a.shape[1] * hills[-1].shape[1])
-    if out is None:
-        out = np.empty(shape)
-    elif out.shape != shape or out.dtype != np.float64 or not out.flags.c_contiguous:
-        raise ValueError(f"out must be C-contiguous float64 of shape {shape}, got {out.shape}")
+    out = _out(out, shape)
     driver(a, hills[-1], float(code.height), bool(code.normalize), out)
     return out
