@@ -32,6 +32,21 @@ def test_the_nengo_networks_winners_are_the_rate_maps(tiny):
     assert len(np.unique(w)) >= tiny.n_units // 2  # many units win: not one unit's bias
 
 
+def test_active_products_give_the_dense_networks_winners():
+    """A 2-D map (small-2d's procedure, 5 x 5 codes, seed 12): the conjunction node summing
+    only the active inputs' products picks the winners the dense transform picks, trial by
+    trial (the same spikes up to float rounding; about 0.5 s)."""
+    m = SigmaPiSOM(
+        sigmapi.load_preset("small-2d"), x_shape=(5, 5), y_shape=(5, 5), iterations=800, seed=12
+    ).fit()
+    rng = np.random.default_rng(3)
+    x, y = m.x_code.encode(rng.random((24, 2))), m.y_code.encode(rng.random((24, 2)))
+    dense = nengo_winners(m, x, y, NengoConfig(window_ms=100.0), seed=12)
+    active = nengo_winners(m, x, y, NengoConfig(window_ms=100.0, products="active"), seed=12)
+    assert np.mean(dense == active) >= 23 / 24, (dense, active)
+    assert len(np.unique(active)) >= 8  # many units win: the currents are not one unit's bias
+
+
 def test_the_network_is_spiking_nengo_objects_with_the_learned_weights(tiny):
     import nengo
 
@@ -53,6 +68,8 @@ def test_bad_settings_are_refused():
         NengoConfig(window_ms=0.0)
     with pytest.raises(ConfigError, match="pool"):
         NengoConfig(pool=0)
+    with pytest.raises(ConfigError, match="products"):
+        NengoConfig(products="sparse")
 
 
 @pytest.mark.slow

@@ -14,13 +14,25 @@ computes, in Nengo's objects:
   pair: the multiplication of a Sigma-Pi unit's clustered synapses, as the coincidence
   detectors of the NumPy network compute it;
 - **map**: ``n_units`` LIF neurons (``nengo.LIF``, Nengo's default time constants). The learned
-  weights are the connection's transform from the conjunctions to the map neurons' currents:
+  weights are the connection's transform from the conjunctions to the map neurons' currents
+  (with ``products="active"``, the conjunction node's own weighted sum: below):
   unit ``k`` receives ``gain (S_k . W)`` (``W`` the Sigma-Pi weights, ``S`` the winner rule's
   affine map of the responses, :func:`sigmapi.export.score_matrix`) plus a bias, the rule's
   offset and a shift that puts the median winner's current at ``drive`` times the threshold
   (set on calibration pairs, the same for every unit);
 - **decision**: the map neuron with the most spikes in the window after ``settle_ms`` (ties:
   the higher filtered rate at the window's end), as the NumPy network decides.
+
+``products="all"`` (the default) passes all ``n_x n_y`` products to the map through a
+connection whose transform holds the learned weights: Nengo's reference simulator multiplies
+the dense ``(n_units, n_x n_y)`` matrix every step (paper-2d: 11.4 M multiply-adds, about 2 s of
+CPU per 220 ms trial). ``products="active"`` computes the same currents inside the conjunction
+node from the input units whose filtered spikes exceed ``active_cut`` of the largest in their
+code (the rest are spike trains' decaying tails and units that did not fire; the fast
+kernel drops products below 1e-4 of the peak the same way), ``sum_ij T_kij x_i y_j`` over
+those units only, and drives the map neurons through an identity connection: the same
+network up to that cut and float rounding (``tests/experiments/test_nengo_net.py``),
+many times cheaper on the 2-D map (docs/guide/other-tools.md).
 
 :func:`nengo_winners` simulates trials and returns the winners; :func:`build_network` gives
 the ``nengo.Network`` itself.
@@ -70,12 +82,21 @@ class NengoConfig:
     threshold units."""
     dt_ms: float = 1.0
     """Simulator time step (ms)."""
+    products: str = "all"
+    """``"all"``: the learned weights are a connection's transform from every product;
+    ``"active"``: the conjunction node sums the active units' products with them (module
+    docstring)."""
+    active_cut: float = 1e-4
+    """With ``products="active"``: input units below this share of their code's largest
+    filtered value are left out."""
 
     def __post_init__(self) -> None:
         for name in ("peak_rate", "window_ms", "tau_s_ms", "drive", "spread", "dt_ms"):
             _validate.positive(name, getattr(self, name), fix="a positive number")
         _validate.integer("pool", self.pool, 1, fix="e.g. 10")
         _validate.number("settle_ms", self.settle_ms, 0.0, fix="e.g. 20")
+        _validate.choice("products", self.products, ("all", "active"))
+        _validate.number("active_cut", self.active_cut, 0.0, 1.0, fix="e.g. 1e-4")
 
 
 def _nengo() -> Any:
@@ -128,6 +149,18 @@ def build_network(
     def products(t: float, v: Array) -> Array:
         return np.asarray(np.outer(v[:nx], v[nx:]).ravel())
 
+    if cfg.products == "active":  # (n_x, n_y, K): a pair's weights side by side
+        by_pair = np.ascontiguousarray(transform.T.reshape(nx, ny, -1))
+
+    def active(v: Array) -> NDArray[np.intp]:
+        return np.flatnonzero(v > cfg.active_cut * max(float(v.max()), 1e-300))
+
+    def currents(t: float, v: Array) -> Array:
+        xs, ys = v[:nx], v[nx:]
+        i, j = active(xs), active(ys)
+        rows = by_pair[i[:, None], j[None, :]]  # (|i|, |j|, K): the active pairs' weights
+        return np.asarray(np.tensordot(np.outer(xs[i], ys[j]), rows, axes=2))
+
     with nengo.Network(seed=seed) as net:
         stimulus = nengo.Node(present, size_out=nx + ny)
         neuron = nengo.SpikingRectifiedLinear(
@@ -137,18 +170,25 @@ def build_network(
             n_in, 1, neuron_type=neuron, gain=np.full(n_in, cfg.peak_rate), bias=np.zeros(n_in)
         )
         # unit u's pool: neurons u * pool ... (u + 1) * pool - 1, driven by its code value
-        spread = np.repeat(np.eye(nx + ny), cfg.pool, axis=0)
+        # (sparse transforms: a dense one multiplies the (n_in, n_x + n_y) zeros every step)
+        member = np.stack([np.arange(n_in), np.arange(n_in) // cfg.pool], axis=1)
+        spread = nengo.transforms.Sparse((n_in, nx + ny), indices=member, init=1.0)
         nengo.Connection(stimulus, pools.neurons, transform=spread, synapse=None)
-        conj = nengo.Node(products, size_in=nx + ny, size_out=nx * ny)
+        k = model.n_units
+        dense = cfg.products == "all"
+        conj = nengo.Node(
+            products if dense else currents, size_in=nx + ny, size_out=nx * ny if dense else k
+        )
         nengo.Connection(
             pools.neurons,
             conj,
-            transform=spread.T / (cfg.pool * cfg.peak_rate),
+            transform=nengo.transforms.Sparse(
+                (nx + ny, n_in), indices=member[:, ::-1], init=1.0 / (cfg.pool * cfg.peak_rate)
+            ),
             synapse=nengo.Lowpass(cfg.tau_s_ms / 1000.0),
         )
-        k = model.n_units
         units = nengo.Ensemble(k, 1, neuron_type=nengo.LIF(), gain=np.ones(k), bias=bias)
-        nengo.Connection(conj, units.neurons, transform=transform, synapse=None)
+        nengo.Connection(conj, units.neurons, transform=transform if dense else 1.0, synapse=None)
         probes = {
             "map": nengo.Probe(units.neurons, "output"),
             "rate": nengo.Probe(units.neurons, "output", synapse=nengo.Lowpass(0.02)),
