@@ -195,6 +195,11 @@ def test_babbling_and_reaching_in_3d_read_no_truth_outside_the_scores():
     )
     for m in ("learned", "retina", "retina_gaze"):
         assert np.array_equal(feats(m, blind), feats(m, bab.views))
+    # the learned state at map T's soft place: a bump between units, reading no labels either
+    soft = r3.features3d(scene, chain, 4, 1.0, 1.0, state="soft")
+    assert np.array_equal(soft("learned", blind), soft("learned", bab.views))
+    peak = chain.map_t.map_coords[np.argmax(soft("learned", bab.views), axis=1)]
+    assert np.all(np.abs(peak - chain.soft_grid_place("torso", bab.views)) <= 0.5 + 1e-9)
     assert np.isnan(feats("true_position", blind)).all()
     layers = {
         m: Association(feats(m, bab.views).shape[1], 7, epochs=2).fit(

@@ -108,6 +108,13 @@ FOLLOW_THROUGH = 1.0
 """When the posture is reached untouched, the arm goes on the same way, this many
 :data:`BACK_OFF` past it, in :data:`APPROACH` seconds, until the first touch (0: it stops at
 the posture)."""
+LEARNED_STATES = ("winner", "soft")
+"""Where the ``learned`` state's bump sits on map T's grid: at its winner, or at its soft place
+(moved between units by the scores,
+:meth:`~sigmapi.experiments.icub.space3d.Chain3D.soft_grid_place`), which the linear
+association can interpolate."""
+LEARNED_STATE = "winner"
+"""The ``learned`` state by default (:data:`LEARNED_STATES`)."""
 TOUCH_DEPTH = 0.002
 """How far into the palm's skin the experimenter presses the ball while babbling, metres."""
 _FAR = (1.5, -1.5, 0.7)  # where the ball waits while the robot babbles (out of reach and view)
@@ -219,13 +226,19 @@ class Features3D:
     feature_width: float
     torso_box: Array
     """``(3, 2)`` the torso-centred range the ``true_position`` grid spans (metres)."""
+    state: str = LEARNED_STATE
+    """Where ``learned``'s bump sits (:data:`LEARNED_STATES`): map T's winner or its soft
+    place."""
 
     def __call__(self, method: str, v: s3.Views3D) -> Array:
         """The state ``(n, n_features)`` of views ``v`` for ``method``."""
         m_t = self.chain.model("torso")  # map T, whatever its design
         if method == "learned":
-            w = m_t.winner(*self.chain.inputs("torso", v), hard=True)
-            return bump_features(m_t.map_coords[w], m_t.map_coords, self.feature_width)
+            if self.state == "soft":
+                centres = self.chain.soft_grid_place("torso", v)
+            else:
+                centres = m_t.map_coords[m_t.winner(*self.chain.inputs("torso", v), hard=True)]
+            return bump_features(centres, m_t.map_coords, self.feature_width)
         if method == "true_position":
             lo, hi = self.torso_box.T
             pos = np.clip((v.torso - lo) / (hi - lo), 0.0, 1.0)
@@ -242,14 +255,20 @@ class Features3D:
 
 
 def features3d(
-    scene: ICubScene, chain: s3.Chain3D, grid: int, width: float, feature_width: float
+    scene: ICubScene,
+    chain: s3.Chain3D,
+    grid: int,
+    width: float,
+    feature_width: float,
+    state: str = LEARNED_STATE,
 ) -> Features3D:
     """The states of the associated methods; ``true_position``'s grid spans the box's
     torso-centred range (its corners, read as the reference's labels)."""
+    s3._check_choice("learned_state", state, LEARNED_STATES)
     corners = np.array(np.meshgrid(*st.BOX)).reshape(3, -1).T
     t = st.torso_position(scene, corners)
     box = np.column_stack([t.min(axis=0), t.max(axis=0)])
-    return Features3D(chain, grid, width, feature_width, box)
+    return Features3D(chain, grid, width, feature_width, box, state)
 
 
 @dataclass(frozen=True)
@@ -483,15 +502,20 @@ def run_seed3d(
     map_shape: tuple[int, int, int] = (6, 6, 6),
     map_grid: int = s3.GRID,
     depth_grid: int | None = s3.DEPTH_GRID,
+    torso_grid: int | None = s3.TORSO_GRID,
+    head_shape: tuple[int, int, int] | None = s3.HEAD_SHAPE,
     backend: str = "auto",
     keep: bool = False,
+    learned_state: str = LEARNED_STATE,
 ) -> dict[str, Any]:
     """One seed of the 3-D task: the maps recorded, learned and scored; babbling; the
     associations; the reaches eyes free and fixated, summarised; ``keep``: also the raw
     reaches (``tests``) for the figures. ``grid``: units per axis of the retina's and the
-    gaze's codes that the associated methods read; ``map_grid`` and ``depth_grid``: the
-    maps' codes (:func:`~sigmapi.experiments.icub.space3d.learn_chain3d`, its measured
-    design by default)."""
+    gaze's codes that the associated methods read; ``map_grid``, ``depth_grid``,
+    ``torso_grid`` and ``head_shape``: the maps' codes and map H's shape
+    (:func:`~sigmapi.experiments.icub.space3d.learn_chain3d`, its measured design by
+    default); ``learned_state``: where the ``learned`` state's bump sits
+    (:data:`LEARNED_STATES`)."""
     t0 = time.perf_counter()
     r_views, r_babble, r_reach = (PLAN.rng(seed, s) for s in ("views", "babbling", "reaches"))
     scene, train, ev = s3.record_box(r_views, pairs, eval_pairs)
@@ -500,6 +524,8 @@ def run_seed3d(
         train["head"],
         grid=map_grid,
         depth_grid=depth_grid,
+        torso_grid=torso_grid,
+        head_shape=head_shape,
         width=width,
         map_shape=map_shape,
         iterations=iterations,
@@ -511,7 +537,7 @@ def run_seed3d(
     t_maps = time.perf_counter() - t0
     bab = babble3d(scene, babbles, r_babble, yaw=yaw, wrist=wrist)
     held = babble3d(scene, max(50, babbles // 10), r_babble, yaw=yaw, wrist=wrist)
-    feats = features3d(scene, chain, grid, width, feature_width)
+    feats = features3d(scene, chain, grid, width, feature_width, learned_state)
     layers = {}
     for method in ASSOCIATED:
         phi = feats(method, bab.views)
