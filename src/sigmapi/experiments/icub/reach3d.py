@@ -113,7 +113,7 @@ LEARNED_STATES = ("winner", "soft")
 (moved between units by the scores,
 :meth:`~sigmapi.experiments.icub.space3d.Chain3D.soft_grid_place`), which the linear
 association can interpolate."""
-LEARNED_STATE = "winner"
+LEARNED_STATE = "soft"
 """The ``learned`` state by default (:data:`LEARNED_STATES`)."""
 TOUCH_DEPTH = 0.002
 """How far into the palm's skin the experimenter presses the ball while babbling, metres."""
@@ -211,11 +211,6 @@ def babble3d(
     return Babbles3D(np.array(postures), s3.Views3D(*cols), tried)
 
 
-def _unit(a: Array) -> Array:
-    n = np.linalg.norm(a, axis=1, keepdims=True)
-    return a / np.where(n > 0, n, 1.0)
-
-
 @dataclass
 class Features3D:
     """The states of views for each associated method (the module's account)."""
@@ -245,11 +240,11 @@ class Features3D:
             centres = pos * (np.asarray(m_t.map_shape, dtype=np.float64) - 1.0)
             return bump_features(centres, m_t.map_coords, self.feature_width)
         code = PopulationCode((self.grid,) * 3, self.width)
-        retina = _unit(code.encode(s3.retina3(v, self.chain.eye_size)))
+        retina = s3.unit_rows(code.encode(s3.retina3(v, self.chain.eye_size)))
         if method == "retina":
             return retina
         if method == "retina_gaze":
-            parts = [retina, _unit(code.encode(s3.eyes3(v))), _unit(code.encode(s3.neck3(v)))]
+            parts = [retina, *(s3.unit_rows(code.encode(f(v))) for f in (s3.eyes3, s3.neck3))]
             return np.hstack(parts) / np.sqrt(3.0)
         raise ValueError(f"no features for method {method!r}")
 

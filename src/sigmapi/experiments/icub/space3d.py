@@ -417,7 +417,7 @@ class Chain3D:
         at zero, the vector of a view scaled to length 1 (a code as the others are)."""
         m, inputs = self.map_h, self.inputs_h(v)
         pairs = zip(m.parts, inputs, strict=True) if isinstance(m, FactorMap) else [(m, inputs)]
-        return [_unit_rows(np.maximum(p.respond(*c), 0.0)) for p, c in pairs]
+        return [unit_rows(np.maximum(p.respond(*c), 0.0)) for p, c in pairs]
 
     def _population_inputs(self, v: Views3D, neck: Array) -> Any:
         """Map T's codes under ``readout="population"``: each part reads the response vector of
@@ -456,7 +456,7 @@ def _codes(m: Model, x: Array, y: Array) -> Any:
     return m.x_code.encode(x), m.y_code.encode(y)
 
 
-def _unit_rows(a: Array) -> Array:
+def unit_rows(a: Array) -> Array:
     """Rows of ``a`` scaled to length 1 (a zero row stays zero)."""
     n = np.linalg.norm(a, axis=1, keepdims=True)
     return a / np.where(n > 0, n, 1.0)
