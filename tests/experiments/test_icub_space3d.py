@@ -172,6 +172,10 @@ def test_bad_design_scales_and_readout_are_refused_by_name():
         s3.Chain3D(None, None, 64, readout="blur")  # type: ignore[arg-type]
 
 
+TINY = {"head_shape": None, "torso_grid": None, "depth_grid": None}
+"""learn_chain3d's sizes tied to the tiny maps' (its defaults are the measured design's)."""
+
+
 def _random_views(n: int, seed: int) -> s3.Views3D:
     """Views with random pixels and gaze (the learning reads only these) and no truth."""
     rng = np.random.default_rng(seed)
@@ -191,6 +195,7 @@ def test_population_readout_feeds_map_t_map_h_responses_and_soft_places_stay_nea
     eyes = (_random_views(120, 0), _random_views(120, 1))
     head = (_random_views(120, 2), _random_views(120, 3))
     kw = dict(grid=4, width=1.0, map_shape=(3, 3, 3), iterations=60, seed=0, eye_size=64)
+    kw.update(torso_grid=None, depth_grid=None)
     chain = s3.learn_chain3d(eyes, head, readout="population", head_shape=(5, 4, 3), **kw)
     h, t = chain.map_h, chain.map_t
     assert isinstance(h, s3.FactorMap) and isinstance(t, s3.FactorMap)
@@ -248,6 +253,7 @@ def test_a_tiny_sealed_run_learns_from_pixels_only():
         eye_size=64,
         design="grid",
         readout="hard",
+        **TINY,
     )
     m = s3.score_map(chain, "head", eyes, eyes)
     assert len(m["order_r2_per_axis"]) == 3 and m["error_cm"] > 0
@@ -265,8 +271,10 @@ def test_a_tiny_sealed_run_learns_from_pixels_only():
             eye_size=64,
             design=design,
             scales="sensed",
-            depth_grid=6,
             readout="soft",
+            head_shape=None,
+            torso_grid=None,
+            depth_grid=6,
         )
         place = chain.place_h(head[0])
         assert place.shape == (60, 3) and np.all((place >= 0) & (place <= 1))

@@ -495,10 +495,6 @@ def run_seed3d(
     grid: int = 6,
     width: float = 1.0,
     map_shape: tuple[int, int, int] = (6, 6, 6),
-    map_grid: int = s3.GRID,
-    depth_grid: int | None = s3.DEPTH_GRID,
-    torso_grid: int | None = s3.TORSO_GRID,
-    head_shape: tuple[int, int, int] | None = s3.HEAD_SHAPE,
     backend: str = "auto",
     keep: bool = False,
     learned_state: str = LEARNED_STATE,
@@ -506,10 +502,9 @@ def run_seed3d(
     """One seed of the 3-D task: the maps recorded, learned and scored; babbling; the
     associations; the reaches eyes free and fixated, summarised; ``keep``: also the raw
     reaches (``tests``) for the figures. ``grid``: units per axis of the retina's and the
-    gaze's codes that the associated methods read; ``map_grid``, ``depth_grid``,
-    ``torso_grid`` and ``head_shape``: the maps' codes and map H's shape
-    (:func:`~sigmapi.experiments.icub.space3d.learn_chain3d`, its measured design by
-    default); ``learned_state``: where the ``learned`` state's bump sits
+    gaze's codes that the associated methods read; ``map_shape``: map T's (the maps' other
+    settings :func:`~sigmapi.experiments.icub.space3d.learn_chain3d`'s defaults, the measured
+    design); ``learned_state``: where the ``learned`` state's bump sits
     (:data:`LEARNED_STATES`)."""
     t0 = time.perf_counter()
     r_views, r_babble, r_reach = (PLAN.rng(seed, s) for s in ("views", "babbling", "reaches"))
@@ -517,10 +512,6 @@ def run_seed3d(
     chain = s3.learn_chain3d(
         train["eyes"],
         train["head"],
-        grid=map_grid,
-        depth_grid=depth_grid,
-        torso_grid=torso_grid,
-        head_shape=head_shape,
         width=width,
         map_shape=map_shape,
         iterations=iterations,

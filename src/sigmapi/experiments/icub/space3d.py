@@ -506,37 +506,44 @@ def learn_chain3d(
     eyes: tuple[Views3D, Views3D],
     head: tuple[Views3D, Views3D],
     *,
-    grid: int,
-    width: float,
-    map_shape: tuple[int, int, int],
-    iterations: int,
     seed: int,
     eye_size: int,
+    grid: int = GRID,
+    width: float = 1.0,
+    map_shape: tuple[int, int, int] = (6, 6, 6),
+    iterations: int = ITERATIONS,
     backend: str = "auto",
     design: str = DESIGN,
     torso_design: str | None = None,
     scales: str = "fixed",
-    depth_grid: int | None = None,
+    depth_grid: int | None = DEPTH_GRID,
     readout: str = READOUT,
-    torso_grid: int | None = None,
-    head_shape: tuple[int, int, int] | None = None,
+    torso_grid: int | None = TORSO_GRID,
+    head_shape: tuple[int, int, int] | None = HEAD_SHAPE,
 ) -> Chain3D:
     """Map H on the eyes' pairs, then map T on map H's code of the head's pairs (codes of
-    ``grid`` units per axis, hills ``width`` wide; both maps ``map_shape``).
+    ``grid`` units per axis, hills ``width`` wide; map T ``map_shape``). The defaults are the
+    measured design (docs/guide/icub-3d.md): the one place :func:`run_maps` and the reach's
+    run take it from.
 
     ``design``: ``"grid"`` (each map one 3-D Sigma-Pi map) or ``"factorised"`` (each a
     :class:`FactorMap`: a 2-D direction map and a 1-D distance map, ``map_shape`` their
     product); ``torso_design``: map T's, when it differs. ``scales``: ``"fixed"`` (the codes
     span the commands' ranges, :func:`fixed_scales`) or ``"sensed"`` (the training views'
     percentiles, :func:`sensed_scales`). ``depth_grid``: units of the codes along the depth
-    (the disparity and the vergence; the default ``grid``). ``readout``: how map T reads
-    map H's place (:data:`READOUTS`, :meth:`Chain3D.place_h`). ``torso_grid``: units per
-    axis of map T's codes (the default ``grid``). ``head_shape``: map H's shape, when it
-    differs from map T's (``map_shape``)."""
+    (the disparity and the vergence; None: ``grid``). ``readout``: how map T reads map H
+    (:data:`READOUTS`, :meth:`Chain3D.place_h`, :meth:`Chain3D.response_h`).
+    ``torso_grid``: units per axis of map T's codes (None: ``grid``). ``head_shape``: map H's
+    shape (None: ``map_shape``)."""
     _check_choice("design", design, DESIGNS)
     t_design = design if torso_design is None else torso_design
     _check_choice("torso_design", t_design, DESIGNS)
     _check_choice("scales", scales, SCALES)
+    if readout == "population" and t_design != design:
+        raise ConfigError(
+            f"readout 'population' needs map T's design to be map H's ({design!r}), got "
+            f"torso_design {t_design!r}; drop torso_design or pick readout 'soft'"
+        )
     sc = fixed_scales(eye_size) if scales == "fixed" else sensed_scales((*eyes, *head))
     dg = grid if depth_grid is None else depth_grid
     s1, s2 = (int(s) for s in np.random.default_rng(seed).integers(0, 2**31 - 1, 2))
@@ -547,11 +554,6 @@ def learn_chain3d(
     _fit(map_h, chain.inputs_h(a), chain.inputs_h(b))
     tg = (grid if torso_grid is None else torso_grid,) * 3
     if readout == "population":  # each part of map T on the response of map H's part
-        if t_design != design:
-            raise ConfigError(
-                f"readout 'population' needs map T's design to be map H's ({design!r}), got "
-                f"torso_design {t_design!r}; drop torso_design or pick readout 'soft'"
-            )
         parts = map_h.parts if isinstance(map_h, FactorMap) else [map_h]
         xs = [tuple(int(n) for n in p.map_shape) for p in parts]
         chain.map_t = _new_map(t_design, tg, map_shape, width, iterations, s2, backend, xs)
@@ -841,21 +843,12 @@ def run_maps(
     *,
     train_pairs: int = 2000,
     eval_pairs: int = 400,
-    grid: int = GRID,
-    width: float = 1.0,
-    map_shape: tuple[int, int, int] = (6, 6, 6),
     iterations: int = ITERATIONS,
-    backend: str = "auto",
-    design: str = DESIGN,
-    torso_design: str | None = None,
-    scales: str = "fixed",
-    depth_grid: int | None = DEPTH_GRID,
-    readout: str = READOUT,
-    torso_grid: int | None = TORSO_GRID,
-    head_shape: tuple[int, int, int] | None = HEAD_SHAPE,
+    **options: Any,
 ) -> dict[str, Any]:
-    """One seed of the 3-D maps: record, learn (:func:`learn_chain3d`'s options), score
-    against both references; the seconds taken and the process's peak resident memory."""
+    """One seed of the 3-D maps: record, learn (``options``: :func:`learn_chain3d`'s, its
+    defaults the measured design), score against both references; the seconds taken and the
+    process's peak resident memory."""
     t0 = time.perf_counter()
     scene, train, ev = record_box(np.random.default_rng(seed), train_pairs, eval_pairs)
     scene.close()
@@ -863,20 +856,10 @@ def run_maps(
     chain = learn_chain3d(
         train["eyes"],
         train["head"],
-        grid=grid,
-        width=width,
-        map_shape=map_shape,
         iterations=iterations,
         seed=seed,
         eye_size=scene.eye_size,
-        backend=backend,
-        design=design,
-        torso_design=torso_design,
-        scales=scales,
-        depth_grid=depth_grid,
-        readout=readout,
-        torso_grid=torso_grid,
-        head_shape=head_shape,
+        **options,
     )
     t_learn = time.perf_counter() - t0 - t_record
     out = score_chain(chain, train, ev, iterations, seed)
