@@ -181,9 +181,9 @@ def test_babbling_and_reaching_in_3d_read_no_truth_outside_the_scores():
     assert np.all(np.isfinite(bab.views.left)) and np.all(np.isfinite(bab.views.torso))
     eyes = s3.record_pairs(scene, 20, rng, "eyes")
     head = s3.record_pairs(scene, 20, rng, "head")
-    chain = s3.learn_chain3d(
-        eyes, head, grid=4, width=1.0, map_shape=(3, 3, 3), iterations=100, seed=0, eye_size=64
-    )
+    # tiny maps, each size given (the defaults are the measured design's)
+    tiny = dict(grid=4, map_shape=(3, 3, 3), head_shape=None, torso_grid=None, depth_grid=None)
+    chain = s3.learn_chain3d(eyes, head, iterations=100, seed=0, eye_size=64, **tiny)
     feats = r3.features3d(scene, chain, 4, 1.0, 1.0)
     # the learned chain, the retina and retina + gaze never read the labels
     blind = s3.Views3D(
@@ -195,6 +195,11 @@ def test_babbling_and_reaching_in_3d_read_no_truth_outside_the_scores():
     )
     for m in ("learned", "retina", "retina_gaze"):
         assert np.array_equal(feats(m, blind), feats(m, bab.views))
+    # the learned state at map T's soft place: a bump between units, reading no labels either
+    soft = r3.features3d(scene, chain, 4, 1.0, 1.0, state="soft")
+    assert np.array_equal(soft("learned", blind), soft("learned", bab.views))
+    peak = chain.map_t.map_coords[np.argmax(soft("learned", bab.views), axis=1)]
+    assert np.all(np.abs(peak - chain.soft_grid_place("torso", bab.views)) <= 0.5 + 1e-9)
     assert np.isnan(feats("true_position", blind)).all()
     layers = {
         m: Association(feats(m, bab.views).shape[1], 7, epochs=2).fit(

@@ -172,6 +172,50 @@ def test_bad_design_scales_and_readout_are_refused_by_name():
         s3.Chain3D(None, None, 64, readout="blur")  # type: ignore[arg-type]
 
 
+TINY = {"head_shape": None, "torso_grid": None, "depth_grid": None}
+"""learn_chain3d's sizes tied to the tiny maps' (its defaults are the measured design's)."""
+
+
+def _random_views(n: int, seed: int) -> s3.Views3D:
+    """Views with random pixels and gaze (the learning reads only these) and no truth."""
+    rng = np.random.default_rng(seed)
+    gaze = rng.uniform(-0.5, 0.5, (n, 6))
+    return s3.Views3D(
+        rng.uniform(0, 64, (n, 2)),
+        rng.uniform(0, 64, (n, 2)),
+        gaze,
+        np.zeros((n, 3)),
+        np.zeros((n, 3)),
+    )
+
+
+def test_population_readout_feeds_map_t_map_h_responses_and_soft_places_stay_near_winners():
+    from sigmapi.errors import ConfigError
+
+    eyes = (_random_views(120, 0), _random_views(120, 1))
+    head = (_random_views(120, 2), _random_views(120, 3))
+    kw = dict(grid=4, width=1.0, map_shape=(3, 3, 3), iterations=60, seed=0, eye_size=64)
+    kw.update(torso_grid=None, depth_grid=None)
+    chain = s3.learn_chain3d(eyes, head, readout="population", head_shape=(5, 4, 3), **kw)
+    h, t = chain.map_h, chain.map_t
+    assert isinstance(h, s3.FactorMap) and isinstance(t, s3.FactorMap)
+    # each part of map T reads the response of map H's part on the same axis
+    assert [p.x_shape for p in t.parts] == [(5,), (4,), (3,)]
+    resp = chain.response_h(head[0])
+    codes = chain.inputs_t(head[0])
+    for r, (x, _), p in zip(resp, codes, h.parts, strict=True):
+        assert r.shape == (120, p.n_units) and np.all(r >= 0)
+        assert np.allclose(np.linalg.norm(r, axis=1), 1.0) and np.array_equal(x, r)
+    assert chain.winners("torso", head[0]).max() < 27
+    # the soft place: within half a unit of the winner's grid place, on each axis
+    for stage in ("head", "torso"):
+        w = chain.winners(stage, head[0])
+        soft = chain.soft_grid_place(stage, head[0])
+        assert np.all(np.abs(soft - chain.model(stage).map_coords[w]) <= 0.5 + 1e-9)
+    with pytest.raises(ConfigError, match="readout 'population' needs map T's design"):
+        s3.learn_chain3d(eyes, head, readout="population", torso_design="grid", **kw)
+
+
 def test_a_tiny_sealed_run_learns_from_pixels_only():
     pytest.importorskip("mujoco")
     pytest.importorskip("icub_models")
@@ -193,6 +237,11 @@ def test_a_tiny_sealed_run_learns_from_pixels_only():
     assert np.allclose(eyes[0].head, eyes[1].head, atol=1e-9)
     assert np.allclose(head[0].torso, head[1].torso, atol=1e-9)
     assert not np.allclose(head[0].head, head[1].head, atol=1e-3)
+    # a smaller turn of the head between the views: each neck joint within it
+    near = s3.record_pairs(scene, 6, rng, "head", turn=np.radians(4.0))
+    assert np.allclose(near[0].torso, near[1].torso, atol=1e-9)
+    turned = np.abs(near[0].gaze[:, 3:] - near[1].gaze[:, 3:])
+    assert np.all(turned <= np.radians(4.0) + 1e-9) and np.any(turned > np.radians(0.5))
     chain = s3.learn_chain3d(
         eyes,
         head,
@@ -204,6 +253,7 @@ def test_a_tiny_sealed_run_learns_from_pixels_only():
         eye_size=64,
         design="grid",
         readout="hard",
+        **TINY,
     )
     m = s3.score_map(chain, "head", eyes, eyes)
     assert len(m["order_r2_per_axis"]) == 3 and m["error_cm"] > 0
@@ -221,8 +271,10 @@ def test_a_tiny_sealed_run_learns_from_pixels_only():
             eye_size=64,
             design=design,
             scales="sensed",
-            depth_grid=6,
             readout="soft",
+            head_shape=None,
+            torso_grid=None,
+            depth_grid=6,
         )
         place = chain.place_h(head[0])
         assert place.shape == (60, 3) and np.all((place >= 0) & (place <= 1))

@@ -108,6 +108,13 @@ FOLLOW_THROUGH = 1.0
 """When the posture is reached untouched, the arm goes on the same way, this many
 :data:`BACK_OFF` past it, in :data:`APPROACH` seconds, until the first touch (0: it stops at
 the posture)."""
+LEARNED_STATES = ("winner", "soft")
+"""Where the ``learned`` state's bump sits on map T's grid: at its winner, or at its soft place
+(moved between units by the scores,
+:meth:`~sigmapi.experiments.icub.space3d.Chain3D.soft_grid_place`), which the linear
+association can interpolate."""
+LEARNED_STATE = "soft"
+"""The ``learned`` state by default (:data:`LEARNED_STATES`)."""
 TOUCH_DEPTH = 0.002
 """How far into the palm's skin the experimenter presses the ball while babbling, metres."""
 _FAR = (1.5, -1.5, 0.7)  # where the ball waits while the robot babbles (out of reach and view)
@@ -204,11 +211,6 @@ def babble3d(
     return Babbles3D(np.array(postures), s3.Views3D(*cols), tried)
 
 
-def _unit(a: Array) -> Array:
-    n = np.linalg.norm(a, axis=1, keepdims=True)
-    return a / np.where(n > 0, n, 1.0)
-
-
 @dataclass
 class Features3D:
     """The states of views for each associated method (the module's account)."""
@@ -219,37 +221,49 @@ class Features3D:
     feature_width: float
     torso_box: Array
     """``(3, 2)`` the torso-centred range the ``true_position`` grid spans (metres)."""
+    state: str = LEARNED_STATE
+    """Where ``learned``'s bump sits (:data:`LEARNED_STATES`): map T's winner or its soft
+    place."""
 
     def __call__(self, method: str, v: s3.Views3D) -> Array:
         """The state ``(n, n_features)`` of views ``v`` for ``method``."""
         m_t = self.chain.model("torso")  # map T, whatever its design
         if method == "learned":
-            w = m_t.winner(*self.chain.inputs("torso", v), hard=True)
-            return bump_features(m_t.map_coords[w], m_t.map_coords, self.feature_width)
+            if self.state == "soft":
+                centres = self.chain.soft_grid_place("torso", v)
+            else:
+                centres = m_t.map_coords[m_t.winner(*self.chain.inputs("torso", v), hard=True)]
+            return bump_features(centres, m_t.map_coords, self.feature_width)
         if method == "true_position":
             lo, hi = self.torso_box.T
             pos = np.clip((v.torso - lo) / (hi - lo), 0.0, 1.0)
             centres = pos * (np.asarray(m_t.map_shape, dtype=np.float64) - 1.0)
             return bump_features(centres, m_t.map_coords, self.feature_width)
         code = PopulationCode((self.grid,) * 3, self.width)
-        retina = _unit(code.encode(s3.retina3(v, self.chain.eye_size)))
+        retina = s3.unit_rows(code.encode(s3.retina3(v, self.chain.eye_size)))
         if method == "retina":
             return retina
         if method == "retina_gaze":
-            parts = [retina, _unit(code.encode(s3.eyes3(v))), _unit(code.encode(s3.neck3(v)))]
+            parts = [retina, *(s3.unit_rows(code.encode(f(v))) for f in (s3.eyes3, s3.neck3))]
             return np.hstack(parts) / np.sqrt(3.0)
         raise ValueError(f"no features for method {method!r}")
 
 
 def features3d(
-    scene: ICubScene, chain: s3.Chain3D, grid: int, width: float, feature_width: float
+    scene: ICubScene,
+    chain: s3.Chain3D,
+    grid: int,
+    width: float,
+    feature_width: float,
+    state: str = LEARNED_STATE,
 ) -> Features3D:
     """The states of the associated methods; ``true_position``'s grid spans the box's
     torso-centred range (its corners, read as the reference's labels)."""
+    s3._check_choice("learned_state", state, LEARNED_STATES)
     corners = np.array(np.meshgrid(*st.BOX)).reshape(3, -1).T
     t = st.torso_position(scene, corners)
     box = np.column_stack([t.min(axis=0), t.max(axis=0)])
-    return Features3D(chain, grid, width, feature_width, box)
+    return Features3D(chain, grid, width, feature_width, box, state)
 
 
 @dataclass(frozen=True)
@@ -481,25 +495,23 @@ def run_seed3d(
     grid: int = 6,
     width: float = 1.0,
     map_shape: tuple[int, int, int] = (6, 6, 6),
-    map_grid: int = s3.GRID,
-    depth_grid: int | None = s3.DEPTH_GRID,
     backend: str = "auto",
     keep: bool = False,
+    learned_state: str = LEARNED_STATE,
 ) -> dict[str, Any]:
     """One seed of the 3-D task: the maps recorded, learned and scored; babbling; the
     associations; the reaches eyes free and fixated, summarised; ``keep``: also the raw
     reaches (``tests``) for the figures. ``grid``: units per axis of the retina's and the
-    gaze's codes that the associated methods read; ``map_grid`` and ``depth_grid``: the
-    maps' codes (:func:`~sigmapi.experiments.icub.space3d.learn_chain3d`, its measured
-    design by default)."""
+    gaze's codes that the associated methods read; ``map_shape``: map T's (the maps' other
+    settings :func:`~sigmapi.experiments.icub.space3d.learn_chain3d`'s defaults, the measured
+    design); ``learned_state``: where the ``learned`` state's bump sits
+    (:data:`LEARNED_STATES`)."""
     t0 = time.perf_counter()
     r_views, r_babble, r_reach = (PLAN.rng(seed, s) for s in ("views", "babbling", "reaches"))
     scene, train, ev = s3.record_box(r_views, pairs, eval_pairs)
     chain = s3.learn_chain3d(
         train["eyes"],
         train["head"],
-        grid=map_grid,
-        depth_grid=depth_grid,
         width=width,
         map_shape=map_shape,
         iterations=iterations,
@@ -511,7 +523,7 @@ def run_seed3d(
     t_maps = time.perf_counter() - t0
     bab = babble3d(scene, babbles, r_babble, yaw=yaw, wrist=wrist)
     held = babble3d(scene, max(50, babbles // 10), r_babble, yaw=yaw, wrist=wrist)
-    feats = features3d(scene, chain, grid, width, feature_width)
+    feats = features3d(scene, chain, grid, width, feature_width, learned_state)
     layers = {}
     for method in ASSOCIATED:
         phi = feats(method, bab.views)

@@ -88,10 +88,15 @@ PAIRS_PER_BALL = 2
 DESIGN = "axes"
 """The maps' design by default (:data:`DESIGNS`; chosen on seeds 0 and 1,
 docs/guide/icub-3d.md)."""
-GRID = 12
-"""Units per axis of the codes by default (the direction's and map T's)."""
+GRID = 24
+"""Units of map H's column, row, version and tilt codes by default."""
 DEPTH_GRID = 24
 """Units of map H's disparity and vergence codes by default."""
+HEAD_SHAPE = (18, 18, 6)
+"""Map H's shape by default (its azimuth, elevation and distance maps' units): finer than map
+T's (6x6x6) along the directions, so that a unit of map T spans more than one of map H."""
+TORSO_GRID = 20
+"""Units per axis of map T's codes by default (of map H's place and of the neck's angles)."""
 READOUT = "soft"
 """How map T reads map H's place by default (:data:`READOUTS`)."""
 ITERATIONS = 30_000
@@ -137,10 +142,19 @@ def _view(scene: ICubScene, seen: tuple[Array, Array], p: Array) -> tuple[Array,
     )
 
 
-def _look(scene: ICubScene, rng: np.random.Generator) -> tuple[Array, Array] | None:
-    """New random head postures and eye commands until both eyes see the ball."""
+def _look(
+    scene: ICubScene, rng: np.random.Generator, turn: float | None = None
+) -> tuple[Array, Array] | None:
+    """New random head postures and eye commands until both eyes see the ball; ``turn``
+    (radians): each posture within ``turn`` of the neck's present one on each joint (clipped
+    to the random postures' range), else anywhere in it."""
+    neck = scene.gaze()[3:6]
     for _ in range(_SEARCHES):
-        scene.set_gaze([0.0, 0.0, 0.0, *st.random_neck3d(rng)])
+        if turn is None:
+            new = st.random_neck3d(rng)
+        else:
+            new = np.clip(neck + rng.uniform(-turn, turn, 3), st.NECK_LOW, st.NECK_HIGH)
+        scene.set_gaze([0.0, 0.0, 0.0, *new])
         seen = st.search_both(scene, rng, tries=_SEARCH_TRIES)
         if seen is not None:
             return seen
@@ -148,11 +162,16 @@ def _look(scene: ICubScene, rng: np.random.Generator) -> tuple[Array, Array] | N
 
 
 def record_pairs(
-    scene: ICubScene, n: int, rng: np.random.Generator, stage: str
+    scene: ICubScene,
+    n: int,
+    rng: np.random.Generator,
+    stage: str,
+    turn: float | None = None,
 ) -> tuple[Views3D, Views3D]:
     """``n`` view pairs of balls put uniformly in :data:`~sigmapi.envs.icub.stereo.BOX`:
     ``stage="eyes"`` two random eye commands with the neck still (map H), ``"head"`` a new
-    random head posture between the two views (map T)."""
+    random head posture between the two views (map T; ``turn``: within ``turn`` radians of
+    the first view's on each neck joint, :func:`_look`)."""
     first: list[tuple[Array, ...]] = []
     second: list[tuple[Array, ...]] = []
     while len(first) < n:
@@ -164,7 +183,7 @@ def record_pairs(
                 break
             va = _view(scene, a, p)
             if stage == "head":
-                b = _look(scene, rng)
+                b = _look(scene, rng, turn)
             else:
                 b = st.search_both(scene, rng, tries=_SEARCH_TRIES)
             if b is not None:
@@ -358,22 +377,55 @@ class Chain3D:
         size = np.asarray(m.map_shape) - 1.0
         if self.readout == "hard":
             return m.map_coords[self.winners_h(v)] / size
-        inputs = self.inputs_h(v)
+        return self.soft_grid_place("head", v) / size
+
+    def soft_grid_place(self, stage: str, v: Views3D) -> Array:
+        """Map ``stage``'s winner's place on its grid ``(n, 3)`` (grid units), moved along
+        each axis to the vertex of the parabola through the winner's and its two neighbours'
+        scores (:func:`soft_place`)."""
+        m, inputs = self.model(stage), self.inputs(stage, v)
         if isinstance(m, FactorMap):
-            places = [soft_place(p, *c) for p, c in zip(m.parts, inputs, strict=True)]
-            return np.column_stack(places) / size
-        return soft_place(m, *inputs) / size
+            return np.column_stack(
+                [soft_place(p, *c) for p, c in zip(m.parts, inputs, strict=True)]
+            )
+        return soft_place(m, *inputs)
 
     def inputs_t(self, v: Views3D) -> Any:
         """Map T's codes of views ``v``: map H's place (hills :data:`HEAD_WIDTH` wide) and
         the neck's yaw, pitch and roll; of a :class:`FactorMap` one pair per part: map H's
         place on the part's axes with the neck's yaw for the azimuth and its pitch for the
         elevation and the distance."""
-        place, neck, m = self.place_h(v), self.scales.unit(v)[:, 6:9], self.map_t
+        neck, m = self.scales.unit(v)[:, 6:9], self.map_t
+        if self.readout == "population":
+            return self._population_inputs(v, neck)
+        place = self.place_h(v)
         if isinstance(m, FactorMap):
             return _codes(m, place, neck[:, [0, 1, 1]])
         code = PopulationCode(self.map_h.map_shape, HEAD_WIDTH).encode(place)
         return code, m.y_code.encode(neck)
+
+    def _neck_codes(self, neck: Array) -> list[Array]:
+        """Map T's second codes, per part of a :class:`FactorMap`: the neck's yaw on the
+        azimuth's axis, its pitch on the elevation's and the distance's."""
+        m, ny = self.map_t, neck[:, [0, 1, 1]]
+        assert isinstance(m, FactorMap)
+        return [p.y_code.encode(ny[:, a]) for p, a in zip(m.parts, m.axes, strict=True)]
+
+    def response_h(self, v: Views3D) -> list[Array]:
+        """Map H's population response to views ``v``, per part (one array for a 3-D
+        map): each unit's activation (:meth:`~sigmapi.model.som.SigmaPiSOM.respond`) clipped
+        at zero, the vector of a view scaled to length 1 (a code as the others are)."""
+        m, inputs = self.map_h, self.inputs_h(v)
+        pairs = zip(m.parts, inputs, strict=True) if isinstance(m, FactorMap) else [(m, inputs)]
+        return [unit_rows(np.maximum(p.respond(*c), 0.0)) for p, c in pairs]
+
+    def _population_inputs(self, v: Views3D, neck: Array) -> Any:
+        """Map T's codes under ``readout="population"``: each part reads the response vector of
+        map H's part on the same axes (:meth:`response_h`) with the neck's code."""
+        m, resp = self.map_t, self.response_h(v)
+        if isinstance(m, FactorMap):
+            return tuple(zip(resp, self._neck_codes(neck), strict=True))
+        return resp[0], m.y_code.encode(neck)
 
     def inputs(self, stage: str, v: Views3D) -> Any:
         """The codes of map ``stage`` (``"head"`` for H, ``"torso"`` for T)."""
@@ -404,6 +456,12 @@ def _codes(m: Model, x: Array, y: Array) -> Any:
     return m.x_code.encode(x), m.y_code.encode(y)
 
 
+def unit_rows(a: Array) -> Array:
+    """Rows of ``a`` scaled to length 1 (a zero row stays zero)."""
+    n = np.linalg.norm(a, axis=1, keepdims=True)
+    return a / np.where(n > 0, n, 1.0)
+
+
 def _n_weights(m: Model) -> int:
     return m.n_weights if isinstance(m, FactorMap) else int(m.weights_.size)
 
@@ -425,18 +483,22 @@ def _new_map(
     iterations: int,
     seed: int,
     backend: str,
+    x_shapes: list[tuple[int, ...]] | None = None,
 ) -> Model:
     """A fresh 3-D map on codes of ``codes`` units per axis (both inputs): ``"grid"`` one
     Sigma-Pi map; ``"factorised"`` a :class:`FactorMap` of a 2-D map on the first two axes
-    and a 1-D map on the third; ``"axes"`` one 1-D map per axis."""
+    and a 1-D map on the third; ``"axes"`` one 1-D map per axis. ``x_shapes``: the first
+    input's shape per part (one for ``"grid"``), when it is not a code of ``codes``."""
     if design == "grid":
-        return SigmaPiSOM(som_config(codes, codes, map_shape, width, iterations, seed, backend))
+        x = codes if x_shapes is None else x_shapes[0]
+        return SigmaPiSOM(som_config(x, codes, map_shape, width, iterations, seed, backend))
     split = [[0, 1], [2]] if design == "factorised" else [[0], [1], [2]]
     seeds = [seed, *(int(s) for s in np.random.default_rng(seed).integers(0, 2**31 - 1, 2))]
     parts = []
-    for axes, s in zip(split, seeds, strict=False):
+    for i, (axes, s) in enumerate(zip(split, seeds, strict=False)):
         c, ms = tuple(codes[a] for a in axes), tuple(map_shape[a] for a in axes)
-        parts.append(SigmaPiSOM(som_config(c, c, ms, width, iterations, s, backend)))
+        x = c if x_shapes is None else x_shapes[i]
+        parts.append(SigmaPiSOM(som_config(x, c, ms, width, iterations, s, backend)))
     return FactorMap(*parts)
 
 
@@ -444,37 +506,44 @@ def learn_chain3d(
     eyes: tuple[Views3D, Views3D],
     head: tuple[Views3D, Views3D],
     *,
-    grid: int,
-    width: float,
-    map_shape: tuple[int, int, int],
-    iterations: int,
     seed: int,
     eye_size: int,
+    grid: int = GRID,
+    width: float = 1.0,
+    map_shape: tuple[int, int, int] = (6, 6, 6),
+    iterations: int = ITERATIONS,
     backend: str = "auto",
     design: str = DESIGN,
     torso_design: str | None = None,
     scales: str = "fixed",
-    depth_grid: int | None = None,
+    depth_grid: int | None = DEPTH_GRID,
     readout: str = READOUT,
-    torso_grid: int | None = None,
-    head_shape: tuple[int, int, int] | None = None,
+    torso_grid: int | None = TORSO_GRID,
+    head_shape: tuple[int, int, int] | None = HEAD_SHAPE,
 ) -> Chain3D:
     """Map H on the eyes' pairs, then map T on map H's code of the head's pairs (codes of
-    ``grid`` units per axis, hills ``width`` wide; both maps ``map_shape``).
+    ``grid`` units per axis, hills ``width`` wide; map T ``map_shape``). The defaults are the
+    measured design (docs/guide/icub-3d.md): the one place :func:`run_maps` and the reach's
+    run take it from.
 
     ``design``: ``"grid"`` (each map one 3-D Sigma-Pi map) or ``"factorised"`` (each a
     :class:`FactorMap`: a 2-D direction map and a 1-D distance map, ``map_shape`` their
     product); ``torso_design``: map T's, when it differs. ``scales``: ``"fixed"`` (the codes
     span the commands' ranges, :func:`fixed_scales`) or ``"sensed"`` (the training views'
     percentiles, :func:`sensed_scales`). ``depth_grid``: units of the codes along the depth
-    (the disparity and the vergence; the default ``grid``). ``readout``: how map T reads
-    map H's place (:data:`READOUTS`, :meth:`Chain3D.place_h`). ``torso_grid``: units per
-    axis of map T's codes (the default ``grid``). ``head_shape``: map H's shape, when it
-    differs from map T's (``map_shape``)."""
+    (the disparity and the vergence; None: ``grid``). ``readout``: how map T reads map H
+    (:data:`READOUTS`, :meth:`Chain3D.place_h`, :meth:`Chain3D.response_h`).
+    ``torso_grid``: units per axis of map T's codes (None: ``grid``). ``head_shape``: map H's
+    shape (None: ``map_shape``)."""
     _check_choice("design", design, DESIGNS)
     t_design = design if torso_design is None else torso_design
     _check_choice("torso_design", t_design, DESIGNS)
     _check_choice("scales", scales, SCALES)
+    if readout == "population" and t_design != design:
+        raise ConfigError(
+            f"readout 'population' needs map T's design to be map H's ({design!r}), got "
+            f"torso_design {t_design!r}; drop torso_design or pick readout 'soft'"
+        )
     sc = fixed_scales(eye_size) if scales == "fixed" else sensed_scales((*eyes, *head))
     dg = grid if depth_grid is None else depth_grid
     s1, s2 = (int(s) for s in np.random.default_rng(seed).integers(0, 2**31 - 1, 2))
@@ -484,7 +553,11 @@ def learn_chain3d(
     a, b = eyes
     _fit(map_h, chain.inputs_h(a), chain.inputs_h(b))
     tg = (grid if torso_grid is None else torso_grid,) * 3
-    if t_design == "grid":  # map H's place code (its grid) with the neck's
+    if readout == "population":  # each part of map T on the response of map H's part
+        parts = map_h.parts if isinstance(map_h, FactorMap) else [map_h]
+        xs = [tuple(int(n) for n in p.map_shape) for p in parts]
+        chain.map_t = _new_map(t_design, tg, map_shape, width, iterations, s2, backend, xs)
+    elif t_design == "grid":  # map H's place code (its grid) with the neck's
         cfg = som_config(map_h.map_shape, tg, map_shape, width, iterations, s2, backend)
         chain.map_t = SigmaPiSOM(cfg)
     else:
@@ -498,8 +571,9 @@ DESIGNS = ("grid", "factorised", "axes")
 """The maps' designs (:func:`learn_chain3d`)."""
 PART_NAMES = {2: ("direction", "distance"), 3: ("azimuth", "elevation", "distance")}
 """The names of a :class:`FactorMap`'s parts in the scores, by their number."""
-READOUTS = ("hard", "soft")
-"""How map T reads map H's place (:meth:`Chain3D.place_h`)."""
+READOUTS = ("hard", "soft", "population")
+"""How map T reads map H: its place (:meth:`Chain3D.place_h`) or its population response
+(:meth:`Chain3D.response_h`)."""
 
 
 def _check_choice(name: str, value: str, choices: tuple[str, ...]) -> None:
@@ -690,10 +764,12 @@ def kmeans_reference(
     rng = np.random.default_rng(seed)
     z = np.unique(np.concatenate([_truth(stage, v) for v in train]), axis=0)
     k = min(k, z.shape[0])
-    centres = z[rng.integers(z.shape[0])][None, :]
-    for _ in range(1, k):  # k-means++
-        d = np.min(np.sum((z[:, None, :] - centres[None, :, :]) ** 2, axis=2), axis=1)
-        centres = np.vstack([centres, z[rng.choice(z.shape[0], p=d / d.sum())]])
+    centres = np.empty((k, z.shape[1]))
+    centres[0] = z[rng.integers(z.shape[0])]
+    d = np.sum((z - centres[0]) ** 2, axis=1)
+    for j in range(1, k):  # k-means++ (d: each place's squared distance to its nearest centre)
+        centres[j] = z[rng.choice(z.shape[0], p=d / d.sum())]
+        d = np.minimum(d, np.sum((z - centres[j]) ** 2, axis=1))
     for _ in range(rounds):
         lab = _nearest(z, centres)
         for j in range(k):
@@ -767,21 +843,12 @@ def run_maps(
     *,
     train_pairs: int = 2000,
     eval_pairs: int = 400,
-    grid: int = GRID,
-    width: float = 1.0,
-    map_shape: tuple[int, int, int] = (6, 6, 6),
     iterations: int = ITERATIONS,
-    backend: str = "auto",
-    design: str = DESIGN,
-    torso_design: str | None = None,
-    scales: str = "fixed",
-    depth_grid: int | None = DEPTH_GRID,
-    readout: str = READOUT,
-    torso_grid: int | None = None,
-    head_shape: tuple[int, int, int] | None = None,
+    **options: Any,
 ) -> dict[str, Any]:
-    """One seed of the 3-D maps: record, learn (:func:`learn_chain3d`'s options), score
-    against both references; the seconds taken and the process's peak resident memory."""
+    """One seed of the 3-D maps: record, learn (``options``: :func:`learn_chain3d`'s, its
+    defaults the measured design), score against both references; the seconds taken and the
+    process's peak resident memory."""
     t0 = time.perf_counter()
     scene, train, ev = record_box(np.random.default_rng(seed), train_pairs, eval_pairs)
     scene.close()
@@ -789,20 +856,10 @@ def run_maps(
     chain = learn_chain3d(
         train["eyes"],
         train["head"],
-        grid=grid,
-        width=width,
-        map_shape=map_shape,
         iterations=iterations,
         seed=seed,
         eye_size=scene.eye_size,
-        backend=backend,
-        design=design,
-        torso_design=torso_design,
-        scales=scales,
-        depth_grid=depth_grid,
-        readout=readout,
-        torso_grid=torso_grid,
-        head_shape=head_shape,
+        **options,
     )
     t_learn = time.perf_counter() - t0 - t_record
     out = score_chain(chain, train, ev, iterations, seed)
