@@ -146,15 +146,6 @@ def look(
     return None
 
 
-def _arm_touches(scene: ICubScene) -> bool:
-    """Touch, sensed with the arm where it is set: any contact of the hand or forearm."""
-    scene._mj.mj_collision(scene.model, scene.data)
-    n = scene.data.ncon
-    g1, g2 = scene.data.contact.geom1[:n], scene.data.contact.geom2[:n]
-    arm = scene.model.geom_contype == 2
-    return bool(np.any(arm[g1] | arm[g2]))
-
-
 def _touch_point(scene: ICubScene, inset: float = 0.0) -> Array:
     """Where a ball's centre sits when it rests on the palm (the palm's contact point plus a
     radius less ``inset`` along its normal), world; truth: the experimenter's and the scores'
@@ -191,7 +182,7 @@ def babble3d(
         q = np.zeros(7)
         q[idx] = rng.uniform(lo[idx], hi[idx])
         scene.set_arm(q)
-        if _arm_touches(scene):
+        if scene.arm_touches():
             continue
         with scene.truth():  # the experimenter presses the ball against the palm
             p = _touch_point(scene, TOUCH_DEPTH)
