@@ -298,8 +298,9 @@ def test_the_space_is_a_declared_choice():
     with pytest.raises(ConfigError, match="space"):
         ICubConfig(space="air")
     assert QUICK.box_pairs < ICubConfig().box_pairs
-    with pytest.raises(ConfigError, match="render must be unset with space 'box'"):
-        ICubConfig(space="box", render="reach.gif")  # no film in 3-D: refused, not ignored
+    assert ICubConfig(space="box", render="reach.gif").render == "reach.gif"  # the 3-D film
+    with pytest.raises(ConfigError, match=r"render must be a file name ending in \.gif"):
+        ICubConfig(space="box", render="reach.png")
 
 
 def test_icub_help_shows_the_space_and_the_box_fields(capsys):
@@ -340,7 +341,7 @@ def test_sigmapi_icub_space_box_runs_and_writes_the_keys(tmp_path, capsys):
     rc = main(
         ["icub", "--space", "box", "--seeds", "7", "--box-pairs", "20", "--box-eval-pairs",
          "20", "--box-iterations", "50", "--box-babbles", "50", "--reaches", "2", "--json",
-         "--out", str(tmp_path / "out"), "--quiet"]
+         "--out", str(tmp_path / "out"), "--quiet", "--render", str(tmp_path / "reach.gif")]
     )  # fmt: skip
     assert rc == 0
     d = json.loads(capsys.readouterr().out)
@@ -351,7 +352,10 @@ def test_sigmapi_icub_space_box_runs_and_writes_the_keys(tmp_path, capsys):
     for name in ("map_head", "map_torso"):
         assert len(d["maps"][name]["order_r2_per_axis"]) == 3
         assert "order_r2" in d["maps"][name]
-    assert (tmp_path / "out" / "end_point_histogram.png").exists()
+    for name in ("end_point_histogram", "film", "eyes"):  # the first seed's film and eyes
+        assert (tmp_path / "out" / f"{name}.png").exists()
+    assert "3-D box" in (tmp_path / "out" / "eyes.txt").read_text()
+    assert (tmp_path / "reach.gif").read_bytes()[:6] == b"GIF89a"
 
 
 def test_the_3d_gym_id_senses_both_eyes_scores_the_palm_and_refuses_bad_input():

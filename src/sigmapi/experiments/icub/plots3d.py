@@ -9,11 +9,13 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from sigmapi._outputs import save_captioned
+from sigmapi.envs.icub.detect import TARGETS
 from sigmapi.envs.icub.model import BALL_RADIUS, HAND_MARKER, MARKER_RADIUS
 
 
@@ -131,3 +133,42 @@ def end_point_definition(path: Path) -> Path:
 def _xy(p: NDArray[np.float64]) -> tuple[float, float]:
     """A 2-D point as the pair matplotlib's annotations take."""
     return float(p[0]), float(p[1])
+
+
+def film_and_eyes(first: Mapping[str, Any], seed: int, out_dir: Path) -> list[Path]:
+    """``film.png``, a strip of the frames filmed during the learned chain's first reach
+    (eyes free), and ``eyes.png``, both eyes' frames of a view of that ball with the arm at the
+    learned posture and the detections drawn on (:func:`~sigmapi.experiments.icub.plots.
+    plot_eyes`), from the first seed's record where it holds them; each with its caption."""
+    import matplotlib.pyplot as plt
+
+    from sigmapi.experiments.icub.plots import plot_eyes, save_film
+    from sigmapi.experiments.icub.reaching import EYES
+
+    paths: list[Path] = []
+
+    def save(fig: Any, name: str, caption: str) -> None:
+        paths.append(save_captioned(fig, out_dir / name, caption, dpi=110, bbox_inches="tight"))
+        plt.close(fig)
+
+    save_film(
+        first.get("film") or [],
+        save,
+        f"Seed {seed}, 3-D box",
+        "from a fixed camera during the learned chain's first reach (eyes free; the ball "
+        "floats where the experimenter put it)",
+    )
+    eyes = first.get("eyes")
+    if eyes is not None:
+        h, w = eyes["l_eye"].shape[:2]
+        found = sum(eyes[f"{e}_{t}_seen"] is not None for e in EYES for t in TARGETS)
+        save(
+            plot_eyes(eyes),
+            "eyes.png",
+            f"Seed {seed}, 3-D box: both eyes' {w}x{h} frames of one view of the first test "
+            "ball, the arm at the posture the learned chain reads from that view; white and "
+            "magenta x: where the detector finds the ball and the hand's marker in the pixels "
+            f"({found} of 4 found); yellow circle and cyan cross: where the ball's centre and "
+            "the palm project (the scorer's truth).",
+        )
+    return paths

@@ -75,7 +75,7 @@ from sigmapi.envs.icub import stereo as st
 from sigmapi.envs.icub.model import BALL_RADIUS
 from sigmapi.experiments.icub import space3d as s3
 from sigmapi.experiments.icub.config import PLAN
-from sigmapi.experiments.icub.reaching import _BABBLED, _WRIST, _YAW
+from sigmapi.experiments.icub.reaching import _BABBLED, _WRIST, _YAW, eye_frames
 
 Array = NDArray[np.float64]
 
@@ -84,6 +84,8 @@ METHODS = ("learned", "true_position", "retina", "retina_gaze", "scripted_ik", "
 ASSOCIATED = METHODS[:4]
 """The methods that reach through an association learned from babbling."""
 CONDITIONS = ("free", "fixated")
+FILM = 8
+"""Frames per leg of the filmed reach (the 2-D run's number)."""
 """The eyes when the state is read: free (the ball anywhere in both views) or fixated."""
 LEG = 0.6
 """Seconds of the move from the home pose to the approach posture."""
@@ -489,10 +491,14 @@ def run_seed3d(
     backend: str = "auto",
     keep: bool = False,
     learned_state: str = LEARNED_STATE,
+    film: bool = False,
 ) -> dict[str, Any]:
     """One seed of the 3-D task: the maps recorded, learned and scored; babbling; the
     associations; the reaches eyes free and fixated, summarised; ``keep``: also the raw
-    reaches (``tests``) for the figures. ``grid``: units per axis of the retina's and the
+    reaches (``tests``) for the figures; ``film``: also the frames of the learned chain's
+    first reach, eyes free (``"film"``, :data:`FILM` per leg), and both eyes' frames of a
+    view of its ball with the arm at the posture the chain reads from it (``"eyes"``,
+    :func:`shown_eyes`). ``grid``: units per axis of the retina's and the
     gaze's codes that the associated methods read; ``map_shape``: map T's (the maps' other
     settings :func:`~sigmapi.experiments.icub.space3d.learn_chain3d`'s defaults, the measured
     design); ``learned_state``: where the ``learned`` state's bump sits
@@ -520,7 +526,9 @@ def run_seed3d(
         phi = feats(method, bab.views)
         layers[method] = Association(phi.shape[1], 7, epochs=epochs).fit(phi, bab.posture)
     t_babble = time.perf_counter() - t0 - t_maps
-    tests, _ = reach_tests3d(scene, layers, feats, reaches, r_reach, held.posture)
+    shot = (lambda i, method: FILM if i == 0 and method == "learned" else 0) if film else None
+    tests, frames = reach_tests3d(scene, layers, feats, reaches, r_reach, held.posture, shot)
+    eyes = shown_eyes(scene, layers["learned"], feats, tests.ball[0], r_reach) if film else None
     scene.close()
     out: dict[str, Any] = {
         "seed": seed,
@@ -536,4 +544,32 @@ def run_seed3d(
     }
     if keep:
         out["tests"] = tests
+    if film:
+        out["film"] = frames
+        if eyes is not None:
+            out["eyes"] = eyes
+    return out
+
+
+def shown_eyes(
+    scene: ICubScene,
+    layer: Association,
+    feats: Callable[[str, s3.Views3D], Array],
+    ball: Array,
+    rng: np.random.Generator,
+) -> dict[str, Any] | None:
+    """Both eyes' frames (:func:`~sigmapi.experiments.icub.reaching.eye_frames`) of a view of
+    ``ball`` (world; the eyes find it, :func:`look`), the arm set at the posture the learned
+    ``layer`` reads from that view (kinematics, the ball where it was put); None when the eyes
+    cannot find it."""
+    scene.reset()
+    st.place_ball(scene, ball)
+    seen = look(scene, rng)
+    if seen is None:
+        return None
+    with scene.truth():
+        row = _view_row(scene, seen, ball)
+    scene.set_arm(layer.predict(feats("learned", _views([row])))[0])
+    out = eye_frames(scene)
+    scene.reset()
     return out
