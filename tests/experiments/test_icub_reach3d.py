@@ -352,8 +352,13 @@ def test_sigmapi_icub_space_box_runs_and_writes_the_keys(tmp_path, capsys):
     for name in ("map_head", "map_torso"):
         assert len(d["maps"][name]["order_r2_per_axis"]) == 3
         assert "order_r2" in d["maps"][name]
-    for name in ("end_point_histogram", "film", "eyes"):  # the first seed's film and eyes
+    for name in ("end_point_histogram", "film", "eyes", "map-slices"):  # the first seed's
         assert (tmp_path / "out" / f"{name}.png").exists()
+    slices = (tmp_path / "out" / "map-slices.txt").read_text()
+    for name in ("map_head", "map_torso"):  # the caption reads the scores
+        s = d["maps"][name]  # one seed: its own numbers
+        verdict = "folded" if s["per_seed"][0]["folded"] else "not flagged"
+        assert f"{s['order_r2']:.2f}, {verdict} (fold score {s['fold_score']:.2f})" in slices
     assert "3-D box" in (tmp_path / "out" / "eyes.txt").read_text()
     assert (tmp_path / "reach.gif").read_bytes()[:6] == b"GIF89a"
 

@@ -333,10 +333,11 @@ class ICubBoxResult(Result):
         """The end-point error histogram per method (eyes free;
         :func:`~sigmapi.experiments.icub.plots3d.end_point_histogram`), the first seed's
         filmed reach as a strip and both eyes' frames with the detections
-        (:func:`~sigmapi.experiments.icub.plots3d.film_and_eyes`); with ``config.render``,
+        (:func:`~sigmapi.experiments.icub.plots3d.film_and_eyes`), the maps' middle slices
+        (:func:`~sigmapi.experiments.icub.plots3d.map_slices`); with ``config.render``,
         the filmed reach as an animated GIF."""
         from sigmapi.experiments.icub.plots import write_gif
-        from sigmapi.experiments.icub.plots3d import end_point_histogram, film_and_eyes
+        from sigmapi.experiments.icub.plots3d import end_point_histogram, film_and_eyes, map_slices
 
         errors = {
             m: 100.0 * np.concatenate([s["end_point_m"]["free"][m] for s in self.per_seed])
@@ -345,6 +346,9 @@ class ICubBoxResult(Result):
         paths = [end_point_histogram(errors, Path(out_dir) / "end_point_histogram.png")]
         first = self.per_seed[0]
         paths += film_and_eyes(first, self.seeds[0], Path(out_dir))
+        if first.get("units"):
+            out = Path(out_dir) / "map-slices.png"
+            paths.append(map_slices(first["units"], first["maps"], self.seeds[0], out))
         if self.config.render is not None and first.get("film"):
             paths.append(write_gif(first["film"], Path(self.config.render)))
         return paths

@@ -76,6 +76,7 @@ from sigmapi.envs.icub.model import BALL_RADIUS
 from sigmapi.experiments.icub import space3d as s3
 from sigmapi.experiments.icub.config import PLAN
 from sigmapi.experiments.icub.reaching import _BABBLED, _WRIST, _YAW, eye_frames
+from sigmapi.metrics import z_decoder
 
 Array = NDArray[np.float64]
 
@@ -517,6 +518,7 @@ def run_seed3d(
         backend=backend,
     )
     maps = s3.score_chain(chain, train, ev, iterations, seed)
+    units = unit_positions(chain, ev) if film else None
     t_maps = time.perf_counter() - t0
     bab = babble3d(scene, babbles, r_babble, yaw=yaw, wrist=wrist)
     held = babble3d(scene, max(50, babbles // 10), r_babble, yaw=yaw, wrist=wrist)
@@ -545,9 +547,26 @@ def run_seed3d(
     if keep:
         out["tests"] = tests
     if film:
-        out["film"] = frames
+        out["film"], out["units"] = frames, units
         if eyes is not None:
             out["eyes"] = eyes
+    return out
+
+
+def unit_positions(
+    chain: s3.Chain3D, ev: dict[str, tuple[tuple[s3.Views3D, s3.Views3D], Any]]
+) -> dict[str, tuple[Array, tuple[int, ...]]]:
+    """Per map (``"map_head"``, ``"map_torso"``): each unit's mean true position over the
+    calibration views it wins (head- or torso-centred metres; a unit that wins none at the
+    affine fit's place, :func:`~sigmapi.metrics.z_decoder`) and the map's shape: the figure's
+    labelled reference."""
+    out = {}
+    for name, stage, data in (("map_head", "head", "eyes"), ("map_torso", "torso", "head")):
+        c0 = ev[data][0][0]
+        model = chain.model(stage)
+        z = c0.head if stage == "head" else c0.torso
+        table = z_decoder(chain.winners(stage, c0), z, model.map_coords)
+        out[name] = (table, tuple(int(n) for n in model.map_shape))
     return out
 
 
