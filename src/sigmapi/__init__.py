@@ -67,3 +67,9 @@ if "sigmapi/ICubReach-v0" not in _gymnasium.registry:
     # the iCub humanoid (sigmapi.envs.icub); making it needs the robot extra (MuJoCo and
     # icub-models); no time limit: every episode ends with its one reach (terminated)
     _gymnasium.register(id="sigmapi/ICubReach-v0", entry_point="sigmapi.envs.icub.env:ICubReachEnv")
+if "sigmapi/ICubReach3D-v0" not in _gymnasium.registry:
+    # the iCub's 3-D task (sigmapi.experiments.icub.env3d: a ball in the air, both eyes, palm
+    # first); making it needs the robot extra; every episode ends with its one reach
+    _gymnasium.register(
+        id="sigmapi/ICubReach3D-v0", entry_point="sigmapi.experiments.icub.env3d:ICubReach3DEnv"
+    )

@@ -298,8 +298,9 @@ def test_the_space_is_a_declared_choice():
     with pytest.raises(ConfigError, match="space"):
         ICubConfig(space="air")
     assert QUICK.box_pairs < ICubConfig().box_pairs
-    with pytest.raises(ConfigError, match="render must be unset with space 'box'"):
-        ICubConfig(space="box", render="reach.gif")  # no film in 3-D: refused, not ignored
+    assert ICubConfig(space="box", render="reach.gif").render == "reach.gif"  # the 3-D film
+    with pytest.raises(ConfigError, match=r"render must be a file name ending in \.gif"):
+        ICubConfig(space="box", render="reach.png")
 
 
 def test_icub_help_shows_the_space_and_the_box_fields(capsys):
@@ -340,7 +341,7 @@ def test_sigmapi_icub_space_box_runs_and_writes_the_keys(tmp_path, capsys):
     rc = main(
         ["icub", "--space", "box", "--seeds", "7", "--box-pairs", "20", "--box-eval-pairs",
          "20", "--box-iterations", "50", "--box-babbles", "50", "--reaches", "2", "--json",
-         "--out", str(tmp_path / "out"), "--quiet"]
+         "--out", str(tmp_path / "out"), "--quiet", "--render", str(tmp_path / "reach.gif")]
     )  # fmt: skip
     assert rc == 0
     d = json.loads(capsys.readouterr().out)
@@ -351,4 +352,50 @@ def test_sigmapi_icub_space_box_runs_and_writes_the_keys(tmp_path, capsys):
     for name in ("map_head", "map_torso"):
         assert len(d["maps"][name]["order_r2_per_axis"]) == 3
         assert "order_r2" in d["maps"][name]
-    assert (tmp_path / "out" / "end_point_histogram.png").exists()
+    for name in ("end_point_histogram", "film", "eyes", "map-slices"):  # the first seed's
+        assert (tmp_path / "out" / f"{name}.png").exists()
+    slices = (tmp_path / "out" / "map-slices.txt").read_text()
+    for name in ("map_head", "map_torso"):  # the caption reads the scores
+        s = d["maps"][name]  # one seed: its own numbers
+        verdict = "folded" if s["per_seed"][0]["folded"] else "not flagged"
+        assert f"{s['order_r2']:.2f}, {verdict} (fold score {s['fold_score']:.2f})" in slices
+    assert "3-D box" in (tmp_path / "out" / "eyes.txt").read_text()
+    assert (tmp_path / "reach.gif").read_bytes()[:6] == b"GIF89a"
+
+
+def test_the_3d_gym_id_senses_both_eyes_scores_the_palm_and_refuses_bad_input():
+    _scene()  # skips without MuJoCo, icub-models or a GL context
+    import gymnasium as gym
+    from gymnasium.utils.env_checker import check_env
+
+    from sigmapi.envs.icub import stereo as st
+    from sigmapi.experiments.icub import reach3d as r3
+
+    env = gym.make("sigmapi/ICubReach3D-v0").unwrapped
+    check_env(env, skip_render_check=True)
+    rng = np.random.default_rng(5)
+    won = []
+    for seed in range(3):
+        p = r3._reachable(env.scene, rng)
+        obs, info = env.reset(seed=seed, options={"ball": p})
+        np.testing.assert_allclose(info["ball"], p)
+        seen = st.see_both(env.scene)  # the observation is both eyes' detections, in pixels
+        assert seen is not None
+        np.testing.assert_allclose(obs["left"] * env.scene.eye_size, seen[0], atol=1e-3)
+        np.testing.assert_allclose(obs["right"] * env.scene.eye_size, seen[1], atol=1e-3)
+        np.testing.assert_allclose(obs["gaze"], env.scene.gaze(), atol=1e-6)
+        q = r3.scripted_ik(env.scene, p)[0]
+        _, reward, done, _, info = env.step(env.action_of(q))
+        assert done and reward == float(info["is_success"])
+        won.append(info["is_success"])
+    assert sum(won) >= 2  # the scripted reference's posture: palm first, the ball kept
+    env.reset(seed=0, options={"ball": p})
+    _, reward, _, _, info = env.step(-np.ones(7, np.float32))  # the arm's lower limits
+    assert reward == 0.0 and not info["is_success"]
+    for bad in (np.full(7, np.nan, np.float32), np.full(7, 2.0, np.float32)):
+        with pytest.raises(ConfigError, match="action must be"):
+            env.step(bad)
+    for opt, says in (({"bal": 1}, "unknown reset option 'bal'"), ({"ball": (0, 0, 0)}, "ball")):
+        with pytest.raises(ConfigError, match=says):
+            env.reset(options=opt)
+    env.close()

@@ -31,7 +31,7 @@ from sigmapi.envs.icub.reach import physical_reach
 from sigmapi.envs.icub.scene import EYE_SIZE, GAZE, ICubScene
 from sigmapi.errors import ConfigError
 
-__all__ = ["ENV_ID", "RETINA_SOURCES", "ICubReachEnv"]
+__all__ = ["ENV_ID", "RETINA_SOURCES", "ArmAction", "ICubReachEnv"]
 
 ENV_ID = "sigmapi/ICubReach-v0"
 """The environment's Gymnasium id (registered by ``import sigmapi``)."""
@@ -41,7 +41,25 @@ RETINA_SOURCES = ("projection", "pixels")
 Obs = dict[str, NDArray[np.float32]]
 
 
-class ICubReachEnv(gym.Env[Obs, NDArray[np.float32]]):
+class ArmAction:
+    """An iCub environment's action: an arm posture, each joint's range (``_lo``, ``_hi``,
+    radians) mapped onto [-1, 1]."""
+
+    _lo: NDArray[np.float64]
+    _hi: NDArray[np.float64]
+
+    def posture(self, action: NDArray[np.generic]) -> NDArray[np.float64]:
+        """The arm posture (radians) of an action in [-1, 1]^7."""
+        a = np.clip(np.asarray(action, dtype=np.float64), -1.0, 1.0)
+        return self._lo + 0.5 * (a + 1.0) * (self._hi - self._lo)
+
+    def action_of(self, posture: NDArray[np.generic]) -> NDArray[np.float32]:
+        """The action (in [-1, 1]^7) of an arm posture (radians; clipped to the ranges)."""
+        q = np.clip(np.asarray(posture, dtype=np.float64), self._lo, self._hi)
+        return (2.0 * (q - self._lo) / (self._hi - self._lo) - 1.0).astype(np.float32)
+
+
+class ICubReachEnv(ArmAction, gym.Env[Obs, NDArray[np.float32]]):
     """Reach for a ball on the table with the iCub's right arm, from a random gaze.
 
     Parameters
@@ -92,16 +110,6 @@ class ICubReachEnv(gym.Env[Obs, NDArray[np.float32]]):
         """The gazes ``reset(options={"gaze": ...})`` takes (:data:`GAZE` rows, ``(low,
         high)``, radians): each joint within its range (the eyes' version and vergence also
         keep each eye's pan within its range)."""
-
-    def posture(self, action: NDArray[np.generic]) -> NDArray[np.float64]:
-        """The arm posture (radians) of an action in [-1, 1]^7."""
-        a = np.clip(np.asarray(action, dtype=np.float64), -1.0, 1.0)
-        return self._lo + 0.5 * (a + 1.0) * (self._hi - self._lo)
-
-    def action_of(self, posture: NDArray[np.generic]) -> NDArray[np.float32]:
-        """The action (in [-1, 1]^7) of an arm posture (radians; clipped to the ranges)."""
-        q = np.clip(np.asarray(posture, dtype=np.float64), self._lo, self._hi)
-        return (2.0 * (q - self._lo) / (self._hi - self._lo) - 1.0).astype(np.float32)
 
     def _retina(self) -> NDArray[np.float64]:
         s = self.scene

@@ -412,6 +412,16 @@ class ICubScene:
         other = (arm[g1] | arm[g2]) & ~palm
         return bool(np.any(palm)), bool(np.any(other))
 
+    def arm_touches(self) -> bool:
+        """Touch, sensed with the arm where it is set: any contact of the hand or forearm
+        (with the ball, the table or the body); the contacts are found again from the pose
+        (``mj_collision``)."""
+        self._mj.mj_collision(self.model, self.data)
+        n = self.data.ncon
+        g1, g2 = self.data.contact.geom1[:n], self.data.contact.geom2[:n]
+        arm = self.model.geom_contype == 2
+        return bool(np.any(arm[g1] | arm[g2]))
+
     def hand_touches_ball(self) -> bool:
         """Whether the right hand (the palm's link, not the forearm) touches the ball."""
         n = self.data.ncon

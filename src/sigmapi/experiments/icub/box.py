@@ -58,6 +58,8 @@ def _peak_mb() -> float:
 class _BoxJob:
     config: ICubConfig
     seed: int
+    film: bool = False
+    """The first seed: also the film and the eyes' frames for the figures."""
 
 
 def _box_seed(job: _BoxJob) -> dict[str, Any]:
@@ -78,6 +80,7 @@ def _box_seed(job: _BoxJob) -> dict[str, Any]:
         map_shape=BOX_MAP,
         backend=cfg.backend,
         keep=True,
+        film=job.film,
     )
     tests = out.pop("tests")
     for key, raw in (
@@ -107,7 +110,7 @@ def run_box(
 ) -> ICubBoxResult:
     """The 3-D task on ``seeds`` (the module's account)."""
     t0 = time.perf_counter()
-    jobs = [(str(s), _BoxJob(config, s)) for s in seeds]
+    jobs = [(str(s), _BoxJob(config, s, i == 0)) for i, s in enumerate(seeds)]
     values = run_all(
         _box_seed,
         jobs,
@@ -328,11 +331,24 @@ class ICubBoxResult(Result):
 
     def figure(self, out_dir: Path) -> list[Path]:
         """The end-point error histogram per method (eyes free;
-        :func:`~sigmapi.experiments.icub.plots3d.end_point_histogram`)."""
-        from sigmapi.experiments.icub.plots3d import end_point_histogram
+        :func:`~sigmapi.experiments.icub.plots3d.end_point_histogram`), the first seed's
+        filmed reach as a strip and both eyes' frames with the detections
+        (:func:`~sigmapi.experiments.icub.plots3d.film_and_eyes`), the maps' middle slices
+        (:func:`~sigmapi.experiments.icub.plots3d.map_slices`); with ``config.render``,
+        the filmed reach as an animated GIF."""
+        from sigmapi.experiments.icub.plots import write_gif
+        from sigmapi.experiments.icub.plots3d import end_point_histogram, film_and_eyes, map_slices
 
         errors = {
             m: 100.0 * np.concatenate([s["end_point_m"]["free"][m] for s in self.per_seed])
             for m in METHODS
         }
-        return [end_point_histogram(errors, Path(out_dir) / "end_point_histogram.png")]
+        paths = [end_point_histogram(errors, Path(out_dir) / "end_point_histogram.png")]
+        first = self.per_seed[0]
+        paths += film_and_eyes(first, self.seeds[0], Path(out_dir))
+        if first.get("units"):
+            out = Path(out_dir) / "map-slices.png"
+            paths.append(map_slices(first["units"], first["maps"], self.seeds[0], out))
+        if self.config.render is not None and first.get("film"):
+            paths.append(write_gif(first["film"], Path(self.config.render)))
+        return paths

@@ -163,13 +163,6 @@ class ICubConfig:
         object.__setattr__(self, "babble_wrist", _wrist_range(self.babble_wrist))
         if self.render is not None and not str(self.render).lower().endswith(".gif"):
             raise _validate.fail("render", "a file name ending in .gif", self.render)
-        if self.render is not None and self.space == "box":
-            raise _validate.fail(
-                "render",
-                "unset with space 'box' (the 3-D task films no reach)",
-                self.render,
-                "drop --render, or use --space table",
-            )
 
     def replace(self, **changes: Any) -> ICubConfig:
         """A copy with ``changes``."""

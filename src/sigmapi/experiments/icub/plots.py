@@ -353,13 +353,20 @@ def icub_figures(result: Any, out_dir: Path) -> list[Path]:
             coinciding({m: [e for _, e in p] for m, p in curves.items()}), "at every point"
         ),
     )
-    film = first.get("film") or []
+    save_film(
+        first.get("film") or [], save, f"Seed {seed}", "during the learned method's first reach"
+    )
+    return paths
+
+
+def save_film(film: Sequence[NDArray[np.uint8]], save: Any, lead: str, what: str) -> None:
+    """Where ``film`` holds frames, ``save(figure, "film.png", caption)`` a strip of some of
+    them (:func:`~sigmapi.experiments.kit.figures.film_strip`), captioned ``lead``, how many
+    of how many frames, ``what`` (how they were filmed)."""
     if film:
         fig, pick = film_strip(film, "frame {k} of {n}")
         save(
             fig,
             "film.png",
-            f"Seed {seed}: {len(pick)} of the {len(film)} frames filmed during the learned "
-            "method's first reach, in order.",
+            f"{lead}: {len(pick)} of the {len(film)} frames filmed {what}, in order.",
         )
-    return paths

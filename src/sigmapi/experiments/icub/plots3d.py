@@ -9,11 +9,13 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from sigmapi._outputs import save_captioned
+from sigmapi.envs.icub.detect import TARGETS
 from sigmapi.envs.icub.model import BALL_RADIUS, HAND_MARKER, MARKER_RADIUS
 
 
@@ -131,3 +133,97 @@ def end_point_definition(path: Path) -> Path:
 def _xy(p: NDArray[np.float64]) -> tuple[float, float]:
     """A 2-D point as the pair matplotlib's annotations take."""
     return float(p[0]), float(p[1])
+
+
+def film_and_eyes(first: Mapping[str, Any], seed: int, out_dir: Path) -> list[Path]:
+    """``film.png``, a strip of the frames filmed during the learned chain's first reach
+    (eyes free), and ``eyes.png``, both eyes' frames of a view of that ball with the arm at the
+    learned posture and the detections drawn on (:func:`~sigmapi.experiments.icub.plots.
+    plot_eyes`), from the first seed's record where it holds them; each with its caption."""
+    import matplotlib.pyplot as plt
+
+    from sigmapi.experiments.icub.plots import plot_eyes, save_film
+    from sigmapi.experiments.icub.reaching import EYES
+
+    paths: list[Path] = []
+
+    def save(fig: Any, name: str, caption: str) -> None:
+        paths.append(save_captioned(fig, out_dir / name, caption, dpi=110, bbox_inches="tight"))
+        plt.close(fig)
+
+    save_film(
+        first.get("film") or [],
+        save,
+        f"Seed {seed}, 3-D box",
+        "from a fixed camera during the learned chain's first reach (eyes free; the ball "
+        "floats where the experimenter put it)",
+    )
+    eyes = first.get("eyes")
+    if eyes is not None:
+        h, w = eyes["l_eye"].shape[:2]
+        found = sum(eyes[f"{e}_{t}_seen"] is not None for e in EYES for t in TARGETS)
+        save(
+            plot_eyes(eyes),
+            "eyes.png",
+            f"Seed {seed}, 3-D box: both eyes' {w}x{h} frames of one view of the first test "
+            "ball, the arm at the posture the learned chain reads from that view; white and "
+            "magenta x: where the detector finds the ball and the hand's marker in the pixels "
+            f"({found} of 4 found); yellow circle and cyan cross: where the ball's centre and "
+            "the palm project (the scorer's truth).",
+        )
+    return paths
+
+
+_SLICE_COLOURS = ("tab:blue", "tab:orange", "tab:green")
+
+
+def map_slices(
+    units: Mapping[str, tuple[NDArray[np.float64], tuple[int, ...]]],
+    scores: Mapping[str, Mapping[str, Any]],
+    seed: int,
+    path: Path,
+) -> Path:
+    """``map-slices.png``: per map, the three middle slices of its 3-D grid (one across each
+    map axis) drawn at the units' mean true positions (``units``: per map the ``(n, 3)``
+    positions in metres and the map's shape), joined along the grid's lines; captioned from
+    ``scores`` (per map its order R², fold score and verdict)."""
+    import matplotlib.pyplot as plt
+
+    frames = {"map_head": "head-centred", "map_torso": "torso-centred"}
+    fig = plt.figure(figsize=(10, 4.8), layout="constrained")
+    words = []
+    for k, (name, (pos, shape)) in enumerate(units.items()):
+        ax = fig.add_subplot(1, len(units), k + 1, projection="3d")
+        grid = (100.0 * pos).reshape(*shape, 3)  # cm
+        for axis, colour in enumerate(_SLICE_COLOURS):
+            sl = np.take(grid, shape[axis] // 2, axis=axis)  # (a, b, 3)
+            for line in (*sl, *sl.transpose(1, 0, 2)):
+                ax.plot(*line.T, color=colour, lw=1.0)
+            ax.plot([], [], color=colour, label=f"middle slice across map axis {axis + 1}")
+        s = scores[name]
+        state = (
+            f"folded (fold score {s['fold_score']:.2f})"
+            if s["folded"]
+            else f"not flagged (fold score {s['fold_score']:.2f})"
+        )
+        title = "map H" if name == "map_head" else "map T"
+        ax.set_title(f"{title}: order R$^2$ {s['order_r2']:.2f}, {state}", fontsize=9)
+        ax.set(xlabel="x cm", ylabel="y cm")
+        ax.set_zlabel("z cm", labelpad=10)
+        ax.set_box_aspect(tuple(np.ptp(grid.reshape(-1, 3), axis=0)))  # cm alike on every axis
+        ax.tick_params(labelsize=7)
+        words.append(
+            f"{title} ({'x'.join(map(str, shape))}, {frames[name]}): order R^2 "
+            f"{s['order_r2']:.2f}, {state}"
+        )
+        if k == 0:
+            fig.legend(loc="outside lower center", ncol=3, fontsize=8)
+    caption = (
+        f"Seed {seed}, 3-D box: each map's units at their mean true position over the "
+        "calibration views they win (a unit that wins none at the affine fit's place), joined "
+        "along the map's grid lines, for the three middle slices of the grid (one across each "
+        "map axis; centimetres, the map's own frame). " + "; ".join(words) + "."
+    )
+    out = save_captioned(fig, path, caption, dpi=110, bbox_inches="tight")
+    plt.close(fig)
+    return out

@@ -75,7 +75,8 @@ from sigmapi.envs.icub import stereo as st
 from sigmapi.envs.icub.model import BALL_RADIUS
 from sigmapi.experiments.icub import space3d as s3
 from sigmapi.experiments.icub.config import PLAN
-from sigmapi.experiments.icub.reaching import _BABBLED, _WRIST, _YAW
+from sigmapi.experiments.icub.reaching import _BABBLED, _WRIST, _YAW, eye_frames
+from sigmapi.metrics import z_decoder
 
 Array = NDArray[np.float64]
 
@@ -84,6 +85,8 @@ METHODS = ("learned", "true_position", "retina", "retina_gaze", "scripted_ik", "
 ASSOCIATED = METHODS[:4]
 """The methods that reach through an association learned from babbling."""
 CONDITIONS = ("free", "fixated")
+FILM = 8
+"""Frames per leg of the filmed reach (the 2-D run's number)."""
 """The eyes when the state is read: free (the ball anywhere in both views) or fixated."""
 LEG = 0.6
 """Seconds of the move from the home pose to the approach posture."""
@@ -146,15 +149,6 @@ def look(
     return None
 
 
-def _arm_touches(scene: ICubScene) -> bool:
-    """Touch, sensed with the arm where it is set: any contact of the hand or forearm."""
-    scene._mj.mj_collision(scene.model, scene.data)
-    n = scene.data.ncon
-    g1, g2 = scene.data.contact.geom1[:n], scene.data.contact.geom2[:n]
-    arm = scene.model.geom_contype == 2
-    return bool(np.any(arm[g1] | arm[g2]))
-
-
 def _touch_point(scene: ICubScene, inset: float = 0.0) -> Array:
     """Where a ball's centre sits when it rests on the palm (the palm's contact point plus a
     radius less ``inset`` along its normal), world; truth: the experimenter's and the scores'
@@ -191,7 +185,7 @@ def babble3d(
         q = np.zeros(7)
         q[idx] = rng.uniform(lo[idx], hi[idx])
         scene.set_arm(q)
-        if _arm_touches(scene):
+        if scene.arm_touches():
             continue
         with scene.truth():  # the experimenter presses the ball against the palm
             p = _touch_point(scene, TOUCH_DEPTH)
@@ -498,10 +492,14 @@ def run_seed3d(
     backend: str = "auto",
     keep: bool = False,
     learned_state: str = LEARNED_STATE,
+    film: bool = False,
 ) -> dict[str, Any]:
     """One seed of the 3-D task: the maps recorded, learned and scored; babbling; the
     associations; the reaches eyes free and fixated, summarised; ``keep``: also the raw
-    reaches (``tests``) for the figures. ``grid``: units per axis of the retina's and the
+    reaches (``tests``) for the figures; ``film``: also the frames of the learned chain's
+    first reach, eyes free (``"film"``, :data:`FILM` per leg), and both eyes' frames of a
+    view of its ball with the arm at the posture the chain reads from it (``"eyes"``,
+    :func:`shown_eyes`). ``grid``: units per axis of the retina's and the
     gaze's codes that the associated methods read; ``map_shape``: map T's (the maps' other
     settings :func:`~sigmapi.experiments.icub.space3d.learn_chain3d`'s defaults, the measured
     design); ``learned_state``: where the ``learned`` state's bump sits
@@ -520,6 +518,7 @@ def run_seed3d(
         backend=backend,
     )
     maps = s3.score_chain(chain, train, ev, iterations, seed)
+    units = unit_positions(chain, ev) if film else None
     t_maps = time.perf_counter() - t0
     bab = babble3d(scene, babbles, r_babble, yaw=yaw, wrist=wrist)
     held = babble3d(scene, max(50, babbles // 10), r_babble, yaw=yaw, wrist=wrist)
@@ -529,7 +528,9 @@ def run_seed3d(
         phi = feats(method, bab.views)
         layers[method] = Association(phi.shape[1], 7, epochs=epochs).fit(phi, bab.posture)
     t_babble = time.perf_counter() - t0 - t_maps
-    tests, _ = reach_tests3d(scene, layers, feats, reaches, r_reach, held.posture)
+    shot = (lambda i, method: FILM if i == 0 and method == "learned" else 0) if film else None
+    tests, frames = reach_tests3d(scene, layers, feats, reaches, r_reach, held.posture, shot)
+    eyes = shown_eyes(scene, layers["learned"], feats, tests.ball[0], r_reach) if film else None
     scene.close()
     out: dict[str, Any] = {
         "seed": seed,
@@ -545,4 +546,49 @@ def run_seed3d(
     }
     if keep:
         out["tests"] = tests
+    if film:
+        out["film"], out["units"] = frames, units
+        if eyes is not None:
+            out["eyes"] = eyes
+    return out
+
+
+def unit_positions(
+    chain: s3.Chain3D, ev: dict[str, tuple[tuple[s3.Views3D, s3.Views3D], Any]]
+) -> dict[str, tuple[Array, tuple[int, ...]]]:
+    """Per map (``"map_head"``, ``"map_torso"``): each unit's mean true position over the
+    calibration views it wins (head- or torso-centred metres; a unit that wins none at the
+    affine fit's place, :func:`~sigmapi.metrics.z_decoder`) and the map's shape: the figure's
+    labelled reference."""
+    out = {}
+    for name, stage, data in (("map_head", "head", "eyes"), ("map_torso", "torso", "head")):
+        c0 = ev[data][0][0]
+        model = chain.model(stage)
+        z = c0.head if stage == "head" else c0.torso
+        table = z_decoder(chain.winners(stage, c0), z, model.map_coords)
+        out[name] = (table, tuple(int(n) for n in model.map_shape))
+    return out
+
+
+def shown_eyes(
+    scene: ICubScene,
+    layer: Association,
+    feats: Callable[[str, s3.Views3D], Array],
+    ball: Array,
+    rng: np.random.Generator,
+) -> dict[str, Any] | None:
+    """Both eyes' frames (:func:`~sigmapi.experiments.icub.reaching.eye_frames`) of a view of
+    ``ball`` (world; the eyes find it, :func:`look`), the arm set at the posture the learned
+    ``layer`` reads from that view (kinematics, the ball where it was put); None when the eyes
+    cannot find it."""
+    scene.reset()
+    st.place_ball(scene, ball)
+    seen = look(scene, rng)
+    if seen is None:
+        return None
+    with scene.truth():
+        row = _view_row(scene, seen, ball)
+    scene.set_arm(layer.predict(feats("learned", _views([row])))[0])
+    out = eye_frames(scene)
+    scene.reset()
     return out

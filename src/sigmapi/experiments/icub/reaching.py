@@ -46,6 +46,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -62,7 +63,7 @@ from sigmapi.envs.icub import (
     physical_reach,
     random_ball,
 )
-from sigmapi.envs.icub.detect import detect
+from sigmapi.envs.icub.detect import TARGETS, detect
 from sigmapi.envs.icub.frames import GOAL_MARGIN, look, saccade, search, sensed_view
 from sigmapi.envs.icub.reach import AIM
 from sigmapi.errors import ConfigError
@@ -381,3 +382,24 @@ def reach_tests(
             res.servo[method] = served
     scene.reset()
     return res, frames
+
+
+EYES = ("l_eye", "r_eye")
+"""The eyes' cameras, left then right."""
+
+
+def eye_frames(scene: ICubScene) -> dict[str, Any]:
+    """Both eyes' frames of the scene as it is set (``"l_eye"``, ``"r_eye"``), where the
+    detector finds each target in each (``"<eye>_<target>_seen"``, pixels or None) and, as
+    the figure's labels (truth), where the ball's centre and the palm project
+    (``"<eye>_ball"``, ``"<eye>_palm"``): what
+    :func:`~sigmapi.experiments.icub.plots.plot_eyes` draws."""
+    out: dict[str, Any] = {}
+    for eye in EYES:
+        out[eye] = img = scene.render(eye)
+        with scene.truth():  # the figure's labels
+            out[f"{eye}_ball"] = scene.project(scene.ball_position(), eye)[0]
+            out[f"{eye}_palm"] = scene.project(scene.palm_position(), eye)[0]
+        for target in TARGETS:
+            out[f"{eye}_{target}_seen"] = detect(img, target)
+    return out

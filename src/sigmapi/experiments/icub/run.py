@@ -45,13 +45,18 @@ from sigmapi.experiments.icub.maps import (
     supervised_fit,
     true_direction_map,
 )
-from sigmapi.experiments.icub.reaching import babble, features, learn_reaching, reach_tests
+from sigmapi.experiments.icub.reaching import (
+    EYES,
+    babble,
+    eye_frames,
+    features,
+    learn_reaching,
+    reach_tests,
+)
 from sigmapi.experiments.icub.result import ICubResult
 from sigmapi.experiments.kit.jobs import Steps, Tick, counted
 from sigmapi.metrics import EVAL_SEED, z_decoder
 from sigmapi.progress import Progress
-
-EYES = ("l_eye", "r_eye")
 
 
 def check_frames(scene: ICubScene, n: int, rng: np.random.Generator) -> dict[str, Any]:
@@ -303,14 +308,7 @@ def _eye_views(
     scene.set_ball(ball)
     scene.set_gaze(gaze)
     scene.set_arm(posture)
-    out: dict[str, Any] = {}
-    for eye in EYES:
-        out[eye] = img = scene.render(eye)
-        with scene.truth():  # the figure's labels
-            out[f"{eye}_ball"] = scene.project(scene.ball_position(), eye)[0]
-            out[f"{eye}_palm"] = scene.project(scene.palm_position(), eye)[0]
-        for target in TARGETS:
-            out[f"{eye}_{target}_seen"] = detect(img, target)
+    out = eye_frames(scene)
     scene.reset()
     return out
 
