@@ -197,6 +197,14 @@ def test_shuffled_control_needs_the_gated_run():
         RewardConfig().replace(methods=("frozen", "shuffled"))
 
 
+def test_run_rules_are_the_episode_runs_with_methods_for_states():
+    with pytest.raises(ConfigError, match="block must be <= episodes"):
+        RewardConfig().replace(episodes=10, final_episodes=5)
+    with pytest.raises(ConfigError, match=r"methods must be distinct names from \('frozen'"):
+        RewardConfig().replace(methods=("gated", "gated"))
+    assert RewardConfig().replace(methods=["frozen"]).run.methods == ("frozen",)
+
+
 # ---------------------------------------------------------------------------- the command
 
 

@@ -61,11 +61,13 @@ def final_rates(outcomes: NDArray[np.bool_], final: int) -> NDArray[np.float64]:
     return np.asarray(outcomes[:, -final:].mean(axis=1), dtype=np.float64)
 
 
-def check_episode_run(config: Any) -> None:
+def check_episode_run(
+    config: Any, names: str = "states", choices: tuple[str, ...] = STATES
+) -> None:
     """The rules of a frozen config of an episode run (``episodes``, ``block``,
-    ``final_episodes`` and ``states`` fields): the final window and one block fit in the
-    episodes, the states are distinct names
-    of :data:`~sigmapi.envs.STATES` (stored as a tuple)."""
+    ``final_episodes`` and the field ``names``, default ``states``): the final window and one
+    block fit in the episodes, the names are distinct ones of ``choices`` (default
+    :data:`~sigmapi.envs.STATES`; stored as a tuple)."""
     if config.final_episodes > config.episodes:
         raise ConfigError(
             f"final_episodes must be <= episodes ({config.episodes}), got {config.final_episodes}"
@@ -75,7 +77,7 @@ def check_episode_run(config: Any) -> None:
             f"block must be <= episodes ({config.episodes}), got {config.block}; "
             "a learning curve needs at least one full block"
         )
-    states = tuple(config.states)
-    if not states or any(s not in STATES for s in states) or len(set(states)) != len(states):
-        raise ConfigError(f"states must be distinct names from {STATES}, got {states!r}")
-    object.__setattr__(config, "states", states)
+    given = tuple(getattr(config, names))
+    if not given or any(s not in choices for s in given) or len(set(given)) != len(given):
+        raise ConfigError(f"{names} must be distinct names from {choices}, got {given!r}")
+    object.__setattr__(config, names, given)

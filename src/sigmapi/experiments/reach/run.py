@@ -209,18 +209,15 @@ class ReachExperiment(SeedRuns[Any]):
 
     def collect(self, config: Any, seeds: tuple[int, ...], got: list[SeedEpisodes]) -> Any:
         """The result of the seeds' jobs (``got``, in the order of ``seeds``)."""
-        run = config.run
-        shape = (len(seeds), run.episodes)
         res = ReachResult(config, seeds)
-        for s in run.states:
-            res.success[s] = np.zeros(shape, dtype=bool)
-            res.steps[s] = np.zeros(shape, dtype=np.int64)
-            res.lost[s] = np.zeros(shape, dtype=bool)
-        for i, one in enumerate(got):
+        for s in config.run.states:
+            eps = [one.runs[s] for one in got]
+            res.success[s] = np.stack([e.success for e in eps]).astype(bool)
+            res.steps[s] = np.stack([e.steps for e in eps]).astype(np.int64)
+            res.lost[s] = np.stack([e.failed for e in eps]).astype(bool)
+        for one in got:
             if "map_metrics" in one.extras:
                 res.map_metrics.append(one.extras["map_metrics"])
-            for s, ep in one.runs.items():
-                res.success[s][i], res.lost[s][i], res.steps[s][i] = ep.success, ep.failed, ep.steps
             for s, (axis, vals) in one.kept.items():
                 res.values[s] = vals
                 res.z_axis = axis

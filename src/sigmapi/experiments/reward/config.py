@@ -16,6 +16,7 @@ from sigmapi.agents.gated import VIEWS
 from sigmapi.config import SOMConfig
 from sigmapi.envs import GazeReachConfig
 from sigmapi.errors import ConfigError
+from sigmapi.experiments.kit.episodes import check_episode_run
 from sigmapi.experiments.kit.parts import Parts
 from sigmapi.experiments.kit.worlds import GAZE_REACH, World
 from sigmapi.experiments.reach.config import (
@@ -99,21 +100,12 @@ class RewardRunConfig:
 
     def __post_init__(self) -> None:
         _validate.check_fields(self)
-        if self.final_episodes > self.episodes or self.block > self.episodes:
-            raise ConfigError(
-                f"final_episodes and block must be <= episodes ({self.episodes}), got "
-                f"{self.final_episodes} and {self.block}"
-            )
-        methods = tuple(self.methods)
-        bad = [m for m in methods if m not in METHODS]
-        if not methods or bad or len(set(methods)) != len(methods):
-            raise ConfigError(f"methods must be distinct names from {METHODS}, got {methods!r}")
-        if "shuffled" in methods and "gated" not in methods:
+        check_episode_run(self, "methods", METHODS)
+        if "shuffled" in self.methods and "gated" not in self.methods:
             raise ConfigError(
                 "methods: 'shuffled' replays the gated run's factors in another order, so it "
-                f"needs 'gated' too, got {methods!r}; add 'gated'"
+                f"needs 'gated' too, got {self.methods!r}; add 'gated'"
             )
-        object.__setattr__(self, "methods", methods)
 
 
 def _small(part: str) -> Any:
