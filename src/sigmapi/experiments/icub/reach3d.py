@@ -75,7 +75,7 @@ from sigmapi.envs.icub import stereo as st
 from sigmapi.envs.icub.model import BALL_RADIUS
 from sigmapi.experiments.icub import space3d as s3
 from sigmapi.experiments.icub.config import PLAN
-from sigmapi.experiments.icub.reaching import _BABBLED, _WRIST, _YAW, eye_frames
+from sigmapi.experiments.icub.reaching import _BABBLED, _WRIST, _YAW, eye_frames, film_first
 from sigmapi.metrics import z_decoder
 
 Array = NDArray[np.float64]
@@ -85,8 +85,6 @@ METHODS = ("learned", "true_position", "retina", "retina_gaze", "scripted_ik", "
 ASSOCIATED = METHODS[:4]
 """The methods that reach through an association learned from babbling."""
 CONDITIONS = ("free", "fixated")
-FILM = 8
-"""Frames per leg of the filmed reach (the 2-D run's number)."""
 """The eyes when the state is read: free (the ball anywhere in both views) or fixated."""
 LEG = 0.6
 """Seconds of the move from the home pose to the approach posture."""
@@ -497,7 +495,8 @@ def run_seed3d(
     """One seed of the 3-D task: the maps recorded, learned and scored; babbling; the
     associations; the reaches eyes free and fixated, summarised; ``keep``: also the raw
     reaches (``tests``) for the figures; ``film``: also the frames of the learned chain's
-    first reach, eyes free (``"film"``, :data:`FILM` per leg), and both eyes' frames of a
+    first reach, eyes free (``"film"``,
+    :func:`~sigmapi.experiments.icub.reaching.film_first`), and both eyes' frames of a
     view of its ball with the arm at the posture the chain reads from it (``"eyes"``,
     :func:`shown_eyes`). ``grid``: units per axis of the retina's and the
     gaze's codes that the associated methods read; ``map_shape``: map T's (the maps' other
@@ -528,7 +527,7 @@ def run_seed3d(
         phi = feats(method, bab.views)
         layers[method] = Association(phi.shape[1], 7, epochs=epochs).fit(phi, bab.posture)
     t_babble = time.perf_counter() - t0 - t_maps
-    shot = (lambda i, method: FILM if i == 0 and method == "learned" else 0) if film else None
+    shot = film_first if film else None
     tests, frames = reach_tests3d(scene, layers, feats, reaches, r_reach, held.posture, shot)
     eyes = shown_eyes(scene, layers["learned"], feats, tests.ball[0], r_reach) if film else None
     scene.close()

@@ -386,6 +386,14 @@ def reach_tests(
 
 EYES = ("l_eye", "r_eye")
 """The eyes' cameras, left then right."""
+FILM = 8
+"""Frames filmed per leg of the one reach a run films (:func:`film_first`)."""
+
+
+def film_first(i: int, method: str) -> int:
+    """What a run films (a ``film`` of :func:`reach_tests` and of the 3-D task's reach tests):
+    :data:`FILM` frames per leg of the learned method's first reach, none of the others."""
+    return FILM if i == 0 and method == "learned" else 0
 
 
 def eye_frames(scene: ICubScene) -> dict[str, Any]:

@@ -50,6 +50,7 @@ from sigmapi.experiments.icub.reaching import (
     babble,
     eye_frames,
     features,
+    film_first,
     learn_reaching,
     reach_tests,
 )
@@ -244,19 +245,13 @@ def _seed(job: _Job, tick: Tick | None) -> dict[str, Any]:
 
     layers, curves = learn_reaching(scene, babbles, held_out, feats, epochs=cfg.epochs)
     steps.next()
-    film = None
-    if job.figures:
-
-        def film(i: int, method: str) -> int:
-            return 8 if i == 0 and method == "learned" else 0
-
     tests, frames = reach_tests(
         scene,
         layers,
         feats,
         cfg.reaches,
         PLAN.rng(seed, "reaches"),
-        film,
+        film_first if job.figures else None,
         servo_steps=cfg.servo_steps,
         servo_rng=PLAN.rng(seed, "servo"),
         babbled=held_out.posture,
