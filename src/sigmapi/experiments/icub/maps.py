@@ -291,6 +291,13 @@ def learn_chain(
     return chain
 
 
+def unit_rows(a: Array) -> Array:
+    """Rows of ``a`` scaled to length 1 (a zero row stays zero): the codes the 2-D and 3-D
+    tasks' states and map T's population input are made of."""
+    n = np.linalg.norm(a, axis=1, keepdims=True)
+    return a / np.where(n > 0, n, 1.0)
+
+
 def angle_error_deg(decoded: Array, true: Array) -> float:
     """RMS angle (degrees) between directions ``(azimuth, elevation)`` ``(N, 2)``."""
     cos = np.clip(np.sum(direction_vectors(decoded) * direction_vectors(true), axis=1), -1.0, 1.0)

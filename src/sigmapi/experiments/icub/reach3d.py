@@ -75,6 +75,7 @@ from sigmapi.envs.icub import stereo as st
 from sigmapi.envs.icub.model import BALL_RADIUS
 from sigmapi.experiments.icub import space3d as s3
 from sigmapi.experiments.icub.config import PLAN
+from sigmapi.experiments.icub.maps import unit_rows
 from sigmapi.experiments.icub.reaching import _BABBLED, _WRIST, _YAW, eye_frames, film_first
 from sigmapi.metrics import z_decoder
 
@@ -232,11 +233,11 @@ class Features3D:
             centres = pos * (np.asarray(m_t.map_shape, dtype=np.float64) - 1.0)
             return bump_features(centres, m_t.map_coords, self.feature_width)
         code = PopulationCode((self.grid,) * 3, self.width)
-        retina = s3.unit_rows(code.encode(s3.retina3(v, self.chain.eye_size)))
+        retina = unit_rows(code.encode(s3.retina3(v, self.chain.eye_size)))
         if method == "retina":
             return retina
         if method == "retina_gaze":
-            parts = [retina, *(s3.unit_rows(code.encode(f(v))) for f in (s3.eyes3, s3.neck3))]
+            parts = [retina, *(unit_rows(code.encode(f(v))) for f in (s3.eyes3, s3.neck3))]
             return np.hstack(parts) / np.sqrt(3.0)
         raise ValueError(f"no features for method {method!r}")
 

@@ -67,7 +67,13 @@ from sigmapi.envs.icub.detect import TARGETS, detect
 from sigmapi.envs.icub.frames import GOAL_MARGIN, look, saccade, search, sensed_view
 from sigmapi.envs.icub.reach import AIM
 from sigmapi.errors import ConfigError
-from sigmapi.experiments.icub.maps import ChainMaps, eye_position, neck_position, retina_position
+from sigmapi.experiments.icub.maps import (
+    ChainMaps,
+    eye_position,
+    neck_position,
+    retina_position,
+    unit_rows,
+)
 
 Array = NDArray[np.float64]
 
@@ -177,18 +183,13 @@ def features(
         pos = (v.torso - TORSO_BOX[:, 0]) / (TORSO_BOX[:, 1] - TORSO_BOX[:, 0])
         centres = np.clip(pos, 0.0, 1.0) * (shape - 1.0)
         return bump_features(centres, chain.map2.map_coords, feature_width)
-    retina = _unit(code.encode(retina_position(v, chain.eye_size)))
+    retina = unit_rows(code.encode(retina_position(v, chain.eye_size)))
     if method == "retina":
         return retina
     if method == "retina_gaze":
-        parts = [retina, _unit(code.encode(eye_position(v))), _unit(code.encode(neck_position(v)))]
+        parts = [retina, *(unit_rows(code.encode(f(v))) for f in (eye_position, neck_position))]
         return np.hstack(parts) / np.sqrt(3.0)
     raise ValueError(f"no features for method {method!r}")
-
-
-def _unit(a: Array) -> Array:
-    n = np.linalg.norm(a, axis=1, keepdims=True)
-    return a / np.where(n > 0, n, 1.0)
 
 
 def learn_reaching(

@@ -59,7 +59,7 @@ from sigmapi.codes import PopulationCode, grid_coordinates
 from sigmapi.envs.icub import ICubScene
 from sigmapi.envs.icub import stereo as st
 from sigmapi.errors import ConfigError
-from sigmapi.experiments.icub.maps import som_config
+from sigmapi.experiments.icub.maps import som_config, unit_rows
 from sigmapi.metrics import (
     EVAL_SEED,
     FOLD_THRESHOLD,
@@ -454,12 +454,6 @@ def _codes(m: Model, x: Array, y: Array) -> Any:
             for p, a in zip(m.parts, m.axes, strict=True)
         )
     return m.x_code.encode(x), m.y_code.encode(y)
-
-
-def unit_rows(a: Array) -> Array:
-    """Rows of ``a`` scaled to length 1 (a zero row stays zero)."""
-    n = np.linalg.norm(a, axis=1, keepdims=True)
-    return a / np.where(n > 0, n, 1.0)
 
 
 def _n_weights(m: Model) -> int:
