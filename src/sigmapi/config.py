@@ -29,6 +29,9 @@ from sigmapi.rules.ordering import check_periodic_map
 from sigmapi.schedules import PAPER_SIGMA, PiecewiseLinear
 from sigmapi.tasks import RELATIONS
 
+REFINE_DRAWS = ("random", "quasi")
+"""How a refinement round draws its pairs on the built-in task (``SOMConfig.refine_draw``)."""
+
 _geometry = functools.lru_cache(maxsize=64)(MapGeometry)
 
 __all__ = [
@@ -180,6 +183,14 @@ class SOMConfig:
     float32 scores without the exact re-check, keeps its sums in float32 and draws its codes
     within rounding (normalised hills multiplied out): cheaper per pair, the same maps within
     a stated tolerance (docs/guide/ceiling.md)."""
+    refine_draw: str = field(
+        default="random", metadata=_validate.bounded("choice", options=REFINE_DRAWS)
+    )
+    """How a refinement round on the built-in task draws its pairs: ``"random"`` (each block
+    from its own random stream, as the training does) or ``"quasi"`` (the round's pairs at
+    the points of a randomly shifted Kronecker sequence, :func:`sigmapi.tasks.kronecker`:
+    the same distribution, spread evenly, so that each unit's mean of view 1's outer
+    products converges faster; docs/guide/ceiling.md, "Quasi-random pairs")."""
     same_view: bool = field(default=False, metadata=_validate.bounded("bool"))
     """Ablation: learn from the view that chose the winner (the paper learns from the other)."""
     backend: str = field(

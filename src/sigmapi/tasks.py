@@ -21,7 +21,15 @@ from sigmapi import _memory, _validate
 from sigmapi.codes import PopulationCode
 from sigmapi.errors import ConfigError
 
-__all__ = ["RELATIONS", "Batch", "Frames", "Relation", "TwoViewSampler", "get_relation"]
+__all__ = [
+    "RELATIONS",
+    "Batch",
+    "Frames",
+    "Relation",
+    "TwoViewSampler",
+    "get_relation",
+    "kronecker",
+]
 
 Array = NDArray[np.float64]
 
@@ -210,6 +218,38 @@ def _fast_encoder() -> Callable[[PopulationCode, Array, Array | None], Array]:
     return encode_fast
 
 
+@functools.cache
+def _kronecker_step(dims: int) -> Array:
+    """The R_d sequence's step in ``dims`` dimensions: the powers ``1/g, 1/g^2, ...`` of the
+    root ``g > 1`` of ``g^(dims + 1) = g + 1`` (the golden ratio for ``dims = 1``)."""
+    g = 2.0
+    for _ in range(64):  # the fixed point iteration converges to float64 precision
+        g = (1.0 + g) ** (1.0 / (dims + 1))
+    return np.asarray((1.0 / g) ** np.arange(1, dims + 1), dtype=np.float64)
+
+
+def kronecker(first: int, n: int, shift: Array) -> Array:
+    """Points ``first .. first + n - 1`` of a randomly shifted Kronecker sequence in the unit
+    cube of ``len(shift)`` dimensions, ``(n, d)``: point ``i`` is
+    ``frac(shift + (i + 1) * alpha)`` with ``alpha`` the R_d sequence's step (Roberts 2018,
+    "The unreasonable effectiveness of quasirandom sequences"), a low-discrepancy sequence;
+    ``shift`` uniform in the cube (a Cranley-Patterson rotation) makes every point uniform
+    and the set's means unbiased. Any stretch of the sequence is computed on its own, so a
+    draw cut into blocks is the same points.
+
+    Examples
+    --------
+    >>> p = kronecker(0, 4, np.zeros(1))
+    >>> np.round(p[:, 0], 3).tolist()
+    [0.618, 0.236, 0.854, 0.472]
+    >>> bool(np.array_equal(kronecker(2, 2, np.zeros(1)), p[2:]))
+    True
+    """
+    shift = np.asarray(shift, dtype=np.float64)
+    i = np.arange(first + 1, first + n + 1, dtype=np.float64)[:, None]
+    return np.asarray((shift + i * _kronecker_step(shift.size)) % 1.0, dtype=np.float64)
+
+
 class TwoViewSampler:
     """Draws batches of two views (x0, y0), (x1, y1) of the same z.
 
@@ -366,8 +406,67 @@ class TwoViewSampler:
         _check_rows(len(z) if z is not None else n, each, "draw fewer pairs")
         if z is None:
             z = self.sample_z(n, rng)
-        px0, py0 = self.sample_view(z, rng)
-        px1, py1 = self.sample_view(z, rng)
+        return self._batch(z, self.sample_view(z, rng), self.sample_view(z, rng), out, exact)
+
+    def sample_at(
+        self,
+        u: Array,
+        out: tuple[Array, Array, Array, Array] | None = None,
+        exact: bool = True,
+    ) -> Batch:
+        """The pairs at points ``u`` ``(n, 3 d)`` of the unit cube (e.g. :func:`kronecker`'s):
+        ``z`` from the first ``d`` columns (uniform over the relation's range), view 0 from
+        the next ``d`` and view 1 from the last ``d`` (:meth:`view_at`). Uniform ``u`` gives
+        the distribution of :meth:`sample`; evenly spread ``u`` (a low-discrepancy sequence)
+        gives means over the pairs that converge faster. ``out`` and ``exact`` as in
+        :meth:`sample`."""
+        u = np.asarray(u, dtype=np.float64)
+        d = self.ndim
+        if u.ndim != 2 or u.shape[1] != 3 * d:
+            raise ConfigError(
+                f"u must have shape (n, {3 * d}) (z, view 0, view 1: {d} columns each), got "
+                f"{u.shape}; draw points in {3 * d} dimensions"
+            )
+        _check_rows(
+            u.shape[0], 8 * (2 * (self.x_code.size + self.y_code.size) + 8 * d), "draw fewer pairs"
+        )
+        lo, hi = self.relation.z_range
+        z = lo + u[:, :d] * (hi - lo)
+        return self._batch(
+            z, self.view_at(z, u[:, d : 2 * d]), self.view_at(z, u[:, 2 * d :]), out, exact
+        )
+
+    def view_at(self, z: Array, u: Array) -> tuple[Array, Array]:
+        """The view (x, y) of each entry of ``z`` ``(B, d)`` at ``u`` ``(B, d)`` in [0, 1):
+        the inverse of the distribution :meth:`sample_view`'s rejection converges to (x's
+        feasible interval with probability its share of both intervals' lengths, uniform
+        within it, else y's). Needs the relation's bounds (the built-in relations give them)."""
+        rel = self.relation
+        if rel.x_bounds is None or rel.y_bounds is None:
+            raise ConfigError(
+                f"relation {rel.name!r} has no x_bounds and y_bounds, which views at given "
+                "points need; give the Relation its bounds or draw views at random (sample)"
+            )
+        xlo, xhi = rel.x_bounds(z)
+        ylo, yhi = rel.y_bounds(z)
+        lx = np.maximum(xhi - xlo, 0.0)
+        ly = np.maximum(yhi - ylo, 0.0)
+        t = u * (lx + ly)  # [0, lx): along x's interval; [lx, lx + ly): along y's
+        pick_x = t < lx
+        x = np.where(pick_x, xlo + t, rel.solve_x(z, ylo + (t - lx)))
+        y = np.where(pick_x, rel.solve_y(z, xlo + t), ylo + (t - lx))
+        return np.clip(x, 0.0, 1.0), np.clip(y, 0.0, 1.0)
+
+    def _batch(
+        self,
+        z: Array,
+        view0: tuple[Array, Array],
+        view1: tuple[Array, Array],
+        out: tuple[Array, Array, Array, Array] | None,
+        exact: bool,
+    ) -> Batch:
+        """The batch of two views' positions, encoded (into ``out`` when given)."""
+        (px0, py0), (px1, py1) = view0, view1
         enc = _encoder() if exact else _fast_encoder()
         dest = out if out is not None else (None, None, None, None)
         return Batch(

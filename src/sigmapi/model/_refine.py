@@ -2,12 +2,14 @@
 functions on a :class:`~sigmapi.model._run.RunState`.
 
 Round ``r`` on the built-in task draws ``config.refine_pairs`` pairs from the run's child
-streams ``(4, r, block)``; with ``fit(views)`` a round is one pass over the rows. A round's
-winners use the weights of its start, which stay unchanged until the round ends, so a model
-saved within a round (``refined_`` is in the model file) replays that round's pairs so far
-and continues to the same weights, bit for bit. A refinement in progress continues only on
-what it started on (the built-in task, or the same rows: ``refine_rows`` is in the model file
-too); other views, or none where it ran on rows, raise a DataError naming what to pass.
+streams ``(4, r, block)`` (``refine_draw = "quasi"``: at the points of one Kronecker sequence
+shifted by stream ``(5, r)``, block ``b`` at its points ``b * BLOCK ..``); with
+``fit(views)`` a round is one pass over the rows. A round's winners use the weights of its
+start, which stay unchanged until the round ends, so a model saved within a round
+(``refined_`` is in the model file) replays that round's pairs so far and continues to the
+same weights, bit for bit. A refinement in progress continues only on what it started on
+(the built-in task, or the same rows: ``refine_rows`` is in the model file too); other
+views, or none where it ran on rows, raise a DataError naming what to pass.
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ from sigmapi.kernels.base import REFINER
 from sigmapi.model._grids import sampler_of
 from sigmapi.model._run import BLOCK, Notify, RunState, rng, training_rule
 from sigmapi.model.views import CodeViews
+from sigmapi.tasks import kronecker
 
 __all__ = ["GROUP", "check_refiner", "per_round", "refine", "refine_total"]
 
@@ -159,8 +162,13 @@ def _draw(
     if not out or out[0].shape[0] < n:
         out[:] = [np.empty((n, int(np.prod(s)))) for s in (c.x_shape, c.y_shape) * 2]
     sampler = sampler_of(c)
+    shift = rng(run.entropy, 5, r).random(3 * sampler.ndim) if c.refine_draw == "quasi" else None
     for i in range(first, last):
         at = slice((i - first) * BLOCK, (i - first + 1) * BLOCK)
         views = (out[0][at], out[1][at], out[2][at], out[3][at])
-        sampler.sample(BLOCK, rng(run.entropy, 4, r, i), out=views, exact=c.refine_tol == 0)
+        exact = c.refine_tol == 0
+        if shift is None:
+            sampler.sample(BLOCK, rng(run.entropy, 4, r, i), out=views, exact=exact)
+        else:  # the round's points i * BLOCK .. of one shifted sequence
+            sampler.sample_at(kronecker(i * BLOCK, BLOCK, shift), out=views, exact=exact)
     return out[0][lo:hi], out[1][lo:hi], out[2][lo:hi], out[3][lo:hi]
