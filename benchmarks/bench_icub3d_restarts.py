@@ -118,6 +118,39 @@ def run(seeds: list[int], restarts: list[int], arms: list[str], head: bool, out:
                 )
 
 
+def parts(seeds: list[int], fits: int, out: Path) -> None:
+    """Per seed, map T's parts each fitted from ``fits`` seeds (:func:`restart_seeds`), the
+    others left at the first fit: each fit's fold score on its training pairs (what the choice
+    reads) beside map T's scores on the evaluation pairs with that fit in place."""
+    from sigmapi.experiments.icub import space3d as s3
+
+    for seed in seeds:
+        scene, train, ev = s3.record_box(np.random.default_rng(seed), 2000, 400)
+        scene.close()
+        chain = s3.learn_chain3d(train["eyes"], train["head"], seed=seed, eye_size=scene.eye_size)
+        first = chain.map_t
+        a, b = (chain.inputs_t(v) for v in train["head"])
+        names = s3.PART_NAMES[3]
+        for i, part in enumerate(first.parts):
+            for k, s in enumerate(s3.restart_seeds(part.config.seed, fits)):
+                m = s3.SigmaPiSOM(part.config.replace(seed=s))
+                m.fit((*a[i], *b[i]))
+                chain.map_t = s3.FactorMap(*(m if j == i else p for j, p in enumerate(first.parts)))
+                sc = s3.score_map(chain, "torso", *ev["head"])
+                row = {
+                    "seed": seed,
+                    "part": names[i],
+                    "fit": k,
+                    "train_pair_fold": s3.pair_fold_score(m, a[i], b[i]),
+                    "eval_part_fold": sc["parts"][names[i]]["fold_score"],
+                    **{key: sc[key] for key in KEYS},
+                    "order_r2_per_axis_spherical": sc["order_r2_per_axis_spherical"],
+                }
+                with out.open("a", encoding="utf-8") as f:
+                    f.write(json.dumps(row, default=float) + "\n")
+            print(seed, names[i], flush=True)
+
+
 def summary(rows: list[dict[str, Any]]) -> dict[str, Any]:
     """Per map: order R^2 median and worst, flagged count, error cm median and worst; the
     learning seconds median and worst."""
@@ -139,10 +172,46 @@ def summary(rows: list[dict[str, Any]]) -> dict[str, Any]:
     return out
 
 
+def parts_summary(rows: list[dict[str, Any]]) -> dict[str, Any]:
+    """Per seed and part: the range of the fits' training-pair fold score and of map T's
+    order R^2, the fits that twisted (order R^2 0.05 or more below the median of that part's
+    fits), and what ``restarts`` 1, 2, 3 and 5 would keep (the lowest training-pair fold score
+    of the first fits, the first on a tie): map T's order R^2 and the part's evaluation fold
+    score with it."""
+    groups: dict[str, list[dict[str, Any]]] = {}
+    for r in rows:
+        groups.setdefault(f"{r['seed']}/{r['part']}", []).append(r)
+    out: dict[str, Any] = {}
+    for key, g in groups.items():
+        g.sort(key=lambda r: r["fit"])
+        fold = [r["train_pair_fold"] for r in g]
+        order = [r["order_r2"] for r in g]
+        med = float(np.median(order))
+        kept = {}
+        for n in (1, 2, 3, 5):
+            k = int(np.argmin(fold[:n]))
+            kept[str(n)] = {
+                "fit": k,
+                "order_r2": order[k],
+                "eval_part_fold": g[k]["eval_part_fold"],
+            }
+        out[key] = {
+            "fits": len(g),
+            "train_pair_fold_range": [min(fold), max(fold)],
+            "order_r2_range": [min(order), max(order)],
+            "twisted_fits": [r["fit"] for r in g if r["order_r2"] <= med - 0.05],
+            "kept": kept,
+        }
+    return out
+
+
 def collect(files: list[Path]) -> None:
     result: dict[str, Any] = {"script": Path(__file__).read_text(encoding="utf-8"), "runs": {}}
     for path in files:
         rows = [json.loads(line) for line in path.read_text(encoding="utf-8").splitlines()]
+        if "part" in rows[0]:
+            result["runs"][path.stem] = {"rows": rows, "summary": parts_summary(rows)}
+            continue
         groups: dict[str, list[dict[str, Any]]] = {}
         for r in rows:
             groups.setdefault(f"{r['arm']}/restarts={r['restarts']}", []).append(r)
@@ -163,11 +232,17 @@ def main() -> None:
     r.add_argument("--arms", nargs="+", default=["pixels"], choices=["pixels", "projections"])
     r.add_argument("--head", action="store_true")
     r.add_argument("--out", type=Path, required=True)
+    q = sub.add_parser("parts")
+    q.add_argument("seeds", type=int, nargs="+")
+    q.add_argument("--fits", type=int, default=20)
+    q.add_argument("--out", type=Path, required=True)
     c = sub.add_parser("collect")
     c.add_argument("files", type=Path, nargs="+")
     a = p.parse_args()
     if a.cmd == "run":
         run(a.seeds, a.restarts, a.arms, a.head, a.out)
+    elif a.cmd == "parts":
+        parts(a.seeds, a.fits, a.out)
     else:
         collect(a.files)
 

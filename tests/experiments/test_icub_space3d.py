@@ -246,6 +246,8 @@ def test_restarts_keep_per_part_the_fit_with_the_lowest_pair_fold_score():
         assert np.array_equal(p.weights_, p1.weights_) == (k == 0)
         differ += k == 1
     assert differ >= 1  # these views make the second fit win somewhere: the choice is exercised
+    default = s3.learn_chain3d(eyes, head, **kw)
+    assert [len(sc) for sc in default.restart_scores] == [s3.RESTARTS] * 3
     for bad in (0, 11, 2.0, True):
         with pytest.raises(
             ConfigError, match=rf"restarts must be an int in \[1, 10\], got {bad!r};"

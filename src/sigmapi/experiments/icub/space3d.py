@@ -102,9 +102,9 @@ READOUT = "soft"
 """How map T reads map H's place by default (:data:`READOUTS`)."""
 ITERATIONS = 30_000
 """Iterations per map by default."""
-RESTARTS = 1
-"""Fits of each part of map T by default (:func:`learn_chain3d`'s ``restarts``; 1: one fit, no
-choice; measured in docs/guide/icub-3d.md)."""
+RESTARTS = 3
+"""Fits of each part of map T by default (:func:`learn_chain3d`'s ``restarts``; chosen on
+seeds 0-2, docs/guide/icub-3d.md)."""
 MAX_RESTARTS = 10
 """Most fits of a part :func:`learn_chain3d` accepts (each costs a whole fit)."""
 _SEARCHES = 4  # head postures tried before a ball is given up
@@ -591,8 +591,8 @@ def learn_chain3d(
     (:func:`restart_seeds`); per part the fit kept is the one with the lowest fold score on
     map T's own training pairs (:func:`pair_fold_score`): the choice reads the robot's codes
     of both views of each pair (map H's place and the neck's angles), never a true position.
-    Each fit's score per part is kept in ``Chain3D.restart_scores``. 1 (the default): one fit,
-    as before the option."""
+    Each fit's score per part is kept in ``Chain3D.restart_scores``. 1: one fit, the map T of
+    before the option, bit for bit."""
     _validate.integer("restarts", restarts, 1, MAX_RESTARTS, fix="e.g. 1 (one fit) or 3")
     _check_choice("design", design, DESIGNS)
     t_design = design if torso_design is None else torso_design
