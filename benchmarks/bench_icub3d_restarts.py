@@ -35,6 +35,19 @@ from _common import machine, write_result
 
 ROOT = Path(__file__).resolve().parent
 RESULTS = ROOT / "results"
+COMMANDS = [
+    "python benchmarks/bench_icub3d_restarts.py run 0 1 2 --restarts 1 2 3 --head"
+    " --out tuning_0-2.jsonl",
+    "python benchmarks/bench_icub3d_restarts.py parts 0 1 2 --fits 20 --out tuning_parts_0-2.jsonl",
+    "python benchmarks/bench_icub3d_restarts.py run 426 427 428 429 430 431 432 433 434 435"
+    " --restarts 1 2 3 --out fresh_426-435.jsonl",
+    "python benchmarks/bench_icub3d_restarts.py run 422 --restarts 1 2 3"
+    " --arms pixels projections --out seed_422_arms.jsonl",
+    "python benchmarks/bench_icub3d_restarts.py collect tuning_0-2.jsonl tuning_parts_0-2.jsonl"
+    " fresh_426-435.jsonl seed_422_arms.jsonl",
+]
+"""The runs of ``benchmarks/results/icub3d-restarts.json`` (``MUJOCO_GL=egl PYTHONPATH=src``,
+one after the other in one background process)."""
 KEYS = ("order_r2", "order_r2_per_axis", "error_cm", "error_cm_median", "fold_score", "folded")
 
 
@@ -206,7 +219,11 @@ def parts_summary(rows: list[dict[str, Any]]) -> dict[str, Any]:
 
 
 def collect(files: list[Path]) -> None:
-    result: dict[str, Any] = {"script": Path(__file__).read_text(encoding="utf-8"), "runs": {}}
+    result: dict[str, Any] = {
+        "commands": COMMANDS,
+        "script": Path(__file__).read_text(encoding="utf-8"),
+        "runs": {},
+    }
     for path in files:
         rows = [json.loads(line) for line in path.read_text(encoding="utf-8").splitlines()]
         if "part" in rows[0]:
