@@ -27,7 +27,9 @@ vergence; map T: map H's distance place with the neck's pitch); ``"axes"``, a
 that axis is (map T: the azimuth with the neck's yaw, the elevation and the distance with
 its pitch). The codes span the commands' ranges or the sensed ones (:data:`SCALES`); map T
 reads map H's place as its winner's grid coordinates or moved between units by the scores
-(:data:`READOUTS`).
+(:data:`READOUTS`). Each part of map T is fitted :data:`RESTARTS` times from seeds spawned
+from its own, and the fit with the lowest fold score on map T's own training pairs (the
+robot's codes of both views, no truth) kept: :func:`learn_chain3d`'s ``restarts``.
 
 Every learning input is read from the pixels (:func:`~sigmapi.envs.icub.stereo.see_both`)
 and the joint angles, on a sealed scene; the simulator's truth gives only the labels
