@@ -246,6 +246,16 @@ def test_restarts_keep_per_part_the_fit_with_the_lowest_pair_fold_score():
         assert np.array_equal(p.weights_, p1.weights_) == (k == 0)
         differ += k == 1
     assert differ >= 1  # these views make the second fit win somewhere: the choice is exercised
+    # the choice reads no truth: other labels on the same views, the same fits kept
+    rng = np.random.default_rng(9)
+    labelled = tuple(
+        s3.Views3D(v.left, v.right, v.gaze, rng.normal(size=(200, 3)), rng.normal(size=(200, 3)))
+        for v in head
+    )
+    again = s3.learn_chain3d(eyes, labelled, restarts=2, **kw)
+    assert again.restart_scores == two.restart_scores
+    for p, q in zip(again.map_t.parts, two.map_t.parts, strict=True):
+        assert np.array_equal(p.weights_, q.weights_)
     default = s3.learn_chain3d(eyes, head, **kw)
     assert [len(sc) for sc in default.restart_scores] == [s3.RESTARTS] * 3
     for bad in (0, 11, 2.0, True):
