@@ -27,7 +27,9 @@ vergence; map T: map H's distance place with the neck's pitch); ``"axes"``, a
 that axis is (map T: the azimuth with the neck's yaw, the elevation and the distance with
 its pitch). The codes span the commands' ranges or the sensed ones (:data:`SCALES`); map T
 reads map H's place as its winner's grid coordinates or moved between units by the scores
-(:data:`READOUTS`).
+(:data:`READOUTS`). Each part of map T is fitted :data:`RESTARTS` times from seeds spawned
+from its own, and the fit with the lowest fold score on map T's own training pairs (the
+robot's codes of both views, no truth) kept: :func:`learn_chain3d`'s ``restarts``.
 
 Every learning input is read from the pixels (:func:`~sigmapi.envs.icub.stereo.see_both`)
 and the joint angles, on a sealed scene; the simulator's truth gives only the labels
@@ -54,6 +56,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from sigmapi import _validate
 from sigmapi.baselines import KohonenSOM
 from sigmapi.codes import PopulationCode, grid_coordinates
 from sigmapi.envs.icub import ICubScene
@@ -101,6 +104,11 @@ READOUT = "soft"
 """How map T reads map H's place by default (:data:`READOUTS`)."""
 ITERATIONS = 30_000
 """Iterations per map by default."""
+RESTARTS = 3
+"""Fits of each part of map T by default (:func:`learn_chain3d`'s ``restarts``; chosen on
+seeds 0-2, docs/guide/icub-3d.md)."""
+MAX_RESTARTS = 10
+"""Most fits of a part :func:`learn_chain3d` accepts (each costs a whole fit)."""
 _SEARCHES = 4  # head postures tried before a ball is given up
 _SEARCH_TRIES = 100  # eye commands per head posture
 
@@ -356,6 +364,9 @@ class Chain3D:
         self.scales = fixed_scales(eye_size) if scales is None else scales
         _check_choice("readout", readout, READOUTS)
         self.readout = readout
+        self.restart_scores: list[list[float]] = []
+        """Map T's parts' fold scores on its training pairs, one per fit (:func:`learn_chain3d`'s
+        ``restarts``; empty lists for one fit)."""
 
     def inputs_h(self, v: Views3D) -> Any:
         """Map H's codes of views ``v``: both retinas (column, row, disparity) and the eyes'
@@ -469,6 +480,52 @@ def _fit(m: Model, a: Any, b: Any) -> None:
         m.fit((*a, *b))
 
 
+def restart_seeds(seed: int, restarts: int) -> list[int]:
+    """The seeds of a part's ``restarts`` fits: its own ``seed`` first (so one fit is the fit
+    without restarts), then one from each child of a :class:`numpy.random.SeedSequence`
+    spawned from it (the list for ``n`` fits the first ``n`` of the list for more)."""
+    kids = np.random.SeedSequence(seed).spawn(restarts - 1)
+    return [seed, *(int(k.generate_state(1)[0]) for k in kids)]
+
+
+def pair_fold_score(model: SigmaPiSOM, a: tuple[Array, Array], b: tuple[Array, Array]) -> float:
+    """The fold score (:func:`sigmapi.metrics.fold_indicators`) of a Sigma-Pi map on the codes
+    ``a`` and ``b`` of view pairs' two views: it reads the robot's codes only (the batch's true
+    positions are empty: no label can enter the score)."""
+    empty = np.zeros((a[0].shape[0], 0))
+    return fold_indicators(model, Batch(*a, *b, empty, empty, empty, empty, empty))[2]
+
+
+def _fit_kept(
+    part: SigmaPiSOM, a: tuple[Array, Array], b: tuple[Array, Array], restarts: int
+) -> tuple[SigmaPiSOM, list[float]]:
+    """``part`` fitted on the pairs' codes ``a``, ``b`` from each of its :func:`restart_seeds`,
+    and the fit kept: the one with the lowest :func:`pair_fold_score` on these same training
+    pairs (the first on a tie), with every fit's score (none for one fit: nothing chosen)."""
+    part.fit((*a, *b))
+    if restarts == 1:
+        return part, []
+    seed = part.config.seed
+    assert seed is not None  # the chain's maps are always seeded (learn_chain3d)
+    fits, scores = [part], [pair_fold_score(part, a, b)]
+    for s in restart_seeds(seed, restarts)[1:]:
+        m = SigmaPiSOM(part.config.replace(seed=s))
+        m.fit((*a, *b))
+        fits.append(m)
+        scores.append(pair_fold_score(m, a, b))
+    return fits[int(np.argmin(scores))], scores
+
+
+def _fit_restarts(m: Model, a: Any, b: Any, restarts: int) -> tuple[Model, list[list[float]]]:
+    """``m`` fitted with :func:`_fit_kept` per part (a Sigma-Pi map: as one part), and each
+    part's scores."""
+    if not isinstance(m, FactorMap):
+        kept, scores = _fit_kept(m, a, b, restarts)
+        return kept, [scores]
+    out = [_fit_kept(p, pa, pb, restarts) for p, pa, pb in zip(m.parts, a, b, strict=True)]
+    return FactorMap(*(p for p, _ in out)), [sc for _, sc in out]
+
+
 def _new_map(
     design: str,
     codes: tuple[int, int, int],
@@ -514,6 +571,7 @@ def learn_chain3d(
     readout: str = READOUT,
     torso_grid: int | None = TORSO_GRID,
     head_shape: tuple[int, int, int] | None = HEAD_SHAPE,
+    restarts: int = RESTARTS,
 ) -> Chain3D:
     """Map H on the eyes' pairs, then map T on map H's code of the head's pairs (codes of
     ``grid`` units per axis, hills ``width`` wide; map T ``map_shape``). The defaults are the
@@ -528,7 +586,16 @@ def learn_chain3d(
     (the disparity and the vergence; None: ``grid``). ``readout``: how map T reads map H
     (:data:`READOUTS`, :meth:`Chain3D.place_h`, :meth:`Chain3D.response_h`).
     ``torso_grid``: units per axis of map T's codes (None: ``grid``). ``head_shape``: map H's
-    shape (None: ``map_shape``)."""
+    shape (None: ``map_shape``).
+
+    ``restarts``: fits of each part of map T (each 1-D map of ``"axes"``; the whole map of
+    ``"grid"``), the first from the seed one fit uses, the others from seeds spawned from it
+    (:func:`restart_seeds`); per part the fit kept is the one with the lowest fold score on
+    map T's own training pairs (:func:`pair_fold_score`): the choice reads the robot's codes
+    of both views of each pair (map H's place and the neck's angles), never a true position.
+    Each fit's score per part is kept in ``Chain3D.restart_scores``. 1: one fit, the map T of
+    before the option, bit for bit."""
+    _validate.integer("restarts", restarts, 1, MAX_RESTARTS, fix="e.g. 1 (one fit) or 3")
     _check_choice("design", design, DESIGNS)
     t_design = design if torso_design is None else torso_design
     _check_choice("torso_design", t_design, DESIGNS)
@@ -557,7 +624,9 @@ def learn_chain3d(
     else:
         chain.map_t = _new_map(t_design, tg, map_shape, width, iterations, s2, backend)
     a, b = head
-    _fit(chain.map_t, chain.inputs_t(a), chain.inputs_t(b))
+    chain.map_t, chain.restart_scores = _fit_restarts(
+        chain.map_t, chain.inputs_t(a), chain.inputs_t(b), restarts
+    )
     return chain
 
 
