@@ -74,6 +74,7 @@ def _box_seed(job: _BoxJob) -> dict[str, Any]:
         epochs=cfg.epochs,
         reaches=cfg.reaches,
         feature_width=cfg.box_feature_width,
+        restarts=cfg.box_restarts,
         yaw=cfg.babble_yaw,
         wrist=(cfg.babble_wrist[0], cfg.babble_wrist[1]),
         grid=BOX_GRID,

@@ -147,6 +147,12 @@ class ICubConfig:
     )
     """Width of the bump map T's winner (or the true position) gives the 3-D task's
     association, map units (``space`` "box")."""
+    box_restarts: int = field(
+        default=3, metadata=_validate.bounded("int", 1, 10, fix="e.g. 1 (one fit) or 3")
+    )
+    """Fits of each part of map T, each kept by its own fold score on the robot's view pairs
+    (``space`` "box"; :func:`~sigmapi.experiments.icub.space3d.learn_chain3d`'s
+    ``restarts``; 1: one fit)."""
     backend: str = field(
         default="auto", metadata=_validate.bounded("choice", options=BACKEND_NAMES)
     )

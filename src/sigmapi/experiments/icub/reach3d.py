@@ -492,6 +492,7 @@ def run_seed3d(
     keep: bool = False,
     learned_state: str = LEARNED_STATE,
     film: bool = False,
+    restarts: int = s3.RESTARTS,
 ) -> dict[str, Any]:
     """One seed of the 3-D task: the maps recorded, learned and scored; babbling; the
     associations; the reaches eyes free and fixated, summarised; ``keep``: also the raw
@@ -503,7 +504,7 @@ def run_seed3d(
     gaze's codes that the associated methods read; ``map_shape``: map T's (the maps' other
     settings :func:`~sigmapi.experiments.icub.space3d.learn_chain3d`'s defaults, the measured
     design); ``learned_state``: where the ``learned`` state's bump sits
-    (:data:`LEARNED_STATES`)."""
+    (:data:`LEARNED_STATES`); ``restarts``: fits of each part of map T (its ``restarts``)."""
     t0 = time.perf_counter()
     r_views, r_babble, r_reach = (PLAN.rng(seed, s) for s in ("views", "babbling", "reaches"))
     scene, train, ev = s3.record_box(r_views, pairs, eval_pairs)
@@ -516,6 +517,7 @@ def run_seed3d(
         seed=seed,
         eye_size=scene.eye_size,
         backend=backend,
+        restarts=restarts,
     )
     maps = s3.score_chain(chain, train, ev, iterations, seed)
     units = unit_positions(chain, ev) if film else None
