@@ -38,6 +38,7 @@ def _share(model: SigmaPiSOM, tol: float, n: int, seed: int) -> float:
     return float(np.mean(got == want))
 
 
+@pytest.mark.slow  # multi-seed; in CI's slow step, to keep the default run under 5 min
 def test_on_five_seeds_the_fast_path_makes_the_bit_exact_paths_maps():
     """Seeds 0-4 (measured: winners equal on 99.96-100 % of 5,000 pairs per seed, view
     consistency within 0.0007 and z error within 0.0005 of the bit-exact path's); the stated

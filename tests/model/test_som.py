@@ -183,6 +183,7 @@ def test_small_map_learns_invariance(learned):
     assert learned["z_error"] <= 0.40
 
 
+@pytest.mark.slow  # multi-seed; in CI's slow step, to keep the default run under 5 min
 def test_learning_from_the_same_view_is_clearly_worse(learned):
     """Ablation (docs/algorithm.md): learning the view that chose the winner breaks invariance."""
     same = _metrics(same_view=True)

@@ -109,6 +109,7 @@ def test_backends_learn_the_same_map_not_its_mirror():
     assert _rank_corr(wf.astype(float), test.z[:, 0]) > 0.5
 
 
+@pytest.mark.slow  # multi-seed; in CI's slow step, to keep the default run under 5 min
 def test_crossview_orders_every_seed_where_the_paper_start_twists():
     """Seeds 0-3 of SMALL_2D: "none" twists at least one, "crossview" orders all four."""
     results = {}
