@@ -402,25 +402,27 @@ class ICubScene:
         ball, any other part of the arm touches anything); the palm's skin is the hand's
         contacts with the ball on the palm's side (:meth:`palm_side`); the contacts are found
         again from the pose (``mj_collision``)."""
-        self._mj.mj_collision(self.model, self.data)
-        d, n = self.data, self.data.ncon
-        g1, g2 = d.contact.geom1[:n], d.contact.geom2[:n]
-        arm = self.model.geom_contype == 2
-        b = self._ball_geom
+        g1, g2, on_arm = self._arm_contacts()
+        b, n = self._ball_geom, len(g1)
         on_ball = ((g1 == b) & self._hand[g2]) | ((g2 == b) & self._hand[g1])
-        palm = on_ball & self.palm_side(d.contact.pos[:n], side)
-        other = (arm[g1] | arm[g2]) & ~palm
+        palm = on_ball & self.palm_side(self.data.contact.pos[:n], side)
+        other = on_arm & ~palm
         return bool(np.any(palm)), bool(np.any(other))
 
     def arm_touches(self) -> bool:
         """Touch, sensed with the arm where it is set: any contact of the hand or forearm
         (with the ball, the table or the body); the contacts are found again from the pose
         (``mj_collision``)."""
+        return bool(np.any(self._arm_contacts()[2]))
+
+    def _arm_contacts(self) -> tuple[NDArray[np.int32], NDArray[np.int32], NDArray[np.bool_]]:
+        """The contacts found again from the pose (``mj_collision``): each one's two geoms and
+        whether one of them is the arm's (the hand or the forearm)."""
         self._mj.mj_collision(self.model, self.data)
         n = self.data.ncon
         g1, g2 = self.data.contact.geom1[:n], self.data.contact.geom2[:n]
         arm = self.model.geom_contype == 2
-        return bool(np.any(arm[g1] | arm[g2]))
+        return g1, g2, arm[g1] | arm[g2]
 
     def hand_touches_ball(self) -> bool:
         """Whether the right hand (the palm's link, not the forearm) touches the ball."""
