@@ -126,6 +126,17 @@ def run_box(
     return res
 
 
+SUMMARIES = (
+    "maps",
+    "methods",
+    "methods_per_seed",
+    "fixation_converged",
+    "targets",
+    "seconds_per_seed",
+    "peak_memory_mb",
+)
+"""The keys of the JSON form computed from the per-seed records."""
+
 _MAP_SCORES = ("order_r2", "error_cm", "error_ratio_to_kmeans", "fold_score")
 
 
@@ -148,26 +159,12 @@ class ICubBoxResult(Result):
         "space: config.space",
         "config",
         "seeds",
-        "maps",
-        "methods",
-        "methods_per_seed",
-        "fixation_converged",
-        "targets",
-        "seconds_per_seed",
-        "peak_memory_mb",
+        *SUMMARIES,
         "seconds",
     )
     """The JSON form: the config and seeds, per map and per method the pooled numbers, per
     seed the methods' numbers, the targets, the time and the peak memory."""
-    COMPUTED = (
-        "maps",
-        "methods",
-        "methods_per_seed",
-        "fixation_converged",
-        "targets",
-        "seconds_per_seed",
-        "peak_memory_mb",
-    )
+    COMPUTED = SUMMARIES
     experiment = "icub"
 
     def maps(self) -> dict[str, dict[str, Any]]:
