@@ -20,8 +20,8 @@ from __future__ import annotations
 
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass, field, replace
-from functools import partial
+from dataclasses import dataclass, field
+from types import SimpleNamespace
 from typing import Any, Literal, NamedTuple, get_args
 
 import numpy as np
@@ -32,8 +32,8 @@ from sigmapi.codes import PopulationCode
 from sigmapi.config import SOMConfig
 from sigmapi.errors import ConfigError
 from sigmapi.executor import Executor, job_memory
-from sigmapi.experiments.base import KEY_VALUES, Experiment, Run, check_seeds, register, run_all
-from sigmapi.experiments.kit.jobs import Tick, counted, iterations_counted
+from sigmapi.experiments.base import KEY_VALUES, Run, check_seeds, register
+from sigmapi.experiments.kit.jobs import SeedJob, SeedRuns, Tick, iterations_counted
 from sigmapi.experiments.kit.maps import MapSpec
 from sigmapi.experiments.kit.results import Result, as_object, columns, render
 from sigmapi.experiments.kit.seeds import SeedPlan
@@ -281,114 +281,6 @@ def _single_inputs(model: SigmaPiSOM, t: Triples, v: int) -> tuple[Array, Array]
     )
 
 
-@dataclass(frozen=True)
-class ChainJob:
-    """One seed of the comparison (a job of the executor): its maps and their scores."""
-
-    seed: int
-    cfg: SOMConfig
-    train_pairs: int
-    code: str
-    cal: Triples
-    test: Triples
-    show: Progress | None = None
-    """Where given, the job shows the iterations of its three maps."""
-
-
-def chain_seed(job: ChainJob) -> dict[str, object]:
-    """Train map A, map B and the single map on seed ``job.seed``'s triples and score both
-    routes on the shared calibration and test triples (one entry of ``"seeds"``)."""
-    total = 3 * job.cfg.iterations
-    return counted(job.show, total, f"chain seed {job.seed}", partial(_chain_seed, job), "it")
-
-
-def _chain_seed(job: ChainJob, tick: Tick | None) -> dict[str, object]:
-    seed, cfg, code, cal, test = job.seed, job.cfg, job.code, job.cal, job.test
-    train = sample_triples(job.train_pairs, PLAN.rng(seed, "triples"))
-    spacing = float(cfg.y_shape[0] - 1)
-
-    # the chain: A on its own task, then B on A's code of the triples' views and the head code
-    start = time.perf_counter()
-    its = cfg.iterations
-    a = SigmaPiSOM(cfg, seed=seed).fit(callback=iterations_counted(tick, "map A", its))
-    b = SigmaPiSOM(cfg.replace(x_shape=a.map_shape), seed=seed)
-
-    def chain_inputs(t: Triples, v: int) -> tuple[Array, Array]:
-        x, e, u = t.view(v)
-        return head_code(a, x, e, code), b.y_code.encode(u)
-
-    b.fit(
-        (*chain_inputs(train, 0), *chain_inputs(train, 1)),
-        callback=iterations_counted(tick, "map B", its),
-    )
-    chain_seconds = time.perf_counter() - start
-
-    def chain_winners(t: Triples, v: int) -> NDArray[np.int64]:
-        return b.winner(*chain_inputs(t, v), hard=True)
-
-    # the single map on the whole transformation: same triples, same config but the grids
-    start = time.perf_counter()
-    s = SigmaPiSOM(single_config(cfg), seed=seed)
-    s.fit(
-        (*_single_inputs(s, train, 0), *_single_inputs(s, train, 1)),
-        callback=iterations_counted(tick, "single map", its),
-    )
-    if tick is not None:
-        tick(0, "scoring both routes")
-    single_seconds = time.perf_counter() - start
-
-    def single_winners(t: Triples, v: int) -> NDArray[np.int64]:
-        return s.winner(*_single_inputs(s, t, v), hard=True)
-
-    out: dict[str, Any] = {"seed": seed}
-    m_a = evaluate(a)
-    out["map_a"] = {k: getattr(m_a, k) for k in ("z_error", "view_consistency", "order_r2")}
-    for name, model, winners, weights, secs in (
-        ("chain", b, chain_winners, a.weights_.size + b.weights_.size, chain_seconds),
-        ("single", s, single_winners, s.weights_.size, single_seconds),
-    ):
-        w0, w1 = winners(test, 0), winners(test, 1)
-        scores = winner_metrics(winners(cal, 0), cal.z, w0, w1, test.z, model.map_coords, spacing)
-        out[name] = {**scores, "weights": int(weights), "train_seconds": secs}
-    out["ratio"] = out["chain"]["z_error"] / out["single"]["z_error"]
-    return out
-
-
-def _run(
-    cfg: SOMConfig,
-    seeds: Sequence[int],
-    train_pairs: int,
-    n_test: int,
-    code: str,
-    executor: Executor | None,
-    progress: Progress | None,
-) -> ChainResult:
-    seeds = check_seeds(seeds)
-    width = 8 * 3 * (int(np.prod(cfg.x_shape)) + int(np.prod(cfg.y_shape)))  # a triple, float64
-    _memory.check_count("train_pairs", train_pairs, 2 * width, "e.g. --train-pairs 20000")
-    _memory.check_count("n_test", n_test, 4 * width, "e.g. --n-test 10000")
-    evaluation = np.random.SeedSequence(EVAL_SEED).spawn(2)  # calibration, test
-    cal, test = (sample_triples(n_test, np.random.default_rng(s)) for s in evaluation)
-    jobs = [(f"seed {s}", ChainJob(s, cfg, train_pairs, code, cal, test)) for s in seeds]
-    per_job = 2 * job_memory(cfg, n_test) + job_memory(single_config(cfg), n_test)
-
-    def describe(key: str, r: dict[str, Any]) -> str:
-        chain, single = r["chain"]["z_error"], r["single"]["z_error"]
-        return f"{key}: chain z error {chain:.3f}, single {single:.3f}"
-
-    done = run_all(
-        chain_seed,
-        jobs,
-        executor=executor,
-        per_job=per_job,
-        progress=progress,
-        desc="chain",
-        describe=describe,
-        verbose=lambda job: replace(job, show=progress),
-    )
-    return ChainResult(cfg, train_pairs, n_test, code, list(done.values()))
-
-
 def run_chain(
     seeds: Sequence[int] = (0, 1, 2),
     *,
@@ -435,7 +327,9 @@ def run_chain(
     _validate.integer("train_pairs", train_pairs, 10, fix="e.g. 20000")
     _validate.integer("n_test", n_test, 10, fix="e.g. 10000")
     _validate.choice("code", code, CODES)
-    return _run(cfg, seeds, train_pairs, n_test, code, executor, progress).to_dict()
+    # a ChainConfig's settings, with a map config of any preset
+    given = SimpleNamespace(som_config=cfg, train_pairs=train_pairs, n_test=n_test, code=code)
+    return CHAIN.execute(given, Run(seeds, executor=executor, progress=progress)).to_dict()
 
 
 QUICK = ChainConfig(overrides=("iterations=60000",), train_pairs=5000, n_test=2000)
@@ -443,10 +337,11 @@ QUICK = ChainConfig(overrides=("iterations=60000",), train_pairs=5000, n_test=20
 ``sigmapi reproduce --quick``), less data; a first look, not the measured setting."""
 
 
-class Chain(Experiment[ChainConfig]):
+class Chain(SeedRuns[Any]):
     """Train map A (retina + eye -> head-centred) on its task, map B (A's response + head ->
     body-centred) and one third-order map on the whole transformation on the same triples, and
-    score both routes by the same metrics."""
+    score both routes by the same metrics. Its config: a :class:`ChainConfig` (or
+    :func:`run_chain`'s settings, of the same names)."""
 
     name = "chain"
     summary = "a chain of two maps (retina -> head -> body) against one map on the whole task"
@@ -455,10 +350,92 @@ class Chain(Experiment[ChainConfig]):
     quick = QUICK
     quick_seeds = (0,)
     quick_time = "about 15 s on two cores"
+    unit = "it"
 
-    def execute(self, config: ChainConfig, run: Run) -> ChainResult:
-        c, r = config, run
-        return _run(c.som_config, r.seeds, c.train_pairs, c.n_test, c.code, r.executor, r.progress)
+    def check(self, config: ChainConfig) -> int:
+        """Refuse data that does not fit; one job's memory (maps A and B and the single map)."""
+        cfg, n_test = config.som_config, config.n_test
+        width = 8 * 3 * (int(np.prod(cfg.x_shape)) + int(np.prod(cfg.y_shape)))  # a triple
+        _memory.check_count(
+            "train_pairs", config.train_pairs, 2 * width, "e.g. --train-pairs 20000"
+        )
+        _memory.check_count("n_test", n_test, 4 * width, "e.g. --n-test 10000")
+        return 2 * job_memory(cfg, n_test) + job_memory(single_config(cfg), n_test)
+
+    def prepare(self, config: ChainConfig, progress: object) -> tuple[SOMConfig, Triples, Triples]:
+        """The map config and the calibration and test triples, from the fixed evaluation seed."""
+        evaluation = np.random.SeedSequence(EVAL_SEED).spawn(2)  # calibration, test
+        cal, test = (sample_triples(config.n_test, np.random.default_rng(s)) for s in evaluation)
+        return config.som_config, cal, test
+
+    def steps(self, job: SeedJob) -> int:
+        return 3 * job.shared[0].iterations
+
+    def describe(self, key: str, value: dict[str, Any]) -> str:
+        chain, single = value["chain"]["z_error"], value["single"]["z_error"]
+        return f"seed {key}: chain z error {chain:.3f}, single {single:.3f}"
+
+    def seed_run(self, job: SeedJob, tick: Tick | None) -> dict[str, object]:
+        """Train map A, map B and the single map on seed ``job.seed``'s triples and score both
+        routes on the shared calibration and test triples (one entry of ``"seeds"``)."""
+        seed, code, (cfg, cal, test) = job.seed, job.config.code, job.shared
+        train = sample_triples(job.config.train_pairs, PLAN.rng(seed, "triples"))
+        spacing = float(cfg.y_shape[0] - 1)
+
+        # the chain: A on its own task, then B on A's code of the triples' views and the head code
+        start = time.perf_counter()
+        its = cfg.iterations
+        a = SigmaPiSOM(cfg, seed=seed).fit(callback=iterations_counted(tick, "map A", its))
+        b = SigmaPiSOM(cfg.replace(x_shape=a.map_shape), seed=seed)
+
+        def chain_inputs(t: Triples, v: int) -> tuple[Array, Array]:
+            x, e, u = t.view(v)
+            return head_code(a, x, e, code), b.y_code.encode(u)
+
+        b.fit(
+            (*chain_inputs(train, 0), *chain_inputs(train, 1)),
+            callback=iterations_counted(tick, "map B", its),
+        )
+        chain_seconds = time.perf_counter() - start
+
+        def chain_winners(t: Triples, v: int) -> NDArray[np.int64]:
+            return b.winner(*chain_inputs(t, v), hard=True)
+
+        # the single map on the whole transformation: same triples, same config but the grids
+        start = time.perf_counter()
+        s = SigmaPiSOM(single_config(cfg), seed=seed)
+        s.fit(
+            (*_single_inputs(s, train, 0), *_single_inputs(s, train, 1)),
+            callback=iterations_counted(tick, "single map", its),
+        )
+        if tick is not None:
+            tick(0, "scoring both routes")
+        single_seconds = time.perf_counter() - start
+
+        def single_winners(t: Triples, v: int) -> NDArray[np.int64]:
+            return s.winner(*_single_inputs(s, t, v), hard=True)
+
+        out: dict[str, Any] = {"seed": seed}
+        m_a = evaluate(a)
+        out["map_a"] = {k: getattr(m_a, k) for k in ("z_error", "view_consistency", "order_r2")}
+        for name, model, winners, weights, secs in (
+            ("chain", b, chain_winners, a.weights_.size + b.weights_.size, chain_seconds),
+            ("single", s, single_winners, s.weights_.size, single_seconds),
+        ):
+            w0, w1 = winners(test, 0), winners(test, 1)
+            scores = winner_metrics(
+                winners(cal, 0), cal.z, w0, w1, test.z, model.map_coords, spacing
+            )
+            out[name] = {**scores, "weights": int(weights), "train_seconds": secs}
+        out["ratio"] = out["chain"]["z_error"] / out["single"]["z_error"]
+        return out
+
+    def collect(
+        self, config: ChainConfig, seeds: tuple[int, ...], values: list[Any]
+    ) -> ChainResult:
+        c = config
+        return ChainResult(c.som_config, c.train_pairs, c.n_test, c.code, values)
 
 
-CHAIN = register(Chain())
+CHAIN = Chain()
+register(CHAIN)
