@@ -10,10 +10,8 @@ on the same triples with B's config but for the grids. Both routes are scored by
 fixed evaluation seed, beside their cost (weights, training seconds). The definitions:
 docs/algorithm.md, "A chain of frames".
 
-The experiment ``chain`` (:class:`Chain`, settings :class:`ChainConfig`) runs one job per seed
-through the executor; :func:`run_chain` is the same from Python with a :class:`SOMConfig`.
-One module, read top to bottom: the settings (:class:`ChainConfig`, :data:`QUICK` below the
-run), the result (:class:`ChainResult`: JSON form, summary, table) and the run.
+Read top to bottom: the settings (:class:`ChainConfig`), the result (:class:`ChainResult`)
+and the run (:class:`Chain`, one job per seed; :func:`run_chain` from Python, any config).
 """
 
 from __future__ import annotations
@@ -21,6 +19,7 @@ from __future__ import annotations
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from functools import partial
 from types import SimpleNamespace
 from typing import Any, Literal, NamedTuple, get_args
 
@@ -136,7 +135,7 @@ COLUMNS = columns(
 
 @dataclass
 class ChainResult(Result):
-    """Both routes per seed (:func:`chain_seed`) and the settings they ran with."""
+    """Both routes per seed (:meth:`Chain.seed_run`) and the settings they ran with."""
 
     config: SOMConfig
     train_pairs: int
@@ -183,14 +182,9 @@ class ChainResult(Result):
         """Both routes per seed, then the summary line."""
         rows = [{"seed": r["seed"], "route": k, **r[k]} for r in self.per_seed for k in ROUTES]
         s = self.summary()
-        return "\n".join(
-            [
-                *render(COLUMNS, rows),
-                f"{s['met']} of {s['n_seeds']} seeds: chain z error <= {s['target_ratio']:g} x "
-                f"the single map's (median ratio {s['ratio_median']:.2f}, worst "
-                f"{s['ratio_worst']:.2f})",
-            ]
-        )
+        met = f"{s['met']} of {s['n_seeds']} seeds: chain z error <= {s['target_ratio']:g} x"
+        ratio = f"(median ratio {s['ratio_median']:.2f}, worst {s['ratio_worst']:.2f})"
+        return "\n".join([*render(COLUMNS, rows), f"{met} the single map's {ratio}"])
 
 
 Array = NDArray[np.float64]
@@ -276,9 +270,8 @@ def single_config(cfg: SOMConfig) -> SOMConfig:
 def _single_inputs(model: SigmaPiSOM, t: Triples, v: int) -> tuple[Array, Array]:
     """The single map's codes of view ``v``: x on its ``(n_x, 1)`` grid, (e, u) jointly."""
     x, e, u = t.view(v)
-    return model.x_code.encode(np.hstack([x, np.zeros_like(x)])), model.y_code.encode(
-        np.hstack([e, u])
-    )
+    retina = np.hstack([x, np.zeros_like(x)])
+    return model.x_code.encode(retina), model.y_code.encode(np.hstack([e, u]))
 
 
 def run_chain(
@@ -303,13 +296,8 @@ def run_chain(
         ``mean`` relation (:func:`chain_config`). Map B and the single map change only grids.
     iterations : int, optional
         Iterations of each of the three maps (default: ``config.iterations``).
-    train_pairs : int
-        View pairs of triples that map B and the single map are trained on (map A trains on
-        its built-in task for its whole run).
-    n_test : int
-        Calibration and test triples (each), from the fixed evaluation seed.
-    code : {"response", "winner"}
-        What map A hands to map B (:func:`head_code`).
+    train_pairs, n_test, code : int, int, {"response", "winner"}
+        As :class:`ChainConfig` has them (map A trains on its built-in task, :func:`head_code`).
     executor : Executor, optional
         Where the seeds run (None: one after another in this process).
     progress : Progress, optional
@@ -398,9 +386,6 @@ class Chain(SeedRuns[Any]):
         )
         chain_seconds = time.perf_counter() - start
 
-        def chain_winners(t: Triples, v: int) -> NDArray[np.int64]:
-            return b.winner(*chain_inputs(t, v), hard=True)
-
         # the single map on the whole transformation: same triples, same config but the grids
         start = time.perf_counter()
         s = SigmaPiSOM(single_config(cfg), seed=seed)
@@ -412,20 +397,16 @@ class Chain(SeedRuns[Any]):
             tick(0, "scoring both routes")
         single_seconds = time.perf_counter() - start
 
-        def single_winners(t: Triples, v: int) -> NDArray[np.int64]:
-            return s.winner(*_single_inputs(s, t, v), hard=True)
-
         out: dict[str, Any] = {"seed": seed}
         m_a = evaluate(a)
         out["map_a"] = {k: getattr(m_a, k) for k in ("z_error", "view_consistency", "order_r2")}
-        for name, model, winners, weights, secs in (
-            ("chain", b, chain_winners, a.weights_.size + b.weights_.size, chain_seconds),
-            ("single", s, single_winners, s.weights_.size, single_seconds),
+        views = ((cal, 0), (test, 0), (test, 1))  # the calibration's first view, both test views
+        for name, model, inputs, weights, secs in (
+            ("chain", b, chain_inputs, a.weights_.size + b.weights_.size, chain_seconds),
+            ("single", s, partial(_single_inputs, s), s.weights_.size, single_seconds),
         ):
-            w0, w1 = winners(test, 0), winners(test, 1)
-            scores = winner_metrics(
-                winners(cal, 0), cal.z, w0, w1, test.z, model.map_coords, spacing
-            )
+            w = [model.winner(*inputs(t, v), hard=True) for t, v in views]
+            scores = winner_metrics(w[0], cal.z, w[1], w[2], test.z, model.map_coords, spacing)
             out[name] = {**scores, "weights": int(weights), "train_seconds": secs}
         out["ratio"] = out["chain"]["z_error"] / out["single"]["z_error"]
         return out

@@ -9,10 +9,9 @@ for each ``L`` of ``labels`` (:mod:`sigmapi.baselines.scoring`). The scores (**z
 needed** and **labels to match**) are defined in docs/algorithm.md, "Your own data and the
 baselines". Values over seeds are medians; every seed's value is kept.
 
-Each seed is one job of the executor (:class:`Compare`, the experiment ``compare``;
-:func:`run_compare` from Python). One module, read top to bottom:
-the settings (:class:`CompareConfig`), the result (:class:`CompareResult`: JSON form, table,
-figure drawn by :mod:`.figures`) and the run.
+Read top to bottom: the settings (:class:`CompareConfig`), the result (:class:`CompareResult`,
+its figure drawn by :mod:`.figures`) and the run (:class:`Compare`, one job per seed;
+:func:`run_compare` from Python).
 """
 
 from __future__ import annotations
@@ -97,9 +96,8 @@ class CompareConfig:
         _validate.check_fields(self)
         for m in self.methods:
             _validate.choice("methods", m, tuple(METHODS))
-        object.__setattr__(
-            self, "methods", tuple(m for m in METHODS if m in self.methods or m == "sigma-pi")
-        )
+        chosen = {*self.methods, "sigma-pi"}
+        object.__setattr__(self, "methods", tuple(m for m in METHODS if m in chosen))
         object.__setattr__(self, "overrides", tuple(self.overrides))
         self.som_config  # noqa: B018 (an unknown preset or a bad override fails here, not later)
 
@@ -253,13 +251,9 @@ class CompareResult(Result):
     def table(self) -> str:
         """The comparison as a plain-text table (medians over seeds)."""
         shape = "x".join(map(str, self.config.som_config.map_shape))
-        return "\n".join(
-            [
-                *render(COLUMNS, self.to_dict()["methods"]),
-                f"z error in grid spacings; a map's winner alone cannot beat {self.floor:.3f} "
-                f"(z cut into {shape} cells)",
-            ]
-        )
+        floor = f"a map's winner alone cannot beat {self.floor:.3f} (z cut into {shape} cells)"
+        rows = render(COLUMNS, self.to_dict()["methods"])
+        return "\n".join([*rows, f"z error in grid spacings; {floor}"])
 
     def draw(self) -> Figure:
         """``compare.png``: :func:`.figures.compare_figure` of the JSON form."""

@@ -163,10 +163,8 @@ class PhysiologyResult(Result):
         rows = render(COLUMNS, [{"map": k, **self.data[k]} for k in ("trained", "random_start")])
         c = self.data["comparison"]
         if c["ks"] is not None:
-            rows.append(
-                f"trained vs random start: KS {c['ks']:.3f}, p = {c['p_value']:.2g} "
-                f"(n = {c['n'][0]}, {c['n'][1]})"
-            )
+            n = f"(n = {c['n'][0]}, {c['n'][1]})"
+            rows.append(f"trained vs random start: KS {c['ks']:.3f}, p = {c['p_value']:.2g} {n}")
         rows.append(self._monkey_line())
         return "\n".join(rows)
 
@@ -174,6 +172,7 @@ class PhysiologyResult(Result):
         m = self.data["monkey"]
         share = m["gain_modulated_share"]
         idx, r2 = m["reference_frame_index"]["median"], m["gain_r2"]["median"]
+        shifted, every = m["displacement_index"]["median"], m["reference_frame_index_all"]["median"]
         left = ", ".join(f"{v} {k.replace('_', ' ')}" for k, v in m["left_out"].items())
         return (
             f"monkey protocol ({len(m['fixations'])} fixations, {m['n_retina']} stimuli per "
@@ -181,16 +180,8 @@ class PhysiologyResult(Result):
             + (f"gain-modulated {100 * share:.0f} %" if share is not None else "no unit admitted")
             + (f", planar-fit R^2 median {r2:.2f}" if r2 is not None else "")
             + (f", reference-frame index median {idx:.2f}" if idx is not None else "")
-            + (
-                f" (by cross-correlation {m['displacement_index']['median']:.2f})"
-                if m["displacement_index"]["median"] is not None
-                else ""
-            )
-            + (
-                f" (every unit: {m['reference_frame_index_all']['median']:.2f})"
-                if m["reference_frame_index_all"]["median"] is not None
-                else ""
-            )
+            + (f" (by cross-correlation {shifted:.2f})" if shifted is not None else "")
+            + (f" (every unit: {every:.2f})" if every is not None else "")
         )
 
     def caption(self) -> str:
@@ -201,11 +192,8 @@ class PhysiologyResult(Result):
             v = r["median_reference_frame_index"]
             return "no unit measured" if v is None else f"median {v:.2f}"
 
-        verdict = (
-            "body-centred"
-            if self.body_centred()
-            else f"not body-centred by the {BODY_CENTRED} criterion"
-        )
+        criterion = f"not body-centred by the {BODY_CENTRED} criterion"
+        verdict = "body-centred" if self.body_centred() else criterion
         text = (
             f"{self.data['model']} (map {'x'.join(map(str, self.data['map_shape']))}): "
             f"reference-frame index (receptive-field shift with gaze over a body-centred "

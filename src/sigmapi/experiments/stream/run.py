@@ -104,12 +104,10 @@ class StreamConfig:
 
 
 QUICK = StreamConfig(
-    overrides=("iterations=20000", "refine_pairs=20000"),
-    dwells=(1, 4, 16),
-    traces=(0.0, 0.5),
-    n_test=2000,
+    overrides=("iterations=20000", "refine_pairs=20000"), dwells=(1, 4, 16), n_test=2000
 )
-"""The quick look: a short run of the 1-D map, three dwell times, one seed."""
+"""The quick look: a short run of the 1-D map, three dwell times, both trace constants, one
+seed."""
 
 
 # -- the result: its JSON form, table and figure ---------------------------------------------------
@@ -134,7 +132,8 @@ COLUMNS = columns(
 
 @dataclass(frozen=True)
 class MapRun:
-    """One map's scores (:func:`stream_job`): the map on pairs when ``dwell`` is None."""
+    """One map's scores (:meth:`StreamExperiment.seed_run`): the map on pairs when ``dwell``
+    is None."""
 
     seed: int
     dwell: int | None
@@ -154,7 +153,7 @@ def _name(trace: float | None) -> str:
 
 @dataclass
 class StreamResult(Result):
-    """Every map's scores (:func:`stream_job`) and the settings they ran with."""
+    """Every map's scores (:class:`MapRun`) and the settings they ran with."""
 
     config: StreamConfig
     seeds: tuple[int, ...]
@@ -286,13 +285,9 @@ class StreamResult(Result):
 
 # -- the run: one job per seed and dwell time ------------------------------------------------------
 
-STREAM_KEY = 7
-"""Frames of seed s and dwell d: ``SeedSequence(s, spawn_key=(STREAM_KEY, d))``, apart from the
-model's own streams (:mod:`sigmapi.model.som`)."""
-
-PLAN = SeedPlan({"frames": STREAM_KEY})
-"""The streams of a seed (:class:`~sigmapi.experiments.kit.seeds.SeedPlan`): the frames,
-one stream per dwell time below it."""
+PLAN = SeedPlan({"frames": 7})
+"""The streams of a seed (:class:`~sigmapi.experiments.kit.seeds.SeedPlan`): the frames of
+dwell time d, ``SeedSequence(seed, spawn_key=(7, d))``, apart from the model's own streams."""
 
 
 @dataclass(frozen=True)
