@@ -17,7 +17,7 @@ and the run (:class:`Chain`, one job per seed; :func:`run_chain` from Python, an
 from __future__ import annotations
 
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from functools import partial
 from types import SimpleNamespace
@@ -370,6 +370,9 @@ class Chain(SeedRuns[Any]):
         train = sample_triples(job.config.train_pairs, PLAN.rng(seed, "triples"))
         spacing = float(cfg.y_shape[0] - 1)
 
+        def both(inputs: Callable[..., tuple[Array, Array]]) -> tuple[Array, Array, Array, Array]:
+            return (*inputs(train, 0), *inputs(train, 1))  # the training triples' view pairs
+
         # the chain: A on its own task, then B on A's code of the triples' views and the head code
         start = time.perf_counter()
         its = cfg.iterations
@@ -380,19 +383,14 @@ class Chain(SeedRuns[Any]):
             x, e, u = t.view(v)
             return head_code(a, x, e, code), b.y_code.encode(u)
 
-        b.fit(
-            (*chain_inputs(train, 0), *chain_inputs(train, 1)),
-            callback=iterations_counted(tick, "map B", its),
-        )
+        b.fit(both(chain_inputs), callback=iterations_counted(tick, "map B", its))
         chain_seconds = time.perf_counter() - start
 
         # the single map on the whole transformation: same triples, same config but the grids
         start = time.perf_counter()
         s = SigmaPiSOM(single_config(cfg), seed=seed)
-        s.fit(
-            (*_single_inputs(s, train, 0), *_single_inputs(s, train, 1)),
-            callback=iterations_counted(tick, "single map", its),
-        )
+        single_inputs = partial(_single_inputs, s)
+        s.fit(both(single_inputs), callback=iterations_counted(tick, "single map", its))
         if tick is not None:
             tick(0, "scoring both routes")
         single_seconds = time.perf_counter() - start
@@ -403,7 +401,7 @@ class Chain(SeedRuns[Any]):
         views = ((cal, 0), (test, 0), (test, 1))  # the calibration's first view, both test views
         for name, model, inputs, weights, secs in (
             ("chain", b, chain_inputs, a.weights_.size + b.weights_.size, chain_seconds),
-            ("single", s, partial(_single_inputs, s), s.weights_.size, single_seconds),
+            ("single", s, single_inputs, s.weights_.size, single_seconds),
         ):
             w = [model.winner(*inputs(t, v), hard=True) for t, v in views]
             scores = winner_metrics(w[0], cal.z, w[1], w[2], test.z, model.map_coords, spacing)

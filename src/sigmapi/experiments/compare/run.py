@@ -277,15 +277,11 @@ class CompareResult(Result):
             if name == "sigma-pi":
                 continue
             match = s.labels_to_match(ref.z_error)
-            reach = (
-                f"comes within 10 % of the map's z error with {match:,} labels"
-                if match is not None
-                else f"not within 10 % of the map's z error with {max(cfg.labels):,} labels"
-            )
-            parts.append(
-                f"{name}: same place {np.median(s.view_consistency):.2f}, z error "
-                f"{s.z_error:.2f}, {reach}."
-            )
+            n = max(cfg.labels) if match is None else match
+            within = "not within" if match is None else "comes within"
+            vc = np.median(s.view_consistency)
+            reach = f"{within} 10 % of the map's z error with {n:,} labels"
+            parts.append(f"{name}: same place {vc:.2f}, z error {s.z_error:.2f}, {reach}.")
         return " ".join(parts)
 
 

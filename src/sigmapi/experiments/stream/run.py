@@ -187,12 +187,8 @@ class StreamResult(Result):
         if not parts or any(p.config != parts[0].config for p in parts):
             raise ConfigError("results to combine must share one config (and be at least one)")
         seeds = check_seeds([s for p in parts for s in p.seeds], "seeds of the results")
-        return cls(
-            parts[0].config,
-            seeds,
-            [r for p in parts for r in p.runs],
-            sum(p.seconds for p in parts),
-        )
+        runs = [r for p in parts for r in p.runs]
+        return cls(parts[0].config, seeds, runs, sum(p.seconds for p in parts))
 
     def _rows(self, trace: float | None, dwell: int | None) -> list[MapRun]:
         rows = [r for r in self.runs if r.trace == trace and r.dwell == dwell]
@@ -248,13 +244,9 @@ class StreamResult(Result):
 
     def table(self) -> str:
         """Medians per method and dwell time, then the acceptance lines."""
-        rows = render(COLUMNS, self.methods())
-        for case in self.cases():
-            rows.append(
-                f"trace {case['trace']:g}, dwell {case['dwell']}: "
-                + margin_line(case, "view consistency of pairs")
-            )
-        return "\n".join(rows)
+        cases = [(c, margin_line(c, "view consistency of pairs")) for c in self.cases()]
+        lines = [f"trace {c['trace']:g}, dwell {c['dwell']}: {text}" for c, text in cases]
+        return "\n".join(render(COLUMNS, self.methods()) + lines)
 
     def caption(self) -> str:
         """The figure's caption, computed from the result."""
