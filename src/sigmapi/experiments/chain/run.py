@@ -328,8 +328,8 @@ QUICK = ChainConfig(overrides=("iterations=60000",), train_pairs=5000, n_test=20
 class Chain(SeedRuns[Any]):
     """Train map A (retina + eye -> head-centred) on its task, map B (A's response + head ->
     body-centred) and one third-order map on the whole transformation on the same triples, and
-    score both routes by the same metrics. Its config: a :class:`ChainConfig` (or
-    :func:`run_chain`'s settings, of the same names)."""
+    score both routes by the same metrics; its config a :class:`ChainConfig` (or the same
+    names from :func:`run_chain`)."""
 
     name = "chain"
     summary = "a chain of two maps (retina -> head -> body) against one map on the whole task"
@@ -342,11 +342,9 @@ class Chain(SeedRuns[Any]):
 
     def check(self, config: ChainConfig) -> int:
         """Refuse data that does not fit; one job's memory (maps A and B and the single map)."""
-        cfg, n_test = config.som_config, config.n_test
+        cfg, pairs, n_test = config.som_config, config.train_pairs, config.n_test
         width = 8 * 3 * (int(np.prod(cfg.x_shape)) + int(np.prod(cfg.y_shape)))  # a triple
-        _memory.check_count(
-            "train_pairs", config.train_pairs, 2 * width, "e.g. --train-pairs 20000"
-        )
+        _memory.check_count("train_pairs", pairs, 2 * width, "e.g. --train-pairs 20000")
         _memory.check_count("n_test", n_test, 4 * width, "e.g. --n-test 10000")
         return 2 * job_memory(cfg, n_test) + job_memory(single_config(cfg), n_test)
 

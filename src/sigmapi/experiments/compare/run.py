@@ -162,8 +162,7 @@ class MethodScore:
         return curve[max(curve)]
 
     def labels_needed(self) -> int:
-        curve = self.median_curve()
-        return min(n for n, e in curve.items() if e <= MATCH_SHARE * self.z_error)
+        return min(n for n, e in self.median_curve().items() if e <= MATCH_SHARE * self.z_error)
 
     def labels_to_match(self, target: float) -> int | None:
         hits = [n for n, e in self.median_curve().items() if e <= MATCH_SHARE * target]
@@ -227,25 +226,24 @@ class CompareResult(Result):
         methods = []
         for name, s in self.scores.items():
             curve = s.median_curve()
-            methods.append(
-                {
-                    "name": name,
-                    "description": METHODS[name],
-                    "view_consistency": float(np.median(s.view_consistency)),
-                    "unit_consistency": float(np.median(s.unit_consistency)),
-                    "z_error": s.z_error,
-                    "labels_used": labels_used,
-                    "labels_needed": s.labels_needed(),
-                    "labels_to_match_sigma_pi": s.labels_to_match(target),
-                    "z_error_by_labels": {str(n): e for n, e in curve.items()},
-                    "per_seed": {
-                        "view_consistency": s.view_consistency,
-                        "unit_consistency": s.unit_consistency,
-                        "z_error": [c[labels_used] for c in s.z_error_by_labels],
-                        "seconds": s.seconds,
-                    },
-                }
-            )
+            entry = {
+                "name": name,
+                "description": METHODS[name],
+                "view_consistency": float(np.median(s.view_consistency)),
+                "unit_consistency": float(np.median(s.unit_consistency)),
+                "z_error": s.z_error,
+                "labels_used": labels_used,
+                "labels_needed": s.labels_needed(),
+                "labels_to_match_sigma_pi": s.labels_to_match(target),
+                "z_error_by_labels": {str(n): e for n, e in curve.items()},
+                "per_seed": {
+                    "view_consistency": s.view_consistency,
+                    "unit_consistency": s.unit_consistency,
+                    "z_error": [c[labels_used] for c in s.z_error_by_labels],
+                    "seconds": s.seconds,
+                },
+            }
+            methods.append(entry)
         return methods
 
     def table(self) -> str:
@@ -317,10 +315,8 @@ def _train(name: str, cfg: CompareConfig, som_cfg: SOMConfig, views: Views, seed
     if name.startswith("sigma-pi"):
         return SigmaPiSOM(som_cfg, seed=seed, **SIGMA_PI_CHANGES[name]).fit(views)
     shape, its = som_cfg.map_shape, cfg.baseline_iterations
-    if name == "kohonen":
-        return KohonenSOM(shape, its, seed=seed).fit(views)
-    if name == "kohonen two-view":
-        return KohonenSOM(shape, its, two_view=True, seed=seed).fit(views)
+    if name.startswith("kohonen"):  # the two-view rule, or each view on its own
+        return KohonenSOM(shape, its, two_view=name == "kohonen two-view", seed=seed).fit(views)
     if name == "minisom":
         return MiniSomMap(shape, its, seed=seed).fit(views)
     if name == "basis functions":
@@ -336,17 +332,6 @@ Scores = dict[str, tuple[float, float, dict[int, float], float]]
 PLAN = SeedPlan({"data": 13})
 """The streams of a seed (:class:`~sigmapi.experiments.kit.seeds.SeedPlan`): the recorded
 views, apart from the streams a model of the same seed draws."""
-
-
-def check_installed(methods: Sequence[str]) -> None:
-    """Refuse, before anything trains, methods whose optional module is not installed."""
-    missing = sorted({NEEDS[m] for m in methods if m in NEEDS} - installed())
-    if missing:
-        names = " and ".join(PACKAGES[m] for m in missing)
-        raise ConfigError(
-            f"the baselines need {names} (not installed here); "
-            f"{install_hint('baselines')}, or leave those methods out"
-        )
 
 
 def installed() -> set[str]:
@@ -388,14 +373,18 @@ class Compare(SeedRuns[CompareConfig]):
     unit = "method"
 
     def check(self, config: CompareConfig) -> int:
-        """Refuse methods not installed here and data that does not fit; one job's memory."""
-        check_installed(config.methods)
-        som = SigmaPiSOM(config.som_config)
+        """Refuse, before anything trains, methods whose optional module is not installed
+        (:func:`installed`) and data that does not fit; one job's memory."""
+        missing = sorted({NEEDS[m] for m in config.methods if m in NEEDS} - installed())
+        if missing:
+            names = " and ".join(PACKAGES[m] for m in missing)
+            raise ConfigError(
+                f"the baselines need {names} (not installed here); "
+                f"{install_hint('baselines')}, or leave those methods out"
+            )
+        som, pairs, n_test = SigmaPiSOM(config.som_config), config.train_pairs, config.n_test
         width = 8 * (int(np.prod(som.x_shape)) + int(np.prod(som.y_shape)))  # a view pair
-        _memory.check_count(
-            "train_pairs", config.train_pairs, 2 * width, "e.g. --train-pairs 20000"
-        )
-        n_test = config.n_test
+        _memory.check_count("train_pairs", pairs, 2 * width, "e.g. --train-pairs 20000")
         _memory.check_count("n_test", n_test, 4 * width + 32 * som.n_units, "e.g. --n-test 10000")
         return job_memory(config.som_config, n_test)
 

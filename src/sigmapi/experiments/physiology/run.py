@@ -94,9 +94,8 @@ class PhysiologyConfig:
 
     def __post_init__(self) -> None:
         if not isinstance(self.model, str) or not self.model:
-            raise _validate.fail(
-                "model", "a model file path", self.model, "e.g. sigmapi physiology model.npz"
-            )
+            fix = "e.g. sigmapi physiology model.npz"
+            raise _validate.fail("model", "a model file path", self.model, fix)
         _validate.check_fields(self)  # the bounds declared beside the fields
         for name, what, fix in (
             ("gazes", "gazes", "e.g. --gazes 0.2,0.35,0.5,0.65,0.8"),
@@ -266,12 +265,8 @@ def _tuning(model: Recordable, cfg: PhysiologyConfig, n_probe: int | None) -> di
             line = np.nonzero(np.all(probes[:, 1:] == best[1:], axis=1))[0]
         responses.append(resp[:, line, u].tolist())
         positions = probes[line, 0].tolist()
-    return {
-        "units": units.tolist(),
-        "gazes": list(cfg.gazes),
-        "responses": responses,
-        "positions": positions,
-    }
+    gazes = list(cfg.gazes)
+    return {"units": units.tolist(), "gazes": gazes, "responses": responses, "positions": positions}
 
 
 def record_model(
@@ -294,6 +289,7 @@ def record_model(
     axes = cfg.gaze_axes or None  # record() checks them against the model's axes
     trained = record(model, cfg.gazes, n_probe, slope, axes)
     start = record(RandomStart(model), cfg.gazes, n_probe, slope, axes)
+    index = trained["reference_frame_index"]
     raw = fixation_protocol(model, cfg.eye_grid, cfg.n_retina)
     monkey = monkey_protocol(
         model, cfg.eye_grid, cfg.n_retina, slope, axes, responds=cfg.responds, recording=raw
@@ -306,10 +302,8 @@ def record_model(
         "relation": model.sampler.relation.name,
         "trained": trained,
         "random_start": start,
-        "reference_frame_index": trained["reference_frame_index"],
-        "comparison": compare_distributions(
-            trained["reference_frame_index"], start["reference_frame_index"]
-        ),
+        "reference_frame_index": index,
+        "comparison": compare_distributions(index, start["reference_frame_index"]),
         "tuning": _tuning(model, cfg, n_probe),
         "monkey": monkey,
     }
@@ -421,9 +415,7 @@ def _monkey_panels(axes: Any, m: dict[str, Any]) -> None:
     if m["gain_modulated_share"] is not None:
         bars.append((f"map, admitted (n={m['admitted']})", m["gain_modulated_share"], True, "C0"))
     bars.append((f"map, every unit (n={m['units']})", m["gain_modulated_share_all"], True, "C0"))
-    for p in m["published"]:
-        if p["measure"] != "gain_modulated_share":
-            continue
+    for p in [p for p in m["published"] if p["measure"] == "gain_modulated_share"]:
         values = p["value"] if isinstance(p["value"], list) else [p["value"]]
         author = p["study"].split(",")[0].split(" ")[0]
         year = p["study"].split(",")[-2].strip().split(" ")[-1]
@@ -442,11 +434,8 @@ def _monkey_panels(axes: Any, m: dict[str, Any]) -> None:
     ax.invert_yaxis()
     ax.set_xlim(0, 1)
     ax.set_xlabel("share of units with an eye-position effect")
-    ax.set_title(
-        f"eye-position effect: ANOVA over the fixations, p < {m['alpha']:g}\n"
-        "(hatched: not verified against the paper)",
-        fontsize=8,
-    )
+    title = f"eye-position effect: ANOVA over the fixations, p < {m['alpha']:g}\n"
+    ax.set_title(title + "(hatched: not verified against the paper)", fontsize=8)
     legend_once(ax, fontsize=7, **BELOW)
 
     ax = axes[1]

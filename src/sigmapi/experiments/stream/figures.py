@@ -60,9 +60,8 @@ def plot_view_consistency(
     for i, (name, entries) in enumerate(lines.items()):
         d = [m["dwell"] for m in entries]
         per = np.array([m["per_seed"]["view_consistency"] for m in entries])
-        ax.fill_between(
-            d, per.min(axis=1), per.max(axis=1), color=f"C{i}", alpha=0.15, lw=0, label=BAND
-        )
+        lo, hi = per.min(axis=1), per.max(axis=1)
+        ax.fill_between(d, lo, hi, color=f"C{i}", alpha=0.15, lw=0, label=BAND)
         ax.plot(d, [m["view_consistency"] for m in entries], "o-", color=f"C{i}", label=name)
     _dwell_axis(ax, lines)
     ax.set_ylabel("view consistency (same winner)")
@@ -103,8 +102,6 @@ def stream_figure(result: Mapping[str, Any]) -> Figure:
     plot_view_consistency(result, left)
     plot_view_consistency(result, mid, margin=result["acceptance"]["margin"])
     plot_fold_rate(result, right)
-    n = len(result["settings"]["seeds"])
-    fig.suptitle(
-        f"Learning from a stream ({result['settings']['preset']}, {n} seed{'s' * (n > 1)})"
-    )
+    n, preset = len(result["settings"]["seeds"]), result["settings"]["preset"]
+    fig.suptitle(f"Learning from a stream ({preset}, {n} seed{'s' * (n > 1)})")
     return fig

@@ -106,8 +106,7 @@ class StreamConfig:
 QUICK = StreamConfig(
     overrides=("iterations=20000", "refine_pairs=20000"), dwells=(1, 4, 16), n_test=2000
 )
-"""The quick look: a short run of the 1-D map, three dwell times, both trace constants, one
-seed."""
+"""The quick look: a short run of the 1-D map, three dwell times, one seed."""
 
 
 # -- the result: its JSON form, table and figure ---------------------------------------------------
@@ -132,8 +131,7 @@ COLUMNS = columns(
 
 @dataclass(frozen=True)
 class MapRun:
-    """One map's scores (:meth:`StreamExperiment.seed_run`): the map on pairs when ``dwell``
-    is None."""
+    """One map's scores (:meth:`StreamExperiment.seed_run`; ``dwell`` None: the map on pairs)."""
 
     seed: int
     dwell: int | None
@@ -145,10 +143,6 @@ class MapRun:
     fold_score: float
     folded: bool
     seconds: float
-
-
-def _name(trace: float | None) -> str:
-    return "pairs" if trace is None else f"stream trace {trace:g}"
 
 
 @dataclass
@@ -203,7 +197,8 @@ class StreamResult(Result):
         out = []
         for trace, dwell in keys:
             rows = self._rows(trace, dwell)
-            entry: dict[str, object] = {"name": _name(trace), "dwell": dwell, "trace": trace}
+            name = "pairs" if trace is None else f"stream trace {trace:g}"
+            entry: dict[str, object] = {"name": name, "dwell": dwell, "trace": trace}
             for k in METRICS:
                 vals = [getattr(r, k) for r in rows]
                 worst = max(vals) if k in ("z_error", "fold_score") else min(vals)
@@ -353,14 +348,12 @@ class StreamExperiment(SeedRuns[StreamConfig]):
             return [scored(model.fit(callback=iterations_counted(tick, "pairs", its)), None, start)]
         model = SigmaPiSOM(cfg, seed=job.seed)
         frames = model.sampler.stream(its + 1, job.dwell, PLAN.rng(job.seed, "frames", job.dwell))
+        xy = (frames.x, frames.y)  # every trace constant learns from the same frames
         out = []
         for lam in job.config.traces:
             start = time.perf_counter()
-            model = SigmaPiSOM(cfg, seed=job.seed).fit_stream(
-                (frames.x, frames.y),
-                trace=lam,
-                callback=iterations_counted(tick, f"trace {lam:g}", its),
-            )
+            counter = iterations_counted(tick, f"trace {lam:g}", its)
+            model = SigmaPiSOM(cfg, seed=job.seed).fit_stream(xy, trace=lam, callback=counter)
             out.append(scored(model, lam, start))
         return out
 
