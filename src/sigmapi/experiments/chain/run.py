@@ -315,7 +315,7 @@ def run_chain(
     _validate.integer("train_pairs", train_pairs, 10, fix="e.g. 20000")
     _validate.integer("n_test", n_test, 10, fix="e.g. 10000")
     _validate.choice("code", code, CODES)
-    # a ChainConfig's settings, with a map config of any preset
+    # what Chain reads of a ChainConfig (its methods read only these), with any map config
     given = SimpleNamespace(som_config=cfg, train_pairs=train_pairs, n_test=n_test, code=code)
     return CHAIN.execute(given, Run(seeds, executor=executor, progress=progress)).to_dict()
 
@@ -328,8 +328,7 @@ QUICK = ChainConfig(overrides=("iterations=60000",), train_pairs=5000, n_test=20
 class Chain(SeedRuns[Any]):
     """Train map A (retina + eye -> head-centred) on its task, map B (A's response + head ->
     body-centred) and one third-order map on the whole transformation on the same triples, and
-    score both routes by the same metrics; its config a :class:`ChainConfig` (or the same
-    names from :func:`run_chain`)."""
+    score both routes by the same metrics."""
 
     name = "chain"
     summary = "a chain of two maps (retina -> head -> body) against one map on the whole task"
