@@ -296,10 +296,10 @@ def test_run_all_raises_the_jobs_own_error(workers):
 def test_an_error_in_an_experiments_job_is_one_line_and_exit_2(tmp_path, capsys, monkeypatch):
     from sigmapi.experiments.stream import run as stream
 
-    def boom(job):
+    def boom(self, job, tick):
         raise ResourceError("the job's own mistake")
 
-    monkeypatch.setattr(stream, "stream_job", boom)
+    monkeypatch.setattr(stream.StreamExperiment, "seed_run", boom)
     rc, err = _main(
         capsys, "stream", "--quick", "--out", tmp_path / "o", "--quiet", "--workers", "1"
     )  # in this process: the patched job runs

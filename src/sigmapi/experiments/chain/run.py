@@ -10,18 +10,17 @@ on the same triples with B's config but for the grids. Both routes are scored by
 fixed evaluation seed, beside their cost (weights, training seconds). The definitions:
 docs/algorithm.md, "A chain of frames".
 
-The experiment ``chain`` (:class:`Chain`, settings :class:`ChainConfig`) runs one job per seed
-through the executor; :func:`run_chain` is the same from Python with a :class:`SOMConfig`.
-One module, read top to bottom: the settings (:class:`ChainConfig`, :data:`QUICK` below the
-run), the result (:class:`ChainResult`: JSON form, summary, table) and the run.
+Read top to bottom: the settings (:class:`ChainConfig`), the result (:class:`ChainResult`)
+and the run (:class:`Chain`, one job per seed; :func:`run_chain` from Python, any config).
 """
 
 from __future__ import annotations
 
 import time
-from collections.abc import Sequence
-from dataclasses import dataclass, field, replace
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
 from functools import partial
+from types import SimpleNamespace
 from typing import Any, Literal, NamedTuple, get_args
 
 import numpy as np
@@ -32,8 +31,8 @@ from sigmapi.codes import PopulationCode
 from sigmapi.config import SOMConfig
 from sigmapi.errors import ConfigError
 from sigmapi.executor import Executor, job_memory
-from sigmapi.experiments.base import KEY_VALUES, Experiment, Run, check_seeds, register, run_all
-from sigmapi.experiments.kit.jobs import Tick, counted, iterations_counted
+from sigmapi.experiments.base import KEY_VALUES, Run, check_seeds, register
+from sigmapi.experiments.kit.jobs import SeedJob, SeedRuns, Tick, iterations_counted
 from sigmapi.experiments.kit.maps import MapSpec
 from sigmapi.experiments.kit.results import Result, as_object, columns, render
 from sigmapi.experiments.kit.seeds import SeedPlan
@@ -136,7 +135,7 @@ COLUMNS = columns(
 
 @dataclass
 class ChainResult(Result):
-    """Both routes per seed (:func:`chain_seed`) and the settings they ran with."""
+    """Both routes per seed (:meth:`Chain.seed_run`) and the settings they ran with."""
 
     config: SOMConfig
     train_pairs: int
@@ -183,14 +182,9 @@ class ChainResult(Result):
         """Both routes per seed, then the summary line."""
         rows = [{"seed": r["seed"], "route": k, **r[k]} for r in self.per_seed for k in ROUTES]
         s = self.summary()
-        return "\n".join(
-            [
-                *render(COLUMNS, rows),
-                f"{s['met']} of {s['n_seeds']} seeds: chain z error <= {s['target_ratio']:g} x "
-                f"the single map's (median ratio {s['ratio_median']:.2f}, worst "
-                f"{s['ratio_worst']:.2f})",
-            ]
-        )
+        met = f"{s['met']} of {s['n_seeds']} seeds: chain z error <= {s['target_ratio']:g} x"
+        ratio = f"(median ratio {s['ratio_median']:.2f}, worst {s['ratio_worst']:.2f})"
+        return "\n".join([*render(COLUMNS, rows), f"{met} the single map's {ratio}"])
 
 
 Array = NDArray[np.float64]
@@ -276,117 +270,8 @@ def single_config(cfg: SOMConfig) -> SOMConfig:
 def _single_inputs(model: SigmaPiSOM, t: Triples, v: int) -> tuple[Array, Array]:
     """The single map's codes of view ``v``: x on its ``(n_x, 1)`` grid, (e, u) jointly."""
     x, e, u = t.view(v)
-    return model.x_code.encode(np.hstack([x, np.zeros_like(x)])), model.y_code.encode(
-        np.hstack([e, u])
-    )
-
-
-@dataclass(frozen=True)
-class ChainJob:
-    """One seed of the comparison (a job of the executor): its maps and their scores."""
-
-    seed: int
-    cfg: SOMConfig
-    train_pairs: int
-    code: str
-    cal: Triples
-    test: Triples
-    show: Progress | None = None
-    """Where given, the job shows the iterations of its three maps."""
-
-
-def chain_seed(job: ChainJob) -> dict[str, object]:
-    """Train map A, map B and the single map on seed ``job.seed``'s triples and score both
-    routes on the shared calibration and test triples (one entry of ``"seeds"``)."""
-    total = 3 * job.cfg.iterations
-    return counted(job.show, total, f"chain seed {job.seed}", partial(_chain_seed, job), "it")
-
-
-def _chain_seed(job: ChainJob, tick: Tick | None) -> dict[str, object]:
-    seed, cfg, code, cal, test = job.seed, job.cfg, job.code, job.cal, job.test
-    train = sample_triples(job.train_pairs, PLAN.rng(seed, "triples"))
-    spacing = float(cfg.y_shape[0] - 1)
-
-    # the chain: A on its own task, then B on A's code of the triples' views and the head code
-    start = time.perf_counter()
-    its = cfg.iterations
-    a = SigmaPiSOM(cfg, seed=seed).fit(callback=iterations_counted(tick, "map A", its))
-    b = SigmaPiSOM(cfg.replace(x_shape=a.map_shape), seed=seed)
-
-    def chain_inputs(t: Triples, v: int) -> tuple[Array, Array]:
-        x, e, u = t.view(v)
-        return head_code(a, x, e, code), b.y_code.encode(u)
-
-    b.fit(
-        (*chain_inputs(train, 0), *chain_inputs(train, 1)),
-        callback=iterations_counted(tick, "map B", its),
-    )
-    chain_seconds = time.perf_counter() - start
-
-    def chain_winners(t: Triples, v: int) -> NDArray[np.int64]:
-        return b.winner(*chain_inputs(t, v), hard=True)
-
-    # the single map on the whole transformation: same triples, same config but the grids
-    start = time.perf_counter()
-    s = SigmaPiSOM(single_config(cfg), seed=seed)
-    s.fit(
-        (*_single_inputs(s, train, 0), *_single_inputs(s, train, 1)),
-        callback=iterations_counted(tick, "single map", its),
-    )
-    if tick is not None:
-        tick(0, "scoring both routes")
-    single_seconds = time.perf_counter() - start
-
-    def single_winners(t: Triples, v: int) -> NDArray[np.int64]:
-        return s.winner(*_single_inputs(s, t, v), hard=True)
-
-    out: dict[str, Any] = {"seed": seed}
-    m_a = evaluate(a)
-    out["map_a"] = {k: getattr(m_a, k) for k in ("z_error", "view_consistency", "order_r2")}
-    for name, model, winners, weights, secs in (
-        ("chain", b, chain_winners, a.weights_.size + b.weights_.size, chain_seconds),
-        ("single", s, single_winners, s.weights_.size, single_seconds),
-    ):
-        w0, w1 = winners(test, 0), winners(test, 1)
-        scores = winner_metrics(winners(cal, 0), cal.z, w0, w1, test.z, model.map_coords, spacing)
-        out[name] = {**scores, "weights": int(weights), "train_seconds": secs}
-    out["ratio"] = out["chain"]["z_error"] / out["single"]["z_error"]
-    return out
-
-
-def _run(
-    cfg: SOMConfig,
-    seeds: Sequence[int],
-    train_pairs: int,
-    n_test: int,
-    code: str,
-    executor: Executor | None,
-    progress: Progress | None,
-) -> ChainResult:
-    seeds = check_seeds(seeds)
-    width = 8 * 3 * (int(np.prod(cfg.x_shape)) + int(np.prod(cfg.y_shape)))  # a triple, float64
-    _memory.check_count("train_pairs", train_pairs, 2 * width, "e.g. --train-pairs 20000")
-    _memory.check_count("n_test", n_test, 4 * width, "e.g. --n-test 10000")
-    evaluation = np.random.SeedSequence(EVAL_SEED).spawn(2)  # calibration, test
-    cal, test = (sample_triples(n_test, np.random.default_rng(s)) for s in evaluation)
-    jobs = [(f"seed {s}", ChainJob(s, cfg, train_pairs, code, cal, test)) for s in seeds]
-    per_job = 2 * job_memory(cfg, n_test) + job_memory(single_config(cfg), n_test)
-
-    def describe(key: str, r: dict[str, Any]) -> str:
-        chain, single = r["chain"]["z_error"], r["single"]["z_error"]
-        return f"{key}: chain z error {chain:.3f}, single {single:.3f}"
-
-    done = run_all(
-        chain_seed,
-        jobs,
-        executor=executor,
-        per_job=per_job,
-        progress=progress,
-        desc="chain",
-        describe=describe,
-        verbose=lambda job: replace(job, show=progress),
-    )
-    return ChainResult(cfg, train_pairs, n_test, code, list(done.values()))
+    retina = np.hstack([x, np.zeros_like(x)])
+    return model.x_code.encode(retina), model.y_code.encode(np.hstack([e, u]))
 
 
 def run_chain(
@@ -411,13 +296,8 @@ def run_chain(
         ``mean`` relation (:func:`chain_config`). Map B and the single map change only grids.
     iterations : int, optional
         Iterations of each of the three maps (default: ``config.iterations``).
-    train_pairs : int
-        View pairs of triples that map B and the single map are trained on (map A trains on
-        its built-in task for its whole run).
-    n_test : int
-        Calibration and test triples (each), from the fixed evaluation seed.
-    code : {"response", "winner"}
-        What map A hands to map B (:func:`head_code`).
+    train_pairs, n_test, code : int, int, {"response", "winner"}
+        As :class:`ChainConfig` has them (map A trains on its built-in task, :func:`head_code`).
     executor : Executor, optional
         Where the seeds run (None: one after another in this process).
     progress : Progress, optional
@@ -435,7 +315,9 @@ def run_chain(
     _validate.integer("train_pairs", train_pairs, 10, fix="e.g. 20000")
     _validate.integer("n_test", n_test, 10, fix="e.g. 10000")
     _validate.choice("code", code, CODES)
-    return _run(cfg, seeds, train_pairs, n_test, code, executor, progress).to_dict()
+    # what Chain reads of a ChainConfig (its methods read only these), with any map config
+    given = SimpleNamespace(som_config=cfg, train_pairs=train_pairs, n_test=n_test, code=code)
+    return CHAIN.execute(given, Run(seeds, executor=executor, progress=progress)).to_dict()
 
 
 QUICK = ChainConfig(overrides=("iterations=60000",), train_pairs=5000, n_test=2000)
@@ -443,7 +325,7 @@ QUICK = ChainConfig(overrides=("iterations=60000",), train_pairs=5000, n_test=20
 ``sigmapi reproduce --quick``), less data; a first look, not the measured setting."""
 
 
-class Chain(Experiment[ChainConfig]):
+class Chain(SeedRuns[Any]):
     """Train map A (retina + eye -> head-centred) on its task, map B (A's response + head ->
     body-centred) and one third-order map on the whole transformation on the same triples, and
     score both routes by the same metrics."""
@@ -455,10 +337,81 @@ class Chain(Experiment[ChainConfig]):
     quick = QUICK
     quick_seeds = (0,)
     quick_time = "about 15 s on two cores"
+    unit = "it"
 
-    def execute(self, config: ChainConfig, run: Run) -> ChainResult:
-        c, r = config, run
-        return _run(c.som_config, r.seeds, c.train_pairs, c.n_test, c.code, r.executor, r.progress)
+    def check(self, config: ChainConfig) -> int:
+        """Refuse data that does not fit; one job's memory (maps A and B and the single map)."""
+        cfg, pairs, n_test = config.som_config, config.train_pairs, config.n_test
+        width = 8 * 3 * (int(np.prod(cfg.x_shape)) + int(np.prod(cfg.y_shape)))  # a triple
+        _memory.check_count("train_pairs", pairs, 2 * width, "e.g. --train-pairs 20000")
+        _memory.check_count("n_test", n_test, 4 * width, "e.g. --n-test 10000")
+        return 2 * job_memory(cfg, n_test) + job_memory(single_config(cfg), n_test)
+
+    def prepare(self, config: ChainConfig, progress: object) -> tuple[SOMConfig, Triples, Triples]:
+        """The map config and the calibration and test triples, from the fixed evaluation seed."""
+        evaluation = np.random.SeedSequence(EVAL_SEED).spawn(2)  # calibration, test
+        cal, test = (sample_triples(config.n_test, np.random.default_rng(s)) for s in evaluation)
+        return config.som_config, cal, test
+
+    def steps(self, job: SeedJob) -> int:
+        return 3 * job.shared[0].iterations
+
+    def describe(self, key: str, value: dict[str, Any]) -> str:
+        chain, single = value["chain"]["z_error"], value["single"]["z_error"]
+        return f"seed {key}: chain z error {chain:.3f}, single {single:.3f}"
+
+    def seed_run(self, job: SeedJob, tick: Tick | None) -> dict[str, object]:
+        """Train map A, map B and the single map on seed ``job.seed``'s triples and score both
+        routes on the shared calibration and test triples (one entry of ``"seeds"``)."""
+        seed, code, (cfg, cal, test) = job.seed, job.config.code, job.shared
+        train = sample_triples(job.config.train_pairs, PLAN.rng(seed, "triples"))
+        spacing = float(cfg.y_shape[0] - 1)
+
+        def both(inputs: Callable[..., tuple[Array, Array]]) -> tuple[Array, Array, Array, Array]:
+            return (*inputs(train, 0), *inputs(train, 1))  # the training triples' view pairs
+
+        # the chain: A on its own task, then B on A's code of the triples' views and the head code
+        start = time.perf_counter()
+        its = cfg.iterations
+        a = SigmaPiSOM(cfg, seed=seed).fit(callback=iterations_counted(tick, "map A", its))
+        b = SigmaPiSOM(cfg.replace(x_shape=a.map_shape), seed=seed)
+
+        def chain_inputs(t: Triples, v: int) -> tuple[Array, Array]:
+            x, e, u = t.view(v)
+            return head_code(a, x, e, code), b.y_code.encode(u)
+
+        b.fit(both(chain_inputs), callback=iterations_counted(tick, "map B", its))
+        chain_seconds = time.perf_counter() - start
+
+        # the single map on the whole transformation: same triples, same config but the grids
+        start = time.perf_counter()
+        s = SigmaPiSOM(single_config(cfg), seed=seed)
+        single_inputs = partial(_single_inputs, s)
+        s.fit(both(single_inputs), callback=iterations_counted(tick, "single map", its))
+        if tick is not None:
+            tick(0, "scoring both routes")
+        single_seconds = time.perf_counter() - start
+
+        out: dict[str, Any] = {"seed": seed}
+        m_a = evaluate(a)
+        out["map_a"] = {k: getattr(m_a, k) for k in ("z_error", "view_consistency", "order_r2")}
+        views = ((cal, 0), (test, 0), (test, 1))  # the calibration's first view, both test views
+        for name, model, inputs, weights, secs in (
+            ("chain", b, chain_inputs, a.weights_.size + b.weights_.size, chain_seconds),
+            ("single", s, single_inputs, s.weights_.size, single_seconds),
+        ):
+            w = [model.winner(*inputs(t, v), hard=True) for t, v in views]
+            scores = winner_metrics(w[0], cal.z, w[1], w[2], test.z, model.map_coords, spacing)
+            out[name] = {**scores, "weights": int(weights), "train_seconds": secs}
+        out["ratio"] = out["chain"]["z_error"] / out["single"]["z_error"]
+        return out
+
+    def collect(
+        self, config: ChainConfig, seeds: tuple[int, ...], values: list[Any]
+    ) -> ChainResult:
+        c = config
+        return ChainResult(c.som_config, c.train_pairs, c.n_test, c.code, values)
 
 
-CHAIN = register(Chain())
+CHAIN = Chain()
+register(CHAIN)

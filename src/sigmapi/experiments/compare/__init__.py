@@ -1,8 +1,6 @@
 """The compare experiment (``sigmapi compare``): the Sigma-Pi map beside the baselines a user would
-pick instead.
+pick instead. Guide: docs/guide/compare.md; results: docs/results/baselines.md.
 
-Guide: docs/guide/compare.md; results: docs/results/baselines.md.
-
-Modules: ``run`` (its settings, result and run in one module, read top to bottom; the
-experiment object, ``REGISTRY``'s entry) and ``figures`` (the figure, matplotlib).
+Modules: ``run`` (settings, result and run, read top to bottom; ``REGISTRY``'s entry) and
+``figures`` (the figure, matplotlib).
 """

@@ -39,26 +39,14 @@ def plot_labels_curve(result: Mapping[str, Any], ax: Axes | None = None) -> Axes
         curve = {int(n): e for n, e in method["z_error_by_labels"].items()}
         color, ls, marker = STYLE.get(name, ("k", "-", "."))
         ref = name == "sigma-pi"  # on top, so a method with the same curve does not hide it
-        ax.plot(
-            list(curve),
-            list(curve.values()),
-            color=color,
-            linestyle=ls,
-            marker=marker,
-            markersize=4,
-            label=name,
-            zorder=3 if ref else 2,
-            linewidth=2.5 if ref else 1.2,
-        )
+        style = {"color": color, "linestyle": ls, "marker": marker, "markersize": 4, "label": name}
+        width, z = (2.5, 3) if ref else (1.2, 2)
+        ax.plot(list(curve), list(curve.values()), **style, zorder=z, linewidth=width)
     floor = result["quantisation_floor"]
     ax.axhline(floor, color="0.5", linewidth=0.8, label=f"winner-only floor {floor:.2f}")
+    at = (min(result["config"]["labels"]), floor)
     ax.annotate(
-        "winner-only floor",
-        (min(result["config"]["labels"]), floor),
-        xytext=(2, 3),
-        textcoords="offset points",
-        fontsize=7,
-        color="0.4",
+        "winner-only floor", at, xytext=(2, 3), textcoords="offset points", fontsize=7, color="0.4"
     )
     ax.set_xscale("log")
     ax.set_yscale("log")

@@ -1,4 +1,3 @@
-# Over 500 lines: one experiment read top to bottom, its settings, result and run in one module.
 """``sigmapi compare``: the Sigma-Pi map beside the methods a user would pick instead.
 
 Every method is trained on the same two-view data (``train_pairs`` view pairs of the preset's
@@ -10,10 +9,9 @@ for each ``L`` of ``labels`` (:mod:`sigmapi.baselines.scoring`). The scores (**z
 needed** and **labels to match**) are defined in docs/algorithm.md, "Your own data and the
 baselines". Values over seeds are medians; every seed's value is kept.
 
-Each seed is one job of the executor (:func:`compare_seed`); the experiment ``compare``
-(:class:`Compare`) is :func:`run_compare` on the command line. One module, read top to bottom:
-the settings (:class:`CompareConfig`), the result (:class:`CompareResult`: JSON form, table,
-figure drawn by :mod:`.figures`) and the run.
+Read top to bottom: the settings (:class:`CompareConfig`), the result (:class:`CompareResult`,
+its figure drawn by :mod:`.figures`) and the run (:class:`Compare`, one job per seed;
+:func:`run_compare` from Python).
 """
 
 from __future__ import annotations
@@ -24,21 +22,20 @@ import importlib.util
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from sigmapi import _memory, _validate
-from sigmapi._outputs import save_captioned
 from sigmapi.baselines.kohonen import KohonenSOM, MiniSomMap
 from sigmapi.baselines.readout import GainFieldNetwork, RBMFeatures
 from sigmapi.baselines.scoring import score_readout, score_units
 from sigmapi.config import SOMConfig
 from sigmapi.errors import ConfigError, install_hint
 from sigmapi.executor import Executor, job_memory
-from sigmapi.experiments.base import KEY_VALUES, Experiment, Run, check_seeds, register, run_all
-from sigmapi.experiments.kit.jobs import Tick, counted
+from sigmapi.experiments.base import KEY_VALUES, Run, check_seeds, register
+from sigmapi.experiments.kit.jobs import SeedJob, SeedRuns, Tick
 from sigmapi.experiments.kit.maps import MapSpec
 from sigmapi.experiments.kit.results import Result, columns, render
 from sigmapi.experiments.kit.seeds import SeedPlan
@@ -46,6 +43,9 @@ from sigmapi.metrics import evaluation_sets, grid_spacing
 from sigmapi.model.som import SigmaPiSOM
 from sigmapi.progress import Progress
 from sigmapi.tasks import Batch
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 # -- the settings ----------------------------------------------------------------------------------
 
@@ -96,9 +96,8 @@ class CompareConfig:
         _validate.check_fields(self)
         for m in self.methods:
             _validate.choice("methods", m, tuple(METHODS))
-        object.__setattr__(
-            self, "methods", tuple(m for m in METHODS if m in self.methods or m == "sigma-pi")
-        )
+        chosen = {*self.methods, "sigma-pi"}
+        object.__setattr__(self, "methods", tuple(m for m in METHODS if m in chosen))
         object.__setattr__(self, "overrides", tuple(self.overrides))
         self.som_config  # noqa: B018 (an unknown preset or a bad override fails here, not later)
 
@@ -125,10 +124,6 @@ QUICK_SEEDS = (0, 1)
 
 
 # -- the result: its JSON form, table and figure ---------------------------------------------------
-
-
-FIGURE = "compare.png"
-"""The comparison's figure in its output folder (its caption beside it, ``compare.txt``)."""
 
 
 MATCH_SHARE = 1.1
@@ -167,8 +162,7 @@ class MethodScore:
         return curve[max(curve)]
 
     def labels_needed(self) -> int:
-        curve = self.median_curve()
-        return min(n for n, e in curve.items() if e <= MATCH_SHARE * self.z_error)
+        return min(n for n, e in self.median_curve().items() if e <= MATCH_SHARE * self.z_error)
 
     def labels_to_match(self, target: float) -> int | None:
         hits = [n for n, e in self.median_curve().items() if e <= MATCH_SHARE * target]
@@ -198,6 +192,7 @@ class CompareResult(Result):
     config with its seeds and labels, the z error's unit and its quantisation floor."""
     COMPUTED = ("methods", "z_error_unit", "quantisation_floor")
     SEEDS_IN_CONFIG = True
+    FIGURE = "compare.png"
     z_error_unit = "input grid spacings"
 
     @property
@@ -231,45 +226,38 @@ class CompareResult(Result):
         methods = []
         for name, s in self.scores.items():
             curve = s.median_curve()
-            methods.append(
-                {
-                    "name": name,
-                    "description": METHODS[name],
-                    "view_consistency": float(np.median(s.view_consistency)),
-                    "unit_consistency": float(np.median(s.unit_consistency)),
-                    "z_error": s.z_error,
-                    "labels_used": labels_used,
-                    "labels_needed": s.labels_needed(),
-                    "labels_to_match_sigma_pi": s.labels_to_match(target),
-                    "z_error_by_labels": {str(n): e for n, e in curve.items()},
-                    "per_seed": {
-                        "view_consistency": s.view_consistency,
-                        "unit_consistency": s.unit_consistency,
-                        "z_error": [c[labels_used] for c in s.z_error_by_labels],
-                        "seconds": s.seconds,
-                    },
-                }
-            )
+            entry = {
+                "name": name,
+                "description": METHODS[name],
+                "view_consistency": float(np.median(s.view_consistency)),
+                "unit_consistency": float(np.median(s.unit_consistency)),
+                "z_error": s.z_error,
+                "labels_used": labels_used,
+                "labels_needed": s.labels_needed(),
+                "labels_to_match_sigma_pi": s.labels_to_match(target),
+                "z_error_by_labels": {str(n): e for n, e in curve.items()},
+                "per_seed": {
+                    "view_consistency": s.view_consistency,
+                    "unit_consistency": s.unit_consistency,
+                    "z_error": [c[labels_used] for c in s.z_error_by_labels],
+                    "seconds": s.seconds,
+                },
+            }
+            methods.append(entry)
         return methods
 
     def table(self) -> str:
         """The comparison as a plain-text table (medians over seeds)."""
         shape = "x".join(map(str, self.config.som_config.map_shape))
-        return "\n".join(
-            [
-                *render(COLUMNS, self.to_dict()["methods"]),
-                f"z error in grid spacings; a map's winner alone cannot beat {self.floor:.3f} "
-                f"(z cut into {shape} cells)",
-            ]
-        )
+        floor = f"a map's winner alone cannot beat {self.floor:.3f} (z cut into {shape} cells)"
+        rows = render(COLUMNS, self.to_dict()["methods"])
+        return "\n".join([*rows, f"z error in grid spacings; {floor}"])
 
-    def figure(self, out_dir: Path) -> list[Path]:
-        """``compare.png`` (:func:`.figures.compare_figure`) and its caption beside it,
-        ``compare.txt``; returns the figure's path."""
+    def draw(self) -> Figure:
+        """``compare.png``: :func:`.figures.compare_figure` of the JSON form."""
         from .figures import compare_figure  # matplotlib: only when drawing
 
-        out = Path(out_dir) / FIGURE
-        return [save_captioned(compare_figure(self.to_dict()), out, self.caption(), dpi=120)]
+        return compare_figure(self.to_dict())
 
     def caption(self) -> str:
         """A caption computed from the result."""
@@ -287,15 +275,11 @@ class CompareResult(Result):
             if name == "sigma-pi":
                 continue
             match = s.labels_to_match(ref.z_error)
-            reach = (
-                f"comes within 10 % of the map's z error with {match:,} labels"
-                if match is not None
-                else f"not within 10 % of the map's z error with {max(cfg.labels):,} labels"
-            )
-            parts.append(
-                f"{name}: same place {np.median(s.view_consistency):.2f}, z error "
-                f"{s.z_error:.2f}, {reach}."
-            )
+            n = max(cfg.labels) if match is None else match
+            within = "not within" if match is None else "comes within"
+            vc = np.median(s.view_consistency)
+            reach = f"{within} 10 % of the map's z error with {n:,} labels"
+            parts.append(f"{name}: same place {vc:.2f}, z error {s.z_error:.2f}, {reach}.")
         return " ".join(parts)
 
 
@@ -331,28 +315,14 @@ def _train(name: str, cfg: CompareConfig, som_cfg: SOMConfig, views: Views, seed
     if name.startswith("sigma-pi"):
         return SigmaPiSOM(som_cfg, seed=seed, **SIGMA_PI_CHANGES[name]).fit(views)
     shape, its = som_cfg.map_shape, cfg.baseline_iterations
-    if name == "kohonen":
-        return KohonenSOM(shape, its, seed=seed).fit(views)
-    if name == "kohonen two-view":
-        return KohonenSOM(shape, its, two_view=True, seed=seed).fit(views)
+    if name.startswith("kohonen"):  # the two-view rule, or each view on its own
+        return KohonenSOM(shape, its, two_view=name == "kohonen two-view", seed=seed).fit(views)
     if name == "minisom":
         return MiniSomMap(shape, its, seed=seed).fit(views)
     if name == "basis functions":
         return GainFieldNetwork().fit(views)
     n_hidden = int(np.prod(som_cfg.x_shape) * np.prod(som_cfg.y_shape))
     return RBMFeatures(n_hidden, cfg.rbm_epochs, seed=seed).fit(views)
-
-
-@dataclass(frozen=True)
-class CompareJob:
-    """One seed of the comparison (a job of the executor): every method on that seed's data."""
-
-    seed: int
-    cfg: CompareConfig
-    cal: Batch
-    test: Batch
-    progress: bool = False
-    """Write a line per method on stderr (when the jobs run one by one in this process)."""
 
 
 Scores = dict[str, tuple[float, float, dict[int, float], float]]
@@ -362,54 +332,6 @@ Scores = dict[str, tuple[float, float, dict[int, float], float]]
 PLAN = SeedPlan({"data": 13})
 """The streams of a seed (:class:`~sigmapi.experiments.kit.seeds.SeedPlan`): the recorded
 views, apart from the streams a model of the same seed draws."""
-
-
-def compare_seed(job: CompareJob) -> Scores:
-    """Train and score every method of ``job.cfg`` on seed ``job.seed``'s recording (with
-    ``job.progress``, a bar or lines of its methods)."""
-    work = functools.partial(_compare_seed, job)
-    show = Progress() if job.progress else None
-    return counted(show, len(job.cfg.methods), f"compare seed {job.seed}", work, "method")
-
-
-def _compare_seed(job: CompareJob, tick: Tick | None) -> Scores:
-    cfg, seed, cal, test = job.cfg, job.seed, job.cal, job.test
-    som_cfg = cfg.som_config
-    base = SigmaPiSOM(som_cfg)
-    spacing = grid_spacing(som_cfg.x_shape, som_cfg.periodic)
-    cells = (base.sampler.relation.z_range, som_cfg.map_shape)
-    b = base.sampler.sample(cfg.train_pairs, PLAN.rng(seed, "data"))
-    views = (b.x0, b.y0, b.x1, b.y1)
-    out: Scores = {}
-    for name in cfg.methods:
-        if tick is not None:
-            tick(0, name)
-        t0 = time.perf_counter()
-        model = _train(name, cfg, som_cfg, views, seed)
-        if isinstance(model, (GainFieldNetwork, RBMFeatures)):
-            vc, uc, curve = score_readout(model.features, cal, test, cfg.labels, spacing, cells)
-        else:
-            unit = (
-                functools.partial(model.winner, hard=True)
-                if isinstance(model, SigmaPiSOM)
-                else model.winner
-            )
-            vc, uc, curve = score_units(unit, base.map_coords, cal, test, cfg.labels, spacing)
-        out[name] = (vc, uc, curve, time.perf_counter() - t0)
-        if tick is not None:
-            tick(1, name)
-    return out
-
-
-def check_installed(methods: Sequence[str]) -> None:
-    """Refuse, before anything trains, methods whose optional module is not installed."""
-    missing = sorted({NEEDS[m] for m in methods if m in NEEDS} - installed())
-    if missing:
-        names = " and ".join(PACKAGES[m] for m in missing)
-        raise ConfigError(
-            f"the baselines need {names} (not installed here); "
-            f"{install_hint('baselines')}, or leave those methods out"
-        )
 
 
 def installed() -> set[str]:
@@ -430,32 +352,10 @@ def run_compare(
     one after another in this process); ``progress`` writes a line per method, or per seed
     where the seeds run in parallel.
     """
-    start = time.perf_counter()
-    seeds = check_seeds(seeds)
-    check_installed(cfg.methods)
-    som = SigmaPiSOM(cfg.som_config)
-    width = 8 * (int(np.prod(som.x_shape)) + int(np.prod(som.y_shape)))  # a view pair, float64
-    _memory.check_count("train_pairs", cfg.train_pairs, 2 * width, "e.g. --train-pairs 20000")
-    _memory.check_count("n_test", cfg.n_test, 4 * width + 32 * som.n_units, "e.g. --n-test 10000")
-    cal, test = evaluation_sets(som, cfg.n_test)
-    jobs = [(f"seed {seed}", CompareJob(seed, cfg, cal, test)) for seed in seeds]
-    done = run_all(
-        compare_seed,
-        jobs,
-        executor=executor,
-        per_job=job_memory(cfg.som_config, cfg.n_test),
-        progress=progress,
-        desc="compare",
-        verbose=lambda job: dataclasses.replace(job, progress=True),
-    )
-    scores = {}
-    for name in cfg.methods:  # each score over the seeds, in their order
-        vc, uc, curves, seconds = zip(*(per_seed[name] for per_seed in done.values()), strict=True)
-        scores[name] = MethodScore(name, list(vc), list(uc), list(curves), list(seconds))
-    return CompareResult(cfg, scores, time.perf_counter() - start, seeds)
+    return COMPARE.execute(cfg, Run(check_seeds(seeds), executor=executor, progress=progress))
 
 
-class Compare(Experiment[CompareConfig]):
+class Compare(SeedRuns[CompareConfig]):
     """Train the Sigma-Pi map, its ablations, first-order SOMs (sigmapi's and MiniSom), a
     basis-function network and an RBM + read-out on the same two-view data and score them by
     the same metrics."""
@@ -469,10 +369,74 @@ class Compare(Experiment[CompareConfig]):
     quick_time = "about 1 min on two cores"
     extra = "baselines"
     default_out = "compare"
-    writes = (FIGURE, Path(FIGURE).with_suffix(".txt").name)
+    writes = ("compare.png", "compare.txt")
+    unit = "method"
 
-    def execute(self, config: CompareConfig, run: Run) -> CompareResult:
-        return run_compare(config, run.progress, seeds=run.seeds, executor=run.executor)
+    def check(self, config: CompareConfig) -> int:
+        """Refuse, before anything trains, methods whose optional module is not installed
+        (:func:`installed`) and data that does not fit; one job's memory."""
+        missing = sorted({NEEDS[m] for m in config.methods if m in NEEDS} - installed())
+        if missing:
+            names = " and ".join(PACKAGES[m] for m in missing)
+            raise ConfigError(
+                f"the baselines need {names} (not installed here); "
+                f"{install_hint('baselines')}, or leave those methods out"
+            )
+        som, pairs, n_test = SigmaPiSOM(config.som_config), config.train_pairs, config.n_test
+        width = 8 * (int(np.prod(som.x_shape)) + int(np.prod(som.y_shape)))  # a view pair
+        _memory.check_count("train_pairs", pairs, 2 * width, "e.g. --train-pairs 20000")
+        _memory.check_count("n_test", n_test, 4 * width + 32 * som.n_units, "e.g. --n-test 10000")
+        return job_memory(config.som_config, n_test)
+
+    def prepare(self, config: CompareConfig, progress: object) -> tuple[Batch, Batch]:
+        """The calibration and test sets every seed is scored on."""
+        return evaluation_sets(SigmaPiSOM(config.som_config), config.n_test)
+
+    def steps(self, job: SeedJob) -> int:
+        return len(job.config.methods)
+
+    def describe(self, key: str, value: Scores) -> str:
+        return f"seed {key} ({sum(v[3] for v in value.values()):.0f} s)"
+
+    def seed_run(self, job: SeedJob, tick: Tick | None) -> Scores:
+        """Train and score every method of ``job.config`` on seed ``job.seed``'s recording."""
+        cfg, seed, (cal, test) = job.config, job.seed, job.shared
+        som_cfg = cfg.som_config
+        base = SigmaPiSOM(som_cfg)
+        spacing = grid_spacing(som_cfg.x_shape, som_cfg.periodic)
+        cells = (base.sampler.relation.z_range, som_cfg.map_shape)
+        b = base.sampler.sample(cfg.train_pairs, PLAN.rng(seed, "data"))
+        views = (b.x0, b.y0, b.x1, b.y1)
+        out: Scores = {}
+        for name in cfg.methods:
+            if tick is not None:
+                tick(0, name)
+            t0 = time.perf_counter()
+            model = _train(name, cfg, som_cfg, views, seed)
+            if isinstance(model, (GainFieldNetwork, RBMFeatures)):
+                vc, uc, curve = score_readout(model.features, cal, test, cfg.labels, spacing, cells)
+            else:
+                unit = (
+                    functools.partial(model.winner, hard=True)
+                    if isinstance(model, SigmaPiSOM)
+                    else model.winner
+                )
+                vc, uc, curve = score_units(unit, base.map_coords, cal, test, cfg.labels, spacing)
+            out[name] = (vc, uc, curve, time.perf_counter() - t0)
+            if tick is not None:
+                tick(1, name)
+        return out
+
+    def collect(
+        self, config: CompareConfig, seeds: tuple[int, ...], values: list[Any]
+    ) -> CompareResult:
+        """Each method's scores over the seeds, in their order."""
+        scores = {}
+        for name in config.methods:
+            vc, uc, curves, seconds = zip(*(per_seed[name] for per_seed in values), strict=True)
+            scores[name] = MethodScore(name, list(vc), list(uc), list(curves), list(seconds))
+        return CompareResult(config, scores, 0.0, seeds)
 
 
-COMPARE = register(Compare())
+COMPARE = Compare()
+register(COMPARE)

@@ -6,11 +6,5 @@ weights for the model's own config and seed) is recorded by
 fixed gazes, a reference-frame index per unit (0 eye-centred, 1 body-centred; Duhamel et al.
 1997) and planar gain-field fits (Andersen et al. 1985). The result holds the per-unit lists,
 their medians and a Kolmogorov-Smirnov comparison of the two index distributions; the figure
-draws them (docs/guide/neurons.md).
-
-- :mod:`.run`: its settings (:class:`PhysiologyConfig`), result (:class:`PhysiologyResult`),
-  the recording and the random start, and the experiment object (``REGISTRY``'s entry);
-- :mod:`.figures`: the figure (matplotlib, imported when drawing).
-
-Guide: docs/guide/neurons.md.
+draws them. Guide: docs/guide/neurons.md. Module: ``run`` (``REGISTRY``'s entry).
 """

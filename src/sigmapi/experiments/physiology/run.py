@@ -1,7 +1,8 @@
 """``sigmapi physiology`` in one module, read top to bottom: its settings
 (:class:`PhysiologyConfig`), its result (:class:`PhysiologyResult`: the JSON form, table and
-figure, drawn by :mod:`.figures`) and the run, which records the model file's map and its
-random start (:func:`record_model`, :class:`PhysiologyExperiment`)."""
+figure), the run, which records the model file's map and its random start
+(:func:`record_model`, :class:`PhysiologyExperiment`), and the figure
+(:func:`physiology_figure`, matplotlib imported when drawing)."""
 
 from __future__ import annotations
 
@@ -9,7 +10,7 @@ import dataclasses
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -27,8 +28,12 @@ from sigmapi.analysis.physiology import (
 )
 from sigmapi.errors import DataError, UsageError
 from sigmapi.experiments.base import Experiment, Run, register
+from sigmapi.experiments.kit.figures import BELOW, legend_once
 from sigmapi.experiments.kit.results import Result, columns, render
 from sigmapi.model.som import SigmaPiSOM, load_model
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 # -- the settings ----------------------------------------------------------------------------------
 
@@ -89,9 +94,8 @@ class PhysiologyConfig:
 
     def __post_init__(self) -> None:
         if not isinstance(self.model, str) or not self.model:
-            raise _validate.fail(
-                "model", "a model file path", self.model, "e.g. sigmapi physiology model.npz"
-            )
+            fix = "e.g. sigmapi physiology model.npz"
+            raise _validate.fail("model", "a model file path", self.model, fix)
         _validate.check_fields(self)  # the bounds declared beside the fields
         for name, what, fix in (
             ("gazes", "gazes", "e.g. --gazes 0.2,0.35,0.5,0.65,0.8"),
@@ -158,10 +162,8 @@ class PhysiologyResult(Result):
         rows = render(COLUMNS, [{"map": k, **self.data[k]} for k in ("trained", "random_start")])
         c = self.data["comparison"]
         if c["ks"] is not None:
-            rows.append(
-                f"trained vs random start: KS {c['ks']:.3f}, p = {c['p_value']:.2g} "
-                f"(n = {c['n'][0]}, {c['n'][1]})"
-            )
+            n = f"(n = {c['n'][0]}, {c['n'][1]})"
+            rows.append(f"trained vs random start: KS {c['ks']:.3f}, p = {c['p_value']:.2g} {n}")
         rows.append(self._monkey_line())
         return "\n".join(rows)
 
@@ -169,6 +171,7 @@ class PhysiologyResult(Result):
         m = self.data["monkey"]
         share = m["gain_modulated_share"]
         idx, r2 = m["reference_frame_index"]["median"], m["gain_r2"]["median"]
+        shifted, every = m["displacement_index"]["median"], m["reference_frame_index_all"]["median"]
         left = ", ".join(f"{v} {k.replace('_', ' ')}" for k, v in m["left_out"].items())
         return (
             f"monkey protocol ({len(m['fixations'])} fixations, {m['n_retina']} stimuli per "
@@ -176,16 +179,8 @@ class PhysiologyResult(Result):
             + (f"gain-modulated {100 * share:.0f} %" if share is not None else "no unit admitted")
             + (f", planar-fit R^2 median {r2:.2f}" if r2 is not None else "")
             + (f", reference-frame index median {idx:.2f}" if idx is not None else "")
-            + (
-                f" (by cross-correlation {m['displacement_index']['median']:.2f})"
-                if m["displacement_index"]["median"] is not None
-                else ""
-            )
-            + (
-                f" (every unit: {m['reference_frame_index_all']['median']:.2f})"
-                if m["reference_frame_index_all"]["median"] is not None
-                else ""
-            )
+            + (f" (by cross-correlation {shifted:.2f})" if shifted is not None else "")
+            + (f" (every unit: {every:.2f})" if every is not None else "")
         )
 
     def caption(self) -> str:
@@ -196,11 +191,8 @@ class PhysiologyResult(Result):
             v = r["median_reference_frame_index"]
             return "no unit measured" if v is None else f"median {v:.2f}"
 
-        verdict = (
-            "body-centred"
-            if self.body_centred()
-            else f"not body-centred by the {BODY_CENTRED} criterion"
-        )
+        criterion = f"not body-centred by the {BODY_CENTRED} criterion"
+        verdict = "body-centred" if self.body_centred() else criterion
         text = (
             f"{self.data['model']} (map {'x'.join(map(str, self.data['map_shape']))}): "
             f"reference-frame index (receptive-field shift with gaze over a body-centred "
@@ -228,8 +220,6 @@ class PhysiologyResult(Result):
     def figure(self, out_dir: Path) -> list[Path]:
         """``physiology.png`` and its caption ``physiology.txt`` (and the NWB file the run
         wrote there, ``--nwb``, in the list of files written)."""
-        from .figures import physiology_figure  # matplotlib: only when drawing
-
         out = Path(out_dir) / FIGURE
         fig = save_captioned(physiology_figure(self.to_dict()), out, self.caption(), dpi=110)
         nwb = self.data.get("nwb")
@@ -275,12 +265,8 @@ def _tuning(model: Recordable, cfg: PhysiologyConfig, n_probe: int | None) -> di
             line = np.nonzero(np.all(probes[:, 1:] == best[1:], axis=1))[0]
         responses.append(resp[:, line, u].tolist())
         positions = probes[line, 0].tolist()
-    return {
-        "units": units.tolist(),
-        "gazes": list(cfg.gazes),
-        "responses": responses,
-        "positions": positions,
-    }
+    gazes = list(cfg.gazes)
+    return {"units": units.tolist(), "gazes": gazes, "responses": responses, "positions": positions}
 
 
 def record_model(
@@ -303,6 +289,7 @@ def record_model(
     axes = cfg.gaze_axes or None  # record() checks them against the model's axes
     trained = record(model, cfg.gazes, n_probe, slope, axes)
     start = record(RandomStart(model), cfg.gazes, n_probe, slope, axes)
+    index = trained["reference_frame_index"]
     raw = fixation_protocol(model, cfg.eye_grid, cfg.n_retina)
     monkey = monkey_protocol(
         model, cfg.eye_grid, cfg.n_retina, slope, axes, responds=cfg.responds, recording=raw
@@ -315,10 +302,8 @@ def record_model(
         "relation": model.sampler.relation.name,
         "trained": trained,
         "random_start": start,
-        "reference_frame_index": trained["reference_frame_index"],
-        "comparison": compare_distributions(
-            trained["reference_frame_index"], start["reference_frame_index"]
-        ),
+        "reference_frame_index": index,
+        "comparison": compare_distributions(index, start["reference_frame_index"]),
         "tuning": _tuning(model, cfg, n_probe),
         "monkey": monkey,
     }
@@ -364,3 +349,121 @@ class PhysiologyExperiment(Experiment[PhysiologyConfig]):
 
 
 PHYSIOLOGY = register(PhysiologyExperiment())
+
+
+# -- the figure: from the JSON form (every mark in a legend, below its panel) ---------------------
+
+
+def physiology_figure(result: dict[str, Any]) -> Figure:
+    """Reference-frame index distributions (trained map against its random start), tuning
+    curves of three units at every gaze, and the gain-field fits; below, the monkey protocol
+    beside the published numbers (where the result has one)."""
+    import matplotlib.pyplot as plt  # only when drawing
+
+    monkey = result.get("monkey")
+    rows = 2 if monkey else 1
+    fig, grid = plt.subplots(rows, 3, figsize=(16, 5.6 * rows), squeeze=False, layout="constrained")
+    axes = grid[0]
+    if monkey:
+        _monkey_panels(grid[1], monkey)
+    ax = axes[0]
+    bins = np.linspace(-1.5, 2.0, 36)
+    for key, label in (("trained", "trained map"), ("random_start", "random start")):
+        vals = [v for v in result[key]["reference_frame_index"] if v is not None]
+        med = result[key]["median_reference_frame_index"]
+        text = "no unit measured" if med is None else f"median {med:.2f}, n={len(vals)}"
+        ax.hist(np.clip(vals, bins[0], bins[-1]), bins=bins, alpha=0.6, label=f"{label} ({text})")
+    ax.axvline(0.0, color="0.4", ls=":", label="0: eye-centred, 1: body-centred")
+    ax.axvline(1.0, color="0.4", ls=":", label="_body")
+    ax.set_xlabel("reference-frame index (0 eye-centred, 1 body-centred)")
+    ax.set_ylabel("units")
+    ax.legend(fontsize=8, **BELOW)
+
+    ax = axes[1]
+    curves = result["tuning"]
+    probes = np.asarray(curves["positions"])
+    for c, unit in enumerate(curves["units"]):
+        for g, resp in zip(curves["gazes"], curves["responses"][c], strict=True):
+            ax.plot(probes, resp, color=f"C{c}", alpha=0.35 + 0.65 * g)
+        ax.plot([], [], color=f"C{c}", label=f"unit {unit}")
+    ax.set_xlabel("retinal position (fraction of the axis)")
+    ax.set_ylabel("response")
+    gazes = ", ".join(f"{g:g}" for g in curves["gazes"])
+    ax.set_title(f"tuning curves at gazes {gazes} (darker: larger)")
+    ax.legend(fontsize=8, **BELOW)
+
+    ax = axes[2]
+    for key, label in (("trained", "trained map"), ("random_start", "random start")):
+        mod = [v for v in result[key]["peak_modulation"] if v is not None]
+        fits = zip(result[key]["gain_r2"], result[key]["gain_slope"], strict=True)
+        pairs = [(a, b) for a, b in fits if a is not None and b is not None]
+        text = f"{np.median(mod):.2f}" if mod else "-"
+        r2, slope = [a for a, _ in pairs], [b for _, b in pairs]
+        ax.scatter(r2, slope, s=10, alpha=0.6, label=f"{label}: peak modulation median {text}")
+    ax.set_xlabel("planar gain-field fit R^2 (response at fixed retinal position)")
+    ax.set_ylabel("gain slope (|b| / mean response)")
+    ax.legend(fontsize=8, **BELOW)
+    return fig
+
+
+def _monkey_panels(axes: Any, m: dict[str, Any]) -> None:
+    """The gain-field studies' protocol on the map beside the monkeys' numbers: the share of
+    gain-modulated units, the reference-frame index of the admitted and left-out units, and
+    the planarity of the admitted units' gain fields."""
+    ax = axes[0]
+    bars: list[tuple[str, float, bool, str]] = []
+    if m["gain_modulated_share"] is not None:
+        bars.append((f"map, admitted (n={m['admitted']})", m["gain_modulated_share"], True, "C0"))
+    bars.append((f"map, every unit (n={m['units']})", m["gain_modulated_share_all"], True, "C0"))
+    for p in [p for p in m["published"] if p["measure"] == "gain_modulated_share"]:
+        values = p["value"] if isinstance(p["value"], list) else [p["value"]]
+        author = p["study"].split(",")[0].split(" ")[0]
+        year = p["study"].split(",")[-2].strip().split(" ")[-1]
+        for i, v in enumerate(values):
+            area = p["area"].split(" / ")[i] if len(values) > 1 else p["area"]
+            label = f"{author} {year} {area}" + (" (> half)" if p.get("bound") else "")
+            bars.append((label, float(v), bool(p["verified"]), "C1"))
+    ys = np.arange(len(bars))
+    for y, (_, v, ok, colour) in zip(ys, bars, strict=True):
+        who = "the map" if colour == "C0" else "published"
+        alpha, hatch = (0.75, None) if ok else (0.35, "//")
+        label = who if ok else f"{who}, not verified against the paper"
+        ax.barh(y, v, color=colour, alpha=alpha, hatch=hatch, label=label)
+        ax.text(min(v, 0.98), y, f" {100 * v:.0f} %", va="center", ha="right", fontsize=7)
+    ax.set_yticks(ys, [b[0] for b in bars], fontsize=7)
+    ax.invert_yaxis()
+    ax.set_xlim(0, 1)
+    ax.set_xlabel("share of units with an eye-position effect")
+    title = f"eye-position effect: ANOVA over the fixations, p < {m['alpha']:g}\n"
+    ax.set_title(title + "(hatched: not verified against the paper)", fontsize=8)
+    legend_once(ax, fontsize=7, **BELOW)
+
+    ax = axes[1]
+    per = m["per_unit"]
+    adm = [v for v in per["reference_frame_index"] if v is not None]
+    every = zip(per["reference_frame_index_all"], per["admitted"], strict=True)
+    out = [v for v, a in every if v is not None and not a]
+    bins = np.linspace(-0.5, 1.5, 41)
+    ax.hist(np.clip(out, bins[0], bins[-1]), bins=bins, alpha=0.5, color="0.5",
+            label=f"left out, every fixation (n={len(out)})")  # fmt: skip
+    ax.hist(np.clip(adm, bins[0], bins[-1]), bins=bins, alpha=0.8, color="C0",
+            label=f"admitted (n={len(adm)})")  # fmt: skip
+    shifted = [v for v in per["displacement_index"] if v is not None]
+    ax.hist(np.clip(shifted, bins[0], bins[-1]), bins=bins, histtype="step", color="C3", lw=1.5,
+            label=f"admitted, by cross-correlation (n={len(shifted)})")  # fmt: skip
+    ax.axvline(0.0, color="0.4", ls=":", label="0: eye-centred, 1: body-centred")
+    ax.axvline(1.0, color="0.4", ls=":", label="_body")
+    ax.axvspan(0.0, 1.0, color="C1", alpha=0.08,
+               label="VIP: from eye- to head-centred\n(Duhamel 1997, Avillac 2005)")  # fmt: skip
+    ax.set_xlabel("reference-frame index, monkey grid\n(0 eye-centred, 1 body-centred)")
+    ax.set_ylabel("units")
+    ax.legend(fontsize=7, **BELOW)
+
+    ax = axes[2]
+    r2 = [v for v, a in zip(per["gain_r2"], per["admitted"], strict=True) if a and v is not None]
+    text = f"admitted units (median {np.median(r2):.2f})" if r2 else "no unit admitted"
+    ax.hist(r2, bins=np.linspace(0, 1, 21), color="C0", alpha=0.8, label=text)
+    ax.set_xlabel("planar gain-field fit R^2\n(rate at the best stimulus over the fixations)")
+    ax.set_ylabel("units")
+    ax.set_title("7a/LIP: 'usually planar or largely planar' (Andersen 1990)", fontsize=8)
+    ax.legend(fontsize=7, **BELOW)

@@ -23,16 +23,22 @@ BAND = "best to worst seed (shaded)"
 """The label of the bands from the best to the worst seed (one legend entry for them all)."""
 
 
-def _lines(result: Mapping[str, Any]) -> dict[str, list[Mapping[str, Any]]]:
-    """The stream methods by name, each a list of entries sorted by dwell time."""
-    out: dict[str, list[Mapping[str, Any]]] = {}
+Entry = Mapping[str, Any]
+
+
+def _lines(result: Mapping[str, Any]) -> tuple[dict[str, list[Entry]], Entry]:
+    """The stream methods by name, each a list of entries sorted by dwell time, and the map
+    on explicit pairs."""
+    out: dict[str, list[Entry]] = {}
     for m in result["methods"]:
         if m["dwell"] is not None:
             out.setdefault(m["name"], []).append(m)
-    return {k: sorted(v, key=lambda m: m["dwell"]) for k, v in out.items()}
+    pairs = next(m for m in result["methods"] if m["dwell"] is None)
+    return {k: sorted(v, key=lambda m: m["dwell"]) for k, v in out.items()}, pairs
 
 
-def _dwell_axis(ax: Axes, dwells: list[int]) -> None:
+def _dwell_axis(ax: Axes, lines: dict[str, list[Entry]]) -> None:
+    dwells = sorted({m["dwell"] for v in lines.values() for m in v})
     ax.set_xscale("log", base=2)
     ax.set_xticks(dwells, [str(d) for d in dwells])
     ax.set_xlabel("dwell time d (saccades per object position)")
@@ -47,31 +53,22 @@ def plot_view_consistency(
     ``margin``: zoom in on the pairs' median +- 3 margins and shade +- ``margin`` around it
     (the acceptance's margin); values outside lie beyond the axis."""
     ax = axes(ax, (5.5, 4))
-    lines = _lines(result)
-    dwells = sorted({m["dwell"] for v in lines.values() for m in v})
-    pairs = next(m for m in result["methods"] if m["dwell"] is None)
+    lines, pairs = _lines(result)
     vals = pairs["per_seed"]["view_consistency"]
     ax.axhspan(min(vals), max(vals), color="k", alpha=0.1, lw=0, label=BAND)
     ax.axhline(pairs["view_consistency"], color="k", ls="--", label="explicit pairs")
     for i, (name, entries) in enumerate(lines.items()):
         d = [m["dwell"] for m in entries]
         per = np.array([m["per_seed"]["view_consistency"] for m in entries])
-        ax.fill_between(
-            d, per.min(axis=1), per.max(axis=1), color=f"C{i}", alpha=0.15, lw=0, label=BAND
-        )
+        lo, hi = per.min(axis=1), per.max(axis=1)
+        ax.fill_between(d, lo, hi, color=f"C{i}", alpha=0.15, lw=0, label=BAND)
         ax.plot(d, [m["view_consistency"] for m in entries], "o-", color=f"C{i}", label=name)
-    _dwell_axis(ax, dwells)
+    _dwell_axis(ax, lines)
     ax.set_ylabel("view consistency (same winner)")
     if margin is not None:
         mid = pairs["view_consistency"]
-        ax.axhspan(
-            mid - margin,
-            mid + margin,
-            color="g",
-            alpha=0.08,
-            lw=0,
-            label=f"explicit pairs +- {margin:g}",
-        )
+        label = f"explicit pairs +- {margin:g}"
+        ax.axhspan(mid - margin, mid + margin, color="g", alpha=0.08, lw=0, label=label)
         ax.set_ylim(mid - 3 * margin, mid + 3 * margin)
         ax.set_title("near explicit pairs", fontsize=10)
     legend_once(ax, fontsize=8, loc="lower right")  # the bands share one entry, in grey
@@ -82,16 +79,14 @@ def plot_fold_rate(result: Mapping[str, Any], ax: Axes | None = None) -> Axes:
     """Share of seeds whose map folded (:func:`sigmapi.metrics.fold_score`) over the dwell
     time, per stream method; the map on explicit pairs as a horizontal line."""
     ax = axes(ax, (5.5, 4))
-    lines = _lines(result)
-    dwells = sorted({m["dwell"] for v in lines.values() for m in v})
-    pairs = next(m for m in result["methods"] if m["dwell"] is None)
+    lines, pairs = _lines(result)
     ax.axhline(pairs["fold_rate"], color="k", ls="--", label="explicit pairs")
     n = len(lines)
     for i, (name, entries) in enumerate(lines.items()):
         d = np.array([m["dwell"] for m in entries], dtype=float)
         shift = 2.0 ** (0.06 * (i - (n - 1) / 2))  # side by side where rates coincide
         ax.plot(d * shift, [m["fold_rate"] for m in entries], "o-", color=f"C{i}", label=name)
-    _dwell_axis(ax, dwells)
+    _dwell_axis(ax, lines)
     ax.set_ylim(-0.05, 1.05)
     ax.set_ylabel(f"fold rate (share of seeds with fold score >= {FOLD_THRESHOLD:g})")
     ax.legend(fontsize=8, loc="best")
@@ -107,8 +102,6 @@ def stream_figure(result: Mapping[str, Any]) -> Figure:
     plot_view_consistency(result, left)
     plot_view_consistency(result, mid, margin=result["acceptance"]["margin"])
     plot_fold_rate(result, right)
-    n = len(result["settings"]["seeds"])
-    fig.suptitle(
-        f"Learning from a stream ({result['settings']['preset']}, {n} seed{'s' * (n > 1)})"
-    )
+    n, preset = len(result["settings"]["seeds"]), result["settings"]["preset"]
+    fig.suptitle(f"Learning from a stream ({preset}, {n} seed{'s' * (n > 1)})")
     return fig

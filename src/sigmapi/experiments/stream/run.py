@@ -18,28 +18,25 @@ per-seed values; ``"acceptance"`` the comparison with pairs seed by seed at ``d 
 
 One module, read top to bottom: the settings (:class:`StreamConfig`, :data:`QUICK`), the
 result (:class:`StreamResult`: its JSON form, table and figure, drawn by :mod:`.figures`), the
-run (:func:`stream_job` per seed and dwell time, :class:`StreamExperiment`).
+run (:class:`StreamExperiment`, one job per seed and dwell time).
 """
 
 from __future__ import annotations
 
 import dataclasses
-import functools
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from pathlib import Path
-from typing import TypedDict
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from sigmapi import _validate
-from sigmapi._outputs import save_captioned
 from sigmapi.config import SOMConfig
 from sigmapi.errors import ConfigError
 from sigmapi.executor import job_memory
-from sigmapi.experiments.base import KEY_VALUES, Experiment, Run, register, run_all
-from sigmapi.experiments.kit.jobs import Tick, counted, iterations_counted
+from sigmapi.experiments.base import KEY_VALUES, register
+from sigmapi.experiments.kit.jobs import SeedJob, SeedRuns, Tick, iterations_counted
 from sigmapi.experiments.kit.maps import MapSpec
 from sigmapi.experiments.kit.results import (
     VC_MARGIN,
@@ -56,7 +53,9 @@ from sigmapi.experiments.kit.results import (
 from sigmapi.experiments.kit.seeds import SeedPlan, check_seeds
 from sigmapi.metrics import evaluate
 from sigmapi.model.som import SigmaPiSOM
-from sigmapi.progress import Progress
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 # -- the settings ----------------------------------------------------------------------------------
 
@@ -105,10 +104,7 @@ class StreamConfig:
 
 
 QUICK = StreamConfig(
-    overrides=("iterations=20000", "refine_pairs=20000"),
-    dwells=(1, 4, 16),
-    traces=(0.0, 0.5),
-    n_test=2000,
+    overrides=("iterations=20000", "refine_pairs=20000"), dwells=(1, 4, 16), n_test=2000
 )
 """The quick look: a short run of the 1-D map, three dwell times, one seed."""
 
@@ -125,9 +121,6 @@ PER_SEED = (*METRICS, "folded", "seconds")
 MIN_DWELL = 4
 """Acceptance: the dwell times it applies to (``d >= MIN_DWELL``)."""
 
-
-FIGURE = "stream.png"
-
 COLUMNS = columns(
     "name:20s dwell:>5 view_consistency:9.3f view_consistency_worst:6.3f z_error:8.3f",
     "order_r2:9.3f order_r2_worst:6.3f",
@@ -138,7 +131,7 @@ COLUMNS = columns(
 
 @dataclass(frozen=True)
 class MapRun:
-    """One map's scores (:func:`stream_job`): the map on pairs when ``dwell`` is None."""
+    """One map's scores (:meth:`StreamExperiment.seed_run`; ``dwell`` None: the map on pairs)."""
 
     seed: int
     dwell: int | None
@@ -152,25 +145,9 @@ class MapRun:
     seconds: float
 
 
-class Case(TypedDict):
-    """The acceptance at one trace constant and dwell time (:meth:`StreamResult.acceptance`)."""
-
-    trace: float
-    dwell: int
-    vc_gap_median: float
-    vc_gap_worst: float
-    met: int
-    n_seeds: int
-    all_met: bool
-
-
-def _name(trace: float | None) -> str:
-    return "pairs" if trace is None else f"stream trace {trace:g}"
-
-
 @dataclass
 class StreamResult(Result):
-    """Every map's scores (:func:`stream_job`) and the settings they ran with."""
+    """Every map's scores (:class:`MapRun`) and the settings they ran with."""
 
     config: StreamConfig
     seeds: tuple[int, ...]
@@ -180,16 +157,16 @@ class StreamResult(Result):
     KEYS = ("methods", "acceptance", "settings", "seconds")
     """The JSON form: :meth:`methods`, :meth:`acceptance`, :meth:`settings` and the whole
     run's wall time."""
+    FIGURE = "stream.png"
 
     @classmethod
     def from_dict(cls, data: object) -> StreamResult:
-        """The result a :meth:`to_dict` wrote (e.g. read back from ``result.json``)."""
-        st = as_object(data)["settings"]
-        config = StreamConfig(
-            **tuples({f.name: st[f.name] for f in dataclasses.fields(StreamConfig)})
-        )
-        seeds = tuple(st["seeds"])
+        """The result a :meth:`to_dict` wrote (e.g. read back from ``result.json``): its runs
+        from the values per seed, so that a result read back has its table and figure."""
         obj = as_object(data)
+        st, seeds = obj["settings"], tuple(obj["settings"]["seeds"])
+        names = (f.name for f in dataclasses.fields(StreamConfig))
+        config = StreamConfig(**tuples({k: st[k] for k in names}))
         runs = [
             MapRun(seed, m["dwell"], m["trace"], **{k: m["per_seed"][k][i] for k in PER_SEED})
             for m in obj["methods"]
@@ -204,12 +181,8 @@ class StreamResult(Result):
         if not parts or any(p.config != parts[0].config for p in parts):
             raise ConfigError("results to combine must share one config (and be at least one)")
         seeds = check_seeds([s for p in parts for s in p.seeds], "seeds of the results")
-        return cls(
-            parts[0].config,
-            seeds,
-            [r for p in parts for r in p.runs],
-            sum(p.seconds for p in parts),
-        )
+        runs = [r for p in parts for r in p.runs]
+        return cls(parts[0].config, seeds, runs, sum(p.seconds for p in parts))
 
     def _rows(self, trace: float | None, dwell: int | None) -> list[MapRun]:
         rows = [r for r in self.runs if r.trace == trace and r.dwell == dwell]
@@ -224,7 +197,8 @@ class StreamResult(Result):
         out = []
         for trace, dwell in keys:
             rows = self._rows(trace, dwell)
-            entry: dict[str, object] = {"name": _name(trace), "dwell": dwell, "trace": trace}
+            name = "pairs" if trace is None else f"stream trace {trace:g}"
+            entry: dict[str, object] = {"name": name, "dwell": dwell, "trace": trace}
             for k in METRICS:
                 vals = [getattr(r, k) for r in rows]
                 worst = max(vals) if k in ("z_error", "fold_score") else min(vals)
@@ -245,8 +219,9 @@ class StreamResult(Result):
         :data:`VC_MARGIN` and ordered, and whether every seed is."""
         return {"margin": VC_MARGIN, "min_dwell": MIN_DWELL, "cases": self.cases()}
 
-    def cases(self) -> list[Case]:
-        """The cases of :meth:`acceptance`, trace constant-major."""
+    def cases(self) -> list[dict[str, Any]]:
+        """The cases of :meth:`acceptance`, trace constant-major: ``trace``, ``dwell`` and
+        :func:`~sigmapi.experiments.kit.results.margin_case` of their gaps."""
         pairs = {r.seed: r for r in self._rows(None, None)}
         out = []
         for trace in self.config.traces:
@@ -254,7 +229,7 @@ class StreamResult(Result):
                 rows = self._rows(trace, dwell)
                 gap = [r.view_consistency - pairs[r.seed].view_consistency for r in rows]
                 margin = margin_case(gap, [r.folded for r in rows])
-                out.append(Case(trace=trace, dwell=dwell, **margin))  # type: ignore[typeddict-item]
+                out.append({"trace": trace, "dwell": dwell, **margin})
         return out
 
     def settings(self) -> dict[str, object]:
@@ -264,13 +239,9 @@ class StreamResult(Result):
 
     def table(self) -> str:
         """Medians per method and dwell time, then the acceptance lines."""
-        rows = render(COLUMNS, self.methods())
-        for case in self.cases():
-            rows.append(
-                f"trace {case['trace']:g}, dwell {case['dwell']}: "
-                + margin_line(case, "view consistency of pairs")
-            )
-        return "\n".join(rows)
+        cases = [(c, margin_line(c, "view consistency of pairs")) for c in self.cases()]
+        lines = [f"trace {c['trace']:g}, dwell {c['dwell']}: {text}" for c, text in cases]
+        return "\n".join(render(COLUMNS, self.methods()) + lines)
 
     def caption(self) -> str:
         """The figure's caption, computed from the result."""
@@ -292,78 +263,29 @@ class StreamResult(Result):
             )
         return text
 
-    def figure(self, out_dir: Path) -> list[Path]:
-        """``stream.png`` (:func:`.figures.stream_figure`) and its caption beside it,
-        ``stream.txt``; returns the figure's path."""
+    def draw(self) -> Figure:
+        """``stream.png``: :func:`.figures.stream_figure` of the JSON form."""
         from .figures import stream_figure  # matplotlib: only when drawing
 
-        out = Path(out_dir) / FIGURE
-        return [save_captioned(stream_figure(self.to_dict()), out, self.caption(), dpi=120)]
+        return stream_figure(self.to_dict())
 
 
 # -- the run: one job per seed and dwell time ------------------------------------------------------
 
-STREAM_KEY = 7
-"""Frames of seed s and dwell d: ``SeedSequence(s, spawn_key=(STREAM_KEY, d))``, apart from the
-model's own streams (:mod:`sigmapi.model.som`)."""
-
-PLAN = SeedPlan({"frames": STREAM_KEY})
-"""The streams of a seed (:class:`~sigmapi.experiments.kit.seeds.SeedPlan`): the frames,
-one stream per dwell time below it."""
+PLAN = SeedPlan({"frames": 7})
+"""The streams of a seed (:class:`~sigmapi.experiments.kit.seeds.SeedPlan`): the frames of
+dwell time d, ``SeedSequence(seed, spawn_key=(7, d))``, apart from the model's own streams."""
 
 
 @dataclass(frozen=True)
-class StreamJob:
-    """One map of the experiment (a job of the executor): pairs when ``dwell`` is None."""
+class StreamJob(SeedJob):
+    """One job of the experiment (``shared``: the map's config): the map on pairs when
+    ``dwell`` is None, else one map per trace constant on the stream of ``(seed, dwell)``."""
 
-    seed: int
-    cfg: SOMConfig
-    dwell: int | None
-    traces: tuple[float, ...]
-    n_test: int
-    show: Progress | None = None
-    """Where given, the job shows its maps' training iterations."""
+    dwell: int | None = None
 
 
-def stream_job(job: StreamJob) -> list[MapRun]:
-    """Train and score the maps of one job: the map on pairs, or one map per trace constant on
-    the stream of ``(seed, dwell)``; one :class:`MapRun` per map."""
-    maps = 1 if job.dwell is None else len(job.traces)
-    what = "pairs" if job.dwell is None else f"dwell {job.dwell}"
-    desc = f"stream seed {job.seed} {what}"
-    work = functools.partial(_stream_job, job)
-    return counted(job.show, maps * job.cfg.iterations, desc, work, "it")
-
-
-def _stream_job(job: StreamJob, tick: Tick | None) -> list[MapRun]:
-    out = []
-    its = job.cfg.iterations
-
-    def scored(model: SigmaPiSOM, trace: float | None, start: float) -> MapRun:
-        m = evaluate(model, n_test=job.n_test)
-        scores = {k: float(getattr(m, k)) for k in METRICS}
-        seconds = time.perf_counter() - start
-        return MapRun(job.seed, job.dwell, trace, **scores, folded=bool(m.folded), seconds=seconds)
-
-    if job.dwell is None:
-        start = time.perf_counter()
-        model = SigmaPiSOM(job.cfg, seed=job.seed)
-        return [scored(model.fit(callback=iterations_counted(tick, "pairs", its)), None, start)]
-    model = SigmaPiSOM(job.cfg, seed=job.seed)
-    rng = PLAN.rng(job.seed, "frames", job.dwell)
-    frames = model.sampler.stream(job.cfg.iterations + 1, job.dwell, rng)
-    for lam in job.traces:
-        start = time.perf_counter()
-        model = SigmaPiSOM(job.cfg, seed=job.seed).fit_stream(
-            (frames.x, frames.y),
-            trace=lam,
-            callback=iterations_counted(tick, f"trace {lam:g}", its),
-        )
-        out.append(scored(model, lam, start))
-    return out
-
-
-class StreamExperiment(Experiment[StreamConfig]):
+class StreamExperiment(SeedRuns[StreamConfig]):
     """Maps learned from a stream of frames (the trace rule) over dwell times and trace
     constants, against the map learned from explicit pairs, on the same seeds."""
 
@@ -375,38 +297,70 @@ class StreamExperiment(Experiment[StreamConfig]):
     quick_seeds = (0,)
     quick_time = "about 45 s on two busy cores"
     default_out = "stream"
-    writes = (FIGURE, Path(FIGURE).with_suffix(".txt").name)
+    writes = ("stream.png", "stream.txt")
+    unit = "it"
 
-    def execute(self, config: StreamConfig, run: Run) -> StreamResult:
-        """Every map of ``config`` on each of ``seeds`` (one job per seed and dwell time, and
-        one per seed on pairs), scored."""
-        seeds, cfg = run.seeds, config.som_config
-        start = time.perf_counter()
-        jobs = [(f"seed {s} pairs", StreamJob(s, cfg, None, (), config.n_test)) for s in seeds]
-        jobs += [
-            (f"seed {s} dwell {d}", StreamJob(s, cfg, d, config.traces, config.n_test))
+    def check(self, config: StreamConfig) -> int:
+        """One job's memory: the map's and its stream's frames (two codes, float64)."""
+        cfg = config.som_config
+        frames = 16 * (cfg.iterations + 1) * (int(np.prod(cfg.x_shape)) + int(np.prod(cfg.y_shape)))
+        return job_memory(cfg, config.n_test) + frames
+
+    def prepare(self, config: StreamConfig, progress: object) -> SOMConfig:
+        return config.som_config  # every job's map
+
+    def jobs(
+        self, config: StreamConfig, seeds: tuple[int, ...], shared: object
+    ) -> list[tuple[str, Any]]:
+        """One job per seed on pairs, then one per seed and dwell time."""
+        jobs = [(f"seed {s} pairs", StreamJob(config, s, shared=shared)) for s in seeds]
+        return jobs + [
+            (f"seed {s} dwell {d}", StreamJob(config, s, shared=shared, dwell=d))
             for s in seeds
             for d in config.dwells
         ]
-        frames = (
-            8 * (cfg.iterations + 1) * 2 * (int(np.prod(cfg.x_shape)) + int(np.prod(cfg.y_shape)))
-        )
 
-        def describe(key: str, rows: list[MapRun]) -> str:
-            return f"{key}: same unit " + ", ".join(f"{r.view_consistency:.3f}" for r in rows)
+    def steps(self, job: StreamJob) -> int:
+        maps = 1 if job.dwell is None else len(job.config.traces)
+        return maps * job.shared.iterations
 
-        done = run_all(
-            stream_job,
-            jobs,
-            executor=run.executor,
-            per_job=job_memory(cfg, config.n_test) + frames,
-            progress=run.progress,
-            desc="stream",
-            describe=describe,
-            verbose=lambda job: dataclasses.replace(job, show=run.progress),
-        )
-        runs = [r for rows in done.values() for r in rows]
-        return StreamResult(config, seeds, runs, time.perf_counter() - start)
+    def desc(self, job: StreamJob) -> str:
+        return f"stream seed {job.seed} " + ("pairs" if job.dwell is None else f"dwell {job.dwell}")
+
+    def describe(self, key: str, value: list[MapRun]) -> str:
+        return f"{key}: same unit " + ", ".join(f"{r.view_consistency:.3f}" for r in value)
+
+    def seed_run(self, job: StreamJob, tick: Tick | None) -> list[MapRun]:
+        """Train and score the maps of one job (:class:`StreamJob`), one :class:`MapRun` each."""
+        cfg, its = job.shared, job.shared.iterations
+
+        def scored(model: SigmaPiSOM, trace: float | None, start: float) -> MapRun:
+            m = evaluate(model, n_test=job.config.n_test)
+            scores = {k: float(getattr(m, k)) for k in METRICS}
+            seconds = time.perf_counter() - start
+            return MapRun(
+                job.seed, job.dwell, trace, **scores, folded=bool(m.folded), seconds=seconds
+            )
+
+        if job.dwell is None:
+            start = time.perf_counter()
+            model = SigmaPiSOM(cfg, seed=job.seed)
+            return [scored(model.fit(callback=iterations_counted(tick, "pairs", its)), None, start)]
+        model = SigmaPiSOM(cfg, seed=job.seed)
+        frames = model.sampler.stream(its + 1, job.dwell, PLAN.rng(job.seed, "frames", job.dwell))
+        xy = (frames.x, frames.y)  # every trace constant learns from the same frames
+        out = []
+        for lam in job.config.traces:
+            start = time.perf_counter()
+            counter = iterations_counted(tick, f"trace {lam:g}", its)
+            model = SigmaPiSOM(cfg, seed=job.seed).fit_stream(xy, trace=lam, callback=counter)
+            out.append(scored(model, lam, start))
+        return out
+
+    def collect(
+        self, config: StreamConfig, seeds: tuple[int, ...], values: list[Any]
+    ) -> StreamResult:
+        return StreamResult(config, seeds, [r for rows in values for r in rows], 0.0)
 
 
 STREAM = register(StreamExperiment())
