@@ -155,9 +155,8 @@ class RobotExperiment(ReachExperiment):
         res = RobotResult(config, seeds)
         for state in config.run.states:
             eps = [one.runs[state] for one in got]
-            res.success[state] = np.stack([e.success for e in eps])
+            res.record(state, eps)
             res.docked[state] = np.stack([e.info["docked"].astype(bool) for e in eps])
-            res.steps[state] = np.stack([e.steps for e in eps])
         if "map" in config.run.states:
             for one in got:
                 res.map_metrics.append(one.extras["map_metrics"])
