@@ -1,9 +1,8 @@
 """Figures of the reach comparison: learning curves and the learned value over z.
 
 Every function takes ``ax=None`` (a new figure when None) and returns the Axes, except
-:func:`reach_figure`, which lays out the whole comparison and returns the Figure. Nothing is
-shown and pyplot is never touched: figures are plain :class:`matplotlib.figure.Figure`
-objects that draw on the Agg canvas when saved with ``fig.savefig(path)``.
+:func:`reach_figure`, which lays out the whole comparison and returns the Figure; pyplot is
+never touched (plain :class:`matplotlib.figure.Figure` objects, drawn when saved).
 """
 
 from __future__ import annotations
