@@ -73,15 +73,9 @@ def plot_units(result: RewardData, method: str, ax: Axes | None = None) -> Axes:
     ax = axes(ax)
     cfg = result.config
     pz = result.units[method]
-    shape = tuple(cfg.map.map_shape)
-    grid = pz.reshape(*shape, -1)
-    for axis in range(len(shape)):
-        for line in (
-            np.moveaxis(grid, axis, 0).reshape(shape[axis], -1, grid.shape[-1]).transpose(1, 0, 2)
-        ):
-            ax.plot(
-                line[:, 0], line[:, 1], color="0.6", linewidth=0.6, label="map neighbours, joined"
-            )
+    grid = pz.reshape(*cfg.map.map_shape, -1)  # 2-D: the units are drawn for the 2-D task
+    for line in (*grid.transpose(1, 0, 2), *grid):
+        ax.plot(line[:, 0], line[:, 1], color="0.6", linewidth=0.6, label="map neighbours, joined")
     ax.plot(*pz.T, "o", color=COLORS.get(method), markersize=3, label="a unit at its preferred z")
     goal = np.asarray(GAZE_REACH.source(cfg.env).goal)
     r, rn = cfg.env.goal_radius, cfg.run.near_radius

@@ -63,7 +63,7 @@ class RobotEnvConfig:
 
     def env_kwargs(self) -> dict[str, object]:
         """The docking world's keyword arguments (``gymnasium.make``'s, time limit included)."""
-        world = ("grid", "code_width", "retina", "saccade_rate")  # moved_share: the recording's
+        world = ("grid", "code_width", "retina", "saccade_rate")  # moved_share: views only
         return {**{k: getattr(self, k) for k in world}, "max_episode_steps": self.max_steps}
 
 
