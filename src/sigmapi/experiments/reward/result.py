@@ -90,7 +90,8 @@ class RewardResult(EpisodesResult):
         near the goal and its ratio to the frozen map, the quality away from the goal (median,
         worst and per seed over the seeds)."""
         run = self.config.run
-        finals, lost = self.final(), self.final_share()
+        finals = self.final()
+        lost = self.final_share()
         frozen_ep = self._episodes("frozen") if "frozen" in self.success else None
         base_mag = self.scores["initial"]["magnification"]
         methods = []
