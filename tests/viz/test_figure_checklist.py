@@ -600,7 +600,9 @@ def _robot(tmp_path: Path) -> Any:
     k = int(np.prod(cfg.map.map_shape))
     unit_z = [rng.uniform(0.1, 0.9, (k, 2)) for _ in range(n)]
     metrics = [{"order_r2": 0.97, "folded": False, "fold_score": 0.2} for _ in range(n)]
-    return RobotResult(cfg, (5, 6), success, docked, steps, metrics, unit_z)
+    return RobotResult(
+        cfg, (5, 6), success, steps=steps, docked=docked, map_metrics=metrics, unit_z=unit_z
+    )
 
 
 def _icub_box_result() -> Any:

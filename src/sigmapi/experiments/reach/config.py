@@ -22,10 +22,7 @@ from sigmapi.errors import ConfigError
 from sigmapi.experiments.kit.episodes import check_episode_run
 from sigmapi.experiments.kit.jobs import Tick
 from sigmapi.experiments.kit.maps import MapSpec
-from sigmapi.experiments.kit.parts import (
-    Parts,
-    check_part_types,
-)
+from sigmapi.experiments.kit.parts import Parts, check_part_types
 from sigmapi.experiments.kit.results import JSON
 from sigmapi.experiments.kit.worlds import GAZE_REACH, World
 from sigmapi.model.som import SigmaPiSOM
@@ -123,11 +120,8 @@ class MapConfig:
         ordering procedure (``crossview``) is what orders a 15x15 map from saccade views
         (docs/guide/reach.md); ``small-2d`` is the schedule of a 7x7 map.
         """
-        if x_code.width != y_code.width or (x_code.height, x_code.normalize, x_code.periodic) != (
-            y_code.height,
-            y_code.normalize,
-            y_code.periodic,
-        ):
+        same = ("width", "height", "normalize", "periodic")
+        if any(getattr(x_code, k) != getattr(y_code, k) for k in same):
             raise ConfigError(
                 f"a map's x and y codes differ only in shape, got {x_code} and {y_code}"
             )

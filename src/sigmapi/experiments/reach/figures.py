@@ -1,9 +1,8 @@
 """Figures of the reach comparison: learning curves and the learned value over z.
 
 Every function takes ``ax=None`` (a new figure when None) and returns the Axes, except
-:func:`reach_figure`, which lays out the whole comparison and returns the Figure. Nothing is
-shown and pyplot is never touched: figures are plain :class:`matplotlib.figure.Figure`
-objects that draw on the Agg canvas when saved with ``fig.savefig(path)``.
+:func:`reach_figure`, which lays out the whole comparison and returns the Figure; pyplot is
+never touched (plain :class:`matplotlib.figure.Figure` objects, drawn when saved).
 """
 
 from __future__ import annotations
@@ -16,7 +15,8 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from numpy.typing import NDArray
 
-from sigmapi.experiments.kit.figures import axes, coinciding, legend_once, plot_apart
+from sigmapi.experiments.kit.episodes_result import plot_with_bands, sd_band
+from sigmapi.experiments.kit.figures import axes, coinciding, legend_once
 from sigmapi.experiments.reach.config import ReachConfig
 
 
@@ -44,6 +44,15 @@ LABELS = {
     "true_z": "true z (upper bound)",
 }
 COLORS = {"map": "C0", "retina": "C3", "retina_gaze": "C1", "true_z": "k"}
+CURVES = {
+    "success": ("success", sd_band, "band: 1 sd over seeds"),
+    "steps": (
+        "steps_to_reach",
+        lambda c: (c["steps_q25"], c["steps_q75"]),
+        "band: quartiles over seeds",
+    ),
+}
+"""Per metric of :func:`plot_reach_curves`: the curve's key, its band and the band's label."""
 
 
 def coinciding_curves(result: ReachData) -> dict[str, dict[str, str]]:
@@ -53,7 +62,7 @@ def coinciding_curves(result: ReachData) -> dict[str, dict[str, str]]:
     curves = result.curves()
     return {
         metric: coinciding({s: [*c["episode"], *c[key]] for s, c in curves.items()})
-        for metric, key in (("success", "success"), ("steps", "steps_to_reach"))
+        for metric, (key, _, _) in CURVES.items()
     }
 
 
@@ -63,30 +72,21 @@ def plot_reach_curves(result: ReachData, metric: str = "success", ax: Axes | Non
     episode, :meth:`~sigmapi.experiments.reach.result.ReachResult.still_rising`, is marked
     so in the legend) or "steps" (mean steps of the successful episodes per block, band =
     the quartiles over seeds)."""
-    if metric not in ("success", "steps"):
+    if metric not in CURVES:
         raise ValueError(f"metric must be 'success' or 'steps', got {metric!r}")
     ax = axes(ax)
-    rising, rise = result.still_rising(), result.final_rise()
+    key, band, what = CURVES[metric]
     curves = result.curves()
-    labels, x, y = {}, {}, {}
-    for state, c in curves.items():
-        labels[state] = LABELS.get(state, state)
-        if metric == "success" and state in rising:
-            labels[state] += f" (still rising: {rise[state]:+.2f})"
-        x[state] = c["episode"].tolist()
-        y[state] = c["success" if metric == "success" else "steps_to_reach"].tolist()
+    labels = dict(LABELS)
+    if metric == "success":
+        rise = result.final_rise()
+        for s in result.still_rising():
+            labels[s] = f"{LABELS.get(s, s)} (still rising: {rise[s]:+.2f})"
     # series that coincide (e.g. two states at success 1) each show; the caption says which
     # (ReachResult.caption, from coinciding_curves)
-    plot_apart(ax, x, y, labels=labels, colours=COLORS, largest=8.0, width=1.8, say=False)
-    band = "band: 1 sd over seeds" if metric == "success" else "band: quartiles over seeds"
-    for state, c in curves.items():
-        if metric == "success":
-            lo, hi = c["success"] - c["success_sd"], c["success"] + c["success_sd"]
-        else:
-            lo, hi = c["steps_q25"], c["steps_q75"]
-        ax.fill_between(
-            c["episode"], lo, hi, color=COLORS.get(state), alpha=0.15, linewidth=0, label=band
-        )
+    plot_with_bands(
+        ax, curves, key, band, what, labels=labels, colours=COLORS, largest=8.0, say=False
+    )
     n, run = len(result.seeds), result.config.run
     ax.set_xlabel(f"episode (blocks of {run.block})")
     if metric == "success":
@@ -97,13 +97,8 @@ def plot_reach_curves(result: ReachData, metric: str = "success", ax: Axes | Non
         ax.set_ylabel("steps to reach (successes)")
         ax.set_title(f"steps to reach, mean of {n} seed{'s' * (n > 1)} (band: IQR)", fontsize=9)
     ax.grid(alpha=0.3)
-    legend_once(  # the bands share one entry
-        ax,
-        fontsize=7,
-        loc="upper center",
-        bbox_to_anchor=(0.5, -0.2),
-        ncol=2,
-    )
+    # the bands share one entry
+    legend_once(ax, fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.2), ncol=2)
     return ax
 
 
@@ -152,9 +147,8 @@ def reach_figure(result: ReachData) -> Figure:
     plot_reach_curves(result, "success", ax0)
     plot_reach_curves(result, "steps", ax1)
     values = [np.asarray(result.values[s]) for s in states]
-    shared: dict[
-        str, float
-    ] = {}  # one colour scale for every state's value map, so that they compare
+    # one colour scale for every state's value map, so that they compare
+    shared: dict[str, float] = {}
     if values and values[0].ndim == 2:
         shared = {
             "vmin": min(float(v.min()) for v in values),

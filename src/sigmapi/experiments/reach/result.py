@@ -9,8 +9,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
-from sigmapi.experiments.kit.episodes import final_rates, success_curve
-from sigmapi.experiments.kit.results import Result
+from sigmapi.experiments.kit.episodes_result import EpisodesResult
 from sigmapi.experiments.reach.config import ReachConfig
 
 if TYPE_CHECKING:
@@ -18,22 +17,16 @@ if TYPE_CHECKING:
 
 
 @dataclass
-class ReachResult(Result):
+class ReachResult(EpisodesResult):
     """Outcome of :meth:`~sigmapi.experiments.reach.run.ReachExperiment.run`.
 
-    ``success[state]``, ``lost[state]`` and ``steps[state]`` have shape ``(len(seeds),
-    episodes)``, one row per seed in the order of ``seeds``: whether each episode reached the
-    goal, whether it lost the object (the world ended it without success; the rest timed out)
-    and how many steps it took; ``values[state]`` is the critic's value over z (the first
-    seed), on ``z_axis``. A result read back from its JSON form (:meth:`from_dict`) holds no
-    records: its summaries are ``written``, as the file has them.
+    Per state, the episode records of
+    :class:`~sigmapi.experiments.kit.episodes_result.EpisodesResult` (``success``: reached
+    the goal; ``lost``: lost the object); ``values[state]`` is the critic's value over z (the
+    first seed), on ``z_axis``.
     """
 
     config: ReachConfig
-    seeds: tuple[int, ...]
-    success: dict[str, NDArray[np.bool_]] = field(default_factory=dict)
-    steps: dict[str, NDArray[np.int64]] = field(default_factory=dict)
-    lost: dict[str, NDArray[np.bool_]] = field(default_factory=dict)
     values: dict[str, NDArray[np.float64]] = field(default_factory=dict)
     z_axis: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
     map_metrics: list[dict[str, float | int]] = field(default_factory=list)
@@ -41,8 +34,8 @@ class ReachResult(Result):
 
     KEYS = (
         "success: final_success",
-        "success_per_seed: final_success_per_seed",
-        "lost: final_lost",
+        "success_per_seed: final",
+        "lost: final_share",
         "timed_out: final_timed_out",
         "ratio_map_to_true_z",
         "final_rise",
@@ -56,31 +49,19 @@ class ReachResult(Result):
     """The JSON form: final success (mean and per seed), lost and timed-out shares, the rise
     over the final episodes and whether each learner levelled off, the curves (NaN: None),
     the maps' metrics, the config (its parts and the seeds) and the time."""
-    COMPUTED = ("success", "success_per_seed", "lost", "timed_out", "ratio_map_to_true_z", "curves")
     LATER = ("final_rise", "final_rise_se", "levelled_off")
     SEEDS_IN_CONFIG = True
     FIGURE = "reach.png"
 
     def final_success(self) -> dict[str, float]:
         """Success rate over the last ``final_episodes`` episodes, mean over seeds."""
-        return {s: float(v.mean()) for s, v in self.final_success_per_seed().items()}
-
-    def final_lost(self) -> dict[str, float]:
-        """Fraction of the last ``final_episodes`` episodes that lost the object (seed mean)."""
-        f = self.config.run.final_episodes
-        return {s: float(v[:, -f:].mean()) for s, v in self.lost.items()}
+        return self.final_mean()
 
     def final_timed_out(self) -> dict[str, float]:
         """Fraction of the last ``final_episodes`` episodes that neither reached nor lost the
         object (seed mean), counted (not ``1 - success - lost``, which rounds to -1e-17)."""
-        f = self.config.run.final_episodes
-        return {
-            s: float((~v[:, -f:] & ~self.lost[s][:, -f:]).mean()) for s, v in self.success.items()
-        }
-
-    def final_success_per_seed(self) -> dict[str, NDArray[np.float64]]:
-        f = self.config.run.final_episodes
-        return {s: final_rates(v, f) for s, v in self.success.items()}
+        lost = self.window("lost")
+        return {s: float((~w & ~lost[s]).mean()) for s, w in self.window().items()}
 
     def final_rise_per_seed(self) -> dict[str, NDArray[np.float64]]:
         """How much the success rate still rose over the last ``final_episodes`` episodes:
@@ -90,8 +71,8 @@ class ReachResult(Result):
         t = np.arange(f, dtype=np.float64) - (f - 1) / 2.0
         denom = float(t @ t)
         out = {}
-        for s, v in self.success.items():
-            y = v[:, -f:].astype(np.float64)
+        for s, w in self.window().items():
+            y = w.astype(np.float64)
             slope = (y @ t) / denom if denom > 0 else np.zeros(len(y))
             out[s] = slope * (f - 1)
         return out
@@ -131,8 +112,8 @@ class ReachResult(Result):
         (the seeds with a success in the block; NaN when none has one).
         """
         b = self.config.run.block
-        out: dict[str, dict[str, NDArray[np.float64]]] = {}
-        for s in self.success:
+        out = self.success_curves()
+        for s, curve in out.items():
             succ, steps = self.success[s], self.steps[s].astype(np.float64)
             nb = succ.shape[1] // b
             sb = succ[:, : nb * b].reshape(succ.shape[0], nb, b)
@@ -141,19 +122,14 @@ class ReachResult(Result):
                 reach_steps = np.where(sb, tb, 0.0).sum(axis=2) / sb.sum(axis=2)
             ok = np.isfinite(reach_steps)
             cnt = ok.sum(axis=0)
-            mean_steps = np.where(
+            curve["steps_to_reach"] = np.where(
                 cnt > 0, np.where(ok, reach_steps, 0.0).sum(axis=0) / np.maximum(cnt, 1), np.nan
             )
             quartiles = np.full((2, nb), np.nan)
             for j in range(nb):
                 if ok[:, j].any():
                     quartiles[:, j] = np.percentile(reach_steps[ok[:, j], j], (25, 75))
-            out[s] = {
-                **success_curve(succ, b),
-                "steps_to_reach": mean_steps,
-                "steps_q25": quartiles[0],
-                "steps_q75": quartiles[1],
-            }
+            curve["steps_q25"], curve["steps_q75"] = quartiles
         return out
 
     def levelled_off(self) -> dict[str, bool]:
@@ -163,8 +139,8 @@ class ReachResult(Result):
     def table(self) -> str:
         """The final success of each state as lines of text (per seed, and the lost share)."""
         run = self.config.run
-        per_seed = self.final_success_per_seed()
-        lost, rise, se = self.final_lost(), self.final_rise(), self.final_rise_se()
+        per_seed = self.final()
+        lost, rise, se = self.final_share(), self.final_rise(), self.final_rise_se()
         lines = [
             f"final success rate over the last {run.final_episodes} of {run.episodes} "
             f"episodes, {len(self.seeds)} seeds:"

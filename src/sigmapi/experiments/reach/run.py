@@ -30,12 +30,7 @@ from numpy.typing import NDArray
 
 from sigmapi import _memory, _validate
 from sigmapi.agents import ActorCritic
-from sigmapi.envs import (
-    Features,
-    PlacedViewSource,
-    TrueZObservation,
-    make_state_env,
-)
+from sigmapi.envs import Features, PlacedViewSource, TrueZObservation, make_state_env
 from sigmapi.errors import ConfigError
 from sigmapi.executor import job_memory
 from sigmapi.experiments.base import register
@@ -211,10 +206,7 @@ class ReachExperiment(SeedRuns[Any]):
         """The result of the seeds' jobs (``got``, in the order of ``seeds``)."""
         res = ReachResult(config, seeds)
         for s in config.run.states:
-            eps = [one.runs[s] for one in got]
-            res.success[s] = np.stack([e.success for e in eps]).astype(bool)
-            res.steps[s] = np.stack([e.steps for e in eps]).astype(np.int64)
-            res.lost[s] = np.stack([e.failed for e in eps]).astype(bool)
+            res.record(s, [one.runs[s] for one in got])
         for one in got:
             if "map_metrics" in one.extras:
                 res.map_metrics.append(one.extras["map_metrics"])

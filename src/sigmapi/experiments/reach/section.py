@@ -53,7 +53,7 @@ def reach_section(ctx: ReportContext) -> Section:
         save_figure(result.draw(), ctx.out / FIGURE, **result.SAVE)
 
     final = result.final_success()
-    per_seed = result.final_success_per_seed()
+    per_seed = result.final()
     rows = "".join(
         f"<tr><td>{html.escape(state)}</td><td>{final[state]:.3f}</td>"
         f"<td>{html.escape(' '.join(f'{v:.3f}' for v in per_seed[state]))}</td>"

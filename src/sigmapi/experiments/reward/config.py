@@ -19,12 +19,7 @@ from sigmapi.errors import ConfigError
 from sigmapi.experiments.kit.episodes import check_episode_run
 from sigmapi.experiments.kit.parts import Parts
 from sigmapi.experiments.kit.worlds import GAZE_REACH, World
-from sigmapi.experiments.reach.config import (
-    SMALL_PRESET,
-    MapConfig,
-    check_parts,
-    preset_setting,
-)
+from sigmapi.experiments.reach.config import SMALL_PRESET, MapConfig, check_parts, preset_setting
 from sigmapi.rules.gating import FEEDBACK, SURPRISE
 
 METHODS = ("frozen", "gated", "shuffled")

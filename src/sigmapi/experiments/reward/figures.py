@@ -16,7 +16,8 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Rectangle
 from numpy.typing import NDArray
 
-from sigmapi.experiments.kit.figures import axes, legend_once, plot_apart
+from sigmapi.experiments.kit.episodes_result import plot_with_bands
+from sigmapi.experiments.kit.figures import axes, legend_once
 from sigmapi.experiments.kit.worlds import GAZE_REACH
 from sigmapi.experiments.reward.config import RewardConfig
 
@@ -44,39 +45,24 @@ COLORS = {"frozen": "C0", "gated": "C2", "shuffled": "C3", "initial": "C0"}
 def plot_reward_curves(result: RewardData, ax: Axes | None = None) -> Axes:
     """Success rate per block, mean over seeds (line), band from the worst to the best seed."""
     ax = axes(ax)
-    curves = result.curves()
-    plot_apart(  # curves that coincide each show, and their labels say so
+    plot_with_bands(  # curves that coincide each show, and their labels say so
         ax,
-        {m: c["episode"].tolist() for m, c in curves.items()},
-        {m: c["success"].tolist() for m, c in curves.items()},
-        labels={m: LABELS.get(m, m) for m in curves},
+        result.curves(),
+        "success",
+        lambda c: (c["success_min"], c["success_max"]),
+        "band: min-max over seeds",
+        labels=LABELS,
         colours=COLORS,
         largest=7.0,
-        width=1.8,
     )
-    for m, c in curves.items():
-        ax.fill_between(
-            c["episode"],
-            c["success_min"],
-            c["success_max"],
-            color=COLORS.get(m),
-            alpha=0.15,
-            linewidth=0,
-            label="band: min-max over seeds",
-        )
     target = result.config.run.target
     ax.axhline(target, color="0.5", linestyle=":", linewidth=1, label=f"target {target:.0%}")
     ax.set_xlabel(f"episode (blocks of {result.config.run.block})")
     ax.set_ylabel("success rate")
     ax.set_ylim(0.0, 1.02)
     ax.set_title(f"reaching success, mean of {len(result.seeds)} seeds (band: min-max)")
-    legend_once(  # the bands share one entry
-        ax,
-        loc="upper center",
-        bbox_to_anchor=(0.5, -0.2),
-        ncol=2,
-        fontsize=8,
-    )
+    # the bands share one entry
+    legend_once(ax, loc="upper center", bbox_to_anchor=(0.5, -0.2), ncol=2, fontsize=8)
     ax.grid(alpha=0.3)
     return ax
 
@@ -87,23 +73,10 @@ def plot_units(result: RewardData, method: str, ax: Axes | None = None) -> Axes:
     ax = axes(ax)
     cfg = result.config
     pz = result.units[method]
-    shape = tuple(cfg.map.map_shape)
-    grid = pz.reshape(*shape, -1)
-    for axis in range(len(shape)):
-        for line in (
-            np.moveaxis(grid, axis, 0).reshape(shape[axis], -1, grid.shape[-1]).transpose(1, 0, 2)
-        ):
-            ax.plot(
-                line[:, 0], line[:, 1], color="0.6", linewidth=0.6, label="map neighbours, joined"
-            )
-    ax.plot(
-        pz[:, 0],
-        pz[:, 1],
-        "o",
-        color=COLORS.get(method),
-        markersize=3,
-        label="a unit at its preferred z",
-    )
+    grid = pz.reshape(*cfg.map.map_shape, -1)  # 2-D: the units are drawn for the 2-D task
+    for line in (*grid.transpose(1, 0, 2), *grid):
+        ax.plot(line[:, 0], line[:, 1], color="0.6", linewidth=0.6, label="map neighbours, joined")
+    ax.plot(*pz.T, "o", color=COLORS.get(method), markersize=3, label="a unit at its preferred z")
     goal = np.asarray(GAZE_REACH.source(cfg.env).goal)
     r, rn = cfg.env.goal_radius, cfg.run.near_radius
     ax.add_patch(Rectangle(tuple(goal - r), 2 * r, 2 * r, color="0.85", zorder=0, label="the goal"))
@@ -124,11 +97,7 @@ def plot_units(result: RewardData, method: str, ax: Axes | None = None) -> Axes:
     ax.set_title(
         f"{LABELS.get(method, method)}: {int(near[0])} units near, x{mag[0]:.2f}", fontsize=9
     )
-    ax.set_xlim(0, 1)
-    ax.set_ylim(0, 1)
-    ax.set_aspect("equal")
-    ax.set_xlabel("z[0]")
-    ax.set_ylabel("z[1]")
+    ax.set(xlim=(0, 1), ylim=(0, 1), aspect="equal", xlabel="z[0]", ylabel="z[1]")
     return ax
 
 

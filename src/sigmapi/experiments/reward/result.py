@@ -10,8 +10,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
-from sigmapi.experiments.kit.episodes import block_rates, final_rates, success_curve
-from sigmapi.experiments.kit.results import JSON, Result
+from sigmapi.experiments.kit.episodes import block_rates
+from sigmapi.experiments.kit.episodes_result import EpisodesResult
 from sigmapi.experiments.reward.config import RewardConfig
 
 if TYPE_CHECKING:
@@ -22,9 +22,6 @@ MAGNIFICATION_TARGET = 1.5
 
 SCORES = ("magnification", "units_near", "units_used", "view_consistency_away", "order_r2_away")
 """The map scores of :func:`~sigmapi.experiments.reward.run.map_scores`, per method and seed."""
-
-SUMMARIES = ("methods", "initial_map", "n_seeds", "target", "magnification_target", "curves")
-"""The keys of the JSON form computed from the records and scores."""
 
 
 def episodes_to_target(success: NDArray[np.bool_], block: int, target: float) -> int | None:
@@ -38,11 +35,7 @@ def episodes_to_target(success: NDArray[np.bool_], block: int, target: float) ->
 def _summary(values: list[float | None], higher: bool = True) -> dict[str, object]:
     """Median and worst over seeds (None, e.g. a target never reached, counts as worst)."""
     known = [v for v in values if v is not None and np.isfinite(v)]
-    worst: float | None
-    if len(known) < len(values):
-        worst = None
-    else:
-        worst = float(min(known) if higher else max(known))
+    worst = None if len(known) < len(values) else float(min(known) if higher else max(known))
     filled = [
         v if v is not None and np.isfinite(v) else (-np.inf if higher else np.inf) for v in values
     ]
@@ -55,22 +48,17 @@ def _summary(values: list[float | None], higher: bool = True) -> dict[str, objec
 
 
 @dataclass
-class RewardResult(Result):
+class RewardResult(EpisodesResult):
     """Outcome of :meth:`~sigmapi.experiments.reward.run.RewardExperiment.run`.
 
-    ``success[m]``, ``lost[m]``, ``steps[m]``: ``(len(seeds), episodes)`` per method ``m``, one
-    row per seed in the order of ``seeds``; ``scores[m][name]``: ``(len(seeds),)`` map scores
-    after the episodes (``initial``: the learned map before them); ``units[m]``: the preferred
-    z of each unit of the first seed's map ``(n_units, d)`` (NaN: wins nothing). A result
-    read back from its JSON form (:meth:`from_dict`) holds no records: its summaries are
-    ``written``, as the file has them.
+    Per method ``m``, the episode records of
+    :class:`~sigmapi.experiments.kit.episodes_result.EpisodesResult`; ``scores[m][name]``:
+    ``(len(seeds),)`` map scores after the episodes (``initial``: the learned map before
+    them); ``units[m]``: the preferred z of each unit of the first seed's map ``(n_units,
+    d)`` (NaN: wins nothing).
     """
 
     config: RewardConfig
-    seeds: tuple[int, ...]
-    success: dict[str, NDArray[np.bool_]] = field(default_factory=dict)
-    lost: dict[str, NDArray[np.bool_]] = field(default_factory=dict)
-    steps: dict[str, NDArray[np.int64]] = field(default_factory=dict)
     updates: dict[str, NDArray[np.int64]] = field(default_factory=dict)
     scores: dict[str, dict[str, NDArray[np.float64]]] = field(default_factory=dict)
     units: dict[str, NDArray[np.float64]] = field(default_factory=dict)
@@ -88,54 +76,33 @@ class RewardResult(Result):
     )
     """The JSON form: ``methods``, the map before the episodes (``initial_map``), the
     acceptance counts, the curves, the config (its parts and the seeds) and the time."""
-    COMPUTED = SUMMARIES
     SEEDS_IN_CONFIG = True
     FIGURE = "reward.png"
     MAGNIFICATION_TARGET = MAGNIFICATION_TARGET
 
-    @classmethod
-    def collect(
-        cls, config: RewardConfig, seeds: tuple[int, ...], per_seed: list[JSON]
-    ) -> RewardResult:
-        """The result of the per-seed values of the run (in the order of ``seeds``)."""
-        res = cls(config, seeds)
-        methods = config.run.methods
-        for m in methods:
-            runs = [v["runs"][m] for v in per_seed]
-            res.success[m] = np.stack([r["success"] for r in runs])
-            res.lost[m] = np.stack([r["lost"] for r in runs])
-            res.steps[m] = np.stack([r["steps"] for r in runs])
-            res.updates[m] = np.array([r["updates"] for r in runs], dtype=np.int64)
-            res.scores[m] = {k: np.array([r["scores"][k] for r in runs]) for k in SCORES}
-            res.units[m] = runs[0]["units"]
-        res.scores["initial"] = {k: np.array([v["initial"][k] for v in per_seed]) for k in SCORES}
-        res.units["initial"] = per_seed[0]["initial_units"]
-        return res
-
     def curves(self) -> dict[str, dict[str, NDArray[np.float64]]]:
         """Per method: ``episode`` (block ends), ``success`` (rate per block, mean over
         seeds), ``success_sd``, ``success_min`` and ``success_max`` over seeds."""
-        b = self.config.run.block
-        return {m: success_curve(succ, b, extremes=True) for m, succ in self.success.items()}
+        return self.success_curves(extremes=True)
 
     def methods(self) -> list[dict[str, object]]:
         """Per method its name, final success, episodes to the target rate, magnification
         near the goal and its ratio to the frozen map, the quality away from the goal (median,
         worst and per seed over the seeds)."""
         run = self.config.run
-        f = run.final_episodes
+        finals = self.final()
+        lost = self.final_share()
         frozen_ep = self._episodes("frozen") if "frozen" in self.success else None
         base_mag = self.scores["initial"]["magnification"]
         methods = []
         for m in run.methods:
             ep = self._episodes(m)
-            final = final_rates(self.success[m], f)
             mag = self.scores[m]["magnification"]
             ratio = mag / base_mag
             entry: dict[str, object] = {
                 "name": m,
-                "final_success": _summary(final.tolist()),
-                "lost": float(self.lost[m][:, -f:].mean()),
+                "final_success": _summary(finals[m].tolist()),
+                "lost": lost[m],
                 "episodes_to_target": _summary(
                     [None if e is None else float(e) for e in ep], higher=False
                 ),

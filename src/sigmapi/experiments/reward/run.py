@@ -25,7 +25,6 @@ from __future__ import annotations
 import copy
 import functools
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -40,7 +39,7 @@ from sigmapi.experiments.kit.results import JSON
 from sigmapi.experiments.kit.seeds import SeedPlan
 from sigmapi.experiments.kit.worlds import GAZE_REACH, World
 from sigmapi.experiments.reward.config import RewardConfig
-from sigmapi.experiments.reward.result import RewardResult
+from sigmapi.experiments.reward.result import SCORES, RewardResult
 from sigmapi.metrics import winner_metrics
 from sigmapi.model.som import SigmaPiSOM
 
@@ -178,9 +177,7 @@ class RewardExperiment(SeedRuns[RewardConfig]):
                 ep, updates = got.episodes, got.updates
                 factors = got.surprises if m == "gated" else factors
             out["runs"][m] = {
-                "success": ep.success,
-                "steps": ep.steps,
-                "lost": ep.failed,
+                "episodes": ep,
                 "updates": updates,
                 "scores": map_scores(model, objects, goal, run.near_radius),
                 "units": preferred_z(model, objects),
@@ -188,9 +185,19 @@ class RewardExperiment(SeedRuns[RewardConfig]):
         return out
 
     def collect(
-        self, config: RewardConfig, seeds: tuple[int, ...], values: list[Any]
+        self, config: RewardConfig, seeds: tuple[int, ...], per_seed: list[JSON]
     ) -> RewardResult:
-        return RewardResult.collect(config, seeds, values)
+        """The result of the per-seed values of the run (in the order of ``seeds``)."""
+        res = RewardResult(config, seeds)
+        for m in config.run.methods:
+            runs = [v["runs"][m] for v in per_seed]
+            res.record(m, [r["episodes"] for r in runs])
+            res.updates[m] = np.array([r["updates"] for r in runs], dtype=np.int64)
+            res.scores[m] = {k: np.array([r["scores"][k] for r in runs]) for k in SCORES}
+            res.units[m] = runs[0]["units"]
+        res.scores["initial"] = {k: np.array([v["initial"][k] for v in per_seed]) for k in SCORES}
+        res.units["initial"] = per_seed[0]["initial_units"]
+        return res
 
 
 REWARD = RewardExperiment()

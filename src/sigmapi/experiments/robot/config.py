@@ -63,13 +63,8 @@ class RobotEnvConfig:
 
     def env_kwargs(self) -> dict[str, object]:
         """The docking world's keyword arguments (``gymnasium.make``'s, time limit included)."""
-        return {
-            "grid": self.grid,
-            "code_width": self.code_width,
-            "retina": self.retina,
-            "saccade_rate": self.saccade_rate,
-            "max_episode_steps": self.max_steps,
-        }
+        world = ("grid", "code_width", "retina", "saccade_rate")  # moved_share: views only
+        return {**{k: getattr(self, k) for k in world}, "max_episode_steps": self.max_steps}
 
 
 @dataclass(frozen=True)

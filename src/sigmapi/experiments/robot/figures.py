@@ -3,8 +3,7 @@
 Thin plot functions (``ax`` in, Axes out) and :func:`robot_figures`, which writes them for a
 :class:`~sigmapi.experiments.robot.result.RobotResult`, each with its caption beside it
 (``NAME.txt``), computed from the data; :func:`film_episode` renders one
-docking episode of the first seed's map learner and :func:`write_gif` saves frames as an
-animated GIF (Pillow, which matplotlib installs).
+docking episode of the first seed's map learner.
 """
 
 from __future__ import annotations
@@ -18,17 +17,12 @@ from numpy.typing import NDArray
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
 
-from sigmapi._outputs import save_captioned, save_gif
+from sigmapi._outputs import save_captioned
 from sigmapi.agents import reset_from
 from sigmapi.envs.robot.frames import Frames
 from sigmapi.envs.robot.scene import Scene
-from sigmapi.experiments.kit.figures import (
-    coincide_sentence,
-    coinciding,
-    film_strip,
-    legend_once,
-    plot_apart,
-)
+from sigmapi.experiments.kit.episodes_result import plot_with_bands, sd_band
+from sigmapi.experiments.kit.figures import coincide_sentence, coinciding, film_strip, legend_once
 from sigmapi.experiments.kit.results import JSON
 from sigmapi.experiments.robot.config import PLAN
 from sigmapi.metrics import FOLD_THRESHOLD, ORDERED_R2
@@ -77,16 +71,7 @@ def plot_curves(curves: dict[str, dict[str, list[float]]], ax: Axes | None = Non
 
     if ax is None:
         ax = plt.figure(figsize=(8, 4)).add_subplot()
-    plot_apart(
-        ax,
-        {s: c["episode"] for s, c in curves.items()},
-        {s: c["success"] for s, c in curves.items()},
-        largest=8.0,
-        width=1.8,
-    )
-    for i, c in enumerate(curves.values()):
-        e, m, sd = (np.asarray(c[k]) for k in ("episode", "success", "success_sd"))
-        ax.fill_between(e, m - sd, m + sd, color=f"C{i}", alpha=0.2, label="band: 1 sd over seeds")
+    plot_with_bands(ax, curves, "success", sd_band, "band: 1 sd over seeds", alpha=0.2, largest=8.0)
     ax.set(xlabel="episode", ylabel="success (docked and touched)", ylim=(-0.02, 1.02))
     legend_once(ax, fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
     return ax
@@ -107,11 +92,6 @@ def film_episode(result: Any, max_frames: int = 60) -> list[NDArray[np.uint8]]:
             break
     env.close()
     return frames
-
-
-def write_gif(frames: list[NDArray[np.uint8]], path: Path, fps: int = 6) -> Path:
-    """Save ``frames`` as an animated GIF at ``path`` (:func:`~sigmapi._outputs.save_gif`)."""
-    return save_gif(frames, path, fps=fps)
 
 
 def _map_words(metrics: JSON) -> str:

@@ -34,10 +34,6 @@ from sigmapi.metrics import (
 from sigmapi.model.som import SigmaPiSOM
 from sigmapi.tasks import Batch
 
-ROBOT_MAP = ROBOT_WORLD.map
-"""The map's settings: the ``robot-2d`` preset (see the module's docstring); the run sets its
-codes, size, length, seed and backend."""
-
 
 def robot_som_config(
     code: PopulationCode,
@@ -45,10 +41,10 @@ def robot_som_config(
     iterations: int,
     seed: int,
     backend: str = "auto",
-    spec: MapSpec = ROBOT_MAP,
+    spec: MapSpec = ROBOT_WORLD.map,
 ) -> SOMConfig:
-    """``spec`` (default :data:`ROBOT_MAP`) on the robot's codes (``code``, retina and gaze
-    alike), a ``map_shape`` map, ``iterations`` long."""
+    """``spec`` (default: the robot world's, ``robot-2d``) on the robot's codes (``code``,
+    retina and gaze alike), a ``map_shape`` map, ``iterations`` long."""
     return spec.config(
         map_shape=tuple(map_shape),
         x_shape=code.shape,

@@ -12,24 +12,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sigmapi.agents import ActorCritic
-from sigmapi.experiments.kit.episodes import final_rates, success_curve
-from sigmapi.experiments.kit.results import JSON, Result, as_object, summaries
+from sigmapi.experiments.kit.episodes_result import EpisodesResult
+from sigmapi.experiments.kit.results import JSON, as_object, summaries
 from sigmapi.experiments.robot.config import RobotConfig
 from sigmapi.model.som import SigmaPiSOM
-
-SUMMARIES = (
-    "success",
-    "success_per_seed",
-    "success_summary",
-    "docked",
-    "reach_given_docked",
-    "reach_given_docked_min",
-    "ratio_map_to_true_z",
-    "margins",
-    "curves",
-)
-"""The keys of the JSON form computed from the episode records (beside the maps' summary,
-:meth:`RobotResult.map_summary`)."""
 
 
 def _summary(values: NDArray[np.float64]) -> dict[str, float]:
@@ -47,22 +33,18 @@ def _nan_stat(
 
 
 @dataclass
-class RobotResult(Result):
+class RobotResult(EpisodesResult):
     """Outcome of :meth:`~sigmapi.experiments.robot.variant.RobotExperiment.run`.
 
-    ``success[state]``, ``docked[state]`` and ``steps[state]`` have shape ``(len(seeds),
-    episodes)``, a row per seed in the order of ``seeds``: whether the hand touched the ball
-    (``info["is_success"]``), whether the base docked, and the steps taken. ``map_metrics``
-    and ``unit_z`` (each unit's preferred z) per seed; ``model`` and ``agent``: the first
-    seed's map and its learner (for the figures). A result read back from its JSON form
-    (:meth:`from_dict`) holds no records: its summaries are ``written``, as the file has them.
+    Per state, the episode records of
+    :class:`~sigmapi.experiments.kit.episodes_result.EpisodesResult` (``success``: the hand
+    touched the ball, ``info["is_success"]``) and ``docked[state]``, of the same shape:
+    whether the base docked. ``map_metrics`` and ``unit_z`` (each unit's preferred z) per
+    seed; ``model`` and ``agent``: the first seed's map and its learner (for the figures).
     """
 
     config: RobotConfig
-    seeds: tuple[int, ...]
-    success: dict[str, NDArray[np.bool_]] = field(default_factory=dict)
     docked: dict[str, NDArray[np.bool_]] = field(default_factory=dict)
-    steps: dict[str, NDArray[np.int64]] = field(default_factory=dict)
     map_metrics: list[JSON] = field(default_factory=list)
     unit_z: list[NDArray[np.float64]] = field(default_factory=list)
     model: SigmaPiSOM | None = None
@@ -72,7 +54,7 @@ class RobotResult(Result):
 
     KEYS = (
         "*map_summary",
-        "success: success_mean",
+        "success: final_mean",
         "success_per_seed: final",
         "success_summary",
         "docked: docked_mean",
@@ -89,7 +71,6 @@ class RobotResult(Result):
     """The JSON form: the maps' metrics (keys of ``sigmapi evaluate``), ``success`` per state
     (final, mean over seeds) with its median and worst seed, docking, the reach given
     docking, the map's margins over the other states, the curves and the config."""
-    COMPUTED = SUMMARIES
 
     @classmethod
     def from_dict(cls, data: Any) -> RobotResult:
@@ -101,34 +82,23 @@ class RobotResult(Result):
         metrics = [dict(as_object(m, "map_metrics entry")) for m in obj["map_metrics"]]
         mapped = (*metrics[0], "order_r2_min", "folded_seeds") if metrics else ()
         return cls(
-            **{**values, "map_metrics": metrics}, written=summaries(obj, (*mapped, *SUMMARIES))
+            **{**values, "map_metrics": metrics}, written=summaries(obj, (*mapped, *cls.COMPUTED))
         )
-
-    def final(self, key: str = "success") -> dict[str, NDArray[np.float64]]:
-        """Per state, the rate of ``key`` (``"success"`` or ``"docked"``) over the last
-        ``final_episodes`` episodes, one per seed."""
-        f = self.config.run.final_episodes
-        table = self.success if key == "success" else self.docked
-        return {s: final_rates(r, f) for s, r in table.items()}
 
     def reach_given_docked(self) -> dict[str, NDArray[np.float64]]:
         """Per state and seed, the share of the last ``final_episodes`` docked episodes in
         which the hand touched the ball (NaN for a seed that docked in none)."""
-        f = self.config.run.final_episodes
+        success = self.window()
         out = {}
-        for s, d in self.docked.items():
-            n = d[:, -f:].sum(axis=1)
-            hit = (self.success[s][:, -f:] & d[:, -f:]).sum(axis=1)
+        for s, d in self.window("docked").items():
+            n = d.sum(axis=1)
+            hit = (success[s] & d).sum(axis=1)
             out[s] = np.where(n > 0, hit / np.maximum(n, 1), np.nan)
         return out
 
     def curves(self) -> dict[str, dict[str, list[float]]]:
         """Per state: block ends, success per block (mean and sd over seeds)."""
-        b = self.config.run.block
-        return {
-            s: {k: v.tolist() for k, v in success_curve(r, b).items()}
-            for s, r in self.success.items()
-        }
+        return {s: {k: v.tolist() for k, v in c.items()} for s, c in self.success_curves().items()}
 
     def map_summary(self) -> dict[str, object]:
         """The maps' metrics with the keys of ``sigmapi evaluate`` (means over seeds;
@@ -143,16 +113,12 @@ class RobotResult(Result):
         out["folded_seeds"] = int(sum(bool(m["folded"]) for m in self.map_metrics))
         return out
 
-    def success_mean(self) -> dict[str, float]:
-        """Per state, the final success rate (mean over seeds)."""
-        return {s: float(v.mean()) for s, v in self.final().items()}
-
     def success_summary(self) -> dict[str, dict[str, float]]:
         return {s: _summary(v) for s, v in self.final().items()}
 
     def docked_mean(self) -> dict[str, float]:
         """Per state, the final docking rate (mean over seeds)."""
-        return {s: float(v.mean()) for s, v in self.final("docked").items()}
+        return self.final_mean("docked")
 
     def reach_given_docked_mean(self) -> dict[str, float | None]:
         return {s: _nan_stat(np.nanmean, v) for s, v in self.reach_given_docked().items()}
@@ -170,7 +136,7 @@ class RobotResult(Result):
 
     def ratio_map_to_true_z(self) -> dict[str, float] | None:
         """The map's final success over the true z's (per seed; ``mean``: of the means)."""
-        final, success = self.final(), self.success_mean()
+        final, success = self.final(), self.final_mean()
         if "map" not in success or not success.get("true_z"):
             return None
         per_seed = _summary(final["map"] / np.maximum(final["true_z"], 1e-12))
@@ -214,11 +180,12 @@ class RobotResult(Result):
         """Write the figures into ``out_dir`` (:func:`~sigmapi.experiments.robot.figures.
         robot_figures`: the map on the table, the learning curves, a film strip) and, with
         ``config.run.render``, the filmed episode as an animated GIF at that path."""
-        from sigmapi.experiments.robot.figures import robot_figures, write_gif
+        from sigmapi._outputs import save_gif
+        from sigmapi.experiments.robot.figures import robot_figures
 
         folder = Path(out_dir)
         folder.mkdir(parents=True, exist_ok=True)
         paths = robot_figures(self, folder, self.film())
         if self.config.run.render is not None and self.film():
-            paths.append(write_gif(self.film(), Path(self.config.run.render)))
+            paths.append(save_gif(self.film(), Path(self.config.run.render), fps=6))
         return paths

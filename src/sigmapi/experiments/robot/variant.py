@@ -49,9 +49,6 @@ from sigmapi.progress import Progress
 Views = tuple[RobotViewBatch, RobotViewBatch]
 """The calibration and test views every seed's map is scored on."""
 
-INFO_KEYS = ("docked", "event")
-"""What the experiment keeps of each episode's last ``info`` besides ``is_success``."""
-
 
 def job_memory(config: RobotConfig) -> int:
     """Peak bytes of one job (an upper estimate): the map's training and scoring
@@ -87,7 +84,7 @@ class RobotExperiment(ReachExperiment):
     extra = "robot"
     default_out = "robot"
     plan = PLAN
-    info_keys = INFO_KEYS
+    info_keys = ("docked", "event")
     returns_map = True
     world = ROBOT_WORLD
 
@@ -155,9 +152,8 @@ class RobotExperiment(ReachExperiment):
         res = RobotResult(config, seeds)
         for state in config.run.states:
             eps = [one.runs[state] for one in got]
-            res.success[state] = np.stack([e.success for e in eps])
+            res.record(state, eps)
             res.docked[state] = np.stack([e.info["docked"].astype(bool) for e in eps])
-            res.steps[state] = np.stack([e.steps for e in eps])
         if "map" in config.run.states:
             for one in got:
                 res.map_metrics.append(one.extras["map_metrics"])
