@@ -14,6 +14,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from functools import partial
 from typing import Any, TypeVar
 
 import numpy as np
@@ -42,6 +43,8 @@ from .config import METRICS, QUICK, REFERENCE_RATE, NeuronsConfig
 from .result import NeuronsResult, Row
 
 M = TypeVar("M")
+SPIKES = ("input_spikes", "hidden_spikes", "map_spikes")
+"""The spike counts per trial of a spiking run (:class:`~sigmapi.neurons.spiking.SpikingRun`)."""
 Array = NDArray[np.float64]
 
 
@@ -128,6 +131,7 @@ def _spiking_rows(
         for i, window in enumerate(run.windows_ms):
             w = run.winners[i]
             m = winner_metrics(wc, cal.z, w[:n], w[n:], test.z[:n], model.map_coords, spacing)
+            spikes = run.input_spikes[i] + run.hidden_spikes[i] + run.map_spikes[i]
             rows.append(
                 {
                     "name": f"{name}{tag}-{window:g}ms",
@@ -136,16 +140,10 @@ def _spiking_rows(
                     "pool": pool,
                     "agreement": float(np.mean(w == r)),
                     "rate_view_consistency": float(np.mean(r[:n] == r[n:])),
-                    "view_consistency": m["view_consistency"],
-                    "view_within_one": m["view_within_one"],
-                    "z_error": m["z_error"],
+                    **{k: m[k] for k in ("view_consistency", "view_within_one", "z_error")},
                     "order_r2": m["order_r2"],
-                    "input_spikes": float(run.input_spikes[i].mean()),
-                    "hidden_spikes": float(run.hidden_spikes[i].mean()),
-                    "map_spikes": float(run.map_spikes[i].mean()),
-                    "spikes_per_decision": float(
-                        (run.input_spikes[i] + run.hidden_spikes[i] + run.map_spikes[i]).mean()
-                    ),
+                    **{k: float(getattr(run, k)[i].mean()) for k in SPIKES},
+                    "spikes_per_decision": float(spikes.mean()),
                     "n_trials": int(x.shape[0]),
                     "seconds": secs,
                 }
@@ -229,46 +227,25 @@ def _spiking(
     ref = REFERENCE_RATE if REFERENCE_RATE in c.peak_rates else c.peak_rates[0]
     runs = [(rate, c.pool) for rate in c.peak_rates]
     runs += [(ref, p) for p in c.pools_compared if p != c.pool]
-
-    def conj(x: Array, y: Array, cfg_s: SpikingConfig, rng: np.random.Generator) -> SpikingRun:
-        return simulate_conjunction(sp.weights_, x, y, cfg_s, rng)
-
+    conj = partial(simulate_conjunction, sp.weights_)
     rows = _spiking_rows(job, "spiking-conjunction", sp, conj, sp.winner, runs, tick=tick)
+    drawn = PLAN.sequence(job.seed, "neurons")
+    deployed: list[tuple[str, int, Any, Callable[..., SpikingRun], bool]] = []
     if c.spiking_branches:
         d = c.spiking_branches
-        dm = dendritic.get(d) or DendriticMap(cfg, d).fit(
-            training, seed=PLAN.sequence(job.seed, "neurons")
-        )
-
-        def dend(x: Array, y: Array, cfg_s: SpikingConfig, rng: np.random.Generator) -> SpikingRun:
-            return simulate_dendritic(dm.u_, dm.v_, dm.gain, dm.threshold, x, y, cfg_s, rng)
-
-        got = _spiking_rows(
-            job,
-            "spiking-dendritic",
-            dm,
-            dend,
-            dm.winner,
-            [(ref, c.pool)],
-            dendritic=True,
-            tick=tick,
-        )
-        rows += [{**r, "branches": d} for r in got]
+        dm = dendritic.get(d) or DendriticMap(cfg, d).fit(training, seed=drawn)
+        net = partial(simulate_dendritic, dm.u_, dm.v_, dm.gain, dm.threshold)
+        deployed.append(("spiking-dendritic", d, dm, net, True))
     if c.spiking_sparse_branches:
         d = c.spiking_sparse_branches
-        sm = sparse.get(d) or SparseDendriticMap(cfg, d).fit(
-            training, seed=PLAN.sequence(job.seed, "neurons")
-        )
+        sm = sparse.get(d) or SparseDendriticMap(cfg, d).fit(training, seed=drawn)
         n_xy = (int(np.prod(cfg.x_shape)), int(np.prod(cfg.y_shape)))
         branch_weights = (sm.c_ * sm.mask_).reshape(sm.n_units, *n_xy)
-
-        def sparse_net(
-            x: Array, y: Array, cfg_s: SpikingConfig, rng: np.random.Generator
-        ) -> SpikingRun:
-            return simulate_conjunction(branch_weights, x, y, cfg_s, rng)
-
+        net = partial(simulate_conjunction, branch_weights)
+        deployed.append(("spiking-sparse-dendritic", d, sm, net, False))
+    for name, d, model, simulate, dend in deployed:
         got = _spiking_rows(
-            job, "spiking-sparse-dendritic", sm, sparse_net, sm.winner, [(ref, c.pool)], tick=tick
+            job, name, model, simulate, model.winner, [(ref, c.pool)], dendritic=dend, tick=tick
         )
         rows += [{**r, "branches": d} for r in got]
     return rows
