@@ -17,6 +17,7 @@ from sigmapi.experiments.kit.results import (
     margin_case,
     margin_line,
     render,
+    tuples,
     within_margin,
 )
 
@@ -124,10 +125,8 @@ class NeuronsResult(Result):
     @classmethod
     def from_dict(cls, data: Row) -> NeuronsResult:
         """The result a :meth:`to_dict` wrote (e.g. read back from ``result.json``)."""
-        st = dict(data["settings"])
-        seeds = tuple(st.pop("seeds"))
-        given: Row = {k: tuple(v) if isinstance(v, list) else v for k, v in st.items()}
-        config = NeuronsConfig(**given)
+        settings = dict(data["settings"])
+        seeds = tuple(settings.pop("seeds"))
         runs = data["runs"]
         jobs = [
             {
@@ -138,7 +137,7 @@ class NeuronsResult(Result):
             for b in data["branches"]
             for key in [(b["seed"], b["task"])]
         ]
-        return cls(config, seeds, jobs, float(data["seconds"]))
+        return cls(NeuronsConfig(**tuples(settings)), seeds, jobs, float(data["seconds"]))
 
     def _rows(self, kind: str) -> list[Row]:
         return [r for j in self.jobs for r in j[kind]]
@@ -241,9 +240,8 @@ class NeuronsResult(Result):
         branch for the first, the summary for the others."""
         return [_scalars(j["branches"]) if i else j["branches"] for i, j in enumerate(self.jobs)]
 
-    def settings(self) -> Row:
-        """The config's fields and the seeds."""
-        return {**vars(self.config), "seeds": self.seeds}
+    settings = Result.config_and_seeds
+    """The config's fields and the seeds."""
 
     def runs(self) -> dict[str, list[Row]]:
         """Every map's and spiking network's row per seed."""

@@ -1,4 +1,3 @@
-# Over 500 lines: the spec, its runs and the resumable results file, read as one.
 """Parameter and seed sweeps: ``sigmapi sweep SPEC.toml --out DIR``.
 
 A spec names a preset, the seeds, fields fixed for every run (``[set]``) and a grid of values
@@ -308,17 +307,8 @@ def run_sweep(
         runs = spec.runs()
         angles = any(get_relation(r.point.relation).circular for r in runs)
         metrics = (*METRIC_COLUMNS, *(CIRCULAR_KEYS if angles else ()))
-        columns = [
-            "run_id",
-            "run_key",
-            *sorted(spec.grid),
-            "seed",
-            *metrics,
-            "train_seconds",
-            "total_seconds",
-            "status",
-            "error",
-        ]
+        timed = ("train_seconds", "total_seconds", "status", "error")
+        columns = ["run_id", "run_key", *sorted(spec.grid), "seed", *metrics, *timed]
         for name in (FIGURE, RESULT_FILE):  # what is written after the runs: checked before them
             if (out / name).exists() and not (out / name).is_file():
                 raise ConfigError(
@@ -474,17 +464,14 @@ class Sweep(Experiment[SweepConfig]):
         spec = dataclasses.replace(config.read_spec(), seeds=run.seeds)
         ex = run.executor if run.executor is not None else Executor(workers=1)
         show = Progress.of(run.progress)
-        state: dict[str, Any] = {}
+        bars: list[tuple[Callable[[bool, str], None], Any]] = []  # the bar, once planned
 
         def on_plan(n_run: int, n_skip: int, reason: str) -> None:
             show.note(
                 f"sweep: {n_run + n_skip} runs, {n_skip} finished already, {n_run} to "
                 f"run; engine {ex.engine}, {reason}"
             )
-            state["done"], state["bar"] = show.jobs(n_run, "sweep")
-
-        def on_done(ok: bool, line: str) -> None:
-            state["done"](ok, line)
+            bars.append(show.jobs(n_run, "sweep"))
 
         try:
             rows = run_sweep(
@@ -493,12 +480,12 @@ class Sweep(Experiment[SweepConfig]):
                 retry_failed=config.retry_failed,
                 add=config.add,
                 on_plan=on_plan,
-                on_done=on_done,
+                on_done=lambda ok, line: bars[0][0](ok, line),
                 executor=ex,
             )
         finally:
-            if "bar" in state:
-                state["bar"].close()
+            for _, bar in bars:
+                bar.close()
         return SweepResult(spec, rows, config.metric)
 
 
