@@ -5,12 +5,24 @@ below their panels, off the data."""
 
 from __future__ import annotations
 
+from typing import Any
+
 import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from sigmapi.experiments.kit.figures import BELOW
 from sigmapi.experiments.kit.results import JSON
+
+
+def _bars(ax: Axes, methods: list[JSON], **kwargs: Any) -> None:
+    """The view consistency of ``methods`` against their synapses per unit: the median, a bar
+    down to the worst seed (``kwargs``: to ``errorbar``)."""
+    vc = [m["view_consistency"] for m in methods]
+    low = [m["view_consistency"] - m["view_consistency_worst"] for m in methods]
+    x = [m["synapses"] for m in methods]
+    ax.errorbar(x, vc, yerr=[low, [0.0] * len(methods)], capsize=3, **kwargs)
 
 
 def neurons_figure(result: JSON) -> Figure:
@@ -34,17 +46,7 @@ def neurons_figure(result: JSON) -> Figure:
         dend = [m for m in rate if m["name"].startswith(prefix)]
         if not dend:
             continue
-        ax.errorbar(
-            [m["synapses"] for m in dend],
-            [m["view_consistency"] for m in dend],
-            yerr=[
-                [m["view_consistency"] - m["view_consistency_worst"] for m in dend],
-                [0.0] * len(dend),
-            ],
-            marker=marker,
-            capsize=3,
-            label=label,
-        )
+        _bars(ax, dend, marker=marker, label=label)
         for m in dend:
             ax.annotate(
                 f"D={m['branches']}",
@@ -54,15 +56,7 @@ def neurons_figure(result: JSON) -> Figure:
                 fontsize=8,
             )
     for m, mk in ((sp, "s"), (next(m for m in rate if m["name"] == "basis-function"), "^")):
-        ax.errorbar(
-            [m["synapses"]],
-            [m["view_consistency"]],
-            yerr=[[m["view_consistency"] - m["view_consistency_worst"]], [0.0]],
-            marker=mk,
-            capsize=3,
-            linestyle="none",
-            label=m["name"],
-        )
+        _bars(ax, [m], marker=mk, linestyle="none", label=m["name"])
     ax.set_xlabel("synapses per map unit (the most in any unit)")
     ax.set_ylabel("view consistency (same winner)")
     ax.set_title("1-D maps of first-order neurons")

@@ -66,16 +66,6 @@ class NeuronsJob:
     """Where given, the job shows its steps (:func:`~sigmapi.experiments.kit.jobs.counted`)."""
 
     @property
-    def steps(self) -> int:
-        """The job's steps: each map trained and each scored, each spiking run."""
-        c = self.config
-        if self.task == "2d":
-            return 2 * (2 + len(c.branches_2d) + len(c.sparse_branches_2d))
-        spiking = len(c.peak_rates) + sum(p != c.pool for p in c.pools_compared)
-        spiking += bool(c.spiking_branches) + bool(c.spiking_sparse_branches)
-        return 2 * (2 + len(c.branches) + len(c.sparse_branches)) + spiking
-
-    @property
     def som_config(self) -> SOMConfig:
         c = self.config
         return c.som_config if self.task == "1d" else c.som_config_2d
@@ -278,15 +268,17 @@ class NeuronsExperiment(SeedRuns[NeuronsConfig]):
     def jobs(
         self, config: NeuronsConfig, seeds: tuple[int, ...], shared: object
     ) -> list[tuple[str, NeuronsJob]]:
-        jobs = [(f"seed {s} 1d", NeuronsJob(s, "1d", config)) for s in seeds]
-        if config.preset_2d:
-            jobs += [
-                (f"seed {s} 2d", NeuronsJob(s, "2d", config)) for s in seeds[: config.seeds_2d]
-            ]
-        return jobs
+        tasks = {"1d": seeds, "2d": seeds[: config.seeds_2d] if config.preset_2d else ()}
+        return [(f"seed {s} {t}", NeuronsJob(s, t, config)) for t, of in tasks.items() for s in of]
 
     def steps(self, job: NeuronsJob) -> int:
-        return job.steps
+        """The job's steps: each map trained and each scored, each spiking run."""
+        c = job.config
+        if job.task == "2d":
+            return 2 * (2 + len(c.branches_2d) + len(c.sparse_branches_2d))
+        spiking = len(c.peak_rates) + sum(p != c.pool for p in c.pools_compared)
+        spiking += bool(c.spiking_branches) + bool(c.spiking_sparse_branches)
+        return 2 * (2 + len(c.branches) + len(c.sparse_branches)) + spiking
 
     def desc(self, job: NeuronsJob) -> str:
         return f"neurons seed {job.seed} {job.task}"
