@@ -13,6 +13,7 @@ from sigmapi.experiments.kit.results import (
     VC_MARGIN,
     Column,
     Result,
+    as_object,
     columns,
     margin_case,
     margin_line,
@@ -57,11 +58,6 @@ SPIKING_COLUMNS = columns(
     spikes_per_decision="spikes",
 )
 """The table's columns of the spiking networks: one row per network and peak rate."""
-
-
-def _scalars(summary: Row) -> Row:
-    """A branch summary without its per-branch lists."""
-    return {k: v for k, v in summary.items() if not isinstance(v, list)}
 
 
 RATE_EXTRA = (
@@ -113,41 +109,34 @@ class NeuronsResult(Result):
 
     config: NeuronsConfig
     seeds: tuple[int, ...]
-    jobs: list[Row]
+    runs: dict[str, list[Row]]
+    """Every map's (``"maps"``) and spiking network's (``"spiking"``) row per seed and task."""
+    branches: list[Row]
+    """What the branches of one dendritic map per seed and task learned: branch by branch for
+    the first, the summary for the others."""
     seconds: float
 
-    KEYS = ("methods", "acceptance", "branches: branch_summaries", "settings", "runs", "seconds")
-    """The JSON form: :meth:`methods`, :meth:`acceptance`, the branches
-    (:meth:`branch_summaries`), the settings, every row (:meth:`runs`) and the time."""
+    KEYS = ("methods", "acceptance", "branches", "settings: config_and_seeds", "runs", "seconds")
+    """The JSON form: :meth:`methods`, :meth:`acceptance`, the branches, the settings (the
+    config's fields and the seeds), every row and the time."""
     FIGURE = "neurons.png"
     SAVE: ClassVar[Mapping[str, object]] = {"dpi": 110}
 
     @classmethod
-    def from_dict(cls, data: Row) -> NeuronsResult:
-        """The result a :meth:`to_dict` wrote (e.g. read back from ``result.json``)."""
-        settings = dict(data["settings"])
+    def read_fields(cls, obj: Mapping[str, object]) -> Row:
+        """The fields of a JSON form (:meth:`Result.read_fields`), the config and the seeds
+        from its settings."""
+        settings = dict(as_object(obj["settings"], "settings"))
         seeds = tuple(settings.pop("seeds"))
-        runs = data["runs"]
-        jobs = [
-            {
-                "maps": [r for r in runs["maps"] if (r["seed"], r["task"]) == key],
-                "spiking": [r for r in runs["spiking"] if (r["seed"], r["task"]) == key],
-                "branches": b,
-            }
-            for b in data["branches"]
-            for key in [(b["seed"], b["task"])]
-        ]
-        return cls(NeuronsConfig(**tuples(settings)), seeds, jobs, float(data["seconds"]))
-
-    def _rows(self, kind: str) -> list[Row]:
-        return [r for j in self.jobs for r in j[kind]]
+        config = NeuronsConfig(**tuples(settings))
+        return {**super().read_fields(obj), "config": config, "seeds": seeds}
 
     def methods(self) -> list[Row]:
         """One entry per map (and task) and per spiking network, window and peak rate:
         ``name``, ``task``, medians and worst seeds of the metrics, ``ordered``, ``n_seeds``,
         ``synapses`` and ``per_seed``."""
         out = []
-        maps = _groups(self._rows("maps"), "task", "name")
+        maps = _groups(self.runs["maps"], "task", "name")
         for (task, name), rows in sorted(maps.items(), key=lambda kv: str(kv[0][0])):
             out.append(
                 {
@@ -162,7 +151,7 @@ class NeuronsResult(Result):
                     "per_seed": {k: [r.get(k) for r in rows] for k in RATE_PER_SEED},
                 }
             )
-        for (name, rate), rows in _groups(self._rows("spiking"), "name", "peak_rate").items():
+        for (name, rate), rows in _groups(self.runs["spiking"], "name", "peak_rate").items():
             gap = [r["view_consistency"] - r["rate_view_consistency"] for r in rows]
             out.append(
                 {
@@ -188,7 +177,7 @@ class NeuronsResult(Result):
         than ``n_x n_y``; ``smallest_branches``: the fewest branches every seed meets it with.
         Spiking: per window up to :data:`MAX_WINDOW_MS` at :data:`REFERENCE_RATE`, the gap to
         the rate map's view consistency and the agreement."""
-        maps = _groups(self._rows("maps"), "task", "name")
+        maps = _groups(self.runs["maps"], "task", "name")
         dendritic = []
         for (task, name), rows in sorted(maps.items(), key=lambda kv: str(kv[0][0])):
             if name == "sigma-pi":
@@ -234,18 +223,6 @@ class NeuronsResult(Result):
                     }
                 )
         return out
-
-    def branch_summaries(self) -> list[Row]:
-        """What the branches of one dendritic map per seed and task learned: branch by
-        branch for the first, the summary for the others."""
-        return [_scalars(j["branches"]) if i else j["branches"] for i, j in enumerate(self.jobs)]
-
-    settings = Result.config_and_seeds
-    """The config's fields and the seeds."""
-
-    def runs(self) -> dict[str, list[Row]]:
-        """Every map's and spiking network's row per seed."""
-        return {"maps": self._rows("maps"), "spiking": self._rows("spiking")}
 
     def table(self) -> str:
         """Medians per map, then the spiking networks at the reference rate, then acceptance."""
@@ -309,7 +286,7 @@ class NeuronsResult(Result):
                     else f"No window up to {MAX_WINDOW_MS} ms within {VC_MARGIN} on every seed. "
                 )
             )
-        b = self.jobs[0]["branches"]
+        b = self.branches[0]
         text += (
             f"Right: the branches of the D={b['branches']} map, seed {b['seed']}, as retinal "
             f"against gaze centre, one colour per unit; {100 * b['conjunction_share']:.0f} % "

@@ -297,7 +297,9 @@ class NeuronsExperiment(SeedRuns[NeuronsConfig]):
     def collect(
         self, config: NeuronsConfig, seeds: tuple[int, ...], values: list[Any]
     ) -> NeuronsResult:
-        return NeuronsResult(config, seeds, values, 0.0)
+        runs = {kind: [r for v in values for r in v[kind]] for kind in ("maps", "spiking")}
+        rest = [{k: x for k, x in v["branches"].items() if not isinstance(x, list)} for v in values]
+        return NeuronsResult(config, seeds, runs, [values[0]["branches"], *rest[1:]], 0.0)
 
 
 NEURONS = register(NeuronsExperiment())

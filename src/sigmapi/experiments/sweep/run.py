@@ -249,12 +249,7 @@ def read_results(path: str | Path) -> list[dict[str, str]]:
 
 
 def _row(run: SweepRun, outcome: Outcome) -> dict[str, object]:
-    row: dict[str, object] = {
-        "run_id": run.run_id,
-        "run_key": run.run_key,
-        **run.params,
-        "seed": run.seed,
-    }
+    row = {"run_id": run.run_id, "run_key": run.run_key, **run.params, "seed": run.seed}
     if outcome.ok:
         return {**row, **outcome.value, "status": "ok", "error": ""}
     error = " ".join(str(outcome.error).split())[:2000]  # one line, bounded
