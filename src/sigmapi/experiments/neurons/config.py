@@ -15,6 +15,10 @@ from sigmapi.neurons.training import TrainingConfig
 METRICS = ("view_consistency", "view_within_one", "z_error", "order_r2", "usage", "fold_score")
 """The scores of each rate map (:func:`sigmapi.evaluate`), besides ``folded``."""
 
+PHYSIOLOGY = ("reference_frame_index", "gain_r2", "peak_modulation")
+"""What a 1-D map's row holds of its physiology (:func:`~sigmapi.analysis.physiology.record`:
+the median over its units)."""
+
 REFERENCE_RATE = 100
 """The peak rate (Hz) the dendritic spiking network runs at (the conjunction network: every
 rate of the config)."""

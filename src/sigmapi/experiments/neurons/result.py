@@ -22,7 +22,7 @@ from sigmapi.experiments.kit.results import (
     within_margin,
 )
 
-from .config import METRICS, REFERENCE_RATE, NeuronsConfig
+from .config import METRICS, PHYSIOLOGY, REFERENCE_RATE, NeuronsConfig
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -60,27 +60,13 @@ SPIKING_COLUMNS = columns(
 """The table's columns of the spiking networks: one row per network and peak rate."""
 
 
-RATE_EXTRA = (
-    "reference_frame_index",
-    "gain_r2",
-    "peak_modulation",
-    "active_synapses",
-    "mean_synapses",
-    "branch_z_gap",
-)
+RATE_EXTRA = (*PHYSIOLOGY, "active_synapses", "mean_synapses", "branch_z_gap")
 """What a rate map's entry summarises besides the :data:`METRICS` (where its rows have it)."""
 RATE_PER_SEED = ("seed", *METRICS, "folded", "seconds")
-SPIKING_METRICS = (
-    "agreement",
-    "view_consistency",
-    "rate_view_consistency",
-    "view_within_one",
-    "z_error",
-    "order_r2",
-    "spikes_per_decision",
-    "map_spikes",
-)
 SPIKING_PER_SEED = ("seed", "agreement", "view_consistency", "rate_view_consistency")
+SPIKING_METRICS = (*SPIKING_PER_SEED[1:], *METRICS[1:4], "spikes_per_decision", "map_spikes")
+"""What a spiking network's entry summarises: its per-seed scores, the rate maps' scores of
+winners (view within one, z error, order) and its spikes."""
 
 
 def _groups(rows: list[Row], *keys: str) -> dict[tuple[object, ...], list[Row]]:

@@ -39,7 +39,7 @@ from sigmapi.neurons.spiking import (
 )
 from sigmapi.progress import Progress
 
-from .config import METRICS, QUICK, REFERENCE_RATE, NeuronsConfig
+from .config import METRICS, PHYSIOLOGY, QUICK, REFERENCE_RATE, NeuronsConfig
 from .result import NeuronsResult, Row
 
 M = TypeVar("M")
@@ -130,8 +130,7 @@ def _spiking_rows(
                     "pool": pool,
                     "agreement": float(np.mean(w == r)),
                     "rate_view_consistency": float(np.mean(r[:n] == r[n:])),
-                    **{k: m[k] for k in ("view_consistency", "view_within_one", "z_error")},
-                    "order_r2": m["order_r2"],
+                    **{k: m[k] for k in METRICS[:4]},  # view consistency to order
                     **{k: float(getattr(run, k)[i].mean()) for k in SPIKES},
                     "spikes_per_decision": float(spikes.mean()),
                     "n_trials": int(x.shape[0]),
@@ -184,13 +183,9 @@ def _neurons_job(job: NeuronsJob, tick: Tick | None) -> Row:
         begin = extra.pop("start")
         _step(tick, 0, f"score {name}")
         row = _scored(model, c.n_test, begin, name=name, task=job.task, seed=job.seed, **extra)
-        if not two_d:
+        if not two_d:  # the physiology's medians over the units
             phys = record(model)
-            row.update(
-                reference_frame_index=phys["median_reference_frame_index"],
-                gain_r2=phys["median_gain_r2"],
-                peak_modulation=phys["median_peak_modulation"],
-            )
+            row.update({k: phys[f"median_{k}"] for k in PHYSIOLOGY})
         rows.append(row)
         _step(tick, 1, f"score {name}")
     mid = sorted(dendritic)[len(dendritic) // 2]
