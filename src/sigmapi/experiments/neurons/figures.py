@@ -76,20 +76,12 @@ def neurons_figure(result: JSON) -> Figure:
         if not rows:
             continue
         w = [m["window_ms"] for m in rows]
-        ax.plot(
-            w,
-            [m["vc_gap"] for m in rows],
-            "o-",
-            color=colour,
-            label=f"{base}: view consistency - rate map's",
+        lines = (
+            ([m["vc_gap"] for m in rows], "o-", "view consistency - rate map's"),
+            ([m["agreement"] - 1.0 for m in rows], "s--", "agreement - 1"),
         )
-        ax.plot(
-            w,
-            [m["agreement"] - 1.0 for m in rows],
-            "s--",
-            color=colour,
-            label=f"{base}: agreement - 1",
-        )
+        for y, style, what in lines:
+            ax.plot(w, y, style, color=colour, label=f"{base}: {what}")
     ax.axhline(-0.02, color="0.5", lw=0.8, ls=":", label="-0.02: the acceptance margin")
     ax.set_xscale("log")
     ticks = sorted({m["window_ms"] for m in spk})

@@ -33,6 +33,13 @@ class Spec(Protocol):
     def grid(self) -> Mapping[str, Any]: ...
 
 
+DOT: dict[str, Any] = {"s": 14, "alpha": 0.6, "zorder": 3, "label": "a seed"}
+"""How :func:`plot_sweep` marks a seed's run (in its line's colour)."""
+CROSS: dict[str, Any] = {"s": 40, "marker": "x", "color": "crimson", "zorder": 4}
+"""How :func:`plot_sweep` marks a folded run (labelled :data:`FOLDED`)."""
+FOLDED = f"folded run (fold score >= {FOLD_THRESHOLD:g})"
+
+
 def draw_summary(
     spec: Spec, rows: list[dict[str, object]], path: str | Path, metric: str = "order_r2"
 ) -> Path:
@@ -116,7 +123,6 @@ def plot_sweep(
         raw.sort(key=float)
     pos = {v: (float(v) if numeric else float(i)) for i, v in enumerate(raw)}
     groups = list(dict.fromkeys(tuple(str(r[g]) for g in group_by) for r in ok))
-    folded_label = f"folded run (fold score >= {FOLD_THRESHOLD:g})"
     for gi, key in enumerate(groups):
         color = f"C{gi % 10}"
         label = ", ".join(f"{g} {v}" for g, v in zip(group_by, key, strict=True)) or None
@@ -134,25 +140,9 @@ def plot_sweep(
             lo.append(float(vals.min()))
             hi.append(float(vals.max()))
             folded = np.array([_folded(r) for r in sel])
-            ax.scatter(
-                np.full(int((~folded).sum()), x),
-                vals[~folded],
-                s=14,
-                color=color,
-                alpha=0.6,
-                zorder=3,
-                label="a seed",
-            )
+            ax.scatter(np.full(int((~folded).sum()), x), vals[~folded], color=color, **DOT)
             if folded.any():
-                ax.scatter(
-                    np.full(int(folded.sum()), x),
-                    vals[folded],
-                    s=40,
-                    marker="x",
-                    color="crimson",
-                    zorder=4,
-                    label=folded_label,
-                )
+                ax.scatter(np.full(int(folded.sum()), x), vals[folded], label=FOLDED, **CROSS)
         ax.plot(xs, med, "-o", color=color, label=label or "median over seeds", zorder=2)
         ax.fill_between(xs, lo, hi, color=color, alpha=0.15, lw=0, label="min-max over seeds")
     if not numeric:
