@@ -190,13 +190,10 @@ class NeuronsResult(Result):
             named = {"branches": ok, "branches_fewer_synapses": cheap, "sparse_branches": sparse}
             for key, these in named.items():
                 out[f"smallest_{key}_{task}"] = min((c["branches"] for c in these), default=None)
-        for m in self.methods():
-            if (
-                m["kind"] == "spiking"
-                and m["peak_rate"] == REFERENCE_RATE
-                and m["pool"] in (None, self.config.pool)
-                and m["window_ms"] <= MAX_WINDOW_MS
-            ):
+        spiking = [m for m in self.methods() if m["kind"] == "spiking"]
+        for m in spiking:
+            pool = m["pool"] in (None, self.config.pool)
+            if m["peak_rate"] == REFERENCE_RATE and pool and m["window_ms"] <= MAX_WINDOW_MS:
                 out["spiking"].append(
                     {
                         "name": m["name"],
@@ -227,12 +224,9 @@ class NeuronsResult(Result):
         """The figure's caption, computed from the result."""
         acc = self.acceptance()
         sp = next(m for m in self.methods() if m["name"] == "sigma-pi" and m["task"] == "1d")
-        dend = [
-            c
-            for c in acc["dendritic"]
-            if c["task"] == "1d" and c["branches"] and not c["name"].startswith(SPARSE)
-        ]
-        best = max(dend, key=lambda c: c["vc_gap_median"])
+        one_d = [c for c in acc["dendritic"] if c["task"] == "1d" and c["branches"]]
+        sparse = [c for c in one_d if c["name"].startswith(SPARSE)]
+        best = max((c for c in one_d if c not in sparse), key=lambda c: c["vc_gap_median"])
         n = len(self.seeds)
         text = (
             f"{self.config.preset}, seeds {', '.join(map(str, self.seeds))}. Left: view "
@@ -242,7 +236,6 @@ class NeuronsResult(Result):
             f"(median gap {best['vc_gap_median']:+.3f}, {best['met']} of {n} seeds within "
             f"{VC_MARGIN} and ordered, {best['synapses']} synapses). "
         )
-        sparse = [c for c in acc["dendritic"] if c["task"] == "1d" and c["name"].startswith(SPARSE)]
         small = acc.get("smallest_sparse_branches_1d")
         if sparse and small is None:
             text += (

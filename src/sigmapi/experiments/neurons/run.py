@@ -1,12 +1,8 @@
-"""The jobs of ``sigmapi neurons``: per seed and task, every map trained, deployed and scored.
-
-One job per ``(seed, task)``: the Sigma-Pi map of the preset (:class:`~sigmapi.SigmaPiSOM`),
-a dendritic map per branch count (:class:`~sigmapi.neurons.dendritic.DendriticMap`) and the
-basis-function map (:class:`~sigmapi.neurons.basis.BasisFunctionMap`), all on the same task
-and seed, scored by :func:`sigmapi.evaluate`; in 1-D also the physiology of each map
-(:func:`sigmapi.analysis.physiology.record`) and the spiking deployments
-(:mod:`sigmapi.neurons.spiking`) on ``spike_test`` test z's of the evaluation set: the
-conjunction network at every peak rate, the dendritic one at 100 Hz.
+"""The jobs of ``sigmapi neurons``, one per seed and task: every map of the package's docstring
+trained and scored by :func:`sigmapi.evaluate`; in 1-D also each map's physiology
+(:func:`sigmapi.analysis.physiology.record`) and the spiking deployments on ``spike_test`` test
+z's of the evaluation set: the conjunction network at every peak rate, the dendritic ones at
+100 Hz.
 """
 
 from __future__ import annotations

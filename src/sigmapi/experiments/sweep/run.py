@@ -11,12 +11,10 @@ A spec names a preset, the seeds, fields fixed for every run (``[set]``) and a g
     code_width = [0.5, 1.0]
     iterations = [2000, 3000]
 
-Each run trains one model and evaluates it (:func:`sigmapi.evaluate`); ``DIR/results.csv``
-gets one row per run, appended after every finished run, so that a sweep started again with
-the same spec runs only the missing runs (:mod:`~sigmapi.experiments.sweep.table`: the run's
-identity ``run_key``, the strict reader). Runs go through :mod:`sigmapi.executor`; a spec
-names at most :data:`MAX_RUNS` runs. What the table holds, what is refused and the engines:
-docs/guide/sweeps.md.
+Each run trains and evaluates one model (:func:`sigmapi.evaluate`), its row appended to
+``DIR/results.csv`` as it finishes, so that a sweep started again runs only the missing runs
+(:mod:`~sigmapi.experiments.sweep.table`). Runs go through :mod:`sigmapi.executor`, at most
+:data:`MAX_RUNS` per spec; the table, what is refused and the engines: docs/guide/sweeps.md.
 
 The experiment ``sweep`` (:class:`Sweep`, settings :class:`SweepConfig`: the spec file) is
 :func:`run_sweep` on the command line; seeds given to it replace the spec's.
@@ -30,7 +28,6 @@ import json
 import math
 import statistics
 import time
-import tomllib
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -39,7 +36,7 @@ from typing import Any
 from sigmapi import _validate
 from sigmapi._lock import output_lock
 from sigmapi._outputs import INPUT, claim_folder
-from sigmapi.config import SOMConfig, check_map_fits_task, load_preset
+from sigmapi.config import SOMConfig, _parse_toml, check_map_fits_task, load_preset
 from sigmapi.errors import ConfigError
 from sigmapi.executor import Executor, Outcome, job_memory
 from sigmapi.experiments.base import RESULT_FILE, Experiment, Run, check_seeds, register
@@ -103,11 +100,7 @@ class SweepSpec:
     @classmethod
     def from_toml(cls, text: str, source: str = "sweep spec") -> SweepSpec:
         """Parse and check a spec; every grid point must make a valid config."""
-        try:
-            data = tomllib.loads(text)
-        except tomllib.TOMLDecodeError as exc:
-            raise ConfigError(f"{source} is not valid TOML: {exc}") from None
-        return cls.from_dict(data, source)
+        return cls.from_dict(_parse_toml(text, source), source)
 
     @classmethod
     def from_dict(cls, data: object, source: str = "sweep spec") -> SweepSpec:
