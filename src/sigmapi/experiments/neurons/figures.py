@@ -15,6 +15,9 @@ from matplotlib.figure import Figure
 from sigmapi.experiments.kit.figures import BELOW
 from sigmapi.experiments.kit.results import JSON
 
+NOTE: dict[str, Any] = {"textcoords": "offset points", "xytext": (4, -12), "fontsize": 8}
+"""Where a dendritic map's branch count is written: below right of its mark."""
+
 
 def _bars(ax: Axes, methods: list[JSON], **kwargs: Any) -> None:
     """The view consistency of ``methods`` against their synapses per unit: the median, a bar
@@ -32,12 +35,8 @@ def neurons_figure(result: JSON) -> Figure:
     ax = axes[0]
     rate = [m for m in result["methods"] if m["kind"] == "rate" and m["task"] == "1d"]
     sp = next(m for m in rate if m["name"] == "sigma-pi")
-    ax.axhspan(
-        sp["view_consistency"] - 0.02,
-        sp["view_consistency"],
-        color="0.85",
-        label="within 0.02 of Sigma-Pi",
-    )
+    vc = sp["view_consistency"]
+    ax.axhspan(vc - 0.02, vc, color="0.85", label="within 0.02 of Sigma-Pi")
     groups = (
         ("dendritic-D", "dense dendritic (median, worst)", "o"),
         ("dendritic-sparse-D", "sparse dendritic, 2 synapses per branch", "D"),
@@ -48,13 +47,7 @@ def neurons_figure(result: JSON) -> Figure:
             continue
         _bars(ax, dend, marker=marker, label=label)
         for m in dend:
-            ax.annotate(
-                f"D={m['branches']}",
-                (m["synapses"], m["view_consistency"]),
-                textcoords="offset points",
-                xytext=(4, -12),
-                fontsize=8,
-            )
+            ax.annotate(f"D={m['branches']}", (m["synapses"], m["view_consistency"]), **NOTE)
     for m, mk in ((sp, "s"), (next(m for m in rate if m["name"] == "basis-function"), "^")):
         _bars(ax, [m], marker=mk, linestyle="none", label=m["name"])
     ax.set_xlabel("synapses per map unit (the most in any unit)")

@@ -22,7 +22,7 @@ from sigmapi.executor import job_memory
 from sigmapi.experiments.base import register
 from sigmapi.experiments.kit.jobs import SeedRuns, Tick
 from sigmapi.experiments.kit.seeds import SeedPlan
-from sigmapi.metrics import evaluate, evaluation_sets, grid_spacing, winner_metrics
+from sigmapi.metrics import evaluate, evaluation_sets, grid_spacing, winner_metrics, z_decoder
 from sigmapi.model.som import SigmaPiSOM
 from sigmapi.neurons.basis import BasisFunctionMap
 from sigmapi.neurons.dendritic import DendriticMap, branch_summary
@@ -76,8 +76,6 @@ def _scored(model: Any, n_test: int, start: float, **extra: Any) -> Row:
 
 def _z_table(model: Any, n: int) -> np.ndarray:
     """Each unit's decoded z ``(K, d)`` on the calibration set (for the branch summary)."""
-    from sigmapi.metrics import z_decoder
-
     cal, _ = evaluation_sets(model, n)
     return z_decoder(model.winner(cal.x0, cal.y0, hard=True), cal.z, model.map_coords)
 

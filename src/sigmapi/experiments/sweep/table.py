@@ -21,7 +21,6 @@ import dataclasses
 import hashlib
 import io
 import json
-import math
 import os
 import stat
 from collections.abc import Collection, Sequence
@@ -207,15 +206,10 @@ def read_table(path: str | Path) -> Table | None:
 
 
 def _line(columns: Sequence[str], row: dict[str, object]) -> bytes:
+    """One row as a line of CSV (a NaN as ``nan``, as csv writes it)."""
     buf = io.StringIO()
-    csv.writer(buf, lineterminator="\n").writerow([_cell(row.get(c, "")) for c in columns])
+    csv.writer(buf, lineterminator="\n").writerow([row.get(c, "") for c in columns])
     return buf.getvalue().encode("utf-8")
-
-
-def _cell(value: object) -> object:
-    if isinstance(value, float) and math.isnan(value):
-        return "nan"
-    return value
 
 
 def open_table(
