@@ -49,6 +49,7 @@ from sigmapi.experiments.sweep.table import (
     open_table,
     read_table,
     run_key,
+    typed,
 )
 from sigmapi.metrics import evaluate
 from sigmapi.metrics.circular import CIRCULAR_KEYS
@@ -356,20 +357,6 @@ class SweepConfig:
         return SweepSpec.read(self.spec)
 
 
-def _typed(value: object) -> object:
-    """A value of the table as written (a string) back as a bool, int or float where it is one."""
-    if not isinstance(value, str) or value in ("", "nan"):
-        return value
-    if value in ("True", "False"):
-        return value == "True"
-    for kind in (int, float):
-        try:
-            return kind(value)
-        except ValueError:
-            pass
-    return value
-
-
 @dataclass
 class SweepResult(Result):
     """The table of a sweep (every run of its spec, in grid order) and its settings."""
@@ -391,8 +378,8 @@ class SweepResult(Result):
         return cls(SweepSpec.from_dict(data["spec"], "the result's spec"), list(data["rows"]))
 
     def typed_rows(self) -> list[dict[str, object]]:
-        """The table's rows, each value typed (:func:`_typed`)."""
-        return [{k: _typed(v) for k, v in r.items()} for r in self.rows]
+        """The table's rows, each value typed (:func:`~sigmapi.experiments.sweep.table.typed`)."""
+        return [{k: typed(v) for k, v in r.items()} for r in self.rows]
 
     def runs(self) -> int:
         return len(self.rows)
@@ -406,7 +393,7 @@ class SweepResult(Result):
         points: dict[str, list[float]] = {}
         for r in self.rows:
             point = ", ".join(f"{k} {r[k]}" for k in keys) or self.spec.preset
-            value = _typed(r.get(self.metric))
+            value = typed(r.get(self.metric))
             finished = points.setdefault(point, [])
             if str(r.get("status")) == "ok" and isinstance(value, (int, float)):
                 finished.append(float(value))
