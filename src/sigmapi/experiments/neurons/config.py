@@ -122,7 +122,17 @@ class NeuronsConfig:
                 (self.branches, self.windows_ms, self.peak_rates),
                 "give at least one value each",
             )
-        self._check_spiking_cost()
+        steps, need = self.spiking_cost()  # the spiking simulations' time and memory, bounded
+        fix = "use fewer or shorter windows_ms, lower peak_rates, a smaller pool or spike_test"
+        if steps > MAX_SPIKING_STEPS:
+            raise _validate.fail(
+                "windows_ms x peak_rates x pool x spike_test",
+                f"at most {MAX_SPIKING_STEPS:.0e} trial-steps of spiking simulation per seed "
+                "(the defaults run about 7e+06)",
+                float(f"{steps:.3g}"),
+                fix,
+            )
+        _memory.check(need, f"a spiking simulation of peak_rates={self.peak_rates}", fix)
         self.som_config  # noqa: B018 (a bad preset or override fails here)
         if self.preset_2d:
             self.som_config_2d  # noqa: B018
@@ -141,20 +151,6 @@ class NeuronsConfig:
             steps += int(max(self.windows_ms) / dt) * self.spike_test * 2
             peak = max(peak, max(1, round(0.5 / dt)) * self.spike_test * 2 * n * 8 * 2)
         return steps, peak
-
-    def _check_spiking_cost(self) -> None:
-        """The spiking simulations' time and memory, bounded before any work."""
-        steps, need = self.spiking_cost()
-        fix = "use fewer or shorter windows_ms, lower peak_rates, a smaller pool or spike_test"
-        if steps > MAX_SPIKING_STEPS:
-            raise _validate.fail(
-                "windows_ms x peak_rates x pool x spike_test",
-                f"at most {MAX_SPIKING_STEPS:.0e} trial-steps of spiking simulation per seed "
-                "(the defaults run about 7e+06)",
-                float(f"{steps:.3g}"),
-                fix,
-            )
-        _memory.check(need, f"a spiking simulation of peak_rates={self.peak_rates}", fix)
 
     @property
     def som_config(self) -> SOMConfig:

@@ -212,12 +212,11 @@ class NeuronsResult(Result):
         methods = self.methods()
         rows = render(RATE_COLUMNS, [m for m in methods if m["kind"] == "rate"])
         rows += render(SPIKING_COLUMNS, [m for m in methods if m["kind"] == "spiking"])
-        acc = self.acceptance()
-        for c in acc["dendritic"]:
-            rows.append(
-                f"{c['name']} ({c['task']}): {margin_line(c, 'of sigma-pi')}; {c['synapses']} "
-                f"synapses per unit against {c['sigma_pi_synapses']}"
-            )
+        rows += [
+            f"{c['name']} ({c['task']}): {margin_line(c, 'of sigma-pi')}; {c['synapses']} "
+            f"synapses per unit against {c['sigma_pi_synapses']}"
+            for c in self.acceptance()["dendritic"]
+        ]
         return "\n".join(rows)
 
     def caption(self) -> str:
