@@ -192,8 +192,8 @@ class NeuronsResult(Result):
                 out[f"smallest_{key}_{task}"] = min((c["branches"] for c in these), default=None)
         spiking = [m for m in self.methods() if m["kind"] == "spiking"]
         for m in spiking:
-            pool = m["pool"] in (None, self.config.pool)
-            if m["peak_rate"] == REFERENCE_RATE and pool and m["window_ms"] <= MAX_WINDOW_MS:
+            own_pool = m["pool"] in (None, self.config.pool)
+            if m["peak_rate"] == REFERENCE_RATE and own_pool and m["window_ms"] <= MAX_WINDOW_MS:
                 out["spiking"].append(
                     {
                         "name": m["name"],
