@@ -143,7 +143,6 @@ def _step(tick: Tick | None, n: int, phase: str) -> None:
 def _neurons_job(job: NeuronsJob, tick: Tick | None) -> Row:
     c, cfg = job.config, job.som_config
     two_d = job.task == "2d"
-    n_x, n_y = int(np.prod(cfg.x_shape)), int(np.prod(cfg.y_shape))
     training, stride = c.training(two_d), c.basis_stride_2d if two_d else 1
     maps: list[tuple[str, Any, Row]] = []  # name, model, its row's own keys
     drawn = PLAN.sequence(job.seed, "neurons")  # the neuron maps' pairs and start
@@ -157,7 +156,7 @@ def _neurons_job(job: NeuronsJob, tick: Tick | None) -> Row:
         return model
 
     sp = train("sigma-pi", SigmaPiSOM(cfg, seed=job.seed).fit)
-    maps[-1][2]["synapses"] = n_x * n_y
+    maps[-1][2]["synapses"] = int(np.prod(cfg.x_shape)) * int(np.prod(cfg.y_shape))
     dendritic: dict[int, DendriticMap] = {}
     for d in c.branches_2d if two_d else c.branches:
         dm = dendritic[d] = train(f"dendritic-D{d}", DendriticMap(cfg, d).fit, training, seed=drawn)
@@ -218,8 +217,7 @@ def _spiking(
     if c.spiking_sparse_branches:
         d = c.spiking_sparse_branches
         sm = sparse.get(d) or SparseDendriticMap(cfg, d).fit(training, seed=drawn)
-        n_xy = (int(np.prod(cfg.x_shape)), int(np.prod(cfg.y_shape)))
-        branch_weights = (sm.c_ * sm.mask_).reshape(sm.n_units, *n_xy)
+        branch_weights = (sm.c_ * sm.mask_).reshape(sm.n_units, int(np.prod(cfg.x_shape)), -1)
         net = partial(simulate_conjunction, branch_weights)
         deployed.append(("spiking-sparse-dendritic", d, sm, net, False))
     for name, d, model, simulate, dend in deployed:
