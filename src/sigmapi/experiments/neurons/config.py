@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass, field
+from typing import Any
 
 from sigmapi import _memory, _validate
 from sigmapi.config import SOMConfig, apply_overrides, load_preset
@@ -13,6 +14,10 @@ from sigmapi.neurons.training import TrainingConfig
 
 METRICS = ("view_consistency", "view_within_one", "z_error", "order_r2", "usage", "fold_score")
 """The scores of each rate map (:func:`sigmapi.evaluate`), besides ``folded``."""
+
+PHYSIOLOGY = ("reference_frame_index", "gain_r2", "peak_modulation")
+"""What a 1-D map's row holds of its physiology (:func:`~sigmapi.analysis.physiology.record`:
+the median over its units)."""
 
 REFERENCE_RATE = 100
 """The peak rate (Hz) the dendritic spiking network runs at (the conjunction network: every
@@ -34,7 +39,15 @@ MAX_SPIKING_STEPS = 10**10
 """Most trial-steps of spiking simulation per seed (:meth:`NeuronsConfig.spiking_cost`; the
 defaults run about 10^7)."""
 
-_FIX = "positive ints, e.g. 2,4,7"
+
+def _bounded(default: Any, kind: str, lo: float, hi: float, fix: str = "", **more: Any) -> Any:
+    """A field of ``default`` within ``[lo, hi]`` (:func:`~sigmapi._validate.bounded`); a
+    tuple of ints (kind ``"ints"``) is given comma-separated, its fix by default
+    ``"positive ints, e.g. 2,4,7"``."""
+    if kind == "ints":
+        more["sep"] = ","
+        fix = fix or "positive ints, e.g. 2,4,7"
+    return field(default=default, metadata=_validate.bounded(kind, lo, hi, fix=fix, **more))
 
 
 @dataclass(frozen=True)
@@ -47,87 +60,52 @@ class NeuronsConfig:
     """The 2-D task ("" for none)."""
     overrides: tuple[str, ...] = field(default=(), metadata=KEY_VALUES)
     """``key=value`` changes to both presets' Sigma-Pi maps, e.g. ``iterations=50000``."""
-    branches: tuple[int, ...] = field(
-        default=(2, 4, 7, 10, 15), metadata=_validate.bounded("ints", 1, 1000, fix=_FIX, sep=",")
-    )
+    branches: tuple[int, ...] = _bounded((2, 4, 7, 10, 15), "ints", 1, 1000)
     """Dendritic branches per unit, 1-D (one map per value)."""
-    branches_2d: tuple[int, ...] = field(
-        default=(7,), metadata=_validate.bounded("ints", 1, 1000, fix=_FIX, sep=",")
-    )
+    branches_2d: tuple[int, ...] = _bounded((7,), "ints", 1, 1000)
     """Dendritic branches per unit, 2-D."""
-    sparse_branches: tuple[int, ...] = field(
-        default=(15, 30, 45), metadata=_validate.bounded("ints", 1, 10_000, fix=_FIX, sep=",")
-    )
+    sparse_branches: tuple[int, ...] = _bounded((15, 30, 45), "ints", 1, 10_000)
     """Branches per unit (mean over the map) of the sparse dendritic maps, two clustered
     synapses each (:class:`~sigmapi.neurons.sparse.SparseDendriticMap`), 1-D."""
-    sparse_branches_2d: tuple[int, ...] = field(
-        default=(200,), metadata=_validate.bounded("ints", 1, 10_000, fix=_FIX, sep=",")
-    )
+    sparse_branches_2d: tuple[int, ...] = _bounded((200,), "ints", 1, 10_000)
     """The same, 2-D (candidate conjunctions at ``basis_stride_2d``)."""
-    seeds_2d: int = field(
-        default=2, metadata=_validate.bounded("int", 0, 1000, fix="0 runs no 2-D task")
-    )
+    seeds_2d: int = _bounded(2, "int", 0, 1000, "0 runs no 2-D task")
     """How many of the seeds also run the 2-D task (the first ones)."""
-    pairs: int = field(
-        default=100_000, metadata=_validate.bounded("int", 0, 10_000_000, fix="e.g. 100000")
-    )
+    pairs: int = _bounded(100_000, "int", 0, 10_000_000, "e.g. 100000")
     """View pairs of the dendritic and basis-function maps' online phase."""
-    pairs_2d: int = field(
-        default=30_000, metadata=_validate.bounded("int", 0, 10_000_000, fix="e.g. 50000")
-    )
+    pairs_2d: int = _bounded(30_000, "int", 0, 10_000_000, "e.g. 50000")
     """The same, 2-D."""
-    windows_ms: tuple[int, ...] = field(
-        default=(10, 20, 50, 100, 200, 500),
-        metadata=_validate.bounded(
-            "ints", 1, LONGEST_WINDOW_MS, count=20, fix="e.g. 20,100,200", sep=","
-        ),
+    windows_ms: tuple[int, ...] = _bounded(
+        (10, 20, 50, 100, 200, 500), "ints", 1, LONGEST_WINDOW_MS, "e.g. 20,100,200", count=20
     )
     """Decision windows of the spiking networks (ms)."""
-    peak_rates: tuple[int, ...] = field(
-        default=(50, 100, 200),
-        metadata=_validate.bounded(
-            "ints", 1, HIGHEST_RATE, count=20, fix="e.g. 50,100,200", sep=","
-        ),
+    peak_rates: tuple[int, ...] = _bounded(
+        (50, 100, 200), "ints", 1, HIGHEST_RATE, "e.g. 50,100,200", count=20
     )
     """Input peak rates of the spiking networks (Hz); 100 is the acceptance's."""
-    spike_test: int = field(
-        default=300, metadata=_validate.bounded("int", 10, 100_000, fix="e.g. 300")
-    )
+    spike_test: int = _bounded(300, "int", 10, 100_000, "e.g. 300")
     """Test z's of the spiking networks (each shown as two views)."""
-    pool: int = field(default=20, metadata=_validate.bounded("int", 1, 1000, fix="e.g. 20"))
+    pool: int = _bounded(20, "int", 1, 1000, "e.g. 20")
     """Poisson neurons per input unit of the spiking networks (chosen on seeds 0-2, with the
     gain and the inhibition: docs/guide/neurons.md)."""
-    spike_gain: float = field(
-        default=0.3, metadata=_validate.bounded("number", 0, 100, lo_open=True, fix="e.g. 0.3")
-    )
+    spike_gain: float = _bounded(0.3, "number", 0, 100, "e.g. 0.3", lo_open=True)
     """The conjunction networks' largest synaptic weight onto a map soma (threshold units)."""
-    spike_inhibition: float = field(
-        default=0.25, metadata=_validate.bounded("number", 0, 100, fix="e.g. 0.25")
-    )
+    spike_inhibition: float = _bounded(0.25, "number", 0, 100, "e.g. 0.25")
     """Lateral inhibition per map spike of the conjunction networks (threshold units; the
     dendritic network keeps :data:`DENDRITIC_INHIBITION`)."""
-    pools_compared: tuple[int, ...] = field(
-        default=(5, 10),
-        metadata=_validate.bounded("ints", 1, 1000, count=20, fix="e.g. 5,10", sep=","),
-    )
+    pools_compared: tuple[int, ...] = _bounded((5, 10), "ints", 1, 1000, "e.g. 5,10", count=20)
     """Other pool sizes the conjunction network runs at the reference rate (what a smaller
     pool costs in accuracy and saves in spikes)."""
-    basis_stride_2d: int = field(default=2, metadata=_validate.bounded("int", 1, 100, fix="e.g. 2"))
+    basis_stride_2d: int = _bounded(2, "int", 1, 100, "e.g. 2")
     """The 2-D basis-function layer's stride (every 2nd retinal and gaze unit per axis: 8^4
     hidden units instead of 15^4)."""
-    spiking_branches: int = field(
-        default=10, metadata=_validate.bounded("int", 0, 1000, fix="0: none")
-    )
+    spiking_branches: int = _bounded(10, "int", 0, 1000, "0: none")
     """The dendritic map (1-D, branches per unit) deployed in spiking neurons (0: none)."""
-    spiking_sparse_branches: int = field(
-        default=30, metadata=_validate.bounded("int", 0, 10_000, fix="0: none")
-    )
+    spiking_sparse_branches: int = _bounded(30, "int", 0, 10_000, "0: none")
     """The sparse dendritic map (1-D, branches per unit) deployed in spiking neurons (0: none):
     each branch a coincidence detector of its retinal and its gaze pool, coupled to a LIF soma
     by its coupling."""
-    n_test: int = field(
-        default=5000, metadata=_validate.bounded("int", 100, 1_000_000, fix="e.g. 5000")
-    )
+    n_test: int = _bounded(5000, "int", 100, 1_000_000, "e.g. 5000")
     """Test z's (and calibration z's) of the rate maps' evaluation."""
 
     def __post_init__(self) -> None:
@@ -144,7 +122,17 @@ class NeuronsConfig:
                 (self.branches, self.windows_ms, self.peak_rates),
                 "give at least one value each",
             )
-        self._check_spiking_cost()
+        steps, need = self.spiking_cost()  # the spiking simulations' time and memory, bounded
+        fix = "use fewer or shorter windows_ms, lower peak_rates, a smaller pool or spike_test"
+        if steps > MAX_SPIKING_STEPS:
+            raise _validate.fail(
+                "windows_ms x peak_rates x pool x spike_test",
+                f"at most {MAX_SPIKING_STEPS:.0e} trial-steps of spiking simulation per seed "
+                "(the defaults run about 7e+06)",
+                float(f"{steps:.3g}"),
+                fix,
+            )
+        _memory.check(need, f"a spiking simulation of peak_rates={self.peak_rates}", fix)
         self.som_config  # noqa: B018 (a bad preset or override fails here)
         if self.preset_2d:
             self.som_config_2d  # noqa: B018
@@ -163,20 +151,6 @@ class NeuronsConfig:
             steps += int(max(self.windows_ms) / dt) * self.spike_test * 2
             peak = max(peak, max(1, round(0.5 / dt)) * self.spike_test * 2 * n * 8 * 2)
         return steps, peak
-
-    def _check_spiking_cost(self) -> None:
-        """The spiking simulations' time and memory, bounded before any work."""
-        steps, need = self.spiking_cost()
-        fix = "use fewer or shorter windows_ms, lower peak_rates, a smaller pool or spike_test"
-        if steps > MAX_SPIKING_STEPS:
-            raise _validate.fail(
-                "windows_ms x peak_rates x pool x spike_test",
-                f"at most {MAX_SPIKING_STEPS:.0e} trial-steps of spiking simulation per seed "
-                "(the defaults run about 7e+06)",
-                float(f"{steps:.3g}"),
-                fix,
-            )
-        _memory.check(need, f"a spiking simulation of peak_rates={self.peak_rates}", fix)
 
     @property
     def som_config(self) -> SOMConfig:

@@ -5,12 +5,27 @@ below their panels, off the data."""
 
 from __future__ import annotations
 
+from typing import Any
+
 import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from sigmapi.experiments.kit.figures import BELOW
 from sigmapi.experiments.kit.results import JSON
+
+NOTE: dict[str, Any] = {"textcoords": "offset points", "xytext": (4, -12), "fontsize": 8}
+"""Where a dendritic map's branch count is written: below right of its mark."""
+
+
+def _bars(ax: Axes, methods: list[JSON], **kwargs: Any) -> None:
+    """The view consistency of ``methods`` against their synapses per unit: the median, a bar
+    down to the worst seed (``kwargs``: to ``errorbar``)."""
+    vc = [m["view_consistency"] for m in methods]
+    low = [m["view_consistency"] - m["view_consistency_worst"] for m in methods]
+    x = [m["synapses"] for m in methods]
+    ax.errorbar(x, vc, yerr=[low, [0.0] * len(methods)], capsize=3, **kwargs)
 
 
 def neurons_figure(result: JSON) -> Figure:
@@ -20,12 +35,8 @@ def neurons_figure(result: JSON) -> Figure:
     ax = axes[0]
     rate = [m for m in result["methods"] if m["kind"] == "rate" and m["task"] == "1d"]
     sp = next(m for m in rate if m["name"] == "sigma-pi")
-    ax.axhspan(
-        sp["view_consistency"] - 0.02,
-        sp["view_consistency"],
-        color="0.85",
-        label="within 0.02 of Sigma-Pi",
-    )
+    vc = sp["view_consistency"]
+    ax.axhspan(vc - 0.02, vc, color="0.85", label="within 0.02 of Sigma-Pi")
     groups = (
         ("dendritic-D", "dense dendritic (median, worst)", "o"),
         ("dendritic-sparse-D", "sparse dendritic, 2 synapses per branch", "D"),
@@ -34,35 +45,11 @@ def neurons_figure(result: JSON) -> Figure:
         dend = [m for m in rate if m["name"].startswith(prefix)]
         if not dend:
             continue
-        ax.errorbar(
-            [m["synapses"] for m in dend],
-            [m["view_consistency"] for m in dend],
-            yerr=[
-                [m["view_consistency"] - m["view_consistency_worst"] for m in dend],
-                [0.0] * len(dend),
-            ],
-            marker=marker,
-            capsize=3,
-            label=label,
-        )
+        _bars(ax, dend, marker=marker, label=label)
         for m in dend:
-            ax.annotate(
-                f"D={m['branches']}",
-                (m["synapses"], m["view_consistency"]),
-                textcoords="offset points",
-                xytext=(4, -12),
-                fontsize=8,
-            )
+            ax.annotate(f"D={m['branches']}", (m["synapses"], m["view_consistency"]), **NOTE)
     for m, mk in ((sp, "s"), (next(m for m in rate if m["name"] == "basis-function"), "^")):
-        ax.errorbar(
-            [m["synapses"]],
-            [m["view_consistency"]],
-            yerr=[[m["view_consistency"] - m["view_consistency_worst"]], [0.0]],
-            marker=mk,
-            capsize=3,
-            linestyle="none",
-            label=m["name"],
-        )
+        _bars(ax, [m], marker=mk, linestyle="none", label=m["name"])
     ax.set_xlabel("synapses per map unit (the most in any unit)")
     ax.set_ylabel("view consistency (same winner)")
     ax.set_title("1-D maps of first-order neurons")
@@ -82,20 +69,12 @@ def neurons_figure(result: JSON) -> Figure:
         if not rows:
             continue
         w = [m["window_ms"] for m in rows]
-        ax.plot(
-            w,
-            [m["vc_gap"] for m in rows],
-            "o-",
-            color=colour,
-            label=f"{base}: view consistency - rate map's",
+        lines = (
+            ([m["vc_gap"] for m in rows], "o-", "view consistency - rate map's"),
+            ([m["agreement"] - 1.0 for m in rows], "s--", "agreement - 1"),
         )
-        ax.plot(
-            w,
-            [m["agreement"] - 1.0 for m in rows],
-            "s--",
-            color=colour,
-            label=f"{base}: agreement - 1",
-        )
+        for y, style, what in lines:
+            ax.plot(w, y, style, color=colour, label=f"{base}: {what}")
     ax.axhline(-0.02, color="0.5", lw=0.8, ls=":", label="-0.02: the acceptance margin")
     ax.set_xscale("log")
     ticks = sorted({m["window_ms"] for m in spk})

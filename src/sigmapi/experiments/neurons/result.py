@@ -13,14 +13,16 @@ from sigmapi.experiments.kit.results import (
     VC_MARGIN,
     Column,
     Result,
+    as_object,
     columns,
     margin_case,
     margin_line,
     render,
+    tuples,
     within_margin,
 )
 
-from .config import METRICS, REFERENCE_RATE, NeuronsConfig
+from .config import METRICS, PHYSIOLOGY, REFERENCE_RATE, NeuronsConfig
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -58,32 +60,13 @@ SPIKING_COLUMNS = columns(
 """The table's columns of the spiking networks: one row per network and peak rate."""
 
 
-def _scalars(summary: Row) -> Row:
-    """A branch summary without its per-branch lists."""
-    return {k: v for k, v in summary.items() if not isinstance(v, list)}
-
-
-RATE_EXTRA = (
-    "reference_frame_index",
-    "gain_r2",
-    "peak_modulation",
-    "active_synapses",
-    "mean_synapses",
-    "branch_z_gap",
-)
+RATE_EXTRA = (*PHYSIOLOGY, "active_synapses", "mean_synapses", "branch_z_gap")
 """What a rate map's entry summarises besides the :data:`METRICS` (where its rows have it)."""
 RATE_PER_SEED = ("seed", *METRICS, "folded", "seconds")
-SPIKING_METRICS = (
-    "agreement",
-    "view_consistency",
-    "rate_view_consistency",
-    "view_within_one",
-    "z_error",
-    "order_r2",
-    "spikes_per_decision",
-    "map_spikes",
-)
 SPIKING_PER_SEED = ("seed", "agreement", "view_consistency", "rate_view_consistency")
+SPIKING_METRICS = (*SPIKING_PER_SEED[1:], *METRICS[1:4], "spikes_per_decision", "map_spikes")
+"""What a spiking network's entry summarises: its per-seed scores, the rate maps' scores of
+winners (view within one, z error, order) and its spikes."""
 
 
 def _groups(rows: list[Row], *keys: str) -> dict[tuple[object, ...], list[Row]]:
@@ -112,43 +95,34 @@ class NeuronsResult(Result):
 
     config: NeuronsConfig
     seeds: tuple[int, ...]
-    jobs: list[Row]
+    runs: dict[str, list[Row]]
+    """Every map's (``"maps"``) and spiking network's (``"spiking"``) row per seed and task."""
+    branches: list[Row]
+    """What the branches of one dendritic map per seed and task learned: branch by branch for
+    the first, the summary for the others."""
     seconds: float
 
-    KEYS = ("methods", "acceptance", "branches: branch_summaries", "settings", "runs", "seconds")
-    """The JSON form: :meth:`methods`, :meth:`acceptance`, the branches
-    (:meth:`branch_summaries`), the settings, every row (:meth:`runs`) and the time."""
+    KEYS = ("methods", "acceptance", "branches", "settings: config_and_seeds", "runs", "seconds")
+    """The JSON form: :meth:`methods`, :meth:`acceptance`, the branches, the settings (the
+    config's fields and the seeds), every row and the time."""
     FIGURE = "neurons.png"
     SAVE: ClassVar[Mapping[str, object]] = {"dpi": 110}
 
     @classmethod
-    def from_dict(cls, data: Row) -> NeuronsResult:
-        """The result a :meth:`to_dict` wrote (e.g. read back from ``result.json``)."""
-        st = dict(data["settings"])
-        seeds = tuple(st.pop("seeds"))
-        given: Row = {k: tuple(v) if isinstance(v, list) else v for k, v in st.items()}
-        config = NeuronsConfig(**given)
-        runs = data["runs"]
-        jobs = [
-            {
-                "maps": [r for r in runs["maps"] if (r["seed"], r["task"]) == key],
-                "spiking": [r for r in runs["spiking"] if (r["seed"], r["task"]) == key],
-                "branches": b,
-            }
-            for b in data["branches"]
-            for key in [(b["seed"], b["task"])]
-        ]
-        return cls(config, seeds, jobs, float(data["seconds"]))
-
-    def _rows(self, kind: str) -> list[Row]:
-        return [r for j in self.jobs for r in j[kind]]
+    def read_fields(cls, obj: Mapping[str, object]) -> Row:
+        """The fields of a JSON form (:meth:`Result.read_fields`), the config and the seeds
+        from its settings."""
+        settings = dict(as_object(obj["settings"], "settings"))
+        seeds = tuple(settings.pop("seeds"))
+        config = NeuronsConfig(**tuples(settings))
+        return {**super().read_fields(obj), "config": config, "seeds": seeds}
 
     def methods(self) -> list[Row]:
         """One entry per map (and task) and per spiking network, window and peak rate:
         ``name``, ``task``, medians and worst seeds of the metrics, ``ordered``, ``n_seeds``,
         ``synapses`` and ``per_seed``."""
         out = []
-        maps = _groups(self._rows("maps"), "task", "name")
+        maps = _groups(self.runs["maps"], "task", "name")
         for (task, name), rows in sorted(maps.items(), key=lambda kv: str(kv[0][0])):
             out.append(
                 {
@@ -163,7 +137,7 @@ class NeuronsResult(Result):
                     "per_seed": {k: [r.get(k) for r in rows] for k in RATE_PER_SEED},
                 }
             )
-        for (name, rate), rows in _groups(self._rows("spiking"), "name", "peak_rate").items():
+        for (name, rate), rows in _groups(self.runs["spiking"], "name", "peak_rate").items():
             gap = [r["view_consistency"] - r["rate_view_consistency"] for r in rows]
             out.append(
                 {
@@ -189,7 +163,7 @@ class NeuronsResult(Result):
         than ``n_x n_y``; ``smallest_branches``: the fewest branches every seed meets it with.
         Spiking: per window up to :data:`MAX_WINDOW_MS` at :data:`REFERENCE_RATE`, the gap to
         the rate map's view consistency and the agreement."""
-        maps = _groups(self._rows("maps"), "task", "name")
+        maps = _groups(self.runs["maps"], "task", "name")
         dendritic = []
         for (task, name), rows in sorted(maps.items(), key=lambda kv: str(kv[0][0])):
             if name == "sigma-pi":
@@ -216,13 +190,10 @@ class NeuronsResult(Result):
             named = {"branches": ok, "branches_fewer_synapses": cheap, "sparse_branches": sparse}
             for key, these in named.items():
                 out[f"smallest_{key}_{task}"] = min((c["branches"] for c in these), default=None)
-        for m in self.methods():
-            if (
-                m["kind"] == "spiking"
-                and m["peak_rate"] == REFERENCE_RATE
-                and m["pool"] in (None, self.config.pool)
-                and m["window_ms"] <= MAX_WINDOW_MS
-            ):
+        spiking = [m for m in self.methods() if m["kind"] == "spiking"]
+        for m in spiking:
+            own_pool = m["pool"] in (None, self.config.pool)
+            if m["peak_rate"] == REFERENCE_RATE and own_pool and m["window_ms"] <= MAX_WINDOW_MS:
                 out["spiking"].append(
                     {
                         "name": m["name"],
@@ -236,42 +207,25 @@ class NeuronsResult(Result):
                 )
         return out
 
-    def branch_summaries(self) -> list[Row]:
-        """What the branches of one dendritic map per seed and task learned: branch by
-        branch for the first, the summary for the others."""
-        return [_scalars(j["branches"]) if i else j["branches"] for i, j in enumerate(self.jobs)]
-
-    def settings(self) -> Row:
-        """The config's fields and the seeds."""
-        return {**vars(self.config), "seeds": self.seeds}
-
-    def runs(self) -> dict[str, list[Row]]:
-        """Every map's and spiking network's row per seed."""
-        return {"maps": self._rows("maps"), "spiking": self._rows("spiking")}
-
     def table(self) -> str:
         """Medians per map, then the spiking networks at the reference rate, then acceptance."""
         methods = self.methods()
         rows = render(RATE_COLUMNS, [m for m in methods if m["kind"] == "rate"])
         rows += render(SPIKING_COLUMNS, [m for m in methods if m["kind"] == "spiking"])
-        acc = self.acceptance()
-        for c in acc["dendritic"]:
-            rows.append(
-                f"{c['name']} ({c['task']}): {margin_line(c, 'of sigma-pi')}; {c['synapses']} "
-                f"synapses per unit against {c['sigma_pi_synapses']}"
-            )
+        rows += [
+            f"{c['name']} ({c['task']}): {margin_line(c, 'of sigma-pi')}; {c['synapses']} "
+            f"synapses per unit against {c['sigma_pi_synapses']}"
+            for c in self.acceptance()["dendritic"]
+        ]
         return "\n".join(rows)
 
     def caption(self) -> str:
         """The figure's caption, computed from the result."""
         acc = self.acceptance()
         sp = next(m for m in self.methods() if m["name"] == "sigma-pi" and m["task"] == "1d")
-        dend = [
-            c
-            for c in acc["dendritic"]
-            if c["task"] == "1d" and c["branches"] and not c["name"].startswith(SPARSE)
-        ]
-        best = max(dend, key=lambda c: c["vc_gap_median"])
+        one_d = [c for c in acc["dendritic"] if c["task"] == "1d" and c["branches"]]
+        sparse = [c for c in one_d if c["name"].startswith(SPARSE)]
+        best = max((c for c in one_d if c not in sparse), key=lambda c: c["vc_gap_median"])
         n = len(self.seeds)
         text = (
             f"{self.config.preset}, seeds {', '.join(map(str, self.seeds))}. Left: view "
@@ -281,7 +235,6 @@ class NeuronsResult(Result):
             f"(median gap {best['vc_gap_median']:+.3f}, {best['met']} of {n} seeds within "
             f"{VC_MARGIN} and ordered, {best['synapses']} synapses). "
         )
-        sparse = [c for c in acc["dendritic"] if c["task"] == "1d" and c["name"].startswith(SPARSE)]
         small = acc.get("smallest_sparse_branches_1d")
         if sparse and small is None:
             text += (
@@ -311,7 +264,7 @@ class NeuronsResult(Result):
                     else f"No window up to {MAX_WINDOW_MS} ms within {VC_MARGIN} on every seed. "
                 )
             )
-        b = self.jobs[0]["branches"]
+        b = self.branches[0]
         text += (
             f"Right: the branches of the D={b['branches']} map, seed {b['seed']}, as retinal "
             f"against gaze centre, one colour per unit; {100 * b['conjunction_share']:.0f} % "

@@ -1,12 +1,8 @@
-"""The jobs of ``sigmapi neurons``: per seed and task, every map trained, deployed and scored.
-
-One job per ``(seed, task)``: the Sigma-Pi map of the preset (:class:`~sigmapi.SigmaPiSOM`),
-a dendritic map per branch count (:class:`~sigmapi.neurons.dendritic.DendriticMap`) and the
-basis-function map (:class:`~sigmapi.neurons.basis.BasisFunctionMap`), all on the same task
-and seed, scored by :func:`sigmapi.evaluate`; in 1-D also the physiology of each map
-(:func:`sigmapi.analysis.physiology.record`) and the spiking deployments
-(:mod:`sigmapi.neurons.spiking`) on ``spike_test`` test z's of the evaluation set: the
-conjunction network at every peak rate, the dendritic one at 100 Hz.
+"""The jobs of ``sigmapi neurons``, one per seed and task: every map of the package's docstring
+trained and scored by :func:`sigmapi.evaluate`; in 1-D also each map's physiology
+(:func:`sigmapi.analysis.physiology.record`) and the spiking deployments on ``spike_test`` test
+z's of the evaluation set: the conjunction network at every peak rate, the dendritic ones at
+100 Hz.
 """
 
 from __future__ import annotations
@@ -14,6 +10,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from functools import partial
 from typing import Any, TypeVar
 
 import numpy as np
@@ -25,7 +22,7 @@ from sigmapi.executor import job_memory
 from sigmapi.experiments.base import register
 from sigmapi.experiments.kit.jobs import SeedRuns, Tick
 from sigmapi.experiments.kit.seeds import SeedPlan
-from sigmapi.metrics import evaluate, evaluation_sets, grid_spacing, winner_metrics
+from sigmapi.metrics import evaluate, evaluation_sets, grid_spacing, winner_metrics, z_decoder
 from sigmapi.model.som import SigmaPiSOM
 from sigmapi.neurons.basis import BasisFunctionMap
 from sigmapi.neurons.dendritic import DendriticMap, branch_summary
@@ -38,10 +35,12 @@ from sigmapi.neurons.spiking import (
 )
 from sigmapi.progress import Progress
 
-from .config import METRICS, QUICK, REFERENCE_RATE, NeuronsConfig
+from .config import METRICS, PHYSIOLOGY, QUICK, REFERENCE_RATE, NeuronsConfig
 from .result import NeuronsResult, Row
 
 M = TypeVar("M")
+SPIKES = ("input_spikes", "hidden_spikes", "map_spikes")
+"""The spike counts per trial of a spiking run (:class:`~sigmapi.neurons.spiking.SpikingRun`)."""
 Array = NDArray[np.float64]
 
 
@@ -63,16 +62,6 @@ class NeuronsJob:
     """Where given, the job shows its steps (:func:`~sigmapi.experiments.kit.jobs.counted`)."""
 
     @property
-    def steps(self) -> int:
-        """The job's steps: each map trained and each scored, each spiking run."""
-        c = self.config
-        if self.task == "2d":
-            return 2 * (2 + len(c.branches_2d) + len(c.sparse_branches_2d))
-        spiking = len(c.peak_rates) + sum(p != c.pool for p in c.pools_compared)
-        spiking += bool(c.spiking_branches) + bool(c.spiking_sparse_branches)
-        return 2 * (2 + len(c.branches) + len(c.sparse_branches)) + spiking
-
-    @property
     def som_config(self) -> SOMConfig:
         c = self.config
         return c.som_config if self.task == "1d" else c.som_config_2d
@@ -87,8 +76,6 @@ def _scored(model: Any, n_test: int, start: float, **extra: Any) -> Row:
 
 def _z_table(model: Any, n: int) -> np.ndarray:
     """Each unit's decoded z ``(K, d)`` on the calibration set (for the branch summary)."""
-    from sigmapi.metrics import z_decoder
-
     cal, _ = evaluation_sets(model, n)
     return z_decoder(model.winner(cal.x0, cal.y0, hard=True), cal.z, model.map_coords)
 
@@ -128,6 +115,7 @@ def _spiking_rows(
         for i, window in enumerate(run.windows_ms):
             w = run.winners[i]
             m = winner_metrics(wc, cal.z, w[:n], w[n:], test.z[:n], model.map_coords, spacing)
+            spikes = run.input_spikes[i] + run.hidden_spikes[i] + run.map_spikes[i]
             rows.append(
                 {
                     "name": f"{name}{tag}-{window:g}ms",
@@ -136,16 +124,9 @@ def _spiking_rows(
                     "pool": pool,
                     "agreement": float(np.mean(w == r)),
                     "rate_view_consistency": float(np.mean(r[:n] == r[n:])),
-                    "view_consistency": m["view_consistency"],
-                    "view_within_one": m["view_within_one"],
-                    "z_error": m["z_error"],
-                    "order_r2": m["order_r2"],
-                    "input_spikes": float(run.input_spikes[i].mean()),
-                    "hidden_spikes": float(run.hidden_spikes[i].mean()),
-                    "map_spikes": float(run.map_spikes[i].mean()),
-                    "spikes_per_decision": float(
-                        (run.input_spikes[i] + run.hidden_spikes[i] + run.map_spikes[i]).mean()
-                    ),
+                    **{k: m[k] for k in METRICS[:4]},  # view consistency to order
+                    **{k: float(getattr(run, k)[i].mean()) for k in SPIKES},
+                    "spikes_per_decision": float(spikes.mean()),
                     "n_trials": int(x.shape[0]),
                     "seconds": secs,
                 }
@@ -162,7 +143,6 @@ def _step(tick: Tick | None, n: int, phase: str) -> None:
 def _neurons_job(job: NeuronsJob, tick: Tick | None) -> Row:
     c, cfg = job.config, job.som_config
     two_d = job.task == "2d"
-    n_x, n_y = int(np.prod(cfg.x_shape)), int(np.prod(cfg.y_shape))
     training, stride = c.training(two_d), c.basis_stride_2d if two_d else 1
     maps: list[tuple[str, Any, Row]] = []  # name, model, its row's own keys
     drawn = PLAN.sequence(job.seed, "neurons")  # the neuron maps' pairs and start
@@ -176,7 +156,7 @@ def _neurons_job(job: NeuronsJob, tick: Tick | None) -> Row:
         return model
 
     sp = train("sigma-pi", SigmaPiSOM(cfg, seed=job.seed).fit)
-    maps[-1][2]["synapses"] = n_x * n_y
+    maps[-1][2]["synapses"] = int(np.prod(cfg.x_shape)) * int(np.prod(cfg.y_shape))
     dendritic: dict[int, DendriticMap] = {}
     for d in c.branches_2d if two_d else c.branches:
         dm = dendritic[d] = train(f"dendritic-D{d}", DendriticMap(cfg, d).fit, training, seed=drawn)
@@ -196,13 +176,9 @@ def _neurons_job(job: NeuronsJob, tick: Tick | None) -> Row:
         begin = extra.pop("start")
         _step(tick, 0, f"score {name}")
         row = _scored(model, c.n_test, begin, name=name, task=job.task, seed=job.seed, **extra)
-        if not two_d:
+        if not two_d:  # the physiology's medians over the units
             phys = record(model)
-            row.update(
-                reference_frame_index=phys["median_reference_frame_index"],
-                gain_r2=phys["median_gain_r2"],
-                peak_modulation=phys["median_peak_modulation"],
-            )
+            row.update({k: phys[f"median_{k}"] for k in PHYSIOLOGY})
         rows.append(row)
         _step(tick, 1, f"score {name}")
     mid = sorted(dendritic)[len(dendritic) // 2]
@@ -229,46 +205,24 @@ def _spiking(
     ref = REFERENCE_RATE if REFERENCE_RATE in c.peak_rates else c.peak_rates[0]
     runs = [(rate, c.pool) for rate in c.peak_rates]
     runs += [(ref, p) for p in c.pools_compared if p != c.pool]
-
-    def conj(x: Array, y: Array, cfg_s: SpikingConfig, rng: np.random.Generator) -> SpikingRun:
-        return simulate_conjunction(sp.weights_, x, y, cfg_s, rng)
-
+    conj = partial(simulate_conjunction, sp.weights_)
     rows = _spiking_rows(job, "spiking-conjunction", sp, conj, sp.winner, runs, tick=tick)
+    drawn = PLAN.sequence(job.seed, "neurons")
+    deployed: list[tuple[str, int, Any, Callable[..., SpikingRun], bool]] = []
     if c.spiking_branches:
         d = c.spiking_branches
-        dm = dendritic.get(d) or DendriticMap(cfg, d).fit(
-            training, seed=PLAN.sequence(job.seed, "neurons")
-        )
-
-        def dend(x: Array, y: Array, cfg_s: SpikingConfig, rng: np.random.Generator) -> SpikingRun:
-            return simulate_dendritic(dm.u_, dm.v_, dm.gain, dm.threshold, x, y, cfg_s, rng)
-
-        got = _spiking_rows(
-            job,
-            "spiking-dendritic",
-            dm,
-            dend,
-            dm.winner,
-            [(ref, c.pool)],
-            dendritic=True,
-            tick=tick,
-        )
-        rows += [{**r, "branches": d} for r in got]
+        dm = dendritic.get(d) or DendriticMap(cfg, d).fit(training, seed=drawn)
+        net = partial(simulate_dendritic, dm.u_, dm.v_, dm.gain, dm.threshold)
+        deployed.append(("spiking-dendritic", d, dm, net, True))
     if c.spiking_sparse_branches:
         d = c.spiking_sparse_branches
-        sm = sparse.get(d) or SparseDendriticMap(cfg, d).fit(
-            training, seed=PLAN.sequence(job.seed, "neurons")
-        )
-        n_xy = (int(np.prod(cfg.x_shape)), int(np.prod(cfg.y_shape)))
-        branch_weights = (sm.c_ * sm.mask_).reshape(sm.n_units, *n_xy)
-
-        def sparse_net(
-            x: Array, y: Array, cfg_s: SpikingConfig, rng: np.random.Generator
-        ) -> SpikingRun:
-            return simulate_conjunction(branch_weights, x, y, cfg_s, rng)
-
+        sm = sparse.get(d) or SparseDendriticMap(cfg, d).fit(training, seed=drawn)
+        branch_weights = (sm.c_ * sm.mask_).reshape(sm.n_units, int(np.prod(cfg.x_shape)), -1)
+        net = partial(simulate_conjunction, branch_weights)
+        deployed.append(("spiking-sparse-dendritic", d, sm, net, False))
+    for name, d, model, simulate, dend in deployed:
         got = _spiking_rows(
-            job, "spiking-sparse-dendritic", sm, sparse_net, sm.winner, [(ref, c.pool)], tick=tick
+            job, name, model, simulate, model.winner, [(ref, c.pool)], dendritic=dend, tick=tick
         )
         rows += [{**r, "branches": d} for r in got]
     return rows
@@ -301,15 +255,17 @@ class NeuronsExperiment(SeedRuns[NeuronsConfig]):
     def jobs(
         self, config: NeuronsConfig, seeds: tuple[int, ...], shared: object
     ) -> list[tuple[str, NeuronsJob]]:
-        jobs = [(f"seed {s} 1d", NeuronsJob(s, "1d", config)) for s in seeds]
-        if config.preset_2d:
-            jobs += [
-                (f"seed {s} 2d", NeuronsJob(s, "2d", config)) for s in seeds[: config.seeds_2d]
-            ]
-        return jobs
+        tasks = {"1d": seeds, "2d": seeds[: config.seeds_2d] if config.preset_2d else ()}
+        return [(f"seed {s} {t}", NeuronsJob(s, t, config)) for t, of in tasks.items() for s in of]
 
     def steps(self, job: NeuronsJob) -> int:
-        return job.steps
+        """The job's steps: each map trained and each scored, each spiking run."""
+        c = job.config
+        if job.task == "2d":
+            return 2 * (2 + len(c.branches_2d) + len(c.sparse_branches_2d))
+        spiking = len(c.peak_rates) + sum(p != c.pool for p in c.pools_compared)
+        spiking += bool(c.spiking_branches) + bool(c.spiking_sparse_branches)
+        return 2 * (2 + len(c.branches) + len(c.sparse_branches)) + spiking
 
     def desc(self, job: NeuronsJob) -> str:
         return f"neurons seed {job.seed} {job.task}"
@@ -328,7 +284,9 @@ class NeuronsExperiment(SeedRuns[NeuronsConfig]):
     def collect(
         self, config: NeuronsConfig, seeds: tuple[int, ...], values: list[Any]
     ) -> NeuronsResult:
-        return NeuronsResult(config, seeds, values, 0.0)
+        runs = {kind: [r for v in values for r in v[kind]] for kind in ("maps", "spiking")}
+        rest = [{k: x for k, x in v["branches"].items() if not isinstance(x, list)} for v in values]
+        return NeuronsResult(config, seeds, runs, [values[0]["branches"], *rest[1:]], 0.0)
 
 
 NEURONS = register(NeuronsExperiment())

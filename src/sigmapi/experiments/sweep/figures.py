@@ -33,6 +33,13 @@ class Spec(Protocol):
     def grid(self) -> Mapping[str, Any]: ...
 
 
+DOT: dict[str, Any] = {"s": 14, "alpha": 0.6, "zorder": 3, "label": "a seed"}
+"""How :func:`plot_sweep` marks a seed's run (in its line's colour)."""
+CROSS: dict[str, Any] = {"s": 40, "marker": "x", "color": "crimson", "zorder": 4}
+"""How :func:`plot_sweep` marks a folded run (labelled :data:`FOLDED`)."""
+FOLDED = f"folded run (fold score >= {FOLD_THRESHOLD:g})"
+
+
 def draw_summary(
     spec: Spec, rows: list[dict[str, object]], path: str | Path, metric: str = "order_r2"
 ) -> Path:
@@ -116,43 +123,23 @@ def plot_sweep(
         raw.sort(key=float)
     pos = {v: (float(v) if numeric else float(i)) for i, v in enumerate(raw)}
     groups = list(dict.fromkeys(tuple(str(r[g]) for g in group_by) for r in ok))
-    folded_label = f"folded run (fold score >= {FOLD_THRESHOLD:g})"
     for gi, key in enumerate(groups):
         color = f"C{gi % 10}"
         label = ", ".join(f"{g} {v}" for g, v in zip(group_by, key, strict=True)) or None
-        xs, med, lo, hi = [], [], [], []
+        mine = [r for r in ok if tuple(str(r[g]) for g in group_by) == key]
+        points = []  # x, median, min and max over seeds
         for v in raw:
-            sel = [
-                r for r in ok if str(r[param]) == v and tuple(str(r[g]) for g in group_by) == key
-            ]
+            sel = [r for r in mine if str(r[param]) == v]
             vals = np.array([float(r[metric]) for r in sel])
             if vals.size == 0:
                 continue
             x = pos[v]
-            xs.append(x)
-            med.append(float(np.median(vals)))
-            lo.append(float(vals.min()))
-            hi.append(float(vals.max()))
+            points.append((x, float(np.median(vals)), float(vals.min()), float(vals.max())))
             folded = np.array([_folded(r) for r in sel])
-            ax.scatter(
-                np.full(int((~folded).sum()), x),
-                vals[~folded],
-                s=14,
-                color=color,
-                alpha=0.6,
-                zorder=3,
-                label="a seed",
-            )
+            ax.scatter(np.full(int((~folded).sum()), x), vals[~folded], color=color, **DOT)
             if folded.any():
-                ax.scatter(
-                    np.full(int(folded.sum()), x),
-                    vals[folded],
-                    s=40,
-                    marker="x",
-                    color="crimson",
-                    zorder=4,
-                    label=folded_label,
-                )
+                ax.scatter(np.full(int(folded.sum()), x), vals[folded], label=FOLDED, **CROSS)
+        xs, med, lo, hi = zip(*points, strict=True)
         ax.plot(xs, med, "-o", color=color, label=label or "median over seeds", zorder=2)
         ax.fill_between(xs, lo, hi, color=color, alpha=0.15, lw=0, label="min-max over seeds")
     if not numeric:

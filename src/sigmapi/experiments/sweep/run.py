@@ -1,4 +1,3 @@
-# Over 500 lines: the spec, its runs and the resumable results file, read as one.
 """Parameter and seed sweeps: ``sigmapi sweep SPEC.toml --out DIR``.
 
 A spec names a preset, the seeds, fields fixed for every run (``[set]``) and a grid of values
@@ -12,12 +11,10 @@ A spec names a preset, the seeds, fields fixed for every run (``[set]``) and a g
     code_width = [0.5, 1.0]
     iterations = [2000, 3000]
 
-Each run trains one model and evaluates it (:func:`sigmapi.evaluate`); ``DIR/results.csv``
-gets one row per run, appended after every finished run, so that a sweep started again with
-the same spec runs only the missing runs (:mod:`~sigmapi.experiments.sweep.table`: the run's
-identity ``run_key``, the strict reader). Runs go through :mod:`sigmapi.executor`; a spec
-names at most :data:`MAX_RUNS` runs. What the table holds, what is refused and the engines:
-docs/guide/sweeps.md.
+Each run trains and evaluates one model (:func:`sigmapi.evaluate`), its row appended to
+``DIR/results.csv`` as it finishes, so that a sweep started again runs only the missing runs
+(:mod:`~sigmapi.experiments.sweep.table`). Runs go through :mod:`sigmapi.executor`, at most
+:data:`MAX_RUNS` per spec; the table, what is refused and the engines: docs/guide/sweeps.md.
 
 The experiment ``sweep`` (:class:`Sweep`, settings :class:`SweepConfig`: the spec file) is
 :func:`run_sweep` on the command line; seeds given to it replace the spec's.
@@ -31,7 +28,6 @@ import json
 import math
 import statistics
 import time
-import tomllib
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -40,7 +36,7 @@ from typing import Any
 from sigmapi import _validate
 from sigmapi._lock import output_lock
 from sigmapi._outputs import INPUT, claim_folder
-from sigmapi.config import SOMConfig, check_map_fits_task, load_preset
+from sigmapi.config import SOMConfig, _parse_toml, check_map_fits_task, load_preset
 from sigmapi.errors import ConfigError
 from sigmapi.executor import Executor, Outcome, job_memory
 from sigmapi.experiments.base import RESULT_FILE, Experiment, Run, check_seeds, register
@@ -53,6 +49,7 @@ from sigmapi.experiments.sweep.table import (
     open_table,
     read_table,
     run_key,
+    typed,
 )
 from sigmapi.metrics import evaluate
 from sigmapi.metrics.circular import CIRCULAR_KEYS
@@ -104,11 +101,7 @@ class SweepSpec:
     @classmethod
     def from_toml(cls, text: str, source: str = "sweep spec") -> SweepSpec:
         """Parse and check a spec; every grid point must make a valid config."""
-        try:
-            data = tomllib.loads(text)
-        except tomllib.TOMLDecodeError as exc:
-            raise ConfigError(f"{source} is not valid TOML: {exc}") from None
-        return cls.from_dict(data, source)
+        return cls.from_dict(_parse_toml(text, source), source)
 
     @classmethod
     def from_dict(cls, data: object, source: str = "sweep spec") -> SweepSpec:
@@ -250,12 +243,7 @@ def read_results(path: str | Path) -> list[dict[str, str]]:
 
 
 def _row(run: SweepRun, outcome: Outcome) -> dict[str, object]:
-    row: dict[str, object] = {
-        "run_id": run.run_id,
-        "run_key": run.run_key,
-        **run.params,
-        "seed": run.seed,
-    }
+    row = {"run_id": run.run_id, "run_key": run.run_key, **run.params, "seed": run.seed}
     if outcome.ok:
         return {**row, **outcome.value, "status": "ok", "error": ""}
     error = " ".join(str(outcome.error).split())[:2000]  # one line, bounded
@@ -308,17 +296,8 @@ def run_sweep(
         runs = spec.runs()
         angles = any(get_relation(r.point.relation).circular for r in runs)
         metrics = (*METRIC_COLUMNS, *(CIRCULAR_KEYS if angles else ()))
-        columns = [
-            "run_id",
-            "run_key",
-            *sorted(spec.grid),
-            "seed",
-            *metrics,
-            "train_seconds",
-            "total_seconds",
-            "status",
-            "error",
-        ]
+        timed = ("train_seconds", "total_seconds", "status", "error")
+        columns = ["run_id", "run_key", *sorted(spec.grid), "seed", *metrics, *timed]
         for name in (FIGURE, RESULT_FILE):  # what is written after the runs: checked before them
             if (out / name).exists() and not (out / name).is_file():
                 raise ConfigError(
@@ -378,20 +357,6 @@ class SweepConfig:
         return SweepSpec.read(self.spec)
 
 
-def _typed(value: object) -> object:
-    """A value of the table as written (a string) back as a bool, int or float where it is one."""
-    if not isinstance(value, str) or value in ("", "nan"):
-        return value
-    if value in ("True", "False"):
-        return value == "True"
-    for kind in (int, float):
-        try:
-            return kind(value)
-        except ValueError:
-            pass
-    return value
-
-
 @dataclass
 class SweepResult(Result):
     """The table of a sweep (every run of its spec, in grid order) and its settings."""
@@ -413,8 +378,8 @@ class SweepResult(Result):
         return cls(SweepSpec.from_dict(data["spec"], "the result's spec"), list(data["rows"]))
 
     def typed_rows(self) -> list[dict[str, object]]:
-        """The table's rows, each value typed (:func:`_typed`)."""
-        return [{k: _typed(v) for k, v in r.items()} for r in self.rows]
+        """The table's rows, each value typed (:func:`~sigmapi.experiments.sweep.table.typed`)."""
+        return [{k: typed(v) for k, v in r.items()} for r in self.rows]
 
     def runs(self) -> int:
         return len(self.rows)
@@ -428,7 +393,7 @@ class SweepResult(Result):
         points: dict[str, list[float]] = {}
         for r in self.rows:
             point = ", ".join(f"{k} {r[k]}" for k in keys) or self.spec.preset
-            value = _typed(r.get(self.metric))
+            value = typed(r.get(self.metric))
             finished = points.setdefault(point, [])
             if str(r.get("status")) == "ok" and isinstance(value, (int, float)):
                 finished.append(float(value))
@@ -474,17 +439,14 @@ class Sweep(Experiment[SweepConfig]):
         spec = dataclasses.replace(config.read_spec(), seeds=run.seeds)
         ex = run.executor if run.executor is not None else Executor(workers=1)
         show = Progress.of(run.progress)
-        state: dict[str, Any] = {}
+        bars: list[tuple[Callable[[bool, str], None], Any]] = []  # the bar, once planned
 
         def on_plan(n_run: int, n_skip: int, reason: str) -> None:
             show.note(
                 f"sweep: {n_run + n_skip} runs, {n_skip} finished already, {n_run} to "
                 f"run; engine {ex.engine}, {reason}"
             )
-            state["done"], state["bar"] = show.jobs(n_run, "sweep")
-
-        def on_done(ok: bool, line: str) -> None:
-            state["done"](ok, line)
+            bars.append(show.jobs(n_run, "sweep"))
 
         try:
             rows = run_sweep(
@@ -493,12 +455,12 @@ class Sweep(Experiment[SweepConfig]):
                 retry_failed=config.retry_failed,
                 add=config.add,
                 on_plan=on_plan,
-                on_done=on_done,
+                on_done=lambda ok, line: bars[0][0](ok, line),
                 executor=ex,
             )
         finally:
-            if "bar" in state:
-                state["bar"].close()
+            for _, bar in bars:
+                bar.close()
         return SweepResult(spec, rows, config.metric)
 
 

@@ -21,7 +21,6 @@ import dataclasses
 import hashlib
 import io
 import json
-import math
 import os
 import stat
 from collections.abc import Collection, Sequence
@@ -114,6 +113,20 @@ def _damaged(path: Path, detail: str) -> ConfigError:
     )
 
 
+def typed(value: object) -> object:
+    """A value of the table as written (a string) back as a bool, int or float where it is one."""
+    if not isinstance(value, str) or value in ("", "nan"):
+        return value
+    if value in ("True", "False"):
+        return value == "True"
+    for kind in (int, float):
+        try:
+            return kind(value)
+        except ValueError:
+            pass
+    return value
+
+
 def _check_row(path: Path, line: int, row: dict[str, str], metrics: Sequence[str]) -> None:
     status = row["status"]
     if status not in ("ok", "failed"):
@@ -122,16 +135,12 @@ def _check_row(path: Path, line: int, row: dict[str, str], metrics: Sequence[str
     if len(key) != 16 or any(c not in "0123456789abcdef" for c in key):
         raise _damaged(path, f"line {line}: run_key must be 16 hex digits, got {key[:40]!r}")
     if status == "ok":
-        for name in metrics:
+        for name in metrics:  # a number (nan too) or a bool
             value = row[name]
-            if value in ("True", "False"):
-                continue
-            try:
-                float(value)
-            except ValueError:
+            if value != "nan" and isinstance(typed(value), str):
                 raise _damaged(
                     path, f"line {line}: an ok run's {name} must be a number, got {value[:40]!r}"
-                ) from None
+                )
 
 
 def read_table(path: str | Path) -> Table | None:
@@ -207,15 +216,10 @@ def read_table(path: str | Path) -> Table | None:
 
 
 def _line(columns: Sequence[str], row: dict[str, object]) -> bytes:
+    """One row as a line of CSV (a NaN as ``nan``, as csv writes it)."""
     buf = io.StringIO()
-    csv.writer(buf, lineterminator="\n").writerow([_cell(row.get(c, "")) for c in columns])
+    csv.writer(buf, lineterminator="\n").writerow([row.get(c, "") for c in columns])
     return buf.getvalue().encode("utf-8")
-
-
-def _cell(value: object) -> object:
-    if isinstance(value, float) and math.isnan(value):
-        return "nan"
-    return value
 
 
 def open_table(
