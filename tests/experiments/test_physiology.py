@@ -21,7 +21,7 @@ from sigmapi.analysis.physiology import (
 )
 from sigmapi.codes import PopulationCode
 from sigmapi.errors import ConfigError
-from sigmapi.experiments.physiology.run import PhysiologyConfig
+from sigmapi.experiments.physiology.run import PhysiologyConfig, PhysiologyResult
 from sigmapi.tasks import TwoViewSampler
 
 
@@ -120,6 +120,8 @@ def test_a_trained_map_is_body_centred_and_its_random_start_is_not(tmp_path):
     data = json.loads(out.stdout)
     assert data["reference_frame_index"] == r["reference_frame_index"]
     assert data["comparison"]["ks"] > 0.5 and data["body_centred"] in (True, False)
+    back = PhysiologyResult.from_dict(data)  # the file reads back: the same JSON, table
+    assert back.to_dict() == data and "trained vs random start" in back.table()
     assert (tmp_path / "p" / "physiology.png").is_file()
     # the wrote line lists every file the command wrote, the caption too
     wrote = out.stderr.strip().splitlines()[-1].split("sigmapi physiology: wrote ")[1]

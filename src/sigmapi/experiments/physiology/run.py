@@ -29,7 +29,7 @@ from sigmapi.analysis.physiology import (
 from sigmapi.errors import DataError, UsageError
 from sigmapi.experiments.base import Experiment, Run, register
 from sigmapi.experiments.kit.figures import BELOW, legend_once
-from sigmapi.experiments.kit.results import Result, columns, render
+from sigmapi.experiments.kit.results import Result, as_object, columns, render, tuples
 from sigmapi.model.som import SigmaPiSOM, load_model
 
 if TYPE_CHECKING:
@@ -146,6 +146,17 @@ class PhysiologyResult(Result):
     between the two index distributions), ``tuning``, ``monkey`` (the gain-field studies'
     protocol, :func:`~sigmapi.analysis.monkey.monkey_protocol`, with the published numbers),
     the verdict (:meth:`body_centred`), the settings and the time."""
+
+    @classmethod
+    def from_dict(cls, data: Any) -> PhysiologyResult:
+        """The result a :meth:`to_dict` wrote (``result.json``): its settings as the config
+        (``tuning_units`` at its default: the file does not hold it), the time, and the rest
+        as the recording (the verdict is computed again)."""
+        obj = dict(as_object(data))
+        settings = tuples(as_object(obj.pop("settings"), "settings"))
+        seconds = float(obj.pop("seconds"))
+        obj.pop("body_centred")
+        return cls(PhysiologyConfig(**settings), obj, seconds)
 
     def body_centred(self) -> bool:
         """Whether the trained map's median reference-frame index is at least
