@@ -24,16 +24,20 @@ def _grid_quantiser(z: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
     return np.ravel_multi_index(cell.T, (n,) * 3), coords
 
 
+def _position_scores(wc, zc, w0, w1, zt, coords):
+    return s3.quantiser_scores(wc, zc, w0, w1, zt, coords, s3._position(np.zeros(3)))
+
+
 def test_position_scores_per_axis_tell_an_ordered_map_from_a_scrambled_one():
     rng = np.random.default_rng(0)
     zc, zt = rng.uniform(0, 0.2, (3000, 3)), rng.uniform(0, 0.2, (1000, 3))
     wc, coords = _grid_quantiser(zc, 6)
     w0, _ = _grid_quantiser(zt, 6)
-    good = s3._position_scores(wc, zc, w0, w0, zt, coords)
+    good = _position_scores(wc, zc, w0, w0, zt, coords)
     assert min(good["order_r2_per_axis"]) > ORDERED_R2
     assert good["error_cm"] == pytest.approx(0.2 / 6 / np.sqrt(12) * np.sqrt(3) * 100, rel=0.15)
     perm = rng.permutation(216)  # the same cells, the units scrambled on the grid
-    bad = s3._position_scores(perm[wc], zc, perm[w0], perm[w0], zt, coords)
+    bad = _position_scores(perm[wc], zc, perm[w0], perm[w0], zt, coords)
     assert max(bad["order_r2_per_axis"]) < 0.5
     assert bad["error_cm"] == pytest.approx(good["error_cm"])  # a lookup table does not care
     # one axis scrambled, the others kept: only that axis's order falls
@@ -43,7 +47,7 @@ def test_position_scores_per_axis_tell_an_ordered_map_from_a_scrambled_one():
     cell[:, 2], cell_c[:, 2] = flip[cell[:, 2]], flip[cell_c[:, 2]]
     w0s = np.ravel_multi_index(cell.T, (6, 6, 6))
     wcs = np.ravel_multi_index(cell_c.T, (6, 6, 6))
-    part = s3._position_scores(wcs, zc, w0s, w0s, zt, coords)["order_r2_per_axis"]
+    part = _position_scores(wcs, zc, w0s, w0s, zt, coords)["order_r2_per_axis"]
     assert part[0] > ORDERED_R2 and part[1] > ORDERED_R2 and part[2] < 0.6
 
 

@@ -29,6 +29,7 @@ and what the chain adds.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -304,18 +305,32 @@ def angle_error_deg(decoded: Array, true: Array) -> float:
     return float(np.degrees(np.sqrt(np.mean(np.arccos(cos) ** 2))))
 
 
-def _scores(
+Extra = Callable[[Array, Array, Array, Array, Array], dict[str, Any]]
+"""A map's own scores from its calibration views' places and true positions, its test views'
+places and true positions, and the test views' decoded positions."""
+
+
+def quantiser_scores(
     wc: NDArray[np.int64],
     zc: Array,
     w0: NDArray[np.int64],
     w1: NDArray[np.int64],
     zt: Array,
     coords: Array,
+    extra: Extra,
 ) -> dict[str, Any]:
-    m = winner_metrics(wc, zc, w0, w1, zt, coords, 1.0)
+    """Order, view consistency and usage (:func:`~sigmapi.metrics.winner_metrics`, without
+    its z error) of a quantiser whose calibration winners are ``wc`` (true positions ``zc``)
+    and test winners ``w0``, ``w1`` (true positions ``zt``), units at ``coords``, with the
+    scores ``extra`` computes."""
+    m: dict[str, Any] = dict(winner_metrics(wc, zc, w0, w1, zt, coords, 1.0))
     m.pop("z_error")
-    m["direction_error_deg"] = angle_error_deg(z_decoder(wc, zc, coords)[w0], zt)
+    m.update(extra(coords[wc], zc, coords[w0], zt, z_decoder(wc, zc, coords)[w0]))
     return m
+
+
+def _direction(cc: Array, zc: Array, ct: Array, zt: Array, decoded: Array) -> dict[str, Any]:
+    return {"direction_error_deg": angle_error_deg(decoded, zt)}
 
 
 def score(chain: ChainMaps, stage: int, cal: MapData, test: MapData) -> dict[str, Any]:
@@ -332,7 +347,7 @@ def score(chain: ChainMaps, stage: int, cal: MapData, test: MapData) -> dict[str
     w0 = np.argmax(scores, axis=1)
     w1 = model.winner(x1, y1, hard=True)
     wc = model.winner(*inputs(c0), hard=True)
-    out = _scores(wc, truth(c0), w0, w1, truth(t0), model.map_coords)
+    out = quantiser_scores(wc, truth(c0), w0, w1, truth(t0), model.map_coords, _direction)
     batch = Batch(x0, y0, x1, y1, truth(t0), t0.retina, t0.gaze, t1.retina, t1.gaze)
     starved, te, fold = fold_indicators(model, batch, w0, w1, scores)
     out.update(
@@ -367,7 +382,7 @@ def true_direction_map(
     def win(v: ViewBatch) -> NDArray[np.int64]:
         return som.winner(truth(v), np.zeros((truth(v).shape[0], 0)))
 
-    return _scores(win(c0), truth(c0), win(t0), win(t1), truth(t0), som.coords)
+    return quantiser_scores(win(c0), truth(c0), win(t0), win(t1), truth(t0), som.coords, _direction)
 
 
 def _cubic(x: Array) -> Array:

@@ -62,7 +62,7 @@ from sigmapi.codes import PopulationCode, grid_coordinates
 from sigmapi.envs.icub import ICubScene
 from sigmapi.envs.icub import stereo as st
 from sigmapi.errors import ConfigError
-from sigmapi.experiments.icub.maps import som_config, unit_rows
+from sigmapi.experiments.icub.maps import Extra, quantiser_scores, som_config, unit_rows
 from sigmapi.metrics import (
     EVAL_SEED,
     FOLD_THRESHOLD,
@@ -70,7 +70,6 @@ from sigmapi.metrics import (
     affine_fit,
     fold_indicators,
     hard_scores,
-    winner_metrics,
     z_decoder,
 )
 from sigmapi.model.som import SigmaPiSOM
@@ -705,30 +704,22 @@ def _per_axis(cc: Array, zc: Array, ct: Array, zt: Array) -> list[float]:
     return [float(r) for r in 1.0 - np.sum((pred - zt) ** 2, axis=0) / sst]
 
 
-def _position_scores(
-    wc: NDArray[np.int64],
-    zc: Array,
-    w0: NDArray[np.int64],
-    w1: NDArray[np.int64],
-    zt: Array,
-    coords: Array,
-    origin: Array | None = None,
-) -> dict[str, Any]:
-    """Order (overall, per axis of ``x, y, z`` and per axis of :func:`spherical` from
-    ``origin``), view consistency, usage and the error in cm of a quantiser whose
-    calibration winners are ``wc`` (true positions ``zc``) and test winners ``w0``, ``w1``
-    (true positions ``zt``), units at ``coords``; ``origin`` None: zero."""
-    origin = np.zeros(3) if origin is None else origin
-    m: dict[str, Any] = dict(winner_metrics(wc, zc, w0, w1, zt, coords, 1.0))
-    m.pop("z_error")
-    m["order_r2_per_axis"] = _per_axis(coords[wc], zc, coords[w0], zt)
-    m["order_r2_per_axis_spherical"] = _per_axis(
-        coords[wc], spherical(zc, origin), coords[w0], spherical(zt, origin)
-    )
-    err = np.linalg.norm(z_decoder(wc, zc, coords)[w0] - zt, axis=1) * 100.0
-    m["error_cm"] = float(np.sqrt(np.mean(err**2)))
-    m["error_cm_median"] = float(np.median(err))
-    return m
+def _position(origin: Array) -> Extra:
+    """The scores of a map of 3-D positions beside its order: per axis of ``x, y, z`` and per
+    axis of :func:`spherical` from ``origin``, and the error in cm."""
+
+    def extra(cc: Array, zc: Array, ct: Array, zt: Array, decoded: Array) -> dict[str, Any]:
+        err = np.linalg.norm(decoded - zt, axis=1) * 100.0
+        return {
+            "order_r2_per_axis": _per_axis(cc, zc, ct, zt),
+            "order_r2_per_axis_spherical": _per_axis(
+                cc, spherical(zc, origin), ct, spherical(zt, origin)
+            ),
+            "error_cm": float(np.sqrt(np.mean(err**2))),
+            "error_cm_median": float(np.median(err)),
+        }
+
+    return extra
 
 
 def _folds(
@@ -779,7 +770,9 @@ def score_map(
         w0, fold = _folds(model, a, b, z)
     w1 = model.winner(*b, hard=True)
     wc = chain.winners(stage, c0)
-    out = _position_scores(wc, _truth(stage, c0), w0, w1, z, model.map_coords, _origin(stage))
+    out = quantiser_scores(
+        wc, _truth(stage, c0), w0, w1, z, model.map_coords, _position(_origin(stage))
+    )
     out.update(fold, ordered=bool(min(out["order_r2_per_axis"]) >= ORDERED_R2))
     out["fold_threshold"] = FOLD_THRESHOLD
     return out
@@ -808,7 +801,9 @@ def true_position_map(
 
     (c0, _), (t0, t1) = cal, test
     zc, zt = _truth(stage, c0), _truth(stage, t0)
-    return _position_scores(win(c0), zc, win(t0), win(t1), zt, som.coords, _origin(stage))
+    return quantiser_scores(
+        win(c0), zc, win(t0), win(t1), zt, som.coords, _position(_origin(stage))
+    )
 
 
 def kmeans_reference(
