@@ -1,10 +1,6 @@
-"""What the reproduction run takes and gives: its options, its typed results, report sections.
-
-:class:`ReproduceConfig` holds its settings (the command-line options), :class:`ReproduceOptions`
-those with the run's seeds, progress and workers; :class:`ReproduceResult` (one
-:class:`PresetResult` per preset, one :class:`SeedRun` per seed) is what ``metrics.json``
-holds, through ``to_dict()``. The sections experiments add to the report are the kit's
-(:mod:`sigmapi.experiments.kit.report`).
+"""What the reproduction run takes and gives: its options (:class:`ReproduceConfig`, the
+command-line options; :class:`ReproduceOptions`) and typed results (:class:`ReproduceResult`,
+``metrics.json``); the report's sections are :mod:`sigmapi.experiments.kit.report`'s.
 """
 
 from __future__ import annotations
@@ -21,15 +17,7 @@ from sigmapi.experiments.base import check_seeds
 from sigmapi.experiments.kit.results import Result, as_object
 from sigmapi.metrics import ORDERED_R2, Metrics
 
-METRIC_KEYS = (
-    "view_consistency",
-    "view_within_one",
-    "z_error",
-    "order_r2",
-    "usage",
-    "fold_score",
-)
-
+METRIC_KEYS = ("view_consistency", "view_within_one", "z_error", "order_r2", "usage", "fold_score")
 """The metrics the report tabulates (median, worst seed, mean and sd over seeds)."""
 
 WORSE_IS_LARGER = ("z_error", "fold_score")
@@ -38,6 +26,12 @@ WORSE_IS_LARGER = ("z_error", "fold_score")
 Stage = Literal["refined", "unrefined"]
 """Which map of a run: at its end (``refined``, after the refinement where the preset has
 one) or at the end of the training, before the refinement (``unrefined``)."""
+
+
+def plural(n: int) -> str:
+    """The plural ending of a word counted ``n`` times ("s" unless one)."""
+    return "s" if n != 1 else ""
+
 
 SaveModels = Literal["shown", "all", "none"]
 SAVE_MODELS: tuple[str, ...] = get_args(SaveModels)
@@ -114,15 +108,12 @@ class ReproduceOptions(ReproduceConfig):
     Attributes
     ----------
     seeds : tuple of int
-        Training seeds (2-D presets: the first ``seeds_2d`` of them); figures other than the
-        learning curves show the model of the seed with the lowest order R^2 (the first on
-        ties), and say why.
+        Training seeds (2-D presets: the first ``seeds_2d`` of them).
     progress : bool
         Show progress bars on stderr.
     workers : int, optional
-        Training runs at once (default: one per core, as many as fit in half the available
-        memory; :func:`~sigmapi.executor.plan_workers`). The results do not
-        depend on it.
+        Training runs at once (default: as many as cores and half the available memory
+        allow, :func:`~sigmapi.executor.plan_workers`); the results do not depend on it.
     """
 
     seeds: tuple[int, ...] = (0, 1, 2)
@@ -142,13 +133,8 @@ class ReproduceOptions(ReproduceConfig):
         return self.seeds
 
 
-SECONDS = (
-    "train_seconds",
-    "refine_seconds",
-    "compile_seconds",
-    "measure_seconds",
-    "cpu_seconds",
-    "compile_cpu_seconds",
+SECONDS = tuple(
+    f"{t}_seconds" for t in ("train", "refine", "compile", "measure", "cpu", "compile_cpu")
 )
 """The times of a :class:`SeedRun`, whose medians over seeds :meth:`PresetResult.to_dict`
 stores (``seconds``)."""
@@ -204,19 +190,14 @@ class SeedRun(Result):
 
     @classmethod
     def from_dict(cls, data: object) -> SeedRun:
-        """The run a :meth:`to_dict` wrote."""
-        data = as_object(data)
-        times: dict[str, Any] = {k: float(data[k]) for k in SECONDS}
-        rest = set(data) - {*SECONDS, "seed", "backend", "unrefined", "curve"}
-        unrefined = data["unrefined"]
-        return cls(
-            seed=int(data["seed"]),
-            backend=str(data["backend"]),
-            metrics=Metrics.from_dict({k: data[k] for k in rest}),
-            curve=dict(data["curve"]),
-            unrefined=None if unrefined is None else Metrics.from_dict(unrefined),
-            **times,
-        )
+        """The run a :meth:`to_dict` wrote (the keys that name no field are its metrics)."""
+        obj = as_object(data)
+        values = cls.read_fields(obj)
+        metrics = Metrics.from_dict({k: v for k, v in obj.items() if k not in values})
+        unrefined = values.pop("unrefined")
+        if unrefined is not None:
+            values["unrefined"] = Metrics.from_dict(unrefined)
+        return cls(**values, metrics=metrics)
 
 
 @dataclass
@@ -260,6 +241,11 @@ class PresetResult(Result):
     def refines(self) -> bool:
         """Whether the runs have an unrefined map to compare (the preset refines)."""
         return all(r.unrefined is not None for r in self.runs) and bool(self.runs)
+
+    def stages(self) -> list[Stage]:
+        """The maps of its runs: the final (``refined``) and, where the preset refines, the
+        ``unrefined``."""
+        return ["refined", "unrefined"] if self.refines else ["refined"]
 
     def _values(self, key: str, stage: Stage) -> list[float]:
         return [r.metric(key, stage) for r in self.runs]
@@ -345,13 +331,8 @@ class ReproduceResult(Result):
         """The result a :meth:`to_dict` wrote (``metrics.json``): its options (those it
         states), presets and sections; no report folder."""
         data = as_object(data)
-        options = ReproduceOptions(
-            quick=data["quick"],
-            seeds=tuple(data["seeds"]),
-            seeds_2d=data["seeds_2d"],
-            n_test=data["n_test"],
-            progress=False,
-        )
+        stated = {k: data[k] for k in ("quick", "seeds", "seeds_2d", "n_test")}
+        options = ReproduceOptions(**stated, progress=False)
         presets = {name: PresetResult.from_dict(p) for name, p in data["presets"].items()}
         return cls(options, presets, dict(data["sections"]), float(data["total_seconds"]))
 
@@ -367,20 +348,19 @@ class ReproduceResult(Result):
                 stages.append(("median before refinement", res.median("unrefined")))
             for label, values in stages:
                 text = ", ".join(f"{k} {v:.3f}" for k, v in values.items())
-                lines.append(f"{name}: {label} of {n} seed{'s' if n != 1 else ''}: {text}")
-            flagged = res.folded_seeds()
+                lines.append(f"{name}: {label} of {n} seed{plural(n)}: {text}")
+            flagged, worst = res.folded_seeds(), res.worst()
             flags = (
-                f"; the fold detector flags seed{'s' if len(flagged) != 1 else ''} "
+                f"; the fold detector flags seed{plural(len(flagged))} "
                 f"{', '.join(map(str, flagged))} (its signs, views of one z won by distant "
                 "units, also mark a coarse map)"
                 if flagged
                 else ""
             )
             lines.append(
-                f"{name}: {res.ordered_count()} of {n} ordered (order R^2 >= "
-                f"{ORDERED_R2}){flags}; worst seed: "
-                f"view_consistency {res.worst()['view_consistency']:.3f}, "
-                f"order_r2 {res.worst()['order_r2']:.3f}"
+                f"{name}: {res.ordered_count()} of {n} ordered (order R^2 >= {ORDERED_R2}){flags}; "
+                f"worst seed: view_consistency {worst['view_consistency']:.3f}, "
+                f"order_r2 {worst['order_r2']:.3f}"
             )
             if res.ceiling is not None:
                 lines.append(

@@ -1,27 +1,15 @@
 """The reproduction run: ``sigmapi reproduce --out DIR``, the project's main job.
 
-Trains the paper presets (``paper-1d``, and ``paper-2d`` where that preset ships), each
-beside the authors' procedure at the same sizes (``paper-1d-authors``, ``paper-2d-authors``),
-on the seeds (the 2-D presets on the first ``seeds_2d`` of them), recording learning curves at
-checkpoints; each run's map is evaluated at the end of the training, before the refinement,
-and at the end (:mod:`~sigmapi.experiments.reproduce.training`: the jobs, numba's one-time
-compile timed apart). The rule's ceiling, the fixed point of Eq. 7 reached from the map the
-figures show (:mod:`sigmapi.analysis.fixed_point`), is computed once per task. The run writes
-into ``DIR`` ``report.html`` (:mod:`~sigmapi.experiments.reproduce.report_html`),
-``metrics.json`` (:meth:`ReproduceResult.to_dict`), the figures of the seed :func:`figure_seed`
-chooses and the trained models ``save_models`` names; docs/guide/reproduce.md describes each
-file and every key of ``metrics.json``.
-
-Experiments add sections to the report: a section is a function ``section(ctx:
-ReportContext) -> Section | None`` (:mod:`sigmapi.experiments.kit.report`), named by its
-``"module:function"`` as experiments are; the default, :data:`SECTIONS`, is the reach
-experiment's. The sections run in a thread of their own once the training has ended, beside
-the ceilings and the figures (which leave a core idle); a section draws holding
-``ctx.drawing``.
-
-The experiment ``reproduce`` (:class:`Reproduce`, settings :class:`ReproduceConfig`) is
-:func:`reproduce` with the seeds, executor and progress given apart; each (preset, seed) is one
-job of the executor.
+Trains the paper presets, each beside the authors' procedure at the same sizes
+(:func:`paper_presets`), on the seeds, one job of the executor per (preset, seed)
+(:mod:`~sigmapi.experiments.reproduce.training`); computes the rule's ceiling once per task
+(:func:`_ceiling`); writes into ``DIR`` ``report.html``
+(:mod:`~sigmapi.experiments.reproduce.report_html`), ``metrics.json``
+(:meth:`ReproduceResult.to_dict`), the figures of the seed :func:`figure_seed` chooses and the
+trained models ``save_models`` names (docs/guide/reproduce.md: each file and every key of
+``metrics.json``). Experiments add sections to the report (:data:`SECTIONS`), which run in a
+thread of their own beside the ceilings and the figures. The experiment ``reproduce``
+(:class:`Reproduce`) is :func:`reproduce` with the seeds, executor and progress given apart.
 """
 
 from __future__ import annotations
@@ -33,8 +21,9 @@ import statistics
 import threading
 import time
 from collections.abc import Callable, Sequence
+from concurrent.futures import Future
 from pathlib import Path
-from typing import Generic, TypeVar
+from typing import Any, TypeVar
 
 from threadpoolctl import threadpool_limits
 
@@ -90,8 +79,10 @@ CEILING_ROUNDS = 8
 QUICK_CEILING_ROUNDS = 3
 
 SECTIONS: tuple[str | SectionFn, ...] = ("sigmapi.experiments.reach.section:reach_section",)
-"""The sections every full report adds after the figures: a section function or its
-``"module:function"`` (imported when the report runs, as experiments are)."""
+"""The sections every full report adds after the figures (the reach experiment's): a function
+``section(ctx: ReportContext) -> Section | None`` (:mod:`sigmapi.experiments.kit.report`) or
+its ``"module:function"`` (imported when the report runs, as experiments are); a section draws
+holding ``ctx.drawing``."""
 
 
 def paper_presets(quick: bool) -> list[tuple[str, SOMConfig]]:
@@ -138,92 +129,31 @@ def figure_seed(runs: Sequence[SeedRun], cfg: SOMConfig) -> tuple[int, str]:
     return i, f"the worst-ordered of its {len(runs)} seeds, {state}: {what}"
 
 
-def _table_gap(runs: Sequence[SeedRun], n_test: int) -> dict[str, float]:
-    """Median over seeds of each curve's last point minus the table's value (the same map,
-    measured on the curves' smaller sets): what the curves caption states."""
+def _table_gap(
+    model: SigmaPiSOM, runs: Sequence[SeedRun], shown: int, opts: ReproduceOptions
+) -> dict[str, object]:
+    """What the curves caption states: the median over seeds of each curve's last point minus
+    the table's value (the same map, measured on the curves' smaller sets), and how much of it
+    the decoding table's size makes (``decoding``): the shown map's z error on the table's
+    test z's but with the curves' decoding table (their calibration z's)."""
+    from sigmapi.analysis.curves import LearningCurve
+    from sigmapi.metrics import evaluation_sets
+
     gap = {
         k: statistics.median(r.curve[k][-1] - getattr(r.metrics, k) for r in runs)
         for k in ("z_error", "view_consistency")
     }
-    return {**gap, "n_test": n_test}
-
-
-def _decoding_cause(
-    model: SigmaPiSOM, run: SeedRun, curve_test: int, test_size: int
-) -> dict[str, object]:
-    """The shown map's z error on the table's test z's but with the curves' decoding table
-    (their calibration z's): beside the table's and the curve's last point, how much of the
-    curve's gap the decoding table's size makes."""
-    from sigmapi.analysis.curves import LearningCurve
-    from sigmapi.metrics import evaluation_sets
-
-    calibration, _ = evaluation_sets(model, curve_test, LearningCurve.seed)
-    _, test = evaluation_sets(model, test_size)
+    calibration, _ = evaluation_sets(model, opts.curve_test, LearningCurve.seed)
+    _, test = evaluation_sets(model, opts.test_size)
     small = evaluate(model, test=test, calibration=calibration).z_error
-    return {
+    run = runs[shown]
+    decoding = {
         "seed": run.seed,
         "z_error_curve_table": float(small),
         "z_error_table": float(run.metrics.z_error),
         "z_error_curve": float(run.curve["z_error"][-1]),
     }
-
-
-def draw_preset(
-    run: figs.RunInfo,
-    model: SigmaPiSOM,
-    entry: PresetResult,
-    out: Path,
-    opts: ReproduceOptions,
-    reference: dict[str, float],
-    progress: Progress | None,
-) -> list[tuple[str, str]]:
-    """Draw every figure of one preset into ``out`` at the options' dpi
-    (``reference``: the published values the curves mark; the curves caption states the gap
-    between the table's and the curves' evaluation sizes); ``(file, caption)`` per figure.
-
-    The facts each caption states are stored in ``entry.figures``.
-    """
-    from sigmapi.analysis.map_data import receptive_field_centres
-
-    test_size = opts.test_size
-    centres = receptive_field_centres(model, seed=0)
-    curves = [r.curve for r in entry.runs]
-    seeds = run.seeds
-    drawn = []
-    bar = Progress.of(progress).each(figs.FIGURES, f"{run.preset} figures")
-    for fig_name in bar:
-        file = f"{fig_name}-{run.preset}.png"
-        label = f"{run.preset}, seed {seeds[run.shown]}"
-        if fig_name == "curves":
-            label = (
-                f"{run.preset}, seed{'s' if len(seeds) > 1 else ''} {', '.join(map(str, seeds))}"
-            )
-        facts = figs.draw_figure(
-            fig_name,
-            model,
-            out / file,
-            curves=curves,
-            reference=reference,
-            label=label,
-            centres=centres,
-            dpi=opts.dpi,
-            ceiling=entry.ceiling,
-        )
-        if fig_name == "curves":
-            facts["table_gap"] = _table_gap(entry.runs, test_size)
-            facts["table_gap"]["decoding"] = _decoding_cause(
-                model, entry.runs[run.shown], run.curve_test, test_size
-            )
-        entry.figures[fig_name] = {"file": file, **facts}
-        drawn.append((file, figs.caption(fig_name, run, facts)))
-    return drawn
-
-
-def _reference(name: str) -> dict[str, float]:
-    ref = dict(REFERENCE.get(name, {}))
-    if name in Z_ERROR_FLOOR:
-        ref["z_error_floor"] = Z_ERROR_FLOOR[name]
-    return ref
+    return {**gap, "n_test": opts.test_size, "decoding": decoding}
 
 
 def reproduce(
@@ -267,14 +197,16 @@ def reproduce(
     trained = train_all(runs_of, opts, ex, progress)
     ctx = ReportContext(out, opts, {name: trained[name][1] for name, _ in runs_of})
     section_fns = [section_function(s) for s in (SECTIONS if sections is None else sections)]
-    sectioned = _Background(lambda: [fn(ctx) for fn in section_fns])  # beside the figures
+    sectioned = _in_background(lambda: [fn(ctx) for fn in section_fns])  # beside the figures
     try:
         for name, cfg in runs_of:
             figures[name] = _report_preset(name, cfg, trained[name][0], ctx, result, progress)
             result.figure_files += [out / file for file, _ in figures[name]]
         added = [s for s in sectioned.result() if s]
-    except BaseException:  # an error or an interrupt: the sections' workers end now
-        sectioned.abandon()
+    except BaseException:  # an error or an interrupt: end the sections' workers now (the
+        # training's have ended), so that their jobs fail at once instead of holding up the exit
+        for child in multiprocessing.active_children():
+            child.terminate()
         raise
     for s in added:
         result.sections[s.title] = s.data
@@ -298,52 +230,63 @@ def _report_preset(
     progress: Progress | None,
 ) -> list[tuple[str, str]]:
     """Preset ``name``'s entry of ``result`` (statistics, the ceiling), its saved models and
-    its figures (drawn holding ``ctx.drawing``); the figures' files and captions."""
+    its figures at the options' dpi, drawn holding ``ctx.drawing``: ``(file, caption)`` per
+    figure; the facts each caption states go into the entry's ``figures`` (the curves mark
+    the published values and state the gap between the table's and the curves' test sets)."""
+    from sigmapi.analysis.map_data import receptive_field_centres
+
     opts, models = result.options, ctx.models[name]
     shown, why = figure_seed(runs, cfg)
-    seeds = opts.seeds_of(cfg)
+    seeds, model = opts.seeds_of(cfg), models[shown]
     entry = PresetResult(
         cfg, runs, REFERENCE.get(name, {}), Z_ERROR_FLOOR.get(name), seeds[shown], why
     )
-    entry.ceiling = _ceiling(name, result, models[shown], seeds[shown], opts, progress)
+    entry.ceiling = _ceiling(name, result, model, seeds[shown], opts, progress)
     result.presets[name] = entry
     for i, seed in enumerate(seeds):
         if opts.save_models == "all" or (opts.save_models == "shown" and i == shown):
             models[i].save(ctx.out / f"{name}-seed{seed}.npz")
     run = figs.RunInfo(name, cfg, seeds, shown, opts.curve_test, why)
+    floor = {} if entry.z_error_floor is None else {"z_error_floor": entry.z_error_floor}
+    curves = f"{name}, seed{'s' if len(seeds) > 1 else ''} {', '.join(map(str, seeds))}"
+    drawn = []
     with ctx.drawing:
-        return draw_preset(run, models[shown], entry, ctx.out, opts, _reference(name), progress)
+        centres = receptive_field_centres(model, seed=0)
+        for fig_name in Progress.of(progress).each(figs.FIGURES, f"{name} figures"):
+            file = f"{fig_name}-{name}.png"
+            facts = figs.draw_figure(
+                fig_name,
+                model,
+                ctx.out / file,
+                curves=[r.curve for r in runs],
+                reference={**entry.reference, **floor},
+                label=curves if fig_name == "curves" else f"{name}, seed {seeds[shown]}",
+                centres=centres,
+                dpi=opts.dpi,
+                ceiling=entry.ceiling,
+            )
+            if fig_name == "curves":
+                facts["table_gap"] = _table_gap(model, runs, shown, opts)
+            entry.figures[fig_name] = {"file": file, **facts}
+            drawn.append((file, figs.caption(fig_name, run, facts)))
+    return drawn
 
 
-class _Background(Generic[T]):
-    """``fn()`` run in a daemon thread from now on; :meth:`result` waits for its value (or
-    raises its error). The sections (the reach experiment: its seeds in a process pool) run so
-    beside the ceilings and the figures, whose drawing leaves a core idle. A daemon thread:
-    an interrupted report does not wait for it (its pool's workers end with this process)."""
+def _in_background(fn: Callable[[], T]) -> Future[T]:
+    """``fn()`` run in a daemon thread from now on; the future of its value (or error). The
+    sections (the reach experiment: its seeds in a process pool) run so beside the ceilings
+    and the figures, whose drawing leaves a core idle. A daemon thread: an interrupted report
+    does not wait for it (its pool's workers end with this process)."""
+    future: Future[T] = Future()
 
-    def __init__(self, fn: Callable[[], T]) -> None:
-        self._value: list[T] = []  # fn's value, once it has one
-        self._error: BaseException | None = None
-        self._thread = threading.Thread(target=self._run, args=(fn,), daemon=True)
-        self._thread.start()
-
-    def _run(self, fn: Callable[[], T]) -> None:
+    def run() -> None:
         try:
-            self._value.append(fn())
+            future.set_result(fn())
         except BaseException as e:  # raised again in the caller's thread by result()
-            self._error = e
+            future.set_exception(e)
 
-    def abandon(self) -> None:
-        """End the worker processes this process started (the sections' pool: the training's
-        has ended), so that the thread's jobs fail at once instead of holding up the exit."""
-        for child in multiprocessing.active_children():
-            child.terminate()
-
-    def result(self) -> T:
-        self._thread.join()
-        if self._error is not None:
-            raise self._error
-        return self._value[0]
+    threading.Thread(target=run, daemon=True).start()
+    return future
 
 
 class Reproduce(Experiment[ReproduceConfig]):
@@ -381,7 +324,7 @@ def _ceiling(
     seed: int,
     opts: ReproduceOptions,
     progress: Progress | None,
-) -> dict[str, object]:
+) -> dict[str, Any]:
     """The rule's ceiling for preset ``name``: its twin's (same task) when the twin ran
     first, else the fixed point reached from ``model``
     (:func:`sigmapi.analysis.fixed_point.fixed_point`)."""

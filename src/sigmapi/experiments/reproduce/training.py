@@ -198,9 +198,11 @@ def train_all(
         for name, cfg in runs_of
         for seed in opts.seeds_of(cfg)
     ]
-    jobs.sort(key=lambda job: -_job_cost(job[1].cfg))  # longest first: no lone job at the end
+    longest = sorted(jobs, key=lambda job: -_job_cost(job[1].cfg))  # no lone job at the end
     # every other job compiles the other half first: two workers share numba's compile
-    jobs = [(key, replace(job, measure_first=i % 2 == 1)) for i, (key, job) in enumerate(jobs)]
+    longest = [
+        (key, replace(job, measure_first=i % 2 == 1)) for i, (key, job) in enumerate(longest)
+    ]
     per_job = max(job_memory(cfg, opts.test_size) for _, cfg in runs_of)
 
     def describe(key: str, value: Trained) -> str:
@@ -215,7 +217,7 @@ def train_all(
 
     done = run_all(
         train_seed,
-        jobs,
+        longest,
         executor=executor,
         per_job=per_job,
         progress=progress,
@@ -223,13 +225,9 @@ def train_all(
         describe=describe,
         verbose=lambda job: replace(job, progress=True),
     )
-    out: dict[str, tuple[list[SeedRun], list[SigmaPiSOM]]] = {}
-    for name, cfg in runs_of:
-        runs, models = [], []
-        for seed in opts.seeds_of(cfg):
-            key = f"{name} seed {seed}"
-            run, header, arrays = done[key]
-            runs.append(run)
-            models.append(SigmaPiSOM.from_arrays(header, arrays, source=key))
-        out[name] = (runs, models)
+    out: dict[str, tuple[list[SeedRun], list[SigmaPiSOM]]] = {n: ([], []) for n, _ in runs_of}
+    for key, job in jobs:  # each preset's runs and models in the order of its seeds
+        run, header, arrays = done[key]
+        out[job.name][0].append(run)
+        out[job.name][1].append(SigmaPiSOM.from_arrays(header, arrays, source=key))
     return out
