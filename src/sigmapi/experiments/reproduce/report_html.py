@@ -1,8 +1,5 @@
-"""The HTML of the reproduction report: one self-contained page (it links only files beside it).
-
-:func:`render` turns a :class:`~sigmapi.experiments.reproduce.results.ReproduceResult`, the
-captioned figures and the added sections into the page; :func:`linked_files` lists the local files a
-page links (the report checks that each exists before writing it).
+"""The HTML of the reproduction report (:func:`render`): one self-contained page, which links
+only files beside it (:func:`linked_files`: the report checks that each exists).
 """
 
 from __future__ import annotations
@@ -58,14 +55,12 @@ _LABEL = {
 
 def _groups(result: ReproduceResult) -> list[list[str]]:
     """The presets side by side: each paper preset with its authors' twin, the rest alone."""
-    names, seen, out = list(result.presets), set(), []
-    for name in names:
-        if name in seen:
-            continue
-        group = [name] + [t for t in (OTHER_PROCEDURE.get(name),) if t in result.presets]
-        seen.update(group)
-        out.append(group)
-    return out
+    twins = [OTHER_PROCEDURE.get(name) for name in result.presets]
+    return [
+        [name] + [t for t in (OTHER_PROCEDURE.get(name),) if t in result.presets]
+        for name in result.presets
+        if name not in twins
+    ]
 
 
 def _cell(res: PresetResult, key: str, stage: Stage) -> str:
@@ -202,9 +197,8 @@ def _fewer(result: ReproduceResult) -> str:
     """Which presets trained fewer of the seeds (the 2-D ones: ``seeds_2d``), if any."""
     n = len(result.options.seeds)
     fewer = [(k, len(p.runs)) for k, p in result.presets.items() if len(p.runs) < n]
-    if not fewer:
-        return ""
-    return " (" + ", ".join(f"{html.escape(k)}: the first {m}" for k, m in fewer) + ")"
+    text = ", ".join(f"{html.escape(k)}: the first {m}" for k, m in fewer)
+    return f" ({text})" if fewer else ""
 
 
 def _bullet(name: str, res: PresetResult) -> str:

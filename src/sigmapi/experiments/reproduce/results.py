@@ -103,22 +103,15 @@ class ReproduceConfig:
 @dataclass(frozen=True)
 class ReproduceOptions(ReproduceConfig):
     """A :class:`ReproduceConfig` with the run's seeds, progress and workers (what the report
-    and its sections see, :class:`~sigmapi.experiments.kit.report.ReportContext`).
-
-    Attributes
-    ----------
-    seeds : tuple of int
-        Training seeds (2-D presets: the first ``seeds_2d`` of them).
-    progress : bool
-        Show progress bars on stderr.
-    workers : int, optional
-        Training runs at once (default: as many as cores and half the available memory
-        allow, :func:`~sigmapi.executor.plan_workers`); the results do not depend on it.
-    """
+    and its sections see, :class:`~sigmapi.experiments.kit.report.ReportContext`)."""
 
     seeds: tuple[int, ...] = (0, 1, 2)
+    """Training seeds (2-D presets: the first ``seeds_2d`` of them)."""
     progress: bool = True
+    """Show progress bars on stderr."""
     workers: int | None = None
+    """Training runs at once (default: as many as cores and half the available memory allow,
+    :func:`~sigmapi.executor.plan_workers`); the results do not depend on it."""
 
     def __post_init__(self) -> None:
         super().__post_init__()

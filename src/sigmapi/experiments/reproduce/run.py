@@ -1,15 +1,10 @@
-"""The reproduction run: ``sigmapi reproduce --out DIR``, the project's main job.
-
-Trains the paper presets, each beside the authors' procedure at the same sizes
-(:func:`paper_presets`), on the seeds, one job of the executor per (preset, seed)
-(:mod:`~sigmapi.experiments.reproduce.training`); computes the rule's ceiling once per task
-(:func:`_ceiling`); writes into ``DIR`` ``report.html``
-(:mod:`~sigmapi.experiments.reproduce.report_html`), ``metrics.json``
-(:meth:`ReproduceResult.to_dict`), the figures of the seed :func:`figure_seed` chooses and the
-trained models ``save_models`` names (docs/guide/reproduce.md: each file and every key of
-``metrics.json``). Experiments add sections to the report (:data:`SECTIONS`), which run in a
-thread of their own beside the ceilings and the figures. The experiment ``reproduce``
-(:class:`Reproduce`) is :func:`reproduce` with the seeds, executor and progress given apart.
+"""The reproduction run: ``sigmapi reproduce --out DIR`` (:class:`Reproduce`, :func:`reproduce`),
+the project's main job: the paper presets beside the authors' procedure (:func:`paper_presets`),
+one job per (preset, seed) (:mod:`~sigmapi.experiments.reproduce.training`), the rule's ceiling
+once per task, and the report (:mod:`~sigmapi.experiments.reproduce.report_html`) with
+``metrics.json``, the figures of the seed :func:`figure_seed` chooses, the models
+``save_models`` names and the sections experiments add (:data:`SECTIONS`), each file described
+in docs/guide/reproduce.md.
 """
 
 from __future__ import annotations
@@ -52,17 +47,15 @@ from sigmapi.viz import figures as figs
 T = TypeVar("T")
 
 REFERENCE: dict[str, dict[str, float]] = {
-    "paper-1d": {"view_consistency": 0.87, "view_within_one": 0.988, "z_error": 0.32},
+    name: {"view_consistency": 0.87, "view_within_one": 0.988, "z_error": 0.32}
+    for name in ("paper-1d", "paper-1d-authors")
 }
 """Reference figures of docs/algorithm.md (the authors' 1-D script re-stated in NumPy, 4 seeds)."""
 
-Z_ERROR_FLOOR: dict[str, float] = {"paper-1d": 0.27}
+Z_ERROR_FLOOR: dict[str, float] = dict.fromkeys(("paper-1d", "paper-1d-authors"), 0.27)
 """Smallest z error a map of that many units can reach (quantisation into 15 units)."""
 
 PAPER_PRESETS = ("paper-1d", "paper-2d")
-
-REFERENCE["paper-1d-authors"] = REFERENCE["paper-1d"]
-Z_ERROR_FLOOR["paper-1d-authors"] = Z_ERROR_FLOOR["paper-1d"]
 
 QUICK_REFINE_PAIRS = 20_000
 """Refinement pairs per round in quick runs."""
@@ -164,26 +157,12 @@ def reproduce(
     sections: Sequence[str | SectionFn] | None = None,
     executor: Executor | None = None,
 ) -> ReproduceResult:
-    """Train and evaluate each paper preset for the seeds; write the report into ``out``.
+    """Train and evaluate each paper preset for the seeds of ``options`` and write the report
+    into the folder ``out`` (created); the result is what ``metrics.json`` holds.
 
-    Parameters
-    ----------
-    out : Path
-        Report folder (created).
-    options : ReproduceOptions, optional
-        Seeds, quick mode, progress bars, which models to save, test size.
-    presets : list of (name, SOMConfig), optional
-        What to run instead of the paper presets (tests use tiny configs).
-    sections : sequence of callables or ``"module:function"`` strings, optional
-        Functions that add report sections (default :data:`SECTIONS`, the reach
-        experiment); ``()`` for none.
-    executor : Executor, optional
-        Where the training runs go (default: this machine, ``options.workers`` at once).
-
-    Returns
-    -------
-    ReproduceResult
-        What ``metrics.json`` holds (``result.to_dict()``).
+    ``presets`` run instead of the paper presets (tests use tiny configs); ``sections`` add
+    report sections (default :data:`SECTIONS`; ``()`` for none); ``executor`` runs the
+    training (default: this machine, ``options.workers`` at once).
     """
     opts = options or ReproduceOptions()
     ex = executor if executor is not None else Executor(workers=opts.workers)
@@ -330,10 +309,9 @@ def _ceiling(
     (:func:`sigmapi.analysis.fixed_point.fixed_point`)."""
     from sigmapi.analysis.fixed_point import fixed_point
 
-    for twin, other in OTHER_PROCEDURE.items():
-        done = result.presets.get(twin)
-        if other == name and done is not None and done.ceiling is not None:
-            return done.ceiling
+    twin = result.presets.get(next((t for t, o in OTHER_PROCEDURE.items() if o == name), ""))
+    if twin is not None and twin.ceiling is not None:
+        return twin.ceiling
     t0 = time.perf_counter()
     for _ in Progress.of(progress).each([name], f"{name} ceiling (fixed point of Eq. 7)"):
         # one BLAS thread: the sections' workers run beside it, and BLAS threads that wait

@@ -30,13 +30,16 @@ class SeedJob:
     name: str
     cfg: SOMConfig
     seed: int
-    n_checkpoints: int
-    curve_test: int
-    test_size: int
+    opts: ReproduceOptions
+    """The run's options: its measurements' sizes."""
     progress: bool = False
     measure_first: bool = False
     """Compile the kernels that refine and measure a map before those that train it
     (:func:`compile_once`); :func:`train_all` sets it on every other job."""
+
+    @property
+    def key(self) -> str:
+        return f"{self.name} seed {self.seed}"
 
 
 COMPILED_BY = (
@@ -58,12 +61,10 @@ def compile_once(cfg: SOMConfig, measure_first: bool = False) -> float:
     dimensions calls the same compiled code as the preset: the training times of
     :func:`train_seed` then hold no compile time, which is reported apart.
 
-    ``measure_first`` (in a process that has compiled nothing yet) compiles the kernels that
-    refine and measure a trained map before those that train it
-    (:func:`_compile_measuring`). On a fresh install two workers that start at once, one
-    each way round, then compile each half once and load the other half from numba's cache
-    (``NUMBA_CACHE_DIR``) rather than both compiling everything (docs/guide/reproduce.md,
-    "Times").
+    ``measure_first`` (in a process that has compiled nothing yet): first the kernels that
+    refine and measure (:func:`_compile_measuring`), so that two workers that start at once,
+    one each way round, compile each half once and load the other from numba's cache
+    (docs/guide/reproduce.md, "Times").
     """
     from sigmapi.analysis.curves import LearningCurve
 
@@ -125,12 +126,9 @@ def train_seed(job: SeedJob) -> Trained:
     c0 = time.process_time()
     compile_cpu = c0 - compile_c0
     model = SigmaPiSOM(cfg, seed=job.seed)
-    callback, bar = Progress(disable=not job.progress or None).training(
-        cfg.iterations, f"{job.name} seed {job.seed}"
-    )
-    curve = LearningCurve(
-        at=checkpoints(cfg.iterations, job.n_checkpoints), n_test=job.curve_test, then=callback
-    )
+    callback, bar = Progress(disable=not job.progress or None).training(cfg.iterations, job.key)
+    at = checkpoints(cfg.iterations, job.opts.n_checkpoints)
+    curve = LearningCurve(at=at, n_test=job.opts.curve_test, then=callback)
     marks: dict[str, float] = {}  # times at the end of the training
     unrefined: list[Metrics] = []  # the map there, where the preset refines
 
@@ -140,16 +138,15 @@ def train_seed(job: SeedJob) -> Trained:
             marks["trained"] = time.perf_counter()
             marks["curve_s"] = curve.seconds
             if cfg.refine_rounds > 0:
-                unrefined.append(evaluate(m, n_test=job.test_size))
+                unrefined.append(evaluate(m, n_test=job.opts.test_size))
             marks["eval_s"] = time.perf_counter() - marks["trained"]
 
     t0 = time.perf_counter()
     with bar:
         model.fit(callback=step)
     end = time.perf_counter()
-    e0 = time.perf_counter()
-    metrics = evaluate(model, n_test=job.test_size)
-    final_eval = time.perf_counter() - e0
+    metrics = evaluate(model, n_test=job.opts.test_size)
+    final_eval = time.perf_counter() - end
     trained = marks.get("trained", end)
     train_s = trained - t0 - marks.get("curve_s", curve.seconds)
     refine_s = end - trained - marks.get("eval_s", 0.0) - (curve.seconds - marks.get("curve_s", 0))
@@ -190,19 +187,10 @@ def train_all(
     progress: Progress | None,
 ) -> dict[str, tuple[list[SeedRun], list[SigmaPiSOM]]]:
     """Train every (preset, seed), in parallel where cores and memory allow."""
-    jobs = [
-        (
-            f"{name} seed {seed}",
-            SeedJob(name, cfg, seed, opts.n_checkpoints, opts.curve_test, opts.test_size),
-        )
-        for name, cfg in runs_of
-        for seed in opts.seeds_of(cfg)
-    ]
-    longest = sorted(jobs, key=lambda job: -_job_cost(job[1].cfg))  # no lone job at the end
+    jobs = [SeedJob(name, cfg, seed, opts) for name, cfg in runs_of for seed in opts.seeds_of(cfg)]
+    longest = sorted(jobs, key=lambda job: -_job_cost(job.cfg))  # no lone job at the end
     # every other job compiles the other half first: two workers share numba's compile
-    longest = [
-        (key, replace(job, measure_first=i % 2 == 1)) for i, (key, job) in enumerate(longest)
-    ]
+    keyed = [(job.key, replace(job, measure_first=i % 2 == 1)) for i, job in enumerate(longest)]
     per_job = max(job_memory(cfg, opts.test_size) for _, cfg in runs_of)
 
     def describe(key: str, value: Trained) -> str:
@@ -217,7 +205,7 @@ def train_all(
 
     done = run_all(
         train_seed,
-        longest,
+        keyed,
         executor=executor,
         per_job=per_job,
         progress=progress,
@@ -226,8 +214,8 @@ def train_all(
         verbose=lambda job: replace(job, progress=True),
     )
     out: dict[str, tuple[list[SeedRun], list[SigmaPiSOM]]] = {n: ([], []) for n, _ in runs_of}
-    for key, job in jobs:  # each preset's runs and models in the order of its seeds
-        run, header, arrays = done[key]
+    for job in jobs:  # each preset's runs and models in the order of its seeds
+        run, header, arrays = done[job.key]
         out[job.name][0].append(run)
-        out[job.name][1].append(SigmaPiSOM.from_arrays(header, arrays, source=key))
+        out[job.name][1].append(SigmaPiSOM.from_arrays(header, arrays, source=job.key))
     return out
