@@ -206,9 +206,10 @@ def _bullet(name: str, res: PresetResult) -> str:
     cfg, n = res.config, len(res.runs)
     seeds = ", ".join(str(r.seed) for r in res.runs)
     med, worst = res.median(), res.worst()
-    times = f"training {res.seconds('train_seconds'):.1f} s"
+    secs = res.median_seconds()
+    times = f"training {secs['train_seconds']:.1f} s"
     if res.refines:
-        times += f", refinement {res.seconds('refine_seconds'):.1f} s"
+        times += f", refinement {secs['refine_seconds']:.1f} s"
     compiled = sum(r.compile_seconds for r in res.runs)
     compiled_cpu = sum(r.compile_cpu_seconds for r in res.runs)
     compile_note = (

@@ -135,26 +135,14 @@ stores (``seconds``)."""
 
 @dataclass
 class SeedRun(Result):
-    """One trained seed: its metrics (after and before the refinement), learning curve and
-    times.
-
-    Attributes
-    ----------
-    train_seconds, refine_seconds : float
-        Wall seconds of the training iterations and of the refinement rounds, without the
-        learning-curve checkpoints, the evaluations and the one-time compile.
-    compile_seconds, compile_cpu_seconds : float
-        numba's one-time compile in the worker process that ran this seed (a small warm-up
-        run of the same rules, timed apart), wall and CPU seconds; 0 once a process has
-        compiled, or for a kernel that compiles nothing.
-    measure_seconds : float
-        Learning-curve checkpoints and the evaluations of the unrefined and final maps.
-    cpu_seconds : float
-        CPU seconds of the job in its process (measurements included, the compile not).
-    unrefined : Metrics or None
-        The map at the end of the training, before the refinement (the same run); None when
-        the preset does not refine.
-    """
+    """One trained seed: its metrics after and before the refinement (``unrefined``: the map
+    at the end of the training, None where the preset does not refine), learning curve and
+    times: the wall seconds of the training iterations and of the refinement rounds (without
+    the checkpoints, the evaluations and the compile), numba's one-time compile in the worker
+    process that ran it (``compile_seconds``, ``compile_cpu_seconds``: wall and CPU seconds of
+    a small run of the same rules; 0 once the process has compiled, or for a kernel that
+    compiles nothing), the checkpoints and evaluations (``measure_seconds``) and the job's CPU
+    seconds (``cpu_seconds``: the measurements in, the compile out)."""
 
     seed: int
     train_seconds: float
@@ -169,8 +157,8 @@ class SeedRun(Result):
     compile_cpu_seconds: float = 0.0
 
     KEYS = ("seed", *SECONDS, "backend", "*metrics", "unrefined", "curve")
-    """The JSON form: the seed, its times, the kernel, the metrics at the top and those of
-    the unrefined map, the learning curve."""
+    """The JSON form: the seed, its times, the kernel, the metrics (the final map's at the top),
+    the learning curve."""
 
     def at(self, stage: Stage = "refined") -> Metrics:
         """The metrics of the map at ``stage`` (the final map's where there is no other)."""
@@ -265,10 +253,6 @@ class PresetResult(Result):
         """Seeds the z-free fold detector flags."""
         return [r.seed for r in self.runs if r.at(stage).folded]
 
-    def seconds(self, key: str) -> float:
-        """Median over seeds of a time of :class:`SeedRun` (e.g. ``"train_seconds"``)."""
-        return statistics.median(float(getattr(r, key)) for r in self.runs)
-
     def _stage(self, stage: Stage) -> dict[str, object]:
         return {
             "median": self.median(stage),
@@ -289,7 +273,8 @@ class PresetResult(Result):
         return [r.seed for r in self.runs]
 
     def median_seconds(self) -> dict[str, float]:
-        return {k: self.seconds(k) for k in SECONDS}
+        """Per time of :class:`SeedRun` (:data:`SECONDS`), its median over the seeds."""
+        return {k: statistics.median(float(getattr(r, k)) for r in self.runs) for k in SECONDS}
 
 
 @dataclass
@@ -336,11 +321,9 @@ class ReproduceResult(Result):
         lines = []
         for name, res in self.presets.items():
             n = len(res.runs)
-            stages = [("median", res.median())]
-            if res.refines:
-                stages.append(("median before refinement", res.median("unrefined")))
-            for label, values in stages:
-                text = ", ".join(f"{k} {v:.3f}" for k, v in values.items())
+            for stage in res.stages():
+                label = "median" if stage == "refined" else "median before refinement"
+                text = ", ".join(f"{k} {v:.3f}" for k, v in res.median(stage).items())
                 lines.append(f"{name}: {label} of {n} seed{plural(n)}: {text}")
             flagged, worst = res.folded_seeds(), res.worst()
             flags = (

@@ -93,13 +93,9 @@ def paper_presets(quick: bool) -> list[tuple[str, SOMConfig]]:
 
 
 def figure_seed(runs: Sequence[SeedRun], cfg: SOMConfig) -> tuple[int, str]:
-    """The run the figures show, and why: the worst-ordered seed (lowest order R^2 of the
-    final map, the first on ties).
-
-    For the authors' procedure (random start) the comparison is about twisted maps, so its
-    worst-ordered map is the one to see; for sigmapi's, the worst-ordered map is the case a
-    reader would doubt (the others are at least as ordered). The reason names the seeds
-    and the values it was chosen from.
+    """The run the figures show, and why (naming the seeds and values it was chosen from):
+    the worst-ordered seed (lowest order R^2 of the final map, the first on ties), for the
+    authors' procedure the twisted map the comparison is about, for sigmapi's the map to doubt.
     """
     i = min(range(len(runs)), key=lambda j: (runs[j].metrics.order_r2, j))
     r2 = runs[i].metrics.order_r2
@@ -220,7 +216,7 @@ def _report_preset(
     entry = PresetResult(
         cfg, runs, REFERENCE.get(name, {}), Z_ERROR_FLOOR.get(name), seeds[shown], why
     )
-    entry.ceiling = _ceiling(name, result, model, seeds[shown], opts, progress)
+    entry.ceiling = _ceiling(name, result, model, seeds[shown], progress)
     result.presets[name] = entry
     for i, seed in enumerate(seeds):
         if opts.save_models == "all" or (opts.save_models == "shown" and i == shown):
@@ -297,18 +293,15 @@ REPRODUCE = register(Reproduce())
 
 
 def _ceiling(
-    name: str,
-    result: ReproduceResult,
-    model: SigmaPiSOM,
-    seed: int,
-    opts: ReproduceOptions,
-    progress: Progress | None,
+    name: str, result: ReproduceResult, model: SigmaPiSOM, seed: int, progress: Progress | None
 ) -> dict[str, Any]:
     """The rule's ceiling for preset ``name``: its twin's (same task) when the twin ran
     first, else the fixed point reached from ``model``
     (:func:`sigmapi.analysis.fixed_point.fixed_point`)."""
     from sigmapi.analysis.fixed_point import fixed_point
 
+    opts = result.options
+    rounds = QUICK_CEILING_ROUNDS if opts.quick else CEILING_ROUNDS
     twin = result.presets.get(next((t for t, o in OTHER_PROCEDURE.items() if o == name), ""))
     if twin is not None and twin.ceiling is not None:
         return twin.ceiling
@@ -318,9 +311,5 @@ def _ceiling(
         # for a busy core cost CPU for nothing (the same numbers: BLAS splits the products
         # by rows, not by the sums)
         with threadpool_limits(limits=1, user_api="blas"):
-            found = fixed_point(
-                model,
-                n_test=opts.test_size,
-                max_rounds=QUICK_CEILING_ROUNDS if opts.quick else CEILING_ROUNDS,
-            )
+            found = fixed_point(model, n_test=opts.test_size, max_rounds=rounds)
     return {**found.to_dict(), "preset": name, "seed": seed, "seconds": time.perf_counter() - t0}

@@ -54,18 +54,11 @@ _COMPILED: set[tuple[object, ...]] = set()
 
 def compile_once(cfg: SOMConfig, measure_first: bool = False) -> float:
     """Compile the kernel functions ``cfg`` trains, refines and is measured with, once per
-    process, on a small run of the same rules; the wall seconds it took (0 if done before).
-
-    numba compiles a function on its first call (or loads it from its cache), whatever the
-    sizes of the arrays, so a 3-unit map of the same rules, ordering, refinement and
-    dimensions calls the same compiled code as the preset: the training times of
-    :func:`train_seed` then hold no compile time, which is reported apart.
-
-    ``measure_first`` (in a process that has compiled nothing yet): first the kernels that
-    refine and measure (:func:`_compile_measuring`), so that two workers that start at once,
-    one each way round, compile each half once and load the other from numba's cache
-    (docs/guide/reproduce.md, "Times").
-    """
+    process, on a 3-unit map of the same rules and dimensions (numba compiles a function on
+    its first call, whatever the arrays' sizes), so that :func:`train_seed`'s times hold no
+    compile; the wall seconds it took (0 if done before). ``measure_first``: the kernels that
+    refine and measure first (:func:`_compile_measuring`; docs/guide/reproduce.md, "Times",
+    says why)."""
     from sigmapi.analysis.curves import LearningCurve
 
     dims = (cfg.refine_rounds > 0, len(cfg.map_shape), len(cfg.x_shape))
@@ -191,7 +184,6 @@ def train_all(
     longest = sorted(jobs, key=lambda job: -_job_cost(job.cfg))  # no lone job at the end
     # every other job compiles the other half first: two workers share numba's compile
     keyed = [(job.key, replace(job, measure_first=i % 2 == 1)) for i, job in enumerate(longest)]
-    per_job = max(job_memory(cfg, opts.test_size) for _, cfg in runs_of)
 
     def describe(key: str, value: Trained) -> str:
         run, m = value[0], value[0].metrics
@@ -207,7 +199,7 @@ def train_all(
         train_seed,
         keyed,
         executor=executor,
-        per_job=per_job,
+        per_job=max(job_memory(cfg, opts.test_size) for _, cfg in runs_of),
         progress=progress,
         desc="reproduce",
         describe=describe,
