@@ -211,12 +211,9 @@ def _bullet(name: str, res: PresetResult) -> str:
     if res.refines:
         times += f", refinement {secs['refine_seconds']:.1f} s"
     compiled = sum(r.compile_seconds for r in res.runs)
-    compiled_cpu = sum(r.compile_cpu_seconds for r in res.runs)
-    compile_note = (
-        f"; numba's one-time compile {compiled:.0f} s ({compiled_cpu:.0f} CPU s) in all, apart"
-        if compiled >= 0.5
-        else ""
-    )
+    if compiled >= 0.5:
+        cpu = sum(r.compile_cpu_seconds for r in res.runs)
+        times += f"; numba's one-time compile {compiled:.0f} s ({cpu:.0f} CPU s) in all, apart"
     before = res.median("unrefined")["view_consistency"]
     gain = f" (before refinement {before:.3f})" if res.refines else ""
     return (
@@ -225,7 +222,7 @@ def _bullet(name: str, res: PresetResult) -> str:
         f"{_procedure(cfg)}; backend {res.runs[0].backend}. "
         f"{n} seed{plural(n)} ({seeds}): {res.ordered_count()} of {n} ordered, "
         f"median view consistency {med['view_consistency']:.3f}{gain}, worst seed "
-        f"{worst['view_consistency']:.3f}; per seed (median) {times}{compile_note}. Figures: "
+        f"{worst['view_consistency']:.3f}; per seed (median) {times}. Figures: "
         f"seed {res.shown_seed}, {html.escape(res.shown_reason)}.{_source(cfg)}</li>"
     )
 

@@ -137,12 +137,13 @@ stores (``seconds``)."""
 class SeedRun(Result):
     """One trained seed: its metrics after and before the refinement (``unrefined``: the map
     at the end of the training, None where the preset does not refine), learning curve and
-    times: the wall seconds of the training iterations and of the refinement rounds (without
-    the checkpoints, the evaluations and the compile), numba's one-time compile in the worker
-    process that ran it (``compile_seconds``, ``compile_cpu_seconds``: wall and CPU seconds of
-    a small run of the same rules; 0 once the process has compiled, or for a kernel that
-    compiles nothing), the checkpoints and evaluations (``measure_seconds``) and the job's CPU
-    seconds (``cpu_seconds``: the measurements in, the compile out)."""
+    times: the wall seconds of the training iterations and of the refinement rounds
+    (``train_seconds``, ``refine_seconds``: without the checkpoints, the evaluations and the
+    compile), numba's one-time compile in the worker process that ran it (``compile_seconds``,
+    ``compile_cpu_seconds``: wall and CPU seconds of a small run of the same rules; 0 once the
+    process has compiled, or for a kernel that compiles nothing), the checkpoints and
+    evaluations (``measure_seconds``) and the job's CPU seconds (``cpu_seconds``: the
+    measurements in, the compile out)."""
 
     seed: int
     train_seconds: float
