@@ -53,21 +53,6 @@ _LABEL = {
 }
 
 
-def _groups(result: ReproduceResult) -> list[list[str]]:
-    """The presets side by side: each paper preset with its authors' twin, the rest alone."""
-    twins = [OTHER_PROCEDURE.get(name) for name in result.presets]
-    return [
-        [name] + [t for t in (OTHER_PROCEDURE.get(name),) if t in result.presets]
-        for name in result.presets
-        if name not in twins
-    ]
-
-
-def _cell(res: PresetResult, key: str, stage: Stage) -> str:
-    med, worst = res.median(stage)[key], res.worst(stage)[key]
-    return f"{med:.3f}" if len(res.runs) == 1 else f"{med:.3f} <small>({worst:.3f})</small>"
-
-
 def _number(value: float | None) -> str:
     return "" if value is None else f"{value:.3f}"
 
@@ -82,8 +67,10 @@ def _summary(result: ReproduceResult) -> str:
     """Per task, one table: sigmapi's map after and before its refinement (the same runs),
     the authors' procedure, the rule's ceiling and the paper's reference, side by side."""
     out = []
-    for group in _groups(result):
-        first = result.presets[group[0]]
+    twins = {OTHER_PROCEDURE.get(name) for name in result.presets}  # beside their presets
+    for name in (n for n in result.presets if n not in twins):
+        group = [n for n in (name, OTHER_PROCEDURE.get(name)) if n in result.presets]
+        first = result.presets[name]
         ceiling, ref = first.ceiling, first.reference
         cols = [_column(n, result.presets[n], s) for n in group for s in result.presets[n].stages()]
         if ceiling is not None:
@@ -105,12 +92,14 @@ def _summary(result: ReproduceResult) -> str:
 def _column(name: str, res: PresetResult, stage: Stage) -> list[str]:
     """A preset's column of the summary at ``stage``: its head, its cell per metric (median
     and worst seed), its seeds ordered."""
-    n = len(res.runs)
+    n, med = len(res.runs), res.median(stage)
+    worst = {k: "" if n == 1 else f" <small>({v:.3f})</small>" for k, v in res.worst(stage).items()}
     what = f"{'refined' if res.refines else 'final map'}, {n} seed{plural(n)}"
     if stage == "unrefined":
         what = "before refinement (same runs)"
+    cells = [f"{med[k]:.3f}{worst[k]}" for k in METRIC_KEYS]
     ordered = f"{res.ordered_count(stage)} of {n}{_flagged(res.folded_seeds(stage))}"
-    return [f"{html.escape(name)}<br>{what}", *(_cell(res, k, stage) for k in METRIC_KEYS), ordered]
+    return [f"{html.escape(name)}<br>{what}", *cells, ordered]
 
 
 def _flagged(seeds: list[int]) -> str:

@@ -109,21 +109,17 @@ class ReproduceOptions(ReproduceConfig):
     """Training seeds (2-D presets: the first ``seeds_2d`` of them)."""
     progress: bool = True
     """Show progress bars on stderr."""
-    workers: int | None = None
+    workers: int | None = field(default=None, metadata=_validate.bounded("int", 1, none=True))
     """Training runs at once (default: as many as cores and half the available memory allow,
     :func:`~sigmapi.executor.plan_workers`); the results do not depend on it."""
 
     def __post_init__(self) -> None:
         super().__post_init__()
         object.__setattr__(self, "seeds", check_seeds(self.seeds))
-        if self.workers is not None:
-            _validate.integer("workers", self.workers, 1)
 
     def seeds_of(self, cfg: SOMConfig) -> tuple[int, ...]:
         """The seeds a preset trains: all of :attr:`seeds`, the first ``seeds_2d`` in 2-D."""
-        if len(cfg.map_shape) >= 2 and self.seeds_2d is not None:
-            return self.seeds[: self.seeds_2d]
-        return self.seeds
+        return self.seeds[: self.seeds_2d] if len(cfg.map_shape) >= 2 else self.seeds
 
 
 SECONDS = tuple(
@@ -215,9 +211,8 @@ class PresetResult(Result):
         "shown_reason",
         "seconds: median_seconds",
     )
-    """The JSON form: the config, seeds and runs, the medians, worst seeds, means, sd and
-    counts after (at the top) and before the refinement, the ceiling, the references, the
-    figures, the seed they show and why, the median times."""
+    """The JSON form: the statistics after the refinement at the top, those before it in
+    ``unrefined`` (docs/guide/reproduce.md names each key)."""
 
     @property
     def refines(self) -> bool:
@@ -302,8 +297,7 @@ class ReproduceResult(Result):
         "sections",
         "total_seconds",
     )
-    """The JSON form (``metrics.json``): the options it states, the presets, the sections'
-    numbers and the time."""
+    """The JSON form (``metrics.json``; docs/guide/reproduce.md names each key)."""
 
     @classmethod
     def from_dict(cls, data: object) -> ReproduceResult:

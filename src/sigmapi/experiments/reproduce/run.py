@@ -61,10 +61,8 @@ QUICK_REFINE_PAIRS = 20_000
 """Refinement pairs per round in quick runs."""
 
 QUICK_ITERATIONS: dict[str, int] = {"paper-1d": 60_000, "paper-2d": 20_000}
-"""Iterations of each preset in quick runs (the schedule is compressed to fit).
-
-paper-2d's quick run is long enough for its map to order but not to converge, so the fold
-detector may flag it; a much shorter one leaves the map partly twisted."""
+"""Iterations of each preset in quick runs (the schedule compressed to fit): paper-2d's map
+orders but does not converge (the fold detector may flag it); much shorter, it stays twisted."""
 
 CEILING_ROUNDS = 8
 """At most this many rounds of the fixed-point search for the ceiling (quick runs:
@@ -176,16 +174,15 @@ def reproduce(
     try:
         for name, cfg in runs_of:
             figures[name] = _report_preset(name, cfg, trained[name][0], ctx, result, progress)
-            result.figure_files += [out / file for file, _ in figures[name]]
         added = [s for s in sectioned.result() if s]
     except BaseException:  # an error or an interrupt: end the sections' workers now (the
         # training's have ended), so that their jobs fail at once instead of holding up the exit
         for child in multiprocessing.active_children():
             child.terminate()
         raise
-    for s in added:
-        result.sections[s.title] = s.data
-        result.figure_files += [out / file for file, _ in s.figures]
+    result.sections.update({s.title: s.data for s in added})
+    drawn = [*figures.values(), *(s.figures for s in added)]
+    result.figure_files += [out / file for files in drawn for file, _ in files]
     result.total_seconds = time.perf_counter() - started
     atomic_write_bytes(out / "metrics.json", json.dumps(result.to_dict(), indent=2).encode())
     text = render(result, figures, added)
