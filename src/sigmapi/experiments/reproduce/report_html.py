@@ -13,7 +13,6 @@ from sigmapi.experiments.reproduce.results import METRIC_KEYS, ORDERED_R2, OTHER
 from sigmapi.metrics import FOLD_THRESHOLD
 
 if TYPE_CHECKING:
-    from sigmapi.config import SOMConfig
     from sigmapi.experiments.kit.report import Section
     from sigmapi.experiments.reproduce.results import PresetResult, ReproduceResult, SeedRun, Stage
 
@@ -164,24 +163,6 @@ def _figure_html(file: str, caption: str) -> str:
     )
 
 
-def _source(cfg: SOMConfig) -> str:
-    """The preset's own note on where its values come from, if it has one (its settings'
-    provenance; the measurements are this run's, stated beside it)."""
-    source = (cfg.extra or {}).get("source")
-    return f" Values from: {html.escape(str(source))}." if source else ""
-
-
-def _procedure(cfg: SOMConfig) -> str:
-    """How the preset trains, from its config: ordering, training, refinement."""
-    refine = (
-        f"then {cfg.refine_rounds} refinement round{plural(cfg.refine_rounds)} "
-        f"of {cfg.refine_pairs:,} pairs (section 6.3)"
-        if cfg.refine_rounds > 0
-        else "no refinement"
-    )
-    return f"{_PROCEDURE[cfg.ordering]}, {cfg.iterations:,} iterations per seed, {refine}"
-
-
 def _fewer(result: ReproduceResult) -> str:
     """Which presets trained fewer of the seeds (the 2-D ones: ``seeds_2d``), if any."""
     n = len(result.options.seeds)
@@ -191,10 +172,19 @@ def _fewer(result: ReproduceResult) -> str:
 
 
 def _bullet(name: str, res: PresetResult) -> str:
-    """One preset's line, every fact computed from its own config and runs."""
-    cfg, n = res.config, len(res.runs)
+    """One preset's line, every fact computed from its own config and runs: how it trains
+    (ordering, training, refinement), its seeds' statistics and times, the seed the figures
+    show, and the preset's own note on where its settings come from, if it has one."""
+    cfg, n, rounds = res.config, len(res.runs), res.config.refine_rounds
     seeds = ", ".join(str(r.seed) for r in res.runs)
     med, worst = res.median(), res.worst()
+    refine = "no refinement"
+    if rounds > 0:
+        pairs = f"of {cfg.refine_pairs:,} pairs (section 6.3)"
+        refine = f"then {rounds} refinement round{plural(rounds)} {pairs}"
+    procedure = f"{_PROCEDURE[cfg.ordering]}, {cfg.iterations:,} iterations per seed, {refine}"
+    source = (cfg.extra or {}).get("source")
+    note = f" Values from: {html.escape(str(source))}." if source else ""
     secs = res.median_seconds()
     times = f"training {secs['train_seconds']:.1f} s"
     if res.refines:
@@ -208,11 +198,11 @@ def _bullet(name: str, res: PresetResult) -> str:
     return (
         f"<li><b>{html.escape(name)}</b>: map {'x'.join(map(str, cfg.map_shape))}, inputs "
         f"{'x'.join(map(str, cfg.x_shape))} + {'x'.join(map(str, cfg.y_shape))}, "
-        f"{_procedure(cfg)}; backend {res.runs[0].backend}. "
+        f"{procedure}; backend {res.runs[0].backend}. "
         f"{n} seed{plural(n)} ({seeds}): {res.ordered_count()} of {n} ordered, "
         f"median view consistency {med['view_consistency']:.3f}{gain}, worst seed "
         f"{worst['view_consistency']:.3f}; per seed (median) {times}. Figures: "
-        f"seed {res.shown_seed}, {html.escape(res.shown_reason)}.{_source(cfg)}</li>"
+        f"seed {res.shown_seed}, {html.escape(res.shown_reason)}.{note}</li>"
     )
 
 

@@ -201,7 +201,7 @@ class PresetResult(Result):
         "config",
         "seeds: seed_list",
         "runs",
-        "*refined",
+        "*stats",
         "unrefined",
         "ceiling",
         "reference",
@@ -249,7 +249,8 @@ class PresetResult(Result):
         """Seeds the z-free fold detector flags."""
         return [r.seed for r in self.runs if r.at(stage).folded]
 
-    def _stage(self, stage: Stage) -> dict[str, object]:
+    def stats(self, stage: Stage = "refined") -> dict[str, object]:
+        """The statistics over the seeds of the maps at ``stage``, as the JSON form holds them."""
         return {
             "median": self.median(stage),
             "worst": self.worst(stage),
@@ -259,11 +260,8 @@ class PresetResult(Result):
             "folded_seeds": self.folded_seeds(stage),
         }
 
-    def refined(self) -> dict[str, object]:
-        return self._stage("refined")
-
     def unrefined(self) -> dict[str, object] | None:
-        return self._stage("unrefined") if self.refines else None
+        return self.stats("unrefined") if self.refines else None
 
     def seed_list(self) -> list[int]:
         return [r.seed for r in self.runs]

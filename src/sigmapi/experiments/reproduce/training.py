@@ -104,13 +104,9 @@ Trained = tuple[SeedRun, dict[str, object], dict[str, NDArray[np.generic]]]
 
 
 def train_seed(job: SeedJob) -> Trained:
-    """Train one seed with learning-curve checkpoints and evaluate it (a job of
-    :func:`~sigmapi.executor.run_jobs`); ``(run, header, arrays)`` of the model.
-
-    The map at the end of the training is evaluated there, before the refinement (the
-    unrefined map of the same run, at no extra training); the times of the training, the
-    refinement, the measurements and the one-time compile are taken apart (:class:`SeedRun`).
-    """
+    """Train one seed with learning-curve checkpoints and evaluate its map at the end of the
+    training, before the refinement, and at the end (a job of :func:`train_all`); ``(run,
+    header, arrays)`` of the model, the times taken apart (:class:`SeedRun`)."""
     from sigmapi.analysis.curves import LearningCurve, checkpoints
 
     cfg = job.cfg
