@@ -14,7 +14,7 @@ from sigmapi.metrics import FOLD_THRESHOLD
 
 if TYPE_CHECKING:
     from sigmapi.experiments.kit.report import Section
-    from sigmapi.experiments.reproduce.results import PresetResult, ReproduceResult, SeedRun, Stage
+    from sigmapi.experiments.reproduce.results import PresetResult, ReproduceResult, Stage
 
 _STYLE = """
 body { font-family: system-ui, sans-serif; max-width: 1150px; margin: 2em auto; padding: 0 1em;
@@ -52,10 +52,6 @@ _LABEL = {
 }
 
 
-def _number(value: float | None) -> str:
-    return "" if value is None else f"{value:.3f}"
-
-
 def _html_table(head: Iterable[str], rows: Iterable[Iterable[str]]) -> str:
     """A table of the header's cells and a row of cells per row (each cell HTML already)."""
     cells = "".join("<tr>" + "".join(f"<td>{c}</td>" for c in row) + "</tr>" for row in rows)
@@ -79,7 +75,7 @@ def _summary(result: ReproduceResult) -> str:
         if ref:
             floor = first.z_error_floor
             notes = {} if floor is None else {"z_error": f" (floor {floor:.2f})"}
-            values = (_number(ref.get(k)) + notes.get(k, "") for k in METRIC_KEYS)
+            values = ((f"{ref[k]:.3f}" if k in ref else "") + notes.get(k, "") for k in METRIC_KEYS)
             cols.append(["reference<br>(docs/algorithm.md)", *values, ""])
         labels = ["median <small>(worst seed)</small>", *(_LABEL[k] for k in METRIC_KEYS)]
         labels.append(f"seeds ordered (R² &ge; {ORDERED_R2})")
@@ -117,8 +113,9 @@ def _table(result: ReproduceResult) -> str:
             med, worst = res.median(stage), res.worst(stage)
             for key in METRIC_KEYS:
                 stats = (f"{med[key]:.3f}", f"{worst[key]:.3f}", _mean_sd(mean[key], sd[key], n))
-                seeds = ", ".join(_seed_value(r, key, stage) for r in res.runs)
-                ref = _number(res.reference.get(key))
+                values = [(f"{r.metric(key, stage):.3f}", r.at(stage).folded) for r in res.runs]
+                seeds = ", ".join(f"<b>{v}</b>" if folded else v for v, folded in values)
+                ref = f"{res.reference[key]:.3f}" if key in res.reference else ""
                 rows.append([label, key, *stats, seeds, ref, _note(res, key, stage)])
     head = ("run", "metric", "median", "worst seed", "mean ± sd",
             "per seed (<b>bold</b>: flagged folded)", "reference", "")  # fmt: skip
@@ -148,19 +145,6 @@ def _note(res: PresetResult, key: str, stage: Stage) -> str:
 def _mean_sd(mean: float, sd: float, n: int) -> str:
     """``mean ± sd`` over seeds; one seed has no spread to show (never "± 0.000")."""
     return f"{mean:.3f} ± {sd:.3f}" if n > 1 else f"{mean:.3f} (one seed)"
-
-
-def _seed_value(run: SeedRun, key: str, stage: Stage) -> str:
-    value = f"{run.metric(key, stage):.3f}"
-    return f"<b>{value}</b>" if run.at(stage).folded else value
-
-
-def _figure_html(file: str, caption: str) -> str:
-    f = html.escape(file, quote=True)
-    return (
-        f"<figure><a href='{f}'><img src='{f}' alt='{html.escape(caption[:80], quote=True)}'></a>"
-        f"<figcaption>{html.escape(caption)}</figcaption></figure>"
-    )
 
 
 def _fewer(result: ReproduceResult) -> str:
@@ -250,7 +234,10 @@ def render(
     parts = [(f"Figures: {name}", "", figs) for name, figs in figures.items()]
     for heading, text, figs in parts + [(s.title, s.html, s.figures) for s in sections]:
         body.append(f"<h2>{html.escape(heading)}</h2>{text}")
-        body.extend(_figure_html(f, c) for f, c in figs)
+        for file, caption in figs:
+            f, alt = html.escape(file, quote=True), html.escape(caption[:80], quote=True)
+            body.append(f"<figure><a href='{f}'><img src='{f}' alt='{alt}'></a>")
+            body.append(f"<figcaption>{html.escape(caption)}</figcaption></figure>")
     return (
         f"<!doctype html><html lang='en'><head><meta charset='utf-8'><title>{title}</title>"
         f"<style>{_STYLE}</style></head><body>{''.join(body)}</body></html>\n"

@@ -18,7 +18,7 @@ import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import Future
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import Any
 
 from threadpoolctl import threadpool_limits
 
@@ -26,7 +26,7 @@ from sigmapi.config import SOMConfig, list_presets, load_preset
 from sigmapi.errors import ConfigError
 from sigmapi.executor import Executor
 from sigmapi.experiments.base import Experiment, Run, register
-from sigmapi.experiments.kit.report import ReportContext, SectionFn, section_function
+from sigmapi.experiments.kit.report import ReportContext, Section, SectionFn, section_function
 from sigmapi.experiments.reproduce.report_html import linked_files, render
 from sigmapi.experiments.reproduce.results import (
     OTHER_PROCEDURE,
@@ -43,8 +43,6 @@ from sigmapi.metrics import ORDERED_R2, evaluate
 from sigmapi.model.som import SigmaPiSOM
 from sigmapi.progress import Progress
 from sigmapi.viz import figures as figs
-
-T = TypeVar("T")
 
 REFERENCE: dict[str, dict[str, float]] = {
     name: {"view_consistency": 0.87, "view_within_one": 0.988, "z_error": 0.32}
@@ -244,12 +242,12 @@ def _report_preset(
     return drawn
 
 
-def _in_background(fn: Callable[[], T]) -> Future[T]:
+def _in_background(fn: Callable[[], list[Section | None]]) -> Future[list[Section | None]]:
     """``fn()`` run in a daemon thread from now on; the future of its value (or error). The
     sections (the reach experiment: its seeds in a process pool) run so beside the ceilings
     and the figures, whose drawing leaves a core idle. A daemon thread: an interrupted report
     does not wait for it (its pool's workers end with this process)."""
-    future: Future[T] = Future()
+    future: Future[list[Section | None]] = Future()
 
     def run() -> None:
         try:
