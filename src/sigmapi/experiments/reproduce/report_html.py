@@ -1,27 +1,20 @@
-"""The HTML of the reproduction report: one self-contained page (it links only files beside it).
-
-:func:`render` turns a :class:`~sigmapi.experiments.reproduce.results.ReproduceResult`, the
-captioned figures and the added sections into the page; :func:`linked_files` lists the local files a
-page links (the report checks that each exists before writing it).
+"""The HTML of the reproduction report (:func:`render`): one self-contained page, which links
+only files beside it (:func:`linked_files`: the report checks that each exists).
 """
 
 from __future__ import annotations
 
 import html
 import re
+from collections.abc import Iterable
 from typing import TYPE_CHECKING
 
-from sigmapi.experiments.reproduce.results import METRIC_KEYS, ORDERED_R2, OTHER_PROCEDURE
+from sigmapi.experiments.reproduce.results import METRIC_KEYS, ORDERED_R2, OTHER_PROCEDURE, plural
 from sigmapi.metrics import FOLD_THRESHOLD
 
 if TYPE_CHECKING:
-    from sigmapi.config import SOMConfig
     from sigmapi.experiments.kit.report import Section
-    from sigmapi.experiments.reproduce.results import (
-        PresetResult,
-        ReproduceResult,
-        Stage,
-    )
+    from sigmapi.experiments.reproduce.results import PresetResult, ReproduceResult, Stage
 
 _STYLE = """
 body { font-family: system-ui, sans-serif; max-width: 1150px; margin: 2em auto; padding: 0 1em;
@@ -59,120 +52,94 @@ _LABEL = {
 }
 
 
-def _groups(result: ReproduceResult) -> list[list[str]]:
-    """The presets side by side: each paper preset with its authors' twin, the rest alone."""
-    names, seen, out = list(result.presets), set(), []
-    for name in names:
-        if name in seen:
-            continue
-        group = [name] + [t for t in (OTHER_PROCEDURE.get(name),) if t in result.presets]
-        seen.update(group)
-        out.append(group)
-    return out
-
-
-def _cell(res: PresetResult, key: str, stage: Stage) -> str:
-    med, worst = res.median(stage)[key], res.worst(stage)[key]
-    return f"{med:.3f}" if len(res.runs) == 1 else f"{med:.3f} <small>({worst:.3f})</small>"
+def _html_table(head: Iterable[str], rows: Iterable[Iterable[str]]) -> str:
+    """A table of the header's cells and a row of cells per row (each cell HTML already)."""
+    cells = "".join("<tr>" + "".join(f"<td>{c}</td>" for c in row) + "</tr>" for row in rows)
+    return "<table><tr>" + "".join(f"<th>{h}</th>" for h in head) + f"</tr>{cells}</table>"
 
 
 def _summary(result: ReproduceResult) -> str:
     """Per task, one table: sigmapi's map after and before its refinement (the same runs),
     the authors' procedure, the rule's ceiling and the paper's reference, side by side."""
     out = []
-    for group in _groups(result):
-        cols: list[tuple[str, PresetResult, Stage]] = []
-        for name in group:
-            res = result.presets[name]
-            n = len(res.runs)
-            what = "refined" if res.refines else "final map"
-            cols.append(
-                (f"{html.escape(name)}<br>{what}, {n} seed{'s' * (n != 1)}", res, "refined")
-            )
-            if res.refines:
-                cols.append(
-                    (f"{html.escape(name)}<br>before refinement (same runs)", res, "unrefined")
-                )
-        first = result.presets[group[0]]
+    twins = {OTHER_PROCEDURE.get(name) for name in result.presets}  # beside their presets
+    for name in (n for n in result.presets if n not in twins):
+        group = [n for n in (name, OTHER_PROCEDURE.get(name)) if n in result.presets]
+        first = result.presets[name]
         ceiling, ref = first.ceiling, first.reference
-        head = "".join(f"<th>{c}</th>" for c, _, _ in cols)
+        cols = [_column(n, result.presets[n], s) for n in group for s in result.presets[n].stages()]
         if ceiling is not None:
-            head += (
-                f"<th>the rule's ceiling<br>fixed point from {html.escape(ceiling['preset'])}"
-                f" seed {ceiling['seed']}</th>"
-            )
-        head += "<th>reference<br>(docs/algorithm.md)</th>" if ref else ""
-        rows = []
-        for key in METRIC_KEYS:
-            cells = "".join(f"<td>{_cell(res, key, stage)}</td>" for _, res, stage in cols)
-            if ceiling is not None:
-                cells += f"<td>{float(ceiling[key]):.3f}</td>" if key in ceiling else "<td></td>"
-            if ref:
-                r = ref.get(key)
-                floor = first.z_error_floor if key == "z_error" else None
-                note = f" (floor {floor:.2f})" if floor is not None else ""
-                cells += f"<td>{'' if r is None else f'{r:.3f}'}{note}</td>"
-            rows.append(f"<tr><td>{_LABEL[key]}</td>{cells}</tr>")
-        ordered = "".join(
-            f"<td>{res.ordered_count(stage)} of {len(res.runs)}"
-            f"{_flagged(res.folded_seeds(stage))}</td>"
-            for _, res, stage in cols
-        )
-        pad = "<td></td>" * ((ceiling is not None) + bool(ref))
-        rows.append(f"<tr><td>seeds ordered (R² &ge; {ORDERED_R2})</td>{ordered}{pad}</tr>")
-        out += ["<table><tr><th>median <small>(worst seed)</small></th>", head, "</tr>"]
-        out += [*rows, "</table>"]
+            at = f"fixed point from {html.escape(ceiling['preset'])} seed {ceiling['seed']}"
+            values = (f"{float(ceiling[k]):.3f}" if k in ceiling else "" for k in METRIC_KEYS)
+            cols.append([f"the rule's ceiling<br>{at}", *values, ""])
+        if ref:
+            floor = first.z_error_floor
+            notes = {} if floor is None else {"z_error": f" (floor {floor:.2f})"}
+            values = ((f"{ref[k]:.3f}" if k in ref else "") + notes.get(k, "") for k in METRIC_KEYS)
+            cols.append(["reference<br>(docs/algorithm.md)", *values, ""])
+        labels = ["median <small>(worst seed)</small>", *(_LABEL[k] for k in METRIC_KEYS)]
+        labels.append(f"seeds ordered (R² &ge; {ORDERED_R2})")
+        head, *rows = zip(labels, *cols, strict=True)  # the columns as rows
+        out.append(_html_table(head, rows))
     return "".join(out)
+
+
+def _column(name: str, res: PresetResult, stage: Stage) -> list[str]:
+    """A preset's column of the summary at ``stage``: its head, its cell per metric (median
+    and worst seed), its seeds ordered."""
+    n, med = len(res.runs), res.median(stage)
+    worst = {k: "" if n == 1 else f" <small>({v:.3f})</small>" for k, v in res.worst(stage).items()}
+    what = f"{'refined' if res.refines else 'final map'}, {n} seed{plural(n)}"
+    if stage == "unrefined":
+        what = "before refinement (same runs)"
+    cells = [f"{med[k]:.3f}{worst[k]}" for k in METRIC_KEYS]
+    ordered = f"{res.ordered_count(stage)} of {n}{_flagged(res.folded_seeds(stage))}"
+    return [f"{html.escape(name)}<br>{what}", *cells, ordered]
 
 
 def _flagged(seeds: list[int]) -> str:
     if not seeds:
         return ", none flagged folded"
-    return f", flagged folded: seed{'s' if len(seeds) != 1 else ''} {', '.join(map(str, seeds))}"
+    return f", flagged folded: seed{plural(len(seeds))} {', '.join(map(str, seeds))}"
 
 
 def _table(result: ReproduceResult) -> str:
     """Every seed's value of every metric, per preset and stage, with the statistics."""
     rows = []
     for name, res in result.presets.items():
-        ref = res.reference
-        stages: list[Stage] = ["refined", "unrefined"] if res.refines else ["refined"]
-        for stage in stages:
-            label = name if stage == "refined" else f"{name}, before refinement"
-            mean, sd = res.mean(stage), res.sd(stage)
+        for stage in res.stages():
+            label = html.escape(name if stage == "refined" else f"{name}, before refinement")
+            mean, sd, n = res.mean(stage), res.sd(stage), len(res.runs)
             med, worst = res.median(stage), res.worst(stage)
             for key in METRIC_KEYS:
-                value = med[key]
-                per_seed = ", ".join(
-                    _seed_value(r.metric(key, stage), r.at(stage).folded) for r in res.runs
-                )
-                r = ref.get(key)
-                note = ""
-                if r is not None:
-                    better = value <= r * 1.1 if key == "z_error" else value >= r - 0.05
-                    cls, word = ("good", "close") if better else ("bad", "off")
-                    note = f"<span class='{cls}'>{word}</span>"
-                if key == "z_error" and res.z_error_floor is not None:
-                    note += f" (floor {res.z_error_floor:.2f})"
-                if key == "order_r2":
-                    n, count = len(res.runs), res.ordered_count(stage)
-                    cls = "good" if count == n else "bad"
-                    note += (
-                        f"<span class='{cls}'>{count} of {n} ordered "
-                        f"(R<sup>2</sup> &ge; {ORDERED_R2})</span>"
-                    ) + _flagged(res.folded_seeds(stage)).replace(", ", "; ", 1)
-                rows.append(
-                    f"<tr><td>{html.escape(label)}</td><td>{key}</td><td>{value:.3f}</td>"
-                    f"<td>{worst[key]:.3f}</td>"
-                    f"<td>{_mean_sd(mean[key], sd[key], len(res.runs))}</td>"
-                    f"<td>{per_seed}</td><td>{'' if r is None else f'{r:.3f}'}</td>"
-                    f"<td>{note}</td></tr>"
-                )
-    return (
-        "<table><tr><th>run</th><th>metric</th><th>median</th><th>worst seed</th>"
-        "<th>mean ± sd</th><th>per seed (<b>bold</b>: flagged folded)</th><th>reference</th>"
-        "<th></th></tr>" + "".join(rows) + "</table>"
-    )
+                stats = (f"{med[key]:.3f}", f"{worst[key]:.3f}", _mean_sd(mean[key], sd[key], n))
+                values = [(f"{r.metric(key, stage):.3f}", r.at(stage).folded) for r in res.runs]
+                seeds = ", ".join(f"<b>{v}</b>" if folded else v for v, folded in values)
+                ref = f"{res.reference[key]:.3f}" if key in res.reference else ""
+                rows.append([label, key, *stats, seeds, ref, _note(res, key, stage)])
+    head = ("run", "metric", "median", "worst seed", "mean ± sd",
+            "per seed (<b>bold</b>: flagged folded)", "reference", "")  # fmt: skip
+    return _html_table(head, rows)
+
+
+def _note(res: PresetResult, key: str, stage: Stage) -> str:
+    """What the per-seed table says beside a metric's median: close to the reference or off,
+    the z error's floor, the seeds ordered and flagged folded."""
+    r, note = res.reference.get(key), ""
+    if r is not None:
+        value = res.median(stage)[key]
+        better = value <= r * 1.1 if key == "z_error" else value >= r - 0.05
+        cls, word = ("good", "close") if better else ("bad", "off")
+        note = f"<span class='{cls}'>{word}</span>"
+    if key == "z_error" and res.z_error_floor is not None:
+        note += f" (floor {res.z_error_floor:.2f})"
+    if key == "order_r2":
+        n, count = len(res.runs), res.ordered_count(stage)
+        cls = "good" if count == n else "bad"
+        note += (
+            f"<span class='{cls}'>{count} of {n} ordered (R<sup>2</sup> &ge; {ORDERED_R2})</span>"
+        ) + _flagged(res.folded_seeds(stage)).replace(", ", "; ", 1)
+    return note
 
 
 def _mean_sd(mean: float, sd: float, n: int) -> str:
@@ -180,72 +147,46 @@ def _mean_sd(mean: float, sd: float, n: int) -> str:
     return f"{mean:.3f} ± {sd:.3f}" if n > 1 else f"{mean:.3f} (one seed)"
 
 
-def _seed_value(value: float, folded: bool) -> str:
-    return f"<b>{value:.3f}</b>" if folded else f"{value:.3f}"
-
-
-def _figure_html(file: str, caption: str) -> str:
-    f = html.escape(file, quote=True)
-    return (
-        f"<figure><a href='{f}'><img src='{f}' alt='{html.escape(caption[:80], quote=True)}'></a>"
-        f"<figcaption>{html.escape(caption)}</figcaption></figure>"
-    )
-
-
-def _source(cfg: SOMConfig) -> str:
-    """The preset's own note on where its values come from, if it has one (its settings'
-    provenance; the measurements are this run's, stated beside it)."""
-    source = (cfg.extra or {}).get("source")
-    return f" Values from: {html.escape(str(source))}." if source else ""
-
-
-def _procedure(cfg: SOMConfig) -> str:
-    """How the preset trains, from its config: ordering, training, refinement."""
-    refine = (
-        f"then {cfg.refine_rounds} refinement round{'s' if cfg.refine_rounds != 1 else ''} "
-        f"of {cfg.refine_pairs:,} pairs (section 6.3)"
-        if cfg.refine_rounds > 0
-        else "no refinement"
-    )
-    return f"{_PROCEDURE[cfg.ordering]}, {cfg.iterations:,} iterations per seed, {refine}"
-
-
 def _fewer(result: ReproduceResult) -> str:
     """Which presets trained fewer of the seeds (the 2-D ones: ``seeds_2d``), if any."""
     n = len(result.options.seeds)
     fewer = [(k, len(p.runs)) for k, p in result.presets.items() if len(p.runs) < n]
-    if not fewer:
-        return ""
-    return " (" + ", ".join(f"{html.escape(k)}: the first {m}" for k, m in fewer) + ")"
+    text = ", ".join(f"{html.escape(k)}: the first {m}" for k, m in fewer)
+    return f" ({text})" if fewer else ""
 
 
 def _bullet(name: str, res: PresetResult) -> str:
-    """One preset's line, every fact computed from its own config and runs."""
-    cfg, n = res.config, len(res.runs)
+    """One preset's line, every fact computed from its own config and runs: how it trains
+    (ordering, training, refinement), its seeds' statistics and times, the seed the figures
+    show, and the preset's own note on where its settings come from, if it has one."""
+    cfg, n, rounds = res.config, len(res.runs), res.config.refine_rounds
     seeds = ", ".join(str(r.seed) for r in res.runs)
     med, worst = res.median(), res.worst()
-    times = f"training {res.seconds('train_seconds'):.1f} s"
+    refine = "no refinement"
+    if rounds > 0:
+        pairs = f"of {cfg.refine_pairs:,} pairs (section 6.3)"
+        refine = f"then {rounds} refinement round{plural(rounds)} {pairs}"
+    procedure = f"{_PROCEDURE[cfg.ordering]}, {cfg.iterations:,} iterations per seed, {refine}"
+    source = (cfg.extra or {}).get("source")
+    note = f" Values from: {html.escape(str(source))}." if source else ""
+    secs = res.median_seconds()
+    times = f"training {secs['train_seconds']:.1f} s"
     if res.refines:
-        times += f", refinement {res.seconds('refine_seconds'):.1f} s"
+        times += f", refinement {secs['refine_seconds']:.1f} s"
     compiled = sum(r.compile_seconds for r in res.runs)
-    compiled_cpu = sum(r.compile_cpu_seconds for r in res.runs)
-    compile_note = (
-        f"; numba's one-time compile {compiled:.0f} s ({compiled_cpu:.0f} CPU s) in all, apart"
-        if compiled >= 0.5
-        else ""
-    )
-    gain = ""
-    if res.refines:
-        before = res.median("unrefined")["view_consistency"]
-        gain = f" (before refinement {before:.3f})"
+    if compiled >= 0.5:
+        cpu = sum(r.compile_cpu_seconds for r in res.runs)
+        times += f"; numba's one-time compile {compiled:.0f} s ({cpu:.0f} CPU s) in all, apart"
+    before = res.median("unrefined")["view_consistency"]
+    gain = f" (before refinement {before:.3f})" if res.refines else ""
     return (
         f"<li><b>{html.escape(name)}</b>: map {'x'.join(map(str, cfg.map_shape))}, inputs "
         f"{'x'.join(map(str, cfg.x_shape))} + {'x'.join(map(str, cfg.y_shape))}, "
-        f"{_procedure(cfg)}; backend {res.runs[0].backend}. "
-        f"{n} seed{'s' if n != 1 else ''} ({seeds}): {res.ordered_count()} of {n} ordered, "
+        f"{procedure}; backend {res.runs[0].backend}. "
+        f"{n} seed{plural(n)} ({seeds}): {res.ordered_count()} of {n} ordered, "
         f"median view consistency {med['view_consistency']:.3f}{gain}, worst seed "
-        f"{worst['view_consistency']:.3f}; per seed (median) {times}{compile_note}. Figures: "
-        f"seed {res.shown_seed}, {html.escape(res.shown_reason)}.{_source(cfg)}</li>"
+        f"{worst['view_consistency']:.3f}; per seed (median) {times}. Figures: "
+        f"seed {res.shown_seed}, {html.escape(res.shown_reason)}.{note}</li>"
     )
 
 
@@ -290,12 +231,13 @@ def render(
         "<p>All numbers, per seed, and the learning curves: <a href='metrics.json'>metrics.json"
         "</a>.</p>",
     ]
-    for name, figs in figures.items():
-        body.append(f"<h2>Figures: {html.escape(name)}</h2>")
-        body.extend(_figure_html(f, c) for f, c in figs)
-    for s in sections:
-        body.append(f"<h2>{html.escape(s.title)}</h2>{s.html}")
-        body.extend(_figure_html(f, c) for f, c in s.figures)
+    parts = [(f"Figures: {name}", "", figs) for name, figs in figures.items()]
+    for heading, text, figs in parts + [(s.title, s.html, s.figures) for s in sections]:
+        body.append(f"<h2>{html.escape(heading)}</h2>{text}")
+        for file, caption in figs:
+            f, alt = html.escape(file, quote=True), html.escape(caption[:80], quote=True)
+            body.append(f"<figure><a href='{f}'><img src='{f}' alt='{alt}'></a>")
+            body.append(f"<figcaption>{html.escape(caption)}</figcaption></figure>")
     return (
         f"<!doctype html><html lang='en'><head><meta charset='utf-8'><title>{title}</title>"
         f"<style>{_STYLE}</style></head><body>{''.join(body)}</body></html>\n"

@@ -1,10 +1,6 @@
-"""What the reproduction run takes and gives: its options, its typed results, report sections.
-
-:class:`ReproduceConfig` holds its settings (the command-line options), :class:`ReproduceOptions`
-those with the run's seeds, progress and workers; :class:`ReproduceResult` (one
-:class:`PresetResult` per preset, one :class:`SeedRun` per seed) is what ``metrics.json``
-holds, through ``to_dict()``. The sections experiments add to the report are the kit's
-(:mod:`sigmapi.experiments.kit.report`).
+"""What the reproduction run takes and gives: its options (:class:`ReproduceConfig`, the
+command-line options; :class:`ReproduceOptions`) and typed results (:class:`ReproduceResult`,
+``metrics.json``); the report's sections are :mod:`sigmapi.experiments.kit.report`'s.
 """
 
 from __future__ import annotations
@@ -21,15 +17,7 @@ from sigmapi.experiments.base import check_seeds
 from sigmapi.experiments.kit.results import Result, as_object
 from sigmapi.metrics import ORDERED_R2, Metrics
 
-METRIC_KEYS = (
-    "view_consistency",
-    "view_within_one",
-    "z_error",
-    "order_r2",
-    "usage",
-    "fold_score",
-)
-
+METRIC_KEYS = ("view_consistency", "view_within_one", "z_error", "order_r2", "usage", "fold_score")
 """The metrics the report tabulates (median, worst seed, mean and sd over seeds)."""
 
 WORSE_IS_LARGER = ("z_error", "fold_score")
@@ -38,6 +26,12 @@ WORSE_IS_LARGER = ("z_error", "fold_score")
 Stage = Literal["refined", "unrefined"]
 """Which map of a run: at its end (``refined``, after the refinement where the preset has
 one) or at the end of the training, before the refinement (``unrefined``)."""
+
+
+def plural(n: int) -> str:
+    """The plural ending of a word counted ``n`` times ("s" unless one)."""
+    return "s" if n != 1 else ""
+
 
 SaveModels = Literal["shown", "all", "none"]
 SAVE_MODELS: tuple[str, ...] = get_args(SaveModels)
@@ -109,46 +103,27 @@ class ReproduceConfig:
 @dataclass(frozen=True)
 class ReproduceOptions(ReproduceConfig):
     """A :class:`ReproduceConfig` with the run's seeds, progress and workers (what the report
-    and its sections see, :class:`~sigmapi.experiments.kit.report.ReportContext`).
-
-    Attributes
-    ----------
-    seeds : tuple of int
-        Training seeds (2-D presets: the first ``seeds_2d`` of them); figures other than the
-        learning curves show the model of the seed with the lowest order R^2 (the first on
-        ties), and say why.
-    progress : bool
-        Show progress bars on stderr.
-    workers : int, optional
-        Training runs at once (default: one per core, as many as fit in half the available
-        memory; :func:`~sigmapi.executor.plan_workers`). The results do not
-        depend on it.
-    """
+    and its sections see, :class:`~sigmapi.experiments.kit.report.ReportContext`)."""
 
     seeds: tuple[int, ...] = (0, 1, 2)
+    """Training seeds (2-D presets: the first ``seeds_2d`` of them)."""
     progress: bool = True
-    workers: int | None = None
+    """Show progress bars on stderr."""
+    workers: int | None = field(default=None, metadata=_validate.bounded("int", 1, none=True))
+    """Training runs at once (default: as many as cores and half the available memory allow,
+    :func:`~sigmapi.executor.plan_workers`); the results do not depend on it."""
 
     def __post_init__(self) -> None:
         super().__post_init__()
         object.__setattr__(self, "seeds", check_seeds(self.seeds))
-        if self.workers is not None:
-            _validate.integer("workers", self.workers, 1)
 
     def seeds_of(self, cfg: SOMConfig) -> tuple[int, ...]:
         """The seeds a preset trains: all of :attr:`seeds`, the first ``seeds_2d`` in 2-D."""
-        if len(cfg.map_shape) >= 2 and self.seeds_2d is not None:
-            return self.seeds[: self.seeds_2d]
-        return self.seeds
+        return self.seeds[: self.seeds_2d] if len(cfg.map_shape) >= 2 else self.seeds
 
 
-SECONDS = (
-    "train_seconds",
-    "refine_seconds",
-    "compile_seconds",
-    "measure_seconds",
-    "cpu_seconds",
-    "compile_cpu_seconds",
+SECONDS = tuple(
+    f"{t}_seconds" for t in ("train", "refine", "compile", "measure", "cpu", "compile_cpu")
 )
 """The times of a :class:`SeedRun`, whose medians over seeds :meth:`PresetResult.to_dict`
 stores (``seconds``)."""
@@ -156,26 +131,15 @@ stores (``seconds``)."""
 
 @dataclass
 class SeedRun(Result):
-    """One trained seed: its metrics (after and before the refinement), learning curve and
-    times.
-
-    Attributes
-    ----------
-    train_seconds, refine_seconds : float
-        Wall seconds of the training iterations and of the refinement rounds, without the
-        learning-curve checkpoints, the evaluations and the one-time compile.
-    compile_seconds, compile_cpu_seconds : float
-        numba's one-time compile in the worker process that ran this seed (a small warm-up
-        run of the same rules, timed apart), wall and CPU seconds; 0 once a process has
-        compiled, or for a kernel that compiles nothing.
-    measure_seconds : float
-        Learning-curve checkpoints and the evaluations of the unrefined and final maps.
-    cpu_seconds : float
-        CPU seconds of the job in its process (measurements included, the compile not).
-    unrefined : Metrics or None
-        The map at the end of the training, before the refinement (the same run); None when
-        the preset does not refine.
-    """
+    """One trained seed: its metrics after and before the refinement (``unrefined``: the map
+    at the end of the training, None where the preset does not refine), learning curve and
+    times: the wall seconds of the training iterations and of the refinement rounds
+    (``train_seconds``, ``refine_seconds``: without the checkpoints, the evaluations and the
+    compile), numba's one-time compile in the worker process that ran it (``compile_seconds``,
+    ``compile_cpu_seconds``: wall and CPU seconds of a small run of the same rules; 0 once the
+    process has compiled, or for a kernel that compiles nothing), the checkpoints and
+    evaluations (``measure_seconds``) and the job's CPU seconds (``cpu_seconds``: the
+    measurements in, the compile out)."""
 
     seed: int
     train_seconds: float
@@ -190,8 +154,8 @@ class SeedRun(Result):
     compile_cpu_seconds: float = 0.0
 
     KEYS = ("seed", *SECONDS, "backend", "*metrics", "unrefined", "curve")
-    """The JSON form: the seed, its times, the kernel, the metrics at the top and those of
-    the unrefined map, the learning curve."""
+    """The JSON form: the seed, its times, the kernel, the metrics (the final map's at the top),
+    the learning curve."""
 
     def at(self, stage: Stage = "refined") -> Metrics:
         """The metrics of the map at ``stage`` (the final map's where there is no other)."""
@@ -204,19 +168,14 @@ class SeedRun(Result):
 
     @classmethod
     def from_dict(cls, data: object) -> SeedRun:
-        """The run a :meth:`to_dict` wrote."""
-        data = as_object(data)
-        times: dict[str, Any] = {k: float(data[k]) for k in SECONDS}
-        rest = set(data) - {*SECONDS, "seed", "backend", "unrefined", "curve"}
-        unrefined = data["unrefined"]
-        return cls(
-            seed=int(data["seed"]),
-            backend=str(data["backend"]),
-            metrics=Metrics.from_dict({k: data[k] for k in rest}),
-            curve=dict(data["curve"]),
-            unrefined=None if unrefined is None else Metrics.from_dict(unrefined),
-            **times,
-        )
+        """The run a :meth:`to_dict` wrote (the keys that name no field are its metrics)."""
+        obj = as_object(data)
+        values = cls.read_fields(obj)
+        metrics = Metrics.from_dict({k: v for k, v in obj.items() if k not in values})
+        unrefined = values.pop("unrefined")
+        if unrefined is not None:
+            values["unrefined"] = Metrics.from_dict(unrefined)
+        return cls(**values, metrics=metrics)
 
 
 @dataclass
@@ -242,7 +201,7 @@ class PresetResult(Result):
         "config",
         "seeds: seed_list",
         "runs",
-        "*refined",
+        "*stats",
         "unrefined",
         "ceiling",
         "reference",
@@ -252,14 +211,18 @@ class PresetResult(Result):
         "shown_reason",
         "seconds: median_seconds",
     )
-    """The JSON form: the config, seeds and runs, the medians, worst seeds, means, sd and
-    counts after (at the top) and before the refinement, the ceiling, the references, the
-    figures, the seed they show and why, the median times."""
+    """The JSON form: the statistics after the refinement at the top, those before it in
+    ``unrefined`` (docs/guide/reproduce.md names each key)."""
 
     @property
     def refines(self) -> bool:
         """Whether the runs have an unrefined map to compare (the preset refines)."""
         return all(r.unrefined is not None for r in self.runs) and bool(self.runs)
+
+    def stages(self) -> list[Stage]:
+        """The maps of its runs: the final (``refined``) and, where the preset refines, the
+        ``unrefined``."""
+        return ["refined", "unrefined"] if self.refines else ["refined"]
 
     def _values(self, key: str, stage: Stage) -> list[float]:
         return [r.metric(key, stage) for r in self.runs]
@@ -286,11 +249,8 @@ class PresetResult(Result):
         """Seeds the z-free fold detector flags."""
         return [r.seed for r in self.runs if r.at(stage).folded]
 
-    def seconds(self, key: str) -> float:
-        """Median over seeds of a time of :class:`SeedRun` (e.g. ``"train_seconds"``)."""
-        return statistics.median(float(getattr(r, key)) for r in self.runs)
-
-    def _stage(self, stage: Stage) -> dict[str, object]:
+    def stats(self, stage: Stage = "refined") -> dict[str, object]:
+        """The statistics over the seeds of the maps at ``stage``, as the JSON form holds them."""
         return {
             "median": self.median(stage),
             "worst": self.worst(stage),
@@ -300,17 +260,15 @@ class PresetResult(Result):
             "folded_seeds": self.folded_seeds(stage),
         }
 
-    def refined(self) -> dict[str, object]:
-        return self._stage("refined")
-
     def unrefined(self) -> dict[str, object] | None:
-        return self._stage("unrefined") if self.refines else None
+        return self.stats("unrefined") if self.refines else None
 
     def seed_list(self) -> list[int]:
         return [r.seed for r in self.runs]
 
     def median_seconds(self) -> dict[str, float]:
-        return {k: self.seconds(k) for k in SECONDS}
+        """Per time of :class:`SeedRun` (:data:`SECONDS`), its median over the seeds."""
+        return {k: statistics.median(float(getattr(r, k)) for r in self.runs) for k in SECONDS}
 
 
 @dataclass
@@ -337,21 +295,15 @@ class ReproduceResult(Result):
         "sections",
         "total_seconds",
     )
-    """The JSON form (``metrics.json``): the options it states, the presets, the sections'
-    numbers and the time."""
+    """The JSON form (``metrics.json``; docs/guide/reproduce.md names each key)."""
 
     @classmethod
     def from_dict(cls, data: object) -> ReproduceResult:
         """The result a :meth:`to_dict` wrote (``metrics.json``): its options (those it
         states), presets and sections; no report folder."""
         data = as_object(data)
-        options = ReproduceOptions(
-            quick=data["quick"],
-            seeds=tuple(data["seeds"]),
-            seeds_2d=data["seeds_2d"],
-            n_test=data["n_test"],
-            progress=False,
-        )
+        stated = {k: data[k] for k in ("quick", "seeds", "seeds_2d", "n_test")}
+        options = ReproduceOptions(**stated, progress=False)
         presets = {name: PresetResult.from_dict(p) for name, p in data["presets"].items()}
         return cls(options, presets, dict(data["sections"]), float(data["total_seconds"]))
 
@@ -362,25 +314,22 @@ class ReproduceResult(Result):
         lines = []
         for name, res in self.presets.items():
             n = len(res.runs)
-            stages = [("median", res.median())]
-            if res.refines:
-                stages.append(("median before refinement", res.median("unrefined")))
-            for label, values in stages:
-                text = ", ".join(f"{k} {v:.3f}" for k, v in values.items())
-                lines.append(f"{name}: {label} of {n} seed{'s' if n != 1 else ''}: {text}")
-            flagged = res.folded_seeds()
+            for stage in res.stages():
+                label = "median" if stage == "refined" else "median before refinement"
+                text = ", ".join(f"{k} {v:.3f}" for k, v in res.median(stage).items())
+                lines.append(f"{name}: {label} of {n} seed{plural(n)}: {text}")
+            flagged, worst = res.folded_seeds(), res.worst()
             flags = (
-                f"; the fold detector flags seed{'s' if len(flagged) != 1 else ''} "
+                f"; the fold detector flags seed{plural(len(flagged))} "
                 f"{', '.join(map(str, flagged))} (its signs, views of one z won by distant "
                 "units, also mark a coarse map)"
                 if flagged
                 else ""
             )
             lines.append(
-                f"{name}: {res.ordered_count()} of {n} ordered (order R^2 >= "
-                f"{ORDERED_R2}){flags}; worst seed: "
-                f"view_consistency {res.worst()['view_consistency']:.3f}, "
-                f"order_r2 {res.worst()['order_r2']:.3f}"
+                f"{name}: {res.ordered_count()} of {n} ordered (order R^2 >= {ORDERED_R2}){flags}; "
+                f"worst seed: view_consistency {worst['view_consistency']:.3f}, "
+                f"order_r2 {worst['order_r2']:.3f}"
             )
             if res.ceiling is not None:
                 lines.append(

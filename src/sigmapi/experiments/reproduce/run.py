@@ -1,27 +1,10 @@
-"""The reproduction run: ``sigmapi reproduce --out DIR``, the project's main job.
-
-Trains the paper presets (``paper-1d``, and ``paper-2d`` where that preset ships), each
-beside the authors' procedure at the same sizes (``paper-1d-authors``, ``paper-2d-authors``),
-on the seeds (the 2-D presets on the first ``seeds_2d`` of them), recording learning curves at
-checkpoints; each run's map is evaluated at the end of the training, before the refinement,
-and at the end (:mod:`~sigmapi.experiments.reproduce.training`: the jobs, numba's one-time
-compile timed apart). The rule's ceiling, the fixed point of Eq. 7 reached from the map the
-figures show (:mod:`sigmapi.analysis.fixed_point`), is computed once per task. The run writes
-into ``DIR`` ``report.html`` (:mod:`~sigmapi.experiments.reproduce.report_html`),
-``metrics.json`` (:meth:`ReproduceResult.to_dict`), the figures of the seed :func:`figure_seed`
-chooses and the trained models ``save_models`` names; docs/guide/reproduce.md describes each
-file and every key of ``metrics.json``.
-
-Experiments add sections to the report: a section is a function ``section(ctx:
-ReportContext) -> Section | None`` (:mod:`sigmapi.experiments.kit.report`), named by its
-``"module:function"`` as experiments are; the default, :data:`SECTIONS`, is the reach
-experiment's. The sections run in a thread of their own once the training has ended, beside
-the ceilings and the figures (which leave a core idle); a section draws holding
-``ctx.drawing``.
-
-The experiment ``reproduce`` (:class:`Reproduce`, settings :class:`ReproduceConfig`) is
-:func:`reproduce` with the seeds, executor and progress given apart; each (preset, seed) is one
-job of the executor.
+"""The reproduction run: ``sigmapi reproduce --out DIR`` (:class:`Reproduce`, :func:`reproduce`),
+the project's main job: the paper presets beside the authors' procedure (:func:`paper_presets`),
+one job per (preset, seed) (:mod:`~sigmapi.experiments.reproduce.training`), the rule's ceiling
+once per task, and the report (:mod:`~sigmapi.experiments.reproduce.report_html`) with
+``metrics.json``, the figures of the seed :func:`figure_seed` chooses, the models
+``save_models`` names and the sections experiments add (:data:`SECTIONS`), each file described
+in docs/guide/reproduce.md.
 """
 
 from __future__ import annotations
@@ -33,8 +16,9 @@ import statistics
 import threading
 import time
 from collections.abc import Callable, Sequence
+from concurrent.futures import Future
 from pathlib import Path
-from typing import Generic, TypeVar
+from typing import Any
 
 from threadpoolctl import threadpool_limits
 
@@ -42,7 +26,7 @@ from sigmapi.config import SOMConfig, list_presets, load_preset
 from sigmapi.errors import ConfigError
 from sigmapi.executor import Executor
 from sigmapi.experiments.base import Experiment, Run, register
-from sigmapi.experiments.kit.report import ReportContext, SectionFn, section_function
+from sigmapi.experiments.kit.report import ReportContext, Section, SectionFn, section_function
 from sigmapi.experiments.reproduce.report_html import linked_files, render
 from sigmapi.experiments.reproduce.results import (
     OTHER_PROCEDURE,
@@ -60,29 +44,23 @@ from sigmapi.model.som import SigmaPiSOM
 from sigmapi.progress import Progress
 from sigmapi.viz import figures as figs
 
-T = TypeVar("T")
-
 REFERENCE: dict[str, dict[str, float]] = {
-    "paper-1d": {"view_consistency": 0.87, "view_within_one": 0.988, "z_error": 0.32},
+    name: {"view_consistency": 0.87, "view_within_one": 0.988, "z_error": 0.32}
+    for name in ("paper-1d", "paper-1d-authors")
 }
 """Reference figures of docs/algorithm.md (the authors' 1-D script re-stated in NumPy, 4 seeds)."""
 
-Z_ERROR_FLOOR: dict[str, float] = {"paper-1d": 0.27}
+Z_ERROR_FLOOR: dict[str, float] = dict.fromkeys(("paper-1d", "paper-1d-authors"), 0.27)
 """Smallest z error a map of that many units can reach (quantisation into 15 units)."""
 
 PAPER_PRESETS = ("paper-1d", "paper-2d")
-
-REFERENCE["paper-1d-authors"] = REFERENCE["paper-1d"]
-Z_ERROR_FLOOR["paper-1d-authors"] = Z_ERROR_FLOOR["paper-1d"]
 
 QUICK_REFINE_PAIRS = 20_000
 """Refinement pairs per round in quick runs."""
 
 QUICK_ITERATIONS: dict[str, int] = {"paper-1d": 60_000, "paper-2d": 20_000}
-"""Iterations of each preset in quick runs (the schedule is compressed to fit).
-
-paper-2d's quick run is long enough for its map to order but not to converge, so the fold
-detector may flag it; a much shorter one leaves the map partly twisted."""
+"""Iterations of each preset in quick runs (the schedule compressed to fit): paper-2d's map
+orders but does not converge (the fold detector may flag it); much shorter, it stays twisted."""
 
 CEILING_ROUNDS = 8
 """At most this many rounds of the fixed-point search for the ceiling (quick runs:
@@ -90,8 +68,10 @@ CEILING_ROUNDS = 8
 QUICK_CEILING_ROUNDS = 3
 
 SECTIONS: tuple[str | SectionFn, ...] = ("sigmapi.experiments.reach.section:reach_section",)
-"""The sections every full report adds after the figures: a section function or its
-``"module:function"`` (imported when the report runs, as experiments are)."""
+"""The sections every full report adds after the figures (the reach experiment's): a function
+``section(ctx: ReportContext) -> Section | None`` (:mod:`sigmapi.experiments.kit.report`) or
+its ``"module:function"`` (imported when the report runs, as experiments are); a section draws
+holding ``ctx.drawing``."""
 
 
 def paper_presets(quick: bool) -> list[tuple[str, SOMConfig]]:
@@ -109,13 +89,9 @@ def paper_presets(quick: bool) -> list[tuple[str, SOMConfig]]:
 
 
 def figure_seed(runs: Sequence[SeedRun], cfg: SOMConfig) -> tuple[int, str]:
-    """The run the figures show, and why: the worst-ordered seed (lowest order R^2 of the
-    final map, the first on ties).
-
-    For the authors' procedure (random start) the comparison is about twisted maps, so its
-    worst-ordered map is the one to see; for sigmapi's, the worst-ordered map is the case a
-    reader would doubt (the others are at least as ordered). The reason names the seeds
-    and the values it was chosen from.
+    """The run the figures show, and why (naming the seeds and values it was chosen from):
+    the worst-ordered seed (lowest order R^2 of the final map, the first on ties), for the
+    authors' procedure the twisted map the comparison is about, for sigmapi's the map to doubt.
     """
     i = min(range(len(runs)), key=lambda j: (runs[j].metrics.order_r2, j))
     r2 = runs[i].metrics.order_r2
@@ -138,92 +114,31 @@ def figure_seed(runs: Sequence[SeedRun], cfg: SOMConfig) -> tuple[int, str]:
     return i, f"the worst-ordered of its {len(runs)} seeds, {state}: {what}"
 
 
-def _table_gap(runs: Sequence[SeedRun], n_test: int) -> dict[str, float]:
-    """Median over seeds of each curve's last point minus the table's value (the same map,
-    measured on the curves' smaller sets): what the curves caption states."""
+def _table_gap(
+    model: SigmaPiSOM, runs: Sequence[SeedRun], shown: int, opts: ReproduceOptions
+) -> dict[str, object]:
+    """What the curves caption states: the median over seeds of each curve's last point minus
+    the table's value (the same map, measured on the curves' smaller sets), and how much of it
+    the decoding table's size makes (``decoding``): the shown map's z error on the table's
+    test z's but with the curves' decoding table (their calibration z's)."""
+    from sigmapi.analysis.curves import LearningCurve
+    from sigmapi.metrics import evaluation_sets
+
     gap = {
         k: statistics.median(r.curve[k][-1] - getattr(r.metrics, k) for r in runs)
         for k in ("z_error", "view_consistency")
     }
-    return {**gap, "n_test": n_test}
-
-
-def _decoding_cause(
-    model: SigmaPiSOM, run: SeedRun, curve_test: int, test_size: int
-) -> dict[str, object]:
-    """The shown map's z error on the table's test z's but with the curves' decoding table
-    (their calibration z's): beside the table's and the curve's last point, how much of the
-    curve's gap the decoding table's size makes."""
-    from sigmapi.analysis.curves import LearningCurve
-    from sigmapi.metrics import evaluation_sets
-
-    calibration, _ = evaluation_sets(model, curve_test, LearningCurve.seed)
-    _, test = evaluation_sets(model, test_size)
+    calibration, _ = evaluation_sets(model, opts.curve_test, LearningCurve.seed)
+    _, test = evaluation_sets(model, opts.test_size)
     small = evaluate(model, test=test, calibration=calibration).z_error
-    return {
+    run = runs[shown]
+    decoding = {
         "seed": run.seed,
         "z_error_curve_table": float(small),
         "z_error_table": float(run.metrics.z_error),
         "z_error_curve": float(run.curve["z_error"][-1]),
     }
-
-
-def draw_preset(
-    run: figs.RunInfo,
-    model: SigmaPiSOM,
-    entry: PresetResult,
-    out: Path,
-    opts: ReproduceOptions,
-    reference: dict[str, float],
-    progress: Progress | None,
-) -> list[tuple[str, str]]:
-    """Draw every figure of one preset into ``out`` at the options' dpi
-    (``reference``: the published values the curves mark; the curves caption states the gap
-    between the table's and the curves' evaluation sizes); ``(file, caption)`` per figure.
-
-    The facts each caption states are stored in ``entry.figures``.
-    """
-    from sigmapi.analysis.map_data import receptive_field_centres
-
-    test_size = opts.test_size
-    centres = receptive_field_centres(model, seed=0)
-    curves = [r.curve for r in entry.runs]
-    seeds = run.seeds
-    drawn = []
-    bar = Progress.of(progress).each(figs.FIGURES, f"{run.preset} figures")
-    for fig_name in bar:
-        file = f"{fig_name}-{run.preset}.png"
-        label = f"{run.preset}, seed {seeds[run.shown]}"
-        if fig_name == "curves":
-            label = (
-                f"{run.preset}, seed{'s' if len(seeds) > 1 else ''} {', '.join(map(str, seeds))}"
-            )
-        facts = figs.draw_figure(
-            fig_name,
-            model,
-            out / file,
-            curves=curves,
-            reference=reference,
-            label=label,
-            centres=centres,
-            dpi=opts.dpi,
-            ceiling=entry.ceiling,
-        )
-        if fig_name == "curves":
-            facts["table_gap"] = _table_gap(entry.runs, test_size)
-            facts["table_gap"]["decoding"] = _decoding_cause(
-                model, entry.runs[run.shown], run.curve_test, test_size
-            )
-        entry.figures[fig_name] = {"file": file, **facts}
-        drawn.append((file, figs.caption(fig_name, run, facts)))
-    return drawn
-
-
-def _reference(name: str) -> dict[str, float]:
-    ref = dict(REFERENCE.get(name, {}))
-    if name in Z_ERROR_FLOOR:
-        ref["z_error_floor"] = Z_ERROR_FLOOR[name]
-    return ref
+    return {**gap, "n_test": opts.test_size, "decoding": decoding}
 
 
 def reproduce(
@@ -234,26 +149,12 @@ def reproduce(
     sections: Sequence[str | SectionFn] | None = None,
     executor: Executor | None = None,
 ) -> ReproduceResult:
-    """Train and evaluate each paper preset for the seeds; write the report into ``out``.
+    """Train and evaluate each paper preset for the seeds of ``options`` and write the report
+    into the folder ``out`` (created); the result is what ``metrics.json`` holds.
 
-    Parameters
-    ----------
-    out : Path
-        Report folder (created).
-    options : ReproduceOptions, optional
-        Seeds, quick mode, progress bars, which models to save, test size.
-    presets : list of (name, SOMConfig), optional
-        What to run instead of the paper presets (tests use tiny configs).
-    sections : sequence of callables or ``"module:function"`` strings, optional
-        Functions that add report sections (default :data:`SECTIONS`, the reach
-        experiment); ``()`` for none.
-    executor : Executor, optional
-        Where the training runs go (default: this machine, ``options.workers`` at once).
-
-    Returns
-    -------
-    ReproduceResult
-        What ``metrics.json`` holds (``result.to_dict()``).
+    ``presets`` run instead of the paper presets (tests use tiny configs); ``sections`` add
+    report sections (default :data:`SECTIONS`; ``()`` for none); ``executor`` runs the
+    training (default: this machine, ``options.workers`` at once).
     """
     opts = options or ReproduceOptions()
     ex = executor if executor is not None else Executor(workers=opts.workers)
@@ -267,18 +168,19 @@ def reproduce(
     trained = train_all(runs_of, opts, ex, progress)
     ctx = ReportContext(out, opts, {name: trained[name][1] for name, _ in runs_of})
     section_fns = [section_function(s) for s in (SECTIONS if sections is None else sections)]
-    sectioned = _Background(lambda: [fn(ctx) for fn in section_fns])  # beside the figures
+    sectioned = _in_background(lambda: [fn(ctx) for fn in section_fns])  # beside the figures
     try:
         for name, cfg in runs_of:
             figures[name] = _report_preset(name, cfg, trained[name][0], ctx, result, progress)
-            result.figure_files += [out / file for file, _ in figures[name]]
         added = [s for s in sectioned.result() if s]
-    except BaseException:  # an error or an interrupt: the sections' workers end now
-        sectioned.abandon()
+    except BaseException:  # an error or an interrupt: end the sections' workers now (the
+        # training's have ended), so that their jobs fail at once instead of holding up the exit
+        for child in multiprocessing.active_children():
+            child.terminate()
         raise
-    for s in added:
-        result.sections[s.title] = s.data
-        result.figure_files += [out / file for file, _ in s.figures]
+    result.sections.update({s.title: s.data for s in added})
+    drawn = [*figures.values(), *(s.figures for s in added)]
+    result.figure_files += [out / file for files in drawn for file, _ in files]
     result.total_seconds = time.perf_counter() - started
     atomic_write_bytes(out / "metrics.json", json.dumps(result.to_dict(), indent=2).encode())
     text = render(result, figures, added)
@@ -298,52 +200,63 @@ def _report_preset(
     progress: Progress | None,
 ) -> list[tuple[str, str]]:
     """Preset ``name``'s entry of ``result`` (statistics, the ceiling), its saved models and
-    its figures (drawn holding ``ctx.drawing``); the figures' files and captions."""
+    its figures at the options' dpi, drawn holding ``ctx.drawing``: ``(file, caption)`` per
+    figure; the facts each caption states go into the entry's ``figures`` (the curves mark
+    the published values and state the gap between the table's and the curves' test sets)."""
+    from sigmapi.analysis.map_data import receptive_field_centres
+
     opts, models = result.options, ctx.models[name]
     shown, why = figure_seed(runs, cfg)
-    seeds = opts.seeds_of(cfg)
+    seeds, model = opts.seeds_of(cfg), models[shown]
     entry = PresetResult(
         cfg, runs, REFERENCE.get(name, {}), Z_ERROR_FLOOR.get(name), seeds[shown], why
     )
-    entry.ceiling = _ceiling(name, result, models[shown], seeds[shown], opts, progress)
+    entry.ceiling = _ceiling(name, result, model, seeds[shown], progress)
     result.presets[name] = entry
     for i, seed in enumerate(seeds):
         if opts.save_models == "all" or (opts.save_models == "shown" and i == shown):
             models[i].save(ctx.out / f"{name}-seed{seed}.npz")
     run = figs.RunInfo(name, cfg, seeds, shown, opts.curve_test, why)
+    floor = {} if entry.z_error_floor is None else {"z_error_floor": entry.z_error_floor}
+    curves = f"{name}, seed{'s' if len(seeds) > 1 else ''} {', '.join(map(str, seeds))}"
+    drawn = []
     with ctx.drawing:
-        return draw_preset(run, models[shown], entry, ctx.out, opts, _reference(name), progress)
+        centres = receptive_field_centres(model, seed=0)
+        for fig_name in Progress.of(progress).each(figs.FIGURES, f"{name} figures"):
+            file = f"{fig_name}-{name}.png"
+            facts = figs.draw_figure(
+                fig_name,
+                model,
+                ctx.out / file,
+                curves=[r.curve for r in runs],
+                reference={**entry.reference, **floor},
+                label=curves if fig_name == "curves" else f"{name}, seed {seeds[shown]}",
+                centres=centres,
+                dpi=opts.dpi,
+                ceiling=entry.ceiling,
+            )
+            if fig_name == "curves":
+                facts["table_gap"] = _table_gap(model, runs, shown, opts)
+            entry.figures[fig_name] = {"file": file, **facts}
+            drawn.append((file, figs.caption(fig_name, run, facts)))
+    return drawn
 
 
-class _Background(Generic[T]):
-    """``fn()`` run in a daemon thread from now on; :meth:`result` waits for its value (or
-    raises its error). The sections (the reach experiment: its seeds in a process pool) run so
-    beside the ceilings and the figures, whose drawing leaves a core idle. A daemon thread:
-    an interrupted report does not wait for it (its pool's workers end with this process)."""
+def _in_background(fn: Callable[[], list[Section | None]]) -> Future[list[Section | None]]:
+    """``fn()`` run in a daemon thread from now on; the future of its value (or error). The
+    sections (the reach experiment: its seeds in a process pool) run so beside the ceilings
+    and the figures, whose drawing leaves a core idle. A daemon thread: an interrupted report
+    does not wait for it (its pool's workers end with this process)."""
+    future: Future[list[Section | None]] = Future()
 
-    def __init__(self, fn: Callable[[], T]) -> None:
-        self._value: list[T] = []  # fn's value, once it has one
-        self._error: BaseException | None = None
-        self._thread = threading.Thread(target=self._run, args=(fn,), daemon=True)
-        self._thread.start()
-
-    def _run(self, fn: Callable[[], T]) -> None:
+    def run() -> None:
         try:
-            self._value.append(fn())
+            future.set_result(fn())
         except BaseException as e:  # raised again in the caller's thread by result()
-            self._error = e
+            future.set_exception(e)
 
-    def abandon(self) -> None:
-        """End the worker processes this process started (the sections' pool: the training's
-        has ended), so that the thread's jobs fail at once instead of holding up the exit."""
-        for child in multiprocessing.active_children():
-            child.terminate()
-
-    def result(self) -> T:
-        self._thread.join()
-        if self._error is not None:
-            raise self._error
-        return self._value[0]
+    threading.Thread(target=run, daemon=True).start()
+    return future
 
 
 class Reproduce(Experiment[ReproduceConfig]):
@@ -375,31 +288,23 @@ REPRODUCE = register(Reproduce())
 
 
 def _ceiling(
-    name: str,
-    result: ReproduceResult,
-    model: SigmaPiSOM,
-    seed: int,
-    opts: ReproduceOptions,
-    progress: Progress | None,
-) -> dict[str, object]:
+    name: str, result: ReproduceResult, model: SigmaPiSOM, seed: int, progress: Progress | None
+) -> dict[str, Any]:
     """The rule's ceiling for preset ``name``: its twin's (same task) when the twin ran
     first, else the fixed point reached from ``model``
     (:func:`sigmapi.analysis.fixed_point.fixed_point`)."""
     from sigmapi.analysis.fixed_point import fixed_point
 
-    for twin, other in OTHER_PROCEDURE.items():
-        done = result.presets.get(twin)
-        if other == name and done is not None and done.ceiling is not None:
-            return done.ceiling
+    opts = result.options
+    rounds = QUICK_CEILING_ROUNDS if opts.quick else CEILING_ROUNDS
+    twin = result.presets.get(next((t for t, o in OTHER_PROCEDURE.items() if o == name), ""))
+    if twin is not None and twin.ceiling is not None:
+        return twin.ceiling
     t0 = time.perf_counter()
     for _ in Progress.of(progress).each([name], f"{name} ceiling (fixed point of Eq. 7)"):
         # one BLAS thread: the sections' workers run beside it, and BLAS threads that wait
         # for a busy core cost CPU for nothing (the same numbers: BLAS splits the products
         # by rows, not by the sums)
         with threadpool_limits(limits=1, user_api="blas"):
-            found = fixed_point(
-                model,
-                n_test=opts.test_size,
-                max_rounds=QUICK_CEILING_ROUNDS if opts.quick else CEILING_ROUNDS,
-            )
+            found = fixed_point(model, n_test=opts.test_size, max_rounds=rounds)
     return {**found.to_dict(), "preset": name, "seed": seed, "seconds": time.perf_counter() - t0}

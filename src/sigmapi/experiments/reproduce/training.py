@@ -30,13 +30,16 @@ class SeedJob:
     name: str
     cfg: SOMConfig
     seed: int
-    n_checkpoints: int
-    curve_test: int
-    test_size: int
+    opts: ReproduceOptions
+    """The run's options: its measurements' sizes."""
     progress: bool = False
     measure_first: bool = False
     """Compile the kernels that refine and measure a map before those that train it
     (:func:`compile_once`); :func:`train_all` sets it on every other job."""
+
+    @property
+    def key(self) -> str:
+        return f"{self.name} seed {self.seed}"
 
 
 COMPILED_BY = (
@@ -51,20 +54,11 @@ _COMPILED: set[tuple[object, ...]] = set()
 
 def compile_once(cfg: SOMConfig, measure_first: bool = False) -> float:
     """Compile the kernel functions ``cfg`` trains, refines and is measured with, once per
-    process, on a small run of the same rules; the wall seconds it took (0 if done before).
-
-    numba compiles a function on its first call (or loads it from its cache), whatever the
-    sizes of the arrays, so a 3-unit map of the same rules, ordering, refinement and
-    dimensions calls the same compiled code as the preset: the training times of
-    :func:`train_seed` then hold no compile time, which is reported apart.
-
-    ``measure_first`` (in a process that has compiled nothing yet) compiles the kernels that
-    refine and measure a trained map before those that train it
-    (:func:`_compile_measuring`). On a fresh install two workers that start at once, one
-    each way round, then compile each half once and load the other half from numba's cache
-    (``NUMBA_CACHE_DIR``) rather than both compiling everything (docs/guide/reproduce.md,
-    "Times").
-    """
+    process, on a 3-unit map of the same rules and dimensions (numba compiles a function on
+    its first call, whatever the arrays' sizes), so that :func:`train_seed`'s times hold no
+    compile; the wall seconds it took (0 if done before). ``measure_first``: the kernels that
+    refine and measure first (:func:`_compile_measuring`; docs/guide/reproduce.md, "Times",
+    says why)."""
     from sigmapi.analysis.curves import LearningCurve
 
     dims = (cfg.refine_rounds > 0, len(cfg.map_shape), len(cfg.x_shape))
@@ -110,13 +104,9 @@ Trained = tuple[SeedRun, dict[str, object], dict[str, NDArray[np.generic]]]
 
 
 def train_seed(job: SeedJob) -> Trained:
-    """Train one seed with learning-curve checkpoints and evaluate it (a job of
-    :func:`~sigmapi.executor.run_jobs`); ``(run, header, arrays)`` of the model.
-
-    The map at the end of the training is evaluated there, before the refinement (the
-    unrefined map of the same run, at no extra training); the times of the training, the
-    refinement, the measurements and the one-time compile are taken apart (:class:`SeedRun`).
-    """
+    """Train one seed with learning-curve checkpoints and evaluate its map at the end of the
+    training, before the refinement, and at the end (a job of :func:`train_all`); ``(run,
+    header, arrays)`` of the model, the times taken apart (:class:`SeedRun`)."""
     from sigmapi.analysis.curves import LearningCurve, checkpoints
 
     cfg = job.cfg
@@ -125,12 +115,9 @@ def train_seed(job: SeedJob) -> Trained:
     c0 = time.process_time()
     compile_cpu = c0 - compile_c0
     model = SigmaPiSOM(cfg, seed=job.seed)
-    callback, bar = Progress(disable=not job.progress or None).training(
-        cfg.iterations, f"{job.name} seed {job.seed}"
-    )
-    curve = LearningCurve(
-        at=checkpoints(cfg.iterations, job.n_checkpoints), n_test=job.curve_test, then=callback
-    )
+    callback, bar = Progress(disable=not job.progress or None).training(cfg.iterations, job.key)
+    at = checkpoints(cfg.iterations, job.opts.n_checkpoints)
+    curve = LearningCurve(at=at, n_test=job.opts.curve_test, then=callback)
     marks: dict[str, float] = {}  # times at the end of the training
     unrefined: list[Metrics] = []  # the map there, where the preset refines
 
@@ -140,16 +127,15 @@ def train_seed(job: SeedJob) -> Trained:
             marks["trained"] = time.perf_counter()
             marks["curve_s"] = curve.seconds
             if cfg.refine_rounds > 0:
-                unrefined.append(evaluate(m, n_test=job.test_size))
+                unrefined.append(evaluate(m, n_test=job.opts.test_size))
             marks["eval_s"] = time.perf_counter() - marks["trained"]
 
     t0 = time.perf_counter()
     with bar:
         model.fit(callback=step)
     end = time.perf_counter()
-    e0 = time.perf_counter()
-    metrics = evaluate(model, n_test=job.test_size)
-    final_eval = time.perf_counter() - e0
+    metrics = evaluate(model, n_test=job.opts.test_size)
+    final_eval = time.perf_counter() - end
     trained = marks.get("trained", end)
     train_s = trained - t0 - marks.get("curve_s", curve.seconds)
     refine_s = end - trained - marks.get("eval_s", 0.0) - (curve.seconds - marks.get("curve_s", 0))
@@ -190,18 +176,10 @@ def train_all(
     progress: Progress | None,
 ) -> dict[str, tuple[list[SeedRun], list[SigmaPiSOM]]]:
     """Train every (preset, seed), in parallel where cores and memory allow."""
-    jobs = [
-        (
-            f"{name} seed {seed}",
-            SeedJob(name, cfg, seed, opts.n_checkpoints, opts.curve_test, opts.test_size),
-        )
-        for name, cfg in runs_of
-        for seed in opts.seeds_of(cfg)
-    ]
-    jobs.sort(key=lambda job: -_job_cost(job[1].cfg))  # longest first: no lone job at the end
+    jobs = [SeedJob(name, cfg, seed, opts) for name, cfg in runs_of for seed in opts.seeds_of(cfg)]
+    longest = sorted(jobs, key=lambda job: -_job_cost(job.cfg))  # no lone job at the end
     # every other job compiles the other half first: two workers share numba's compile
-    jobs = [(key, replace(job, measure_first=i % 2 == 1)) for i, (key, job) in enumerate(jobs)]
-    per_job = max(job_memory(cfg, opts.test_size) for _, cfg in runs_of)
+    keyed = [(job.key, replace(job, measure_first=i % 2 == 1)) for i, job in enumerate(longest)]
 
     def describe(key: str, value: Trained) -> str:
         run, m = value[0], value[0].metrics
@@ -215,21 +193,17 @@ def train_all(
 
     done = run_all(
         train_seed,
-        jobs,
+        keyed,
         executor=executor,
-        per_job=per_job,
+        per_job=max(job_memory(cfg, opts.test_size) for _, cfg in runs_of),
         progress=progress,
         desc="reproduce",
         describe=describe,
         verbose=lambda job: replace(job, progress=True),
     )
-    out: dict[str, tuple[list[SeedRun], list[SigmaPiSOM]]] = {}
-    for name, cfg in runs_of:
-        runs, models = [], []
-        for seed in opts.seeds_of(cfg):
-            key = f"{name} seed {seed}"
-            run, header, arrays = done[key]
-            runs.append(run)
-            models.append(SigmaPiSOM.from_arrays(header, arrays, source=key))
-        out[name] = (runs, models)
+    out: dict[str, tuple[list[SeedRun], list[SigmaPiSOM]]] = {n: ([], []) for n, _ in runs_of}
+    for job in jobs:  # each preset's runs and models in the order of its seeds
+        run, header, arrays = done[job.key]
+        out[job.name][0].append(run)
+        out[job.name][1].append(SigmaPiSOM.from_arrays(header, arrays, source=job.key))
     return out
