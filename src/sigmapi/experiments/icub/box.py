@@ -334,7 +334,7 @@ class ICubBoxResult(Result):
         (:func:`~sigmapi.experiments.icub.plots3d.film_and_eyes`), the maps' middle slices
         (:func:`~sigmapi.experiments.icub.plots3d.map_slices`); with ``config.render``,
         the filmed reach as an animated GIF."""
-        from sigmapi.experiments.icub.plots import write_gif
+        from sigmapi._outputs import save_gif
         from sigmapi.experiments.icub.plots3d import end_point_histogram, film_and_eyes, map_slices
 
         errors = {
@@ -348,5 +348,5 @@ class ICubBoxResult(Result):
             out = Path(out_dir) / "map-slices.png"
             paths.append(map_slices(first["units"], first["maps"], self.seeds[0], out))
         if self.config.render is not None and first.get("film"):
-            paths.append(write_gif(first["film"], Path(self.config.render)))
+            paths.append(save_gif(first["film"], Path(self.config.render), fps=8))
         return paths

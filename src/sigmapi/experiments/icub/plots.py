@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from sigmapi._outputs import save_captioned, save_gif
+from sigmapi._outputs import save_captioned
 from sigmapi.envs.icub import REACH_REGION
 from sigmapi.experiments.icub.reaching import METHODS
 from sigmapi.experiments.kit.figures import (
@@ -257,11 +257,6 @@ def plot_eyes(eyes: Mapping[str, Any]) -> Any:
     leg = fig.legend(handles, labels, loc="outside lower center", ncol=2)
     leg.get_frame().set_facecolor("0.6")  # the yellow circle shows on grey
     return fig
-
-
-def write_gif(frames: list[NDArray[np.uint8]], path: Path, fps: int = 8) -> Path:
-    """Save ``frames`` as an animated GIF at ``path`` (:func:`~sigmapi._outputs.save_gif`)."""
-    return save_gif(frames, path, fps=fps)
 
 
 def _rates(values: Mapping[str, float]) -> str:

@@ -258,10 +258,11 @@ class ICubResult(Result):
     def figure(self, out_dir: Path) -> list[Path]:
         """The figures (:func:`~sigmapi.experiments.icub.plots.icub_figures`) and, with
         ``config.render``, the filmed reach as an animated GIF."""
-        from sigmapi.experiments.icub.plots import icub_figures, write_gif
+        from sigmapi._outputs import save_gif
+        from sigmapi.experiments.icub.plots import icub_figures
 
         paths = icub_figures(self, Path(out_dir))
         film = self.per_seed[0].get("film")
         if self.config.render is not None and film:
-            paths.append(write_gif(film, Path(self.config.render)))
+            paths.append(save_gif(film, Path(self.config.render), fps=8))
         return paths
