@@ -1,7 +1,5 @@
-"""The base of the results made of episode records (reach, robot, reward): the records per
-name (a state the learner reads, or a method) and what all of them compute from the records,
-the rates over the final episodes and the learning curves (:mod:`.episodes`); and the
-drawing of those curves (:func:`plot_with_bands`)."""
+"""The base of the results made of episode records per name, a state or a method (reach, robot,
+reward), and the drawing of their learning curves (:func:`plot_with_bands`)."""
 
 from __future__ import annotations
 
@@ -63,8 +61,7 @@ class EpisodesResult(Result):
     def final(self, key: str = "success") -> dict[str, NDArray[np.float64]]:
         """Per name, the rate of the records ``key`` over the last ``final_episodes``
         episodes (:meth:`window`), one per seed."""
-        f = self.config.run.final_episodes
-        return {s: final_rates(r, f) for s, r in getattr(self, key).items()}
+        return {s: final_rates(w, w.shape[1]) for s, w in self.window(key).items()}
 
     def final_mean(self, key: str = "success") -> dict[str, float]:
         """:meth:`final`, mean over seeds."""
