@@ -102,9 +102,8 @@ class Experiment(Protocol[C]):
     """How long the quick run took, and on what machine, as ``--help`` says it (e.g. ``"about
     15 s on two quiet cores"``; None: not measured)."""
     extra: str | None = None
-    """The optional dependencies the experiment needs: a name of pyproject.toml's extras
-    (e.g. ``"robot"``; None: none), which its ``--help`` names with the install command
-    (:func:`~sigmapi.errors.install_hint`)."""
+    """The extra of pyproject.toml the experiment needs (e.g. ``"robot"``; None: none), which
+    its ``--help`` names with the install command (:func:`~sigmapi.errors.install_hint`)."""
     default_out: str | None = None
     """The folder the command line writes into by default (None: it writes nothing unless it
     is given one)."""

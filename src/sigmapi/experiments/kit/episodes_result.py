@@ -22,12 +22,11 @@ if TYPE_CHECKING:
 
 @dataclass
 class EpisodesResult(Result):
-    """A result of episode records: ``success[name]``, ``lost[name]`` and ``steps[name]`` have
-    shape ``(len(seeds), episodes)``, one row per seed in the order of ``seeds``: whether each
-    episode succeeded, whether the world ended it without success (the rest timed out) and how
-    many steps it took. The config's ``run`` part has ``block`` and ``final_episodes``. A
-    result read back from its JSON form (:meth:`from_dict`) holds no records: its summaries
-    are ``written``, as the file has them."""
+    """A result of episode records: ``success[name]``, ``lost[name]`` and ``steps[name]``, one
+    row per seed of ``seeds``, say whether each episode succeeded, whether the world ended it
+    without success (the rest timed out) and how many steps it took. The config's ``run`` part
+    has ``block`` and ``final_episodes``. A result read back (:meth:`from_dict`) holds no
+    records: its summaries are ``written``."""
 
     config: Any
     seeds: tuple[int, ...]

@@ -184,9 +184,8 @@ class SeedRuns(Experiment[C]):
         return counted(job.show, self.steps(job), self.desc(job), run, self.unit)
 
     def execute(self, config: C, run: Run) -> Any:
-        """Every job of ``config`` and the run's seeds, each a job of its executor (the result
-        does not depend on where it runs); run one by one in this process, a job shows a bar of
-        its steps. ``run.out`` is not used: the run writes nothing while it runs."""
+        """Every job of ``config`` and the run's seeds through its executor (the result does not
+        depend on where they run); ``run.out`` is not used: the run writes nothing as it runs."""
         per_job = self.check(config)
         t0 = time.perf_counter()
         jobs = self.jobs(config, run.seeds, self.prepare(config, run.progress))

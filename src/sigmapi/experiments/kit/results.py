@@ -1,8 +1,5 @@
-"""The base of every experiment's result (:class:`Result`): its JSON form derived from the keys
-it names, read back from it (the docs read every result file this way, so that a result's keys
-are defined once, by the result), and one renderer of console tables (:func:`render` of a list
-of :class:`Column`).
-"""
+"""The base of every experiment's result (:class:`Result`), whose keys are defined once, by the
+result (the docs read every result file back with it), and console tables (:func:`render`)."""
 
 from __future__ import annotations
 
