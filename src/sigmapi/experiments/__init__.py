@@ -1,21 +1,12 @@
 """Experiments above the library: one protocol, a registry, a kit, one package per experiment.
 
-- :mod:`~sigmapi.experiments.base`: the :class:`Experiment` protocol (an experiment writes its
-  ``execute(config, run)``, ``run`` a :class:`Run`), :data:`REGISTRY` (names
-  registered lazily: :data:`ENTRIES`), :func:`register`, :func:`write_result`
-  (``result.json``) and :func:`check_seeds`;
-- one package per experiment, each with its ``run`` (the experiment object and its run) and,
-  where it has them apart, ``config``, ``result`` and ``figures`` (the small ones, chain,
-  compare, stream and physiology, keep settings and result in ``run``, read top to bottom);
-  its ``__init__`` names its guide and results page: :mod:`~sigmapi.experiments.reproduce`
-  (the report: also ``results`` and ``report_html``), :mod:`~sigmapi.experiments.sweep`,
-  :mod:`~sigmapi.experiments.compare`,
-  :mod:`~sigmapi.experiments.chain`, :mod:`~sigmapi.experiments.stream`,
-  :mod:`~sigmapi.experiments.reach` (also ``section``, its part of the report),
-  :mod:`~sigmapi.experiments.robot` (reach in the robot's world: ``variant``, ``map``),
-  :mod:`~sigmapi.experiments.reward`,
-  :mod:`~sigmapi.experiments.icub`, :mod:`~sigmapi.experiments.neurons` and
-  :mod:`~sigmapi.experiments.physiology`.
+:mod:`~sigmapi.experiments.base` holds the :class:`Experiment` protocol (an experiment writes
+its ``execute(config, run)``, ``run`` a :class:`Run`), :data:`REGISTRY`, :func:`register`,
+:func:`write_result` and :func:`check_seeds`; :mod:`~sigmapi.experiments.kit` what the
+experiments share. Each experiment is a package named as its command (:data:`ENTRIES`) with
+its ``run`` (robot's: ``variant``) and, where it has them apart, ``config``, ``result`` and
+``figures`` (the small ones, chain, compare, stream and physiology, keep all in ``run``, read
+top to bottom); its ``__init__`` names its guide and results page.
 
 A new experiment is one package and one line in :data:`ENTRIES`; nothing here imports an
 experiment until it is used (``sigmapi --help`` lists them from :data:`ENTRIES`).
@@ -37,9 +28,7 @@ from sigmapi.experiments.base import (
     write_result,
 )
 
-# name, "module:object", one line for ``sigmapi --help``: the command line lists these
-# without importing them; ``REGISTRY[name]`` imports the module when the command runs
-# left unformatted: a table, one entry per experiment
+# name, "module:object", one line for ``sigmapi --help``; left unformatted: one entry a row
 ENTRIES = (
     ("chain", "sigmapi.experiments.chain.run:CHAIN",
      "a chain of two maps (retina -> head -> body) against one map on the whole task"),
@@ -69,33 +58,21 @@ ENTRIES = (
 for _entry in ENTRIES:
     REGISTRY.add(*_entry)
 
-_LAZY = {
-    "REACH": "reach.run",
-    "ReachExperiment": "reach.run",
-    "REFERENCE": "reproduce.run",
-    "SECTIONS": "reproduce.run",
-    "paper_presets": "reproduce.run",
-    "REWARD": "reward.run",
-    "RewardExperiment": "reward.run",
-    "ROBOT": "robot.variant",
-    "NEURONS": "neurons.run",
-    "NeuronsExperiment": "neurons.run",
-    "PHYSIOLOGY": "physiology.run",
-    "PhysiologyExperiment": "physiology.run",
-    "RobotExperiment": "robot.variant",
-    "STREAM": "stream.run",
-    "StreamExperiment": "stream.run",
-    "SweepSpec": "sweep.run",
-    "run_sweep": "sweep.run",
-    "run_chain": "chain.run",
-    "CompareConfig": "compare.run",
-    "CompareResult": "compare.run",
-    "run_compare": "compare.run",
-    "ReportContext": "kit.report",
-    "ReproduceOptions": "reproduce.results",
-    "ReproduceResult": "reproduce.results",
-    "Section": "kit.report",
+_LAZY_FROM = {
+    "chain.run": ("run_chain",),
+    "compare.run": ("CompareConfig", "CompareResult", "run_compare"),
+    "kit.report": ("ReportContext", "Section"),
+    "neurons.run": ("NEURONS", "NeuronsExperiment"),
+    "physiology.run": ("PHYSIOLOGY", "PhysiologyExperiment"),
+    "reach.run": ("REACH", "ReachExperiment"),
+    "reproduce.results": ("ReproduceOptions", "ReproduceResult"),
+    "reproduce.run": ("REFERENCE", "SECTIONS", "paper_presets"),
+    "reward.run": ("REWARD", "RewardExperiment"),
+    "robot.variant": ("ROBOT", "RobotExperiment"),
+    "stream.run": ("STREAM", "StreamExperiment"),
+    "sweep.run": ("SweepSpec", "run_sweep"),
 }
+_LAZY = {name: module for module, names in _LAZY_FROM.items() for name in names}
 """The names this package re-exports from its experiments, imported on first use."""
 
 

@@ -1,32 +1,18 @@
 """One protocol for every experiment: a typed config in, seeds given apart, a result out as data.
 
-An :class:`Experiment` names a command (``name``), says in one line what it does (``summary``)
-and holds its settings in ``config_type``, a frozen dataclass with a docstring under each
-field: the command-line options are generated from those fields (:mod:`sigmapi.cli`), so a
-field added there is an option too. ``run(config, seeds=..., out=..., executor=...,
-progress=...)`` checks them and calls the one method an experiment writes, ``execute(config,
-run)`` (``run``: a :class:`Run`, the seeds and the rest); it returns a :class:`Result`:
-``to_dict()`` (JSON-able: what ``--json`` prints and :func:`write_result` stores as
-``result.json``, the data that documents are rendered from), ``table()`` (the console text)
-and ``figure(out_dir)`` (the figures it writes); a result reads back from its JSON form with
-``from_dict``. Results subclass the kit's
-:class:`~sigmapi.experiments.kit.results.Result`, which derives ``to_dict`` and ``from_dict``
-from the keys it names (``KEYS``) and renders tables from column specs.
-
-Seeds are not part of a config: every experiment takes them as ``seeds``, a list of distinct
-non-negative ints checked by :func:`check_seeds`, and says its default ones
-(:meth:`Experiment.default_seeds`). Per-seed jobs run through the :class:`~sigmapi.executor.
-Executor` (:func:`run_all`); ``executor=None`` runs them one after another in this process.
+An :class:`Experiment`'s settings are a frozen dataclass whose fields are the command-line
+options (:mod:`sigmapi.cli`); :meth:`Experiment.run` checks the config and the seeds
+(:func:`check_seeds`) and calls ``execute(config, run)``, the one method an experiment writes,
+which returns a :class:`~sigmapi.experiments.kit.results.Result` (:func:`write_result` writes
+it as ``result.json``). Per-seed jobs run through the executor (:func:`run_all`).
 
 Adding an experiment
 --------------------
 One package in ``sigmapi/experiments/`` whose ``run`` module holds its config dataclass, its
-result (a :class:`Result`: its ``KEYS``, ``table``, ``figure``) and an experiment object passed to
-:func:`register` at import time; one line in ``ENTRIES`` of ``sigmapi/experiments/__init__.py``
-(name, ``"module:object"``, the one-line summary), so that the command line lists it without
-importing it. The command ``sigmapi NAME`` then exists with an option per config field and the
-common ones (seeds, output folder, JSON, executor, quiet). The reach experiment, for instance,
-registers from ``sigmapi/experiments/reach/run.py``::
+result and an experiment object passed to :func:`register`; one line in ``ENTRIES`` of
+``sigmapi/experiments/__init__.py`` (name, ``"module:object"``, summary). ``sigmapi NAME`` then
+has an option per config field and the common ones (seeds, output folder, JSON, executor,
+quiet). The reach experiment, for instance (``sigmapi/experiments/reach/run.py``)::
 
     @dataclass(frozen=True)
     class ReachRun:
@@ -116,9 +102,8 @@ class Experiment(Protocol[C]):
     """How long the quick run took, and on what machine, as ``--help`` says it (e.g. ``"about
     15 s on two quiet cores"``; None: not measured)."""
     extra: str | None = None
-    """The optional dependencies the experiment needs: a name of pyproject.toml's extras
-    (e.g. ``"robot"``; None: none), which its ``--help`` names with the install command
-    (:func:`~sigmapi.errors.install_hint`)."""
+    """The extra of pyproject.toml the experiment needs (e.g. ``"robot"``; None: none), which
+    its ``--help`` names with the install command (:func:`~sigmapi.errors.install_hint`)."""
     default_out: str | None = None
     """The folder the command line writes into by default (None: it writes nothing unless it
     is given one)."""
@@ -151,23 +136,9 @@ class Experiment(Protocol[C]):
         executor: Executor | None = None,
         progress: Progress | None = None,
     ) -> Result:
-        """Run ``config`` for each of ``seeds``: the config's type and the seeds checked, then
-        :meth:`execute`.
-
-        Parameters
-        ----------
-        config : config_type
-            The settings.
-        seeds : sequence of int
-            Distinct non-negative ints (:func:`check_seeds`).
-        out : Path, optional
-            A folder for what the run writes as it goes (a sweep's table, a report's models);
-            None where the experiment writes nothing while it runs.
-        executor : Executor, optional
-            Where the per-seed jobs run (None: one after another in this process).
-        progress : Progress, optional
-            Progress on stderr (None: nothing).
-        """
+        """Run ``config`` (a ``config_type``) for each of ``seeds``: the config's type and the
+        seeds checked, then :meth:`execute` with a :class:`Run` of ``seeds``, ``out`` (e.g. a
+        sweep's table, a report's models), ``executor`` and ``progress``."""
         if not isinstance(config, self.config_type):
             raise _validate.fail("config", f"a {self.config_type.__name__}", config)
         return self.execute(config, Run(check_seeds(seeds), out, executor, progress))
@@ -301,12 +272,9 @@ sub-command for each (:meth:`Registry.add` registers one by its ``"module:object
 
 
 def register(experiment: Experiment[C]) -> Experiment[C]:
-    """Add ``experiment`` to :data:`REGISTRY` under its ``name``; returns it.
-
-    The name must be a command word not taken by another experiment, the config type a frozen
-    dataclass. A module named by a lazy entry (:meth:`Registry.add`) registers its experiment
-    when it is imported: that fills the entry.
-    """
+    """Add ``experiment`` to :data:`REGISTRY` under its ``name`` (a command word not taken by
+    another experiment; its config type a frozen dataclass); returns it. A module named by a
+    lazy entry (:meth:`Registry.add`) registers its experiment on import: that fills the entry."""
     name = _check_name(getattr(experiment, "name", None))
     cls = getattr(experiment, "config_type", None)
     if not (
@@ -366,14 +334,9 @@ def run_all(
     """Run ``fn`` on each ``(key, arg)`` of ``jobs`` through ``executor``; the values by key.
 
     ``per_job`` (bytes, :func:`~sigmapi.executor.job_memory`) bounds the jobs at once. With
-    progress, one bar (or line) per finished job, ``describe(key, value)`` its text; where the
-    jobs run one by one in this process, ``verbose(arg)`` gives each job instead a progress of
-    its own (e.g. a bar of its training iterations), and in a log (stderr no terminal) the
-    parallel jobs of this machine too, beside the line per finished job: each job's lines
-    then say how far it is while none has finished. A failed job raises its own error
-    (:func:`~sigmapi.executor.job_error`: a sigmapi error as itself, a bug as
-    ``RuntimeError``), naming the job.
-    """
+    progress, one line per finished job, ``describe(key, value)``; ``verbose(arg)`` gives each
+    job a progress of its own where the jobs run one by one in this process, or on this machine
+    into a log. A failed job raises its own error (:func:`~sigmapi.executor.job_error`)."""
     ex = executor if executor is not None else Executor(workers=1)
     if ex.engine == "local":  # a job must fit on this machine (a cluster's are its own)
         _memory.check(

@@ -1,2 +1,2 @@
-"""What the experiments share, written once: the seed plan (:mod:`.seeds`) and the arithmetic
-of episode records (:mod:`.episodes`: block success curves and final-window rates)."""
+"""What the experiments share, written once: the seed plan, the result base, per-seed jobs,
+configs of parts, map specs, worlds, episode records, figures and the report's sections."""

@@ -1,7 +1,5 @@
 """The arithmetic of episode records, once: outcomes per seed and episode (a ``(seeds,
-episodes)`` array of bools, one row per seed) turned into block rates and the learning curves
-of the reach, robot and reward experiments (:func:`success_curve`), and rates over the final
-episodes (what the tables report)."""
+episodes)`` array of bools) as block rates, learning curves and rates over the final episodes."""
 
 from __future__ import annotations
 

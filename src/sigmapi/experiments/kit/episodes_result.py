@@ -1,7 +1,5 @@
-"""The base of the results made of episode records (reach, robot, reward): the records per
-name (a state the learner reads, or a method) and what all of them compute from the records,
-the rates over the final episodes and the learning curves (:mod:`.episodes`); and the
-drawing of those curves (:func:`plot_with_bands`)."""
+"""The base of the results made of episode records per name, a state or a method (reach, robot,
+reward), and the drawing of their learning curves (:func:`plot_with_bands`)."""
 
 from __future__ import annotations
 
@@ -24,12 +22,11 @@ if TYPE_CHECKING:
 
 @dataclass
 class EpisodesResult(Result):
-    """A result of episode records: ``success[name]``, ``lost[name]`` and ``steps[name]`` have
-    shape ``(len(seeds), episodes)``, one row per seed in the order of ``seeds``: whether each
-    episode succeeded, whether the world ended it without success (the rest timed out) and how
-    many steps it took. The config's ``run`` part has ``block`` and ``final_episodes``. A
-    result read back from its JSON form (:meth:`from_dict`) holds no records: its summaries
-    are ``written``, as the file has them."""
+    """A result of episode records: ``success[name]``, ``lost[name]`` and ``steps[name]``, one
+    row per seed of ``seeds``, say whether each episode succeeded, whether the world ended it
+    without success (the rest timed out) and how many steps it took. The config's ``run`` part
+    has ``block`` and ``final_episodes``. A result read back (:meth:`from_dict`) holds no
+    records: its summaries are ``written``."""
 
     config: Any
     seeds: tuple[int, ...]
@@ -63,8 +60,7 @@ class EpisodesResult(Result):
     def final(self, key: str = "success") -> dict[str, NDArray[np.float64]]:
         """Per name, the rate of the records ``key`` over the last ``final_episodes``
         episodes (:meth:`window`), one per seed."""
-        f = self.config.run.final_episodes
-        return {s: final_rates(r, f) for s, r in getattr(self, key).items()}
+        return {s: final_rates(w, w.shape[1]) for s, w in self.window(key).items()}
 
     def final_mean(self, key: str = "success") -> dict[str, float]:
         """:meth:`final`, mean over seeds."""

@@ -1,13 +1,5 @@
-"""What the experiments' figures share: series that may coincide, drawn so that each one
-shows, and said so; legends below a panel.
-
-:func:`plot_apart` draws named series over their x values with one marker each, the first
-largest and each later one :data:`SHRINK` times smaller (its line thinner) on top, so a series
-that lies under another still shows round it; a series equal to an earlier one at every point
-(:func:`coinciding`) gets "(coincides with NAME)" in its label. Captions state the same with
-:func:`coincide_sentence`. :func:`legend_once` gives marks that share a label (the bands of
-every series) one legend entry.
-"""
+"""What the experiments' figures share: series that may coincide drawn so that each one shows,
+and said so (:func:`plot_apart`, :func:`coincide_sentence`); legends below a panel."""
 
 from __future__ import annotations
 
@@ -74,10 +66,10 @@ def plot_apart(
     say: bool = True,
 ) -> dict[str, str]:
     """Draw each series of ``y`` over its ``x`` on ``ax`` (:func:`coinciding` on x and y):
-    marker ``MARKERS[i]`` of size ``largest / SHRINK**i``, line width from ``width`` down;
-    ``labels`` and ``colours`` per name (default: the name, ``C0``, ``C1``, ...). With ``say``
-    a coinciding series' label names the one it lies on (without, the caption must say so).
-    Returns the coinciding series."""
+    marker ``MARKERS[i]`` of size ``largest / SHRINK**i`` on top of the ones before (a series
+    under another shows round it), line width from ``width`` down; ``labels`` and ``colours``
+    per name (default: the name, ``C0``, ``C1``, ...). With ``say`` a coinciding series' label
+    names the one it lies on (without, the caption must say so). Returns the coinciding series."""
     same = coinciding({m: [*x[m], *y[m]] for m in y})
     for i, m in enumerate(y):
         label = (labels or {}).get(m, m)

@@ -1,8 +1,6 @@
-"""The per-seed job of an experiment and its progress: one function, run where the executor
-puts it, that shows a bar of its episodes only where it runs in the caller's process; and the
-one protocol of the embodied experiments: a seed's map, then the same learner on every state
-the experiment compares (:func:`seed_episodes`); and
-:class:`SeedRuns`, the run of an experiment of one job per seed, written once."""
+"""The per-seed job of an experiment and its progress (:func:`counted`, :class:`Steps`), one
+experiment of a job per seed written once (:class:`SeedRuns`), and the protocol of the embodied
+experiments: a seed's map, then the same learner on every state compared (:func:`seed_episodes`)."""
 
 from __future__ import annotations
 
@@ -106,13 +104,11 @@ def seed_episodes(
     info_keys: Sequence[str] = (),
     keep: Callable[[str, gym.Env[Any, Any], ActorCritic], Any] | None = None,
 ) -> SeedEpisodes:
-    """The protocol of one seed of an embodied experiment (reach, robot): the map, learned by
-    ``make_map(seed, tick)`` (``(model, extras)``) where a state reads it (``"map"`` in
-    ``states``); then per state, the world as that state sees it (``state_env(state,
-    model)``) and the same learner on the same episodes (its action choices from stream
-    ``"agent"`` of ``seed``'s ``plan``, episode ``i``'s start from stream ``("starts", i)``:
-    :func:`~sigmapi.agents.run_episodes`), ``tick(1, state)`` after each; ``keep(state, env,
-    learner)``, where given, what to keep of it."""
+    """One seed of an embodied experiment (reach, robot): the map ``make_map(seed, tick)`` where
+    a state reads it (``"map"`` in ``states``); then per state, its world ``state_env(state,
+    model)`` and the same learner on the same episodes (streams ``"agent"`` and ``("starts",
+    i)`` of ``plan``: :func:`~sigmapi.agents.run_episodes`), ``tick(1, state)`` after each;
+    ``keep(state, env, learner)``, where given, what to keep of it."""
     model, extras = make_map(seed, tick) if "map" in states else (None, {})
     out = SeedEpisodes(model, extras)
     for state in states:
@@ -188,9 +184,8 @@ class SeedRuns(Experiment[C]):
         return counted(job.show, self.steps(job), self.desc(job), run, self.unit)
 
     def execute(self, config: C, run: Run) -> Any:
-        """Every job of ``config`` and the run's seeds, each a job of its executor (the result
-        does not depend on where it runs); run one by one in this process, a job shows a bar of
-        its steps. ``run.out`` is not used: the run writes nothing while it runs."""
+        """Every job of ``config`` and the run's seeds through its executor (the result does not
+        depend on where they run); ``run.out`` is not used: the run writes nothing as it runs."""
         per_job = self.check(config)
         t0 = time.perf_counter()
         jobs = self.jobs(config, run.seeds, self.prepare(config, run.progress))

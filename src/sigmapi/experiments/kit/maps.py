@@ -1,10 +1,5 @@
-"""A map's settings as data: a preset and its overrides (:class:`MapSpec`), resolved once.
-
-Every experiment that trains a Sigma-Pi map names it this way: a shipped TOML preset
-(``sigmapi presets``; a schedule of its own is a preset too, e.g. ``robot-2d``), ``key=value``
-overrides as ``--set`` takes them, typed changes the experiment makes, and last the fields the
-experiment fixes (the world's codes, the map's size, length, seed and backend).
-"""
+"""A map's settings as data, resolved once (:class:`MapSpec`): how every experiment that trains a
+Sigma-Pi map names it (a schedule of its own is a preset too, e.g. ``robot-2d``)."""
 
 from __future__ import annotations
 
@@ -17,8 +12,9 @@ from sigmapi.config import SOMConfig, apply_overrides, load_preset
 
 @dataclass(frozen=True)
 class MapSpec:
-    """A preset, then ``changes`` (typed), then ``overrides`` (``key=value`` strings, the
-    user's); :meth:`config` adds the fields the experiment fixes.
+    """A shipped preset, then ``changes`` (typed, the experiment's), then ``overrides``
+    (``key=value`` strings as ``--set`` takes them, the user's); :meth:`config` adds last the
+    fields the experiment fixes (the world's codes, the map's size, length, seed and backend).
 
     Examples
     --------

@@ -1,8 +1,5 @@
-"""Configs made of parts: frozen dataclasses (``env``, ``map``, ``agent``, ``run``, ...) held
-by one config that subclasses :class:`Parts`, each of its fields a part. ``PARTS`` (each
-part's name and class) is derived from those fields, never listed again. Field names are
-unique across the parts, so ``config.replace(grid=7, episodes=150)`` finds each field's part,
-and the command line gives every part's fields as options (:mod:`sigmapi.cli.experiment`)."""
+"""Configs made of parts (:class:`Parts`): frozen dataclasses (``env``, ``map``, ``agent``,
+``run``, ...) held by one config whose command-line options are every part's fields."""
 
 from __future__ import annotations
 
@@ -14,13 +11,13 @@ from typing import ClassVar, Self
 
 from sigmapi import _validate
 from sigmapi.errors import ConfigError
-from sigmapi.experiments.kit.results import JSON, tuples
+from sigmapi.experiments.kit.results import tuples
 
 
 class Parts:
     """The base of a config made of parts: every dataclass field is a part, a frozen dataclass
-    of its own. :attr:`PARTS` is derived from the fields (their declared classes) when the
-    config class is made."""
+    of its own (:attr:`PARTS`, derived from the fields, never listed again). Field names are
+    unique across the parts, so ``config.replace(grid=7, episodes=150)`` finds each one's part."""
 
     PARTS: ClassVar[dict[str, type]]
     """Each part's name and class, in the order of the fields."""
@@ -40,8 +37,17 @@ class Parts:
         return cls.__name__.removesuffix("Config").lower()
 
     def replace(self, **changes: object) -> Self:
-        """A copy with ``changes``, fields of any part by name (``grid=7, episodes=150``)."""
-        return type(self)(**replaced_parts(self, self.PARTS, changes, self.kind()))
+        """A copy with ``changes``, fields of any part by name (``grid=7, episodes=150``); an
+        unknown field is a ConfigError that lists the valid ones."""
+        owner = {f.name: p for p, cls in self.PARTS.items() for f in dataclasses.fields(cls)}
+        bad = sorted(set(changes) - set(owner))
+        if bad:
+            valid = ", ".join(sorted(owner))
+            raise ConfigError(f"unknown {self.kind()} config field {bad[0]!r}; valid: {valid}")
+        parts = {p: {k: v for k, v in changes.items() if owner[k] == p} for p in self.PARTS}
+        return type(self)(
+            **{p: dataclasses.replace(getattr(self, p), **c) for p, c in parts.items()}
+        )
 
     def to_dict(self) -> dict[str, object]:
         """The parts as JSON-able tables (tuples as lists): ``{"env": {...}, "map": ...}``."""
@@ -49,8 +55,26 @@ class Parts:
 
     @classmethod
     def from_dict(cls, data: object) -> Self:
-        """The config a :meth:`to_dict` wrote."""
-        return cls(**parts_from_dict(data, cls.PARTS, cls.kind()))
+        """The config a :meth:`to_dict` wrote (lists as tuples): each part's table must hold
+        only its class's fields (a ConfigError naming the first that is not one; a KeyError
+        naming a missing part)."""
+        kind = cls.kind()
+        if not isinstance(data, Mapping):
+            raise _validate.fail(f"{kind} config", "a JSON object of parts", type(data).__name__)
+        out = {}
+        for part, part_cls in cls.PARTS.items():
+            table = data[part]
+            if not isinstance(table, Mapping):
+                raise _validate.fail(f"{kind} config part {part!r}", "a JSON object", table)
+            names = {f.name for f in dataclasses.fields(part_cls)}
+            bad = sorted(set(table) - names)
+            if bad:
+                raise ConfigError(
+                    f"unknown {kind} config field {bad[0]!r} in part {part!r}; valid: "
+                    f"{', '.join(sorted(names))}"
+                )
+            out[part] = part_cls(**tuples(table))
+        return cls(**out)
 
 
 def parts_of(config_type: type) -> dict[str, type]:
@@ -65,25 +89,6 @@ def check_part_types(config: object, parts: dict[str, type]) -> None:
             raise _validate.fail(name, f"a {cls.__name__}", getattr(config, name))
 
 
-def replaced_parts(
-    config: object, parts: dict[str, type], changes: dict[str, object], kind: str
-) -> JSON:
-    """The parts of ``config`` with ``changes`` (fields of any part, by name); an unknown
-    field is a ConfigError that lists the valid ones (``kind``: "reach", "reward", ...)."""
-    owner = {f.name: part for part, cls in parts.items() for f in dataclasses.fields(cls)}
-    bad = sorted(set(changes) - set(owner))
-    if bad:
-        raise ConfigError(
-            f"unknown {kind} config field {bad[0]!r}; valid: {', '.join(sorted(owner))}"
-        )
-    return {
-        part: dataclasses.replace(
-            getattr(config, part), **{k: v for k, v in changes.items() if owner[k] == part}
-        )
-        for part in parts
-    }
-
-
 def parts_dict(config: object, parts: dict[str, type]) -> dict[str, dict[str, object]]:
     """The parts of ``config`` as JSON-able tables (tuples as lists)."""
     return {
@@ -93,25 +98,3 @@ def parts_dict(config: object, parts: dict[str, type]) -> dict[str, dict[str, ob
         }
         for part in parts
     }
-
-
-def parts_from_dict(data: object, parts: dict[str, type], kind: str) -> JSON:
-    """The parts a :func:`parts_dict` wrote, built again (lists as tuples): each part's
-    table must hold only its class's fields (a ConfigError naming the first that is not one;
-    a KeyError naming a missing part)."""
-    if not isinstance(data, Mapping):
-        raise _validate.fail(f"{kind} config", "a JSON object of parts", type(data).__name__)
-    out = {}
-    for part, cls in parts.items():
-        table = data[part]
-        if not isinstance(table, Mapping):
-            raise _validate.fail(f"{kind} config part {part!r}", "a JSON object", table)
-        names = {f.name for f in dataclasses.fields(cls)}
-        bad = sorted(set(table) - names)
-        if bad:
-            raise ConfigError(
-                f"unknown {kind} config field {bad[0]!r} in part {part!r}; valid: "
-                f"{', '.join(sorted(names))}"
-            )
-        out[part] = cls(**tuples(table))
-    return out

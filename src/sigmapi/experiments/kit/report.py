@@ -1,7 +1,7 @@
-"""What an experiment adds to the report of ``sigmapi reproduce``: a :class:`Section`, made
-by a function of the :class:`ReportContext`, named by its ``"module:function"`` (as the
-experiments are: :func:`section_function` imports it when the report runs), so that the report
-imports no experiment and an experiment no part of the report."""
+"""What an experiment adds to the report of ``sigmapi reproduce``: a :class:`Section`, made by
+a function of the :class:`ReportContext` named by its ``"module:function"``
+(:func:`section_function`), so that the report imports no experiment and an experiment no part
+of the report."""
 
 from __future__ import annotations
 
@@ -21,25 +21,17 @@ if TYPE_CHECKING:
 
 @dataclass(frozen=True)
 class Section:
-    """A section of the report.
-
-    Attributes
-    ----------
-    title : str
-        Heading (plain text; escaped).
-    html : str
-        Body, an HTML fragment (trusted: write it with :func:`html.escape` on your values).
-    figures : list of (str, str)
-        ``(file name relative to the report folder, caption)`` per image; the files must
-        exist when the report is written.
-    data : dict
-        Numbers to store in ``metrics.json`` under ``sections[title]``.
-    """
+    """A section of the report."""
 
     title: str
+    """Heading (plain text; escaped)."""
     html: str = ""
+    """Body, an HTML fragment (trusted: write it with :func:`html.escape` on your values)."""
     figures: list[tuple[str, str]] = field(default_factory=list)
+    """``(file name relative to the report folder, caption)`` per image; the files must exist
+    when the report is written."""
     data: dict[str, object] = field(default_factory=dict)
+    """Numbers to store in ``metrics.json`` under ``sections[title]``."""
 
 
 class ReportOptions(Protocol):
@@ -55,13 +47,10 @@ class ReportOptions(Protocol):
 
 @dataclass
 class ReportContext:
-    """What a section gets: the report folder, the run settings and the trained models.
-
-    ``models`` maps each preset name to its trained models, one per seed (in ``seeds`` order).
-    Sections run in a thread of their own while the report draws its figures and computes
-    the ceilings: a section draws its figures holding ``drawing``, which the report holds
-    while it draws its own.
-    """
+    """What a section gets: the report folder, the run settings and the trained models
+    (``models``: per preset name, one per seed in ``seeds`` order). Sections run in a thread of
+    their own beside the report's figures and ceilings: a section draws holding ``drawing``,
+    which the report holds while it draws its own."""
 
     out: Path
     options: ReportOptions

@@ -1,16 +1,5 @@
-"""The base of every experiment's result: its JSON form derived from its fields and methods,
-read back from it (``from_dict``: the docs read every result file this way, so that a result's
-keys are defined once, by the result), and one renderer of console tables from column specs.
-
-A result is a dataclass that subclasses :class:`Result` and names the keys of its JSON form in
-order (:attr:`Result.KEYS`): each key is a field or a method of that name (its value, or what
-it returns), or ``"key: attribute"`` where the attribute is named otherwise. Values become JSON
-types on the way (:func:`plain`: nested dataclasses, tuples, numpy arrays and scalars). The
-keys computed from records a file does not hold (:attr:`Result.COMPUTED`: per-episode records,
-curves) read back as the summaries ``written``, and ``to_dict`` gives them back unchanged, so
-that ``to_dict -> from_dict -> to_dict`` is the identity. A table is :func:`render` of a list
-of :class:`Column`.
-"""
+"""The base of every experiment's result (:class:`Result`), whose keys are defined once, by the
+result (the docs read every result file back with it), and console tables (:func:`render`)."""
 
 from __future__ import annotations
 

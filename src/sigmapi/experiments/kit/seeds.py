@@ -1,27 +1,12 @@
 """One seed plan: the random streams of one seed of an experiment, each by name.
 
-Every experiment takes its seeds as ints (:func:`check_seeds`) and draws each of its random
-streams from a :class:`SeedPlan`, by one derivation: stream ``name`` of seed ``s`` is the
-child ``SeedSequence(s, spawn_key=(key, *more))`` of ``SeedSequence(s)`` under the spawn key
-the plan names (``more``: keys below it, e.g. one stream per dwell time or per episode). The
-plan hands out generators (:meth:`SeedPlan.rng`, :meth:`SeedPlan.rngs`) and sequences
-(:meth:`SeedPlan.sequence`), never ints: a stream is never drawn as an int and passed on.
-
-Two things take a seed of their own, and each has one rule:
-
-- a model (:class:`~sigmapi.SigmaPiSOM`, whose ``SOMConfig.seed`` is an int) is built with
-  the seed ``s`` itself: its streams (weights, data, passes, refinement) are then the children
-  of ``SeedSequence(s)`` under :data:`MODEL_KEYS` (0-4), the same tree as the plan's, so a
-  plan names its keys from 5 up (checked). Two models of one seed (chain's maps A and B, the
-  iCub's maps 1 and 2, compare's methods) draw the same streams, as the same seed promises;
-- an environment is seeded from a generator: an episode's start is a generator of the plan
-  (:meth:`SeedPlan.rngs`, one per episode) that becomes the world's ``np_random`` before a
-  ``reset()`` (:func:`~sigmapi.agents.reset_from`; Gymnasium's ``reset(seed=n)`` is the
-  same with ``default_rng(n)``).
-
-Whatever takes a generator or a ``SeedSequence`` takes the plan's: a source of views
-(:func:`~sigmapi.envs.collect_saccade_views`), the actor-critic, the neurons' dendritic and
-basis-function maps.
+Every experiment takes its seeds as ints (:func:`check_seeds`) and draws each random stream from
+a :class:`SeedPlan`: stream ``name`` of seed ``s`` is ``SeedSequence(s, spawn_key=(key,
+*more))``, the plan naming ``key`` (``more``: keys below it, e.g. one per episode), handed out
+as generators or sequences, never ints. A model is built with the seed ``s`` itself, its own
+streams the children :data:`MODEL_KEYS` (0-4) of the same tree, so a plan's keys start at 5
+and two models of one seed draw the same streams. An environment is seeded from a generator
+of the plan, one per episode, as its ``np_random`` (:func:`~sigmapi.agents.reset_from`).
 """
 
 from __future__ import annotations
@@ -87,10 +72,8 @@ class SeedPlan:
 
 
 def check_seeds(seeds: Any, name: str = "seeds") -> tuple[int, ...]:
-    """``seeds`` as a tuple of ints: at least one, each >= 0, no two alike.
-
-    The one check of every experiment's seeds (``name`` says where they came from, e.g.
-    ``"sweep spec 'a.toml': seeds"``).
+    """``seeds`` as a tuple of ints: at least one, each >= 0, no two alike (``name``: where they
+    came from, e.g. ``"sweep spec 'a.toml': seeds"``).
 
     Examples
     --------

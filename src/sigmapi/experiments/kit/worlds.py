@@ -1,15 +1,9 @@
 """The worlds an embodied experiment learns its map in and acts in, by name (:data:`WORLDS`).
 
-A :class:`World` is what an experiment needs of one: its Gymnasium id and how its settings (a
-frozen dataclass: the ``env`` part of the reach and robot configs) give
-``gymnasium.make``'s keyword arguments, time limit included; the world itself as a view source
-(:class:`~sigmapi.envs.ViewSource`: its codes, the saccade view pairs a map's data are
-recorded from); the map spec its map starts from; its default seeds. A new world (a humanoid)
-is one :func:`register_world` call; its callables are module-level functions, so that a job
-carrying the world runs in another process.
-
-The gaze-and-reach world is registered here (:data:`GAZE_REACH`); the simulated robot's in
-:mod:`sigmapi.experiments.robot.config`, beside its settings.
+A new world (a humanoid) is one :func:`register_world` call; its callables are module-level
+functions, so that a job carrying the world runs in another process. The gaze-and-reach world
+is registered here (:data:`GAZE_REACH`), the simulated robot's in
+:mod:`sigmapi.experiments.robot.config`.
 """
 
 from __future__ import annotations
@@ -28,7 +22,9 @@ from sigmapi.experiments.kit.maps import MapSpec
 
 @dataclass(frozen=True)
 class World:
-    """One world: see the module's docstring."""
+    """What an experiment needs of a world: its Gymnasium id, its settings (the ``env`` part of
+    the reach and robot configs) and how they give ``gymnasium.make``'s arguments, the world as
+    a view source, the map spec its map starts from and its default seeds."""
 
     name: str
     """Its name in :data:`WORLDS`."""
