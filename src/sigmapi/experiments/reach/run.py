@@ -37,7 +37,7 @@ from sigmapi.experiments.base import register
 from sigmapi.experiments.kit.jobs import SeedEpisodes, SeedJob, SeedRuns, Tick, seed_episodes
 from sigmapi.experiments.kit.seeds import SeedPlan
 from sigmapi.experiments.kit.worlds import GAZE_REACH, World
-from sigmapi.experiments.reach.config import SMALL_PRESET, ReachConfig, preset_setting
+from sigmapi.experiments.reach.config import SMALL, ReachConfig
 from sigmapi.experiments.reach.result import ReachResult
 from sigmapi.metrics import evaluate
 from sigmapi.model.som import SigmaPiSOM, load_model
@@ -103,9 +103,7 @@ class ReachExperiment(SeedRuns[Any]):
     name = "reach"
     summary = "learn to reach with an actor-critic on the learned map vs. other states"
     config_type: type[Any] = ReachConfig
-    quick: Any = ReachConfig().replace(
-        episodes=150, final_episodes=50, **preset_setting(SMALL_PRESET)
-    )
+    quick: Any = SMALL.replace(episodes=150, final_episodes=50)
     quick_seeds = (0,)
     quick_time = "about 12 s on two busy cores"
     default_out = "reach"

@@ -38,7 +38,7 @@ from sigmapi.experiments.kit.jobs import SeedJob, SeedRuns, Tick
 from sigmapi.experiments.kit.results import JSON
 from sigmapi.experiments.kit.seeds import SeedPlan
 from sigmapi.experiments.kit.worlds import GAZE_REACH, World
-from sigmapi.experiments.reward.config import RewardConfig
+from sigmapi.experiments.reward.config import METHODS, RewardConfig
 from sigmapi.experiments.reward.result import SCORES, RewardResult
 from sigmapi.metrics import winner_metrics
 from sigmapi.model.som import SigmaPiSOM
@@ -151,10 +151,11 @@ class RewardExperiment(SeedRuns[RewardConfig]):
             "initial_units": preferred_z(learned, objects),
             "runs": {},
         }
+        features = (cfg.map.features, cfg.map.feature_width)
+        gating = cfg.gate.gating()  # the same settings for every method
         factors: NDArray[np.float64] | None = None
-        for m in sorted(run.methods, key=("frozen", "gated", "shuffled").index):
+        for m in sorted(run.methods, key=METHODS.index):
             model = copy.copy(learned)
-            features = (cfg.map.features, cfg.map.feature_width)
             env = MapObservation(world.make_env(cfg.env), model, *features)
             agent = actor_critic_for(env, cfg.agent, seed=PLAN.rng(seed, "agent"))
             done = None if tick is None else functools.partial(tick, 1, m)
@@ -166,13 +167,7 @@ class RewardExperiment(SeedRuns[RewardConfig]):
                 replay = None if factors is None else PLAN.rng(seed, "shuffle").permutation(factors)
                 fixations = PLAN.rng(seed, "fixations")
                 got = run_gated_episodes(
-                    env,
-                    agent,
-                    starts,
-                    cfg.gate.gating(),
-                    fixations,
-                    surprises=replay,
-                    on_episode=done,
+                    env, agent, starts, gating, fixations, surprises=replay, on_episode=done
                 )
                 ep, updates = got.episodes, got.updates
                 factors = got.surprises if m == "gated" else factors
