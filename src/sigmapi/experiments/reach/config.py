@@ -1,8 +1,7 @@
 """The settings of one reach comparison, in four frozen parts (:class:`ReachConfig`): the world
 (:class:`~sigmapi.envs.GazeReachConfig`), the map (:class:`MapConfig`), the learner
-(:class:`~sigmapi.agents.ActorCriticConfig`) and the run (:class:`ReachRunConfig`). Each part
-checks its own fields; the seeds are not settings (they are given to the run), and the
-``sigmapi reach`` options are the parts' fields (:mod:`sigmapi.cli.experiment`).
+(:class:`~sigmapi.agents.ActorCriticConfig`) and the run (:class:`ReachRunConfig`); the seeds
+are not settings (they are given to the run).
 """
 
 from __future__ import annotations

@@ -1,8 +1,6 @@
-"""Figures of the reach comparison: learning curves and the learned value over z.
-
-Every function takes ``ax=None`` (a new figure when None) and returns the Axes, except
-:func:`reach_figure`, which lays out the whole comparison and returns the Figure; pyplot is
-never touched (plain :class:`matplotlib.figure.Figure` objects, drawn when saved).
+"""Figures of the reach comparison: learning curves and the learned value over z. Each plot
+function takes ``ax=None`` (a new figure) and returns the Axes; :func:`reach_figure` lays out
+the comparison and returns the Figure (pyplot untouched: plain Figures, drawn when saved).
 """
 
 from __future__ import annotations

@@ -1,13 +1,12 @@
-"""Figures of the robot experiment: the map on the table, learning curves, a film strip.
-
-Thin plot functions (``ax`` in, Axes out) and :func:`robot_figures`, which writes them for a
-:class:`~sigmapi.experiments.robot.result.RobotResult`, each with its caption beside it
-(``NAME.txt``), computed from the data; :func:`film_episode` renders one
-docking episode of the first seed's map learner.
+"""Figures of the robot experiment: the map on the table, learning curves, a film strip. Plot
+functions (``ax`` in, Axes out), :func:`robot_figures`, which writes them for a
+:class:`~sigmapi.experiments.robot.result.RobotResult` with their captions (``NAME.txt``), and
+:func:`film_episode`, one docking episode of the first seed's map learner.
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -64,7 +63,7 @@ def plot_unit_positions(
     return ax
 
 
-def plot_curves(curves: dict[str, dict[str, list[float]]], ax: Axes | None = None) -> Axes:
+def plot_curves(curves: Mapping[str, Mapping[str, Any]], ax: Axes | None = None) -> Axes:
     """Success per block of episodes, mean over seeds with one standard deviation shaded; one
     marker per state (curves that coincide each show, their legend entries say so)."""
     import matplotlib.pyplot as plt
@@ -134,7 +133,7 @@ def robot_figures(
             + (f"; {words}" if words else "")
             + ". Tan: the table; grey disc: the robot, facing up.",
         )
-    curves = result.curves()
+    curves = result.success_curves()
     final = result.final()
     save(
         plot_curves(curves).figure,

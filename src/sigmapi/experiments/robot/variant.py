@@ -5,10 +5,8 @@ with the robot's map (docs/guide/robot.md).
 a :class:`~sigmapi.experiments.robot.result.RobotResult`. Seed ``s``'s random streams are those
 of :data:`~sigmapi.experiments.robot.config.PLAN`: ``"views"`` (the map's recorded views; the
 map is built with seed ``s``, its weights the seed's own), ``"starts"`` and ``"agent"`` (the
-same for every state), ``"film"`` (the filmed episode's start). The map learns in passes over
-view pairs recorded from the still robot's saccades
-(:func:`~sigmapi.experiments.robot.map.learn_map`) and is scored on evaluation pairs drawn from
-:data:`~sigmapi.metrics.EVAL_SEED` (the same for every seed).
+same for every state), ``"film"`` (the filmed episode's start). The map and its scores:
+:mod:`~sigmapi.experiments.robot.map`.
 
 Examples
 --------
