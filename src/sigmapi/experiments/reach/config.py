@@ -28,8 +28,7 @@ from sigmapi.model.som import SigmaPiSOM
 
 
 def default_map_shape(dim: object) -> tuple[int, ...]:
-    """The map of a ``dim``-D task when none is given: 15x15 in 2-D (paper-2d), 12 units in
-    1-D."""
+    """The map of a ``dim``-D task when none is given: 15x15 in 2-D (paper-2d), 12 units in 1-D."""
     return (15, 15) if dim == 2 else (12,)
 
 
@@ -132,18 +131,10 @@ class MapConfig:
             raise ConfigError(
                 f"a map's x and y codes differ only in shape, got {x_code} and {y_code}"
             )
-        return MapSpec(self.preset).config(
-            x_shape=x_code.shape,
-            y_shape=y_code.shape,
-            code_width=x_code.width,
-            code_height=x_code.height,
-            code_normalize=x_code.normalize,
-            periodic=x_code.periodic,
-            map_shape=self.map_shape,
-            iterations=self.iterations,
-            backend=self.backend,
-            seed=seed,
-        )
+        shapes = {"x_shape": x_code.shape, "y_shape": y_code.shape, "map_shape": self.map_shape}
+        codes = {f"code_{k}": getattr(x_code, k) for k in same[:3]}  # code_width, ...
+        run = {"iterations": self.iterations, "backend": self.backend, "seed": seed}
+        return MapSpec(self.preset).config(**shapes, **codes, periodic=x_code.periodic, **run)
 
 
 @dataclass(frozen=True)
@@ -221,5 +212,4 @@ def preset_setting(name: str) -> JSON:
 
 
 SMALL = ReachConfig().replace(**preset_setting(SMALL_PRESET))
-"""The 7x7 setting (:data:`SMALL_PRESET`): the quick run's and the reward experiment's world
-and map."""
+"""The 7x7 setting (:data:`SMALL_PRESET`): the world and map of the quick run and of reward."""

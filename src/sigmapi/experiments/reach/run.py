@@ -1,13 +1,12 @@
 """The reach experiment: one actor-critic, several state representations, many seeds.
 
 :data:`REACH` (a :class:`ReachExperiment`) runs a
-:class:`~sigmapi.experiments.reach.config.ReachConfig` on a list of seeds and returns a
-:class:`~sigmapi.experiments.reach.result.ReachResult`. Seed ``s``'s random streams are
-those of :data:`PLAN`: ``"views"`` the map's data (saccade views; its weights are the seed's
-own, the map built with seed ``s``), ``"starts"`` the episodes' start states (identical for
-every state representation: same learner, same episodes), ``"agent"`` the learner's action
-choices (the same stream for every representation); each is child ``(key, ...)`` of
-``SeedSequence(s)`` (:mod:`sigmapi.experiments.kit.seeds`).
+:class:`~sigmapi.experiments.reach.config.ReachConfig` on seeds and returns a
+:class:`~sigmapi.experiments.reach.result.ReachResult`. Seed ``s``'s random streams are those
+of :data:`PLAN`, each a child of ``SeedSequence(s)`` (:mod:`sigmapi.experiments.kit.seeds`):
+``"views"`` the map's data (saccade views; the map is built with seed ``s``), ``"starts"`` the
+episodes' start states and ``"agent"`` the learner's action choices (both the same for every
+state representation: same learner, same episodes).
 
 Examples
 --------

@@ -51,14 +51,9 @@ def plot_unit_positions(
         label = "the map's rows and columns" if i == 0 else "_rows"
         ax.plot(-line[:, 1], line[:, 0], color="tab:blue", lw=0.8, label=label)
     ax.plot(-p[:, 1], p[:, 0], "o", color="tab:red", ms=3, label="a unit's ball position")
-    ax.set(
-        xlim=(-1.0, 1.0),
-        ylim=(-0.2, 1.45),
-        aspect="equal",
-        xlabel="right of the robot (m)",
-        ylabel="ahead of the robot (m)",
-        title="each unit's preferred ball position",
-    )
+    ax.set(xlim=(-1.0, 1.0), ylim=(-0.2, 1.45), aspect="equal")
+    ax.set(xlabel="right of the robot (m)", ylabel="ahead of the robot (m)")
+    ax.set_title("each unit's preferred ball position")
     ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
     return ax
 
