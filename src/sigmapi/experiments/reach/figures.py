@@ -140,10 +140,8 @@ def reach_figure(result: ReachData) -> Figure:
     fig = Figure(figsize=(width, 8.0), layout="constrained")
     grid = fig.add_gridspec(2, n)
     half = n // 2
-    ax0 = fig.add_subplot(grid[0, :half])
-    ax1 = fig.add_subplot(grid[0, half:])
-    plot_reach_curves(result, "success", ax0)
-    plot_reach_curves(result, "steps", ax1)
+    plot_reach_curves(result, "success", fig.add_subplot(grid[0, :half]))
+    plot_reach_curves(result, "steps", fig.add_subplot(grid[0, half:]))
     values = [np.asarray(result.values[s]) for s in states]
     # one colour scale for every state's value map, so that they compare
     shared: dict[str, float] = {}
