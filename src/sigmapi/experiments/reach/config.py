@@ -1,14 +1,13 @@
 """The settings of one reach comparison, in four frozen parts (:class:`ReachConfig`): the world
 (:class:`~sigmapi.envs.GazeReachConfig`), the map (:class:`MapConfig`), the learner
-(:class:`~sigmapi.agents.ActorCriticConfig`) and the run (:class:`ReachRunConfig`). Each part
-checks its own fields; the seeds are not settings (they are given to the run), and the
-``sigmapi reach`` options are the parts' fields (:mod:`sigmapi.cli.experiment`).
+(:class:`~sigmapi.agents.ActorCriticConfig`) and the run (:class:`ReachRunConfig`); the seeds
+are not settings (they are given to the run).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -29,25 +28,36 @@ from sigmapi.model.som import SigmaPiSOM
 
 
 def default_map_shape(dim: object) -> tuple[int, ...]:
-    """The map of a ``dim``-D task when none is given: 15x15 in 2-D (paper-2d), 12 units in
-    1-D."""
+    """The map of a ``dim``-D task when none is given: 15x15 in 2-D (paper-2d), 12 units in 1-D."""
     return (15, 15) if dim == 2 else (12,)
 
 
-def check_parts(config: Any, parts: dict[str, type]) -> None:
-    """Each part of a config of parts (``env``, ``map``, ...) is of its class
+class MapParts(Parts):
+    """A config of parts whose ``env`` is a world's settings and whose ``map`` a
+    :class:`MapConfig` (the reach and reward configs): each part is of its class
     (:func:`~sigmapi.experiments.kit.parts.check_part_types`), and the map has an axis per
     dimension of the world's task (a ConfigError naming the first that is not)."""
-    check_part_types(config, parts)
-    dim, shape = config.env.dim, config.map.map_shape
-    if len(shape) != dim:
-        axes = "1 axis" if dim == 1 else f"{dim} axes"
-        raise ConfigError(
-            f"map_shape must have {axes} for a task of dim {dim}, got "
-            f"{'x'.join(map(str, shape))} ({len(shape)}-D); give map_shape "
-            f"{'x'.join(map(str, default_map_shape(dim)))} (the dim-{dim} default), or "
-            f"dim {len(shape)} for a {len(shape)}-D task"
-        )
+
+    if TYPE_CHECKING:
+        env: GazeReachConfig
+        map: MapConfig
+
+    def __post_init__(self) -> None:
+        check_part_types(self, self.PARTS)
+        dim, shape = self.env.dim, self.map.map_shape
+        if len(shape) != dim:
+            axes = "1 axis" if dim == 1 else f"{dim} axes"
+            raise ConfigError(
+                f"map_shape must have {axes} for a task of dim {dim}, got "
+                f"{'x'.join(map(str, shape))} ({len(shape)}-D); give map_shape "
+                f"{'x'.join(map(str, default_map_shape(dim)))} (the dim-{dim} default), or "
+                f"dim {len(shape)} for a {len(shape)}-D task"
+            )
+
+    def som_config(self, seed: int, world: World = GAZE_REACH) -> SOMConfig:
+        """The config of the map of seed ``seed``, on the codes of ``world``
+        (:meth:`MapConfig.in_world`)."""
+        return self.map.in_world(world, self.env, seed)
 
 
 @dataclass(frozen=True)
@@ -113,33 +123,18 @@ class MapConfig:
         return self.som_config(source.x_code, source.y_code, seed)
 
     def som_config(self, x_code: PopulationCode, y_code: PopulationCode, seed: int) -> SOMConfig:
-        """The map's config for views coded by ``x_code`` and ``y_code`` (the world's codes).
-
-        The ``preset`` (default ``paper-2d``, :class:`~sigmapi.experiments.kit.maps.MapSpec`)
-        on the world's codes, with this map's shape, length (``iterations``) and backend. Its
-        ordering procedure (``crossview``) is what orders a 15x15 map from saccade views
-        (docs/guide/reach.md); ``small-2d`` is the schedule of a 7x7 map.
-        """
+        """The map's config for views coded by ``x_code`` and ``y_code`` (the world's codes):
+        the ``preset`` (:class:`~sigmapi.experiments.kit.maps.MapSpec`) on them, with this
+        map's shape, length (``iterations``) and backend."""
         same = ("width", "height", "normalize", "periodic")
         if any(getattr(x_code, k) != getattr(y_code, k) for k in same):
             raise ConfigError(
                 f"a map's x and y codes differ only in shape, got {x_code} and {y_code}"
             )
-        codes: dict[str, object] = {
-            "x_shape": x_code.shape,
-            "y_shape": y_code.shape,
-            "code_width": x_code.width,
-            "code_height": x_code.height,
-            "code_normalize": x_code.normalize,
-            "periodic": x_code.periodic,
-        }
-        run: dict[str, object] = {
-            "map_shape": self.map_shape,
-            "iterations": self.iterations,
-            "backend": self.backend,
-            "seed": seed,
-        }
-        return MapSpec(self.preset).config(**codes, **run)
+        shapes = {"x_shape": x_code.shape, "y_shape": y_code.shape, "map_shape": self.map_shape}
+        codes = {f"code_{k}": getattr(x_code, k) for k in same[:3]}  # code_width, ...
+        run = {"iterations": self.iterations, "backend": self.backend, "seed": seed}
+        return MapSpec(self.preset).config(**shapes, **codes, periodic=x_code.periodic, **run)
 
 
 @dataclass(frozen=True)
@@ -170,7 +165,7 @@ class ReachRunConfig:
 
 
 @dataclass(frozen=True)
-class ReachConfig(Parts):
+class ReachConfig(MapParts):
     """Everything one reach comparison depends on, but its seeds. Defaults: the 2-D task, a
     saccade on every step, the paper-2d map, the authors' actor-critic, 600 episodes."""
 
@@ -183,24 +178,16 @@ class ReachConfig(Parts):
     run: ReachRunConfig = field(default_factory=ReachRunConfig)
     """The states, episodes and curves."""
 
-    def __post_init__(self) -> None:
-        check_parts(self, self.PARTS)
-
     def replace(self, **changes: object) -> ReachConfig:
         """A copy with ``changes``, fields of any part by name (``grid=7, episodes=150``)."""
         if "dim" in changes and "map_shape" not in changes:  # the default map follows the task
             changes = {**changes, "map_shape": default_map_shape(changes["dim"])}
         return super().replace(**changes)
 
-    def som_config(self, seed: int, world: World = GAZE_REACH) -> SOMConfig:
-        """The config of the map of seed ``seed``, on the codes of ``world``
-        (:meth:`MapConfig.in_world`)."""
-        return self.map.in_world(world, self.env, seed)
-
 
 SMALL_PRESET = "small-2d"
-"""The preset of the 7x7 setting (the quick run's and the reward experiment's): 7x7 codes of
-width 0.5, a 7x7 map on 10,000 views with the small-map schedule (:func:`preset_setting`)."""
+"""The preset of the 7x7 setting: 7x7 codes of width 0.5, a 7x7 map on 10,000 views with the
+small-map schedule (:func:`preset_setting`)."""
 
 
 def preset_setting(name: str) -> JSON:
@@ -222,3 +209,7 @@ def preset_setting(name: str) -> JSON:
         "iterations": cfg.iterations,
         "preset": name,
     }
+
+
+SMALL = ReachConfig().replace(**preset_setting(SMALL_PRESET))
+"""The 7x7 setting (:data:`SMALL_PRESET`): the world and map of the quick run and of reward."""

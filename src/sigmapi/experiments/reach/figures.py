@@ -1,8 +1,6 @@
-"""Figures of the reach comparison: learning curves and the learned value over z.
-
-Every function takes ``ax=None`` (a new figure when None) and returns the Axes, except
-:func:`reach_figure`, which lays out the whole comparison and returns the Figure; pyplot is
-never touched (plain :class:`matplotlib.figure.Figure` objects, drawn when saved).
+"""Figures of the reach comparison: learning curves and the learned value over z. Each plot
+function takes ``ax=None`` (a new figure) and returns the Axes; :func:`reach_figure` lays out
+the comparison and returns the Figure (pyplot untouched: plain Figures, drawn when saved).
 """
 
 from __future__ import annotations
@@ -142,10 +140,8 @@ def reach_figure(result: ReachData) -> Figure:
     fig = Figure(figsize=(width, 8.0), layout="constrained")
     grid = fig.add_gridspec(2, n)
     half = n // 2
-    ax0 = fig.add_subplot(grid[0, :half])
-    ax1 = fig.add_subplot(grid[0, half:])
-    plot_reach_curves(result, "success", ax0)
-    plot_reach_curves(result, "steps", ax1)
+    plot_reach_curves(result, "success", fig.add_subplot(grid[0, :half]))
+    plot_reach_curves(result, "steps", fig.add_subplot(grid[0, half:]))
     values = [np.asarray(result.values[s]) for s in states]
     # one colour scale for every state's value map, so that they compare
     shared: dict[str, float] = {}

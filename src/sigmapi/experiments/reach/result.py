@@ -3,6 +3,7 @@ them, its JSON form, its table and its figure."""
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
@@ -118,18 +119,12 @@ class ReachResult(EpisodesResult):
             nb = succ.shape[1] // b
             sb = succ[:, : nb * b].reshape(succ.shape[0], nb, b)
             tb = steps[:, : nb * b].reshape(succ.shape[0], nb, b)
-            with np.errstate(invalid="ignore", divide="ignore"):
+            with np.errstate(invalid="ignore", divide="ignore"), warnings.catch_warnings():
+                warnings.simplefilter("ignore", RuntimeWarning)  # a block without a success
                 reach_steps = np.where(sb, tb, 0.0).sum(axis=2) / sb.sum(axis=2)
-            ok = np.isfinite(reach_steps)
-            cnt = ok.sum(axis=0)
-            curve["steps_to_reach"] = np.where(
-                cnt > 0, np.where(ok, reach_steps, 0.0).sum(axis=0) / np.maximum(cnt, 1), np.nan
-            )
-            quartiles = np.full((2, nb), np.nan)
-            for j in range(nb):
-                if ok[:, j].any():
-                    quartiles[:, j] = np.percentile(reach_steps[ok[:, j], j], (25, 75))
-            curve["steps_q25"], curve["steps_q75"] = quartiles
+                mean = np.nanmean(reach_steps, axis=0)
+                q25, q75 = np.nanpercentile(reach_steps, (25, 75), axis=0)
+            curve.update(steps_to_reach=mean, steps_q25=q25, steps_q75=q75)
         return out
 
     def levelled_off(self) -> dict[str, bool]:

@@ -1,13 +1,12 @@
 """The reach experiment: one actor-critic, several state representations, many seeds.
 
 :data:`REACH` (a :class:`ReachExperiment`) runs a
-:class:`~sigmapi.experiments.reach.config.ReachConfig` on a list of seeds and returns a
-:class:`~sigmapi.experiments.reach.result.ReachResult`. Seed ``s``'s random streams are
-those of :data:`PLAN`: ``"views"`` the map's data (saccade views; its weights are the seed's
-own, the map built with seed ``s``), ``"starts"`` the episodes' start states (identical for
-every state representation: same learner, same episodes), ``"agent"`` the learner's action
-choices (the same stream for every representation); each is child ``(key, ...)`` of
-``SeedSequence(s)`` (:mod:`sigmapi.experiments.kit.seeds`).
+:class:`~sigmapi.experiments.reach.config.ReachConfig` on seeds and returns a
+:class:`~sigmapi.experiments.reach.result.ReachResult`. Seed ``s``'s random streams are those
+of :data:`PLAN`, each a child of ``SeedSequence(s)`` (:mod:`sigmapi.experiments.kit.seeds`):
+``"views"`` the map's data (saccade views; the map is built with seed ``s``), ``"starts"`` the
+episodes' start states and ``"agent"`` the learner's action choices (both the same for every
+state representation: same learner, same episodes).
 
 Examples
 --------
@@ -37,7 +36,7 @@ from sigmapi.experiments.base import register
 from sigmapi.experiments.kit.jobs import SeedEpisodes, SeedJob, SeedRuns, Tick, seed_episodes
 from sigmapi.experiments.kit.seeds import SeedPlan
 from sigmapi.experiments.kit.worlds import GAZE_REACH, World
-from sigmapi.experiments.reach.config import SMALL_PRESET, ReachConfig, preset_setting
+from sigmapi.experiments.reach.config import SMALL, ReachConfig
 from sigmapi.experiments.reach.result import ReachResult
 from sigmapi.metrics import evaluate
 from sigmapi.model.som import SigmaPiSOM, load_model
@@ -103,9 +102,7 @@ class ReachExperiment(SeedRuns[Any]):
     name = "reach"
     summary = "learn to reach with an actor-critic on the learned map vs. other states"
     config_type: type[Any] = ReachConfig
-    quick: Any = ReachConfig().replace(
-        episodes=150, final_episodes=50, **preset_setting(SMALL_PRESET)
-    )
+    quick: Any = SMALL.replace(episodes=150, final_episodes=50)
     quick_seeds = (0,)
     quick_time = "about 12 s on two busy cores"
     default_out = "reach"

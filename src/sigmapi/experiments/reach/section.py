@@ -1,12 +1,9 @@
-"""The reach experiment as a section of the reproduction report (``sigmapi reproduce``).
-
-The report (:mod:`sigmapi.experiments.reproduce.run`) calls :func:`reach_section`: it
-runs the reach experiment (:data:`~sigmapi.experiments.reach.run.REACH`: the 2-D task, a saccade on
-every step, the same actor-critic on four state representations), draws the figure and
-returns the section. ``--quick`` runs 1 seed of 150 episodes on the small 7x7 map (the
-preset ``small-2d``, :data:`~sigmapi.experiments.reach.config.SMALL_PRESET`); the full run is
-the defaults of :class:`~sigmapi.experiments.reach.config.ReachConfig` on the experiment's
-default seeds (the acceptance run).
+"""The reach experiment as a section of the reproduction report (``sigmapi reproduce``):
+:func:`reach_section` runs :data:`~sigmapi.experiments.reach.run.REACH` (the 2-D task, a
+saccade on every step, the same actor-critic on four state representations; ``--quick``: 1
+seed of 150 episodes on the 7x7 map of :data:`~sigmapi.experiments.reach.config.SMALL_PRESET`,
+else the defaults on the default seeds, the acceptance run), draws the figure and returns the
+section.
 """
 
 from __future__ import annotations

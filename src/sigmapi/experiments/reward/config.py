@@ -8,18 +8,14 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass, field
-from typing import Any
 
 from sigmapi import _validate
 from sigmapi.agents import ActorCriticConfig, Gating
 from sigmapi.agents.gated import VIEWS
-from sigmapi.config import SOMConfig
 from sigmapi.envs import GazeReachConfig
 from sigmapi.errors import ConfigError
 from sigmapi.experiments.kit.episodes import check_episode_run
-from sigmapi.experiments.kit.parts import Parts
-from sigmapi.experiments.kit.worlds import GAZE_REACH, World
-from sigmapi.experiments.reach.config import SMALL_PRESET, MapConfig, check_parts, preset_setting
+from sigmapi.experiments.reach.config import SMALL, MapConfig, MapParts
 from sigmapi.rules.gating import FEEDBACK, SURPRISE
 
 METHODS = ("frozen", "gated", "shuffled")
@@ -103,24 +99,14 @@ class RewardRunConfig:
             )
 
 
-def _small(part: str) -> Any:
-    """The world (``"env"``) or the map (``"map"``) of the 7x7 setting (:data:`SMALL_PRESET`)."""
-    setting = preset_setting(SMALL_PRESET)
-    if part == "env":
-        return GazeReachConfig(grid=setting["grid"], code_width=setting["code_width"])
-    return MapConfig(
-        map_shape=setting["map_shape"], iterations=setting["iterations"], preset=SMALL_PRESET
-    )
-
-
 @dataclass(frozen=True)
-class RewardConfig(Parts):
+class RewardConfig(MapParts):
     """Everything one reward-gating comparison depends on, but its seeds. Defaults: the 7x7
     world and map of the reach experiment's small setting, the authors' actor-critic."""
 
-    env: GazeReachConfig = field(default_factory=lambda: _small("env"))
+    env: GazeReachConfig = field(default_factory=lambda: SMALL.env)
     """The world and its time limit."""
-    map: MapConfig = field(default_factory=lambda: _small("map"))
+    map: MapConfig = field(default_factory=lambda: SMALL.map)
     """The map learned without a teacher before the episodes."""
     agent: ActorCriticConfig = field(default_factory=ActorCriticConfig)
     """The learner."""
@@ -130,13 +116,9 @@ class RewardConfig(Parts):
     """The methods, episodes and scores."""
 
     def __post_init__(self) -> None:
-        check_parts(self, self.PARTS)
+        super().__post_init__()
         if self.map.model_path is not None:
             raise ConfigError(
                 "model_path must be None for the reward experiment: each seed learns its own "
                 f"map, the one the methods start from, got {self.map.model_path!r}"
             )
-
-    def som_config(self, seed: int, world: World = GAZE_REACH) -> SOMConfig:
-        """The config of the map of seed ``seed``, on the codes of ``world``."""
-        return self.map.in_world(world, self.env, seed)

@@ -1,14 +1,12 @@
 """Figures of the reward comparison: success over episodes per method, and where each map's
-units lie in z (the magnification near the goal).
-
-Functions take ``ax=None`` (a new figure when None) and return the Axes, except
-:func:`reward_figure`, which lays out the comparison and returns the Figure; pyplot is never
-touched.
+units lie in z (the magnification near the goal). Each plot function takes ``ax=None`` (a new
+figure) and returns the Axes; :func:`reward_figure` lays out the comparison and returns the
+Figure (pyplot untouched).
 """
 
 from __future__ import annotations
 
-from typing import Protocol
+from typing import Any, Protocol
 
 import numpy as np
 from matplotlib.axes import Axes
@@ -80,17 +78,9 @@ def plot_units(result: RewardData, method: str, ax: Axes | None = None) -> Axes:
     goal = np.asarray(GAZE_REACH.source(cfg.env).goal)
     r, rn = cfg.env.goal_radius, cfg.run.near_radius
     ax.add_patch(Rectangle(tuple(goal - r), 2 * r, 2 * r, color="0.85", zorder=0, label="the goal"))
+    dashed: dict[str, Any] = {"fill": False, "linestyle": "--", "edgecolor": "k", "linewidth": 0.8}
     ax.add_patch(
-        Rectangle(
-            tuple(goal - rn),
-            2 * rn,
-            2 * rn,
-            fill=False,
-            linestyle="--",
-            edgecolor="k",
-            linewidth=0.8,
-            label="the region near the goal",
-        )
+        Rectangle(tuple(goal - rn), 2 * rn, 2 * rn, **dashed, label="the region near the goal")
     )
     mag = result.scores[method]["magnification"]
     near = result.scores[method]["units_near"]

@@ -94,6 +94,7 @@ class RewardResult(EpisodesResult):
         lost = self.final_share()
         frozen_ep = self._episodes("frozen") if "frozen" in self.success else None
         base_mag = self.scores["initial"]["magnification"]
+        summed = ("units_near", "view_consistency_away", "order_r2_away")
         methods = []
         for m in run.methods:
             ep = self._episodes(m)
@@ -110,9 +111,7 @@ class RewardResult(EpisodesResult):
                 "magnification": _summary(mag.tolist()),
                 "magnification_ratio": _summary(ratio.tolist()),
                 "magnification_ratio_met": int(np.sum(ratio >= MAGNIFICATION_TARGET)),
-                "units_near": _summary(self.scores[m]["units_near"].tolist()),
-                "view_consistency_away": _summary(self.scores[m]["view_consistency_away"].tolist()),
-                "order_r2_away": _summary(self.scores[m]["order_r2_away"].tolist()),
+                **{k: _summary(self.scores[m][k].tolist()) for k in summed},
                 "gated_updates": _summary(self.updates[m].astype(float).tolist()),
             }
             if frozen_ep is not None:

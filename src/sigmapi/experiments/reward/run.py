@@ -5,11 +5,10 @@ returns a :class:`~sigmapi.experiments.reward.result.RewardResult`: per seed, on
 without a teacher, then the same actor-critic on three copies of it, ``frozen``, ``gated``
 (:func:`~sigmapi.agents.gated.run_gated_episodes`) and ``shuffled`` (docs/guide/reward.md,
 docs/algorithm.md "Reward-gated plasticity"), each map scored by :func:`map_scores`. Seed
-``s``'s random streams are those of :data:`PLAN`: ``"views"`` (the map's saccade views; the
-map is built with seed ``s``, its weights the seed's own), ``"starts"`` and ``"agent"`` (the
-same for every method), ``"probes"`` (the test objects), ``"shuffle"`` and ``"fixations"`` (the
-gated updates' second fixations); each a child of ``SeedSequence(s)``
-(:mod:`sigmapi.experiments.kit.seeds`).
+``s``'s random streams are those of :data:`PLAN`, each a child of ``SeedSequence(s)``
+(:mod:`sigmapi.experiments.kit.seeds`): ``"views"`` (the map's saccade views; the map is built
+with seed ``s``), ``"starts"`` and ``"agent"`` (the same for every method), ``"probes"`` (the
+test objects), ``"shuffle"`` and ``"fixations"`` (the gated updates' second fixations).
 
 Examples
 --------
@@ -38,7 +37,7 @@ from sigmapi.experiments.kit.jobs import SeedJob, SeedRuns, Tick
 from sigmapi.experiments.kit.results import JSON
 from sigmapi.experiments.kit.seeds import SeedPlan
 from sigmapi.experiments.kit.worlds import GAZE_REACH, World
-from sigmapi.experiments.reward.config import RewardConfig
+from sigmapi.experiments.reward.config import METHODS, RewardConfig
 from sigmapi.experiments.reward.result import SCORES, RewardResult
 from sigmapi.metrics import winner_metrics
 from sigmapi.model.som import SigmaPiSOM
@@ -139,22 +138,23 @@ class RewardExperiment(SeedRuns[RewardConfig]):
         return len(job.config.run.methods) * job.config.run.episodes
 
     def seed_run(self, job: SeedJob, tick: Tick | None) -> JSON:
-        """One seed: its map, then each method's learner on the same episodes, then the
-        scores."""
+        """One seed: its map, then each method's learner on the same episodes, then the scores."""
         cfg, seed, world, run = job.config, job.seed, self.world, job.config.run
         learned = cfg.map.learn(world, cfg.env, seed, PLAN.rng(seed, "views"))
         place = world.source(cfg.env)
         objects = probe_objects(place, run.n_test, PLAN.rng(seed, "probes"))
         goal = np.asarray(place.goal, dtype=np.float64)
-        out: JSON = {
-            "initial": map_scores(learned, objects, goal, run.near_radius),
-            "initial_units": preferred_z(learned, objects),
-            "runs": {},
-        }
+
+        def scored(model: SigmaPiSOM) -> JSON:  # a map's scores, its units' preferred z
+            scores = map_scores(model, objects, goal, run.near_radius)
+            return {"scores": scores, "units": preferred_z(model, objects)}
+
+        out: JSON = {"initial": scored(learned), "runs": {}}
+        features = (cfg.map.features, cfg.map.feature_width)
+        gating = cfg.gate.gating()  # the same settings for every method
         factors: NDArray[np.float64] | None = None
-        for m in sorted(run.methods, key=("frozen", "gated", "shuffled").index):
+        for m in sorted(run.methods, key=METHODS.index):
             model = copy.copy(learned)
-            features = (cfg.map.features, cfg.map.feature_width)
             env = MapObservation(world.make_env(cfg.env), model, *features)
             agent = actor_critic_for(env, cfg.agent, seed=PLAN.rng(seed, "agent"))
             done = None if tick is None else functools.partial(tick, 1, m)
@@ -166,22 +166,11 @@ class RewardExperiment(SeedRuns[RewardConfig]):
                 replay = None if factors is None else PLAN.rng(seed, "shuffle").permutation(factors)
                 fixations = PLAN.rng(seed, "fixations")
                 got = run_gated_episodes(
-                    env,
-                    agent,
-                    starts,
-                    cfg.gate.gating(),
-                    fixations,
-                    surprises=replay,
-                    on_episode=done,
+                    env, agent, starts, gating, fixations, surprises=replay, on_episode=done
                 )
                 ep, updates = got.episodes, got.updates
                 factors = got.surprises if m == "gated" else factors
-            out["runs"][m] = {
-                "episodes": ep,
-                "updates": updates,
-                "scores": map_scores(model, objects, goal, run.near_radius),
-                "units": preferred_z(model, objects),
-            }
+            out["runs"][m] = {"episodes": ep, "updates": updates, **scored(model)}
         return out
 
     def collect(
@@ -195,8 +184,9 @@ class RewardExperiment(SeedRuns[RewardConfig]):
             res.updates[m] = np.array([r["updates"] for r in runs], dtype=np.int64)
             res.scores[m] = {k: np.array([r["scores"][k] for r in runs]) for k in SCORES}
             res.units[m] = runs[0]["units"]
-        res.scores["initial"] = {k: np.array([v["initial"][k] for v in per_seed]) for k in SCORES}
-        res.units["initial"] = per_seed[0]["initial_units"]
+        initial = [v["initial"] for v in per_seed]
+        res.scores["initial"] = {k: np.array([i["scores"][k] for i in initial]) for k in SCORES}
+        res.units["initial"] = initial[0]["units"]
         return res
 
 

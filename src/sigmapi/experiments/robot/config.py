@@ -144,12 +144,6 @@ class RobotConfig(Parts):
     def __post_init__(self) -> None:
         check_part_types(self, self.PARTS)
 
-    def make_env(self, world: World | None = None, **kwargs: object) -> gym.Env[Any, Any]:
-        """The docking world through ``gymnasium.make`` (``world``, default
-        :data:`ROBOT_WORLD`; its TimeLimit included); ``kwargs`` go to it too (e.g.
-        ``render_mode="rgb_array"``)."""
-        return (world or ROBOT_WORLD).make_env(self.env, **kwargs)
-
     def state_env(
         self,
         state: str,
@@ -157,10 +151,11 @@ class RobotConfig(Parts):
         world: World | None = None,
         **kwargs: object,
     ) -> gym.Env[Features, Any]:
-        """The docking world (:meth:`make_env`) as ``state`` sees it
-        (:mod:`sigmapi.envs.wrappers`); ``"true_z"`` codes z on the map's grid (like for
-        like), ``"map"`` needs ``model``."""
-        env, m = self.make_env(world, **kwargs), self.map
+        """The docking world through ``gymnasium.make`` (``world``, default
+        :data:`ROBOT_WORLD`; its TimeLimit included; ``kwargs`` go to it too, e.g.
+        ``render_mode="rgb_array"``) as ``state`` sees it (:mod:`sigmapi.envs.wrappers`);
+        ``"true_z"`` codes z on the map's grid (like for like), ``"map"`` needs ``model``."""
+        env, m = (world or ROBOT_WORLD).make_env(self.env, **kwargs), self.map
         if state == "true_z":
             return TrueZObservation(env, shape=m.map_shape, width=m.feature_width)
         return make_state_env(env, state, model, m.features, m.feature_width)

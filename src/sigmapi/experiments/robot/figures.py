@@ -1,13 +1,12 @@
-"""Figures of the robot experiment: the map on the table, learning curves, a film strip.
-
-Thin plot functions (``ax`` in, Axes out) and :func:`robot_figures`, which writes them for a
-:class:`~sigmapi.experiments.robot.result.RobotResult`, each with its caption beside it
-(``NAME.txt``), computed from the data; :func:`film_episode` renders one
-docking episode of the first seed's map learner.
+"""Figures of the robot experiment: the map on the table, learning curves, a film strip. Plot
+functions (``ax`` in, Axes out), :func:`robot_figures`, which writes them for a
+:class:`~sigmapi.experiments.robot.result.RobotResult` with their captions (``NAME.txt``), and
+:func:`film_episode`, one docking episode of the first seed's map learner.
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -52,19 +51,14 @@ def plot_unit_positions(
         label = "the map's rows and columns" if i == 0 else "_rows"
         ax.plot(-line[:, 1], line[:, 0], color="tab:blue", lw=0.8, label=label)
     ax.plot(-p[:, 1], p[:, 0], "o", color="tab:red", ms=3, label="a unit's ball position")
-    ax.set(
-        xlim=(-1.0, 1.0),
-        ylim=(-0.2, 1.45),
-        aspect="equal",
-        xlabel="right of the robot (m)",
-        ylabel="ahead of the robot (m)",
-        title="each unit's preferred ball position",
-    )
+    ax.set(xlim=(-1.0, 1.0), ylim=(-0.2, 1.45), aspect="equal")
+    ax.set(xlabel="right of the robot (m)", ylabel="ahead of the robot (m)")
+    ax.set_title("each unit's preferred ball position")
     ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
     return ax
 
 
-def plot_curves(curves: dict[str, dict[str, list[float]]], ax: Axes | None = None) -> Axes:
+def plot_curves(curves: Mapping[str, Mapping[str, Any]], ax: Axes | None = None) -> Axes:
     """Success per block of episodes, mean over seeds with one standard deviation shaded; one
     marker per state (curves that coincide each show, their legend entries say so)."""
     import matplotlib.pyplot as plt
@@ -134,7 +128,7 @@ def robot_figures(
             + (f"; {words}" if words else "")
             + ". Tan: the table; grey disc: the robot, facing up.",
         )
-    curves = result.curves()
+    curves = result.success_curves()
     final = result.final()
     save(
         plot_curves(curves).figure,

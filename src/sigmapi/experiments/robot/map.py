@@ -1,14 +1,8 @@
-"""The map the robot learns from its own view pairs, and its scores against the true ``z``.
-
-:func:`learn_map` records view pairs from the still robot's saccades
-(:func:`~sigmapi.envs.collect_saccade_views` on a :class:`~sigmapi.envs.robot.RobotViews`)
-and fits the map on them. :func:`robot_som_config` is the map's configuration: the
-``robot-2d`` preset (``paper-2d``'s min-distance winner, learning rate 0.1 -> 0.01 and
-cross-view ordered start, with a neighbourhood that ends at 0.5 map units instead of 1e-5;
-the preset file gives the evidence) on the robot's codes.
-
-:func:`score_map` scores a map on view pairs whose ``z`` is known, with the definitions of
-:func:`sigmapi.evaluate` (``sigmapi.metrics``): the same keys, the same fold score.
+"""The map the robot learns from its own view pairs (:func:`learn_map`), and its scores against
+the true ``z`` (:func:`score_map`, with the definitions and keys of :func:`sigmapi.evaluate`).
+Its configuration (:func:`robot_som_config`) is the ``robot-2d`` preset: ``paper-2d``'s
+min-distance winner, learning rate 0.1 -> 0.01 and cross-view ordered start, with a
+neighbourhood that ends at 0.5 map units instead of 1e-5 (the preset file gives the evidence).
 """
 
 from __future__ import annotations

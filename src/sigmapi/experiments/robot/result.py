@@ -62,7 +62,7 @@ class RobotResult(EpisodesResult):
         "reach_given_docked_min",
         "ratio_map_to_true_z",
         "margins",
-        "curves",
+        "curves: success_curves",
         "map_metrics",
         "config",
         "seeds",
@@ -95,10 +95,6 @@ class RobotResult(EpisodesResult):
             hit = (success[s] & d).sum(axis=1)
             out[s] = np.where(n > 0, hit / np.maximum(n, 1), np.nan)
         return out
-
-    def curves(self) -> dict[str, dict[str, list[float]]]:
-        """Per state: block ends, success per block (mean and sd over seeds)."""
-        return {s: {k: v.tolist() for k, v in c.items()} for s, c in self.success_curves().items()}
 
     def map_summary(self) -> dict[str, object]:
         """The maps' metrics with the keys of ``sigmapi evaluate`` (means over seeds;

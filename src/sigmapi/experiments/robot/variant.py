@@ -5,10 +5,8 @@ with the robot's map (docs/guide/robot.md).
 a :class:`~sigmapi.experiments.robot.result.RobotResult`. Seed ``s``'s random streams are those
 of :data:`~sigmapi.experiments.robot.config.PLAN`: ``"views"`` (the map's recorded views; the
 map is built with seed ``s``, its weights the seed's own), ``"starts"`` and ``"agent"`` (the
-same for every state), ``"film"`` (the filmed episode's start). The map learns in passes over
-view pairs recorded from the still robot's saccades
-(:func:`~sigmapi.experiments.robot.map.learn_map`) and is scored on evaluation pairs drawn from
-:data:`~sigmapi.metrics.EVAL_SEED` (the same for every seed).
+same for every state), ``"film"`` (the filmed episode's start). The map and its scores:
+:mod:`~sigmapi.experiments.robot.map`.
 
 Examples
 --------
@@ -30,7 +28,7 @@ from sigmapi.codes import PopulationCode
 from sigmapi.envs import Features
 from sigmapi.envs.robot.scene import check_rendering, mujoco_module
 from sigmapi.envs.robot.views import RobotViewBatch
-from sigmapi.executor import job_memory as _som_job_memory
+from sigmapi.executor import job_memory
 from sigmapi.experiments.base import register
 from sigmapi.experiments.kit.jobs import SeedEpisodes, Tick
 from sigmapi.experiments.reach.run import ReachExperiment
@@ -50,19 +48,6 @@ Views = tuple[RobotViewBatch, RobotViewBatch]
 """The calibration and test views every seed's map is scored on."""
 
 
-def job_memory(config: RobotConfig) -> int:
-    """Peak bytes of one job (an upper estimate): the map's training and scoring
-    (:func:`sigmapi.executor.job_memory`), its recorded and evaluation views and the
-    episodes' records."""
-    env, m = config.env, config.map
-    n = env.grid**2
-    code = PopulationCode((env.grid,) * 2, width=env.code_width)
-    som = robot_som_config(code, m.map_shape, m.iterations, 0, m.backend)
-    views = (m.train_pairs + 2 * m.eval_pairs) * 4 * n * 8
-    episodes = 64 * config.run.episodes  # start seeds and each episode's records
-    return _som_job_memory(som, n_test=m.eval_pairs) + views + episodes
-
-
 class RobotExperiment(ReachExperiment):
     """A simulated robot (MuJoCo) records view pairs from its saccades and learns the
     Sigma-Pi map; then an actor-critic docks on the map, the retina code, retina and gaze
@@ -78,8 +63,7 @@ class RobotExperiment(ReachExperiment):
     config_type = RobotConfig
     quick = QUICK
     quick_seeds = (0,)
-    """The seed of ``--quick``: a tuning seed (a first look does not peek at the reported
-    ones)."""
+    """The seed of ``--quick``: a tuning seed (a first look does not peek at the reported ones)."""
     quick_time = "about 20 s on two quiet cores, 80 s on two busy ones"
     extra = "robot"
     default_out = "robot"
@@ -96,17 +80,23 @@ class RobotExperiment(ReachExperiment):
         check_rendering()
 
     def check(self, config: RobotConfig) -> int:
-        """MuJoCo (and a renderer for the pixel retina) before any work, and the memory of
-        one job (the main process records views too: checked first)."""
+        """MuJoCo (and a renderer for the pixel retina) before any work, and the peak bytes of
+        one job, an upper estimate (the main process records views too: checked first): the
+        map's training and scoring (:func:`sigmapi.executor.job_memory`), its recorded and
+        evaluation views and the episodes' records."""
         mujoco_module()  # says which extra to install
         if config.env.retina == "pixels":
             check_rendering()
-        per_job = job_memory(config)
+        env, m = config.env, config.map
+        code = PopulationCode((env.grid,) * 2, width=env.code_width)
+        som = robot_som_config(code, m.map_shape, m.iterations, 0, m.backend)
+        views = (m.train_pairs + 2 * m.eval_pairs) * 4 * env.grid**2 * 8
+        episodes = 64 * config.run.episodes  # start seeds and each episode's records
+        per_job = job_memory(som, n_test=m.eval_pairs) + views + episodes
         _memory.check(
             per_job,
-            f"a robot job of grid={config.env.grid}, eval_pairs="
-            f"{config.map.eval_pairs:,}, train_pairs={config.map.train_pairs:,}, episodes="
-            f"{config.run.episodes:,}",
+            f"a robot job of grid={env.grid}, eval_pairs={m.eval_pairs:,}, train_pairs="
+            f"{m.train_pairs:,}, episodes={config.run.episodes:,}",
             "use a smaller grid or map, or fewer pairs or episodes",
         )
         return per_job
