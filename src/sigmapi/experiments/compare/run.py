@@ -22,7 +22,7 @@ import importlib.util
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -43,9 +43,6 @@ from sigmapi.metrics import evaluation_sets, grid_spacing
 from sigmapi.model.som import SigmaPiSOM
 from sigmapi.progress import Progress
 from sigmapi.tasks import Batch
-
-if TYPE_CHECKING:
-    from matplotlib.figure import Figure
 
 # -- the settings ----------------------------------------------------------------------------------
 
@@ -193,6 +190,7 @@ class CompareResult(Result):
     COMPUTED = ("methods", "z_error_unit", "quantisation_floor")
     SEEDS_IN_CONFIG = True
     FIGURE = "compare.png"
+    DRAWN_BY = "sigmapi.experiments.compare.figures:compare_figure"
     z_error_unit = "input grid spacings"
 
     @property
@@ -252,12 +250,6 @@ class CompareResult(Result):
         floor = f"a map's winner alone cannot beat {self.floor:.3f} (z cut into {shape} cells)"
         rows = render(COLUMNS, self.to_dict()["methods"])
         return "\n".join([*rows, f"z error in grid spacings; {floor}"])
-
-    def draw(self) -> Figure:
-        """``compare.png``: :func:`.figures.compare_figure` of the JSON form."""
-        from .figures import compare_figure  # matplotlib: only when drawing
-
-        return compare_figure(self.to_dict())
 
     def caption(self) -> str:
         """A caption computed from the result."""

@@ -7,7 +7,8 @@ import dataclasses
 import inspect
 import typing
 from collections.abc import Mapping
-from typing import ClassVar, Self
+from dataclasses import field
+from typing import Any, ClassVar, Self
 
 from sigmapi import _validate
 from sigmapi.errors import ConfigError
@@ -98,3 +99,9 @@ def parts_dict(config: object, parts: dict[str, type]) -> dict[str, dict[str, ob
         }
         for part in parts
     }
+
+
+def count_field(default: int) -> Any:
+    """A config field counting episodes, blocks, pairs or tests: an int from 1 to 1,000,000
+    (the bound declared once, shown in ``--help``), ``default`` unless given."""
+    return field(default=default, metadata=_validate.bounded("int", 1, 1_000_000))

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import importlib
 import re
 import typing
 from collections.abc import Callable, Mapping, Sequence
@@ -210,9 +211,18 @@ class Result:
         """The result as console text (a few lines a person reads)."""
         raise NotImplementedError
 
+    DRAWN_BY: ClassVar[str] = ""
+    """``"module:function"`` that draws :data:`FIGURE` from the JSON form (imported when
+    drawing: matplotlib only then); "": the result draws it itself (:meth:`draw`)."""
+
     def draw(self) -> Figure:
-        """The figure of :data:`FIGURE` (a matplotlib Figure)."""
-        raise NotImplementedError
+        """The figure of :data:`FIGURE` (a matplotlib Figure): :data:`DRAWN_BY` of the JSON
+        form."""
+        if not self.DRAWN_BY:
+            raise NotImplementedError
+        module, _, name = self.DRAWN_BY.partition(":")
+        figure: Figure = getattr(importlib.import_module(module), name)(self.to_dict())
+        return figure
 
     def caption(self) -> str:
         """The caption of :data:`FIGURE`, computed from the result."""

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, ClassVar
+from typing import ClassVar
 
 import numpy as np
 
@@ -23,9 +23,6 @@ from sigmapi.experiments.kit.results import (
 )
 
 from .config import METRICS, PHYSIOLOGY, REFERENCE_RATE, NeuronsConfig
-
-if TYPE_CHECKING:
-    from matplotlib.figure import Figure
 
 Row = JSON
 """A record of the JSON form: a map's or a spiking network's row of one job (its name, task,
@@ -106,6 +103,7 @@ class NeuronsResult(Result):
     """The JSON form: :meth:`methods`, :meth:`acceptance`, the branches, the settings (the
     config's fields and the seeds), every row and the time."""
     FIGURE = "neurons.png"
+    DRAWN_BY = "sigmapi.experiments.neurons.figures:neurons_figure"
     SAVE: ClassVar[Mapping[str, object]] = {"dpi": 110}
 
     @classmethod
@@ -273,9 +271,3 @@ class NeuronsResult(Result):
             f"{b['z_gap_median']:.2f} grid units."
         )
         return text
-
-    def draw(self) -> Figure:
-        """The figure (:func:`~sigmapi.experiments.neurons.figures.neurons_figure`)."""
-        from .figures import neurons_figure  # matplotlib: only when drawing
-
-        return neurons_figure(self.to_dict())

@@ -21,7 +21,7 @@ from sigmapi.errors import ConfigError
 from sigmapi.experiments.kit.episodes import check_episode_run
 from sigmapi.experiments.kit.jobs import Tick
 from sigmapi.experiments.kit.maps import MapSpec
-from sigmapi.experiments.kit.parts import Parts, check_part_types
+from sigmapi.experiments.kit.parts import Parts, check_part_types, count_field
 from sigmapi.experiments.kit.results import JSON
 from sigmapi.experiments.kit.worlds import GAZE_REACH, World
 from sigmapi.model.som import SigmaPiSOM
@@ -143,11 +143,11 @@ class ReachRunConfig:
 
     states: tuple[str, ...] = STATES
     """State representations to compare."""
-    episodes: int = field(default=600, metadata=_validate.bounded("int", 1, 1_000_000))
+    episodes: int = count_field(600)
     """Episodes of reinforcement learning per seed and state."""
-    block: int = field(default=50, metadata=_validate.bounded("int", 1, 1_000_000))
+    block: int = count_field(50)
     """Episodes per point of the learning curves."""
-    final_episodes: int = field(default=200, metadata=_validate.bounded("int", 1, 1_000_000))
+    final_episodes: int = count_field(200)
     """The final success rate is measured over this many last episodes."""
     plateau_rise: float = field(
         default=0.05,

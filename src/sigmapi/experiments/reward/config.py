@@ -15,6 +15,7 @@ from sigmapi.agents.gated import VIEWS
 from sigmapi.envs import GazeReachConfig
 from sigmapi.errors import ConfigError
 from sigmapi.experiments.kit.episodes import check_episode_run
+from sigmapi.experiments.kit.parts import count_field
 from sigmapi.experiments.reach.config import SMALL, MapConfig, MapParts
 from sigmapi.rules.gating import FEEDBACK, SURPRISE
 
@@ -72,11 +73,11 @@ class RewardRunConfig:
 
     methods: tuple[str, ...] = METHODS
     """Maps to compare ("frozen", "gated", "shuffled"; "shuffled" needs "gated")."""
-    episodes: int = field(default=300, metadata=_validate.bounded("int", 1, 1_000_000))
+    episodes: int = count_field(300)
     """Episodes of reinforcement learning per seed and method."""
-    block: int = field(default=20, metadata=_validate.bounded("int", 1, 1_000_000))
+    block: int = count_field(20)
     """Episodes per point of the learning curves (and the window of the 80 % criterion)."""
-    final_episodes: int = field(default=100, metadata=_validate.bounded("int", 1, 1_000_000))
+    final_episodes: int = count_field(100)
     """The final success rate is measured over this many last episodes."""
     target: float = field(
         default=0.8, metadata=_validate.bounded("number", 0, 1, lo_open=True, fix="e.g. 0.8")
@@ -86,7 +87,7 @@ class RewardRunConfig:
         default=0.2, metadata=_validate.bounded("number", 0, 0.5, lo_open=True, fix="e.g. 0.2")
     )
     """Chebyshev radius around the goal of the region "near the goal" (the magnification)."""
-    n_test: int = field(default=4000, metadata=_validate.bounded("int", 1, 1_000_000))
+    n_test: int = count_field(4000)
     """Test objects (views at random z) that score the maps."""
 
     def __post_init__(self) -> None:

@@ -23,7 +23,7 @@ from sigmapi.envs.robot.views import RobotViews
 from sigmapi.errors import ConfigError
 from sigmapi.experiments.kit.episodes import check_episode_run
 from sigmapi.experiments.kit.maps import MapSpec
-from sigmapi.experiments.kit.parts import Parts, check_part_types, parts_dict
+from sigmapi.experiments.kit.parts import Parts, check_part_types, count_field, parts_dict
 from sigmapi.experiments.kit.results import as_object, tuples
 from sigmapi.experiments.kit.seeds import SeedPlan
 from sigmapi.experiments.kit.worlds import World, register_world
@@ -79,7 +79,7 @@ class RobotMapConfig:
     """View pairs recorded from saccades for the map (body and ball still)."""
     iterations: int = field(default=40_000, metadata=_validate.bounded("int", 1, 100_000_000))
     """Learning iterations of the map (the recorded pairs are used in passes)."""
-    eval_pairs: int = field(default=3000, metadata=_validate.bounded("int", 1, 1_000_000))
+    eval_pairs: int = count_field(3000)
     """Calibration and test pairs (each) that score the map against the true z."""
     backend: str = "auto"
     """Kernel that learns and reads the map ("auto": the fast one when it is installed)."""
@@ -103,11 +103,11 @@ class RobotMapConfig:
 class RobotRunConfig:
     """What is compared and for how long: the states, the episodes, the curves' blocks."""
 
-    episodes: int = field(default=400, metadata=_validate.bounded("int", 1, 1_000_000))
+    episodes: int = count_field(400)
     """Docking episodes per seed and state."""
-    final_episodes: int = field(default=100, metadata=_validate.bounded("int", 1, 1_000_000))
+    final_episodes: int = count_field(100)
     """Final success is measured over this many last episodes."""
-    block: int = field(default=50, metadata=_validate.bounded("int", 1, 1_000_000))
+    block: int = count_field(50)
     """Episodes per point of the learning curves."""
     states: tuple[str, ...] = STATES
     """States compared: map, retina, retina_gaze, true_z."""

@@ -27,7 +27,7 @@ import dataclasses
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
@@ -53,9 +53,6 @@ from sigmapi.experiments.kit.results import (
 from sigmapi.experiments.kit.seeds import SeedPlan, check_seeds
 from sigmapi.metrics import evaluate
 from sigmapi.model.som import SigmaPiSOM
-
-if TYPE_CHECKING:
-    from matplotlib.figure import Figure
 
 # -- the settings ----------------------------------------------------------------------------------
 
@@ -158,6 +155,7 @@ class StreamResult(Result):
     """The JSON form: :meth:`methods`, :meth:`acceptance`, :meth:`settings` and the whole
     run's wall time."""
     FIGURE = "stream.png"
+    DRAWN_BY = "sigmapi.experiments.stream.figures:stream_figure"
 
     @classmethod
     def from_dict(cls, data: object) -> StreamResult:
@@ -262,12 +260,6 @@ class StreamResult(Result):
                 f"{VC_MARGIN} of pairs and ordered (median gap {best['vc_gap_median']:+.3f})."
             )
         return text
-
-    def draw(self) -> Figure:
-        """``stream.png``: :func:`.figures.stream_figure` of the JSON form."""
-        from .figures import stream_figure  # matplotlib: only when drawing
-
-        return stream_figure(self.to_dict())
 
 
 # -- the run: one job per seed and dwell time ------------------------------------------------------
