@@ -305,7 +305,7 @@ def angle_error_deg(decoded: Array, true: Array) -> float:
     return float(np.degrees(np.sqrt(np.mean(np.arccos(cos) ** 2))))
 
 
-Extra = Callable[[Array, Array, Array, Array, Array], dict[str, Any]]
+Extra = Callable[[Array, Array, Array, Array, Array], dict[str, object]]
 """A map's own scores from its calibration views' places and true positions, its test views'
 places and true positions, and the test views' decoded positions."""
 
@@ -329,7 +329,7 @@ def quantiser_scores(
     return m
 
 
-def _direction(cc: Array, zc: Array, ct: Array, zt: Array, decoded: Array) -> dict[str, Any]:
+def _direction(cc: Array, zc: Array, ct: Array, zt: Array, decoded: Array) -> dict[str, object]:
     return {"direction_error_deg": angle_error_deg(decoded, zt)}
 
 

@@ -708,7 +708,7 @@ def _position(origin: Array) -> Extra:
     """The scores of a map of 3-D positions beside its order: per axis of ``x, y, z`` and per
     axis of :func:`spherical` from ``origin``, and the error in cm."""
 
-    def extra(cc: Array, zc: Array, ct: Array, zt: Array, decoded: Array) -> dict[str, Any]:
+    def extra(cc: Array, zc: Array, ct: Array, zt: Array, decoded: Array) -> dict[str, object]:
         err = np.linalg.norm(decoded - zt, axis=1) * 100.0
         return {
             "order_r2_per_axis": _per_axis(cc, zc, ct, zt),

@@ -8,7 +8,7 @@ import inspect
 import typing
 from collections.abc import Mapping
 from dataclasses import field
-from typing import Any, ClassVar, Self
+from typing import ClassVar, Self
 
 from sigmapi import _validate
 from sigmapi.errors import ConfigError
@@ -101,7 +101,7 @@ def parts_dict(config: object, parts: dict[str, type]) -> dict[str, dict[str, ob
     }
 
 
-def count_field(default: int) -> Any:
+def count_field(default: int) -> int:
     """A config field counting episodes, blocks, pairs or tests: an int from 1 to 1,000,000
     (the bound declared once, shown in ``--help``), ``default`` unless given."""
     return field(default=default, metadata=_validate.bounded("int", 1, 1_000_000))

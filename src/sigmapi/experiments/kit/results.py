@@ -193,7 +193,7 @@ class Result:
         return values
 
     @classmethod
-    def from_dict(cls: type[R], data: Any) -> R:
+    def from_dict(cls: type[R], data: object) -> R:
         """The result a :meth:`to_dict` wrote (``result.json``): its fields as the file holds
         them and its computed keys as ``written`` (the file holds no records)."""
         obj = as_object(data)

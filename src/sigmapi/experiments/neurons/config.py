@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TypeVar
 
 from sigmapi import _memory, _validate
 from sigmapi.config import SOMConfig, apply_overrides, load_preset
@@ -40,14 +40,30 @@ MAX_SPIKING_STEPS = 10**10
 defaults run about 10^7)."""
 
 
-def _bounded(default: Any, kind: str, lo: float, hi: float, fix: str = "", **more: Any) -> Any:
+T = TypeVar("T")
+
+
+def _bounded(
+    default: T,
+    kind: str,
+    lo: float,
+    hi: float,
+    fix: str = "",
+    *,
+    count: int = _validate.MAX_ITEMS,
+    lo_open: bool = False,
+) -> T:
     """A field of ``default`` within ``[lo, hi]`` (:func:`~sigmapi._validate.bounded`); a
     tuple of ints (kind ``"ints"``) is given comma-separated, its fix by default
     ``"positive ints, e.g. 2,4,7"``."""
     if kind == "ints":
-        more["sep"] = ","
         fix = fix or "positive ints, e.g. 2,4,7"
-    return field(default=default, metadata=_validate.bounded(kind, lo, hi, fix=fix, **more))
+        return field(
+            default=default, metadata=_validate.bounded(kind, lo, hi, fix=fix, count=count, sep=",")
+        )
+    return field(
+        default=default, metadata=_validate.bounded(kind, lo, hi, fix=fix, lo_open=lo_open)
+    )
 
 
 @dataclass(frozen=True)

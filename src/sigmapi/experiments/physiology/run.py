@@ -148,7 +148,7 @@ class PhysiologyResult(Result):
     the verdict (:meth:`body_centred`), the settings and the time."""
 
     @classmethod
-    def from_dict(cls, data: Any) -> PhysiologyResult:
+    def from_dict(cls, data: object) -> PhysiologyResult:
         """The result a :meth:`to_dict` wrote (``result.json``): its settings as the config
         (``tuning_units`` at its default: the file does not hold it), the time, and the rest
         as the recording (the verdict is computed again)."""

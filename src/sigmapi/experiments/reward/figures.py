@@ -6,7 +6,7 @@ Figure (pyplot untouched).
 
 from __future__ import annotations
 
-from typing import Any, Protocol
+from typing import Protocol
 
 import numpy as np
 from matplotlib.axes import Axes
@@ -78,10 +78,9 @@ def plot_units(result: RewardData, method: str, ax: Axes | None = None) -> Axes:
     goal = np.asarray(GAZE_REACH.source(cfg.env).goal)
     r, rn = cfg.env.goal_radius, cfg.run.near_radius
     ax.add_patch(Rectangle(tuple(goal - r), 2 * r, 2 * r, color="0.85", zorder=0, label="the goal"))
-    dashed: dict[str, Any] = {"fill": False, "linestyle": "--", "edgecolor": "k", "linewidth": 0.8}
-    ax.add_patch(
-        Rectangle(tuple(goal - rn), 2 * rn, 2 * rn, **dashed, label="the region near the goal")
-    )
+    near_box = Rectangle(tuple(goal - rn), 2 * rn, 2 * rn, fill=False, linestyle="--")
+    near_box.set(edgecolor="k", linewidth=0.8, label="the region near the goal")
+    ax.add_patch(near_box)
     mag = result.scores[method]["magnification"]
     near = result.scores[method]["units_near"]
     ax.set_title(

@@ -6,7 +6,6 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -73,7 +72,7 @@ class RobotResult(EpisodesResult):
     docking, the map's margins over the other states, the curves and the config."""
 
     @classmethod
-    def from_dict(cls, data: Any) -> RobotResult:
+    def from_dict(cls, data: object) -> RobotResult:
         """The result a :meth:`to_dict` wrote (``result.json``): its config, seeds, maps'
         metrics and time, and its summaries as written (the file holds no episode records;
         the maps' summary has the keys of their metrics)."""
