@@ -330,6 +330,7 @@ def test_babbled_postures_touch_the_table_and_the_physics_holds_them(scene: ICub
     assert np.median(gaps) < 0.01, gaps
 
 
+@pytest.mark.slow  # 10 s: the default run keeps its 5-minute budget (CI runs the slow step)
 def test_babbling_teaches_an_association(scene: ICubScene):
     from sigmapi.experiments.icub.reaching import BABBLE_WRIST, babble
 
@@ -513,6 +514,7 @@ def test_the_maps_anneal_their_learning_rate_past_the_presets_end():
     assert cfg.eps[-1][0] == 1.0 and cfg.eps[-1][1] < preset_end  # still falling at the end
 
 
+@pytest.mark.slow  # 24 s: the default run keeps its 5-minute budget (CI runs the slow step)
 def test_a_tiny_run_writes_every_key(rendering, tmp_path, monkeypatch):
     from sigmapi.envs.icub import TruthLeak
     from sigmapi.experiments import write_result
