@@ -361,7 +361,7 @@ class Compare(SeedRuns[CompareConfig]):
     quick_time = "about 1 min on two cores"
     extra = "baselines"
     default_out = "compare"
-    writes = ("compare.png", "compare.txt")
+    writes = CompareResult.figure_names()
     unit = "method"
 
     def check(self, config: CompareConfig) -> int:

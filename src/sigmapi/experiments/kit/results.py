@@ -236,6 +236,12 @@ class Result:
         out = Path(out_dir) / self.FIGURE
         return [save_captioned(self.draw(), out, self.caption(), **self.SAVE)]
 
+    @classmethod
+    def figure_names(cls) -> tuple[str, ...]:
+        """The names of the files :meth:`figure` writes: :data:`FIGURE` and its caption (an
+        experiment's ``writes``)."""
+        return (cls.FIGURE, Path(cls.FIGURE).with_suffix(".txt").name) if cls.FIGURE else ()
+
 
 def _typed(hint: object, value: Any) -> Any:
     """``value`` read from JSON as a field of type ``hint``."""

@@ -330,7 +330,7 @@ class PhysiologyExperiment(Experiment[PhysiologyConfig]):
     config_type = PhysiologyConfig
     seeds = (0,)
     default_out = None
-    writes = ("physiology.png", "physiology.txt", NWB_FILE)
+    writes = (FIGURE, Path(FIGURE).with_suffix(".txt").name, NWB_FILE)
 
     def execute(self, config: PhysiologyConfig, run: Run) -> PhysiologyResult:
         start = time.perf_counter()

@@ -289,7 +289,7 @@ class StreamExperiment(SeedRuns[StreamConfig]):
     quick_seeds = (0,)
     quick_time = "about 45 s on two busy cores"
     default_out = "stream"
-    writes = ("stream.png", "stream.txt")
+    writes = StreamResult.figure_names()
     unit = "it"
 
     def check(self, config: StreamConfig) -> int:
