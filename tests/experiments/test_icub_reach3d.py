@@ -216,9 +216,32 @@ def test_babbling_and_reaching_in_3d_read_no_truth_outside_the_scores():
             assert out[cond][m]["end_point_cm"]["p90"] >= out[cond][m]["end_point_cm"]["median"]
     # the reference and the chance rate do not depend on what the eyes did
     assert out["free"]["scripted_ik"] == out["fixated"]["scripted_ik"]
+    assert tests.ik_error.shape == (3,) and np.all(tests.ik_error < r3.REACHABLE)
 
 
-def _record(seed: int, learned: list[float], strict: list[bool]) -> dict:
+def test_the_test_balls_are_put_reachable_or_anywhere_in_the_box():
+    from sigmapi.envs.icub import stereo as st
+    from sigmapi.experiments.icub import reach3d as r3
+
+    scene = _scene()
+    scene.seal()
+    box = np.asarray(st.BOX)
+    rng = np.random.default_rng(123)
+    anywhere = np.array([r3._test_ball(scene, rng, "box") for _ in range(150)])
+    assert np.all((anywhere >= box[:, 0]) & (anywhere <= box[:, 1]))
+    # "box" is the experimenter's uniform draw itself, one point per ball, no IK consulted
+    assert np.array_equal(anywhere, st.random_point(np.random.default_rng(123), 150))
+    missed = [r3.scripted_ik(scene, p)[1] >= r3.REACHABLE for p in anywhere]
+    assert 0 < sum(missed) < 15  # 6 of these 150: the far, low corner lies beyond the arm
+    near = r3._test_ball(scene, np.random.default_rng(1), "reachable")
+    assert r3.scripted_ik(scene, near)[1] < r3.REACHABLE
+    with pytest.raises(ValueError, match="balls"):
+        r3._test_ball(scene, np.random.default_rng(0), "table")
+
+
+def _record(
+    seed: int, learned: list[float], strict: list[bool], ik: list[float] | None = None
+) -> dict:
     maps = {
         "order_r2": 0.5,
         "order_r2_per_axis": [0.9, 0.96, 0.97],
@@ -257,6 +280,7 @@ def _record(seed: int, learned: list[float], strict: list[bool]) -> dict:
         "seconds": {"total": 10.0},
         "peak_rss_mb": 700.0,
         **raw,
+        **({} if ik is None else {"ik_error_m": ik}),
     }
 
 
@@ -287,10 +311,31 @@ def test_the_box_result_pools_every_reach_and_judges_the_targets():
     assert t["random_posture_strict_success"] is True
     assert t["maps_ordered_all_seeds"] is False
     assert d["peak_memory_mb"] == 700.0
+    assert d["balls"] is None  # records without the IK's errors
     text = res.table()
     for m in METHODS:
         assert m in text
     assert "map_torso" in text
+
+
+def test_the_box_result_pools_the_reachable_balls_apart():
+    ik = [0.002, 0.05, 0.004, 0.03]  # balls 1 and 3 of each seed beyond the arm
+    res = ICubBoxResult(
+        ICubConfig(space="box", box_balls="box"),
+        (5, 6),
+        [
+            _record(5, [0.005, 0.01, 0.015, 0.02], [True, False, True, False], ik),
+            _record(6, [0.05, 0.06, 0.07, 0.08], [False, False, True, True], ik),
+        ],
+    )
+    balls = json.loads(json.dumps(res.to_dict()))["balls"]
+    assert balls["placed"] == "box" and balls["reachable_share"] == 0.5
+    learned = balls["reachable"]["learned"]
+    assert learned["strict_success"] == pytest.approx(3 / 4)
+    assert learned["end_point_cm"]["median"] == pytest.approx(np.median([0.5, 1.5, 5, 7]))
+    assert "0.50 of them reachable" in res.table()
+    with pytest.raises(ConfigError, match="box_balls"):
+        ICubConfig(box_balls="table")
 
 
 def test_the_space_is_a_declared_choice():

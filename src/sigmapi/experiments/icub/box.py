@@ -23,7 +23,7 @@ import numpy as np
 from sigmapi.executor import Executor
 from sigmapi.experiments.base import run_all
 from sigmapi.experiments.icub.config import ICubConfig
-from sigmapi.experiments.icub.reach3d import METHODS, run_seed3d
+from sigmapi.experiments.icub.reach3d import METHODS, REACHABLE, run_seed3d
 from sigmapi.experiments.kit.results import Result
 from sigmapi.metrics import ORDERED_R2
 from sigmapi.progress import Progress
@@ -75,6 +75,7 @@ def _box_seed(job: _BoxJob) -> dict[str, Any]:
         reaches=cfg.reaches,
         feature_width=cfg.box_feature_width,
         restarts=cfg.box_restarts,
+        balls=cfg.box_balls,
         yaw=cfg.babble_yaw,
         wrist=(cfg.babble_wrist[0], cfg.babble_wrist[1]),
         grid=BOX_GRID,
@@ -91,6 +92,7 @@ def _box_seed(job: _BoxJob) -> dict[str, Any]:
         ("touched", tests.touched),
     ):
         out[key] = {c: {m: v.tolist() for m, v in d.items()} for c, d in raw.items()}
+    out["ik_error_m"] = tests.ik_error.tolist()
     out["peak_rss_mb"] = _peak_mb()
     return out
 
@@ -131,6 +133,7 @@ SUMMARIES = (
     "methods",
     "methods_per_seed",
     "fixation_converged",
+    "balls",
     "targets",
     "seconds_per_seed",
     "peak_memory_mb",
@@ -198,11 +201,14 @@ class ICubBoxResult(Result):
             }
         return out
 
-    def _pooled(self, cond: str, method: str) -> dict[str, Any]:
-        e = 100.0 * np.concatenate([s["end_point_m"][cond][method] for s in self.per_seed])
-        strict = np.concatenate([s["strict"][cond][method] for s in self.per_seed])
-        touched = np.concatenate([s["touched"][cond][method] for s in self.per_seed])
-        aim = 100.0 * np.concatenate([s["aim_m"][cond][method] for s in self.per_seed])
+    def _pooled(self, cond: str, method: str, keep: Any = slice(None)) -> dict[str, Any]:
+        """Over every reach of every seed (``keep``: a mask over those reaches)."""
+
+        def every(key: str) -> Any:
+            return np.concatenate([s[key][cond][method] for s in self.per_seed])[keep]
+
+        e, aim = 100.0 * every("end_point_m"), 100.0 * every("aim_m")
+        strict, touched = every("strict"), every("touched")
         return {
             "end_point_cm": {
                 "median": float(np.median(e)),
@@ -220,6 +226,21 @@ class ICubBoxResult(Result):
         ``success`` (touched); the same after a fixation under ``fixated``."""
         return {
             m: {**self._pooled("free", m), "fixated": self._pooled("fixated", m)} for m in METHODS
+        }
+
+    def balls(self) -> dict[str, Any] | None:
+        """Where the test balls were put (``config.box_balls``), the share of them the
+        scripted IK rests on the palm within
+        :data:`~sigmapi.experiments.icub.reach3d.REACHABLE`, and per method (eyes free) the
+        pooled numbers of :meth:`methods` over those reachable balls alone; ``None`` for
+        records without the IK's errors (written before they were kept)."""
+        if any("ik_error_m" not in s for s in self.per_seed):
+            return None
+        reachable = np.concatenate([s["ik_error_m"] for s in self.per_seed]) < REACHABLE
+        return {
+            "placed": self.config.box_balls,
+            "reachable_share": float(np.mean(reachable)),
+            "reachable": {m: self._pooled("free", m, reachable) for m in METHODS},
         }
 
     def methods_per_seed(self) -> dict[str, dict[str, list[Any]]]:
@@ -313,6 +334,12 @@ class ICubBoxResult(Result):
                 f"{name:<10}{m['order_r2']:>9.3f}{axes:>18}{m['folded_seeds']:>7d}"
                 f"{m['error_cm']:>8.2f}{m['kmeans']['error_cm']:>8.2f}"
                 f"{m['true_position']['error_cm']:>9.2f}"
+            )
+        balls = self.balls()
+        if balls is not None:
+            lines.append(
+                f"test balls: {balls['placed']}, {balls['reachable_share']:.2f} of them reachable"
+                " (the scripted IK within 1 cm)"
             )
         lines.append(
             f"{'method':<15}{'end point cm':>13}{'p90':>7}{'strict':>8}{'touch':>7}"

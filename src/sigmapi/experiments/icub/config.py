@@ -27,6 +27,12 @@ SPACES = ("table", "box")
 anywhere in a box within the arm's reach, seen by both eyes (the 3-D task,
 :mod:`~sigmapi.experiments.icub.reach3d`)."""
 
+TEST_BALLS = ("reachable", "box")
+"""Where the experimenter puts the 3-D reach tests' balls (:attr:`ICubConfig.box_balls`):
+"reachable" (uniform in the box, kept when the scripted IK rests the ball on the palm within
+1 cm, :data:`~sigmapi.experiments.icub.reach3d.REACHABLE`) or "box" (uniform in the box,
+every one, the far corners beyond the arm included)."""
+
 HEAD_CODES = ("winner", "centroid", "response")
 """What map 1 can hand to map 2 (:meth:`~sigmapi.experiments.icub.maps.ChainMaps.head`)."""
 READOUTS = ("centroid", "winner")
@@ -153,6 +159,13 @@ class ICubConfig:
     """Fits of each part of map T, each kept by its own fold score on the robot's view pairs
     (``space`` "box"; :func:`~sigmapi.experiments.icub.space3d.learn_chain3d`'s
     ``restarts``; 1: one fit)."""
+    box_balls: str = field(
+        default="reachable", metadata=_validate.bounded("choice", options=TEST_BALLS)
+    )
+    """Where the experimenter puts the 3-D reach tests' balls (``space`` "box"): "reachable"
+    (uniform in the box, kept when the scripted IK rests the ball on the palm within 1 cm) or
+    "box" (uniform in the box, every one; the JSON's ``balls`` then also pools the reaches to
+    the reachable ones)."""
     backend: str = field(
         default="auto", metadata=_validate.bounded("choice", options=BACKEND_NAMES)
     )

@@ -51,7 +51,8 @@ or forearm with the ball); :data:`SETTLE` seconds later it is scored:
   less than :data:`MOVED` (its centre at the end against where it was put).
 
 **The reach tests** (:func:`reach_tests3d`): balls uniform in the box that the scripted IK
-rests on the palm within 1 cm (the experimenter's choice, as on the table); the robot finds
+rests on the palm within 1 cm (the experimenter's choice, as on the table), or every ball
+uniform in the box (:data:`TEST_BALLS`); the robot finds
 each with both eyes (random head postures and eye commands: **eyes free**, the ball anywhere
 in both views), then fixates it (:func:`~sigmapi.envs.icub.stereo.fixate`: **fixated**); each
 associated method reaches from each view.
@@ -74,7 +75,7 @@ from sigmapi.envs.icub import ICubScene, arm_ik
 from sigmapi.envs.icub import stereo as st
 from sigmapi.envs.icub.model import BALL_RADIUS
 from sigmapi.experiments.icub import space3d as s3
-from sigmapi.experiments.icub.config import PLAN
+from sigmapi.experiments.icub.config import PLAN, TEST_BALLS
 from sigmapi.experiments.icub.maps import unit_rows
 from sigmapi.experiments.icub.reaching import _BABBLED, _WRIST, _YAW, eye_frames, film_first
 from sigmapi.metrics import z_decoder
@@ -357,12 +358,24 @@ def scripted_ik(scene: ICubScene, p: Array, rounds: int = 4) -> tuple[Array, flo
     return q, err
 
 
+REACHABLE = 0.01
+"""The scripted IK's error (metres) under which a ball counts as reachable."""
+
+
 def _reachable(scene: ICubScene, rng: np.random.Generator) -> Array:
-    """A ball centre uniform in the box that the scripted IK rests on the palm within 1 cm."""
+    """A ball centre uniform in the box that the scripted IK rests on the palm within
+    :data:`REACHABLE`."""
     while True:
         p = st.random_point(rng, 1)[0]
-        if scripted_ik(scene, p)[1] < 0.01:
+        if scripted_ik(scene, p)[1] < REACHABLE:
             return p
+
+
+def _test_ball(scene: ICubScene, rng: np.random.Generator, balls: str) -> Array:
+    """One test ball's centre (world metres) drawn as :data:`TEST_BALLS` ``balls`` says."""
+    if balls not in TEST_BALLS:
+        raise ValueError(f"balls must be one of {TEST_BALLS}, got {balls!r}")
+    return _reachable(scene, rng) if balls == "reachable" else st.random_point(rng, 1)[0]
 
 
 @dataclass
@@ -373,6 +386,9 @@ class ReachTests3D:
     ball: Array
     fixated: NDArray[np.bool_]
     """Per ball, whether the fixation converged (else the fixated state is the free one)."""
+    ik_error: Array = field(default_factory=lambda: np.zeros(0))
+    """Per ball, where the scripted IK's posture rests a ball on the palm from the ball's
+    centre (metres, the kinematics); under :data:`REACHABLE`: a reachable ball."""
     end_point: dict[str, dict[str, Array]] = field(default_factory=dict)
     strict: dict[str, dict[str, NDArray[np.bool_]]] = field(default_factory=dict)
     touched: dict[str, dict[str, NDArray[np.bool_]]] = field(default_factory=dict)
@@ -396,32 +412,35 @@ def reach_tests3d(
     rng: np.random.Generator,
     babbled: Array,
     film: Callable[[int, str], int] | None = None,
+    balls: str = "reachable",
 ) -> tuple[ReachTests3D, list[NDArray[np.uint8]]]:
     """``n`` reaches per condition and method (the module's account); ``random_posture``
     draws from ``babbled`` ``(m, 7)``; ``film(i, method)`` frames per leg of reach ``i``
-    (eyes free); the frames filmed, in order."""
-    balls: list[Array] = []
+    (eyes free); ``balls``: where the experimenter puts them (:data:`TEST_BALLS`); the
+    frames filmed, in order."""
+    placed: list[Array] = []
     free: list[tuple[Array, ...]] = []
     fixed: list[tuple[Array, ...]] = []
     converged: list[bool] = []
-    while len(balls) < n:
+    while len(placed) < n:
         scene.reset()
-        p = _reachable(scene, rng)
+        p = _test_ball(scene, rng, balls)
         st.place_ball(scene, p)
         seen = look(scene, rng)
         if seen is None:  # the eyes cannot find it: the experimenter puts another
             continue
-        balls.append(p)
+        placed.append(p)
         free.append(_view_row(scene, seen, p))
         fix = st.fixate(scene)
         converged.append(fix is not None)
         fixed.append(free[-1] if fix is None else _view_row(scene, fix[0], p))
-    ball = np.array(balls)
+    ball = np.array(placed)
     views = {"free": _views(free), "fixated": _views(fixed)}
-    res = ReachTests3D(ball, np.array(converged))
     frames: list[NDArray[np.uint8]] = []
     chance = babbled[rng.integers(0, len(babbled), n)]
-    ik = np.array([scripted_ik(scene, p)[0] for p in ball])
+    solved = [scripted_ik(scene, p) for p in ball]
+    ik = np.array([q for q, _ in solved])
+    res = ReachTests3D(ball, np.array(converged), np.array([e for _, e in solved]))
 
     def run(postures: Array, method: str, cond: str) -> None:
         out = []
@@ -493,6 +512,7 @@ def run_seed3d(
     learned_state: str = LEARNED_STATE,
     film: bool = False,
     restarts: int = s3.RESTARTS,
+    balls: str = "reachable",
 ) -> dict[str, Any]:
     """One seed of the 3-D task: the maps recorded, learned and scored; babbling; the
     associations; the reaches eyes free and fixated, summarised; ``keep``: also the raw
@@ -504,7 +524,8 @@ def run_seed3d(
     gaze's codes that the associated methods read; ``map_shape``: map T's (the maps' other
     settings :func:`~sigmapi.experiments.icub.space3d.learn_chain3d`'s defaults, the measured
     design); ``learned_state``: where the ``learned`` state's bump sits
-    (:data:`LEARNED_STATES`); ``restarts``: fits of each part of map T (its ``restarts``)."""
+    (:data:`LEARNED_STATES`); ``restarts``: fits of each part of map T (its ``restarts``);
+    ``balls``: where the reach tests' balls are put (:data:`TEST_BALLS`)."""
     t0 = time.perf_counter()
     r_views, r_babble, r_reach = (PLAN.rng(seed, s) for s in ("views", "babbling", "reaches"))
     scene, train, ev = s3.record_box(r_views, pairs, eval_pairs)
@@ -531,7 +552,9 @@ def run_seed3d(
         layers[method] = Association(phi.shape[1], 7, epochs=epochs).fit(phi, bab.posture)
     t_babble = time.perf_counter() - t0 - t_maps
     shot = film_first if film else None
-    tests, frames = reach_tests3d(scene, layers, feats, reaches, r_reach, held.posture, shot)
+    tests, frames = reach_tests3d(
+        scene, layers, feats, reaches, r_reach, held.posture, shot, balls=balls
+    )
     eyes = shown_eyes(scene, layers["learned"], feats, tests.ball[0], r_reach) if film else None
     scene.close()
     out: dict[str, Any] = {
