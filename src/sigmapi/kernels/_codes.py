@@ -118,7 +118,7 @@ def _outer(a, h, height, normalize, out):  # pragma: no cover - compiled
         if normalize:
             for u in range(m * n):
                 sq[u] = row[u] * row[u]
-            norm = np.sqrt(0.0 + _pairwise(sq, 0, m * n))
+            norm = np.sqrt(0.0 + _pairwise(sq, np.int64(0), m * n))  # not a literal
             for u in range(m * n):
                 row[u] = row[u] / norm
 

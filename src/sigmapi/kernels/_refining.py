@@ -370,12 +370,12 @@ def _products(x, y, tol, members_x, members_y, xv, yv, xt, yt, xs, ys, xe, ye, t
     width = n_mx * n_my
     for b in range(n_ty):  # y's tiles that can pass, spread to a block's layout
         if yt[b] * mx > thr:
-            _spread(yv[b], n_mx, n_my, 1, ye[b])
+            _spread(yv[b], n_mx, n_my, np.int64(1), ye[b])  # not literals: one compilation
     n = 0
     for a in range(n_tx):
         if xt[a] * my <= thr:
             continue
-        _spread(xv[a], n_mx, n_my, 0, xe)
+        _spread(xv[a], n_mx, n_my, np.int64(0), xe)
         for b in range(n_ty):
             if xt[a] * yt[b] <= thr:
                 continue
@@ -477,7 +477,7 @@ def _settle_row(index, raw, scale, sqnorm, c, x, y, tol, rule, rel, tl, sv, n, v
     ub, ubg, cand, near, done = work[0], work[1], work[2], work[3], work[4]
     s32 = work[5].view(np.float32)
     n_groups = gnorms.shape[1]
-    _bounds(gnorms, tl, sv, n, 0, n_groups, gc, rule, s32, ubg)
+    _bounds(gnorms, tl, sv, n, np.int64(0), n_groups, gc, rule, s32, ubg)  # not a literal
     m = 0  # units scored: done[:m] (as floats), their scores cand[:m] and slacks near[:m]
     low = -np.inf  # the largest lower end of a score so far
     best = 0  # the position in done of the best score
@@ -530,7 +530,7 @@ def _settle_row(index, raw, scale, sqnorm, c, x, y, tol, rule, rel, tl, sv, n, v
         m += 1
     lo = cand[best] - near[best]
     units = np.empty(m, dtype=np.int64)
-    nn = 0
+    nn = np.int64(0)  # not a literal: one compilation of _exact_best
     for q in range(m):
         if cand[q] + near[q] >= lo:
             units[nn] = int(done[q])

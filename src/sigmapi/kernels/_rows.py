@@ -201,7 +201,7 @@ def _respond_row(raw, scale, x, y, tol, ahead, jb, pi, pv, acc, h):
     ``jb``, ``pi``, ``pv``, ``acc``: scratch for :func:`_pairs` and the float64 sums.
     """
     n = _pairs(x, y, tol, jb, pi, pv)
-    activate(raw, scale, pi, pv, n, ahead, 0, raw.shape[1], acc, h)
+    activate(raw, scale, pi, pv, n, ahead, np.int64(0), raw.shape[1], acc, h)  # not a literal
 
 
 @njit(cache=True, nogil=True)

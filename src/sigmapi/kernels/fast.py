@@ -336,6 +336,9 @@ def _train(
     its (exact) decay."""
     k_units = raw.shape[1]
     jb, pi0, pv0, pi1, pv1, h, ea, gain, acc, t1, t2 = _buffers(k_units, raw.shape[0], y0.shape[1])
+    # typed int64 and bool, not literals: a constant passed straight to _unit_chunk is typed
+    # as a literal, and numba compiles it once per mix of literals at its calls (16 in all)
+    zero, yes = np.int64(0), np.bool_(True)
     n_chunks = (k_units + CHUNK - 1) // CHUNK
     n_iter = x0.shape[0]
     if n_iter == 0:
@@ -345,12 +348,12 @@ def _train(
         for c in prange(n_chunks):
             # left unformatted: the arguments in the rows of the kernel's signature
             _unit_chunk(raw, scale, sqnorm, c * CHUNK, min(k_units, (c + 1) * CHUNK), ea, 1.0,
-                        0, 0, pi1, pv1, 0, pi0, pv0, n0, True, track, h, gain, acc,
+                        zero, zero, pi1, pv1, zero, pi0, pv0, n0, yes, track, h, gain, acc,
                         ahead)  # fmt: skip
     else:
         # left unformatted: the arguments in the rows of the kernel's signature
-        _unit_chunk(raw, scale, sqnorm, 0, k_units, ea, 1.0, 0, 0,
-                    pi1, pv1, 0, pi0, pv0, n0, True, track, h, gain, acc, ahead)  # fmt: skip
+        _unit_chunk(raw, scale, sqnorm, zero, k_units, ea, 1.0, zero, zero,
+                    pi1, pv1, zero, pi0, pv0, n0, yes, track, h, gain, acc, ahead)  # fmt: skip
     for t in range(n_iter):
         w = _winner(h, scale, sqnorm, rule, sigmas[t], cut, dims, strides, map_periodic, t1, t2)
         out[t] = w
@@ -371,7 +374,7 @@ def _train(
                             acc, ahead)  # fmt: skip
         else:
             # left unformatted: the arguments in the rows of the kernel's signature
-            _unit_chunk(raw, scale, sqnorm, 0, k_units, ea, thr, lo, hi,
+            _unit_chunk(raw, scale, sqnorm, zero, k_units, ea, thr, lo, hi,
                         pi1, pv1, n1, pi0, pv0, n0, more, track, h, gain, acc, ahead)  # fmt: skip
 
 
@@ -495,14 +498,17 @@ def _train_stream(
     trace now exists."""
     k_units = raw.shape[1]
     jb, pi, pv, _, _, h, ea, gain, acc, t1, t2 = _buffers(k_units, raw.shape[0], y.shape[1])
+    # typed int64 and bool, not literals: a constant passed straight to _unit_chunk is typed
+    # as a literal, and numba compiles it once per mix of literals at its calls (16 in all)
+    zero, yes = np.int64(0), np.bool_(True)
     a = np.empty(k_units)
     n_chunks = (k_units + CHUNK - 1) // CHUNK
     for t in range(x.shape[0]):
         n = _pairs(x[t], y[t], tol, jb, pi, pv)
         lo = k_units
-        hi = 0
+        hi = zero
         thr = 1.0
-        n1 = 0
+        n1 = zero
         if primed:
             top = 0.0
             for k in range(k_units):
@@ -521,12 +527,12 @@ def _train_stream(
             for c in prange(n_chunks):
                 # left unformatted: the arguments in the rows of the kernel's signature
                 _unit_chunk(raw, scale, sqnorm, c * CHUNK, min(k_units, (c + 1) * CHUNK), ea,
-                            thr, lo, hi, pi, pv, n1, pi, pv, n, True, track, h, gain, acc,
+                            thr, lo, hi, pi, pv, n1, pi, pv, n, yes, track, h, gain, acc,
                             ahead)  # fmt: skip
         else:
             # left unformatted: the arguments in the rows of the kernel's signature
-            _unit_chunk(raw, scale, sqnorm, 0, k_units, ea, thr, lo, hi,
-                        pi, pv, n1, pi, pv, n, True, track, h, gain, acc, ahead)  # fmt: skip
+            _unit_chunk(raw, scale, sqnorm, zero, k_units, ea, thr, lo, hi,
+                        pi, pv, n1, pi, pv, n, yes, track, h, gain, acc, ahead)  # fmt: skip
         w = _winner(h, scale, sqnorm, rule, sigmas[t], cut, dims, strides, map_periodic, t1, t2)
         out[t] = w
         _neighbourhood(w, sigmas[t], 1.0, tol, dims, strides, map_periodic, a)
