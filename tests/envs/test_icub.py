@@ -115,6 +115,41 @@ def test_check_env_and_eye_frames(rendering):
     env.close()
 
 
+def test_the_gym_id_observes_what_the_eye_sees_with_the_truth_sealed(rendering):
+    """The 2-D id's reset and step read no truth outside ``scene.truth()`` (it went into the
+    scores only): the retina is the detector's find in the right eye's frame, the gaze the
+    robot's own search; a fixed gaze that does not see the ball observes (0, 0)."""
+    import gymnasium as gym
+
+    import sigmapi  # noqa: F401  # registers the ids
+    from sigmapi.envs.icub import TruthLeak
+
+    env: Any = gym.make("sigmapi/ICubReach-v0").unwrapped
+    s = env.scene
+    s.seal()
+    try:
+        for seed in range(3):
+            obs, info = env.reset(seed=seed)
+            seen = s.see("ball")
+            assert seen is not None  # found by the search: the detection is the retina
+            np.testing.assert_allclose(obs["retina"] * s.eye_size, seen, atol=1e-4)
+            np.testing.assert_allclose(obs["gaze"], s.gaze(), atol=1e-6)
+            with s.truth():
+                q, _ = arm_ik(s, info["ball"] + np.array([0.0, 0.0, AIM]))
+            obs, reward, done, _, info = env.step(env.action_of(q))
+            assert done and reward == float(info["is_success"])
+            seen = s.see("ball")  # seen again after the reach, or (0, 0): never the projection
+            want = np.zeros(2) if seen is None else seen / s.eye_size
+            np.testing.assert_allclose(obs["retina"], want, atol=1e-6)
+        obs, info = env.reset(seed=0, options={"ball": (0.34, -0.1), "gaze": np.zeros(6)})
+        assert s.see("ball") is None and np.all(obs["retina"] == 0.0)  # looks above the ball
+        np.testing.assert_allclose(info["ball"][:2], (0.34, -0.1))
+        with pytest.raises(TruthLeak):
+            s.ball_position()
+    finally:
+        env.close()
+
+
 def test_rendered_retina_agrees_with_the_projection(rendering):
     from sigmapi.envs.icub.frames import direction_ball
 

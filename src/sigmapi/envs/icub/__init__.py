@@ -14,7 +14,7 @@ package.
 
 from __future__ import annotations
 
-from sigmapi.envs.icub.env import ENV_ID, RETINA_SOURCES, ICubReachEnv
+from sigmapi.envs.icub.env import ENV_ID, ICubReachEnv
 from sigmapi.envs.icub.frames import (
     GAZE_HIGH,
     GAZE_LOW,
@@ -53,7 +53,6 @@ __all__ = [
     "HOME_ARM",
     "PAIRS_PER_BALL",
     "REACH_REGION",
-    "RETINA_SOURCES",
     "TABLE_HEIGHT",
     "TORSO_BOX",
     "ICubReachEnv",

@@ -1,15 +1,23 @@
-"""ICubReach: the iCub sees a ball on the table from a random gaze and reaches for it.
+"""ICubReach: the iCub looks for a ball on the table and reaches for it.
 
 One reach is one episode of one step. ``reset`` puts the ball at a random place of the arm's
-reach (:data:`~sigmapi.envs.icub.frames.REACH_REGION`), the eyes and neck at a random gaze that
-keeps it in the right eye's view and the arm at home. The observation is what the robot
-measures: ``"retina"``, the ball's position in the right eye's image as a fraction of its side
-(``(u, v) / eye_size``, from the exact projection or from the rendered pixels), ``"gaze"``, the
-six gaze angles (radians, :data:`~sigmapi.envs.icub.scene.GAZE`) and ``"arm"``, the right arm's
-seven joint angles. The action is an arm posture, each joint's range mapped onto [-1, 1]; the
-step moves the arm there in the physics, approaching from above
+reach (:data:`~sigmapi.envs.icub.frames.REACH_REGION`; the experimenter), the arm at home, and
+the robot looks for the ball: random gaze commands, uniform in the gazes' range, until the
+right eye's detector sees it (:func:`~sigmapi.envs.icub.frames.search`); a ball the eyes do
+not find is put elsewhere, as the experimenter would. The observation is what the robot
+senses: ``"retina"``, where the colour detector (:mod:`~sigmapi.envs.icub.detect`) finds the
+ball in the right eye's rendered frame, as a fraction of its side (``(u, v) / eye_size``),
+``"gaze"``, the six gaze angles (radians, :data:`~sigmapi.envs.icub.scene.GAZE`) and
+``"arm"``, the right arm's seven joint angles. Where the eye does not see the ball (a gaze
+fixed by ``reset(options=...)`` that looks elsewhere, or after a reach, the hand in the way
+and a search that did not find it) the retina is ``(0, 0)``: a detection never touches the
+image's border, so no detection reads ``(0, 0)``. The action is an arm posture, each joint's
+range mapped onto [-1, 1]; the step moves the arm there in the physics, approaching from above
 (:func:`~sigmapi.envs.icub.reach.physical_reach`), and ends the episode: reward 1 and
-``info["is_success"]`` when the hand touched the ball, else 0.
+``info["is_success"]`` when the hand touched the ball, else 0; where the eye lost the ball in
+the reach it looks for it again (:func:`~sigmapi.envs.icub.frames.search`). The simulator's
+truth (the ball's place, its torso-centred direction, the palm's closest distance) is in
+``info`` only, for scoring.
 
 ``env.unwrapped.render_eyes()`` returns both eyes' frames (the images the retina is read
 from); ``render_mode="rgb_array"`` renders a third-person view.
@@ -25,18 +33,16 @@ from gymnasium import spaces
 from numpy.typing import NDArray
 
 from sigmapi.envs.checks import check_action, check_options, check_vector
-from sigmapi.envs.icub.frames import REACH_REGION, random_ball, random_gaze
+from sigmapi.envs.icub.frames import REACH_REGION, random_ball, search
 from sigmapi.envs.icub.model import BALL_RADIUS
 from sigmapi.envs.icub.reach import physical_reach
 from sigmapi.envs.icub.scene import EYE_SIZE, GAZE, ICubScene
 from sigmapi.errors import ConfigError
 
-__all__ = ["ENV_ID", "RETINA_SOURCES", "ArmAction", "ICubReachEnv"]
+__all__ = ["ENV_ID", "ArmAction", "ICubReachEnv"]
 
 ENV_ID = "sigmapi/ICubReach-v0"
 """The environment's Gymnasium id (registered by ``import sigmapi``)."""
-RETINA_SOURCES = ("projection", "pixels")
-"""Where the observed retina comes from: the exact projection or the rendered pixels."""
 
 Obs = dict[str, NDArray[np.float32]]
 
@@ -60,13 +66,10 @@ class ArmAction:
 
 
 class ICubReachEnv(ArmAction, gym.Env[Obs, NDArray[np.float32]]):
-    """Reach for a ball on the table with the iCub's right arm, from a random gaze.
+    """Reach for a ball on the table with the iCub's right arm, seen by the right eye.
 
     Parameters
     ----------
-    retina : {"projection", "pixels"}
-        The observed retina: exact projection, or the red blob's centroid in the right eye's
-        rendered frame.
     eye_size : int
         Side of each eye's square frame, pixels.
     render_mode : {None, "rgb_array"}
@@ -77,14 +80,10 @@ class ICubReachEnv(ArmAction, gym.Env[Obs, NDArray[np.float32]]):
     reset_options: ClassVar[tuple[str, ...]] = ("ball", "gaze")
     """The names ``reset(options=...)`` takes."""
 
-    def __init__(
-        self, retina: str = "projection", eye_size: int = EYE_SIZE, render_mode: str | None = None
-    ) -> None:
-        if retina not in RETINA_SOURCES:
-            raise ConfigError(f"retina must be one of {RETINA_SOURCES}, got {retina!r}")
+    def __init__(self, eye_size: int = EYE_SIZE, render_mode: str | None = None) -> None:
         if render_mode not in (None, "rgb_array"):
             raise ConfigError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
-        self.retina_source, self.render_mode = retina, render_mode
+        self.render_mode = render_mode
         self.scene = ICubScene(eye_size)
         lim = np.float32(np.pi)
         self.observation_space = spaces.Dict(
@@ -96,6 +95,7 @@ class ICubReachEnv(ArmAction, gym.Env[Obs, NDArray[np.float32]]):
         )
         self.action_space = spaces.Box(-1.0, 1.0, (7,), np.float32)
         self._lo, self._hi = self.scene.arm_range.T
+        self._seen: NDArray[np.float64] | None = None
         m = self.scene.model
         table = m.geom("table").id
         centre, half = m.geom_pos[table][:2], m.geom_size[table][:2] - BALL_RADIUS
@@ -111,17 +111,11 @@ class ICubReachEnv(ArmAction, gym.Env[Obs, NDArray[np.float32]]):
         high)``, radians): each joint within its range (the eyes' version and vergence also
         keep each eye's pan within its range)."""
 
-    def _retina(self) -> NDArray[np.float64]:
-        s = self.scene
-        uv = s.ball_pixels("r_eye") if self.retina_source == "pixels" else None
-        if uv is None:  # projection, or a ball hidden by the hand: the projection
-            uv = s.project(s.ball_position())[0]
-        return np.asarray(uv) / s.eye_size
-
     def _obs(self) -> Obs:
         s = self.scene
+        uv = np.zeros(2) if self._seen is None else self._seen / s.eye_size
         return {
-            "retina": np.clip(self._retina(), 0, 1).astype(np.float32),
+            "retina": np.clip(uv, 0, 1).astype(np.float32),
             "gaze": s.gaze().astype(np.float32),
             "arm": s.arm().astype(np.float32),
         }
@@ -131,7 +125,10 @@ class ICubReachEnv(ArmAction, gym.Env[Obs, NDArray[np.float32]]):
     ) -> tuple[Obs, dict[str, object]]:
         """A new ball and gaze; ``options={"ball": (x, y), "gaze": six angles}`` fixes them:
         the ball on the table (:attr:`ball_region`), the gaze within the joints' ranges
-        (:attr:`gaze_range`); else one :class:`~sigmapi.errors.ConfigError` line."""
+        (:attr:`gaze_range`); else one :class:`~sigmapi.errors.ConfigError` line. Without a
+        fixed gaze the robot searches for the ball (a drawn ball it does not find is put
+        elsewhere; a fixed one is a :class:`~sigmapi.errors.ConfigError`); a fixed gaze is
+        kept, seeing the ball or not."""
         options = check_options(options, self.reset_options, "ICubReach")
         ball, gaze = options.get("ball"), options.get("gaze")
         if ball is not None:
@@ -146,13 +143,23 @@ class ICubReachEnv(ArmAction, gym.Env[Obs, NDArray[np.float32]]):
         if gaze is not None:
             gaze = self._check_gaze(gaze)
         super().reset(seed=seed)
-        s = self.scene
-        s.reset()
-        s.set_ball(random_ball(self.np_random, 1, REACH_REGION)[0] if ball is None else ball)
-        if gaze is None:
-            random_gaze(s, s.ball_position(), self.np_random)
-        else:
-            s.set_gaze(gaze)
+        s, rng = self.scene, self.np_random
+        while True:
+            s.reset()
+            s.set_ball(random_ball(rng, 1, REACH_REGION)[0] if ball is None else ball)
+            if gaze is not None:
+                s.set_gaze(gaze)
+                self._seen = s.see("ball")
+                break
+            found = search(s, rng)  # the robot's own looking: random gazes until it sees
+            self._seen = None if found is None else found[0]
+            if self._seen is not None:
+                break
+            if ball is not None:
+                raise ConfigError(
+                    f"options['ball'] must be a place the right eye can find, got "
+                    f"{np.round(ball, 4).tolist()}; another place on the table"
+                )
         s.hold()
         return self._obs(), self._info()
 
@@ -172,15 +179,23 @@ class ICubReachEnv(ArmAction, gym.Env[Obs, NDArray[np.float32]]):
 
     def _info(self) -> dict[str, object]:
         s = self.scene
-        return {"ball": s.ball_position(), "torso_direction": s.torso_direction(s.ball_position())}
+        with s.truth():  # the scorer's readings, never observed
+            p = s.ball_position()
+            return {"ball": p, "torso_direction": s.torso_direction(p)}
 
     def step(
         self, action: NDArray[np.float32]
     ) -> tuple[Obs, SupportsFloat, bool, bool, dict[str, object]]:
         """Reach for posture ``action`` (7 finite numbers in [-1, 1]: :meth:`posture`; else one
-        :class:`~sigmapi.errors.ConfigError` line); the episode ends (terminated) with the reach."""
+        :class:`~sigmapi.errors.ConfigError` line); the episode ends (terminated) with the reach.
+        Where the reach hid or moved the ball the robot looks for it again (random gazes)."""
         a = check_action(self.action_space, action, fix="each joint's range mapped onto [-1, 1]")
-        out = physical_reach(self.scene, self.posture(a))
+        s = self.scene
+        out = physical_reach(s, self.posture(a))
+        self._seen = s.see("ball")
+        if self._seen is None:
+            found = search(s, self.np_random)
+            self._seen = None if found is None else found[0]
         info = {**self._info(), "is_success": out.touched, "distance": out.distance}
         return self._obs(), float(out.touched), True, False, info
 

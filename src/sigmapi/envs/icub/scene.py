@@ -14,7 +14,7 @@ Frames (all measured on the model, never assumed):
 - **retina**: pixel coordinates ``(u, v)`` of a point in an eye's image, as
   :mod:`sigmapi.envs.robot.scene` defines them (``u`` along columns, ``v`` along rows, 0 at the
   left and top edges), by the pinhole of MuJoCo's camera pose and ``fovy``
-  (:meth:`ICubScene.project`) or from the rendered pixels (:meth:`ICubScene.ball_pixels`);
+  (:meth:`ICubScene.project`) or from the rendered pixels (:meth:`ICubScene.see`);
 - **head-centred**: a point's direction from the right eye's centre (on both eye axes, so it
   moves with neither) in the head's frame: x forward, y left, z up with the eyes at zero;
 - **torso-centred**: a point's direction in the chest's frame (x forward, y left, z up), from
@@ -51,7 +51,7 @@ from sigmapi.envs.icub.model import (
     TABLE_HEIGHT,
     load_model,
 )
-from sigmapi.envs.robot.scene import blob_centroid, check_rendering, mujoco_module
+from sigmapi.envs.robot.scene import check_rendering, mujoco_module
 from sigmapi.errors import ConfigError, SigmapiError
 
 __all__ = [
@@ -362,11 +362,6 @@ class ICubScene:
             yield
         finally:
             self._truth_depth -= 1
-
-    def ball_pixels(self, eye: str = "r_eye") -> Array | None:
-        """The ball's retinal position read from ``eye``'s rendered pixels (the red blob's
-        centroid), or None when it is not in view."""
-        return blob_centroid(self.render(eye))
 
     def close(self) -> None:
         """Free the offscreen renderers."""
