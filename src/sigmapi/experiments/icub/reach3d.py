@@ -120,6 +120,9 @@ LEARNED_STATE = "soft"
 """The ``learned`` state by default (:data:`LEARNED_STATES`)."""
 TOUCH_DEPTH = 0.002
 """How far into the palm's skin the experimenter presses the ball while babbling, metres."""
+CODE_GRID = 6
+"""Units per axis of the 3-D population codes that the ``retina`` and ``retina_gaze`` states
+read (both eyes' pixels, the eyes' angles, the neck's) by default."""
 _FAR = (1.5, -1.5, 0.7)  # where the ball waits while the robot babbles (out of reach and view)
 _SEARCHES = 4  # head postures tried before a ball or a hand is given up
 _SEARCH_TRIES = 60  # eye commands per head posture
@@ -504,9 +507,9 @@ def run_seed3d(
     feature_width: float,
     yaw: float,
     wrist: tuple[float, float],
-    grid: int = 6,
+    grid: int = CODE_GRID,
     width: float = 1.0,
-    map_shape: tuple[int, int, int] = (6, 6, 6),
+    map_shape: tuple[int, int, int] = s3.TORSO_SHAPE,
     backend: str = "auto",
     keep: bool = False,
     learned_state: str = LEARNED_STATE,
@@ -520,9 +523,10 @@ def run_seed3d(
     first reach, eyes free (``"film"``,
     :func:`~sigmapi.experiments.icub.reaching.film_first`), and both eyes' frames of a
     view of its ball with the arm at the posture the chain reads from it (``"eyes"``,
-    :func:`shown_eyes`). ``grid``: units per axis of the retina's and the
-    gaze's codes that the associated methods read; ``map_shape``: map T's (the maps' other
-    settings :func:`~sigmapi.experiments.icub.space3d.learn_chain3d`'s defaults, the measured
+    :func:`shown_eyes`). ``grid``: units per axis of the retina's and the gaze's codes that
+    the associated methods read (:data:`CODE_GRID`); ``map_shape``: map T's
+    (:data:`~sigmapi.experiments.icub.space3d.TORSO_SHAPE`; the maps' other settings
+    :func:`~sigmapi.experiments.icub.space3d.learn_chain3d`'s defaults, the measured
     design); ``learned_state``: where the ``learned`` state's bump sits
     (:data:`LEARNED_STATES`); ``restarts``: fits of each part of map T (its ``restarts``);
     ``balls``: where the reach tests' balls are put (:data:`TEST_BALLS`)."""
