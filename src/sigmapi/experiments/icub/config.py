@@ -99,7 +99,7 @@ class ICubConfig:
     directions."""
     frame_scenes: int = field(
         default=1000,
-        metadata=_validate.bounded("int", 1, 20_000, fix="e.g. 1000 (about 5 ms a frame)"),
+        metadata=_validate.bounded("int", 1, 20_000, fix="e.g. 1000"),
     )
     """Random scenes in which the rendered retina is compared with the exact projection."""
     babble_yaw: float = field(

@@ -42,8 +42,7 @@ stops where it is at the first touch of the ball (the arm's touch: any contact o
 or forearm with the ball); :data:`SETTLE` seconds later it is scored:
 
 - **end-point error**: the distance from the palm's contact point ``C`` (the palm site: the
-  middle of the palm's surface, the vertices of the hand within 2 cm of it lie at most 1.6 mm
-  in front of it) to the surface of the ball where the experimenter put it:
+  middle of the palm's surface) to the surface of the ball where the experimenter put it:
   ``| |C - b| - R |`` (``b`` its centre, ``R`` its radius), centimetres;
 - **strict success**: the palm touched the ball (a contact of the hand whose point lies on
   the palm's side: at least :data:`PALM_SIDE` along the palm's normal from ``C``; the back
@@ -96,7 +95,8 @@ SETTLE = 0.05
 """Seconds the physics runs after the arm stopped, before the reach is scored."""
 PALM_SIDE = -0.01
 """A contact of the hand is the palm's when its point lies at least this far along the palm's
-normal from the palm's contact point (metres; the hand spans -0.039 to 0.012 along it)."""
+normal from the palm's contact point (metres; negative: behind it; how far the hand reaches
+either way: docs/guide/icub-3d.md)."""
 MOVED = 0.01
 """Strict success: the ball's centre moved less than this, metres."""
 START_ARM = (-0.52, 1.3, 0.0, 0.785, 0.0, 0.0, 0.0)
@@ -105,8 +105,8 @@ with the shoulder rolled out to 1.3 rad, the hand right of and above the box (th
 holds the hand inside the box, where the first leg swept balls away)."""
 BACK_OFF = (0.0, 0.0, -0.15, 0.0, 0.0, -0.35, 0.0)
 """The approach posture is the posture plus this (shoulder yaw and wrist pitch, radians): the
-palm some 4 cm back from the ball, against its facing; the last leg moves it forward onto
-the ball, palm first."""
+palm backed off from the ball, against its facing (how far: docs/guide/icub-3d.md); the last
+leg moves it forward onto the ball, palm first."""
 FOLLOW_THROUGH = 1.0
 """When the posture is reached untouched, the arm goes on the same way, this many
 :data:`BACK_OFF` past it, in :data:`APPROACH` seconds, until the first touch (0: it stops at
