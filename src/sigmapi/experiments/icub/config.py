@@ -174,7 +174,8 @@ class ICubConfig:
     )
     """Kernel that learns and reads the maps ("auto": the fast one when it is installed)."""
     render: str | None = field(default=None, metadata=OUTPUT)
-    """Also write an animated GIF of the first seed's first learned reach to this file."""
+    """Also write an animated GIF of the first seed's first learned reach to this file: a
+    name ending in .gif (e.g. reach.gif)."""
 
     def __post_init__(self) -> None:
         _validate.check_fields(self)  # the bounds declared beside the fields
