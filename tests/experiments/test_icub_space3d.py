@@ -155,6 +155,24 @@ def test_factor_map_wins_the_product_of_its_parts_winners():
     assert np.array_equal(three.map_coords[w3][:, 0], three.map_coords[w3][:, 2])
 
 
+def test_the_box_jobs_memory_counts_the_weights_of_the_default_maps():
+    """box._job_memory's weights are those of the maps learn_chain3d builds by default (the
+    guide's 24,192 and 7,200), and its estimate stays above the measured peak (629 MB)."""
+    import math
+
+    from sigmapi.experiments.icub import box
+
+    def weights(codes, shape):
+        m = s3._new_map(s3.DESIGN, codes, shape, 1.0, 10, 0, "reference")
+        parts = m.parts if isinstance(m, s3.FactorMap) else [m]
+        return sum(math.prod((*p.map_shape, *p.x_shape, *p.y_shape)) for p in parts)
+
+    head = weights((s3.GRID, s3.GRID, s3.DEPTH_GRID), s3.HEAD_SHAPE)
+    torso = weights((s3.TORSO_GRID,) * 3, s3.TORSO_SHAPE)
+    assert box._map_weights() == (head, torso) == (24_192, 7_200)
+    assert box._job_memory() > 629e6
+
+
 def test_bad_design_scales_and_readout_are_refused_by_name():
     from sigmapi.errors import ConfigError
 

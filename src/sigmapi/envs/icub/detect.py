@@ -29,8 +29,8 @@ COLOURS = {"ball": (0, (1, 2)), "hand": (1, (0, 2))}
 ``others`` below 100 (the ball is drawn flat red, the marker flat green, ``emission=1``; the
 table, floor and hand are neither)."""
 MIN_PIXELS = {"ball": 6, "hand": 4}
-"""The fewest pixels of a valid detection, per target (64x64 frames: the ball covers about
-25-120 pixels on the table, the marker 6-15)."""
+"""The fewest pixels of a valid detection, per target (what the ball and the marker cover in
+a frame: docs/guide/icub.md)."""
 
 
 def mask(image: NDArray[Any], target: str) -> NDArray[np.bool_]:

@@ -67,8 +67,8 @@ EYE_HALF = 0.034
 """Half the distance between the eyes' rotation centres, metres (the model's, after iKin)."""
 EYE_LOW = np.radians([-35.0, -30.0, 4.0])
 """Low ends of the eyes' random commands: tilt, version, vergence (radians; the vergence
-spans the box's distances, 8-27 degrees fixated, with a margin of the disparities'
-:data:`FUSION` range)."""
+spans the box's distances, with a margin of the disparities' :data:`FUSION` range: the
+vergences of fixations are in docs/guide/icub-3d.md)."""
 EYE_HIGH = np.radians([10.0, 30.0, 20.0])
 """High ends of the eyes' random commands."""
 NECK_LOW = np.radians([-40.0, -8.0, -40.0])

@@ -22,16 +22,13 @@ import numpy as np
 
 from sigmapi.executor import Executor
 from sigmapi.experiments.base import run_all
+from sigmapi.experiments.icub import space3d as s3
 from sigmapi.experiments.icub.config import ICubConfig
 from sigmapi.experiments.icub.reach3d import METHODS, REACHABLE, run_seed3d
 from sigmapi.experiments.kit.results import Result
 from sigmapi.metrics import ORDERED_R2
 from sigmapi.progress import Progress
 
-BOX_GRID = 6
-"""Units per axis of the 3-D codes (both retinas, the eyes' and the neck's angles)."""
-BOX_MAP = (6, 6, 6)
-"""The grid of map H and map T."""
 TARGETS3D: dict[str, float] = {
     "learned_end_point_cm": 2.0,
     "learned_end_point_over_true": 1.5,
@@ -78,8 +75,6 @@ def _box_seed(job: _BoxJob) -> dict[str, Any]:
         balls=cfg.box_balls,
         yaw=cfg.babble_yaw,
         wrist=(cfg.babble_wrist[0], cfg.babble_wrist[1]),
-        grid=BOX_GRID,
-        map_shape=BOX_MAP,
         backend=cfg.backend,
         keep=True,
         film=job.film,
@@ -97,11 +92,35 @@ def _box_seed(job: _BoxJob) -> dict[str, Any]:
     return out
 
 
+def _map_weights() -> tuple[int, int]:
+    """The weights of map H and of map T as
+    :func:`~sigmapi.experiments.icub.space3d.learn_chain3d` builds them by default
+    (:data:`~sigmapi.experiments.icub.space3d.DESIGN`: one 1-D map per axis on two codes): map H
+    (:data:`~sigmapi.experiments.icub.space3d.HEAD_SHAPE`) on codes of
+    :data:`~sigmapi.experiments.icub.space3d.GRID` units (column and version, row and tilt)
+    and :data:`~sigmapi.experiments.icub.space3d.DEPTH_GRID` (disparity and vergence), map T
+    (:data:`~sigmapi.experiments.icub.space3d.TORSO_SHAPE`) on codes of
+    :data:`~sigmapi.experiments.icub.space3d.TORSO_GRID` units."""
+    head_codes = (s3.GRID, s3.GRID, s3.DEPTH_GRID)
+    head = sum(u * c * c for u, c in zip(s3.HEAD_SHAPE, head_codes, strict=True))
+    torso = sum(u * s3.TORSO_GRID**2 for u in s3.TORSO_SHAPE)
+    return head, torso
+
+
 def _job_memory() -> int:
-    """Bytes of one job (an upper estimate): two 6x6x6 maps on 216-unit codes (weights and
-    the trainer's state), the views' codes, the renderers (measured peak: about 0.7 GB)."""
-    units, n = int(np.prod(BOX_MAP)), BOX_GRID**3
-    return units * n * (n + units) * 8 * 3 + 400 * 2**20
+    """Bytes of one job, an upper estimate that schedules the jobs: the maps' weights
+    (:func:`_map_weights`, map T's once per fit, at most
+    :data:`~sigmapi.experiments.icub.space3d.MAX_RESTARTS`) in float64 three times over (the
+    weights, the trainer's state, a copy), and :data:`_JOB_REST` for the rest (the measured
+    peak: docs/guide/icub-3d.md)."""
+    head, torso = _map_weights()
+    return (head + s3.MAX_RESTARTS * torso) * 8 * 3 + _JOB_REST
+
+
+_JOB_REST = 768 * 2**20
+"""Bytes of one job besides the maps' weights (:func:`_job_memory`): the interpreter with
+NumPy and MuJoCo, the scene and both eyes' renderers, the views' codes, the babbles and the
+associations' states."""
 
 
 def run_box(

@@ -15,6 +15,8 @@ from sigmapi._outputs import OUTPUT
 from sigmapi.codes import _WIDTH_FIX, MIN_WIDTH
 from sigmapi.config import BACKEND_NAMES
 from sigmapi.envs.icub.frames import BALLS, PAIRS_PER_BALL
+from sigmapi.experiments.icub.maps import HEAD_WIDTH
+from sigmapi.experiments.icub.reaching import BABBLE_WRIST, BABBLE_YAW
 from sigmapi.experiments.kit.seeds import SeedPlan
 
 PLAN = SeedPlan({"views": 5, "babbling": 6, "reaches": 7, "servo": 8})
@@ -84,7 +86,8 @@ class ICubConfig:
     """What map 1 hands to map 2: "winner" (a code of its winner's place), "centroid" (of its
     response's centre of mass near the winner) or "response"."""
     head_width: float = field(
-        default=0.85, metadata=_validate.bounded("width", MIN_WIDTH, fix="map-1 units; e.g. 0.85")
+        default=HEAD_WIDTH,
+        metadata=_validate.bounded("width", MIN_WIDTH, fix=f"map-1 units; e.g. {HEAD_WIDTH}"),
     )
     """Width of the hill, map-1 units, of the code of map 1's place that map 2 reads
     (``head_code`` "winner" or "centroid":
@@ -96,17 +99,17 @@ class ICubConfig:
     directions."""
     frame_scenes: int = field(
         default=1000,
-        metadata=_validate.bounded("int", 1, 20_000, fix="e.g. 1000 (about 5 ms a frame)"),
+        metadata=_validate.bounded("int", 1, 20_000, fix="e.g. 1000"),
     )
     """Random scenes in which the rendered retina is compared with the exact projection."""
     babble_yaw: float = field(
-        default=0.8,
+        default=BABBLE_YAW,
         metadata=_validate.bounded("number", -0.65, 1.3, fix="the joint's range is -0.65 to 1.40"),
     )
     """The lowest shoulder yaw babbling draws, radians (the joint's range is -0.65 to 1.40:
     :data:`~sigmapi.experiments.icub.reaching.BABBLE_YAW`)."""
     babble_wrist: tuple[float, ...] = field(
-        default=(-0.6, -0.3),
+        default=BABBLE_WRIST,
         metadata=_validate.bounded("numbers", -1.39, 0.43, count=2, fix=_WRIST_FIX),
     )
     """The range (low, high) of the wrist's pitch that babbling draws from, radians (the
@@ -171,7 +174,8 @@ class ICubConfig:
     )
     """Kernel that learns and reads the maps ("auto": the fast one when it is installed)."""
     render: str | None = field(default=None, metadata=OUTPUT)
-    """Also write an animated GIF of the first seed's first learned reach to this file."""
+    """Also write an animated GIF of the first seed's first learned reach to this file: a
+    name ending in .gif (e.g. reach.gif)."""
 
     def __post_init__(self) -> None:
         _validate.check_fields(self)  # the bounds declared beside the fields

@@ -72,7 +72,9 @@ HEAD_WIDTH = 0.85
 """Width (map-1 units) of the hill of the code of map 1's place that map 2 reads
 (:meth:`ChainMaps.head`); the retina's, the eyes' and the neck's codes keep the config's
 ``code_width`` (1). Narrower hills lowered map 2's error and wider ones its order (chosen on
-the tuning seeds: ``docs/guide/icub.md``, where the settings come from)."""
+the tuning seeds: ``docs/guide/icub.md``, where the settings come from). In the 3-D task,
+map T of design ``"grid"`` reads map H's place with hills as wide
+(:mod:`~sigmapi.experiments.icub.space3d`)."""
 
 READOUT_RADIUS = 2.0
 """Units (map units on each axis, around the winner) whose response :meth:`ChainMaps.place`

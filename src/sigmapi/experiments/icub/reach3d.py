@@ -42,8 +42,7 @@ stops where it is at the first touch of the ball (the arm's touch: any contact o
 or forearm with the ball); :data:`SETTLE` seconds later it is scored:
 
 - **end-point error**: the distance from the palm's contact point ``C`` (the palm site: the
-  middle of the palm's surface, the vertices of the hand within 2 cm of it lie at most 1.6 mm
-  in front of it) to the surface of the ball where the experimenter put it:
+  middle of the palm's surface) to the surface of the ball where the experimenter put it:
   ``| |C - b| - R |`` (``b`` its centre, ``R`` its radius), centimetres;
 - **strict success**: the palm touched the ball (a contact of the hand whose point lies on
   the palm's side: at least :data:`PALM_SIDE` along the palm's normal from ``C``; the back
@@ -96,7 +95,8 @@ SETTLE = 0.05
 """Seconds the physics runs after the arm stopped, before the reach is scored."""
 PALM_SIDE = -0.01
 """A contact of the hand is the palm's when its point lies at least this far along the palm's
-normal from the palm's contact point (metres; the hand spans -0.039 to 0.012 along it)."""
+normal from the palm's contact point (metres; negative: behind it; how far the hand reaches
+either way: docs/guide/icub-3d.md)."""
 MOVED = 0.01
 """Strict success: the ball's centre moved less than this, metres."""
 START_ARM = (-0.52, 1.3, 0.0, 0.785, 0.0, 0.0, 0.0)
@@ -105,8 +105,8 @@ with the shoulder rolled out to 1.3 rad, the hand right of and above the box (th
 holds the hand inside the box, where the first leg swept balls away)."""
 BACK_OFF = (0.0, 0.0, -0.15, 0.0, 0.0, -0.35, 0.0)
 """The approach posture is the posture plus this (shoulder yaw and wrist pitch, radians): the
-palm some 4 cm back from the ball, against its facing; the last leg moves it forward onto
-the ball, palm first."""
+palm backed off from the ball, against its facing (how far: docs/guide/icub-3d.md); the last
+leg moves it forward onto the ball, palm first."""
 FOLLOW_THROUGH = 1.0
 """When the posture is reached untouched, the arm goes on the same way, this many
 :data:`BACK_OFF` past it, in :data:`APPROACH` seconds, until the first touch (0: it stops at
@@ -120,6 +120,9 @@ LEARNED_STATE = "soft"
 """The ``learned`` state by default (:data:`LEARNED_STATES`)."""
 TOUCH_DEPTH = 0.002
 """How far into the palm's skin the experimenter presses the ball while babbling, metres."""
+CODE_GRID = 6
+"""Units per axis of the 3-D population codes that the ``retina`` and ``retina_gaze`` states
+read (both eyes' pixels, the eyes' angles, the neck's) by default."""
 _FAR = (1.5, -1.5, 0.7)  # where the ball waits while the robot babbles (out of reach and view)
 _SEARCHES = 4  # head postures tried before a ball or a hand is given up
 _SEARCH_TRIES = 60  # eye commands per head posture
@@ -504,9 +507,9 @@ def run_seed3d(
     feature_width: float,
     yaw: float,
     wrist: tuple[float, float],
-    grid: int = 6,
+    grid: int = CODE_GRID,
     width: float = 1.0,
-    map_shape: tuple[int, int, int] = (6, 6, 6),
+    map_shape: tuple[int, int, int] = s3.TORSO_SHAPE,
     backend: str = "auto",
     keep: bool = False,
     learned_state: str = LEARNED_STATE,
@@ -520,9 +523,10 @@ def run_seed3d(
     first reach, eyes free (``"film"``,
     :func:`~sigmapi.experiments.icub.reaching.film_first`), and both eyes' frames of a
     view of its ball with the arm at the posture the chain reads from it (``"eyes"``,
-    :func:`shown_eyes`). ``grid``: units per axis of the retina's and the
-    gaze's codes that the associated methods read; ``map_shape``: map T's (the maps' other
-    settings :func:`~sigmapi.experiments.icub.space3d.learn_chain3d`'s defaults, the measured
+    :func:`shown_eyes`). ``grid``: units per axis of the retina's and the gaze's codes that
+    the associated methods read (:data:`CODE_GRID`); ``map_shape``: map T's
+    (:data:`~sigmapi.experiments.icub.space3d.TORSO_SHAPE`; the maps' other settings
+    :func:`~sigmapi.experiments.icub.space3d.learn_chain3d`'s defaults, the measured
     design); ``learned_state``: where the ``learned`` state's bump sits
     (:data:`LEARNED_STATES`); ``restarts``: fits of each part of map T (its ``restarts``);
     ``balls``: where the reach tests' balls are put (:data:`TEST_BALLS`)."""

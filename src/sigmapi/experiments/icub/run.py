@@ -317,17 +317,11 @@ class ICubExperiment(Experiment[ICubConfig]):
     config_type = ICubConfig
     quick = QUICK
     seeds = (123, 124, 125, 126, 127)
-    """The seeds of the acceptance run: none of them was tuned on (tuning used seeds 0-2; seeds
-    100-104 measured the settings before the learning rate of the ``icub-2d`` preset, seeds
-    105-109 those before the centroid readout of map 2, ``ICubConfig.readout``, seeds 110-114
-    those before the bent wrist in babbling,
-    :data:`~sigmapi.experiments.icub.reaching.BABBLE_WRIST`, and map 2's narrower code of map
-    1's place, :data:`~sigmapi.experiments.icub.maps.HEAD_WIDTH`; seeds 115-119 and the check on
-    120-122 measured today's settings before map 2's reference fed an exact map 1,
-    :func:`~sigmapi.experiments.icub.maps.exact_map1`, which changes no setting)."""
+    """The seeds of the acceptance run: none of them was tuned on (the tuning seeds are 0-2;
+    the seeds earlier versions were checked on: docs/results/icub-history.md)."""
     quick_seeds = (0,)
-    quick_time = "about 2 min on two quiet cores, 2-3 min on two busy ones"
     """The seed of ``--quick``: a tuning seed."""
+    quick_time = "about 2 min on two quiet cores, 2-3 min on two busy ones"
     extra = "robot"
     default_out = "icub"
 

@@ -18,18 +18,18 @@ high within the right arm's reach, in the air, seen by both eyes.
   and the eyes find the ball again: the pair shares the torso-centred position.
 
 Each map is one of :data:`DESIGNS` (:func:`learn_chain3d`): ``"grid"``, one 3-D Sigma-Pi map
-(``map_shape``, e.g. 6x6x6) on 3-D population codes of both inputs (map T's first code a
-hill :data:`HEAD_WIDTH` wide at map H's place on its grid); ``"factorised"``, a
-:class:`FactorMap` of a 2-D direction map (column and row with version and tilt; map T: map
-H's direction place with the neck's yaw and pitch) and a 1-D distance map (disparity with
-vergence; map T: map H's distance place with the neck's pitch); ``"axes"``, a
+(``map_shape``, e.g. 6x6x6) on 3-D population codes of both inputs (map T's first code a hill
+:data:`~sigmapi.experiments.icub.maps.HEAD_WIDTH` wide at map H's place on its grid);
+``"factorised"``, a :class:`FactorMap` of a 2-D direction map (column and row with version and
+tilt; map T: map H's direction place with the neck's yaw and pitch) and a 1-D distance map
+(disparity with vergence; map T: map H's distance place with the neck's pitch); ``"axes"``, a
 :class:`FactorMap` of three 1-D maps, one per axis, each on the pair of variables whose sum
-that axis is (map T: the azimuth with the neck's yaw, the elevation and the distance with
-its pitch). The codes span the commands' ranges or the sensed ones (:data:`SCALES`); map T
-reads map H's place as its winner's grid coordinates or moved between units by the scores
-(:data:`READOUTS`). Each part of map T is fitted :data:`RESTARTS` times from seeds spawned
-from its own, and the fit with the lowest fold score on map T's own training pairs (the
-robot's codes of both views, no truth) kept: :func:`learn_chain3d`'s ``restarts``.
+that axis is (map T: the azimuth with the neck's yaw, the elevation and the distance with its
+pitch). The codes span the commands' ranges or the sensed ones (:data:`SCALES`); map T reads
+map H's place as its winner's grid coordinates or moved between units by the scores
+(:data:`READOUTS`). Each part of map T is fitted :data:`RESTARTS` times from seeds spawned from
+its own, and the fit with the lowest fold score on map T's own training pairs (the robot's
+codes of both views, no truth) kept: :func:`learn_chain3d`'s ``restarts``.
 
 Every learning input is read from the pixels (:func:`~sigmapi.envs.icub.stereo.see_both`)
 and the joint angles, on a sealed scene; the simulator's truth gives only the labels
@@ -62,7 +62,13 @@ from sigmapi.codes import PopulationCode, grid_coordinates
 from sigmapi.envs.icub import ICubScene
 from sigmapi.envs.icub import stereo as st
 from sigmapi.errors import ConfigError
-from sigmapi.experiments.icub.maps import Extra, quantiser_scores, som_config, unit_rows
+from sigmapi.experiments.icub.maps import (
+    HEAD_WIDTH,
+    Extra,
+    quantiser_scores,
+    som_config,
+    unit_rows,
+)
 from sigmapi.metrics import (
     EVAL_SEED,
     FOLD_THRESHOLD,
@@ -80,13 +86,13 @@ Array = NDArray[np.float64]
 DISPARITY = st.FUSION
 """Half the range of horizontal disparities the retina's code spans, pixels (``u_left -
 u_right`` within the fusion range, :data:`~sigmapi.envs.icub.stereo.FUSION`)."""
-HEAD_WIDTH = 0.85
-"""Width (map-H units) of the hill of map H's place code that map T reads."""
 SENSED_PERCENT = 1.0
 """The percentile at either end of a sensed variable's range that :func:`sensed_scales`
 spans (the outer 1 % of the views clipped to the ends)."""
-PAIRS_PER_BALL = 2
-"""View pairs recorded per placed ball (each from a new head posture)."""
+PAIRS_PER_BALL_3D = 2
+"""View pairs recorded per ball put in the box (each from a new head posture): the 3-D
+task's own setting, apart from the table's :data:`~sigmapi.envs.icub.frames.PAIRS_PER_BALL`
+(``--pairs-per-ball``, which the box does not read)."""
 DESIGN = "axes"
 """The maps' design by default (:data:`DESIGNS`; chosen on seeds 0 and 1,
 docs/guide/icub-3d.md)."""
@@ -96,7 +102,10 @@ DEPTH_GRID = 24
 """Units of map H's disparity and vergence codes by default."""
 HEAD_SHAPE = (18, 18, 6)
 """Map H's shape by default (its azimuth, elevation and distance maps' units): finer than map
-T's (6x6x6) along the directions, so that a unit of map T spans more than one of map H."""
+T's (:data:`TORSO_SHAPE`) along the directions, so that a unit of map T spans more than one
+of map H."""
+TORSO_SHAPE = (6, 6, 6)
+"""Map T's shape by default (its azimuth, elevation and distance maps' units)."""
 TORSO_GRID = 20
 """Units per axis of map T's codes by default (of map H's place and of the neck's angles)."""
 READOUT = "soft"
@@ -184,7 +193,7 @@ def record_pairs(
     while len(first) < n:
         p = st.random_point(rng, 1)[0]
         st.place_ball(scene, p)
-        for _ in range(PAIRS_PER_BALL):
+        for _ in range(PAIRS_PER_BALL_3D):
             a = _look(scene, rng)
             if a is None or len(first) >= n:
                 break
@@ -401,7 +410,8 @@ class Chain3D:
         return soft_place(m, *inputs)
 
     def inputs_t(self, v: Views3D) -> Any:
-        """Map T's codes of views ``v``: map H's place (hills :data:`HEAD_WIDTH` wide) and
+        """Map T's codes of views ``v``: map H's place (hills
+        :data:`~sigmapi.experiments.icub.maps.HEAD_WIDTH` wide) and
         the neck's yaw, pitch and roll; of a :class:`FactorMap` one pair per part: map H's
         place on the part's axes with the neck's yaw for the azimuth and its pitch for the
         elevation and the distance."""
@@ -560,7 +570,7 @@ def learn_chain3d(
     eye_size: int,
     grid: int = GRID,
     width: float = 1.0,
-    map_shape: tuple[int, int, int] = (6, 6, 6),
+    map_shape: tuple[int, int, int] = TORSO_SHAPE,
     iterations: int = ITERATIONS,
     backend: str = "auto",
     design: str = DESIGN,
