@@ -518,7 +518,7 @@ def _train_stream(
             for k in range(k_units):
                 if ea[k] > thr:
                     lo = min(lo, k)
-                    hi = k + 1
+                    hi = np.int64(k + 1)
             n1 = n
         else:
             for k in range(k_units):
