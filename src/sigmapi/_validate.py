@@ -239,6 +239,8 @@ class Bounds:
     why: str = ""
     """Why a number has no upper bound (``hi`` None), where it has none: a size that drives
     the work has one (tests/cli/test_hostile_round5.py walks every experiment's config)."""
+    exact: bool = False
+    """A tuple takes exactly :attr:`count` values, not at most (e.g. a 2-D map's shape)."""
 
     def describe(self) -> str:
         """``"an int >= 1"``, ``"a number in (0, 1]"``, ``"one of 'a', 'b'"``, ..."""
@@ -253,7 +255,8 @@ class Bounds:
         elif self.kind in ("ints", "numbers"):
             kind = "an int" if self.kind == "ints" else "a number"
             one = _range(kind, self.lo, self.hi, self.lo_open, self.hi_open)
-            text = f"up to {self.count} values, each {one}"
+            many = "exactly" if self.exact else "up to"
+            text = f"{many} {self.count} values, each {one}"
         else:
             text = "one of " + ", ".join(repr(o) for o in self.options)
         text = f"{text}, or None" if self.none else text
@@ -285,9 +288,10 @@ class Bounds:
         if isinstance(value, (str, bytes, Mapping)) or not isinstance(value, Iterable):
             raise fail(name, self.describe(), value, self.fix)
         items = tuple(value)
-        if len(items) > self.count:
-            shown = f"{len(items):,} values"
-            raise fail(name, f"at most {self.count} values", shown, self.fix)
+        if len(items) > self.count or (self.exact and len(items) != self.count):
+            shown = f"{len(items):,} value" + ("" if len(items) == 1 else "s")
+            many = "exactly" if self.exact else "at most"
+            raise fail(name, f"{many} {self.count} values", shown, self.fix)
         kind = "int" if self.kind == "ints" else "number"
         one = Bounds(kind, self.lo, self.hi, self.lo_open, self.hi_open, self.fix)
         return tuple(one.check(name, v) for v in items)
@@ -305,6 +309,7 @@ def bounded(
     none: bool = False,
     count: int = MAX_ITEMS,
     why: str = "",
+    exact: bool = False,
     **more: object,
 ) -> Mapping[str, object]:
     """Field metadata declaring :class:`Bounds`: ``episodes: int = field(default=600,
@@ -314,7 +319,7 @@ def bounded(
     if kind not in KINDS:
         raise ValueError(f"bounds are of a kind in {KINDS}, got {kind!r}")
     return {
-        "bounds": Bounds(kind, lo, hi, lo_open, hi_open, fix, options, none, count, why),
+        "bounds": Bounds(kind, lo, hi, lo_open, hi_open, fix, options, none, count, why, exact),
         **more,
     }
 

@@ -438,8 +438,10 @@ def test_association_checks_its_input():
 def test_config_rejects_bad_values():
     from sigmapi.experiments.icub.config import ICubConfig
 
-    with pytest.raises(ConfigError, match="map_shape"):
+    with pytest.raises(ConfigError, match="map_shape must be exactly 2 values"):
         ICubConfig(map_shape=(8,))
+    with pytest.raises(ConfigError, match="babble_wrist must be exactly 2 values"):
+        ICubConfig(babble_wrist=(-0.6, -0.5, -0.3))
     with pytest.raises(ConfigError, match="head_code"):
         ICubConfig(head_code="mean")
     with pytest.raises(ConfigError, match="render"):

@@ -58,7 +58,8 @@ class ICubConfig:
     )
     """Width of the codes' hills, grid units."""
     map_shape: tuple[int, ...] = field(
-        default=(8, 8), metadata=_validate.bounded("ints", 1, 64, count=2, fix="e.g. 8x8")
+        default=(8, 8),
+        metadata=_validate.bounded("ints", 1, 64, count=2, exact=True, fix="e.g. 8x8"),
     )
     """Grid of each Sigma-Pi map (map 1 and map 2)."""
     train_pairs: int = field(
@@ -110,7 +111,7 @@ class ICubConfig:
     :data:`~sigmapi.experiments.icub.reaching.BABBLE_YAW`)."""
     babble_wrist: tuple[float, ...] = field(
         default=BABBLE_WRIST,
-        metadata=_validate.bounded("numbers", -1.39, 0.43, count=2, fix=_WRIST_FIX),
+        metadata=_validate.bounded("numbers", -1.39, 0.43, count=2, exact=True, fix=_WRIST_FIX),
     )
     """The range (low, high) of the wrist's pitch that babbling draws from, radians (the
     joint's range is -1.396 to 0.436: :data:`~sigmapi.experiments.icub.reaching.BABBLE_WRIST`;
@@ -179,10 +180,6 @@ class ICubConfig:
 
     def __post_init__(self) -> None:
         _validate.check_fields(self)  # the bounds declared beside the fields
-        if len(self.map_shape) != 2:
-            raise _validate.fail(
-                "map_shape", "2 axes (a direction is 2-D)", self.map_shape, "e.g. 8x8"
-            )
         object.__setattr__(self, "babble_wrist", _wrist_range(self.babble_wrist))
         if self.render is not None and not str(self.render).lower().endswith(".gif"):
             raise _validate.fail("render", "a file name ending in .gif", self.render)
