@@ -150,6 +150,36 @@ def test_the_gym_id_observes_what_the_eye_sees_with_the_truth_sealed(rendering):
         env.close()
 
 
+def test_a_reset_whose_eyes_find_no_ball_gives_up_in_one_line(rendering, monkeypatch):
+    """Frames that never show the ball (a broken renderer) end the reset after
+    :data:`PLACEMENTS` balls, for either id, instead of a search that never ends."""
+    import gymnasium as gym
+
+    import sigmapi  # noqa: F401  # registers the ids
+    from sigmapi.envs.icub import env as env2d
+    from sigmapi.experiments.icub import env3d
+
+    tried: list[int] = []
+
+    def blind(mark: int) -> Any:
+        def search(*args: Any, **kwargs: Any) -> None:
+            tried.append(mark)
+            assert len(tried) < 100, "the reset searched on and on"  # the old loop never ended
+
+        return search
+
+    monkeypatch.setattr(env2d, "search", blind(1))
+    monkeypatch.setattr(env3d, "look", blind(3))
+    for name in ("sigmapi/ICubReach-v0", "sigmapi/ICubReach3D-v0"):
+        env = gym.make(name)
+        try:
+            with pytest.raises(RuntimeError, match="found none of 20 balls"):
+                env.reset(seed=0)
+        finally:
+            env.close()
+    assert tried == [1] * env2d.PLACEMENTS + [3] * env2d.PLACEMENTS
+
+
 def test_rendered_retina_agrees_with_the_projection(rendering):
     from sigmapi.envs.icub.frames import direction_ball
 

@@ -39,12 +39,24 @@ from sigmapi.envs.icub.reach import physical_reach
 from sigmapi.envs.icub.scene import EYE_SIZE, GAZE, ICubScene
 from sigmapi.errors import ConfigError
 
-__all__ = ["ENV_ID", "ArmAction", "ICubReachEnv"]
+__all__ = ["ENV_ID", "PLACEMENTS", "ArmAction", "ICubReachEnv", "nothing_seen"]
 
 ENV_ID = "sigmapi/ICubReach-v0"
 """The environment's Gymnasium id (registered by ``import sigmapi``)."""
 
 Obs = dict[str, NDArray[np.float32]]
+
+PLACEMENTS = 20
+"""Balls the experimenter puts at ``reset`` (each looked for by the robot) before the reset
+gives up with a RuntimeError: the eyes finding none at all means the frames show no ball."""
+
+
+def nothing_seen(n: int) -> RuntimeError:
+    """The reset's error when the eyes found none of ``n`` balls put in view."""
+    return RuntimeError(
+        f"the eyes found none of {n} balls put within view: the rendered frames show no ball "
+        "(check the renderer, e.g. MUJOCO_GL=egl, with env.unwrapped.render_eyes())"
+    )
 
 
 class ArmAction:
@@ -144,7 +156,7 @@ class ICubReachEnv(ArmAction, gym.Env[Obs, NDArray[np.float32]]):
             gaze = self._check_gaze(gaze)
         super().reset(seed=seed)
         s, rng = self.scene, self.np_random
-        while True:
+        for _ in range(PLACEMENTS):
             s.reset()
             s.set_ball(random_ball(rng, 1, REACH_REGION)[0] if ball is None else ball)
             if gaze is not None:
@@ -160,6 +172,8 @@ class ICubReachEnv(ArmAction, gym.Env[Obs, NDArray[np.float32]]):
                     f"options['ball'] must be a place the right eye can find, got "
                     f"{np.round(ball, 4).tolist()}; another place on the table"
                 )
+        else:
+            raise nothing_seen(PLACEMENTS)
         s.hold()
         return self._obs(), self._info()
 

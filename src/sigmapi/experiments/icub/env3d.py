@@ -28,7 +28,7 @@ from numpy.typing import NDArray
 
 from sigmapi.envs.checks import check_action, check_options, check_vector
 from sigmapi.envs.icub import stereo as st
-from sigmapi.envs.icub.env import ArmAction
+from sigmapi.envs.icub.env import PLACEMENTS, ArmAction, nothing_seen
 from sigmapi.envs.icub.scene import EYE_SIZE, ICubScene
 from sigmapi.errors import ConfigError
 from sigmapi.experiments.icub.reach3d import look, reach3d
@@ -105,7 +105,7 @@ class ICubReach3DEnv(ArmAction, gym.Env[Obs, NDArray[np.float32]]):
             )
         super().reset(seed=seed)
         s, rng = self.scene, self.np_random
-        while True:
+        for _ in range(PLACEMENTS):
             s.reset()
             p = st.random_point(rng, 1)[0] if ball is None else ball
             st.place_ball(s, p)
@@ -117,6 +117,8 @@ class ICubReach3DEnv(ArmAction, gym.Env[Obs, NDArray[np.float32]]):
                     f"options['ball'] must be a point both eyes can find, got "
                     f"{np.round(ball, 4).tolist()}; another point of the box"
                 )
+        else:
+            raise nothing_seen(PLACEMENTS)
         return self._obs(), self._info()
 
     def _info(self) -> dict[str, object]:
