@@ -58,6 +58,17 @@ def test_a_touch_counts_as_the_palms_only_on_the_palms_side():
     assert r3._contacts(scene) == (False, False)
 
 
+def test_the_palms_middle_is_a_patch_across_the_palm_not_along_its_normal():
+    from sigmapi.envs.icub.model import HOME_ARM
+
+    scene = _scene()
+    scene.set_arm(HOME_ARM)
+    c, r = _palm_frame(scene)
+    n, across = r[:, 2], r[:, 0]
+    points = np.array([c + 0.02 * n, c - 0.03 * n, c + 0.02 * across, c + 0.04 * across])
+    assert scene.palm_patch(points, 0.03).tolist() == [True, True, True, False]
+
+
 def test_the_skin_feels_the_ball_on_the_palm_apart_from_the_rest_of_the_arm():
     from sigmapi.envs.icub import stereo as st
     from sigmapi.envs.icub.model import BALL_RADIUS, HOME_ARM
@@ -179,6 +190,18 @@ def test_babbling_and_reaching_in_3d_read_no_truth_outside_the_scores():
             seen_at = st.torso_position(scene, r3._touch_point(scene))
             assert np.linalg.norm(seen_at - t) < 0.005
     assert np.all(np.isfinite(bab.views.left)) and np.all(np.isfinite(bab.views.torso))
+    # swept: the arm moves into a ball held anywhere in the box; no truth read but its place
+    swept = r3.babble3d(scene, 6, rng, yaw=0.8, wrist=(-0.6, -0.3), how="swept")
+    assert swept.posture.shape == (6, 7) and swept.tried >= 6
+    with scene.truth():  # each kept posture is the palm's first touch of the ball it saw
+        for q, t in zip(swept.posture, swept.views.torso, strict=True):
+            st.place_ball(scene, st.torso_to_world(scene, t))
+            scene.set_arm(q)
+            assert scene.skin(r3.PALM_SIDE, r3.PALM_PATCH) == (True, False)
+            centre = np.linalg.norm(scene.palm_position() - st.torso_to_world(scene, t))
+            assert centre < 0.05  # the ball on the palm's middle, not on the fingers
+    with pytest.raises(ConfigError, match="babbling"):
+        r3.babble3d(scene, 1, rng, yaw=0.8, wrist=(-0.6, -0.3), how="thrown")
     eyes = s3.record_pairs(scene, 20, rng, "eyes")
     head = s3.record_pairs(scene, 20, rng, "head")
     # tiny maps, each size given (the defaults are the measured design's)

@@ -392,15 +392,28 @@ class ICubScene:
         c, r = self.data.site_xpos[self._palm], self.data.site_xmat[self._palm].reshape(3, 3)
         return np.asarray((np.asarray(points) - c) @ r[:, 2] >= side)
 
-    def skin(self, side: float) -> tuple[bool, bool]:
+    def palm_patch(self, points: ArrayLike, radius: float) -> NDArray[np.bool_]:
+        """Whether contact points ``(k, 3)`` lie within ``radius`` metres of the palm's contact
+        point across the palm (their distance from its normal through that point): the
+        taxels of the palm's middle, as against the fingers'."""
+        c, r = self.data.site_xpos[self._palm], self.data.site_xmat[self._palm].reshape(3, 3)
+        d = np.asarray(points) - c
+        across = d - np.outer(d @ r[:, 2], r[:, 2])
+        return np.asarray(np.linalg.norm(across, axis=1) <= radius)
+
+    def skin(self, side: float, patch: float | None = None) -> tuple[bool, bool]:
         """The arm's touch sensors, the arm where it is set: (the palm's skin touches the
         ball, any other part of the arm touches anything); the palm's skin is the hand's
-        contacts with the ball on the palm's side (:meth:`palm_side`); the contacts are found
-        again from the pose (``mj_collision``)."""
+        contacts with the ball on the palm's side (:meth:`palm_side`) and, with ``patch``,
+        within ``patch`` metres of the palm's middle (:meth:`palm_patch`); the contacts are
+        found again from the pose (``mj_collision``)."""
         g1, g2, on_arm = self._arm_contacts()
         b, n = self._ball_geom, len(g1)
         on_ball = ((g1 == b) & self._hand[g2]) | ((g2 == b) & self._hand[g1])
-        palm = on_ball & self.palm_side(self.data.contact.pos[:n], side)
+        points = self.data.contact.pos[:n]
+        palm = on_ball & self.palm_side(points, side)
+        if patch is not None:
+            palm &= self.palm_patch(points, patch)
         other = on_arm & ~palm
         return bool(np.any(palm)), bool(np.any(other))
 

@@ -73,6 +73,7 @@ def _box_seed(job: _BoxJob) -> dict[str, Any]:
         feature_width=cfg.box_feature_width,
         restarts=cfg.box_restarts,
         balls=cfg.box_balls,
+        babbling=cfg.box_babbling,
         yaw=cfg.babble_yaw,
         wrist=(cfg.babble_wrist[0], cfg.babble_wrist[1]),
         backend=cfg.backend,

@@ -35,6 +35,17 @@ TEST_BALLS = ("reachable", "box")
 1 cm, :data:`~sigmapi.experiments.icub.reach3d.REACHABLE`) or "box" (uniform in the box,
 every one, the far corners beyond the arm included)."""
 
+BABBLINGS = ("offered", "swept")
+"""How a 3-D babble meets its ball (:attr:`ICubConfig.box_babbling`,
+:func:`~sigmapi.experiments.icub.reach3d.babble3d`): "offered" (the arm takes a random
+posture; where its palm lies where balls are met, the experimenter presses a ball onto it, a
+choice that reads the palm's true place) or "swept" (the experimenter holds a ball at a random
+point of the box; the arm moves from the reach's start toward a random posture and stops at
+its first touch: no truth read but the ball's place). Either way the skin and both eyes keep
+it."""
+BABBLING = "offered"
+"""How 3-D babbles meet their balls by default (:data:`BABBLINGS`)."""
+
 HEAD_CODES = ("winner", "centroid", "response")
 """What map 1 can hand to map 2 (:meth:`~sigmapi.experiments.icub.maps.ChainMaps.head`)."""
 READOUTS = ("centroid", "winner")
@@ -163,6 +174,13 @@ class ICubConfig:
     """Fits of each part of map T, each kept by its own fold score on the robot's view pairs
     (``space`` "box"; :func:`~sigmapi.experiments.icub.space3d.learn_chain3d`'s
     ``restarts``; 1: one fit)."""
+    box_babbling: str = field(
+        default=BABBLING, metadata=_validate.bounded("choice", options=BABBLINGS)
+    )
+    """How the 3-D task's babbles meet their balls (``space`` "box"): "offered" (the
+    experimenter presses a ball onto the palm where the palm lies in the box) or "swept" (the
+    arm sweeps toward a random posture into a ball held at a random point of the box, kept at
+    the palm's first touch)."""
     box_balls: str = field(
         default="reachable", metadata=_validate.bounded("choice", options=TEST_BALLS)
     )

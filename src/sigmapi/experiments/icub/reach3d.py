@@ -74,7 +74,7 @@ from sigmapi.envs.icub import ICubScene, arm_ik
 from sigmapi.envs.icub import stereo as st
 from sigmapi.envs.icub.model import BALL_RADIUS
 from sigmapi.experiments.icub import space3d as s3
-from sigmapi.experiments.icub.config import PLAN, TEST_BALLS
+from sigmapi.experiments.icub.config import BABBLING, BABBLINGS, PLAN, TEST_BALLS
 from sigmapi.experiments.icub.maps import unit_rows
 from sigmapi.experiments.icub.reaching import _BABBLED, _WRIST, _YAW, eye_frames, film_first
 from sigmapi.metrics import z_decoder
@@ -119,7 +119,16 @@ association can interpolate."""
 LEARNED_STATE = "soft"
 """The ``learned`` state by default (:data:`LEARNED_STATES`)."""
 TOUCH_DEPTH = 0.002
-"""How far into the palm's skin the experimenter presses the ball while babbling, metres."""
+"""How far into the palm's skin the experimenter presses the ball while babbling ("offered"),
+metres."""
+PALM_PATCH = 0.03
+"""A swept babble is kept only when the ball touches the palm within this many metres of the
+palm's middle (:meth:`~sigmapi.envs.icub.ICubScene.palm_patch`: the palm's taxels, not the
+fingers')."""
+SWEEP_STEPS = 30
+"""Steps of a babbling sweep from :data:`START_ARM` to its random posture ("swept")."""
+SWEEP_HALVINGS = 5
+"""Halvings of the step in which a sweep first touched, to find the posture of the touch."""
 CODE_GRID = 6
 """Units per axis of the 3-D population codes that the ``retina`` and ``retina_gaze`` states
 read (both eyes' pixels, the eyes' angles, the neck's) by default."""
@@ -171,9 +180,13 @@ def babble3d(
     *,
     yaw: float,
     wrist: tuple[float, float],
+    how: str = BABBLING,
 ) -> Babbles3D:
     """``n`` babbles (the module's account), the shoulder's yaw drawn from ``yaw`` to its
-    upper limit and the wrist's pitch from ``wrist``; the scene's arm goes back to rest."""
+    upper limit and the wrist's pitch from ``wrist``, ``how`` as
+    :data:`~sigmapi.experiments.icub.config.BABBLINGS` says; the scene's arm goes back to
+    rest."""
+    s3._check_choice("babbling", how, BABBLINGS)
     lo, hi = scene.arm_range.T.copy()
     lo[_YAW] = max(lo[_YAW], yaw)
     lo[_WRIST], hi[_WRIST] = wrist
@@ -184,19 +197,28 @@ def babble3d(
     tried = 0
     while len(postures) < n:
         tried += 1
-        st.place_ball(scene, _FAR)
         q = np.zeros(7)
         q[idx] = rng.uniform(lo[idx], hi[idx])
-        scene.set_arm(q)
-        if scene.arm_touches():
-            continue
-        with scene.truth():  # the experimenter presses the ball against the palm
-            p = _touch_point(scene, TOUCH_DEPTH)
-        if np.any((p < st.BOX[:, 0]) | (p > st.BOX[:, 1])):  # where balls are met only
-            continue
-        st.place_ball(scene, p)
-        palm, other = scene.skin(PALM_SIDE)
-        if not palm or other:  # kept by the skin: the palm alone feels the ball
+        if how == "offered":
+            st.place_ball(scene, _FAR)
+            scene.set_arm(q)
+            if scene.arm_touches():
+                continue
+            with scene.truth():  # the experimenter presses the ball against the palm
+                p = _touch_point(scene, TOUCH_DEPTH)
+            if np.any((p < st.BOX[:, 0]) | (p > st.BOX[:, 1])):  # where balls are met only
+                continue
+            st.place_ball(scene, p)
+        else:  # the experimenter holds a ball anywhere in the box; the arm sweeps into it
+            p = st.random_point(rng, 1)[0]
+            st.place_ball(scene, p)
+            touch = _sweep(scene, np.asarray(START_ARM), q)
+            if touch is None:
+                continue
+            q = touch
+        # kept by the skin: the palm alone feels the ball (swept: the palm's middle)
+        palm, other = scene.skin(PALM_SIDE, None if how == "offered" else PALM_PATCH)
+        if not palm or other:
             continue
         seen = look(scene, rng, "ball")
         if seen is None:
@@ -206,6 +228,30 @@ def babble3d(
     scene.reset()
     cols = [np.array(c, dtype=np.float64) for c in zip(*rows, strict=True)]
     return Babbles3D(np.array(postures), s3.Views3D(*cols), tried)
+
+
+def _sweep(scene: ICubScene, start: Array, goal: Array) -> Array | None:
+    """The arm moved from ``start`` toward ``goal`` (joint space, a straight line) until its
+    first touch (:meth:`~sigmapi.envs.icub.ICubScene.skin`: anything the arm feels), in
+    :data:`SWEEP_STEPS` steps and then halved :data:`SWEEP_HALVINGS` times between the last
+    step untouched and the first touched: the posture of the first touch, the arm left there;
+    None if nothing was touched or the start already touches."""
+
+    def touches(s: float) -> bool:
+        scene.set_arm(start + s * (goal - start))
+        return any(scene.skin(PALM_SIDE))
+
+    if touches(0.0):
+        return None
+    for k in range(1, SWEEP_STEPS + 1):
+        if touches(k / SWEEP_STEPS):
+            a, b = (k - 1) / SWEEP_STEPS, k / SWEEP_STEPS
+            for _ in range(SWEEP_HALVINGS):
+                mid = 0.5 * (a + b)
+                a, b = (a, mid) if touches(mid) else (mid, b)
+            touches(b)  # the arm at the first touch
+            return start + b * (goal - start)
+    return None
 
 
 @dataclass
@@ -516,6 +562,7 @@ def run_seed3d(
     film: bool = False,
     restarts: int = s3.RESTARTS,
     balls: str = "reachable",
+    babbling: str = BABBLING,
 ) -> dict[str, Any]:
     """One seed of the 3-D task: the maps recorded, learned and scored; babbling; the
     associations; the reaches eyes free and fixated, summarised; ``keep``: also the raw
@@ -529,7 +576,8 @@ def run_seed3d(
     :func:`~sigmapi.experiments.icub.space3d.learn_chain3d`'s defaults, the measured
     design); ``learned_state``: where the ``learned`` state's bump sits
     (:data:`LEARNED_STATES`); ``restarts``: fits of each part of map T (its ``restarts``);
-    ``balls``: where the reach tests' balls are put (:data:`TEST_BALLS`)."""
+    ``balls``: where the reach tests' balls are put (:data:`TEST_BALLS`); ``babbling``: how
+    babbles meet their balls (:data:`BABBLINGS`)."""
     t0 = time.perf_counter()
     r_views, r_babble, r_reach = (PLAN.rng(seed, s) for s in ("views", "babbling", "reaches"))
     scene, train, ev = s3.record_box(r_views, pairs, eval_pairs)
@@ -547,8 +595,8 @@ def run_seed3d(
     maps = s3.score_chain(chain, train, ev, iterations, seed)
     units = unit_positions(chain, ev) if film else None
     t_maps = time.perf_counter() - t0
-    bab = babble3d(scene, babbles, r_babble, yaw=yaw, wrist=wrist)
-    held = babble3d(scene, max(50, babbles // 10), r_babble, yaw=yaw, wrist=wrist)
+    bab = babble3d(scene, babbles, r_babble, yaw=yaw, wrist=wrist, how=babbling)
+    held = babble3d(scene, max(50, babbles // 10), r_babble, yaw=yaw, wrist=wrist, how=babbling)
     feats = features3d(scene, chain, grid, width, feature_width, learned_state)
     layers = {}
     for method in ASSOCIATED:
