@@ -15,7 +15,11 @@ the robot senses: its skin (:meth:`~sigmapi.envs.icub.ICubScene.skin`: the palm 
 ball, no other part of the arm feels anything) and both eyes find the ball (random head
 postures and eye commands, :func:`look`). A babble is the posture and both eyes' view of the
 ball on its palm (its pixels and the gaze); the ball's true place is kept as the labels of the
-references.
+references. That is babbling "offered"; in "swept" (``babbling``,
+:data:`~sigmapi.experiments.icub.config.BABBLINGS`) the experimenter only holds a ball at a
+random point of the box, the arm sweeps from :data:`START_ARM` toward a random posture until
+its first touch (:func:`_sweep`), and the skin keeps the posture when the palm's middle
+(:data:`PALM_PATCH`) alone feels the ball.
 
 **The states** (:data:`ASSOCIATED`), each associated with the postures by an
 :class:`~sigmapi.agents.Association` trained on the same babbles:
@@ -422,8 +426,7 @@ def _reachable(scene: ICubScene, rng: np.random.Generator) -> Array:
 
 def _test_ball(scene: ICubScene, rng: np.random.Generator, balls: str) -> Array:
     """One test ball's centre (world metres) drawn as :data:`TEST_BALLS` ``balls`` says."""
-    if balls not in TEST_BALLS:
-        raise ValueError(f"balls must be one of {TEST_BALLS}, got {balls!r}")
+    s3._check_choice("balls", balls, TEST_BALLS)
     return _reachable(scene, rng) if balls == "reachable" else st.random_point(rng, 1)[0]
 
 
@@ -436,8 +439,8 @@ class ReachTests3D:
     fixated: NDArray[np.bool_]
     """Per ball, whether the fixation converged (else the fixated state is the free one)."""
     ik_error: Array = field(default_factory=lambda: np.zeros(0))
-    """Per ball, where the scripted IK's posture rests a ball on the palm from the ball's
-    centre (metres, the kinematics); under :data:`REACHABLE`: a reachable ball."""
+    """Per ball, the distance (metres) from its centre to where the scripted IK's posture
+    would rest a ball on the palm (the kinematics); under :data:`REACHABLE`: reachable."""
     end_point: dict[str, dict[str, Array]] = field(default_factory=dict)
     strict: dict[str, dict[str, NDArray[np.bool_]]] = field(default_factory=dict)
     touched: dict[str, dict[str, NDArray[np.bool_]]] = field(default_factory=dict)
