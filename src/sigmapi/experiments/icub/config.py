@@ -34,6 +34,8 @@ TEST_BALLS = ("reachable", "box")
 "reachable" (uniform in the box, kept when the scripted IK rests the ball on the palm within
 1 cm, :data:`~sigmapi.experiments.icub.reach3d.REACHABLE`) or "box" (uniform in the box,
 every one, the far corners beyond the arm included)."""
+TEST_BALL = "reachable"
+"""Where the 3-D reach tests' balls are put by default (:data:`TEST_BALLS`)."""
 
 BABBLINGS = ("offered", "swept")
 """How a 3-D babble meets its ball (:attr:`ICubConfig.box_babbling`,
@@ -182,12 +184,12 @@ class ICubConfig:
     arm sweeps toward a random posture into a ball held at a random point of the box, kept at
     the palm's first touch)."""
     box_balls: str = field(
-        default="reachable", metadata=_validate.bounded("choice", options=TEST_BALLS)
+        default=TEST_BALL, metadata=_validate.bounded("choice", options=TEST_BALLS)
     )
     """Where the experimenter puts the 3-D reach tests' balls (``space`` "box"): "reachable"
     (uniform in the box, kept when the scripted IK rests the ball on the palm within 1 cm) or
-    "box" (uniform in the box, every one; the JSON's ``balls`` then also pools the reaches to
-    the reachable ones)."""
+    "box" (uniform in the box, every one); the JSON's ``balls`` pools the reaches over the
+    reachable ones apart."""
     backend: str = field(
         default="auto", metadata=_validate.bounded("choice", options=BACKEND_NAMES)
     )

@@ -78,7 +78,7 @@ from sigmapi.envs.icub import ICubScene, arm_ik
 from sigmapi.envs.icub import stereo as st
 from sigmapi.envs.icub.model import BALL_RADIUS
 from sigmapi.experiments.icub import space3d as s3
-from sigmapi.experiments.icub.config import BABBLING, BABBLINGS, PLAN, TEST_BALLS
+from sigmapi.experiments.icub.config import BABBLING, BABBLINGS, PLAN, TEST_BALL, TEST_BALLS
 from sigmapi.experiments.icub.maps import unit_rows
 from sigmapi.experiments.icub.reaching import _BABBLED, _WRIST, _YAW, eye_frames, film_first
 from sigmapi.metrics import z_decoder
@@ -464,7 +464,7 @@ def reach_tests3d(
     rng: np.random.Generator,
     babbled: Array,
     film: Callable[[int, str], int] | None = None,
-    balls: str = "reachable",
+    balls: str = TEST_BALL,
 ) -> tuple[ReachTests3D, list[NDArray[np.uint8]]]:
     """``n`` reaches per condition and method (the module's account); ``random_posture``
     draws from ``babbled`` ``(m, 7)``; ``film(i, method)`` frames per leg of reach ``i``
@@ -564,7 +564,7 @@ def run_seed3d(
     learned_state: str = LEARNED_STATE,
     film: bool = False,
     restarts: int = s3.RESTARTS,
-    balls: str = "reachable",
+    balls: str = TEST_BALL,
     babbling: str = BABBLING,
 ) -> dict[str, Any]:
     """One seed of the 3-D task: the maps recorded, learned and scored; babbling; the
