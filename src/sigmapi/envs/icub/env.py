@@ -163,8 +163,7 @@ class ICubReachEnv(ArmAction, gym.Env[Obs, NDArray[np.float32]]):
                 s.set_gaze(gaze)
                 self._seen = s.see("ball")
                 break
-            found = search(s, rng)  # the robot's own looking: random gazes until it sees
-            self._seen = None if found is None else found[0]
+            self._seen = self._look()
             if self._seen is not None:
                 break
             if ball is not None:
@@ -191,6 +190,12 @@ class ICubReachEnv(ArmAction, gym.Env[Obs, NDArray[np.float32]]):
             )
         return g
 
+    def _look(self) -> NDArray[np.float64] | None:
+        """The robot's own looking (random gazes until the right eye sees the ball,
+        :func:`~sigmapi.envs.icub.frames.search`): where it sees the ball, or None."""
+        found = search(self.scene, self.np_random)
+        return None if found is None else found[0]
+
     def _info(self) -> dict[str, object]:
         s = self.scene
         with s.truth():  # the scorer's readings, never observed
@@ -208,8 +213,7 @@ class ICubReachEnv(ArmAction, gym.Env[Obs, NDArray[np.float32]]):
         out = physical_reach(s, self.posture(a))
         self._seen = s.see("ball")
         if self._seen is None:
-            found = search(s, self.np_random)
-            self._seen = None if found is None else found[0]
+            self._seen = self._look()
         info = {**self._info(), "is_success": out.touched, "distance": out.distance}
         return self._obs(), float(out.touched), True, False, info
 

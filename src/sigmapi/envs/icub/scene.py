@@ -385,18 +385,23 @@ class ICubScene:
         h = self._hand
         return bool(np.any(on & (h[g1] | h[g2])))
 
+    def _palm_frame(self) -> tuple[Array, Array]:
+        """The palm's contact point and its frame's axes (columns; the third the palm's
+        normal): the hand's own frame, in which its taxels report where a touch is."""
+        return self.data.site_xpos[self._palm], self.data.site_xmat[self._palm].reshape(3, 3)
+
     def palm_side(self, points: ArrayLike, side: float) -> NDArray[np.bool_]:
         """Whether contact points ``(k, 3)`` lie on the palm's side of the hand (at least
         ``side`` metres along the palm's normal from its contact point): where on the hand
         they are, in the hand's own frame, as a tactile skin's taxels report it."""
-        c, r = self.data.site_xpos[self._palm], self.data.site_xmat[self._palm].reshape(3, 3)
+        c, r = self._palm_frame()
         return np.asarray((np.asarray(points) - c) @ r[:, 2] >= side)
 
     def palm_patch(self, points: ArrayLike, radius: float) -> NDArray[np.bool_]:
         """Whether contact points ``(k, 3)`` lie within ``radius`` metres of the palm's contact
         point across the palm (their distance from its normal through that point): the
         taxels of the palm's middle, as against the fingers'."""
-        c, r = self.data.site_xpos[self._palm], self.data.site_xmat[self._palm].reshape(3, 3)
+        c, r = self._palm_frame()
         d = np.asarray(points) - c
         across = d - np.outer(d @ r[:, 2], r[:, 2])
         return np.asarray(np.linalg.norm(across, axis=1) <= radius)

@@ -359,7 +359,7 @@ class ICubBoxResult(Result):
         if balls is not None:
             lines.append(
                 f"test balls: {balls['placed']}, {balls['reachable_share']:.2f} of them reachable"
-                " (the scripted IK within 1 cm)"
+                f" (the scripted IK within {100 * REACHABLE:g} cm)"
             )
         lines.append(
             f"{'method':<15}{'end point cm':>13}{'p90':>7}{'strict':>8}{'touch':>7}"
