@@ -74,8 +74,9 @@ def icub_models(seed: int, folder: Path, n_slope: int = 1000) -> list[Model]:
     import numpy as np
 
     from sigmapi.envs.icub import ICubScene
+    from sigmapi.envs.icub.views import eye_position, neck_position, retina_position
     from sigmapi.experiments.icub.config import ICubConfig
-    from sigmapi.experiments.icub.maps import MapData, eye_position, neck_position, retina_position
+    from sigmapi.experiments.icub.maps import MapData
     from sigmapi.experiments.icub.run import learn_seed_chain
 
     cfg, scene = ICubConfig(), ICubScene()

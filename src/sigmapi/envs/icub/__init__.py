@@ -6,7 +6,8 @@
   head- and torso-centred frames, contacts;
 - :mod:`~sigmapi.envs.icub.frames`: views of the ball from random gazes, measured;
 - :mod:`~sigmapi.envs.icub.reach`: the scripted inverse kinematics and the physical reach;
-- :mod:`~sigmapi.envs.icub.env`: ``sigmapi/ICubReach-v0``.
+- :mod:`~sigmapi.envs.icub.env`: ``sigmapi/ICubReach-v0``;
+- :mod:`~sigmapi.envs.icub.views`: map 1's view pairs as a view source (:class:`ICubViews`).
 
 ``mujoco`` and ``icub_models`` are imported when the first scene is built, not with this
 package.
@@ -40,6 +41,7 @@ from sigmapi.envs.icub.scene import (
     direction_angles,
     direction_vectors,
 )
+from sigmapi.envs.icub.views import ICubViews
 
 __all__ = [
     "ARM",
@@ -57,6 +59,7 @@ __all__ = [
     "TORSO_BOX",
     "ICubReachEnv",
     "ICubScene",
+    "ICubViews",
     "ReachOutcome",
     "TruthLeak",
     "ViewBatch",

@@ -10,7 +10,8 @@
   ball's torso-centred direction.
 
 Population codes read measured angles, each scaled to [0, 1] over the range the random gazes
-are drawn from (:data:`~sigmapi.envs.icub.GAZE_LOW`.. :data:`~sigmapi.envs.icub.GAZE_HIGH`).
+are drawn from (:data:`~sigmapi.envs.icub.GAZE_LOW`.. :data:`~sigmapi.envs.icub.GAZE_HIGH`;
+:mod:`sigmapi.envs.icub.views`, where map 1's views are also a view source for the kit).
 Both maps use the ``icub-2d`` preset (:data:`MAP`: ``paper-2d``'s min-distance winner and
 cross-view ordered start, a neighbourhood that ends at 1 map unit, a learning rate that
 anneals on to 0.004, no refinement rounds).
@@ -40,8 +41,6 @@ from sigmapi.baselines import KohonenSOM
 from sigmapi.codes import PopulationCode
 from sigmapi.config import SOMConfig
 from sigmapi.envs.icub import (
-    GAZE_HIGH,
-    GAZE_LOW,
     HEAD_BOX,
     PAIRS_PER_BALL,
     ICubScene,
@@ -49,6 +48,7 @@ from sigmapi.envs.icub import (
     direction_vectors,
     view_pairs,
 )
+from sigmapi.envs.icub.views import eye_position, neck_position, retina_position, view_codes
 from sigmapi.experiments.chain.run import head_code
 from sigmapi.experiments.kit.maps import MapSpec
 from sigmapi.metrics import (
@@ -79,27 +79,6 @@ map T of design ``"grid"`` reads map H's place with hills as wide
 READOUT_RADIUS = 2.0
 """Units (map units on each axis, around the winner) whose response :meth:`ChainMaps.place`
 weighs (chosen on the tuning seeds: ``docs/guide/icub.md``)."""
-
-_EYE_LO = np.array([GAZE_LOW[0], GAZE_LOW[1] - 0.5 * GAZE_HIGH[2]])
-_EYE_HI = np.array([GAZE_HIGH[0], GAZE_HIGH[1] - 0.5 * GAZE_LOW[2]])
-_NECK = [3, 5]  # pitch and yaw (the roll is held at zero)
-
-
-def retina_position(v: ViewBatch, eye_size: int) -> Array:
-    """The retina as positions in [0, 1]^2: ``(u, v) / eye_size``."""
-    return np.clip(v.retina / eye_size, 0.0, 1.0)
-
-
-def eye_position(v: ViewBatch) -> Array:
-    """The right eye's tilt and pan (``version - vergence / 2``) scaled to [0, 1]."""
-    eye = np.column_stack([v.gaze[:, 0], v.gaze[:, 1] - 0.5 * v.gaze[:, 2]])
-    return np.clip((eye - _EYE_LO) / (_EYE_HI - _EYE_LO), 0.0, 1.0)
-
-
-def neck_position(v: ViewBatch) -> Array:
-    """The neck's pitch and yaw scaled to [0, 1]."""
-    lo, hi = GAZE_LOW[_NECK], GAZE_HIGH[_NECK]
-    return np.clip((v.gaze[:, _NECK] - lo) / (hi - lo), 0.0, 1.0)
 
 
 def som_config(
@@ -212,8 +191,7 @@ class ChainMaps:
 
     def inputs1(self, v: ViewBatch) -> tuple[Array, Array]:
         """Map 1's codes of views ``v``: retina, eye angles."""
-        m = self.map1
-        return m.x_code.encode(retina_position(v, self.eye_size)), m.y_code.encode(eye_position(v))
+        return view_codes(self.map1.x_code, self.map1.y_code, v, self.eye_size)
 
     def inputs2(self, v: ViewBatch) -> tuple[Array, Array]:
         """Map 2's codes of views ``v``: map 1's response, neck angles."""

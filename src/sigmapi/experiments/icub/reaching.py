@@ -66,14 +66,9 @@ from sigmapi.envs.icub import (
 from sigmapi.envs.icub.detect import TARGETS, detect
 from sigmapi.envs.icub.frames import GOAL_MARGIN, look, saccade, search, sensed_view
 from sigmapi.envs.icub.reach import AIM
+from sigmapi.envs.icub.views import eye_position, neck_position, retina_position
 from sigmapi.errors import ConfigError
-from sigmapi.experiments.icub.maps import (
-    ChainMaps,
-    eye_position,
-    neck_position,
-    retina_position,
-    unit_rows,
-)
+from sigmapi.experiments.icub.maps import ChainMaps, unit_rows
 
 Array = NDArray[np.float64]
 

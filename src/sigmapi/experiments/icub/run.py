@@ -35,7 +35,7 @@ from sigmapi.envs.robot.scene import check_rendering, mujoco_module
 from sigmapi.errors import ConfigError
 from sigmapi.experiments.base import Experiment, Run, register, run_all
 from sigmapi.experiments.icub.box import ICubBoxResult, run_box
-from sigmapi.experiments.icub.config import PLAN, QUICK, ICubConfig
+from sigmapi.experiments.icub.config import ICUB_WORLD, PLAN, QUICK, ICubConfig
 from sigmapi.experiments.icub.maps import (
     ChainMaps,
     MapData,
@@ -316,9 +316,8 @@ class ICubExperiment(Experiment[ICubConfig]):
     summary = "the iCub learns a chain of maps from its eyes and neck, then learns to reach"
     config_type = ICubConfig
     quick = QUICK
-    seeds = (123, 124, 125, 126, 127)
-    """The seeds of the acceptance run: none of them was tuned on (the tuning seeds are 0-2;
-    the seeds earlier versions were checked on: docs/results/icub-history.md)."""
+    seeds = ICUB_WORLD.seeds
+    """The seeds of the acceptance run (:data:`~sigmapi.experiments.icub.config.SEEDS`)."""
     quick_seeds = (0,)
     """The seed of ``--quick``: a tuning seed."""
     quick_time = "about 2 min on two quiet cores, 2-3 min on two busy ones"
