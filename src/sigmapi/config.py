@@ -335,7 +335,9 @@ def list_presets() -> list[str]:
     return sorted(p.name[:-5] for p in files.iterdir() if p.name.endswith(".toml"))
 
 
-def _parse_toml(text: str, source: str) -> dict[str, object]:
+def parse_toml(text: str, source: str) -> dict[str, object]:
+    """The table of TOML ``text``; a ConfigError naming ``source`` (a preset, a file) where it
+    is not valid TOML. The presets', the config files' and the sweep files' one parser."""
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
@@ -349,7 +351,7 @@ def load_preset(name: str) -> SOMConfig:
     if name not in names:
         raise ConfigError(f"unknown preset {name!r}; available presets: {', '.join(names)}")
     text = resources.files("sigmapi").joinpath("presets", f"{name}.toml").read_text("utf-8")
-    return _from_toml(_parse_toml(text, f"preset {name!r}"), f"preset {name!r}")
+    return _from_toml(parse_toml(text, f"preset {name!r}"), f"preset {name!r}")
 
 
 def load_config_file(path: str | Path, base: SOMConfig | None = None) -> SOMConfig:
@@ -361,7 +363,7 @@ def load_config_file(path: str | Path, base: SOMConfig | None = None) -> SOMConf
         text = p.read_text("utf-8-sig")  # a byte order mark (Windows editors) is no key
     except (OSError, UnicodeDecodeError) as exc:
         raise ConfigError(f"config file {str(p)!r} cannot be read as UTF-8 text: {exc}") from None
-    data = _parse_toml(text, f"config file {str(p)!r}")
+    data = parse_toml(text, f"config file {str(p)!r}")
     return _from_toml(data, f"config file {str(p)!r}", base)
 
 

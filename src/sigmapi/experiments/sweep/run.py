@@ -36,7 +36,7 @@ from typing import Any
 from sigmapi import _validate
 from sigmapi._lock import output_lock
 from sigmapi._outputs import INPUT, claim_folder
-from sigmapi.config import SOMConfig, _parse_toml, check_map_fits_task, load_preset
+from sigmapi.config import SOMConfig, check_map_fits_task, load_preset, parse_toml
 from sigmapi.errors import ConfigError
 from sigmapi.executor import Executor, Outcome, job_memory
 from sigmapi.experiments.base import RESULT_FILE, Experiment, Run, check_seeds, register
@@ -101,7 +101,7 @@ class SweepSpec:
     @classmethod
     def from_toml(cls, text: str, source: str = "sweep spec") -> SweepSpec:
         """Parse and check a spec; every grid point must make a valid config."""
-        return cls.from_dict(_parse_toml(text, source), source)
+        return cls.from_dict(parse_toml(text, source), source)
 
     @classmethod
     def from_dict(cls, data: object, source: str = "sweep spec") -> SweepSpec:
