@@ -43,6 +43,7 @@ __all__ = [
     "list_presets",
     "load_config_file",
     "load_preset",
+    "parse_toml",
 ]
 
 BACKEND_NAMES = BACKEND_CHOICES
