@@ -20,7 +20,6 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from functools import partial
-from types import SimpleNamespace
 from typing import Any, Literal, NamedTuple, get_args
 
 import numpy as np
@@ -110,6 +109,21 @@ class ChainConfig:
         (:func:`chain_config`)."""
         spec = MapSpec(self.preset, self.overrides, {"ordering": "crossview", "refine_rounds": 0})
         return chain_config(spec.config())
+
+
+@dataclass(frozen=True)
+class ChainSettings:
+    """What the chain's jobs read of a :class:`ChainConfig`, with any map config in place of
+    a preset and its overrides (:func:`run_chain`'s)."""
+
+    som_config: SOMConfig
+    """Every map's config."""
+    train_pairs: int
+    """View pairs of triples that map B and the single map are trained on."""
+    n_test: int
+    """Calibration and test triples (each)."""
+    code: str
+    """What map A hands to map B (:data:`CODES`)."""
 
 
 # -- the result: its JSON form, summary and table --------------------------------------------------
@@ -315,8 +329,7 @@ def run_chain(
     _validate.integer("train_pairs", train_pairs, 10, fix="e.g. 20000")
     _validate.integer("n_test", n_test, 10, fix="e.g. 10000")
     _validate.choice("code", code, CODES)
-    # what Chain reads of a ChainConfig (its methods read only these), with any map config
-    given = SimpleNamespace(som_config=cfg, train_pairs=train_pairs, n_test=n_test, code=code)
+    given = ChainSettings(cfg, train_pairs, n_test, code)
     return CHAIN.execute(given, Run(seeds, executor=executor, progress=progress)).to_dict()
 
 
