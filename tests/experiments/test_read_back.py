@@ -11,7 +11,7 @@ from typing import Any
 
 import pytest
 
-from sigmapi.errors import ConfigError
+from sigmapi.errors import ConfigError, DataError
 from sigmapi.experiments.chain.run import ChainResult
 from sigmapi.experiments.compare.run import CompareResult
 from sigmapi.experiments.icub.result import ICubResult
@@ -30,6 +30,8 @@ KEPT: list[tuple[str, Any, str]] = [
     ("compare", CompareResult, ""),
     ("icub", ICubResult, ""),
     ("icub-check", ICubResult, ""),
+    ("icub-box", ICubResult, ""),  # reads back as an ICubBoxResult (its "space" is "box")
+    ("icub-box-balls", ICubResult, ""),
     ("neurons", NeuronsResult, ""),
     ("reach", ReachResult, ""),
     ("reproduce", ReproduceResult, "metrics"),
@@ -71,6 +73,22 @@ def test_a_kept_result_reads_back_with_its_values(name, cls, key):
     out = _json(cls.from_dict(inner).to_dict())
     _within(inner, out)
     assert _json(cls.from_dict(out).to_dict()) == out  # and again: the identity
+
+
+@pytest.mark.parametrize(("name", "cls", "key"), KEPT, ids=[k[0] for k in KEPT])
+def test_a_kept_result_read_back_draws_its_figures_or_says_why_not(name, cls, key, tmp_path):
+    data = json.loads((RESULTS / f"{name}.json").read_text("utf-8"))
+    result = cls.from_dict(data[key] if key else data)
+    if name.startswith("icub"):  # its figures show frames, balls and reaches the file lacks
+        with pytest.raises(DataError, match="no records per seed"):
+            result.figure(tmp_path)
+        return
+    paths = result.figure(tmp_path)
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(
+        [p.name for p in paths] + [p.with_suffix(".txt").name for p in paths]
+    )
+    for p in paths:
+        assert p.stat().st_size > 1000 and p.with_suffix(".txt").read_text("utf-8").strip()
 
 
 def test_a_result_read_back_without_a_key_names_it():

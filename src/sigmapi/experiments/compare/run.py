@@ -252,26 +252,29 @@ class CompareResult(Result):
         return "\n".join([*rows, f"z error in grid spacings; {floor}"])
 
     def caption(self) -> str:
-        """A caption computed from the result."""
-        cfg, ref = self.config, self.reference
+        """A caption computed from the result's JSON form (so that a result read back from
+        its file draws its figure with the same caption)."""
+        data = self.to_dict()
+        cfg, methods = self.config, {m["name"]: m for m in data["methods"]}
+        ref = methods["sigma-pi"]
         n = len(self.seeds)
         parts = [
             f"{cfg.preset} task, {cfg.train_pairs:,} recorded view pairs per seed, median of {n} "
             f"seed{'s' * (n > 1)}. The Sigma-Pi map puts both views of one z on the same unit "
-            f"in {np.median(ref.view_consistency):.2f} of test cases, z error "
-            f"{ref.z_error:.2f} grid spacings (a winner alone cannot beat {self.floor:.2f}) with "
-            f"its units named by {ref.labels_needed()} labels (within 10 % of its error with "
-            "all of them)."
+            f"in {ref['view_consistency']:.2f} of test cases, z error "
+            f"{ref['z_error']:.2f} grid spacings (a winner alone cannot beat "
+            f"{data['quantisation_floor']:.2f}) with its units named by {ref['labels_needed']} "
+            "labels (within 10 % of its error with all of them)."
         ]
-        for name, s in self.scores.items():
+        for name, m in methods.items():
             if name == "sigma-pi":
                 continue
-            match = s.labels_to_match(ref.z_error)
+            match = m["labels_to_match_sigma_pi"]
             n = max(cfg.labels) if match is None else match
             within = "not within" if match is None else "comes within"
-            vc = np.median(s.view_consistency)
             reach = f"{within} 10 % of the map's z error with {n:,} labels"
-            parts.append(f"{name}: same place {vc:.2f}, z error {s.z_error:.2f}, {reach}.")
+            vc, z = m["view_consistency"], m["z_error"]
+            parts.append(f"{name}: same place {vc:.2f}, z error {z:.2f}, {reach}.")
         return " ".join(parts)
 
 

@@ -160,6 +160,8 @@ SUMMARIES = (
 )
 """The keys of the JSON form computed from the per-seed records."""
 
+_LATER = ("balls",)
+
 _MAP_SCORES = ("order_r2", "error_cm", "error_ratio_to_kmeans", "fold_score")
 
 
@@ -187,7 +189,9 @@ class ICubBoxResult(Result):
     )
     """The JSON form: the config and seeds, per map and per method the pooled numbers, per
     seed the methods' numbers, the targets, the time and the peak memory."""
-    COMPUTED = SUMMARIES
+    LATER = _LATER
+    """Computed keys that files written before them lack (``balls``: since ``--box-balls``)."""
+    COMPUTED = tuple(k for k in SUMMARIES if k not in _LATER)
     experiment = "icub"
 
     def maps(self) -> dict[str, dict[str, Any]]:
@@ -383,7 +387,9 @@ class ICubBoxResult(Result):
         the filmed reach as an animated GIF."""
         from sigmapi._outputs import save_gif
         from sigmapi.experiments.icub.plots3d import end_point_histogram, film_and_eyes, map_slices
+        from sigmapi.experiments.icub.result import check_drawable
 
+        check_drawable(self.per_seed)
         errors = {
             m: 100.0 * np.concatenate([s["end_point_m"]["free"][m] for s in self.per_seed])
             for m in METHODS
