@@ -58,6 +58,25 @@ def test_a_touch_counts_as_the_palms_only_on_the_palms_side():
     assert r3._contacts(scene) == (False, False)
 
 
+def test_the_hand_spans_what_the_end_point_diagram_draws():
+    """HAND_SPAN (the diagram's hand) against the mesh: its vertices along the palm's normal
+    from the palm's contact point, within 1 mm."""
+    from sigmapi.envs.icub.model import HAND_SPAN, HOME_ARM
+
+    scene = _scene()
+    scene.set_arm(HOME_ARM)
+    m, d = scene.model, scene.data
+    c, r = _palm_frame(scene)
+    meshes = [g for g in np.flatnonzero(scene._hand) if m.geom_type[g] == 7]  # mjGEOM_MESH
+    along = []
+    for g in meshes:
+        first, n = m.mesh_vertadr[m.geom_dataid[g]], m.mesh_vertnum[m.geom_dataid[g]]
+        world = m.mesh_vert[first : first + n] @ d.geom_xmat[g].reshape(3, 3).T + d.geom_xpos[g]
+        along.append((world - c) @ r[:, 2])
+    a = np.concatenate(along)
+    np.testing.assert_allclose([-a.min(), a.max()], HAND_SPAN, atol=1e-3)
+
+
 def test_the_palms_middle_is_a_patch_across_the_palm_not_along_its_normal():
     from sigmapi.envs.icub.model import HOME_ARM
 

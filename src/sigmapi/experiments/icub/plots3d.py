@@ -16,7 +16,7 @@ from numpy.typing import NDArray
 
 from sigmapi._outputs import save_captioned
 from sigmapi.envs.icub.detect import TARGETS
-from sigmapi.envs.icub.model import BALL_RADIUS, HAND_MARKER, MARKER_RADIUS
+from sigmapi.envs.icub.model import BALL_RADIUS, HAND_MARKER, HAND_SPAN, MARKER_RADIUS
 
 
 def end_point_histogram(errors: Mapping[str, NDArray[np.float64]], path: Path) -> Path:
@@ -74,13 +74,13 @@ def end_point_definition(path: Path) -> Path:
     ax.add_patch(Circle(tuple(b), r, color="C3", alpha=0.8))
     ax.plot(*b, "k+")
     ax.annotate("b (centre)", _xy(b), xytext=(0.4, -0.8), fontsize=8)
-    # the hand: 3.9 cm behind to 1.2 cm in front of C along the palm's normal (+x here)
-    ax.add_patch(Rectangle((c[0] - 3.9, c[1] - 4.0), 5.1, 8.0, color="0.8"))
+    behind, front = (cm * d for d in HAND_SPAN)  # the hand along the palm's normal (+x here)
+    ax.add_patch(Rectangle((c[0] - behind, c[1] - 4.0), behind + front, 8.0, color="0.8"))
     ax.plot([c[0], c[0]], [c[1] - 4.0, c[1] + 4.0], color="0.3", lw=2)
     m = c + np.array([HAND_MARKER[2] * cm, 0.0])
     ax.add_patch(Circle(tuple(m), MARKER_RADIUS * cm, color="C2"))
     ax.annotate(
-        "marker (3 cm behind C)",
+        f"marker ({-HAND_MARKER[2] * cm:.0f} cm behind C)",
         _xy(m),
         xytext=(m[0] - 4.5, m[1] - 5.6),
         fontsize=8,
@@ -122,8 +122,8 @@ def end_point_definition(path: Path) -> Path:
         "the middle of the palm's surface) where the reach ended to the surface of the ball "
         f"(radius {r:.0f} cm) where the experimenter put it. A contact counts as the palm's "
         "when its point lies no more than 1 cm behind C along the palm's normal; the hand "
-        "(grey, to scale along the normal) reaches 3.9 cm behind C, the green marker the eyes "
-        "see sits 3 cm behind it."
+        f"(grey, to scale along the normal) reaches {behind:.1f} cm behind C, the green marker "
+        f"the eyes see sits {-HAND_MARKER[2] * cm:.0f} cm behind it."
     )
     out = save_captioned(fig, path, caption, dpi=110, bbox_inches="tight")
     plt.close(fig)
