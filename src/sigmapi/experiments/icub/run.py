@@ -320,7 +320,7 @@ class ICubExperiment(Experiment[ICubConfig]):
     """The seeds of the acceptance run (:data:`~sigmapi.experiments.icub.config.SEEDS`)."""
     quick_seeds = (0,)
     """The seed of ``--quick``: a tuning seed."""
-    quick_time = "about 2 min on two quiet cores, 2-3 min on two busy ones"
+    quick_time = "about 3 min on two quiet cores, more on busy ones; --space box: 30 s"
     extra = "robot"
     default_out = "icub"
 
