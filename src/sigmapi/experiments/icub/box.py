@@ -25,7 +25,7 @@ from sigmapi.experiments.base import run_all
 from sigmapi.experiments.icub import space3d as s3
 from sigmapi.experiments.icub.config import ICubConfig
 from sigmapi.experiments.icub.reach3d import METHODS, REACHABLE, run_seed3d
-from sigmapi.experiments.kit.results import Result
+from sigmapi.experiments.kit.results import Result, check_records
 from sigmapi.metrics import ORDERED_R2
 from sigmapi.progress import Progress
 
@@ -387,9 +387,8 @@ class ICubBoxResult(Result):
         the filmed reach as an animated GIF."""
         from sigmapi._outputs import save_gif
         from sigmapi.experiments.icub.plots3d import end_point_histogram, film_and_eyes, map_slices
-        from sigmapi.experiments.icub.result import check_drawable
 
-        check_drawable(self.per_seed)
+        check_records(self.per_seed, "sigmapi icub --space box ... --out DIR")
         errors = {
             m: 100.0 * np.concatenate([s["end_point_m"]["free"][m] for s in self.per_seed])
             for m in METHODS

@@ -12,10 +12,9 @@ from typing import Any
 
 import numpy as np
 
-from sigmapi.errors import DataError
 from sigmapi.experiments.icub.config import ICubConfig
 from sigmapi.experiments.icub.reaching import METHODS
-from sigmapi.experiments.kit.results import Column, Result, columns, render
+from sigmapi.experiments.kit.results import Column, Result, check_records, columns, render
 from sigmapi.metrics import ORDERED_R2
 
 TARGETS: dict[str, float] = {
@@ -67,17 +66,6 @@ def _scored(rows: list[dict[str, Any]], true: list[dict[str, Any]]) -> dict[str,
         "error_ratio_to_true_direction": float(np.median(ratio)),
         "error_ratio_worst": float(max(ratio)),
     }
-
-
-def check_drawable(per_seed: list[dict[str, Any]]) -> None:
-    """Refuse to draw a result without its records per seed (one read back from its JSON,
-    which holds the pooled numbers, not the frames, balls and reaches the figures show)."""
-    if not per_seed:
-        raise DataError(
-            "this iCub result holds no records per seed (read back from its JSON, it has the "
-            "pooled numbers only), and its figures are drawn from those records; run "
-            "`sigmapi icub ... --out DIR` again to draw them"
-        )
 
 
 def _per_seed(rows: list[dict[str, Any]]) -> list[dict[str, object]]:
@@ -273,7 +261,7 @@ class ICubResult(Result):
         from sigmapi._outputs import save_gif
         from sigmapi.experiments.icub.plots import icub_figures
 
-        check_drawable(self.per_seed)
+        check_records(self.per_seed, "sigmapi icub ... --out DIR")
         paths = icub_figures(self, Path(out_dir))
         film = self.per_seed[0].get("film")
         if self.config.render is not None and film:

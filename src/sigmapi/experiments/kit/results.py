@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any, ClassVar, TypeVar
 import numpy as np
 
 from sigmapi._outputs import save_captioned
+from sigmapi.errors import DataError
 from sigmapi.experiments.kit.seeds import check_seeds
 
 if TYPE_CHECKING:
@@ -43,6 +44,18 @@ def summaries(data: object, required: Sequence[str], optional: Sequence[str] = (
     out = {k: obj[k] for k in required}
     out.update({k: obj[k] for k in optional if k in obj})
     return out
+
+
+def check_records(records: Sequence[object], command: str) -> None:
+    """Refuse to draw a result without its ``records`` per seed (one read back from its JSON,
+    which holds the pooled numbers, not the records its figures show): one DataError line
+    naming the ``command`` that draws them."""
+    if not records:
+        raise DataError(
+            "this result holds no records per seed (read back from its JSON, it has the "
+            f"pooled numbers only), and its figures are drawn from those records; run `{command}` "
+            "again to draw them"
+        )
 
 
 VC_MARGIN = 0.02
