@@ -99,11 +99,11 @@ HAND_MARKER = (0.0, 0.0, -0.03)
 """Where the green marker on the back of the right hand sits in the palm's frame
 (``r_hand_dh_frame``), metres: 3 cm behind the palm, where the eyes see it over the table."""
 MARKER_RADIUS = 0.015
+"""Radius of the hand's marker (a flat green sphere, no contacts), metres."""
 HAND_SPAN = (0.039, 0.012)
 """How far the right hand's mesh reaches behind and in front of the palm's contact point (the
 palm site) along the palm's normal, metres (the diagram of the end-point error draws it;
 ``tests/experiments/test_icub_reach3d.py`` measures it on the model)."""
-"""Radius of the hand's marker (a flat green sphere, no contacts), metres."""
 REST_ARM = (0.17, 0.35, 0.0, 0.27, 0.0, 0.0, 0.0)
 """The right arm's rest pose, radians: hanging at the side, out of the eyes' view of the table."""
 _LEFT = tuple("l" + name[1:] for name in ARM)
